@@ -1,0 +1,69 @@
+#version 450
+// Deferred direct lighting: outgoing radiance (W/(m^2 sr)) of every G-buffer pixel from every
+// light, with shadow-map visibility. Lambert f = rho/pi; normalized Phong only when the scene
+// has Phong materials (HAS_PHONG). Point/spot: E = I cos(theta) / d^2 times Mitsuba's spot
+// falloff; directional: E = E_perp cos(theta).
+#include "frame.glsl"
+#include "brdf.glsl"
+#include "shadow.glsl"
+
+layout(constant_id = 0) const bool HAS_PHONG = false;
+
+layout(local_size_x = 8, local_size_y = 8) in;
+layout(set = 0, binding = 0, std430) readonly buffer FrameBuf { GpuFrame frame; };
+layout(set = 0, binding = 1) uniform sampler2D gb_albedo;
+layout(set = 0, binding = 2) uniform sampler2D gb_normal;
+layout(set = 0, binding = 3) uniform sampler2D gb_specular;
+layout(set = 0, binding = 4) uniform sampler2D gb_depth;
+layout(set = 0, binding = 5) uniform sampler2DArray shadow_maps;
+layout(set = 0, binding = 6, rgba32f) uniform writeonly image2D radiance;
+
+// Mitsuba 3 `spot`: 1 inside the beam, linear in angle to 0 at the cutoff.
+float spot_falloff(GpuLight l, float cos_axis) {
+    if (cos_axis <= l.spot.x) return 0.0;
+    float theta = acos(clamp(cos_axis, -1.0, 1.0));
+    if (theta <= l.spot.z) return 1.0;
+    return clamp((l.spot.y - theta) / max(l.spot.y - l.spot.z, 1e-6), 0.0, 1.0);
+}
+
+void main() {
+    ivec2 px = ivec2(gl_GlobalInvocationID.xy);
+    ivec2 size = ivec2(frame.counts.zw);
+    if (any(greaterThanEqual(px, size))) return;
+    float depth = texelFetch(gb_depth, px, 0).r;
+    if (depth >= 1.0) {
+        imageStore(radiance, px, vec4(0.0));
+        return;
+    }
+    vec2 uv = (vec2(px) + 0.5) / vec2(size);
+    vec4 wp = frame.inv_view_proj * vec4(uv * 2.0 - 1.0, depth, 1.0);
+    vec3 p = wp.xyz / wp.w;
+    vec3 albedo = texelFetch(gb_albedo, px, 0).rgb;
+    vec4 ns = texelFetch(gb_normal, px, 0);
+    vec3 n = normalize(ns.xyz);
+    vec3 wo = normalize(frame.camera_position.xyz - p);
+    vec3 specular = HAS_PHONG ? texelFetch(gb_specular, px, 0).rgb : vec3(0.0);
+
+    vec3 lo = vec3(0.0);
+    for (uint i = 0u; i < frame.counts.x; ++i) {
+        GpuLight l = frame.lights[i];
+        vec3 wi;
+        vec3 e;
+        if (l.info.x == LIGHT_DIRECTIONAL) {
+            wi = -l.direction.xyz;
+            e = l.intensity.rgb * max(dot(n, wi), 0.0);
+        } else {
+            vec3 d = l.position.xyz - p;
+            float d2 = max(dot(d, d), 1e-30);
+            wi = d * inversesqrt(d2);
+            float falloff = l.info.x == LIGHT_SPOT ? spot_falloff(l, dot(-wi, l.direction.xyz)) : 1.0;
+            e = l.intensity.rgb * (falloff * max(dot(n, wi), 0.0) / d2);
+        }
+        if (all(equal(e, vec3(0.0)))) continue;
+        float vis = shadow_visibility(shadow_maps, frame, l, p, n, max(dot(n, wi), 0.0));
+        vec3 f = brdf_lambert(albedo);
+        if (HAS_PHONG) f += brdf_phong(specular, ns.w, n, wi, wo);
+        lo += f * e * vis;
+    }
+    imageStore(radiance, px, vec4(lo, 1.0));
+}

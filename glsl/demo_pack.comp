@@ -1,0 +1,12 @@
+#version 450
+// Demo pass 3: a compute shader packs the float attachment into RGBA8.
+layout(local_size_x = 8, local_size_y = 8) in;
+layout(set = 0, binding = 0) uniform sampler2D src;
+layout(set = 0, binding = 1, rgba8) uniform writeonly image2D dst;
+
+void main() {
+    ivec2 size = imageSize(dst);
+    ivec2 p = ivec2(gl_GlobalInvocationID.xy);
+    if (any(greaterThanEqual(p, size))) return;
+    imageStore(dst, p, texelFetch(src, p, 0));
+}

@@ -1,0 +1,37 @@
+#version 450
+// G-buffer pass: albedo (linear, 16-bit float so dark albedos keep 1% accuracy), world normal
+// and shininess, and, only when the scene has Phong materials, the specular color.
+layout(constant_id = 0) const bool HAS_PHONG = false;
+
+struct GpuMaterial {
+    vec4 albedo;    // rgb albedo, a opacity
+    vec4 specular;  // rgb specular reflectance, a shininess
+};
+
+#include "frame.glsl"
+layout(set = 0, binding = 0, std430) readonly buffer FrameBuf { GpuFrame frame; };
+layout(set = 0, binding = 1, std430) readonly buffer Materials { GpuMaterial materials[]; };
+
+layout(push_constant) uniform Push {
+    mat4 model;
+    uint material;
+} pc;
+
+layout(location = 0) in vec3 in_normal;
+layout(location = 1) in vec2 in_uv;
+layout(location = 2) in vec3 in_world;
+
+layout(location = 0) out vec4 out_albedo;
+layout(location = 1) out vec4 out_normal;
+layout(location = 2) out vec4 out_specular;
+
+void main() {
+    GpuMaterial m = materials[pc.material];
+    vec3 n = normalize(in_normal);
+    // Two-sided surfaces: shade the side the camera sees. Decided geometrically, not by
+    // gl_FrontFacing, because the y-flipped projection inverts the winding.
+    if (dot(n, frame.camera_position.xyz - in_world) < 0.0) n = -n;
+    out_albedo = vec4(m.albedo.rgb, 1.0);
+    out_normal = vec4(n, m.specular.a);
+    if (HAS_PHONG) out_specular = vec4(m.specular.rgb, 1.0);
+}

@@ -1,0 +1,38 @@
+// Frame constants shared by the camera, shadow and shading passes.
+// Mirrors `GpuFrame` in src/render/gpu.rs (a test checks the Rust layout).
+#ifndef FRAME_GLSL
+#define FRAME_GLSL
+
+#define MAX_LIGHTS 16
+#define MAX_SHADOW_VIEWS 64
+
+#define LIGHT_POINT 0u
+#define LIGHT_SPOT 1u
+#define LIGHT_DIRECTIONAL 2u
+
+struct GpuLight {
+    vec4 position;      // xyz world position (point, spot)
+    vec4 direction;     // xyz unit direction light travels (spot, directional)
+    vec4 intensity;     // rgb: W/sr (point, spot) or W/m^2 (directional)
+    vec4 spot;          // x cos(cutoff), y cutoff rad, z beam rad
+    uvec4 info;         // x kind, y first shadow view, z shadow view count (0: no shadow)
+};
+
+struct GpuShadowView {
+    mat4 view_proj;     // world -> Vulkan clip of the shadow map layer
+    vec4 params;        // x texel footprint per meter of distance (perspective) or meters (ortho),
+                        // y 1 = orthographic, z near, w far
+    vec4 axis;          // xyz major axis of a cube face (point lights), w unused
+};
+
+struct GpuFrame {
+    mat4 view_proj;
+    mat4 inv_view_proj;
+    vec4 camera_position;
+    uvec4 counts;       // x lights, y shadow views, z width, w height
+    vec4 shadow;        // x constant bias (depth units), y slope bias, z normal offset (texels), w PCF radius (texels)
+    GpuLight lights[MAX_LIGHTS];
+    GpuShadowView shadow_views[MAX_SHADOW_VIEWS];
+};
+
+#endif

@@ -1,0 +1,3 @@
+#version 450
+// Shadow maps store depth only.
+void main() {}

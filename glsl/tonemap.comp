@@ -1,0 +1,40 @@
+#version 450
+// Tone mapping of linear HDR radiance to sRGB-encoded 8-bit (seeds/000 post-processing):
+// 0 linear (exposure, clamp), 1 logarithmic, 2 Drago et al. 2003, 3 filmic (ACES fit,
+// Narkowicz 2015). Luminance-based operators scale the color by Ld / Lw.
+layout(local_size_x = 8, local_size_y = 8) in;
+layout(set = 0, binding = 0) uniform sampler2D hdr;
+layout(set = 0, binding = 1, rgba8) uniform writeonly image2D ldr;
+
+layout(push_constant) uniform Push {
+    float exposure;
+    uint op;
+    float white;    // luminance mapped to 1 (logarithmic, Drago)
+    float drago_bias;
+} pc;
+
+float luminance(vec3 c) { return dot(c, vec3(0.2126, 0.7152, 0.0722)); }
+
+vec3 srgb_encode(vec3 c) {
+    c = clamp(c, 0.0, 1.0);
+    return mix(c * 12.92, 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, greaterThan(c, vec3(0.0031308)));
+}
+
+void main() {
+    ivec2 p = ivec2(gl_GlobalInvocationID.xy);
+    ivec2 size = imageSize(ldr);
+    if (any(greaterThanEqual(p, size))) return;
+    vec3 c = max(texelFetch(hdr, p, 0).rgb, vec3(0.0)) * pc.exposure;
+    float lw = luminance(c);
+    float white = max(pc.white, 1e-6);
+    if (pc.op == 1u) {
+        c *= lw > 0.0 ? (log(1.0 + lw) / log(1.0 + white)) / lw : 0.0;
+    } else if (pc.op == 2u) {
+        float b = clamp(pc.drago_bias, 0.5, 1.0);
+        float ld = log(lw + 1.0) / (log(white + 1.0) / log(10.0) * log(2.0 + 8.0 * pow(lw / white, log(b) / log(0.5))));
+        c *= lw > 0.0 ? ld / lw : 0.0;
+    } else if (pc.op == 3u) {
+        c = clamp(c * (2.51 * c + 0.03) / (c * (2.43 * c + 0.59) + 0.14), 0.0, 1.0);
+    }
+    imageStore(ldr, p, vec4(srgb_encode(c), 1.0));
+}

@@ -1,0 +1,356 @@
+//! Executes a compiled graph: creates the transients of each frame slot in their arenas and
+//! records the frame, wrapping every pass in a debug label and a timestamp pair and
+//! inserting the barriers the compile step derived.
+
+use super::compile::{CompiledGraph, MemoryOracle, MemoryRequirements, ResourceDeclView};
+use super::{BufferHandle, GraphError, ImageHandle, Origin, RenderGraph, ResourceId, ResourceKind};
+use crate::vk::{
+    vk, Buffer, BufferDesc, Cmd, Context, Image, ImageDesc, MemoryLocation, TimestampRecorder,
+};
+
+/// GPU handles of an image as a pass sees it.
+#[derive(Clone, Debug)]
+pub struct GpuImage {
+    pub raw: vk::Image,
+    pub view: vk::ImageView,
+    /// One view per mip level when the image has several.
+    pub mip_views: Vec<vk::ImageView>,
+    pub desc: ImageDesc,
+}
+
+impl GpuImage {
+    pub fn extent_2d(&self) -> vk::Extent2D {
+        vk::Extent2D {
+            width: self.desc.width,
+            height: self.desc.height,
+        }
+    }
+    /// The view of one mip level (the full view when there is only one level).
+    pub fn mip_view(&self, level: u32) -> vk::ImageView {
+        self.mip_views
+            .get(level as usize)
+            .copied()
+            .unwrap_or(self.view)
+    }
+}
+
+/// GPU handle of a buffer as a pass sees it.
+#[derive(Clone, Copy, Debug)]
+pub struct GpuBuffer {
+    pub raw: vk::Buffer,
+    pub size_bytes: u64,
+}
+
+#[derive(Clone, Debug)]
+enum GpuResource {
+    Image(GpuImage),
+    Buffer(GpuBuffer),
+}
+
+/// What a pass's recording closure receives.
+pub struct PassContext<'a> {
+    pub cmd: &'a Cmd<'a>,
+    /// Frame slot being recorded (0..frames in flight), for per-slot data such as uniforms.
+    pub slot: usize,
+    resources: &'a [Option<GpuResource>],
+}
+
+impl PassContext<'_> {
+    /// The image behind a handle this pass declared.
+    ///
+    /// # Panics
+    /// If the handle is not an image of this graph: handles are typed and created by the
+    /// same graph, so this is a programming error, not a user error.
+    pub fn image(&self, h: ImageHandle) -> &GpuImage {
+        match self.resources.get(h.0 .0 as usize) {
+            Some(Some(GpuResource::Image(i))) => i,
+            _ => panic!("image handle {:?} does not belong to this graph", h.0),
+        }
+    }
+
+    /// The buffer behind a handle this pass declared (see `image` for the panic).
+    pub fn buffer(&self, h: BufferHandle) -> GpuBuffer {
+        match self.resources.get(h.0 .0 as usize) {
+            Some(Some(GpuResource::Buffer(b))) => *b,
+            _ => panic!("buffer handle {:?} does not belong to this graph", h.0),
+        }
+    }
+}
+
+struct Slot {
+    arenas: Vec<vk::DeviceMemory>,
+    images: Vec<Image>,
+    buffers: Vec<Buffer>,
+    resources: Vec<Option<GpuResource>>,
+}
+
+/// A compiled graph with its GPU resources, recorded once per frame.
+pub struct GraphExecutor {
+    graph: RenderGraph,
+    compiled: CompiledGraph,
+    slots: Vec<Slot>,
+}
+
+/// Memory requirements from the device, without creating anything.
+struct DeviceOracle<'a> {
+    ctx: &'a Context,
+    error: std::cell::RefCell<Option<String>>,
+}
+
+impl MemoryOracle for DeviceOracle<'_> {
+    fn requirements(&self, _id: ResourceId, r: &ResourceDeclView) -> MemoryRequirements {
+        let req = match r.image {
+            Some(desc) => self.ctx.image_requirements(desc),
+            None => self
+                .ctx
+                .buffer_requirements(r.buffer_size_bytes, r.buffer_usage),
+        };
+        let memory_type = self
+            .ctx
+            .device_local_type(req.memory_type_bits)
+            .unwrap_or_else(|| {
+                *self.error.borrow_mut() =
+                    Some(format!("no memory type fits transient `{}`", r.name));
+                0
+            });
+        MemoryRequirements {
+            size_bytes: req.size,
+            alignment: req.alignment,
+            memory_type,
+        }
+    }
+}
+
+impl GraphExecutor {
+    /// Compiles `graph` against the device and creates its transients for `frames_in_flight`
+    /// slots (each slot has its own arenas, so frames in flight never share transients).
+    pub fn new(
+        ctx: &Context,
+        graph: RenderGraph,
+        frames_in_flight: usize,
+    ) -> Result<Self, GraphError> {
+        let oracle = DeviceOracle {
+            ctx,
+            error: Default::default(),
+        };
+        let compiled = graph.compile(&oracle)?;
+        if let Some(e) = oracle.error.borrow_mut().take() {
+            return Err(GraphError::Gpu(e));
+        }
+        let mut exec = Self {
+            graph,
+            compiled,
+            slots: Vec::new(),
+        };
+        for s in 0..frames_in_flight.max(1) {
+            match exec.create_slot(ctx, s) {
+                Ok(slot) => exec.slots.push(slot),
+                Err(e) => {
+                    exec.destroy(ctx);
+                    return Err(GraphError::Gpu(e.to_string()));
+                }
+            }
+        }
+        Ok(exec)
+    }
+
+    fn create_slot(&self, ctx: &Context, index: usize) -> Result<Slot, crate::vk::VkError> {
+        let mut slot = Slot {
+            arenas: Vec::new(),
+            images: Vec::new(),
+            buffers: Vec::new(),
+            resources: vec![None; self.graph.resources.len()],
+        };
+        for (i, a) in self.compiled.arenas.iter().enumerate() {
+            match ctx.allocate_arena(
+                a.memory_type,
+                a.size_bytes,
+                &format!("graph arena {i} (slot {index})"),
+            ) {
+                Ok(m) => slot.arenas.push(m),
+                Err(e) => {
+                    Self::destroy_slot(ctx, slot);
+                    return Err(e);
+                }
+            }
+        }
+        for (i, r) in self.graph.resources.iter().enumerate() {
+            let gpu = match (&r.origin, &r.kind) {
+                (
+                    Origin::Imported {
+                        image: Some(img), ..
+                    },
+                    ResourceKind::Image(desc),
+                ) => Some(GpuResource::Image(GpuImage {
+                    raw: img.raw,
+                    view: img.view,
+                    mip_views: img.mip_views.clone(),
+                    desc: desc.clone(),
+                })),
+                (
+                    Origin::Imported {
+                        buffer: Some(b), ..
+                    },
+                    ResourceKind::Buffer { size_bytes, .. },
+                ) => Some(GpuResource::Buffer(GpuBuffer {
+                    raw: *b,
+                    size_bytes: *size_bytes,
+                })),
+                (Origin::Transient, kind) => {
+                    let Some(place) = self.compiled.placements[i] else {
+                        continue;
+                    };
+                    let memory = slot.arenas[place.arena];
+                    let created = match kind {
+                        ResourceKind::Image(desc) => {
+                            let mut d = desc.clone();
+                            d.usage |= self.compiled.image_usage[i];
+                            ctx.create_image_in(&d, memory, place.offset).map(|img| {
+                                let g = GpuImage {
+                                    raw: img.raw,
+                                    view: img.view,
+                                    mip_views: img.mip_views.clone(),
+                                    desc: d,
+                                };
+                                slot.images.push(img);
+                                GpuResource::Image(g)
+                            })
+                        }
+                        ResourceKind::Buffer { size_bytes, .. } => {
+                            let desc = BufferDesc {
+                                name: r.name.clone(),
+                                size_bytes: *size_bytes,
+                                usage: self.compiled.buffer_usage[i],
+                                location: MemoryLocation::GpuOnly,
+                            };
+                            ctx.create_buffer_in(&desc, memory, place.offset).map(|b| {
+                                let g = GpuBuffer {
+                                    raw: b.raw,
+                                    size_bytes: *size_bytes,
+                                };
+                                slot.buffers.push(b);
+                                GpuResource::Buffer(g)
+                            })
+                        }
+                    };
+                    match created {
+                        Ok(g) => Some(g),
+                        Err(e) => {
+                            Self::destroy_slot(ctx, slot);
+                            return Err(e);
+                        }
+                    }
+                }
+                // Imported by description only: compile-only graphs cannot execute.
+                _ => None,
+            };
+            slot.resources[i] = gpu;
+        }
+        Ok(slot)
+    }
+
+    pub fn compiled(&self) -> &CompiledGraph {
+        &self.compiled
+    }
+
+    pub fn graph(&self) -> &RenderGraph {
+        &self.graph
+    }
+
+    /// Records the frame into `cmd` using the transients of `slot`.
+    pub fn record(&self, cmd: &Cmd, slot: usize, timestamps: &mut TimestampRecorder) {
+        let Some(s) = self.slots.get(slot % self.slots.len().max(1)) else {
+            return;
+        };
+        for (pos, &p) in self.compiled.order.iter().enumerate() {
+            let pass = &self.graph.passes[p];
+            cmd.begin_label(&pass.name, label_color(p));
+            let ts = timestamps.begin(cmd, &pass.name);
+            self.emit(cmd, s, &self.compiled.pass_barriers[pos]);
+            if let Some(f) = &pass.record {
+                f(&PassContext {
+                    cmd,
+                    slot,
+                    resources: &s.resources,
+                });
+            }
+            timestamps.end(cmd, ts);
+            cmd.end_label();
+        }
+        self.emit(cmd, s, &self.compiled.final_barriers);
+    }
+
+    fn emit(&self, cmd: &Cmd, slot: &Slot, barriers: &[super::Barrier]) {
+        let mut images = Vec::new();
+        let mut buffers = Vec::new();
+        for b in barriers {
+            match &slot.resources[b.resource.0 as usize] {
+                Some(GpuResource::Image(img)) => images.push(
+                    vk::ImageMemoryBarrier2::builder()
+                        .src_stage_mask(b.src_stages)
+                        .src_access_mask(b.src_access)
+                        .dst_stage_mask(b.dst_stages)
+                        .dst_access_mask(b.dst_access)
+                        .old_layout(b.old_layout)
+                        .new_layout(b.new_layout)
+                        .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                        .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                        .image(img.raw)
+                        .subresource_range(vk::ImageSubresourceRange {
+                            aspect_mask: img.desc.aspect(),
+                            base_mip_level: b.sub.base_mip,
+                            level_count: b.sub.mip_count,
+                            base_array_layer: b.sub.base_layer,
+                            layer_count: b.sub.layer_count,
+                        })
+                        .build(),
+                ),
+                Some(GpuResource::Buffer(buf)) => buffers.push(
+                    vk::BufferMemoryBarrier2::builder()
+                        .src_stage_mask(b.src_stages)
+                        .src_access_mask(b.src_access)
+                        .dst_stage_mask(b.dst_stages)
+                        .dst_access_mask(b.dst_access)
+                        .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                        .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                        .buffer(buf.raw)
+                        .offset(0)
+                        .size(vk::WHOLE_SIZE)
+                        .build(),
+                ),
+                None => {}
+            }
+        }
+        cmd.barriers(&images, &buffers);
+    }
+
+    fn destroy_slot(ctx: &Context, slot: Slot) {
+        for img in slot.images {
+            ctx.destroy_image(img);
+        }
+        for b in slot.buffers {
+            ctx.destroy_buffer(b);
+        }
+        for m in slot.arenas {
+            ctx.free_arena(m);
+        }
+    }
+
+    /// Destroys the transients. The caller must have waited for the GPU.
+    pub fn destroy(mut self, ctx: &Context) {
+        for slot in self.slots.drain(..) {
+            Self::destroy_slot(ctx, slot);
+        }
+    }
+}
+
+/// A stable per-pass color for debug labels (RenderDoc groups).
+fn label_color(index: usize) -> [f32; 4] {
+    let h = (index as f32 * 0.618_034).fract();
+    [
+        0.5 + 0.5 * (std::f32::consts::TAU * h).cos(),
+        0.5 + 0.5 * (std::f32::consts::TAU * (h + 0.33)).cos(),
+        0.5 + 0.5 * (std::f32::consts::TAU * (h + 0.67)).cos(),
+        1.0,
+    ]
+}

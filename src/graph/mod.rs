@@ -1,0 +1,343 @@
+//! The render graph: declare passes and resources, compile, execute.
+//!
+//! A frame is a list of passes. Each pass declares every resource it touches and how
+//! ([`Access`]), then hands over one closure that records its commands. [`RenderGraph::compile`]
+//! is plain Rust (no GPU): it validates the declarations, culls passes that feed no output,
+//! computes transient lifetimes, places transients in buddy-allocated arenas (aliasing those
+//! whose lifetimes do not overlap) and derives every barrier and layout transition. The
+//! [`GraphExecutor`] creates the transients on the GPU and records the frame, wrapping each
+//! pass in a debug label and a timestamp pair. No pass records a barrier.
+//!
+//! ```no_run
+//! # use voxgi::graph::*;
+//! # use voxgi::vk::{vk, ImageDesc};
+//! let mut g = RenderGraph::new();
+//! let img = g.create_image(ImageDesc::new_2d("gradient", vk::Format::R8G8B8A8_UNORM, 64, 64));
+//! let out = g.import_buffer_desc("readback", 64 * 64 * 4, Access::HostRead);
+//! g.add_pass("demo_gradient")
+//!     .write(img, Access::StorageWrite(Shader::Compute))
+//!     .record(move |_ctx| { /* bind, dispatch */ });
+//! g.add_pass("readback")
+//!     .read(img, Access::TransferRead)
+//!     .write(out, Access::TransferWrite)
+//!     .record(move |_ctx| { /* copy */ });
+//! ```
+//! Imported resources are persistent: each frame starts and ends with them in the state they
+//! were imported with, so one compiled graph serves every frame.
+
+mod access;
+pub mod buddy;
+mod compile;
+mod dump;
+mod execute;
+
+pub use access::{Access, AccessInfo, Shader, Subresource, SubresourceSel};
+pub use compile::{
+    texel_bytes, Arena, Barrier, CompiledGraph, EstimateOracle, MemoryOracle, MemoryRequirements,
+    MemoryStats, Placement, ResourceDeclView,
+};
+pub use execute::{GpuBuffer, GpuImage, GraphExecutor, PassContext};
+
+use crate::vk::{vk, Buffer, Image, ImageDesc};
+
+/// Errors of graph declaration and compilation. Each names the pass and resource.
+#[derive(Debug, thiserror::Error, PartialEq, Eq)]
+pub enum GraphError {
+    #[error("pass `{pass}` reads `{resource}`, but no earlier pass writes it and it is not imported: add the pass that produces it before `{pass}`, or import it")]
+    ReadBeforeWrite { pass: String, resource: String },
+    #[error("pass `{pass}` declares {access:?} on `{resource}`, which is not valid for a {kind}")]
+    AccessKindMismatch {
+        pass: String,
+        resource: String,
+        access: Access,
+        kind: &'static str,
+    },
+    #[error(
+        "pass `{pass}` declares `{resource}` with `.read()` but {access:?} writes: use `.write()`"
+    )]
+    ReadDeclaredAsWrite {
+        pass: String,
+        resource: String,
+        access: Access,
+    },
+    #[error("pass `{pass}` accesses mips {mips:?} / layers {layers:?} of `{resource}`, which has {mip_levels} mips and {layer_count} layers")]
+    SubresourceOutOfRange {
+        pass: String,
+        resource: String,
+        mips: (u32, u32),
+        layers: (u32, u32),
+        mip_levels: u32,
+        layer_count: u32,
+    },
+    #[error("pass `{pass}` uses the same subresource of `{resource}` in two layouts ({a:?} and {b:?}); split the pass or use distinct mips/layers")]
+    ConflictingLayouts {
+        pass: String,
+        resource: String,
+        a: Access,
+        b: Access,
+    },
+    #[error("two passes are named `{0}`: pass names must be unique (they key the timings)")]
+    DuplicatePassName(String),
+    #[error("the graph has no output: import a resource or mark one with `mark_output`, otherwise every pass is culled")]
+    NoOutput,
+    #[error("transient `{resource}` cannot be placed: {reason}")]
+    Placement { resource: String, reason: String },
+    #[error("GPU error while building the graph: {0}")]
+    Gpu(String),
+}
+
+/// A resource in the graph; typed handles wrap it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct ResourceId(pub u32);
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct ImageHandle(pub ResourceId);
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct BufferHandle(pub ResourceId);
+
+impl From<ImageHandle> for ResourceId {
+    fn from(h: ImageHandle) -> Self {
+        h.0
+    }
+}
+impl From<BufferHandle> for ResourceId {
+    fn from(h: BufferHandle) -> Self {
+        h.0
+    }
+}
+
+/// GPU handles of an imported image (copied; the owner keeps the `Image`).
+#[derive(Clone, Debug)]
+pub(crate) struct ImportedImage {
+    pub raw: vk::Image,
+    pub view: vk::ImageView,
+    pub mip_views: Vec<vk::ImageView>,
+}
+
+#[derive(Clone, Debug)]
+pub(crate) enum ResourceKind {
+    Image(ImageDesc),
+    Buffer {
+        size_bytes: u64,
+        usage: vk::BufferUsageFlags,
+    },
+}
+
+#[derive(Clone, Debug)]
+pub(crate) enum Origin {
+    Transient,
+    /// Persistent; valid in `state` at the start and the end of every frame.
+    Imported {
+        state: Access,
+        image: Option<ImportedImage>,
+        buffer: Option<vk::Buffer>,
+    },
+}
+
+#[derive(Clone, Debug)]
+pub(crate) struct ResourceDecl {
+    pub name: String,
+    pub kind: ResourceKind,
+    pub origin: Origin,
+    pub output: bool,
+}
+
+impl ResourceDecl {
+    pub(crate) fn mips_layers(&self) -> (u32, u32) {
+        match &self.kind {
+            ResourceKind::Image(d) => (d.mip_levels, d.layers),
+            ResourceKind::Buffer { .. } => (1, 1),
+        }
+    }
+    pub(crate) fn is_image(&self) -> bool {
+        matches!(self.kind, ResourceKind::Image(_))
+    }
+    pub(crate) fn is_transient(&self) -> bool {
+        matches!(self.origin, Origin::Transient)
+    }
+}
+
+/// The closure a pass records with.
+pub type RecordFn = Box<dyn Fn(&PassContext) + 'static>;
+
+pub(crate) struct PassDecl {
+    pub name: String,
+    /// (resource, access, selection, declared with `.read()`)
+    pub accesses: Vec<(ResourceId, Access, SubresourceSel, bool)>,
+    pub record: Option<RecordFn>,
+}
+
+/// The declared frame.
+#[derive(Default)]
+pub struct RenderGraph {
+    pub(crate) resources: Vec<ResourceDecl>,
+    pub(crate) passes: Vec<PassDecl>,
+}
+
+impl RenderGraph {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    fn push(&mut self, name: &str, kind: ResourceKind, origin: Origin) -> ResourceId {
+        self.resources.push(ResourceDecl {
+            name: name.to_owned(),
+            kind,
+            origin,
+            output: false,
+        });
+        ResourceId(self.resources.len() as u32 - 1)
+    }
+
+    /// A transient image; its usage flags are derived from the declared accesses.
+    pub fn create_image(&mut self, desc: ImageDesc) -> ImageHandle {
+        let name = desc.name.clone();
+        ImageHandle(self.push(&name, ResourceKind::Image(desc), Origin::Transient))
+    }
+
+    /// A transient buffer; its usage flags are derived from the declared accesses.
+    pub fn create_buffer(&mut self, name: &str, size_bytes: u64) -> BufferHandle {
+        BufferHandle(self.push(
+            name,
+            ResourceKind::Buffer {
+                size_bytes,
+                usage: vk::BufferUsageFlags::empty(),
+            },
+            Origin::Transient,
+        ))
+    }
+
+    /// Imports a persistent image that is in `state` before and after each frame.
+    pub fn import_image(&mut self, image: &Image, state: Access) -> ImageHandle {
+        let imported = ImportedImage {
+            raw: image.raw,
+            view: image.view,
+            mip_views: image.mip_views.clone(),
+        };
+        ImageHandle(self.push(
+            &image.desc.name,
+            ResourceKind::Image(image.desc.clone()),
+            Origin::Imported {
+                state,
+                image: Some(imported),
+                buffer: None,
+            },
+        ))
+    }
+
+    /// Imports a persistent buffer that is in `state` before and after each frame.
+    pub fn import_buffer(&mut self, buffer: &Buffer, state: Access) -> BufferHandle {
+        BufferHandle(self.push(
+            &buffer.desc.name,
+            ResourceKind::Buffer {
+                size_bytes: buffer.desc.size_bytes,
+                usage: buffer.desc.usage,
+            },
+            Origin::Imported {
+                state,
+                image: None,
+                buffer: Some(buffer.raw),
+            },
+        ))
+    }
+
+    /// Imports an image by description only (no GPU handle): for compiling without a GPU.
+    pub fn import_image_desc(&mut self, desc: ImageDesc, state: Access) -> ImageHandle {
+        let name = desc.name.clone();
+        ImageHandle(self.push(
+            &name,
+            ResourceKind::Image(desc),
+            Origin::Imported {
+                state,
+                image: None,
+                buffer: None,
+            },
+        ))
+    }
+
+    /// Imports a buffer by description only (no GPU handle): for compiling without a GPU.
+    pub fn import_buffer_desc(
+        &mut self,
+        name: &str,
+        size_bytes: u64,
+        state: Access,
+    ) -> BufferHandle {
+        BufferHandle(self.push(
+            name,
+            ResourceKind::Buffer {
+                size_bytes,
+                usage: vk::BufferUsageFlags::empty(),
+            },
+            Origin::Imported {
+                state,
+                image: None,
+                buffer: None,
+            },
+        ))
+    }
+
+    /// Keeps the passes that produce `resource` even if nothing reads it in this graph.
+    pub fn mark_output(&mut self, resource: impl Into<ResourceId>) {
+        let id = resource.into();
+        if let Some(r) = self.resources.get_mut(id.0 as usize) {
+            r.output = true;
+        }
+    }
+
+    pub fn add_pass(&mut self, name: &str) -> PassBuilder<'_> {
+        self.passes.push(PassDecl {
+            name: name.to_owned(),
+            accesses: Vec::new(),
+            record: None,
+        });
+        let index = self.passes.len() - 1;
+        PassBuilder { graph: self, index }
+    }
+
+    pub fn pass_names(&self) -> impl Iterator<Item = &str> {
+        self.passes.iter().map(|p| p.name.as_str())
+    }
+
+    pub fn resource_name(&self, id: impl Into<ResourceId>) -> &str {
+        self.resources
+            .get(id.into().0 as usize)
+            .map(|r| r.name.as_str())
+            .unwrap_or("?")
+    }
+}
+
+/// Declares one pass's accesses, then its recording closure.
+pub struct PassBuilder<'g> {
+    graph: &'g mut RenderGraph,
+    index: usize,
+}
+
+impl PassBuilder<'_> {
+    fn add(self, id: ResourceId, access: Access, sel: SubresourceSel, declared_read: bool) -> Self {
+        self.graph.passes[self.index]
+            .accesses
+            .push((id, access, sel, declared_read));
+        self
+    }
+    /// Declares a read of the whole resource.
+    pub fn read(self, r: impl Into<ResourceId>, access: Access) -> Self {
+        self.add(r.into(), access, SubresourceSel::whole(), true)
+    }
+    /// Declares a write (or read-write) of the whole resource.
+    pub fn write(self, r: impl Into<ResourceId>, access: Access) -> Self {
+        self.add(r.into(), access, SubresourceSel::whole(), false)
+    }
+    /// Declares a read of some mips/layers of an image.
+    pub fn read_sub(self, r: ImageHandle, access: Access, sel: SubresourceSel) -> Self {
+        self.add(r.into(), access, sel, true)
+    }
+    /// Declares a write of some mips/layers of an image.
+    pub fn write_sub(self, r: ImageHandle, access: Access, sel: SubresourceSel) -> Self {
+        self.add(r.into(), access, sel, false)
+    }
+    /// Hands over the recording closure; ends the declaration.
+    pub fn record(self, f: impl Fn(&PassContext) + 'static) {
+        self.graph.passes[self.index].record = Some(Box::new(f));
+    }
+}

@@ -1,0 +1,26 @@
+//! voxgi: a Vulkan-native real-time global-illumination renderer (voxel GI after Thiedemann
+//! 2010, on a render graph after Oetke 2017). See DESIGN.md for the architecture map.
+//!
+//! `vk` is the only module that calls Vulkan; `graph` derives every barrier; the remaining
+//! modules are safe Rust.
+
+#![cfg_attr(not(test), deny(clippy::unwrap_used, clippy::expect_used))]
+
+pub mod demo;
+#[forbid(unsafe_code)]
+pub mod eval;
+#[forbid(unsafe_code)]
+pub mod graph;
+#[forbid(unsafe_code)]
+pub mod light;
+#[forbid(unsafe_code)]
+pub mod post;
+#[forbid(unsafe_code)]
+pub mod profile;
+#[forbid(unsafe_code)]
+pub mod render;
+#[forbid(unsafe_code)]
+pub mod scene;
+pub mod vk;
+#[forbid(unsafe_code)]
+pub mod voxel;

@@ -1,0 +1,225 @@
+//! The `voxgi` command line. Everything but argument handling lives in the library.
+
+use anyhow::{bail, Context as _, Result};
+use clap::{Parser, Subcommand};
+use std::path::PathBuf;
+use voxgi::demo::Demo;
+use voxgi::profile::ProfileReport;
+use voxgi::vk::{Context, ContextDesc, FrameLoop, MAX_FRAMES_IN_FLIGHT};
+
+#[derive(Parser)]
+#[command(
+    name = "voxgi",
+    version,
+    about = "Vulkan voxel global illumination: render, profile and measure"
+)]
+struct Cli {
+    /// Enable the Khronos validation layer with synchronization validation; any message
+    /// makes the command fail.
+    #[arg(long, global = true)]
+    validate: bool,
+    /// Vulkan device: index or part of its name (default: discrete > integrated > CPU;
+    /// also VOXGI_DEVICE).
+    #[arg(long, global = true)]
+    device: Option<String>,
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Runs the frame N times after warm-up and prints per-pass GPU milliseconds
+    /// (median, min, max).
+    Profile {
+        /// Frames measured after warm-up.
+        #[arg(long, default_value_t = 100)]
+        frames: usize,
+        /// Frames run before measuring.
+        #[arg(long, default_value_t = 10)]
+        warmup: usize,
+        #[arg(long, default_value_t = 512)]
+        width: u32,
+        #[arg(long, default_value_t = 512)]
+        height: u32,
+        /// Print JSON instead of a table.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Prints the compiled render graph: passes, barriers, lifetimes, transient memory.
+    Graph {
+        /// Graphviz dot instead of text.
+        #[arg(long)]
+        dot: bool,
+        #[arg(long, default_value_t = 512)]
+        width: u32,
+        #[arg(long, default_value_t = 512)]
+        height: u32,
+    },
+    /// Lists Vulkan devices and whether voxgi can use them.
+    Devices,
+    /// Compares two images (EXR or PNG): relMSE, PSNR, SSIM, FLIP, mean/max absolute error.
+    Compare {
+        /// The reference image.
+        reference: PathBuf,
+        /// The image under test.
+        test: PathBuf,
+        /// Writes a FLIP error heatmap (PNG).
+        #[arg(long)]
+        heatmap: Option<PathBuf>,
+        /// Print JSON instead of text.
+        #[arg(long)]
+        json: bool,
+    },
+}
+
+fn main() {
+    env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
+    let cli = Cli::parse();
+    if let Err(e) = run(cli) {
+        eprintln!("error: {e:#}");
+        std::process::exit(1);
+    }
+}
+
+fn run(cli: Cli) -> Result<()> {
+    match cli.command {
+        Command::Devices => {
+            print!("{}", voxgi::vk::describe_devices()?);
+            Ok(())
+        }
+        Command::Compare {
+            reference,
+            test,
+            heatmap,
+            json,
+        } => compare(&reference, &test, heatmap.as_deref(), json),
+        Command::Graph { dot, width, height } => {
+            let ctx = context(cli.validate, cli.device)?;
+            let demo = Demo::new(&ctx, width, height)?;
+            let exec = demo.executor(&ctx, 1)?;
+            let c = exec.compiled();
+            if dot {
+                print!("{}", c.dump_dot(exec.graph()));
+            } else {
+                print!("{}", c.dump_text(exec.graph()));
+            }
+            exec.destroy(&ctx);
+            demo.destroy(&ctx);
+            check_validation(&ctx)
+        }
+        Command::Profile {
+            frames,
+            warmup,
+            width,
+            height,
+            json,
+        } => {
+            let ctx = context(cli.validate, cli.device)?;
+            let report = profile_demo(&ctx, frames, warmup, width, height)?;
+            if json {
+                println!("{}", serde_json::to_string_pretty(&report)?);
+            } else {
+                print!("{}", report.table());
+            }
+            check_validation(&ctx)
+        }
+    }
+}
+
+fn context(validate: bool, device: Option<String>) -> Result<Context> {
+    Ok(Context::new(&ContextDesc {
+        validation: validate,
+        device,
+        ..Default::default()
+    })?)
+}
+
+fn check_validation(ctx: &Context) -> Result<()> {
+    let n = ctx.validation.total();
+    if n > 0 {
+        bail!("the validation layers reported {n} message(s) (see the log above); this is a bug in voxgi, please report it");
+    }
+    Ok(())
+}
+
+fn profile_demo(
+    ctx: &Context,
+    frames: usize,
+    warmup: usize,
+    width: u32,
+    height: u32,
+) -> Result<ProfileReport> {
+    let demo = Demo::new(ctx, width, height)?;
+    let exec = demo.executor(ctx, MAX_FRAMES_IN_FLIGHT)?;
+    let mut frame_loop = FrameLoop::new(
+        ctx,
+        MAX_FRAMES_IN_FLIGHT,
+        exec.compiled().order.len() as u32,
+    )?;
+    let mut measured = Vec::new();
+    for i in 0..warmup + frames {
+        let (slot, cmd, ts, done) = frame_loop.begin(ctx)?;
+        exec.record(&cmd, slot, ts);
+        if i >= warmup + MAX_FRAMES_IN_FLIGHT && !done.is_empty() {
+            measured.push(done);
+        }
+        frame_loop.submit(ctx, &[], &[])?;
+    }
+    measured.extend(
+        frame_loop
+            .finish(ctx)?
+            .into_iter()
+            .filter(|t| !t.is_empty()),
+    );
+    let c = exec.compiled();
+    let mut report = ProfileReport::from_frames(&ctx.info.name, &measured, warmup);
+    report
+        .notes
+        .push(("graph".into(), "demo (4 live passes, 1 culled)".into()));
+    report
+        .notes
+        .push(("resolution".into(), format!("{width}x{height}")));
+    report.notes.push((
+        "transient memory".into(),
+        format!(
+            "{} bytes aliased, {} bytes without aliasing",
+            c.memory.peak_aliased_bytes, c.memory.unaliased_bytes
+        ),
+    ));
+    let culled: Vec<&str> = c.culled.iter().map(|&p| c.pass_names[p].as_str()).collect();
+    report
+        .notes
+        .push(("culled passes".into(), culled.join(", ")));
+    exec.destroy(ctx);
+    frame_loop.destroy(ctx);
+    demo.destroy(ctx);
+    Ok(report)
+}
+
+fn compare(
+    reference: &std::path::Path,
+    test: &std::path::Path,
+    heatmap: Option<&std::path::Path>,
+    json: bool,
+) -> Result<()> {
+    let m = voxgi::eval::compare_files(reference, test, None)?;
+    if let Some(path) = heatmap {
+        let r = voxgi::eval::HdrImage::load(reference)?;
+        let t = voxgi::eval::HdrImage::load(test)?;
+        let errors = voxgi::eval::flip_error_map(&r, &t)?;
+        voxgi::eval::write_heatmap(path, &errors, r.width, r.height)
+            .with_context(|| format!("writing the heatmap {}", path.display()))?;
+    }
+    if json {
+        println!("{}", serde_json::to_string_pretty(&m)?);
+    } else {
+        println!("relMSE    {:.6}", m.rel_mse);
+        println!("PSNR      {:.2} dB", m.psnr_db);
+        println!("SSIM      {:.4}", m.ssim);
+        println!("FLIP      {:.4}", m.flip_mean);
+        println!("mean |e|  {:.6}", m.mean_abs);
+        println!("max |e|   {:.6}", m.max_abs);
+        println!("pixels    {}", m.pixels);
+    }
+    Ok(())
+}

@@ -1,0 +1,906 @@
+//! The frame of voxgi: shadow maps → G-buffer → deferred direct light → tone mapping, with
+//! read-back of the linear HDR radiance and the tone-mapped image.
+//!
+//! [`Renderer`] uploads a [`Scene`] once, owns the pipelines, and declares the frame as a
+//! render graph; [`render_image`] runs one frame headless.
+
+mod cull;
+pub mod gpu;
+
+pub use cull::aabb_visible;
+
+use crate::eval::HdrImage;
+use crate::graph::{Access, GraphError, GraphExecutor, RenderGraph, Shader};
+use crate::light::{shadow_views, ShadowSettings};
+use crate::post::ToneMap;
+use crate::scene::{Light, Scene};
+use crate::vk::{
+    vk, Attachment, Buffer, BufferDesc, ComputePipeline, Context, Descriptor, FrameLoop,
+    GraphicsPipeline, GraphicsPipelineDesc, ImageDesc, MemoryLocation, PassTiming, VkError,
+    MAX_FRAMES_IN_FLIGHT,
+};
+use bytemuck::Zeroable;
+use glam::{Mat4, Vec3};
+use gpu::*;
+use std::sync::{Arc, RwLock};
+
+/// Errors of building or running a frame.
+#[derive(Debug, thiserror::Error)]
+pub enum RenderError {
+    #[error(transparent)]
+    Vk(#[from] VkError),
+    #[error(transparent)]
+    Graph(#[from] GraphError),
+    #[error("the scene has {0} lights; voxgi renders at most {MAX_LIGHTS}: remove some")]
+    TooManyLights(usize),
+    #[error("the scene's lights need {0} shadow-map views; at most {MAX_SHADOW_VIEWS} fit (a point light takes 6): remove some point lights")]
+    TooManyShadowViews(usize),
+    #[error("image size {0}x{1} is invalid: width and height must be between 1 and 16384")]
+    BadSize(u32, u32),
+    #[error("the scene has no geometry to render: add an object")]
+    EmptyScene,
+}
+
+/// What a frame renders.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RenderSettings {
+    pub width: u32,
+    pub height: u32,
+    /// Scene time (animation), seconds.
+    pub time_s: f32,
+    pub shadow: ShadowSettings,
+    pub tonemap: ToneMap,
+}
+
+impl Default for RenderSettings {
+    fn default() -> Self {
+        Self {
+            width: 512,
+            height: 512,
+            time_s: 0.0,
+            shadow: ShadowSettings::default(),
+            tonemap: ToneMap::default(),
+        }
+    }
+}
+
+/// One indexed draw of a submesh of an object.
+#[derive(Clone, Copy, Debug)]
+struct Draw {
+    first_index: u32,
+    index_count: u32,
+    vertex_offset: i32,
+    material: u32,
+    model: Mat4,
+    aabb: crate::scene::Aabb,
+}
+
+/// Draw lists after culling, read by the recording closures.
+#[derive(Clone, Debug, Default)]
+struct DrawLists {
+    camera: Vec<Draw>,
+    /// Per shadow view.
+    shadow: Vec<Vec<Draw>>,
+}
+
+struct Pipelines {
+    gbuffer: GraphicsPipeline,
+    shadow: GraphicsPipeline,
+    deferred: ComputePipeline,
+    tonemap: ComputePipeline,
+}
+
+/// A scene on the GPU with the pipelines of the direct-light frame.
+pub struct Renderer {
+    pub settings: RenderSettings,
+    vertices: Buffer,
+    indices: Buffer,
+    materials: Buffer,
+    /// `MAX_FRAMES_IN_FLIGHT` copies of `GpuFrame`, `frame_stride` bytes apart.
+    frame: Buffer,
+    frame_stride: u64,
+    readback_hdr: Buffer,
+    readback_ldr: Buffer,
+    pipelines: Pipelines,
+    sampler: vk::Sampler,
+    has_phong: bool,
+    shadow_view_count: u32,
+    draws: Arc<RwLock<DrawLists>>,
+    all_draws: Vec<Draw>,
+    frame_data: GpuFrame,
+}
+
+const GBUFFER_COLOR: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
+const DEPTH: vk::Format = vk::Format::D32_SFLOAT;
+const HDR: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
+
+impl Renderer {
+    pub fn new(
+        ctx: &Context,
+        scene: &Scene,
+        settings: RenderSettings,
+    ) -> Result<Self, RenderError> {
+        if settings.width == 0
+            || settings.height == 0
+            || settings.width > 16384
+            || settings.height > 16384
+        {
+            return Err(RenderError::BadSize(settings.width, settings.height));
+        }
+        if scene.lights.len() > MAX_LIGHTS {
+            return Err(RenderError::TooManyLights(scene.lights.len()));
+        }
+        let (vertices, indices, all_draws) = upload_geometry(ctx, scene, settings.time_s)?;
+        let materials: Vec<GpuMaterial> = scene
+            .materials
+            .iter()
+            .map(|m| GpuMaterial {
+                albedo: [m.albedo.x, m.albedo.y, m.albedo.z, m.opacity],
+                specular: [m.specular.x, m.specular.y, m.specular.z, m.shininess],
+            })
+            .collect();
+        let materials_buf = ctx.upload_buffer(
+            "materials",
+            bytemuck::cast_slice(&materials),
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+        )?;
+        let has_phong = !scene.is_all_lambert();
+        let frame_stride = (std::mem::size_of::<GpuFrame>() as u64).next_multiple_of(256);
+        let frame = ctx.create_buffer(&BufferDesc {
+            name: "frame constants".into(),
+            size_bytes: frame_stride * MAX_FRAMES_IN_FLIGHT as u64,
+            usage: vk::BufferUsageFlags::STORAGE_BUFFER,
+            location: MemoryLocation::CpuToGpu,
+        })?;
+        let pixels = u64::from(settings.width) * u64::from(settings.height);
+        let readback_hdr = ctx.create_buffer(&BufferDesc {
+            name: "readback hdr".into(),
+            size_bytes: pixels * 16,
+            usage: vk::BufferUsageFlags::TRANSFER_DST,
+            location: MemoryLocation::GpuToCpu,
+        })?;
+        let readback_ldr = ctx.create_buffer(&BufferDesc {
+            name: "readback ldr".into(),
+            size_bytes: pixels * 4,
+            usage: vk::BufferUsageFlags::TRANSFER_DST,
+            location: MemoryLocation::GpuToCpu,
+        })?;
+        let pipelines = create_pipelines(ctx, has_phong)?;
+        let sampler = ctx.create_sampler(vk::Filter::NEAREST, false)?;
+        let mut r = Self {
+            settings,
+            vertices,
+            indices,
+            materials: materials_buf,
+            frame,
+            frame_stride,
+            readback_hdr,
+            readback_ldr,
+            pipelines,
+            sampler,
+            has_phong,
+            shadow_view_count: 0,
+            draws: Arc::new(RwLock::new(DrawLists::default())),
+            all_draws,
+            frame_data: GpuFrame::zeroed(),
+        };
+        r.prepare(scene)?;
+        Ok(r)
+    }
+
+    /// Computes frame constants, shadow views and culled draw lists for the scene's camera.
+    fn prepare(&mut self, scene: &Scene) -> Result<(), RenderError> {
+        let s = &self.settings;
+        let (views, per_light) = shadow_views(scene, s.time_s, &s.shadow);
+        if views.len() > MAX_SHADOW_VIEWS {
+            return Err(RenderError::TooManyShadowViews(views.len()));
+        }
+        let aspect = s.width as f32 / s.height as f32;
+        let view_proj = scene.camera.view_proj(aspect);
+        let mut f = GpuFrame::zeroed();
+        f.view_proj = view_proj.to_cols_array();
+        f.inv_view_proj = view_proj.inverse().to_cols_array();
+        f.camera_position = scene.camera.position.extend(1.0).to_array();
+        f.counts = [
+            scene.lights.len() as u32,
+            views.len() as u32,
+            s.width,
+            s.height,
+        ];
+        f.shadow = [
+            s.shadow.bias_texels,
+            s.shadow.slope_bias_texels,
+            s.shadow.normal_offset_texels,
+            s.shadow.pcf_radius as f32,
+        ];
+        for (i, light) in scene.lights.iter().enumerate() {
+            f.lights[i] = gpu_light(light, per_light[i].first, per_light[i].count);
+        }
+        for (i, v) in views.iter().enumerate() {
+            f.shadow_views[i] = GpuShadowView {
+                view_proj: v.view_proj.to_cols_array(),
+                params: [
+                    v.texel_footprint,
+                    if v.orthographic { 1.0 } else { 0.0 },
+                    v.near,
+                    v.far,
+                ],
+                axis: [0.0; 4],
+            };
+        }
+        self.frame_data = f;
+        self.shadow_view_count = views.len() as u32;
+        let lists = DrawLists {
+            camera: self
+                .all_draws
+                .iter()
+                .copied()
+                .filter(|d| aabb_visible(&view_proj, &d.aabb))
+                .collect(),
+            shadow: views
+                .iter()
+                .map(|v| {
+                    self.all_draws
+                        .iter()
+                        .copied()
+                        .filter(|d| aabb_visible(&v.view_proj, &d.aabb))
+                        .collect()
+                })
+                .collect(),
+        };
+        if let Ok(mut d) = self.draws.write() {
+            *d = lists;
+        }
+        Ok(())
+    }
+
+    /// Writes the frame constants of frame slot `slot` (call after the slot's fence).
+    pub fn write_frame(&mut self, slot: usize) {
+        let offset = (slot as u64 * self.frame_stride) as usize;
+        let bytes = bytemuck::bytes_of(&self.frame_data);
+        if let Some(m) = self.frame.mapped_mut() {
+            m[offset..offset + bytes.len()].copy_from_slice(bytes);
+        }
+    }
+
+    /// Number of culled camera draws and total draws (for statistics and tests).
+    pub fn camera_draws(&self) -> (usize, usize) {
+        let visible = self.draws.read().map(|d| d.camera.len()).unwrap_or(0);
+        (visible, self.all_draws.len())
+    }
+
+    pub fn shadow_view_count(&self) -> u32 {
+        self.shadow_view_count
+    }
+
+    pub fn has_phong(&self) -> bool {
+        self.has_phong
+    }
+
+    /// Declares the frame.
+    pub fn graph(&self) -> RenderGraph {
+        let s = &self.settings;
+        let (w, h) = (s.width, s.height);
+        let mut g = RenderGraph::new();
+        let frame = g.import_buffer(&self.frame, Access::StorageRead(Shader::Compute));
+        let frame_raw = self.frame.raw;
+        let stride = self.frame_stride;
+        let frame_size = std::mem::size_of::<GpuFrame>() as u64;
+        let frame_desc = move |slot: usize| Descriptor::StorageBuffer {
+            binding: 0,
+            buffer: frame_raw,
+            offset: slot as u64 * stride,
+            range: frame_size,
+        };
+        let (vb, ib, mb) = (self.vertices.raw, self.indices.raw, self.materials.raw);
+
+        // Shadow maps: one layer per shadow view (a 1x1 cleared layer when there are none, so
+        // the shading pass always has a map to bind).
+        let views = self.shadow_view_count;
+        let res = if views == 0 { 1 } else { s.shadow.resolution };
+        let shadow_map = g.create_image(
+            ImageDesc::new_2d("shadow maps", DEPTH, res, res).with_layers(views.max(1)),
+        );
+        let pipe = self.pipelines.shadow;
+        let draws = self.draws.clone();
+        g.add_pass("shadow_depth")
+            .read(frame, Access::StorageRead(Shader::Geometry))
+            .write(shadow_map, Access::DepthAttachment)
+            .record(move |ctx| {
+                let map = ctx.image(shadow_map);
+                let depth = Attachment {
+                    view: map.view,
+                    clear: Some(vk::ClearValue {
+                        depth_stencil: vk::ClearDepthStencilValue {
+                            depth: 1.0,
+                            stencil: 0,
+                        },
+                    }),
+                };
+                ctx.cmd
+                    .begin_rendering_layers(map.extent_2d(), views.max(1), &[], Some(depth));
+                ctx.cmd.bind(&pipe, &[frame_desc(ctx.slot)]);
+                ctx.cmd.bind_vertex_buffer(vb);
+                ctx.cmd.bind_index_buffer(ib);
+                if let Ok(lists) = draws.read() {
+                    for (v, list) in lists.shadow.iter().enumerate() {
+                        for d in list {
+                            let push = GpuDrawPush {
+                                model: d.model.to_cols_array(),
+                                index: v as u32,
+                                _pad: [0; 3],
+                            };
+                            ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
+                            ctx.cmd
+                                .draw_indexed(d.index_count, d.first_index, d.vertex_offset);
+                        }
+                    }
+                }
+                ctx.cmd.end_rendering();
+            });
+
+        // G-buffer.
+        let albedo = g.create_image(ImageDesc::new_2d("gbuffer albedo", GBUFFER_COLOR, w, h));
+        let normal = g.create_image(ImageDesc::new_2d("gbuffer normal", GBUFFER_COLOR, w, h));
+        let specular = self
+            .has_phong
+            .then(|| g.create_image(ImageDesc::new_2d("gbuffer specular", GBUFFER_COLOR, w, h)));
+        let depth = g.create_image(ImageDesc::new_2d("gbuffer depth", DEPTH, w, h));
+        let pipe = self.pipelines.gbuffer;
+        let draws = self.draws.clone();
+        let mut pass = g
+            .add_pass("gbuffer")
+            .read(frame, Access::StorageRead(Shader::Graphics))
+            .write(albedo, Access::ColorAttachment)
+            .write(normal, Access::ColorAttachment)
+            .write(depth, Access::DepthAttachment);
+        if let Some(spec) = specular {
+            pass = pass.write(spec, Access::ColorAttachment);
+        }
+        pass.record(move |ctx| {
+            let clear = Some(vk::ClearValue {
+                color: vk::ClearColorValue { float32: [0.0; 4] },
+            });
+            let mut colors = vec![
+                Attachment {
+                    view: ctx.image(albedo).view,
+                    clear,
+                },
+                Attachment {
+                    view: ctx.image(normal).view,
+                    clear,
+                },
+            ];
+            if let Some(spec) = specular {
+                colors.push(Attachment {
+                    view: ctx.image(spec).view,
+                    clear,
+                });
+            }
+            let depth_att = Attachment {
+                view: ctx.image(depth).view,
+                clear: Some(vk::ClearValue {
+                    depth_stencil: vk::ClearDepthStencilValue {
+                        depth: 1.0,
+                        stencil: 0,
+                    },
+                }),
+            };
+            ctx.cmd
+                .begin_rendering(ctx.image(albedo).extent_2d(), &colors, Some(depth_att));
+            ctx.cmd.bind(
+                &pipe,
+                &[frame_desc(ctx.slot), Descriptor::storage_buffer(1, mb)],
+            );
+            ctx.cmd.bind_vertex_buffer(vb);
+            ctx.cmd.bind_index_buffer(ib);
+            if let Ok(lists) = draws.read() {
+                for d in &lists.camera {
+                    let push = GpuDrawPush {
+                        model: d.model.to_cols_array(),
+                        index: d.material,
+                        _pad: [0; 3],
+                    };
+                    ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
+                    ctx.cmd
+                        .draw_indexed(d.index_count, d.first_index, d.vertex_offset);
+                }
+            }
+            ctx.cmd.end_rendering();
+        });
+
+        // Deferred direct light.
+        let radiance = g.create_image(ImageDesc::new_2d("radiance", HDR, w, h));
+        let pipe = self.pipelines.deferred;
+        let sampler = self.sampler;
+        let groups = (w.div_ceil(8), h.div_ceil(8));
+        let mut pass = g
+            .add_pass("deferred_direct")
+            .read(frame, Access::StorageRead(Shader::Compute))
+            .read(albedo, Access::Sampled(Shader::Compute))
+            .read(normal, Access::Sampled(Shader::Compute))
+            .read(depth, Access::Sampled(Shader::Compute))
+            .read(shadow_map, Access::Sampled(Shader::Compute))
+            .write(radiance, Access::StorageWrite(Shader::Compute));
+        if let Some(spec) = specular {
+            pass = pass.read(spec, Access::Sampled(Shader::Compute));
+        }
+        pass.record(move |ctx| {
+            let sampled = |binding, view| Descriptor::SampledImage {
+                binding,
+                view,
+                sampler,
+            };
+            // Without Phong materials the specular binding is never read; bind albedo there.
+            let spec_view = specular
+                .map(|s| ctx.image(s).view)
+                .unwrap_or(ctx.image(albedo).view);
+            ctx.cmd.bind(
+                &pipe,
+                &[
+                    frame_desc(ctx.slot),
+                    sampled(1, ctx.image(albedo).view),
+                    sampled(2, ctx.image(normal).view),
+                    sampled(3, spec_view),
+                    sampled(4, ctx.image(depth).view),
+                    sampled(5, ctx.image(shadow_map).view),
+                    Descriptor::StorageImage {
+                        binding: 6,
+                        view: ctx.image(radiance).view,
+                    },
+                ],
+            );
+            ctx.cmd.dispatch(groups.0, groups.1, 1);
+        });
+
+        // Tone mapping.
+        let ldr = g.create_image(ImageDesc::new_2d("ldr", vk::Format::R8G8B8A8_UNORM, w, h));
+        let pipe = self.pipelines.tonemap;
+        let tm = s.tonemap;
+        g.add_pass("tonemap")
+            .read(radiance, Access::Sampled(Shader::Compute))
+            .write(ldr, Access::StorageWrite(Shader::Compute))
+            .record(move |ctx| {
+                ctx.cmd.bind(
+                    &pipe,
+                    &[
+                        Descriptor::SampledImage {
+                            binding: 0,
+                            view: ctx.image(radiance).view,
+                            sampler,
+                        },
+                        Descriptor::StorageImage {
+                            binding: 1,
+                            view: ctx.image(ldr).view,
+                        },
+                    ],
+                );
+                let push = GpuTonemapPush {
+                    exposure: tm.exposure,
+                    op: tm.operator.shader_id(),
+                    white: tm.white,
+                    drago_bias: tm.drago_bias,
+                };
+                ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
+                ctx.cmd.dispatch(groups.0, groups.1, 1);
+            });
+
+        // Read-back of both images.
+        let hdr_buf = g.import_buffer(&self.readback_hdr, Access::HostRead);
+        let ldr_buf = g.import_buffer(&self.readback_ldr, Access::HostRead);
+        let extent = vk::Extent3D {
+            width: w,
+            height: h,
+            depth: 1,
+        };
+        g.add_pass("readback_hdr")
+            .read(radiance, Access::TransferRead)
+            .write(hdr_buf, Access::TransferWrite)
+            .record(move |ctx| {
+                ctx.cmd.copy_image_to_buffer(
+                    ctx.image(radiance).raw,
+                    extent,
+                    0,
+                    1,
+                    ctx.buffer(hdr_buf).raw,
+                )
+            });
+        g.add_pass("readback_ldr")
+            .read(ldr, Access::TransferRead)
+            .write(ldr_buf, Access::TransferWrite)
+            .record(move |ctx| {
+                ctx.cmd.copy_image_to_buffer(
+                    ctx.image(ldr).raw,
+                    extent,
+                    0,
+                    1,
+                    ctx.buffer(ldr_buf).raw,
+                )
+            });
+        g
+    }
+
+    /// Linear radiance of the last completed frame.
+    pub fn hdr_image(&self) -> HdrImage {
+        let (w, h) = (self.settings.width, self.settings.height);
+        let data: Vec<[f32; 3]> = self
+            .readback_hdr
+            .mapped()
+            .map(|m| {
+                bytemuck::cast_slice::<u8, [f32; 4]>(&m[..(w * h * 16) as usize])
+                    .iter()
+                    .map(|p| [p[0], p[1], p[2]])
+                    .collect()
+            })
+            .unwrap_or_else(|| vec![[0.0; 3]; (w * h) as usize]);
+        HdrImage {
+            width: w,
+            height: h,
+            data,
+        }
+    }
+
+    /// Tone-mapped sRGB RGBA8 pixels of the last completed frame.
+    pub fn ldr_pixels(&self) -> Vec<u8> {
+        let n = (self.settings.width * self.settings.height * 4) as usize;
+        self.readback_ldr
+            .mapped()
+            .map(|m| m[..n].to_vec())
+            .unwrap_or_default()
+    }
+
+    pub fn destroy(self, ctx: &Context) {
+        ctx.destroy_graphics_pipeline(self.pipelines.gbuffer);
+        ctx.destroy_graphics_pipeline(self.pipelines.shadow);
+        ctx.destroy_compute_pipeline(self.pipelines.deferred);
+        ctx.destroy_compute_pipeline(self.pipelines.tonemap);
+        ctx.destroy_sampler(self.sampler);
+        for b in [
+            self.vertices,
+            self.indices,
+            self.materials,
+            self.frame,
+            self.readback_hdr,
+            self.readback_ldr,
+        ] {
+            ctx.destroy_buffer(b);
+        }
+    }
+}
+
+fn gpu_light(light: &Light, first_view: u32, views: u32) -> GpuLight {
+    let v4 = |v: Vec3| [v.x, v.y, v.z, 0.0];
+    match *light {
+        Light::Point {
+            position,
+            intensity_w_sr,
+        } => GpuLight {
+            position: v4(position),
+            intensity: v4(intensity_w_sr),
+            info: [LIGHT_POINT, first_view, views, 0],
+            ..Default::default()
+        },
+        Light::Spot {
+            position,
+            direction,
+            intensity_w_sr,
+            cutoff_deg,
+            beam_deg,
+        } => GpuLight {
+            position: v4(position),
+            direction: v4(direction),
+            intensity: v4(intensity_w_sr),
+            spot: [
+                cutoff_deg.to_radians().cos(),
+                cutoff_deg.to_radians(),
+                beam_deg.to_radians(),
+                0.0,
+            ],
+            info: [LIGHT_SPOT, first_view, views, 0],
+        },
+        Light::Directional {
+            direction,
+            irradiance_w_m2,
+        } => GpuLight {
+            direction: v4(direction),
+            intensity: v4(irradiance_w_m2),
+            info: [LIGHT_DIRECTIONAL, first_view, views, 0],
+            ..Default::default()
+        },
+    }
+}
+
+/// Uploads every mesh into one vertex and one index buffer; returns one draw per submesh of
+/// each object at time `t_s`.
+fn upload_geometry(
+    ctx: &Context,
+    scene: &Scene,
+    t_s: f32,
+) -> Result<(Buffer, Buffer, Vec<Draw>), RenderError> {
+    let mut vertices: Vec<GpuVertex> = Vec::new();
+    let mut indices: Vec<u32> = Vec::new();
+    let mut mesh_base = Vec::with_capacity(scene.meshes.len());
+    for mesh in &scene.meshes {
+        mesh_base.push((vertices.len() as i32, indices.len() as u32));
+        for (i, p) in mesh.positions.iter().enumerate() {
+            let n = mesh.normals.get(i).copied().unwrap_or(Vec3::Y);
+            let uv = mesh
+                .uvs
+                .as_ref()
+                .and_then(|u| u.get(i).copied())
+                .unwrap_or_default();
+            vertices.push(GpuVertex {
+                position: p.to_array(),
+                normal: n.to_array(),
+                uv: uv.to_array(),
+            });
+        }
+        indices.extend_from_slice(&mesh.indices);
+    }
+    if vertices.is_empty() || indices.is_empty() {
+        return Err(RenderError::EmptyScene);
+    }
+    let mut draws = Vec::new();
+    for object in &scene.objects {
+        let mesh_index = object.mesh_at(t_s);
+        let Some(mesh) = scene.meshes.get(mesh_index) else {
+            continue;
+        };
+        let (vbase, ibase) = mesh_base[mesh_index];
+        let model = object.transform_at(t_s);
+        let aabb = mesh.aabb.transformed(&model);
+        for (si, sub) in mesh.submeshes.iter().enumerate() {
+            let material = object.materials.get(si).copied().unwrap_or(sub.material) as u32;
+            draws.push(Draw {
+                first_index: ibase + sub.first_index,
+                index_count: sub.index_count,
+                vertex_offset: vbase,
+                material,
+                model,
+                aabb,
+            });
+        }
+    }
+    let vb = ctx.upload_buffer(
+        "vertices",
+        bytemuck::cast_slice(&vertices),
+        vk::BufferUsageFlags::VERTEX_BUFFER,
+    )?;
+    let ib = ctx.upload_buffer(
+        "indices",
+        bytemuck::cast_slice(&indices),
+        vk::BufferUsageFlags::INDEX_BUFFER,
+    )?;
+    Ok((vb, ib, draws))
+}
+
+fn create_pipelines(ctx: &Context, has_phong: bool) -> Result<Pipelines, VkError> {
+    let storage = vk::DescriptorType::STORAGE_BUFFER;
+    let sampled = vk::DescriptorType::COMBINED_IMAGE_SAMPLER;
+    let push = std::mem::size_of::<GpuDrawPush>() as u32;
+    let vertex_attributes = vec![
+        (vk::Format::R32G32B32_SFLOAT, 0),
+        (vk::Format::R32G32B32_SFLOAT, 12),
+        (vk::Format::R32G32_SFLOAT, 24),
+    ];
+    let mut colors = vec![GBUFFER_COLOR, GBUFFER_COLOR];
+    if has_phong {
+        colors.push(GBUFFER_COLOR);
+    }
+    let gbuffer = ctx.graphics_pipeline(&GraphicsPipelineDesc {
+        vertex: "gbuffer.vert".into(),
+        geometry: None,
+        fragment: "gbuffer.frag".into(),
+        bindings: vec![(0, storage), (1, storage)],
+        push_constant_bytes: push,
+        vertex_stride: std::mem::size_of::<GpuVertex>() as u32,
+        vertex_attributes: vertex_attributes.clone(),
+        topology: vk::PrimitiveTopology::TRIANGLE_LIST,
+        cull_mode: vk::CullModeFlags::NONE,
+        color_formats: colors,
+        depth_format: Some(DEPTH),
+        depth_test: true,
+        depth_write: true,
+        depth_bias: false,
+        logic_op: None,
+        spec: vec![(0, u32::from(has_phong))],
+    })?;
+    let shadow = ctx.graphics_pipeline(&GraphicsPipelineDesc {
+        vertex: "shadow_depth.vert".into(),
+        geometry: Some("shadow_depth.geom".into()),
+        fragment: "shadow_depth.frag".into(),
+        bindings: vec![(0, storage)],
+        push_constant_bytes: push,
+        vertex_stride: std::mem::size_of::<GpuVertex>() as u32,
+        vertex_attributes: vec![(vk::Format::R32G32B32_SFLOAT, 0)],
+        topology: vk::PrimitiveTopology::TRIANGLE_LIST,
+        cull_mode: vk::CullModeFlags::NONE,
+        color_formats: vec![],
+        depth_format: Some(DEPTH),
+        depth_test: true,
+        depth_write: true,
+        depth_bias: false,
+        logic_op: None,
+        spec: vec![],
+    })?;
+    let deferred = ctx.compute_pipeline(
+        "deferred_direct.comp",
+        &[
+            (0, storage),
+            (1, sampled),
+            (2, sampled),
+            (3, sampled),
+            (4, sampled),
+            (5, sampled),
+            (6, vk::DescriptorType::STORAGE_IMAGE),
+        ],
+        0,
+        &[(0, u32::from(has_phong))],
+    )?;
+    let tonemap = ctx.compute_pipeline(
+        "tonemap.comp",
+        &[(0, sampled), (1, vk::DescriptorType::STORAGE_IMAGE)],
+        std::mem::size_of::<GpuTonemapPush>() as u32,
+        &[],
+    )?;
+    Ok(Pipelines {
+        gbuffer,
+        shadow,
+        deferred,
+        tonemap,
+    })
+}
+
+/// The result of [`render_image`].
+pub struct RenderOutput {
+    pub hdr: HdrImage,
+    /// Tone-mapped sRGB RGBA8.
+    pub ldr: Vec<u8>,
+    pub timings: Vec<PassTiming>,
+    /// Compiled-graph facts: live passes, culled passes, transient bytes aliased / not.
+    pub live_passes: Vec<String>,
+    pub transient_bytes: (u64, u64),
+}
+
+/// Renders one frame of `scene` headless.
+pub fn render_image(
+    ctx: &Context,
+    scene: &Scene,
+    settings: &RenderSettings,
+) -> Result<RenderOutput, RenderError> {
+    let mut renderer = Renderer::new(ctx, scene, settings.clone())?;
+    let result = run_frames(ctx, &mut renderer, 1);
+    let out = result.map(|timings| {
+        let hdr = renderer.hdr_image();
+        let ldr = renderer.ldr_pixels();
+        (hdr, ldr, timings)
+    });
+    let (exec_facts, out) = match out {
+        Ok((hdr, ldr, (timings, live, bytes))) => (Some((live, bytes)), Ok((hdr, ldr, timings))),
+        Err(e) => (None, Err(e)),
+    };
+    renderer.destroy(ctx);
+    let (hdr, ldr, timings) = out?;
+    let (live_passes, transient_bytes) = exec_facts.unwrap_or_default();
+    Ok(RenderOutput {
+        hdr,
+        ldr,
+        timings,
+        live_passes,
+        transient_bytes,
+    })
+}
+
+type FrameFacts = (Vec<PassTiming>, Vec<String>, (u64, u64));
+
+/// Runs `frames` frames; returns the last frame's timings and graph facts.
+fn run_frames(
+    ctx: &Context,
+    renderer: &mut Renderer,
+    frames: usize,
+) -> Result<FrameFacts, RenderError> {
+    let exec = GraphExecutor::new(ctx, renderer.graph(), MAX_FRAMES_IN_FLIGHT)?;
+    let result = (|| -> Result<FrameFacts, RenderError> {
+        let mut frame_loop = FrameLoop::new(
+            ctx,
+            MAX_FRAMES_IN_FLIGHT,
+            exec.compiled().order.len() as u32,
+        )?;
+        let mut last = Vec::new();
+        let run = (|| -> Result<(), RenderError> {
+            for _ in 0..frames {
+                let slot = frame_loop.current_slot();
+                // begin() waits for the slot's fence before the frame constants are rewritten.
+                let (slot_b, cmd, ts, done) = frame_loop.begin(ctx)?;
+                debug_assert_eq!(slot, slot_b);
+                if !done.is_empty() {
+                    last = done;
+                }
+                renderer.write_frame(slot);
+                exec.record(&cmd, slot, ts);
+                frame_loop.submit(ctx, &[], &[])?;
+            }
+            Ok(())
+        })();
+        let finished = frame_loop.finish(ctx);
+        frame_loop.destroy(ctx);
+        run?;
+        if let Some(t) = finished?.into_iter().last() {
+            last = t;
+        }
+        let c = exec.compiled();
+        let live = c.order.iter().map(|&p| c.pass_names[p].clone()).collect();
+        Ok((
+            last,
+            live,
+            (c.memory.peak_aliased_bytes, c.memory.unaliased_bytes),
+        ))
+    })();
+    let _ = ctx.wait_idle();
+    exec.destroy(ctx);
+    result
+}
+
+/// What [`profile_scene`] measured.
+pub struct ProfileRun {
+    /// Per measured frame, the timings of each pass in order.
+    pub frames: Vec<Vec<PassTiming>>,
+    pub live_passes: Vec<String>,
+    pub culled_passes: Vec<String>,
+    /// Transient bytes with and without aliasing.
+    pub transient_bytes: (u64, u64),
+}
+
+/// Per-pass GPU timing over many frames of a scene (for `voxgi profile`).
+pub fn profile_scene(
+    ctx: &Context,
+    scene: &Scene,
+    settings: &RenderSettings,
+    frames: usize,
+    warmup: usize,
+) -> Result<ProfileRun, RenderError> {
+    let mut renderer = Renderer::new(ctx, scene, settings.clone())?;
+    let result = (|| {
+        let exec = GraphExecutor::new(ctx, renderer.graph(), MAX_FRAMES_IN_FLIGHT)?;
+        let r = (|| -> Result<Vec<Vec<PassTiming>>, RenderError> {
+            let mut frame_loop = FrameLoop::new(
+                ctx,
+                MAX_FRAMES_IN_FLIGHT,
+                exec.compiled().order.len() as u32,
+            )?;
+            let mut measured = Vec::new();
+            let run = (|| -> Result<(), RenderError> {
+                for i in 0..warmup + frames {
+                    let slot = frame_loop.current_slot();
+                    let (_, cmd, ts, done) = frame_loop.begin(ctx)?;
+                    if i >= warmup + MAX_FRAMES_IN_FLIGHT && !done.is_empty() {
+                        measured.push(done);
+                    }
+                    renderer.write_frame(slot);
+                    exec.record(&cmd, slot, ts);
+                    frame_loop.submit(ctx, &[], &[])?;
+                }
+                Ok(())
+            })();
+            let finished = frame_loop.finish(ctx);
+            frame_loop.destroy(ctx);
+            run?;
+            measured.extend(finished?.into_iter().filter(|t| !t.is_empty()));
+            Ok(measured)
+        })();
+        let _ = ctx.wait_idle();
+        let c = exec.compiled();
+        let live = c.order.iter().map(|&p| c.pass_names[p].clone()).collect();
+        let culled = c.culled.iter().map(|&p| c.pass_names[p].clone()).collect();
+        let bytes = (c.memory.peak_aliased_bytes, c.memory.unaliased_bytes);
+        exec.destroy(ctx);
+        r.map(|frames| ProfileRun {
+            frames,
+            live_passes: live,
+            culled_passes: culled,
+            transient_bytes: bytes,
+        })
+    })();
+    renderer.destroy(ctx);
+    result
+}

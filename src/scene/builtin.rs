@@ -1,0 +1,120 @@
+//! Built-in scenes, available without any file (`voxgi view` with no arguments).
+//!
+//! They are defined as TOML (`assets/scenes/cornell.toml`, embedded with `include_str!`) and
+//! go through the same parser and validation as scene files: one format, one code path, and
+//! the file doubles as an example users can copy. Variants are made by editing the parsed
+//! description before validation.
+
+use std::path::Path;
+
+use super::desc::{self, LightDesc, LightKind, ScalarOrVec3, SceneDesc};
+use super::{Scene, SceneError};
+
+/// The scene used when none is given.
+pub const DEFAULT_SCENE: &str = "cornell";
+
+const CORNELL_TOML: &str = include_str!("../../assets/scenes/cornell.toml");
+
+/// Names accepted by [`builtin`].
+pub fn builtin_names() -> &'static [&'static str] {
+    &["cornell", "cornell-point"]
+}
+
+/// A built-in scene by name, or `None` for an unknown name.
+///
+/// The embedded scenes are checked by the tests, so they always load; should one ever fail,
+/// the error is logged and `None` returned rather than panicking.
+pub fn builtin(name: &str) -> Option<Scene> {
+    match try_builtin(name)? {
+        Ok(scene) => Some(scene),
+        Err(e) => {
+            log::error!("built-in scene `{name}` is broken (a bug in voxgi): {e}");
+            None
+        }
+    }
+}
+
+fn try_builtin(name: &str) -> Option<Result<Scene, SceneError>> {
+    let origin = format!("<built-in scene {name}>");
+    let origin = Path::new(&origin);
+    let modify: fn(&mut SceneDesc) = match name {
+        "cornell" => |_| {},
+        "cornell-point" => |d| {
+            // 1 W/sr at 0.25 m below the ceiling: E = 1 / 0.5^2 = 4 W/m² at the floor center.
+            d.lights = vec![LightDesc {
+                kind: LightKind::Point,
+                position: Some([0.278, 0.5, 0.2796]),
+                direction: None,
+                intensity_w_sr: Some(ScalarOrVec3::Vec3([1.0, 1.0, 1.0])),
+                irradiance_w_m2: None,
+                cutoff_deg: None,
+                beam_deg: None,
+            }];
+        },
+        _ => return None,
+    };
+    Some(desc::parse(CORNELL_TOML, origin).and_then(|mut d| {
+        modify(&mut d);
+        // Built-in scenes reference only built-in meshes, so the base directory is unused.
+        desc::build(d, origin, Path::new("."), None)
+    }))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::Light;
+    use glam::Vec3;
+
+    #[test]
+    fn every_builtin_loads() {
+        for name in builtin_names() {
+            let r = try_builtin(name);
+            assert!(matches!(r, Some(Ok(_))), "{name}: {r:?}");
+        }
+        assert!(builtin("nope").is_none());
+        assert!(builtin(DEFAULT_SCENE).is_some());
+    }
+
+    #[test]
+    fn cornell_matches_the_published_box() {
+        let s = builtin("cornell").unwrap_or_else(|| panic!("cornell"));
+        let b = s.aabb_at(0.0);
+        assert!((b.min - Vec3::ZERO).length() < 1e-6, "{b:?}");
+        assert!(
+            (b.max - Vec3::new(0.556, 0.5488, 0.5592)).length() < 1e-6,
+            "{b:?}"
+        );
+        assert_eq!(s.objects.len(), 3);
+        assert!(s.is_all_lambert());
+        assert!(!s.has_point_lights() && s.has_spot_lights());
+        assert!(!s.has_dynamic_objects());
+        let fov = 2.0 * (0.0125f32 / 0.035).atan().to_degrees();
+        assert!((s.camera.fov_y_deg - fov).abs() < 0.05);
+        assert_eq!(s.camera.forward, Vec3::Z);
+        // Three wall colors plus nothing else.
+        assert_eq!(s.materials.len(), 3);
+        let Light::Spot {
+            position,
+            direction,
+            intensity_w_sr,
+            ..
+        } = s.lights[0]
+        else {
+            panic!("expected a spot light")
+        };
+        assert_eq!(direction, -Vec3::Y);
+        // The irradiance stated in cornell.toml.
+        let e = intensity_w_sr.x / (position.y * position.y);
+        assert!((e - 3.43).abs() < 0.01, "{e}");
+        // 5 walls + 2 × 5 block faces, two triangles each.
+        assert_eq!(s.triangle_count_at(0.0), 30);
+    }
+
+    #[test]
+    fn cornell_point_has_a_point_light() {
+        let s = builtin("cornell-point").unwrap_or_else(|| panic!("cornell-point"));
+        assert!(s.has_point_lights() && !s.has_spot_lights());
+        assert_eq!(s.lights.len(), 1);
+    }
+}

@@ -1,0 +1,881 @@
+//! The scene file as written (serde types) and its validation into a [`Scene`].
+
+use std::path::{Path, PathBuf};
+
+use glam::Vec3;
+use serde::Deserialize;
+
+use super::camera::Camera;
+use super::error::{field_ref, from_toml_error, SceneError};
+use super::light::Light;
+use super::mesh::{Aabb, BUILTIN_MESH_NAMES};
+use super::obj::AssetStore;
+use super::object::{rotation_from_euler_xyz_deg, Animation, Keyframe, Object, Transform};
+use super::Scene;
+
+/// A number or three numbers (`scale = 2` or `scale = [1, 2, 1]`; `albedo = 0.5`).
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
+#[serde(untagged, expecting = "expected a number or an array of 3 numbers")]
+pub(crate) enum ScalarOrVec3 {
+    Scalar(f32),
+    Vec3([f32; 3]),
+}
+
+impl ScalarOrVec3 {
+    fn to_array(self) -> [f32; 3] {
+        match self {
+            ScalarOrVec3::Scalar(s) => [s; 3],
+            ScalarOrVec3::Vec3(v) => v,
+        }
+    }
+}
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct SceneDesc {
+    pub camera: CameraDesc,
+    #[serde(default)]
+    pub lights: Vec<LightDesc>,
+    #[serde(default)]
+    pub objects: Vec<ObjectDesc>,
+    pub voxel: Option<toml::Table>,
+    pub gi: Option<toml::Table>,
+}
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct CameraDesc {
+    pub position: [f32; 3],
+    pub target: Option<[f32; 3]>,
+    pub forward: Option<[f32; 3]>,
+    pub up: Option<[f32; 3]>,
+    pub fov_y_deg: f32,
+    pub near: Option<f32>,
+    pub far: Option<f32>,
+}
+
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub(crate) enum LightKind {
+    Point,
+    Spot,
+    Directional,
+}
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct LightDesc {
+    pub kind: LightKind,
+    pub position: Option<[f32; 3]>,
+    pub direction: Option<[f32; 3]>,
+    pub intensity_w_sr: Option<ScalarOrVec3>,
+    pub irradiance_w_m2: Option<ScalarOrVec3>,
+    pub cutoff_deg: Option<f32>,
+    pub beam_deg: Option<f32>,
+}
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct ObjectDesc {
+    pub name: Option<String>,
+    pub mesh: Option<String>,
+    pub builtin: Option<String>,
+    pub translate: Option<[f32; 3]>,
+    pub rotate_deg: Option<[f32; 3]>,
+    pub scale: Option<ScalarOrVec3>,
+    pub material: Option<MaterialDesc>,
+    pub dynamic: Option<bool>,
+    pub animation: Option<AnimationDesc>,
+}
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct MaterialDesc {
+    pub albedo: Option<ScalarOrVec3>,
+    pub specular: Option<ScalarOrVec3>,
+    pub shininess: Option<f32>,
+    pub opacity: Option<f32>,
+}
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct AnimationDesc {
+    pub keyframes: Option<Vec<KeyframeDesc>>,
+    #[serde(rename = "loop")]
+    pub looping: Option<bool>,
+    pub obj_sequence: Option<String>,
+    pub frames: Option<u32>,
+    pub fps: Option<f32>,
+    pub first_frame: Option<u32>,
+}
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct KeyframeDesc {
+    pub time_s: f32,
+    pub translate: Option<[f32; 3]>,
+    pub rotate_deg: Option<[f32; 3]>,
+    pub scale: Option<ScalarOrVec3>,
+}
+
+/// Parses scene TOML; `file` is only used in messages.
+pub(crate) fn parse(text: &str, file: &Path) -> Result<SceneDesc, SceneError> {
+    // Parse as plain TOML first so syntax errors and schema errors get distinct variants.
+    if let Err(e) = text.parse::<toml::Table>() {
+        return Err(from_toml_error(file, text, &e, true));
+    }
+    toml::from_str::<SceneDesc>(text).map_err(|e| from_toml_error(file, text, &e, false))
+}
+
+/// Field-level checks, each error naming `file` and the field.
+struct Check<'a> {
+    file: &'a Path,
+}
+
+impl Check<'_> {
+    fn invalid(&self, field: &str, problem: impl Into<String>) -> SceneError {
+        SceneError::InvalidValue {
+            file: self.file.to_path_buf(),
+            field: field.to_string(),
+            problem: problem.into(),
+        }
+    }
+
+    fn camera(&self, field: &str, problem: impl Into<String>) -> SceneError {
+        SceneError::InvalidCamera {
+            file: self.file.to_path_buf(),
+            field: field.to_string(),
+            problem: problem.into(),
+        }
+    }
+
+    fn scalar(&self, field: &str, v: f32) -> Result<f32, SceneError> {
+        if v.is_finite() {
+            Ok(v)
+        } else {
+            Err(SceneError::NonFinite {
+                file: self.file.to_path_buf(),
+                field: field.to_string(),
+                value: v,
+            })
+        }
+    }
+
+    fn vec3(&self, field: &str, v: [f32; 3]) -> Result<Vec3, SceneError> {
+        for (i, x) in v.iter().enumerate() {
+            self.scalar(&format!("{field}[{i}]"), *x)?;
+        }
+        Ok(Vec3::from_array(v))
+    }
+
+    fn direction(&self, field: &str, v: [f32; 3]) -> Result<Vec3, SceneError> {
+        let v = self.vec3(field, v)?;
+        // Rescale first so that a tiny but non-zero vector (1e-30) is still a direction.
+        let scaled = v / v.abs().max_element().max(f32::MIN_POSITIVE);
+        let n = scaled.normalize_or_zero();
+        if v == Vec3::ZERO || n == Vec3::ZERO {
+            return Err(SceneError::ZeroLengthDirection {
+                file: self.file.to_path_buf(),
+                field: field.to_string(),
+            });
+        }
+        Ok(n)
+    }
+
+    fn intensity(&self, field: &str, v: ScalarOrVec3) -> Result<Vec3, SceneError> {
+        let v = self.vec3(field, v.to_array())?;
+        for (i, x) in v.to_array().iter().enumerate() {
+            if *x < 0.0 {
+                return Err(SceneError::NegativeIntensity {
+                    file: self.file.to_path_buf(),
+                    field: format!("{field}[{i}]"),
+                    value: *x,
+                });
+            }
+        }
+        Ok(v)
+    }
+
+    fn reflectance(&self, field: &str, v: ScalarOrVec3) -> Result<Vec3, SceneError> {
+        let v = self.vec3(field, v.to_array())?;
+        if v.min_element() < 0.0 || v.max_element() > 1.0 {
+            return Err(self.invalid(
+                field,
+                format!(
+                    "reflectance {v} outside [0, 1]; expected linear RGB reflectances in [0, 1] \
+                     (values above 1 create energy)"
+                ),
+            ));
+        }
+        Ok(v)
+    }
+
+    fn scale(&self, field: &str, v: ScalarOrVec3) -> Result<Vec3, SceneError> {
+        let v = self.vec3(field, v.to_array())?;
+        if v.to_array().contains(&0.0) {
+            return Err(self.invalid(
+                field,
+                format!("scale {v} has a zero component, which flattens the object; expected non-zero scale factors"),
+            ));
+        }
+        Ok(v)
+    }
+}
+
+/// Validates `desc` and loads everything it references. `file` names the scene in messages;
+/// relative paths resolve against `base_dir`.
+pub(crate) fn build(
+    desc: SceneDesc,
+    file: &Path,
+    base_dir: &Path,
+    source: Option<PathBuf>,
+) -> Result<Scene, SceneError> {
+    let ck = Check { file };
+    let camera = build_camera(&ck, &desc.camera)?;
+    let lights = desc
+        .lights
+        .iter()
+        .enumerate()
+        .map(|(i, l)| build_light(&ck, &format!("lights[{i}]"), l))
+        .collect::<Result<Vec<_>, _>>()?;
+    if desc.objects.is_empty() {
+        return Err(SceneError::EmptyScene {
+            file: file.to_path_buf(),
+        });
+    }
+    if lights.is_empty() {
+        log::warn!(
+            "{}: the scene has no lights, so it will render black; add a `[[lights]]` table",
+            file.display()
+        );
+    }
+    let mut store = AssetStore::default();
+    let mut objects = Vec::with_capacity(desc.objects.len());
+    for (i, o) in desc.objects.iter().enumerate() {
+        objects.push(build_object(
+            &ck,
+            &format!("objects[{i}]"),
+            o,
+            base_dir,
+            &mut store,
+        )?);
+    }
+    Ok(Scene {
+        camera,
+        lights,
+        objects,
+        meshes: store.meshes,
+        materials: store.materials,
+        textures: store.textures,
+        voxel: desc.voxel,
+        gi: desc.gi,
+        source,
+    })
+}
+
+fn build_camera(ck: &Check<'_>, c: &CameraDesc) -> Result<Camera, SceneError> {
+    let position = ck.vec3("camera.position", c.position)?;
+    let forward =
+        match (c.target, c.forward) {
+            (Some(_), Some(_)) => {
+                return Err(ck.camera(
+                    "camera.target",
+                    "both `target` and `forward` are given; keep one of them",
+                ))
+            }
+            (None, None) => return Err(ck.camera(
+                "camera",
+                "neither `target` nor `forward` is given; add `target = [x, y, z]` (a point to \
+                 look at, meters) or `forward = [x, y, z]` (a direction)",
+            )),
+            (Some(t), None) => {
+                let t = ck.vec3("camera.target", t)?;
+                let d = t - position;
+                if d.length_squared() == 0.0 || d.normalize_or_zero() == Vec3::ZERO {
+                    return Err(ck.camera(
+                        "camera.target",
+                        "the target equals the camera position; move the target or use `forward`",
+                    ));
+                }
+                d.normalize()
+            }
+            (None, Some(f)) => ck.direction("camera.forward", f)?,
+        };
+    let up = match c.up {
+        Some(u) => ck.direction("camera.up", u)?,
+        None => Vec3::Y,
+    };
+    if forward.cross(up).length() < 1e-4 {
+        return Err(ck.camera(
+            "camera.up",
+            format!(
+                "up {up} is parallel to the viewing direction {forward}; expected an up vector \
+                 that is not parallel to it, e.g. [0, 0, 1] when looking straight down"
+            ),
+        ));
+    }
+    let fov = ck.scalar("camera.fov_y_deg", c.fov_y_deg)?;
+    if !(fov > 0.0 && fov < 180.0) {
+        return Err(ck.camera(
+            "camera.fov_y_deg",
+            format!(
+                "{fov} is not a vertical field of view; expected degrees in (0, 180), e.g. 39.3"
+            ),
+        ));
+    }
+    let near = ck.scalar("camera.near", c.near.unwrap_or(0.01))?;
+    let far = ck.scalar("camera.far", c.far.unwrap_or(100.0))?;
+    if near <= 0.0 {
+        return Err(ck.camera(
+            "camera.near",
+            format!("near = {near}; expected a positive distance in meters, e.g. 0.01"),
+        ));
+    }
+    if far <= near {
+        return Err(ck.camera(
+            "camera.far",
+            format!("far = {far} is not beyond near = {near}; expected near < far"),
+        ));
+    }
+    if far / near > 1e7 {
+        log::warn!(
+            "{}: camera far/near = {:.0e} loses depth precision; raise `near` or lower `far`",
+            ck.file.display(),
+            far / near
+        );
+    }
+    Ok(Camera {
+        position,
+        forward,
+        up,
+        fov_y_deg: fov,
+        near,
+        far,
+    })
+}
+
+fn build_light(ck: &Check<'_>, field: &str, l: &LightDesc) -> Result<Light, SceneError> {
+    let f = |name: &str| format!("{field}.{name}");
+    let kind_name = match l.kind {
+        LightKind::Point => "point",
+        LightKind::Spot => "spot",
+        LightKind::Directional => "directional",
+    };
+    let require = |name: &str, present: bool, example: &str| {
+        if present {
+            Ok(())
+        } else {
+            Err(ck.invalid(
+                &f(name),
+                format!("a {kind_name} light needs `{name}`; add e.g. `{name} = {example}`"),
+            ))
+        }
+    };
+    let forbid = |name: &str, present: bool| {
+        if present {
+            Err(ck.invalid(
+                &f(name),
+                format!("`{name}` does not apply to a {kind_name} light; remove it"),
+            ))
+        } else {
+            Ok(())
+        }
+    };
+    match l.kind {
+        LightKind::Point | LightKind::Spot => {
+            require("position", l.position.is_some(), "[0, 1, 0]")?;
+            require("intensity_w_sr", l.intensity_w_sr.is_some(), "[1, 1, 1]")?;
+            forbid("irradiance_w_m2", l.irradiance_w_m2.is_some())?;
+        }
+        LightKind::Directional => {
+            require("direction", l.direction.is_some(), "[0, -1, 0]")?;
+            require("irradiance_w_m2", l.irradiance_w_m2.is_some(), "[1, 1, 1]")?;
+            forbid("position", l.position.is_some())?;
+            forbid("intensity_w_sr", l.intensity_w_sr.is_some())?;
+        }
+    }
+    if l.kind != LightKind::Spot {
+        forbid("cutoff_deg", l.cutoff_deg.is_some())?;
+        forbid("beam_deg", l.beam_deg.is_some())?;
+    }
+    if l.kind == LightKind::Point {
+        forbid("direction", l.direction.is_some())?;
+    }
+    if l.kind == LightKind::Spot {
+        require("direction", l.direction.is_some(), "[0, -1, 0]")?;
+    }
+    let position = l.position.map(|p| ck.vec3(&f("position"), p)).transpose()?;
+    let direction = l
+        .direction
+        .map(|d| ck.direction(&f("direction"), d))
+        .transpose()?;
+    let intensity = l
+        .intensity_w_sr
+        .map(|v| ck.intensity(&f("intensity_w_sr"), v))
+        .transpose()?;
+    let irradiance = l
+        .irradiance_w_m2
+        .map(|v| ck.intensity(&f("irradiance_w_m2"), v))
+        .transpose()?;
+    // `require` above guarantees the kind's fields are present.
+    let missing = |name: &str| ck.invalid(&f(name), "missing");
+    Ok(match l.kind {
+        LightKind::Point => Light::Point {
+            position: position.ok_or_else(|| missing("position"))?,
+            intensity_w_sr: intensity.ok_or_else(|| missing("intensity_w_sr"))?,
+        },
+        LightKind::Spot => {
+            // Mitsuba 3's defaults: cutoff_angle 20°, beam_width 3/4 of the cutoff.
+            let cutoff = ck.scalar(&f("cutoff_deg"), l.cutoff_deg.unwrap_or(20.0))?;
+            if !(cutoff > 0.0 && cutoff < 90.0) {
+                return Err(ck.invalid(
+                    &f("cutoff_deg"),
+                    format!(
+                        "{cutoff} is not a cone half-angle; expected degrees in (0, 90) (use a \
+                         point light for wider cones)"
+                    ),
+                ));
+            }
+            let beam = ck.scalar(&f("beam_deg"), l.beam_deg.unwrap_or(0.75 * cutoff))?;
+            if !(beam > 0.0 && beam <= cutoff) {
+                return Err(ck.invalid(
+                    &f("beam_deg"),
+                    format!("{beam} is not in (0, cutoff_deg = {cutoff}]; the full-intensity core must lie inside the cone"),
+                ));
+            }
+            Light::Spot {
+                position: position.ok_or_else(|| missing("position"))?,
+                direction: direction.ok_or_else(|| missing("direction"))?,
+                intensity_w_sr: intensity.ok_or_else(|| missing("intensity_w_sr"))?,
+                cutoff_deg: cutoff,
+                beam_deg: beam,
+            }
+        }
+        LightKind::Directional => Light::Directional {
+            direction: direction.ok_or_else(|| missing("direction"))?,
+            irradiance_w_m2: irradiance.ok_or_else(|| missing("irradiance_w_m2"))?,
+        },
+    })
+}
+
+fn build_transform(
+    ck: &Check<'_>,
+    field: &str,
+    translate: Option<[f32; 3]>,
+    rotate_deg: Option<[f32; 3]>,
+    scale: Option<ScalarOrVec3>,
+    base: &Transform,
+) -> Result<Transform, SceneError> {
+    Ok(Transform {
+        translate: match translate {
+            Some(t) => ck.vec3(&format!("{field}.translate"), t)?,
+            None => base.translate,
+        },
+        rotation: match rotate_deg {
+            Some(r) => rotation_from_euler_xyz_deg(ck.vec3(&format!("{field}.rotate_deg"), r)?),
+            None => base.rotation,
+        },
+        scale: match scale {
+            Some(s) => ck.scale(&format!("{field}.scale"), s)?,
+            None => base.scale,
+        },
+    })
+}
+
+fn build_object(
+    ck: &Check<'_>,
+    field: &str,
+    o: &ObjectDesc,
+    base_dir: &Path,
+    store: &mut AssetStore,
+) -> Result<Object, SceneError> {
+    let f = |name: &str| format!("{field}.{name}");
+    let transform = build_transform(
+        ck,
+        field,
+        o.translate,
+        o.rotate_deg,
+        o.scale,
+        &Transform::default(),
+    )?;
+    let sequence = o.animation.as_ref().and_then(|a| a.obj_sequence.as_ref());
+    let (mesh, default_name) = match (&o.mesh, &o.builtin) {
+        (Some(_), Some(_)) => {
+            return Err(ck.invalid(
+                &f("builtin"),
+                "both `mesh` and `builtin` are given; keep one of them",
+            ))
+        }
+        (None, None) if sequence.is_none() => {
+            return Err(ck.invalid(
+                field,
+                format!(
+                    "the object has no geometry; add `mesh = \"file.obj\"` (relative to the \
+                     scene file) or `builtin = \"NAME\"` with NAME one of {BUILTIN_MESH_NAMES:?}"
+                ),
+            ))
+        }
+        (None, None) => (None, String::new()),
+        (Some(_), None) if sequence.is_some() => {
+            return Err(ck.invalid(
+                &f("mesh"),
+                "an object animated by `obj_sequence` takes its meshes from the sequence; \
+                 remove `mesh`",
+            ))
+        }
+        (Some(m), None) => {
+            let path = base_dir.join(m);
+            let name = path
+                .file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_else(|| m.clone());
+            let idx = store.obj_mesh(&path, "OBJ mesh", &field_ref(ck.file, &f("mesh")))?;
+            (Some(idx), name)
+        }
+        (None, Some(b)) => match store.builtin_mesh(b) {
+            Some(idx) => (Some(idx), b.clone()),
+            None => {
+                return Err(ck.invalid(
+                    &f("builtin"),
+                    format!("unknown built-in mesh `{b}`; expected one of {BUILTIN_MESH_NAMES:?}"),
+                ))
+            }
+        },
+    };
+    let name = o.name.clone().unwrap_or_else(|| default_name.clone());
+
+    let animation = match &o.animation {
+        None => None,
+        Some(a) => Some(build_animation(
+            ck,
+            &f("animation"),
+            a,
+            &transform,
+            base_dir,
+            store,
+        )?),
+    };
+    let mesh = match (&animation, mesh) {
+        (Some(Animation::ObjSequence { meshes, .. }), _) => meshes.first().copied(),
+        (_, m) => m,
+    }
+    .ok_or_else(|| ck.invalid(field, "the object has no mesh"))?;
+    let name = if name.is_empty() {
+        format!("object{}", field.trim_start_matches("objects"))
+    } else {
+        name
+    };
+
+    let dynamic = match (o.dynamic, animation.is_some()) {
+        (Some(false), true) => {
+            return Err(ck.invalid(
+                &f("dynamic"),
+                "an animated object is dynamic; remove `dynamic = false` or the animation",
+            ))
+        }
+        (d, animated) => d.unwrap_or(animated),
+    };
+
+    let submesh_materials: Vec<usize> = store
+        .meshes
+        .get(mesh)
+        .map(|m| m.submeshes.iter().map(|s| s.material).collect())
+        .unwrap_or_default();
+    let materials = match &o.material {
+        None => submesh_materials,
+        Some(md) => apply_override(ck, &f("material"), md, &name, &submesh_materials, store)?,
+    };
+    let local_aabb = store
+        .meshes
+        .get(mesh)
+        .map(|m| m.aabb)
+        .unwrap_or(Aabb::EMPTY);
+    Ok(Object {
+        name,
+        mesh,
+        materials,
+        transform,
+        dynamic,
+        animation,
+        local_aabb,
+    })
+}
+
+/// Derives one material per distinct submesh material with the override's fields replaced.
+fn apply_override(
+    ck: &Check<'_>,
+    field: &str,
+    md: &MaterialDesc,
+    object: &str,
+    submesh_materials: &[usize],
+    store: &mut AssetStore,
+) -> Result<Vec<usize>, SceneError> {
+    let albedo = md
+        .albedo
+        .map(|a| ck.reflectance(&format!("{field}.albedo"), a))
+        .transpose()?;
+    let specular = md
+        .specular
+        .map(|s| ck.reflectance(&format!("{field}.specular"), s))
+        .transpose()?;
+    let shininess = md
+        .shininess
+        .map(|s| ck.scalar(&format!("{field}.shininess"), s))
+        .transpose()?;
+    if let Some(s) = shininess {
+        if s < 0.0 {
+            return Err(ck.invalid(
+                &format!("{field}.shininess"),
+                format!("{s} is negative; expected a Phong exponent >= 0"),
+            ));
+        }
+    }
+    let opacity = md
+        .opacity
+        .map(|s| ck.scalar(&format!("{field}.opacity"), s))
+        .transpose()?;
+    if let Some(o) = opacity {
+        if !(0.0..=1.0).contains(&o) {
+            return Err(ck.invalid(
+                &format!("{field}.opacity"),
+                format!("{o} is outside [0, 1]; 1 is opaque"),
+            ));
+        }
+    }
+    let mut derived: Vec<(usize, usize)> = Vec::new();
+    let mut out = Vec::with_capacity(submesh_materials.len());
+    for &m in submesh_materials {
+        if let Some(&(_, d)) = derived.iter().find(|(src, _)| *src == m) {
+            out.push(d);
+            continue;
+        }
+        let Some(base) = store.materials.get(m) else {
+            out.push(m);
+            continue;
+        };
+        let mut mat = base.clone();
+        mat.name = format!("{object}:{}", base.name);
+        if let Some(a) = albedo {
+            mat.albedo = a;
+            mat.albedo_texture = None;
+        }
+        if let Some(s) = specular {
+            mat.specular = s;
+        }
+        if let Some(n) = shininess {
+            mat.shininess = n;
+        }
+        if let Some(o) = opacity {
+            mat.opacity = o;
+        }
+        if (mat.albedo + mat.specular).max_element() > 1.0 {
+            log::warn!(
+                "{}: {field}: albedo + specular exceeds 1 in some channel, so the material \
+                 reflects more energy than it receives; lower one of them",
+                ck.file.display()
+            );
+        }
+        let d = store.materials.len();
+        store.materials.push(mat);
+        derived.push((m, d));
+        out.push(d);
+    }
+    Ok(out)
+}
+
+fn build_animation(
+    ck: &Check<'_>,
+    field: &str,
+    a: &AnimationDesc,
+    base: &Transform,
+    base_dir: &Path,
+    store: &mut AssetStore,
+) -> Result<Animation, SceneError> {
+    let f = |name: &str| format!("{field}.{name}");
+    let looping = a.looping.unwrap_or(true);
+    match (&a.keyframes, &a.obj_sequence) {
+        (Some(_), Some(_)) => Err(ck.invalid(
+            field,
+            "both `keyframes` and `obj_sequence` are given; an animation is one or the other",
+        )),
+        (None, None) => Err(ck.invalid(
+            field,
+            "expected `keyframes = [{ time_s = 0.0, translate = [...] }, ...]` or \
+             `obj_sequence = \"anim/frame_{:03}.obj\"` with `frames` and `fps`",
+        )),
+        (Some(keys), None) => {
+            for name in ["frames", "fps", "first_frame"] {
+                let present = match name {
+                    "frames" => a.frames.is_some(),
+                    "fps" => a.fps.is_some(),
+                    _ => a.first_frame.is_some(),
+                };
+                if present {
+                    return Err(ck.invalid(
+                        &f(name),
+                        format!("`{name}` belongs to `obj_sequence` animations; remove it"),
+                    ));
+                }
+            }
+            if keys.is_empty() {
+                return Err(ck.invalid(&f("keyframes"), "no keyframes; add at least one"));
+            }
+            let mut keyframes = Vec::with_capacity(keys.len());
+            for (i, k) in keys.iter().enumerate() {
+                let kf = f(&format!("keyframes[{i}]"));
+                let time_s = ck.scalar(&format!("{kf}.time_s"), k.time_s)?;
+                if let Some(prev) = keyframes.last().map(|p: &Keyframe| p.time_s) {
+                    if time_s <= prev {
+                        return Err(ck.invalid(
+                            &format!("{kf}.time_s"),
+                            format!(
+                                "{time_s} s is not after the previous keyframe ({prev} s); \
+                                 expected strictly increasing times"
+                            ),
+                        ));
+                    }
+                }
+                let transform = build_transform(ck, &kf, k.translate, k.rotate_deg, k.scale, base)?;
+                keyframes.push(Keyframe { time_s, transform });
+            }
+            Ok(Animation::Keyframes { keyframes, looping })
+        }
+        (None, Some(pattern)) => {
+            let frames = a.frames.ok_or_else(|| {
+                ck.invalid(
+                    &f("frames"),
+                    "an `obj_sequence` needs `frames = N` (N >= 1)",
+                )
+            })?;
+            if frames == 0 {
+                return Err(ck.invalid(&f("frames"), "0 frames; expected at least 1"));
+            }
+            let fps = ck.scalar(&f("fps"), a.fps.unwrap_or(24.0))?;
+            if fps <= 0.0 {
+                return Err(ck.invalid(&f("fps"), format!("{fps}; expected frames per second > 0")));
+            }
+            let first = a.first_frame.unwrap_or(0);
+            let seq_field = f("obj_sequence");
+            let referenced_by = field_ref(ck.file, &seq_field);
+            let mut meshes = Vec::with_capacity(frames as usize);
+            let mut frame_aabbs = Vec::with_capacity(frames as usize);
+            let mut first_path = PathBuf::new();
+            for n in 0..frames {
+                let number = first.checked_add(n).ok_or_else(|| {
+                    ck.invalid(&f("first_frame"), "first_frame + frames overflows")
+                })?;
+                let name = format_frame(pattern, number).ok_or_else(|| {
+                    ck.invalid(
+                        &seq_field,
+                        format!(
+                            "`{pattern}` has no frame-number placeholder; expected `{{}}` or \
+                             `{{:0N}}` (zero-padded to N digits), e.g. \"anim/frame_{{:03}}.obj\""
+                        ),
+                    )
+                })?;
+                let path = base_dir.join(&name);
+                let idx = store.obj_mesh(&path, "OBJ sequence frame", &referenced_by)?;
+                if let Some(&m0) = meshes.first() {
+                    check_same_topology(store, m0, idx, &path, &first_path, &referenced_by)?;
+                } else {
+                    first_path = path.clone();
+                }
+                meshes.push(idx);
+                frame_aabbs.push(store.meshes.get(idx).map(|m| m.aabb).unwrap_or(Aabb::EMPTY));
+            }
+            if a.fps.is_none() {
+                log::info!(
+                    "{}: {field}: no `fps` given, playing at 24 frames per second",
+                    ck.file.display()
+                );
+            }
+            Ok(Animation::ObjSequence {
+                meshes,
+                frame_aabbs,
+                fps,
+                looping,
+            })
+        }
+    }
+}
+
+fn check_same_topology(
+    store: &AssetStore,
+    first: usize,
+    other: usize,
+    path: &Path,
+    first_path: &Path,
+    referenced_by: &str,
+) -> Result<(), SceneError> {
+    let (Some(a), Some(b)) = (store.meshes.get(first), store.meshes.get(other)) else {
+        return Ok(());
+    };
+    let problem = if a.positions.len() != b.positions.len() {
+        Some(format!(
+            "{} vertices instead of {}",
+            b.positions.len(),
+            a.positions.len()
+        ))
+    } else if a.indices != b.indices {
+        Some(format!(
+            "different faces ({} triangles, first has {})",
+            b.triangle_count(),
+            a.triangle_count()
+        ))
+    } else if a.submeshes != b.submeshes {
+        Some("different material groups".to_string())
+    } else if a.uvs.is_some() != b.uvs.is_some() {
+        Some("texture coordinates present in one frame only".to_string())
+    } else {
+        None
+    };
+    match problem {
+        None => Ok(()),
+        Some(problem) => Err(SceneError::SequenceTopology {
+            file: path.to_path_buf(),
+            first_frame: first_path.to_path_buf(),
+            problem,
+            referenced_by: referenced_by.to_string(),
+        }),
+    }
+}
+
+/// Replaces the first `{}` or `{:0N}` / `{:N}` in `pattern` by `n` (zero-padded to N digits).
+pub(crate) fn format_frame(pattern: &str, n: u32) -> Option<String> {
+    let start = pattern.find('{')?;
+    let end = start + pattern[start..].find('}')?;
+    let spec = &pattern[start + 1..end];
+    let width = match spec {
+        "" => 0,
+        s => s.strip_prefix(':')?.parse::<usize>().ok()?,
+    };
+    // Widths beyond 32 digits are typos; refuse rather than allocate.
+    if width > 32 {
+        return None;
+    }
+    Some(format!(
+        "{}{:0width$}{}",
+        &pattern[..start],
+        n,
+        &pattern[end + 1..],
+        width = width
+    ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn frame_patterns() {
+        assert_eq!(format_frame("f_{:03}.obj", 7).as_deref(), Some("f_007.obj"));
+        assert_eq!(format_frame("f_{}.obj", 12).as_deref(), Some("f_12.obj"));
+        assert_eq!(
+            format_frame("f_{:4}.obj", 12).as_deref(),
+            Some("f_0012.obj")
+        );
+        assert_eq!(format_frame("f.obj", 1), None);
+        assert_eq!(format_frame("f_{x}.obj", 1), None);
+        assert_eq!(format_frame("f_{:999}.obj", 1), None);
+    }
+}

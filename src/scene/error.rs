@@ -1,0 +1,312 @@
+//! Errors a scene file, an OBJ/MTL file or a built-in scene can cause.
+//!
+//! Every variant names the file it is about and the field (`lights[1].direction`) or the line
+//! (`line 12`) where the problem is, says what was expected, and says what to do. They are
+//! meant to be printed as they are, e.g. by `main.rs` through `anyhow`.
+
+use std::path::{Path, PathBuf};
+
+/// Something wrong with a scene the user gave us.
+#[derive(Debug, thiserror::Error)]
+pub enum SceneError {
+    /// A file the scene needs (the scene itself, an OBJ mesh, a frame of an OBJ sequence)
+    /// does not exist. Missing textures and MTL files are only warnings.
+    #[error(
+        "{}: {what} not found{}; check the path (paths in a scene file are relative to the \
+         scene file's directory)",
+        file.display(),
+        referenced_by.as_ref().map(|r| format!(" (referenced by {r})")).unwrap_or_default()
+    )]
+    NotFound {
+        file: PathBuf,
+        /// "scene file", "OBJ mesh", "OBJ sequence frame"…
+        what: &'static str,
+        /// `scene.toml: objects[2].mesh`, when another file referenced it.
+        referenced_by: Option<String>,
+    },
+
+    /// Any other I/O error while reading a file.
+    #[error("{}: cannot read {what}: {source}; check that the file is readable", file.display())]
+    Io {
+        file: PathBuf,
+        what: &'static str,
+        #[source]
+        source: std::io::Error,
+    },
+
+    /// The text is not valid TOML.
+    #[error(
+        "{}:{line}:{col}: TOML syntax error: {message}{}; fix the syntax at that position",
+        file.display(),
+        show_source_line(source_line)
+    )]
+    TomlSyntax {
+        file: PathBuf,
+        line: usize,
+        col: usize,
+        message: String,
+        source_line: String,
+    },
+
+    /// A key the scene format does not know (often a typo).
+    #[error(
+        "{}:{line}:{col}: unknown key `{key}`{}; expected one of {expected}; remove the key or \
+         fix its spelling (see the format in `voxgi::scene` docs)",
+        file.display(),
+        show_source_line(source_line)
+    )]
+    UnknownKey {
+        file: PathBuf,
+        line: usize,
+        col: usize,
+        key: String,
+        expected: String,
+        source_line: String,
+    },
+
+    /// Valid TOML, but a value has the wrong type or shape, or a required key is missing.
+    #[error(
+        "{}:{line}:{col}: {message}{}; see the format in `voxgi::scene` docs",
+        file.display(),
+        show_source_line(source_line)
+    )]
+    Schema {
+        file: PathBuf,
+        line: usize,
+        col: usize,
+        message: String,
+        source_line: String,
+    },
+
+    /// NaN or infinity in a numeric field of the scene file.
+    #[error(
+        "{}: `{field}` is {value}; expected a finite number; replace it with a finite value",
+        file.display()
+    )]
+    NonFinite {
+        file: PathBuf,
+        field: String,
+        value: f32,
+    },
+
+    /// A direction (or `up`, or camera target minus position) of length zero.
+    #[error(
+        "{}: `{field}` has zero length; expected a non-zero direction vector, e.g. [0, -1, 0]",
+        file.display()
+    )]
+    ZeroLengthDirection { file: PathBuf, field: String },
+
+    /// Camera parameters that do not describe a projection (fov, near/far, up ∥ forward).
+    #[error("{}: `{field}`: {problem}", file.display())]
+    InvalidCamera {
+        file: PathBuf,
+        field: String,
+        problem: String,
+    },
+
+    /// A light intensity or irradiance below zero.
+    #[error(
+        "{}: `{field}` = {value} is negative; light intensities are W/sr (point, spot) or W/m² \
+         (directional) and must be >= 0; use 0 to switch a channel off",
+        file.display()
+    )]
+    NegativeIntensity {
+        file: PathBuf,
+        field: String,
+        value: f32,
+    },
+
+    /// A value out of its allowed range, or two fields that contradict each other, or a field
+    /// required by another one (e.g. `direction` for a spot light).
+    #[error("{}: `{field}`: {problem}", file.display())]
+    InvalidValue {
+        file: PathBuf,
+        field: String,
+        problem: String,
+    },
+
+    /// The scene has no `[[objects]]`.
+    #[error(
+        "{}: the scene has no objects; add at least one `[[objects]]` table with `mesh = \
+         \"path.obj\"` or `builtin = \"cube\"`",
+        file.display()
+    )]
+    EmptyScene { file: PathBuf },
+
+    /// The OBJ (or MTL) file could not be parsed.
+    #[error(
+        "{}{}: malformed {kind}: {message}; fix or re-export the file",
+        file.display(),
+        line.map(|l| format!(":{l}")).unwrap_or_default()
+    )]
+    MalformedObj {
+        file: PathBuf,
+        /// "OBJ" or "MTL".
+        kind: &'static str,
+        line: Option<usize>,
+        message: String,
+    },
+
+    /// A face refers to a vertex, texture coordinate or normal that does not exist.
+    #[error(
+        "{}:{line}: face refers to {element} {index}, but only {count} are defined before \
+         this line; fix the face indices (OBJ indices start at 1, negative ones count back)",
+        file.display()
+    )]
+    FaceIndexOutOfRange {
+        file: PathBuf,
+        line: usize,
+        /// "vertex", "texture coordinate" or "normal".
+        element: &'static str,
+        index: i64,
+        count: usize,
+    },
+
+    /// NaN or infinity in a vertex position, normal or texture coordinate.
+    #[error(
+        "{}:{line}: {element} has a non-finite component (NaN or infinity); expected finite \
+         numbers; fix the exporter or remove the vertex",
+        file.display()
+    )]
+    NonFiniteVertex {
+        file: PathBuf,
+        line: usize,
+        element: &'static str,
+    },
+
+    /// A frame of an OBJ sequence whose topology differs from the first frame.
+    #[error(
+        "{}: OBJ sequence frame differs in topology from the first frame {} ({problem}); \
+         every frame must have the same faces, vertex count and materials; re-export the \
+         sequence with a fixed topology (referenced by {referenced_by})",
+        file.display(),
+        first_frame.display()
+    )]
+    SequenceTopology {
+        file: PathBuf,
+        first_frame: PathBuf,
+        problem: String,
+        referenced_by: String,
+    },
+
+    /// A texture exists but cannot be decoded.
+    #[error(
+        "{}: cannot decode texture: {message}; convert it to PNG or EXR (referenced by \
+         {referenced_by})",
+        file.display()
+    )]
+    TextureDecode {
+        file: PathBuf,
+        message: String,
+        referenced_by: String,
+    },
+}
+
+fn show_source_line(line: &str) -> String {
+    if line.trim().is_empty() {
+        String::new()
+    } else {
+        format!(" (in `{}`)", line.trim())
+    }
+}
+
+/// `file: field` as used in "referenced by" clauses.
+pub(crate) fn field_ref(file: &Path, field: &str) -> String {
+    format!("{}: {field}", file.display())
+}
+
+/// 1-based line and column of byte offset `pos` in `text`, and the text of that line.
+pub(crate) fn line_col(text: &str, pos: usize) -> (usize, usize, String) {
+    let pos = pos.min(text.len());
+    // Step back to a char boundary so slicing cannot panic on a span inside a multi-byte char.
+    let mut p = pos;
+    while p > 0 && !text.is_char_boundary(p) {
+        p -= 1;
+    }
+    let before = &text[..p];
+    let line = before.matches('\n').count() + 1;
+    let line_start = before.rfind('\n').map(|i| i + 1).unwrap_or(0);
+    let col = before[line_start..].chars().count() + 1;
+    let line_text = text[line_start..].lines().next().unwrap_or("").to_string();
+    (line, col, line_text)
+}
+
+/// Converts a `toml` error into a [`SceneError`], keeping the line and column.
+pub(crate) fn from_toml_error(
+    file: &Path,
+    text: &str,
+    err: &toml::de::Error,
+    syntax: bool,
+) -> SceneError {
+    let (line, col, source_line) =
+        err.span()
+            .map(|s| line_col(text, s.start))
+            .unwrap_or((0, 0, String::new()));
+    let message = err.message().trim().replace('\n', "; ");
+    let file = file.to_path_buf();
+    if syntax {
+        return SceneError::TomlSyntax {
+            file,
+            line,
+            col,
+            message,
+            source_line,
+        };
+    }
+    // serde's wording: "unknown field `foo`, expected one of `a`, `b`" (or "expected `a`").
+    if let Some(rest) = message.strip_prefix("unknown field `") {
+        if let Some((key, tail)) = rest.split_once('`') {
+            let expected = tail
+                .trim_start_matches(',')
+                .trim()
+                .trim_start_matches("expected one of")
+                .trim_start_matches("expected")
+                .trim()
+                .to_string();
+            let expected = if expected.is_empty() {
+                "no keys here".to_string()
+            } else {
+                expected
+            };
+            return SceneError::UnknownKey {
+                file,
+                line,
+                col,
+                key: key.to_string(),
+                expected,
+                source_line,
+            };
+        }
+    }
+    SceneError::Schema {
+        file,
+        line,
+        col,
+        message,
+        source_line,
+    }
+}
+
+impl SceneError {
+    /// A short, stable name of the variant, for logs and tests.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            SceneError::NotFound { .. } => "not-found",
+            SceneError::Io { .. } => "io",
+            SceneError::TomlSyntax { .. } => "toml-syntax",
+            SceneError::UnknownKey { .. } => "unknown-key",
+            SceneError::Schema { .. } => "schema",
+            SceneError::NonFinite { .. } => "non-finite",
+            SceneError::ZeroLengthDirection { .. } => "zero-length-direction",
+            SceneError::InvalidCamera { .. } => "invalid-camera",
+            SceneError::NegativeIntensity { .. } => "negative-intensity",
+            SceneError::InvalidValue { .. } => "invalid-value",
+            SceneError::EmptyScene { .. } => "empty-scene",
+            SceneError::MalformedObj { .. } => "malformed-obj",
+            SceneError::FaceIndexOutOfRange { .. } => "face-index-out-of-range",
+            SceneError::NonFiniteVertex { .. } => "non-finite-vertex",
+            SceneError::SequenceTopology { .. } => "sequence-topology",
+            SceneError::TextureDecode { .. } => "texture-decode",
+        }
+    }
+}

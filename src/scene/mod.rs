@@ -1,0 +1,208 @@
+//! Scenes: the TOML scene format, OBJ/MTL meshes, textures, camera, lights, materials,
+//! animation, and the built-in scenes. Pure Rust; the renderer uploads what [`Scene`] holds.
+//!
+//! # Units and conventions
+//! Meters; linear RGB; right-handed world, y up. Point and spot lights give radiant intensity
+//! in W/sr (E = I cosθ / d²), directional lights irradiance in W/m². Spot falloff, light units
+//! and the camera FOV follow Mitsuba 3 (except that `fov_y_deg` is always *vertical*;
+//! Mitsuba's default `fov_axis` is "x", see [`Camera::fov_x_deg`]). Materials are Lambert plus
+//! normalized Phong, f = ρ/π + ρs (n+2)/(2π) cosⁿα.
+//!
+//! # Scene file format
+//! Every key below is listed; any other key is an error. Relative paths resolve against the
+//! scene file's directory. Error messages name fields as `objects[2].scale` (0-based).
+//!
+//! ```toml
+//! [camera]
+//! position = [0.278, 0.273, -0.80]  # meters
+//! target = [0.278, 0.273, 0.0]      # a point to look at, or instead:
+//! # forward = [0.0, 0.0, 1.0]       # a viewing direction (not both)
+//! up = [0.0, 1.0, 0.0]              # optional, default +Y; must not be parallel to the view
+//! fov_y_deg = 39.3                  # vertical field of view, degrees in (0, 180)
+//! near = 0.01                       # optional, default 0.01 m
+//! far = 100.0                       # optional, default 100 m; near < far
+//!
+//! [[lights]]                        # zero or more
+//! kind = "spot"                     # "point" | "spot" | "directional"
+//! position = [0.278, 0.54, 0.28]    # point, spot
+//! direction = [0.0, -1.0, 0.0]      # spot (cone axis), directional (direction of travel)
+//! intensity_w_sr = [1.0, 1.0, 1.0]  # point, spot: W/sr, >= 0 (a single number means gray)
+//! cutoff_deg = 30.0                 # spot: cone half-angle in (0, 90); Mitsuba `cutoff_angle`;
+//!                                   #   default 20
+//! beam_deg = 20.0                   # spot: full-intensity half-angle in (0, cutoff];
+//!                                   #   Mitsuba `beam_width`; default 3/4 of cutoff
+//!
+//! [[lights]]
+//! kind = "directional"
+//! direction = [-0.3, -1.0, 0.2]
+//! irradiance_w_m2 = [2.0, 2.0, 2.0] # W/m² on a surface facing the light
+//!
+//! [[objects]]                       # at least one
+//! name = "bunny"                    # optional, for the UI and logs
+//! mesh = "../meshes/bunny.obj"      # an OBJ file (its MTL and textures beside it), or:
+//! # builtin = "cube"                # "cube" (1 m, centered), "quad" (1 m², XZ plane, facing
+//!                                   #   +Y), "sphere" (diameter 1 m), "cornell_walls",
+//!                                   #   "cornell_short_block", "cornell_tall_block"
+//! translate = [0.278, 0.0, 0.28]    # optional; model matrix = T · R · S
+//! rotate_deg = [0.0, 90.0, 0.0]     # optional, about X first, then Y, then Z (world axes)
+//! scale = 0.02                      # optional, a number or [x, y, z], non-zero
+//! material = { albedo = [0.8, 0.8, 0.8], specular = [0.1, 0.1, 0.1], shininess = 40.0 }
+//!                                   # optional: replaces these MTL fields on every submesh;
+//!                                   #   also `opacity` in [0, 1]; an `albedo` drops `map_Kd`
+//! dynamic = true                    # optional: re-voxelized every frame (default: animated)
+//!
+//! [objects.animation]               # optional; keyframes or an OBJ sequence
+//! loop = true                       # optional, default true
+//! keyframes = [
+//!     { time_s = 0.0, translate = [0.2, 0.0, 0.3] },
+//!     { time_s = 2.0, translate = [0.4, 0.0, 0.3], rotate_deg = [0.0, 180.0, 0.0], scale = 0.03 },
+//! ]                                 # times strictly increasing; a key's missing fields take
+//!                                   # the object's values; translation and scale are
+//!                                   # interpolated linearly, rotation by slerp
+//!
+//! [[objects]]
+//! name = "flag"
+//! [objects.animation]
+//! obj_sequence = "anim/flag_{:03}.obj"  # `{}` or `{:0N}` is replaced by the frame number
+//! frames = 24                           # >= 1; every frame must share the first's topology
+//! fps = 24.0                            # optional, default 24
+//! first_frame = 1                       # optional, default 0
+//!
+//! [voxel]    # optional, settings of the voxel grid (checked by `voxel`, not here)
+//! [gi]       # optional, settings of the GI methods (checked by `gi`, not here)
+//! ```
+//!
+//! A missing texture (or MTL file) is not an error: it is logged with `log::warn!` and the
+//! material's color is used. Everything else that is wrong is a [`SceneError`] naming the
+//! file and the field or line.
+//!
+//! # Built-in scenes
+//! [`builtin()`] returns `cornell` (the default: Cornell box lit by a spot light) and
+//! `cornell-point` (the same box with a point light). They are parsed from the embedded
+//! `assets/scenes/cornell.toml` through the same code path as files.
+
+mod builtin;
+mod camera;
+mod desc;
+mod error;
+mod light;
+mod material;
+mod mesh;
+mod obj;
+mod object;
+
+use std::path::{Path, PathBuf};
+
+pub use builtin::{builtin, builtin_names, DEFAULT_SCENE};
+pub use camera::Camera;
+pub use error::SceneError;
+pub use light::{spot_falloff, Light};
+pub use material::{BumpKind, Material, TextureData};
+pub use mesh::{area_weighted_normals, Aabb, Mesh, SubMesh, BUILTIN_MESH_NAMES};
+pub use object::{rotation_from_euler_xyz_deg, Animation, Keyframe, Object, Transform};
+
+/// A loaded, validated scene: everything finite, directions unit length, indices in range.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    pub camera: Camera,
+    pub lights: Vec<Light>,
+    pub objects: Vec<Object>,
+    /// Shared by objects; OBJ sequences contribute one mesh per frame.
+    pub meshes: Vec<Mesh>,
+    pub materials: Vec<Material>,
+    pub textures: Vec<TextureData>,
+    /// The `[voxel]` table as written, for the voxel module to interpret.
+    pub voxel: Option<toml::Table>,
+    /// The `[gi]` table as written, for the GI module to interpret.
+    pub gi: Option<toml::Table>,
+    /// The scene file; `None` for built-in scenes.
+    pub source: Option<PathBuf>,
+}
+
+impl Scene {
+    /// Loads a TOML scene file and everything it references.
+    pub fn load(path: impl AsRef<Path>) -> Result<Scene, SceneError> {
+        let path = path.as_ref();
+        let text = obj::read_text(path, "scene file", None)?;
+        let base_dir = path.parent().unwrap_or(Path::new("."));
+        let desc = desc::parse(&text, path)?;
+        desc::build(desc, path, base_dir, Some(path.to_path_buf()))
+    }
+
+    /// Parses scene TOML from a string. `origin` names it in error messages; relative paths
+    /// resolve against `base_dir`.
+    pub fn from_toml_str(text: &str, origin: &Path, base_dir: &Path) -> Result<Scene, SceneError> {
+        let desc = desc::parse(text, origin)?;
+        desc::build(desc, origin, base_dir, None)
+    }
+
+    /// Bounds of all objects at time `t_s`.
+    pub fn aabb_at(&self, t_s: f32) -> Aabb {
+        self.objects
+            .iter()
+            .fold(Aabb::EMPTY, |b, o| b.union(o.aabb_at(t_s)))
+    }
+
+    /// Materials drawn by some object.
+    pub fn used_materials(&self) -> impl Iterator<Item = &Material> {
+        self.objects
+            .iter()
+            .flat_map(|o| o.materials.iter())
+            .filter_map(|&m| self.materials.get(m))
+    }
+
+    /// No drawn material has a specular lobe: Phong passes can be skipped.
+    pub fn is_all_lambert(&self) -> bool {
+        self.used_materials().all(Material::is_lambert)
+    }
+
+    /// Point lights need cube shadow maps.
+    pub fn has_point_lights(&self) -> bool {
+        self.lights.iter().any(Light::is_point)
+    }
+
+    pub fn has_spot_lights(&self) -> bool {
+        self.lights.iter().any(Light::is_spot)
+    }
+
+    pub fn has_directional_lights(&self) -> bool {
+        self.lights.iter().any(Light::is_directional)
+    }
+
+    /// Some object must be re-voxelized every frame.
+    pub fn has_dynamic_objects(&self) -> bool {
+        self.objects.iter().any(|o| o.dynamic)
+    }
+
+    /// Some object moves by itself (keyframes or an OBJ sequence).
+    pub fn has_animation(&self) -> bool {
+        self.objects.iter().any(Object::is_animated)
+    }
+
+    /// Some drawn material samples an albedo texture.
+    pub fn has_albedo_textures(&self) -> bool {
+        self.used_materials().any(|m| m.albedo_texture.is_some())
+    }
+
+    /// Some drawn material has a bump or normal map.
+    pub fn has_bump_maps(&self) -> bool {
+        self.used_materials().any(|m| m.bump_texture.is_some())
+    }
+
+    /// Some drawn material is not fully opaque.
+    pub fn has_transparency(&self) -> bool {
+        self.used_materials().any(|m| !m.is_opaque())
+    }
+
+    /// Total triangles drawn at time `t_s`.
+    pub fn triangle_count_at(&self, t_s: f32) -> usize {
+        self.objects
+            .iter()
+            .filter_map(|o| self.meshes.get(o.mesh_at(t_s)))
+            .map(Mesh::triangle_count)
+            .sum()
+    }
+}
+
+#[cfg(test)]
+mod tests;

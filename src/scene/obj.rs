@@ -1,0 +1,574 @@
+//! OBJ/MTL loading (through `tobj`), textures (through `image`), and the store that
+//! deduplicates meshes, materials and textures while a scene is built.
+
+use std::cell::RefCell;
+use std::collections::HashMap;
+use std::io::Cursor;
+use std::path::{Path, PathBuf};
+
+use glam::{Vec2, Vec3};
+
+use super::error::SceneError;
+use super::material::{BumpKind, Material, TextureData};
+use super::mesh::{area_weighted_normals, builtin_shape, BuiltinMaterial, Mesh, SubMesh};
+
+/// Meshes, materials and textures of a scene under construction.
+#[derive(Default)]
+pub(crate) struct AssetStore {
+    pub meshes: Vec<Mesh>,
+    pub materials: Vec<Material>,
+    pub textures: Vec<TextureData>,
+    /// OBJ path → mesh, so objects sharing a file share the mesh.
+    obj_meshes: HashMap<PathBuf, usize>,
+    builtin_meshes: HashMap<String, usize>,
+    /// (OBJ directory, MTL material name) → material.
+    mtl_materials: HashMap<(PathBuf, String), usize>,
+    builtin_materials: HashMap<BuiltinMaterial, usize>,
+    /// (path, sRGB) → texture, `None` when missing (warned once).
+    textures_by_path: HashMap<(PathBuf, bool), Option<usize>>,
+}
+
+impl AssetStore {
+    pub fn builtin_material(&mut self, m: BuiltinMaterial) -> usize {
+        if let Some(&i) = self.builtin_materials.get(&m) {
+            return i;
+        }
+        let i = self.materials.len();
+        self.materials.push(Material::lambert(
+            format!("builtin:{}", m.name()),
+            m.albedo(),
+        ));
+        self.builtin_materials.insert(m, i);
+        i
+    }
+
+    /// The mesh for `builtin = NAME`, or `None` if there is no such shape.
+    pub fn builtin_mesh(&mut self, name: &str) -> Option<usize> {
+        if let Some(&i) = self.builtin_meshes.get(name) {
+            return Some(i);
+        }
+        let shape = builtin_shape(name)?;
+        let submeshes = shape
+            .parts
+            .iter()
+            .map(|&(first_index, index_count, m)| SubMesh {
+                first_index,
+                index_count,
+                material: self.builtin_material(m),
+            })
+            .collect();
+        let mut mesh = Mesh {
+            name: format!("builtin:{name}"),
+            positions: shape.positions,
+            normals: shape.normals,
+            uvs: Some(shape.uvs),
+            indices: shape.indices,
+            submeshes,
+            aabb: super::mesh::Aabb::EMPTY,
+        };
+        mesh.update_aabb();
+        let i = self.meshes.len();
+        self.meshes.push(mesh);
+        self.builtin_meshes.insert(name.to_string(), i);
+        Some(i)
+    }
+
+    /// Loads (once) the OBJ at `path`; `referenced_by` names the scene field, for messages.
+    pub fn obj_mesh(
+        &mut self,
+        path: &Path,
+        what: &'static str,
+        referenced_by: &str,
+    ) -> Result<usize, SceneError> {
+        if let Some(&i) = self.obj_meshes.get(path) {
+            return Ok(i);
+        }
+        let mesh = self.load_obj(path, what, referenced_by)?;
+        let i = self.meshes.len();
+        self.meshes.push(mesh);
+        self.obj_meshes.insert(path.to_path_buf(), i);
+        Ok(i)
+    }
+
+    fn load_obj(
+        &mut self,
+        path: &Path,
+        what: &'static str,
+        referenced_by: &str,
+    ) -> Result<Mesh, SceneError> {
+        let text = read_text(path, what, Some(referenced_by))?;
+        prescan_obj(path, &text)?;
+
+        let dir = path.parent().unwrap_or(Path::new(".")).to_path_buf();
+        // MTL problems found by tobj's callback: (path, missing?, message).
+        let mtl_problems: RefCell<Vec<(PathBuf, bool, String)>> = RefCell::new(Vec::new());
+        let options = tobj::LoadOptions {
+            single_index: true,
+            triangulate: true,
+            ignore_points: true,
+            ignore_lines: true,
+        };
+        let loaded = guarded(|| {
+            tobj::load_obj_buf(&mut Cursor::new(text.as_bytes()), &options, |mtl| {
+                let mtl_path = dir.join(mtl);
+                match std::fs::read_to_string(&mtl_path) {
+                    Ok(mtl_text) => {
+                        if let Err((line, message)) = prescan_mtl(&mtl_text) {
+                            mtl_problems.borrow_mut().push((
+                                mtl_path.clone(),
+                                false,
+                                format!("line {line}: {message}"),
+                            ));
+                            return Ok((Vec::new(), Default::default()));
+                        }
+                        let r =
+                            guarded(|| tobj::load_mtl_buf(&mut Cursor::new(mtl_text.as_bytes())))
+                                .unwrap_or(Err(tobj::LoadError::GenericFailure));
+                        if let Err(e) = &r {
+                            mtl_problems.borrow_mut().push((
+                                mtl_path.clone(),
+                                false,
+                                e.to_string(),
+                            ));
+                        }
+                        r
+                    }
+                    Err(e) => {
+                        let missing = e.kind() == std::io::ErrorKind::NotFound;
+                        mtl_problems
+                            .borrow_mut()
+                            .push((mtl_path.clone(), missing, e.to_string()));
+                        // An empty library: faces using its materials get the default material.
+                        Ok((Vec::new(), Default::default()))
+                    }
+                }
+            })
+        })
+        .unwrap_or(Err(tobj::LoadError::GenericFailure));
+        let (models, materials) = loaded.map_err(|e| SceneError::MalformedObj {
+            file: path.to_path_buf(),
+            kind: "OBJ",
+            line: None,
+            message: e.to_string(),
+        })?;
+        for (mtl_path, missing, message) in mtl_problems.into_inner() {
+            if missing {
+                log::warn!(
+                    "{}: material library {} not found; its materials fall back to the \
+                     default gray (0.5). Put the MTL next to the OBJ or remove the `mtllib` line.",
+                    path.display(),
+                    mtl_path.display()
+                );
+            } else {
+                return Err(SceneError::MalformedObj {
+                    file: mtl_path,
+                    kind: "MTL",
+                    line: None,
+                    message,
+                });
+            }
+        }
+        // tobj reports MTL errors here too; ours were already handled above.
+        let materials = materials.unwrap_or_default();
+
+        let material_ids = materials
+            .iter()
+            .map(|m| self.register_mtl_material(&dir, m, path))
+            .collect::<Result<Vec<_>, _>>()?;
+
+        let mut mesh = Mesh {
+            name: path.display().to_string(),
+            positions: Vec::new(),
+            normals: Vec::new(),
+            uvs: None,
+            indices: Vec::new(),
+            submeshes: Vec::new(),
+            aabb: super::mesh::Aabb::EMPTY,
+        };
+        let any_uvs = models.iter().any(|m| !m.mesh.texcoords.is_empty());
+        let mut uvs = Vec::new();
+        for model in &models {
+            let m = &model.mesh;
+            let n = m.positions.len() / 3;
+            if m.indices.is_empty() {
+                continue;
+            }
+            let base = mesh.positions.len();
+            let positions: Vec<Vec3> = m
+                .positions
+                .chunks_exact(3)
+                .map(|p| Vec3::new(p[0], p[1], p[2]))
+                .collect();
+            let local_indices = &m.indices;
+            let computed = area_weighted_normals(&positions, local_indices);
+            let normals: Vec<Vec3> = if m.normals.len() == 3 * n {
+                m.normals
+                    .chunks_exact(3)
+                    .zip(&computed)
+                    .map(|(v, c)| {
+                        // A zero-length normal in the file falls back to the computed one.
+                        let u = Vec3::new(v[0], v[1], v[2]).normalize_or_zero();
+                        if u == Vec3::ZERO {
+                            *c
+                        } else {
+                            u
+                        }
+                    })
+                    .collect()
+            } else {
+                computed
+            };
+            if any_uvs {
+                if m.texcoords.len() == 2 * n {
+                    uvs.extend(m.texcoords.chunks_exact(2).map(|t| Vec2::new(t[0], t[1])));
+                } else {
+                    uvs.resize(uvs.len() + n, Vec2::ZERO);
+                }
+            }
+            let first_index = mesh.indices.len() as u32;
+            mesh.indices
+                .extend(local_indices.iter().map(|&i| i + base as u32));
+            mesh.positions.extend(positions);
+            mesh.normals.extend(normals);
+            let material = match m.material_id.and_then(|id| material_ids.get(id)) {
+                Some(&id) => id,
+                None => self.builtin_material(BuiltinMaterial::Default),
+            };
+            mesh.submeshes.push(SubMesh {
+                first_index,
+                index_count: local_indices.len() as u32,
+                material,
+            });
+        }
+        if mesh.indices.is_empty() {
+            return Err(SceneError::MalformedObj {
+                file: path.to_path_buf(),
+                kind: "OBJ",
+                line: None,
+                message: "the file contains no faces (`f` lines)".into(),
+            });
+        }
+        if any_uvs {
+            mesh.uvs = Some(uvs);
+        }
+        mesh.update_aabb();
+        Ok(mesh)
+    }
+
+    fn register_mtl_material(
+        &mut self,
+        dir: &Path,
+        m: &tobj::Material,
+        obj: &Path,
+    ) -> Result<usize, SceneError> {
+        let key = (dir.to_path_buf(), m.name.clone());
+        if let Some(&i) = self.mtl_materials.get(&key) {
+            return Ok(i);
+        }
+        let field = |f: &str| format!("{}: material `{}` {f}", obj.display(), m.name);
+        let rgb = |v: Option<[f32; 3]>, default: Vec3| {
+            v.map(Vec3::from_array)
+                .filter(|c| c.is_finite())
+                .unwrap_or(default)
+                .max(Vec3::ZERO)
+        };
+        let albedo_texture = match texture_file(m.diffuse_texture.as_deref()) {
+            Some(t) => self.texture(&dir.join(t), true, &field("map_Kd"))?,
+            None => None,
+        };
+        let mut bump_kind = BumpKind::Height;
+        let mut bump_texture = match texture_file(m.normal_texture.as_deref()) {
+            Some(t) => self.texture(&dir.join(t), false, &field("map_bump"))?,
+            None => None,
+        };
+        if let Some(t) = texture_file(m.unknown_param.get("norm").map(String::as_str)) {
+            if let Some(i) = self.texture(&dir.join(t), false, &field("norm"))? {
+                bump_texture = Some(i);
+                bump_kind = BumpKind::TangentNormal;
+            }
+        }
+        let finite_or = |v: Option<f32>, d: f32| v.filter(|x| x.is_finite()).unwrap_or(d);
+        let material = Material {
+            name: m.name.clone(),
+            albedo: rgb(m.diffuse, BuiltinMaterial::Default.albedo()),
+            specular: rgb(m.specular, Vec3::ZERO),
+            shininess: finite_or(m.shininess, 0.0).max(0.0),
+            albedo_texture,
+            bump_texture,
+            bump_kind,
+            opacity: finite_or(m.dissolve, 1.0).clamp(0.0, 1.0),
+        };
+        let i = self.materials.len();
+        self.materials.push(material);
+        self.mtl_materials.insert(key, i);
+        Ok(i)
+    }
+
+    /// Loads a texture once. A missing file is a warning and gives `None` (the material's
+    /// color is used instead); a file that exists but cannot be decoded is an error.
+    pub fn texture(
+        &mut self,
+        path: &Path,
+        srgb: bool,
+        referenced_by: &str,
+    ) -> Result<Option<usize>, SceneError> {
+        let key = (path.to_path_buf(), srgb);
+        if let Some(&i) = self.textures_by_path.get(&key) {
+            return Ok(i);
+        }
+        if !path.is_file() {
+            log::warn!(
+                "{}: texture not found (referenced by {referenced_by}); using the material's \
+                 color instead. Fix the path in the MTL file (relative to the OBJ's directory).",
+                path.display()
+            );
+            self.textures_by_path.insert(key, None);
+            return Ok(None);
+        }
+        let img = image::open(path).map_err(|e| SceneError::TextureDecode {
+            file: path.to_path_buf(),
+            message: e.to_string(),
+            referenced_by: referenced_by.to_string(),
+        })?;
+        let rgba = img.to_rgba8();
+        let i = self.textures.len();
+        self.textures.push(TextureData {
+            path: path.to_path_buf(),
+            width: rgba.width(),
+            height: rgba.height(),
+            rgba8: rgba.into_raw(),
+            srgb,
+        });
+        self.textures_by_path.insert(key, Some(i));
+        Ok(Some(i))
+    }
+}
+
+/// Runs a tobj call, turning a panic inside tobj (it unwraps in a few places on malformed
+/// input) into `None` so a bad file cannot crash the renderer.
+fn guarded<T>(f: impl FnOnce() -> T) -> Option<T> {
+    std::panic::catch_unwind(std::panic::AssertUnwindSafe(f)).ok()
+}
+
+/// Checks the MTL statements tobj would panic on or report without a line: colors need three
+/// numbers. Returns (line, message).
+fn prescan_mtl(text: &str) -> Result<(), (usize, String)> {
+    for (i, raw) in text.lines().enumerate() {
+        let l = raw.split('#').next().unwrap_or("");
+        let mut toks = l.split_whitespace();
+        let Some(kw) = toks.next() else { continue };
+        if matches!(kw, "Ka" | "Kd" | "Ks" | "Ke") {
+            let nums: Vec<&str> = toks.collect();
+            if nums.len() < 3 || nums.iter().take(3).any(|t| t.parse::<f32>().is_err()) {
+                return Err((
+                    i + 1,
+                    format!("`{}`: expected `{kw} r g b` with three numbers", raw.trim()),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The file name in an MTL map statement, skipping options such as `-bm 0.5`.
+fn texture_file(s: Option<&str>) -> Option<String> {
+    let s = s?.trim();
+    if s.is_empty() {
+        return None;
+    }
+    let name = if s.starts_with('-') {
+        s.split_whitespace().last()?
+    } else {
+        s
+    };
+    Some(name.replace('\\', "/"))
+}
+
+/// Reads a whole text file; a missing file becomes [`SceneError::NotFound`].
+pub(crate) fn read_text(
+    path: &Path,
+    what: &'static str,
+    referenced_by: Option<&str>,
+) -> Result<String, SceneError> {
+    std::fs::read_to_string(path).map_err(|e| {
+        if e.kind() == std::io::ErrorKind::NotFound {
+            SceneError::NotFound {
+                file: path.to_path_buf(),
+                what,
+                referenced_by: referenced_by.map(str::to_string),
+            }
+        } else {
+            SceneError::Io {
+                file: path.to_path_buf(),
+                what,
+                source: e,
+            }
+        }
+    })
+}
+
+/// Checks what tobj does not report with a line number: unparsable or non-finite numbers in
+/// `v`/`vt`/`vn` lines, and face indices out of range.
+fn prescan_obj(path: &Path, text: &str) -> Result<(), SceneError> {
+    let keyword = |l: &str| l.split_whitespace().next().map(str::to_string);
+    let mut totals = [0usize; 3];
+    for l in text.lines() {
+        match keyword(l).as_deref() {
+            Some("v") => totals[0] += 1,
+            Some("vt") => totals[1] += 1,
+            Some("vn") => totals[2] += 1,
+            _ => {}
+        }
+    }
+    let malformed = |line: usize, message: String| SceneError::MalformedObj {
+        file: path.to_path_buf(),
+        kind: "OBJ",
+        line: Some(line),
+        message,
+    };
+    let mut counts = [0usize; 3];
+    for (i, raw) in text.lines().enumerate() {
+        let line_no = i + 1;
+        let l = raw.split('#').next().unwrap_or("");
+        let mut toks = l.split_whitespace();
+        let Some(kw) = toks.next() else { continue };
+        let (slot, min, element) = match kw {
+            "v" => (0, 3, "vertex position"),
+            "vt" => (1, 1, "texture coordinate"),
+            "vn" => (2, 3, "vertex normal"),
+            "f" => {
+                let verts: Vec<&str> = toks.collect();
+                if verts.len() < 3 {
+                    return Err(malformed(
+                        line_no,
+                        format!("face with {} vertices; expected at least 3", verts.len()),
+                    ));
+                }
+                for v in verts {
+                    if v.split('/').count() > 3 {
+                        return Err(malformed(
+                            line_no,
+                            format!("bad face vertex `{v}`; expected v, v/vt, v//vn or v/vt/vn"),
+                        ));
+                    }
+                    for (k, part) in v.split('/').enumerate() {
+                        if part.is_empty() {
+                            // `v//vn` leaves the texture coordinate out.
+                            if k == 0 {
+                                return Err(malformed(line_no, format!("bad face vertex `{v}`")));
+                            }
+                            continue;
+                        }
+                        let idx: i64 = part.parse().map_err(|_| {
+                            malformed(line_no, format!("bad face index `{part}` in `{v}`"))
+                        })?;
+                        let element = ["vertex", "texture coordinate", "normal"][k];
+                        let resolved = if idx > 0 {
+                            (idx as u64 <= totals[k] as u64).then_some(())
+                        } else if idx < 0 {
+                            (idx.unsigned_abs() <= counts[k] as u64).then_some(())
+                        } else {
+                            None
+                        };
+                        if resolved.is_none() {
+                            return Err(SceneError::FaceIndexOutOfRange {
+                                file: path.to_path_buf(),
+                                line: line_no,
+                                element,
+                                index: idx,
+                                count: if idx < 0 { counts[k] } else { totals[k] },
+                            });
+                        }
+                    }
+                }
+                continue;
+            }
+            _ => continue,
+        };
+        let mut n = 0;
+        let mut w = 1.0;
+        for t in toks {
+            let x: f32 = t.parse().map_err(|_| {
+                malformed(
+                    line_no,
+                    format!("`{t}` is not a number in a `{kw}` line (`{}`)", raw.trim()),
+                )
+            })?;
+            if !x.is_finite() {
+                return Err(SceneError::NonFiniteVertex {
+                    file: path.to_path_buf(),
+                    line: line_no,
+                    element,
+                });
+            }
+            n += 1;
+            if n == 4 {
+                w = x;
+            }
+        }
+        // `v x y z w`: tobj divides by w (with colors, `v x y z r g b`, there is no w).
+        if kw == "v" && n == 4 && w == 0.0 {
+            return Err(malformed(line_no, "vertex with w = 0".to_string()));
+        }
+        if n < min {
+            return Err(malformed(
+                line_no,
+                format!("`{kw}` line with {n} numbers; expected at least {min}"),
+            ));
+        }
+        counts[slot] += 1;
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn prescan_reports_lines() {
+        let p = Path::new("x.obj");
+        let ok = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2//1 -1//-1\n";
+        assert!(prescan_obj(p, ok).is_ok());
+        let e = prescan_obj(p, "v 0 0 0\nv 1 0 0\nv 0 nan 0\nf 1 2 3\n");
+        assert!(
+            matches!(e, Err(SceneError::NonFiniteVertex { line: 3, .. })),
+            "{e:?}"
+        );
+        let e = prescan_obj(p, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n");
+        assert!(
+            matches!(
+                e,
+                Err(SceneError::FaceIndexOutOfRange {
+                    line: 4,
+                    index: 4,
+                    count: 3,
+                    ..
+                })
+            ),
+            "{e:?}"
+        );
+        let e = prescan_obj(p, "v 0 0 0\nf 1 -2 1\n");
+        assert!(matches!(
+            e,
+            Err(SceneError::FaceIndexOutOfRange { line: 2, .. })
+        ));
+        let e = prescan_obj(p, "v 0 0\n");
+        assert!(matches!(
+            e,
+            Err(SceneError::MalformedObj { line: Some(1), .. })
+        ));
+        let e = prescan_obj(p, "v 0 0 1e39\n");
+        assert!(matches!(e, Err(SceneError::NonFiniteVertex { .. })));
+    }
+
+    #[test]
+    fn texture_file_skips_options() {
+        assert_eq!(
+            texture_file(Some("-bm 0.5 a\\b.png")),
+            Some("a/b.png".into())
+        );
+        assert_eq!(texture_file(Some("  ")), None);
+        assert_eq!(texture_file(Some("tex.png")), Some("tex.png".into()));
+    }
+}

@@ -1,0 +1,882 @@
+//! Scene loading tests: the asset scenes, every user error, OBJ details, and a fuzz test.
+
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use glam::Vec3;
+use proptest::prelude::*;
+
+use super::*;
+
+fn asset(rel: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("assets")
+        .join(rel)
+}
+
+/// A fresh directory under the system temp dir, unique per test and process.
+struct TempDir(PathBuf);
+
+impl TempDir {
+    fn new(tag: &str) -> TempDir {
+        static N: AtomicUsize = AtomicUsize::new(0);
+        let n = N.fetch_add(1, Ordering::Relaxed);
+        let dir =
+            std::env::temp_dir().join(format!("voxgi_scene_{tag}_{}_{n}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        TempDir(dir)
+    }
+
+    fn write(&self, name: &str, text: &str) -> PathBuf {
+        let p = self.0.join(name);
+        if let Some(parent) = p.parent() {
+            std::fs::create_dir_all(parent).unwrap();
+        }
+        std::fs::write(&p, text).unwrap();
+        p
+    }
+}
+
+impl Drop for TempDir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+const CAMERA: &str = "[camera]\nposition = [0, 1, -3]\ntarget = [0, 0, 0]\nfov_y_deg = 40\n";
+const LIGHT: &str = "[[lights]]\nkind = \"point\"\nposition = [0, 2, 0]\nintensity_w_sr = 1.0\n";
+const CUBE: &str = "[[objects]]\nbuiltin = \"cube\"\n";
+const TRIANGLE_OBJ: &str = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+
+/// Writes `scene.toml` with `text` (plus `files`) and loads it; returns the error and the
+/// scene path.
+fn load_err(text: &str, files: &[(&str, &str)]) -> (SceneError, PathBuf) {
+    let dir = TempDir::new("err");
+    for (name, content) in files {
+        dir.write(name, content);
+    }
+    let path = dir.write("scene.toml", text);
+    match Scene::load(&path) {
+        Ok(_) => panic!("expected an error for:\n{text}"),
+        Err(e) => (e, path),
+    }
+}
+
+fn load_ok(text: &str, files: &[(&str, &str)]) -> Scene {
+    let dir = TempDir::new("ok");
+    for (name, content) in files {
+        dir.write(name, content);
+    }
+    let path = dir.write("scene.toml", text);
+    Scene::load(&path).unwrap_or_else(|e| panic!("{e}\n{text}"))
+}
+
+/// The message names the file and contains each of `parts`.
+fn assert_msg(e: &SceneError, file: &Path, parts: &[&str]) {
+    let msg = e.to_string();
+    assert!(
+        msg.contains(&file.display().to_string()),
+        "message does not name {}: {msg}",
+        file.display()
+    );
+    for p in parts {
+        assert!(msg.contains(p), "message lacks `{p}`: {msg}");
+    }
+}
+
+// ---- asset and built-in scenes -------------------------------------------------------------
+
+#[test]
+fn asset_cornell_loads() {
+    let s = Scene::load(asset("scenes/cornell.toml")).unwrap();
+    assert_eq!(s.objects.len(), 3);
+    assert!(s.source.is_some());
+}
+
+#[test]
+fn asset_cornell_bunny_sits_on_the_floor() {
+    let s = Scene::load(asset("scenes/cornell_bunny.toml")).unwrap();
+    let bunny = s.objects.iter().find(|o| o.name == "bunny").unwrap();
+    let b = bunny.aabb_at(0.0);
+    assert!(b.min.y.abs() < 1e-3, "{b:?}");
+    assert!((b.extent().y - 0.2).abs() < 0.005, "{b:?}");
+    // Inside the box.
+    assert!(b.min.x > 0.0 && b.max.x < 0.55 && b.min.z > 0.0 && b.max.z < 0.559);
+    let mesh = &s.meshes[bunny.mesh];
+    // The OBJ has no normals: computed, unit length, mostly pointing away from the center.
+    assert_eq!(mesh.normals.len(), mesh.positions.len());
+    assert!(mesh.normals.iter().all(|n| (n.length() - 1.0).abs() < 1e-4));
+    let c = mesh.aabb.center();
+    let outward = mesh
+        .positions
+        .iter()
+        .zip(&mesh.normals)
+        .filter(|(p, n)| n.dot(**p - c) > 0.0)
+        .count();
+    assert!(outward * 10 > mesh.positions.len() * 8, "{outward}");
+    assert!(s.is_all_lambert());
+}
+
+#[test]
+fn asset_point_light_loads() {
+    let s = Scene::load(asset("scenes/point_light.toml")).unwrap();
+    assert!(s.has_point_lights());
+    assert!(!s.has_spot_lights());
+    assert!(!s.is_all_lambert(), "the ball is Phong");
+    assert!(s.has_dynamic_objects() && s.has_animation());
+    // The orbiter moves, so the scene bounds change over time but stay finite.
+    let orbiter = s.objects.iter().find(|o| o.name == "orbiter").unwrap();
+    assert_ne!(orbiter.aabb_at(0.0), orbiter.aabb_at(1.0));
+    assert_eq!(
+        orbiter.aabb_at(0.0),
+        orbiter.aabb_at(4.0),
+        "loops after 4 s"
+    );
+    assert!(s.aabb_at(1.3).min.is_finite() && s.aabb_at(1.3).max.is_finite());
+}
+
+#[test]
+fn doc_example_follows_the_schema() {
+    // The module doc's example uses every key; it must parse (its files need not exist).
+    let src = include_str!("mod.rs");
+    let start = src.find("```toml").unwrap() + "```toml".len();
+    let end = start + src[start..].find("//! ```").unwrap();
+    let toml: String = src[start..end]
+        .lines()
+        .map(|l| l.trim_start().trim_start_matches("//!"))
+        .map(|l| l.strip_prefix(' ').unwrap_or(l))
+        .collect::<Vec<_>>()
+        .join("\n");
+    let d = desc::parse(&toml, Path::new("doc")).unwrap_or_else(|e| panic!("{e}\n{toml}"));
+    assert_eq!(d.objects.len(), 2);
+    assert_eq!(d.lights.len(), 2);
+}
+
+// ---- error cases -----------------------------------------------------------------------------
+
+#[test]
+fn missing_scene_file() {
+    let p = std::env::temp_dir().join("voxgi_no_such_scene.toml");
+    let e = Scene::load(&p).unwrap_err();
+    assert!(matches!(e, SceneError::NotFound { .. }), "{e}");
+    assert_msg(&e, &p, &["scene file not found"]);
+}
+
+#[test]
+fn missing_obj_file() {
+    let text = format!("{CAMERA}{LIGHT}[[objects]]\nmesh = \"meshes/nope.obj\"\n");
+    let (e, scene) = load_err(&text, &[]);
+    assert!(matches!(e, SceneError::NotFound { .. }), "{e}");
+    assert_msg(
+        &e,
+        &scene,
+        &["nope.obj", "objects[0].mesh", "OBJ mesh not found"],
+    );
+}
+
+#[test]
+fn toml_syntax_error_has_line_and_column() {
+    let text = format!("{CAMERA}{LIGHT}[[objects]]\nbuiltin = \"cube\nscale = 2\n");
+    let (e, scene) = load_err(&text, &[]);
+    let SceneError::TomlSyntax { line, col, .. } = e else {
+        panic!("{e}")
+    };
+    assert_eq!(line, 10);
+    assert!(col > 1);
+    assert_msg(&e, &scene, &[":10:", "TOML syntax error"]);
+}
+
+#[test]
+fn unknown_key_is_named() {
+    let text = format!("{CAMERA}{LIGHT}[[objects]]\nbuiltin = \"cube\"\nscal = 2\n");
+    let (e, scene) = load_err(&text, &[]);
+    let SceneError::UnknownKey { line, ref key, .. } = e else {
+        panic!("{e}")
+    };
+    assert_eq!((line, key.as_str()), (11, "scal"));
+    assert_msg(&e, &scene, &["unknown key `scal`", "`scale`", ":11:"]);
+    // Also in nested tables.
+    let text = format!("{CAMERA}{LIGHT}{CUBE}material = {{ albedo = 0.5, roughness = 0.2 }}\n");
+    let (e, _) = load_err(&text, &[]);
+    assert!(
+        matches!(e, SceneError::UnknownKey { ref key, .. } if key == "roughness"),
+        "{e}"
+    );
+}
+
+#[test]
+fn wrong_type_is_a_schema_error() {
+    let text = format!("{CAMERA}{LIGHT}[[objects]]\nbuiltin = \"cube\"\nscale = \"big\"\n");
+    let (e, scene) = load_err(&text, &[]);
+    assert!(matches!(e, SceneError::Schema { line: 11, .. }), "{e}");
+    assert_msg(&e, &scene, &["a number or an array of 3 numbers"]);
+    let text = format!("{CAMERA}[[lights]]\nkind = \"area\"\n{CUBE}");
+    let (e, _) = load_err(&text, &[]);
+    assert!(matches!(e, SceneError::Schema { .. }), "{e}");
+    assert!(e.to_string().contains("spot"), "{e}");
+}
+
+#[test]
+fn nan_and_inf_are_rejected() {
+    for (text, field) in [
+        (
+            format!("{CAMERA}{LIGHT}{CUBE}translate = [0, nan, 0]\n"),
+            "objects[0].translate[1]",
+        ),
+        (
+            format!("{CAMERA}[[lights]]\nkind = \"point\"\nposition = [0, 2, 0]\nintensity_w_sr = inf\n{CUBE}"),
+            "lights[0].intensity_w_sr[0]",
+        ),
+        (
+            CAMERA.replace("fov_y_deg = 40", "fov_y_deg = nan") + LIGHT + CUBE,
+            "camera.fov_y_deg",
+        ),
+        (
+            CAMERA.replace("[0, 1, -3]", "[0, 1, -inf]") + LIGHT + CUBE,
+            "camera.position[2]",
+        ),
+    ] {
+        let (e, scene) = load_err(&text, &[]);
+        assert!(matches!(e, SceneError::NonFinite { .. }), "{e}");
+        assert_msg(&e, &scene, &[field, "finite"]);
+    }
+}
+
+#[test]
+fn zero_length_direction() {
+    let text = format!(
+        "{CAMERA}[[lights]]\nkind = \"spot\"\nposition = [0, 2, 0]\ndirection = [0, 0, 0]\nintensity_w_sr = 1\n{CUBE}"
+    );
+    let (e, scene) = load_err(&text, &[]);
+    assert!(matches!(e, SceneError::ZeroLengthDirection { .. }), "{e}");
+    assert_msg(&e, &scene, &["lights[0].direction", "zero length"]);
+    let text = CAMERA.replace("target = [0, 0, 0]", "forward = [0, 0, 0]") + LIGHT + CUBE;
+    let (e, _) = load_err(&text, &[]);
+    assert!(
+        matches!(e, SceneError::ZeroLengthDirection { ref field, .. } if field == "camera.forward")
+    );
+}
+
+#[test]
+fn bad_camera() {
+    for (from, to, field) in [
+        ("fov_y_deg = 40", "fov_y_deg = 0", "camera.fov_y_deg"),
+        ("fov_y_deg = 40", "fov_y_deg = -10", "camera.fov_y_deg"),
+        ("fov_y_deg = 40", "fov_y_deg = 180", "camera.fov_y_deg"),
+        (
+            "fov_y_deg = 40",
+            "fov_y_deg = 40\nnear = 1\nfar = 1",
+            "camera.far",
+        ),
+        (
+            "fov_y_deg = 40",
+            "fov_y_deg = 40\nnear = 2\nfar = 1",
+            "camera.far",
+        ),
+        ("fov_y_deg = 40", "fov_y_deg = 40\nnear = 0", "camera.near"),
+        ("target = [0, 0, 0]", "target = [0, 1, -3]", "camera.target"),
+        ("target = [0, 0, 0]", "forward = [0, 1, 0]", "camera.up"),
+        ("target = [0, 0, 0]", "", "camera"),
+    ] {
+        let text = CAMERA.replace(from, to) + LIGHT + CUBE;
+        let (e, scene) = load_err(&text, &[]);
+        assert!(
+            matches!(e, SceneError::InvalidCamera { field: ref f, .. } if f == field),
+            "{to}: {e}"
+        );
+        assert_msg(&e, &scene, &[field]);
+    }
+}
+
+#[test]
+fn negative_intensity() {
+    let text = format!(
+        "{CAMERA}[[lights]]\nkind = \"point\"\nposition = [0, 2, 0]\nintensity_w_sr = [1, -0.5, 1]\n{CUBE}"
+    );
+    let (e, scene) = load_err(&text, &[]);
+    assert!(matches!(e, SceneError::NegativeIntensity { .. }), "{e}");
+    assert_msg(&e, &scene, &["lights[0].intensity_w_sr[1]", "-0.5", ">= 0"]);
+    let text = format!(
+        "{CAMERA}[[lights]]\nkind = \"directional\"\ndirection = [0, -1, 0]\nirradiance_w_m2 = -1\n{CUBE}"
+    );
+    let (e, _) = load_err(&text, &[]);
+    assert!(matches!(e, SceneError::NegativeIntensity { .. }), "{e}");
+}
+
+#[test]
+fn light_fields_must_fit_the_kind() {
+    for (light, field) in [
+        ("kind = \"spot\"\nposition = [0, 2, 0]\nintensity_w_sr = 1", "lights[0].direction"),
+        ("kind = \"point\"\nposition = [0, 2, 0]\nintensity_w_sr = 1\ncutoff_deg = 10", "lights[0].cutoff_deg"),
+        ("kind = \"directional\"\ndirection = [0, -1, 0]\nintensity_w_sr = 1", "lights[0].irradiance_w_m2"),
+        ("kind = \"spot\"\nposition = [0, 2, 0]\ndirection = [0, -1, 0]\nintensity_w_sr = 1\ncutoff_deg = 10\nbeam_deg = 20", "lights[0].beam_deg"),
+        ("kind = \"spot\"\nposition = [0, 2, 0]\ndirection = [0, -1, 0]\nintensity_w_sr = 1\ncutoff_deg = 95", "lights[0].cutoff_deg"),
+    ] {
+        let text = format!("{CAMERA}[[lights]]\n{light}\n{CUBE}");
+        let (e, scene) = load_err(&text, &[]);
+        assert!(matches!(e, SceneError::InvalidValue { .. }), "{e}");
+        assert_msg(&e, &scene, &[field]);
+    }
+}
+
+#[test]
+fn spot_defaults_follow_mitsuba() {
+    let text = format!(
+        "{CAMERA}[[lights]]\nkind = \"spot\"\nposition = [0, 2, 0]\ndirection = [0, -2, 0]\nintensity_w_sr = 1\n{CUBE}"
+    );
+    let s = load_ok(&text, &[]);
+    let Light::Spot {
+        cutoff_deg,
+        beam_deg,
+        direction,
+        ..
+    } = s.lights[0]
+    else {
+        panic!()
+    };
+    assert_eq!((cutoff_deg, beam_deg), (20.0, 15.0));
+    assert_eq!(direction, -Vec3::Y);
+}
+
+#[test]
+fn empty_scene() {
+    let (e, scene) = load_err(&format!("{CAMERA}{LIGHT}"), &[]);
+    assert!(matches!(e, SceneError::EmptyScene { .. }), "{e}");
+    assert_msg(&e, &scene, &["no objects", "[[objects]]"]);
+}
+
+#[test]
+fn object_errors() {
+    for (obj, field) in [
+        ("builtin = \"teapot\"", "objects[0].builtin"),
+        ("builtin = \"cube\"\nmesh = \"a.obj\"", "objects[0].builtin"),
+        ("name = \"x\"", "objects[0]"),
+        ("builtin = \"cube\"\nscale = [1, 0, 1]", "objects[0].scale"),
+        (
+            "builtin = \"cube\"\nmaterial = { albedo = 1.5 }",
+            "objects[0].material.albedo",
+        ),
+        (
+            "builtin = \"cube\"\nmaterial = { shininess = -1 }",
+            "objects[0].material.shininess",
+        ),
+        (
+            "builtin = \"cube\"\ndynamic = false\nanimation = { keyframes = [{ time_s = 0 }] }",
+            "objects[0].dynamic",
+        ),
+        (
+            "builtin = \"cube\"\nanimation = { keyframes = [{ time_s = 1 }, { time_s = 1 }] }",
+            "objects[0].animation.keyframes[1].time_s",
+        ),
+        (
+            "builtin = \"cube\"\nanimation = { keyframes = [] }",
+            "objects[0].animation.keyframes",
+        ),
+        (
+            "builtin = \"cube\"\nanimation = { loop = true }",
+            "objects[0].animation",
+        ),
+        (
+            "animation = { obj_sequence = \"f.obj\", frames = 2 }",
+            "objects[0].animation.obj_sequence",
+        ),
+        (
+            "animation = { obj_sequence = \"f{}.obj\", frames = 0 }",
+            "objects[0].animation.frames",
+        ),
+    ] {
+        let text = format!("{CAMERA}{LIGHT}[[objects]]\n{obj}\n");
+        let (e, scene) = load_err(&text, &[]);
+        assert!(matches!(e, SceneError::InvalidValue { .. }), "{obj}: {e}");
+        assert_msg(&e, &scene, &[field]);
+    }
+}
+
+// ---- OBJ files -----------------------------------------------------------------------------
+
+#[test]
+fn malformed_obj_names_the_file() {
+    // tobj rejects this one itself (no line known).
+    let obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nusemtl\n";
+    let text = format!("{CAMERA}{LIGHT}[[objects]]\nmesh = \"m.obj\"\n");
+    let (e, scene) = load_err(&text, &[("m.obj", obj)]);
+    assert!(
+        matches!(e, SceneError::MalformedObj { kind: "OBJ", .. }),
+        "{e}"
+    );
+    assert_msg(&e, &scene.with_file_name("m.obj"), &["malformed OBJ"]);
+    // Caught before tobj, with a line.
+    let (e, scene) = load_err(&text, &[("m.obj", "v 0 0\n")]);
+    assert!(
+        matches!(e, SceneError::MalformedObj { line: Some(1), .. }),
+        "{e}"
+    );
+    assert_msg(&e, &scene.with_file_name("m.obj"), &["m.obj:1"]);
+    // No faces at all.
+    let (e, _) = load_err(&text, &[("m.obj", "v 0 0 0\n")]);
+    assert!(matches!(e, SceneError::MalformedObj { .. }), "{e}");
+}
+
+#[test]
+fn malformed_mtl_names_the_mtl_file() {
+    let obj = format!("mtllib m.mtl\nusemtl a\n{TRIANGLE_OBJ}");
+    let text = format!("{CAMERA}{LIGHT}[[objects]]\nmesh = \"m.obj\"\n");
+    let (e, scene) = load_err(&text, &[("m.obj", &obj), ("m.mtl", "newmtl a\nKd 1 2\n")]);
+    assert!(
+        matches!(e, SceneError::MalformedObj { kind: "MTL", .. }),
+        "{e}"
+    );
+    assert_msg(&e, &scene.with_file_name("m.mtl"), &["line 2", "Kd r g b"]);
+}
+
+#[test]
+fn face_index_out_of_range() {
+    let text = format!("{CAMERA}{LIGHT}[[objects]]\nmesh = \"m.obj\"\n");
+    let obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2 7\n";
+    let (e, scene) = load_err(&text, &[("m.obj", obj)]);
+    assert!(
+        matches!(
+            e,
+            SceneError::FaceIndexOutOfRange {
+                line: 5,
+                index: 7,
+                count: 3,
+                ..
+            }
+        ),
+        "{e}"
+    );
+    assert_msg(&e, &scene.with_file_name("m.obj"), &["m.obj:5", "vertex 7"]);
+}
+
+#[test]
+fn nan_vertex_is_rejected() {
+    let text = format!("{CAMERA}{LIGHT}[[objects]]\nmesh = \"m.obj\"\n");
+    let obj = "v 0 0 0\nv 1 NaN 0\nv 0 1 0\nf 1 2 3\n";
+    let (e, scene) = load_err(&text, &[("m.obj", obj)]);
+    assert!(
+        matches!(e, SceneError::NonFiniteVertex { line: 2, .. }),
+        "{e}"
+    );
+    assert_msg(
+        &e,
+        &scene.with_file_name("m.obj"),
+        &["m.obj:2", "non-finite"],
+    );
+    let obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 inf 1\nf 1//1 2//1 3//1\n";
+    let (e, _) = load_err(&text, &[("m.obj", obj)]);
+    assert!(
+        matches!(e, SceneError::NonFiniteVertex { line: 4, .. }),
+        "{e}"
+    );
+}
+
+#[test]
+fn obj_normals_computed_or_taken() {
+    let text = format!("{CAMERA}{LIGHT}[[objects]]\nmesh = \"m.obj\"\n");
+    let s = load_ok(&text, &[("m.obj", TRIANGLE_OBJ)]);
+    let m = &s.meshes[s.objects[0].mesh];
+    assert_eq!(m.positions.len(), 3);
+    assert!(m.normals.iter().all(|n| n.abs_diff_eq(Vec3::Z, 1e-6)));
+    assert!(m.uvs.is_none());
+    // Given normals are normalized and used as they are.
+    let obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 2 0\nvt 0 0\nf 1/1/1 2/1/1 3/1/1\n";
+    let s = load_ok(&text, &[("m.obj", obj)]);
+    let m = &s.meshes[s.objects[0].mesh];
+    assert!(m.normals.iter().all(|n| n.abs_diff_eq(Vec3::Y, 1e-6)));
+    assert_eq!(m.uvs.as_ref().map(Vec::len), Some(3));
+    // Without an MTL, the default material.
+    assert_eq!(
+        s.materials[s.objects[0].materials[0]].albedo,
+        Vec3::splat(0.5)
+    );
+}
+
+#[test]
+fn mtl_materials_textures_and_missing_texture() {
+    let dir = TempDir::new("tex");
+    let img = image::RgbaImage::from_pixel(2, 3, image::Rgba([10, 20, 30, 255]));
+    img.save(dir.0.join("albedo.png")).unwrap();
+    dir.write(
+        "m.mtl",
+        "newmtl shiny\nKd 0.2 0.4 0.6\nKs 0.3 0.3 0.3\nNs 50\nd 0.5\nmap_Kd albedo.png\n\
+         newmtl lost\nKd 0.1 0.2 0.3\nmap_Kd missing.png\nmap_bump missing_bump.png\n",
+    );
+    dir.write(
+        "m.obj",
+        "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nusemtl shiny\nf 1 2 3\nusemtl lost\nf 2 4 3\n",
+    );
+    let scene = dir.write(
+        "scene.toml",
+        &format!("{CAMERA}{LIGHT}[[objects]]\nmesh = \"m.obj\"\n[[objects]]\nmesh = \"m.obj\"\nmaterial = {{ albedo = 0.9 }}\n"),
+    );
+    let s = Scene::load(&scene).unwrap();
+    // Both objects share the mesh.
+    assert_eq!(s.meshes.len(), 1);
+    let m = &s.meshes[0];
+    assert_eq!(m.submeshes.len(), 2);
+    let shiny = &s.materials[s.objects[0].materials[0]];
+    assert_eq!(shiny.albedo, Vec3::new(0.2, 0.4, 0.6));
+    assert_eq!((shiny.shininess, shiny.opacity), (50.0, 0.5));
+    assert!(!shiny.is_lambert());
+    let t = &s.textures[shiny.albedo_texture.unwrap()];
+    assert_eq!((t.width, t.height, t.srgb, t.rgba8.len()), (2, 3, true, 24));
+    assert_eq!(&t.rgba8[..4], &[10, 20, 30, 255]);
+    // Missing textures: a warning, and the color stays.
+    let lost = &s.materials[s.objects[0].materials[1]];
+    assert_eq!(lost.albedo_texture, None);
+    assert_eq!(lost.bump_texture, None);
+    assert_eq!(lost.albedo, Vec3::new(0.1, 0.2, 0.3));
+    assert_eq!(s.textures.len(), 1);
+    // The override replaces the albedo (and drops the albedo map) but keeps the rest.
+    let o = &s.materials[s.objects[1].materials[0]];
+    assert_eq!(
+        (o.albedo, o.albedo_texture, o.shininess),
+        (Vec3::splat(0.9), None, 50.0)
+    );
+    assert!(!s.is_all_lambert() && s.has_albedo_textures() && s.has_transparency());
+}
+
+#[test]
+fn undecodable_texture_is_an_error() {
+    let obj = format!("mtllib m.mtl\nusemtl a\n{TRIANGLE_OBJ}");
+    let text = format!("{CAMERA}{LIGHT}[[objects]]\nmesh = \"m.obj\"\n");
+    let (e, scene) = load_err(
+        &text,
+        &[
+            ("m.obj", &obj),
+            ("m.mtl", "newmtl a\nmap_Kd bad.png\n"),
+            ("bad.png", "not a png"),
+        ],
+    );
+    assert!(matches!(e, SceneError::TextureDecode { .. }), "{e}");
+    assert_msg(&e, &scene.with_file_name("bad.png"), &["map_Kd"]);
+}
+
+#[test]
+fn missing_mtl_is_a_warning() {
+    let obj = format!("mtllib gone.mtl\nusemtl a\n{TRIANGLE_OBJ}");
+    let text = format!("{CAMERA}{LIGHT}[[objects]]\nmesh = \"m.obj\"\n");
+    let s = load_ok(&text, &[("m.obj", &obj)]);
+    assert_eq!(
+        s.materials[s.objects[0].materials[0]].albedo,
+        Vec3::splat(0.5)
+    );
+}
+
+#[test]
+fn obj_sequence_frames() {
+    let frame = |z: f32| format!("v 0 0 {z}\nv 1 0 {z}\nv 0 1 {z}\nf 1 2 3\n");
+    let (f1, f2, f3) = (frame(0.0), frame(1.0), frame(2.0));
+    let text = format!(
+        "{CAMERA}{LIGHT}[[objects]]\nanimation = {{ obj_sequence = \"anim/f_{{:02}}.obj\", frames = 3, fps = 2.0, first_frame = 1 }}\n"
+    );
+    let s = load_ok(
+        &text,
+        &[
+            ("anim/f_01.obj", &f1),
+            ("anim/f_02.obj", &f2),
+            ("anim/f_03.obj", &f3),
+        ],
+    );
+    let o = &s.objects[0];
+    assert!(o.dynamic);
+    assert_eq!(s.meshes.len(), 3);
+    let z_at = |t: f32| s.meshes[o.mesh_at(t)].positions[0].z;
+    assert_eq!(
+        (z_at(0.0), z_at(0.6), z_at(1.2), z_at(1.6)),
+        (0.0, 1.0, 2.0, 0.0)
+    );
+    assert_eq!(o.aabb_at(1.2).min.z, 2.0);
+    // A frame with another topology.
+    let bad = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nf 1 2 3\nf 2 4 3\n";
+    let (e, scene) = load_err(
+        &text,
+        &[
+            ("anim/f_01.obj", &f1),
+            ("anim/f_02.obj", bad),
+            ("anim/f_03.obj", &f3),
+        ],
+    );
+    assert!(matches!(e, SceneError::SequenceTopology { .. }), "{e}");
+    let frame2 = scene.with_file_name("anim").join("f_02.obj");
+    assert_msg(&e, &frame2, &["f_01.obj", "4 vertices instead of 3"]);
+    // A missing frame.
+    let (e, _) = load_err(&text, &[("anim/f_01.obj", &f1)]);
+    assert!(
+        matches!(e, SceneError::NotFound { ref file, .. } if file.ends_with("f_02.obj")),
+        "{e}"
+    );
+}
+
+#[test]
+fn keyframes_inherit_the_object_transform() {
+    let text = format!(
+        "{CAMERA}{LIGHT}[[objects]]\nbuiltin = \"cube\"\ntranslate = [0, 5, 0]\nscale = 2\n\
+         animation = {{ loop = false, keyframes = [{{ time_s = 0, translate = [0, 0, 0] }}, {{ time_s = 1, translate = [2, 0, 0] }}] }}\n"
+    );
+    let s = load_ok(&text, &[]);
+    let b = s.aabb_at(0.5);
+    // Scale 2 kept from the object; translation interpolated.
+    assert!(b.min.abs_diff_eq(Vec3::new(0.0, -1.0, -1.0), 1e-5), "{b:?}");
+    assert!(b.max.abs_diff_eq(Vec3::new(2.0, 1.0, 1.0), 1e-5), "{b:?}");
+    assert!(s.has_dynamic_objects());
+}
+
+#[test]
+fn voxel_and_gi_tables_are_kept() {
+    let text = format!("{CAMERA}{LIGHT}{CUBE}[voxel]\nresolution = 128\n[gi]\nmethod = \"vpl\"\n");
+    let s = load_ok(&text, &[]);
+    assert_eq!(
+        s.voxel
+            .as_ref()
+            .and_then(|v| v.get("resolution"))
+            .and_then(|v| v.as_integer()),
+        Some(128)
+    );
+    assert!(s.gi.is_some());
+}
+
+// ---- fuzzing -------------------------------------------------------------------------------
+
+/// Lines a scene file may contain, with numbers to be filled in.
+const FRAGMENTS: &[&str] = &[
+    "[camera]",
+    "position = [{}, {}, {}]",
+    "target = [{}, {}, {}]",
+    "forward = [{}, {}, {}]",
+    "up = [{}, {}, {}]",
+    "fov_y_deg = {}",
+    "near = {}",
+    "far = {}",
+    "[[lights]]",
+    "kind = \"point\"",
+    "kind = \"spot\"",
+    "kind = \"directional\"",
+    "direction = [{}, {}, {}]",
+    "intensity_w_sr = {}",
+    "irradiance_w_m2 = [{}, {}, {}]",
+    "cutoff_deg = {}",
+    "beam_deg = {}",
+    "[[objects]]",
+    "builtin = \"cube\"",
+    "builtin = \"sphere\"",
+    "builtin = \"cornell_walls\"",
+    "mesh = \"nowhere.obj\"",
+    "translate = [{}, {}, {}]",
+    "rotate_deg = [{}, {}, {}]",
+    "scale = {}",
+    "material = { albedo = {}, specular = {}, shininess = {} }",
+    "dynamic = true",
+    "animation = { keyframes = [{ time_s = {}, translate = [{}, {}, {}] }, { time_s = {}, scale = {} }] }",
+    "animation = { obj_sequence = \"f{}.obj\", frames = 3 }",
+    "[voxel]",
+    "x = {}",
+    "[gi]",
+    "= = [",
+    "\"",
+];
+
+const NUMBERS: &[&str] = &[
+    "0", "1", "-1", "0.5", "1e30", "-1e30", "1e-30", "nan", "inf", "-inf", "180", "90", "1e6",
+    "\"s\"", "[1, 2]",
+];
+
+fn fill(fragment: &str, numbers: &[usize]) -> String {
+    let mut out = String::new();
+    let mut k = 0;
+    for (i, part) in fragment.split("{}").enumerate() {
+        if i > 0 {
+            out.push_str(NUMBERS[numbers[k % numbers.len()] % NUMBERS.len()]);
+            k += 1;
+        }
+        out.push_str(part);
+    }
+    out
+}
+
+/// What a loaded scene promises: finite numbers, unit directions, finite matrices.
+fn check_invariants(s: &Scene) {
+    let c = &s.camera;
+    assert!(c.position.is_finite() && c.forward.is_normalized() && c.up.is_normalized());
+    assert!(c.view_proj(16.0 / 9.0).is_finite());
+    for l in &s.lights {
+        match *l {
+            Light::Point {
+                position,
+                intensity_w_sr,
+            } => {
+                assert!(position.is_finite() && intensity_w_sr.min_element() >= 0.0);
+            }
+            Light::Spot {
+                direction,
+                cutoff_deg,
+                beam_deg,
+                ..
+            } => {
+                assert!(direction.is_normalized() && beam_deg <= cutoff_deg);
+            }
+            Light::Directional { direction, .. } => assert!(direction.is_normalized()),
+        }
+    }
+    for o in &s.objects {
+        assert!(o.mesh < s.meshes.len());
+        assert!(o.materials.iter().all(|&m| m < s.materials.len()));
+        for t in [0.0, 0.37, 5.0, -3.0] {
+            assert!(!o.transform_at(t).is_nan());
+            let _ = o.mesh_at(t);
+        }
+    }
+}
+
+/// Keys of a light and of an object, each a line with numbers to be filled in.
+const LIGHT_KEYS: &[&str] = &[
+    "position = [{}, {}, {}]",
+    "direction = [{}, {}, {}]",
+    "intensity_w_sr = [{}, {}, {}]",
+    "irradiance_w_m2 = {}",
+    "cutoff_deg = {}",
+    "beam_deg = {}",
+];
+const LIGHT_KINDS: &[&str] = &["point", "spot", "directional"];
+const OBJECT_KEYS: &[&str] = &[
+    "translate = [{}, {}, {}]",
+    "rotate_deg = [{}, {}, {}]",
+    "scale = {}",
+    "material = { albedo = {}, specular = {}, shininess = {}, opacity = {} }",
+    "dynamic = true",
+    "animation = { loop = false, keyframes = [{ time_s = {}, translate = [{}, {}, {}] }, { time_s = {}, scale = {}, rotate_deg = [{}, 0, {}] }] }",
+];
+const BUILTINS: &[&str] = &[
+    "cube",
+    "quad",
+    "sphere",
+    "cornell_walls",
+    "cornell_tall_block",
+];
+/// Mostly valid numbers, so that many generated scenes load and get their invariants checked.
+const GOOD_NUMBERS: &[&str] = &["1", "0.5", "0.1", "0.7", "2", "30", "1e-6", "1e6", "0"];
+
+fn fill_from(fragment: &str, numbers: &[usize], table: &[&str]) -> String {
+    let mut out = String::new();
+    let mut k = 0;
+    for (i, part) in fragment.split("{}").enumerate() {
+        if i > 0 {
+            out.push_str(table[numbers[k % numbers.len()] % table.len()]);
+            k += 1;
+        }
+        out.push_str(part);
+    }
+    out
+}
+
+type Entity = (usize, Vec<bool>, Vec<usize>);
+
+fn entity() -> impl Strategy<Value = Entity> {
+    (
+        0..8usize,
+        prop::collection::vec(any::<bool>(), 6),
+        prop::collection::vec(
+            prop_oneof![
+                20 => 0..GOOD_NUMBERS.len(),
+                1 => GOOD_NUMBERS.len()..GOOD_NUMBERS.len() + NUMBERS.len(),
+            ],
+            1..24,
+        ),
+    )
+}
+
+/// Numbers index GOOD_NUMBERS first, then NUMBERS (the bad ones included).
+fn pick(i: usize) -> &'static str {
+    GOOD_NUMBERS
+        .get(i)
+        .copied()
+        .unwrap_or_else(|| NUMBERS[(i - GOOD_NUMBERS.len()) % NUMBERS.len()])
+}
+
+fn structured_scene(cam: &[usize], lights: &[Entity], objects: &[Entity]) -> String {
+    let table: Vec<&str> = (0..GOOD_NUMBERS.len() + NUMBERS.len()).map(pick).collect();
+    // Camera numbers: cam[i] is 0 for the valid value most of the time.
+    let cam_value = |i: usize, good: &'static str| if cam[i] == 0 { good } else { pick(cam[i]) };
+    let mut t = format!(
+        "[camera]\nposition = [0, {}, -2]\nforward = [0, {}, 1]\nfov_y_deg = {}\nnear = {}\nfar = {}\n",
+        cam_value(0, "1"),
+        cam_value(1, "0"),
+        cam_value(2, "40"),
+        cam_value(3, "0.01"),
+        cam_value(4, "100"),
+    );
+    for (kind, mask, nums) in lights {
+        let kind = kind % 3;
+        t.push_str(&format!("[[lights]]\nkind = \"{}\"\n", LIGHT_KINDS[kind]));
+        // The keys each kind needs, plus (rarely) one it must not have.
+        let needed: &[usize] = match kind {
+            0 => &[0, 2],
+            1 => &[0, 1, 2],
+            _ => &[1, 3],
+        };
+        for (i, key) in LIGHT_KEYS.iter().enumerate() {
+            let optional = kind == 1 && i >= 4 && mask[i];
+            let intruder = mask.iter().all(|m| *m) && !needed.contains(&i);
+            if needed.contains(&i) || optional || intruder {
+                t.push_str(&fill_from(key, nums, &table));
+                t.push('\n');
+            }
+        }
+    }
+    for (b, mask, nums) in objects {
+        t.push_str(&format!(
+            "[[objects]]\nbuiltin = \"{}\"\n",
+            BUILTINS[b % BUILTINS.len()]
+        ));
+        for (key, on) in OBJECT_KEYS.iter().zip(mask) {
+            if *on {
+                t.push_str(&fill_from(key, nums, &table));
+                t.push('\n');
+            }
+        }
+    }
+    t
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 256, ..ProptestConfig::default() })]
+
+    #[test]
+    fn arbitrary_text_never_panics(text in "\\PC{0,300}") {
+        let _ = Scene::from_toml_str(&text, Path::new("fuzz.toml"), &std::env::temp_dir());
+    }
+
+    #[test]
+    fn scene_like_text_never_panics(
+        lines in prop::collection::vec((0..FRAGMENTS.len(), prop::collection::vec(0..NUMBERS.len(), 1..8)), 0..24)
+    ) {
+        let mut text = String::from("[camera]\nposition = [0, 0, -1]\nforward = [0, 0, 1]\nfov_y_deg = 40\n");
+        for (f, nums) in &lines {
+            text.push_str(&fill(FRAGMENTS[*f], nums));
+            text.push('\n');
+        }
+        if let Ok(s) = Scene::from_toml_str(&text, Path::new("fuzz.toml"), &std::env::temp_dir()) {
+            check_invariants(&s);
+        }
+    }
+
+    #[test]
+    fn structured_scenes_load_or_fail_cleanly(
+        cam in prop::collection::vec(prop_oneof![8 => Just(0usize), 1 => 0..GOOD_NUMBERS.len() + NUMBERS.len()], 5),
+        lights in prop::collection::vec(entity(), 0..4),
+        objects in prop::collection::vec(entity(), 0..4),
+    ) {
+        let text = structured_scene(&cam, &lights, &objects);
+        match Scene::from_toml_str(&text, Path::new("fuzz.toml"), &std::env::temp_dir()) {
+            Ok(s) => {
+                check_invariants(&s);
+                let b = s.aabb_at(0.5);
+                prop_assert!(b.min.is_finite() && b.max.is_finite(), "{:?}", b);
+            }
+            // Every error names the file.
+            Err(e) => prop_assert!(e.to_string().contains("fuzz.toml"), "{}", e),
+        }
+    }
+}

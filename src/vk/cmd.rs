@@ -1,0 +1,434 @@
+//! `Cmd`: the safe command-recording surface a pass's closure receives.
+//!
+//! Passes never call ash; they bind pipelines, push descriptors by (set, binding), and draw or
+//! dispatch through this type. Barriers are recorded only by the render graph's executor.
+
+use super::pipeline::{Bindable, Descriptor};
+use super::Context;
+use ash::vk;
+use std::ffi::CString;
+
+/// One color or depth attachment of a dynamic-rendering pass.
+#[derive(Clone, Copy)]
+pub struct Attachment {
+    pub view: vk::ImageView,
+    /// `Some` clears on load, `None` keeps the contents.
+    pub clear: Option<vk::ClearValue>,
+}
+
+/// A command buffer in the recording state, with the context it belongs to.
+pub struct Cmd<'a> {
+    pub(crate) ctx: &'a Context,
+    pub(crate) raw: vk::CommandBuffer,
+}
+
+impl<'a> Cmd<'a> {
+    /// # Invariant
+    /// `raw` must be a primary command buffer of `ctx.device` in the recording state for the
+    /// lifetime of the returned value.
+    pub(crate) fn new(ctx: &'a Context, raw: vk::CommandBuffer) -> Self {
+        Self { ctx, raw }
+    }
+
+    pub fn raw(&self) -> vk::CommandBuffer {
+        self.raw
+    }
+
+    pub fn context(&self) -> &Context {
+        self.ctx
+    }
+
+    pub(crate) fn barriers(
+        &self,
+        images: &[vk::ImageMemoryBarrier2],
+        buffers: &[vk::BufferMemoryBarrier2],
+    ) {
+        if images.is_empty() && buffers.is_empty() {
+            return;
+        }
+        let dep = vk::DependencyInfo::builder()
+            .image_memory_barriers(images)
+            .buffer_memory_barriers(buffers);
+        // SAFETY: Cmd invariant (recording); barrier handles are live resources of the graph.
+        unsafe { self.ctx.device.cmd_pipeline_barrier2(self.raw, &dep) };
+    }
+
+    pub fn begin_label(&self, name: &str, color: [f32; 4]) {
+        let Some(du) = &self.ctx.debug_utils else {
+            return;
+        };
+        let Ok(cname) = CString::new(name) else {
+            return;
+        };
+        let label = vk::DebugUtilsLabelEXT::builder()
+            .label_name(&cname)
+            .color(color);
+        // SAFETY: Cmd invariant.
+        unsafe { du.cmd_begin_debug_utils_label(self.raw, &label) };
+    }
+
+    pub fn end_label(&self) {
+        let Some(du) = &self.ctx.debug_utils else {
+            return;
+        };
+        // SAFETY: Cmd invariant; paired with begin_label by the executor.
+        unsafe { du.cmd_end_debug_utils_label(self.raw) };
+    }
+
+    pub(crate) fn write_timestamp(&self, pool: vk::QueryPool, query: u32, end: bool) {
+        let stage = if end {
+            vk::PipelineStageFlags2::ALL_COMMANDS
+        } else {
+            vk::PipelineStageFlags2::NONE
+        };
+        // SAFETY: Cmd invariant; the query was reset at the start of this command buffer.
+        unsafe {
+            self.ctx
+                .device
+                .cmd_write_timestamp2(self.raw, stage, pool, query)
+        };
+    }
+
+    pub(crate) fn reset_queries(&self, pool: vk::QueryPool, first: u32, count: u32) {
+        // SAFETY: Cmd invariant; outside any rendering instance.
+        unsafe {
+            self.ctx
+                .device
+                .cmd_reset_query_pool(self.raw, pool, first, count)
+        };
+    }
+
+    /// Begins dynamic rendering over `extent` and sets a full viewport and scissor.
+    pub fn begin_rendering(
+        &self,
+        extent: vk::Extent2D,
+        colors: &[Attachment],
+        depth: Option<Attachment>,
+    ) {
+        self.begin_rendering_layers(extent, 1, colors, depth);
+    }
+
+    /// Begins layered dynamic rendering (a geometry shader picks `gl_Layer`) into array views.
+    pub fn begin_rendering_layers(
+        &self,
+        extent: vk::Extent2D,
+        layers: u32,
+        colors: &[Attachment],
+        depth: Option<Attachment>,
+    ) {
+        let color_infos: Vec<vk::RenderingAttachmentInfo> = colors
+            .iter()
+            .map(|a| attachment_info(a, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL))
+            .collect();
+        let depth_info =
+            depth.map(|a| attachment_info(&a, vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL));
+        let area = vk::Rect2D {
+            offset: vk::Offset2D { x: 0, y: 0 },
+            extent,
+        };
+        let mut info = vk::RenderingInfo::builder()
+            .render_area(area)
+            .layer_count(layers.max(1))
+            .color_attachments(&color_infos);
+        if let Some(d) = depth_info.as_ref() {
+            info = info.depth_attachment(d);
+        }
+        self.begin_rendering_info(&info, extent);
+    }
+
+    /// Begins dynamic rendering without attachments (e.g. voxelization writes storage images
+    /// only), over `extent` with `layers` layers.
+    pub fn begin_rendering_no_attachments(&self, extent: vk::Extent2D, layers: u32) {
+        let area = vk::Rect2D {
+            offset: vk::Offset2D { x: 0, y: 0 },
+            extent,
+        };
+        let info = vk::RenderingInfo::builder()
+            .render_area(area)
+            .layer_count(layers.max(1));
+        self.begin_rendering_info(&info, extent);
+    }
+
+    fn begin_rendering_info(&self, info: &vk::RenderingInfo, extent: vk::Extent2D) {
+        let viewport = [vk::Viewport {
+            x: 0.0,
+            y: 0.0,
+            width: extent.width as f32,
+            height: extent.height as f32,
+            min_depth: 0.0,
+            max_depth: 1.0,
+        }];
+        let scissor = [vk::Rect2D {
+            offset: vk::Offset2D { x: 0, y: 0 },
+            extent,
+        }];
+        // SAFETY: Cmd invariant; attachment views are live and in the layouts the graph set.
+        unsafe {
+            self.ctx.device.cmd_begin_rendering(self.raw, info);
+            self.ctx.device.cmd_set_viewport(self.raw, 0, &viewport);
+            self.ctx.device.cmd_set_scissor(self.raw, 0, &scissor);
+        }
+    }
+
+    pub fn end_rendering(&self) {
+        // SAFETY: Cmd invariant; paired with begin_rendering.
+        unsafe { self.ctx.device.cmd_end_rendering(self.raw) };
+    }
+
+    /// Binds a pipeline and pushes its descriptor set 0.
+    pub fn bind(&self, pipeline: &impl Bindable, descriptors: &[Descriptor]) {
+        let (bind_point, raw, layout) = pipeline.bind_info();
+        let mut image_infos: Vec<[vk::DescriptorImageInfo; 1]> =
+            Vec::with_capacity(descriptors.len());
+        let mut buffer_infos: Vec<[vk::DescriptorBufferInfo; 1]> =
+            Vec::with_capacity(descriptors.len());
+        for d in descriptors {
+            match *d {
+                Descriptor::SampledImage { view, sampler, .. } => {
+                    image_infos.push([vk::DescriptorImageInfo {
+                        sampler,
+                        image_view: view,
+                        image_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+                    }])
+                }
+                Descriptor::StorageImage { view, .. } => {
+                    image_infos.push([vk::DescriptorImageInfo {
+                        sampler: vk::Sampler::null(),
+                        image_view: view,
+                        image_layout: vk::ImageLayout::GENERAL,
+                    }])
+                }
+                Descriptor::StorageBuffer {
+                    buffer,
+                    offset,
+                    range,
+                    ..
+                }
+                | Descriptor::UniformBuffer {
+                    buffer,
+                    offset,
+                    range,
+                    ..
+                } => buffer_infos.push([vk::DescriptorBufferInfo {
+                    buffer,
+                    offset,
+                    range,
+                }]),
+            }
+        }
+        let (mut ii, mut bi) = (0, 0);
+        let writes: Vec<vk::WriteDescriptorSet> = descriptors
+            .iter()
+            .map(|d| {
+                let w = vk::WriteDescriptorSet::builder()
+                    .dst_binding(d.binding())
+                    .descriptor_type(d.descriptor_type());
+                match d {
+                    Descriptor::SampledImage { .. } | Descriptor::StorageImage { .. } => {
+                        ii += 1;
+                        w.image_info(&image_infos[ii - 1]).build()
+                    }
+                    _ => {
+                        bi += 1;
+                        w.buffer_info(&buffer_infos[bi - 1]).build()
+                    }
+                }
+            })
+            .collect();
+        // SAFETY: Cmd invariant; pipeline and layout are live; the set layout was created with
+        // the PUSH_DESCRIPTOR flag; infos outlive the calls.
+        unsafe {
+            self.ctx.device.cmd_bind_pipeline(self.raw, bind_point, raw);
+            if !writes.is_empty() {
+                self.ctx
+                    .push_descriptor
+                    .cmd_push_descriptor_set(self.raw, bind_point, layout, 0, &writes);
+            }
+        }
+    }
+
+    /// Push constants for the pipeline last bound (all stages).
+    pub fn push_constants(&self, pipeline: &impl Bindable, bytes: &[u8]) {
+        let (_, _, layout) = pipeline.bind_info();
+        // SAFETY: Cmd invariant; the layout declares a push-constant range of ALL stages that
+        // covers `bytes` (checked when the pipeline was created).
+        unsafe {
+            self.ctx.device.cmd_push_constants(
+                self.raw,
+                layout,
+                vk::ShaderStageFlags::ALL,
+                0,
+                bytes,
+            )
+        };
+    }
+
+    pub fn dispatch(&self, x: u32, y: u32, z: u32) {
+        // SAFETY: Cmd invariant; a compute pipeline is bound.
+        unsafe { self.ctx.device.cmd_dispatch(self.raw, x, y, z) };
+    }
+
+    pub fn draw(&self, vertices: u32, instances: u32) {
+        // SAFETY: Cmd invariant; inside rendering with a graphics pipeline bound.
+        unsafe {
+            self.ctx
+                .device
+                .cmd_draw(self.raw, vertices, instances, 0, 0)
+        };
+    }
+
+    pub fn draw_indexed(&self, indices: u32, first_index: u32, vertex_offset: i32) {
+        // SAFETY: Cmd invariant; index buffer bound.
+        unsafe {
+            self.ctx
+                .device
+                .cmd_draw_indexed(self.raw, indices, 1, first_index, vertex_offset, 0)
+        };
+    }
+
+    pub fn bind_vertex_buffer(&self, buffer: vk::Buffer) {
+        // SAFETY: Cmd invariant; buffer is live with VERTEX_BUFFER usage.
+        unsafe {
+            self.ctx
+                .device
+                .cmd_bind_vertex_buffers(self.raw, 0, &[buffer], &[0])
+        };
+    }
+
+    pub fn bind_index_buffer(&self, buffer: vk::Buffer) {
+        // SAFETY: Cmd invariant; buffer is live with INDEX_BUFFER usage.
+        unsafe {
+            self.ctx
+                .device
+                .cmd_bind_index_buffer(self.raw, buffer, 0, vk::IndexType::UINT32)
+        };
+    }
+
+    /// Copies mip `mip` (all layers) of a color image in TRANSFER_SRC layout into a buffer,
+    /// tightly packed, layer after layer.
+    pub fn copy_image_to_buffer(
+        &self,
+        image: vk::Image,
+        extent: vk::Extent3D,
+        mip: u32,
+        layers: u32,
+        buffer: vk::Buffer,
+    ) {
+        let region = [vk::BufferImageCopy {
+            buffer_offset: 0,
+            buffer_row_length: 0,
+            buffer_image_height: 0,
+            image_subresource: vk::ImageSubresourceLayers {
+                aspect_mask: vk::ImageAspectFlags::COLOR,
+                mip_level: mip,
+                base_array_layer: 0,
+                layer_count: layers,
+            },
+            image_offset: vk::Offset3D::default(),
+            image_extent: extent,
+        }];
+        // SAFETY: Cmd invariant; the graph put the image in TRANSFER_SRC_OPTIMAL; the buffer is
+        // large enough (checked by the caller's read-back size).
+        unsafe {
+            self.ctx.device.cmd_copy_image_to_buffer(
+                self.raw,
+                image,
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                buffer,
+                &region,
+            )
+        };
+    }
+
+    /// Copies a whole buffer into an image (TRANSFER_DST layout), mip `mip`, all layers.
+    pub fn copy_buffer_to_image(
+        &self,
+        buffer: vk::Buffer,
+        image: vk::Image,
+        extent: vk::Extent3D,
+        mip: u32,
+        layers: u32,
+    ) {
+        let region = [vk::BufferImageCopy {
+            buffer_offset: 0,
+            buffer_row_length: 0,
+            buffer_image_height: 0,
+            image_subresource: vk::ImageSubresourceLayers {
+                aspect_mask: vk::ImageAspectFlags::COLOR,
+                mip_level: mip,
+                base_array_layer: 0,
+                layer_count: layers,
+            },
+            image_offset: vk::Offset3D::default(),
+            image_extent: extent,
+        }];
+        // SAFETY: Cmd invariant; the graph put the image in TRANSFER_DST_OPTIMAL.
+        unsafe {
+            self.ctx.device.cmd_copy_buffer_to_image(
+                self.raw,
+                buffer,
+                image,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                &region,
+            )
+        };
+    }
+
+    pub fn copy_buffer(&self, src: vk::Buffer, dst: vk::Buffer, size_bytes: u64) {
+        let region = [vk::BufferCopy {
+            src_offset: 0,
+            dst_offset: 0,
+            size: size_bytes,
+        }];
+        // SAFETY: Cmd invariant; both buffers hold at least size_bytes.
+        unsafe { self.ctx.device.cmd_copy_buffer(self.raw, src, dst, &region) };
+    }
+
+    /// Clears mips and layers of a color image in TRANSFER_DST layout.
+    pub fn clear_color_image(
+        &self,
+        image: vk::Image,
+        value: vk::ClearColorValue,
+        mips: u32,
+        layers: u32,
+    ) {
+        let range = [vk::ImageSubresourceRange {
+            aspect_mask: vk::ImageAspectFlags::COLOR,
+            base_mip_level: 0,
+            level_count: mips,
+            base_array_layer: 0,
+            layer_count: layers,
+        }];
+        // SAFETY: Cmd invariant; the graph put the image in TRANSFER_DST_OPTIMAL.
+        unsafe {
+            self.ctx.device.cmd_clear_color_image(
+                self.raw,
+                image,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                &value,
+                &range,
+            )
+        };
+    }
+
+    pub fn fill_buffer(&self, buffer: vk::Buffer, value: u32) {
+        // SAFETY: Cmd invariant; whole-size fill of a TRANSFER_DST buffer.
+        unsafe {
+            self.ctx
+                .device
+                .cmd_fill_buffer(self.raw, buffer, 0, vk::WHOLE_SIZE, value)
+        };
+    }
+}
+
+fn attachment_info(a: &Attachment, layout: vk::ImageLayout) -> vk::RenderingAttachmentInfo {
+    let mut info = vk::RenderingAttachmentInfo::builder()
+        .image_view(a.view)
+        .image_layout(layout)
+        .store_op(vk::AttachmentStoreOp::STORE);
+    info = match a.clear {
+        Some(c) => info.load_op(vk::AttachmentLoadOp::CLEAR).clear_value(c),
+        None => info.load_op(vk::AttachmentLoadOp::LOAD),
+    };
+    info.build()
+}

@@ -1,0 +1,563 @@
+//! Instance, validation messenger, device choice and the persistent-memory allocator.
+//!
+//! Teardown order (STYLE.md): wait idle → allocator → device → messenger → instance.
+
+use super::VkError;
+use ash::extensions::{ext, khr};
+use ash::vk;
+use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
+use std::ffi::{c_void, CStr, CString};
+use std::mem::ManuallyDrop;
+use std::sync::atomic::{AtomicU32, Ordering};
+use std::sync::{Arc, Mutex};
+
+/// How to create a [`Context`].
+#[derive(Clone, Debug, Default)]
+pub struct ContextDesc {
+    /// Enable `VK_LAYER_KHRONOS_validation` with synchronization validation.
+    pub validation: bool,
+    /// Device override: a decimal index into the device list or a case-insensitive substring
+    /// of the device name. Falls back to `VOXGI_DEVICE` when `None`.
+    pub device: Option<String>,
+    /// Extra instance extensions (e.g. surface extensions for a window).
+    pub instance_extensions: Vec<&'static CStr>,
+    /// Ask for `VK_KHR_swapchain`.
+    pub swapchain: bool,
+}
+
+/// Messages the validation layers sent, counted by severity. Tests assert both counts are 0.
+#[derive(Debug, Default)]
+pub struct ValidationLog {
+    pub errors: AtomicU32,
+    pub warnings: AtomicU32,
+    messages: Mutex<Vec<String>>,
+}
+
+impl ValidationLog {
+    pub fn error_count(&self) -> u32 {
+        self.errors.load(Ordering::SeqCst)
+    }
+    pub fn warning_count(&self) -> u32 {
+        self.warnings.load(Ordering::SeqCst)
+    }
+    /// Errors plus warnings: what a test must see as zero.
+    pub fn total(&self) -> u32 {
+        self.error_count() + self.warning_count()
+    }
+    /// A copy of every recorded message (errors and warnings), oldest first.
+    pub fn messages(&self) -> Vec<String> {
+        self.messages.lock().map(|m| m.clone()).unwrap_or_default()
+    }
+    fn record(&self, severity: vk::DebugUtilsMessageSeverityFlagsEXT, text: String) {
+        if severity.contains(vk::DebugUtilsMessageSeverityFlagsEXT::ERROR) {
+            self.errors.fetch_add(1, Ordering::SeqCst);
+            log::error!("{text}");
+        } else {
+            self.warnings.fetch_add(1, Ordering::SeqCst);
+            log::warn!("{text}");
+        }
+        if let Ok(mut m) = self.messages.lock() {
+            m.push(text);
+        }
+    }
+}
+
+/// Limits and properties the rest of the renderer needs.
+#[derive(Clone, Debug)]
+pub struct DeviceInfo {
+    pub name: String,
+    pub device_type: vk::PhysicalDeviceType,
+    pub api_version: u32,
+    /// Nanoseconds per timestamp tick.
+    pub timestamp_period_ns: f32,
+    pub timestamp_valid_bits: u32,
+    pub max_sampler_anisotropy: f32,
+    pub non_coherent_atom_size: u64,
+}
+
+pub struct Context {
+    pub entry: ash::Entry,
+    pub instance: ash::Instance,
+    pub physical_device: vk::PhysicalDevice,
+    pub device: ash::Device,
+    pub queue: vk::Queue,
+    pub queue_family: u32,
+    pub info: DeviceInfo,
+    pub push_descriptor: khr::PushDescriptor,
+    /// Present when the loader offers `VK_EXT_debug_utils` (labels for RenderDoc, messenger).
+    pub debug_utils: Option<ext::DebugUtils>,
+    pub validation: Arc<ValidationLog>,
+    pub(super) allocator: ManuallyDrop<Mutex<Allocator>>,
+    pub(super) upload_pool: Mutex<vk::CommandPool>,
+    messenger: vk::DebugUtilsMessengerEXT,
+}
+
+/// Device features voxgi needs, each with the reason shown to the user when it is missing.
+const REQUIRED_FEATURES: &[(&str, &str)] = &[
+    (
+        "geometryShader",
+        "layered voxelization picks the 3D-texture layer in a geometry shader",
+    ),
+    (
+        "logicOp",
+        "binary voxelization ORs 128-bit columns with a logic op",
+    ),
+    (
+        "fragmentStoresAndAtomics",
+        "voxelization stores from fragment shaders",
+    ),
+    (
+        "samplerAnisotropy",
+        "textures are sampled with anisotropic filtering",
+    ),
+];
+
+fn feature_enabled(f: &vk::PhysicalDeviceFeatures, name: &str) -> bool {
+    match name {
+        "geometryShader" => f.geometry_shader == vk::TRUE,
+        "logicOp" => f.logic_op == vk::TRUE,
+        "fragmentStoresAndAtomics" => f.fragment_stores_and_atomics == vk::TRUE,
+        "samplerAnisotropy" => f.sampler_anisotropy == vk::TRUE,
+        _ => false,
+    }
+}
+
+impl Context {
+    pub fn new(desc: &ContextDesc) -> Result<Self, VkError> {
+        // SAFETY: loads the system Vulkan loader; the returned Entry keeps the library alive.
+        let entry = unsafe { ash::Entry::load() }.map_err(|e| VkError::NoLoader(e.to_string()))?;
+
+        let available_ext: Vec<CString> = entry
+            .enumerate_instance_extension_properties(None)
+            .map_err(VkError::vk("enumerate instance extensions"))?
+            .iter()
+            // SAFETY: extension_name is a NUL-terminated array filled by the loader.
+            .map(|p| unsafe { CStr::from_ptr(p.extension_name.as_ptr()) }.to_owned())
+            .collect();
+        let has_ext = |name: &CStr| available_ext.iter().any(|e| e.as_c_str() == name);
+        let debug_utils_available = has_ext(ext::DebugUtils::name());
+
+        let mut layers: Vec<*const i8> = Vec::new();
+        let validation_layer = c"VK_LAYER_KHRONOS_validation";
+        if desc.validation {
+            let layer_present = entry
+                .enumerate_instance_layer_properties()
+                .map_err(VkError::vk("enumerate instance layers"))?
+                .iter()
+                // SAFETY: layer_name is a NUL-terminated array filled by the loader.
+                .any(|l| unsafe { CStr::from_ptr(l.layer_name.as_ptr()) } == validation_layer);
+            if !layer_present {
+                return Err(VkError::MissingValidationLayer);
+            }
+            if !debug_utils_available {
+                return Err(VkError::MissingInstanceExtension(
+                    "VK_EXT_debug_utils".into(),
+                ));
+            }
+            layers.push(validation_layer.as_ptr());
+        }
+
+        let mut extensions: Vec<*const i8> = Vec::new();
+        if debug_utils_available {
+            extensions.push(ext::DebugUtils::name().as_ptr());
+        }
+        for e in &desc.instance_extensions {
+            if !has_ext(e) {
+                return Err(VkError::MissingInstanceExtension(
+                    e.to_string_lossy().into(),
+                ));
+            }
+            extensions.push(e.as_ptr());
+        }
+
+        let app_name = c"voxgi";
+        let app_info = vk::ApplicationInfo::builder()
+            .application_name(app_name)
+            .application_version(vk::make_api_version(0, 0, 1, 0))
+            .engine_name(app_name)
+            .api_version(vk::API_VERSION_1_3);
+        let enabled_validation_features =
+            [vk::ValidationFeatureEnableEXT::SYNCHRONIZATION_VALIDATION];
+        let mut validation_features = vk::ValidationFeaturesEXT::builder()
+            .enabled_validation_features(&enabled_validation_features);
+        let mut instance_info = vk::InstanceCreateInfo::builder()
+            .application_info(&app_info)
+            .enabled_layer_names(&layers)
+            .enabled_extension_names(&extensions);
+        if desc.validation {
+            instance_info = instance_info.push_next(&mut validation_features);
+        }
+        // SAFETY: every pointer in instance_info refers to locals that outlive this call.
+        let instance = unsafe { entry.create_instance(&instance_info, None) }
+            .map_err(VkError::vk("create the Vulkan instance"))?;
+
+        let validation = Arc::new(ValidationLog::default());
+        let debug_utils = debug_utils_available.then(|| ext::DebugUtils::new(&entry, &instance));
+        let mut messenger = vk::DebugUtilsMessengerEXT::null();
+        if let (true, Some(du)) = (desc.validation, debug_utils.as_ref()) {
+            let info = vk::DebugUtilsMessengerCreateInfoEXT::builder()
+                .message_severity(
+                    vk::DebugUtilsMessageSeverityFlagsEXT::WARNING
+                        | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR,
+                )
+                .message_type(
+                    vk::DebugUtilsMessageTypeFlagsEXT::GENERAL
+                        | vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
+                        | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE,
+                )
+                .pfn_user_callback(Some(debug_callback))
+                .user_data(Arc::as_ptr(&validation) as *mut c_void);
+            // SAFETY: the user data points into the Arc held by the Context (`validation`),
+            // which outlives the messenger: Drop destroys the messenger first.
+            messenger = unsafe { du.create_debug_utils_messenger(&info, None) }
+                .map_err(VkError::vk("create the debug messenger"))?;
+        }
+
+        let (physical_device, queue_family, info) =
+            match pick_device(&instance, desc.device.clone(), desc.swapchain) {
+                Ok(v) => v,
+                Err(e) => {
+                    // SAFETY: nothing else was created from the instance besides the messenger.
+                    unsafe {
+                        if let Some(du) = &debug_utils {
+                            du.destroy_debug_utils_messenger(messenger, None);
+                        }
+                        instance.destroy_instance(None);
+                    }
+                    return Err(e);
+                }
+            };
+        log::info!(
+            "using Vulkan device: {} ({:?})",
+            info.name,
+            info.device_type
+        );
+
+        let priorities = [1.0f32];
+        let queue_info = [vk::DeviceQueueCreateInfo::builder()
+            .queue_family_index(queue_family)
+            .queue_priorities(&priorities)
+            .build()];
+        let features = vk::PhysicalDeviceFeatures::builder()
+            .geometry_shader(true)
+            .logic_op(true)
+            .fragment_stores_and_atomics(true)
+            .sampler_anisotropy(true)
+            .independent_blend(true)
+            // Out-of-range buffer reads return zero instead of faulting: the ray tests rely on
+            // it only as a safety net, and the validation layers check every access anyway.
+            .robust_buffer_access(desc.validation)
+            .build();
+        // maintenance4 is mandatory in Vulkan 1.3; shaderc's SPIR-V 1.6 relies on it (LocalSizeId).
+        let mut features13 = vk::PhysicalDeviceVulkan13Features::builder()
+            .dynamic_rendering(true)
+            .synchronization2(true)
+            .maintenance4(true);
+        let mut features12 = vk::PhysicalDeviceVulkan12Features::builder().host_query_reset(true);
+        let mut device_ext: Vec<*const i8> = vec![khr::PushDescriptor::name().as_ptr()];
+        if desc.swapchain {
+            device_ext.push(khr::Swapchain::name().as_ptr());
+        }
+        let device_info = vk::DeviceCreateInfo::builder()
+            .queue_create_infos(&queue_info)
+            .enabled_features(&features)
+            .enabled_extension_names(&device_ext)
+            .push_next(&mut features13)
+            .push_next(&mut features12);
+        // SAFETY: physical_device comes from this instance; all pointers refer to live locals.
+        let device = unsafe { instance.create_device(physical_device, &device_info, None) }
+            .map_err(VkError::vk("create the logical device"))?;
+        // SAFETY: the queue family and index 0 were requested in device_info.
+        let queue = unsafe { device.get_device_queue(queue_family, 0) };
+
+        let allocator = Allocator::new(&AllocatorCreateDesc {
+            instance: instance.clone(),
+            device: device.clone(),
+            physical_device,
+            debug_settings: gpu_allocator::AllocatorDebugSettings {
+                log_leaks_on_shutdown: true,
+                ..Default::default()
+            },
+            buffer_device_address: false,
+            allocation_sizes: Default::default(),
+        })
+        .map_err(|e| VkError::Allocation(e.to_string()))?;
+
+        let pool_info = vk::CommandPoolCreateInfo::builder()
+            .queue_family_index(queue_family)
+            .flags(vk::CommandPoolCreateFlags::TRANSIENT);
+        // SAFETY: device is valid; the pool is destroyed in Drop.
+        let upload_pool = unsafe { device.create_command_pool(&pool_info, None) }
+            .map_err(VkError::vk("create the upload command pool"))?;
+
+        let push_descriptor = khr::PushDescriptor::new(&instance, &device);
+        Ok(Self {
+            entry,
+            instance,
+            physical_device,
+            device,
+            queue,
+            queue_family,
+            info,
+            push_descriptor,
+            debug_utils,
+            validation,
+            allocator: ManuallyDrop::new(Mutex::new(allocator)),
+            upload_pool: Mutex::new(upload_pool),
+            messenger,
+        })
+    }
+
+    /// Blocks until the GPU is idle.
+    pub fn wait_idle(&self) -> Result<(), VkError> {
+        // SAFETY: the device is valid for the lifetime of self.
+        unsafe { self.device.device_wait_idle() }.map_err(VkError::vk("wait for the device"))
+    }
+
+    /// Gives a Vulkan object a name visible in validation messages and RenderDoc.
+    pub fn set_name<T: vk::Handle>(&self, object: T, name: &str) {
+        let Some(du) = &self.debug_utils else { return };
+        let Ok(cname) = CString::new(name) else {
+            return;
+        };
+        let info = vk::DebugUtilsObjectNameInfoEXT::builder()
+            .object_type(T::TYPE)
+            .object_handle(object.as_raw())
+            .object_name(&cname);
+        // SAFETY: object is a live handle of this device; naming failure is harmless.
+        let _ = unsafe { du.set_debug_utils_object_name(self.device.handle(), &info) };
+    }
+
+    /// Memory properties of the chosen device (for the graph's transient arenas).
+    pub fn memory_properties(&self) -> vk::PhysicalDeviceMemoryProperties {
+        // SAFETY: physical_device belongs to instance.
+        unsafe {
+            self.instance
+                .get_physical_device_memory_properties(self.physical_device)
+        }
+    }
+}
+
+impl Drop for Context {
+    fn drop(&mut self) {
+        // SAFETY: teardown in dependency order; every child object was destroyed by its owner
+        // (the validation layer reports any that were not as an error).
+        unsafe {
+            let _ = self.device.device_wait_idle();
+            if let Ok(pool) = self.upload_pool.lock() {
+                self.device.destroy_command_pool(*pool, None);
+            }
+            ManuallyDrop::drop(&mut self.allocator);
+            self.device.destroy_device(None);
+            if let Some(du) = &self.debug_utils {
+                if self.messenger != vk::DebugUtilsMessengerEXT::null() {
+                    du.destroy_debug_utils_messenger(self.messenger, None);
+                }
+            }
+            self.instance.destroy_instance(None);
+        }
+    }
+}
+
+unsafe extern "system" fn debug_callback(
+    severity: vk::DebugUtilsMessageSeverityFlagsEXT,
+    _types: vk::DebugUtilsMessageTypeFlagsEXT,
+    data: *const vk::DebugUtilsMessengerCallbackDataEXT,
+    user: *mut c_void,
+) -> vk::Bool32 {
+    // SAFETY: the layer passes valid callback data; `user` points to the ValidationLog of the
+    // Context, alive until the messenger is destroyed.
+    let (log_sink, text) = unsafe {
+        let log_sink = &*(user as *const ValidationLog);
+        let msg = if data.is_null() || (*data).p_message.is_null() {
+            String::from("(no message)")
+        } else {
+            CStr::from_ptr((*data).p_message)
+                .to_string_lossy()
+                .into_owned()
+        };
+        (log_sink, msg)
+    };
+    log_sink.record(severity, text);
+    vk::FALSE
+}
+
+fn device_name(props: &vk::PhysicalDeviceProperties) -> String {
+    // SAFETY: device_name is a NUL-terminated array filled by the driver.
+    unsafe { CStr::from_ptr(props.device_name.as_ptr()) }
+        .to_string_lossy()
+        .into_owned()
+}
+
+fn type_rank(t: vk::PhysicalDeviceType) -> u32 {
+    match t {
+        vk::PhysicalDeviceType::DISCRETE_GPU => 0,
+        vk::PhysicalDeviceType::INTEGRATED_GPU => 1,
+        vk::PhysicalDeviceType::VIRTUAL_GPU => 2,
+        vk::PhysicalDeviceType::CPU => 3,
+        _ => 4,
+    }
+}
+
+/// Why a device cannot run voxgi, or `None` when it can; also returns the queue family.
+fn check_device(
+    instance: &ash::Instance,
+    pd: vk::PhysicalDevice,
+    swapchain: bool,
+) -> Result<u32, String> {
+    // SAFETY: pd was enumerated from instance.
+    let props = unsafe { instance.get_physical_device_properties(pd) };
+    if props.api_version < vk::API_VERSION_1_3 {
+        return Err(format!(
+            "supports Vulkan {}.{}, voxgi needs 1.3 (update the driver)",
+            vk::api_version_major(props.api_version),
+            vk::api_version_minor(props.api_version)
+        ));
+    }
+    // SAFETY: as above.
+    let features = unsafe { instance.get_physical_device_features(pd) };
+    for (name, why) in REQUIRED_FEATURES {
+        if !feature_enabled(&features, name) {
+            return Err(format!("lacks the feature `{name}` ({why})"));
+        }
+    }
+    let mut f13 = vk::PhysicalDeviceVulkan13Features::default();
+    let mut f12 = vk::PhysicalDeviceVulkan12Features::default();
+    let mut f2 = vk::PhysicalDeviceFeatures2::builder()
+        .push_next(&mut f13)
+        .push_next(&mut f12);
+    // SAFETY: as above; the chain points to live locals.
+    unsafe { instance.get_physical_device_features2(pd, &mut f2) };
+    if f13.dynamic_rendering != vk::TRUE {
+        return Err("lacks the Vulkan 1.3 feature `dynamicRendering`".into());
+    }
+    if f13.synchronization2 != vk::TRUE {
+        return Err("lacks the Vulkan 1.3 feature `synchronization2`".into());
+    }
+    if f13.maintenance4 != vk::TRUE {
+        return Err("lacks the Vulkan 1.3 feature `maintenance4`".into());
+    }
+    if f12.host_query_reset != vk::TRUE {
+        return Err("lacks the Vulkan 1.2 feature `hostQueryReset`".into());
+    }
+    // SAFETY: as above.
+    let exts = unsafe { instance.enumerate_device_extension_properties(pd) }
+        .map_err(|e| format!("cannot list extensions ({e})"))?;
+    let has = |n: &CStr| {
+        exts.iter()
+            // SAFETY: extension_name is NUL-terminated.
+            .any(|e| unsafe { CStr::from_ptr(e.extension_name.as_ptr()) } == n)
+    };
+    if !has(khr::PushDescriptor::name()) {
+        return Err("lacks the extension `VK_KHR_push_descriptor`".into());
+    }
+    if swapchain && !has(khr::Swapchain::name()) {
+        return Err("lacks the extension `VK_KHR_swapchain`".into());
+    }
+    if props.limits.timestamp_compute_and_graphics != vk::TRUE {
+        return Err("cannot write timestamps on graphics and compute queues".into());
+    }
+    // SAFETY: as above.
+    let families = unsafe { instance.get_physical_device_queue_family_properties(pd) };
+    let want = vk::QueueFlags::GRAPHICS | vk::QueueFlags::COMPUTE;
+    families
+        .iter()
+        .position(|f| f.queue_flags.contains(want) && f.timestamp_valid_bits > 0)
+        .map(|i| i as u32)
+        .ok_or_else(|| "has no queue with graphics, compute and timestamps".into())
+}
+
+fn pick_device(
+    instance: &ash::Instance,
+    override_name: Option<String>,
+    swapchain: bool,
+) -> Result<(vk::PhysicalDevice, u32, DeviceInfo), VkError> {
+    // SAFETY: instance is valid.
+    let devices = unsafe { instance.enumerate_physical_devices() }
+        .map_err(VkError::vk("enumerate physical devices"))?;
+    if devices.is_empty() {
+        return Err(VkError::NoDevice {
+            report: "no Vulkan device found".into(),
+        });
+    }
+    let wanted = override_name.or_else(|| std::env::var("VOXGI_DEVICE").ok());
+    let mut report = String::new();
+    let mut candidates = Vec::new();
+    for (i, &pd) in devices.iter().enumerate() {
+        // SAFETY: pd was enumerated from instance.
+        let props = unsafe { instance.get_physical_device_properties(pd) };
+        let name = device_name(&props);
+        let selected_by_user = wanted.as_deref().map(|w| {
+            w.parse::<usize>().map(|idx| idx == i).unwrap_or(false)
+                || name.to_lowercase().contains(&w.to_lowercase())
+        });
+        match check_device(instance, pd, swapchain) {
+            Ok(family) => {
+                report.push_str(&format!(
+                    "  [{i}] {name} ({:?}): usable\n",
+                    props.device_type
+                ));
+                if selected_by_user != Some(false) {
+                    candidates.push((type_rank(props.device_type), i, pd, family, props));
+                }
+            }
+            Err(why) => report.push_str(&format!(
+                "  [{i}] {name} ({:?}): {why}\n",
+                props.device_type
+            )),
+        }
+    }
+    candidates.sort_by_key(|c| (c.0, c.1));
+    let Some((_, _, pd, family, props)) = candidates.into_iter().next() else {
+        return Err(match wanted {
+            Some(w) => VkError::DeviceNotFound { wanted: w, report },
+            None => VkError::NoDevice { report },
+        });
+    };
+    // SAFETY: pd is valid.
+    let families = unsafe { instance.get_physical_device_queue_family_properties(pd) };
+    let info = DeviceInfo {
+        name: device_name(&props),
+        device_type: props.device_type,
+        api_version: props.api_version,
+        timestamp_period_ns: props.limits.timestamp_period,
+        timestamp_valid_bits: families[family as usize].timestamp_valid_bits,
+        max_sampler_anisotropy: props.limits.max_sampler_anisotropy,
+        non_coherent_atom_size: props.limits.non_coherent_atom_size,
+    };
+    Ok((pd, family, info))
+}
+
+/// One line per Vulkan device: index, name, type, and whether voxgi can use it (and why not).
+pub fn describe_devices() -> Result<String, VkError> {
+    // SAFETY: loads the system Vulkan loader; the Entry outlives the instance below.
+    let entry = unsafe { ash::Entry::load() }.map_err(|e| VkError::NoLoader(e.to_string()))?;
+    let app_info = vk::ApplicationInfo::builder().api_version(vk::API_VERSION_1_3);
+    let info = vk::InstanceCreateInfo::builder().application_info(&app_info);
+    // SAFETY: info points to live locals.
+    let instance = unsafe { entry.create_instance(&info, None) }
+        .map_err(VkError::vk("create the Vulkan instance"))?;
+    let result = pick_device(&instance, None, false);
+    // SAFETY: nothing else was created from this instance.
+    let devices = unsafe { instance.enumerate_physical_devices() }.unwrap_or_default();
+    let mut report = String::new();
+    for (i, &pd) in devices.iter().enumerate() {
+        // SAFETY: pd was enumerated from instance.
+        let props = unsafe { instance.get_physical_device_properties(pd) };
+        let status = match check_device(&instance, pd, false) {
+            Ok(_) => "usable".to_owned(),
+            Err(why) => why,
+        };
+        report.push_str(&format!(
+            "[{i}] {} ({:?}): {status}\n",
+            device_name(&props),
+            props.device_type
+        ));
+    }
+    if let Ok((_, _, chosen)) = result {
+        report.push_str(&format!("default choice: {}\n", chosen.name));
+    }
+    // SAFETY: no child objects exist.
+    unsafe { instance.destroy_instance(None) };
+    Ok(report)
+}

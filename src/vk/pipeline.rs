@@ -1,0 +1,450 @@
+//! Shader modules, compute and graphics pipelines with one push-descriptor set, samplers.
+
+use super::{shaders, Context, VkError};
+use ash::vk;
+
+/// A descriptor pushed at bind time, addressed by its binding in set 0.
+#[derive(Clone, Copy, Debug)]
+pub enum Descriptor {
+    SampledImage {
+        binding: u32,
+        view: vk::ImageView,
+        sampler: vk::Sampler,
+    },
+    StorageImage {
+        binding: u32,
+        view: vk::ImageView,
+    },
+    StorageBuffer {
+        binding: u32,
+        buffer: vk::Buffer,
+        offset: u64,
+        range: u64,
+    },
+    UniformBuffer {
+        binding: u32,
+        buffer: vk::Buffer,
+        offset: u64,
+        range: u64,
+    },
+}
+
+impl Descriptor {
+    pub fn binding(&self) -> u32 {
+        match *self {
+            Descriptor::SampledImage { binding, .. }
+            | Descriptor::StorageImage { binding, .. }
+            | Descriptor::StorageBuffer { binding, .. }
+            | Descriptor::UniformBuffer { binding, .. } => binding,
+        }
+    }
+    pub fn descriptor_type(&self) -> vk::DescriptorType {
+        match self {
+            Descriptor::SampledImage { .. } => vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
+            Descriptor::StorageImage { .. } => vk::DescriptorType::STORAGE_IMAGE,
+            Descriptor::StorageBuffer { .. } => vk::DescriptorType::STORAGE_BUFFER,
+            Descriptor::UniformBuffer { .. } => vk::DescriptorType::UNIFORM_BUFFER,
+        }
+    }
+    /// A whole-buffer storage descriptor.
+    pub fn storage_buffer(binding: u32, buffer: vk::Buffer) -> Self {
+        Descriptor::StorageBuffer {
+            binding,
+            buffer,
+            offset: 0,
+            range: vk::WHOLE_SIZE,
+        }
+    }
+}
+
+/// Anything `Cmd::bind` accepts.
+pub trait Bindable {
+    fn bind_info(&self) -> (vk::PipelineBindPoint, vk::Pipeline, vk::PipelineLayout);
+}
+
+pub struct ShaderModule {
+    pub raw: vk::ShaderModule,
+    pub name: String,
+}
+
+impl Context {
+    /// A shader module of the embedded SPIR-V `glsl/<file_name>`.
+    pub fn shader_module(&self, file_name: &str) -> Result<ShaderModule, VkError> {
+        let bytes =
+            shaders::get(file_name).ok_or_else(|| VkError::MissingShader(file_name.into()))?;
+        let words = ash::util::read_spv(&mut std::io::Cursor::new(bytes)).map_err(|e| {
+            VkError::InvalidSpirv {
+                name: file_name.into(),
+                reason: e.to_string(),
+            }
+        })?;
+        let info = vk::ShaderModuleCreateInfo::builder().code(&words);
+        // SAFETY: words is valid SPIR-V produced by shaderc at build time.
+        let raw = unsafe { self.device.create_shader_module(&info, None) }
+            .map_err(VkError::vk("create a shader module"))?;
+        self.set_name(raw, file_name);
+        Ok(ShaderModule {
+            raw,
+            name: file_name.into(),
+        })
+    }
+
+    pub fn destroy_shader_module(&self, m: ShaderModule) {
+        // SAFETY: no pipeline creation is in progress with this module.
+        unsafe { self.device.destroy_shader_module(m.raw, None) };
+    }
+
+    fn push_layout(
+        &self,
+        bindings: &[(u32, vk::DescriptorType)],
+        push_constant_bytes: u32,
+    ) -> Result<(vk::DescriptorSetLayout, vk::PipelineLayout), VkError> {
+        let b: Vec<vk::DescriptorSetLayoutBinding> = bindings
+            .iter()
+            .map(|&(binding, ty)| {
+                vk::DescriptorSetLayoutBinding::builder()
+                    .binding(binding)
+                    .descriptor_type(ty)
+                    .descriptor_count(1)
+                    .stage_flags(vk::ShaderStageFlags::ALL)
+                    .build()
+            })
+            .collect();
+        let info = vk::DescriptorSetLayoutCreateInfo::builder()
+            .flags(vk::DescriptorSetLayoutCreateFlags::PUSH_DESCRIPTOR_KHR)
+            .bindings(&b);
+        // SAFETY: valid device and create info.
+        let set_layout = unsafe { self.device.create_descriptor_set_layout(&info, None) }
+            .map_err(VkError::vk("create a descriptor set layout"))?;
+        let ranges = [vk::PushConstantRange {
+            stage_flags: vk::ShaderStageFlags::ALL,
+            offset: 0,
+            size: push_constant_bytes,
+        }];
+        let set_layouts = [set_layout];
+        let mut layout_info = vk::PipelineLayoutCreateInfo::builder().set_layouts(&set_layouts);
+        if push_constant_bytes > 0 {
+            layout_info = layout_info.push_constant_ranges(&ranges);
+        }
+        // SAFETY: valid device; set_layout is live.
+        let layout = unsafe { self.device.create_pipeline_layout(&layout_info, None) }
+            .map_err(VkError::vk("create a pipeline layout"))?;
+        Ok((set_layout, layout))
+    }
+
+    /// A compute pipeline of `glsl/<file_name>` with the given set-0 bindings and push-constant
+    /// size. `spec` holds 32-bit specialization constants by constant id.
+    pub fn compute_pipeline(
+        &self,
+        file_name: &str,
+        bindings: &[(u32, vk::DescriptorType)],
+        push_constant_bytes: u32,
+        spec: &[(u32, u32)],
+    ) -> Result<ComputePipeline, VkError> {
+        let module = self.shader_module(file_name)?;
+        let (set_layout, layout) = self.push_layout(bindings, push_constant_bytes)?;
+        let (entries, data) = spec_data(spec);
+        let spec_info = vk::SpecializationInfo::builder()
+            .map_entries(&entries)
+            .data(&data);
+        let stage = vk::PipelineShaderStageCreateInfo::builder()
+            .stage(vk::ShaderStageFlags::COMPUTE)
+            .module(module.raw)
+            .name(c"main")
+            .specialization_info(&spec_info);
+        let info = [vk::ComputePipelineCreateInfo::builder()
+            .stage(stage.build())
+            .layout(layout)
+            .build()];
+        // SAFETY: module and layout are live; info points to live locals.
+        let result = unsafe {
+            self.device
+                .create_compute_pipelines(vk::PipelineCache::null(), &info, None)
+        };
+        self.destroy_shader_module(module);
+        let pipeline = result.map_err(|(_, e)| VkError::Call {
+            what: "create a compute pipeline",
+            result: e,
+        })?[0];
+        self.set_name(pipeline, file_name);
+        Ok(ComputePipeline {
+            raw: pipeline,
+            layout,
+            set_layout,
+        })
+    }
+
+    pub fn graphics_pipeline(
+        &self,
+        desc: &GraphicsPipelineDesc,
+    ) -> Result<GraphicsPipeline, VkError> {
+        let mut modules = vec![
+            (
+                vk::ShaderStageFlags::VERTEX,
+                self.shader_module(&desc.vertex)?,
+            ),
+            (
+                vk::ShaderStageFlags::FRAGMENT,
+                self.shader_module(&desc.fragment)?,
+            ),
+        ];
+        if let Some(g) = &desc.geometry {
+            modules.push((vk::ShaderStageFlags::GEOMETRY, self.shader_module(g)?));
+        }
+        let (set_layout, layout) = self.push_layout(&desc.bindings, desc.push_constant_bytes)?;
+        let (entries, data) = spec_data(&desc.spec);
+        let spec_info = vk::SpecializationInfo::builder()
+            .map_entries(&entries)
+            .data(&data);
+        let stages: Vec<vk::PipelineShaderStageCreateInfo> = modules
+            .iter()
+            .map(|(stage, m)| {
+                vk::PipelineShaderStageCreateInfo::builder()
+                    .stage(*stage)
+                    .module(m.raw)
+                    .name(c"main")
+                    .specialization_info(&spec_info)
+                    .build()
+            })
+            .collect();
+        let vertex_bindings: Vec<vk::VertexInputBindingDescription> = if desc.vertex_stride > 0 {
+            vec![vk::VertexInputBindingDescription {
+                binding: 0,
+                stride: desc.vertex_stride,
+                input_rate: vk::VertexInputRate::VERTEX,
+            }]
+        } else {
+            vec![]
+        };
+        let attributes: Vec<vk::VertexInputAttributeDescription> = desc
+            .vertex_attributes
+            .iter()
+            .enumerate()
+            .map(
+                |(i, &(format, offset))| vk::VertexInputAttributeDescription {
+                    location: i as u32,
+                    binding: 0,
+                    format,
+                    offset,
+                },
+            )
+            .collect();
+        let vertex_input = vk::PipelineVertexInputStateCreateInfo::builder()
+            .vertex_binding_descriptions(&vertex_bindings)
+            .vertex_attribute_descriptions(&attributes);
+        let input_assembly =
+            vk::PipelineInputAssemblyStateCreateInfo::builder().topology(desc.topology);
+        let viewport = vk::PipelineViewportStateCreateInfo::builder()
+            .viewport_count(1)
+            .scissor_count(1);
+        let raster = vk::PipelineRasterizationStateCreateInfo::builder()
+            .polygon_mode(vk::PolygonMode::FILL)
+            .cull_mode(desc.cull_mode)
+            .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
+            .depth_bias_enable(desc.depth_bias)
+            .line_width(1.0);
+        let multisample = vk::PipelineMultisampleStateCreateInfo::builder()
+            .rasterization_samples(vk::SampleCountFlags::TYPE_1);
+        let depth = vk::PipelineDepthStencilStateCreateInfo::builder()
+            .depth_test_enable(desc.depth_format.is_some() && desc.depth_test)
+            .depth_write_enable(desc.depth_format.is_some() && desc.depth_write)
+            .depth_compare_op(vk::CompareOp::LESS_OR_EQUAL);
+        let blend_attachments: Vec<vk::PipelineColorBlendAttachmentState> = desc
+            .color_formats
+            .iter()
+            .map(|_| {
+                vk::PipelineColorBlendAttachmentState::builder()
+                    .color_write_mask(vk::ColorComponentFlags::RGBA)
+                    .build()
+            })
+            .collect();
+        let mut blend =
+            vk::PipelineColorBlendStateCreateInfo::builder().attachments(&blend_attachments);
+        if let Some(op) = desc.logic_op {
+            blend = blend.logic_op_enable(true).logic_op(op);
+        }
+        let mut dynamic_states = vec![vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
+        if desc.depth_bias {
+            dynamic_states.push(vk::DynamicState::DEPTH_BIAS);
+        }
+        let dynamic = vk::PipelineDynamicStateCreateInfo::builder().dynamic_states(&dynamic_states);
+        let mut rendering = vk::PipelineRenderingCreateInfo::builder()
+            .color_attachment_formats(&desc.color_formats)
+            .depth_attachment_format(desc.depth_format.unwrap_or(vk::Format::UNDEFINED));
+        let info = [vk::GraphicsPipelineCreateInfo::builder()
+            .stages(&stages)
+            .vertex_input_state(&vertex_input)
+            .input_assembly_state(&input_assembly)
+            .viewport_state(&viewport)
+            .rasterization_state(&raster)
+            .multisample_state(&multisample)
+            .depth_stencil_state(&depth)
+            .color_blend_state(&blend)
+            .dynamic_state(&dynamic)
+            .layout(layout)
+            .push_next(&mut rendering)
+            .build()];
+        // SAFETY: modules and layout are live; info points to live locals.
+        let result = unsafe {
+            self.device
+                .create_graphics_pipelines(vk::PipelineCache::null(), &info, None)
+        };
+        for (_, m) in modules {
+            self.destroy_shader_module(m);
+        }
+        let pipeline = result.map_err(|(_, e)| VkError::Call {
+            what: "create a graphics pipeline",
+            result: e,
+        })?[0];
+        self.set_name(pipeline, &desc.fragment);
+        Ok(GraphicsPipeline {
+            raw: pipeline,
+            layout,
+            set_layout,
+        })
+    }
+
+    pub fn destroy_compute_pipeline(&self, p: ComputePipeline) {
+        // SAFETY: the caller waited for all GPU work using the pipeline.
+        unsafe {
+            self.device.destroy_pipeline(p.raw, None);
+            self.device.destroy_pipeline_layout(p.layout, None);
+            self.device
+                .destroy_descriptor_set_layout(p.set_layout, None);
+        }
+    }
+
+    pub fn destroy_graphics_pipeline(&self, p: GraphicsPipeline) {
+        // SAFETY: the caller waited for all GPU work using the pipeline.
+        unsafe {
+            self.device.destroy_pipeline(p.raw, None);
+            self.device.destroy_pipeline_layout(p.layout, None);
+            self.device
+                .destroy_descriptor_set_layout(p.set_layout, None);
+        }
+    }
+
+    /// A sampler with the given filter and clamp-to-edge addressing.
+    pub fn create_sampler(
+        &self,
+        filter: vk::Filter,
+        anisotropy: bool,
+    ) -> Result<vk::Sampler, VkError> {
+        let mipmap_mode = if filter == vk::Filter::LINEAR {
+            vk::SamplerMipmapMode::LINEAR
+        } else {
+            vk::SamplerMipmapMode::NEAREST
+        };
+        let info = vk::SamplerCreateInfo::builder()
+            .mag_filter(filter)
+            .min_filter(filter)
+            .mipmap_mode(mipmap_mode)
+            .address_mode_u(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+            .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+            .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+            .anisotropy_enable(anisotropy)
+            .max_anisotropy(if anisotropy {
+                self.info.max_sampler_anisotropy.min(16.0)
+            } else {
+                1.0
+            })
+            .max_lod(vk::LOD_CLAMP_NONE);
+        // SAFETY: valid device and create info.
+        unsafe { self.device.create_sampler(&info, None) }.map_err(VkError::vk("create a sampler"))
+    }
+
+    pub fn destroy_sampler(&self, s: vk::Sampler) {
+        // SAFETY: the caller waited for all GPU work using the sampler.
+        unsafe { self.device.destroy_sampler(s, None) };
+    }
+}
+
+/// Map entries and data of 32-bit specialization constants.
+fn spec_data(spec: &[(u32, u32)]) -> (Vec<vk::SpecializationMapEntry>, Vec<u8>) {
+    let entries = spec
+        .iter()
+        .enumerate()
+        .map(|(i, &(id, _))| vk::SpecializationMapEntry {
+            constant_id: id,
+            offset: 4 * i as u32,
+            size: 4,
+        })
+        .collect();
+    let data = spec.iter().flat_map(|&(_, v)| v.to_ne_bytes()).collect();
+    (entries, data)
+}
+
+#[derive(Clone, Copy, Debug)]
+pub struct ComputePipeline {
+    pub raw: vk::Pipeline,
+    pub layout: vk::PipelineLayout,
+    pub set_layout: vk::DescriptorSetLayout,
+}
+
+impl Bindable for ComputePipeline {
+    fn bind_info(&self) -> (vk::PipelineBindPoint, vk::Pipeline, vk::PipelineLayout) {
+        (vk::PipelineBindPoint::COMPUTE, self.raw, self.layout)
+    }
+}
+
+#[derive(Clone, Copy, Debug)]
+pub struct GraphicsPipeline {
+    pub raw: vk::Pipeline,
+    pub layout: vk::PipelineLayout,
+    pub set_layout: vk::DescriptorSetLayout,
+}
+
+impl Bindable for GraphicsPipeline {
+    fn bind_info(&self) -> (vk::PipelineBindPoint, vk::Pipeline, vk::PipelineLayout) {
+        (vk::PipelineBindPoint::GRAPHICS, self.raw, self.layout)
+    }
+}
+
+/// Plain creation data of a graphics pipeline (dynamic rendering).
+#[derive(Clone, Debug)]
+pub struct GraphicsPipelineDesc {
+    pub vertex: String,
+    pub geometry: Option<String>,
+    pub fragment: String,
+    pub bindings: Vec<(u32, vk::DescriptorType)>,
+    pub push_constant_bytes: u32,
+    /// Stride of vertex binding 0; 0 means no vertex buffer (e.g. a full-screen triangle).
+    pub vertex_stride: u32,
+    /// (format, offset) per location.
+    pub vertex_attributes: Vec<(vk::Format, u32)>,
+    pub topology: vk::PrimitiveTopology,
+    pub cull_mode: vk::CullModeFlags,
+    pub color_formats: Vec<vk::Format>,
+    pub depth_format: Option<vk::Format>,
+    pub depth_test: bool,
+    pub depth_write: bool,
+    pub depth_bias: bool,
+    /// Logic op on every color attachment (e.g. OR for binary voxel columns).
+    pub logic_op: Option<vk::LogicOp>,
+    /// 32-bit specialization constants (constant id, value), applied to every stage.
+    pub spec: Vec<(u32, u32)>,
+}
+
+impl GraphicsPipelineDesc {
+    /// A full-screen pass: no vertex input, triangle list, no culling, one color target.
+    pub fn fullscreen(vertex: &str, fragment: &str, color: vk::Format) -> Self {
+        Self {
+            vertex: vertex.into(),
+            geometry: None,
+            fragment: fragment.into(),
+            bindings: vec![],
+            push_constant_bytes: 0,
+            vertex_stride: 0,
+            vertex_attributes: vec![],
+            topology: vk::PrimitiveTopology::TRIANGLE_LIST,
+            cull_mode: vk::CullModeFlags::NONE,
+            color_formats: vec![color],
+            depth_format: None,
+            depth_test: false,
+            depth_write: false,
+            depth_bias: false,
+            logic_op: None,
+            spec: vec![],
+        }
+    }
+}

@@ -1,0 +1,518 @@
+//! Persistent buffers and images, allocated with gpu-allocator; staging upload and read-back.
+
+use super::{Context, VkError};
+use ash::vk;
+use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
+pub use gpu_allocator::MemoryLocation;
+
+/// Plain creation data of a buffer.
+#[derive(Clone, Debug)]
+pub struct BufferDesc {
+    pub name: String,
+    pub size_bytes: u64,
+    pub usage: vk::BufferUsageFlags,
+    pub location: MemoryLocation,
+}
+
+pub struct Buffer {
+    pub raw: vk::Buffer,
+    pub desc: BufferDesc,
+    allocation: Option<Allocation>,
+}
+
+impl Buffer {
+    /// The mapped bytes of a host-visible buffer.
+    pub fn mapped(&self) -> Option<&[u8]> {
+        self.allocation.as_ref()?.mapped_slice()
+    }
+    pub fn mapped_mut(&mut self) -> Option<&mut [u8]> {
+        self.allocation.as_mut()?.mapped_slice_mut()
+    }
+}
+
+/// Plain creation data of an image. `depth > 1` makes a 3D image; `layers > 1` a 2D array.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ImageDesc {
+    pub name: String,
+    pub format: vk::Format,
+    pub width: u32,
+    pub height: u32,
+    pub depth: u32,
+    pub layers: u32,
+    pub mip_levels: u32,
+    pub usage: vk::ImageUsageFlags,
+}
+
+impl ImageDesc {
+    pub fn new_2d(name: &str, format: vk::Format, width: u32, height: u32) -> Self {
+        Self {
+            name: name.to_owned(),
+            format,
+            width,
+            height,
+            depth: 1,
+            layers: 1,
+            mip_levels: 1,
+            usage: vk::ImageUsageFlags::empty(),
+        }
+    }
+    pub fn with_layers(mut self, layers: u32) -> Self {
+        self.layers = layers;
+        self
+    }
+    pub fn with_mips(mut self, mip_levels: u32) -> Self {
+        self.mip_levels = mip_levels;
+        self
+    }
+    pub fn with_depth(mut self, depth: u32) -> Self {
+        self.depth = depth;
+        self
+    }
+    pub fn with_usage(mut self, usage: vk::ImageUsageFlags) -> Self {
+        self.usage = usage;
+        self
+    }
+    pub fn aspect(&self) -> vk::ImageAspectFlags {
+        aspect_of(self.format)
+    }
+    pub fn image_type(&self) -> vk::ImageType {
+        if self.depth > 1 {
+            vk::ImageType::TYPE_3D
+        } else {
+            vk::ImageType::TYPE_2D
+        }
+    }
+    pub fn view_type(&self) -> vk::ImageViewType {
+        if self.depth > 1 {
+            vk::ImageViewType::TYPE_3D
+        } else if self.layers > 1 {
+            vk::ImageViewType::TYPE_2D_ARRAY
+        } else {
+            vk::ImageViewType::TYPE_2D
+        }
+    }
+    pub fn create_info(&self) -> vk::ImageCreateInfo {
+        vk::ImageCreateInfo::builder()
+            .image_type(self.image_type())
+            .format(self.format)
+            .extent(vk::Extent3D {
+                width: self.width,
+                height: self.height,
+                depth: self.depth,
+            })
+            .mip_levels(self.mip_levels)
+            .array_layers(self.layers)
+            .samples(vk::SampleCountFlags::TYPE_1)
+            .tiling(vk::ImageTiling::OPTIMAL)
+            .usage(self.usage)
+            .sharing_mode(vk::SharingMode::EXCLUSIVE)
+            .initial_layout(vk::ImageLayout::UNDEFINED)
+            .build()
+    }
+}
+
+pub fn aspect_of(format: vk::Format) -> vk::ImageAspectFlags {
+    match format {
+        vk::Format::D16_UNORM | vk::Format::D32_SFLOAT | vk::Format::X8_D24_UNORM_PACK32 => {
+            vk::ImageAspectFlags::DEPTH
+        }
+        vk::Format::D24_UNORM_S8_UINT | vk::Format::D32_SFLOAT_S8_UINT => {
+            vk::ImageAspectFlags::DEPTH | vk::ImageAspectFlags::STENCIL
+        }
+        _ => vk::ImageAspectFlags::COLOR,
+    }
+}
+
+/// An image with a view of all its mips and layers, plus optional per-mip views.
+pub struct Image {
+    pub raw: vk::Image,
+    pub view: vk::ImageView,
+    /// One view per mip level (all layers), for storage writes into a single level.
+    pub mip_views: Vec<vk::ImageView>,
+    pub desc: ImageDesc,
+    allocation: Option<Allocation>,
+}
+
+impl Context {
+    pub fn create_buffer(&self, desc: &BufferDesc) -> Result<Buffer, VkError> {
+        if desc.size_bytes == 0 {
+            return Err(VkError::Invalid(format!(
+                "buffer `{}` has size 0",
+                desc.name
+            )));
+        }
+        let info = vk::BufferCreateInfo::builder()
+            .size(desc.size_bytes)
+            .usage(desc.usage)
+            .sharing_mode(vk::SharingMode::EXCLUSIVE);
+        // SAFETY: valid device and create info.
+        let raw = unsafe { self.device.create_buffer(&info, None) }
+            .map_err(VkError::vk("create a buffer"))?;
+        // SAFETY: raw was just created on this device.
+        let requirements = unsafe { self.device.get_buffer_memory_requirements(raw) };
+        let allocation = self.allocate(&desc.name, requirements, desc.location, true);
+        let allocation = match allocation {
+            Ok(a) => a,
+            Err(e) => {
+                // SAFETY: raw is unused.
+                unsafe { self.device.destroy_buffer(raw, None) };
+                return Err(e);
+            }
+        };
+        // SAFETY: memory and offset come from an allocation that satisfies `requirements`.
+        unsafe {
+            self.device
+                .bind_buffer_memory(raw, allocation.memory(), allocation.offset())
+        }
+        .map_err(VkError::vk("bind buffer memory"))?;
+        self.set_name(raw, &desc.name);
+        Ok(Buffer {
+            raw,
+            desc: desc.clone(),
+            allocation: Some(allocation),
+        })
+    }
+
+    pub fn destroy_buffer(&self, mut buffer: Buffer) {
+        // SAFETY: the caller no longer uses the buffer (GPU work was waited for).
+        unsafe { self.device.destroy_buffer(buffer.raw, None) };
+        if let Some(a) = buffer.allocation.take() {
+            self.free(a);
+        }
+    }
+
+    pub fn create_image(&self, desc: &ImageDesc) -> Result<Image, VkError> {
+        // SAFETY: valid device and create info.
+        let raw = unsafe { self.device.create_image(&desc.create_info(), None) }
+            .map_err(VkError::vk("create an image"))?;
+        // SAFETY: raw was just created on this device.
+        let requirements = unsafe { self.device.get_image_memory_requirements(raw) };
+        let allocation =
+            match self.allocate(&desc.name, requirements, MemoryLocation::GpuOnly, false) {
+                Ok(a) => a,
+                Err(e) => {
+                    // SAFETY: raw is unused.
+                    unsafe { self.device.destroy_image(raw, None) };
+                    return Err(e);
+                }
+            };
+        // SAFETY: allocation satisfies `requirements`.
+        unsafe {
+            self.device
+                .bind_image_memory(raw, allocation.memory(), allocation.offset())
+        }
+        .map_err(VkError::vk("bind image memory"))?;
+        self.set_name(raw, &desc.name);
+        let (view, mip_views) = self.create_views(raw, desc)?;
+        Ok(Image {
+            raw,
+            view,
+            mip_views,
+            desc: desc.clone(),
+            allocation: Some(allocation),
+        })
+    }
+
+    /// Wraps an image whose memory the caller bound (the graph's transient arenas).
+    pub fn wrap_image(&self, raw: vk::Image, desc: &ImageDesc) -> Result<Image, VkError> {
+        self.set_name(raw, &desc.name);
+        let (view, mip_views) = self.create_views(raw, desc)?;
+        Ok(Image {
+            raw,
+            view,
+            mip_views,
+            desc: desc.clone(),
+            allocation: None,
+        })
+    }
+
+    /// Wraps a buffer whose memory the caller bound (the graph's transient arenas).
+    pub fn wrap_buffer(&self, raw: vk::Buffer, desc: &BufferDesc) -> Buffer {
+        self.set_name(raw, &desc.name);
+        Buffer {
+            raw,
+            desc: desc.clone(),
+            allocation: None,
+        }
+    }
+
+    fn create_views(
+        &self,
+        raw: vk::Image,
+        desc: &ImageDesc,
+    ) -> Result<(vk::ImageView, Vec<vk::ImageView>), VkError> {
+        let make = |base_mip: u32, mips: u32| {
+            let info = vk::ImageViewCreateInfo::builder()
+                .image(raw)
+                .view_type(desc.view_type())
+                .format(desc.format)
+                .subresource_range(vk::ImageSubresourceRange {
+                    aspect_mask: desc.aspect(),
+                    base_mip_level: base_mip,
+                    level_count: mips,
+                    base_array_layer: 0,
+                    layer_count: desc.layers,
+                });
+            // SAFETY: raw is a live image of this device with a compatible format.
+            unsafe { self.device.create_image_view(&info, None) }
+                .map_err(VkError::vk("create an image view"))
+        };
+        let view = make(0, desc.mip_levels)?;
+        let mut mip_views = Vec::new();
+        if desc.mip_levels > 1 {
+            for m in 0..desc.mip_levels {
+                mip_views.push(make(m, 1)?);
+            }
+        }
+        Ok((view, mip_views))
+    }
+
+    pub fn destroy_image(&self, mut image: Image) {
+        // SAFETY: the caller no longer uses the image (GPU work was waited for).
+        unsafe {
+            for v in image.mip_views.drain(..) {
+                self.device.destroy_image_view(v, None);
+            }
+            self.device.destroy_image_view(image.view, None);
+        }
+        // SAFETY: as above.
+        unsafe { self.device.destroy_image(image.raw, None) };
+        if let Some(a) = image.allocation.take() {
+            self.free(a);
+        }
+    }
+
+    fn allocate(
+        &self,
+        name: &str,
+        requirements: vk::MemoryRequirements,
+        location: MemoryLocation,
+        linear: bool,
+    ) -> Result<Allocation, VkError> {
+        let mut alloc = self
+            .allocator
+            .lock()
+            .map_err(|_| VkError::Allocation("allocator lock poisoned".into()))?;
+        alloc
+            .allocate(&AllocationCreateDesc {
+                name,
+                requirements,
+                location,
+                linear,
+                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+            })
+            .map_err(|e| VkError::Allocation(format!("`{name}`: {e}")))
+    }
+
+    fn free(&self, allocation: Allocation) {
+        if let Ok(mut alloc) = self.allocator.lock() {
+            if let Err(e) = alloc.free(allocation) {
+                log::error!("freeing GPU memory failed: {e}");
+            }
+        }
+    }
+
+    /// Creates a device-local buffer filled with `data` (staging copy, waits for completion).
+    pub fn upload_buffer(
+        &self,
+        name: &str,
+        data: &[u8],
+        usage: vk::BufferUsageFlags,
+    ) -> Result<Buffer, VkError> {
+        let mut staging = self.create_buffer(&BufferDesc {
+            name: format!("{name} (staging)"),
+            size_bytes: data.len().max(4) as u64,
+            usage: vk::BufferUsageFlags::TRANSFER_SRC,
+            location: MemoryLocation::CpuToGpu,
+        })?;
+        if let Some(m) = staging.mapped_mut() {
+            m[..data.len()].copy_from_slice(data);
+        }
+        let dst = self.create_buffer(&BufferDesc {
+            name: name.to_owned(),
+            size_bytes: data.len().max(4) as u64,
+            usage: usage | vk::BufferUsageFlags::TRANSFER_DST,
+            location: MemoryLocation::GpuOnly,
+        })?;
+        let result = self.one_time_submit(|device, cmd| {
+            let region = [vk::BufferCopy {
+                src_offset: 0,
+                dst_offset: 0,
+                size: data.len().max(4) as u64,
+            }];
+            // SAFETY: both buffers are live and large enough; cmd is recording.
+            unsafe { device.cmd_copy_buffer(cmd, staging.raw, dst.raw, &region) };
+        });
+        self.destroy_buffer(staging);
+        result?;
+        Ok(dst)
+    }
+
+    /// Records `f` into a fresh command buffer, submits it, and waits. Ends with a full
+    /// memory barrier so that later submissions see the writes: uploads happen outside the
+    /// render graph, before the frame that first uses the resource.
+    pub fn one_time_submit(
+        &self,
+        f: impl FnOnce(&ash::Device, vk::CommandBuffer),
+    ) -> Result<(), VkError> {
+        let pool = self
+            .upload_pool
+            .lock()
+            .map_err(|_| VkError::Invalid("upload pool lock poisoned".into()))?;
+        let info = vk::CommandBufferAllocateInfo::builder()
+            .command_pool(*pool)
+            .level(vk::CommandBufferLevel::PRIMARY)
+            .command_buffer_count(1);
+        // SAFETY: pool is valid and externally synchronized by the mutex.
+        let cmd = unsafe { self.device.allocate_command_buffers(&info) }
+            .map_err(VkError::vk("allocate an upload command buffer"))?[0];
+        let begin = vk::CommandBufferBeginInfo::builder()
+            .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
+        // SAFETY: cmd is a fresh primary command buffer.
+        unsafe { self.device.begin_command_buffer(cmd, &begin) }
+            .map_err(VkError::vk("begin an upload command buffer"))?;
+        f(&self.device, cmd);
+        let barrier = [vk::MemoryBarrier2::builder()
+            .src_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
+            .src_access_mask(vk::AccessFlags2::MEMORY_WRITE)
+            .dst_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
+            .dst_access_mask(vk::AccessFlags2::MEMORY_READ | vk::AccessFlags2::MEMORY_WRITE)
+            .build()];
+        let dep = vk::DependencyInfo::builder().memory_barriers(&barrier);
+        // SAFETY: cmd is recording.
+        unsafe {
+            self.device.cmd_pipeline_barrier2(cmd, &dep);
+            self.device.end_command_buffer(cmd)
+        }
+        .map_err(VkError::vk("end an upload command buffer"))?;
+        let fence_info = vk::FenceCreateInfo::default();
+        // SAFETY: valid device.
+        let fence = unsafe { self.device.create_fence(&fence_info, None) }
+            .map_err(VkError::vk("create a fence"))?;
+        let cmds = [cmd];
+        let submit = [vk::SubmitInfo::builder().command_buffers(&cmds).build()];
+        // SAFETY: queue access is serialized by holding the upload-pool lock; cmd is executable.
+        let result = unsafe {
+            self.device
+                .queue_submit(self.queue, &submit, fence)
+                .and_then(|_| self.device.wait_for_fences(&[fence], true, u64::MAX))
+        };
+        // SAFETY: the fence was waited for (or submission failed), so cmd is not pending.
+        unsafe {
+            self.device.destroy_fence(fence, None);
+            self.device.free_command_buffers(*pool, &cmds);
+        }
+        result.map_err(VkError::vk("submit an upload"))
+    }
+}
+
+/// Raw memory for the render graph's transient arenas (the graph places resources in it).
+impl Context {
+    /// Memory requirements of an image that is not created yet (Vulkan 1.3 core query).
+    pub fn image_requirements(&self, desc: &ImageDesc) -> vk::MemoryRequirements {
+        let info = desc.create_info();
+        let query = vk::DeviceImageMemoryRequirements::builder().create_info(&info);
+        let mut out = vk::MemoryRequirements2::default();
+        // SAFETY: info is a valid create info; out is a plain output struct.
+        unsafe {
+            self.device
+                .get_device_image_memory_requirements(&query, &mut out)
+        };
+        out.memory_requirements
+    }
+
+    /// Memory requirements of a buffer that is not created yet.
+    pub fn buffer_requirements(
+        &self,
+        size_bytes: u64,
+        usage: vk::BufferUsageFlags,
+    ) -> vk::MemoryRequirements {
+        let info = vk::BufferCreateInfo::builder()
+            .size(size_bytes.max(1))
+            .usage(usage)
+            .sharing_mode(vk::SharingMode::EXCLUSIVE);
+        let query = vk::DeviceBufferMemoryRequirements::builder().create_info(&info);
+        let mut out = vk::MemoryRequirements2::default();
+        // SAFETY: info is a valid create info; out is a plain output struct.
+        unsafe {
+            self.device
+                .get_device_buffer_memory_requirements(&query, &mut out)
+        };
+        out.memory_requirements
+    }
+
+    /// The first device-local memory type among `type_bits` (any type if none is local).
+    pub fn device_local_type(&self, type_bits: u32) -> Option<u32> {
+        let props = self.memory_properties();
+        let types = &props.memory_types[..props.memory_type_count as usize];
+        let pick = |want: vk::MemoryPropertyFlags| {
+            types
+                .iter()
+                .enumerate()
+                .find(|(i, t)| type_bits & (1 << i) != 0 && t.property_flags.contains(want))
+                .map(|(i, _)| i as u32)
+        };
+        pick(vk::MemoryPropertyFlags::DEVICE_LOCAL)
+            .or_else(|| pick(vk::MemoryPropertyFlags::empty()))
+    }
+
+    pub fn allocate_arena(
+        &self,
+        memory_type: u32,
+        size_bytes: u64,
+        name: &str,
+    ) -> Result<vk::DeviceMemory, VkError> {
+        let info = vk::MemoryAllocateInfo::builder()
+            .allocation_size(size_bytes.max(1))
+            .memory_type_index(memory_type);
+        // SAFETY: valid device; memory_type comes from device_local_type.
+        let memory = unsafe { self.device.allocate_memory(&info, None) }.map_err(|e| {
+            VkError::Allocation(format!(
+                "transient arena `{name}` of {size_bytes} bytes: {e}"
+            ))
+        })?;
+        self.set_name(memory, name);
+        Ok(memory)
+    }
+
+    pub fn free_arena(&self, memory: vk::DeviceMemory) {
+        // SAFETY: every resource bound to the arena was destroyed and no work is pending.
+        unsafe { self.device.free_memory(memory, None) };
+    }
+
+    /// Creates an image bound at `offset` in `memory` (the graph checked size and alignment).
+    pub fn create_image_in(
+        &self,
+        desc: &ImageDesc,
+        memory: vk::DeviceMemory,
+        offset: u64,
+    ) -> Result<Image, VkError> {
+        // SAFETY: valid create info.
+        let raw = unsafe { self.device.create_image(&desc.create_info(), None) }
+            .map_err(VkError::vk("create a transient image"))?;
+        // SAFETY: the graph placed [offset, offset+size) inside memory with the required alignment.
+        unsafe { self.device.bind_image_memory(raw, memory, offset) }
+            .map_err(VkError::vk("bind a transient image"))?;
+        self.wrap_image(raw, desc)
+    }
+
+    /// Creates a buffer bound at `offset` in `memory`.
+    pub fn create_buffer_in(
+        &self,
+        desc: &BufferDesc,
+        memory: vk::DeviceMemory,
+        offset: u64,
+    ) -> Result<Buffer, VkError> {
+        let info = vk::BufferCreateInfo::builder()
+            .size(desc.size_bytes.max(1))
+            .usage(desc.usage)
+            .sharing_mode(vk::SharingMode::EXCLUSIVE);
+        // SAFETY: valid create info.
+        let raw = unsafe { self.device.create_buffer(&info, None) }
+            .map_err(VkError::vk("create a transient buffer"))?;
+        // SAFETY: as for create_image_in.
+        unsafe { self.device.bind_buffer_memory(raw, memory, offset) }
+            .map_err(VkError::vk("bind a transient buffer"))?;
+        Ok(self.wrap_buffer(raw, desc))
+    }
+}
