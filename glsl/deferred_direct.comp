@@ -5,12 +5,12 @@
 // falloff; directional: E = E_perp cos(theta).
 #include "frame.glsl"
 #include "brdf.glsl"
-#include "shadow.glsl"
 
 layout(constant_id = 0) const bool HAS_PHONG = false;
 
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(set = 0, binding = 0, std430) readonly buffer FrameBuf { GpuFrame frame; };
+#include "shadow.glsl"
 layout(set = 0, binding = 1) uniform sampler2D gb_albedo;
 layout(set = 0, binding = 2) uniform sampler2D gb_normal;
 layout(set = 0, binding = 3) uniform sampler2D gb_specular;
@@ -60,7 +60,7 @@ void main() {
             e = l.intensity.rgb * (falloff * max(dot(n, wi), 0.0) / d2);
         }
         if (all(equal(e, vec3(0.0)))) continue;
-        float vis = shadow_visibility(shadow_maps, frame, l, p, n, max(dot(n, wi), 0.0));
+        float vis = shadow_visibility(shadow_maps, l, p, n, max(dot(n, wi), 0.0));
         vec3 f = brdf_lambert(albedo);
         if (HAS_PHONG) f += brdf_phong(specular, ns.w, n, wi, wo);
         lo += f * e * vis;

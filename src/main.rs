@@ -4,7 +4,10 @@ use anyhow::{bail, Context as _, Result};
 use clap::{Parser, Subcommand};
 use std::path::PathBuf;
 use voxgi::demo::Demo;
+use voxgi::post::ToneOperator;
 use voxgi::profile::ProfileReport;
+use voxgi::render::{profile_scene, render_image, RenderSettings};
+use voxgi::scene::load_scene_arg;
 use voxgi::vk::{Context, ContextDesc, FrameLoop, MAX_FRAMES_IN_FLIGHT};
 
 #[derive(Parser)]
@@ -28,32 +31,54 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Renders a scene headless to PNG (tone-mapped) and optionally EXR (linear radiance).
+    Render {
+        /// A built-in scene (cornell, cornell-point) or a TOML scene file. Default: cornell.
+        scene: Option<String>,
+        /// Output PNG (tone-mapped, sRGB).
+        #[arg(short, long, default_value = "voxgi.png")]
+        output: PathBuf,
+        /// Also write the linear HDR radiance (W/(m² sr)) as OpenEXR.
+        #[arg(long)]
+        exr: Option<PathBuf>,
+        #[command(flatten)]
+        frame: FrameArgs,
+        /// Compare the linear radiance with a reference EXR and print the metrics.
+        #[arg(long)]
+        compare: Option<PathBuf>,
+    },
     /// Runs the frame N times after warm-up and prints per-pass GPU milliseconds
     /// (median, min, max).
     Profile {
+        /// A built-in scene or a TOML scene file. Default: cornell.
+        scene: Option<String>,
+        /// Profile the render-graph demo frame instead of a scene.
+        #[arg(long)]
+        demo: bool,
+        #[command(flatten)]
+        frame: FrameArgs,
         /// Frames measured after warm-up.
         #[arg(long, default_value_t = 100)]
         frames: usize,
         /// Frames run before measuring.
         #[arg(long, default_value_t = 10)]
         warmup: usize,
-        #[arg(long, default_value_t = 512)]
-        width: u32,
-        #[arg(long, default_value_t = 512)]
-        height: u32,
         /// Print JSON instead of a table.
         #[arg(long)]
         json: bool,
     },
     /// Prints the compiled render graph: passes, barriers, lifetimes, transient memory.
     Graph {
+        /// A built-in scene or a TOML scene file. Default: cornell.
+        scene: Option<String>,
+        /// The render-graph demo frame instead of a scene's frame.
+        #[arg(long)]
+        demo: bool,
         /// Graphviz dot instead of text.
         #[arg(long)]
         dot: bool,
-        #[arg(long, default_value_t = 512)]
-        width: u32,
-        #[arg(long, default_value_t = 512)]
-        height: u32,
+        #[command(flatten)]
+        frame: FrameArgs,
     },
     /// Lists Vulkan devices and whether voxgi can use them.
     Devices,
@@ -70,6 +95,44 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+}
+
+/// Frame settings shared by `render` and `profile`.
+#[derive(clap::Args, Clone)]
+struct FrameArgs {
+    #[arg(long, default_value_t = 512)]
+    width: u32,
+    #[arg(long, default_value_t = 512)]
+    height: u32,
+    /// Scene time in seconds (animations).
+    #[arg(long, default_value_t = 0.0)]
+    time: f32,
+    #[arg(long, value_enum, default_value_t = ToneOperator::Filmic)]
+    tonemap: ToneOperator,
+    #[arg(long, default_value_t = 1.0)]
+    exposure: f32,
+    /// Shadow-map resolution (texels per side).
+    #[arg(long, default_value_t = 1024)]
+    shadow_resolution: u32,
+    /// PCF radius in texels.
+    #[arg(long, default_value_t = 1)]
+    pcf_radius: u32,
+}
+
+impl FrameArgs {
+    fn settings(&self) -> RenderSettings {
+        let mut s = RenderSettings {
+            width: self.width,
+            height: self.height,
+            time_s: self.time,
+            ..Default::default()
+        };
+        s.tonemap.operator = self.tonemap;
+        s.tonemap.exposure = self.exposure;
+        s.shadow.resolution = self.shadow_resolution;
+        s.shadow.pcf_radius = self.pcf_radius;
+        s
+    }
 }
 
 fn main() {
@@ -93,29 +156,105 @@ fn run(cli: Cli) -> Result<()> {
             heatmap,
             json,
         } => compare(&reference, &test, heatmap.as_deref(), json),
-        Command::Graph { dot, width, height } => {
+        Command::Graph {
+            scene,
+            demo,
+            dot,
+            frame,
+        } => {
             let ctx = context(cli.validate, cli.device)?;
-            let demo = Demo::new(&ctx, width, height)?;
-            let exec = demo.executor(&ctx, 1)?;
-            let c = exec.compiled();
-            if dot {
-                print!("{}", c.dump_dot(exec.graph()));
+            let dump = |exec: &voxgi::graph::GraphExecutor| {
+                let c = exec.compiled();
+                if dot {
+                    print!("{}", c.dump_dot(exec.graph()));
+                } else {
+                    print!("{}", c.dump_text(exec.graph()));
+                }
+            };
+            if demo {
+                let demo = Demo::new(&ctx, frame.width, frame.height)?;
+                let exec = demo.executor(&ctx, 1)?;
+                dump(&exec);
+                exec.destroy(&ctx);
+                demo.destroy(&ctx);
             } else {
-                print!("{}", c.dump_text(exec.graph()));
+                let scene = load_scene_arg(scene.as_deref())?;
+                let renderer = voxgi::render::Renderer::new(&ctx, &scene, frame.settings())?;
+                let exec = voxgi::graph::GraphExecutor::new(&ctx, renderer.graph(), 1)?;
+                dump(&exec);
+                exec.destroy(&ctx);
+                renderer.destroy(&ctx);
             }
-            exec.destroy(&ctx);
-            demo.destroy(&ctx);
+            check_validation(&ctx)
+        }
+        Command::Render {
+            scene,
+            output,
+            exr,
+            frame,
+            compare,
+        } => {
+            let scene = load_scene_arg(scene.as_deref())?;
+            let ctx = context(cli.validate, cli.device)?;
+            let out = render_image(&ctx, &scene, &frame.settings())?;
+            image::save_buffer(
+                &output,
+                &out.ldr,
+                frame.width,
+                frame.height,
+                image::ColorType::Rgba8,
+            )
+            .with_context(|| format!("writing {}", output.display()))?;
+            println!("wrote {}", output.display());
+            if let Some(path) = exr {
+                out.hdr.save_exr(&path)?;
+                println!("wrote {}", path.display());
+            }
+            for t in &out.timings {
+                println!("  {:<16} {:>9.3} ms", t.name, t.gpu_ms);
+            }
+            if let Some(reference) = compare {
+                let r = voxgi::eval::HdrImage::load(&reference)?;
+                let m = voxgi::eval::compare(&r, &out.hdr, None)?;
+                print_metrics(&m);
+            }
             check_validation(&ctx)
         }
         Command::Profile {
+            scene,
+            demo,
+            frame,
             frames,
             warmup,
-            width,
-            height,
             json,
         } => {
             let ctx = context(cli.validate, cli.device)?;
-            let report = profile_demo(&ctx, frames, warmup, width, height)?;
+            let report = if demo {
+                profile_demo(&ctx, frames, warmup, frame.width, frame.height)?
+            } else {
+                let scene_name = scene
+                    .clone()
+                    .unwrap_or_else(|| voxgi::scene::DEFAULT_SCENE.into());
+                let scene = load_scene_arg(scene.as_deref())?;
+                let run = profile_scene(&ctx, &scene, &frame.settings(), frames, warmup)?;
+                let mut report = ProfileReport::from_frames(&ctx.info.name, &run.frames, warmup);
+                report.notes.push(("scene".into(), scene_name));
+                report.notes.push((
+                    "resolution".into(),
+                    format!("{}x{}", frame.width, frame.height),
+                ));
+                report.notes.push((
+                    "transient memory".into(),
+                    format!(
+                        "{} bytes aliased, {} bytes without aliasing",
+                        run.transient_bytes.0, run.transient_bytes.1
+                    ),
+                ));
+                report
+                    .notes
+                    .push(("culled passes".into(), run.culled_passes.join(", ")));
+                report
+            };
             if json {
                 println!("{}", serde_json::to_string_pretty(&report)?);
             } else {
@@ -213,13 +352,17 @@ fn compare(
     if json {
         println!("{}", serde_json::to_string_pretty(&m)?);
     } else {
-        println!("relMSE    {:.6}", m.rel_mse);
-        println!("PSNR      {:.2} dB", m.psnr_db);
-        println!("SSIM      {:.4}", m.ssim);
-        println!("FLIP      {:.4}", m.flip_mean);
-        println!("mean |e|  {:.6}", m.mean_abs);
-        println!("max |e|   {:.6}", m.max_abs);
-        println!("pixels    {}", m.pixels);
+        print_metrics(&m);
     }
     Ok(())
+}
+
+fn print_metrics(m: &voxgi::eval::Metrics) {
+    println!("relMSE    {:.6}", m.rel_mse);
+    println!("PSNR      {:.2} dB", m.psnr_db);
+    println!("SSIM      {:.4}", m.ssim);
+    println!("FLIP      {:.4}", m.flip_mean);
+    println!("mean |e|  {:.6}", m.mean_abs);
+    println!("max |e|   {:.6}", m.max_abs);
+    println!("pixels    {}", m.pixels);
 }

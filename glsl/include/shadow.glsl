@@ -1,6 +1,8 @@
 // Shadow-map visibility with percentage-closer filtering (seeds/001, digest_001_004.md A.1-A.4).
 // Depths are compared in meters along the view axis, with bias and normal offset measured in
 // shadow-map texels, so the same settings work from millimeter to kilometer scenes.
+// The including shader declares `frame` (a GpuFrame in a storage buffer) before including
+// this file; it is read in place, never copied (it is several kilobytes).
 #ifndef SHADOW_GLSL
 #define SHADOW_GLSL
 #include "frame.glsl"
@@ -27,10 +29,10 @@ uint shadow_view_index(GpuLight l, vec3 p) {
 
 // Fraction of the PCF footprint around p that the light reaches. n: unit surface normal,
 // cos_theta: cosine between n and the direction to the light.
-float shadow_visibility(sampler2DArray maps, GpuFrame frame, GpuLight l, vec3 p, vec3 n, float cos_theta) {
+float shadow_visibility(sampler2DArray maps, GpuLight l, vec3 p, vec3 n, float cos_theta) {
     if (l.info.z == 0u) return 1.0;
     uint v = shadow_view_index(l, p);
-    GpuShadowView sv = frame.shadow_views[v];
+    GpuShadowView sv = frame.shadow_views[v];  // 96 bytes: one view, not the frame
     // World size of one shadow texel at p.
     vec4 c0 = sv.view_proj * vec4(p, 1.0);
     float dist = sv.params.y > 0.5 ? 1.0 : max(c0.w, 1e-30);

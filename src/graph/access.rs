@@ -120,11 +120,13 @@ impl Access {
                 true,
                 true,
             ),
+            // The depth test reads only values written in the same pass (after the clear), so
+            // for culling and read-before-write checks this is a write.
             Access::DepthAttachment => (
                 S::EARLY_FRAGMENT_TESTS | S::LATE_FRAGMENT_TESTS,
                 A::DEPTH_STENCIL_ATTACHMENT_READ | A::DEPTH_STENCIL_ATTACHMENT_WRITE,
                 L::DEPTH_ATTACHMENT_OPTIMAL,
-                true,
+                false,
                 true,
             ),
             Access::DepthRead => (

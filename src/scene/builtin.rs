@@ -60,6 +60,16 @@ fn try_builtin(name: &str) -> Option<Result<Scene, SceneError>> {
     }))
 }
 
+/// A scene from a command-line argument: a built-in name (`cornell`, ...), a path to a TOML
+/// scene file, or the default scene when `None`.
+pub fn load_scene_arg(arg: Option<&str>) -> Result<Scene, SceneError> {
+    let name = arg.unwrap_or(DEFAULT_SCENE);
+    if let Some(result) = try_builtin(name) {
+        return result;
+    }
+    Scene::load(name)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

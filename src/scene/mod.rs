@@ -93,7 +93,7 @@ mod object;
 
 use std::path::{Path, PathBuf};
 
-pub use builtin::{builtin, builtin_names, DEFAULT_SCENE};
+pub use builtin::{builtin, builtin_names, load_scene_arg, DEFAULT_SCENE};
 pub use camera::Camera;
 pub use error::SceneError;
 pub use light::{spot_falloff, Light};

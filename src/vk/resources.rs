@@ -41,6 +41,8 @@ pub struct ImageDesc {
     pub layers: u32,
     pub mip_levels: u32,
     pub usage: vk::ImageUsageFlags,
+    /// View as an array even with one layer (shaders declare `*Array` samplers).
+    pub array: bool,
 }
 
 impl ImageDesc {
@@ -54,10 +56,13 @@ impl ImageDesc {
             layers: 1,
             mip_levels: 1,
             usage: vk::ImageUsageFlags::empty(),
+            array: false,
         }
     }
+    /// An array image of `layers` layers, viewed as an array even when `layers` is 1.
     pub fn with_layers(mut self, layers: u32) -> Self {
         self.layers = layers;
+        self.array = true;
         self
     }
     pub fn with_mips(mut self, mip_levels: u32) -> Self {
@@ -85,7 +90,7 @@ impl ImageDesc {
     pub fn view_type(&self) -> vk::ImageViewType {
         if self.depth > 1 {
             vk::ImageViewType::TYPE_3D
-        } else if self.layers > 1 {
+        } else if self.layers > 1 || self.array {
             vk::ImageViewType::TYPE_2D_ARRAY
         } else {
             vk::ImageViewType::TYPE_2D

@@ -1,0 +1,295 @@
+//! Direct light against closed forms: a Lambert plane under point, spot and directional
+//! lights, a blocker's shadow, and the Cornell box's plausibility. Each render runs with
+//! validation and synchronization validation on.
+
+mod common;
+
+use glam::{Vec3, Vec4Swizzles};
+use std::path::Path;
+use voxgi::eval::HdrImage;
+use voxgi::render::{render_image, RenderSettings};
+use voxgi::scene::{spot_falloff, Scene};
+
+const SIZE: u32 = 128;
+
+fn scene(toml: &str) -> Scene {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes");
+    Scene::from_toml_str(toml, Path::new("<test scene>"), &dir).expect("test scene parses")
+}
+
+fn render(scene: &Scene) -> HdrImage {
+    let ctx = common::context();
+    let settings = RenderSettings {
+        width: SIZE,
+        height: SIZE,
+        ..Default::default()
+    };
+    let out = render_image(&ctx, scene, &settings).expect("renders");
+    common::assert_no_validation_messages(&ctx);
+    assert!(
+        out.hdr.data.iter().all(|p| p.iter().all(|c| c.is_finite())),
+        "no NaN/Inf in the image"
+    );
+    out.hdr
+}
+
+/// World point on the plane y = 0 seen through the center of pixel (x, y).
+fn plane_point(scene: &Scene, x: u32, y: u32) -> Vec3 {
+    let inv = scene.camera.view_proj(1.0).inverse();
+    let ndc = |z: f32| {
+        let p = inv
+            * glam::Vec4::new(
+                (x as f32 + 0.5) / SIZE as f32 * 2.0 - 1.0,
+                (y as f32 + 0.5) / SIZE as f32 * 2.0 - 1.0,
+                z,
+                1.0,
+            );
+        p.xyz() / p.w
+    };
+    let (a, b) = (ndc(0.0), ndc(1.0));
+    let t = a.y / (a.y - b.y);
+    a + (b - a) * t
+}
+
+fn pixel(img: &HdrImage, x: u32, y: u32) -> Vec3 {
+    Vec3::from(img.data[(y * img.width + x) as usize])
+}
+
+fn assert_close(got: Vec3, want: Vec3, rel: f32, what: &str) {
+    for c in 0..3 {
+        let (g, w) = (got[c], want[c]);
+        assert!(
+            (g - w).abs() <= rel * w.abs().max(1e-6),
+            "{what}: channel {c}: got {g}, expected {w} (rel. tol. {rel})"
+        );
+    }
+}
+
+const CAMERA_DOWN: &str = r#"
+[camera]
+position = [0.0, 3.0, 0.0]
+target = [0.0, 0.0, 0.0]
+up = [0.0, 0.0, 1.0]
+fov_y_deg = 60.0
+near = 0.05
+far = 10.0
+"#;
+
+const PLANE: &str = r#"
+[[objects]]
+name = "plane"
+builtin = "quad"
+scale = [6.0, 1.0, 6.0]
+material = { albedo = [0.5, 0.25, 0.8] }
+"#;
+
+const ALBEDO: Vec3 = Vec3::new(0.5, 0.25, 0.8);
+/// Pixels sampled for the closed-form checks (away from the image border).
+const PIXELS: [(u32, u32); 7] = [
+    (64, 64),
+    (20, 30),
+    (100, 40),
+    (30, 110),
+    (110, 100),
+    (64, 10),
+    (5, 64),
+];
+
+#[test]
+fn point_light_matches_inverse_square_law() {
+    let s = scene(&format!(
+        "{CAMERA_DOWN}{PLANE}[[lights]]\nkind = \"point\"\nposition = [0.3, 1.0, -0.2]\nintensity_w_sr = [2.0, 1.0, 3.0]\n"
+    ));
+    let img = render(&s);
+    let light = Vec3::new(0.3, 1.0, -0.2);
+    let intensity = Vec3::new(2.0, 1.0, 3.0);
+    for (x, y) in PIXELS {
+        let p = plane_point(&s, x, y);
+        let d = light - p;
+        let cos = d.normalize().y;
+        let want = ALBEDO / std::f32::consts::PI * intensity * cos / d.length_squared();
+        assert_close(
+            pixel(&img, x, y),
+            want,
+            0.01,
+            &format!("point light, pixel ({x}, {y}) at {p}"),
+        );
+    }
+}
+
+#[test]
+fn spot_light_matches_inside_and_at_the_edge_of_its_cone() {
+    let s = scene(&format!(
+        "{CAMERA_DOWN}{PLANE}[[lights]]\nkind = \"spot\"\nposition = [0.0, 1.0, 0.0]\ndirection = [0.0, -1.0, 0.0]\n\
+         intensity_w_sr = [3.0, 3.0, 3.0]\ncutoff_deg = 40.0\nbeam_deg = 25.0\n"
+    ));
+    let img = render(&s);
+    let light = Vec3::new(0.0, 1.0, 0.0);
+    let mut inside = 0;
+    let mut edge = 0;
+    for y in (4..SIZE).step_by(9) {
+        for x in (4..SIZE).step_by(9) {
+            let p = plane_point(&s, x, y);
+            let d = light - p;
+            let cos = d.normalize().y;
+            let falloff = spot_falloff(cos, 40.0, 25.0);
+            let angle = cos.acos().to_degrees();
+            // Skip pixels whose footprint straddles the beam or cutoff boundary (the falloff
+            // has a kink there, so the pixel-center value is not the pixel's value).
+            if (angle - 25.0).abs() < 1.0 || (angle - 40.0).abs() < 1.0 {
+                continue;
+            }
+            let want = ALBEDO / std::f32::consts::PI * 3.0 * falloff * cos / d.length_squared();
+            assert_close(
+                pixel(&img, x, y),
+                want,
+                0.01,
+                &format!("spot, pixel ({x}, {y}), {angle:.1} deg"),
+            );
+            if angle < 25.0 {
+                inside += 1;
+            } else if angle < 40.0 {
+                edge += 1;
+            }
+        }
+    }
+    assert!(
+        inside >= 10 && edge >= 10,
+        "sampled {inside} pixels in the beam and {edge} in the falloff"
+    );
+}
+
+#[test]
+fn directional_light_gives_uniform_cosine_weighted_radiance() {
+    let dir = Vec3::new(0.3, -1.0, 0.2).normalize();
+    let s = scene(&format!(
+        "{CAMERA_DOWN}{PLANE}[[lights]]\nkind = \"directional\"\ndirection = [{}, {}, {}]\nirradiance_w_m2 = [3.0, 2.0, 1.0]\n",
+        dir.x, dir.y, dir.z
+    ));
+    let img = render(&s);
+    let want = ALBEDO / std::f32::consts::PI * Vec3::new(3.0, 2.0, 1.0) * (-dir.y);
+    for (x, y) in PIXELS {
+        assert_close(
+            pixel(&img, x, y),
+            want,
+            0.01,
+            &format!("directional, pixel ({x}, {y})"),
+        );
+    }
+}
+
+#[test]
+fn a_blocker_darkens_exactly_its_shadow() {
+    // A 0.4 m cube centered 0.5 m above the plane, a point light 1.5 m above: the umbra on
+    // the plane is the cube's bottom face projected from the light, scaled 1.5/1.2 = 1.25.
+    let s = scene(&format!(
+        "{CAMERA_DOWN}{PLANE}[[lights]]\nkind = \"point\"\nposition = [0.0, 1.5, 0.0]\nintensity_w_sr = [2.0, 2.0, 2.0]\n\
+         [[objects]]\nname = \"blocker\"\nbuiltin = \"cube\"\ntranslate = [0.0, 0.5, 0.0]\nscale = 0.4\n"
+    ));
+    let img = render(&s);
+    let light = Vec3::new(0.0, 1.5, 0.0);
+    let (mut dark, mut lit) = (0, 0);
+    for y in (2..SIZE).step_by(5) {
+        for x in (2..SIZE).step_by(5) {
+            let p = plane_point(&s, x, y);
+            // Hidden by the cube from the camera (it looks straight down): skip.
+            if p.x.abs() < 0.3 && p.z.abs() < 0.3 {
+                continue;
+            }
+            // The shadow of the cube's top face (y = 0.7) is larger than its bottom's: shadow
+            // half-width 0.2 * 1.5 / 0.8 = 0.375 m; stay 0.05 m away from its edges.
+            let half = 0.2 * 1.5 / 0.8;
+            let inside = p.x.abs() < half - 0.05 && p.z.abs() < half - 0.05;
+            let outside = p.x.abs() > half + 0.05 || p.z.abs() > half + 0.05;
+            let got = pixel(&img, x, y);
+            if inside {
+                assert!(
+                    got.max_element() < 1e-6,
+                    "pixel ({x}, {y}) at {p} must be in shadow, got {got}"
+                );
+                dark += 1;
+            } else if outside {
+                let d = light - p;
+                let want =
+                    ALBEDO / std::f32::consts::PI * 2.0 * d.normalize().y / d.length_squared();
+                assert_close(got, want, 0.01, &format!("lit pixel ({x}, {y}) at {p}"));
+                lit += 1;
+            }
+        }
+    }
+    assert!(
+        dark >= 5 && lit >= 100,
+        "checked {dark} shadowed and {lit} lit pixels"
+    );
+}
+
+#[test]
+fn cornell_box_is_plausible() {
+    let s = voxgi::scene::builtin("cornell").expect("built-in cornell");
+    let img = render(&s);
+    // Project a world point to its pixel.
+    let vp = s.camera.view_proj(1.0);
+    let at = |p: Vec3| {
+        let c = vp * p.extend(1.0);
+        let n = c.xyz() / c.w;
+        let (x, y) = (
+            ((n.x * 0.5 + 0.5) * SIZE as f32) as u32,
+            ((n.y * 0.5 + 0.5) * SIZE as f32) as u32,
+        );
+        pixel(&img, x.min(SIZE - 1), y.min(SIZE - 1))
+    };
+    // Low on the side walls, inside the cone and unshadowed: red left, green right.
+    let red = at(Vec3::new(0.55, 0.1, 0.1));
+    let green = at(Vec3::new(0.0, 0.1, 0.1));
+    assert!(
+        red.x > 3.0 * red.y && red.x > 3.0 * red.z,
+        "left wall is red: {red}"
+    );
+    assert!(
+        green.y > 2.0 * green.x && green.y > 2.0 * green.z,
+        "right wall is green: {green}"
+    );
+    // The ceiling gets no direct light from a spot aimed down (cutoff 50 deg).
+    let ceiling = at(Vec3::new(0.278, 0.5488, 0.1));
+    assert!(ceiling.max_element() < 1e-6, "ceiling is unlit: {ceiling}");
+    // Lit floor in front of the blocks: close to rho/pi * I cos / d^2.
+    let p = Vec3::new(0.40, 0.0, 0.05);
+    let d = Vec3::new(0.278, 0.540, 0.2796) - p;
+    let want = 0.73 / std::f32::consts::PI * d.normalize().y / d.length_squared();
+    let got = at(p);
+    assert!(
+        (got.x - want).abs() < 0.02 * want,
+        "floor radiance {got} vs closed form {want}"
+    );
+}
+
+#[test]
+fn bad_scene_files_give_errors_that_name_the_file() {
+    let exe = env!("CARGO_BIN_EXE_voxgi");
+    let dir = std::env::temp_dir().join(format!("voxgi-bad-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let cases = [
+        ("missing.toml", None, "missing.toml"),
+        ("unknown_key.toml", Some(format!("{CAMERA_DOWN}{PLANE}bogus = 1\n")), "bogus"),
+        ("nan.toml", Some(format!("{CAMERA_DOWN}{PLANE}[[lights]]\nkind = \"point\"\nposition = [nan, 1.0, 0.0]\nintensity_w_sr = 1.0\n")), "position"),
+        ("empty.toml", Some(CAMERA_DOWN.to_string()), "empty.toml"),
+    ];
+    for (name, content, needle) in cases {
+        let path = dir.join(name);
+        if let Some(c) = content {
+            std::fs::write(&path, c).expect("write scene");
+        }
+        let out = std::process::Command::new(exe)
+            .args(["render", path.to_str().expect("utf-8 path"), "-o"])
+            .arg(dir.join("out.png"))
+            .output()
+            .expect("runs voxgi");
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{name}: must fail");
+        assert!(
+            stderr.contains(needle) && stderr.contains(name),
+            "{name}: error must name the file and {needle}: {stderr}"
+        );
+        assert!(!stderr.contains("panicked"), "{name}: no panic: {stderr}");
+    }
+}
