@@ -82,6 +82,22 @@ enum Command {
     },
     /// Lists Vulkan devices and whether voxgi can use them.
     Devices,
+    /// Writes a Mitsuba 3 scene (XML + PLY meshes) identical to a voxgi scene, for reference
+    /// rendering with tools/reference.
+    ExportMitsuba {
+        /// A built-in scene or a TOML scene file. Default: cornell.
+        scene: Option<String>,
+        /// Output directory.
+        #[arg(short, long)]
+        output: PathBuf,
+        #[arg(long, default_value_t = 256)]
+        width: u32,
+        #[arg(long, default_value_t = 256)]
+        height: u32,
+        /// Scene time in seconds (animations).
+        #[arg(long, default_value_t = 0.0)]
+        time: f32,
+    },
     /// Compares two images (EXR or PNG): relMSE, PSNR, SSIM, FLIP, mean/max absolute error.
     Compare {
         /// The reference image.
@@ -146,6 +162,27 @@ fn main() {
 
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
+        Command::ExportMitsuba {
+            scene,
+            output,
+            width,
+            height,
+            time,
+        } => {
+            let scene = load_scene_arg(scene.as_deref())?;
+            let report =
+                voxgi::eval::mitsuba::export_mitsuba(&scene, time, width, height, &output)?;
+            for w in &report.warnings {
+                eprintln!("warning: {w}");
+            }
+            println!(
+                "wrote {} ({} shapes, {} triangles)",
+                report.xml_path.display(),
+                report.shape_count,
+                report.triangle_count
+            );
+            Ok(())
+        }
         Command::Devices => {
             print!("{}", voxgi::vk::describe_devices()?);
             Ok(())

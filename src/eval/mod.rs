@@ -13,6 +13,7 @@ mod error;
 pub mod heatmap;
 pub mod image_io;
 pub mod metrics;
+pub mod mitsuba;
 
 pub use color::{luminance, srgb_decode, srgb_encode, to_srgb8};
 pub use error::EvalError;

@@ -33,6 +33,7 @@
 //!   truth, and the 1-bit / 3-bit marching baselines (§4.8).
 
 pub mod bits;
+pub mod gpu_rays;
 pub mod grid;
 pub mod ray_mask;
 pub mod traverse;
@@ -44,6 +45,7 @@ mod traverse_tests;
 pub use bits::{BitGrid, BitHierarchy, Column};
 pub use grid::{Axis, GridDesc, VoxelGrid};
 pub use traverse::{HitResult, TraversalParams};
+pub use voxelize::voxelize_scene;
 
 /// Voxels per column texel (one `R32G32B32A32_UINT` texel = 4 × 32 bits).
 pub const COLUMN_BITS: u32 = 128;

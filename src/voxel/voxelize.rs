@@ -197,6 +197,33 @@ pub fn voxelize_mesh(
     Ok(stats)
 }
 
+/// Voxelizes every object of `scene` at time `t_s` (its world-space triangles) into `bits`.
+pub fn voxelize_scene(
+    grid: &VoxelGrid,
+    bits: &mut BitGrid,
+    scene: &crate::scene::Scene,
+    t_s: f32,
+) -> Result<VoxelizeStats, VoxelError> {
+    let mut total = VoxelizeStats::default();
+    for object in &scene.objects {
+        let Some(mesh) = scene.meshes.get(object.mesh_at(t_s)) else {
+            continue;
+        };
+        let m = object.transform_at(t_s);
+        let world: Vec<Vec3> = mesh
+            .positions
+            .iter()
+            .map(|p| m.transform_point3(*p))
+            .collect();
+        let s = voxelize_mesh(grid, bits, &world, &mesh.indices)?;
+        total.triangles += s.triangles;
+        total.degenerate += s.degenerate;
+        total.outside += s.outside;
+        total.box_tests += s.box_tests;
+    }
+    Ok(total)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -1,0 +1,283 @@
+//! Casting batches of voxel-space rays on the GPU (`glsl/voxel_rays.comp`, built on the GLSL
+//! traversal library `glsl/include/voxel_traverse.glsl`): the GPU side of the CPU-twin tests
+//! and of `voxgi bench traverse`.
+//!
+//! The hierarchy travels in storage buffers with the CPU's exact level sizes (ceil halving),
+//! so any grid size works and the GPU sees bit for bit what the CPU twin sees.
+
+use super::bits::BitHierarchy;
+use super::ray_mask::RayMaskLut;
+use super::traverse::{HitResult, TraversalParams};
+use crate::graph::{Access, GraphError, GraphExecutor, RenderGraph, Shader};
+use crate::vk::{
+    vk, Buffer, BufferDesc, ComputePipeline, Context, Descriptor, FrameLoop, MemoryLocation,
+    VkError,
+};
+use bytemuck::{Pod, Zeroable};
+use glam::{UVec3, Vec3};
+
+/// One ray of a batch (voxel space): origin and `t_max`, direction.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct GpuRay {
+    pub origin_tmax: [f32; 4],
+    pub dir: [f32; 4],
+}
+
+impl GpuRay {
+    pub fn new(origin: Vec3, dir: Vec3, t_max: f32) -> Self {
+        Self {
+            origin_tmax: [origin.x, origin.y, origin.z, t_max],
+            dir: [dir.x, dir.y, dir.z, 0.0],
+        }
+    }
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+struct GpuRayResult {
+    hit_voxel: [u32; 4],
+    t_steps: [f32; 4],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct GpuRaysPush {
+    dims: [i32; 4],
+    params: [u32; 4],
+    params2: [u32; 4],
+}
+
+/// Which ray test a batch uses.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RayMethod {
+    /// Hierarchical traversal with ray masks (thesis §4.5).
+    Hierarchical(TraversalParams),
+    /// Exact voxel walk (ground truth).
+    Dda,
+    /// Uniform marching, 1-bit mask, this many samples (§4.8).
+    March1(u32),
+    /// Uniform marching, 3-bit mask, this many samples (§4.8).
+    March3(u32),
+}
+
+impl RayMethod {
+    pub fn name(&self) -> String {
+        match self {
+            RayMethod::Hierarchical(_) => "hierarchical".into(),
+            RayMethod::Dda => "dda".into(),
+            RayMethod::March1(n) => format!("march1x{n}"),
+            RayMethod::March3(n) => format!("march3x{n}"),
+        }
+    }
+}
+
+/// Results of one batch: a hit per ray (positions are not read back) and the pass's GPU time.
+#[derive(Clone, Debug)]
+pub struct RayBatch {
+    pub method: RayMethod,
+    pub hits: Vec<HitResult>,
+    pub gpu_ms: f64,
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum RayCastError {
+    #[error(transparent)]
+    Vk(#[from] VkError),
+    #[error(transparent)]
+    Graph(#[from] GraphError),
+    #[error("no rays to cast")]
+    NoRays,
+}
+
+/// A voxel hierarchy on the GPU, ready to cast ray batches.
+pub struct VoxelRayCaster {
+    pipeline: ComputePipeline,
+    columns: Buffer,
+    levels: Buffer,
+    lut: Buffer,
+    dims: UVec3,
+    max_level: u32,
+}
+
+impl VoxelRayCaster {
+    pub fn new(ctx: &Context, h: &BitHierarchy) -> Result<Self, VkError> {
+        let mut columns = Vec::new();
+        let mut levels: Vec<[u32; 4]> = Vec::new();
+        for l in 0..h.level_count() {
+            let g = h.level(l);
+            levels.push([(columns.len() / 16) as u32, g.res_x(), g.res_y(), 0]);
+            columns.extend_from_slice(&g.to_gpu_bytes());
+        }
+        let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        let columns = ctx.upload_buffer("voxel columns", &columns, storage)?;
+        let levels = ctx.upload_buffer("voxel levels", bytemuck::cast_slice(&levels), storage)?;
+        let lut = ctx.upload_buffer("ray mask lut", &RayMaskLut::new().to_gpu_bytes(), storage)?;
+        let b = vk::DescriptorType::STORAGE_BUFFER;
+        let pipeline = ctx.compute_pipeline(
+            "voxel_rays.comp",
+            &[(0, b), (1, b), (2, b), (3, b), (4, b)],
+            std::mem::size_of::<GpuRaysPush>() as u32,
+            &[],
+        )?;
+        let base = h.base();
+        Ok(Self {
+            pipeline,
+            columns,
+            levels,
+            lut,
+            dims: UVec3::new(base.res_x(), base.res_y(), base.depth()),
+            max_level: h.max_level(),
+        })
+    }
+
+    /// Casts `rays` once per method, side by side in one frame (one pass each), and returns
+    /// every batch's hits and GPU time.
+    pub fn cast(
+        &self,
+        ctx: &Context,
+        rays: &[GpuRay],
+        methods: &[RayMethod],
+    ) -> Result<Vec<RayBatch>, RayCastError> {
+        if rays.is_empty() {
+            return Err(RayCastError::NoRays);
+        }
+        let ray_buf = ctx.upload_buffer(
+            "rays",
+            bytemuck::cast_slice(rays),
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+        )?;
+        let mut results = Vec::new();
+        for m in methods {
+            match ctx.create_buffer(&BufferDesc {
+                name: format!("ray results {}", m.name()),
+                size_bytes: (rays.len() * std::mem::size_of::<GpuRayResult>()) as u64,
+                usage: vk::BufferUsageFlags::STORAGE_BUFFER,
+                location: MemoryLocation::GpuToCpu,
+            }) {
+                Ok(b) => results.push(b),
+                Err(e) => {
+                    results.into_iter().for_each(|b| ctx.destroy_buffer(b));
+                    ctx.destroy_buffer(ray_buf);
+                    return Err(e.into());
+                }
+            }
+        }
+        let out = self.run(ctx, &ray_buf, &results, rays.len() as u32, methods);
+        let batches = out.map(|times| {
+            methods
+                .iter()
+                .zip(&results)
+                .zip(times)
+                .map(|((m, buf), gpu_ms)| RayBatch {
+                    method: *m,
+                    hits: read_hits(buf, rays.len()),
+                    gpu_ms,
+                })
+                .collect()
+        });
+        results.into_iter().for_each(|b| ctx.destroy_buffer(b));
+        ctx.destroy_buffer(ray_buf);
+        batches
+    }
+
+    fn run(
+        &self,
+        ctx: &Context,
+        rays: &Buffer,
+        results: &[Buffer],
+        count: u32,
+        methods: &[RayMethod],
+    ) -> Result<Vec<f64>, RayCastError> {
+        let mut g = RenderGraph::new();
+        let read = Access::StorageRead(Shader::Compute);
+        let columns = g.import_buffer(&self.columns, read);
+        let levels = g.import_buffer(&self.levels, read);
+        let lut = g.import_buffer(&self.lut, read);
+        let ray_h = g.import_buffer(rays, read);
+        let pipe = self.pipeline;
+        let dims = [
+            self.dims.x as i32,
+            self.dims.y as i32,
+            self.dims.z as i32,
+            self.max_level as i32,
+        ];
+        for (m, buf) in methods.iter().zip(results) {
+            let out = g.import_buffer(buf, Access::HostRead);
+            let (mode, start, iters, samples) = match *m {
+                RayMethod::Hierarchical(p) => (0, p.start_level, p.max_iterations, 0),
+                RayMethod::Dda => (1, 0, 0, 0),
+                RayMethod::March1(n) => (2, 0, 0, n),
+                RayMethod::March3(n) => (3, 0, 0, n),
+            };
+            let push = GpuRaysPush {
+                dims,
+                params: [start, iters, mode, count],
+                params2: [samples, 0, 0, 0],
+            };
+            g.add_pass(&format!("voxel_rays[{}]", m.name()))
+                .read(columns, read)
+                .read(levels, read)
+                .read(lut, read)
+                .read(ray_h, read)
+                .write(out, Access::StorageWrite(Shader::Compute))
+                .record(move |ctx| {
+                    let d = |binding, h| Descriptor::storage_buffer(binding, ctx.buffer(h).raw);
+                    ctx.cmd.bind(
+                        &pipe,
+                        &[
+                            d(0, columns),
+                            d(1, levels),
+                            d(2, lut),
+                            d(3, ray_h),
+                            d(4, out),
+                        ],
+                    );
+                    ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
+                    ctx.cmd.dispatch(count.div_ceil(64), 1, 1);
+                });
+        }
+        let exec = GraphExecutor::new(ctx, g, 1)?;
+        let run = (|| -> Result<Vec<f64>, RayCastError> {
+            let mut frames = FrameLoop::new(ctx, 1, exec.compiled().order.len() as u32)?;
+            let r = (|| -> Result<Vec<f64>, RayCastError> {
+                let (slot, cmd, ts, _) = frames.begin(ctx)?;
+                exec.record(&cmd, slot, ts);
+                frames.submit(ctx, &[], &[])?;
+                let timings = frames.finish(ctx)?.pop().unwrap_or_default();
+                Ok(timings.iter().map(|t| t.gpu_ms).collect())
+            })();
+            let _ = ctx.wait_idle();
+            frames.destroy(ctx);
+            r
+        })();
+        exec.destroy(ctx);
+        run
+    }
+
+    pub fn destroy(self, ctx: &Context) {
+        ctx.destroy_compute_pipeline(self.pipeline);
+        ctx.destroy_buffer(self.columns);
+        ctx.destroy_buffer(self.levels);
+        ctx.destroy_buffer(self.lut);
+    }
+}
+
+fn read_hits(buf: &Buffer, n: usize) -> Vec<HitResult> {
+    let Some(bytes) = buf.mapped() else {
+        return Vec::new();
+    };
+    let results: &[GpuRayResult] =
+        bytemuck::cast_slice(&bytes[..n * std::mem::size_of::<GpuRayResult>()]);
+    results
+        .iter()
+        .map(|r| HitResult {
+            hit: r.hit_voxel[0] != 0,
+            voxel: UVec3::new(r.hit_voxel[1], r.hit_voxel[2], r.hit_voxel[3]),
+            t: r.t_steps[0],
+            position: Vec3::ZERO,
+            steps: r.t_steps[1] as u32,
+            ran_out: r.t_steps[2] != 0.0,
+        })
+        .collect()
+}
