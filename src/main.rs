@@ -82,6 +82,9 @@ enum Command {
     },
     /// Lists Vulkan devices and whether voxgi can use them.
     Devices,
+    /// Benchmarks measured side by side in one GPU run.
+    #[command(subcommand)]
+    Bench(BenchCommand),
     /// Writes a Mitsuba 3 scene (XML + PLY meshes) identical to a voxgi scene, for reference
     /// rendering with tools/reference.
     ExportMitsuba {
@@ -108,6 +111,29 @@ enum Command {
         #[arg(long)]
         heatmap: Option<PathBuf>,
         /// Print JSON instead of text.
+        #[arg(long)]
+        json: bool,
+    },
+}
+
+#[derive(Subcommand)]
+enum BenchCommand {
+    /// Hierarchical voxel ray test vs uniform 1-bit marching on the same rays (thesis §9.3.1):
+    /// GPU ms, rays/s, steps per ray, and the marching samples needed to match >= 99% of
+    /// the hierarchical results.
+    Traverse {
+        /// A built-in scene or a TOML scene file. Default: cornell.
+        scene: Option<String>,
+        /// Voxel grid x/y resolution (depth 128).
+        #[arg(long, default_value_t = 128)]
+        resolution: u32,
+        /// G-buffer size in pixels per side (surface points rays start from).
+        #[arg(long, default_value_t = 128)]
+        gbuffer: u32,
+        /// Rays per surface point.
+        #[arg(long, default_value_t = 16)]
+        rays: u32,
+        /// Print JSON instead of tables.
         #[arg(long)]
         json: bool,
     },
@@ -182,6 +208,29 @@ fn run(cli: Cli) -> Result<()> {
                 report.triangle_count
             );
             Ok(())
+        }
+        Command::Bench(BenchCommand::Traverse {
+            scene,
+            resolution,
+            gbuffer,
+            rays,
+            json,
+        }) => {
+            let scene = load_scene_arg(scene.as_deref())?;
+            let ctx = context(cli.validate, cli.device)?;
+            let desc = voxgi::voxel::bench::TraverseBenchDesc {
+                resolution,
+                gbuffer_size: gbuffer,
+                rays_per_point: rays,
+                ..Default::default()
+            };
+            let report = voxgi::voxel::bench::bench_traverse(&ctx, &scene, &desc)?;
+            if json {
+                println!("{}", serde_json::to_string_pretty(&report)?);
+            } else {
+                print!("{}", report.table());
+            }
+            check_validation(&ctx)
         }
         Command::Devices => {
             print!("{}", voxgi::vk::describe_devices()?);

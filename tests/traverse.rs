@@ -296,3 +296,31 @@ fn gpu_marching_baselines_match_cpu() {
     }
     common::assert_no_validation_messages(&ctx);
 }
+
+#[test]
+fn gpu_traversal_on_a_512_cubed_grid() {
+    let ctx = common::context();
+    let mut rng = Rng(17);
+    let mut g = BitGrid::new(512, 512, 4);
+    // Sparse random voxels plus a few solid slabs, so rays both travel far and stop.
+    for _ in 0..200_000 {
+        let v = (
+            rng.next_u64() % 512,
+            rng.next_u64() % 512,
+            rng.next_u64() % 512,
+        );
+        g.set(v.0 as u32, v.1 as u32, v.2 as u32);
+    }
+    for i in 0..512 {
+        for j in 0..512 {
+            g.set(i, j, 300);
+            g.set(400, i, j);
+        }
+    }
+    let h = BitHierarchy::build(g);
+    let rays = random_rays(&mut rng, Vec3::splat(512.0), 20_000);
+    let (ran_out, hits) = check(&ctx, &h, &rays, "512^3");
+    assert_eq!(ran_out, 0, "512^3: {ran_out} rays ran out of iterations");
+    assert!(hits > rays.len() / 20, "512^3: only {hits} hits");
+    common::assert_no_validation_messages(&ctx);
+}
