@@ -110,6 +110,10 @@ enum Command {
         /// Writes a FLIP error heatmap (PNG).
         #[arg(long)]
         heatmap: Option<PathBuf>,
+        /// An image of the same size whose bright pixels (luminance > 0.5) are excluded from
+        /// every metric, e.g. the sky.
+        #[arg(long)]
+        mask: Option<PathBuf>,
         /// Print JSON instead of text.
         #[arg(long)]
         json: bool,
@@ -240,8 +244,9 @@ fn run(cli: Cli) -> Result<()> {
             reference,
             test,
             heatmap,
+            mask,
             json,
-        } => compare(&reference, &test, heatmap.as_deref(), json),
+        } => compare(&reference, &test, heatmap.as_deref(), mask.as_deref(), json),
         Command::Graph {
             scene,
             demo,
@@ -425,9 +430,22 @@ fn compare(
     reference: &std::path::Path,
     test: &std::path::Path,
     heatmap: Option<&std::path::Path>,
+    mask: Option<&std::path::Path>,
     json: bool,
 ) -> Result<()> {
-    let m = voxgi::eval::compare_files(reference, test, None)?;
+    let mask = match mask {
+        Some(path) => {
+            let img = voxgi::eval::HdrImage::load(path)?;
+            Some(
+                img.data
+                    .iter()
+                    .map(|p| voxgi::eval::luminance(*p) > 0.5)
+                    .collect::<Vec<bool>>(),
+            )
+        }
+        None => None,
+    };
+    let m = voxgi::eval::compare_files(reference, test, mask.as_deref())?;
     if let Some(path) = heatmap {
         let r = voxgi::eval::HdrImage::load(reference)?;
         let t = voxgi::eval::HdrImage::load(test)?;

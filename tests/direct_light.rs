@@ -293,3 +293,65 @@ fn bad_scene_files_give_errors_that_name_the_file() {
         assert!(!stderr.contains("panicked"), "{name}: no panic: {stderr}");
     }
 }
+
+#[test]
+fn albedo_textures_are_sampled_in_linear_space() {
+    // A 4x4-cell sRGB checker on a 2 m quad, lit straight down with E = pi W/m^2, so every
+    // cell's radiance equals its linear albedo. Cells are 4x4 texels, so bilinear filtering
+    // and the first mips (anisotropic filtering may blend them in) keep each cell's color.
+    let dir = std::env::temp_dir().join(format!("voxgi-tex-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let (a, b) = ([200u8, 60, 30], [30u8, 120, 220]);
+    let mut png = image::RgbaImage::new(16, 16);
+    for (x, y, p) in png.enumerate_pixels_mut() {
+        let c = if (x / 4 + y / 4) % 2 == 0 { a } else { b };
+        *p = image::Rgba([c[0], c[1], c[2], 255]);
+    }
+    png.save(dir.join("checker.png")).expect("png");
+    std::fs::write(
+        dir.join("checker.mtl"),
+        "newmtl checker\nKd 1 1 1\nmap_Kd checker.png\n",
+    )
+    .expect("mtl");
+    std::fs::write(
+        dir.join("quad.obj"),
+        "mtllib checker.mtl\nv -1 0 1\nv 1 0 1\nv 1 0 -1\nv -1 0 -1\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nvn 0 1 0\n\
+         usemtl checker\nf 1/1/1 2/2/1 3/3/1\nf 1/1/1 3/3/1 4/4/1\n",
+    )
+    .expect("obj");
+    let toml = format!(
+        "{CAMERA_DOWN}[[lights]]\nkind = \"directional\"\ndirection = [0.0, -1.0, 0.0]\nirradiance_w_m2 = {}\n\
+         [[objects]]\nmesh = \"quad.obj\"\n",
+        std::f32::consts::PI
+    );
+    let s = Scene::from_toml_str(&toml, Path::new("<texture test>"), &dir).expect("parses");
+    assert!(s.has_albedo_textures());
+    let img = render(&s);
+    let vp = s.camera.view_proj(1.0);
+    let decode = |c: [u8; 3]| Vec3::from(c.map(|v| voxgi::eval::srgb_decode(f32::from(v) / 255.0)));
+    for row in 0..4 {
+        for col in 0..4 {
+            // Cell (col, row) of the image: u = (x + 1) / 2, image row = (1 + z) / 2 * 16.
+            let p = Vec3::new(
+                -1.0 + (col as f32 + 0.5) / 2.0,
+                0.0,
+                -1.0 + (row as f32 + 0.5) / 2.0,
+            );
+            let c = vp * p.extend(1.0);
+            let n = c.xyz() / c.w;
+            let (x, y) = (
+                ((n.x * 0.5 + 0.5) * SIZE as f32) as u32,
+                ((n.y * 0.5 + 0.5) * SIZE as f32) as u32,
+            );
+            let want = decode(if (col + row) % 2 == 0 { a } else { b });
+            let got = pixel(&img, x, y);
+            // 1%, or half an 8-bit step near black (hardware sRGB decode is table-based).
+            for ch in 0..3 {
+                assert!(
+                    (got[ch] - want[ch]).abs() <= 0.01 * want[ch] + 5e-4,
+                    "cell ({col}, {row}) channel {ch}: got {got}, expected {want}"
+                );
+            }
+        }
+    }
+}

@@ -52,6 +52,8 @@ pub struct GpuMaterial {
     pub albedo: [f32; 4],
     /// rgb specular reflectance, a shininess.
     pub specular: [f32; 4],
+    /// x: 1 if an albedo texture replaces `albedo` (as in the Mitsuba export).
+    pub flags: [u32; 4],
 }
 
 /// Interleaved vertex of every mesh.
@@ -105,7 +107,8 @@ mod tests {
             size_of::<GpuFrame>(),
             176 + 80 * MAX_LIGHTS + 96 * MAX_SHADOW_VIEWS
         );
-        assert_eq!(size_of::<GpuMaterial>(), 32);
+        assert_eq!(size_of::<GpuMaterial>(), 48);
+        assert_eq!(offset_of!(GpuMaterial, flags), 32);
         assert_eq!(size_of::<GpuVertex>(), 32);
         assert_eq!(offset_of!(GpuVertex, uv), 24);
         assert_eq!(size_of::<GpuDrawPush>(), 80);

@@ -6,6 +6,7 @@
 
 mod cull;
 pub mod gpu;
+mod textures;
 
 pub use cull::aabb_visible;
 
@@ -71,6 +72,8 @@ struct Draw {
     index_count: u32,
     vertex_offset: i32,
     material: u32,
+    /// Index into the renderer's textures (the albedo map of the material).
+    texture: Option<usize>,
     model: Mat4,
     aabb: crate::scene::Aabb,
 }
@@ -103,6 +106,9 @@ pub struct Renderer {
     readback_ldr: Buffer,
     pipelines: Pipelines,
     sampler: vk::Sampler,
+    /// Albedo textures of the scene, then a 1x1 white placeholder (always last).
+    textures: Vec<crate::vk::Image>,
+    texture_sampler: vk::Sampler,
     has_phong: bool,
     shadow_view_count: u32,
     draws: Arc<RwLock<DrawLists>>,
@@ -137,6 +143,7 @@ impl Renderer {
             .map(|m| GpuMaterial {
                 albedo: [m.albedo.x, m.albedo.y, m.albedo.z, m.opacity],
                 specular: [m.specular.x, m.specular.y, m.specular.z, m.shininess],
+                flags: [u32::from(m.albedo_texture.is_some()), 0, 0, 0],
             })
             .collect();
         let materials_buf = ctx.upload_buffer(
@@ -165,7 +172,31 @@ impl Renderer {
             usage: vk::BufferUsageFlags::TRANSFER_DST,
             location: MemoryLocation::GpuToCpu,
         })?;
-        let pipelines = create_pipelines(ctx, has_phong)?;
+        let has_textures = scene.has_albedo_textures();
+        let mut textures = Vec::new();
+        for (i, t) in scene.textures.iter().enumerate() {
+            // Only albedo maps are sampled (bump maps are not shaded yet).
+            if scene.materials.iter().any(|m| m.albedo_texture == Some(i)) {
+                textures.push(textures::upload_texture(
+                    ctx,
+                    t,
+                    &format!("texture {}", t.path.display()),
+                )?);
+            } else {
+                textures.push(textures::upload_texture(
+                    ctx,
+                    &placeholder_texture(),
+                    "unused texture slot",
+                )?);
+            }
+        }
+        textures.push(textures::upload_texture(
+            ctx,
+            &placeholder_texture(),
+            "texture placeholder",
+        )?);
+        let texture_sampler = ctx.create_sampler(vk::Filter::LINEAR, true)?;
+        let pipelines = create_pipelines(ctx, has_phong, has_textures)?;
         let sampler = ctx.create_sampler(vk::Filter::NEAREST, false)?;
         let mut r = Self {
             settings,
@@ -178,6 +209,8 @@ impl Renderer {
             readback_ldr,
             pipelines,
             sampler,
+            textures,
+            texture_sampler,
             has_phong,
             shadow_view_count: 0,
             draws: Arc::new(RwLock::new(DrawLists::default())),
@@ -348,6 +381,12 @@ impl Renderer {
         let depth = g.create_image(ImageDesc::new_2d("gbuffer depth", DEPTH, w, h));
         let pipe = self.pipelines.gbuffer;
         let draws = self.draws.clone();
+        let tex_handles: Vec<_> = self
+            .textures
+            .iter()
+            .map(|t| g.import_image(t, Access::Sampled(Shader::Fragment)))
+            .collect();
+        let tex_sampler = self.texture_sampler;
         let mut pass = g
             .add_pass("gbuffer")
             .read(frame, Access::StorageRead(Shader::Graphics))
@@ -357,6 +396,10 @@ impl Renderer {
         if let Some(spec) = specular {
             pass = pass.write(spec, Access::ColorAttachment);
         }
+        for &t in &tex_handles {
+            pass = pass.read(t, Access::Sampled(Shader::Fragment));
+        }
+        let placeholder = tex_handles[tex_handles.len() - 1];
         pass.record(move |ctx| {
             let clear = Some(vk::ClearValue {
                 color: vk::ClearColorValue { float32: [0.0; 4] },
@@ -388,14 +431,33 @@ impl Renderer {
             };
             ctx.cmd
                 .begin_rendering(ctx.image(albedo).extent_2d(), &colors, Some(depth_att));
+            let texture = |t: Option<usize>| Descriptor::SampledImage {
+                binding: 2,
+                view: ctx
+                    .image(
+                        t.and_then(|i| tex_handles.get(i).copied())
+                            .unwrap_or(placeholder),
+                    )
+                    .view,
+                sampler: tex_sampler,
+            };
             ctx.cmd.bind(
                 &pipe,
-                &[frame_desc(ctx.slot), Descriptor::storage_buffer(1, mb)],
+                &[
+                    frame_desc(ctx.slot),
+                    Descriptor::storage_buffer(1, mb),
+                    texture(None),
+                ],
             );
             ctx.cmd.bind_vertex_buffer(vb);
             ctx.cmd.bind_index_buffer(ib);
             if let Ok(lists) = draws.read() {
+                let mut bound = None;
                 for d in &lists.camera {
+                    if d.texture != bound {
+                        ctx.cmd.push_descriptors(&pipe, &[texture(d.texture)]);
+                        bound = d.texture;
+                    }
                     let push = GpuDrawPush {
                         model: d.model.to_cols_array(),
                         index: d.material,
@@ -555,6 +617,10 @@ impl Renderer {
         ctx.destroy_compute_pipeline(self.pipelines.deferred);
         ctx.destroy_compute_pipeline(self.pipelines.tonemap);
         ctx.destroy_sampler(self.sampler);
+        ctx.destroy_sampler(self.texture_sampler);
+        for t in self.textures {
+            ctx.destroy_image(t);
+        }
         for b in [
             self.vertices,
             self.indices,
@@ -650,12 +716,14 @@ fn upload_geometry(
         let model = object.transform_at(t_s);
         let aabb = mesh.aabb.transformed(&model);
         for (si, sub) in mesh.submeshes.iter().enumerate() {
-            let material = object.materials.get(si).copied().unwrap_or(sub.material) as u32;
+            let material = object.materials.get(si).copied().unwrap_or(sub.material);
+            let texture = scene.materials.get(material).and_then(|m| m.albedo_texture);
             draws.push(Draw {
                 first_index: ibase + sub.first_index,
                 index_count: sub.index_count,
                 vertex_offset: vbase,
-                material,
+                material: material as u32,
+                texture,
                 model,
                 aabb,
             });
@@ -674,7 +742,22 @@ fn upload_geometry(
     Ok((vb, ib, draws))
 }
 
-fn create_pipelines(ctx: &Context, has_phong: bool) -> Result<Pipelines, VkError> {
+/// A 1x1 white texture bound where a draw has no albedo map.
+fn placeholder_texture() -> crate::scene::TextureData {
+    crate::scene::TextureData {
+        path: "placeholder".into(),
+        width: 1,
+        height: 1,
+        rgba8: vec![255; 4],
+        srgb: true,
+    }
+}
+
+fn create_pipelines(
+    ctx: &Context,
+    has_phong: bool,
+    has_textures: bool,
+) -> Result<Pipelines, VkError> {
     let storage = vk::DescriptorType::STORAGE_BUFFER;
     let sampled = vk::DescriptorType::COMBINED_IMAGE_SAMPLER;
     let push = std::mem::size_of::<GpuDrawPush>() as u32;
@@ -691,7 +774,7 @@ fn create_pipelines(ctx: &Context, has_phong: bool) -> Result<Pipelines, VkError
         vertex: "gbuffer.vert".into(),
         geometry: None,
         fragment: "gbuffer.frag".into(),
-        bindings: vec![(0, storage), (1, storage)],
+        bindings: vec![(0, storage), (1, storage), (2, sampled)],
         push_constant_bytes: push,
         vertex_stride: std::mem::size_of::<GpuVertex>() as u32,
         vertex_attributes: vertex_attributes.clone(),
@@ -703,7 +786,7 @@ fn create_pipelines(ctx: &Context, has_phong: bool) -> Result<Pipelines, VkError
         depth_write: true,
         depth_bias: false,
         logic_op: None,
-        spec: vec![(0, u32::from(has_phong))],
+        spec: vec![(0, u32::from(has_phong)), (1, u32::from(has_textures))],
     })?;
     let shadow = ctx.graphics_pipeline(&GraphicsPipelineDesc {
         vertex: "shadow_depth.vert".into(),

@@ -177,7 +177,18 @@ impl<'a> Cmd<'a> {
 
     /// Binds a pipeline and pushes its descriptor set 0.
     pub fn bind(&self, pipeline: &impl Bindable, descriptors: &[Descriptor]) {
-        let (bind_point, raw, layout) = pipeline.bind_info();
+        let (bind_point, raw, _) = pipeline.bind_info();
+        // SAFETY: Cmd invariant; the pipeline is live.
+        unsafe { self.ctx.device.cmd_bind_pipeline(self.raw, bind_point, raw) };
+        self.push_descriptors(pipeline, descriptors);
+    }
+
+    /// Pushes descriptors of set 0 of `pipeline` (e.g. a per-draw texture) without rebinding.
+    pub fn push_descriptors(&self, pipeline: &impl Bindable, descriptors: &[Descriptor]) {
+        if descriptors.is_empty() {
+            return;
+        }
+        let (bind_point, _, layout) = pipeline.bind_info();
         let mut image_infos: Vec<[vk::DescriptorImageInfo; 1]> =
             Vec::with_capacity(descriptors.len());
         let mut buffer_infos: Vec<[vk::DescriptorBufferInfo; 1]> =
@@ -235,16 +246,13 @@ impl<'a> Cmd<'a> {
                 }
             })
             .collect();
-        // SAFETY: Cmd invariant; pipeline and layout are live; the set layout was created with
-        // the PUSH_DESCRIPTOR flag; infos outlive the calls.
+        // SAFETY: Cmd invariant; the layout's set 0 was created with the PUSH_DESCRIPTOR flag;
+        // the infos outlive the call.
         unsafe {
-            self.ctx.device.cmd_bind_pipeline(self.raw, bind_point, raw);
-            if !writes.is_empty() {
-                self.ctx
-                    .push_descriptor
-                    .cmd_push_descriptor_set(self.raw, bind_point, layout, 0, &writes);
-            }
-        }
+            self.ctx
+                .push_descriptor
+                .cmd_push_descriptor_set(self.raw, bind_point, layout, 0, &writes)
+        };
     }
 
     /// Push constants for the pipeline last bound (all stages).

@@ -521,3 +521,108 @@ impl Context {
         Ok(self.wrap_buffer(raw, desc))
     }
 }
+
+impl Context {
+    /// Creates a sampled image from tightly packed texel data per mip level (level 0 first)
+    /// and leaves it in SHADER_READ_ONLY_OPTIMAL. A one-time upload outside the render graph:
+    /// the image is persistent and the graph imports it in that state.
+    pub fn upload_image(&self, desc: &ImageDesc, levels: &[Vec<u8>]) -> Result<Image, VkError> {
+        let mut desc = desc.clone();
+        desc.mip_levels = levels.len().max(1) as u32;
+        desc.usage |= vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST;
+        let image = self.create_image(&desc)?;
+        let total: usize = levels.iter().map(Vec::len).sum();
+        let mut staging = match self.create_buffer(&BufferDesc {
+            name: format!("{} (staging)", desc.name),
+            size_bytes: total.max(4) as u64,
+            usage: vk::BufferUsageFlags::TRANSFER_SRC,
+            location: MemoryLocation::CpuToGpu,
+        }) {
+            Ok(b) => b,
+            Err(e) => {
+                self.destroy_image(image);
+                return Err(e);
+            }
+        };
+        let mut regions = Vec::new();
+        if let Some(m) = staging.mapped_mut() {
+            let mut offset = 0usize;
+            for (level, data) in levels.iter().enumerate() {
+                m[offset..offset + data.len()].copy_from_slice(data);
+                regions.push(vk::BufferImageCopy {
+                    buffer_offset: offset as u64,
+                    buffer_row_length: 0,
+                    buffer_image_height: 0,
+                    image_subresource: vk::ImageSubresourceLayers {
+                        aspect_mask: desc.aspect(),
+                        mip_level: level as u32,
+                        base_array_layer: 0,
+                        layer_count: desc.layers,
+                    },
+                    image_offset: vk::Offset3D::default(),
+                    image_extent: vk::Extent3D {
+                        width: (desc.width >> level).max(1),
+                        height: (desc.height >> level).max(1),
+                        depth: (desc.depth >> level).max(1),
+                    },
+                });
+                offset += data.len();
+            }
+        }
+        let range = vk::ImageSubresourceRange {
+            aspect_mask: desc.aspect(),
+            base_mip_level: 0,
+            level_count: desc.mip_levels,
+            base_array_layer: 0,
+            layer_count: desc.layers,
+        };
+        let result = self.one_time_submit(|device, cmd| {
+            let to_dst = [vk::ImageMemoryBarrier2::builder()
+                .src_stage_mask(vk::PipelineStageFlags2::NONE)
+                .dst_stage_mask(vk::PipelineStageFlags2::COPY)
+                .dst_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
+                .old_layout(vk::ImageLayout::UNDEFINED)
+                .new_layout(vk::ImageLayout::TRANSFER_DST_OPTIMAL)
+                .image(image.raw)
+                .subresource_range(range)
+                .build()];
+            let to_read = [vk::ImageMemoryBarrier2::builder()
+                .src_stage_mask(vk::PipelineStageFlags2::COPY)
+                .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
+                .dst_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
+                .dst_access_mask(vk::AccessFlags2::SHADER_SAMPLED_READ)
+                .old_layout(vk::ImageLayout::TRANSFER_DST_OPTIMAL)
+                .new_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)
+                .image(image.raw)
+                .subresource_range(range)
+                .build()];
+            // SAFETY: cmd is recording; the image and staging buffer are live and sized for
+            // every region.
+            unsafe {
+                device.cmd_pipeline_barrier2(
+                    cmd,
+                    &vk::DependencyInfo::builder().image_memory_barriers(&to_dst),
+                );
+                device.cmd_copy_buffer_to_image(
+                    cmd,
+                    staging.raw,
+                    image.raw,
+                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                    &regions,
+                );
+                device.cmd_pipeline_barrier2(
+                    cmd,
+                    &vk::DependencyInfo::builder().image_memory_barriers(&to_read),
+                );
+            }
+        });
+        self.destroy_buffer(staging);
+        match result {
+            Ok(()) => Ok(image),
+            Err(e) => {
+                self.destroy_image(image);
+                Err(e)
+            }
+        }
+    }
+}
