@@ -449,6 +449,113 @@ pub fn voxelize_static(
     Ok(columns)
 }
 
+/// What the renderer's frame voxelizes (absent: no voxel passes at all).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct VoxelSettings {
+    /// Cap on the x/y resolution; voxels are near-cubic ([`VoxelGrid::around`]).
+    pub max_res_xy: u32,
+    /// Depth layers of 128 voxels.
+    pub layers: u32,
+    /// Voxelize static geometry every frame too (to measure the full cost) instead of once.
+    pub revoxelize_static: bool,
+}
+
+impl Default for VoxelSettings {
+    fn default() -> Self {
+        Self {
+            max_res_xy: 128,
+            layers: 1,
+            revoxelize_static: false,
+        }
+    }
+}
+
+/// The voxel grid of a scene with the resources of its per-frame passes: the static objects
+/// voxelized once (unless `revoxelize_static`), the dynamic ones inserted every frame.
+pub struct VoxelFrame {
+    pub voxels: GpuVoxelGrid,
+    pipelines: VoxelPipelines,
+    static_tris: TriangleBuffer,
+    dynamic_tris: TriangleBuffer,
+    static_columns: Option<Buffer>,
+}
+
+impl VoxelFrame {
+    pub fn new(
+        ctx: &Context,
+        scene: &Scene,
+        t_s: f32,
+        settings: &VoxelSettings,
+    ) -> Result<Self, GpuVoxelError> {
+        let aabb = scene.aabb_at(t_s);
+        let grid = VoxelGrid::around(
+            aabb.min,
+            aabb.max,
+            &super::GridDesc {
+                layers: settings.layers,
+                max_res_xy: settings.max_res_xy,
+                ..Default::default()
+            },
+        )?;
+        let pipelines = VoxelPipelines::new(ctx)?;
+        let voxels = GpuVoxelGrid::new(ctx, &grid)?;
+        let static_tris =
+            TriangleBuffer::upload(ctx, "static triangles", &scene_triangles(scene, t_s, false))?;
+        let dynamic_tris =
+            TriangleBuffer::upload(ctx, "dynamic triangles", &scene_triangles(scene, t_s, true))?;
+        let static_columns = if settings.revoxelize_static || static_tris.count == 0 {
+            None
+        } else {
+            Some(voxelize_static(ctx, &pipelines, &grid, &static_tris)?)
+        };
+        Ok(Self {
+            voxels,
+            pipelines,
+            static_tris,
+            dynamic_tris,
+            static_columns,
+        })
+    }
+
+    /// Declares the frame's voxel passes; returns the column image (resting state
+    /// [`VOXEL_IMAGE_STATE`]).
+    pub fn add_passes(&self, g: &mut RenderGraph) -> ImageHandle {
+        let image = self.voxels.import(g);
+        let grid = &self.voxels.grid;
+        let columns = g.create_buffer("voxel column buffer", column_bytes(grid));
+        match &self.static_columns {
+            Some(b) => add_voxelize_passes(
+                g,
+                &self.pipelines,
+                grid,
+                columns,
+                ColumnBase::Copy(b),
+                &[&self.dynamic_tris],
+            ),
+            None => add_voxelize_passes(
+                g,
+                &self.pipelines,
+                grid,
+                columns,
+                ColumnBase::Clear,
+                &[&self.static_tris, &self.dynamic_tris],
+            ),
+        }
+        add_store_and_mip_passes(g, &self.pipelines, &self.voxels, columns, image);
+        image
+    }
+
+    pub fn destroy(self, ctx: &Context) {
+        if let Some(b) = self.static_columns {
+            ctx.destroy_buffer(b);
+        }
+        self.static_tris.destroy(ctx);
+        self.dynamic_tris.destroy(ctx);
+        self.voxels.destroy(ctx);
+        self.pipelines.destroy(ctx);
+    }
+}
+
 /// Runs a graph once, waits, and returns the timings of its passes.
 pub fn run_once(ctx: &Context, graph: RenderGraph) -> Result<Vec<PassTiming>, GpuVoxelError> {
     let exec = GraphExecutor::new(ctx, graph, 1)?;
