@@ -12,7 +12,8 @@
 // voxel bounding box, and each walks its column's depth range, ORing whole words.
 #include "voxel_bits.glsl"
 
-layout(local_size_x = 64) in;
+// Invocations per triangle (specialization constant; VoxelPipelines picks it).
+layout(local_size_x_id = 0) in;
 
 struct Triangle {
     vec4 v[3];   // world-space vertices, w unused
