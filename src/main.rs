@@ -163,6 +163,16 @@ struct FrameArgs {
     /// PCF radius in texels.
     #[arg(long, default_value_t = 1)]
     pcf_radius: u32,
+    /// Voxelize the scene every frame into a grid of at most N×N columns (`profile` then
+    /// shows the voxel passes).
+    #[arg(long, value_name = "N")]
+    voxels: Option<u32>,
+    /// Depth layers of 128 voxels of the voxel grid.
+    #[arg(long, default_value_t = 1)]
+    voxel_layers: u32,
+    /// Re-voxelize static geometry every frame too (measures the full voxelization).
+    #[arg(long)]
+    revoxelize: bool,
 }
 
 impl FrameArgs {
@@ -177,6 +187,13 @@ impl FrameArgs {
         s.tonemap.exposure = self.exposure;
         s.shadow.resolution = self.shadow_resolution;
         s.shadow.pcf_radius = self.pcf_radius;
+        s.voxels = self
+            .voxels
+            .map(|max_res_xy| voxgi::voxel::gpu::VoxelSettings {
+                max_res_xy,
+                layers: self.voxel_layers,
+                revoxelize_static: self.revoxelize,
+            });
         s
     }
 }

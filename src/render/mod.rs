@@ -40,6 +40,8 @@ pub enum RenderError {
     BadSize(u32, u32),
     #[error("the scene has no geometry to render: add an object")]
     EmptyScene,
+    #[error(transparent)]
+    Voxel(#[from] crate::voxel::gpu::GpuVoxelError),
 }
 
 /// What a frame renders.
@@ -51,6 +53,8 @@ pub struct RenderSettings {
     pub time_s: f32,
     pub shadow: ShadowSettings,
     pub tonemap: ToneMap,
+    /// Voxelize the scene every frame (`None`: direct light needs no voxels).
+    pub voxels: Option<crate::voxel::gpu::VoxelSettings>,
 }
 
 impl Default for RenderSettings {
@@ -61,6 +65,7 @@ impl Default for RenderSettings {
             time_s: 0.0,
             shadow: ShadowSettings::default(),
             tonemap: ToneMap::default(),
+            voxels: None,
         }
     }
 }
@@ -114,6 +119,7 @@ pub struct Renderer {
     draws: Arc<RwLock<DrawLists>>,
     all_draws: Vec<Draw>,
     frame_data: GpuFrame,
+    voxels: Option<crate::voxel::gpu::VoxelFrame>,
 }
 
 const GBUFFER_COLOR: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
@@ -198,6 +204,15 @@ impl Renderer {
         let texture_sampler = ctx.create_sampler(vk::Filter::LINEAR, true)?;
         let pipelines = create_pipelines(ctx, has_phong, has_textures)?;
         let sampler = ctx.create_sampler(vk::Filter::NEAREST, false)?;
+        let voxels = match &settings.voxels {
+            Some(v) => Some(crate::voxel::gpu::VoxelFrame::new(
+                ctx,
+                scene,
+                settings.time_s,
+                v,
+            )?),
+            None => None,
+        };
         let mut r = Self {
             settings,
             vertices,
@@ -216,6 +231,7 @@ impl Renderer {
             draws: Arc::new(RwLock::new(DrawLists::default())),
             all_draws,
             frame_data: GpuFrame::zeroed(),
+            voxels,
         };
         r.prepare(scene)?;
         Ok(r)
@@ -326,6 +342,9 @@ impl Renderer {
             range: frame_size,
         };
         let (vb, ib, mb) = (self.vertices.raw, self.indices.raw, self.materials.raw);
+        if let Some(v) = &self.voxels {
+            v.add_passes(&mut g);
+        }
 
         // Shadow maps: one layer per shadow view (a 1x1 cleared layer when there are none, so
         // the shading pass always has a map to bind).
@@ -612,6 +631,9 @@ impl Renderer {
     }
 
     pub fn destroy(self, ctx: &Context) {
+        if let Some(v) = self.voxels {
+            v.destroy(ctx);
+        }
         ctx.destroy_graphics_pipeline(self.pipelines.gbuffer);
         ctx.destroy_graphics_pipeline(self.pipelines.shadow);
         ctx.destroy_compute_pipeline(self.pipelines.deferred);

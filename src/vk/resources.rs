@@ -353,6 +353,69 @@ impl Context {
         Ok(dst)
     }
 
+    /// Clears every mip and layer of a freshly created color image and leaves it in `layout`,
+    /// so a render graph can import it in a resting state with that layout (imported images
+    /// are assumed to be in their resting state before the first frame). Waits.
+    pub fn clear_new_image(
+        &self,
+        image: &Image,
+        value: vk::ClearColorValue,
+        layout: vk::ImageLayout,
+    ) -> Result<(), VkError> {
+        let range = vk::ImageSubresourceRange {
+            aspect_mask: image.desc.aspect(),
+            base_mip_level: 0,
+            level_count: image.desc.mip_levels,
+            base_array_layer: 0,
+            layer_count: image.desc.layers,
+        };
+        let barrier = |old, new, src_stage, src_access, dst_stage, dst_access| {
+            [vk::ImageMemoryBarrier2::builder()
+                .src_stage_mask(src_stage)
+                .src_access_mask(src_access)
+                .dst_stage_mask(dst_stage)
+                .dst_access_mask(dst_access)
+                .old_layout(old)
+                .new_layout(new)
+                .image(image.raw)
+                .subresource_range(range)
+                .build()]
+        };
+        let to_dst = barrier(
+            vk::ImageLayout::UNDEFINED,
+            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+            vk::PipelineStageFlags2::NONE,
+            vk::AccessFlags2::NONE,
+            vk::PipelineStageFlags2::CLEAR,
+            vk::AccessFlags2::TRANSFER_WRITE,
+        );
+        let to_final = barrier(
+            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+            layout,
+            vk::PipelineStageFlags2::CLEAR,
+            vk::AccessFlags2::TRANSFER_WRITE,
+            vk::PipelineStageFlags2::ALL_COMMANDS,
+            vk::AccessFlags2::MEMORY_READ | vk::AccessFlags2::MEMORY_WRITE,
+        );
+        self.one_time_submit(|device, cmd| {
+            let dep = vk::DependencyInfo::builder().image_memory_barriers(&to_dst);
+            let dep_final = vk::DependencyInfo::builder().image_memory_barriers(&to_final);
+            // SAFETY: cmd is recording; the image is live and unused by any pending work
+            // (it was just created); the range covers the whole image.
+            unsafe {
+                device.cmd_pipeline_barrier2(cmd, &dep);
+                device.cmd_clear_color_image(
+                    cmd,
+                    image.raw,
+                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                    &value,
+                    &[range],
+                );
+                device.cmd_pipeline_barrier2(cmd, &dep_final);
+            }
+        })
+    }
+
     /// Records `f` into a fresh command buffer, submits it, and waits. Ends with a full
     /// memory barrier so that later submissions see the writes: uploads happen outside the
     /// render graph, before the frame that first uses the resource.

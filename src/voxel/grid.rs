@@ -254,7 +254,14 @@ impl VoxelGrid {
     /// Computed directly rather than through the 4×4 matrix to keep f32 precision for large
     /// world coordinates.
     pub fn world_to_voxel(&self, p: Vec3) -> Vec3 {
-        to_frame(self.axis, p - self.min) * (self.extent_voxels().as_vec3() / self.frame_extent_m())
+        to_frame(self.axis, p - self.min) * self.voxels_per_meter()
+    }
+
+    /// Voxels per meter in voxel axis order `(x, y, depth)`: the scale of
+    /// [`Self::world_to_voxel`]. The GPU voxelizer receives this exact f32 vector and repeats
+    /// `to_frame(p − min) · scale`, so both sides round identically.
+    pub fn voxels_per_meter(&self) -> Vec3 {
+        self.extent_voxels().as_vec3() / self.frame_extent_m()
     }
 
     /// Continuous voxel coordinates → world point.

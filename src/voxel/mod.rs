@@ -28,12 +28,14 @@
 //! - [`grid`]: grid placement and the world→voxel transforms.
 //! - [`bits`]: [`bits::BitGrid`] (CPU copy of the column image) and [`bits::BitHierarchy`].
 //! - [`voxelize`]: exact triangle surface voxelizer (Akenine-Möller triangle/box SAT).
+//! - [`gpu`]: the GPU column image, triangle voxelizer and OR mip chain as render-graph passes.
 //! - [`ray_mask`]: the 128×128 ray-mask LUT (thesis §4.5, Fig. 16) and single-bit LUT (§3.3).
 //! - [`traverse`]: hierarchical first hit and visibility (§4.5–§4.7), the exact DDA ground
 //!   truth, and the 1-bit / 3-bit marching baselines (§4.8).
 
 pub mod bench;
 pub mod bits;
+pub mod gpu;
 pub mod gpu_rays;
 pub mod grid;
 pub mod ray_mask;

@@ -34,7 +34,7 @@ pub struct VoxelizeStats {
 
 /// `|n|² ≤ DEGENERATE_REL · |e0|²·|e1|²`, i.e. the sine of the angle between the edges is
 /// below ~3e-5: f32 cross products of nearly parallel edges are noise at that level.
-const DEGENERATE_REL: f32 = 1e-9;
+pub(crate) const DEGENERATE_REL: f32 = 1e-9;
 
 fn is_degenerate(e0: Vec3, e1: Vec3, n: Vec3) -> bool {
     n.length_squared() <= DEGENERATE_REL * e0.length_squared() * e1.length_squared()

@@ -1,0 +1,647 @@
+//! The voxel grid on the GPU: the persistent column image, the triangle voxelizer, and the
+//! OR mip chain, all declared as render-graph passes (no pass records a barrier).
+//!
+//! # Passes (named after their GLSL stems)
+//! - `voxel_clear`: zeroes the transient column buffer (or `voxel_copy_static` copies the
+//!   once-voxelized static grid into it, so only dynamic objects are voxelized per frame).
+//! - `voxelize_triangles`: conservative surface voxelization of world-space triangles by the
+//!   exact triangle/box test, bit for bit the CPU reference [`super::voxelize`]. It ORs bits
+//!   into a *buffer* with `atomicOr`: storage-image atomics exist only for `R32_UINT`, and a
+//!   buffer laid out like the image's tightly packed mip 0 makes the next step one copy.
+//! - `voxel_store`: copies the column buffer into mip 0 of the `R32G32B32A32_UINT` image.
+//! - `voxel_mip_1` … `voxel_mip_N` (`voxel_mip.comp`): level ℓ = OR of 2×2 texels of ℓ−1,
+//!   one dispatch per level, each declared on its own mip subresources.
+//!
+//! # Image size versus the CPU hierarchy
+//! [`BitHierarchy`] sizes level ℓ as `ceil(res / 2^ℓ)`; Vulkan mips are `max(1, size >> ℓ)`
+//! (floor), which drops the last odd row or column. The image is therefore allocated at the
+//! next power of two per axis ([`image_extent`]) and the grid occupies its top-left
+//! `res_x × res_y` corner; the padding stays empty. Then texel `(x, y)` of level ℓ covers the
+//! aligned block `[x·2^ℓ, (x+1)·2^ℓ)` exactly as on the CPU, every CPU level is the top-left
+//! corner of the GPU level, and both have `mip_count(res_x, res_y)` levels. Traversal code
+//! must bound columns by the grid resolution, not the image size. Power-of-two resolutions
+//! (the usual choice) waste nothing.
+//!
+//! [`BitHierarchy`]: super::BitHierarchy
+
+use super::bits::mip_count;
+use super::{VoxelError, VoxelGrid};
+use crate::graph::{
+    Access, BufferHandle, GraphError, GraphExecutor, ImageHandle, RenderGraph, Shader, Subresource,
+};
+use crate::scene::Scene;
+use crate::vk::{
+    vk, Buffer, BufferDesc, ComputePipeline, Context, Descriptor, FrameLoop, Image, ImageDesc,
+    MemoryLocation, PassTiming, VkError,
+};
+use glam::Vec3;
+
+/// Format of the binary column image: one texel = one column of 128 voxels.
+pub const COLUMN_FORMAT: vk::Format = vk::Format::R32G32B32A32_UINT;
+
+/// Largest workgroup count per dispatch dimension that every Vulkan device supports.
+const MAX_GROUPS_X: u32 = 65535;
+
+/// Errors of the GPU voxel passes.
+#[derive(Debug, thiserror::Error)]
+pub enum GpuVoxelError {
+    #[error(transparent)]
+    Vk(#[from] VkError),
+    #[error(transparent)]
+    Graph(#[from] GraphError),
+    #[error(transparent)]
+    Voxel(#[from] VoxelError),
+}
+
+/// One world-space triangle as the shader reads it (`struct Triangle` in
+/// `voxelize_triangles.comp`, std430: three `vec4`, w unused).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GpuTriangle {
+    pub v: [[f32; 4]; 3],
+}
+
+impl GpuTriangle {
+    pub fn new(tri: [Vec3; 3]) -> Self {
+        Self {
+            v: tri.map(|p| p.extend(0.0).to_array()),
+        }
+    }
+}
+
+/// Push constants of `voxelize_triangles.comp`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GpuVoxelizePush {
+    /// World corner of the grid box (xyz).
+    pub grid_min: [f32; 4],
+    /// Voxels per meter in the voxel-camera frame, exactly as [`VoxelGrid::world_to_voxel`]
+    /// computes it (so the shader repeats its f32 operations).
+    pub scale: [f32; 4],
+    /// `res_x, res_y, D, depth axis (0 = X, 1 = Y, 2 = Z)`.
+    pub dims: [u32; 4],
+    /// Column-buffer width and height, triangle count, first triangle.
+    pub extent: [u32; 4],
+}
+
+impl GpuVoxelizePush {
+    pub fn new(grid: &VoxelGrid, count: u32, first: u32) -> Self {
+        let (w, h) = image_extent(grid);
+        let ext = grid.extent_voxels();
+        Self {
+            grid_min: grid.world_min().extend(0.0).to_array(),
+            scale: grid.voxels_per_meter().extend(0.0).to_array(),
+            dims: [ext.x, ext.y, ext.z, grid.axis().index() as u32],
+            extent: [w, h, count, first],
+        }
+    }
+}
+
+/// `(width, height)` of the column image: the next power of two of each grid axis (see the
+/// module doc).
+pub fn image_extent(grid: &VoxelGrid) -> (u32, u32) {
+    (
+        grid.res_x().next_power_of_two(),
+        grid.res_y().next_power_of_two(),
+    )
+}
+
+/// Bytes of the column buffer (= mip 0 of the image, tightly packed).
+pub fn column_bytes(grid: &VoxelGrid) -> u64 {
+    let (w, h) = image_extent(grid);
+    u64::from(w) * u64::from(h) * u64::from(grid.layers()) * 16
+}
+
+/// The pipelines of the voxel passes.
+pub struct VoxelPipelines {
+    voxelize: ComputePipeline,
+    mip: ComputePipeline,
+    sampler: vk::Sampler,
+}
+
+/// Invocations per triangle of `voxelize_triangles` (see [`VoxelPipelines::with_group_size`]).
+///
+/// Open issue: on lavapipe a group of 8 (its SIMD width) is 1.5–6× faster, but then grids
+/// with two layers (D = 256) lose runs of voxels against the CPU reference (tests/voxelize.rs
+/// fails); 64 is exact on every test. Not yet understood (driver or shader), so 64 stays.
+pub const VOXELIZE_GROUP_SIZE: u32 = 64;
+
+impl VoxelPipelines {
+    pub fn new(ctx: &Context) -> Result<Self, VkError> {
+        Self::with_group_size(ctx, VOXELIZE_GROUP_SIZE)
+    }
+
+    /// Pipelines whose voxelizer shares each triangle's columns among `group_size`
+    /// invocations (one workgroup per triangle).
+    pub fn with_group_size(ctx: &Context, group_size: u32) -> Result<Self, VkError> {
+        let storage = vk::DescriptorType::STORAGE_BUFFER;
+        let voxelize = ctx.compute_pipeline(
+            "voxelize_triangles.comp",
+            &[(0, storage), (1, storage)],
+            std::mem::size_of::<GpuVoxelizePush>() as u32,
+            &[(0, group_size.max(1))],
+        )?;
+        let mip = ctx.compute_pipeline(
+            "voxel_mip.comp",
+            &[
+                (0, vk::DescriptorType::COMBINED_IMAGE_SAMPLER),
+                (1, vk::DescriptorType::STORAGE_IMAGE),
+            ],
+            0,
+            &[],
+        )?;
+        let sampler = ctx.create_sampler(vk::Filter::NEAREST, false)?;
+        Ok(Self {
+            voxelize,
+            mip,
+            sampler,
+        })
+    }
+
+    pub fn destroy(self, ctx: &Context) {
+        ctx.destroy_compute_pipeline(self.voxelize);
+        ctx.destroy_compute_pipeline(self.mip);
+        ctx.destroy_sampler(self.sampler);
+    }
+}
+
+/// State of the column image between frames: sampled by compute shaders (ray casting).
+pub const VOXEL_IMAGE_STATE: Access = Access::Sampled(Shader::Compute);
+
+/// The persistent binary grid image with its full mip chain.
+pub struct GpuVoxelGrid {
+    pub grid: VoxelGrid,
+    pub image: Image,
+}
+
+impl GpuVoxelGrid {
+    pub fn new(ctx: &Context, grid: &VoxelGrid) -> Result<Self, GpuVoxelError> {
+        let (w, h) = image_extent(grid);
+        let desc = ImageDesc::new_2d("voxel columns", COLUMN_FORMAT, w, h)
+            .with_layers(grid.layers())
+            .with_mips(mip_count(grid.res_x(), grid.res_y()))
+            .with_usage(
+                vk::ImageUsageFlags::STORAGE
+                    | vk::ImageUsageFlags::SAMPLED
+                    | vk::ImageUsageFlags::TRANSFER_SRC
+                    | vk::ImageUsageFlags::TRANSFER_DST,
+            );
+        debug_assert_eq!(desc.mip_levels, 1 + w.max(h).trailing_zeros());
+        let image = ctx.create_image(&desc)?;
+        // Imported images must be in their resting state before the first frame.
+        if let Err(e) = ctx.clear_new_image(
+            &image,
+            vk::ClearColorValue { uint32: [0; 4] },
+            VOXEL_IMAGE_STATE.info().layout,
+        ) {
+            ctx.destroy_image(image);
+            return Err(e.into());
+        }
+        Ok(Self { grid: *grid, image })
+    }
+
+    pub fn mip_levels(&self) -> u32 {
+        self.image.desc.mip_levels
+    }
+
+    /// Imports the image into `g` in its resting state.
+    pub fn import(&self, g: &mut RenderGraph) -> ImageHandle {
+        g.import_image(&self.image, VOXEL_IMAGE_STATE)
+    }
+
+    pub fn destroy(self, ctx: &Context) {
+        ctx.destroy_image(self.image);
+    }
+}
+
+/// World-space triangles uploaded once (a device-local storage buffer).
+pub struct TriangleBuffer {
+    pub buffer: Buffer,
+    pub count: u32,
+}
+
+impl TriangleBuffer {
+    /// Validates (finite vertices, like the CPU reference) and uploads `triangles`.
+    pub fn upload(
+        ctx: &Context,
+        name: &str,
+        triangles: &[[Vec3; 3]],
+    ) -> Result<Self, GpuVoxelError> {
+        check_finite(triangles)?;
+        let data: Vec<GpuTriangle> = triangles.iter().map(|&t| GpuTriangle::new(t)).collect();
+        let buffer = ctx.upload_buffer(
+            name,
+            bytemuck::cast_slice(&data),
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+        )?;
+        Ok(Self {
+            buffer,
+            count: triangles.len() as u32,
+        })
+    }
+
+    pub fn destroy(self, ctx: &Context) {
+        ctx.destroy_buffer(self.buffer);
+    }
+}
+
+fn check_finite(triangles: &[[Vec3; 3]]) -> Result<(), VoxelError> {
+    for (i, tri) in triangles.iter().enumerate() {
+        if let Some(&vertex) = tri.iter().find(|v| !v.is_finite()) {
+            return Err(VoxelError::NonFiniteVertex {
+                triangle: i,
+                vertex,
+            });
+        }
+    }
+    Ok(())
+}
+
+/// World-space triangles of the scene's objects at time `t_s`; `dynamic` selects the dynamic
+/// (moving or animated) objects, or the static ones.
+pub fn scene_triangles(scene: &Scene, t_s: f32, dynamic: bool) -> Vec<[Vec3; 3]> {
+    let mut out = Vec::new();
+    for object in &scene.objects {
+        if (object.dynamic || object.is_animated()) != dynamic {
+            continue;
+        }
+        let Some(mesh) = scene.meshes.get(object.mesh_at(t_s)) else {
+            continue;
+        };
+        let model = object.transform_at(t_s);
+        for tri in mesh.indices.chunks_exact(3) {
+            let p = |i: u32| {
+                model.transform_point3(mesh.positions.get(i as usize).copied().unwrap_or(Vec3::NAN))
+            };
+            out.push([p(tri[0]), p(tri[1]), p(tri[2])]);
+        }
+    }
+    out
+}
+
+/// How the column buffer starts each time the passes run.
+#[derive(Clone, Copy)]
+pub enum ColumnBase<'a> {
+    /// Empty.
+    Clear,
+    /// A copy of a persistent column buffer (the static geometry voxelized once), in the
+    /// resting state `TransferRead`.
+    Copy(&'a Buffer),
+}
+
+/// Declares `voxel_clear`/`voxel_copy_static` and `voxelize_triangles` writing a column
+/// buffer (`columns`, sized [`column_bytes`]). Each triangle set is one dispatch.
+pub fn add_voxelize_passes(
+    g: &mut RenderGraph,
+    pipelines: &VoxelPipelines,
+    grid: &VoxelGrid,
+    columns: BufferHandle,
+    base: ColumnBase<'_>,
+    triangles: &[&TriangleBuffer],
+) {
+    match base {
+        ColumnBase::Clear => g
+            .add_pass("voxel_clear")
+            .write(columns, Access::TransferWrite)
+            .record(move |ctx| ctx.cmd.fill_buffer(ctx.buffer(columns).raw, 0)),
+        ColumnBase::Copy(static_columns) => {
+            let size = column_bytes(grid);
+            let src = g.import_buffer(static_columns, Access::TransferRead);
+            g.add_pass("voxel_copy_static")
+                .read(src, Access::TransferRead)
+                .write(columns, Access::TransferWrite)
+                .record(move |ctx| {
+                    ctx.cmd
+                        .copy_buffer(ctx.buffer(src).raw, ctx.buffer(columns).raw, size)
+                })
+        }
+    }
+    let sets: Vec<(BufferHandle, u32)> = triangles
+        .iter()
+        .filter(|t| t.count > 0)
+        .map(|t| {
+            (
+                g.import_buffer(&t.buffer, Access::StorageRead(Shader::Compute)),
+                t.count,
+            )
+        })
+        .collect();
+    if sets.is_empty() {
+        return;
+    }
+    let pipe = pipelines.voxelize;
+    let grid = *grid;
+    let mut pass = g
+        .add_pass("voxelize_triangles")
+        .write(columns, Access::StorageReadWrite(Shader::Compute));
+    for &(h, _) in &sets {
+        pass = pass.read(h, Access::StorageRead(Shader::Compute));
+    }
+    pass.record(move |ctx| {
+        for &(h, count) in &sets {
+            ctx.cmd.bind(
+                &pipe,
+                &[
+                    Descriptor::storage_buffer(0, ctx.buffer(h).raw),
+                    Descriptor::storage_buffer(1, ctx.buffer(columns).raw),
+                ],
+            );
+            // One workgroup per triangle; rows of MAX_GROUPS_X workgroups past the limit.
+            let mut first = 0;
+            while first < count {
+                let n = (count - first).min(MAX_GROUPS_X * MAX_GROUPS_X);
+                let push = GpuVoxelizePush::new(&grid, n, first);
+                ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
+                let x = n.min(MAX_GROUPS_X);
+                ctx.cmd.dispatch(x, n.div_ceil(x), 1);
+                first += n;
+            }
+        }
+    });
+}
+
+/// Declares `voxel_store` (column buffer → mip 0) and the OR mip chain `voxel_mip_1..`.
+pub fn add_store_and_mip_passes(
+    g: &mut RenderGraph,
+    pipelines: &VoxelPipelines,
+    voxels: &GpuVoxelGrid,
+    columns: BufferHandle,
+    image: ImageHandle,
+) {
+    let (w, h) = image_extent(&voxels.grid);
+    let layers = voxels.grid.layers();
+    g.add_pass("voxel_store")
+        .read(columns, Access::TransferRead)
+        .write_sub(image, Access::TransferWrite, Subresource::mip(0))
+        .record(move |ctx| {
+            ctx.cmd.copy_buffer_to_image(
+                ctx.buffer(columns).raw,
+                ctx.image(image).raw,
+                vk::Extent3D {
+                    width: w,
+                    height: h,
+                    depth: 1,
+                },
+                0,
+                layers,
+            )
+        });
+    add_mip_passes(g, pipelines, image, voxels.mip_levels(), (w, h), layers);
+}
+
+/// Declares `voxel_mip_1 .. voxel_mip_{levels-1}`: one dispatch per level, reading level
+/// ℓ−1 sampled (`texelFetch`) and writing level ℓ as a storage image.
+pub fn add_mip_passes(
+    g: &mut RenderGraph,
+    pipelines: &VoxelPipelines,
+    image: ImageHandle,
+    levels: u32,
+    extent: (u32, u32),
+    layers: u32,
+) {
+    for level in 1..levels {
+        let pipe = pipelines.mip;
+        let sampler = pipelines.sampler;
+        let (w, h) = ((extent.0 >> level).max(1), (extent.1 >> level).max(1));
+        g.add_pass(&format!("voxel_mip_{level}"))
+            .read_sub(
+                image,
+                Access::Sampled(Shader::Compute),
+                Subresource::mip(level - 1),
+            )
+            .write_sub(
+                image,
+                Access::StorageWrite(Shader::Compute),
+                Subresource::mip(level),
+            )
+            .record(move |ctx| {
+                let img = ctx.image(image);
+                ctx.cmd.bind(
+                    &pipe,
+                    &[
+                        Descriptor::SampledImage {
+                            binding: 0,
+                            view: img.mip_view(level - 1),
+                            sampler,
+                        },
+                        Descriptor::StorageImage {
+                            binding: 1,
+                            view: img.mip_view(level),
+                        },
+                    ],
+                );
+                ctx.cmd.dispatch(w.div_ceil(8), h.div_ceil(8), layers);
+            });
+    }
+}
+
+/// Voxelizes static geometry once into a persistent column buffer (resting state
+/// `TransferRead`), which each frame then copies with [`ColumnBase::Copy`] before inserting
+/// the dynamic objects: static geometry is never re-voxelized.
+pub fn voxelize_static(
+    ctx: &Context,
+    pipelines: &VoxelPipelines,
+    grid: &VoxelGrid,
+    triangles: &TriangleBuffer,
+) -> Result<Buffer, GpuVoxelError> {
+    let columns = ctx.create_buffer(&BufferDesc {
+        name: "voxel static columns".into(),
+        size_bytes: column_bytes(grid),
+        usage: vk::BufferUsageFlags::STORAGE_BUFFER
+            | vk::BufferUsageFlags::TRANSFER_SRC
+            | vk::BufferUsageFlags::TRANSFER_DST,
+        location: MemoryLocation::GpuOnly,
+    })?;
+    let mut g = RenderGraph::new();
+    let h = g.import_buffer(&columns, Access::TransferRead);
+    add_voxelize_passes(&mut g, pipelines, grid, h, ColumnBase::Clear, &[triangles]);
+    if let Err(e) = run_once(ctx, g) {
+        ctx.destroy_buffer(columns);
+        return Err(e);
+    }
+    Ok(columns)
+}
+
+/// What the renderer's frame voxelizes (absent: no voxel passes at all).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct VoxelSettings {
+    /// Cap on the x/y resolution; voxels are near-cubic ([`VoxelGrid::around`]).
+    pub max_res_xy: u32,
+    /// Depth layers of 128 voxels.
+    pub layers: u32,
+    /// Voxelize static geometry every frame too (to measure the full cost) instead of once.
+    pub revoxelize_static: bool,
+}
+
+impl Default for VoxelSettings {
+    fn default() -> Self {
+        Self {
+            max_res_xy: 128,
+            layers: 1,
+            revoxelize_static: false,
+        }
+    }
+}
+
+/// The voxel grid of a scene with the resources of its per-frame passes: the static objects
+/// voxelized once (unless `revoxelize_static`), the dynamic ones inserted every frame.
+pub struct VoxelFrame {
+    pub voxels: GpuVoxelGrid,
+    pipelines: VoxelPipelines,
+    static_tris: TriangleBuffer,
+    dynamic_tris: TriangleBuffer,
+    static_columns: Option<Buffer>,
+}
+
+impl VoxelFrame {
+    pub fn new(
+        ctx: &Context,
+        scene: &Scene,
+        t_s: f32,
+        settings: &VoxelSettings,
+    ) -> Result<Self, GpuVoxelError> {
+        let aabb = scene.aabb_at(t_s);
+        let grid = VoxelGrid::around(
+            aabb.min,
+            aabb.max,
+            &super::GridDesc {
+                layers: settings.layers,
+                max_res_xy: settings.max_res_xy,
+                ..Default::default()
+            },
+        )?;
+        let pipelines = VoxelPipelines::new(ctx)?;
+        let voxels = GpuVoxelGrid::new(ctx, &grid)?;
+        let static_tris =
+            TriangleBuffer::upload(ctx, "static triangles", &scene_triangles(scene, t_s, false))?;
+        let dynamic_tris =
+            TriangleBuffer::upload(ctx, "dynamic triangles", &scene_triangles(scene, t_s, true))?;
+        let static_columns = if settings.revoxelize_static || static_tris.count == 0 {
+            None
+        } else {
+            Some(voxelize_static(ctx, &pipelines, &grid, &static_tris)?)
+        };
+        Ok(Self {
+            voxels,
+            pipelines,
+            static_tris,
+            dynamic_tris,
+            static_columns,
+        })
+    }
+
+    /// Declares the frame's voxel passes; returns the column image (resting state
+    /// [`VOXEL_IMAGE_STATE`]).
+    pub fn add_passes(&self, g: &mut RenderGraph) -> ImageHandle {
+        let image = self.voxels.import(g);
+        let grid = &self.voxels.grid;
+        let columns = g.create_buffer("voxel column buffer", column_bytes(grid));
+        match &self.static_columns {
+            Some(b) => add_voxelize_passes(
+                g,
+                &self.pipelines,
+                grid,
+                columns,
+                ColumnBase::Copy(b),
+                &[&self.dynamic_tris],
+            ),
+            None => add_voxelize_passes(
+                g,
+                &self.pipelines,
+                grid,
+                columns,
+                ColumnBase::Clear,
+                &[&self.static_tris, &self.dynamic_tris],
+            ),
+        }
+        add_store_and_mip_passes(g, &self.pipelines, &self.voxels, columns, image);
+        image
+    }
+
+    pub fn destroy(self, ctx: &Context) {
+        if let Some(b) = self.static_columns {
+            ctx.destroy_buffer(b);
+        }
+        self.static_tris.destroy(ctx);
+        self.dynamic_tris.destroy(ctx);
+        self.voxels.destroy(ctx);
+        self.pipelines.destroy(ctx);
+    }
+}
+
+/// Runs a graph once, waits, and returns the timings of its passes.
+pub fn run_once(ctx: &Context, graph: RenderGraph) -> Result<Vec<PassTiming>, GpuVoxelError> {
+    let exec = GraphExecutor::new(ctx, graph, 1)?;
+    let result = (|| -> Result<Vec<PassTiming>, GpuVoxelError> {
+        let mut frames = FrameLoop::new(ctx, 1, exec.compiled().order.len() as u32)?;
+        let run = (|| -> Result<(), VkError> {
+            let (slot, cmd, ts, _) = frames.begin(ctx)?;
+            exec.record(&cmd, slot, ts);
+            frames.submit(ctx, &[], &[])
+        })();
+        let finished = frames.finish(ctx);
+        frames.destroy(ctx);
+        run?;
+        Ok(finished?.into_iter().last().unwrap_or_default())
+    })();
+    let _ = ctx.wait_idle();
+    exec.destroy(ctx);
+    result
+}
+
+/// A host-visible buffer for reading back GPU data.
+pub fn readback_buffer(ctx: &Context, name: &str, size_bytes: u64) -> Result<Buffer, VkError> {
+    ctx.create_buffer(&BufferDesc {
+        name: name.into(),
+        size_bytes,
+        usage: vk::BufferUsageFlags::TRANSFER_DST,
+        location: MemoryLocation::GpuToCpu,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn gpu_struct_layouts_match_glsl() {
+        // std430 `struct Triangle { vec4 v[3]; }` and the push block of
+        // voxelize_triangles.comp (four 16-byte vectors).
+        assert_eq!(std::mem::size_of::<GpuTriangle>(), 48);
+        assert_eq!(std::mem::size_of::<GpuVoxelizePush>(), 64);
+        assert_eq!(std::mem::offset_of!(GpuVoxelizePush, scale), 16);
+        assert_eq!(std::mem::offset_of!(GpuVoxelizePush, dims), 32);
+        assert_eq!(std::mem::offset_of!(GpuVoxelizePush, extent), 48);
+    }
+
+    #[test]
+    fn shader_degenerate_threshold_is_the_reference_constant() {
+        // voxelize_triangles.comp spells DEGENERATE_REL as this bit pattern.
+        assert_eq!(
+            super::super::voxelize::DEGENERATE_REL.to_bits(),
+            0x3089_705f
+        );
+    }
+
+    #[test]
+    fn image_extent_holds_every_cpu_level() {
+        for (rx, ry) in [(1, 1), (5, 3), (64, 64), (100, 37), (512, 1)] {
+            let grid = VoxelGrid::from_box(
+                Vec3::ZERO,
+                Vec3::ONE,
+                Some(super::super::Axis::Z),
+                rx,
+                ry,
+                1,
+            )
+            .expect("grid");
+            let (w, h) = image_extent(&grid);
+            let levels = 1 + w.max(h).trailing_zeros();
+            assert_eq!(levels, mip_count(rx, ry));
+            for l in 0..levels {
+                assert!((w >> l).max(1) >= super::super::bits::mip_extent(rx, l));
+                assert!((h >> l).max(1) >= super::super::bits::mip_extent(ry, l));
+            }
+        }
+    }
+}
