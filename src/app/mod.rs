@@ -73,7 +73,8 @@ pub struct ViewerOptions {
     /// Scripted run: exit after this many presented frames.
     pub frames: Option<u64>,
     /// Scripted run: resize the window to (width, height) halfway through; the run ends only
-    /// once the swapchain has that size.
+    /// once the swapchain has that size. (The scene renders right of the panel, so
+    /// screenshots are narrower than the window.)
     pub resize_to: Option<(u32, u32)>,
     /// Screenshot path (PNG). A scripted run writes one of its last frame; otherwise F12 and
     /// the panel button write here (default `voxgi-shot-N.png`).
@@ -145,7 +146,8 @@ pub fn run(scene: Scene, opts: &ViewerOptions) -> Result<ViewerReport, AppError>
 struct FrameGraph {
     exec: GraphExecutor,
     present: ImageHandle,
-    /// Tone-mapped pixels of a frame, when `shot_wanted` was set while recording it.
+    /// Tone-mapped pixels (the scene, without the panel) of a frame, when `shot_wanted` was
+    /// set while recording it.
     shot: Buffer,
     shot_wanted: Rc<Cell<bool>>,
     extent: vk::Extent2D,
@@ -186,6 +188,8 @@ struct Viewer {
     report: ViewerReport,
     status: String,
     resize_requested: bool,
+    /// Width of the side panel in pixels: the scene renders to the right of it.
+    panel_px: u32,
 }
 
 /// Graph-shaping settings differ (per-frame values such as PCF radius do not count).
@@ -296,6 +300,7 @@ impl Viewer {
             report: ViewerReport::default(),
             status: String::new(),
             resize_requested: false,
+            panel_px: 0,
         }
     }
 
@@ -455,18 +460,22 @@ impl Viewer {
         let Some(renderer) = self.renderer.as_mut() else {
             return Ok(false);
         };
+        // The scene fills the window right of the panel (all of it when the window is narrow).
+        let panel_px = if extent.width > self.panel_px + 64 {
+            self.panel_px
+        } else {
+            0
+        };
         let mut settings = renderer.settings.clone();
-        settings.width = extent.width;
+        settings.width = extent.width - panel_px;
         settings.height = extent.height;
         settings.tonemap = self.controls.tonemap;
         settings.shadow = self.controls.shadow;
         renderer.settings = settings.clone();
         renderer.prepare(&self.scene)?;
-        if self
-            .graph
-            .as_ref()
-            .map_or(true, |g| needs_new_graph(&g.settings, &settings))
-        {
+        if self.graph.as_ref().map_or(true, |g| {
+            g.extent != extent || needs_new_graph(&g.settings, &settings)
+        }) {
             self.rebuild(ctx)?;
         }
 
@@ -533,9 +542,12 @@ impl Viewer {
             status: &self.status,
         };
         let (controls, stats) = (&mut self.controls, &self.stats);
+        let mut panel_points = 0.0;
         let out = egui_ctx.run(raw, |c| {
-            panel::draw(c, controls, stats, &info);
+            panel_points = panel::draw(c, controls, stats, &info);
         });
+        // Rounded down: the scene starts under the panel's edge rather than leaving a gap.
+        self.panel_px = (panel_points * out.pixels_per_point).max(0.0).floor() as u32;
         self.fly.speed_m_s = self.controls.speed_m_s;
         self.egui_state
             .handle_platform_output(window, out.platform_output);
@@ -570,9 +582,21 @@ impl Viewer {
             return Ok(());
         }
         let extent = swapchain.extent;
+        let (w, h) = (renderer.settings.width, renderer.settings.height);
+        // The scene's place in the window: right-aligned, left of it is the panel.
+        let scene_rect = vk::Rect2D {
+            offset: vk::Offset2D {
+                x: extent.width.saturating_sub(w) as i32,
+                y: 0,
+            },
+            extent: vk::Extent2D {
+                width: w,
+                height: h,
+            },
+        };
         let shot = ctx.create_buffer(&BufferDesc {
             name: "screenshot".into(),
-            size_bytes: u64::from(extent.width) * u64::from(extent.height) * 4,
+            size_bytes: u64::from(w) * u64::from(h) * 4,
             usage: vk::BufferUsageFlags::TRANSFER_DST,
             location: MemoryLocation::GpuToCpu,
         })?;
@@ -592,7 +616,7 @@ impl Viewer {
                     src.raw,
                     src.extent_2d(),
                     dst.raw,
-                    dst.extent_2d(),
+                    scene_rect,
                     vk::Filter::NEAREST,
                 );
                 if wanted.get() {
@@ -639,7 +663,7 @@ impl Viewer {
                 self.report.screenshots.len() + 1
             )),
         };
-        let (w, h) = (g.extent.width, g.extent.height);
+        let (w, h) = (g.settings.width, g.settings.height);
         let n = (w * h * 4) as usize;
         let pixels = g.shot.mapped().map(|m| m[..n].to_vec()).unwrap_or_default();
         image::save_buffer(&path, &pixels, w, h, image::ColorType::Rgba8).map_err(|e| {
