@@ -6,6 +6,8 @@
 
 #![cfg_attr(not(test), deny(clippy::unwrap_used, clippy::expect_used))]
 
+#[forbid(unsafe_code)]
+pub mod app;
 pub mod demo;
 #[forbid(unsafe_code)]
 pub mod eval;

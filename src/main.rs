@@ -80,6 +80,30 @@ enum Command {
         #[command(flatten)]
         frame: FrameArgs,
     },
+    /// Opens the interactive viewer: fly camera (WASD, Q/E, right mouse), a panel with per-pass
+    /// GPU times, light, tone-mapping and shadow controls; F12 writes a screenshot.
+    View {
+        /// A built-in scene or a TOML scene file. Default: cornell.
+        scene: Option<String>,
+        /// Initial window width and height, pixels.
+        #[arg(long, default_value_t = 1280)]
+        width: u32,
+        #[arg(long, default_value_t = 720)]
+        height: u32,
+        #[arg(long, value_enum, default_value_t = ToneOperator::Filmic)]
+        tonemap: ToneOperator,
+        #[arg(long, default_value_t = 1.0)]
+        exposure: f32,
+        /// Scripted run (tests): exit after N presented frames, writing --screenshot.
+        #[arg(long)]
+        frames: Option<u64>,
+        /// Scripted run: resize the window to WxH halfway through.
+        #[arg(long, value_parser = parse_size)]
+        resize: Option<(u32, u32)>,
+        /// Screenshot PNG path (F12 / the panel button; the end of a scripted run).
+        #[arg(long)]
+        screenshot: Option<PathBuf>,
+    },
     /// Lists Vulkan devices and whether voxgi can use them.
     Devices,
     /// Benchmarks measured side by side in one GPU run.
@@ -257,6 +281,40 @@ fn run(cli: Cli) -> Result<()> {
             print!("{}", voxgi::vk::describe_devices()?);
             Ok(())
         }
+        Command::View {
+            scene,
+            width,
+            height,
+            tonemap,
+            exposure,
+            frames,
+            resize,
+            screenshot,
+        } => {
+            let scene = load_scene_arg(scene.as_deref())?;
+            let mut settings = RenderSettings::default();
+            settings.tonemap.operator = tonemap;
+            settings.tonemap.exposure = exposure;
+            let opts = voxgi::app::ViewerOptions {
+                validation: cli.validate,
+                device: cli.device,
+                width,
+                height,
+                settings,
+                frames,
+                resize_to: resize,
+                screenshot,
+            };
+            let report = voxgi::app::run(scene, &opts)?;
+            for p in &report.screenshots {
+                println!("wrote {}", p.display());
+            }
+            let n = report.validation_messages.len();
+            if n > 0 {
+                bail!("the validation layers reported {n} message(s) (see the log above); this is a bug in voxgi, please report it");
+            }
+            Ok(())
+        }
         Command::Compare {
             reference,
             test,
@@ -371,6 +429,21 @@ fn run(cli: Cli) -> Result<()> {
             check_validation(&ctx)
         }
     }
+}
+
+/// `WxH` → (W, H), both positive.
+fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("`{s}` is not WxH (e.g. 640x480)"))?;
+    let parse = |v: &str| {
+        v.trim()
+            .parse::<u32>()
+            .ok()
+            .filter(|&n| (1..=16384).contains(&n))
+            .ok_or_else(|| format!("`{v}` in `{s}` is not a size between 1 and 16384"))
+    };
+    Ok((parse(w)?, parse(h)?))
 }
 
 fn context(validate: bool, device: Option<String>) -> Result<Context> {

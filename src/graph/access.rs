@@ -54,7 +54,9 @@ pub enum Access {
     IndirectBuffer,
     /// The host reads the resource after the frame (read-back buffers).
     HostRead,
-    /// The image is presented after the frame.
+    /// The image is presented after the frame. As an import state it also means the frame
+    /// starts from an acquired image whose contents are discarded (its first access must
+    /// overwrite it), so no frame depends on the layout the presentation engine left.
     Present,
 }
 
@@ -136,15 +138,16 @@ impl Access {
                 true,
                 false,
             ),
+            // Copies, blits and clears are distinct sync2 stages; a transfer access may be any.
             Access::TransferRead => (
-                S::COPY,
+                S::COPY | S::BLIT,
                 A::TRANSFER_READ,
                 L::TRANSFER_SRC_OPTIMAL,
                 true,
                 false,
             ),
             Access::TransferWrite => (
-                S::COPY | S::CLEAR,
+                S::COPY | S::BLIT | S::CLEAR,
                 A::TRANSFER_WRITE,
                 L::TRANSFER_DST_OPTIMAL,
                 false,
@@ -166,7 +169,9 @@ impl Access {
                 false,
             ),
             Access::HostRead => (S::HOST, A::HOST_READ, L::GENERAL, true, false),
-            Access::Present => (S::NONE, A::NONE, L::PRESENT_SRC_KHR, true, false),
+            // ALL_COMMANDS, not NONE: a frame's first barrier on a swapchain image must chain
+            // with the acquire semaphore's wait, which only a non-empty source scope does.
+            Access::Present => (S::ALL_COMMANDS, A::NONE, L::PRESENT_SRC_KHR, true, false),
         };
         AccessInfo {
             stages,

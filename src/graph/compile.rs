@@ -457,7 +457,13 @@ impl RenderGraph {
         let initial = |this: &Self, id: ResourceId| -> CellState {
             let r = this.resource(id);
             match r.origin {
-                Origin::Imported { state, .. } => CellState::imported(state.info(), r.is_image()),
+                Origin::Imported { state, .. } => {
+                    let mut cell = CellState::imported(state.info(), r.is_image());
+                    // A freshly acquired swapchain image may be in any layout (UNDEFINED after
+                    // creation): discard it, see `Access::Present`.
+                    cell.pristine = state == Access::Present;
+                    cell
+                }
                 Origin::Transient => {
                     let (stages, access) =
                         this.alias_predecessors(id, order, lifetimes, placements);
@@ -837,6 +843,55 @@ mod tests {
     }
 
     #[test]
+    fn present_import_discards_at_start_and_returns_to_present() {
+        let mut g = RenderGraph::new();
+        let src = g.create_image(img("src", 16));
+        let desc = ImageDesc::new_2d("swapchain", vk::Format::B8G8R8A8_UNORM, 16, 16);
+        let sc = g.import_image_desc(desc, Access::Present);
+        g.add_pass("fill")
+            .write(src, Access::StorageWrite(Shader::Compute))
+            .record(|_| {});
+        g.add_pass("blit")
+            .read(src, Access::TransferRead)
+            .write(sc, Access::TransferWrite)
+            .record(|_| {});
+        g.add_pass("overlay")
+            .write(sc, Access::ColorAttachmentReadWrite)
+            .record(|_| {});
+        let c = compile(&g);
+        let first: Vec<_> = c.pass_barriers[1]
+            .iter()
+            .filter(|b| b.resource == sc.0)
+            .collect();
+        assert_eq!(first.len(), 1);
+        // Whatever layout presentation left, the frame discards it ...
+        assert_eq!(first[0].old_layout, vk::ImageLayout::UNDEFINED);
+        assert_eq!(first[0].new_layout, vk::ImageLayout::TRANSFER_DST_OPTIMAL);
+        // ... after the acquire semaphore's wait (a non-empty source scope chains with it).
+        assert!(first[0]
+            .src_stages
+            .contains(vk::PipelineStageFlags2::ALL_COMMANDS));
+        // The overlay keeps the blitted contents.
+        let mid: Vec<_> = c.pass_barriers[2]
+            .iter()
+            .filter(|b| b.resource == sc.0)
+            .collect();
+        assert_eq!(mid[0].old_layout, vk::ImageLayout::TRANSFER_DST_OPTIMAL);
+        let last: Vec<_> = c
+            .final_barriers
+            .iter()
+            .filter(|b| b.resource == sc.0)
+            .collect();
+        assert_eq!(last.len(), 1);
+        assert_eq!(
+            last[0].old_layout,
+            vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL
+        );
+        assert_eq!(last[0].new_layout, vk::ImageLayout::PRESENT_SRC_KHR);
+        assert_eq!(last[0].src_access, vk::AccessFlags2::COLOR_ATTACHMENT_WRITE);
+    }
+
+    #[test]
     fn write_then_read_makes_one_barrier_with_layout_transition() {
         let mut g = RenderGraph::new();
         let a = g.create_image(img("a", 16));
@@ -866,7 +921,10 @@ mod tests {
         assert_eq!(b1.len(), 1);
         assert_eq!(b1[0].src_stages, vk::PipelineStageFlags2::COMPUTE_SHADER);
         assert_eq!(b1[0].src_access, vk::AccessFlags2::SHADER_STORAGE_WRITE);
-        assert_eq!(b1[0].dst_stages, vk::PipelineStageFlags2::COPY);
+        assert_eq!(
+            b1[0].dst_stages,
+            vk::PipelineStageFlags2::COPY | vk::PipelineStageFlags2::BLIT
+        );
         assert_eq!(b1[0].dst_access, vk::AccessFlags2::TRANSFER_READ);
         assert_eq!(b1[0].old_layout, vk::ImageLayout::GENERAL);
         assert_eq!(b1[0].new_layout, vk::ImageLayout::TRANSFER_SRC_OPTIMAL);

@@ -249,6 +249,60 @@ impl GraphExecutor {
         Ok(slot)
     }
 
+    /// Points an imported image at another image of the same format and size, for every frame
+    /// slot: the swapchain image acquired this frame. Barriers stay as compiled (they depend on
+    /// the declared accesses only).
+    pub fn rebind_image(&mut self, handle: ImageHandle, image: &Image) -> Result<(), GraphError> {
+        let index = handle.0 .0 as usize;
+        let Some(r) = self.graph.resources.get_mut(index) else {
+            return Err(GraphError::Gpu(format!(
+                "rebind: image handle {:?} is not in this graph",
+                handle.0
+            )));
+        };
+        let fits = match &r.kind {
+            ResourceKind::Image(d) => {
+                d.format == image.desc.format
+                    && (d.width, d.height, d.depth, d.layers, d.mip_levels)
+                        == (
+                            image.desc.width,
+                            image.desc.height,
+                            image.desc.depth,
+                            image.desc.layers,
+                            image.desc.mip_levels,
+                        )
+            }
+            ResourceKind::Buffer { .. } => false,
+        };
+        let Origin::Imported {
+            image: Some(imported),
+            ..
+        } = &mut r.origin
+        else {
+            return Err(GraphError::Gpu(format!(
+                "rebind: `{}` is not an imported image",
+                r.name
+            )));
+        };
+        if !fits {
+            return Err(GraphError::Gpu(format!(
+                "rebind: `{}` cannot take `{}`, whose format or size differs: build a new graph",
+                r.name, image.desc.name
+            )));
+        }
+        imported.raw = image.raw;
+        imported.view = image.view;
+        imported.mip_views = image.mip_views.clone();
+        for slot in &mut self.slots {
+            if let Some(GpuResource::Image(g)) = &mut slot.resources[index] {
+                g.raw = image.raw;
+                g.view = image.view;
+                g.mip_views = image.mip_views.clone();
+            }
+        }
+        Ok(())
+    }
+
     pub fn compiled(&self) -> &CompiledGraph {
         &self.compiled
     }

@@ -11,7 +11,7 @@ mod textures;
 pub use cull::aabb_visible;
 
 use crate::eval::HdrImage;
-use crate::graph::{Access, GraphError, GraphExecutor, RenderGraph, Shader};
+use crate::graph::{Access, GraphError, GraphExecutor, ImageHandle, RenderGraph, Shader};
 use crate::light::{shadow_views, ShadowSettings};
 use crate::post::ToneMap;
 use crate::scene::{Light, Scene};
@@ -68,6 +68,15 @@ impl Default for RenderSettings {
             voxels: None,
         }
     }
+}
+
+/// The images a declared frame produces.
+#[derive(Clone, Copy, Debug)]
+pub struct FrameImages {
+    /// Linear radiance, RGBA32F.
+    pub radiance: ImageHandle,
+    /// Tone-mapped, sRGB-encoded values in RGBA8 UNORM.
+    pub ldr: ImageHandle,
 }
 
 /// One indexed draw of a submesh of an object.
@@ -237,8 +246,10 @@ impl Renderer {
         Ok(r)
     }
 
-    /// Computes frame constants, shadow views and culled draw lists for the scene's camera.
-    fn prepare(&mut self, scene: &Scene) -> Result<(), RenderError> {
+    /// Computes frame constants, shadow views and culled draw lists for the scene's camera and
+    /// lights and `settings`. Call again after changing them (the viewer does, every frame);
+    /// a new size, shadow resolution or tone map also needs a new graph.
+    pub fn prepare(&mut self, scene: &Scene) -> Result<(), RenderError> {
         let s = &self.settings;
         let (views, per_light) = shadow_views(scene, s.time_s, &s.shadow);
         if views.len() > MAX_SHADOW_VIEWS {
@@ -326,11 +337,52 @@ impl Renderer {
         self.has_phong
     }
 
-    /// Declares the frame.
+    /// Declares the frame with read-back of the radiance and the tone-mapped image (at the
+    /// size given to [`Renderer::new`]).
     pub fn graph(&self) -> RenderGraph {
+        let mut g = RenderGraph::new();
+        let FrameImages { radiance, ldr } = self.declare(&mut g);
+        let (w, h) = (self.settings.width, self.settings.height);
+        let hdr_buf = g.import_buffer(&self.readback_hdr, Access::HostRead);
+        let ldr_buf = g.import_buffer(&self.readback_ldr, Access::HostRead);
+        let extent = vk::Extent3D {
+            width: w,
+            height: h,
+            depth: 1,
+        };
+        g.add_pass("readback_hdr")
+            .read(radiance, Access::TransferRead)
+            .write(hdr_buf, Access::TransferWrite)
+            .record(move |ctx| {
+                ctx.cmd.copy_image_to_buffer(
+                    ctx.image(radiance).raw,
+                    extent,
+                    0,
+                    1,
+                    ctx.buffer(hdr_buf).raw,
+                )
+            });
+        g.add_pass("readback_ldr")
+            .read(ldr, Access::TransferRead)
+            .write(ldr_buf, Access::TransferWrite)
+            .record(move |ctx| {
+                ctx.cmd.copy_image_to_buffer(
+                    ctx.image(ldr).raw,
+                    extent,
+                    0,
+                    1,
+                    ctx.buffer(ldr_buf).raw,
+                )
+            });
+        g
+    }
+
+    /// Declares the frame's passes into `g` at `settings`' size and returns the images it
+    /// produces, for callers that add their own outputs (the viewer presents `ldr`). Nothing
+    /// is an output yet: passes that feed nothing the caller adds are culled.
+    pub fn declare(&self, g: &mut RenderGraph) -> FrameImages {
         let s = &self.settings;
         let (w, h) = (s.width, s.height);
-        let mut g = RenderGraph::new();
         let frame = g.import_buffer(&self.frame, Access::StorageRead(Shader::Compute));
         let frame_raw = self.frame.raw;
         let stride = self.frame_stride;
@@ -343,7 +395,7 @@ impl Renderer {
         };
         let (vb, ib, mb) = (self.vertices.raw, self.indices.raw, self.materials.raw);
         if let Some(v) = &self.voxels {
-            v.add_passes(&mut g);
+            v.add_passes(g);
         }
 
         // Shadow maps: one layer per shadow view (a 1x1 cleared layer when there are none, so
@@ -566,39 +618,7 @@ impl Renderer {
                 ctx.cmd.dispatch(groups.0, groups.1, 1);
             });
 
-        // Read-back of both images.
-        let hdr_buf = g.import_buffer(&self.readback_hdr, Access::HostRead);
-        let ldr_buf = g.import_buffer(&self.readback_ldr, Access::HostRead);
-        let extent = vk::Extent3D {
-            width: w,
-            height: h,
-            depth: 1,
-        };
-        g.add_pass("readback_hdr")
-            .read(radiance, Access::TransferRead)
-            .write(hdr_buf, Access::TransferWrite)
-            .record(move |ctx| {
-                ctx.cmd.copy_image_to_buffer(
-                    ctx.image(radiance).raw,
-                    extent,
-                    0,
-                    1,
-                    ctx.buffer(hdr_buf).raw,
-                )
-            });
-        g.add_pass("readback_ldr")
-            .read(ldr, Access::TransferRead)
-            .write(ldr_buf, Access::TransferWrite)
-            .record(move |ctx| {
-                ctx.cmd.copy_image_to_buffer(
-                    ctx.image(ldr).raw,
-                    extent,
-                    0,
-                    1,
-                    ctx.buffer(ldr_buf).raw,
-                )
-            });
-        g
+        FrameImages { radiance, ldr }
     }
 
     /// Linear radiance of the last completed frame.

@@ -419,6 +419,62 @@ impl<'a> Cmd<'a> {
         };
     }
 
+    /// Copies mip 0 of `src` (TRANSFER_SRC layout) onto `dst_rect` of `dst` (TRANSFER_DST
+    /// layout), scaling with `filter` and converting between formats (e.g. RGBA → BGRA).
+    pub fn blit_image(
+        &self,
+        src: vk::Image,
+        src_extent: vk::Extent2D,
+        dst: vk::Image,
+        dst_rect: vk::Rect2D,
+        filter: vk::Filter,
+    ) {
+        let corner = |o: vk::Offset2D, e: vk::Extent2D| vk::Offset3D {
+            x: o.x + e.width as i32,
+            y: o.y + e.height as i32,
+            z: 1,
+        };
+        let origin = vk::Offset2D { x: 0, y: 0 };
+        let layers = vk::ImageSubresourceLayers {
+            aspect_mask: vk::ImageAspectFlags::COLOR,
+            mip_level: 0,
+            base_array_layer: 0,
+            layer_count: 1,
+        };
+        let region = [vk::ImageBlit {
+            src_subresource: layers,
+            src_offsets: [vk::Offset3D::default(), corner(origin, src_extent)],
+            dst_subresource: layers,
+            dst_offsets: [
+                vk::Offset3D {
+                    x: dst_rect.offset.x,
+                    y: dst_rect.offset.y,
+                    z: 0,
+                },
+                corner(dst_rect.offset, dst_rect.extent),
+            ],
+        }];
+        // SAFETY: Cmd invariant; the graph put src in TRANSFER_SRC_OPTIMAL and dst in
+        // TRANSFER_DST_OPTIMAL; both are color images whose formats support blits.
+        unsafe {
+            self.ctx.device.cmd_blit_image(
+                self.raw,
+                src,
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                dst,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                &region,
+                filter,
+            )
+        };
+    }
+
+    /// Restricts drawing to `rect` (inside a rendering instance).
+    pub fn set_scissor(&self, rect: vk::Rect2D) {
+        // SAFETY: Cmd invariant; the bound pipeline has a dynamic scissor.
+        unsafe { self.ctx.device.cmd_set_scissor(self.raw, 0, &[rect]) };
+    }
+
     pub fn fill_buffer(&self, buffer: vk::Buffer, value: u32) {
         // SAFETY: Cmd invariant; whole-size fill of a TRANSFER_DST buffer.
         unsafe {

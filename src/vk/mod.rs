@@ -6,6 +6,7 @@ mod context;
 mod frame;
 mod pipeline;
 mod resources;
+mod swapchain;
 
 pub use ash::vk;
 pub use cmd::{Attachment, Cmd};
@@ -15,6 +16,7 @@ pub use pipeline::{
     Bindable, ComputePipeline, Descriptor, GraphicsPipeline, GraphicsPipelineDesc, ShaderModule,
 };
 pub use resources::{Buffer, BufferDesc, Image, ImageDesc, MemoryLocation};
+pub use swapchain::{surface_extensions, Acquired, Swapchain};
 
 /// Errors of the Vulkan layer. Each message says what happened and what to do.
 #[derive(Debug, thiserror::Error)]

@@ -178,6 +178,23 @@ impl Context {
         &self,
         desc: &GraphicsPipelineDesc,
     ) -> Result<GraphicsPipeline, VkError> {
+        self.graphics_pipeline_blend(desc, false)
+    }
+
+    /// A graphics pipeline whose color attachments blend premultiplied-alpha "over" the
+    /// existing contents (overlays such as the viewer's UI).
+    pub fn graphics_pipeline_premultiplied(
+        &self,
+        desc: &GraphicsPipelineDesc,
+    ) -> Result<GraphicsPipeline, VkError> {
+        self.graphics_pipeline_blend(desc, true)
+    }
+
+    fn graphics_pipeline_blend(
+        &self,
+        desc: &GraphicsPipelineDesc,
+        premultiplied: bool,
+    ) -> Result<GraphicsPipeline, VkError> {
         let mut modules = vec![
             (
                 vk::ShaderStageFlags::VERTEX,
@@ -253,9 +270,20 @@ impl Context {
             .color_formats
             .iter()
             .map(|_| {
-                vk::PipelineColorBlendAttachmentState::builder()
-                    .color_write_mask(vk::ColorComponentFlags::RGBA)
-                    .build()
+                let b = vk::PipelineColorBlendAttachmentState::builder()
+                    .color_write_mask(vk::ColorComponentFlags::RGBA);
+                if premultiplied {
+                    b.blend_enable(true)
+                        .src_color_blend_factor(vk::BlendFactor::ONE)
+                        .dst_color_blend_factor(vk::BlendFactor::ONE_MINUS_SRC_ALPHA)
+                        .color_blend_op(vk::BlendOp::ADD)
+                        .src_alpha_blend_factor(vk::BlendFactor::ONE_MINUS_DST_ALPHA)
+                        .dst_alpha_blend_factor(vk::BlendFactor::ONE)
+                        .alpha_blend_op(vk::BlendOp::ADD)
+                        .build()
+                } else {
+                    b.build()
+                }
             })
             .collect();
         let mut blend =

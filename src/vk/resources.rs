@@ -416,6 +416,98 @@ impl Context {
         })
     }
 
+    /// Fills mip 0 (all layers) of `image` with `data` (tightly packed texels) through a
+    /// staging buffer and leaves it in `layout_after`; waits for completion. Like
+    /// [`Context::upload_buffer`], this happens outside the render graph, between frames:
+    /// the previous contents are discarded, so the image may be in any layout, but no frame in
+    /// flight may use it (wait for the device first).
+    pub fn write_image(
+        &self,
+        image: &Image,
+        data: &[u8],
+        layout_after: vk::ImageLayout,
+    ) -> Result<(), VkError> {
+        let mut staging = self.create_buffer(&BufferDesc {
+            name: format!("{} (staging)", image.desc.name),
+            size_bytes: data.len().max(4) as u64,
+            usage: vk::BufferUsageFlags::TRANSFER_SRC,
+            location: MemoryLocation::CpuToGpu,
+        })?;
+        if let Some(m) = staging.mapped_mut() {
+            m[..data.len()].copy_from_slice(data);
+        }
+        let range = vk::ImageSubresourceRange {
+            aspect_mask: image.desc.aspect(),
+            base_mip_level: 0,
+            level_count: 1,
+            base_array_layer: 0,
+            layer_count: image.desc.layers,
+        };
+        let to_dst = [vk::ImageMemoryBarrier2::builder()
+            .src_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
+            .dst_stage_mask(vk::PipelineStageFlags2::COPY)
+            .dst_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
+            .old_layout(vk::ImageLayout::UNDEFINED)
+            .new_layout(vk::ImageLayout::TRANSFER_DST_OPTIMAL)
+            .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+            .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+            .image(image.raw)
+            .subresource_range(range)
+            .build()];
+        let to_final = [vk::ImageMemoryBarrier2::builder()
+            .src_stage_mask(vk::PipelineStageFlags2::COPY)
+            .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
+            .dst_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
+            .dst_access_mask(vk::AccessFlags2::MEMORY_READ)
+            .old_layout(vk::ImageLayout::TRANSFER_DST_OPTIMAL)
+            .new_layout(layout_after)
+            .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+            .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+            .image(image.raw)
+            .subresource_range(range)
+            .build()];
+        let region = [vk::BufferImageCopy {
+            buffer_offset: 0,
+            buffer_row_length: 0,
+            buffer_image_height: 0,
+            image_subresource: vk::ImageSubresourceLayers {
+                aspect_mask: image.desc.aspect(),
+                mip_level: 0,
+                base_array_layer: 0,
+                layer_count: image.desc.layers,
+            },
+            image_offset: vk::Offset3D::default(),
+            image_extent: vk::Extent3D {
+                width: image.desc.width,
+                height: image.desc.height,
+                depth: image.desc.depth,
+            },
+        }];
+        let result = self.one_time_submit(|device, cmd| {
+            // SAFETY: cmd is recording; image and staging are live; the staging buffer holds
+            // the tightly packed mip 0 (the caller's data length matches the image).
+            unsafe {
+                device.cmd_pipeline_barrier2(
+                    cmd,
+                    &vk::DependencyInfo::builder().image_memory_barriers(&to_dst),
+                );
+                device.cmd_copy_buffer_to_image(
+                    cmd,
+                    staging.raw,
+                    image.raw,
+                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                    &region,
+                );
+                device.cmd_pipeline_barrier2(
+                    cmd,
+                    &vk::DependencyInfo::builder().image_memory_barriers(&to_final),
+                );
+            }
+        });
+        self.destroy_buffer(staging);
+        result
+    }
+
     /// Records `f` into a fresh command buffer, submits it, and waits. Ends with a full
     /// memory barrier so that later submissions see the writes: uploads happen outside the
     /// render graph, before the frame that first uses the resource.

@@ -1,0 +1,744 @@
+//! The desktop viewer, `voxgi view`: a winit window, the renderer's frame presented through
+//! the render graph, and an egui side panel drawn by the graph pass `egui`.
+//!
+//! Why not egui-ash's runner: its painter is private to its own event loop, records its own
+//! render pass and texture uploads with hand-written barriers and layout changes the graph
+//! cannot see (they would contradict the graph's barriers: validation errors), needs a second
+//! gpu-allocator, and indexes its buffers by swapchain image rather than frame in flight. So
+//! the viewer drives winit itself, takes input through egui-winit, and draws egui's meshes in
+//! one ~100-line graph pass; every barrier of the frame, swapchain transitions included, is
+//! derived by the graph.
+//!
+//! Frame: renderer passes → `present` (blit of the tone-mapped image into the acquired
+//! swapchain image, converting RGBA to the swapchain's BGRA; optional screenshot copy) →
+//! `egui`. The swapchain image is imported with [`Access::Present`] and rebound every frame.
+
+mod camera;
+mod overlay;
+mod panel;
+
+pub use camera::{FlyCamera, MoveKeys};
+pub use panel::{Controls, TimingStats};
+
+use crate::graph::{Access, GraphError, GraphExecutor, ImageHandle, RenderGraph};
+use crate::render::{FrameImages, RenderError, RenderSettings, Renderer};
+use crate::scene::{Camera, Light, Scene};
+use crate::vk::{
+    surface_extensions, vk, Acquired, Buffer, BufferDesc, Context, ContextDesc, FrameLoop,
+    MemoryLocation, Swapchain, VkError, MAX_FRAMES_IN_FLIGHT,
+};
+use overlay::Overlay;
+use raw_window_handle::{HasRawDisplayHandle, HasRawWindowHandle};
+use std::cell::Cell;
+use std::path::PathBuf;
+use std::rc::Rc;
+use std::time::{Duration, Instant};
+use winit::dpi::PhysicalSize;
+use winit::event::{ElementState, Event, KeyEvent, MouseButton, MouseScrollDelta, WindowEvent};
+use winit::event_loop::{EventLoop, EventLoopWindowTarget};
+use winit::keyboard::{KeyCode, PhysicalKey};
+use winit::window::{Window, WindowBuilder};
+
+/// Errors of the viewer. Each says what to do.
+#[derive(Debug, thiserror::Error)]
+pub enum AppError {
+    #[error("cannot open a window: {0}. Without a display, run under `xvfb-run -a`")]
+    Window(String),
+    #[error(transparent)]
+    Vk(#[from] VkError),
+    #[error(transparent)]
+    Render(#[from] RenderError),
+    #[error(transparent)]
+    Graph(#[from] GraphError),
+    #[error("cannot write the screenshot {path}: {reason}")]
+    Screenshot { path: PathBuf, reason: String },
+    #[error("the scripted run presented {done} of {wanted} frames in {seconds} s (is the window minimized or hidden?)")]
+    Stalled {
+        done: u64,
+        wanted: u64,
+        seconds: u64,
+    },
+}
+
+/// How to run the viewer.
+#[derive(Clone, Debug)]
+pub struct ViewerOptions {
+    pub validation: bool,
+    pub device: Option<String>,
+    /// Initial inner size of the window, pixels.
+    pub width: u32,
+    pub height: u32,
+    /// Initial tone mapping and shadows (the size comes from the window).
+    pub settings: RenderSettings,
+    /// Scripted run: exit after this many presented frames.
+    pub frames: Option<u64>,
+    /// Scripted run: resize the window to (width, height) halfway through; the run ends only
+    /// once the swapchain has that size. (The scene renders right of the panel, so
+    /// screenshots are narrower than the window.)
+    pub resize_to: Option<(u32, u32)>,
+    /// Screenshot path (PNG). A scripted run writes one of its last frame; otherwise F12 and
+    /// the panel button write here (default `voxgi-shot-N.png`).
+    pub screenshot: Option<PathBuf>,
+}
+
+impl Default for ViewerOptions {
+    fn default() -> Self {
+        Self {
+            validation: false,
+            device: None,
+            width: 1280,
+            height: 720,
+            settings: RenderSettings::default(),
+            frames: None,
+            resize_to: None,
+            screenshot: None,
+        }
+    }
+}
+
+/// What a run did.
+#[derive(Debug, Default)]
+pub struct ViewerReport {
+    pub frames: u64,
+    pub screenshots: Vec<PathBuf>,
+    /// Validation messages (errors and warnings); any is a bug.
+    pub validation_messages: Vec<String>,
+}
+
+/// Scripted runs give up after this long.
+const SCRIPT_TIMEOUT: Duration = Duration::from_secs(120);
+/// Enough timestamp pairs for any frame graph.
+const MAX_PASSES: u32 = 64;
+
+/// Opens the window and runs until it is closed (or the scripted frames are done).
+pub fn run(scene: Scene, opts: &ViewerOptions) -> Result<ViewerReport, AppError> {
+    let event_loop = EventLoop::new().map_err(|e| AppError::Window(e.to_string()))?;
+    let window = WindowBuilder::new()
+        .with_title("voxgi")
+        .with_inner_size(PhysicalSize::new(opts.width.max(1), opts.height.max(1)))
+        .build(&event_loop)
+        .map_err(|e| AppError::Window(e.to_string()))?;
+    let ctx = Context::new(&ContextDesc {
+        validation: opts.validation,
+        device: opts.device.clone(),
+        instance_extensions: surface_extensions(event_loop.raw_display_handle())?,
+        swapchain: true,
+    })?;
+    let mut viewer = Viewer::new(&ctx, &window, scene, opts)?;
+    let mut outcome: Result<(), AppError> = Ok(());
+    let loop_result = event_loop.run(|event, elwt| {
+        if let Err(e) = viewer.handle(&ctx, &window, event, elwt) {
+            outcome = Err(e);
+            elwt.exit();
+        }
+    });
+    let report = viewer.destroy(&ctx);
+    outcome?;
+    loop_result.map_err(|e| AppError::Window(e.to_string()))?;
+    let _ = ctx.wait_idle();
+    Ok(ViewerReport {
+        validation_messages: ctx.validation.messages(),
+        ..report
+    })
+}
+
+/// The compiled frame for one swapchain size and set of graph-shaping settings.
+struct FrameGraph {
+    exec: GraphExecutor,
+    present: ImageHandle,
+    /// Tone-mapped pixels (the scene, without the panel) of a frame, when `shot_wanted` was
+    /// set while recording it.
+    shot: Buffer,
+    shot_wanted: Rc<Cell<bool>>,
+    extent: vk::Extent2D,
+    /// The settings this graph bakes in (size, shadow resolution, tone map).
+    settings: RenderSettings,
+}
+
+impl FrameGraph {
+    fn destroy(self, ctx: &Context) {
+        self.exec.destroy(ctx);
+        ctx.destroy_buffer(self.shot);
+    }
+}
+
+struct Viewer {
+    opts: ViewerOptions,
+    scene: Scene,
+    base_lights: Vec<Light>,
+    light_names: Vec<String>,
+    lens: Camera,
+    fly: FlyCamera,
+    keys: MoveKeys,
+    looking: bool,
+    cursor: Option<(f64, f64)>,
+    renderer: Option<Renderer>,
+    swapchain: Option<Swapchain>,
+    swapchain_dirty: bool,
+    overlay: Option<Overlay>,
+    frame_loop: Option<FrameLoop>,
+    graph: Option<FrameGraph>,
+    egui_ctx: egui::Context,
+    egui_state: egui_winit::State,
+    controls: Controls,
+    stats: TimingStats,
+    last_frame: Instant,
+    frame_ms: f32,
+    started: Instant,
+    report: ViewerReport,
+    status: String,
+    resize_requested: bool,
+    /// Width of the side panel in pixels: the scene renders to the right of it.
+    panel_px: u32,
+}
+
+/// Graph-shaping settings differ (per-frame values such as PCF radius do not count).
+fn needs_new_graph(a: &RenderSettings, b: &RenderSettings) -> bool {
+    (a.width, a.height, a.shadow.resolution) != (b.width, b.height, b.shadow.resolution)
+        || a.tonemap != b.tonemap
+}
+
+fn scaled(light: &Light, s: f32) -> Light {
+    let mut l = *light;
+    match &mut l {
+        Light::Point { intensity_w_sr, .. } | Light::Spot { intensity_w_sr, .. } => {
+            *intensity_w_sr *= s
+        }
+        Light::Directional {
+            irradiance_w_m2, ..
+        } => *irradiance_w_m2 *= s,
+    }
+    l
+}
+
+impl Viewer {
+    fn new(
+        ctx: &Context,
+        window: &Window,
+        scene: Scene,
+        opts: &ViewerOptions,
+    ) -> Result<Self, AppError> {
+        let size = window.inner_size();
+        let extent = vk::Extent2D {
+            width: size.width,
+            height: size.height,
+        };
+        let swapchain = Swapchain::new(
+            ctx,
+            window.raw_display_handle(),
+            window.raw_window_handle(),
+            extent,
+            MAX_FRAMES_IN_FLIGHT,
+        )?;
+        let mut viewer = Self::with_swapchain(window, scene, opts, swapchain);
+        if let Err(e) = viewer.init_gpu(ctx) {
+            viewer.destroy(ctx);
+            return Err(e);
+        }
+        Ok(viewer)
+    }
+
+    fn with_swapchain(
+        window: &Window,
+        scene: Scene,
+        opts: &ViewerOptions,
+        swapchain: Swapchain,
+    ) -> Self {
+        let egui_ctx = egui::Context::default();
+        egui_ctx.set_visuals(egui::Visuals::dark());
+        let egui_state = egui_winit::State::new(
+            egui_ctx.clone(),
+            egui::ViewportId::ROOT,
+            window,
+            Some(window.scale_factor() as f32),
+            Some(8192),
+        );
+        let fly = FlyCamera::from_camera(&scene.camera, scene.aabb_at(0.0).extent().length());
+        let light_names = scene
+            .lights
+            .iter()
+            .enumerate()
+            .map(|(i, l)| {
+                let kind = match l {
+                    Light::Point { .. } => "point",
+                    Light::Spot { .. } => "spot",
+                    Light::Directional { .. } => "directional",
+                };
+                format!("{kind} {i}")
+            })
+            .collect();
+        let controls = Controls {
+            tonemap: opts.settings.tonemap,
+            shadow: opts.settings.shadow,
+            light_scale: vec![1.0; scene.lights.len()],
+            speed_m_s: fly.speed_m_s,
+            screenshot: false,
+        };
+        Self {
+            opts: opts.clone(),
+            base_lights: scene.lights.clone(),
+            light_names,
+            lens: scene.camera,
+            fly,
+            scene,
+            keys: MoveKeys::default(),
+            looking: false,
+            cursor: None,
+            renderer: None,
+            swapchain: Some(swapchain),
+            swapchain_dirty: false,
+            overlay: None,
+            frame_loop: None,
+            graph: None,
+            egui_ctx,
+            egui_state,
+            controls,
+            stats: TimingStats::new(120),
+            last_frame: Instant::now(),
+            frame_ms: 0.0,
+            started: Instant::now(),
+            report: ViewerReport::default(),
+            status: String::new(),
+            resize_requested: false,
+            panel_px: 0,
+        }
+    }
+
+    fn init_gpu(&mut self, ctx: &Context) -> Result<(), AppError> {
+        let (format, extent) = match &self.swapchain {
+            Some(s) => (s.format, s.extent),
+            None => return Ok(()),
+        };
+        let mut settings = self.opts.settings.clone();
+        settings.width = extent.width.max(1);
+        settings.height = extent.height.max(1);
+        self.renderer = Some(Renderer::new(ctx, &self.scene, settings)?);
+        self.overlay = Some(Overlay::new(ctx, format)?);
+        self.frame_loop = Some(FrameLoop::new(ctx, MAX_FRAMES_IN_FLIGHT, MAX_PASSES)?);
+        Ok(())
+    }
+
+    fn handle(
+        &mut self,
+        ctx: &Context,
+        window: &Window,
+        event: Event<()>,
+        elwt: &EventLoopWindowTarget<()>,
+    ) -> Result<(), AppError> {
+        match event {
+            Event::AboutToWait => window.request_redraw(),
+            Event::WindowEvent { event, .. } => {
+                let consumed = self.egui_state.on_window_event(window, &event).consumed;
+                match event {
+                    WindowEvent::CloseRequested => elwt.exit(),
+                    WindowEvent::Resized(_) => self.swapchain_dirty = true,
+                    WindowEvent::RedrawRequested => {
+                        let script_done = self.redraw(ctx, window)?;
+                        if script_done {
+                            elwt.exit();
+                        }
+                    }
+                    WindowEvent::KeyboardInput {
+                        event:
+                            KeyEvent {
+                                physical_key: PhysicalKey::Code(code),
+                                state,
+                                ..
+                            },
+                        ..
+                    } => {
+                        // Releases always count, so no key sticks when egui takes focus.
+                        let down = state == ElementState::Pressed;
+                        if !down || !consumed {
+                            self.key(code, down, elwt);
+                        }
+                    }
+                    WindowEvent::MouseInput {
+                        state,
+                        button: MouseButton::Right,
+                        ..
+                    } => self.looking = state == ElementState::Pressed && !consumed,
+                    WindowEvent::CursorMoved { position, .. } => {
+                        if let (true, Some((x, y))) = (self.looking, self.cursor) {
+                            self.fly
+                                .look((position.x - x) as f32, (position.y - y) as f32);
+                        }
+                        self.cursor = Some((position.x, position.y));
+                    }
+                    WindowEvent::MouseWheel { delta, .. } if !consumed => {
+                        let notches = match delta {
+                            MouseScrollDelta::LineDelta(_, y) => y,
+                            MouseScrollDelta::PixelDelta(p) => (p.y / 40.0) as f32,
+                        };
+                        self.fly.scroll_speed(notches);
+                    }
+                    _ => {}
+                }
+            }
+            _ => {}
+        }
+        Ok(())
+    }
+
+    fn key(&mut self, code: KeyCode, down: bool, elwt: &EventLoopWindowTarget<()>) {
+        let k = &mut self.keys;
+        match code {
+            KeyCode::KeyW => k.forward = down,
+            KeyCode::KeyS => k.back = down,
+            KeyCode::KeyA => k.left = down,
+            KeyCode::KeyD => k.right = down,
+            KeyCode::KeyE => k.up = down,
+            KeyCode::KeyQ => k.down = down,
+            KeyCode::ShiftLeft | KeyCode::ShiftRight => k.fast = down,
+            KeyCode::F12 if down => self.controls.screenshot = true,
+            KeyCode::Escape if down => elwt.exit(),
+            _ => {}
+        }
+    }
+
+    /// Renders and presents one frame. Returns `true` when a scripted run is done.
+    fn redraw(&mut self, ctx: &Context, window: &Window) -> Result<bool, AppError> {
+        let now = Instant::now();
+        let dt_s = (now - self.last_frame).as_secs_f32();
+        self.last_frame = now;
+        self.frame_ms = 0.9 * self.frame_ms + 0.1 * dt_s * 1000.0;
+        if let Some(wanted) = self.opts.frames {
+            if self.started.elapsed() > SCRIPT_TIMEOUT {
+                return Err(AppError::Stalled {
+                    done: self.report.frames,
+                    wanted,
+                    seconds: SCRIPT_TIMEOUT.as_secs(),
+                });
+            }
+            if let (Some((w, h)), false) = (self.opts.resize_to, self.resize_requested) {
+                if self.report.frames >= wanted / 2 {
+                    let _ = window.request_inner_size(PhysicalSize::new(w, h));
+                    self.resize_requested = true;
+                }
+            }
+        }
+
+        self.fly.advance(self.keys, dt_s);
+        self.scene.camera = self.fly.apply(&self.lens);
+
+        // Minimized (or zero-sized): nothing to present until the window is back.
+        let size = window.inner_size();
+        if size.width == 0 || size.height == 0 {
+            return Ok(false);
+        }
+        let Some(swapchain) = self.swapchain.as_mut() else {
+            return Ok(false);
+        };
+        let window_px = vk::Extent2D {
+            width: size.width,
+            height: size.height,
+        };
+        if self.swapchain_dirty || swapchain.extent != window_px {
+            swapchain.recreate(ctx, window_px)?;
+            self.swapchain_dirty = false;
+        }
+        let extent = swapchain.extent;
+        if extent.width == 0 || extent.height == 0 {
+            return Ok(false);
+        }
+
+        // The scripted run's last frame is the one it screenshots.
+        let last_scripted = self.opts.frames.is_some_and(|n| {
+            self.report.frames + 1 >= n
+                && self
+                    .opts
+                    .resize_to
+                    .map_or(true, |(w, h)| (extent.width, extent.height) == (w, h))
+        });
+        let (prims, ppp) = self.run_ui(ctx, window, extent)?;
+
+        // Apply the panel.
+        for (i, base) in self.base_lights.iter().enumerate() {
+            let s = self.controls.light_scale.get(i).copied().unwrap_or(1.0);
+            self.scene.lights[i] = scaled(base, s);
+        }
+        let Some(renderer) = self.renderer.as_mut() else {
+            return Ok(false);
+        };
+        // The scene fills the window right of the panel (all of it when the window is narrow).
+        let panel_px = if extent.width > self.panel_px + 64 {
+            self.panel_px
+        } else {
+            0
+        };
+        let mut settings = renderer.settings.clone();
+        settings.width = extent.width - panel_px;
+        settings.height = extent.height;
+        settings.tonemap = self.controls.tonemap;
+        settings.shadow = self.controls.shadow;
+        renderer.settings = settings.clone();
+        renderer.prepare(&self.scene)?;
+        if self.graph.as_ref().map_or(true, |g| {
+            g.extent != extent || needs_new_graph(&g.settings, &settings)
+        }) {
+            self.rebuild(ctx)?;
+        }
+
+        let (Some(frame_loop), Some(graph), Some(renderer), Some(overlay), Some(swapchain)) = (
+            self.frame_loop.as_mut(),
+            self.graph.as_mut(),
+            self.renderer.as_mut(),
+            self.overlay.as_mut(),
+            self.swapchain.as_ref(),
+        ) else {
+            return Ok(false);
+        };
+        let slot = frame_loop.current_slot();
+        let (_, cmd, timestamps, finished) = frame_loop.begin(ctx)?;
+        self.stats.push(finished);
+        let (index, ready) = match swapchain.acquire(slot)? {
+            Acquired::Image { index, ready } => (index, ready),
+            Acquired::OutOfDate => {
+                // Keep the frame loop in step with an empty submission; resize next frame.
+                frame_loop.submit(ctx, &[], &[])?;
+                self.swapchain_dirty = true;
+                return Ok(false);
+            }
+        };
+        graph
+            .exec
+            .rebind_image(graph.present, &swapchain.images[index as usize])?;
+        renderer.write_frame(slot);
+        overlay.write_frame(slot, &prims, ppp, extent);
+        let shot = self.controls.screenshot || last_scripted;
+        graph.shot_wanted.set(shot);
+        graph.exec.record(&cmd, slot, timestamps);
+        frame_loop.submit(
+            ctx,
+            &[(ready, vk::PipelineStageFlags2::ALL_COMMANDS)],
+            &[swapchain.render_semaphore(index)],
+        )?;
+        if swapchain.present(ctx, index)? {
+            self.swapchain_dirty = true;
+        }
+        self.report.frames += 1;
+        if shot {
+            self.controls.screenshot = false;
+            self.save_screenshot(ctx)?;
+        }
+        Ok(last_scripted)
+    }
+
+    /// Runs the panel; returns egui's triangles and pixels per point.
+    fn run_ui(
+        &mut self,
+        ctx: &Context,
+        window: &Window,
+        extent: vk::Extent2D,
+    ) -> Result<(Vec<egui::ClippedPrimitive>, f32), AppError> {
+        self.controls.speed_m_s = self.fly.speed_m_s;
+        let raw = self.egui_state.take_egui_input(window);
+        let egui_ctx = self.egui_ctx.clone();
+        let info = panel::PanelInfo {
+            device: &ctx.info.name,
+            extent_px: (extent.width, extent.height),
+            frame_ms: self.frame_ms,
+            light_names: &self.light_names,
+            status: &self.status,
+        };
+        let (controls, stats) = (&mut self.controls, &self.stats);
+        let mut panel_points = 0.0;
+        let out = egui_ctx.run(raw, |c| {
+            panel_points = panel::draw(c, controls, stats, &info);
+        });
+        // Rounded down: the scene starts under the panel's edge rather than leaving a gap.
+        self.panel_px = (panel_points * out.pixels_per_point).max(0.0).floor() as u32;
+        self.fly.speed_m_s = self.controls.speed_m_s;
+        self.egui_state
+            .handle_platform_output(window, out.platform_output);
+        if let Some(overlay) = self.overlay.as_mut() {
+            if overlay.update_textures(ctx, &out.textures_delta)? {
+                // The atlas image changed: the graph imports the old one.
+                if let Some(g) = self.graph.take() {
+                    ctx.wait_idle()?;
+                    g.destroy(ctx);
+                }
+            }
+        }
+        let ppp = out.pixels_per_point;
+        Ok((egui_ctx.tessellate(out.shapes, ppp), ppp))
+    }
+
+    /// Builds the frame graph for the current swapchain and renderer settings.
+    fn rebuild(&mut self, ctx: &Context) -> Result<(), AppError> {
+        ctx.wait_idle()?;
+        if let Some(g) = self.graph.take() {
+            g.destroy(ctx);
+        }
+        self.stats.clear();
+        let (Some(renderer), Some(overlay), Some(swapchain)) = (
+            self.renderer.as_ref(),
+            self.overlay.as_ref(),
+            self.swapchain.as_ref(),
+        ) else {
+            return Ok(());
+        };
+        if !overlay.ready() {
+            return Ok(());
+        }
+        let extent = swapchain.extent;
+        let (w, h) = (renderer.settings.width, renderer.settings.height);
+        // The scene's place in the window: right-aligned, left of it is the panel.
+        let scene_rect = vk::Rect2D {
+            offset: vk::Offset2D {
+                x: extent.width.saturating_sub(w) as i32,
+                y: 0,
+            },
+            extent: vk::Extent2D {
+                width: w,
+                height: h,
+            },
+        };
+        let shot = ctx.create_buffer(&BufferDesc {
+            name: "screenshot".into(),
+            size_bytes: u64::from(w) * u64::from(h) * 4,
+            usage: vk::BufferUsageFlags::TRANSFER_DST,
+            location: MemoryLocation::GpuToCpu,
+        })?;
+        let mut g = RenderGraph::new();
+        let FrameImages { ldr, .. } = renderer.declare(&mut g);
+        let present = g.import_image(&swapchain.images[0], Access::Present);
+        let shot_handle = g.import_buffer(&shot, Access::HostRead);
+        let shot_wanted = Rc::new(Cell::new(false));
+        let wanted = shot_wanted.clone();
+        g.add_pass("present")
+            .read(ldr, Access::TransferRead)
+            .write(present, Access::TransferWrite)
+            .write(shot_handle, Access::TransferWrite)
+            .record(move |c| {
+                let (src, dst) = (c.image(ldr), c.image(present));
+                c.cmd.blit_image(
+                    src.raw,
+                    src.extent_2d(),
+                    dst.raw,
+                    scene_rect,
+                    vk::Filter::NEAREST,
+                );
+                if wanted.get() {
+                    let e = src.extent_2d();
+                    c.cmd.copy_image_to_buffer(
+                        src.raw,
+                        vk::Extent3D {
+                            width: e.width,
+                            height: e.height,
+                            depth: 1,
+                        },
+                        0,
+                        1,
+                        c.buffer(shot_handle).raw,
+                    );
+                }
+            });
+        overlay.declare(&mut g, present);
+        let exec = match GraphExecutor::new(ctx, g, MAX_FRAMES_IN_FLIGHT) {
+            Ok(e) => e,
+            Err(e) => {
+                ctx.destroy_buffer(shot);
+                return Err(e.into());
+            }
+        };
+        self.graph = Some(FrameGraph {
+            exec,
+            present,
+            shot,
+            shot_wanted,
+            extent,
+            settings: renderer.settings.clone(),
+        });
+        Ok(())
+    }
+
+    fn save_screenshot(&mut self, ctx: &Context) -> Result<(), AppError> {
+        ctx.wait_idle()?;
+        let Some(g) = &self.graph else { return Ok(()) };
+        let path = match &self.opts.screenshot {
+            Some(p) => p.clone(),
+            None => PathBuf::from(format!(
+                "voxgi-shot-{}.png",
+                self.report.screenshots.len() + 1
+            )),
+        };
+        let (w, h) = (g.settings.width, g.settings.height);
+        let n = (w * h * 4) as usize;
+        let pixels = g.shot.mapped().map(|m| m[..n].to_vec()).unwrap_or_default();
+        image::save_buffer(&path, &pixels, w, h, image::ColorType::Rgba8).map_err(|e| {
+            AppError::Screenshot {
+                path: path.clone(),
+                reason: e.to_string(),
+            }
+        })?;
+        self.status = format!("wrote {}", path.display());
+        log::info!("{}", self.status);
+        self.report.screenshots.push(path);
+        Ok(())
+    }
+
+    /// Waits for the GPU and destroys everything in dependency order.
+    fn destroy(&mut self, ctx: &Context) -> ViewerReport {
+        let _ = ctx.wait_idle();
+        if let Some(mut fl) = self.frame_loop.take() {
+            let _ = fl.finish(ctx);
+            fl.destroy(ctx);
+        }
+        if let Some(g) = self.graph.take() {
+            g.destroy(ctx);
+        }
+        if let Some(o) = self.overlay.take() {
+            o.destroy(ctx);
+        }
+        if let Some(r) = self.renderer.take() {
+            r.destroy(ctx);
+        }
+        if let Some(s) = self.swapchain.take() {
+            s.destroy(ctx);
+        }
+        std::mem::take(&mut self.report)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Vec3;
+
+    #[test]
+    fn light_scale_scales_the_radiometric_quantity() {
+        let p = Light::Point {
+            position: Vec3::ZERO,
+            intensity_w_sr: Vec3::splat(2.0),
+        };
+        assert_eq!(
+            scaled(&p, 0.5),
+            Light::Point {
+                position: Vec3::ZERO,
+                intensity_w_sr: Vec3::ONE
+            }
+        );
+        let d = Light::Directional {
+            direction: Vec3::NEG_Y,
+            irradiance_w_m2: Vec3::ONE,
+        };
+        assert!(
+            matches!(scaled(&d, 3.0), Light::Directional { irradiance_w_m2, .. } if irradiance_w_m2 == Vec3::splat(3.0))
+        );
+    }
+
+    #[test]
+    fn only_graph_shaping_settings_rebuild() {
+        let a = RenderSettings::default();
+        let mut b = a.clone();
+        b.shadow.pcf_radius += 1;
+        b.shadow.bias_texels *= 2.0;
+        assert!(!needs_new_graph(&a, &b));
+        b.tonemap.exposure *= 2.0;
+        assert!(needs_new_graph(&a, &b));
+        let mut c = a.clone();
+        c.width += 1;
+        assert!(needs_new_graph(&a, &c));
+    }
+}

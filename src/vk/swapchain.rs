@@ -1,0 +1,309 @@
+//! A window surface and its swapchain: acquire, present, recreate on resize.
+//!
+//! Swapchain images are wrapped as [`Image`]s (with views, without memory) so the render graph
+//! can import them with [`Access::Present`](crate::graph::Access::Present) and derive every
+//! transition; this module records no commands.
+
+use super::{Context, Image, ImageDesc, VkError};
+use ash::extensions::khr;
+use ash::vk;
+use raw_window_handle::{RawDisplayHandle, RawWindowHandle};
+use std::ffi::CStr;
+
+/// Instance extensions a surface on `display` needs (pass them in
+/// [`ContextDesc::instance_extensions`](super::ContextDesc)).
+pub fn surface_extensions(display: RawDisplayHandle) -> Result<Vec<&'static CStr>, VkError> {
+    let names = ash_window::enumerate_required_extensions(display).map_err(VkError::vk(
+        "list the surface extensions of this window system",
+    ))?;
+    Ok(names
+        .iter()
+        // SAFETY: ash-window returns pointers to static NUL-terminated extension names.
+        .map(|&p| unsafe { CStr::from_ptr(p) })
+        .collect())
+}
+
+/// What [`Swapchain::acquire`] got.
+pub enum Acquired {
+    /// Render into `images[index]`; wait for `ready` before writing it.
+    Image { index: u32, ready: vk::Semaphore },
+    /// The surface changed (resize); recreate and try the next frame.
+    OutOfDate,
+}
+
+pub struct Swapchain {
+    surface_loader: khr::Surface,
+    loader: khr::Swapchain,
+    surface: vk::SurfaceKHR,
+    raw: vk::SwapchainKHR,
+    /// The swapchain images, viewed as `format`. Owned by the swapchain: never destroy them.
+    pub images: Vec<Image>,
+    pub format: vk::Format,
+    pub extent: vk::Extent2D,
+    /// Signalled by acquire, one per frame slot (reused once the slot's fence signalled).
+    acquire_semaphores: Vec<vk::Semaphore>,
+    /// Signalled by the frame's submission, waited for by present; one per image, because a
+    /// presentation may still hold it when another image is acquired.
+    render_semaphores: Vec<vk::Semaphore>,
+}
+
+/// Formats in order of preference. UNORM only: the renderer writes sRGB-encoded values, which
+/// must reach the display unchanged (an `_SRGB` format would encode them twice).
+const FORMATS: &[vk::Format] = &[vk::Format::B8G8R8A8_UNORM, vk::Format::R8G8B8A8_UNORM];
+
+impl Swapchain {
+    /// A surface for the window and a swapchain of `extent` (clamped to what the surface
+    /// allows). `slots` is the number of frames in flight.
+    pub fn new(
+        ctx: &Context,
+        display: RawDisplayHandle,
+        window: RawWindowHandle,
+        extent: vk::Extent2D,
+        slots: usize,
+    ) -> Result<Self, VkError> {
+        let surface_loader = khr::Surface::new(&ctx.entry, &ctx.instance);
+        // SAFETY: the handles come from a live window that outlives the swapchain (the caller
+        // destroys the swapchain before the window).
+        let surface =
+            unsafe { ash_window::create_surface(&ctx.entry, &ctx.instance, display, window, None) }
+                .map_err(VkError::vk("create a window surface"))?;
+        let mut s = Self {
+            surface_loader,
+            loader: khr::Swapchain::new(&ctx.instance, &ctx.device),
+            surface,
+            raw: vk::SwapchainKHR::null(),
+            images: Vec::new(),
+            format: vk::Format::UNDEFINED,
+            extent,
+            acquire_semaphores: Vec::new(),
+            render_semaphores: Vec::new(),
+        };
+        let result = s.check_support(ctx).and_then(|()| {
+            for _ in 0..slots.max(1) {
+                let sem = s.semaphore(ctx)?;
+                s.acquire_semaphores.push(sem);
+            }
+            s.recreate(ctx, extent)
+        });
+        match result {
+            Ok(()) => Ok(s),
+            Err(e) => {
+                s.destroy(ctx);
+                Err(e)
+            }
+        }
+    }
+
+    fn semaphore(&self, ctx: &Context) -> Result<vk::Semaphore, VkError> {
+        // SAFETY: valid device; destroyed in `destroy` / `recreate`.
+        unsafe {
+            ctx.device
+                .create_semaphore(&vk::SemaphoreCreateInfo::default(), None)
+        }
+        .map_err(VkError::vk("create a semaphore"))
+    }
+
+    fn check_support(&mut self, ctx: &Context) -> Result<(), VkError> {
+        // SAFETY: physical device, queue family and surface belong to this instance.
+        let present = unsafe {
+            self.surface_loader.get_physical_device_surface_support(
+                ctx.physical_device,
+                ctx.queue_family,
+                self.surface,
+            )
+        }
+        .map_err(VkError::vk("query presentation support"))?;
+        if !present {
+            return Err(VkError::Invalid(format!(
+                "the device {} cannot present to this window; choose another with --device",
+                ctx.info.name
+            )));
+        }
+        // SAFETY: as above.
+        let formats = unsafe {
+            self.surface_loader
+                .get_physical_device_surface_formats(ctx.physical_device, self.surface)
+        }
+        .map_err(VkError::vk("query surface formats"))?;
+        self.format = FORMATS
+            .iter()
+            .copied()
+            .find(|f| {
+                formats.iter().any(|s| {
+                    s.format == *f && s.color_space == vk::ColorSpaceKHR::SRGB_NONLINEAR
+                })
+            })
+            .ok_or_else(|| {
+                VkError::Invalid(format!(
+                    "the window offers none of the formats {FORMATS:?} (it offers {:?}); voxgi needs an 8-bit UNORM swapchain",
+                    formats.iter().map(|f| f.format).collect::<Vec<_>>()
+                ))
+            })?;
+        Ok(())
+    }
+
+    /// The extent the surface wants for a window of `window_px` pixels; zero when minimized.
+    pub fn surface_extent(
+        &self,
+        ctx: &Context,
+        window_px: vk::Extent2D,
+    ) -> Result<vk::Extent2D, VkError> {
+        // SAFETY: physical device and surface are live.
+        let caps = unsafe {
+            self.surface_loader
+                .get_physical_device_surface_capabilities(ctx.physical_device, self.surface)
+        }
+        .map_err(VkError::vk("query surface capabilities"))?;
+        Ok(if caps.current_extent.width != u32::MAX {
+            caps.current_extent
+        } else {
+            vk::Extent2D {
+                width: window_px
+                    .width
+                    .clamp(caps.min_image_extent.width, caps.max_image_extent.width),
+                height: window_px
+                    .height
+                    .clamp(caps.min_image_extent.height, caps.max_image_extent.height),
+            }
+        })
+    }
+
+    /// Recreates the swapchain for a window of `window_px` pixels. Waits for the device first.
+    /// With a zero extent (minimized) the old swapchain is kept; check [`Self::extent`].
+    pub fn recreate(&mut self, ctx: &Context, window_px: vk::Extent2D) -> Result<(), VkError> {
+        let extent = self.surface_extent(ctx, window_px)?;
+        if extent.width == 0 || extent.height == 0 {
+            self.extent = extent;
+            return Ok(());
+        }
+        ctx.wait_idle()?;
+        // SAFETY: as above.
+        let caps = unsafe {
+            self.surface_loader
+                .get_physical_device_surface_capabilities(ctx.physical_device, self.surface)
+        }
+        .map_err(VkError::vk("query surface capabilities"))?;
+        let usage = vk::ImageUsageFlags::TRANSFER_DST | vk::ImageUsageFlags::COLOR_ATTACHMENT;
+        if !caps.supported_usage_flags.contains(usage) {
+            return Err(VkError::Invalid(format!(
+                "the window's swapchain images do not support {usage:?} (they support {:?})",
+                caps.supported_usage_flags
+            )));
+        }
+        let mut count = caps.min_image_count + 1;
+        if caps.max_image_count > 0 {
+            count = count.min(caps.max_image_count);
+        }
+        let info = vk::SwapchainCreateInfoKHR::builder()
+            .surface(self.surface)
+            .min_image_count(count)
+            .image_format(self.format)
+            .image_color_space(vk::ColorSpaceKHR::SRGB_NONLINEAR)
+            .image_extent(extent)
+            .image_array_layers(1)
+            .image_usage(usage)
+            .image_sharing_mode(vk::SharingMode::EXCLUSIVE)
+            .pre_transform(caps.current_transform)
+            .composite_alpha(vk::CompositeAlphaFlagsKHR::OPAQUE)
+            // FIFO is the one mode every driver has; it also keeps the viewer from spinning.
+            .present_mode(vk::PresentModeKHR::FIFO)
+            .clipped(true)
+            .old_swapchain(self.raw);
+        // SAFETY: the surface is live; the old swapchain is retired by this call and destroyed
+        // below after the device went idle (waited above).
+        let raw = unsafe { self.loader.create_swapchain(&info, None) }
+            .map_err(VkError::vk("create the swapchain"))?;
+        self.destroy_images(ctx);
+        // SAFETY: the old swapchain is retired and no work uses it (device idle).
+        unsafe { self.loader.destroy_swapchain(self.raw, None) };
+        self.raw = raw;
+        self.extent = extent;
+        // SAFETY: raw is the live swapchain just created.
+        let raws = unsafe { self.loader.get_swapchain_images(raw) }
+            .map_err(VkError::vk("get the swapchain images"))?;
+        for (i, &image) in raws.iter().enumerate() {
+            let desc = ImageDesc::new_2d(
+                &format!("swapchain image {i}"),
+                self.format,
+                extent.width,
+                extent.height,
+            )
+            .with_usage(usage);
+            self.images.push(ctx.wrap_image(image, &desc)?);
+            let sem = self.semaphore(ctx)?;
+            self.render_semaphores.push(sem);
+        }
+        Ok(())
+    }
+
+    /// Acquires the next image, signalling the semaphore of frame slot `slot`. Call after the
+    /// slot's fence was waited for (so its semaphore is unsignalled and unused).
+    pub fn acquire(&self, slot: usize) -> Result<Acquired, VkError> {
+        let ready = self.acquire_semaphores[slot % self.acquire_semaphores.len()];
+        // SAFETY: the swapchain is live; `ready` is unsignalled (see above).
+        match unsafe {
+            self.loader
+                .acquire_next_image(self.raw, u64::MAX, ready, vk::Fence::null())
+        } {
+            // A suboptimal image is still presentable: use it, recreate after presenting.
+            Ok((index, _suboptimal)) => Ok(Acquired::Image { index, ready }),
+            Err(vk::Result::ERROR_OUT_OF_DATE_KHR) => Ok(Acquired::OutOfDate),
+            Err(e) => Err(VkError::Call {
+                what: "acquire a swapchain image",
+                result: e,
+            }),
+        }
+    }
+
+    /// The semaphore the frame rendering into image `index` signals and presentation waits on.
+    pub fn render_semaphore(&self, index: u32) -> vk::Semaphore {
+        self.render_semaphores[index as usize]
+    }
+
+    /// Presents image `index`. Returns `true` when the swapchain should be recreated.
+    pub fn present(&self, ctx: &Context, index: u32) -> Result<bool, VkError> {
+        let waits = [self.render_semaphore(index)];
+        let swapchains = [self.raw];
+        let indices = [index];
+        let info = vk::PresentInfoKHR::builder()
+            .wait_semaphores(&waits)
+            .swapchains(&swapchains)
+            .image_indices(&indices);
+        // SAFETY: the image was acquired and the frame writing it was submitted signalling
+        // `waits[0]`; the queue is used from this thread only.
+        match unsafe { self.loader.queue_present(ctx.queue, &info) } {
+            Ok(suboptimal) => Ok(suboptimal),
+            Err(vk::Result::ERROR_OUT_OF_DATE_KHR) => Ok(true),
+            Err(e) => Err(VkError::Call {
+                what: "present",
+                result: e,
+            }),
+        }
+    }
+
+    fn destroy_images(&mut self, ctx: &Context) {
+        for image in self.images.drain(..) {
+            // SAFETY: views were created by wrap_image; the images belong to the swapchain and
+            // are not destroyed here. The caller waited for the device.
+            unsafe { ctx.device.destroy_image_view(image.view, None) };
+        }
+        for s in self.render_semaphores.drain(..) {
+            // SAFETY: the device is idle, so no submission or presentation uses it.
+            unsafe { ctx.device.destroy_semaphore(s, None) };
+        }
+    }
+
+    /// Destroys the swapchain and the surface. Call before the window is dropped.
+    pub fn destroy(mut self, ctx: &Context) {
+        let _ = ctx.wait_idle();
+        self.destroy_images(ctx);
+        // SAFETY: the device is idle; nothing uses these objects any more.
+        unsafe {
+            for s in self.acquire_semaphores.drain(..) {
+                ctx.device.destroy_semaphore(s, None);
+            }
+            self.loader.destroy_swapchain(self.raw, None);
+            self.surface_loader.destroy_surface(self.surface, None);
+        }
+    }
+}
