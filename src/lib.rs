@@ -12,6 +12,8 @@ pub mod demo;
 #[forbid(unsafe_code)]
 pub mod eval;
 #[forbid(unsafe_code)]
+pub mod gi;
+#[forbid(unsafe_code)]
 pub mod graph;
 #[forbid(unsafe_code)]
 pub mod light;

@@ -4,6 +4,7 @@ use anyhow::{bail, Context as _, Result};
 use clap::{Parser, Subcommand};
 use std::path::PathBuf;
 use voxgi::demo::Demo;
+use voxgi::gi::GiMethod;
 use voxgi::post::ToneOperator;
 use voxgi::profile::ProfileReport;
 use voxgi::render::{profile_scene, render_image, RenderSettings};
@@ -197,6 +198,27 @@ struct FrameArgs {
     /// Re-voxelize static geometry every frame too (measures the full voxelization).
     #[arg(long)]
     revoxelize: bool,
+    /// Indirect-light method (none: direct light only).
+    #[arg(long, value_enum, default_value_t = GiMethod::None)]
+    gi: GiMethod,
+    /// GI rays per pixel.
+    #[arg(long, default_value_t = 16)]
+    gi_rays: u32,
+    /// GI ray length in meters (default: the scene's diagonal).
+    #[arg(long)]
+    gi_radius: Option<f32>,
+    /// Self-intersection offset along the normal, in voxel diagonals (thesis k1).
+    #[arg(long, default_value_t = 1.0)]
+    gi_normal_offset: f32,
+    /// Geometry-aware filter radius in pixels (0: off).
+    #[arg(long, default_value_t = 4)]
+    gi_filter_radius: u32,
+    /// Geometry-aware filter passes (each horizontal + vertical).
+    #[arg(long, default_value_t = 2)]
+    gi_filter_passes: u32,
+    /// Reflective light-map resolution per light view.
+    #[arg(long, default_value_t = 256)]
+    light_map_resolution: u32,
 }
 
 impl FrameArgs {
@@ -218,6 +240,16 @@ impl FrameArgs {
                 layers: self.voxel_layers,
                 revoxelize_static: self.revoxelize,
             });
+        s.gi = voxgi::gi::GiSettings {
+            method: self.gi,
+            rays: self.gi_rays,
+            radius_m: self.gi_radius,
+            normal_offset_voxels: self.gi_normal_offset,
+            filter_radius: self.gi_filter_radius,
+            filter_passes: self.gi_filter_passes,
+            light_map_resolution: self.light_map_resolution,
+            ..Default::default()
+        };
         s
     }
 }

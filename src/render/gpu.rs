@@ -75,6 +75,16 @@ pub struct GpuDrawPush {
     pub _pad: [u32; 3],
 }
 
+/// Push constants of the reflective light-map pass.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct GpuLightMapPush {
+    pub model: [f32; 16],
+    pub view: u32,
+    pub material: u32,
+    pub _pad: [u32; 2],
+}
+
 /// Push constants of `tonemap.comp`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
@@ -113,5 +123,7 @@ mod tests {
         assert_eq!(offset_of!(GpuVertex, uv), 24);
         assert_eq!(size_of::<GpuDrawPush>(), 80);
         assert_eq!(size_of::<GpuTonemapPush>(), 16);
+        assert_eq!(size_of::<GpuLightMapPush>(), 80);
+        assert_eq!(offset_of!(GpuLightMapPush, material), 68);
     }
 }

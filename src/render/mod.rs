@@ -53,8 +53,11 @@ pub struct RenderSettings {
     pub time_s: f32,
     pub shadow: ShadowSettings,
     pub tonemap: ToneMap,
-    /// Voxelize the scene every frame (`None`: direct light needs no voxels).
+    /// Voxelize the scene every frame (`None`: direct light needs no voxels). Indirect light
+    /// voxelizes with default settings when this is `None`.
     pub voxels: Option<crate::voxel::gpu::VoxelSettings>,
+    /// Indirect light (method `None`: direct light only).
+    pub gi: crate::gi::GiSettings,
 }
 
 impl Default for RenderSettings {
@@ -66,6 +69,7 @@ impl Default for RenderSettings {
             shadow: ShadowSettings::default(),
             tonemap: ToneMap::default(),
             voxels: None,
+            gi: crate::gi::GiSettings::default(),
         }
     }
 }
@@ -129,6 +133,8 @@ pub struct Renderer {
     all_draws: Vec<Draw>,
     frame_data: GpuFrame,
     voxels: Option<crate::voxel::gpu::VoxelFrame>,
+    /// Indirect-light passes and the light-map pipeline, when a GI method is on.
+    gi: Option<(crate::gi::GiPasses, GraphicsPipeline)>,
 }
 
 const GBUFFER_COLOR: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
@@ -213,7 +219,9 @@ impl Renderer {
         let texture_sampler = ctx.create_sampler(vk::Filter::LINEAR, true)?;
         let pipelines = create_pipelines(ctx, has_phong, has_textures)?;
         let sampler = ctx.create_sampler(vk::Filter::NEAREST, false)?;
-        let voxels = match &settings.voxels {
+        let gi_on = settings.gi.method != crate::gi::GiMethod::None;
+        let voxel_settings = settings.voxels.or(gi_on.then(Default::default));
+        let voxels = match &voxel_settings {
             Some(v) => Some(crate::voxel::gpu::VoxelFrame::new(
                 ctx,
                 scene,
@@ -221,6 +229,21 @@ impl Renderer {
                 v,
             )?),
             None => None,
+        };
+        let gi = match (&voxels, gi_on) {
+            (Some(v), true) => {
+                let diagonal = scene.aabb_at(settings.time_s).extent().length();
+                let passes = crate::gi::GiPasses::new(
+                    ctx,
+                    settings.gi,
+                    &v.voxels.grid,
+                    settings.shadow.resolution,
+                    diagonal,
+                )?;
+                let light_map = create_light_map_pipeline(ctx)?;
+                Some((passes, light_map))
+            }
+            _ => None,
         };
         let mut r = Self {
             settings,
@@ -241,6 +264,7 @@ impl Renderer {
             all_draws,
             frame_data: GpuFrame::zeroed(),
             voxels,
+            gi,
         };
         r.prepare(scene)?;
         Ok(r)
@@ -394,9 +418,7 @@ impl Renderer {
             range: frame_size,
         };
         let (vb, ib, mb) = (self.vertices.raw, self.indices.raw, self.materials.raw);
-        if let Some(v) = &self.voxels {
-            v.add_passes(g);
-        }
+        let voxel_image = self.voxels.as_ref().map(|v| v.add_passes(g));
 
         // Shadow maps: one layer per shadow view (a 1x1 cleared layer when there are none, so
         // the shading pass always has a map to bind).
@@ -586,6 +608,97 @@ impl Renderer {
             ctx.cmd.dispatch(groups.0, groups.1, 1);
         });
 
+        // Indirect light: reflective light maps over the shadow views, then the GI passes.
+        let radiance = match (&self.gi, voxel_image) {
+            (Some((gi, light_map_pipe)), Some(voxels)) => {
+                let res = gi.settings.light_map_resolution.max(1);
+                let layers = views.max(1);
+                let mut rlm = |name: &str, format| {
+                    g.create_image(ImageDesc::new_2d(name, format, res, res).with_layers(layers))
+                };
+                let rlm_radiance = rlm("light map radiance", vk::Format::R16G16B16A16_SFLOAT);
+                let rlm_position = rlm("light map position", vk::Format::R32G32B32A32_SFLOAT);
+                let rlm_normal = rlm("light map normal", vk::Format::R16G16B16A16_SFLOAT);
+                let rlm_depth = rlm("light map depth", DEPTH);
+                let pipe = *light_map_pipe;
+                let draws = self.draws.clone();
+                g.add_pass("light_map")
+                    .read(frame, Access::StorageRead(Shader::Graphics))
+                    .write(rlm_radiance, Access::ColorAttachment)
+                    .write(rlm_position, Access::ColorAttachment)
+                    .write(rlm_normal, Access::ColorAttachment)
+                    .write(rlm_depth, Access::DepthAttachment)
+                    .record(move |ctx| {
+                        let clear = Some(vk::ClearValue {
+                            color: vk::ClearColorValue { float32: [0.0; 4] },
+                        });
+                        let colors = [rlm_radiance, rlm_position, rlm_normal].map(|h| Attachment {
+                            view: ctx.image(h).view,
+                            clear,
+                        });
+                        let depth = Attachment {
+                            view: ctx.image(rlm_depth).view,
+                            clear: Some(vk::ClearValue {
+                                depth_stencil: vk::ClearDepthStencilValue {
+                                    depth: 1.0,
+                                    stencil: 0,
+                                },
+                            }),
+                        };
+                        ctx.cmd.begin_rendering_layers(
+                            ctx.image(rlm_depth).extent_2d(),
+                            layers,
+                            &colors,
+                            Some(depth),
+                        );
+                        ctx.cmd.bind(
+                            &pipe,
+                            &[frame_desc(ctx.slot), Descriptor::storage_buffer(1, mb)],
+                        );
+                        ctx.cmd.bind_vertex_buffer(vb);
+                        ctx.cmd.bind_index_buffer(ib);
+                        if let Ok(lists) = draws.read() {
+                            for (v, list) in lists.shadow.iter().enumerate() {
+                                for d in list {
+                                    let push = GpuLightMapPush {
+                                        model: d.model.to_cols_array(),
+                                        view: v as u32,
+                                        material: d.material,
+                                        _pad: [0; 2],
+                                    };
+                                    ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
+                                    ctx.cmd.draw_indexed(
+                                        d.index_count,
+                                        d.first_index,
+                                        d.vertex_offset,
+                                    );
+                                }
+                            }
+                        }
+                        ctx.cmd.end_rendering();
+                    });
+                gi.add_passes(
+                    g,
+                    &crate::gi::GiInputs {
+                        frame,
+                        frame_descriptor: frame_desc(0),
+                        frame_stride: stride,
+                        albedo,
+                        normal,
+                        depth,
+                        direct: radiance,
+                        voxels,
+                        rlm_radiance,
+                        rlm_position,
+                        rlm_normal,
+                        width: w,
+                        height: h,
+                    },
+                )
+            }
+            _ => radiance,
+        };
+
         // Tone mapping.
         let ldr = g.create_image(ImageDesc::new_2d("ldr", vk::Format::R8G8B8A8_UNORM, w, h));
         let pipe = self.pipelines.tonemap;
@@ -653,6 +766,10 @@ impl Renderer {
     pub fn destroy(self, ctx: &Context) {
         if let Some(v) = self.voxels {
             v.destroy(ctx);
+        }
+        if let Some((gi, light_map)) = self.gi {
+            gi.destroy(ctx);
+            ctx.destroy_graphics_pipeline(light_map);
         }
         ctx.destroy_graphics_pipeline(self.pipelines.gbuffer);
         ctx.destroy_graphics_pipeline(self.pipelines.shadow);
@@ -782,6 +899,36 @@ fn upload_geometry(
         vk::BufferUsageFlags::INDEX_BUFFER,
     )?;
     Ok((vb, ib, draws))
+}
+
+/// The reflective light-map pipeline (`light_map.{vert,geom,frag}`).
+fn create_light_map_pipeline(ctx: &Context) -> Result<GraphicsPipeline, VkError> {
+    let storage = vk::DescriptorType::STORAGE_BUFFER;
+    ctx.graphics_pipeline(&GraphicsPipelineDesc {
+        vertex: "light_map.vert".into(),
+        geometry: Some("light_map.geom".into()),
+        fragment: "light_map.frag".into(),
+        bindings: vec![(0, storage), (1, storage)],
+        push_constant_bytes: std::mem::size_of::<GpuLightMapPush>() as u32,
+        vertex_stride: std::mem::size_of::<GpuVertex>() as u32,
+        vertex_attributes: vec![
+            (vk::Format::R32G32B32_SFLOAT, 0),
+            (vk::Format::R32G32B32_SFLOAT, 12),
+        ],
+        topology: vk::PrimitiveTopology::TRIANGLE_LIST,
+        cull_mode: vk::CullModeFlags::NONE,
+        color_formats: vec![
+            vk::Format::R16G16B16A16_SFLOAT,
+            vk::Format::R32G32B32A32_SFLOAT,
+            vk::Format::R16G16B16A16_SFLOAT,
+        ],
+        depth_format: Some(DEPTH),
+        depth_test: true,
+        depth_write: true,
+        depth_bias: false,
+        logic_op: None,
+        spec: vec![],
+    })
 }
 
 /// A 1x1 white texture bound where a draw has no albedo map.

@@ -1,0 +1,18 @@
+#version 450
+// Direct plus indirect light: L = L_direct + rho/pi * E_indirect (Lambert receivers).
+layout(local_size_x = 8, local_size_y = 8) in;
+layout(set = 0, binding = 0) uniform sampler2D direct;
+layout(set = 0, binding = 1) uniform sampler2D gb_albedo;
+layout(set = 0, binding = 2) uniform sampler2D indirect_irradiance;
+layout(set = 0, binding = 3, rgba32f) uniform writeonly image2D radiance;
+
+#define PI 3.14159265358979323846
+
+void main() {
+    ivec2 p = ivec2(gl_GlobalInvocationID.xy);
+    if (any(greaterThanEqual(p, imageSize(radiance)))) return;
+    vec4 d = texelFetch(direct, p, 0);
+    vec3 albedo = texelFetch(gb_albedo, p, 0).rgb;
+    vec3 e = texelFetch(indirect_irradiance, p, 0).rgb;
+    imageStore(radiance, p, vec4(d.rgb + albedo / PI * e, d.a));
+}

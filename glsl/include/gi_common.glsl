@@ -1,0 +1,44 @@
+// Shared by the GI passes: push constants, sampling, the voxel grid accessors.
+#ifndef GI_COMMON_GLSL
+#define GI_COMMON_GLSL
+
+#define PI 3.14159265358979323846
+
+// Mirrors `GpuGiPush` in src/gi/mod.rs.
+layout(push_constant) uniform GiPush {
+    mat4 world_to_voxel;
+    ivec4 dims;      // voxels x, y, depth; w max hierarchy level
+    vec4 params;     // x radius (m), y normal offset (voxel diagonals), z hit tolerance (voxel diagonals), w voxel diagonal (m)
+    uvec4 iparams;   // x rays per pixel, y start level, z max iterations, w frame seed
+    vec4 params2;    // x light-map texel footprint scale (shadow res / light-map res), y bounces, z, w unused
+} gi;
+
+// Radical inverse in base 2 (Hammersley's second coordinate).
+float radical_inverse(uint i) {
+    return float(bitfieldReverse(i)) * 2.3283064365386963e-10;
+}
+
+// A per-pixel hash for the Cranley-Patterson rotation (no visible tiling, unlike a small
+// random texture).
+vec2 pixel_rotation(uvec2 p, uint seed) {
+    uint h = p.x * 1973u + p.y * 9277u + seed * 26699u;
+    h = (h ^ 61u) ^ (h >> 16u);
+    h *= 9u;
+    h ^= h >> 4u;
+    h *= 0x27d4eb2du;
+    h ^= h >> 15u;
+    uint h2 = h * 747796405u + 2891336453u;
+    return vec2(float(h & 0xffffu), float(h2 >> 16u)) / 65536.0;
+}
+
+// Cosine-distributed direction around n (Malley's method).
+vec3 cosine_direction(vec3 n, vec2 u) {
+    float r = sqrt(u.x);
+    float phi = 2.0 * PI * u.y;
+    vec3 t = abs(n.x) > 0.9 ? vec3(0.0, 1.0, 0.0) : vec3(1.0, 0.0, 0.0);
+    vec3 b1 = normalize(cross(n, t));
+    vec3 b2 = cross(n, b1);
+    return normalize(b1 * (r * cos(phi)) + b2 * (r * sin(phi)) + n * sqrt(max(1.0 - u.x, 0.0)));
+}
+
+#endif

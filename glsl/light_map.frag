@@ -1,0 +1,56 @@
+#version 450
+// Reflective light maps: what the light sees is directly lit by it, so each texel stores the
+// radiance leaving that surface (Lambert: rho/pi * E, E = I cos / d^2 with Mitsuba's spot
+// falloff), its world position and its normal, for lookups at voxel ray hits (§6.1).
+#include "frame.glsl"
+
+layout(set = 0, binding = 0, std430) readonly buffer FrameBuf { GpuFrame frame; };
+struct GpuMaterial { vec4 albedo; vec4 specular; uvec4 flags; };
+layout(set = 0, binding = 1, std430) readonly buffer Materials { GpuMaterial materials[]; };
+
+layout(push_constant) uniform Push {
+    mat4 model;
+    uint view;
+    uint material;
+} pc;
+
+layout(location = 0) in vec3 in_normal;
+layout(location = 1) in vec3 in_world;
+
+layout(location = 0) out vec4 out_radiance;
+layout(location = 1) out vec4 out_position;
+layout(location = 2) out vec4 out_normal;
+
+#define PI 3.14159265358979323846
+
+void main() {
+    // The shadow views index their light through the light table.
+    GpuLight l;
+    for (uint i = 0u; i < frame.counts.x; ++i) {
+        GpuLight c = frame.lights[i];
+        if (pc.view >= c.info.y && pc.view < c.info.y + c.info.z) l = c;
+    }
+    vec3 n = normalize(in_normal);
+    vec3 e;
+    if (l.info.x == LIGHT_DIRECTIONAL) {
+        if (dot(n, -l.direction.xyz) < 0.0) n = -n;
+        e = l.intensity.rgb * max(dot(n, -l.direction.xyz), 0.0);
+    } else {
+        vec3 d = l.position.xyz - in_world;
+        float d2 = max(dot(d, d), 1e-30);
+        vec3 wi = d * inversesqrt(d2);
+        // Two-sided: the side the light sees.
+        if (dot(n, wi) < 0.0) n = -n;
+        float falloff = 1.0;
+        if (l.info.x == LIGHT_SPOT) {
+            float c = dot(-wi, l.direction.xyz);
+            float theta = acos(clamp(c, -1.0, 1.0));
+            falloff = c <= l.spot.x ? 0.0 : (theta <= l.spot.z ? 1.0 : clamp((l.spot.y - theta) / max(l.spot.y - l.spot.z, 1e-6), 0.0, 1.0));
+        }
+        e = l.intensity.rgb * (falloff * max(dot(n, wi), 0.0) / d2);
+    }
+    GpuMaterial m = materials[pc.material];
+    out_radiance = vec4(m.albedo.rgb / PI * e, 1.0);
+    out_position = vec4(in_world, 1.0);
+    out_normal = vec4(n, 0.0);
+}

@@ -1,0 +1,18 @@
+#version 450
+// Reflective light maps (thesis §6.1): world position and normal of each vertex; the geometry
+// shader projects into the light view's layer.
+layout(location = 0) in vec3 in_position;
+layout(location = 1) in vec3 in_normal;
+
+layout(push_constant) uniform Push {
+    mat4 model;
+    uint view;
+    uint material;
+} pc;
+
+layout(location = 0) out vec3 out_normal;
+
+void main() {
+    gl_Position = pc.model * vec4(in_position, 1.0);
+    out_normal = transpose(inverse(mat3(pc.model))) * in_normal;
+}

@@ -1,0 +1,379 @@
+//! Indirect light on the voxel ray test (thesis ch. 6). `hemisphere`: one bounce by
+//! hemisphere sampling with radiance from reflective light maps, filtered by the
+//! geometry-aware filter and added to the direct light.
+
+use crate::graph::{Access, BufferHandle, ImageHandle, RenderGraph, Shader};
+use crate::vk::{vk, Buffer, ComputePipeline, Context, Descriptor, ImageDesc, VkError};
+use crate::voxel::ray_mask::RayMaskLut;
+use crate::voxel::VoxelGrid;
+use bytemuck::{Pod, Zeroable};
+
+/// A GI method of the speed/accuracy ladder.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+pub enum GiMethod {
+    /// No indirect light.
+    #[default]
+    None,
+    /// One bounce: N rays per pixel, radiance at hits from reflective light maps (§6.2).
+    Hemisphere,
+}
+
+/// Parameters of the indirect-light passes (all exposed on the command line).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GiSettings {
+    pub method: GiMethod,
+    /// Rays per pixel.
+    pub rays: u32,
+    /// Ray length in meters; `None`: the scene's diagonal (unbounded in practice).
+    pub radius_m: Option<f32>,
+    /// Self-intersection offset along the normal, in voxel diagonals (thesis §4.4, k₁).
+    pub normal_offset_voxels: f32,
+    /// Light-map hit tolerance, in voxel diagonals (plus the map texel's footprint).
+    pub hit_tolerance_voxels: f32,
+    pub start_level: u32,
+    pub max_iterations: u32,
+    /// Reflective light-map resolution per view (the thesis used 256²).
+    pub light_map_resolution: u32,
+    /// Geometry-aware filter radius in pixels (0: off) and number of h+v passes.
+    pub filter_radius: u32,
+    pub filter_passes: u32,
+    /// Seed of the per-pixel rotation (vary per frame to accumulate).
+    pub seed: u32,
+}
+
+impl Default for GiSettings {
+    fn default() -> Self {
+        Self {
+            method: GiMethod::None,
+            rays: 16,
+            radius_m: None,
+            normal_offset_voxels: 1.0,
+            hit_tolerance_voxels: 1.5,
+            start_level: 1,
+            max_iterations: 1024,
+            light_map_resolution: 256,
+            filter_radius: 4,
+            filter_passes: 2,
+            seed: 0,
+        }
+    }
+}
+
+/// Push constants of the GI passes (`glsl/include/gi_common.glsl`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct GpuGiPush {
+    pub world_to_voxel: [f32; 16],
+    pub dims: [i32; 4],
+    pub params: [f32; 4],
+    pub iparams: [u32; 4],
+    pub params2: [f32; 4],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct GpuFilterPush {
+    direction: [i32; 2],
+    radius: i32,
+    plane_tolerance: f32,
+}
+
+/// The G-buffer and light inputs of the GI passes.
+#[derive(Clone, Copy, Debug)]
+pub struct GiInputs {
+    pub frame: BufferHandle,
+    /// Binding 0 of the frame constants of slot 0; slot k is `frame_stride` bytes further.
+    pub frame_descriptor: Descriptor,
+    pub frame_stride: u64,
+    pub albedo: ImageHandle,
+    pub normal: ImageHandle,
+    pub depth: ImageHandle,
+    pub direct: ImageHandle,
+    pub voxels: ImageHandle,
+    pub rlm_radiance: ImageHandle,
+    pub rlm_position: ImageHandle,
+    pub rlm_normal: ImageHandle,
+    pub width: u32,
+    pub height: u32,
+}
+
+/// Pipelines and constant data of the GI passes.
+pub struct GiPasses {
+    pub settings: GiSettings,
+    hemisphere: ComputePipeline,
+    filter: ComputePipeline,
+    composite: ComputePipeline,
+    lut: Buffer,
+    sampler: vk::Sampler,
+    push: GpuGiPush,
+}
+
+impl GiPasses {
+    /// `grid`: the voxel grid the frame voxelizes; `shadow_resolution`: of the shadow maps,
+    /// whose views the light maps share; `scene_diagonal_m`: default ray length.
+    pub fn new(
+        ctx: &Context,
+        settings: GiSettings,
+        grid: &VoxelGrid,
+        shadow_resolution: u32,
+        scene_diagonal_m: f32,
+    ) -> Result<Self, VkError> {
+        let b = vk::DescriptorType::STORAGE_BUFFER;
+        let s = vk::DescriptorType::COMBINED_IMAGE_SAMPLER;
+        let i = vk::DescriptorType::STORAGE_IMAGE;
+        let push = std::mem::size_of::<GpuGiPush>() as u32;
+        let hemisphere = ctx.compute_pipeline(
+            "gi_hemisphere.comp",
+            &[
+                (0, b),
+                (1, s),
+                (2, s),
+                (3, s),
+                (4, b),
+                (5, s),
+                (6, s),
+                (7, s),
+                (8, i),
+            ],
+            push,
+            &[],
+        )?;
+        let filter = ctx.compute_pipeline(
+            "gi_filter.comp",
+            &[(0, b), (1, s), (2, s), (3, s), (4, i)],
+            std::mem::size_of::<GpuFilterPush>() as u32,
+            &[],
+        )?;
+        let composite = ctx.compute_pipeline(
+            "gi_composite.comp",
+            &[(0, s), (1, s), (2, s), (3, i)],
+            0,
+            &[],
+        )?;
+        let lut = ctx.upload_buffer(
+            "ray mask lut",
+            &RayMaskLut::new().to_gpu_bytes(),
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+        )?;
+        let sampler = ctx.create_sampler(vk::Filter::NEAREST, false)?;
+        let ext = grid.extent_voxels();
+        let levels = crate::voxel::bits::mip_count(grid.res_x(), grid.res_y());
+        let push = GpuGiPush {
+            world_to_voxel: grid.world_to_voxel_matrix().to_cols_array(),
+            dims: [ext.x as i32, ext.y as i32, ext.z as i32, levels as i32 - 1],
+            params: [
+                settings.radius_m.unwrap_or(scene_diagonal_m),
+                settings.normal_offset_voxels,
+                settings.hit_tolerance_voxels,
+                grid.voxel_diagonal_m(),
+            ],
+            iparams: [
+                settings.rays,
+                settings.start_level,
+                settings.max_iterations,
+                settings.seed,
+            ],
+            params2: [
+                shadow_resolution as f32 / settings.light_map_resolution.max(1) as f32,
+                1.0,
+                0.0,
+                0.0,
+            ],
+        };
+        Ok(Self {
+            settings,
+            hemisphere,
+            filter,
+            composite,
+            lut,
+            sampler,
+            push,
+        })
+    }
+
+    /// Declares the hemisphere, filter and composite passes; returns the total radiance.
+    pub fn add_passes(&self, g: &mut RenderGraph, inp: &GiInputs) -> ImageHandle {
+        let (w, h) = (inp.width, inp.height);
+        let groups = (w.div_ceil(8), h.div_ceil(8));
+        let sampler = self.sampler;
+        let lut = g.import_buffer(&self.lut, Access::StorageRead(Shader::Compute));
+        let irradiance = g.create_image(ImageDesc::new_2d(
+            "indirect irradiance",
+            vk::Format::R32G32B32A32_SFLOAT,
+            w,
+            h,
+        ));
+        let pipe = self.hemisphere;
+        let push = self.push;
+        let i = *inp;
+        let read = Access::Sampled(Shader::Compute);
+        g.add_pass("gi_hemisphere")
+            .read(i.frame, Access::StorageRead(Shader::Compute))
+            .read(i.normal, read)
+            .read(i.depth, read)
+            .read(i.voxels, read)
+            .read(lut, Access::StorageRead(Shader::Compute))
+            .read(i.rlm_radiance, read)
+            .read(i.rlm_position, read)
+            .read(i.rlm_normal, read)
+            .write(irradiance, Access::StorageWrite(Shader::Compute))
+            .record(move |ctx| {
+                let sampled = |binding, h: ImageHandle| Descriptor::SampledImage {
+                    binding,
+                    view: ctx.image(h).view,
+                    sampler,
+                };
+                ctx.cmd.bind(
+                    &pipe,
+                    &[
+                        frame_for_slot(i.frame_descriptor, i.frame_stride, ctx.slot),
+                        sampled(1, i.normal),
+                        sampled(2, i.depth),
+                        sampled(3, i.voxels),
+                        Descriptor::storage_buffer(4, ctx.buffer(lut).raw),
+                        sampled(5, i.rlm_radiance),
+                        sampled(6, i.rlm_position),
+                        sampled(7, i.rlm_normal),
+                        Descriptor::StorageImage {
+                            binding: 8,
+                            view: ctx.image(irradiance).view,
+                        },
+                    ],
+                );
+                ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
+                ctx.cmd.dispatch(groups.0, groups.1, 1);
+            });
+
+        // Geometry-aware filter, horizontal then vertical, `filter_passes` times.
+        let mut current = irradiance;
+        let passes = if self.settings.filter_radius == 0 {
+            0
+        } else {
+            self.settings.filter_passes
+        };
+        for p in 0..passes {
+            for (axis, dir) in [("h", [1, 0]), ("v", [0, 1])] {
+                let out = g.create_image(ImageDesc::new_2d(
+                    &format!("filtered irradiance {p}{axis}"),
+                    vk::Format::R32G32B32A32_SFLOAT,
+                    w,
+                    h,
+                ));
+                let pipe = self.filter;
+                let src = current;
+                let fp = GpuFilterPush {
+                    direction: dir,
+                    radius: self.settings.filter_radius as i32,
+                    plane_tolerance: 0.02,
+                };
+                g.add_pass(&format!("gi_filter[{p}{axis}]"))
+                    .read(i.frame, Access::StorageRead(Shader::Compute))
+                    .read(i.normal, read)
+                    .read(i.depth, read)
+                    .read(src, read)
+                    .write(out, Access::StorageWrite(Shader::Compute))
+                    .record(move |ctx| {
+                        let sampled = |binding, h: ImageHandle| Descriptor::SampledImage {
+                            binding,
+                            view: ctx.image(h).view,
+                            sampler,
+                        };
+                        ctx.cmd.bind(
+                            &pipe,
+                            &[
+                                frame_for_slot(i.frame_descriptor, i.frame_stride, ctx.slot),
+                                sampled(1, i.normal),
+                                sampled(2, i.depth),
+                                sampled(3, src),
+                                Descriptor::StorageImage {
+                                    binding: 4,
+                                    view: ctx.image(out).view,
+                                },
+                            ],
+                        );
+                        ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&fp));
+                        ctx.cmd.dispatch(groups.0, groups.1, 1);
+                    });
+                current = out;
+            }
+        }
+
+        let total = g.create_image(ImageDesc::new_2d(
+            "radiance (direct + indirect)",
+            vk::Format::R32G32B32A32_SFLOAT,
+            w,
+            h,
+        ));
+        let pipe = self.composite;
+        let indirect = current;
+        g.add_pass("gi_composite")
+            .read(i.direct, read)
+            .read(i.albedo, read)
+            .read(indirect, read)
+            .write(total, Access::StorageWrite(Shader::Compute))
+            .record(move |ctx| {
+                let sampled = |binding, h: ImageHandle| Descriptor::SampledImage {
+                    binding,
+                    view: ctx.image(h).view,
+                    sampler,
+                };
+                ctx.cmd.bind(
+                    &pipe,
+                    &[
+                        sampled(0, i.direct),
+                        sampled(1, i.albedo),
+                        sampled(2, indirect),
+                        Descriptor::StorageImage {
+                            binding: 3,
+                            view: ctx.image(total).view,
+                        },
+                    ],
+                );
+                ctx.cmd.dispatch(groups.0, groups.1, 1);
+            });
+        total
+    }
+
+    pub fn destroy(self, ctx: &Context) {
+        ctx.destroy_compute_pipeline(self.hemisphere);
+        ctx.destroy_compute_pipeline(self.filter);
+        ctx.destroy_compute_pipeline(self.composite);
+        ctx.destroy_buffer(self.lut);
+        ctx.destroy_sampler(self.sampler);
+    }
+}
+
+/// The frame-constants descriptor of frame slot `slot`.
+fn frame_for_slot(d: Descriptor, stride: u64, slot: usize) -> Descriptor {
+    match d {
+        Descriptor::StorageBuffer {
+            binding,
+            buffer,
+            offset,
+            range,
+        } => Descriptor::StorageBuffer {
+            binding,
+            buffer,
+            offset: offset + slot as u64 * stride,
+            range,
+        },
+        other => other,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn push_constants_fit_and_match_glsl() {
+        assert_eq!(
+            std::mem::size_of::<GpuGiPush>(),
+            128,
+            "the Vulkan minimum push-constant size"
+        );
+        assert_eq!(std::mem::offset_of!(GpuGiPush, dims), 64);
+        assert_eq!(std::mem::offset_of!(GpuGiPush, params2), 112);
+        assert_eq!(std::mem::size_of::<GpuFilterPush>(), 16);
+    }
+}
