@@ -85,8 +85,12 @@ void main() {
     for (uint i = 0u; i < rays; ++i) {
         vec2 u = fract(vec2((float(i) + 0.5) / float(rays), radical_inverse(i)) + rot);
         vec3 d = cosine_direction(n, u);
-        VxHit h = voxel_first_hit(gi.dims.xyz, uint(gi.dims.w), ov, dir_to_voxel * d, gi.params.x, gi.iparams.y, gi.iparams.z);
-        if (h.hit) sum += light_map_radiance(origin + d * h.t, d);
+        // Offset along the ray (§4.4): k2 * h / (d . n), clamped, so grazing rays leave the
+        // surface's own voxels too.
+        float along = min(gi.params2.z * gi.params.w / max(dot(d, n), 1e-4), gi.params2.w * gi.params.w);
+        vec3 o = origin + d * along;
+        VxHit h = voxel_first_hit(gi.dims.xyz, uint(gi.dims.w), ov + dir_to_voxel * (d * along), dir_to_voxel * d, max(gi.params.x - along, 0.0), gi.iparams.y, gi.iparams.z);
+        if (h.hit) sum += light_map_radiance(o + d * h.t, d);
     }
     imageStore(irradiance, px, vec4(sum * (PI / float(rays)), 1.0));
 }

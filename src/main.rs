@@ -210,6 +210,9 @@ struct FrameArgs {
     /// Self-intersection offset along the normal, in voxel diagonals (thesis k1).
     #[arg(long, default_value_t = 1.0)]
     gi_normal_offset: f32,
+    /// Self-intersection offset along the ray, in voxel diagonals over cos (thesis k2).
+    #[arg(long, default_value_t = 0.0)]
+    gi_ray_offset: f32,
     /// Geometry-aware filter radius in pixels (0: off).
     #[arg(long, default_value_t = 4)]
     gi_filter_radius: u32,
@@ -245,6 +248,7 @@ impl FrameArgs {
             rays: self.gi_rays,
             radius_m: self.gi_radius,
             normal_offset_voxels: self.gi_normal_offset,
+            ray_offset_voxels: self.gi_ray_offset,
             filter_radius: self.gi_filter_radius,
             filter_passes: self.gi_filter_passes,
             light_map_resolution: self.light_map_resolution,

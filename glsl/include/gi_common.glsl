@@ -10,7 +10,7 @@ layout(push_constant) uniform GiPush {
     ivec4 dims;      // voxels x, y, depth; w max hierarchy level
     vec4 params;     // x radius (m), y normal offset (voxel diagonals), z hit tolerance (voxel diagonals), w voxel diagonal (m)
     uvec4 iparams;   // x rays per pixel, y start level, z max iterations, w frame seed
-    vec4 params2;    // x light-map texel footprint scale (shadow res / light-map res), y bounces, z, w unused
+    vec4 params2;    // x light-map texel footprint scale (shadow res / light-map res), y bounces, z ray offset k2 (voxel diagonals), w its clamp (voxel diagonals)
 } gi;
 
 // Radical inverse in base 2 (Hammersley's second coordinate).

@@ -248,15 +248,6 @@ VxHit voxel_first_hit(ivec3 dims, uint max_level, vec3 origin, vec3 dir, float t
     return vx_miss(origin, steps, true);
 }
 
-// Self-intersection offsets of the thesis (§4.4), in voxel space: the ray origin moves k1
-// voxel diagonals along the surface normal n, then along the ray by k2 * h / (d . n) (h the
-// voxel diagonal), clamped to k2_max diagonals so grazing rays do not jump far.
-vec3 voxel_offset_origin(vec3 p, vec3 n, vec3 d, float k1, float k2, float k2_max) {
-    const float h = 1.7320508;  // voxel diagonal in voxel units
-    float dn = max(dot(normalize(d), n), 1e-4);
-    return p + n * (k1 * h) + normalize(d) * min(k2 * h / dn, k2_max * h);
-}
-
 // Whether the segment a -> b (voxel space) is free of set voxels (both end voxels count:
 // apply the thesis's offsets, §4.4, first). Running out of iterations counts as visible.
 bool voxel_visible(ivec3 dims, uint max_level, vec3 a, vec3 b, uint start_level, uint max_iterations) {

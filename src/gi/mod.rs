@@ -28,6 +28,10 @@ pub struct GiSettings {
     pub radius_m: Option<f32>,
     /// Self-intersection offset along the normal, in voxel diagonals (thesis §4.4, k₁).
     pub normal_offset_voxels: f32,
+    /// Self-intersection offset along the ray, k₂ · h / (d·n) in voxel diagonals h, clamped
+    /// to `ray_offset_max_voxels` (thesis §4.4).
+    pub ray_offset_voxels: f32,
+    pub ray_offset_max_voxels: f32,
     /// Light-map hit tolerance, in voxel diagonals (plus the map texel's footprint).
     pub hit_tolerance_voxels: f32,
     pub start_level: u32,
@@ -48,6 +52,8 @@ impl Default for GiSettings {
             rays: 16,
             radius_m: None,
             normal_offset_voxels: 1.0,
+            ray_offset_voxels: 0.0,
+            ray_offset_max_voxels: 4.0,
             hit_tolerance_voxels: 1.5,
             start_level: 1,
             max_iterations: 1024,
