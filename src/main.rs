@@ -4,6 +4,7 @@ use anyhow::{bail, Context as _, Result};
 use clap::{Parser, Subcommand};
 use std::path::PathBuf;
 use voxgi::demo::Demo;
+use voxgi::light::PointShadow;
 use voxgi::post::ToneOperator;
 use voxgi::profile::ProfileReport;
 use voxgi::render::{profile_scene, render_image, RenderSettings};
@@ -163,6 +164,9 @@ struct FrameArgs {
     /// PCF radius in texels.
     #[arg(long, default_value_t = 1)]
     pcf_radius: u32,
+    /// Shadow maps of point lights: six cube faces or two paraboloid hemispheres.
+    #[arg(long, value_enum, default_value_t = PointShadow::Cube)]
+    point_shadows: PointShadow,
     /// Voxelize the scene every frame into a grid of at most N×N columns (`profile` then
     /// shows the voxel passes).
     #[arg(long, value_name = "N")]
@@ -187,6 +191,7 @@ impl FrameArgs {
         s.tonemap.exposure = self.exposure;
         s.shadow.resolution = self.shadow_resolution;
         s.shadow.pcf_radius = self.pcf_radius;
+        s.shadow.point_technique = self.point_shadows;
         s.voxels = self
             .voxels
             .map(|max_res_xy| voxgi::voxel::gpu::VoxelSettings {
