@@ -9,9 +9,10 @@
 // of the true curved images. For an edge of angular length a the chord deviates from the arc by
 // at most about a^2 / 8 in uv (times the 1/(1+z) scale), so coverage is off by up to
 // res * a^2 / 16 texels; the 0.4 m blocker cube of the tests, 0.8 m from the light, is off by
-// under one texel at 1024^2. Depth does not suffer: the fragment shader writes the exact
-// distance to the triangle's plane along the texel's ray. Triangles crossing the rim are clipped
-// to the hemisphere (z >= 0), whose boundary maps onto the unit circle.
+// under one texel at 1024^2. Depth does not suffer as much: the fragment shader writes the
+// distance along the texel's ray to the triangle's plane, clamped to the triangle's range.
+// Triangles crossing the rim are clipped to the hemisphere (z >= 0), whose boundary maps onto
+// the unit circle.
 #include "frame.glsl"
 
 layout(triangles) in;
@@ -24,19 +25,23 @@ layout(push_constant) uniform Push {
     uint view;
 } pc;
 
-// Paraboloid only: uv of the fragment (exact, as w = 1) and the triangle's plane in the
-// hemisphere frame (xyz unit normal, w offset; all 0 for the other projections), near and far.
+// Paraboloid only: uv of the fragment (exact, as w = 1), the triangle's vertices in the
+// hemisphere frame (w 1; w 0 for the other projections), near and far.
 layout(location = 0) out vec2 out_uv;
-layout(location = 1) flat out vec4 out_plane;
-layout(location = 2) flat out vec2 out_range;
+layout(location = 1) flat out vec4 out_v0;
+layout(location = 2) flat out vec3 out_v1;
+layout(location = 3) flat out vec3 out_v2;
+layout(location = 4) flat out vec2 out_range;
 
-void emit_paraboloid(vec3 d, GpuShadowView sv, vec4 plane) {
+void emit_paraboloid(vec3 d, GpuShadowView sv, vec3 tri[3]) {
     float len = length(d);
     vec2 uv = d.xy / max(len + d.z, 1e-30);
     gl_Position = vec4(uv, clamp((len - sv.params.z) / (sv.params.w - sv.params.z), 0.0, 1.0), 1.0);
     gl_Layer = int(pc.view);
     out_uv = uv;
-    out_plane = plane;
+    out_v0 = vec4(tri[0], 1.0);
+    out_v1 = tri[1];
+    out_v2 = tri[2];
     out_range = sv.params.zw;
     EmitVertex();
 }
@@ -48,7 +53,9 @@ void main() {
             gl_Position = sv.view_proj * gl_in[i].gl_Position;
             gl_Layer = int(pc.view);
             out_uv = vec2(0.0);
-            out_plane = vec4(0.0);
+            out_v0 = vec4(0.0);
+            out_v1 = vec3(0.0);
+            out_v2 = vec3(0.0);
             out_range = sv.params.zw;
             EmitVertex();
         }
@@ -57,11 +64,6 @@ void main() {
     }
     vec3 d[3];
     for (int i = 0; i < 3; ++i) d[i] = (sv.view_proj * gl_in[i].gl_Position).xyz;
-    vec3 n = cross(d[1] - d[0], d[2] - d[0]);
-    float nl = length(n);
-    if (nl <= 0.0) return;
-    n /= nl;
-    vec4 plane = vec4(n, -dot(n, d[0]));
     // Clip to z >= 0 (one plane: at most four vertices), emitted in strip order.
     vec3 poly[4];
     int count = 0;
@@ -71,13 +73,13 @@ void main() {
         if ((a.z >= 0.0) != (b.z >= 0.0)) poly[count++] = mix(a, b, a.z / (a.z - b.z));
     }
     if (count < 3) return;
-    emit_paraboloid(poly[0], sv, plane);
-    emit_paraboloid(poly[1], sv, plane);
+    emit_paraboloid(poly[0], sv, d);
+    emit_paraboloid(poly[1], sv, d);
     if (count == 4) {
-        emit_paraboloid(poly[3], sv, plane);
-        emit_paraboloid(poly[2], sv, plane);
+        emit_paraboloid(poly[3], sv, d);
+        emit_paraboloid(poly[2], sv, d);
     } else {
-        emit_paraboloid(poly[2], sv, plane);
+        emit_paraboloid(poly[2], sv, d);
     }
     EndPrimitive();
 }
