@@ -5,6 +5,7 @@ use clap::{Parser, Subcommand};
 use std::path::PathBuf;
 use voxgi::demo::Demo;
 use voxgi::gi::GiMethod;
+use voxgi::light::PointShadow;
 use voxgi::post::ToneOperator;
 use voxgi::profile::ProfileReport;
 use voxgi::render::{profile_scene, render_image, RenderSettings};
@@ -188,6 +189,9 @@ struct FrameArgs {
     /// PCF radius in texels.
     #[arg(long, default_value_t = 1)]
     pcf_radius: u32,
+    /// Shadow maps of point lights: six cube faces or two paraboloid hemispheres.
+    #[arg(long, value_enum, default_value_t = PointShadow::Cube)]
+    point_shadows: PointShadow,
     /// Voxelize the scene every frame into a grid of at most N×N columns (`profile` then
     /// shows the voxel passes).
     #[arg(long, value_name = "N")]
@@ -236,6 +240,7 @@ impl FrameArgs {
         s.tonemap.exposure = self.exposure;
         s.shadow.resolution = self.shadow_resolution;
         s.shadow.pcf_radius = self.pcf_radius;
+        s.shadow.point_technique = self.point_shadows;
         s.voxels = self
             .voxels
             .map(|max_res_xy| voxgi::voxel::gpu::VoxelSettings {

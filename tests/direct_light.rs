@@ -7,6 +7,7 @@ mod common;
 use glam::{Vec3, Vec4Swizzles};
 use std::path::Path;
 use voxgi::eval::HdrImage;
+use voxgi::light::PointShadow;
 use voxgi::render::{render_image, RenderSettings};
 use voxgi::scene::{spot_falloff, Scene};
 
@@ -18,12 +19,17 @@ fn scene(toml: &str) -> Scene {
 }
 
 fn render(scene: &Scene) -> HdrImage {
+    render_with(scene, PointShadow::Cube)
+}
+
+fn render_with(scene: &Scene, point_technique: PointShadow) -> HdrImage {
     let ctx = common::context();
-    let settings = RenderSettings {
+    let mut settings = RenderSettings {
         width: SIZE,
         height: SIZE,
         ..Default::default()
     };
+    settings.shadow.point_technique = point_technique;
     let out = render_image(&ctx, scene, &settings).expect("renders");
     common::assert_no_validation_messages(&ctx);
     assert!(
@@ -97,10 +103,19 @@ const PIXELS: [(u32, u32); 7] = [
 
 #[test]
 fn point_light_matches_inverse_square_law() {
+    point_light_inverse_square(PointShadow::Cube);
+}
+
+#[test]
+fn point_light_matches_inverse_square_law_with_paraboloid_shadows() {
+    point_light_inverse_square(PointShadow::DualParaboloid);
+}
+
+fn point_light_inverse_square(technique: PointShadow) {
     let s = scene(&format!(
         "{CAMERA_DOWN}{PLANE}[[lights]]\nkind = \"point\"\nposition = [0.3, 1.0, -0.2]\nintensity_w_sr = [2.0, 1.0, 3.0]\n"
     ));
-    let img = render(&s);
+    let img = render_with(&s, technique);
     let light = Vec3::new(0.3, 1.0, -0.2);
     let intensity = Vec3::new(2.0, 1.0, 3.0);
     for (x, y) in PIXELS {
@@ -178,15 +193,58 @@ fn directional_light_gives_uniform_cosine_weighted_radiance() {
     }
 }
 
+const BLOCKER: &str = "[[lights]]\nkind = \"point\"\nposition = [0.0, 1.5, 0.0]\nintensity_w_sr = [2.0, 2.0, 2.0]\n\
+     [[objects]]\nname = \"blocker\"\nbuiltin = \"cube\"\ntranslate = [0.0, 0.5, 0.0]\nscale = 0.4\n";
+
 #[test]
 fn a_blocker_darkens_exactly_its_shadow() {
+    blocker_shadow(PointShadow::Cube);
+}
+
+#[test]
+fn a_blocker_darkens_exactly_its_shadow_with_paraboloid_shadows() {
+    blocker_shadow(PointShadow::DualParaboloid);
+}
+
+/// Cube and paraboloid maps differ only along the shadow's edge: count the pixels.
+#[test]
+fn cube_and_paraboloid_shadows_differ_only_at_the_edge() {
+    let s = scene(&format!("{CAMERA_DOWN}{PLANE}{BLOCKER}"));
+    let cube = render_with(&s, PointShadow::Cube);
+    let dpm = render_with(&s, PointShadow::DualParaboloid);
+    let half = 0.2 * 1.5 / 0.8;
+    let (mut differ, mut off_edge) = (0, 0);
+    for y in 0..SIZE {
+        for x in 0..SIZE {
+            let (a, b) = (pixel(&cube, x, y), pixel(&dpm, x, y));
+            if (a - b).abs().max_element() <= 1e-3 * a.max_element().max(1e-6) {
+                continue;
+            }
+            differ += 1;
+            // Distance of the pixel's plane point to the shadow outline (a square).
+            let p = plane_point(&s, x, y);
+            let edge = (p.x.abs().max(p.z.abs()) - half).abs();
+            let hidden = p.x.abs() < 0.3 && p.z.abs() < 0.3;
+            if edge > 0.05 && !hidden {
+                off_edge += 1;
+            }
+        }
+    }
+    println!(
+        "cube vs paraboloid: {differ} of {} pixels differ",
+        SIZE * SIZE
+    );
+    assert_eq!(
+        off_edge, 0,
+        "{differ} pixels differ, {off_edge} away from the shadow edge"
+    );
+}
+
+fn blocker_shadow(technique: PointShadow) {
     // A 0.4 m cube centered 0.5 m above the plane, a point light 1.5 m above: the umbra on
     // the plane is the cube's bottom face projected from the light, scaled 1.5/1.2 = 1.25.
-    let s = scene(&format!(
-        "{CAMERA_DOWN}{PLANE}[[lights]]\nkind = \"point\"\nposition = [0.0, 1.5, 0.0]\nintensity_w_sr = [2.0, 2.0, 2.0]\n\
-         [[objects]]\nname = \"blocker\"\nbuiltin = \"cube\"\ntranslate = [0.0, 0.5, 0.0]\nscale = 0.4\n"
-    ));
-    let img = render(&s);
+    let s = scene(&format!("{CAMERA_DOWN}{PLANE}{BLOCKER}"));
+    let img = render_with(&s, technique);
     let light = Vec3::new(0.0, 1.5, 0.0);
     let (mut dark, mut lit) = (0, 0);
     for y in (2..SIZE).step_by(5) {

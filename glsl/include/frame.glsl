@@ -19,10 +19,12 @@ struct GpuLight {
 };
 
 struct GpuShadowView {
-    mat4 view_proj;     // world -> Vulkan clip of the shadow map layer
-    vec4 params;        // x texel footprint per meter of distance (perspective) or meters (ortho),
-                        // y 1 = orthographic, z near, w far
-    vec4 axis;          // xyz major axis of a cube face (point lights), w unused
+    mat4 view_proj;     // world -> Vulkan clip of the shadow map layer (paraboloid: world ->
+                        // hemisphere frame, light at the origin, +z the axis)
+    vec4 params;        // x texel footprint per meter of distance (perspective), meters (ortho)
+                        // or radians at the axis (paraboloid), y 0 perspective, 1 orthographic,
+                        // 2 paraboloid, z near, w far
+    vec4 axis;          // xyz the view's axis (cube face, hemisphere, spot/sun direction), w unused
 };
 
 struct GpuFrame {

@@ -1,11 +1,45 @@
 //! Shadow views: the projections the shadow pass renders and the shading pass looks up.
 //!
 //! Every view is one layer of a single depth array. Only the views a scene needs exist: a
-//! point light adds six cube faces, a spot light one perspective map, a directional light one
-//! orthographic map; no lights, no shadow views.
+//! point light adds six cube faces (or two paraboloid hemispheres), a spot light one
+//! perspective map, a directional light one orthographic map; no lights, no shadow views.
 
+use crate::render::aabb_visible;
 use crate::scene::{Aabb, Light, Scene};
 use glam::{Mat4, Vec3};
+
+/// How point lights are shadowed.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum PointShadow {
+    /// Six perspective cube faces.
+    #[default]
+    Cube,
+    /// Two paraboloid hemispheres around ±Y (Brabec et al. 2002; digest_001_004.md A.1):
+    /// a third of the layers and draws, at the cost of curved edges (see `shadow_depth.geom`).
+    #[value(name = "paraboloid")]
+    DualParaboloid,
+}
+
+/// The projection of a shadow view.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ShadowProjection {
+    Perspective,
+    Orthographic,
+    /// `view_proj` is the rigid world → hemisphere frame (light at the origin, +z the
+    /// hemisphere's axis); the paraboloid map itself is applied per vertex in the shaders.
+    Paraboloid,
+}
+
+impl ShadowProjection {
+    /// `GpuShadowView::params.y` (glsl/include/frame.glsl).
+    pub fn gpu_code(self) -> f32 {
+        match self {
+            Self::Perspective => 0.0,
+            Self::Orthographic => 1.0,
+            Self::Paraboloid => 2.0,
+        }
+    }
+}
 
 /// Shadow parameters (exposed in the CLI and the viewer).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -20,6 +54,8 @@ pub struct ShadowSettings {
     pub slope_bias_texels: f32,
     /// Normal offset of the lookup position, in texels (times sin(theta)).
     pub normal_offset_texels: f32,
+    /// Cube or dual-paraboloid maps for point lights.
+    pub point_technique: PointShadow,
 }
 
 impl Default for ShadowSettings {
@@ -30,6 +66,7 @@ impl Default for ShadowSettings {
             bias_texels: 1.0,
             slope_bias_texels: 1.0,
             normal_offset_texels: 1.0,
+            point_technique: PointShadow::Cube,
         }
     }
 }
@@ -38,13 +75,38 @@ impl Default for ShadowSettings {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ShadowView {
     pub view_proj: Mat4,
-    /// World size of a texel per meter of view depth (perspective) or in meters (ortho).
+    /// World size of a texel per meter of view depth (perspective), in meters (ortho), or in
+    /// radians at the hemisphere's axis (paraboloid; times 1 + cos of the angle elsewhere).
     pub texel_footprint: f32,
-    pub orthographic: bool,
+    pub projection: ShadowProjection,
+    /// The view's axis (the direction a cube face or paraboloid hemisphere looks).
+    pub axis: Vec3,
     pub near: f32,
     pub far: f32,
     /// Index of the light in `scene.lights`.
     pub light: usize,
+}
+
+impl ShadowView {
+    /// False only when no part of `aabb` can land in this view (conservative).
+    pub fn may_see(&self, aabb: &Aabb) -> bool {
+        match self.projection {
+            // The hemisphere is the half-space in front of the light; the paraboloid covers
+            // all of it, so only boxes entirely behind are culled.
+            ShadowProjection::Paraboloid => {
+                !aabb.is_empty()
+                    && (0..8).any(|i| {
+                        let c = Vec3::new(
+                            if i & 1 == 0 { aabb.min.x } else { aabb.max.x },
+                            if i & 2 == 0 { aabb.min.y } else { aabb.max.y },
+                            if i & 4 == 0 { aabb.min.z } else { aabb.max.z },
+                        );
+                        self.view_proj.transform_point3(c).z >= 0.0
+                    })
+            }
+            _ => aabb_visible(&self.view_proj, aabb),
+        }
+    }
 }
 
 /// Which views belong to a light: `count` consecutive views starting at `first`.
@@ -115,11 +177,39 @@ pub fn shadow_views(
                 views.push(ShadowView {
                     view_proj: proj * view,
                     texel_footprint: 2.0 * half.tan() / res,
-                    orthographic: false,
+                    projection: ShadowProjection::Perspective,
+                    axis: direction,
                     near,
                     far,
                     light: li,
                 });
+            }
+            Light::Point { position, .. }
+                if settings.point_technique == PointShadow::DualParaboloid =>
+            {
+                let (near, far) = depth_range(position, &aabb);
+                // Hemisphere frames share x and y, so a PCF tap past one rim (|uv| > 1) is the
+                // other map's uv / |uv|^2 (glsl/include/shadow.glsl).
+                for axis in [Vec3::Y, Vec3::NEG_Y] {
+                    let rot = Mat4::from_cols(
+                        Vec3::X.extend(0.0),
+                        Vec3::Z.extend(0.0),
+                        axis.extend(0.0),
+                        glam::Vec4::W,
+                    )
+                    .transpose();
+                    views.push(ShadowView {
+                        view_proj: rot * Mat4::from_translation(-position),
+                        // uv = d.xy / (1 + d.z) is conformal (stereographic) with
+                        // |duv/dangle| = 1 / (1 + d.z); a texel spans 2 / res in uv.
+                        texel_footprint: 2.0 / res,
+                        projection: ShadowProjection::Paraboloid,
+                        axis,
+                        near,
+                        far,
+                        light: li,
+                    });
+                }
             }
             Light::Point { position, .. } => {
                 let (near, far) = depth_range(position, &aabb);
@@ -138,7 +228,8 @@ pub fn shadow_views(
                     views.push(ShadowView {
                         view_proj: proj * view,
                         texel_footprint: 2.0 * half.tan() / res,
-                        orthographic: false,
+                        projection: ShadowProjection::Perspective,
+                        axis,
                         near,
                         far,
                         light: li,
@@ -177,7 +268,8 @@ pub fn shadow_views(
                 views.push(ShadowView {
                     view_proj: proj * view,
                     texel_footprint: (size + 2.0 * margin) / res,
-                    orthographic: true,
+                    projection: ShadowProjection::Orthographic,
+                    axis: direction,
                     near,
                     far,
                     light: li,
@@ -258,6 +350,61 @@ mod tests {
                 "point {p} face {face} -> {q}"
             );
         }
+    }
+
+    fn paraboloid_uv(view: &ShadowView, p: Vec3) -> glam::Vec2 {
+        let d = view.view_proj.transform_point3(p);
+        glam::Vec2::new(d.x, d.y) / (d.length() + d.z)
+    }
+
+    #[test]
+    fn paraboloid_hemispheres_cover_the_scene_and_meet_at_the_rim() {
+        let scene = builtin("cornell-point").expect("cornell-point");
+        let settings = ShadowSettings {
+            point_technique: PointShadow::DualParaboloid,
+            ..Default::default()
+        };
+        let (views, per_light) = shadow_views(&scene, 0.0, &settings);
+        assert_eq!(
+            views.len(),
+            2,
+            "a paraboloid point light has two hemispheres"
+        );
+        assert_eq!(per_light, vec![LightShadows { first: 0, count: 2 }]);
+        let light = scene.lights[0].position().expect("point light");
+        let aabb = scene.aabb_at(0.0);
+        for i in 0..1000 {
+            let u = Vec3::new(
+                (i % 10) as f32 / 9.0,
+                ((i / 10) % 10) as f32 / 9.0,
+                (i / 100) as f32 / 9.0,
+            );
+            let p = aabb.min + (aabb.max - aabb.min) * u;
+            let d = p - light;
+            if d.length() < 1e-3 {
+                continue;
+            }
+            // Picked by the sign along the axis, as shadow.glsl does.
+            let (v, other) = if d.dot(views[0].axis) >= 0.0 {
+                (&views[0], &views[1])
+            } else {
+                (&views[1], &views[0])
+            };
+            let uv = paraboloid_uv(v, p);
+            assert!(uv.length() <= 1.0 + 1e-5, "point {p} -> {uv}");
+            assert!(d.length() <= v.far && v.may_see(&Aabb { min: p, max: p }));
+            // Past the rim, the other hemisphere holds the same direction at uv / |uv|^2.
+            if uv.length() > 0.5 {
+                let back = paraboloid_uv(other, p);
+                let inv = back / back.length_squared();
+                assert!((inv - uv).length() < 1e-3 * uv.length(), "{uv} vs {inv}");
+            }
+        }
+        let below = Aabb {
+            min: light - Vec3::new(1.0, 2.0, 1.0),
+            max: light - Vec3::new(-1.0, 1.0, -1.0),
+        };
+        assert!(!views[0].may_see(&below) && views[1].may_see(&below));
     }
 
     #[test]

@@ -26,8 +26,10 @@ pub struct GpuLight {
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct GpuShadowView {
     pub view_proj: [f32; 16],
-    /// x texel footprint (per meter of depth, or meters when ortho), y ortho flag, z near, w far.
+    /// x texel footprint (per meter of depth, meters when ortho, radians at the axis when
+    /// paraboloid), y projection (`ShadowProjection::gpu_code`), z near, w far.
     pub params: [f32; 4],
+    /// xyz the view's axis (cube face, paraboloid hemisphere, spot or sun direction).
     pub axis: [f32; 4],
 }
 

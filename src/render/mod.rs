@@ -12,7 +12,7 @@ pub use cull::aabb_visible;
 
 use crate::eval::HdrImage;
 use crate::graph::{Access, GraphError, GraphExecutor, ImageHandle, RenderGraph, Shader};
-use crate::light::{shadow_views, ShadowSettings};
+use crate::light::{shadow_views, PointShadow, ShadowSettings};
 use crate::post::ToneMap;
 use crate::scene::{Light, Scene};
 use crate::vk::{
@@ -34,12 +34,14 @@ pub enum RenderError {
     Graph(#[from] GraphError),
     #[error("the scene has {0} lights; voxgi renders at most {MAX_LIGHTS}: remove some")]
     TooManyLights(usize),
-    #[error("the scene's lights need {0} shadow-map views; at most {MAX_SHADOW_VIEWS} fit (a point light takes 6): remove some point lights")]
+    #[error("the scene's lights need {0} shadow-map views; at most {MAX_SHADOW_VIEWS} fit (a point light takes 6, or 2 with paraboloid shadows): remove some point lights or use --point-shadows paraboloid")]
     TooManyShadowViews(usize),
     #[error("image size {0}x{1} is invalid: width and height must be between 1 and 16384")]
     BadSize(u32, u32),
     #[error("the scene has no geometry to render: add an object")]
     EmptyScene,
+    #[error("indirect light reads reflective light maps, which exist for cube shadow maps only: use --point-shadows cube with --gi")]
+    GiNeedsCubeShadows,
     #[error(transparent)]
     Voxel(#[from] crate::voxel::gpu::GpuVoxelError),
 }
@@ -217,9 +219,22 @@ impl Renderer {
             "texture placeholder",
         )?);
         let texture_sampler = ctx.create_sampler(vk::Filter::LINEAR, true)?;
-        let pipelines = create_pipelines(ctx, has_phong, has_textures)?;
+        // Paraboloid maps write their depth per fragment, which costs the other maps their
+        // early depth test: only scenes that have them pay for it.
+        let paraboloid = settings.shadow.point_technique == PointShadow::DualParaboloid
+            && scene
+                .lights
+                .iter()
+                .any(|l| matches!(l, Light::Point { .. }));
+        let pipelines = create_pipelines(ctx, has_phong, has_textures, paraboloid)?;
         let sampler = ctx.create_sampler(vk::Filter::NEAREST, false)?;
         let gi_on = settings.gi.method != crate::gi::GiMethod::None;
+        if gi_on
+            && settings.shadow.point_technique == PointShadow::DualParaboloid
+            && scene.has_point_lights()
+        {
+            return Err(RenderError::GiNeedsCubeShadows);
+        }
         let voxel_settings = settings.voxels.or(gi_on.then(Default::default));
         let voxels = match &voxel_settings {
             Some(v) => Some(crate::voxel::gpu::VoxelFrame::new(
@@ -303,13 +318,8 @@ impl Renderer {
         for (i, v) in views.iter().enumerate() {
             f.shadow_views[i] = GpuShadowView {
                 view_proj: v.view_proj.to_cols_array(),
-                params: [
-                    v.texel_footprint,
-                    if v.orthographic { 1.0 } else { 0.0 },
-                    v.near,
-                    v.far,
-                ],
-                axis: [0.0; 4],
+                params: [v.texel_footprint, v.projection.gpu_code(), v.near, v.far],
+                axis: v.axis.extend(0.0).to_array(),
             };
         }
         self.frame_data = f;
@@ -327,7 +337,7 @@ impl Renderer {
                     self.all_draws
                         .iter()
                         .copied()
-                        .filter(|d| aabb_visible(&v.view_proj, &d.aabb))
+                        .filter(|d| v.may_see(&d.aabb))
                         .collect()
                 })
                 .collect(),
@@ -946,6 +956,7 @@ fn create_pipelines(
     ctx: &Context,
     has_phong: bool,
     has_textures: bool,
+    paraboloid_shadows: bool,
 ) -> Result<Pipelines, VkError> {
     let storage = vk::DescriptorType::STORAGE_BUFFER;
     let sampled = vk::DescriptorType::COMBINED_IMAGE_SAMPLER;
@@ -980,7 +991,11 @@ fn create_pipelines(
     let shadow = ctx.graphics_pipeline(&GraphicsPipelineDesc {
         vertex: "shadow_depth.vert".into(),
         geometry: Some("shadow_depth.geom".into()),
-        fragment: "shadow_depth.frag".into(),
+        fragment: if paraboloid_shadows {
+            "shadow_depth_paraboloid.frag".into()
+        } else {
+            "shadow_depth.frag".into()
+        },
         bindings: vec![(0, storage)],
         push_constant_bytes: push,
         vertex_stride: std::mem::size_of::<GpuVertex>() as u32,
