@@ -173,6 +173,15 @@ struct FrameArgs {
     /// Re-voxelize static geometry every frame too (measures the full voxelization).
     #[arg(long)]
     revoxelize: bool,
+    /// Show a voxel debug view instead of the lit image (voxelizes at 128 unless --voxels).
+    #[arg(long, value_enum)]
+    debug: Option<voxgi::voxel::debug_view::DebugView>,
+    /// Hierarchy level shown by --debug level (0 = the voxels).
+    #[arg(long, default_value_t = 0)]
+    debug_level: u32,
+    /// Traversal steps shown white by --debug steps.
+    #[arg(long, default_value_t = 64)]
+    debug_steps_scale: u32,
 }
 
 impl FrameArgs {
@@ -193,6 +202,14 @@ impl FrameArgs {
                 max_res_xy,
                 layers: self.voxel_layers,
                 revoxelize_static: self.revoxelize,
+            });
+        s.debug = self
+            .debug
+            .map(|view| voxgi::voxel::debug_view::DebugSettings {
+                view,
+                level: self.debug_level,
+                steps_scale: self.debug_steps_scale,
+                ..Default::default()
             });
         s
     }
@@ -320,6 +337,9 @@ fn run(cli: Cli) -> Result<()> {
             }
             for t in &out.timings {
                 println!("  {:<16} {:>9.3} ms", t.name, t.gpu_ms);
+            }
+            if let Some(d) = frame.settings().debug {
+                println!("{}", voxgi::voxel::debug_view::describe(&d, &out.hdr));
             }
             if let Some(reference) = compare {
                 let r = voxgi::eval::HdrImage::load(&reference)?;

@@ -55,6 +55,9 @@ pub struct RenderSettings {
     pub tonemap: ToneMap,
     /// Voxelize the scene every frame (`None`: direct light needs no voxels).
     pub voxels: Option<crate::voxel::gpu::VoxelSettings>,
+    /// Show a voxel debug view instead of the lit image (voxelizes with the default
+    /// [`crate::voxel::gpu::VoxelSettings`] when `voxels` is `None`).
+    pub debug: Option<crate::voxel::debug_view::DebugSettings>,
 }
 
 impl Default for RenderSettings {
@@ -66,6 +69,7 @@ impl Default for RenderSettings {
             shadow: ShadowSettings::default(),
             tonemap: ToneMap::default(),
             voxels: None,
+            debug: None,
         }
     }
 }
@@ -120,6 +124,7 @@ pub struct Renderer {
     all_draws: Vec<Draw>,
     frame_data: GpuFrame,
     voxels: Option<crate::voxel::gpu::VoxelFrame>,
+    voxel_debug: Option<crate::voxel::debug_view::VoxelDebugPass>,
 }
 
 const GBUFFER_COLOR: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
@@ -204,7 +209,10 @@ impl Renderer {
         let texture_sampler = ctx.create_sampler(vk::Filter::LINEAR, true)?;
         let pipelines = create_pipelines(ctx, has_phong, has_textures)?;
         let sampler = ctx.create_sampler(vk::Filter::NEAREST, false)?;
-        let voxels = match &settings.voxels {
+        let voxel_settings = settings
+            .voxels
+            .or(settings.debug.map(|_| Default::default()));
+        let voxels = match &voxel_settings {
             Some(v) => Some(crate::voxel::gpu::VoxelFrame::new(
                 ctx,
                 scene,
@@ -212,6 +220,16 @@ impl Renderer {
                 v,
             )?),
             None => None,
+        };
+        let voxel_debug = match (&settings.debug, &voxels) {
+            (Some(d), Some(v)) => Some(crate::voxel::debug_view::VoxelDebugPass::new(
+                ctx,
+                &scene.camera,
+                settings.width as f32 / settings.height as f32,
+                d,
+                v,
+            )?),
+            _ => None,
         };
         let mut r = Self {
             settings,
@@ -232,6 +250,7 @@ impl Renderer {
             all_draws,
             frame_data: GpuFrame::zeroed(),
             voxels,
+            voxel_debug,
         };
         r.prepare(scene)?;
         Ok(r)
@@ -342,9 +361,7 @@ impl Renderer {
             range: frame_size,
         };
         let (vb, ib, mb) = (self.vertices.raw, self.indices.raw, self.materials.raw);
-        if let Some(v) = &self.voxels {
-            v.add_passes(&mut g);
-        }
+        let voxel_image = self.voxels.as_ref().map(|v| v.add_passes(&mut g));
 
         // Shadow maps: one layer per shadow view (a 1x1 cleared layer when there are none, so
         // the shading pass always has a map to bind).
@@ -566,6 +583,23 @@ impl Renderer {
                 ctx.cmd.dispatch(groups.0, groups.1, 1);
             });
 
+        // A debug view replaces the lit image: the read-backs take its images, and the graph
+        // culls deferred light, tone mapping, G-buffer and shadows, which nothing reads then.
+        let (radiance, ldr) = match (&self.voxel_debug, &self.voxels, voxel_image) {
+            (Some(pass), Some(v), Some(image)) => {
+                let value = g.create_image(ImageDesc::new_2d("voxel debug value", HDR, w, h));
+                let color = g.create_image(ImageDesc::new_2d(
+                    "voxel debug color",
+                    vk::Format::R8G8B8A8_UNORM,
+                    w,
+                    h,
+                ));
+                pass.add_pass(&mut g, &v.voxels, image, value, color, (w, h));
+                (value, color)
+            }
+            _ => (radiance, ldr),
+        };
+
         // Read-back of both images.
         let hdr_buf = g.import_buffer(&self.readback_hdr, Access::HostRead);
         let ldr_buf = g.import_buffer(&self.readback_ldr, Access::HostRead);
@@ -631,6 +665,9 @@ impl Renderer {
     }
 
     pub fn destroy(self, ctx: &Context) {
+        if let Some(pass) = self.voxel_debug {
+            pass.destroy(ctx);
+        }
         if let Some(v) = self.voxels {
             v.destroy(ctx);
         }

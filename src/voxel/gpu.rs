@@ -51,6 +51,8 @@ pub enum GpuVoxelError {
     Graph(#[from] GraphError),
     #[error(transparent)]
     Voxel(#[from] VoxelError),
+    #[error("debug level {level} does not exist: the voxel grid has levels 0..={max}; pass a smaller --debug-level")]
+    BadDebugLevel { level: u32, max: u32 },
 }
 
 /// One world-space triangle as the shader reads it (`struct Triangle` in
