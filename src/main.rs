@@ -163,8 +163,8 @@ struct FrameArgs {
     /// PCF radius in texels.
     #[arg(long, default_value_t = 1)]
     pcf_radius: u32,
-    /// Voxelize the scene every frame into a grid of at most N×N columns (`profile` then
-    /// shows the voxel passes).
+    /// Voxelize the scene into a grid of at most N×N columns: static geometry once, dynamic
+    /// objects in the frames they move (`profile` then shows those voxel passes).
     #[arg(long, value_name = "N")]
     voxels: Option<u32>,
     /// Depth layers of 128 voxels of the voxel grid.

@@ -322,8 +322,14 @@ impl Renderer {
         Ok(())
     }
 
-    /// Writes the frame constants of frame slot `slot` (call after the slot's fence).
+    /// Writes the frame constants of frame slot `slot` (call after the slot's fence), and the
+    /// dynamic objects' voxels at `settings.time_s`.
     pub fn write_frame(&mut self, slot: usize) {
+        if let Some(v) = &mut self.voxels {
+            if let Err(e) = v.update(self.settings.time_s, slot) {
+                log::warn!("dynamic objects not re-voxelized: {e}");
+            }
+        }
         let offset = (slot as u64 * self.frame_stride) as usize;
         let bytes = bytemuck::bytes_of(&self.frame_data);
         if let Some(m) = self.frame.mapped_mut() {
