@@ -192,8 +192,8 @@ struct FrameArgs {
     /// Shadow maps of point lights: six cube faces or two paraboloid hemispheres.
     #[arg(long, value_enum, default_value_t = PointShadow::Cube)]
     point_shadows: PointShadow,
-    /// Voxelize the scene every frame into a grid of at most N×N columns (`profile` then
-    /// shows the voxel passes).
+    /// Voxelize the scene into a grid of at most N×N columns: static geometry once, dynamic
+    /// objects in the frames they move (`profile` then shows those voxel passes).
     #[arg(long, value_name = "N")]
     voxels: Option<u32>,
     /// Depth layers of 128 voxels of the voxel grid.
@@ -226,6 +226,15 @@ struct FrameArgs {
     /// Reflective light-map resolution per light view.
     #[arg(long, default_value_t = 256)]
     light_map_resolution: u32,
+    /// Show a voxel debug view instead of the lit image (voxelizes at 128 unless --voxels).
+    #[arg(long, value_enum)]
+    debug: Option<voxgi::voxel::debug_view::DebugView>,
+    /// Hierarchy level shown by --debug level (0 = the voxels).
+    #[arg(long, default_value_t = 0)]
+    debug_level: u32,
+    /// Traversal steps shown white by --debug steps.
+    #[arg(long, default_value_t = 64)]
+    debug_steps_scale: u32,
 }
 
 impl FrameArgs {
@@ -259,6 +268,14 @@ impl FrameArgs {
             light_map_resolution: self.light_map_resolution,
             ..Default::default()
         };
+        s.debug = self
+            .debug
+            .map(|view| voxgi::voxel::debug_view::DebugSettings {
+                view,
+                level: self.debug_level,
+                steps_scale: self.debug_steps_scale,
+                ..Default::default()
+            });
         s
     }
 }
@@ -419,6 +436,9 @@ fn run(cli: Cli) -> Result<()> {
             }
             for t in &out.timings {
                 println!("  {:<16} {:>9.3} ms", t.name, t.gpu_ms);
+            }
+            if let Some(d) = frame.settings().debug {
+                println!("{}", voxgi::voxel::debug_view::describe(&d, &out.hdr));
             }
             if let Some(reference) = compare {
                 let r = voxgi::eval::HdrImage::load(&reference)?;

@@ -60,6 +60,9 @@ pub struct RenderSettings {
     pub voxels: Option<crate::voxel::gpu::VoxelSettings>,
     /// Indirect light (method `None`: direct light only).
     pub gi: crate::gi::GiSettings,
+    /// Show a voxel debug view instead of the lit image (voxelizes with the default
+    /// [`crate::voxel::gpu::VoxelSettings`] when `voxels` is `None`).
+    pub debug: Option<crate::voxel::debug_view::DebugSettings>,
 }
 
 impl Default for RenderSettings {
@@ -72,6 +75,7 @@ impl Default for RenderSettings {
             tonemap: ToneMap::default(),
             voxels: None,
             gi: crate::gi::GiSettings::default(),
+            debug: None,
         }
     }
 }
@@ -137,6 +141,7 @@ pub struct Renderer {
     voxels: Option<crate::voxel::gpu::VoxelFrame>,
     /// Indirect-light passes and the light-map pipeline, when a GI method is on.
     gi: Option<(crate::gi::GiPasses, GraphicsPipeline)>,
+    voxel_debug: Option<crate::voxel::debug_view::VoxelDebugPass>,
 }
 
 const GBUFFER_COLOR: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
@@ -235,7 +240,10 @@ impl Renderer {
         {
             return Err(RenderError::GiNeedsCubeShadows);
         }
-        let voxel_settings = settings.voxels.or(gi_on.then(Default::default));
+        let voxel_settings = settings
+            .voxels
+            .or(gi_on.then(Default::default))
+            .or(settings.debug.map(|_| Default::default()));
         let voxels = match &voxel_settings {
             Some(v) => Some(crate::voxel::gpu::VoxelFrame::new(
                 ctx,
@@ -260,6 +268,16 @@ impl Renderer {
             }
             _ => None,
         };
+        let voxel_debug = match (&settings.debug, &voxels) {
+            (Some(d), Some(v)) => Some(crate::voxel::debug_view::VoxelDebugPass::new(
+                ctx,
+                &scene.camera,
+                settings.width as f32 / settings.height as f32,
+                d,
+                v,
+            )?),
+            _ => None,
+        };
         let mut r = Self {
             settings,
             vertices,
@@ -280,6 +298,7 @@ impl Renderer {
             frame_data: GpuFrame::zeroed(),
             voxels,
             gi,
+            voxel_debug,
         };
         r.prepare(scene)?;
         Ok(r)
@@ -348,8 +367,14 @@ impl Renderer {
         Ok(())
     }
 
-    /// Writes the frame constants of frame slot `slot` (call after the slot's fence).
+    /// Writes the frame constants of frame slot `slot` (call after the slot's fence), and the
+    /// dynamic objects' voxels at `settings.time_s`.
     pub fn write_frame(&mut self, slot: usize) {
+        if let Some(v) = &mut self.voxels {
+            if let Err(e) = v.update(self.settings.time_s, slot) {
+                log::warn!("dynamic objects not re-voxelized: {e}");
+            }
+        }
         let offset = (slot as u64 * self.frame_stride) as usize;
         let bytes = bytemuck::bytes_of(&self.frame_data);
         if let Some(m) = self.frame.mapped_mut() {
@@ -741,6 +766,23 @@ impl Renderer {
                 ctx.cmd.dispatch(groups.0, groups.1, 1);
             });
 
+        // A debug view replaces the lit image: the read-backs take its images, and the graph
+        // culls deferred light, tone mapping, G-buffer and shadows, which nothing reads then.
+        let (radiance, ldr) = match (&self.voxel_debug, &self.voxels, voxel_image) {
+            (Some(pass), Some(v), Some(image)) => {
+                let value = g.create_image(ImageDesc::new_2d("voxel debug value", HDR, w, h));
+                let color = g.create_image(ImageDesc::new_2d(
+                    "voxel debug color",
+                    vk::Format::R8G8B8A8_UNORM,
+                    w,
+                    h,
+                ));
+                pass.add_pass(g, &v.voxels, image, value, color, (w, h));
+                (value, color)
+            }
+            _ => (radiance, ldr),
+        };
+
         FrameImages { radiance, ldr }
     }
 
@@ -774,6 +816,9 @@ impl Renderer {
     }
 
     pub fn destroy(self, ctx: &Context) {
+        if let Some(pass) = self.voxel_debug {
+            pass.destroy(ctx);
+        }
         if let Some(v) = self.voxels {
             v.destroy(ctx);
         }

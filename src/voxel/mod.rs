@@ -35,6 +35,7 @@
 
 pub mod bench;
 pub mod bits;
+pub mod debug_view;
 pub mod gpu;
 pub mod gpu_rays;
 pub mod grid;

@@ -1,0 +1,354 @@
+//! Debug views of the GPU voxel grid (`glsl/voxel_debug.comp`, pass `voxel_debug`): camera
+//! rays cast through the column image's OR hierarchy with the GLSL traversal library.
+//!
+//! - [`DebugView::Voxels`]: hierarchical first hit, shaded by the entered face's normal
+//!   (N·L with a fixed light over the camera's shoulder, edges darkened).
+//! - [`DebugView::Steps`]: the traversal's loop iterations per pixel on a heat ramp (black 0 →
+//!   red → yellow → white at `steps_scale`); the value image holds the raw counts.
+//! - [`DebugView::Level`]: occupancy of one hierarchy level, walked exactly (blocks of
+//!   2^ℓ × 2^ℓ voxels, one voxel deep).
+//!
+//! The pass writes an `RGBA32F` value image (shade, step count or occupancy: what tests and
+//! `--exr` read) and the `RGBA8` color image the renderer reads back as its picture.
+
+use super::gpu::{GpuVoxelError, GpuVoxelGrid, VoxelFrame};
+use super::ray_mask::RayMaskLut;
+use super::traverse::TraversalParams;
+use super::VoxelGrid;
+use crate::eval::HdrImage;
+use crate::graph::{Access, ImageHandle, RenderGraph, Shader};
+use crate::scene::Camera;
+use crate::vk::{vk, Buffer, ComputePipeline, Context, Descriptor, VkError};
+use glam::{Mat4, Vec3};
+
+/// Which debug view a frame shows instead of the lit image.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum DebugView {
+    /// Ray-cast voxels shaded by their face normals.
+    #[default]
+    Voxels,
+    /// Hierarchical traversal steps per pixel (heat ramp).
+    Steps,
+    /// Occupancy of one hierarchy level.
+    Level,
+}
+
+impl DebugView {
+    fn shader_mode(self) -> u32 {
+        match self {
+            DebugView::Voxels => 0,
+            DebugView::Steps => 1,
+            DebugView::Level => 2,
+        }
+    }
+}
+
+/// A debug view with its parameters.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct DebugSettings {
+    pub view: DebugView,
+    /// Hierarchy level of [`DebugView::Level`].
+    pub level: u32,
+    /// Traversal parameters of the voxels and steps views.
+    pub traversal: TraversalParams,
+    /// Step count shown white by [`DebugView::Steps`].
+    pub steps_scale: u32,
+}
+
+impl Default for DebugSettings {
+    fn default() -> Self {
+        Self {
+            view: DebugView::Voxels,
+            level: 0,
+            traversal: TraversalParams::default(),
+            steps_scale: 64,
+        }
+    }
+}
+
+/// Push constants of `voxel_debug.comp`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GpuVoxelDebugPush {
+    /// Vulkan NDC (z 0 = near, 1 = far) → continuous voxel coordinates, column-major.
+    pub ndc_to_voxel: [f32; 16],
+    /// Voxels `(res_x, res_y, D)`, coarsest level.
+    pub dims: [i32; 4],
+    /// Mode, level, max iterations, start level.
+    pub params: [u32; 4],
+    /// Unit light direction in voxel axes, steps at the top of the heat ramp.
+    pub light: [f32; 4],
+}
+
+impl GpuVoxelDebugPush {
+    /// `view_proj` is the camera's world → clip matrix; `light_dir` the world direction
+    /// towards the light.
+    pub fn new(
+        grid: &VoxelGrid,
+        levels: u32,
+        view_proj: Mat4,
+        light_dir: Vec3,
+        s: &DebugSettings,
+    ) -> Self {
+        let ext = grid.extent_voxels();
+        // The permutation of world axes into voxel axes (no scale): normals are axis-aligned.
+        let light =
+            (grid.dir_world_to_voxel(light_dir) / grid.voxels_per_meter()).normalize_or_zero();
+        Self {
+            ndc_to_voxel: (grid.world_to_voxel_matrix() * view_proj.inverse()).to_cols_array(),
+            dims: [
+                ext.x as i32,
+                ext.y as i32,
+                ext.z as i32,
+                levels.saturating_sub(1) as i32,
+            ],
+            params: [
+                s.view.shader_mode(),
+                s.level,
+                s.traversal.max_iterations,
+                s.traversal.start_level,
+            ],
+            light: [light.x, light.y, light.z, s.steps_scale.max(1) as f32],
+        }
+    }
+}
+
+/// The pipeline, ray-mask LUT (uploaded once) and push constants of a debug view.
+pub struct VoxelDebugPass {
+    pipeline: ComputePipeline,
+    lut: Buffer,
+    sampler: vk::Sampler,
+    push: GpuVoxelDebugPush,
+}
+
+impl VoxelDebugPass {
+    /// The debug view of `frame`'s grid seen by `camera` (`aspect` = width / height), lit
+    /// from over the camera's shoulder.
+    pub fn new(
+        ctx: &Context,
+        camera: &Camera,
+        aspect: f32,
+        settings: &DebugSettings,
+        frame: &VoxelFrame,
+    ) -> Result<Self, GpuVoxelError> {
+        let levels = frame.voxels.mip_levels();
+        if settings.level >= levels {
+            return Err(GpuVoxelError::BadDebugLevel {
+                level: settings.level,
+                max: levels - 1,
+            });
+        }
+        let right = camera.forward.cross(camera.up).normalize_or_zero();
+        let up = right.cross(camera.forward);
+        let light = -camera.forward + 0.6 * up - 0.4 * right;
+        let push = GpuVoxelDebugPush::new(
+            &frame.voxels.grid,
+            levels,
+            camera.view_proj(aspect),
+            light,
+            settings,
+        );
+        Ok(Self::with_push(ctx, push)?)
+    }
+
+    fn with_push(ctx: &Context, push: GpuVoxelDebugPush) -> Result<Self, VkError> {
+        let lut = ctx.upload_buffer(
+            "ray mask lut",
+            &RayMaskLut::new().to_gpu_bytes(),
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+        )?;
+        let pipeline = ctx.compute_pipeline(
+            "voxel_debug.comp",
+            &[
+                (0, vk::DescriptorType::COMBINED_IMAGE_SAMPLER),
+                (1, vk::DescriptorType::STORAGE_BUFFER),
+                (2, vk::DescriptorType::STORAGE_IMAGE),
+                (3, vk::DescriptorType::STORAGE_IMAGE),
+            ],
+            std::mem::size_of::<GpuVoxelDebugPush>() as u32,
+            &[],
+        );
+        let pipeline = match pipeline {
+            Ok(p) => p,
+            Err(e) => {
+                ctx.destroy_buffer(lut);
+                return Err(e);
+            }
+        };
+        let sampler = match ctx.create_sampler(vk::Filter::NEAREST, false) {
+            Ok(s) => s,
+            Err(e) => {
+                ctx.destroy_buffer(lut);
+                ctx.destroy_compute_pipeline(pipeline);
+                return Err(e);
+            }
+        };
+        Ok(Self {
+            pipeline,
+            lut,
+            sampler,
+            push,
+        })
+    }
+
+    /// Declares `voxel_debug`: reads the column image `columns` (every mip) and writes
+    /// `value` (`RGBA32F`) and `color` (`RGBA8`), both `extent` pixels.
+    pub fn add_pass(
+        &self,
+        g: &mut RenderGraph,
+        voxels: &GpuVoxelGrid,
+        columns: ImageHandle,
+        value: ImageHandle,
+        color: ImageHandle,
+        extent: (u32, u32),
+    ) {
+        let push = self.push;
+        debug_assert_eq!(push.dims[3] as u32 + 1, voxels.mip_levels());
+        let read = Access::StorageRead(Shader::Compute);
+        let lut = g.import_buffer(&self.lut, read);
+        let pipe = self.pipeline;
+        let sampler = self.sampler;
+        g.add_pass("voxel_debug")
+            .read(columns, Access::Sampled(Shader::Compute))
+            .read(lut, read)
+            .write(value, Access::StorageWrite(Shader::Compute))
+            .write(color, Access::StorageWrite(Shader::Compute))
+            .record(move |ctx| {
+                ctx.cmd.bind(
+                    &pipe,
+                    &[
+                        Descriptor::SampledImage {
+                            binding: 0,
+                            view: ctx.image(columns).view,
+                            sampler,
+                        },
+                        Descriptor::storage_buffer(1, ctx.buffer(lut).raw),
+                        Descriptor::StorageImage {
+                            binding: 2,
+                            view: ctx.image(value).view,
+                        },
+                        Descriptor::StorageImage {
+                            binding: 3,
+                            view: ctx.image(color).view,
+                        },
+                    ],
+                );
+                ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
+                ctx.cmd
+                    .dispatch(extent.0.div_ceil(8), extent.1.div_ceil(8), 1);
+            });
+    }
+
+    pub fn destroy(self, ctx: &Context) {
+        ctx.destroy_compute_pipeline(self.pipeline);
+        ctx.destroy_buffer(self.lut);
+        ctx.destroy_sampler(self.sampler);
+    }
+}
+
+/// What a debug view's value image says, pixel statistics for the CLI and tests.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct DebugStats {
+    pub pixels: usize,
+    /// Pixels whose ray hit a voxel.
+    pub hits: usize,
+    /// Steps view: rays the iteration cap ended.
+    pub ran_out: usize,
+    /// Steps view: mean and largest step count over every pixel.
+    pub mean_steps: f64,
+    pub max_steps: u32,
+}
+
+/// Statistics of the value image of a debug view (see the module doc for its channels).
+pub fn debug_stats(view: DebugView, value: &HdrImage) -> DebugStats {
+    let mut s = DebugStats {
+        pixels: value.data.len(),
+        ..Default::default()
+    };
+    let mut sum = 0.0;
+    for p in &value.data {
+        if view == DebugView::Steps {
+            let steps = p[0].max(0.0) as u32;
+            sum += f64::from(steps);
+            s.max_steps = s.max_steps.max(steps);
+            s.hits += usize::from(p[1] > 0.5);
+            s.ran_out += usize::from(p[2] > 0.5);
+        } else {
+            s.hits += usize::from(p[0] > 0.0);
+        }
+    }
+    s.mean_steps = if s.pixels > 0 {
+        sum / s.pixels as f64
+    } else {
+        0.0
+    };
+    s
+}
+
+/// A few lines for the CLI: what the colors mean and what the view measured.
+pub fn describe(settings: &DebugSettings, value: &HdrImage) -> String {
+    let st = debug_stats(settings.view, value);
+    let hit_share = 100.0 * st.hits as f64 / st.pixels.max(1) as f64;
+    match settings.view {
+        DebugView::Voxels => format!(
+            "voxels view: {hit_share:.1}% of pixels hit a voxel (shade = N·L of the entered face)"
+        ),
+        DebugView::Steps => {
+            let top = settings.steps_scale.max(1);
+            format!(
+                "steps view: heat ramp black = 0, red = {}, yellow = {}, white >= {top} steps\n\
+                 steps per pixel: mean {:.2}, max {} (cap {}); {hit_share:.1}% hit, {} ran out",
+                top / 3,
+                2 * top / 3,
+                st.mean_steps,
+                st.max_steps,
+                settings.traversal.max_iterations,
+                st.ran_out
+            )
+        }
+        DebugView::Level => format!(
+            "level {} view: blocks of {n}x{n}x1 voxels; {hit_share:.1}% of pixels hit",
+            settings.level,
+            n = 1u32 << settings.level.min(31)
+        ),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn push_layout_matches_glsl() {
+        // mat4 + ivec4 + uvec4 + vec4 (std430 push block); within the 128-byte minimum.
+        assert_eq!(std::mem::size_of::<GpuVoxelDebugPush>(), 112);
+        assert_eq!(std::mem::offset_of!(GpuVoxelDebugPush, dims), 64);
+        assert_eq!(std::mem::offset_of!(GpuVoxelDebugPush, params), 80);
+        assert_eq!(std::mem::offset_of!(GpuVoxelDebugPush, light), 96);
+    }
+
+    #[test]
+    fn ndc_maps_into_voxel_space() {
+        // A camera looking at the grid's center: the center pixel's ray passes through the
+        // grid center, and the light direction is a unit vector.
+        let grid = VoxelGrid::from_box(Vec3::ZERO, Vec3::ONE, None, 64, 64, 1).expect("grid");
+        let view = Mat4::look_at_rh(Vec3::new(0.5, 0.5, 3.0), Vec3::splat(0.5), Vec3::Y);
+        let proj = Mat4::perspective_rh(1.0, 1.0, 0.1, 10.0);
+        let push = GpuVoxelDebugPush::new(
+            &grid,
+            7,
+            proj * view,
+            Vec3::new(1.0, 2.0, 3.0),
+            &DebugSettings::default(),
+        );
+        let m = Mat4::from_cols_array(&push.ndc_to_voxel);
+        let a = m.project_point3(Vec3::new(0.0, 0.0, 0.0));
+        let b = m.project_point3(Vec3::new(0.0, 0.0, 1.0));
+        let center = grid.world_to_voxel(Vec3::splat(0.5));
+        let d = (b - a).normalize();
+        let closest = a + d * (center - a).dot(d);
+        assert!((closest - center).length() < 1e-2, "{closest} vs {center}");
+        assert!((Vec3::from_slice(&push.light[..3]).length() - 1.0).abs() < 1e-5);
+        assert_eq!(push.dims, [64, 64, 128, 6]);
+    }
+}

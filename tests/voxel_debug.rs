@@ -1,0 +1,189 @@
+//! The voxel debug views (`voxgi render --debug voxels|steps|level`): camera rays through the
+//! GPU column image. Checks on read-back pixels: background black, the Cornell floor lit by
+//! its +y face, step counts within the iteration cap, the hierarchical view equal to the exact
+//! walk, and coarser levels covering finer ones. Validation and synchronization validation on.
+
+mod common;
+
+use glam::{Vec3, Vec4Swizzles};
+use std::path::Path;
+use voxgi::eval::HdrImage;
+use voxgi::render::{render_image, RenderOutput, RenderSettings};
+use voxgi::scene::{builtin, Scene};
+use voxgi::voxel::debug_view::{debug_stats, DebugSettings, DebugView};
+
+const SIZE: u32 = 96;
+
+fn render(scene: &Scene, view: DebugView, level: u32) -> RenderOutput {
+    let ctx = common::context();
+    let settings = RenderSettings {
+        width: SIZE,
+        height: SIZE,
+        debug: Some(DebugSettings {
+            view,
+            level,
+            ..Default::default()
+        }),
+        ..Default::default()
+    };
+    let out = render_image(&ctx, scene, &settings).expect("renders the debug view");
+    common::assert_no_validation_messages(&ctx);
+    assert!(out.live_passes.iter().any(|p| p == "voxel_debug"));
+    for culled in ["deferred_direct", "tonemap", "gbuffer", "shadow_depth"] {
+        assert!(
+            !out.live_passes.iter().any(|p| p == culled),
+            "{culled} must be culled in a debug view: {:?}",
+            out.live_passes
+        );
+    }
+    assert_eq!(out.ldr.len(), (SIZE * SIZE * 4) as usize);
+    out
+}
+
+fn value(img: &HdrImage, x: u32, y: u32) -> [f32; 3] {
+    img.data[(y * img.width + x) as usize]
+}
+
+/// The pixel through which the camera sees world point `p`.
+fn pixel_of(scene: &Scene, p: Vec3) -> (u32, u32) {
+    let clip = scene.camera.view_proj(1.0) * p.extend(1.0);
+    let ndc = clip.xy() / clip.w;
+    let px = (ndc + 1.0) * 0.5 * SIZE as f32;
+    (px.x as u32, px.y as u32)
+}
+
+#[test]
+fn cornell_voxels_view_lights_the_floor_and_equals_the_exact_walk() {
+    let scene = builtin("cornell").expect("cornell");
+    let voxels = render(&scene, DebugView::Voxels, 0);
+    // Floor in front of the tall block: entered through its +y face, N.L = 0.6 / |L| with the
+    // light over the camera's shoulder (-forward + 0.6 up - 0.4 right), shade 0.15 + 0.85 N.L,
+    // edges darkened to at most 0.6 of that.
+    let n_dot_l = 0.6 / (1.0f32 + 0.36 + 0.16).sqrt();
+    let lit = 0.15 + 0.85 * n_dot_l;
+    for p in [Vec3::new(0.45, 0.0, 0.1), Vec3::new(0.1, 0.0, 0.05)] {
+        let (x, y) = pixel_of(&scene, p);
+        let v = value(&voxels.hdr, x, y)[0];
+        assert!(
+            (0.6 * lit - 1e-3..=lit + 1e-3).contains(&v),
+            "floor point {p} at pixel ({x}, {y}): shade {v}, expected within [{}, {lit}]",
+            0.6 * lit
+        );
+        let i = ((y * SIZE + x) * 4) as usize;
+        assert!(
+            voxels.ldr[i] > 60,
+            "floor pixel ({x}, {y}) is lit in the PNG"
+        );
+    }
+    // The hierarchical traversal and the exact walk over level 0 see the same voxels.
+    let walk = render(&scene, DebugView::Level, 0);
+    let differ = (voxels.hdr.data.iter().zip(&walk.hdr.data))
+        .filter(|(a, b)| a != b)
+        .count();
+    assert_eq!(differ, 0, "hierarchical and DDA debug images differ");
+    assert_eq!(voxels.ldr, walk.ldr);
+}
+
+#[test]
+fn cornell_steps_view_stays_within_the_iteration_cap() {
+    let scene = builtin("cornell").expect("cornell");
+    let steps = render(&scene, DebugView::Steps, 0);
+    let voxels = render(&scene, DebugView::Voxels, 0);
+    let cap = DebugSettings::default().traversal.max_iterations;
+    let mut hits = 0;
+    for (s, v) in steps.hdr.data.iter().zip(&voxels.hdr.data) {
+        let (n, hit, ran_out) = (s[0], s[1] > 0.5, s[2] > 0.5);
+        assert_eq!(n.fract(), 0.0, "step counts are integers");
+        assert!(n <= cap as f32, "{n} steps exceed the cap {cap}");
+        assert!(!ran_out, "no Cornell ray runs out of {cap} iterations");
+        assert_eq!(hit, v[0] > 0.0, "steps and voxels views agree on hits");
+        if hit {
+            hits += 1;
+            assert!(n >= 1.0, "a hit takes at least one step");
+        }
+    }
+    let st = debug_stats(DebugView::Steps, &steps.hdr);
+    assert_eq!(st.hits, hits);
+    assert!(
+        hits as f32 > 0.8 * (SIZE * SIZE) as f32,
+        "the box fills the view"
+    );
+    assert!(st.mean_steps > 1.0 && st.max_steps <= cap);
+}
+
+#[test]
+fn coarser_levels_cover_every_finer_hit() {
+    let scene = builtin("cornell").expect("cornell");
+    let fine = render(&scene, DebugView::Level, 0);
+    let coarse = render(&scene, DebugView::Level, 3);
+    let (f, c) = (
+        debug_stats(DebugView::Level, &fine.hdr),
+        debug_stats(DebugView::Level, &coarse.hdr),
+    );
+    for (a, b) in fine.hdr.data.iter().zip(&coarse.hdr.data) {
+        assert!(a[0] == 0.0 || b[0] > 0.0, "a level-0 hit missed at level 3");
+    }
+    assert!(c.hits >= f.hits);
+}
+
+#[test]
+fn background_is_black_around_a_lone_cube() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes");
+    let scene = Scene::from_toml_str(
+        r#"
+[camera]
+position = [0.0, 0.0, 4.0]
+target = [0.0, 0.0, 0.0]
+up = [0.0, 1.0, 0.0]
+fov_y_deg = 40.0
+near = 0.1
+far = 20.0
+
+[[objects]]
+name = "cube"
+builtin = "cube"
+rotate_deg = [20.0, 30.0, 0.0]
+"#,
+        Path::new("<test scene>"),
+        &dir,
+    )
+    .expect("test scene parses");
+    for view in [DebugView::Voxels, DebugView::Steps, DebugView::Level] {
+        let out = render(&scene, view, 1);
+        let center = value(&out.hdr, SIZE / 2, SIZE / 2);
+        let hit = if view == DebugView::Steps {
+            center[1] > 0.5 && center[0] >= 1.0
+        } else {
+            center[0] > 0.0
+        };
+        assert!(hit, "{view:?}: the center pixel sees the cube: {center:?}");
+        for (x, y) in [(0, 0), (SIZE - 1, 0), (0, SIZE - 1), (SIZE - 1, SIZE - 1)] {
+            let i = ((y * SIZE + x) * 4) as usize;
+            assert_eq!(
+                &out.ldr[i..i + 4],
+                &[0, 0, 0, 255],
+                "{view:?}: corner ({x}, {y}) is background"
+            );
+        }
+    }
+}
+
+#[test]
+fn a_level_beyond_the_hierarchy_is_an_error() {
+    let ctx = common::context();
+    let settings = RenderSettings {
+        width: 8,
+        height: 8,
+        debug: Some(DebugSettings {
+            view: DebugView::Level,
+            level: 40,
+            ..Default::default()
+        }),
+        ..Default::default()
+    };
+    let scene = builtin("cornell").expect("cornell");
+    let err = render_image(&ctx, &scene, &settings)
+        .err()
+        .expect("level 40 is rejected");
+    assert!(err.to_string().contains("--debug-level"), "{err}");
+}
