@@ -3,11 +3,13 @@
 // and shininess, and, only when the scene has Phong materials, the specular color.
 layout(constant_id = 0) const bool HAS_PHONG = false;
 layout(constant_id = 1) const bool HAS_TEXTURES = false;
+layout(constant_id = 2) const bool HAS_BUMP = false;
 
 struct GpuMaterial {
     vec4 albedo;    // rgb albedo, a opacity
     vec4 specular;  // rgb specular reflectance, a shininess
-    uvec4 flags;    // x: an albedo texture replaces albedo
+    uvec4 flags;    // x: an albedo texture replaces albedo; y: bump map kind (0 none,
+                    // 1 height, 2 tangent-space normal); z: bump scale (float bits, m per unit)
 };
 
 #include "frame.glsl"
@@ -15,6 +17,8 @@ layout(set = 0, binding = 0, std430) readonly buffer FrameBuf { GpuFrame frame; 
 layout(set = 0, binding = 1, std430) readonly buffer Materials { GpuMaterial materials[]; };
 // The draw's albedo texture (a 1x1 placeholder when the material has none).
 layout(set = 0, binding = 2) uniform sampler2D albedo_texture;
+// The draw's bump or normal map (the placeholder when it has none).
+layout(set = 0, binding = 3) uniform sampler2D bump_texture;
 
 layout(push_constant) uniform Push {
     mat4 model;
@@ -29,6 +33,28 @@ layout(location = 0) out vec4 out_albedo;
 layout(location = 1) out vec4 out_normal;
 layout(location = 2) out vec4 out_specular;
 
+// Tangent frame from screen-space derivatives (Schüler 2013, "Followup: normal mapping
+// without precomputed tangents"): no per-vertex tangents needed. uv has v up, as in OBJ.
+mat3 cotangent_frame(vec3 n, vec3 p, vec2 uv) {
+    vec3 dp1 = dFdx(p), dp2 = dFdy(p);
+    vec2 duv1 = dFdx(uv), duv2 = dFdy(uv);
+    vec3 dp2perp = cross(dp2, n), dp1perp = cross(n, dp1);
+    vec3 t = dp2perp * duv1.x + dp1perp * duv2.x;
+    vec3 b = dp2perp * duv1.y + dp1perp * duv2.y;
+    float inv = inversesqrt(max(max(dot(t, t), dot(b, b)), 1e-30));
+    return mat3(t * inv, b * inv, n);
+}
+
+// Height-map bump (Mikkelsen 2010, "Bump mapping unparametrized surfaces on the GPU"):
+// perturbs n by the screen-space gradient of the height h (meters) over the surface.
+vec3 bump_height(vec3 n, vec3 p, float h) {
+    vec3 dpdx = dFdx(p), dpdy = dFdy(p);
+    vec3 r1 = cross(dpdy, n), r2 = cross(n, dpdx);
+    float det = dot(dpdx, r1);
+    vec3 grad = sign(det) * (dFdx(h) * r1 + dFdy(h) * r2);
+    return normalize(abs(det) * n - grad);
+}
+
 void main() {
     GpuMaterial m = materials[pc.material];
     vec3 n = normalize(in_normal);
@@ -37,7 +63,17 @@ void main() {
     if (dot(n, frame.camera_position.xyz - in_world) < 0.0) n = -n;
     vec3 albedo = m.albedo.rgb;
     // OBJ texture coordinates have v up; image rows start at the top.
-    if (HAS_TEXTURES && m.flags.x != 0u) albedo = texture(albedo_texture, vec2(in_uv.x, 1.0 - in_uv.y)).rgb;
+    vec2 tex_uv = vec2(in_uv.x, 1.0 - in_uv.y);
+    if (HAS_TEXTURES && m.flags.x != 0u) albedo = texture(albedo_texture, tex_uv).rgb;
+    if (HAS_BUMP && m.flags.y == 2u) {
+        vec3 t = texture(bump_texture, tex_uv).xyz * 2.0 - 1.0;
+        vec3 bumped = normalize(cotangent_frame(n, in_world, in_uv) * t);
+        if (!any(isnan(bumped))) n = bumped;
+    } else if (HAS_BUMP && m.flags.y == 1u) {
+        float h = texture(bump_texture, tex_uv).r * uintBitsToFloat(m.flags.z);
+        vec3 bumped = bump_height(n, in_world, h);
+        if (!any(isnan(bumped))) n = bumped;
+    }
     out_albedo = vec4(albedo, 1.0);
     out_normal = vec4(n, m.specular.a);
     if (HAS_PHONG) out_specular = vec4(m.specular.rgb, 1.0);

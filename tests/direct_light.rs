@@ -413,3 +413,56 @@ fn albedo_textures_are_sampled_in_linear_space() {
         }
     }
 }
+
+/// Renders a 2 m quad lit straight down (E = pi) with the given MTL lines and 16x16 RGB
+/// texture `map.png`; returns the radiance at the image center.
+fn textured_quad_center(mtl_lines: &str, texel: [u8; 3]) -> Vec3 {
+    let dir = std::env::temp_dir().join(format!(
+        "voxgi-bump-{}-{}",
+        std::process::id(),
+        texel
+            .iter()
+            .map(|c| c.to_string())
+            .collect::<Vec<_>>()
+            .join("_")
+    ));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let png =
+        image::RgbaImage::from_pixel(16, 16, image::Rgba([texel[0], texel[1], texel[2], 255]));
+    png.save(dir.join("map.png")).expect("png");
+    std::fs::write(
+        dir.join("m.mtl"),
+        format!("newmtl m\nKd 0.5 0.5 0.5\n{mtl_lines}\n"),
+    )
+    .expect("mtl");
+    std::fs::write(
+        dir.join("quad.obj"),
+        "mtllib m.mtl\nv -1 0 1\nv 1 0 1\nv 1 0 -1\nv -1 0 -1\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nvn 0 1 0\n\
+         usemtl m\nf 1/1/1 2/2/1 3/3/1\nf 1/1/1 3/3/1 4/4/1\n",
+    )
+    .expect("obj");
+    let toml = format!(
+        "{CAMERA_DOWN}[[lights]]\nkind = \"directional\"\ndirection = [0.0, -1.0, 0.0]\nirradiance_w_m2 = {}\n\
+         [[objects]]\nmesh = \"quad.obj\"\n",
+        std::f32::consts::PI
+    );
+    let s = Scene::from_toml_str(&toml, Path::new("<bump test>"), &dir).expect("parses");
+    pixel(&render(&s), SIZE / 2, SIZE / 2)
+}
+
+#[test]
+fn normal_and_bump_maps_perturb_the_shading_normal() {
+    let flat = textured_quad_center("", [0, 0, 0]);
+    assert_close(flat, Vec3::splat(0.5), 0.01, "no map: radiance = albedo");
+    // Tangent space (n + 1) / 2: (128, 128, 255) is the unperturbed normal.
+    let unperturbed = textured_quad_center("norm map.png", [128, 128, 255]);
+    assert_close(unperturbed, flat, 0.01, "a flat normal map changes nothing");
+    // (218, 128, 218) tilts the normal 45 degrees towards the tangent: E scales by cos 45.
+    let tilted = textured_quad_center("norm map.png", [218, 128, 218]);
+    let t = Vec3::new(218.0, 128.0, 218.0) / 255.0 * 2.0 - Vec3::ONE;
+    let cos = t.z / t.length();
+    assert_close(tilted, flat * cos, 0.01, "a 45-degree normal map");
+    // A constant height map has no gradient: no change.
+    let height = textured_quad_center("map_bump map.png", [100, 100, 100]);
+    assert_close(height, flat, 0.01, "a constant height map changes nothing");
+}

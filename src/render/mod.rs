@@ -14,7 +14,7 @@ use crate::eval::HdrImage;
 use crate::graph::{Access, GraphError, GraphExecutor, ImageHandle, RenderGraph, Shader};
 use crate::light::{shadow_views, PointShadow, ShadowSettings};
 use crate::post::ToneMap;
-use crate::scene::{Light, Scene};
+use crate::scene::{BumpKind, Light, Scene};
 use crate::vk::{
     vk, Attachment, Buffer, BufferDesc, ComputePipeline, Context, Descriptor, FrameLoop,
     GraphicsPipeline, GraphicsPipelineDesc, ImageDesc, MemoryLocation, PassTiming, VkError,
@@ -98,6 +98,8 @@ struct Draw {
     material: u32,
     /// Index into the renderer's textures (the albedo map of the material).
     texture: Option<usize>,
+    /// Index into the renderer's textures of the material's bump or normal map.
+    bump: Option<usize>,
     model: Mat4,
     aabb: crate::scene::Aabb,
 }
@@ -144,6 +146,9 @@ pub struct Renderer {
     voxel_debug: Option<crate::voxel::debug_view::VoxelDebugPass>,
 }
 
+/// Meters of height per unit of a height (bump) map: MTL has no unit for heights.
+const BUMP_SCALE_M: f32 = 0.01;
+
 const GBUFFER_COLOR: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
 const DEPTH: vk::Format = vk::Format::D32_SFLOAT;
 const HDR: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
@@ -171,7 +176,16 @@ impl Renderer {
             .map(|m| GpuMaterial {
                 albedo: [m.albedo.x, m.albedo.y, m.albedo.z, m.opacity],
                 specular: [m.specular.x, m.specular.y, m.specular.z, m.shininess],
-                flags: [u32::from(m.albedo_texture.is_some()), 0, 0, 0],
+                flags: [
+                    u32::from(m.albedo_texture.is_some()),
+                    match (m.bump_texture, m.bump_kind) {
+                        (None, _) => 0,
+                        (Some(_), BumpKind::Height) => 1,
+                        (Some(_), BumpKind::TangentNormal) => 2,
+                    },
+                    BUMP_SCALE_M.to_bits(),
+                    0,
+                ],
             })
             .collect();
         let materials_buf = ctx.upload_buffer(
@@ -180,6 +194,13 @@ impl Renderer {
             vk::BufferUsageFlags::STORAGE_BUFFER,
         )?;
         let has_phong = !scene.is_all_lambert();
+        for m in scene.used_materials().filter(|m| !m.is_opaque()) {
+            log::warn!(
+                "material `{}` has opacity {} (MTL `d`): voxgi renders it opaque (no transparency yet)",
+                m.name,
+                m.opacity
+            );
+        }
         let frame_stride = (std::mem::size_of::<GpuFrame>() as u64).next_multiple_of(256);
         let frame = ctx.create_buffer(&BufferDesc {
             name: "frame constants".into(),
@@ -203,8 +224,11 @@ impl Renderer {
         let has_textures = scene.has_albedo_textures();
         let mut textures = Vec::new();
         for (i, t) in scene.textures.iter().enumerate() {
-            // Only albedo maps are sampled (bump maps are not shaded yet).
-            if scene.materials.iter().any(|m| m.albedo_texture == Some(i)) {
+            if scene
+                .materials
+                .iter()
+                .any(|m| m.albedo_texture == Some(i) || m.bump_texture == Some(i))
+            {
                 textures.push(textures::upload_texture(
                     ctx,
                     t,
@@ -231,7 +255,13 @@ impl Renderer {
                 .lights
                 .iter()
                 .any(|l| matches!(l, Light::Point { .. }));
-        let pipelines = create_pipelines(ctx, has_phong, has_textures, paraboloid)?;
+        let pipelines = create_pipelines(
+            ctx,
+            has_phong,
+            has_textures,
+            scene.has_bump_maps(),
+            paraboloid,
+        )?;
         let sampler = ctx.create_sampler(vk::Filter::NEAREST, false)?;
         let gi_on = settings.gi.method != crate::gi::GiMethod::None;
         if gi_on
@@ -559,8 +589,8 @@ impl Renderer {
             };
             ctx.cmd
                 .begin_rendering(ctx.image(albedo).extent_2d(), &colors, Some(depth_att));
-            let texture = |t: Option<usize>| Descriptor::SampledImage {
-                binding: 2,
+            let texture = |binding: u32, t: Option<usize>| Descriptor::SampledImage {
+                binding,
                 view: ctx
                     .image(
                         t.and_then(|i| tex_handles.get(i).copied())
@@ -574,17 +604,19 @@ impl Renderer {
                 &[
                     frame_desc(ctx.slot),
                     Descriptor::storage_buffer(1, mb),
-                    texture(None),
+                    texture(2, None),
+                    texture(3, None),
                 ],
             );
             ctx.cmd.bind_vertex_buffer(vb);
             ctx.cmd.bind_index_buffer(ib);
             if let Ok(lists) = draws.read() {
-                let mut bound = None;
+                let mut bound = (None, None);
                 for d in &lists.camera {
-                    if d.texture != bound {
-                        ctx.cmd.push_descriptors(&pipe, &[texture(d.texture)]);
-                        bound = d.texture;
+                    if (d.texture, d.bump) != bound {
+                        ctx.cmd
+                            .push_descriptors(&pipe, &[texture(2, d.texture), texture(3, d.bump)]);
+                        bound = (d.texture, d.bump);
                     }
                     let push = GpuDrawPush {
                         model: d.model.to_cols_array(),
@@ -932,12 +964,14 @@ fn upload_geometry(
         for (si, sub) in mesh.submeshes.iter().enumerate() {
             let material = object.materials.get(si).copied().unwrap_or(sub.material);
             let texture = scene.materials.get(material).and_then(|m| m.albedo_texture);
+            let bump = scene.materials.get(material).and_then(|m| m.bump_texture);
             draws.push(Draw {
                 first_index: ibase + sub.first_index,
                 index_count: sub.index_count,
                 vertex_offset: vbase,
                 material: material as u32,
                 texture,
+                bump,
                 model,
                 aabb,
             });
@@ -1001,6 +1035,7 @@ fn create_pipelines(
     ctx: &Context,
     has_phong: bool,
     has_textures: bool,
+    has_bump: bool,
     paraboloid_shadows: bool,
 ) -> Result<Pipelines, VkError> {
     let storage = vk::DescriptorType::STORAGE_BUFFER;
@@ -1019,7 +1054,7 @@ fn create_pipelines(
         vertex: "gbuffer.vert".into(),
         geometry: None,
         fragment: "gbuffer.frag".into(),
-        bindings: vec![(0, storage), (1, storage), (2, sampled)],
+        bindings: vec![(0, storage), (1, storage), (2, sampled), (3, sampled)],
         push_constant_bytes: push,
         vertex_stride: std::mem::size_of::<GpuVertex>() as u32,
         vertex_attributes: vertex_attributes.clone(),
@@ -1031,7 +1066,11 @@ fn create_pipelines(
         depth_write: true,
         depth_bias: false,
         logic_op: None,
-        spec: vec![(0, u32::from(has_phong)), (1, u32::from(has_textures))],
+        spec: vec![
+            (0, u32::from(has_phong)),
+            (1, u32::from(has_textures)),
+            (2, u32::from(has_bump)),
+        ],
     })?;
     let shadow = ctx.graphics_pipeline(&GraphicsPipelineDesc {
         vertex: "shadow_depth.vert".into(),
