@@ -28,130 +28,20 @@ layout(push_constant) uniform Push {
     uvec4 extent;    // column-buffer width, height; triangle count; first triangle
 } pc;
 
-// f32 bit pattern of DEGENERATE_REL = 1e-9 in voxelize.rs (a literal could round twice).
-#define DEGENERATE_REL uintBitsToFloat(0x3089705fu)
-
-float dot_exact(vec3 a, vec3 b) {
-    precise float r = (a.x * b.x) + (a.y * b.y) + (a.z * b.z);
-    return r;
-}
-
-vec3 cross_exact(vec3 a, vec3 b) {
-    precise vec3 r = vec3(a.y * b.z - b.y * a.z, a.z * b.x - b.z * a.x, a.x * b.y - b.x * a.y);
-    return r;
-}
-
-bool is_degenerate(vec3 e0, vec3 e1, vec3 n) {
-    precise float l = dot_exact(n, n);
-    precise float bound = DEGENERATE_REL * dot_exact(e0, e0) * dot_exact(e1, e1);
-    return l <= bound;
-}
-
-// World point -> continuous voxel coordinates (VoxelGrid::world_to_voxel).
-vec3 to_voxel(vec3 p) {
-    precise vec3 d = p - pc.grid_min.xyz;
-    vec3 f = pc.dims.w == 0u ? d.yzx : (pc.dims.w == 1u ? d.zxy : d);
-    precise vec3 r = f * pc.scale.xyz;
-    return r;
-}
-
-const vec3 HALF = vec3(0.5);
-
-bool tri_box_overlap(vec3 center, vec3 t0, vec3 t1, vec3 t2) {
-    precise vec3 v0 = t0 - center;
-    precise vec3 v1 = t1 - center;
-    precise vec3 v2 = t2 - center;
-    vec3 lo = min(min(v0, v1), v2);
-    vec3 hi = max(max(v0, v1), v2);
-    if (any(greaterThan(lo, HALF)) || any(lessThan(hi, -HALF))) {
-        return false;
+#define VOXEL_COLUMN_BEGIN(x, y) uint word = 0xffffffffu; uint bits = 0u;
+#define VOXEL_HIT(x, y, k)                                              \
+    {                                                                   \
+        uint wi = voxel_word_index(uvec2(x, y), k, pc.extent.xy);       \
+        if (wi != word) {                                               \
+            if (bits != 0u) atomicOr(words[word], bits);                \
+            word = wi;                                                  \
+            bits = 0u;                                                  \
+        }                                                               \
+        bits |= 1u << voxel_bit(k);                                     \
     }
-    precise vec3 edges[3] = vec3[3](v1 - v0, v2 - v1, v0 - v2);
-    for (int i = 0; i < 3; ++i) {
-        for (int j = 0; j < 3; ++j) {
-            vec3 unit = vec3(j == 0 ? 1.0 : 0.0, j == 1 ? 1.0 : 0.0, j == 2 ? 1.0 : 0.0);
-            vec3 axis = cross_exact(unit, edges[i]);
-            float p0 = dot_exact(axis, v0);
-            float p1 = dot_exact(axis, v1);
-            float p2 = dot_exact(axis, v2);
-            float rad = dot_exact(HALF, abs(axis));
-            float pmin = min(min(p0, p1), p2);
-            float pmax = max(max(p0, p1), p2);
-            if (pmin > rad || pmax < -rad) {
-                return false;
-            }
-        }
-    }
-    vec3 n = cross_exact(edges[0], edges[1]);
-    if (is_degenerate(edges[0], edges[1], n)) {
-        return true;
-    }
-    float d = dot_exact(n, v0);
-    float r = dot_exact(HALF, abs(n));
-    precise float below = d - r;
-    precise float above = d + r;
-    return below <= 0.0 && above >= 0.0;
-}
+#define VOXEL_COLUMN_END(x, y) if (bits != 0u) atomicOr(words[word], bits);
+#include "voxelize_core.glsl"
 
 void main() {
-    uint tri_index = gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x;
-    if (tri_index >= pc.extent.z) {
-        return;
-    }
-    Triangle t = tris[pc.extent.w + tri_index];
-    vec3 a = to_voxel(t.v[0].xyz);
-    vec3 b = to_voxel(t.v[1].xyz);
-    vec3 c = to_voxel(t.v[2].xyz);
-    vec3 dims_f = vec3(pc.dims.xyz);
-    vec3 lo = min(min(a, b), c);
-    vec3 hi = max(max(a, b), c);
-    // Closed boxes: a vertex at exactly x = 3 touches voxels 2 and 3.
-    if (any(lessThan(hi, vec3(0.0))) || any(greaterThan(lo, dims_f))) {
-        return;
-    }
-    precise vec3 e0 = b - a;
-    precise vec3 e1 = c - b;
-    vec3 n = cross_exact(e0, e1);
-    bool degenerate = is_degenerate(e0, e1, n);
-    uvec3 first = uvec3(clamp(ceil(lo) - 1.0, vec3(0.0), dims_f - 1.0));
-    uvec3 last = uvec3(clamp(floor(hi), vec3(0.0), dims_f - 1.0));
-    // Per column, the plane bounds the depth range where it is not steep (a pure speed-up:
-    // widened by a voxel; the SAT test decides every bit).
-    bool use_plane = !degenerate && abs(n.z) >= 0.1 * sqrt(dot_exact(n, n));
-    uint w = last.x - first.x + 1u;
-    uint columns = w * (last.y - first.y + 1u);
-    for (uint col = gl_LocalInvocationIndex; col < columns; col += gl_WorkGroupSize.x) {
-        uint x = first.x + col % w;
-        uint y = first.y + col / w;
-        uint k0 = first.z;
-        uint k1 = last.z;
-        if (use_plane) {
-            float x0 = float(x), x1 = float(x) + 1.0, y0 = float(y), y1 = float(y) + 1.0;
-            vec4 zs = vec4(a.z) - (n.x * (vec4(x0, x1, x0, x1) - a.x)
-                                   + n.y * (vec4(y0, y0, y1, y1) - a.y)) / n.z;
-            float zmin = min(min(zs.x, zs.y), min(zs.z, zs.w)) - 1.0;
-            float zmax = max(max(zs.x, zs.y), max(zs.z, zs.w)) + 1.0;
-            k0 = max(k0, uint(clamp(floor(zmin), 0.0, dims_f.z - 1.0)));
-            k1 = min(k1, uint(clamp(floor(zmax), 0.0, dims_f.z - 1.0)));
-        }
-        uint word = 0xffffffffu;
-        uint bits = 0u;
-        for (uint k = k0; k <= k1; ++k) {
-            vec3 center = vec3(float(x), float(y), float(k)) + HALF;
-            if (tri_box_overlap(center, a, b, c)) {
-                uint wi = voxel_word_index(uvec2(x, y), k, pc.extent.xy);
-                if (wi != word) {
-                    if (bits != 0u) {
-                        atomicOr(words[word], bits);
-                    }
-                    word = wi;
-                    bits = 0u;
-                }
-                bits |= 1u << voxel_bit(k);
-            }
-        }
-        if (bits != 0u) {
-            atomicOr(words[word], bits);
-        }
-    }
+    voxelize_triangle_core();
 }
