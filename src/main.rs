@@ -102,6 +102,13 @@ enum Command {
         /// Scripted run: resize the window to WxH halfway through.
         #[arg(long, value_parser = parse_size)]
         resize: Option<(u32, u32)>,
+        /// Scripted run: minimize the window after FRAME presented frames, restore it after
+        /// --restore-after skipped redraws (needs a window manager; under Xvfb e.g. openbox).
+        #[arg(long, value_name = "FRAME")]
+        minimize_at: Option<u64>,
+        /// Scripted run: redraws to skip while minimized before restoring the window.
+        #[arg(long, value_name = "N", default_value_t = 10)]
+        restore_after: u64,
         /// Screenshot PNG path (F12 / the panel button; the end of a scripted run).
         #[arg(long)]
         screenshot: Option<PathBuf>,
@@ -347,6 +354,8 @@ fn run(cli: Cli) -> Result<()> {
             exposure,
             frames,
             resize,
+            minimize_at,
+            restore_after,
             screenshot,
         } => {
             let scene = load_scene_arg(scene.as_deref())?;
@@ -361,11 +370,19 @@ fn run(cli: Cli) -> Result<()> {
                 settings,
                 frames,
                 resize_to: resize,
+                minimize_at,
+                restore_after,
                 screenshot,
             };
             let report = voxgi::app::run(scene, &opts)?;
             for p in &report.screenshots {
                 println!("wrote {}", p.display());
+            }
+            if report.skipped_minimized > 0 {
+                println!(
+                    "skipped {} frames while minimized",
+                    report.skipped_minimized
+                );
             }
             let n = report.validation_messages.len();
             if n > 0 {

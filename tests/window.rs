@@ -1,9 +1,20 @@
 //! The viewer in a real window (CI: `xvfb-run -a cargo test`). Runs `voxgi --validate view` as
-//! a scripted run: frames, a resize halfway, a screenshot of the last frame; the command fails
-//! on any validation message. Without a display the test fails with the hint, never passes.
+//! a scripted run: frames, a resize halfway (or a minimize and restore), a screenshot of the
+//! last frame; the command fails on any validation message. Without a display, or without
+//! openbox for the minimize test, a test fails with the hint, never passes.
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
+use std::process::{Child, Command, Stdio};
+use std::sync::Mutex;
+use std::time::{Duration, Instant};
+
+/// The tests share one X display; the minimize test runs a window manager on it, which must
+/// not manage (place, constrain) the other test's window. So they take turns.
+static DISPLAY: Mutex<()> = Mutex::new(());
+
+fn lock_display() -> std::sync::MutexGuard<'static, ()> {
+    DISPLAY.lock().unwrap_or_else(|e| e.into_inner())
+}
 
 fn scratch_dir(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("voxgi-{name}-{}", std::process::id()));
@@ -12,8 +23,13 @@ fn scratch_dir(name: &str) -> PathBuf {
 }
 
 fn voxgi(args: &[&str]) -> std::process::Output {
+    voxgi_with(args, |_| {})
+}
+
+fn voxgi_with(args: &[&str], setup: impl FnOnce(&mut Command)) -> std::process::Output {
     let mut cmd = Command::new(env!("CARGO_BIN_EXE_voxgi"));
     cmd.args(args);
+    setup(&mut cmd);
     if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
         cmd.env("XDG_RUNTIME_DIR", scratch_dir("xdg"));
     }
@@ -38,6 +54,60 @@ fn assert_success(out: &std::process::Output, what: &str) {
     );
 }
 
+/// A window manager (openbox) on the test's X display, stopped when dropped; `None` inside when
+/// the display already has one.
+struct WindowManager(Option<Child>);
+
+impl Drop for WindowManager {
+    fn drop(&mut self) {
+        if let Some(child) = &mut self.0 {
+            let _ = child.kill();
+            let _ = child.wait();
+        }
+    }
+}
+
+const WM_HINT: &str = "minimizing a window needs a window manager; under Xvfb the test starts \
+                       openbox (Debian/Ubuntu: apt-get install openbox, or run tools/setup)";
+
+fn start_window_manager(dir: &Path) -> WindowManager {
+    if std::env::var_os("DISPLAY").is_none() {
+        panic!(
+            "the minimize test needs an X display: run it under Xvfb, `xvfb-run -a cargo test` \
+             (Debian/Ubuntu: apt-get install xvfb openbox)"
+        );
+    }
+    let ready = dir.join("wm-ready");
+    let log = dir.join("wm.log");
+    let mut child = Command::new("openbox")
+        .arg("--sm-disable")
+        .arg("--startup")
+        .arg(format!("touch {}", ready.display()))
+        .env_remove("WAYLAND_DISPLAY")
+        .stdout(Stdio::null())
+        .stderr(std::fs::File::create(&log).expect("create the window manager's log"))
+        .spawn()
+        .unwrap_or_else(|e| panic!("cannot start openbox ({e}): {WM_HINT}"));
+    let started = Instant::now();
+    while !ready.exists() {
+        if let Ok(Some(status)) = child.try_wait() {
+            let msg = std::fs::read_to_string(&log).unwrap_or_default();
+            if msg.contains("already running") {
+                // The display's own window manager will do.
+                return WindowManager(None);
+            }
+            panic!("openbox exited ({status}) before it was ready: {msg}\n{WM_HINT}");
+        }
+        if started.elapsed() > Duration::from_secs(20) {
+            let _ = child.kill();
+            let _ = child.wait();
+            panic!("openbox did not start within 20 s: {WM_HINT}");
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    WindowManager(Some(child))
+}
+
 fn load(path: &Path) -> image::RgbaImage {
     image::open(path)
         .unwrap_or_else(|e| panic!("cannot read {}: {e}", path.display()))
@@ -47,6 +117,7 @@ fn load(path: &Path) -> image::RgbaImage {
 #[test]
 fn viewer_renders_resizes_and_screenshots_without_validation_messages() {
     require_display();
+    let _display = lock_display();
     let dir = scratch_dir("window");
     let shot = dir.join("shot.png");
     let out = voxgi(&[
@@ -71,7 +142,77 @@ fn viewer_renders_resizes_and_screenshots_without_validation_messages() {
     let (w, h) = img.dimensions();
     assert_eq!(h, 360, "the screenshot is {w}x{h}");
     assert!((300..640).contains(&w), "the screenshot is {w}x{h}");
+    assert_not_blank(&img);
+    // With the camera untouched, the viewer shows exactly what `voxgi render` writes.
+    assert_matches_render(&img, &dir);
+    let _ = std::fs::remove_dir_all(&dir);
+}
 
+#[test]
+fn viewer_skips_frames_while_minimized_and_renders_after_restore() {
+    require_display();
+    let _display = lock_display();
+    let dir = scratch_dir("minimize");
+    let _wm = start_window_manager(&dir);
+    let shot = dir.join("shot.png");
+    let out = voxgi_with(
+        &[
+            "--validate",
+            "view",
+            "--width",
+            "320",
+            "--height",
+            "240",
+            "--frames",
+            "8",
+            "--minimize-at",
+            "3",
+            "--restore-after",
+            "10",
+            "--screenshot",
+            shot.to_str().expect("utf-8 path"),
+        ],
+        |cmd| {
+            // X11: iconify through the window manager started above.
+            cmd.env_remove("WAYLAND_DISPLAY")
+                .env("RUST_LOG", "warn,voxgi::app=info");
+        },
+    );
+    // Exit code 0 means: the window was minimized and restored (else the run fails with the
+    // window manager hint), no validation message, screenshot written after the restore.
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        out.status.success(),
+        "voxgi --validate view --minimize-at failed ({}):\n{stderr}\n{WM_HINT}",
+        out.status
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let skipped: u64 = stdout
+        .lines()
+        .find_map(|l| {
+            l.strip_prefix("skipped ")?
+                .strip_suffix(" frames while minimized")?
+                .parse()
+                .ok()
+        })
+        .unwrap_or_else(|| panic!("no \"skipped N frames while minimized\" in:\n{stdout}"));
+    assert!(
+        skipped >= 10,
+        "skipped {skipped} frames while minimized, expected at least --restore-after 10"
+    );
+    assert!(
+        stderr.contains("restored: recreating the swapchain"),
+        "the swapchain was not recreated after the restore:\n{stderr}"
+    );
+    let img = load(&shot);
+    let (w, h) = img.dimensions();
+    assert_eq!(h, 240, "the screenshot is {w}x{h}");
+    assert_not_blank(&img);
+    assert_matches_render(&img, &dir);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+fn assert_not_blank(img: &image::RgbaImage) {
     let mut sum = 0.0f64;
     let mut colors = std::collections::HashSet::new();
     for p in img.pixels() {
@@ -89,8 +230,11 @@ fn viewer_renders_resizes_and_screenshots_without_validation_messages() {
         "the screenshot has {} colors",
         colors.len()
     );
+}
 
-    // With the camera untouched, the viewer shows exactly what `voxgi render` writes.
+/// With the camera untouched, the viewer shows exactly what `voxgi render` writes.
+fn assert_matches_render(img: &image::RgbaImage, dir: &Path) {
+    let (w, h) = img.dimensions();
     let reference = dir.join("render.png");
     let out = voxgi(&[
         "--validate",
@@ -114,5 +258,4 @@ fn viewer_renders_resizes_and_screenshots_without_validation_messages() {
         max_diff <= 1,
         "the viewer's frame differs from `voxgi render` by up to {max_diff}/255"
     );
-    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -58,6 +58,8 @@ pub enum AppError {
         wanted: u64,
         seconds: u64,
     },
+    #[error("the scripted run asked to {what} the window, which did not happen within {seconds} s: minimizing needs a window manager (under Xvfb start one, e.g. `openbox`; tools/setup installs it)")]
+    Minimize { what: &'static str, seconds: u64 },
 }
 
 /// How to run the viewer.
@@ -76,6 +78,12 @@ pub struct ViewerOptions {
     /// once the swapchain has that size. (The scene renders right of the panel, so
     /// screenshots are narrower than the window.)
     pub resize_to: Option<(u32, u32)>,
+    /// Scripted run: minimize (iconify) the window once this many frames were presented, and
+    /// restore it after `restore_after` redraws were skipped while minimized; the run ends
+    /// only after the restore. Needs a window manager (X11: one that honours
+    /// `WM_CHANGE_STATE` and sets `_NET_WM_STATE_HIDDEN`, such as openbox).
+    pub minimize_at: Option<u64>,
+    pub restore_after: u64,
     /// Screenshot path (PNG). A scripted run writes one of its last frame; otherwise F12 and
     /// the panel button write here (default `voxgi-shot-N.png`).
     pub screenshot: Option<PathBuf>,
@@ -91,6 +99,8 @@ impl Default for ViewerOptions {
             settings: RenderSettings::default(),
             frames: None,
             resize_to: None,
+            minimize_at: None,
+            restore_after: 10,
             screenshot: None,
         }
     }
@@ -101,12 +111,18 @@ impl Default for ViewerOptions {
 pub struct ViewerReport {
     pub frames: u64,
     pub screenshots: Vec<PathBuf>,
+    /// Redraws skipped because the window was minimized (or zero-sized).
+    pub skipped_minimized: u64,
     /// Validation messages (errors and warnings); any is a bug.
     pub validation_messages: Vec<String>,
 }
 
 /// Scripted runs give up after this long.
 const SCRIPT_TIMEOUT: Duration = Duration::from_secs(120);
+/// How long a scripted minimize or restore may take to reach the window.
+const MINIMIZE_TIMEOUT: Duration = Duration::from_secs(10);
+/// While minimized nothing throttles the loop (no presentation): poll at about 60 Hz.
+const MINIMIZED_POLL: Duration = Duration::from_millis(16);
 /// Enough timestamp pairs for any frame graph.
 const MAX_PASSES: u32 = 64;
 
@@ -188,8 +204,25 @@ struct Viewer {
     report: ViewerReport,
     status: String,
     resize_requested: bool,
+    minimize_script: MinimizeScript,
+    /// The window was minimized (or zero-sized) at the last redraw.
+    minimized: bool,
     /// Width of the side panel in pixels: the scene renders to the right of it.
     panel_px: u32,
+}
+
+/// Where a scripted minimize (`ViewerOptions::minimize_at`) stands.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum MinimizeScript {
+    /// Not yet (or not scripted).
+    Pending,
+    /// Minimize requested at this time; waiting for the window manager.
+    Requested(Instant),
+    /// The viewer saw the window minimized.
+    Minimized,
+    /// Restore requested at this time; waiting for the window manager.
+    Restoring(Instant),
+    Done,
 }
 
 /// Graph-shaping settings differ (per-frame values such as PCF radius do not count).
@@ -300,6 +333,12 @@ impl Viewer {
             report: ViewerReport::default(),
             status: String::new(),
             resize_requested: false,
+            minimize_script: if opts.minimize_at.is_some() {
+                MinimizeScript::Pending
+            } else {
+                MinimizeScript::Done
+            },
+            minimized: false,
             panel_px: 0,
         }
     }
@@ -416,15 +455,43 @@ impl Viewer {
                     self.resize_requested = true;
                 }
             }
+            self.step_minimize_script(window)?;
         }
 
         self.fly.advance(self.keys, dt_s);
         self.scene.camera = self.fly.apply(&self.lens);
 
-        // Minimized (or zero-sized): nothing to present until the window is back.
+        // Minimized (or zero-sized): nothing to present until the window is back. On X11 an
+        // iconified window keeps its size (and the surface its extent), so ask the window
+        // manager's state too.
         let size = window.inner_size();
-        if size.width == 0 || size.height == 0 {
+        if size.width == 0 || size.height == 0 || window.is_minimized() == Some(true) {
+            if !self.minimized {
+                self.minimized = true;
+                if let Some(s) = &self.swapchain {
+                    let px = vk::Extent2D {
+                        width: size.width,
+                        height: size.height,
+                    };
+                    let e = s.surface_extent(ctx, px)?;
+                    log::info!(
+                        "minimized: window {}x{}, surface extent {}x{}; skipping frames",
+                        size.width,
+                        size.height,
+                        e.width,
+                        e.height
+                    );
+                }
+            }
+            self.report.skipped_minimized += 1;
+            std::thread::sleep(MINIMIZED_POLL);
             return Ok(false);
+        }
+        if self.minimized {
+            // Back from minimized: the surface may have changed meanwhile.
+            log::info!("restored: recreating the swapchain");
+            self.minimized = false;
+            self.swapchain_dirty = true;
         }
         let Some(swapchain) = self.swapchain.as_mut() else {
             return Ok(false);
@@ -445,6 +512,7 @@ impl Viewer {
         // The scripted run's last frame is the one it screenshots.
         let last_scripted = self.opts.frames.is_some_and(|n| {
             self.report.frames + 1 >= n
+                && self.minimize_script == MinimizeScript::Done
                 && self
                     .opts
                     .resize_to
@@ -522,6 +590,55 @@ impl Viewer {
             self.save_screenshot(ctx)?;
         }
         Ok(last_scripted)
+    }
+
+    /// Advances a scripted minimize: request it, wait until the window is minimized, skip
+    /// `restore_after` redraws, request the restore, wait until the window is back.
+    fn step_minimize_script(&mut self, window: &Window) -> Result<(), AppError> {
+        let timed_out = |since: Instant, what| {
+            if since.elapsed() > MINIMIZE_TIMEOUT {
+                Err(AppError::Minimize {
+                    what,
+                    seconds: MINIMIZE_TIMEOUT.as_secs(),
+                })
+            } else {
+                Ok(())
+            }
+        };
+        match self.minimize_script {
+            MinimizeScript::Pending => {
+                if self
+                    .opts
+                    .minimize_at
+                    .is_some_and(|n| self.report.frames >= n)
+                {
+                    window.set_minimized(true);
+                    self.minimize_script = MinimizeScript::Requested(Instant::now());
+                }
+            }
+            MinimizeScript::Requested(since) => {
+                if self.minimized {
+                    self.minimize_script = MinimizeScript::Minimized;
+                } else {
+                    timed_out(since, "minimize")?;
+                }
+            }
+            MinimizeScript::Minimized => {
+                if self.report.skipped_minimized >= self.opts.restore_after.max(1) {
+                    window.set_minimized(false);
+                    self.minimize_script = MinimizeScript::Restoring(Instant::now());
+                }
+            }
+            MinimizeScript::Restoring(since) => {
+                if !self.minimized {
+                    self.minimize_script = MinimizeScript::Done;
+                } else {
+                    timed_out(since, "restore")?;
+                }
+            }
+            MinimizeScript::Done => {}
+        }
+        Ok(())
     }
 
     /// Runs the panel; returns egui's triangles and pixels per point.
