@@ -18,14 +18,6 @@ layout(set = 0, binding = 4) uniform sampler2D gb_depth;
 layout(set = 0, binding = 5) uniform sampler2DArray shadow_maps;
 layout(set = 0, binding = 6, rgba32f) uniform writeonly image2D radiance;
 
-// Mitsuba 3 `spot`: 1 inside the beam, linear in angle to 0 at the cutoff.
-float spot_falloff(GpuLight l, float cos_axis) {
-    if (cos_axis <= l.spot.x) return 0.0;
-    float theta = acos(clamp(cos_axis, -1.0, 1.0));
-    if (theta <= l.spot.z) return 1.0;
-    return clamp((l.spot.y - theta) / max(l.spot.y - l.spot.z, 1e-6), 0.0, 1.0);
-}
-
 void main() {
     ivec2 px = ivec2(gl_GlobalInvocationID.xy);
     ivec2 size = ivec2(frame.counts.zw);

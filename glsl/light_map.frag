@@ -41,12 +41,7 @@ void main() {
         vec3 wi = d * inversesqrt(d2);
         // Two-sided: the side the light sees.
         if (dot(n, wi) < 0.0) n = -n;
-        float falloff = 1.0;
-        if (l.info.x == LIGHT_SPOT) {
-            float c = dot(-wi, l.direction.xyz);
-            float theta = acos(clamp(c, -1.0, 1.0));
-            falloff = c <= l.spot.x ? 0.0 : (theta <= l.spot.z ? 1.0 : clamp((l.spot.y - theta) / max(l.spot.y - l.spot.z, 1e-6), 0.0, 1.0));
-        }
+        float falloff = l.info.x == LIGHT_SPOT ? spot_falloff(l, dot(-wi, l.direction.xyz)) : 1.0;
         e = l.intensity.rgb * (falloff * max(dot(n, wi), 0.0) / d2);
     }
     GpuMaterial m = materials[pc.material];

@@ -230,6 +230,12 @@ struct FrameArgs {
     /// Geometry-aware filter passes (each horizontal + vertical).
     #[arg(long, default_value_t = 2)]
     gi_filter_passes: u32,
+    /// Path-tracer bounces.
+    #[arg(long, default_value_t = 2)]
+    gi_bounces: u32,
+    /// Frames the path tracer accumulates in a headless render.
+    #[arg(long, default_value_t = 1)]
+    gi_frames: u32,
     /// Reflective light-map resolution per light view.
     #[arg(long, default_value_t = 256)]
     light_map_resolution: u32,
@@ -273,6 +279,8 @@ impl FrameArgs {
             filter_radius: self.gi_filter_radius,
             filter_passes: self.gi_filter_passes,
             light_map_resolution: self.light_map_resolution,
+            bounces: self.gi_bounces,
+            accumulate_frames: self.gi_frames,
             ..Default::default()
         };
         s.debug = self

@@ -1,5 +1,6 @@
-//! Indirect light against the Mitsuba full-GI references: the hemisphere method must beat
-//! direct-only rendering on every test scene (relMSE and FLIP), with validation on.
+//! Indirect light: against the Mitsuba full-GI references both GI methods must beat
+//! direct-only rendering on every test scene (relMSE and FLIP), and the path tracer must match
+//! the furnace closed form. Validation on.
 
 mod common;
 
@@ -40,7 +41,7 @@ fn metrics(scene_arg: &str, reference: &str, gi: GiSettings) -> Metrics {
 }
 
 #[test]
-fn hemisphere_beats_direct_only_on_every_test_scene() {
+fn hemisphere_and_path_tracer_beat_direct_only_on_every_test_scene() {
     for (scene, reference) in [
         ("cornell", "cornell"),
         ("assets/scenes/cornell_bunny.toml", "cornell_bunny"),
@@ -71,6 +72,93 @@ fn hemisphere_beats_direct_only_on_every_test_scene() {
             "{reference}: hemisphere FLIP {} !< direct {}",
             gi.flip_mean,
             direct.flip_mean
+        );
+        let pt = metrics(
+            scene,
+            reference,
+            GiSettings {
+                method: GiMethod::Pathtrace,
+                rays: 8,
+                bounces: 2,
+                accumulate_frames: 2,
+                ..Default::default()
+            },
+        );
+        println!(
+            "{reference}: path tracer (2 bounces) relMSE {:.4} FLIP {:.4}",
+            pt.rel_mse, pt.flip_mean
+        );
+        assert!(
+            pt.rel_mse < direct.rel_mse && pt.flip_mean < direct.flip_mean,
+            "{reference}: path tracer must beat direct light"
+        );
+    }
+}
+
+/// A closed sphere of uniform Lambert albedo `a` with a point light at its center: irradiance
+/// is uniform, and B bounces give L = a/pi * E_direct * (1 + a + ... + a^B). Returns
+/// (direct-only radiance, path-traced radiance) at the image center.
+fn furnace(bounces: u32) -> (glam::Vec3, glam::Vec3) {
+    let toml = r#"
+[camera]
+position = [0.0, 0.0, 0.0]
+target = [0.0, 0.0, 1.0]
+fov_y_deg = 40.0
+near = 0.01
+far = 10.0
+[[lights]]
+kind = "point"
+position = [0.0, 0.0, 0.0]
+intensity_w_sr = [1.0, 1.0, 1.0]
+[[objects]]
+builtin = "sphere"
+scale = 2.0
+material = { albedo = [0.5, 0.5, 0.5] }
+"#;
+    let scene = voxgi::scene::Scene::from_toml_str(toml, Path::new("<furnace>"), Path::new(ROOT))
+        .expect("parses");
+    let ctx = common::context();
+    let size = 64;
+    let center = |gi: GiSettings| {
+        let settings = RenderSettings {
+            width: size,
+            height: size,
+            gi,
+            ..Default::default()
+        };
+        let out = render_image(&ctx, &scene, &settings).expect("renders");
+        // Mean over the central 8x8 pixels.
+        let mut sum = glam::Vec3::ZERO;
+        for y in size / 2 - 4..size / 2 + 4 {
+            for x in size / 2 - 4..size / 2 + 4 {
+                sum += glam::Vec3::from(out.hdr.data[(y * size + x) as usize]);
+            }
+        }
+        sum / 64.0
+    };
+    let direct = center(GiSettings::default());
+    let traced = center(GiSettings {
+        method: GiMethod::Pathtrace,
+        rays: 16,
+        bounces,
+        accumulate_frames: 8,
+        ..Default::default()
+    });
+    common::assert_no_validation_messages(&ctx);
+    (direct, traced)
+}
+
+#[test]
+fn path_tracer_matches_the_furnace_closed_form() {
+    let a = 0.5f32;
+    for bounces in 1..=3 {
+        let (direct, traced) = furnace(bounces);
+        let factor: f32 = (0..=bounces).map(|b| a.powi(b as i32)).sum();
+        let ratio = traced.x / direct.x;
+        println!("furnace, {bounces} bounce(s): direct {direct}, traced {traced}, ratio {ratio:.4}, closed form {factor:.4}");
+        assert!(
+            (ratio - factor).abs() < 0.03 * factor,
+            "{bounces} bounces: ratio {ratio} vs closed form {factor}"
         );
     }
 }

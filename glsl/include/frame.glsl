@@ -37,4 +37,13 @@ struct GpuFrame {
     GpuShadowView shadow_views[MAX_SHADOW_VIEWS];
 };
 
+// Mitsuba 3 `spot` falloff: 1 inside the beam, linear in angle to 0 at the cutoff.
+// `cos_axis`: cosine between the spot axis and the direction from the light to the point.
+float spot_falloff(GpuLight l, float cos_axis) {
+    if (cos_axis <= l.spot.x) return 0.0;
+    float theta = acos(clamp(cos_axis, -1.0, 1.0));
+    if (theta <= l.spot.z) return 1.0;
+    return clamp((l.spot.y - theta) / max(l.spot.y - l.spot.z, 1e-6), 0.0, 1.0);
+}
+
 #endif

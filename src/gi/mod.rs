@@ -3,10 +3,14 @@
 //! geometry-aware filter and added to the direct light.
 
 use crate::graph::{Access, BufferHandle, ImageHandle, RenderGraph, Shader};
-use crate::vk::{vk, Buffer, ComputePipeline, Context, Descriptor, ImageDesc, VkError};
+use crate::scene::Scene;
+use crate::vk::{vk, Buffer, ComputePipeline, Context, Descriptor, Image, ImageDesc, VkError};
+use crate::voxel::gpu::GpuVoxelizePush;
 use crate::voxel::ray_mask::RayMaskLut;
 use crate::voxel::VoxelGrid;
 use bytemuck::{Pod, Zeroable};
+use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
+use std::sync::Arc;
 
 /// A GI method of the speed/accuracy ladder.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
@@ -16,6 +20,9 @@ pub enum GiMethod {
     None,
     /// One bounce: N rays per pixel, radiance at hits from reflective light maps (§6.2).
     Hemisphere,
+    /// B bounces with albedo and normal from voxel volumes and direct light at every hit from
+    /// the shadow maps, accumulated over frames (§6.3).
+    Pathtrace,
 }
 
 /// Parameters of the indirect-light passes (all exposed on the command line).
@@ -43,6 +50,10 @@ pub struct GiSettings {
     pub filter_passes: u32,
     /// Seed of the per-pixel rotation (vary per frame to accumulate).
     pub seed: u32,
+    /// Path-tracer bounces.
+    pub bounces: u32,
+    /// Frames a headless render accumulates (path tracer; the viewer accumulates while still).
+    pub accumulate_frames: u32,
 }
 
 impl Default for GiSettings {
@@ -61,6 +72,8 @@ impl Default for GiSettings {
             filter_radius: 4,
             filter_passes: 2,
             seed: 0,
+            bounces: 2,
+            accumulate_frames: 1,
         }
     }
 }
@@ -99,6 +112,7 @@ pub struct GiInputs {
     pub rlm_radiance: ImageHandle,
     pub rlm_position: ImageHandle,
     pub rlm_normal: ImageHandle,
+    pub shadow_map: ImageHandle,
     pub width: u32,
     pub height: u32,
 }
@@ -106,6 +120,9 @@ pub struct GiInputs {
 /// Pipelines and constant data of the GI passes.
 pub struct GiPasses {
     pub settings: GiSettings,
+    pathtracer: Option<PathTracer>,
+    /// Frames accumulated since the last reset (path tracer).
+    frames: Arc<AtomicU32>,
     hemisphere: ComputePipeline,
     filter: ComputePipeline,
     composite: ComputePipeline,
@@ -120,10 +137,13 @@ impl GiPasses {
     pub fn new(
         ctx: &Context,
         settings: GiSettings,
+        scene: &Scene,
+        time_s: f32,
         grid: &VoxelGrid,
         shadow_resolution: u32,
-        scene_diagonal_m: f32,
+        (width, height): (u32, u32),
     ) -> Result<Self, VkError> {
+        let scene_diagonal_m = scene.aabb_at(time_s).extent().length();
         let b = vk::DescriptorType::STORAGE_BUFFER;
         let s = vk::DescriptorType::COMBINED_IMAGE_SAMPLER;
         let i = vk::DescriptorType::STORAGE_IMAGE;
@@ -181,13 +201,20 @@ impl GiPasses {
             ],
             params2: [
                 shadow_resolution as f32 / settings.light_map_resolution.max(1) as f32,
-                1.0,
-                0.0,
-                0.0,
+                settings.bounces.max(1) as f32,
+                settings.ray_offset_voxels,
+                settings.ray_offset_max_voxels,
             ],
+        };
+        let pathtracer = if settings.method == GiMethod::Pathtrace {
+            Some(PathTracer::new(ctx, scene, time_s, grid, (width, height))?)
+        } else {
+            None
         };
         Ok(Self {
             settings,
+            pathtracer,
+            frames: Arc::new(AtomicU32::new(0)),
             hemisphere,
             filter,
             composite,
@@ -197,12 +224,40 @@ impl GiPasses {
         })
     }
 
-    /// Declares the hemisphere, filter and composite passes; returns the total radiance.
+    /// Counts a new frame (call before recording it): the path tracer accumulates into it.
+    pub fn advance(&self) {
+        self.frames.fetch_add(1, Ordering::SeqCst);
+    }
+
+    /// Restarts accumulation (camera, lights or scene changed).
+    pub fn reset(&self) {
+        self.frames.store(0, Ordering::SeqCst);
+    }
+
+    /// Frames accumulated so far.
+    pub fn accumulated_frames(&self) -> u32 {
+        self.frames.load(Ordering::SeqCst)
+    }
+
+    /// Declares the indirect-light, filter and composite passes; returns the total radiance.
     pub fn add_passes(&self, g: &mut RenderGraph, inp: &GiInputs) -> ImageHandle {
+        let lut = g.import_buffer(&self.lut, Access::StorageRead(Shader::Compute));
+        let irradiance = match &self.pathtracer {
+            Some(pt) => pt.add_passes(g, inp, lut, self.push, self.sampler, self.frames.clone()),
+            None => self.add_hemisphere(g, inp, lut),
+        };
+        self.add_filter_and_composite(g, inp, irradiance)
+    }
+
+    fn add_hemisphere(
+        &self,
+        g: &mut RenderGraph,
+        inp: &GiInputs,
+        lut: BufferHandle,
+    ) -> ImageHandle {
         let (w, h) = (inp.width, inp.height);
         let groups = (w.div_ceil(8), h.div_ceil(8));
         let sampler = self.sampler;
-        let lut = g.import_buffer(&self.lut, Access::StorageRead(Shader::Compute));
         let irradiance = g.create_image(ImageDesc::new_2d(
             "indirect irradiance",
             vk::Format::R32G32B32A32_SFLOAT,
@@ -249,6 +304,20 @@ impl GiPasses {
                 ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
                 ctx.cmd.dispatch(groups.0, groups.1, 1);
             });
+        irradiance
+    }
+
+    fn add_filter_and_composite(
+        &self,
+        g: &mut RenderGraph,
+        inp: &GiInputs,
+        irradiance: ImageHandle,
+    ) -> ImageHandle {
+        let (w, h) = (inp.width, inp.height);
+        let groups = (w.div_ceil(8), h.div_ceil(8));
+        let sampler = self.sampler;
+        let read = Access::Sampled(Shader::Compute);
+        let i = *inp;
 
         // Geometry-aware filter, horizontal then vertical, `filter_passes` times.
         let mut current = irradiance;
@@ -341,12 +410,235 @@ impl GiPasses {
     }
 
     pub fn destroy(self, ctx: &Context) {
+        if let Some(pt) = self.pathtracer {
+            pt.destroy(ctx);
+        }
         ctx.destroy_compute_pipeline(self.hemisphere);
         ctx.destroy_compute_pipeline(self.filter);
         ctx.destroy_compute_pipeline(self.composite);
         ctx.destroy_buffer(self.lut);
         ctx.destroy_sampler(self.sampler);
     }
+}
+
+/// The path tracer's persistent resources: attribute volumes and the accumulation history.
+struct PathTracer {
+    pathtrace: ComputePipeline,
+    attributes: ComputePipeline,
+    triangles: Buffer,
+    triangle_count: u32,
+    voxelize_push: GpuVoxelizePush,
+    albedo: Image,
+    normal: Image,
+    history: Image,
+    /// The volumes hold the static scene once written.
+    volumes_written: Arc<AtomicBool>,
+}
+
+/// Group size of the attribute voxelizer (one workgroup per triangle).
+const ATTRIBUTE_GROUP_SIZE: u32 = 64;
+
+impl PathTracer {
+    fn new(
+        ctx: &Context,
+        scene: &Scene,
+        time_s: f32,
+        grid: &VoxelGrid,
+        (w, h): (u32, u32),
+    ) -> Result<Self, VkError> {
+        let storage = vk::DescriptorType::STORAGE_BUFFER;
+        let image = vk::DescriptorType::STORAGE_IMAGE;
+        let sampled = vk::DescriptorType::COMBINED_IMAGE_SAMPLER;
+        let attributes = ctx.compute_pipeline(
+            "voxelize_attributes.comp",
+            &[(0, storage), (1, image), (2, image)],
+            std::mem::size_of::<GpuVoxelizePush>() as u32,
+            &[(0, ATTRIBUTE_GROUP_SIZE)],
+        )?;
+        let pathtrace = ctx.compute_pipeline(
+            "gi_pathtrace.comp",
+            &[
+                (0, storage),
+                (1, sampled),
+                (2, sampled),
+                (3, sampled),
+                (4, storage),
+                (5, sampled),
+                (6, sampled),
+                (7, sampled),
+                (8, image),
+            ],
+            std::mem::size_of::<GpuGiPush>() as u32,
+            &[],
+        )?;
+        let tris = attribute_triangles(scene, time_s);
+        let bytes: &[u8] = if tris.is_empty() {
+            &[0; 48]
+        } else {
+            bytemuck::cast_slice(&tris)
+        };
+        let triangles = ctx.upload_buffer(
+            "attribute triangles",
+            bytes,
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+        )?;
+        let ext = grid.extent_voxels();
+        let usage = vk::ImageUsageFlags::STORAGE
+            | vk::ImageUsageFlags::SAMPLED
+            | vk::ImageUsageFlags::TRANSFER_DST;
+        let volume = |name: &str, format| {
+            ImageDesc::new_2d(name, format, ext.x, ext.y)
+                .with_depth(ext.z)
+                .with_usage(usage)
+        };
+        let resting = Access::Sampled(Shader::Compute).info().layout;
+        let zero = vk::ClearColorValue { float32: [0.0; 4] };
+        let albedo = ctx.create_image(&volume("albedo volume", vk::Format::R8G8B8A8_UNORM))?;
+        ctx.clear_new_image(&albedo, zero, resting)?;
+        let normal = ctx.create_image(&volume("normal volume", vk::Format::R8G8B8A8_SNORM))?;
+        ctx.clear_new_image(&normal, zero, resting)?;
+        let history = ctx.create_image(
+            &ImageDesc::new_2d("path tracer history", vk::Format::R32G32B32A32_SFLOAT, w, h)
+                .with_usage(usage),
+        )?;
+        ctx.clear_new_image(&history, zero, resting)?;
+        Ok(Self {
+            pathtrace,
+            attributes,
+            triangle_count: tris.len() as u32,
+            voxelize_push: GpuVoxelizePush::new(grid, tris.len() as u32, 0),
+            triangles,
+            albedo,
+            normal,
+            history,
+            volumes_written: Arc::new(AtomicBool::new(false)),
+        })
+    }
+
+    fn add_passes(
+        &self,
+        g: &mut RenderGraph,
+        i: &GiInputs,
+        lut: BufferHandle,
+        push: GpuGiPush,
+        sampler: vk::Sampler,
+        frames: Arc<AtomicU32>,
+    ) -> ImageHandle {
+        let read = Access::Sampled(Shader::Compute);
+        let albedo = g.import_image(&self.albedo, read);
+        let normal = g.import_image(&self.normal, read);
+        let history = g.import_image(&self.history, read);
+        let tris = g.import_buffer(&self.triangles, Access::StorageRead(Shader::Compute));
+        let (pipe, count, vpush) = (self.attributes, self.triangle_count, self.voxelize_push);
+        let written = self.volumes_written.clone();
+        // Static geometry: the first frame writes the volumes, later frames keep them.
+        g.add_pass("voxelize_attributes")
+            .read(tris, Access::StorageRead(Shader::Compute))
+            .write(albedo, Access::StorageWrite(Shader::Compute))
+            .write(normal, Access::StorageWrite(Shader::Compute))
+            .record(move |ctx| {
+                if written.swap(true, Ordering::SeqCst) || count == 0 {
+                    return;
+                }
+                ctx.cmd.bind(
+                    &pipe,
+                    &[
+                        Descriptor::storage_buffer(0, ctx.buffer(tris).raw),
+                        Descriptor::StorageImage {
+                            binding: 1,
+                            view: ctx.image(albedo).view,
+                        },
+                        Descriptor::StorageImage {
+                            binding: 2,
+                            view: ctx.image(normal).view,
+                        },
+                    ],
+                );
+                ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&vpush));
+                let x = count.min(65_535);
+                ctx.cmd.dispatch(x, count.div_ceil(x), 1);
+            });
+        let pipe = self.pathtrace;
+        let i = *i;
+        let groups = (i.width.div_ceil(8), i.height.div_ceil(8));
+        g.add_pass("gi_pathtrace")
+            .read(i.frame, Access::StorageRead(Shader::Compute))
+            .read(i.normal, read)
+            .read(i.depth, read)
+            .read(i.voxels, read)
+            .read(lut, Access::StorageRead(Shader::Compute))
+            .read(albedo, read)
+            .read(normal, read)
+            .read(i.shadow_map, read)
+            .write(history, Access::StorageReadWrite(Shader::Compute))
+            .record(move |ctx| {
+                let sampled = |binding, h: ImageHandle| Descriptor::SampledImage {
+                    binding,
+                    view: ctx.image(h).view,
+                    sampler,
+                };
+                ctx.cmd.bind(
+                    &pipe,
+                    &[
+                        frame_for_slot(i.frame_descriptor, i.frame_stride, ctx.slot),
+                        sampled(1, i.normal),
+                        sampled(2, i.depth),
+                        sampled(3, i.voxels),
+                        Descriptor::storage_buffer(4, ctx.buffer(lut).raw),
+                        sampled(5, albedo),
+                        sampled(6, normal),
+                        sampled(7, i.shadow_map),
+                        Descriptor::StorageImage {
+                            binding: 8,
+                            view: ctx.image(history).view,
+                        },
+                    ],
+                );
+                let mut p = push;
+                // Frames accumulated before this one (`advance` ran before recording).
+                p.iparams[3] = frames.load(Ordering::SeqCst).saturating_sub(1);
+                ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&p));
+                ctx.cmd.dispatch(groups.0, groups.1, 1);
+            });
+        history
+    }
+
+    fn destroy(self, ctx: &Context) {
+        ctx.destroy_compute_pipeline(self.pathtrace);
+        ctx.destroy_compute_pipeline(self.attributes);
+        ctx.destroy_buffer(self.triangles);
+        ctx.destroy_image(self.albedo);
+        ctx.destroy_image(self.normal);
+        ctx.destroy_image(self.history);
+    }
+}
+
+/// World-space triangles of the scene at `t_s`, each vertex's w holding one channel of the
+/// material's albedo (the layout `voxelize_attributes.comp` reads).
+fn attribute_triangles(scene: &Scene, t_s: f32) -> Vec<[[f32; 4]; 3]> {
+    let mut out = Vec::new();
+    for object in &scene.objects {
+        let Some(mesh) = scene.meshes.get(object.mesh_at(t_s)) else {
+            continue;
+        };
+        let m = object.transform_at(t_s);
+        for (si, sub) in mesh.submeshes.iter().enumerate() {
+            let material = object.materials.get(si).copied().unwrap_or(sub.material);
+            let albedo = scene
+                .materials
+                .get(material)
+                .map(|m| m.albedo)
+                .unwrap_or(glam::Vec3::splat(0.5));
+            let range = sub.first_index as usize..(sub.first_index + sub.index_count) as usize;
+            for t in mesh.indices[range].chunks_exact(3) {
+                out.push([0, 1, 2].map(|k| {
+                    let v = m.transform_point3(mesh.positions[t[k] as usize]);
+                    [v.x, v.y, v.z, albedo[k]]
+                }));
+            }
+        }
+    }
+    out
 }
 
 /// The frame-constants descriptor of frame slot `slot`.

@@ -285,13 +285,14 @@ impl Renderer {
         };
         let gi = match (&voxels, gi_on) {
             (Some(v), true) => {
-                let diagonal = scene.aabb_at(settings.time_s).extent().length();
                 let passes = crate::gi::GiPasses::new(
                     ctx,
                     settings.gi,
+                    scene,
+                    settings.time_s,
                     &v.voxels.grid,
                     settings.shadow.resolution,
-                    diagonal,
+                    (settings.width, settings.height),
                 )?;
                 let light_map = create_light_map_pipeline(ctx)?;
                 Some((passes, light_map))
@@ -371,6 +372,12 @@ impl Renderer {
                 axis: v.axis.extend(0.0).to_array(),
             };
         }
+        // Accumulated indirect light is valid only while camera, lights and settings stay.
+        if let Some((gi, _)) = &self.gi {
+            if bytemuck::bytes_of(&f) != bytemuck::bytes_of(&self.frame_data) {
+                gi.reset();
+            }
+        }
         self.frame_data = f;
         self.shadow_view_count = views.len() as u32;
         let lists = DrawLists {
@@ -400,6 +407,9 @@ impl Renderer {
     /// Writes the frame constants of frame slot `slot` (call after the slot's fence), and the
     /// dynamic objects' voxels at `settings.time_s`.
     pub fn write_frame(&mut self, slot: usize) {
+        if let Some((gi, _)) = &self.gi {
+            gi.advance();
+        }
         if let Some(v) = &mut self.voxels {
             if let Err(e) = v.update(self.settings.time_s, slot) {
                 log::warn!("dynamic objects not re-voxelized: {e}");
@@ -758,6 +768,7 @@ impl Renderer {
                         rlm_radiance,
                         rlm_position,
                         rlm_normal,
+                        shadow_map,
                         width: w,
                         height: h,
                     },
@@ -1140,7 +1151,12 @@ pub fn render_image(
     settings: &RenderSettings,
 ) -> Result<RenderOutput, RenderError> {
     let mut renderer = Renderer::new(ctx, scene, settings.clone())?;
-    let result = run_frames(ctx, &mut renderer, 1);
+    // The path tracer converges over frames; everything else is done in one.
+    let frames = match settings.gi.method {
+        crate::gi::GiMethod::Pathtrace => settings.gi.accumulate_frames.max(1) as usize,
+        _ => 1,
+    };
+    let result = run_frames(ctx, &mut renderer, frames);
     let out = result.map(|timings| {
         let hdr = renderer.hdr_image();
         let ldr = renderer.ldr_pixels();

@@ -1,0 +1,126 @@
+#version 450
+// The voxel path tracer (thesis §6.3): from each G-buffer point, `rays` paths of up to B
+// bounces through the binary voxel hierarchy; at every hit the albedo and normal come from
+// the volumes congruent with the bits and the direct light there from the shadow maps (next
+// event estimation), so each bounce adds throughput * rho/pi * E_direct. Cosine sampling of
+// Lambert bounces makes the throughput factor the albedo. Samples: Hammersley for the first
+// bounce, Halton (2,3) and (5,7) for the next two, hashed random after, all rotated per pixel
+// and per accumulated frame. The irradiance estimate E = pi/N sum L is accumulated over frames
+// into a history image while camera and scene stay still.
+#include "frame.glsl"
+#include "gi_common.glsl"
+
+layout(local_size_x = 8, local_size_y = 8) in;
+layout(set = 0, binding = 0, std430) readonly buffer FrameBuf { GpuFrame frame; };
+layout(set = 0, binding = 1) uniform sampler2D gb_normal;
+layout(set = 0, binding = 2) uniform sampler2D gb_depth;
+layout(set = 0, binding = 3) uniform usampler2DArray voxels;
+layout(set = 0, binding = 4, std430) readonly buffer RayMasks { uvec4 ray_masks[]; };
+layout(set = 0, binding = 5) uniform sampler3D albedo_volume;
+layout(set = 0, binding = 6) uniform sampler3D normal_volume;
+layout(set = 0, binding = 7) uniform sampler2DArray shadow_maps;
+layout(set = 0, binding = 8, rgba32f) uniform image2D history;
+
+uvec4 vx_column(uint level, int x, int y, uint layer) {
+    return texelFetch(voxels, ivec3(x, y, int(layer)), int(level));
+}
+uvec4 vx_ray_mask(uint a, uint b) { return ray_masks[b * 128u + a]; }
+bool vx_voxel(int x, int y, int k) {
+    uvec4 c = vx_column(0u, x, y, uint(k) / 128u);
+    uint bit = uint(k) % 128u;
+    return ((c[bit / 32u] >> (bit % 32u)) & 1u) != 0u;
+}
+
+#include "voxel_traverse.glsl"
+#include "shadow.glsl"
+
+// Outgoing Lambert radiance at p (normal n, albedo a) from every light, shadowed.
+vec3 direct_at(vec3 p, vec3 n, vec3 a) {
+    vec3 lo = vec3(0.0);
+    for (uint i = 0u; i < frame.counts.x; ++i) {
+        GpuLight l = frame.lights[i];
+        vec3 wi;
+        vec3 e;
+        if (l.info.x == LIGHT_DIRECTIONAL) {
+            wi = -l.direction.xyz;
+            e = l.intensity.rgb * max(dot(n, wi), 0.0);
+        } else {
+            vec3 d = l.position.xyz - p;
+            float d2 = max(dot(d, d), 1e-30);
+            wi = d * inversesqrt(d2);
+            float falloff = l.info.x == LIGHT_SPOT ? spot_falloff(l, dot(-wi, l.direction.xyz)) : 1.0;
+            e = l.intensity.rgb * (falloff * max(dot(n, wi), 0.0) / d2);
+        }
+        if (all(equal(e, vec3(0.0)))) continue;
+        lo += a / PI * e * shadow_visibility(shadow_maps, l, p, n, max(dot(n, wi), 0.0));
+    }
+    return lo;
+}
+
+float halton(uint i, uint base) {
+    float f = 1.0, r = 0.0;
+    while (i > 0u) {
+        f /= float(base);
+        r += f * float(i % base);
+        i /= base;
+    }
+    return r;
+}
+
+vec2 bounce_sample(uint bounce, uint s, uint rays, uint frame_index, vec2 rot) {
+    uint i = frame_index * rays + s;
+    vec2 u;
+    if (bounce == 0u) u = vec2((float(s) + 0.5) / float(rays), radical_inverse(s));
+    else if (bounce == 1u) u = vec2(halton(i + 1u, 2u), halton(i + 1u, 3u));
+    else if (bounce == 2u) u = vec2(halton(i + 1u, 5u), halton(i + 1u, 7u));
+    else u = pixel_rotation(uvec2(i, bounce), frame_index * 31u + s);
+    return fract(u + rot);
+}
+
+void main() {
+    ivec2 px = ivec2(gl_GlobalInvocationID.xy);
+    ivec2 size = ivec2(frame.counts.zw);
+    if (any(greaterThanEqual(px, size))) return;
+    uint frame_index = gi.iparams.w;
+    float depth = texelFetch(gb_depth, px, 0).r;
+    if (depth >= 1.0) {
+        imageStore(history, px, vec4(0.0));
+        return;
+    }
+    vec2 uv = (vec2(px) + 0.5) / vec2(size);
+    vec4 wp = frame.inv_view_proj * vec4(uv * 2.0 - 1.0, depth, 1.0);
+    vec3 p = wp.xyz / wp.w;
+    vec3 n = normalize(texelFetch(gb_normal, px, 0).xyz);
+    float offset = gi.params.y * gi.params.w;
+    mat3 dir_to_voxel = mat3(gi.world_to_voxel);
+    uint rays = max(gi.iparams.x, 1u);
+    uint bounces = max(uint(gi.params2.y), 1u);
+    vec2 rot = pixel_rotation(uvec2(px), frame_index);
+    vec3 sum = vec3(0.0);
+    for (uint s = 0u; s < rays; ++s) {
+        vec3 o = p + n * offset;
+        vec3 nn = n;
+        vec3 throughput = vec3(1.0);
+        vec3 l = vec3(0.0);
+        for (uint b = 0u; b < bounces; ++b) {
+            vec3 d = cosine_direction(nn, bounce_sample(b, s, rays, frame_index, rot));
+            vec3 ov = (gi.world_to_voxel * vec4(o, 1.0)).xyz;
+            VxHit h = voxel_first_hit(gi.dims.xyz, uint(gi.dims.w), ov, dir_to_voxel * d, gi.params.x, gi.iparams.y, gi.iparams.z);
+            if (!h.hit) break;
+            ivec3 v = ivec3(h.voxel);
+            vec3 a = texelFetch(albedo_volume, v, 0).rgb;
+            vec3 hn = texelFetch(normal_volume, v, 0).xyz;
+            hn = dot(hn, hn) > 0.25 ? normalize(hn) : -d;
+            if (dot(hn, d) > 0.0) hn = -hn;  // the side the ray arrives at
+            vec3 hp = o + d * h.t;
+            l += throughput * direct_at(hp, hn, a);
+            throughput *= a;
+            o = hp + hn * offset;
+            nn = hn;
+        }
+        sum += l;
+    }
+    vec3 e = sum * (PI / float(rays));
+    vec3 old = frame_index == 0u ? e : imageLoad(history, px).rgb;
+    imageStore(history, px, vec4(mix(old, e, 1.0 / float(frame_index + 1u)), 1.0));
+}
