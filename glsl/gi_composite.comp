@@ -1,10 +1,14 @@
 #version 450
-// Direct plus indirect light: L = L_direct + rho/pi * E_indirect (Lambert receivers).
+// Direct plus indirect light: L = L_direct + rho/pi * E_indirect for Lambert receivers; Phong
+// receivers' indirect radiance is stored as is (see gi_common.glsl).
+layout(constant_id = 0) const bool HAS_PHONG = false;
+
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(set = 0, binding = 0) uniform sampler2D direct;
 layout(set = 0, binding = 1) uniform sampler2D gb_albedo;
 layout(set = 0, binding = 2) uniform sampler2D indirect_irradiance;
 layout(set = 0, binding = 3, rgba32f) uniform writeonly image2D radiance;
+layout(set = 0, binding = 4) uniform sampler2D gb_specular;   // albedo when !HAS_PHONG
 
 #define PI 3.14159265358979323846
 
@@ -14,5 +18,7 @@ void main() {
     vec4 d = texelFetch(direct, p, 0);
     vec3 albedo = texelFetch(gb_albedo, p, 0).rgb;
     vec3 e = texelFetch(indirect_irradiance, p, 0).rgb;
-    imageStore(radiance, p, vec4(d.rgb + albedo / PI * e, d.a));
+    // Phong pixels already hold their indirect radiance (see gi_common.glsl).
+    bool phong = HAS_PHONG && any(greaterThan(texelFetch(gb_specular, p, 0).rgb, vec3(0.0)));
+    imageStore(radiance, p, vec4(d.rgb + (phong ? e : albedo / PI * e), d.a));
 }

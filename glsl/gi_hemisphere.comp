@@ -8,6 +8,8 @@
 #include "frame.glsl"
 #include "gi_common.glsl"
 
+layout(constant_id = 0) const bool HAS_PHONG = false;
+
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(set = 0, binding = 0, std430) readonly buffer FrameBuf { GpuFrame frame; };
 layout(set = 0, binding = 1) uniform sampler2D gb_normal;
@@ -18,6 +20,8 @@ layout(set = 0, binding = 5) uniform sampler2DArray rlm_radiance;
 layout(set = 0, binding = 6) uniform sampler2DArray rlm_position;
 layout(set = 0, binding = 7) uniform sampler2DArray rlm_normal;
 layout(set = 0, binding = 8, rgba32f) uniform writeonly image2D irradiance;
+layout(set = 0, binding = 9) uniform sampler2D gb_specular;   // albedo when !HAS_PHONG
+layout(set = 0, binding = 10) uniform sampler2D gb_albedo;
 
 uvec4 vx_column(uint level, int x, int y, uint layer) {
     return texelFetch(voxels, ivec3(x, y, int(layer)), int(level));
@@ -74,23 +78,46 @@ void main() {
     vec2 uv = (vec2(px) + 0.5) / vec2(size);
     vec4 wp = frame.inv_view_proj * vec4(uv * 2.0 - 1.0, depth, 1.0);
     vec3 p = wp.xyz / wp.w;
-    vec3 n = normalize(texelFetch(gb_normal, px, 0).xyz);
+    vec4 ns = texelFetch(gb_normal, px, 0);
+    vec3 n = normalize(ns.xyz);
+    vec3 specular = HAS_PHONG ? texelFetch(gb_specular, px, 0).rgb : vec3(0.0);
+    bool phong = HAS_PHONG && is_phong_pixel(specular);
+    vec3 mirror = reflect(-normalize(frame.camera_position.xyz - p), n);
     // Self-intersection offset along the normal (§4.4).
     vec3 origin = p + n * (gi.params.y * gi.params.w);
     vec3 ov = (gi.world_to_voxel * vec4(origin, 1.0)).xyz;
     mat3 dir_to_voxel = mat3(gi.world_to_voxel);
     uint rays = max(gi.iparams.x, 1u);
+    // Phong pixels spend half their rays on the specular lobe.
+    uint lobe_rays = phong ? rays / 2u : 0u;
+    uint diffuse_rays = rays - lobe_rays;
     vec2 rot = pixel_rotation(uvec2(px), gi.iparams.w);
     vec3 sum = vec3(0.0);
+    vec3 lobe_sum = vec3(0.0);
     for (uint i = 0u; i < rays; ++i) {
-        vec2 u = fract(vec2((float(i) + 0.5) / float(rays), radical_inverse(i)) + rot);
-        vec3 d = cosine_direction(n, u);
+        bool lobe = i >= diffuse_rays;
+        uint j = lobe ? i - diffuse_rays : i;
+        uint count = lobe ? lobe_rays : diffuse_rays;
+        vec2 u = fract(vec2((float(j) + 0.5) / float(count), radical_inverse(j)) + rot);
+        vec3 d = lobe ? phong_direction(mirror, ns.w, u) : cosine_direction(n, u);
+        float cos_n = dot(d, n);
+        if (cos_n <= 0.0) continue;  // a lobe sample below the surface contributes nothing
         // Offset along the ray (§4.4): k2 * h / (d . n), clamped, so grazing rays leave the
         // surface's own voxels too.
         float along = min(gi.params2.z * gi.params.w / max(dot(d, n), 1e-4), gi.params2.w * gi.params.w);
         vec3 o = origin + d * along;
         VxHit h = voxel_first_hit(gi.dims.xyz, uint(gi.dims.w), ov + dir_to_voxel * (d * along), dir_to_voxel * d, max(gi.params.x - along, 0.0), gi.iparams.y, gi.iparams.z);
-        if (h.hit) sum += light_map_radiance(o + d * h.t, d);
+        if (!h.hit) continue;
+        vec3 l = light_map_radiance(o + d * h.t, d);
+        if (lobe) lobe_sum += l * cos_n;
+        else sum += l;
     }
-    imageStore(irradiance, px, vec4(sum * (PI / float(rays)), 1.0));
+    vec3 e = sum * (PI / float(max(diffuse_rays, 1u)));
+    if (phong) {
+        vec3 albedo = texelFetch(gb_albedo, px, 0).rgb;
+        vec3 s = specular * ((ns.w + 2.0) / (ns.w + 1.0)) * lobe_sum / float(max(lobe_rays, 1u));
+        imageStore(irradiance, px, vec4(albedo / PI * e + s, 1.0));
+    } else {
+        imageStore(irradiance, px, vec4(e, 1.0));
+    }
 }

@@ -10,6 +10,8 @@
 #include "frame.glsl"
 #include "gi_common.glsl"
 
+layout(constant_id = 0) const bool HAS_PHONG = false;
+
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(set = 0, binding = 0, std430) readonly buffer FrameBuf { GpuFrame frame; };
 layout(set = 0, binding = 1) uniform sampler2D gb_normal;
@@ -20,6 +22,8 @@ layout(set = 0, binding = 5) uniform sampler3D albedo_volume;
 layout(set = 0, binding = 6) uniform sampler3D normal_volume;
 layout(set = 0, binding = 7) uniform sampler2DArray shadow_maps;
 layout(set = 0, binding = 8, rgba32f) uniform image2D history;
+layout(set = 0, binding = 9) uniform sampler2D gb_specular;   // albedo when !HAS_PHONG
+layout(set = 0, binding = 10) uniform sampler2D gb_albedo;
 
 uvec4 vx_column(uint level, int x, int y, uint layer) {
     return texelFetch(voxels, ivec3(x, y, int(layer)), int(level));
@@ -90,20 +94,37 @@ void main() {
     vec2 uv = (vec2(px) + 0.5) / vec2(size);
     vec4 wp = frame.inv_view_proj * vec4(uv * 2.0 - 1.0, depth, 1.0);
     vec3 p = wp.xyz / wp.w;
-    vec3 n = normalize(texelFetch(gb_normal, px, 0).xyz);
+    vec4 ns = texelFetch(gb_normal, px, 0);
+    vec3 n = normalize(ns.xyz);
+    vec3 specular = HAS_PHONG ? texelFetch(gb_specular, px, 0).rgb : vec3(0.0);
+    bool phong = HAS_PHONG && is_phong_pixel(specular);
+    vec3 mirror = reflect(-normalize(frame.camera_position.xyz - p), n);
+    // Phong pixels spend half their paths on the specular lobe (first bounce).
+    uint lobe_rays = phong ? max(gi.iparams.x, 1u) / 2u : 0u;
     float offset = gi.params.y * gi.params.w;
     mat3 dir_to_voxel = mat3(gi.world_to_voxel);
     uint rays = max(gi.iparams.x, 1u);
     uint bounces = max(uint(gi.params2.y), 1u);
     vec2 rot = pixel_rotation(uvec2(px), frame_index);
+    uint diffuse_rays = rays - lobe_rays;
     vec3 sum = vec3(0.0);
+    vec3 lobe_sum = vec3(0.0);
     for (uint s = 0u; s < rays; ++s) {
+        bool lobe = s >= diffuse_rays;
+        uint j = lobe ? s - diffuse_rays : s;
+        uint count = lobe ? lobe_rays : diffuse_rays;
         vec3 o = p + n * offset;
         vec3 nn = n;
         vec3 throughput = vec3(1.0);
         vec3 l = vec3(0.0);
+        float cos_first = 1.0;
         for (uint b = 0u; b < bounces; ++b) {
-            vec3 d = cosine_direction(nn, bounce_sample(b, s, rays, frame_index, rot));
+            vec2 u = bounce_sample(b, j, count, frame_index, rot);
+            vec3 d = (lobe && b == 0u) ? phong_direction(mirror, ns.w, u) : cosine_direction(nn, u);
+            if (b == 0u) {
+                cos_first = dot(d, n);
+                if (cos_first <= 0.0) break;  // a lobe sample below the surface
+            }
             vec3 ov = (gi.world_to_voxel * vec4(o, 1.0)).xyz;
             VxHit h = voxel_first_hit(gi.dims.xyz, uint(gi.dims.w), ov, dir_to_voxel * d, gi.params.x, gi.iparams.y, gi.iparams.z);
             if (!h.hit) break;
@@ -118,9 +139,14 @@ void main() {
             o = hp + hn * offset;
             nn = hn;
         }
-        sum += l;
+        if (lobe) lobe_sum += l * max(cos_first, 0.0);
+        else sum += l;
     }
-    vec3 e = sum * (PI / float(rays));
+    vec3 e = sum * (PI / float(max(diffuse_rays, 1u)));
+    if (phong) {
+        vec3 albedo = texelFetch(gb_albedo, px, 0).rgb;
+        e = albedo / PI * e + specular * ((ns.w + 2.0) / (ns.w + 1.0)) * lobe_sum / float(max(lobe_rays, 1u));
+    }
     vec3 old = frame_index == 0u ? e : imageLoad(history, px).rgb;
     imageStore(history, px, vec4(mix(old, e, 1.0 / float(frame_index + 1u)), 1.0));
 }

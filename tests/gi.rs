@@ -162,3 +162,74 @@ fn path_tracer_matches_the_furnace_closed_form() {
         );
     }
 }
+
+#[test]
+fn phong_receivers_sample_their_lobe() {
+    // A glossy black floor (rho_s = 0.5, n = 200) reflects a white Lambert wall (albedo 0.8)
+    // lit head-on by a directional light (E = pi, so the wall's radiance is 0.8). The floor
+    // gets no direct light. At the floor point the camera sees, the reflected radiance is
+    // rho_s (n+2)/(n+1) * L_wall * cos(theta_r) (normalized Phong over a uniform wall).
+    let toml = r#"
+[camera]
+position = [0.0, 0.5, -1.0]
+target = [0.0, 0.0, 0.0]
+fov_y_deg = 30.0
+near = 0.01
+far = 20.0
+[[lights]]
+kind = "directional"
+direction = [0.0, 0.0, 1.0]
+irradiance_w_m2 = 3.14159265
+[[objects]]
+builtin = "quad"
+scale = [4.0, 1.0, 4.0]
+material = { albedo = [0.0, 0.0, 0.0], specular = [0.5, 0.5, 0.5], shininess = 200.0 }
+[[objects]]
+builtin = "quad"
+rotate_deg = [-90.0, 0.0, 0.0]
+translate = [0.0, 1.5, 1.0]
+scale = [4.0, 1.0, 4.0]
+material = { albedo = [0.8, 0.8, 0.8] }
+"#;
+    let scene =
+        voxgi::scene::Scene::from_toml_str(toml, Path::new("<phong lobe>"), Path::new(ROOT))
+            .expect("parses");
+    let cos_r = 0.5f32 / (0.5f32 * 0.5 + 1.0).sqrt();
+    let want = 0.5 * 202.0 / 201.0 * 0.8 * cos_r;
+    let ctx = common::context();
+    for (name, gi) in [
+        (
+            "hemisphere",
+            GiSettings {
+                method: GiMethod::Hemisphere,
+                rays: 64,
+                ..Default::default()
+            },
+        ),
+        (
+            "pathtrace",
+            GiSettings {
+                method: GiMethod::Pathtrace,
+                rays: 16,
+                bounces: 1,
+                accumulate_frames: 4,
+                ..Default::default()
+            },
+        ),
+    ] {
+        let settings = RenderSettings {
+            width: 64,
+            height: 64,
+            gi,
+            ..Default::default()
+        };
+        let out = render_image(&ctx, &scene, &settings).expect("renders");
+        let got = glam::Vec3::from(out.hdr.data[32 * 64 + 32]);
+        println!("{name}: floor radiance {got}, expected {want}");
+        assert!(
+            (got.x - want).abs() < 0.06 * want,
+            "{name}: glossy floor {got} vs {want}"
+        );
+    }
+    common::assert_no_validation_messages(&ctx);
+}

@@ -31,14 +31,30 @@ vec2 pixel_rotation(uvec2 p, uint seed) {
     return vec2(float(h & 0xffffu), float(h2 >> 16u)) / 65536.0;
 }
 
-// Cosine-distributed direction around n (Malley's method).
-vec3 cosine_direction(vec3 n, vec2 u) {
-    float r = sqrt(u.x);
-    float phi = 2.0 * PI * u.y;
-    vec3 t = abs(n.x) > 0.9 ? vec3(0.0, 1.0, 0.0) : vec3(1.0, 0.0, 0.0);
-    vec3 b1 = normalize(cross(n, t));
-    vec3 b2 = cross(n, b1);
-    return normalize(b1 * (r * cos(phi)) + b2 * (r * sin(phi)) + n * sqrt(max(1.0 - u.x, 0.0)));
+// Direction at polar cosine `c` and azimuth 2 pi u around the unit axis `a`.
+vec3 around_axis(vec3 a, float c, float u) {
+    float s = sqrt(max(1.0 - c * c, 0.0));
+    float phi = 2.0 * PI * u;
+    vec3 t = abs(a.x) > 0.9 ? vec3(0.0, 1.0, 0.0) : vec3(1.0, 0.0, 0.0);
+    vec3 b1 = normalize(cross(a, t));
+    vec3 b2 = cross(a, b1);
+    return normalize(b1 * (s * cos(phi)) + b2 * (s * sin(phi)) + a * c);
 }
+
+// Cosine-distributed direction around n (Malley's method): cos theta = sqrt(1 - u).
+vec3 cosine_direction(vec3 n, vec2 u) {
+    return around_axis(n, sqrt(max(1.0 - u.x, 0.0)), u.y);
+}
+
+// Normalized-Phong lobe around the mirror direction r: pdf (n+1)/(2 pi) cos^n alpha, so
+// cos alpha = u^(1/(n+1)) (the thesis's printed formula has a square root too many).
+vec3 phong_direction(vec3 r, float shininess, vec2 u) {
+    return around_axis(r, pow(max(u.x, 1e-30), 1.0 / (shininess + 1.0)), u.y);
+}
+
+// Combines the estimates of a pixel: Lambert pixels keep the irradiance E (the filter works
+// on irradiance and the composite multiplies by albedo / pi); Phong pixels store their
+// indirect radiance, albedo/pi * E plus the lobe estimate rho_s (n+2)/(n+1) * mean(L cos).
+bool is_phong_pixel(vec3 specular) { return any(greaterThan(specular, vec3(0.0))); }
 
 #endif

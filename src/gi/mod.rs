@@ -113,6 +113,8 @@ pub struct GiInputs {
     pub rlm_position: ImageHandle,
     pub rlm_normal: ImageHandle,
     pub shadow_map: ImageHandle,
+    /// The G-buffer's specular image, present when the scene has Phong materials.
+    pub specular: Option<ImageHandle>,
     pub width: u32,
     pub height: u32,
 }
@@ -142,6 +144,7 @@ impl GiPasses {
         grid: &VoxelGrid,
         shadow_resolution: u32,
         (width, height): (u32, u32),
+        has_phong: bool,
     ) -> Result<Self, VkError> {
         let scene_diagonal_m = scene.aabb_at(time_s).extent().length();
         let b = vk::DescriptorType::STORAGE_BUFFER;
@@ -160,9 +163,11 @@ impl GiPasses {
                 (6, s),
                 (7, s),
                 (8, i),
+                (9, s),
+                (10, s),
             ],
             push,
-            &[],
+            &[(0, u32::from(has_phong))],
         )?;
         let filter = ctx.compute_pipeline(
             "gi_filter.comp",
@@ -172,9 +177,9 @@ impl GiPasses {
         )?;
         let composite = ctx.compute_pipeline(
             "gi_composite.comp",
-            &[(0, s), (1, s), (2, s), (3, i)],
+            &[(0, s), (1, s), (2, s), (3, i), (4, s)],
             0,
-            &[],
+            &[(0, u32::from(has_phong))],
         )?;
         let lut = ctx.upload_buffer(
             "ray mask lut",
@@ -207,7 +212,14 @@ impl GiPasses {
             ],
         };
         let pathtracer = if settings.method == GiMethod::Pathtrace {
-            Some(PathTracer::new(ctx, scene, time_s, grid, (width, height))?)
+            Some(PathTracer::new(
+                ctx,
+                scene,
+                time_s,
+                grid,
+                (width, height),
+                has_phong,
+            )?)
         } else {
             None
         };
@@ -268,7 +280,9 @@ impl GiPasses {
         let push = self.push;
         let i = *inp;
         let read = Access::Sampled(Shader::Compute);
-        g.add_pass("gi_hemisphere")
+        let mut pass = g
+            .add_pass("gi_hemisphere")
+            .read(i.albedo, read)
             .read(i.frame, Access::StorageRead(Shader::Compute))
             .read(i.normal, read)
             .read(i.depth, read)
@@ -277,33 +291,38 @@ impl GiPasses {
             .read(i.rlm_radiance, read)
             .read(i.rlm_position, read)
             .read(i.rlm_normal, read)
-            .write(irradiance, Access::StorageWrite(Shader::Compute))
-            .record(move |ctx| {
-                let sampled = |binding, h: ImageHandle| Descriptor::SampledImage {
-                    binding,
-                    view: ctx.image(h).view,
-                    sampler,
-                };
-                ctx.cmd.bind(
-                    &pipe,
-                    &[
-                        frame_for_slot(i.frame_descriptor, i.frame_stride, ctx.slot),
-                        sampled(1, i.normal),
-                        sampled(2, i.depth),
-                        sampled(3, i.voxels),
-                        Descriptor::storage_buffer(4, ctx.buffer(lut).raw),
-                        sampled(5, i.rlm_radiance),
-                        sampled(6, i.rlm_position),
-                        sampled(7, i.rlm_normal),
-                        Descriptor::StorageImage {
-                            binding: 8,
-                            view: ctx.image(irradiance).view,
-                        },
-                    ],
-                );
-                ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
-                ctx.cmd.dispatch(groups.0, groups.1, 1);
-            });
+            .write(irradiance, Access::StorageWrite(Shader::Compute));
+        if let Some(sp) = i.specular {
+            pass = pass.read(sp, read);
+        }
+        pass.record(move |ctx| {
+            let sampled = |binding, h: ImageHandle| Descriptor::SampledImage {
+                binding,
+                view: ctx.image(h).view,
+                sampler,
+            };
+            ctx.cmd.bind(
+                &pipe,
+                &[
+                    frame_for_slot(i.frame_descriptor, i.frame_stride, ctx.slot),
+                    sampled(1, i.normal),
+                    sampled(2, i.depth),
+                    sampled(3, i.voxels),
+                    Descriptor::storage_buffer(4, ctx.buffer(lut).raw),
+                    sampled(5, i.rlm_radiance),
+                    sampled(6, i.rlm_position),
+                    sampled(7, i.rlm_normal),
+                    Descriptor::StorageImage {
+                        binding: 8,
+                        view: ctx.image(irradiance).view,
+                    },
+                    sampled(9, i.specular.unwrap_or(i.albedo)),
+                    sampled(10, i.albedo),
+                ],
+            );
+            ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
+            ctx.cmd.dispatch(groups.0, groups.1, 1);
+        });
         irradiance
     }
 
@@ -381,31 +400,36 @@ impl GiPasses {
         ));
         let pipe = self.composite;
         let indirect = current;
-        g.add_pass("gi_composite")
+        let mut pass = g
+            .add_pass("gi_composite")
             .read(i.direct, read)
             .read(i.albedo, read)
             .read(indirect, read)
-            .write(total, Access::StorageWrite(Shader::Compute))
-            .record(move |ctx| {
-                let sampled = |binding, h: ImageHandle| Descriptor::SampledImage {
-                    binding,
-                    view: ctx.image(h).view,
-                    sampler,
-                };
-                ctx.cmd.bind(
-                    &pipe,
-                    &[
-                        sampled(0, i.direct),
-                        sampled(1, i.albedo),
-                        sampled(2, indirect),
-                        Descriptor::StorageImage {
-                            binding: 3,
-                            view: ctx.image(total).view,
-                        },
-                    ],
-                );
-                ctx.cmd.dispatch(groups.0, groups.1, 1);
-            });
+            .write(total, Access::StorageWrite(Shader::Compute));
+        if let Some(sp) = i.specular {
+            pass = pass.read(sp, read);
+        }
+        pass.record(move |ctx| {
+            let sampled = |binding, h: ImageHandle| Descriptor::SampledImage {
+                binding,
+                view: ctx.image(h).view,
+                sampler,
+            };
+            ctx.cmd.bind(
+                &pipe,
+                &[
+                    sampled(0, i.direct),
+                    sampled(1, i.albedo),
+                    sampled(2, indirect),
+                    Descriptor::StorageImage {
+                        binding: 3,
+                        view: ctx.image(total).view,
+                    },
+                    sampled(4, i.specular.unwrap_or(i.albedo)),
+                ],
+            );
+            ctx.cmd.dispatch(groups.0, groups.1, 1);
+        });
         total
     }
 
@@ -445,6 +469,7 @@ impl PathTracer {
         time_s: f32,
         grid: &VoxelGrid,
         (w, h): (u32, u32),
+        has_phong: bool,
     ) -> Result<Self, VkError> {
         let storage = vk::DescriptorType::STORAGE_BUFFER;
         let image = vk::DescriptorType::STORAGE_IMAGE;
@@ -467,9 +492,11 @@ impl PathTracer {
                 (6, sampled),
                 (7, sampled),
                 (8, image),
+                (9, sampled),
+                (10, sampled),
             ],
             std::mem::size_of::<GpuGiPush>() as u32,
-            &[],
+            &[(0, u32::from(has_phong))],
         )?;
         let tris = attribute_triangles(scene, time_s);
         let bytes: &[u8] = if tris.is_empty() {
@@ -561,7 +588,9 @@ impl PathTracer {
         let pipe = self.pathtrace;
         let i = *i;
         let groups = (i.width.div_ceil(8), i.height.div_ceil(8));
-        g.add_pass("gi_pathtrace")
+        let mut pass = g
+            .add_pass("gi_pathtrace")
+            .read(i.albedo, read)
             .read(i.frame, Access::StorageRead(Shader::Compute))
             .read(i.normal, read)
             .read(i.depth, read)
@@ -570,36 +599,41 @@ impl PathTracer {
             .read(albedo, read)
             .read(normal, read)
             .read(i.shadow_map, read)
-            .write(history, Access::StorageReadWrite(Shader::Compute))
-            .record(move |ctx| {
-                let sampled = |binding, h: ImageHandle| Descriptor::SampledImage {
-                    binding,
-                    view: ctx.image(h).view,
-                    sampler,
-                };
-                ctx.cmd.bind(
-                    &pipe,
-                    &[
-                        frame_for_slot(i.frame_descriptor, i.frame_stride, ctx.slot),
-                        sampled(1, i.normal),
-                        sampled(2, i.depth),
-                        sampled(3, i.voxels),
-                        Descriptor::storage_buffer(4, ctx.buffer(lut).raw),
-                        sampled(5, albedo),
-                        sampled(6, normal),
-                        sampled(7, i.shadow_map),
-                        Descriptor::StorageImage {
-                            binding: 8,
-                            view: ctx.image(history).view,
-                        },
-                    ],
-                );
-                let mut p = push;
-                // Frames accumulated before this one (`advance` ran before recording).
-                p.iparams[3] = frames.load(Ordering::SeqCst).saturating_sub(1);
-                ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&p));
-                ctx.cmd.dispatch(groups.0, groups.1, 1);
-            });
+            .write(history, Access::StorageReadWrite(Shader::Compute));
+        if let Some(sp) = i.specular {
+            pass = pass.read(sp, read);
+        }
+        pass.record(move |ctx| {
+            let sampled = |binding, h: ImageHandle| Descriptor::SampledImage {
+                binding,
+                view: ctx.image(h).view,
+                sampler,
+            };
+            ctx.cmd.bind(
+                &pipe,
+                &[
+                    frame_for_slot(i.frame_descriptor, i.frame_stride, ctx.slot),
+                    sampled(1, i.normal),
+                    sampled(2, i.depth),
+                    sampled(3, i.voxels),
+                    Descriptor::storage_buffer(4, ctx.buffer(lut).raw),
+                    sampled(5, albedo),
+                    sampled(6, normal),
+                    sampled(7, i.shadow_map),
+                    Descriptor::StorageImage {
+                        binding: 8,
+                        view: ctx.image(history).view,
+                    },
+                    sampled(9, i.specular.unwrap_or(i.albedo)),
+                    sampled(10, i.albedo),
+                ],
+            );
+            let mut p = push;
+            // Frames accumulated before this one (`advance` ran before recording).
+            p.iparams[3] = frames.load(Ordering::SeqCst).saturating_sub(1);
+            ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&p));
+            ctx.cmd.dispatch(groups.0, groups.1, 1);
+        });
         history
     }
 

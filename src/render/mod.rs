@@ -293,6 +293,7 @@ impl Renderer {
                     &v.voxels.grid,
                     settings.shadow.resolution,
                     (settings.width, settings.height),
+                    has_phong,
                 )?;
                 let light_map = create_light_map_pipeline(ctx)?;
                 Some((passes, light_map))
@@ -769,6 +770,7 @@ impl Renderer {
                         rlm_position,
                         rlm_normal,
                         shadow_map,
+                        specular,
                         width: w,
                         height: h,
                     },
