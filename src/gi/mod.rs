@@ -119,6 +119,21 @@ pub struct GiInputs {
     pub height: u32,
 }
 
+/// What the GI passes are built for.
+#[derive(Clone, Copy)]
+pub struct GiTarget<'a> {
+    pub scene: &'a Scene,
+    pub time_s: f32,
+    /// The voxel grid the frame voxelizes.
+    pub grid: &'a VoxelGrid,
+    /// Of the shadow maps, whose views the light maps share.
+    pub shadow_resolution: u32,
+    /// Frame width and height.
+    pub size: (u32, u32),
+    /// The scene has Phong materials (the G-buffer has a specular image).
+    pub has_phong: bool,
+}
+
 /// Pipelines and constant data of the GI passes.
 pub struct GiPasses {
     pub settings: GiSettings,
@@ -134,18 +149,20 @@ pub struct GiPasses {
 }
 
 impl GiPasses {
-    /// `grid`: the voxel grid the frame voxelizes; `shadow_resolution`: of the shadow maps,
-    /// whose views the light maps share; `scene_diagonal_m`: default ray length.
+    /// Creates the pipelines (and, for the path tracer, its volumes and history) for `target`.
     pub fn new(
         ctx: &Context,
         settings: GiSettings,
-        scene: &Scene,
-        time_s: f32,
-        grid: &VoxelGrid,
-        shadow_resolution: u32,
-        (width, height): (u32, u32),
-        has_phong: bool,
+        target: &GiTarget<'_>,
     ) -> Result<Self, VkError> {
+        let GiTarget {
+            scene,
+            time_s,
+            grid,
+            shadow_resolution,
+            size: (width, height),
+            has_phong,
+        } = *target;
         let scene_diagonal_m = scene.aabb_at(time_s).extent().length();
         let b = vk::DescriptorType::STORAGE_BUFFER;
         let s = vk::DescriptorType::COMBINED_IMAGE_SAMPLER;

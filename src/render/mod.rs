@@ -288,12 +288,14 @@ impl Renderer {
                 let passes = crate::gi::GiPasses::new(
                     ctx,
                     settings.gi,
-                    scene,
-                    settings.time_s,
-                    &v.voxels.grid,
-                    settings.shadow.resolution,
-                    (settings.width, settings.height),
-                    has_phong,
+                    &crate::gi::GiTarget {
+                        scene,
+                        time_s: settings.time_s,
+                        grid: &v.voxels.grid,
+                        shadow_resolution: settings.shadow.resolution,
+                        size: (settings.width, settings.height),
+                        has_phong,
+                    },
                 )?;
                 let light_map = create_light_map_pipeline(ctx)?;
                 Some((passes, light_map))
