@@ -1,0 +1,142 @@
+// Body of gi_hemisphere.comp (radiance at hits from the reflective light maps) and
+// gi_hemisphere_volume.comp (from the direct-radiance voxel volume, RADIANCE_FROM_VOLUME).
+// Indirect light by hemisphere sampling (thesis §6.2): from each G-buffer point, N
+// cosine-distributed rays (Hammersley points with a per-pixel Cranley-Patterson rotation)
+// are cast through the binary voxel hierarchy within a radius; at a hit, the radiance the
+// lights put there is read from the reflective light maps (§6.1), valid only if the map saw
+// the same surface (distance tolerance) from the side the ray hits (back-face test). With
+// cosine sampling the irradiance estimate is E = pi/N * sum L.
+#include "frame.glsl"
+#include "gi_common.glsl"
+
+layout(constant_id = 0) const bool HAS_PHONG = false;
+
+layout(local_size_x = 8, local_size_y = 8) in;
+layout(set = 0, binding = 0, std430) readonly buffer FrameBuf { GpuFrame frame; };
+layout(set = 0, binding = 1) uniform sampler2D gb_normal;
+layout(set = 0, binding = 2) uniform sampler2D gb_depth;
+layout(set = 0, binding = 3) uniform usampler2DArray voxels;
+layout(set = 0, binding = 4, std430) readonly buffer RayMasks { uvec4 ray_masks[]; };
+#ifdef RADIANCE_FROM_VOLUME
+layout(set = 0, binding = 5) uniform sampler3D radiance_volume;  // rgb radiance, a: lit side
+layout(set = 0, binding = 6) uniform sampler3D normal_volume;
+#else
+layout(set = 0, binding = 5) uniform sampler2DArray rlm_radiance;
+layout(set = 0, binding = 6) uniform sampler2DArray rlm_position;
+layout(set = 0, binding = 7) uniform sampler2DArray rlm_normal;
+#endif
+layout(set = 0, binding = 8, rgba32f) uniform writeonly image2D irradiance;
+layout(set = 0, binding = 9) uniform sampler2D gb_specular;   // albedo when !HAS_PHONG
+layout(set = 0, binding = 10) uniform sampler2D gb_albedo;
+
+uvec4 vx_column(uint level, int x, int y, uint layer) {
+    return texelFetch(voxels, ivec3(x, y, int(layer)), int(level));
+}
+uvec4 vx_ray_mask(uint a, uint b) { return ray_masks[b * 128u + a]; }
+bool vx_voxel(int x, int y, int k) {
+    uvec4 c = vx_column(0u, x, y, uint(k) / 128u);
+    uint bit = uint(k) % 128u;
+    return ((c[bit / 32u] >> (bit % 32u)) & 1u) != 0u;
+}
+
+#include "voxel_traverse.glsl"
+#include "shadow.glsl"
+
+#ifdef RADIANCE_FROM_VOLUME
+// Radiance of the hit voxel's lit side, if the ray arrives on that side (back-face test).
+vec3 hit_radiance(VxHit h, vec3 hit, vec3 dir) {
+    vec4 r = texelFetch(radiance_volume, ivec3(h.voxel), 0);
+    vec3 n = texelFetch(normal_volume, ivec3(h.voxel), 0).xyz * (r.a < 0.0 ? -1.0 : 1.0);
+    return dot(n, -dir) > 0.0 ? r.rgb : vec3(0.0);
+}
+#else
+// Radiance leaving the surface at world point `hit`, seen along `dir`, from every light's
+// reflective map that saw that surface.
+vec3 light_map_radiance(vec3 hit, vec3 dir) {
+    vec3 sum = vec3(0.0);
+    ivec2 size = textureSize(rlm_radiance, 0).xy;
+    for (uint i = 0u; i < frame.counts.x; ++i) {
+        GpuLight l = frame.lights[i];
+        if (l.info.z == 0u) continue;
+        uint v = shadow_view_index(l, hit);
+        GpuShadowView sv = frame.shadow_views[v];
+        vec4 c = sv.view_proj * vec4(hit, 1.0);
+        if (c.w <= 0.0) continue;
+        vec3 ndc = c.xyz / c.w;
+        if (any(greaterThan(abs(ndc.xy), vec2(1.0))) || ndc.z < 0.0 || ndc.z > 1.0) continue;
+        ivec2 q = clamp(ivec2(floor((ndc.xy * 0.5 + 0.5) * vec2(size))), ivec2(0), size - 1);
+        vec4 pos = texelFetch(rlm_position, ivec3(q, int(v)), 0);
+        if (pos.w == 0.0) continue;  // the light sees nothing there
+        vec3 n = texelFetch(rlm_normal, ivec3(q, int(v)), 0).xyz;
+        // Tolerance: the hit lies on the boundary of the hit voxel (up to a diagonal from the
+        // surface), plus the light-map texel's footprint at that distance.
+        float dist = sv.params.y > 0.5 ? 1.0 : c.w;
+        float texel_m = sv.params.x * gi.params2.x * dist;
+        float tol = gi.params.z * gi.params.w + 2.0 * texel_m;
+        if (distance(pos.xyz, hit) > tol) continue;
+        if (dot(n, -dir) <= 0.0) continue;  // the ray reached the back of that surface
+        sum += texelFetch(rlm_radiance, ivec3(q, int(v)), 0).rgb;
+    }
+    return sum;
+}
+
+vec3 hit_radiance(VxHit h, vec3 hit, vec3 dir) {
+    return light_map_radiance(hit, dir);
+}
+#endif
+
+void main() {
+    ivec2 px = ivec2(gl_GlobalInvocationID.xy);
+    ivec2 size = ivec2(frame.counts.zw);
+    if (any(greaterThanEqual(px, size))) return;
+    float depth = texelFetch(gb_depth, px, 0).r;
+    if (depth >= 1.0) {
+        imageStore(irradiance, px, vec4(0.0));
+        return;
+    }
+    vec2 uv = (vec2(px) + 0.5) / vec2(size);
+    vec4 wp = frame.inv_view_proj * vec4(uv * 2.0 - 1.0, depth, 1.0);
+    vec3 p = wp.xyz / wp.w;
+    vec4 ns = texelFetch(gb_normal, px, 0);
+    vec3 n = normalize(ns.xyz);
+    vec3 specular = HAS_PHONG ? texelFetch(gb_specular, px, 0).rgb : vec3(0.0);
+    bool phong = HAS_PHONG && is_phong_pixel(specular);
+    vec3 mirror = reflect(-normalize(frame.camera_position.xyz - p), n);
+    // Self-intersection offset along the normal (§4.4).
+    vec3 origin = p + n * (gi.params.y * gi.params.w);
+    vec3 ov = (gi.world_to_voxel * vec4(origin, 1.0)).xyz;
+    mat3 dir_to_voxel = mat3(gi.world_to_voxel);
+    uint rays = max(gi.iparams.x, 1u);
+    // Phong pixels spend half their rays on the specular lobe.
+    uint lobe_rays = phong ? rays / 2u : 0u;
+    uint diffuse_rays = rays - lobe_rays;
+    vec2 rot = pixel_rotation(uvec2(px), gi.iparams.w);
+    vec3 sum = vec3(0.0);
+    vec3 lobe_sum = vec3(0.0);
+    for (uint i = 0u; i < rays; ++i) {
+        bool lobe = i >= diffuse_rays;
+        uint j = lobe ? i - diffuse_rays : i;
+        uint count = lobe ? lobe_rays : diffuse_rays;
+        vec2 u = fract(vec2((float(j) + 0.5) / float(count), radical_inverse(j)) + rot);
+        vec3 d = lobe ? phong_direction(mirror, ns.w, u) : cosine_direction(n, u);
+        float cos_n = dot(d, n);
+        if (cos_n <= 0.0) continue;  // a lobe sample below the surface contributes nothing
+        // Offset along the ray (§4.4): k2 * h / (d . n), clamped, so grazing rays leave the
+        // surface's own voxels too.
+        float along = min(gi.params2.z * gi.params.w / max(dot(d, n), 1e-4), gi.params2.w * gi.params.w);
+        vec3 o = origin + d * along;
+        VxHit h = voxel_first_hit(gi.dims.xyz, uint(gi.dims.w), ov + dir_to_voxel * (d * along), dir_to_voxel * d, max(gi.params.x - along, 0.0), gi.iparams.y, gi.iparams.z);
+        if (!h.hit) continue;
+        vec3 l = hit_radiance(h, o + d * h.t, d);
+        if (lobe) lobe_sum += l * cos_n;
+        else sum += l;
+    }
+    vec3 e = sum * (PI / float(max(diffuse_rays, 1u)));
+    if (phong) {
+        vec3 albedo = texelFetch(gb_albedo, px, 0).rgb;
+        vec3 s = specular * ((ns.w + 2.0) / (ns.w + 1.0)) * lobe_sum / float(max(lobe_rays, 1u));
+        imageStore(irradiance, px, vec4(albedo / PI * e + s, 1.0));
+    } else {
+        imageStore(irradiance, px, vec4(e, 1.0));
+    }
+}
