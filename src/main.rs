@@ -9,7 +9,7 @@ use voxgi::light::PointShadow;
 use voxgi::post::ToneOperator;
 use voxgi::profile::ProfileReport;
 use voxgi::render::{profile_scene, render_image, RenderSettings};
-use voxgi::scene::load_scene_arg;
+use voxgi::scene::{load_scene_arg, resolve_gi, GiOverrides, Scene};
 use voxgi::vk::{Context, ContextDesc, FrameLoop, MAX_FRAMES_IN_FLIGHT};
 
 #[derive(Parser)]
@@ -83,7 +83,8 @@ enum Command {
         frame: FrameArgs,
     },
     /// Opens the interactive viewer: fly camera (WASD, Q/E, right mouse), a panel with per-pass
-    /// GPU times, light, tone-mapping and shadow controls; F12 writes a screenshot.
+    /// GPU times, light, tone-mapping, shadow and global-illumination controls; F12 writes a
+    /// screenshot.
     View {
         /// A built-in scene or a TOML scene file. Default: cornell.
         scene: Option<String>,
@@ -112,6 +113,9 @@ enum Command {
         /// Screenshot PNG path (F12 / the panel button; the end of a scripted run).
         #[arg(long)]
         screenshot: Option<PathBuf>,
+        // The initial indirect light; the panel changes it.
+        #[command(flatten)]
+        gi: GiArgs,
     },
     /// Lists Vulkan devices and whether voxgi can use them.
     Devices,
@@ -176,6 +180,73 @@ enum BenchCommand {
     },
 }
 
+/// Indirect-light flags of `render`, `profile`, `graph` and `view`. Each one given overrides the
+/// scene file's `[gi]` value, which overrides the default shown.
+#[derive(clap::Args, Clone, Debug, Default)]
+struct GiArgs {
+    /// Indirect-light method (none: direct light only) [default: the scene's `[gi] method`,
+    /// else none].
+    #[arg(long, value_enum)]
+    gi: Option<GiMethod>,
+    /// GI rays per pixel [default: the scene's `[gi] rays`, else 16].
+    #[arg(long, value_name = "N")]
+    gi_rays: Option<u32>,
+    /// GI ray length in meters [default: the scene's `[gi] radius_m`, else the scene's
+    /// diagonal].
+    #[arg(long, value_name = "M")]
+    gi_radius: Option<f32>,
+    /// Self-intersection offset along the normal, in voxel diagonals (thesis k1) [default: the
+    /// scene's `[gi] normal_offset_voxels`, else 1].
+    #[arg(long, value_name = "K1")]
+    gi_normal_offset: Option<f32>,
+    /// Self-intersection offset along the ray, in voxel diagonals over cos (thesis k2)
+    /// [default: the scene's `[gi] ray_offset_voxels`, else 0].
+    #[arg(long, value_name = "K2")]
+    gi_ray_offset: Option<f32>,
+    /// Geometry-aware filter radius in pixels, 0: off [default: the scene's `[gi]
+    /// filter_radius`, else 4].
+    #[arg(long, value_name = "R")]
+    gi_filter_radius: Option<u32>,
+    /// Geometry-aware filter passes, each horizontal + vertical [default: the scene's `[gi]
+    /// filter_passes`, else 2].
+    #[arg(long, value_name = "P")]
+    gi_filter_passes: Option<u32>,
+    /// Path-tracer bounces [default: the scene's `[gi] bounces`, else 2].
+    #[arg(long, value_name = "B")]
+    gi_bounces: Option<u32>,
+    /// Frames the path tracer accumulates in a headless render [default: the scene's `[gi]
+    /// accumulate_frames`, else 1].
+    #[arg(long, value_name = "F")]
+    gi_frames: Option<u32>,
+    /// Reflective light-map resolution per light view [default: the scene's `[gi]
+    /// light_map_resolution`, else 256].
+    #[arg(long, value_name = "L")]
+    light_map_resolution: Option<u32>,
+}
+
+impl GiArgs {
+    /// The flags given, for [`voxgi::scene::resolve_gi`].
+    fn overrides(&self) -> GiOverrides {
+        GiOverrides {
+            method: self.gi,
+            rays: self.gi_rays,
+            bounces: self.gi_bounces,
+            radius_m: self.gi_radius,
+            normal_offset_voxels: self.gi_normal_offset,
+            ray_offset_voxels: self.gi_ray_offset,
+            filter_radius: self.gi_filter_radius,
+            filter_passes: self.gi_filter_passes,
+            light_map_resolution: self.light_map_resolution,
+            accumulate_frames: self.gi_frames,
+        }
+    }
+
+    /// The scene's `[gi]` values, overridden by the flags given.
+    fn settings(&self, scene: &Scene) -> voxgi::gi::GiSettings {
+        resolve_gi(&scene.gi, &self.overrides())
+    }
+}
+
 /// Frame settings shared by `render` and `profile`.
 #[derive(clap::Args, Clone)]
 struct FrameArgs {
@@ -209,36 +280,8 @@ struct FrameArgs {
     /// Re-voxelize static geometry every frame too (measures the full voxelization).
     #[arg(long)]
     revoxelize: bool,
-    /// Indirect-light method (none: direct light only).
-    #[arg(long, value_enum, default_value_t = GiMethod::None)]
-    gi: GiMethod,
-    /// GI rays per pixel.
-    #[arg(long, default_value_t = 16)]
-    gi_rays: u32,
-    /// GI ray length in meters (default: the scene's diagonal).
-    #[arg(long)]
-    gi_radius: Option<f32>,
-    /// Self-intersection offset along the normal, in voxel diagonals (thesis k1).
-    #[arg(long, default_value_t = 1.0)]
-    gi_normal_offset: f32,
-    /// Self-intersection offset along the ray, in voxel diagonals over cos (thesis k2).
-    #[arg(long, default_value_t = 0.0)]
-    gi_ray_offset: f32,
-    /// Geometry-aware filter radius in pixels (0: off).
-    #[arg(long, default_value_t = 4)]
-    gi_filter_radius: u32,
-    /// Geometry-aware filter passes (each horizontal + vertical).
-    #[arg(long, default_value_t = 2)]
-    gi_filter_passes: u32,
-    /// Path-tracer bounces.
-    #[arg(long, default_value_t = 2)]
-    gi_bounces: u32,
-    /// Frames the path tracer accumulates in a headless render.
-    #[arg(long, default_value_t = 1)]
-    gi_frames: u32,
-    /// Reflective light-map resolution per light view.
-    #[arg(long, default_value_t = 256)]
-    light_map_resolution: u32,
+    #[command(flatten)]
+    gi: GiArgs,
     /// Show a voxel debug view instead of the lit image (voxelizes at 128 unless --voxels).
     #[arg(long, value_enum)]
     debug: Option<voxgi::voxel::debug_view::DebugView>,
@@ -251,7 +294,8 @@ struct FrameArgs {
 }
 
 impl FrameArgs {
-    fn settings(&self) -> RenderSettings {
+    /// The frame's settings; GI values not given as flags come from the scene's `[gi]`.
+    fn settings(&self, scene: &Scene) -> RenderSettings {
         let mut s = RenderSettings {
             width: self.width,
             height: self.height,
@@ -270,19 +314,7 @@ impl FrameArgs {
                 layers: self.voxel_layers,
                 revoxelize_static: self.revoxelize,
             });
-        s.gi = voxgi::gi::GiSettings {
-            method: self.gi,
-            rays: self.gi_rays,
-            radius_m: self.gi_radius,
-            normal_offset_voxels: self.gi_normal_offset,
-            ray_offset_voxels: self.gi_ray_offset,
-            filter_radius: self.gi_filter_radius,
-            filter_passes: self.gi_filter_passes,
-            light_map_resolution: self.light_map_resolution,
-            bounces: self.gi_bounces,
-            accumulate_frames: self.gi_frames,
-            ..Default::default()
-        };
+        s.gi = self.gi.settings(scene);
         s.debug = self
             .debug
             .map(|view| voxgi::voxel::debug_view::DebugSettings {
@@ -365,11 +397,13 @@ fn run(cli: Cli) -> Result<()> {
             minimize_at,
             restore_after,
             screenshot,
+            gi,
         } => {
             let scene = load_scene_arg(scene.as_deref())?;
             let mut settings = RenderSettings::default();
             settings.tonemap.operator = tonemap;
             settings.tonemap.exposure = exposure;
+            settings.gi = gi.settings(&scene);
             let opts = voxgi::app::ViewerOptions {
                 validation: cli.validate,
                 device: cli.device,
@@ -428,7 +462,7 @@ fn run(cli: Cli) -> Result<()> {
                 demo.destroy(&ctx);
             } else {
                 let scene = load_scene_arg(scene.as_deref())?;
-                let renderer = voxgi::render::Renderer::new(&ctx, &scene, frame.settings())?;
+                let renderer = voxgi::render::Renderer::new(&ctx, &scene, frame.settings(&scene))?;
                 let exec = voxgi::graph::GraphExecutor::new(&ctx, renderer.graph(), 1)?;
                 dump(&exec);
                 exec.destroy(&ctx);
@@ -445,7 +479,8 @@ fn run(cli: Cli) -> Result<()> {
         } => {
             let scene = load_scene_arg(scene.as_deref())?;
             let ctx = context(cli.validate, cli.device)?;
-            let out = render_image(&ctx, &scene, &frame.settings())?;
+            let settings = frame.settings(&scene);
+            let out = render_image(&ctx, &scene, &settings)?;
             image::save_buffer(
                 &output,
                 &out.ldr,
@@ -462,7 +497,7 @@ fn run(cli: Cli) -> Result<()> {
             for t in &out.timings {
                 println!("  {:<16} {:>9.3} ms", t.name, t.gpu_ms);
             }
-            if let Some(d) = frame.settings().debug {
+            if let Some(d) = settings.debug {
                 println!("{}", voxgi::voxel::debug_view::describe(&d, &out.hdr));
             }
             if let Some(reference) = compare {
@@ -488,7 +523,7 @@ fn run(cli: Cli) -> Result<()> {
                     .clone()
                     .unwrap_or_else(|| voxgi::scene::DEFAULT_SCENE.into());
                 let scene = load_scene_arg(scene.as_deref())?;
-                let run = profile_scene(&ctx, &scene, &frame.settings(), frames, warmup)?;
+                let run = profile_scene(&ctx, &scene, &frame.settings(&scene), frames, warmup)?;
                 let mut report = ProfileReport::from_frames(&ctx.info.name, &run.frames, warmup);
                 report.notes.push(("scene".into(), scene_name));
                 report.notes.push((
@@ -645,4 +680,89 @@ fn print_metrics(m: &voxgi::eval::Metrics) {
     println!("mean |e|  {:.6}", m.mean_abs);
     println!("max |e|   {:.6}", m.max_abs);
     println!("pixels    {}", m.pixels);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn render_gi(args: &[&str]) -> GiOverrides {
+        let cli = Cli::try_parse_from([&["voxgi", "render"], args].concat()).expect("parses");
+        match cli.command {
+            Command::Render { frame, .. } => frame.gi.overrides(),
+            _ => unreachable!(),
+        }
+    }
+
+    #[test]
+    fn gi_flags_not_given_leave_the_scene_values() {
+        assert!(render_gi(&[]).is_empty());
+        let scene = GiOverrides {
+            method: Some(GiMethod::Pathtrace),
+            rays: Some(4),
+            bounces: Some(3),
+            ..Default::default()
+        };
+        let s = resolve_gi(&scene, &render_gi(&[]));
+        assert_eq!((s.method, s.rays, s.bounces), (GiMethod::Pathtrace, 4, 3));
+        let s = resolve_gi(
+            &scene,
+            &render_gi(&["--gi", "hemisphere", "--gi-rays", "32", "--gi-frames", "8"]),
+        );
+        assert_eq!(
+            (s.method, s.rays, s.bounces, s.accumulate_frames),
+            (GiMethod::Hemisphere, 32, 3, 8)
+        );
+    }
+
+    #[test]
+    fn every_gi_flag_maps_to_its_field() {
+        let o = render_gi(&[
+            "--gi",
+            "pathtrace",
+            "--gi-rays",
+            "2",
+            "--gi-bounces",
+            "3",
+            "--gi-radius",
+            "0.5",
+            "--gi-normal-offset",
+            "0.25",
+            "--gi-ray-offset",
+            "1.5",
+            "--gi-filter-radius",
+            "6",
+            "--gi-filter-passes",
+            "7",
+            "--gi-frames",
+            "9",
+            "--light-map-resolution",
+            "128",
+        ]);
+        assert_eq!(
+            o,
+            GiOverrides {
+                method: Some(GiMethod::Pathtrace),
+                rays: Some(2),
+                bounces: Some(3),
+                radius_m: Some(0.5),
+                normal_offset_voxels: Some(0.25),
+                ray_offset_voxels: Some(1.5),
+                filter_radius: Some(6),
+                filter_passes: Some(7),
+                light_map_resolution: Some(128),
+                accumulate_frames: Some(9),
+            }
+        );
+        // The viewer takes the same flags.
+        let cli = Cli::try_parse_from(["voxgi", "view", "--gi", "pathtrace", "--gi-bounces", "1"])
+            .expect("parses");
+        let Command::View { gi, .. } = cli.command else {
+            unreachable!()
+        };
+        assert_eq!(
+            (gi.gi, gi.gi_bounces, gi.gi_rays),
+            (Some(GiMethod::Pathtrace), Some(1), None)
+        );
+    }
 }

@@ -212,6 +212,61 @@ fn viewer_skips_frames_while_minimized_and_renders_after_restore() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+#[test]
+fn viewer_renders_a_scene_with_gi_table_and_gi_flags_without_validation_messages() {
+    require_display();
+    let _display = lock_display();
+    let dir = scratch_dir("window-gi");
+    // The built-in Cornell box with the path tracer chosen by the scene file; a flag
+    // overrides the scene's bounces. The resize makes the viewer replace its renderer (the
+    // path tracer's history has the frame's size).
+    let cornell = include_str!("../assets/scenes/cornell.toml");
+    let scene = dir.join("cornell_gi.toml");
+    std::fs::write(
+        &scene,
+        format!("{cornell}\n[gi]\nmethod = \"pathtrace\"\nrays = 2\nbounces = 3\n"),
+    )
+    .expect("write the scene");
+    let shot = dir.join("shot.png");
+    let out = voxgi_with(
+        &[
+            "--validate",
+            "view",
+            scene.to_str().expect("utf-8 path"),
+            "--gi-bounces",
+            "1",
+            "--width",
+            "320",
+            "--height",
+            "240",
+            "--frames",
+            "8",
+            "--resize",
+            "400x300",
+            "--screenshot",
+            shot.to_str().expect("utf-8 path"),
+        ],
+        |cmd| {
+            cmd.env("RUST_LOG", "warn,voxgi::app=info");
+        },
+    );
+    assert_success(&out, "voxgi --validate view (scene with [gi])");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("indirect light: pathtrace, 2 rays, 1 bounces"),
+        "the viewer did not start with the scene's path tracer and the flag's bounces:\n{stderr}"
+    );
+    assert!(
+        stderr.contains("new renderer") && stderr.contains("x300, indirect light: pathtrace"),
+        "the viewer did not make a new renderer for the resized path tracer:\n{stderr}"
+    );
+    let img = load(&shot);
+    let (w, h) = img.dimensions();
+    assert_eq!(h, 300, "the screenshot is {w}x{h}");
+    assert_not_blank(&img);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 fn assert_not_blank(img: &image::RgbaImage) {
     let mut sum = 0.0f64;
     let mut colors = std::collections::HashSet::new();

@@ -20,6 +20,7 @@ mod panel;
 pub use camera::{FlyCamera, MoveKeys};
 pub use panel::{Controls, TimingStats};
 
+use crate::gi::{GiMethod, GiSettings};
 use crate::graph::{Access, GraphError, GraphExecutor, ImageHandle, RenderGraph};
 use crate::render::{FrameImages, RenderError, RenderSettings, Renderer};
 use crate::scene::{Camera, Light, Scene};
@@ -231,6 +232,27 @@ fn needs_new_graph(a: &RenderSettings, b: &RenderSettings) -> bool {
         || a.tonemap != b.tonemap
 }
 
+/// Settings the renderer bakes into its resources differ: the GI passes are made for one method
+/// and set of parameters, and the path tracer's history for one size. A new renderer then.
+fn needs_new_renderer(a: &RenderSettings, b: &RenderSettings) -> bool {
+    a.gi != b.gi || (a.gi.method != GiMethod::None && (a.width, a.height) != (b.width, b.height))
+}
+
+/// One line about the indirect light, for the log.
+fn describe_gi(gi: &GiSettings) -> String {
+    match gi.method {
+        GiMethod::None => "none".into(),
+        GiMethod::Hemisphere => format!(
+            "hemisphere, {} rays, filter {}×{}",
+            gi.rays, gi.filter_radius, gi.filter_passes
+        ),
+        GiMethod::Pathtrace => format!(
+            "pathtrace, {} rays, {} bounces, filter {}×{}",
+            gi.rays, gi.bounces, gi.filter_radius, gi.filter_passes
+        ),
+    }
+}
+
 fn scaled(light: &Light, s: f32) -> Light {
     let mut l = *light;
     match &mut l {
@@ -303,6 +325,7 @@ impl Viewer {
         let controls = Controls {
             tonemap: opts.settings.tonemap,
             shadow: opts.settings.shadow,
+            gi: opts.settings.gi,
             light_scale: vec![1.0; scene.lights.len()],
             speed_m_s: fly.speed_m_s,
             screenshot: false,
@@ -351,6 +374,7 @@ impl Viewer {
         let mut settings = self.opts.settings.clone();
         settings.width = extent.width.max(1);
         settings.height = extent.height.max(1);
+        log::info!("indirect light: {}", describe_gi(&settings.gi));
         self.renderer = Some(Renderer::new(ctx, &self.scene, settings)?);
         self.overlay = Some(Overlay::new(ctx, format)?);
         self.frame_loop = Some(FrameLoop::new(ctx, MAX_FRAMES_IN_FLIGHT, MAX_PASSES)?);
@@ -525,7 +549,7 @@ impl Viewer {
             let s = self.controls.light_scale.get(i).copied().unwrap_or(1.0);
             self.scene.lights[i] = scaled(base, s);
         }
-        let Some(renderer) = self.renderer.as_mut() else {
+        let Some(current) = self.renderer.as_ref().map(|r| r.settings.clone()) else {
             return Ok(false);
         };
         // The scene fills the window right of the panel (all of it when the window is narrow).
@@ -534,11 +558,21 @@ impl Viewer {
         } else {
             0
         };
-        let mut settings = renderer.settings.clone();
+        let mut settings = current.clone();
         settings.width = extent.width - panel_px;
         settings.height = extent.height;
         settings.tonemap = self.controls.tonemap;
         settings.shadow = self.controls.shadow;
+        // Each GI edit costs a new renderer: apply them once no slider is being dragged.
+        if !self.egui_ctx.input(|i| i.pointer.any_down()) {
+            settings.gi = self.controls.gi;
+        }
+        if needs_new_renderer(&current, &settings) {
+            self.replace_renderer(ctx, &mut settings)?;
+        }
+        let Some(renderer) = self.renderer.as_mut() else {
+            return Ok(false);
+        };
         renderer.settings = settings.clone();
         renderer.prepare(&self.scene)?;
         if self.graph.as_ref().map_or(true, |g| {
@@ -657,6 +691,10 @@ impl Viewer {
             frame_ms: self.frame_ms,
             light_names: &self.light_names,
             status: &self.status,
+            gi_frames: self
+                .renderer
+                .as_ref()
+                .and_then(Renderer::gi_accumulated_frames),
         };
         let (controls, stats) = (&mut self.controls, &self.stats);
         let mut panel_points = 0.0;
@@ -679,6 +717,47 @@ impl Viewer {
         }
         let ppp = out.pixels_per_point;
         Ok((egui_ctx.tessellate(out.shapes, ppp), ppp))
+    }
+
+    /// Replaces the renderer by one made for `settings` (and drops the graph, which imports the
+    /// old one's resources). When that fails for new GI settings, the old renderer stays, the
+    /// GI settings revert and the panel says why.
+    fn replace_renderer(
+        &mut self,
+        ctx: &Context,
+        settings: &mut RenderSettings,
+    ) -> Result<(), AppError> {
+        ctx.wait_idle()?;
+        if let Some(g) = self.graph.take() {
+            g.destroy(ctx);
+        }
+        match Renderer::new(ctx, &self.scene, settings.clone()) {
+            Ok(r) => {
+                if let Some(old) = self.renderer.replace(r) {
+                    old.destroy(ctx);
+                }
+                log::info!(
+                    "new renderer {}x{}, indirect light: {}",
+                    settings.width,
+                    settings.height,
+                    describe_gi(&settings.gi)
+                );
+                Ok(())
+            }
+            Err(e) => {
+                let old = self.renderer.as_ref().map(|r| r.settings.gi);
+                match old {
+                    Some(old) if old != settings.gi => {
+                        settings.gi = old;
+                        self.controls.gi = old;
+                        self.status = format!("GI settings not applied: {e}");
+                        log::warn!("{}", self.status);
+                        Ok(())
+                    }
+                    _ => Err(e.into()),
+                }
+            }
+        }
     }
 
     /// Builds the frame graph for the current swapchain and renderer settings.
@@ -857,5 +936,35 @@ mod tests {
         let mut c = a.clone();
         c.width += 1;
         assert!(needs_new_graph(&a, &c));
+    }
+
+    #[test]
+    fn gi_changes_need_a_new_renderer() {
+        let a = RenderSettings::default();
+        let mut b = a.clone();
+        // Without GI a size change only rebuilds the graph.
+        b.width += 1;
+        b.tonemap.exposure *= 2.0;
+        assert!(!needs_new_renderer(&a, &b));
+        for change in [
+            |g: &mut GiSettings| g.method = GiMethod::Pathtrace,
+            |g: &mut GiSettings| g.rays += 1,
+            |g: &mut GiSettings| g.bounces += 1,
+            |g: &mut GiSettings| g.radius_m = Some(1.0),
+            |g: &mut GiSettings| g.filter_radius += 1,
+            |g: &mut GiSettings| g.filter_passes += 1,
+            |g: &mut GiSettings| g.normal_offset_voxels += 0.5,
+        ] {
+            let mut c = a.clone();
+            change(&mut c.gi);
+            assert!(needs_new_renderer(&a, &c), "{:?}", c.gi);
+        }
+        // With GI on, the path tracer's history has the frame's size.
+        let mut on = a.clone();
+        on.gi.method = GiMethod::Hemisphere;
+        let mut resized = on.clone();
+        resized.height += 1;
+        assert!(needs_new_renderer(&on, &resized));
+        assert!(!needs_new_renderer(&on, &on.clone()));
     }
 }

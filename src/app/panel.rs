@@ -1,5 +1,7 @@
-//! The side panel: per-pass GPU timings, light, tone-mapping and shadow controls, screenshot.
+//! The side panel: per-pass GPU timings, light, tone-mapping, shadow and global-illumination
+//! controls, screenshot.
 
+use crate::gi::{GiMethod, GiSettings};
 use crate::light::ShadowSettings;
 use crate::post::{ToneMap, ToneOperator};
 use crate::vk::PassTiming;
@@ -69,6 +71,9 @@ fn median_sorted(v: &[f64]) -> f64 {
 pub struct Controls {
     pub tonemap: ToneMap,
     pub shadow: ShadowSettings,
+    /// Indirect light; a change needs a new renderer, which the viewer makes once no pointer
+    /// button is down (not while a slider is being dragged).
+    pub gi: GiSettings,
     /// Per light, a factor on the scene file's intensity.
     pub light_scale: Vec<f32>,
     pub speed_m_s: f32,
@@ -83,6 +88,21 @@ pub struct PanelInfo<'a> {
     pub frame_ms: f32,
     pub light_names: &'a [String],
     pub status: &'a str,
+    /// Frames the indirect light has accumulated (`None`: GI off).
+    pub gi_frames: Option<u32>,
+}
+
+const GI_METHODS: [(GiMethod, &str); 3] = [
+    (GiMethod::None, "none"),
+    (GiMethod::Hemisphere, "hemisphere"),
+    (GiMethod::Pathtrace, "pathtrace"),
+];
+
+fn gi_method_name(m: GiMethod) -> &'static str {
+    GI_METHODS
+        .iter()
+        .find(|(g, _)| *g == m)
+        .map_or("?", |(_, n)| n)
 }
 
 const SHADOW_RESOLUTIONS: [u32; 5] = [256, 512, 1024, 2048, 4096];
@@ -195,6 +215,10 @@ pub fn draw(ctx: &egui::Context, c: &mut Controls, stats: &TimingStats, info: &P
                     );
                 });
 
+            egui::CollapsingHeader::new("Global illumination")
+                .default_open(true)
+                .show(ui, |ui| gi_controls(ui, &mut c.gi, info.gi_frames));
+
             ui.separator();
             if ui.button("Screenshot (F12)").clicked() {
                 c.screenshot = true;
@@ -204,6 +228,52 @@ pub fn draw(ctx: &egui::Context, c: &mut Controls, stats: &TimingStats, info: &P
             }
         });
     panel.response.rect.width()
+}
+
+/// The GI method and its parameters; what does not apply to the method is hidden.
+fn gi_controls(ui: &mut egui::Ui, gi: &mut GiSettings, frames: Option<u32>) {
+    egui::ComboBox::from_label("method")
+        .selected_text(gi_method_name(gi.method))
+        .show_ui(ui, |ui| {
+            for (m, name) in GI_METHODS {
+                ui.selectable_value(&mut gi.method, m, name);
+            }
+        });
+    if gi.method == GiMethod::None {
+        ui.label("direct light only");
+        return;
+    }
+    ui.add(
+        egui::Slider::new(&mut gi.rays, 1..=256)
+            .logarithmic(true)
+            .text("rays / pixel"),
+    );
+    if gi.method == GiMethod::Pathtrace {
+        ui.add(egui::Slider::new(&mut gi.bounces, 1..=8).text("bounces"));
+    }
+    let mut limited = gi.radius_m.is_some();
+    ui.checkbox(&mut limited, "limit ray length");
+    match (limited, gi.radius_m) {
+        (true, None) => gi.radius_m = Some(1.0),
+        (false, Some(_)) => gi.radius_m = None,
+        _ => {}
+    }
+    if let Some(r) = &mut gi.radius_m {
+        ui.add(
+            egui::Slider::new(r, 0.01..=100.0)
+                .logarithmic(true)
+                .text("radius m"),
+        );
+    }
+    ui.add(egui::Slider::new(&mut gi.filter_radius, 0..=16).text("filter radius"));
+    ui.add(egui::Slider::new(&mut gi.filter_passes, 0..=8).text("filter passes"));
+    ui.add(egui::Slider::new(&mut gi.normal_offset_voxels, 0.0..=4.0).text("normal offset"));
+    if gi.method == GiMethod::Pathtrace {
+        match frames {
+            Some(n) => ui.label(format!("accumulated frames: {n}")),
+            None => ui.label("accumulated frames: –"),
+        };
+    }
 }
 
 #[cfg(test)]

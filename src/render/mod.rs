@@ -425,6 +425,11 @@ impl Renderer {
         }
     }
 
+    /// Frames the indirect light has accumulated since the last reset (`None`: GI off).
+    pub fn gi_accumulated_frames(&self) -> Option<u32> {
+        self.gi.as_ref().map(|(gi, _)| gi.accumulated_frames())
+    }
+
     /// Number of culled camera draws and total draws (for statistics and tests).
     pub fn camera_draws(&self) -> (usize, usize) {
         let visible = self.draws.read().map(|d| d.camera.len()).unwrap_or(0);

@@ -7,6 +7,7 @@ use serde::Deserialize;
 
 use super::camera::Camera;
 use super::error::{field_ref, from_toml_error, SceneError};
+use super::gi::{GiOverrides, GI_METHOD_NAMES};
 use super::light::Light;
 use super::mesh::{Aabb, BUILTIN_MESH_NAMES};
 use super::obj::AssetStore;
@@ -39,7 +40,24 @@ pub(crate) struct SceneDesc {
     #[serde(default)]
     pub objects: Vec<ObjectDesc>,
     pub voxel: Option<toml::Table>,
-    pub gi: Option<toml::Table>,
+    pub gi: Option<GiDesc>,
+}
+
+/// The `[gi]` table. Integers are read signed so that a negative count is reported by
+/// [`build_gi`] with the field's name, not as a type mismatch.
+#[derive(Clone, Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct GiDesc {
+    pub method: Option<String>,
+    pub rays: Option<i64>,
+    pub bounces: Option<i64>,
+    pub radius_m: Option<f32>,
+    pub normal_offset_voxels: Option<f32>,
+    pub ray_offset_voxels: Option<f32>,
+    pub filter_radius: Option<i64>,
+    pub filter_passes: Option<i64>,
+    pub light_map_resolution: Option<i64>,
+    pub accumulate_frames: Option<i64>,
 }
 
 #[derive(Clone, Debug, Deserialize)]
@@ -232,6 +250,12 @@ pub(crate) fn build(
 ) -> Result<Scene, SceneError> {
     let ck = Check { file };
     let camera = build_camera(&ck, &desc.camera)?;
+    let gi = desc
+        .gi
+        .as_ref()
+        .map(|g| build_gi(&ck, g))
+        .transpose()?
+        .unwrap_or_default();
     let lights = desc
         .lights
         .iter()
@@ -268,7 +292,7 @@ pub(crate) fn build(
         materials: store.materials,
         textures: store.textures,
         voxel: desc.voxel,
-        gi: desc.gi,
+        gi,
         source,
     })
 }
@@ -351,6 +375,99 @@ fn build_camera(ck: &Check<'_>, c: &CameraDesc) -> Result<Camera, SceneError> {
         fov_y_deg: fov,
         near,
         far,
+    })
+}
+
+/// Checks the `[gi]` table; ranges are those the GI passes handle in one frame.
+fn build_gi(ck: &Check<'_>, g: &GiDesc) -> Result<GiOverrides, SceneError> {
+    let method = match &g.method {
+        None => None,
+        Some(name) => Some(
+            GI_METHOD_NAMES
+                .iter()
+                .find(|(n, _)| *n == name.as_str())
+                .map(|&(_, m)| m)
+                .ok_or_else(|| {
+                    ck.invalid(
+                        "gi.method",
+                        format!(
+                            "unknown method \"{name}\"; expected \"none\" (direct light only), \
+                             \"hemisphere\" (one bounce) or \"pathtrace\" (multi-bounce)"
+                        ),
+                    )
+                })?,
+        ),
+    };
+    let count = |name: &str, v: Option<i64>, min: i64, max: i64, what: &str| {
+        v.map(|v| {
+            if (min..=max).contains(&v) {
+                Ok(v as u32)
+            } else {
+                Err(ck.invalid(
+                    &format!("gi.{name}"),
+                    format!("{v}; expected {what}, an integer in [{min}, {max}]"),
+                ))
+            }
+        })
+        .transpose()
+    };
+    let length = |name: &str, v: Option<f32>, positive: bool, what: &str| {
+        v.map(|v| {
+            let field = format!("gi.{name}");
+            let v = ck.scalar(&field, v)?;
+            if v < 0.0 || (positive && v == 0.0) {
+                let bound = if positive { "> 0" } else { ">= 0" };
+                return Err(ck.invalid(&field, format!("{v}; expected {what} {bound}")));
+            }
+            Ok(v)
+        })
+        .transpose()
+    };
+    Ok(GiOverrides {
+        method,
+        rays: count("rays", g.rays, 1, 4096, "rays per pixel")?,
+        bounces: count("bounces", g.bounces, 1, 16, "path-tracer bounces")?,
+        radius_m: length("radius_m", g.radius_m, true, "a ray length in meters")?,
+        normal_offset_voxels: length(
+            "normal_offset_voxels",
+            g.normal_offset_voxels,
+            false,
+            "an offset along the normal in voxel diagonals",
+        )?,
+        ray_offset_voxels: length(
+            "ray_offset_voxels",
+            g.ray_offset_voxels,
+            false,
+            "an offset along the ray in voxel diagonals",
+        )?,
+        filter_radius: count(
+            "filter_radius",
+            g.filter_radius,
+            0,
+            64,
+            "a filter radius in pixels (0: off)",
+        )?,
+        filter_passes: count(
+            "filter_passes",
+            g.filter_passes,
+            0,
+            16,
+            "a number of filter passes",
+        )?,
+        light_map_resolution: count(
+            "light_map_resolution",
+            g.light_map_resolution,
+            16,
+            8192,
+            "texels per side of a light map",
+        )?,
+        accumulate_frames: count(
+            "accumulate_frames",
+            g.accumulate_frames,
+            1,
+            1 << 20,
+            "frames to accumulate",
+        )?,
     })
 }
 

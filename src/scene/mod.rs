@@ -69,7 +69,19 @@
 //! first_frame = 1                       # optional, default 0
 //!
 //! [voxel]    # optional, settings of the voxel grid (checked by `voxel`, not here)
-//! [gi]       # optional, settings of the GI methods (checked by `gi`, not here)
+//!
+//! [gi]       # optional: the scene's indirect-light defaults; every key optional (default
+//!            #   in brackets); command-line flags (`--gi`, `--gi-rays`, …) override them
+//! method = "pathtrace"              # "none" | "hemisphere" | "pathtrace" ["none"]
+//! rays = 16                         # rays per pixel, 1..=4096 [16]
+//! bounces = 2                       # path-tracer bounces, 1..=16 [2]
+//! radius_m = 1.5                    # ray length in meters, > 0 [the scene's diagonal]
+//! normal_offset_voxels = 1.0        # start offset along the normal, voxel diagonals >= 0 [1]
+//! ray_offset_voxels = 0.0           # start offset along the ray, voxel diagonals >= 0 [0]
+//! filter_radius = 4                 # geometry-aware filter radius, pixels 0..=64, 0 off [4]
+//! filter_passes = 2                 # filter passes (horizontal + vertical), 0..=16 [2]
+//! light_map_resolution = 256        # reflective light-map texels per side, 16..=8192 [256]
+//! accumulate_frames = 1             # frames a headless path-tracer render accumulates [1]
 //! ```
 //!
 //! A missing texture (or MTL file) is not an error: it is logged with `log::warn!` and the
@@ -85,6 +97,7 @@ mod builtin;
 mod camera;
 mod desc;
 mod error;
+mod gi;
 mod light;
 mod material;
 mod mesh;
@@ -96,6 +109,7 @@ use std::path::{Path, PathBuf};
 pub use builtin::{builtin, builtin_names, load_scene_arg, DEFAULT_SCENE};
 pub use camera::Camera;
 pub use error::SceneError;
+pub use gi::{resolve_gi, GiOverrides};
 pub use light::{spot_falloff, Light};
 pub use material::{BumpKind, Material, TextureData};
 pub use mesh::{area_weighted_normals, Aabb, Mesh, SubMesh, BUILTIN_MESH_NAMES};
@@ -113,8 +127,9 @@ pub struct Scene {
     pub textures: Vec<TextureData>,
     /// The `[voxel]` table as written, for the voxel module to interpret.
     pub voxel: Option<toml::Table>,
-    /// The `[gi]` table as written, for the GI module to interpret.
-    pub gi: Option<toml::Table>,
+    /// The `[gi]` table: the scene's defaults of the indirect-light settings (nothing given
+    /// without the table); see [`resolve_gi`].
+    pub gi: GiOverrides,
     /// The scene file; `None` for built-in scenes.
     pub source: Option<PathBuf>,
 }

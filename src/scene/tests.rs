@@ -151,6 +151,9 @@ fn doc_example_follows_the_schema() {
     let d = desc::parse(&toml, Path::new("doc")).unwrap_or_else(|e| panic!("{e}\n{toml}"));
     assert_eq!(d.objects.len(), 2);
     assert_eq!(d.lights.len(), 2);
+    assert!(d
+        .gi
+        .is_some_and(|g| g.method.as_deref() == Some("pathtrace")));
 }
 
 // ---- error cases -----------------------------------------------------------------------------
@@ -625,8 +628,8 @@ fn keyframes_inherit_the_object_transform() {
 }
 
 #[test]
-fn voxel_and_gi_tables_are_kept() {
-    let text = format!("{CAMERA}{LIGHT}{CUBE}[voxel]\nresolution = 128\n[gi]\nmethod = \"vpl\"\n");
+fn voxel_table_is_kept() {
+    let text = format!("{CAMERA}{LIGHT}{CUBE}[voxel]\nresolution = 128\n");
     let s = load_ok(&text, &[]);
     assert_eq!(
         s.voxel
@@ -635,7 +638,147 @@ fn voxel_and_gi_tables_are_kept() {
             .and_then(|v| v.as_integer()),
         Some(128)
     );
-    assert!(s.gi.is_some());
+    assert!(s.gi.is_empty(), "no [gi] table: nothing given");
+}
+
+// ---- the [gi] table ------------------------------------------------------------------------
+
+#[test]
+fn gi_table_parses_every_key() {
+    let text = format!(
+        "{CAMERA}{LIGHT}{CUBE}[gi]\nmethod = \"pathtrace\"\nrays = 8\nbounces = 3\n\
+         radius_m = 1.5\nnormal_offset_voxels = 0.5\nray_offset_voxels = 2\n\
+         filter_radius = 0\nfilter_passes = 1\nlight_map_resolution = 128\n\
+         accumulate_frames = 64\n"
+    );
+    let s = load_ok(&text, &[]);
+    assert_eq!(
+        s.gi,
+        GiOverrides {
+            method: Some(crate::gi::GiMethod::Pathtrace),
+            rays: Some(8),
+            bounces: Some(3),
+            radius_m: Some(1.5),
+            normal_offset_voxels: Some(0.5),
+            ray_offset_voxels: Some(2.0),
+            filter_radius: Some(0),
+            filter_passes: Some(1),
+            light_map_resolution: Some(128),
+            accumulate_frames: Some(64),
+        }
+    );
+    // Partial tables give only what they name; the rest stays the defaults'.
+    for (method, m) in [
+        ("none", crate::gi::GiMethod::None),
+        ("hemisphere", crate::gi::GiMethod::Hemisphere),
+    ] {
+        let text = format!("{CAMERA}{LIGHT}{CUBE}[gi]\nmethod = \"{method}\"\n");
+        let s = load_ok(&text, &[]);
+        assert_eq!(
+            s.gi,
+            GiOverrides {
+                method: Some(m),
+                ..Default::default()
+            }
+        );
+    }
+    let s = load_ok(&format!("{CAMERA}{LIGHT}{CUBE}[gi]\nrays = 4\n"), &[]);
+    let settings = resolve_gi(&s.gi, &GiOverrides::default());
+    assert_eq!(settings.rays, 4);
+    assert_eq!(settings.method, crate::gi::GiMethod::None);
+}
+
+#[test]
+fn gi_unknown_method_names_file_field_and_choices() {
+    let text = format!("{CAMERA}{LIGHT}{CUBE}[gi]\nmethod = \"vpl\"\n");
+    let (e, scene) = load_err(&text, &[]);
+    assert!(
+        matches!(e, SceneError::InvalidValue { ref field, .. } if field == "gi.method"),
+        "{e}"
+    );
+    assert_msg(
+        &e,
+        &scene,
+        &[
+            "`gi.method`",
+            "\"vpl\"",
+            "\"none\"",
+            "\"hemisphere\"",
+            "\"pathtrace\"",
+        ],
+    );
+}
+
+#[test]
+fn gi_out_of_range_values_name_the_field() {
+    for (line, field, expected) in [
+        (
+            "rays = -4",
+            "gi.rays",
+            "-4; expected rays per pixel, an integer in [1, 4096]",
+        ),
+        ("rays = 0", "gi.rays", "[1, 4096]"),
+        ("bounces = 0", "gi.bounces", "path-tracer bounces"),
+        ("filter_radius = -1", "gi.filter_radius", "[0, 64]"),
+        ("filter_passes = 100", "gi.filter_passes", "[0, 16]"),
+        (
+            "light_map_resolution = 4",
+            "gi.light_map_resolution",
+            "[16, 8192]",
+        ),
+        (
+            "accumulate_frames = 0",
+            "gi.accumulate_frames",
+            "frames to accumulate",
+        ),
+        ("radius_m = 0", "gi.radius_m", "> 0"),
+        ("radius_m = -2.5", "gi.radius_m", "a ray length in meters"),
+        (
+            "normal_offset_voxels = -1",
+            "gi.normal_offset_voxels",
+            ">= 0",
+        ),
+        ("ray_offset_voxels = -0.5", "gi.ray_offset_voxels", ">= 0"),
+    ] {
+        let text = format!("{CAMERA}{LIGHT}{CUBE}[gi]\n{line}\n");
+        let (e, scene) = load_err(&text, &[]);
+        assert!(
+            matches!(e, SceneError::InvalidValue { field: ref f, .. } if f == field),
+            "{line}: {e}"
+        );
+        assert_msg(&e, &scene, &[&format!("`{field}`"), expected]);
+    }
+    let text = format!("{CAMERA}{LIGHT}{CUBE}[gi]\nradius_m = nan\n");
+    let (e, scene) = load_err(&text, &[]);
+    assert!(
+        matches!(e, SceneError::NonFinite { ref field, .. } if field == "gi.radius_m"),
+        "{e}"
+    );
+    assert_msg(&e, &scene, &["`gi.radius_m`", "finite"]);
+}
+
+#[test]
+fn gi_unknown_key_and_wrong_type_are_named() {
+    let text = format!("{CAMERA}{LIGHT}{CUBE}[gi]\nmethod = \"hemisphere\"\nraays = 4\n");
+    let (e, scene) = load_err(&text, &[]);
+    let SceneError::UnknownKey { line, ref key, .. } = e else {
+        panic!("{e}")
+    };
+    assert_eq!((line, key.as_str()), (13, "raays"));
+    assert_msg(
+        &e,
+        &scene,
+        &[
+            "unknown key `raays`",
+            "`rays`",
+            "`accumulate_frames`",
+            ":13:",
+        ],
+    );
+    let text = format!("{CAMERA}{LIGHT}{CUBE}[gi]\nrays = \"many\"\n");
+    let (e, scene) = load_err(&text, &[]);
+    assert!(matches!(e, SceneError::Schema { line: 12, .. }), "{e}");
+    assert_msg(&e, &scene, &["rays = \"many\""]);
 }
 
 // ---- fuzzing -------------------------------------------------------------------------------
@@ -674,6 +817,9 @@ const FRAGMENTS: &[&str] = &[
     "[voxel]",
     "x = {}",
     "[gi]",
+    "method = \"pathtrace\"",
+    "rays = {}",
+    "radius_m = {}",
     "= = [",
     "\"",
 ];
