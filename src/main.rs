@@ -188,6 +188,10 @@ struct GiArgs {
     /// else none].
     #[arg(long, value_enum)]
     gi: Option<GiMethod>,
+    /// Where hemisphere sampling reads the radiance at ray hits: reflective light maps or a
+    /// direct-radiance voxel volume.
+    #[arg(long, value_enum, default_value_t = voxgi::gi::RadianceSource::Maps)]
+    gi_radiance: voxgi::gi::RadianceSource,
     /// GI rays per pixel [default: the scene's `[gi] rays`, else 16].
     #[arg(long, value_name = "N")]
     gi_rays: Option<u32>,
@@ -243,7 +247,10 @@ impl GiArgs {
 
     /// The scene's `[gi]` values, overridden by the flags given.
     fn settings(&self, scene: &Scene) -> voxgi::gi::GiSettings {
-        resolve_gi(&scene.gi, &self.overrides())
+        voxgi::gi::GiSettings {
+            radiance_source: self.gi_radiance,
+            ..resolve_gi(&scene.gi, &self.overrides())
+        }
     }
 }
 

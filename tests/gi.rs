@@ -233,3 +233,44 @@ material = { albedo = [0.8, 0.8, 0.8] }
     }
     common::assert_no_validation_messages(&ctx);
 }
+
+#[test]
+fn radiance_volume_matches_light_maps() {
+    // The thesis's two sources of radiance at hemisphere-ray hits must agree on the Cornell box
+    // (both are one bounce from the same direct light) and beat direct light.
+    use voxgi::gi::RadianceSource;
+    let maps = metrics(
+        "cornell",
+        "cornell",
+        GiSettings {
+            method: GiMethod::Hemisphere,
+            rays: 8,
+            ..Default::default()
+        },
+    );
+    let volume = metrics(
+        "cornell",
+        "cornell",
+        GiSettings {
+            method: GiMethod::Hemisphere,
+            rays: 8,
+            radiance_source: RadianceSource::Volume,
+            ..Default::default()
+        },
+    );
+    println!(
+        "light maps relMSE {:.4} FLIP {:.4}; volume relMSE {:.4} FLIP {:.4}",
+        maps.rel_mse, maps.flip_mean, volume.rel_mse, volume.flip_mean
+    );
+    assert!(
+        volume.rel_mse < 0.2,
+        "volume must beat direct light (0.384): {}",
+        volume.rel_mse
+    );
+    assert!(
+        (volume.rel_mse - maps.rel_mse).abs() < 0.1 * maps.rel_mse,
+        "maps {} vs volume {}",
+        maps.rel_mse,
+        volume.rel_mse
+    );
+}

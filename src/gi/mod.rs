@@ -54,6 +54,18 @@ pub struct GiSettings {
     pub bounces: u32,
     /// Frames a headless render accumulates (path tracer; the viewer accumulates while still).
     pub accumulate_frames: u32,
+    /// Where the hemisphere method reads the radiance at ray hits.
+    pub radiance_source: RadianceSource,
+}
+
+/// Where hemisphere sampling reads the radiance leaving a hit surface (thesis §6.1).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+pub enum RadianceSource {
+    /// Reflective light maps rendered per shadow view (radiance, position, normal).
+    #[default]
+    Maps,
+    /// A direct-radiance voxel volume congruent with the bits (diffuse senders).
+    Volume,
 }
 
 impl Default for GiSettings {
@@ -74,6 +86,7 @@ impl Default for GiSettings {
             seed: 0,
             bounces: 2,
             accumulate_frames: 1,
+            radiance_source: RadianceSource::Maps,
         }
     }
 }
@@ -228,7 +241,9 @@ impl GiPasses {
                 settings.ray_offset_max_voxels,
             ],
         };
-        let pathtracer = if settings.method == GiMethod::Pathtrace {
+        let radiance_volume = settings.method == GiMethod::Hemisphere
+            && settings.radiance_source == RadianceSource::Volume;
+        let pathtracer = if settings.method == GiMethod::Pathtrace || radiance_volume {
             Some(PathTracer::new(
                 ctx,
                 scene,
@@ -236,6 +251,7 @@ impl GiPasses {
                 grid,
                 (width, height),
                 has_phong,
+                settings.method == GiMethod::Pathtrace,
             )?)
         } else {
             None
@@ -462,9 +478,12 @@ impl GiPasses {
     }
 }
 
-/// The path tracer's persistent resources: attribute volumes and the accumulation history.
+/// Persistent resources of the volume-based methods: the albedo and normal volumes, plus the
+/// path tracer's pipeline and history, or the direct-radiance volume and its hemisphere
+/// pipeline.
 struct PathTracer {
-    pathtrace: ComputePipeline,
+    pathtrace: Option<ComputePipeline>,
+    radiance: Option<RadianceVolume>,
     attributes: ComputePipeline,
     triangles: Buffer,
     triangle_count: u32,
@@ -474,6 +493,13 @@ struct PathTracer {
     history: Image,
     /// The volumes hold the static scene once written.
     volumes_written: Arc<AtomicBool>,
+}
+
+/// The direct-radiance volume (rgba16f, congruent with the bits) and its passes.
+struct RadianceVolume {
+    volume_pipeline: ComputePipeline,
+    hemisphere_pipeline: ComputePipeline,
+    image: Image,
 }
 
 /// Group size of the attribute voxelizer (one workgroup per triangle).
@@ -487,6 +513,7 @@ impl PathTracer {
         grid: &VoxelGrid,
         (w, h): (u32, u32),
         has_phong: bool,
+        path_trace: bool,
     ) -> Result<Self, VkError> {
         let storage = vk::DescriptorType::STORAGE_BUFFER;
         let image = vk::DescriptorType::STORAGE_IMAGE;
@@ -497,24 +524,28 @@ impl PathTracer {
             std::mem::size_of::<GpuVoxelizePush>() as u32,
             &[(0, ATTRIBUTE_GROUP_SIZE)],
         )?;
-        let pathtrace = ctx.compute_pipeline(
-            "gi_pathtrace.comp",
-            &[
-                (0, storage),
-                (1, sampled),
-                (2, sampled),
-                (3, sampled),
-                (4, storage),
-                (5, sampled),
-                (6, sampled),
-                (7, sampled),
-                (8, image),
-                (9, sampled),
-                (10, sampled),
-            ],
-            std::mem::size_of::<GpuGiPush>() as u32,
-            &[(0, u32::from(has_phong))],
-        )?;
+        let pathtrace = path_trace
+            .then(|| {
+                ctx.compute_pipeline(
+                    "gi_pathtrace.comp",
+                    &[
+                        (0, storage),
+                        (1, sampled),
+                        (2, sampled),
+                        (3, sampled),
+                        (4, storage),
+                        (5, sampled),
+                        (6, sampled),
+                        (7, sampled),
+                        (8, image),
+                        (9, sampled),
+                        (10, sampled),
+                    ],
+                    std::mem::size_of::<GpuGiPush>() as u32,
+                    &[(0, u32::from(has_phong))],
+                )
+            })
+            .transpose()?;
         let tris = attribute_triangles(scene, time_s);
         let bytes: &[u8] = if tris.is_empty() {
             &[0; 48]
@@ -541,13 +572,27 @@ impl PathTracer {
         ctx.clear_new_image(&albedo, zero, resting)?;
         let normal = ctx.create_image(&volume("normal volume", vk::Format::R8G8B8A8_SNORM))?;
         ctx.clear_new_image(&normal, zero, resting)?;
+        // The history exists for the path tracer only; the radiance volume for the hemisphere
+        // method reading it (1x1 placeholder history otherwise, never bound).
+        let (hw, hh) = if path_trace { (w, h) } else { (1, 1) };
         let history = ctx.create_image(
-            &ImageDesc::new_2d("path tracer history", vk::Format::R32G32B32A32_SFLOAT, w, h)
-                .with_usage(usage),
+            &ImageDesc::new_2d(
+                "path tracer history",
+                vk::Format::R32G32B32A32_SFLOAT,
+                hw,
+                hh,
+            )
+            .with_usage(usage),
         )?;
         ctx.clear_new_image(&history, zero, resting)?;
+        let radiance = if path_trace {
+            None
+        } else {
+            Some(RadianceVolume::new(ctx, grid, has_phong)?)
+        };
         Ok(Self {
             pathtrace,
+            radiance,
             attributes,
             triangle_count: tris.len() as u32,
             voxelize_push: GpuVoxelizePush::new(grid, tris.len() as u32, 0),
@@ -571,7 +616,6 @@ impl PathTracer {
         let read = Access::Sampled(Shader::Compute);
         let albedo = g.import_image(&self.albedo, read);
         let normal = g.import_image(&self.normal, read);
-        let history = g.import_image(&self.history, read);
         let tris = g.import_buffer(&self.triangles, Access::StorageRead(Shader::Compute));
         let (pipe, count, vpush) = (self.attributes, self.triangle_count, self.voxelize_push);
         let written = self.volumes_written.clone();
@@ -602,7 +646,14 @@ impl PathTracer {
                 let x = count.min(65_535);
                 ctx.cmd.dispatch(x, count.div_ceil(x), 1);
             });
-        let pipe = self.pathtrace;
+        let Some(pipe) = self.pathtrace else {
+            return match &self.radiance {
+                Some(rv) => rv.add_passes(g, i, lut, albedo, normal, push, sampler),
+                // Unreachable by construction (one of the two exists); no indirect light.
+                None => albedo,
+            };
+        };
+        let history = g.import_image(&self.history, read);
         let i = *i;
         let groups = (i.width.div_ceil(8), i.height.div_ceil(8));
         let mut pass = g
@@ -655,12 +706,177 @@ impl PathTracer {
     }
 
     fn destroy(self, ctx: &Context) {
-        ctx.destroy_compute_pipeline(self.pathtrace);
+        if let Some(p) = self.pathtrace {
+            ctx.destroy_compute_pipeline(p);
+        }
+        if let Some(rv) = self.radiance {
+            ctx.destroy_compute_pipeline(rv.volume_pipeline);
+            ctx.destroy_compute_pipeline(rv.hemisphere_pipeline);
+            ctx.destroy_image(rv.image);
+        }
         ctx.destroy_compute_pipeline(self.attributes);
         ctx.destroy_buffer(self.triangles);
         ctx.destroy_image(self.albedo);
         ctx.destroy_image(self.normal);
         ctx.destroy_image(self.history);
+    }
+}
+
+impl RadianceVolume {
+    fn new(ctx: &Context, grid: &VoxelGrid, has_phong: bool) -> Result<Self, VkError> {
+        let b = vk::DescriptorType::STORAGE_BUFFER;
+        let s = vk::DescriptorType::COMBINED_IMAGE_SAMPLER;
+        let i = vk::DescriptorType::STORAGE_IMAGE;
+        let push = std::mem::size_of::<GpuGiPush>() as u32;
+        let volume_pipeline = ctx.compute_pipeline(
+            "gi_radiance_volume.comp",
+            &[(0, b), (1, s), (2, s), (3, s), (4, s), (5, i)],
+            push,
+            &[],
+        )?;
+        let hemisphere_pipeline = ctx.compute_pipeline(
+            "gi_hemisphere_volume.comp",
+            &[
+                (0, b),
+                (1, s),
+                (2, s),
+                (3, s),
+                (4, b),
+                (5, s),
+                (6, s),
+                (8, i),
+                (9, s),
+                (10, s),
+            ],
+            push,
+            &[(0, u32::from(has_phong))],
+        )?;
+        let ext = grid.extent_voxels();
+        let usage = vk::ImageUsageFlags::STORAGE
+            | vk::ImageUsageFlags::SAMPLED
+            | vk::ImageUsageFlags::TRANSFER_DST;
+        let image = ctx.create_image(
+            &ImageDesc::new_2d(
+                "direct radiance volume",
+                vk::Format::R16G16B16A16_SFLOAT,
+                ext.x,
+                ext.y,
+            )
+            .with_depth(ext.z)
+            .with_usage(usage),
+        )?;
+        ctx.clear_new_image(
+            &image,
+            vk::ClearColorValue { float32: [0.0; 4] },
+            Access::Sampled(Shader::Compute).info().layout,
+        )?;
+        Ok(Self {
+            volume_pipeline,
+            hemisphere_pipeline,
+            image,
+        })
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn add_passes(
+        &self,
+        g: &mut RenderGraph,
+        i: &GiInputs,
+        lut: BufferHandle,
+        albedo: ImageHandle,
+        normal: ImageHandle,
+        push: GpuGiPush,
+        sampler: vk::Sampler,
+    ) -> ImageHandle {
+        let read = Access::Sampled(Shader::Compute);
+        let i = *i;
+        let volume = g.import_image(&self.image, read);
+        let pipe = self.volume_pipeline;
+        let dims = push.dims;
+        g.add_pass("gi_radiance_volume")
+            .read(i.frame, Access::StorageRead(Shader::Compute))
+            .read(i.voxels, read)
+            .read(albedo, read)
+            .read(normal, read)
+            .read(i.shadow_map, read)
+            .write(volume, Access::StorageWrite(Shader::Compute))
+            .record(move |ctx| {
+                let sampled = |binding, h: ImageHandle| Descriptor::SampledImage {
+                    binding,
+                    view: ctx.image(h).view,
+                    sampler,
+                };
+                ctx.cmd.bind(
+                    &pipe,
+                    &[
+                        frame_for_slot(i.frame_descriptor, i.frame_stride, ctx.slot),
+                        sampled(1, i.voxels),
+                        sampled(2, albedo),
+                        sampled(3, normal),
+                        sampled(4, i.shadow_map),
+                        Descriptor::StorageImage {
+                            binding: 5,
+                            view: ctx.image(volume).view,
+                        },
+                    ],
+                );
+                ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
+                ctx.cmd.dispatch(
+                    (dims[0] as u32).div_ceil(4),
+                    (dims[1] as u32).div_ceil(4),
+                    (dims[2] as u32).div_ceil(4),
+                );
+            });
+        let irradiance = g.create_image(ImageDesc::new_2d(
+            "indirect irradiance",
+            vk::Format::R32G32B32A32_SFLOAT,
+            i.width,
+            i.height,
+        ));
+        let pipe = self.hemisphere_pipeline;
+        let groups = (i.width.div_ceil(8), i.height.div_ceil(8));
+        let mut pass = g
+            .add_pass("gi_hemisphere_volume")
+            .read(i.albedo, read)
+            .read(i.frame, Access::StorageRead(Shader::Compute))
+            .read(i.normal, read)
+            .read(i.depth, read)
+            .read(i.voxels, read)
+            .read(lut, Access::StorageRead(Shader::Compute))
+            .read(volume, read)
+            .read(normal, read)
+            .write(irradiance, Access::StorageWrite(Shader::Compute));
+        if let Some(sp) = i.specular {
+            pass = pass.read(sp, read);
+        }
+        pass.record(move |ctx| {
+            let sampled = |binding, h: ImageHandle| Descriptor::SampledImage {
+                binding,
+                view: ctx.image(h).view,
+                sampler,
+            };
+            ctx.cmd.bind(
+                &pipe,
+                &[
+                    frame_for_slot(i.frame_descriptor, i.frame_stride, ctx.slot),
+                    sampled(1, i.normal),
+                    sampled(2, i.depth),
+                    sampled(3, i.voxels),
+                    Descriptor::storage_buffer(4, ctx.buffer(lut).raw),
+                    sampled(5, volume),
+                    sampled(6, normal),
+                    Descriptor::StorageImage {
+                        binding: 8,
+                        view: ctx.image(irradiance).view,
+                    },
+                    sampled(9, i.specular.unwrap_or(i.albedo)),
+                    sampled(10, i.albedo),
+                ],
+            );
+            ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
+            ctx.cmd.dispatch(groups.0, groups.1, 1);
+        });
+        irradiance
     }
 }
 
