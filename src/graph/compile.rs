@@ -422,8 +422,11 @@ impl RenderGraph {
             .unwrap_or(0);
         let mut live = HashMap::new();
         let mut out = Vec::new();
+        // Largest first among those starting together: buddy blocks then pack without holes.
+        let mut by_size: Vec<usize> = members.to_vec();
+        by_size.sort_by_key(|&i| std::cmp::Reverse(reqs[i].map(block_size).unwrap_or(0)));
         for pos in 0..=last {
-            for &i in members {
+            for &i in &by_size {
                 if let (Some((start, _)), Some(r)) = (lifetimes[i], reqs[i]) {
                     if start == pos {
                         let a = buddy.allocate(
