@@ -174,6 +174,12 @@ enum BenchCommand {
         /// Rays per surface point.
         #[arg(long, default_value_t = 16)]
         rays: u32,
+        /// Hierarchy level the traversal starts at (thesis §4.5).
+        #[arg(long, default_value_t = 1)]
+        start_level: u32,
+        /// Iteration cap of the hierarchical traversal.
+        #[arg(long, default_value_t = 1024)]
+        max_iterations: u32,
         /// Print JSON instead of tables.
         #[arg(long)]
         json: bool,
@@ -192,6 +198,13 @@ struct GiArgs {
     /// direct-radiance voxel volume.
     #[arg(long, value_enum, default_value_t = voxgi::gi::RadianceSource::Maps)]
     gi_radiance: voxgi::gi::RadianceSource,
+    /// Hierarchy level GI rays start their traversal at (thesis §4.5).
+    #[arg(long, default_value_t = 1)]
+    gi_start_level: u32,
+    /// Iteration cap of GI rays' hierarchical traversal (too low shows as missing indirect
+    /// shadows, thesis Fig. 46).
+    #[arg(long, default_value_t = 1024)]
+    gi_max_iterations: u32,
     /// GI rays per pixel [default: the scene's `[gi] rays`, else 16].
     #[arg(long, value_name = "N")]
     gi_rays: Option<u32>,
@@ -249,6 +262,8 @@ impl GiArgs {
     fn settings(&self, scene: &Scene) -> voxgi::gi::GiSettings {
         voxgi::gi::GiSettings {
             radiance_source: self.gi_radiance,
+            start_level: self.gi_start_level,
+            max_iterations: self.gi_max_iterations,
             ..resolve_gi(&scene.gi, &self.overrides())
         }
     }
@@ -335,6 +350,15 @@ impl FrameArgs {
 }
 
 fn main() {
+    // `voxgi compare a b | head -1` closes stdout early: end quietly like other CLI tools
+    // instead of panicking in println!.
+    let default_hook = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        if info.to_string().contains("failed printing to stdout") {
+            std::process::exit(0);
+        }
+        default_hook(info);
+    }));
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
     let cli = Cli::parse();
     if let Err(e) = run(cli) {
@@ -371,6 +395,8 @@ fn run(cli: Cli) -> Result<()> {
             resolution,
             gbuffer,
             rays,
+            start_level,
+            max_iterations,
             json,
         }) => {
             let scene = load_scene_arg(scene.as_deref())?;
@@ -379,6 +405,10 @@ fn run(cli: Cli) -> Result<()> {
                 resolution,
                 gbuffer_size: gbuffer,
                 rays_per_point: rays,
+                params: voxgi::voxel::TraversalParams {
+                    start_level,
+                    max_iterations,
+                },
                 ..Default::default()
             };
             let report = voxgi::voxel::bench::bench_traverse(&ctx, &scene, &desc)?;

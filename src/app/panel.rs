@@ -267,7 +267,14 @@ fn gi_controls(ui: &mut egui::Ui, gi: &mut GiSettings, frames: Option<u32>) {
     }
     ui.add(egui::Slider::new(&mut gi.filter_radius, 0..=16).text("filter radius"));
     ui.add(egui::Slider::new(&mut gi.filter_passes, 0..=8).text("filter passes"));
-    ui.add(egui::Slider::new(&mut gi.normal_offset_voxels, 0.0..=4.0).text("normal offset"));
+    ui.add(egui::Slider::new(&mut gi.normal_offset_voxels, 0.0..=4.0).text("normal offset k1"));
+    ui.add(egui::Slider::new(&mut gi.ray_offset_voxels, 0.0..=2.0).text("ray offset k2"));
+    ui.add(egui::Slider::new(&mut gi.start_level, 0..=8).text("start level"));
+    ui.add(
+        egui::Slider::new(&mut gi.max_iterations, 16..=4096)
+            .logarithmic(true)
+            .text("max iterations"),
+    );
     if gi.method == GiMethod::Pathtrace {
         match frames {
             Some(n) => ui.label(format!("accumulated frames: {n}")),
