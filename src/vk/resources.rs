@@ -416,32 +416,67 @@ impl Context {
         })
     }
 
-    /// Fills mip 0 (all layers) of `image` with `data` (tightly packed texels) through a
-    /// staging buffer and leaves it in `layout_after`; waits for completion. Like
-    /// [`Context::upload_buffer`], this happens outside the render graph, between frames:
-    /// the previous contents are discarded, so the image may be in any layout, but no frame in
-    /// flight may use it (wait for the device first).
+    /// Fills mip 0 (all layers) of `image` with `data` (tightly packed texels) and leaves it
+    /// in `layout_after`; see [`Context::write_image_levels`].
     pub fn write_image(
         &self,
         image: &Image,
         data: &[u8],
         layout_after: vk::ImageLayout,
     ) -> Result<(), VkError> {
+        self.write_image_levels(image, &[data], layout_after)
+    }
+
+    /// Fills mips `0..levels.len()` (all layers) of `image` with tightly packed texels through
+    /// a staging buffer and leaves them in `layout_after`; waits for completion. Like
+    /// [`Context::upload_buffer`], this happens outside the render graph, between frames: the
+    /// previous contents are discarded, so the image may be in any layout, but no frame in
+    /// flight may use it (wait for the device first).
+    pub fn write_image_levels(
+        &self,
+        image: &Image,
+        levels: &[&[u8]],
+        layout_after: vk::ImageLayout,
+    ) -> Result<(), VkError> {
+        let total: usize = levels.iter().map(|l| l.len()).sum();
         let mut staging = self.create_buffer(&BufferDesc {
             name: format!("{} (staging)", image.desc.name),
-            size_bytes: data.len().max(4) as u64,
+            size_bytes: total.max(4) as u64,
             usage: vk::BufferUsageFlags::TRANSFER_SRC,
             location: MemoryLocation::CpuToGpu,
         })?;
+        let desc = &image.desc;
+        let mut regions = Vec::with_capacity(levels.len());
         if let Some(m) = staging.mapped_mut() {
-            m[..data.len()].copy_from_slice(data);
+            let mut offset = 0usize;
+            for (level, data) in levels.iter().enumerate() {
+                m[offset..offset + data.len()].copy_from_slice(data);
+                regions.push(vk::BufferImageCopy {
+                    buffer_offset: offset as u64,
+                    buffer_row_length: 0,
+                    buffer_image_height: 0,
+                    image_subresource: vk::ImageSubresourceLayers {
+                        aspect_mask: desc.aspect(),
+                        mip_level: level as u32,
+                        base_array_layer: 0,
+                        layer_count: desc.layers,
+                    },
+                    image_offset: vk::Offset3D::default(),
+                    image_extent: vk::Extent3D {
+                        width: (desc.width >> level).max(1),
+                        height: (desc.height >> level).max(1),
+                        depth: (desc.depth >> level).max(1),
+                    },
+                });
+                offset += data.len();
+            }
         }
         let range = vk::ImageSubresourceRange {
-            aspect_mask: image.desc.aspect(),
+            aspect_mask: desc.aspect(),
             base_mip_level: 0,
-            level_count: 1,
+            level_count: levels.len().max(1) as u32,
             base_array_layer: 0,
-            layer_count: image.desc.layers,
+            layer_count: desc.layers,
         };
         let to_dst = [vk::ImageMemoryBarrier2::builder()
             .src_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
@@ -466,26 +501,9 @@ impl Context {
             .image(image.raw)
             .subresource_range(range)
             .build()];
-        let region = [vk::BufferImageCopy {
-            buffer_offset: 0,
-            buffer_row_length: 0,
-            buffer_image_height: 0,
-            image_subresource: vk::ImageSubresourceLayers {
-                aspect_mask: image.desc.aspect(),
-                mip_level: 0,
-                base_array_layer: 0,
-                layer_count: image.desc.layers,
-            },
-            image_offset: vk::Offset3D::default(),
-            image_extent: vk::Extent3D {
-                width: image.desc.width,
-                height: image.desc.height,
-                depth: image.desc.depth,
-            },
-        }];
         let result = self.one_time_submit(|device, cmd| {
-            // SAFETY: cmd is recording; image and staging are live; the staging buffer holds
-            // the tightly packed mip 0 (the caller's data length matches the image).
+            // SAFETY: cmd is recording; image and staging are live; every region lies inside
+            // the staging buffer and the image's mip levels.
             unsafe {
                 device.cmd_pipeline_barrier2(
                     cmd,
@@ -496,7 +514,7 @@ impl Context {
                     staging.raw,
                     image.raw,
                     vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                    &region,
+                    &regions,
                 );
                 device.cmd_pipeline_barrier2(
                     cmd,
@@ -686,93 +704,8 @@ impl Context {
         desc.mip_levels = levels.len().max(1) as u32;
         desc.usage |= vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST;
         let image = self.create_image(&desc)?;
-        let total: usize = levels.iter().map(Vec::len).sum();
-        let mut staging = match self.create_buffer(&BufferDesc {
-            name: format!("{} (staging)", desc.name),
-            size_bytes: total.max(4) as u64,
-            usage: vk::BufferUsageFlags::TRANSFER_SRC,
-            location: MemoryLocation::CpuToGpu,
-        }) {
-            Ok(b) => b,
-            Err(e) => {
-                self.destroy_image(image);
-                return Err(e);
-            }
-        };
-        let mut regions = Vec::new();
-        if let Some(m) = staging.mapped_mut() {
-            let mut offset = 0usize;
-            for (level, data) in levels.iter().enumerate() {
-                m[offset..offset + data.len()].copy_from_slice(data);
-                regions.push(vk::BufferImageCopy {
-                    buffer_offset: offset as u64,
-                    buffer_row_length: 0,
-                    buffer_image_height: 0,
-                    image_subresource: vk::ImageSubresourceLayers {
-                        aspect_mask: desc.aspect(),
-                        mip_level: level as u32,
-                        base_array_layer: 0,
-                        layer_count: desc.layers,
-                    },
-                    image_offset: vk::Offset3D::default(),
-                    image_extent: vk::Extent3D {
-                        width: (desc.width >> level).max(1),
-                        height: (desc.height >> level).max(1),
-                        depth: (desc.depth >> level).max(1),
-                    },
-                });
-                offset += data.len();
-            }
-        }
-        let range = vk::ImageSubresourceRange {
-            aspect_mask: desc.aspect(),
-            base_mip_level: 0,
-            level_count: desc.mip_levels,
-            base_array_layer: 0,
-            layer_count: desc.layers,
-        };
-        let result = self.one_time_submit(|device, cmd| {
-            let to_dst = [vk::ImageMemoryBarrier2::builder()
-                .src_stage_mask(vk::PipelineStageFlags2::NONE)
-                .dst_stage_mask(vk::PipelineStageFlags2::COPY)
-                .dst_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
-                .old_layout(vk::ImageLayout::UNDEFINED)
-                .new_layout(vk::ImageLayout::TRANSFER_DST_OPTIMAL)
-                .image(image.raw)
-                .subresource_range(range)
-                .build()];
-            let to_read = [vk::ImageMemoryBarrier2::builder()
-                .src_stage_mask(vk::PipelineStageFlags2::COPY)
-                .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
-                .dst_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
-                .dst_access_mask(vk::AccessFlags2::SHADER_SAMPLED_READ)
-                .old_layout(vk::ImageLayout::TRANSFER_DST_OPTIMAL)
-                .new_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)
-                .image(image.raw)
-                .subresource_range(range)
-                .build()];
-            // SAFETY: cmd is recording; the image and staging buffer are live and sized for
-            // every region.
-            unsafe {
-                device.cmd_pipeline_barrier2(
-                    cmd,
-                    &vk::DependencyInfo::builder().image_memory_barriers(&to_dst),
-                );
-                device.cmd_copy_buffer_to_image(
-                    cmd,
-                    staging.raw,
-                    image.raw,
-                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                    &regions,
-                );
-                device.cmd_pipeline_barrier2(
-                    cmd,
-                    &vk::DependencyInfo::builder().image_memory_barriers(&to_read),
-                );
-            }
-        });
-        self.destroy_buffer(staging);
-        match result {
+        let slices: Vec<&[u8]> = levels.iter().map(Vec::as_slice).collect();
+        match self.write_image_levels(&image, &slices, vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL) {
             Ok(()) => Ok(image),
             Err(e) => {
                 self.destroy_image(image);
