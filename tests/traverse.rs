@@ -265,6 +265,53 @@ fn gpu_extreme_rays_match_cpu() {
 }
 
 #[test]
+fn gpu_segment_visibility_matches_cpu_visible() {
+    // voxel_visible(a, b) is voxel_first_hit(a, b - a, t_max = 1): cast segments and compare
+    // with the CPU twin's `visible` on every segment.
+    use voxgi::voxel::traverse::visible;
+    let ctx = common::context();
+    let mut rng = Rng(23);
+    let h = random_grid(&mut rng, 48, 40, 2, 0.01);
+    let dims = Vec3::new(48.0, 40.0, 256.0);
+    let segments: Vec<(Vec3, Vec3)> = (0..50_000)
+        .map(|_| {
+            (
+                Vec3::new(rng.f(), rng.f(), rng.f()) * dims,
+                Vec3::new(rng.f(), rng.f(), rng.f()) * dims,
+            )
+        })
+        .collect();
+    let rays: Vec<GpuRay> = segments
+        .iter()
+        .map(|&(a, b)| GpuRay::new(a, b - a, 1.0))
+        .collect();
+    let params = TraversalParams {
+        start_level: 1,
+        max_iterations: 4096,
+    };
+    let caster = VoxelRayCaster::new(&ctx, &h).expect("uploads");
+    let batch = caster
+        .cast(&ctx, &rays, &[RayMethod::Hierarchical(params)])
+        .expect("casts");
+    caster.destroy(&ctx);
+    let mut blocked = 0;
+    for (i, &(a, b)) in segments.iter().enumerate() {
+        let gpu_visible = !batch[0].hits[i].hit;
+        assert_eq!(
+            gpu_visible,
+            visible(&h, a, b, &params),
+            "segment {i}: {a} -> {b}"
+        );
+        blocked += usize::from(!gpu_visible);
+    }
+    assert!(
+        blocked > 1000 && blocked < 49_000,
+        "{blocked} of 50000 segments blocked: both outcomes are exercised"
+    );
+    common::assert_no_validation_messages(&ctx);
+}
+
+#[test]
 fn gpu_marching_baselines_match_cpu() {
     let ctx = common::context();
     let mut rng = Rng(5);
