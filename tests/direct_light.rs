@@ -466,3 +466,52 @@ fn normal_and_bump_maps_perturb_the_shading_normal() {
     let height = textured_quad_center("map_bump map.png", [100, 100, 100]);
     assert_close(height, flat, 0.01, "a constant height map changes nothing");
 }
+
+#[test]
+fn keyframed_objects_follow_the_scene_time_after_prepare() {
+    // A renderer made at t = 0 and moved to t = 0.5 with `prepare` draws what a renderer made
+    // at t = 0.5 draws (the viewer advances time this way). Keyframes loop by default.
+    use voxgi::graph::GraphExecutor;
+    use voxgi::render::Renderer;
+    use voxgi::vk::{FrameLoop, MAX_FRAMES_IN_FLIGHT};
+    let toml = format!(
+        "{CAMERA_DOWN}{PLANE}[[lights]]\nkind = \"directional\"\ndirection = [0.0, -1.0, 0.0]\nirradiance_w_m2 = 3.0\n\
+         [[objects]]\nname = \"mover\"\nbuiltin = \"cube\"\nscale = 0.4\n\
+         [objects.animation]\nkeyframes = [ {{ time_s = 0.0, translate = [-0.8, 0.3, 0.0] }}, {{ time_s = 1.0, translate = [0.8, 0.3, 0.0] }} ]\n"
+    );
+    let s = scene(&toml);
+    let ctx = common::context();
+    let frame = |renderer: &mut Renderer| {
+        let exec = GraphExecutor::new(&ctx, renderer.graph(), MAX_FRAMES_IN_FLIGHT).expect("graph");
+        let mut frames = FrameLoop::new(&ctx, MAX_FRAMES_IN_FLIGHT, 16).expect("frames");
+        let (slot, cmd, ts, _) = frames.begin(&ctx).expect("begin");
+        renderer.write_frame(slot);
+        exec.record(&cmd, slot, ts);
+        frames.submit(&ctx, &[], &[]).expect("submit");
+        frames.finish(&ctx).expect("finish");
+        frames.destroy(&ctx);
+        exec.destroy(&ctx);
+        renderer.hdr_image()
+    };
+    let settings = |t: f32| RenderSettings {
+        width: SIZE,
+        height: SIZE,
+        time_s: t,
+        ..Default::default()
+    };
+    let mut moved = Renderer::new(&ctx, &s, settings(0.0)).expect("renderer");
+    let at_start = frame(&mut moved);
+    moved.settings.time_s = 0.5;
+    moved.prepare(&s).expect("prepare");
+    let after = frame(&mut moved);
+    moved.destroy(&ctx);
+    let mut fresh = Renderer::new(&ctx, &s, settings(0.5)).expect("renderer");
+    let expected = frame(&mut fresh);
+    fresh.destroy(&ctx);
+    assert_ne!(at_start.data, after.data, "the cube moved");
+    assert_eq!(
+        after.data, expected.data,
+        "prepare at t = 0.5 draws what a renderer made at t = 0.5 draws"
+    );
+    common::assert_no_validation_messages(&ctx);
+}

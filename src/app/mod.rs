@@ -328,6 +328,8 @@ impl Viewer {
             gi: opts.settings.gi,
             light_scale: vec![1.0; scene.lights.len()],
             speed_m_s: fly.speed_m_s,
+            time_s: opts.settings.time_s,
+            animate: false,
             screenshot: false,
         };
         Self {
@@ -464,6 +466,10 @@ impl Viewer {
         let now = Instant::now();
         let dt_s = (now - self.last_frame).as_secs_f32();
         self.last_frame = now;
+        if self.controls.animate {
+            // Bounded so a stalled frame does not jump the animation.
+            self.controls.time_s += dt_s.min(0.1);
+        }
         self.frame_ms = 0.9 * self.frame_ms + 0.1 * dt_s * 1000.0;
         if let Some(wanted) = self.opts.frames {
             if self.started.elapsed() > SCRIPT_TIMEOUT {
@@ -559,6 +565,7 @@ impl Viewer {
             0
         };
         let mut settings = current.clone();
+        settings.time_s = self.controls.time_s;
         settings.width = extent.width - panel_px;
         settings.height = extent.height;
         settings.tonemap = self.controls.tonemap;

@@ -77,6 +77,9 @@ pub struct Controls {
     /// Per light, a factor on the scene file's intensity.
     pub light_scale: Vec<f32>,
     pub speed_m_s: f32,
+    /// Scene time (keyframed objects and dynamic voxels follow it) and whether it runs.
+    pub time_s: f32,
+    pub animate: bool,
     /// Set by the button (or F12); the viewer clears it after saving.
     pub screenshot: bool,
 }
@@ -154,6 +157,10 @@ pub fn draw(ctx: &egui::Context, c: &mut Controls, stats: &TimingStats, info: &P
                             .logarithmic(true)
                             .text("speed m/s"),
                     );
+                    ui.horizontal(|ui| {
+                        ui.checkbox(&mut c.animate, "animate");
+                        ui.label(format!("t = {:.2} s", c.time_s));
+                    });
                 });
 
             egui::CollapsingHeader::new("Lights")

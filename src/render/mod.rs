@@ -100,6 +100,9 @@ struct Draw {
     texture: Option<usize>,
     /// Index into the renderer's textures of the material's bump or normal map.
     bump: Option<usize>,
+    /// The object drawn (its transform follows the scene time) and its mesh's local box.
+    object: usize,
+    local_aabb: crate::scene::Aabb,
     model: Mat4,
     aabb: crate::scene::Aabb,
 }
@@ -383,6 +386,14 @@ impl Renderer {
         }
         self.frame_data = f;
         self.shadow_view_count = views.len() as u32;
+        // Keyframed objects follow the scene time (OBJ sequences keep the frame they were
+        // created with: their vertex ranges differ per frame).
+        for d in &mut self.all_draws {
+            if let Some(o) = scene.objects.get(d.object).filter(|o| o.is_animated()) {
+                d.model = o.transform_at(s.time_s);
+                d.aabb = d.local_aabb.transformed(&d.model);
+            }
+        }
         let lists = DrawLists {
             camera: self
                 .all_draws
@@ -973,7 +984,7 @@ fn upload_geometry(
         return Err(RenderError::EmptyScene);
     }
     let mut draws = Vec::new();
-    for object in &scene.objects {
+    for (object_index, object) in scene.objects.iter().enumerate() {
         let mesh_index = object.mesh_at(t_s);
         let Some(mesh) = scene.meshes.get(mesh_index) else {
             continue;
@@ -992,6 +1003,8 @@ fn upload_geometry(
                 material: material as u32,
                 texture,
                 bump,
+                object: object_index,
+                local_aabb: mesh.aabb,
                 model,
                 aabb,
             });
