@@ -33,6 +33,7 @@
 //! - [`traverse`]: hierarchical first hit and visibility (§4.5–§4.7), the exact DDA ground
 //!   truth, and the 1-bit / 3-bit marching baselines (§4.8).
 
+pub mod atlas;
 pub mod bench;
 pub mod bits;
 pub mod debug_view;
