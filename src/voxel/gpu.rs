@@ -53,6 +53,8 @@ pub enum GpuVoxelError {
     Graph(#[from] GraphError),
     #[error(transparent)]
     Voxel(#[from] VoxelError),
+    #[error(transparent)]
+    Atlas(#[from] super::atlas::AtlasError),
     #[error("debug level {level} does not exist: the voxel grid has levels 0..={max}; pass a smaller --debug-level")]
     BadDebugLevel { level: u32, max: u32 },
 }

@@ -38,6 +38,7 @@ pub mod bench;
 pub mod bits;
 pub mod debug_view;
 pub mod gpu;
+pub mod gpu_atlas;
 pub mod gpu_rays;
 pub mod grid;
 pub mod ray_mask;
