@@ -202,6 +202,10 @@ struct FrameArgs {
     /// Re-voxelize static geometry every frame too (measures the full voxelization).
     #[arg(long)]
     revoxelize: bool,
+    /// Voxelizer: exact triangle/box test, or the thesis's texture-atlas splatting with
+    /// automatic atlases (applies to --voxels, GI and --debug voxel grids).
+    #[arg(long, value_enum, default_value_t = voxgi::voxel::gpu::Voxelizer::Triangle)]
+    voxelizer: voxgi::voxel::gpu::Voxelizer,
     /// Indirect-light method (none: direct light only).
     #[arg(long, value_enum, default_value_t = GiMethod::None)]
     gi: GiMethod,
@@ -250,12 +254,17 @@ impl FrameArgs {
         s.shadow.resolution = self.shadow_resolution;
         s.shadow.pcf_radius = self.pcf_radius;
         s.shadow.point_technique = self.point_shadows;
+        let default_res = voxgi::voxel::gpu::VoxelSettings::default().max_res_xy;
+        // GI and debug views voxelize without --voxels; they then honour --voxelizer too.
+        let needs_voxels = self.gi != GiMethod::None || self.debug.is_some();
         s.voxels = self
             .voxels
+            .or((needs_voxels && self.voxelizer != Default::default()).then_some(default_res))
             .map(|max_res_xy| voxgi::voxel::gpu::VoxelSettings {
                 max_res_xy,
                 layers: self.voxel_layers,
                 revoxelize_static: self.revoxelize,
+                voxelizer: self.voxelizer,
             });
         s.gi = voxgi::gi::GiSettings {
             method: self.gi,

@@ -204,3 +204,116 @@ fn cornell_box_atlas_vs_cpu_256_two_layers() {
 fn bunny_scene_atlas_vs_cpu_256x256x128() {
     check_flat("assets/scenes/cornell_bunny.toml", 256);
 }
+
+/// Static Cornell walls and a keyframed cube that moves and turns (as in voxel_dynamic.rs).
+fn animated_scene() -> voxgi::scene::Scene {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes");
+    voxgi::scene::Scene::from_toml_str(
+        r#"
+[camera]
+position = [0.278, 0.273, -0.800]
+target = [0.278, 0.273, 0.0]
+up = [0.0, 1.0, 0.0]
+fov_y_deg = 39.3
+near = 0.01
+far = 10.0
+
+[[objects]]
+name = "walls"
+builtin = "cornell_walls"
+
+[[objects]]
+name = "mover"
+builtin = "cube"
+scale = 0.12
+
+[objects.animation]
+loop = false
+
+[[objects.animation.keyframes]]
+time_s = 0.0
+translate = [0.2, 0.15, 0.2]
+rotate_deg = [0.0, 0.0, 0.0]
+
+[[objects.animation.keyframes]]
+time_s = 1.0
+translate = [0.45, 0.35, 0.4]
+rotate_deg = [30.0, 45.0, 10.0]
+"#,
+        Path::new("<animated test scene>"),
+        &dir,
+    )
+    .expect("test scene parses")
+}
+
+/// The renderer's `VoxelFrame` with `--voxelizer atlas`: static walls voxelized once, the
+/// rigid mover's atlas points transformed per frame; each frame's mip 0 against the CPU.
+#[test]
+fn voxel_frame_atlas_follows_a_moving_object() {
+    use voxgi::voxel::gpu::{VoxelFrame, VoxelSettings, Voxelizer};
+    let ctx = common::context();
+    let s = animated_scene();
+    let settings = VoxelSettings {
+        voxelizer: Voxelizer::Atlas,
+        ..Default::default()
+    };
+    let mut frame = VoxelFrame::new(&ctx, &s, 0.0, &settings).expect("voxel frame");
+    assert!(frame.has_frame_passes());
+    let grid = frame.voxels.grid;
+    let (w, h) = image_extent(&grid);
+    let size = column_bytes(&grid);
+    let readback = readback_buffer(&ctx, "voxel readback", size).expect("readback");
+    for t in [0.0, 0.5, 1.0] {
+        assert!(frame.update(t, 0).expect("update"), "the mover moved");
+        let mut g = RenderGraph::new();
+        let image = frame.add_passes(&mut g);
+        let out = g.import_buffer(&readback, Access::HostRead);
+        g.add_pass("voxel_readback")
+            .read(image, Access::TransferRead)
+            .write(out, Access::TransferWrite)
+            .record(move |ctx| {
+                let extent = voxgi::vk::vk::Extent3D {
+                    width: w,
+                    height: h,
+                    depth: 1,
+                };
+                ctx.cmd.copy_image_to_buffer(
+                    ctx.image(image).raw,
+                    extent,
+                    0,
+                    1,
+                    ctx.buffer(out).raw,
+                )
+            });
+        let timings = run_once(&ctx, g).expect("frame runs");
+        let names: Vec<_> = timings.iter().map(|t| t.name.as_str()).collect();
+        assert!(names.contains(&"voxel_copy_static"), "{names:?}");
+        assert!(names.contains(&"voxelize_atlas"), "{names:?}");
+        assert!(!names.contains(&"voxelize_triangles"), "{names:?}");
+        let full = BitGrid::from_gpu_bytes(
+            w,
+            h,
+            1,
+            &readback.mapped().expect("mapped")[..size as usize],
+        )
+        .expect("size");
+        let mut gpu = BitGrid::for_grid(&grid);
+        for y in 0..grid.res_y() {
+            for x in 0..grid.res_x() {
+                *gpu.column_mut(x, y, 0) = full.column(x, y, 0);
+            }
+        }
+        let mut cpu = BitGrid::for_grid(&grid);
+        voxgi::voxel::voxelize_scene(&grid, &mut cpu, &s, t).expect("cpu");
+        let (recall, precision, near) = compare(&cpu, &gpu);
+        println!("t = {t}: recall {recall:.4}, precision {precision:.5}");
+        assert_eq!(near, 1.0);
+        assert!(recall >= MIN_RECALL, "t = {t}: recall {recall}");
+    }
+    // Nothing moves after t = 1: no re-voxelization.
+    assert!(!frame.update(1.0, 0).expect("update"));
+    assert!(!frame.update(2.0, 0).expect("update"));
+    ctx.destroy_buffer(readback);
+    frame.destroy(&ctx);
+    common::assert_no_validation_messages(&ctx);
+}

@@ -351,8 +351,8 @@ pub struct AtlasScene {
     pub pipelines: AtlasPipelines,
     points: Vec<AtlasPoints>,
     static_instances: Vec<(usize, Mat4)>,
-    /// `(points, object index in the scene, model per slot)`.
-    dynamic_instances: Vec<(usize, usize, Arc<SlotMatrices>)>,
+    /// `(points, the object, model per slot)`.
+    dynamic_instances: Vec<(usize, crate::scene::Object, Arc<SlotMatrices>)>,
 }
 
 impl AtlasScene {
@@ -374,7 +374,7 @@ impl AtlasScene {
         };
         let mut built: Vec<(Arc<MeshAtlas>, usize)> = Vec::new();
         let r = (|| -> Result<(), GpuVoxelError> {
-            for (oi, o) in scene.objects.iter().enumerate() {
+            for o in &scene.objects {
                 if !uses_atlas(o) {
                     continue;
                 }
@@ -404,7 +404,7 @@ impl AtlasScene {
                     for s in 0..MAX_FRAMES_IN_FLIGHT {
                         m.set(s, o.transform_at(t_s));
                     }
-                    me.dynamic_instances.push((pi, oi, m));
+                    me.dynamic_instances.push((pi, o.clone(), m));
                 } else {
                     me.static_instances.push((pi, o.transform_at(t_s)));
                 }
@@ -436,20 +436,19 @@ impl AtlasScene {
             .sum()
     }
 
-    /// Writes the dynamic objects' model matrices at `t_s` into `slot`; returns them (for
-    /// change detection).
-    pub fn update(&self, scene: &Scene, t_s: f32, slot: usize) -> Vec<Mat4> {
+    /// The dynamic objects' model matrices at `t_s`.
+    pub fn models_at(&self, t_s: f32) -> Vec<Mat4> {
         self.dynamic_instances
             .iter()
-            .map(|(_, oi, m)| {
-                let model = scene
-                    .objects
-                    .get(*oi)
-                    .map_or(Mat4::IDENTITY, |o| o.transform_at(t_s));
-                m.set(slot, model);
-                model
-            })
+            .map(|(_, o, _)| o.transform_at(t_s))
             .collect()
+    }
+
+    /// Writes the dynamic objects' model matrices for frame slot `slot` (after its fence).
+    pub fn write_models(&self, slot: usize, models: &[Mat4]) {
+        for ((_, _, m), &model) in self.dynamic_instances.iter().zip(models) {
+            m.set(slot, model);
+        }
     }
 
     /// Declares `voxelize_atlas` for the static objects, the dynamic ones, or both.
