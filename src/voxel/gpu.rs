@@ -697,8 +697,9 @@ pub enum Voxelizer {
     /// reference.
     #[default]
     Triangle,
-    /// The thesis's texture-atlas splatting with automatic atlases ([`super::gpu_atlas`]);
-    /// objects animated by OBJ sequences (deforming) still use the triangle voxelizer.
+    /// The thesis's texture-atlas splatting with automatic atlases; objects animated by OBJ
+    /// sequences (deforming) still use the triangle voxelizer.
+    // See `voxel::gpu_atlas` (no intra-doc link: clap shows this text in --help).
     Atlas,
 }
 
