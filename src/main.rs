@@ -302,6 +302,10 @@ struct FrameArgs {
     /// Re-voxelize static geometry every frame too (measures the full voxelization).
     #[arg(long)]
     revoxelize: bool,
+    /// Voxelizer: exact triangle/box test, or the thesis's texture-atlas splatting with
+    /// automatic atlases (applies to --voxels, GI and --debug voxel grids).
+    #[arg(long, value_enum, default_value_t = voxgi::voxel::gpu::Voxelizer::Triangle)]
+    voxelizer: voxgi::voxel::gpu::Voxelizer,
     #[command(flatten)]
     gi: GiArgs,
     /// Show a voxel debug view instead of the lit image (voxelizes at 128 unless --voxels).
@@ -329,14 +333,19 @@ impl FrameArgs {
         s.shadow.resolution = self.shadow_resolution;
         s.shadow.pcf_radius = self.pcf_radius;
         s.shadow.point_technique = self.point_shadows;
+        let default_res = voxgi::voxel::gpu::VoxelSettings::default().max_res_xy;
+        s.gi = self.gi.settings(scene);
+        // GI and debug views voxelize without --voxels; they then honour --voxelizer too.
+        let needs_voxels = s.gi.method != GiMethod::None || self.debug.is_some();
         s.voxels = self
             .voxels
+            .or((needs_voxels && self.voxelizer != Default::default()).then_some(default_res))
             .map(|max_res_xy| voxgi::voxel::gpu::VoxelSettings {
                 max_res_xy,
                 layers: self.voxel_layers,
                 revoxelize_static: self.revoxelize,
+                voxelizer: self.voxelizer,
             });
-        s.gi = self.gi.settings(scene);
         s.debug = self
             .debug
             .map(|view| voxgi::voxel::debug_view::DebugSettings {

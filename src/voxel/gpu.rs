@@ -53,6 +53,8 @@ pub enum GpuVoxelError {
     Graph(#[from] GraphError),
     #[error(transparent)]
     Voxel(#[from] VoxelError),
+    #[error(transparent)]
+    Atlas(#[from] super::atlas::AtlasError),
     #[error("debug level {level} does not exist: the voxel grid has levels 0..={max}; pass a smaller --debug-level")]
     BadDebugLevel { level: u32, max: u32 },
 }
@@ -684,6 +686,21 @@ pub struct VoxelSettings {
     pub layers: u32,
     /// Voxelize static geometry every frame too (to measure the full cost) instead of once.
     pub revoxelize_static: bool,
+    /// Which voxelizer sets the bits.
+    pub voxelizer: Voxelizer,
+}
+
+/// The two voxelizers of DESIGN.md "Voxel representation".
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum Voxelizer {
+    /// Exact conservative triangle/box test (`voxelize_triangles`), bit for bit the CPU
+    /// reference.
+    #[default]
+    Triangle,
+    /// The thesis's texture-atlas splatting with automatic atlases; objects animated by OBJ
+    /// sequences (deforming) still use the triangle voxelizer.
+    // See `voxel::gpu_atlas` (no intra-doc link: clap shows this text in --help).
+    Atlas,
 }
 
 impl Default for VoxelSettings {
@@ -692,6 +709,7 @@ impl Default for VoxelSettings {
             max_res_xy: 128,
             layers: 1,
             revoxelize_static: false,
+            voxelizer: Voxelizer::Triangle,
         }
     }
 }
@@ -712,6 +730,14 @@ pub struct VoxelFrame {
     static_columns: Option<Buffer>,
     dynamic: Option<DynamicVoxels>,
     revoxelize_static: bool,
+    /// Atlas voxelizer state (with [`Voxelizer::Atlas`]): its atlases live in `atlas_cache`,
+    /// in memory for the renderer's lifetime, so a static mesh is packed once per run.
+    atlas: Option<super::gpu_atlas::AtlasScene>,
+    atlas_cache: super::atlas::AtlasCache,
+    /// The dynamic atlas objects' model matrices in the grid (as `DynamicVoxels::voxelized`).
+    atlas_models: Option<Vec<glam::Mat4>>,
+    /// Open in the frame slots that re-voxelize (present when anything is dynamic).
+    gate: Option<Arc<SlotGate>>,
 }
 
 /// The moving part of a [`VoxelFrame`].
@@ -719,7 +745,6 @@ struct DynamicVoxels {
     /// The scene's dynamic objects with the scene's meshes (textures dropped).
     scene: Scene,
     triangles: DynamicTriangles,
-    gate: Arc<SlotGate>,
     /// The triangles in the grid (or about to be, once the last open slot's frame runs).
     voxelized: Option<Vec<GpuTriangle>>,
 }
@@ -772,8 +797,16 @@ impl VoxelFrame {
         )?;
         let pipelines = VoxelPipelines::new(ctx)?;
         let voxels = GpuVoxelGrid::new(ctx, &grid)?;
-        let static_tris =
-            TriangleBuffer::upload(ctx, "static triangles", &scene_triangles(scene, t_s, false))?;
+        let atlas_mode = settings.voxelizer == Voxelizer::Atlas;
+        let static_tris = TriangleBuffer::upload(
+            ctx,
+            "static triangles",
+            &if atlas_mode {
+                Vec::new()
+            } else {
+                scene_triangles(scene, t_s, false)
+            },
+        )?;
         let mut frame = Self {
             voxels,
             pipelines,
@@ -781,19 +814,37 @@ impl VoxelFrame {
             static_columns: None,
             dynamic: None,
             revoxelize_static: settings.revoxelize_static,
+            atlas: None,
+            atlas_cache: Default::default(),
+            atlas_models: None,
+            gate: None,
         };
-        if let Err(e) = frame.init(ctx, scene, t_s) {
+        if let Err(e) = frame.init(ctx, scene, t_s, atlas_mode) {
             frame.destroy(ctx);
             return Err(e);
         }
         Ok(frame)
     }
 
-    fn init(&mut self, ctx: &Context, scene: &Scene, t_s: f32) -> Result<(), GpuVoxelError> {
+    fn init(
+        &mut self,
+        ctx: &Context,
+        scene: &Scene,
+        t_s: f32,
+        atlas_mode: bool,
+    ) -> Result<(), GpuVoxelError> {
         let grid = self.voxels.grid;
-        if scene.objects.iter().any(|o| o.dynamic || o.is_animated()) {
+        if atlas_mode {
+            let a =
+                super::gpu_atlas::AtlasScene::new(ctx, scene, t_s, &grid, &mut self.atlas_cache);
+            self.atlas = Some(a?);
+        }
+        let tri_dynamic = |o: &crate::scene::Object| {
+            (o.dynamic || o.is_animated()) && !(atlas_mode && super::gpu_atlas::uses_atlas(o))
+        };
+        if scene.objects.iter().any(tri_dynamic) {
             let mut dyn_scene = scene.clone();
-            dyn_scene.objects.retain(|o| o.dynamic || o.is_animated());
+            dyn_scene.objects.retain(tri_dynamic);
             dyn_scene.textures.clear();
             let tris = dynamic_triangles(&dyn_scene, t_s)?;
             let mut triangles = DynamicTriangles::new(
@@ -807,18 +858,25 @@ impl VoxelFrame {
             self.dynamic = Some(DynamicVoxels {
                 scene: dyn_scene,
                 triangles,
-                gate: Arc::new(SlotGate::default()),
                 voxelized: None,
             });
         }
-        if !self.revoxelize_static && self.static_tris.count > 0 {
-            if self.dynamic.is_some() {
-                self.static_columns = Some(voxelize_static(
-                    ctx,
-                    &self.pipelines,
-                    &grid,
-                    &self.static_tris,
-                )?);
+        let atlas_static = self.atlas.as_ref().is_some_and(|a| a.has_static());
+        if self.has_frame_passes() {
+            self.gate = Some(Arc::new(SlotGate::default()));
+        }
+        if !self.revoxelize_static && (self.static_tris.count > 0 || atlas_static) {
+            if self.has_frame_passes() {
+                self.static_columns = Some(match &self.atlas {
+                    Some(a) => super::gpu_atlas::voxelize_static_atlas(
+                        ctx,
+                        a,
+                        &self.pipelines,
+                        &grid,
+                        &self.static_tris,
+                    )?,
+                    None => voxelize_static(ctx, &self.pipelines, &grid, &self.static_tris)?,
+                });
             } else {
                 // Nothing ever moves: build the grid and its hierarchy now, once.
                 let mut g = RenderGraph::new();
@@ -832,6 +890,9 @@ impl VoxelFrame {
                     ColumnBase::Clear,
                     &[&self.static_tris],
                 );
+                if let Some(a) = &self.atlas {
+                    a.add_pass(&mut g, &grid, columns, true, false, None);
+                }
                 add_store_and_mip_passes(&mut g, &self.pipelines, &self.voxels, columns, image);
                 run_once(ctx, g)?;
             }
@@ -841,23 +902,42 @@ impl VoxelFrame {
 
     /// Whether the frame declares voxel passes (dynamic objects, or `revoxelize_static`).
     pub fn has_frame_passes(&self) -> bool {
-        self.dynamic.is_some() || self.revoxelize_static
+        self.dynamic.is_some()
+            || self.revoxelize_static
+            || self.atlas.as_ref().is_some_and(|a| a.has_dynamic())
     }
 
     /// Prepares frame slot `slot` for scene time `t_s` (call after the slot's fence): writes
     /// the dynamic triangles when they changed since they were last voxelized. Returns
     /// whether this frame re-voxelizes.
     pub fn update(&mut self, t_s: f32, slot: usize) -> Result<bool, GpuVoxelError> {
-        let Some(d) = &mut self.dynamic else {
-            return Ok(self.revoxelize_static);
+        let tris = match &self.dynamic {
+            Some(d) => Some(dynamic_triangles(&d.scene, t_s)?),
+            None => None,
         };
-        let tris = dynamic_triangles(&d.scene, t_s)?;
-        let run = self.revoxelize_static || d.voxelized.as_ref() != Some(&tris);
+        let models = self.atlas.as_ref().map(|a| a.models_at(t_s));
+        let tris_changed = match (&self.dynamic, &tris) {
+            (Some(d), Some(t)) => d.voxelized.as_ref() != Some(t),
+            _ => false,
+        };
+        let models_changed = match &models {
+            Some(m) if !m.is_empty() => self.atlas_models.as_ref() != Some(m),
+            _ => false,
+        };
+        let run = self.revoxelize_static || tris_changed || models_changed;
         if run {
-            d.triangles.write(slot, &tris);
-            d.voxelized = Some(tris);
+            if let (Some(d), Some(tris)) = (&mut self.dynamic, tris) {
+                d.triangles.write(slot, &tris);
+                d.voxelized = Some(tris);
+            }
+            if let (Some(a), Some(models)) = (&self.atlas, models) {
+                a.write_models(slot, &models);
+                self.atlas_models = Some(models);
+            }
         }
-        d.gate.set(slot, run);
+        if let Some(g) = &self.gate {
+            g.set(slot, run);
+        }
         Ok(run)
     }
 
@@ -881,7 +961,7 @@ impl VoxelFrame {
         if let Some(d) = &self.dynamic {
             sources.push(TriangleSource::PerSlot(&d.triangles));
         }
-        let gate = self.dynamic.as_ref().map(|d| d.gate.clone());
+        let gate = self.gate.clone();
         add_voxelize_passes_gated(
             g,
             &self.pipelines,
@@ -891,6 +971,10 @@ impl VoxelFrame {
             &sources,
             gate.clone(),
         );
+        if let Some(a) = &self.atlas {
+            let statics = self.static_columns.is_none();
+            a.add_pass(g, grid, columns, statics, true, gate.clone());
+        }
         add_store_and_mip_passes_gated(g, &self.pipelines, &self.voxels, columns, image, gate);
         image
     }
@@ -901,6 +985,9 @@ impl VoxelFrame {
         }
         if let Some(d) = self.dynamic {
             d.triangles.destroy(ctx);
+        }
+        if let Some(a) = self.atlas {
+            a.destroy(ctx);
         }
         self.static_tris.destroy(ctx);
         self.voxels.destroy(ctx);

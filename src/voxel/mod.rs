@@ -29,14 +29,19 @@
 //! - [`bits`]: [`bits::BitGrid`] (CPU copy of the column image) and [`bits::BitHierarchy`].
 //! - [`voxelize`]: exact triangle surface voxelizer (Akenine-Möller triangle/box SAT).
 //! - [`gpu`]: the GPU column image, triangle voxelizer and OR mip chain as render-graph passes.
+//! - [`atlas`]: automatic injective per-mesh atlases (packing, coverage rule, density).
+//! - [`gpu_atlas`]: the thesis's atlas voxelizer (`atlas_positions`, `atlas_points`,
+//!   `voxelize_atlas`), selected by [`gpu::Voxelizer::Atlas`].
 //! - [`ray_mask`]: the 128×128 ray-mask LUT (thesis §4.5, Fig. 16) and single-bit LUT (§3.3).
 //! - [`traverse`]: hierarchical first hit and visibility (§4.5–§4.7), the exact DDA ground
 //!   truth, and the 1-bit / 3-bit marching baselines (§4.8).
 
+pub mod atlas;
 pub mod bench;
 pub mod bits;
 pub mod debug_view;
 pub mod gpu;
+pub mod gpu_atlas;
 pub mod gpu_rays;
 pub mod grid;
 pub mod ray_mask;

@@ -1,0 +1,37 @@
+#version 450
+// Atlas voxelization (thesis §3.3): one point per valid atlas texel, transformed by the
+// object's model matrix and the voxel camera, sets its voxel's bit. The bits go into the
+// same column buffer as voxelize_triangles (atomicOr) instead of an RGBA32UI target with
+// logicOp OR, so both voxelizers share voxel_clear / voxel_copy_static / voxel_store.
+#include "voxel_bits.glsl"
+
+layout(local_size_x = 64) in;
+
+layout(set = 0, binding = 0, std430) readonly buffer Points { vec4 points[]; };
+layout(set = 0, binding = 1, std430) buffer Columns { uint words[]; };
+
+layout(push_constant) uniform Push {
+    mat4 model;      // model → world
+    vec4 grid_min;   // world corner of the grid box (xyz)
+    vec4 scale;      // voxels per meter in the voxel-camera frame (u, v, w)
+    uvec4 dims;      // res_x, res_y, D, depth axis (0 = X, 1 = Y, 2 = Z)
+    uvec4 extent;    // column-buffer width, height; point count; unused
+} pc;
+
+void main() {
+    uint i = gl_GlobalInvocationID.y * (gl_NumWorkGroups.x * gl_WorkGroupSize.x)
+           + gl_GlobalInvocationID.x;
+    if (i >= pc.extent.z) {
+        return;
+    }
+    vec3 world = (pc.model * vec4(points[i].xyz, 1.0)).xyz;
+    vec3 d = world - pc.grid_min.xyz;
+    vec3 f = pc.dims.w == 0u ? d.yzx : (pc.dims.w == 1u ? d.zxy : d);
+    vec3 v = floor(f * pc.scale.xyz);
+    // Points outside the grid are clipped, not wrapped.
+    if (any(lessThan(v, vec3(0.0))) || any(greaterThanEqual(v, vec3(pc.dims.xyz)))) {
+        return;
+    }
+    uvec3 u = uvec3(v);
+    atomicOr(words[voxel_word_index(u.xy, u.z, pc.extent.xy)], 1u << voxel_bit(u.z));
+}

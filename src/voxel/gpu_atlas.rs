@@ -1,0 +1,538 @@
+//! The thesis's atlas voxelizer on the GPU (Thiedemann 2010, `seeds/000`, digest §3.2–§3.3)
+//! with the automatic atlases of [`super::atlas`].
+//!
+//! # Passes (named after their GLSL stems)
+//! - `atlas_positions` (graphics, once per atlas): each triangle's atlas cell is drawn as a
+//!   quad with the atlas position as clip position; the fragment shader writes the
+//!   **model-space** position of the closest triangle point for the texels the triangle owns
+//!   (conservative: thin and tiny triangles keep at least one texel).
+//! - `atlas_points` (compute, once per atlas): compacts the valid texels into a point list
+//!   (digest §3.3 step 2). Rigid objects therefore pay the rasterization once; per frame only
+//!   their points are transformed, so the cost follows the atlas size (the surface area over
+//!   the voxel size), not the triangle count.
+//! - `voxelize_atlas` (compute, per voxelization): one invocation per point transforms it by
+//!   the object's model matrix and ORs its single bit into the **column buffer** with
+//!   `atomicOr`. The thesis ORs a single-bit LUT into an `RGBA32UI` target with `logicOp OR`;
+//!   the buffer is chosen here because the triangle voxelizer already writes it, so both
+//!   voxelizers share `voxel_clear` / `voxel_copy_static` (static grid + dynamic objects),
+//!   `voxel_store` and the mip chain, and can be mixed in one frame (objects animated by OBJ
+//!   sequences, which deform, keep the triangle voxelizer).
+//!
+//! Every sample lies on its triangle, so the atlas voxels are a subset of the conservative
+//! triangle voxelization ([`super::voxelize`]) up to f32 rounding at voxel boundaries.
+
+use super::atlas::{AtlasCache, MeshAtlas};
+use super::gpu::{image_extent, run_once, GpuVoxelError, SlotGate};
+use super::VoxelGrid;
+use crate::graph::{Access, BufferHandle, RenderGraph, Shader};
+use crate::scene::{Animation, Scene};
+use crate::vk::{
+    vk, Attachment, Buffer, BufferDesc, ComputePipeline, Context, Descriptor, GraphicsPipeline,
+    GraphicsPipelineDesc, ImageDesc, MemoryLocation, VkError, MAX_FRAMES_IN_FLIGHT,
+};
+use glam::{Mat4, Vec3};
+use std::sync::{Arc, Mutex};
+
+/// Format of the position atlas (model-space xyz, w = 1 where a triangle owns the texel).
+pub const ATLAS_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
+
+/// Points per row of `voxelize_atlas` workgroups past which the dispatch gets a second
+/// dimension (65535 groups of 64).
+const MAX_POINTS_X: u32 = 65535 * 64;
+
+/// One atlas triangle as the shaders read it (`struct AtlasTriangle`, atlas_triangle.glsl).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GpuAtlasTriangle {
+    pub p: [[f32; 4]; 3],
+    pub uv01: [f32; 4],
+    pub uv2: [f32; 4],
+    pub cell: [u32; 4],
+}
+
+/// Push constants of `voxelize_atlas.comp`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GpuAtlasVoxelizePush {
+    pub model: [f32; 16],
+    pub grid_min: [f32; 4],
+    pub scale: [f32; 4],
+    pub dims: [u32; 4],
+    pub extent: [u32; 4],
+}
+
+/// The pipelines of the atlas passes.
+pub struct AtlasPipelines {
+    positions: GraphicsPipeline,
+    points: ComputePipeline,
+    voxelize: ComputePipeline,
+    sampler: vk::Sampler,
+}
+
+impl AtlasPipelines {
+    pub fn new(ctx: &Context) -> Result<Self, VkError> {
+        let storage = vk::DescriptorType::STORAGE_BUFFER;
+        let mut desc = GraphicsPipelineDesc::fullscreen(
+            "atlas_positions.vert",
+            "atlas_positions.frag",
+            ATLAS_FORMAT,
+        );
+        desc.bindings = vec![(0, storage)];
+        desc.push_constant_bytes = 16;
+        let positions = ctx.graphics_pipeline(&desc)?;
+        let points = ctx.compute_pipeline(
+            "atlas_points.comp",
+            &[
+                (0, vk::DescriptorType::COMBINED_IMAGE_SAMPLER),
+                (1, storage),
+            ],
+            0,
+            &[],
+        )?;
+        let voxelize = ctx.compute_pipeline(
+            "voxelize_atlas.comp",
+            &[(0, storage), (1, storage)],
+            std::mem::size_of::<GpuAtlasVoxelizePush>() as u32,
+            &[],
+        )?;
+        let sampler = ctx.create_sampler(vk::Filter::NEAREST, false)?;
+        Ok(Self {
+            positions,
+            points,
+            voxelize,
+            sampler,
+        })
+    }
+
+    pub fn destroy(self, ctx: &Context) {
+        ctx.destroy_graphics_pipeline(self.positions);
+        ctx.destroy_compute_pipeline(self.points);
+        ctx.destroy_compute_pipeline(self.voxelize);
+        ctx.destroy_sampler(self.sampler);
+    }
+}
+
+/// The valid texels of one atlas: model-space points (`vec4`, w = 1) in a device buffer.
+pub struct AtlasPoints {
+    pub buffer: Buffer,
+    pub count: u32,
+    /// The atlas's `(width, height)` in texels.
+    pub atlas_extent: (u32, u32),
+}
+
+impl AtlasPoints {
+    pub fn destroy(self, ctx: &Context) {
+        ctx.destroy_buffer(self.buffer);
+    }
+}
+
+/// Renders the position atlas of a mesh (`atlas_positions`) and compacts its valid texels
+/// (`atlas_points`), once.
+pub fn render_atlas_points(
+    ctx: &Context,
+    pipes: &AtlasPipelines,
+    atlas: &MeshAtlas,
+    positions: &[Vec3],
+    indices: &[u32],
+) -> Result<AtlasPoints, GpuVoxelError> {
+    let tris: Vec<GpuAtlasTriangle> = atlas
+        .triangles
+        .iter()
+        .zip(indices.chunks_exact(3))
+        .map(|(t, idx)| GpuAtlasTriangle {
+            p: [0, 1, 2].map(|k| {
+                positions
+                    .get(idx[k] as usize)
+                    .copied()
+                    .unwrap_or(Vec3::ZERO)
+                    .extend(1.0)
+                    .to_array()
+            }),
+            uv01: [t.uv[0].x, t.uv[0].y, t.uv[1].x, t.uv[1].y],
+            uv2: [t.uv[2].x, t.uv[2].y, 0.0, 0.0],
+            cell: t.cell,
+        })
+        .collect();
+    let (w, h) = (atlas.width, atlas.height);
+    let tri_buffer = ctx.upload_buffer(
+        "atlas triangles",
+        bytemuck::cast_slice(&tris),
+        vk::BufferUsageFlags::STORAGE_BUFFER,
+    )?;
+    let scratch = match ctx.create_buffer(&BufferDesc {
+        name: "atlas points (scratch)".into(),
+        size_bytes: 16 + u64::from(w) * u64::from(h) * 16,
+        usage: vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+        location: MemoryLocation::GpuToCpu,
+    }) {
+        Ok(b) => b,
+        Err(e) => {
+            ctx.destroy_buffer(tri_buffer);
+            return Err(e.into());
+        }
+    };
+    let result = (|| {
+        let mut g = RenderGraph::new();
+        let tri_h = g.import_buffer(&tri_buffer, Access::StorageRead(Shader::Graphics));
+        let out = g.import_buffer(&scratch, Access::HostRead);
+        let image = g.create_image(ImageDesc::new_2d("position atlas", ATLAS_FORMAT, w, h));
+        let n = tris.len() as u32;
+        let (pipe, size) = (pipes.positions, [w as f32, h as f32, 0.0, 0.0]);
+        g.add_pass("atlas_positions")
+            .read(tri_h, Access::StorageRead(Shader::Graphics))
+            .write(image, Access::ColorAttachment)
+            .record(move |ctx| {
+                let target = ctx.image(image);
+                let clear = vk::ClearValue {
+                    color: vk::ClearColorValue { float32: [0.0; 4] },
+                };
+                ctx.cmd.begin_rendering(
+                    target.extent_2d(),
+                    &[Attachment {
+                        view: target.view,
+                        clear: Some(clear),
+                    }],
+                    None,
+                );
+                ctx.cmd.bind(
+                    &pipe,
+                    &[Descriptor::storage_buffer(0, ctx.buffer(tri_h).raw)],
+                );
+                ctx.cmd.push_constants(&pipe, bytemuck::cast_slice(&size));
+                ctx.cmd.draw(6 * n, 1);
+                ctx.cmd.end_rendering();
+            });
+        g.add_pass("atlas_points_clear")
+            .write(out, Access::TransferWrite)
+            .record(move |ctx| ctx.cmd.fill_buffer(ctx.buffer(out).raw, 0));
+        let (pipe, sampler) = (pipes.points, pipes.sampler);
+        g.add_pass("atlas_points")
+            .read(image, Access::Sampled(Shader::Compute))
+            .write(out, Access::StorageReadWrite(Shader::Compute))
+            .record(move |ctx| {
+                ctx.cmd.bind(
+                    &pipe,
+                    &[
+                        Descriptor::SampledImage {
+                            binding: 0,
+                            view: ctx.image(image).view,
+                            sampler,
+                        },
+                        Descriptor::storage_buffer(1, ctx.buffer(out).raw),
+                    ],
+                );
+                ctx.cmd.dispatch(w.div_ceil(8), h.div_ceil(8), 1);
+            });
+        g.mark_output(out);
+        run_once(ctx, g)?;
+        let bytes = scratch.mapped().unwrap_or(&[]);
+        let count = bytes
+            .get(..4)
+            .map_or(0, |b| u32::from_ne_bytes([b[0], b[1], b[2], b[3]]))
+            .min(w.saturating_mul(h));
+        let points = bytes.get(16..16 + count as usize * 16).unwrap_or(&[]);
+        let buffer = ctx.upload_buffer(
+            "atlas points",
+            if points.is_empty() { &[0; 16] } else { points },
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+        )?;
+        Ok(AtlasPoints {
+            buffer,
+            count,
+            atlas_extent: (w, h),
+        })
+    })();
+    ctx.destroy_buffer(scratch);
+    ctx.destroy_buffer(tri_buffer);
+    result
+}
+
+/// A model matrix per frame slot, written by the host after the slot's fence.
+#[derive(Debug, Default)]
+pub struct SlotMatrices {
+    models: [Mutex<Mat4>; MAX_FRAMES_IN_FLIGHT],
+}
+
+impl SlotMatrices {
+    pub fn set(&self, slot: usize, m: Mat4) {
+        if let Some(Ok(mut g)) = self.models.get(slot).map(|m| m.lock()) {
+            *g = m;
+        }
+    }
+
+    fn get(&self, slot: usize) -> Mat4 {
+        self.models
+            .get(slot)
+            .and_then(|m| m.lock().ok().map(|g| *g))
+            .unwrap_or(Mat4::IDENTITY)
+    }
+}
+
+/// Where a `voxelize_atlas` instance takes its model matrix from.
+#[derive(Clone, Debug)]
+pub enum ModelAt {
+    Fixed(Mat4),
+    PerSlot(Arc<SlotMatrices>),
+}
+
+/// Declares `voxelize_atlas`: each `(points, model)` instance ORs its transformed points
+/// into `columns` (which `voxel_clear` or `voxel_copy_static` initialised). Records only in
+/// slots `gate` leaves open.
+pub fn add_voxelize_atlas_pass(
+    g: &mut RenderGraph,
+    pipes: &AtlasPipelines,
+    grid: &VoxelGrid,
+    columns: BufferHandle,
+    instances: &[(&AtlasPoints, ModelAt)],
+    gate: Option<Arc<SlotGate>>,
+) {
+    let sets: Vec<(BufferHandle, u32, ModelAt)> = instances
+        .iter()
+        .filter(|(p, _)| p.count > 0)
+        .map(|(p, m)| {
+            (
+                g.import_buffer(&p.buffer, Access::StorageRead(Shader::Compute)),
+                p.count,
+                m.clone(),
+            )
+        })
+        .collect();
+    if sets.is_empty() {
+        return;
+    }
+    let mut pass = g
+        .add_pass("voxelize_atlas")
+        .write(columns, Access::StorageReadWrite(Shader::Compute));
+    for (h, _, _) in &sets {
+        pass = pass.read(*h, Access::StorageRead(Shader::Compute));
+    }
+    let (pipe, grid) = (pipes.voxelize, *grid);
+    let (w, h) = image_extent(&grid);
+    pass.record(move |ctx| {
+        if !gate.as_ref().map_or(true, |g| g.is_open(ctx.slot)) {
+            return;
+        }
+        for (buf, count, model) in &sets {
+            let model = match model {
+                ModelAt::Fixed(m) => *m,
+                ModelAt::PerSlot(s) => s.get(ctx.slot),
+            };
+            let ext = grid.extent_voxels();
+            let push = GpuAtlasVoxelizePush {
+                model: model.to_cols_array(),
+                grid_min: grid.world_min().extend(0.0).to_array(),
+                scale: grid.voxels_per_meter().extend(0.0).to_array(),
+                dims: [ext.x, ext.y, ext.z, grid.axis().index() as u32],
+                extent: [w, h, *count, 0],
+            };
+            ctx.cmd.bind(
+                &pipe,
+                &[
+                    Descriptor::storage_buffer(0, ctx.buffer(*buf).raw),
+                    Descriptor::storage_buffer(1, ctx.buffer(columns).raw),
+                ],
+            );
+            ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
+            let x = (*count).min(MAX_POINTS_X);
+            ctx.cmd.dispatch(x.div_ceil(64), count.div_ceil(x), 1);
+        }
+    });
+}
+
+/// Whether the atlas voxelizer handles `object` when atlases are selected: everything but
+/// OBJ sequences, which deform (the atlas method's limit) and keep the triangle voxelizer.
+pub fn uses_atlas(object: &crate::scene::Object) -> bool {
+    !matches!(object.animation, Some(Animation::ObjSequence { .. }))
+}
+
+/// The atlas side of a scene's voxelization: one point list per distinct (mesh, scale),
+/// instanced by the objects with their model matrices.
+pub struct AtlasScene {
+    pub pipelines: AtlasPipelines,
+    points: Vec<AtlasPoints>,
+    static_instances: Vec<(usize, Mat4)>,
+    /// `(points, the object, model per slot)`.
+    dynamic_instances: Vec<(usize, crate::scene::Object, Arc<SlotMatrices>)>,
+}
+
+impl AtlasScene {
+    /// Builds (or takes from `cache`) the atlas of every object that [`uses_atlas`], renders
+    /// and compacts each once. Texels are sized for `grid`'s smallest voxel edge.
+    pub fn new(
+        ctx: &Context,
+        scene: &Scene,
+        t_s: f32,
+        grid: &VoxelGrid,
+        cache: &mut AtlasCache,
+    ) -> Result<Self, GpuVoxelError> {
+        let texel_m = super::atlas::texel_size_for_voxel(grid.voxel_size_m().min_element());
+        let mut me = Self {
+            pipelines: AtlasPipelines::new(ctx)?,
+            points: Vec::new(),
+            static_instances: Vec::new(),
+            dynamic_instances: Vec::new(),
+        };
+        let mut built: Vec<(Arc<MeshAtlas>, usize)> = Vec::new();
+        let r = (|| -> Result<(), GpuVoxelError> {
+            for o in &scene.objects {
+                if !uses_atlas(o) {
+                    continue;
+                }
+                let Some(mesh) = scene.meshes.get(o.mesh) else {
+                    continue;
+                };
+                let scale = o.transform_components_at(t_s).scale;
+                let atlas =
+                    cache.get(&mesh.name, &mesh.positions, &mesh.indices, scale, texel_m)?;
+                let pi = match built.iter().find(|(k, _)| Arc::ptr_eq(k, &atlas)) {
+                    Some(&(_, i)) => i,
+                    None => {
+                        let p = render_atlas_points(
+                            ctx,
+                            &me.pipelines,
+                            &atlas,
+                            &mesh.positions,
+                            &mesh.indices,
+                        )?;
+                        me.points.push(p);
+                        built.push((atlas.clone(), me.points.len() - 1));
+                        me.points.len() - 1
+                    }
+                };
+                if o.dynamic || o.is_animated() {
+                    let m = Arc::new(SlotMatrices::default());
+                    for s in 0..MAX_FRAMES_IN_FLIGHT {
+                        m.set(s, o.transform_at(t_s));
+                    }
+                    me.dynamic_instances.push((pi, o.clone(), m));
+                } else {
+                    me.static_instances.push((pi, o.transform_at(t_s)));
+                }
+            }
+            Ok(())
+        })();
+        if let Err(e) = r {
+            me.destroy(ctx);
+            return Err(e);
+        }
+        Ok(me)
+    }
+
+    pub fn has_static(&self) -> bool {
+        !self.static_instances.is_empty()
+    }
+
+    pub fn has_dynamic(&self) -> bool {
+        !self.dynamic_instances.is_empty()
+    }
+
+    /// Total points splatted per full voxelization (static and dynamic instances).
+    pub fn point_count(&self) -> u64 {
+        self.static_instances
+            .iter()
+            .map(|&(p, _)| p)
+            .chain(self.dynamic_instances.iter().map(|(p, _, _)| *p))
+            .map(|p| u64::from(self.points[p].count))
+            .sum()
+    }
+
+    /// The dynamic objects' model matrices at `t_s`.
+    pub fn models_at(&self, t_s: f32) -> Vec<Mat4> {
+        self.dynamic_instances
+            .iter()
+            .map(|(_, o, _)| o.transform_at(t_s))
+            .collect()
+    }
+
+    /// Writes the dynamic objects' model matrices for frame slot `slot` (after its fence).
+    pub fn write_models(&self, slot: usize, models: &[Mat4]) {
+        for ((_, _, m), &model) in self.dynamic_instances.iter().zip(models) {
+            m.set(slot, model);
+        }
+    }
+
+    /// Declares `voxelize_atlas` for the static objects, the dynamic ones, or both.
+    pub fn add_pass(
+        &self,
+        g: &mut RenderGraph,
+        grid: &VoxelGrid,
+        columns: BufferHandle,
+        statics: bool,
+        dynamics: bool,
+        gate: Option<Arc<SlotGate>>,
+    ) {
+        let mut inst: Vec<(&AtlasPoints, ModelAt)> = Vec::new();
+        if statics {
+            inst.extend(
+                self.static_instances
+                    .iter()
+                    .map(|&(p, m)| (&self.points[p], ModelAt::Fixed(m))),
+            );
+        }
+        if dynamics {
+            inst.extend(
+                self.dynamic_instances
+                    .iter()
+                    .map(|(p, _, m)| (&self.points[*p], ModelAt::PerSlot(m.clone()))),
+            );
+        }
+        add_voxelize_atlas_pass(g, &self.pipelines, grid, columns, &inst, gate);
+    }
+
+    pub fn destroy(self, ctx: &Context) {
+        for p in self.points {
+            p.destroy(ctx);
+        }
+        self.pipelines.destroy(ctx);
+    }
+}
+
+/// Voxelizes the static atlas instances once into a persistent column buffer (resting state
+/// `TransferRead`), like [`super::gpu::voxelize_static`] for triangles.
+pub fn voxelize_static_atlas(
+    ctx: &Context,
+    atlas: &AtlasScene,
+    tri_pipes: &super::gpu::VoxelPipelines,
+    grid: &VoxelGrid,
+    triangles: &super::gpu::TriangleBuffer,
+) -> Result<Buffer, GpuVoxelError> {
+    let columns = ctx.create_buffer(&BufferDesc {
+        name: "voxel static columns".into(),
+        size_bytes: super::gpu::column_bytes(grid),
+        usage: vk::BufferUsageFlags::STORAGE_BUFFER
+            | vk::BufferUsageFlags::TRANSFER_SRC
+            | vk::BufferUsageFlags::TRANSFER_DST,
+        location: MemoryLocation::GpuOnly,
+    })?;
+    let mut g = RenderGraph::new();
+    let h = g.import_buffer(&columns, Access::TransferRead);
+    super::gpu::add_voxelize_passes(
+        &mut g,
+        tri_pipes,
+        grid,
+        h,
+        super::gpu::ColumnBase::Clear,
+        &[triangles],
+    );
+    atlas.add_pass(&mut g, grid, h, true, false, None);
+    if let Err(e) = run_once(ctx, g) {
+        ctx.destroy_buffer(columns);
+        return Err(e);
+    }
+    Ok(columns)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn gpu_struct_layouts_match_glsl() {
+        assert_eq!(std::mem::size_of::<GpuAtlasTriangle>(), 96);
+        assert_eq!(std::mem::offset_of!(GpuAtlasTriangle, uv01), 48);
+        assert_eq!(std::mem::offset_of!(GpuAtlasTriangle, cell), 80);
+        assert_eq!(std::mem::size_of::<GpuAtlasVoxelizePush>(), 128);
+        assert_eq!(std::mem::offset_of!(GpuAtlasVoxelizePush, grid_min), 64);
+        assert_eq!(std::mem::offset_of!(GpuAtlasVoxelizePush, extent), 112);
+    }
+}

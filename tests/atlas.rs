@@ -1,0 +1,319 @@
+//! The atlas voxelizer (automatic atlases, `atlas_positions` → `atlas_points` →
+//! `voxelize_atlas`) against the exact CPU triangle voxelizer on the Cornell box and the
+//! bunny scene. Validation is on; any message fails.
+//!
+//! # What is asserted, and why
+//! - **Precision** (atlas voxels that the CPU sets): every atlas sample is a point of a
+//!   triangle, so its voxel touches the triangle and lies in the conservative CPU set; only
+//!   f32 rounding of a sample that lies exactly on a voxel face can move it into the
+//!   neighbour. Asserted: every atlas voxel is in the CPU set dilated by one voxel (3×3×3),
+//!   and the undilated precision is ≥ 0.999.
+//! - **Recall** (CPU voxels the atlas sets): point samples cannot reach voxels the surface
+//!   only grazes (the reference counts touching boxes, `voxelize.rs`). With texels of half a
+//!   voxel (`atlas::texel_size_for_voxel`, ε ≈ 0.35 voxel) the measured recall is
+//!   0.985–0.992 (Cornell 128³ 0.9852, 256²×128 0.9907, 256²×256 0.9858; bunny 128³ 0.9899,
+//!   256²×128 0.9916; printed
+//!   by the tests). Asserted: issue 4's bound [`MIN_RECALL`] = 0.97.
+
+mod common;
+
+use glam::Vec3;
+use std::path::Path;
+use voxgi::graph::{Access, RenderGraph};
+use voxgi::vk::Context;
+use voxgi::voxel::atlas::AtlasCache;
+use voxgi::voxel::gpu::{
+    add_voxelize_passes, column_bytes, image_extent, readback_buffer, run_once, scene_triangles,
+    ColumnBase, VoxelPipelines,
+};
+use voxgi::voxel::gpu_atlas::AtlasScene;
+use voxgi::voxel::voxelize::voxelize_triangles;
+use voxgi::voxel::{BitGrid, GridDesc, VoxelGrid};
+
+/// Lower bound on recall against the conservative CPU set (see the module doc).
+const MIN_RECALL: f64 = 0.97;
+
+fn scene(path: &str) -> voxgi::scene::Scene {
+    if path == "cornell" {
+        return voxgi::scene::load_scene_arg(None).expect("built-in cornell");
+    }
+    voxgi::scene::Scene::load(Path::new(env!("CARGO_MANIFEST_DIR")).join(path))
+        .expect("scene loads")
+}
+
+/// The atlas voxelization of `s` at time 0, read back from the column buffer.
+fn atlas_bits(ctx: &Context, grid: &VoxelGrid, s: &voxgi::scene::Scene) -> (BitGrid, u64) {
+    let tri_pipes = VoxelPipelines::new(ctx).expect("voxel pipelines");
+    let mut cache = AtlasCache::default();
+    let atlas = AtlasScene::new(ctx, s, 0.0, grid, &mut cache).expect("atlas scene");
+    let size = column_bytes(grid);
+    let readback = readback_buffer(ctx, "atlas voxels readback", size).expect("readback");
+    let mut g = RenderGraph::new();
+    let columns = g.create_buffer("voxel column buffer", size);
+    add_voxelize_passes(&mut g, &tri_pipes, grid, columns, ColumnBase::Clear, &[]);
+    atlas.add_pass(&mut g, grid, columns, true, true, None);
+    let out = g.import_buffer(&readback, Access::HostRead);
+    g.add_pass("atlas_readback")
+        .read(columns, Access::TransferRead)
+        .write(out, Access::TransferWrite)
+        .record(move |ctx| {
+            ctx.cmd
+                .copy_buffer(ctx.buffer(columns).raw, ctx.buffer(out).raw, size)
+        });
+    let timings = run_once(ctx, g).expect("atlas graph runs");
+    assert!(timings.iter().any(|t| t.name == "voxelize_atlas"));
+    let (w, h) = image_extent(grid);
+    let full = BitGrid::from_gpu_bytes(
+        w,
+        h,
+        grid.layers(),
+        &readback.mapped().expect("host-visible")[..size as usize],
+    )
+    .expect("read-back size");
+    let mut bits = BitGrid::for_grid(grid);
+    for layer in 0..grid.layers() {
+        for y in 0..grid.res_y() {
+            for x in 0..grid.res_x() {
+                *bits.column_mut(x, y, layer) = full.column(x, y, layer);
+            }
+        }
+    }
+    let points = atlas.point_count();
+    ctx.destroy_buffer(readback);
+    atlas.destroy(ctx);
+    tri_pipes.destroy(ctx);
+    (bits, points)
+}
+
+/// `(recall, precision, precision against the CPU set dilated by one voxel)`.
+fn compare(cpu: &BitGrid, gpu: &BitGrid) -> (f64, f64, f64) {
+    let (rx, ry, d) = (cpu.res_x(), cpu.res_y(), cpu.depth());
+    let (mut both, mut near) = (0u64, 0u64);
+    for k in 0..d {
+        for y in 0..ry {
+            for x in 0..rx {
+                if !gpu.get(x, y, k) {
+                    continue;
+                }
+                if cpu.get(x, y, k) {
+                    both += 1;
+                    near += 1;
+                    continue;
+                }
+                let mut found = false;
+                for (dx, dy, dk) in itertools_product() {
+                    let (nx, ny, nk) = (x as i64 + dx, y as i64 + dy, k as i64 + dk);
+                    if nx >= 0
+                        && ny >= 0
+                        && nk >= 0
+                        && cpu.contains(nx as u32, ny as u32, nk as u32)
+                        && cpu.get(nx as u32, ny as u32, nk as u32)
+                    {
+                        found = true;
+                    }
+                }
+                near += u64::from(found);
+            }
+        }
+    }
+    let n_gpu = gpu.count_ones().max(1) as f64;
+    (
+        both as f64 / cpu.count_ones().max(1) as f64,
+        both as f64 / n_gpu,
+        near as f64 / n_gpu,
+    )
+}
+
+fn itertools_product() -> impl Iterator<Item = (i64, i64, i64)> {
+    (-1..=1).flat_map(|a| (-1..=1).flat_map(move |b| (-1..=1).map(move |c| (a, b, c))))
+}
+
+/// Near-cubic voxels, at most `max_res_xy` columns a side.
+fn check(name: &str, max_res_xy: u32, layers: u32) {
+    let aabb = scene(name).aabb_at(0.0);
+    let desc = GridDesc {
+        layers,
+        max_res_xy,
+        ..Default::default()
+    };
+    check_grid(
+        name,
+        &VoxelGrid::around(aabb.min, aabb.max, &desc).expect("grid"),
+    );
+}
+
+/// `res`² columns of 128 voxels (flat voxels), as in the issue's 256²×128.
+fn check_flat(name: &str, res: u32) {
+    let aabb = scene(name).aabb_at(0.0);
+    let pad = Vec3::splat(0.01 * aabb.extent().max_element());
+    let grid =
+        VoxelGrid::from_box(aabb.min - pad, aabb.max + pad, None, res, res, 1).expect("grid");
+    check_grid(name, &grid);
+}
+
+fn check_grid(name: &str, grid: &VoxelGrid) {
+    let ctx = common::context();
+    let s = scene(name);
+    let grid = *grid;
+    let mut tris: Vec<[Vec3; 3]> = scene_triangles(&s, 0.0, false);
+    tris.extend(scene_triangles(&s, 0.0, true));
+    let mut cpu = BitGrid::for_grid(&grid);
+    voxelize_triangles(&grid, &mut cpu, &tris).expect("cpu voxelization");
+    let (gpu, points) = atlas_bits(&ctx, &grid, &s);
+    let (recall, precision, near) = compare(&cpu, &gpu);
+    println!(
+        "{name} {}x{}x{}: {} triangles, {points} points, cpu {} voxels, atlas {} voxels, \
+         recall {recall:.4}, precision {precision:.5}, precision (dilated) {near:.5}",
+        grid.res_x(),
+        grid.res_y(),
+        grid.depth(),
+        tris.len(),
+        cpu.count_ones(),
+        gpu.count_ones(),
+    );
+    assert_eq!(
+        near, 1.0,
+        "an atlas voxel is farther than one voxel from the surface"
+    );
+    assert!(precision >= 0.999, "precision {precision}");
+    assert!(recall >= MIN_RECALL, "recall {recall} < {MIN_RECALL}");
+    common::assert_no_validation_messages(&ctx);
+}
+
+#[test]
+fn cornell_box_atlas_vs_cpu_128() {
+    check("cornell", 128, 1);
+}
+
+#[test]
+fn bunny_scene_atlas_vs_cpu_128() {
+    check("assets/scenes/cornell_bunny.toml", 128, 1);
+}
+
+#[test]
+fn cornell_box_atlas_vs_cpu_256x256x128() {
+    check_flat("cornell", 256);
+}
+
+#[test]
+fn cornell_box_atlas_vs_cpu_256_two_layers() {
+    check("cornell", 256, 2);
+}
+
+#[test]
+fn bunny_scene_atlas_vs_cpu_256x256x128() {
+    check_flat("assets/scenes/cornell_bunny.toml", 256);
+}
+
+/// Static Cornell walls and a keyframed cube that moves and turns (as in voxel_dynamic.rs).
+fn animated_scene() -> voxgi::scene::Scene {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes");
+    voxgi::scene::Scene::from_toml_str(
+        r#"
+[camera]
+position = [0.278, 0.273, -0.800]
+target = [0.278, 0.273, 0.0]
+up = [0.0, 1.0, 0.0]
+fov_y_deg = 39.3
+near = 0.01
+far = 10.0
+
+[[objects]]
+name = "walls"
+builtin = "cornell_walls"
+
+[[objects]]
+name = "mover"
+builtin = "cube"
+scale = 0.12
+
+[objects.animation]
+loop = false
+
+[[objects.animation.keyframes]]
+time_s = 0.0
+translate = [0.2, 0.15, 0.2]
+rotate_deg = [0.0, 0.0, 0.0]
+
+[[objects.animation.keyframes]]
+time_s = 1.0
+translate = [0.45, 0.35, 0.4]
+rotate_deg = [30.0, 45.0, 10.0]
+"#,
+        Path::new("<animated test scene>"),
+        &dir,
+    )
+    .expect("test scene parses")
+}
+
+/// The renderer's `VoxelFrame` with `--voxelizer atlas`: static walls voxelized once, the
+/// rigid mover's atlas points transformed per frame; each frame's mip 0 against the CPU.
+#[test]
+fn voxel_frame_atlas_follows_a_moving_object() {
+    use voxgi::voxel::gpu::{VoxelFrame, VoxelSettings, Voxelizer};
+    let ctx = common::context();
+    let s = animated_scene();
+    let settings = VoxelSettings {
+        voxelizer: Voxelizer::Atlas,
+        ..Default::default()
+    };
+    let mut frame = VoxelFrame::new(&ctx, &s, 0.0, &settings).expect("voxel frame");
+    assert!(frame.has_frame_passes());
+    let grid = frame.voxels.grid;
+    let (w, h) = image_extent(&grid);
+    let size = column_bytes(&grid);
+    let readback = readback_buffer(&ctx, "voxel readback", size).expect("readback");
+    for t in [0.0, 0.5, 1.0] {
+        assert!(frame.update(t, 0).expect("update"), "the mover moved");
+        let mut g = RenderGraph::new();
+        let image = frame.add_passes(&mut g);
+        let out = g.import_buffer(&readback, Access::HostRead);
+        g.add_pass("voxel_readback")
+            .read(image, Access::TransferRead)
+            .write(out, Access::TransferWrite)
+            .record(move |ctx| {
+                let extent = voxgi::vk::vk::Extent3D {
+                    width: w,
+                    height: h,
+                    depth: 1,
+                };
+                ctx.cmd.copy_image_to_buffer(
+                    ctx.image(image).raw,
+                    extent,
+                    0,
+                    1,
+                    ctx.buffer(out).raw,
+                )
+            });
+        let timings = run_once(&ctx, g).expect("frame runs");
+        let names: Vec<_> = timings.iter().map(|t| t.name.as_str()).collect();
+        assert!(names.contains(&"voxel_copy_static"), "{names:?}");
+        assert!(names.contains(&"voxelize_atlas"), "{names:?}");
+        assert!(!names.contains(&"voxelize_triangles"), "{names:?}");
+        let full = BitGrid::from_gpu_bytes(
+            w,
+            h,
+            1,
+            &readback.mapped().expect("mapped")[..size as usize],
+        )
+        .expect("size");
+        let mut gpu = BitGrid::for_grid(&grid);
+        for y in 0..grid.res_y() {
+            for x in 0..grid.res_x() {
+                *gpu.column_mut(x, y, 0) = full.column(x, y, 0);
+            }
+        }
+        let mut cpu = BitGrid::for_grid(&grid);
+        voxgi::voxel::voxelize_scene(&grid, &mut cpu, &s, t).expect("cpu");
+        let (recall, precision, near) = compare(&cpu, &gpu);
+        println!("t = {t}: recall {recall:.4}, precision {precision:.5}");
+        assert_eq!(near, 1.0);
+        assert!(recall >= MIN_RECALL, "t = {t}: recall {recall}");
+    }
+    // Nothing moves after t = 1: no re-voxelization.
+    assert!(!frame.update(1.0, 0).expect("update"));
+    assert!(!frame.update(2.0, 0).expect("update"));
+    ctx.destroy_buffer(readback);
+    frame.destroy(&ctx);
+    common::assert_no_validation_messages(&ctx);
+}
