@@ -4,7 +4,10 @@
 
 use crate::graph::{Access, BufferHandle, ImageHandle, RenderGraph, Shader};
 use crate::scene::Scene;
-use crate::vk::{vk, Buffer, ComputePipeline, Context, Descriptor, Image, ImageDesc, VkError};
+use crate::vk::{
+    vk, Buffer, BufferDesc, ComputePipeline, Context, Descriptor, Image, ImageDesc, MemoryLocation,
+    VkError, MAX_FRAMES_IN_FLIGHT,
+};
 use crate::voxel::gpu::GpuVoxelizePush;
 use crate::voxel::ray_mask::RayMaskLut;
 use crate::voxel::VoxelGrid;
@@ -269,6 +272,18 @@ impl GiPasses {
         })
     }
 
+    /// Prepares frame slot `slot` for scene time `t_s` (after the slot's fence): rewrites the
+    /// attribute volumes and restarts accumulation when moving objects moved.
+    pub fn update_dynamic(&mut self, t_s: f32, slot: usize) {
+        if self
+            .pathtracer
+            .as_mut()
+            .is_some_and(|pt| pt.update(t_s, slot))
+        {
+            self.reset();
+        }
+    }
+
     /// Counts a new frame (call before recording it): the path tracer accumulates into it.
     pub fn advance(&self) {
         self.frames.fetch_add(1, Ordering::SeqCst);
@@ -493,6 +508,19 @@ struct PathTracer {
     history: Image,
     /// The volumes hold the static scene once written.
     volumes_written: Arc<AtomicBool>,
+    /// Scenes with moving objects: triangles per frame slot, rewritten when they change.
+    animated: Option<AnimatedTriangles>,
+}
+
+/// The attribute triangles of a scene with moving objects: one region of the host-visible
+/// triangle buffer per frame slot, written after the slot's fence (see `Renderer::write_frame`).
+struct AnimatedTriangles {
+    scene: Scene,
+    capacity: usize,
+    last: Option<Vec<[[f32; 4]; 3]>>,
+    /// Per slot: the region changed and the volumes must be rewritten in that slot's frame.
+    dirty: Arc<[AtomicBool; MAX_FRAMES_IN_FLIGHT]>,
+    counts: Arc<[AtomicU32; MAX_FRAMES_IN_FLIGHT]>,
 }
 
 /// The direct-radiance volume (rgba16f, congruent with the bits) and its passes.
@@ -552,11 +580,39 @@ impl PathTracer {
         } else {
             bytemuck::cast_slice(&tris)
         };
-        let triangles = ctx.upload_buffer(
-            "attribute triangles",
-            bytes,
-            vk::BufferUsageFlags::STORAGE_BUFFER,
-        )?;
+        let (triangles, animated) = if scene.has_animation() {
+            // Headroom for OBJ sequences whose frames differ in triangle count.
+            let capacity = (tris.len() * 2).max(1);
+            let region = (capacity * std::mem::size_of::<[[f32; 4]; 3]>()) as u64;
+            let mut buffer = ctx.create_buffer(&BufferDesc {
+                name: "attribute triangles (per frame slot)".into(),
+                size_bytes: region * MAX_FRAMES_IN_FLIGHT as u64,
+                usage: vk::BufferUsageFlags::STORAGE_BUFFER,
+                location: MemoryLocation::CpuToGpu,
+            })?;
+            if let Some(m) = buffer.mapped_mut() {
+                for slot in 0..MAX_FRAMES_IN_FLIGHT {
+                    let at = slot * region as usize;
+                    m[at..at + bytes.len()].copy_from_slice(bytes);
+                }
+            }
+            let count = tris.len() as u32;
+            let animated = AnimatedTriangles {
+                scene: scene.clone(),
+                capacity,
+                last: Some(tris.clone()),
+                dirty: Arc::new(std::array::from_fn(|_| AtomicBool::new(false))),
+                counts: Arc::new(std::array::from_fn(|_| AtomicU32::new(count))),
+            };
+            (buffer, Some(animated))
+        } else {
+            let buffer = ctx.upload_buffer(
+                "attribute triangles",
+                bytes,
+                vk::BufferUsageFlags::STORAGE_BUFFER,
+            )?;
+            (buffer, None)
+        };
         let ext = grid.extent_voxels();
         let usage = vk::ImageUsageFlags::STORAGE
             | vk::ImageUsageFlags::SAMPLED
@@ -601,7 +657,37 @@ impl PathTracer {
             normal,
             history,
             volumes_written: Arc::new(AtomicBool::new(false)),
+            animated,
         })
+    }
+
+    /// For scenes with moving objects: writes frame slot `slot`'s triangles at `t_s` when they
+    /// changed, so that frame rewrites the volumes. Returns whether they changed.
+    fn update(&mut self, t_s: f32, slot: usize) -> bool {
+        let Some(a) = &mut self.animated else {
+            return false;
+        };
+        let tris = attribute_triangles(&a.scene, t_s);
+        if a.last.as_ref() == Some(&tris) {
+            return false;
+        }
+        let n = tris.len().min(a.capacity);
+        if n < tris.len() {
+            log::warn!(
+                "{} attribute triangles exceed the buffer's {}; extra ones are dropped",
+                tris.len(),
+                a.capacity
+            );
+        }
+        let region = a.capacity * std::mem::size_of::<[[f32; 4]; 3]>();
+        if let Some(m) = self.triangles.mapped_mut() {
+            let bytes: &[u8] = bytemuck::cast_slice(&tris[..n]);
+            m[slot * region..slot * region + bytes.len()].copy_from_slice(bytes);
+        }
+        a.counts[slot % MAX_FRAMES_IN_FLIGHT].store(n as u32, Ordering::SeqCst);
+        a.dirty[slot % MAX_FRAMES_IN_FLIGHT].store(true, Ordering::SeqCst);
+        a.last = Some(tris);
+        true
     }
 
     fn add_passes(
@@ -619,19 +705,44 @@ impl PathTracer {
         let tris = g.import_buffer(&self.triangles, Access::StorageRead(Shader::Compute));
         let (pipe, count, vpush) = (self.attributes, self.triangle_count, self.voxelize_push);
         let written = self.volumes_written.clone();
-        // Static geometry: the first frame writes the volumes, later frames keep them.
+        let per_slot = self.animated.as_ref().map(|a| {
+            let region = (a.capacity * std::mem::size_of::<[[f32; 4]; 3]>()) as u64;
+            (region, a.dirty.clone(), a.counts.clone())
+        });
+        // The first frame writes the volumes; later frames keep them until something moves.
         g.add_pass("voxelize_attributes")
             .read(tris, Access::StorageRead(Shader::Compute))
             .write(albedo, Access::StorageWrite(Shader::Compute))
             .write(normal, Access::StorageWrite(Shader::Compute))
             .record(move |ctx| {
-                if written.swap(true, Ordering::SeqCst) || count == 0 {
+                let first = !written.swap(true, Ordering::SeqCst);
+                let slot = ctx.slot % MAX_FRAMES_IN_FLIGHT;
+                let (triangles, count) = match &per_slot {
+                    Some((region, dirty, counts)) => {
+                        let moved = dirty[slot].swap(false, Ordering::SeqCst);
+                        if !(first || moved) {
+                            return;
+                        }
+                        let d = Descriptor::StorageBuffer {
+                            binding: 0,
+                            buffer: ctx.buffer(tris).raw,
+                            offset: slot as u64 * region,
+                            range: *region,
+                        };
+                        (d, counts[slot].load(Ordering::SeqCst))
+                    }
+                    None if first => (Descriptor::storage_buffer(0, ctx.buffer(tris).raw), count),
+                    None => return,
+                };
+                if count == 0 {
                     return;
                 }
+                let mut vpush = vpush;
+                vpush.extent[2] = count;
                 ctx.cmd.bind(
                     &pipe,
                     &[
-                        Descriptor::storage_buffer(0, ctx.buffer(tris).raw),
+                        triangles,
                         Descriptor::StorageImage {
                             binding: 1,
                             view: ctx.image(albedo).view,

@@ -421,7 +421,8 @@ impl Renderer {
     /// Writes the frame constants of frame slot `slot` (call after the slot's fence), and the
     /// dynamic objects' voxels at `settings.time_s`.
     pub fn write_frame(&mut self, slot: usize) {
-        if let Some((gi, _)) = &self.gi {
+        if let Some((gi, _)) = &mut self.gi {
+            gi.update_dynamic(self.settings.time_s, slot);
             gi.advance();
         }
         if let Some(v) = &mut self.voxels {
