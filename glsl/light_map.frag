@@ -1,7 +1,8 @@
 #version 450
 // Reflective light maps: what the light sees is directly lit by it, so each texel stores the
 // radiance leaving that surface (Lambert: rho/pi * E, E = I cos / d^2 with Mitsuba's spot
-// falloff), its world position and its normal, for lookups at voxel ray hits (§6.1).
+// falloff; the diffuse part), its world position and material and its normal, for lookups at
+// voxel ray hits (§6.1).
 #include "frame.glsl"
 
 layout(set = 0, binding = 0, std430) readonly buffer FrameBuf { GpuFrame frame; };
@@ -46,6 +47,8 @@ void main() {
     }
     GpuMaterial m = materials[pc.material];
     out_radiance = vec4(m.albedo.rgb / PI * e, 1.0);
-    out_position = vec4(in_world, 1.0);
+    // w: material index + 1 (0 marks texels the light sees nothing in), so lookups can
+    // evaluate a glossy sender's lobe toward the ray (§6.1).
+    out_position = vec4(in_world, float(pc.material + 1u));
     out_normal = vec4(n, 0.0);
 }

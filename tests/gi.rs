@@ -357,3 +357,73 @@ keyframes = [ { time_s = 0.0, translate = [-0.8, 0.25, 0.0] }, { time_s = 1.0, t
     );
     common::assert_no_validation_messages(&ctx);
 }
+
+#[test]
+fn glossy_senders_reflect_light_onto_receivers() {
+    // A black floor lit at 45 degrees reflects nothing diffusely; with rho_s = 0.5 it throws a
+    // specular reflection onto the white wall ahead: the mirror image of a directional light
+    // of irradiance rho_s (n+2)/(n+1) E_floor, arriving at 45 degrees, i.e. a wall radiance of
+    // about 0.8/pi * 0.5 * (E cos45) * cos45 = 0.2 for E = pi (less for a broad lobe). The
+    // matte black floor must add nothing.
+    let scene_with = |specular: f32| {
+        let toml = format!(
+            r#"
+[camera]
+position = [0.0, 0.6, -1.0]
+target = [0.0, 0.8, 1.0]
+fov_y_deg = 30.0
+near = 0.01
+far = 20.0
+[[lights]]
+kind = "directional"
+direction = [0.0, -0.70710678, 0.70710678]
+irradiance_w_m2 = 3.14159265
+[[objects]]
+builtin = "quad"
+scale = [4.0, 1.0, 4.0]
+material = {{ albedo = [0.0, 0.0, 0.0], specular = [{specular}, {specular}, {specular}], shininess = 50.0 }}
+[[objects]]
+builtin = "quad"
+rotate_deg = [-90.0, 0.0, 0.0]
+translate = [0.0, 1.5, 1.0]
+scale = [4.0, 1.0, 4.0]
+material = {{ albedo = [0.8, 0.8, 0.8] }}
+"#
+        );
+        voxgi::scene::Scene::from_toml_str(&toml, Path::new("<glossy sender>"), Path::new(ROOT))
+            .expect("parses")
+    };
+    let ctx = common::context();
+    let wall = |specular: f32, gi: GiSettings| {
+        let settings = RenderSettings {
+            width: 64,
+            height: 64,
+            gi,
+            ..Default::default()
+        };
+        let out = render_image(&ctx, &scene_with(specular), &settings).expect("renders");
+        glam::Vec3::from(out.hdr.data[32 * 64 + 32]).x
+    };
+    let gi = GiSettings {
+        method: GiMethod::Hemisphere,
+        rays: 128,
+        ..Default::default()
+    };
+    let direct = wall(0.5, GiSettings::default());
+    let glossy = wall(0.5, gi) - direct;
+    let matte = wall(0.0, gi) - direct;
+    println!("wall: direct {direct:.4}, indirect from a glossy floor {glossy:.4}, from a matte black floor {matte:.4}");
+    assert!(
+        (direct - 0.8 * 0.70710678).abs() < 0.01,
+        "direct light on the wall: {direct}"
+    );
+    assert!(
+        (0.1..0.3).contains(&glossy),
+        "glossy floor's reflection on the wall: {glossy}"
+    );
+    assert!(
+        matte.abs() < 0.01,
+        "a matte black floor reflects nothing: {matte}"
+    );
+    common::assert_no_validation_messages(&ctx);
+}

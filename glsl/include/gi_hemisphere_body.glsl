@@ -24,6 +24,8 @@ layout(set = 0, binding = 6) uniform sampler3D normal_volume;
 layout(set = 0, binding = 5) uniform sampler2DArray rlm_radiance;
 layout(set = 0, binding = 6) uniform sampler2DArray rlm_position;
 layout(set = 0, binding = 7) uniform sampler2DArray rlm_normal;
+struct GpuMaterial { vec4 albedo; vec4 specular; uvec4 flags; };
+layout(set = 0, binding = 11, std430) readonly buffer Materials { GpuMaterial materials[]; };
 #endif
 layout(set = 0, binding = 8, rgba32f) uniform writeonly image2D irradiance;
 layout(set = 0, binding = 9) uniform sampler2D gb_specular;   // albedo when !HAS_PHONG
@@ -68,14 +70,36 @@ vec3 light_map_radiance(vec3 hit, vec3 dir) {
         vec4 pos = texelFetch(rlm_position, ivec3(q, int(v)), 0);
         if (pos.w == 0.0) continue;  // the light sees nothing there
         vec3 n = texelFetch(rlm_normal, ivec3(q, int(v)), 0).xyz;
-        // Tolerance: the hit lies on the boundary of the hit voxel (up to a diagonal from the
-        // surface), plus the light-map texel's footprint at that distance.
+        // Direction from the stored surface point to the light.
+        vec3 wl = l.info.x == LIGHT_DIRECTIONAL ? -l.direction.xyz : normalize(l.position.xyz - pos.xyz);
+        float cos_l = max(dot(n, wl), 0.0);
+        // Tolerance (§6.1): the hit lies on the boundary of the hit voxel (up to a diagonal
+        // from the surface) plus the light-map texel's footprint on a surface at this slope,
+        // clamped so grazing texels do not accept far points.
         float dist = sv.params.y > 0.5 ? 1.0 : c.w;
         float texel_m = sv.params.x * gi.params2.x * dist;
-        float tol = gi.params.z * gi.params.w + 2.0 * texel_m;
+        float footprint = min(texel_m / max(cos_l, 0.05), 8.0 * gi.params.w);
+        float tol = gi.params.z * gi.params.w + 2.0 * footprint;
         if (distance(pos.xyz, hit) > tol) continue;
         if (dot(n, -dir) <= 0.0) continue;  // the ray reached the back of that surface
-        sum += texelFetch(rlm_radiance, ivec3(q, int(v)), 0).rgb;
+        vec3 radiance = texelFetch(rlm_radiance, ivec3(q, int(v)), 0).rgb;
+        // Glossy senders: their Phong lobe toward the ray, from the irradiance the light puts
+        // there (E = I cos / d^2 with the spot falloff, or E_perp cos), recomputed from the
+        // stored position and normal; the map itself holds only the diffuse part.
+        GpuMaterial m = materials[max(uint(pos.w + 0.5), 1u) - 1u];
+        if (m.specular.a > 0.0 && any(greaterThan(m.specular.rgb, vec3(0.0)))) {
+            vec3 e;
+            if (l.info.x == LIGHT_DIRECTIONAL) {
+                e = l.intensity.rgb * cos_l;
+            } else {
+                vec3 d = l.position.xyz - pos.xyz;
+                float falloff = l.info.x == LIGHT_SPOT ? spot_falloff(l, dot(-wl, l.direction.xyz)) : 1.0;
+                e = l.intensity.rgb * (falloff * cos_l / max(dot(d, d), 1e-30));
+            }
+            float ca = max(dot(reflect(-wl, n), -dir), 0.0);
+            radiance += m.specular.rgb * (m.specular.a + 2.0) / (2.0 * PI) * pow(ca, m.specular.a) * e;
+        }
+        sum += radiance;
     }
     return sum;
 }

@@ -131,6 +131,8 @@ pub struct GiInputs {
     pub shadow_map: ImageHandle,
     /// The G-buffer's specular image, present when the scene has Phong materials.
     pub specular: Option<ImageHandle>,
+    /// The scene's materials (`GpuMaterial`), for glossy senders in the light maps.
+    pub materials: vk::Buffer,
     pub width: u32,
     pub height: u32,
 }
@@ -198,6 +200,7 @@ impl GiPasses {
                 (8, i),
                 (9, s),
                 (10, s),
+                (11, b),
             ],
             push,
             &[(0, u32::from(has_phong))],
@@ -366,6 +369,7 @@ impl GiPasses {
                     },
                     sampled(9, i.specular.unwrap_or(i.albedo)),
                     sampled(10, i.albedo),
+                    Descriptor::storage_buffer(11, i.materials),
                 ],
             );
             ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));

@@ -790,6 +790,7 @@ impl Renderer {
                         rlm_normal,
                         shadow_map,
                         specular,
+                        materials: mb,
                         width: w,
                         height: h,
                     },
