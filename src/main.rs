@@ -97,6 +97,9 @@ enum Command {
         tonemap: ToneOperator,
         #[arg(long, default_value_t = 1.0)]
         exposure: f32,
+        /// Start with a voxel debug view instead of the lit image (the panel switches views).
+        #[arg(long, value_enum)]
+        debug: Option<voxgi::voxel::debug_view::DebugView>,
         /// Scripted run (tests): exit after N presented frames, writing --screenshot.
         #[arg(long)]
         frames: Option<u64>,
@@ -444,9 +447,14 @@ fn run(cli: Cli) -> Result<()> {
             restore_after,
             screenshot,
             gi,
+            debug,
         } => {
             let scene = load_scene_arg(scene.as_deref())?;
             let mut settings = RenderSettings::default();
+            settings.debug = debug.map(|view| voxgi::voxel::debug_view::DebugSettings {
+                view,
+                ..Default::default()
+            });
             settings.tonemap.operator = tonemap;
             settings.tonemap.exposure = exposure;
             settings.gi = gi.settings(&scene);

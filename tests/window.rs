@@ -267,6 +267,34 @@ fn viewer_renders_a_scene_with_gi_table_and_gi_flags_without_validation_messages
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+#[test]
+fn viewer_shows_a_voxel_debug_view_without_validation_messages() {
+    require_display();
+    let _display = lock_display();
+    let dir = scratch_dir("window-debug");
+    let shot = dir.join("voxels.png");
+    let out = voxgi_with(
+        &[
+            "--validate",
+            "view",
+            "--debug",
+            "voxels",
+            "--width",
+            "320",
+            "--height",
+            "240",
+            "--frames",
+            "6",
+            "--screenshot",
+            shot.to_str().expect("utf-8 path"),
+        ],
+        |_| {},
+    );
+    assert_success(&out, "voxgi --validate view --debug voxels");
+    assert_not_blank(&load(&shot));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 fn assert_not_blank(img: &image::RgbaImage) {
     let mut sum = 0.0f64;
     let mut colors = std::collections::HashSet::new();

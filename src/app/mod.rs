@@ -235,7 +235,8 @@ fn needs_new_graph(a: &RenderSettings, b: &RenderSettings) -> bool {
 /// Settings the renderer bakes into its resources differ: the GI passes are made for one method
 /// and set of parameters, and the path tracer's history for one size. A new renderer then.
 fn needs_new_renderer(a: &RenderSettings, b: &RenderSettings) -> bool {
-    a.gi != b.gi || (a.gi.method != GiMethod::None && (a.width, a.height) != (b.width, b.height))
+    let sized = a.gi.method != GiMethod::None || a.debug.is_some();
+    a.gi != b.gi || a.debug != b.debug || (sized && (a.width, a.height) != (b.width, b.height))
 }
 
 /// One line about the indirect light, for the log.
@@ -330,6 +331,7 @@ impl Viewer {
             speed_m_s: fly.speed_m_s,
             time_s: opts.settings.time_s,
             animate: false,
+            debug: opts.settings.debug.map(|d| d.view),
             screenshot: false,
         };
         Self {
@@ -573,6 +575,13 @@ impl Viewer {
         // Each GI edit costs a new renderer: apply them once no slider is being dragged.
         if !self.egui_ctx.input(|i| i.pointer.any_down()) {
             settings.gi = self.controls.gi;
+            settings.debug =
+                self.controls
+                    .debug
+                    .map(|view| crate::voxel::debug_view::DebugSettings {
+                        view,
+                        ..settings.debug.unwrap_or_default()
+                    });
         }
         if needs_new_renderer(&current, &settings) {
             self.replace_renderer(ctx, &mut settings)?;

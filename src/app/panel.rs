@@ -5,6 +5,7 @@ use crate::gi::{GiMethod, GiSettings};
 use crate::light::ShadowSettings;
 use crate::post::{ToneMap, ToneOperator};
 use crate::vk::PassTiming;
+use crate::voxel::debug_view::DebugView;
 use std::collections::VecDeque;
 
 /// Per-pass GPU times of the last frames; the panel shows medians (robust to hiccups).
@@ -80,6 +81,8 @@ pub struct Controls {
     /// Scene time (keyframed objects and dynamic voxels follow it) and whether it runs.
     pub time_s: f32,
     pub animate: bool,
+    /// A voxel debug view instead of the lit image (a change needs a new renderer).
+    pub debug: Option<DebugView>,
     /// Set by the button (or F12); the viewer clears it after saving.
     pub screenshot: bool,
 }
@@ -226,6 +229,23 @@ pub fn draw(ctx: &egui::Context, c: &mut Controls, stats: &TimingStats, info: &P
                 .default_open(true)
                 .show(ui, |ui| gi_controls(ui, &mut c.gi, info.gi_frames));
 
+            egui::CollapsingHeader::new("View")
+                .default_open(false)
+                .show(ui, |ui| {
+                    egui::ComboBox::from_label("image")
+                        .selected_text(debug_name(c.debug))
+                        .show_ui(ui, |ui| {
+                            for v in [
+                                None,
+                                Some(DebugView::Voxels),
+                                Some(DebugView::Steps),
+                                Some(DebugView::Level),
+                            ] {
+                                ui.selectable_value(&mut c.debug, v, debug_name(v));
+                            }
+                        });
+                });
+
             ui.separator();
             if ui.button("Screenshot (F12)").clicked() {
                 c.screenshot = true;
@@ -235,6 +255,16 @@ pub fn draw(ctx: &egui::Context, c: &mut Controls, stats: &TimingStats, info: &P
             }
         });
     panel.response.rect.width()
+}
+
+/// Name of a debug view in the panel.
+fn debug_name(v: Option<DebugView>) -> &'static str {
+    match v {
+        None => "lit",
+        Some(DebugView::Voxels) => "voxels",
+        Some(DebugView::Steps) => "traversal steps",
+        Some(DebugView::Level) => "hierarchy level",
+    }
 }
 
 /// The GI method and its parameters; what does not apply to the method is hidden.
