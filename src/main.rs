@@ -450,11 +450,13 @@ fn run(cli: Cli) -> Result<()> {
             debug,
         } => {
             let scene = load_scene_arg(scene.as_deref())?;
-            let mut settings = RenderSettings::default();
-            settings.debug = debug.map(|view| voxgi::voxel::debug_view::DebugSettings {
-                view,
+            let mut settings = RenderSettings {
+                debug: debug.map(|view| voxgi::voxel::debug_view::DebugSettings {
+                    view,
+                    ..Default::default()
+                }),
                 ..Default::default()
-            });
+            };
             settings.tonemap.operator = tonemap;
             settings.tonemap.exposure = exposure;
             settings.gi = gi.settings(&scene);
