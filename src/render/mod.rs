@@ -100,8 +100,10 @@ struct Draw {
     texture: Option<usize>,
     /// Index into the renderer's textures of the material's bump or normal map.
     bump: Option<usize>,
-    /// The object drawn (its transform follows the scene time) and its mesh's local box.
+    /// The object drawn (its transform and, for OBJ sequences, its frame follow the scene
+    /// time), the submesh, and the mesh's local box.
     object: usize,
+    submesh: usize,
     local_aabb: crate::scene::Aabb,
     model: Mat4,
     aabb: crate::scene::Aabb,
@@ -142,6 +144,8 @@ pub struct Renderer {
     shadow_view_count: u32,
     draws: Arc<RwLock<DrawLists>>,
     all_draws: Vec<Draw>,
+    /// Vertex and index offsets of every mesh in the shared buffers.
+    mesh_base: Vec<(i32, u32)>,
     frame_data: GpuFrame,
     voxels: Option<crate::voxel::gpu::VoxelFrame>,
     /// Indirect-light passes and the light-map pipeline, when a GI method is on.
@@ -172,7 +176,8 @@ impl Renderer {
         if scene.lights.len() > MAX_LIGHTS {
             return Err(RenderError::TooManyLights(scene.lights.len()));
         }
-        let (vertices, indices, all_draws) = upload_geometry(ctx, scene, settings.time_s)?;
+        let (vertices, indices, all_draws, mesh_base) =
+            upload_geometry(ctx, scene, settings.time_s)?;
         let materials: Vec<GpuMaterial> = scene
             .materials
             .iter()
@@ -332,6 +337,7 @@ impl Renderer {
             shadow_view_count: 0,
             draws: Arc::new(RwLock::new(DrawLists::default())),
             all_draws,
+            mesh_base,
             frame_data: GpuFrame::zeroed(),
             voxels,
             gi,
@@ -386,13 +392,25 @@ impl Renderer {
         }
         self.frame_data = f;
         self.shadow_view_count = views.len() as u32;
-        // Keyframed objects follow the scene time (OBJ sequences keep the frame they were
-        // created with: their vertex ranges differ per frame).
+        // Animated objects follow the scene time: keyframes move them, OBJ sequences switch
+        // to the frame's mesh (frames share topology, so only the buffer offsets change).
         for d in &mut self.all_draws {
-            if let Some(o) = scene.objects.get(d.object).filter(|o| o.is_animated()) {
-                d.model = o.transform_at(s.time_s);
-                d.aabb = d.local_aabb.transformed(&d.model);
+            let Some(o) = scene.objects.get(d.object).filter(|o| o.is_animated()) else {
+                continue;
+            };
+            let mesh_index = o.mesh_at(s.time_s);
+            if let (Some(mesh), Some(&(vbase, ibase))) =
+                (scene.meshes.get(mesh_index), self.mesh_base.get(mesh_index))
+            {
+                if let Some(sub) = mesh.submeshes.get(d.submesh) {
+                    d.first_index = ibase + sub.first_index;
+                    d.index_count = sub.index_count;
+                    d.vertex_offset = vbase;
+                    d.local_aabb = mesh.aabb;
+                }
             }
+            d.model = o.transform_at(s.time_s);
+            d.aabb = d.local_aabb.transformed(&d.model);
         }
         let lists = DrawLists {
             camera: self
@@ -961,7 +979,7 @@ fn upload_geometry(
     ctx: &Context,
     scene: &Scene,
     t_s: f32,
-) -> Result<(Buffer, Buffer, Vec<Draw>), RenderError> {
+) -> Result<(Buffer, Buffer, Vec<Draw>, Vec<(i32, u32)>), RenderError> {
     let mut vertices: Vec<GpuVertex> = Vec::new();
     let mut indices: Vec<u32> = Vec::new();
     let mut mesh_base = Vec::with_capacity(scene.meshes.len());
@@ -1006,6 +1024,7 @@ fn upload_geometry(
                 texture,
                 bump,
                 object: object_index,
+                submesh: si,
                 local_aabb: mesh.aabb,
                 model,
                 aabb,
@@ -1022,7 +1041,7 @@ fn upload_geometry(
         bytemuck::cast_slice(&indices),
         vk::BufferUsageFlags::INDEX_BUFFER,
     )?;
-    Ok((vb, ib, draws))
+    Ok((vb, ib, draws, mesh_base))
 }
 
 /// The reflective light-map pipeline (`light_map.{vert,geom,frag}`).
