@@ -176,8 +176,12 @@ impl Renderer {
         if scene.lights.len() > MAX_LIGHTS {
             return Err(RenderError::TooManyLights(scene.lights.len()));
         }
-        let (vertices, indices, all_draws, mesh_base) =
-            upload_geometry(ctx, scene, settings.time_s)?;
+        let Geometry {
+            vertices,
+            indices,
+            draws: all_draws,
+            mesh_base,
+        } = upload_geometry(ctx, scene, settings.time_s)?;
         let materials: Vec<GpuMaterial> = scene
             .materials
             .iter()
@@ -974,12 +978,17 @@ fn gpu_light(light: &Light, first_view: u32, views: u32) -> GpuLight {
 }
 
 /// Uploads every mesh into one vertex and one index buffer; returns one draw per submesh of
+/// The scene's meshes on the GPU: one vertex and one index buffer, a draw per submesh of each
+/// object, and each mesh's offsets in the buffers.
+struct Geometry {
+    vertices: Buffer,
+    indices: Buffer,
+    draws: Vec<Draw>,
+    mesh_base: Vec<(i32, u32)>,
+}
+
 /// each object at time `t_s`.
-fn upload_geometry(
-    ctx: &Context,
-    scene: &Scene,
-    t_s: f32,
-) -> Result<(Buffer, Buffer, Vec<Draw>, Vec<(i32, u32)>), RenderError> {
+fn upload_geometry(ctx: &Context, scene: &Scene, t_s: f32) -> Result<Geometry, RenderError> {
     let mut vertices: Vec<GpuVertex> = Vec::new();
     let mut indices: Vec<u32> = Vec::new();
     let mut mesh_base = Vec::with_capacity(scene.meshes.len());
@@ -1041,7 +1050,12 @@ fn upload_geometry(
         bytemuck::cast_slice(&indices),
         vk::BufferUsageFlags::INDEX_BUFFER,
     )?;
-    Ok((vb, ib, draws, mesh_base))
+    Ok(Geometry {
+        vertices: vb,
+        indices: ib,
+        draws,
+        mesh_base,
+    })
 }
 
 /// The reflective light-map pipeline (`light_map.{vert,geom,frag}`).
