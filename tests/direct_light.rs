@@ -417,19 +417,27 @@ fn albedo_textures_are_sampled_in_linear_space() {
 /// Renders a 2 m quad lit straight down (E = pi) with the given MTL lines and 16x16 RGB
 /// texture `map.png`; returns the radiance at the image center.
 fn textured_quad_center(mtl_lines: &str, texel: [u8; 3]) -> Vec3 {
-    let dir = std::env::temp_dir().join(format!(
-        "voxgi-bump-{}-{}",
-        std::process::id(),
-        texel
-            .iter()
-            .map(|c| c.to_string())
-            .collect::<Vec<_>>()
-            .join("_")
-    ));
+    textured_quad_center_with(mtl_lines, &format!("{texel:?}"), |_, _| texel)
+}
+
+/// As `textured_quad_center`, with the 16x16 texture given per texel (column, row).
+fn textured_quad_center_with(
+    mtl_lines: &str,
+    tag: &str,
+    texel_at: impl Fn(u32, u32) -> [u8; 3],
+) -> Vec3 {
+    let tag: String = tag.chars().filter(char::is_ascii_alphanumeric).collect();
+    let dir = std::env::temp_dir().join(format!("voxgi-bump-{}-{tag}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temp dir");
-    let png =
-        image::RgbaImage::from_pixel(16, 16, image::Rgba([texel[0], texel[1], texel[2], 255]));
+    let png = image::RgbaImage::from_fn(16, 16, |x, y| {
+        let [r, g, b] = texel_at(x, y);
+        image::Rgba([r, g, b, 255])
+    });
     png.save(dir.join("map.png")).expect("png");
+    textured_quad_center_in(&dir, mtl_lines)
+}
+
+fn textured_quad_center_in(dir: &Path, mtl_lines: &str) -> Vec3 {
     std::fs::write(
         dir.join("m.mtl"),
         format!("newmtl m\nKd 0.5 0.5 0.5\n{mtl_lines}\n"),
@@ -446,7 +454,7 @@ fn textured_quad_center(mtl_lines: &str, texel: [u8; 3]) -> Vec3 {
          [[objects]]\nmesh = \"quad.obj\"\n",
         std::f32::consts::PI
     );
-    let s = Scene::from_toml_str(&toml, Path::new("<bump test>"), &dir).expect("parses");
+    let s = Scene::from_toml_str(&toml, Path::new("<bump test>"), dir).expect("parses");
     pixel(&render(&s), SIZE / 2, SIZE / 2)
 }
 
@@ -465,6 +473,20 @@ fn normal_and_bump_maps_perturb_the_shading_normal() {
     // A constant height map has no gradient: no change.
     let height = textured_quad_center("map_bump map.png", [100, 100, 100]);
     assert_close(height, flat, 0.01, "a constant height map changes nothing");
+    // A ramp along u (texel values 8, 24, ..., 248: slope 16/255 per texel, 16 texels per unit
+    // of u) scaled by -bm 100 at 1 cm per unit over a 2 m quad: world slope
+    // 0.01 * 100 * (16 * 16 / 255) / 2 = 0.502, so E scales by cos(atan(0.502)) = 0.894.
+    // The screen-space finite differences of the filtered height are not exact on lavapipe
+    // (measured 0.860 with its anisotropic sampler, 0.917 without), so the bound only says the
+    // ramp tilts the normal by about the right amount; a flat result (bump ignored) fails.
+    let ramp = textured_quad_center_with("map_bump -bm 100 map.png", "ramp", |x, _| {
+        [(16 * x + 8) as u8; 3]
+    });
+    let ratio = ramp.x / flat.x;
+    assert!(
+        (0.80..0.95).contains(&ratio),
+        "a height ramp with -bm 100 scales radiance by {ratio} (closed form 0.894)"
+    );
 }
 
 #[test]

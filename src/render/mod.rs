@@ -153,7 +153,8 @@ pub struct Renderer {
     voxel_debug: Option<crate::voxel::debug_view::VoxelDebugPass>,
 }
 
-/// Meters of height per unit of a height (bump) map: MTL has no unit for heights.
+/// Meters of height per unit of a height (bump) map, times the MTL `-bm` multiplier: MTL has
+/// no unit for heights.
 const BUMP_SCALE_M: f32 = 0.01;
 
 const GBUFFER_COLOR: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
@@ -195,7 +196,7 @@ impl Renderer {
                         (Some(_), BumpKind::Height) => 1,
                         (Some(_), BumpKind::TangentNormal) => 2,
                     },
-                    BUMP_SCALE_M.to_bits(),
+                    (BUMP_SCALE_M * m.bump_scale).to_bits(),
                     0,
                 ],
             })

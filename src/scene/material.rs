@@ -24,6 +24,8 @@ pub struct Material {
     /// Index into [`super::Scene::textures`] of the bump or normal map (linear).
     pub bump_texture: Option<usize>,
     pub bump_kind: BumpKind,
+    /// MTL `-bm` multiplier of a height map (1 when absent).
+    pub bump_scale: f32,
     /// Opacity (MTL `d`), 1 = opaque.
     pub opacity: f32,
 }
@@ -48,6 +50,7 @@ impl Material {
             albedo_texture: None,
             bump_texture: None,
             bump_kind: BumpKind::Height,
+            bump_scale: 1.0,
             opacity: 1.0,
         }
     }

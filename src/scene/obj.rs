@@ -296,6 +296,7 @@ impl AssetStore {
             albedo_texture,
             bump_texture,
             bump_kind,
+            bump_scale: bump_multiplier(m.normal_texture.as_deref()),
             opacity: finite_or(m.dissolve, 1.0).clamp(0.0, 1.0),
         };
         let i = self.materials.len();
@@ -371,6 +372,22 @@ fn prescan_mtl(text: &str) -> Result<(), (usize, String)> {
 }
 
 /// The file name in an MTL map statement, skipping options such as `-bm 0.5`.
+/// The `-bm X` option of a bump-map statement (1 when absent or not a finite number).
+fn bump_multiplier(s: Option<&str>) -> f32 {
+    let Some(s) = s else { return 1.0 };
+    let mut words = s.split_whitespace();
+    while let Some(w) = words.next() {
+        if w == "-bm" {
+            return words
+                .next()
+                .and_then(|v| v.parse::<f32>().ok())
+                .filter(|v| v.is_finite())
+                .unwrap_or(1.0);
+        }
+    }
+    1.0
+}
+
 fn texture_file(s: Option<&str>) -> Option<String> {
     let s = s?.trim();
     if s.is_empty() {
@@ -560,6 +577,14 @@ mod tests {
         ));
         let e = prescan_obj(p, "v 0 0 1e39\n");
         assert!(matches!(e, Err(SceneError::NonFiniteVertex { .. })));
+    }
+
+    #[test]
+    fn bump_multiplier_is_read_from_the_options() {
+        assert_eq!(bump_multiplier(Some("-bm 0.5 a.png")), 0.5);
+        assert_eq!(bump_multiplier(Some("a.png")), 1.0);
+        assert_eq!(bump_multiplier(Some("-bm nan a.png")), 1.0);
+        assert_eq!(bump_multiplier(None), 1.0);
     }
 
     #[test]
