@@ -493,9 +493,7 @@ fn normal_and_bump_maps_perturb_the_shading_normal() {
 fn keyframed_objects_follow_the_scene_time_after_prepare() {
     // A renderer made at t = 0 and moved to t = 0.5 with `prepare` draws what a renderer made
     // at t = 0.5 draws (the viewer advances time this way). Keyframes loop by default.
-    use voxgi::graph::GraphExecutor;
     use voxgi::render::Renderer;
-    use voxgi::vk::{FrameLoop, MAX_FRAMES_IN_FLIGHT};
     let toml = format!(
         "{CAMERA_DOWN}{PLANE}[[lights]]\nkind = \"directional\"\ndirection = [0.0, -1.0, 0.0]\nirradiance_w_m2 = 3.0\n\
          [[objects]]\nname = \"mover\"\nbuiltin = \"cube\"\nscale = 0.4\n\
@@ -503,18 +501,6 @@ fn keyframed_objects_follow_the_scene_time_after_prepare() {
     );
     let s = scene(&toml);
     let ctx = common::context();
-    let frame = |renderer: &mut Renderer| {
-        let exec = GraphExecutor::new(&ctx, renderer.graph(), MAX_FRAMES_IN_FLIGHT).expect("graph");
-        let mut frames = FrameLoop::new(&ctx, MAX_FRAMES_IN_FLIGHT, 16).expect("frames");
-        let (slot, cmd, ts, _) = frames.begin(&ctx).expect("begin");
-        renderer.write_frame(slot);
-        exec.record(&cmd, slot, ts);
-        frames.submit(&ctx, &[], &[]).expect("submit");
-        frames.finish(&ctx).expect("finish");
-        frames.destroy(&ctx);
-        exec.destroy(&ctx);
-        renderer.hdr_image()
-    };
     let settings = |t: f32| RenderSettings {
         width: SIZE,
         height: SIZE,
@@ -522,13 +508,13 @@ fn keyframed_objects_follow_the_scene_time_after_prepare() {
         ..Default::default()
     };
     let mut moved = Renderer::new(&ctx, &s, settings(0.0)).expect("renderer");
-    let at_start = frame(&mut moved);
+    let at_start = common::run_frames(&ctx, &mut moved, 1);
     moved.settings.time_s = 0.5;
     moved.prepare(&s).expect("prepare");
-    let after = frame(&mut moved);
+    let after = common::run_frames(&ctx, &mut moved, 1);
     moved.destroy(&ctx);
     let mut fresh = Renderer::new(&ctx, &s, settings(0.5)).expect("renderer");
-    let expected = frame(&mut fresh);
+    let expected = common::run_frames(&ctx, &mut fresh, 1);
     fresh.destroy(&ctx);
     assert_ne!(at_start.data, after.data, "the cube moved");
     assert_eq!(
@@ -542,9 +528,7 @@ fn keyframed_objects_follow_the_scene_time_after_prepare() {
 fn obj_sequence_frames_follow_the_scene_time_after_prepare() {
     // A two-frame OBJ sequence (a small quad on the left, then on the right): a renderer made at
     // frame 0 and moved to frame 1 with `prepare` draws what a renderer made at frame 1 draws.
-    use voxgi::graph::GraphExecutor;
     use voxgi::render::Renderer;
-    use voxgi::vk::{FrameLoop, MAX_FRAMES_IN_FLIGHT};
     let dir = std::env::temp_dir().join(format!("voxgi-seq-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temp dir");
     for (frame, x) in [(0, -0.8f32), (1, 0.8)] {
@@ -564,18 +548,6 @@ fn obj_sequence_frames_follow_the_scene_time_after_prepare() {
     );
     let s = Scene::from_toml_str(&toml, Path::new("<sequence>"), &dir).expect("parses");
     let ctx = common::context();
-    let frame = |renderer: &mut Renderer| {
-        let exec = GraphExecutor::new(&ctx, renderer.graph(), MAX_FRAMES_IN_FLIGHT).expect("graph");
-        let mut frames = FrameLoop::new(&ctx, MAX_FRAMES_IN_FLIGHT, 16).expect("frames");
-        let (slot, cmd, ts, _) = frames.begin(&ctx).expect("begin");
-        renderer.write_frame(slot);
-        exec.record(&cmd, slot, ts);
-        frames.submit(&ctx, &[], &[]).expect("submit");
-        frames.finish(&ctx).expect("finish");
-        frames.destroy(&ctx);
-        exec.destroy(&ctx);
-        renderer.hdr_image()
-    };
     let settings = |t: f32| RenderSettings {
         width: SIZE,
         height: SIZE,
@@ -583,13 +555,13 @@ fn obj_sequence_frames_follow_the_scene_time_after_prepare() {
         ..Default::default()
     };
     let mut moved = Renderer::new(&ctx, &s, settings(0.25)).expect("renderer");
-    let first = frame(&mut moved);
+    let first = common::run_frames(&ctx, &mut moved, 1);
     moved.settings.time_s = 1.25;
     moved.prepare(&s).expect("prepare");
-    let second = frame(&mut moved);
+    let second = common::run_frames(&ctx, &mut moved, 1);
     moved.destroy(&ctx);
     let mut fresh = Renderer::new(&ctx, &s, settings(1.25)).expect("renderer");
-    let expected = frame(&mut fresh);
+    let expected = common::run_frames(&ctx, &mut fresh, 1);
     fresh.destroy(&ctx);
     assert_ne!(first.data, second.data, "the sequence switched frames");
     assert_eq!(

@@ -280,9 +280,7 @@ fn path_tracer_restarts_and_follows_moving_objects() {
     // A path-traced renderer made at t = 0, run, then moved to t = 0.5 rewrites its albedo and
     // normal volumes and restarts accumulation: after the same number of frames it shows
     // exactly what a renderer made at t = 0.5 shows (the sample sequences restart too).
-    use voxgi::graph::GraphExecutor;
     use voxgi::render::Renderer;
-    use voxgi::vk::{FrameLoop, MAX_FRAMES_IN_FLIGHT};
     let toml = r#"
 [camera]
 position = [0.0, 2.5, -2.5]
@@ -309,21 +307,6 @@ keyframes = [ { time_s = 0.0, translate = [-0.8, 0.25, 0.0] }, { time_s = 1.0, t
     let scene = voxgi::scene::Scene::from_toml_str(toml, Path::new("<moving>"), Path::new(ROOT))
         .expect("parses");
     let ctx = common::context();
-    let run = |r: &mut Renderer, frames: usize| {
-        let exec = GraphExecutor::new(&ctx, r.graph(), MAX_FRAMES_IN_FLIGHT).expect("graph");
-        let mut fl = FrameLoop::new(&ctx, MAX_FRAMES_IN_FLIGHT, 64).expect("frames");
-        for _ in 0..frames {
-            let slot = fl.current_slot();
-            let (_, cmd, ts, _) = fl.begin(&ctx).expect("begin");
-            r.write_frame(slot);
-            exec.record(&cmd, slot, ts);
-            fl.submit(&ctx, &[], &[]).expect("submit");
-        }
-        fl.finish(&ctx).expect("finish");
-        fl.destroy(&ctx);
-        exec.destroy(&ctx);
-        r.hdr_image()
-    };
     let settings = |t: f32| RenderSettings {
         width: 64,
         height: 64,
@@ -337,10 +320,10 @@ keyframes = [ { time_s = 0.0, translate = [-0.8, 0.25, 0.0] }, { time_s = 1.0, t
         ..Default::default()
     };
     let mut moved = Renderer::new(&ctx, &scene, settings(0.0)).expect("renderer");
-    let before = run(&mut moved, 2);
+    let before = common::run_frames(&ctx, &mut moved, 2);
     moved.settings.time_s = 0.5;
     moved.prepare(&scene).expect("prepare");
-    let after = run(&mut moved, 3);
+    let after = common::run_frames(&ctx, &mut moved, 3);
     assert_eq!(
         moved.gi_accumulated_frames(),
         Some(3),
@@ -348,7 +331,7 @@ keyframes = [ { time_s = 0.0, translate = [-0.8, 0.25, 0.0] }, { time_s = 1.0, t
     );
     moved.destroy(&ctx);
     let mut fresh = Renderer::new(&ctx, &scene, settings(0.5)).expect("renderer");
-    let expected = run(&mut fresh, 3);
+    let expected = common::run_frames(&ctx, &mut fresh, 3);
     fresh.destroy(&ctx);
     assert_ne!(before.data, after.data, "the cube moved");
     assert_eq!(

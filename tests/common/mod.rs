@@ -30,3 +30,27 @@ pub fn assert_no_validation_messages(ctx: &Context) {
         panic!("{n} validation message(s):\n{msgs}");
     }
 }
+
+/// Runs `frames` frames of `renderer`'s graph (writing its frame constants per slot, as the
+/// viewer does) and returns the linear radiance of the last one.
+pub fn run_frames(
+    ctx: &Context,
+    renderer: &mut voxgi::render::Renderer,
+    frames: usize,
+) -> voxgi::eval::HdrImage {
+    use voxgi::graph::GraphExecutor;
+    use voxgi::vk::{FrameLoop, MAX_FRAMES_IN_FLIGHT};
+    let exec = GraphExecutor::new(ctx, renderer.graph(), MAX_FRAMES_IN_FLIGHT).expect("graph");
+    let mut frame_loop = FrameLoop::new(ctx, MAX_FRAMES_IN_FLIGHT, 64).expect("frame loop");
+    for _ in 0..frames {
+        let slot = frame_loop.current_slot();
+        let (_, cmd, ts, _) = frame_loop.begin(ctx).expect("begin frame");
+        renderer.write_frame(slot);
+        exec.record(&cmd, slot, ts);
+        frame_loop.submit(ctx, &[], &[]).expect("submit");
+    }
+    frame_loop.finish(ctx).expect("finish");
+    frame_loop.destroy(ctx);
+    exec.destroy(ctx);
+    renderer.hdr_image()
+}
