@@ -319,7 +319,6 @@ impl GiPasses {
         lut: BufferHandle,
     ) -> ImageHandle {
         let (w, h) = (inp.width, inp.height);
-        let groups = (w.div_ceil(8), h.div_ceil(8));
         let sampler = self.sampler;
         let irradiance = g.create_image(ImageDesc::new_2d(
             "indirect irradiance",
@@ -330,51 +329,18 @@ impl GiPasses {
         let pipe = self.hemisphere;
         let push = self.push;
         let i = *inp;
-        let read = Access::Sampled(Shader::Compute);
-        let mut pass = g
-            .add_pass("gi_hemisphere")
-            .read(i.albedo, read)
-            .read(i.frame, Access::StorageRead(Shader::Compute))
-            .read(i.normal, read)
-            .read(i.depth, read)
-            .read(i.voxels, read)
-            .read(lut, Access::StorageRead(Shader::Compute))
-            .read(i.rlm_radiance, read)
-            .read(i.rlm_position, read)
-            .read(i.rlm_normal, read)
-            .write(irradiance, Access::StorageWrite(Shader::Compute));
-        if let Some(sp) = i.specular {
-            pass = pass.read(sp, read);
-        }
-        pass.record(move |ctx| {
-            let sampled = |binding, h: ImageHandle| Descriptor::SampledImage {
-                binding,
-                view: ctx.image(h).view,
-                sampler,
-            };
-            ctx.cmd.bind(
-                &pipe,
-                &[
-                    frame_for_slot(i.frame_descriptor, i.frame_stride, ctx.slot),
-                    sampled(1, i.normal),
-                    sampled(2, i.depth),
-                    sampled(3, i.voxels),
-                    Descriptor::storage_buffer(4, ctx.buffer(lut).raw),
-                    sampled(5, i.rlm_radiance),
-                    sampled(6, i.rlm_position),
-                    sampled(7, i.rlm_normal),
-                    Descriptor::StorageImage {
-                        binding: 8,
-                        view: ctx.image(irradiance).view,
-                    },
-                    sampled(9, i.specular.unwrap_or(i.albedo)),
-                    sampled(10, i.albedo),
-                    Descriptor::storage_buffer(11, i.materials),
-                ],
-            );
-            ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
-            ctx.cmd.dispatch(groups.0, groups.1, 1);
-        });
+        add_ray_pass(
+            g,
+            "gi_hemisphere",
+            pipe,
+            &i,
+            lut,
+            sampler,
+            &[(5, i.rlm_radiance), (6, i.rlm_position), (7, i.rlm_normal)],
+            (irradiance, Access::StorageWrite(Shader::Compute)),
+            Some(i.materials),
+            move || push,
+        );
         irradiance
     }
 
@@ -770,53 +736,23 @@ impl PathTracer {
         };
         let history = g.import_image(&self.history, read);
         let i = *i;
-        let groups = (i.width.div_ceil(8), i.height.div_ceil(8));
-        let mut pass = g
-            .add_pass("gi_pathtrace")
-            .read(i.albedo, read)
-            .read(i.frame, Access::StorageRead(Shader::Compute))
-            .read(i.normal, read)
-            .read(i.depth, read)
-            .read(i.voxels, read)
-            .read(lut, Access::StorageRead(Shader::Compute))
-            .read(albedo, read)
-            .read(normal, read)
-            .read(i.shadow_map, read)
-            .write(history, Access::StorageReadWrite(Shader::Compute));
-        if let Some(sp) = i.specular {
-            pass = pass.read(sp, read);
-        }
-        pass.record(move |ctx| {
-            let sampled = |binding, h: ImageHandle| Descriptor::SampledImage {
-                binding,
-                view: ctx.image(h).view,
-                sampler,
-            };
-            ctx.cmd.bind(
-                &pipe,
-                &[
-                    frame_for_slot(i.frame_descriptor, i.frame_stride, ctx.slot),
-                    sampled(1, i.normal),
-                    sampled(2, i.depth),
-                    sampled(3, i.voxels),
-                    Descriptor::storage_buffer(4, ctx.buffer(lut).raw),
-                    sampled(5, albedo),
-                    sampled(6, normal),
-                    sampled(7, i.shadow_map),
-                    Descriptor::StorageImage {
-                        binding: 8,
-                        view: ctx.image(history).view,
-                    },
-                    sampled(9, i.specular.unwrap_or(i.albedo)),
-                    sampled(10, i.albedo),
-                ],
-            );
-            let mut p = push;
-            // Frames accumulated before this one (`advance` ran before recording).
-            p.iparams[3] = frames.load(Ordering::SeqCst).saturating_sub(1);
-            ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&p));
-            ctx.cmd.dispatch(groups.0, groups.1, 1);
-        });
+        add_ray_pass(
+            g,
+            "gi_pathtrace",
+            pipe,
+            &i,
+            lut,
+            sampler,
+            &[(5, albedo), (6, normal), (7, i.shadow_map)],
+            (history, Access::StorageReadWrite(Shader::Compute)),
+            None,
+            move || {
+                let mut p = push;
+                // Frames accumulated before this one (`advance` ran before recording).
+                p.iparams[3] = frames.load(Ordering::SeqCst).saturating_sub(1);
+                p
+            },
+        );
         history
     }
 
@@ -949,48 +885,18 @@ impl RadianceVolume {
             i.height,
         ));
         let pipe = self.hemisphere_pipeline;
-        let groups = (i.width.div_ceil(8), i.height.div_ceil(8));
-        let mut pass = g
-            .add_pass("gi_hemisphere_volume")
-            .read(i.albedo, read)
-            .read(i.frame, Access::StorageRead(Shader::Compute))
-            .read(i.normal, read)
-            .read(i.depth, read)
-            .read(i.voxels, read)
-            .read(lut, Access::StorageRead(Shader::Compute))
-            .read(volume, read)
-            .read(normal, read)
-            .write(irradiance, Access::StorageWrite(Shader::Compute));
-        if let Some(sp) = i.specular {
-            pass = pass.read(sp, read);
-        }
-        pass.record(move |ctx| {
-            let sampled = |binding, h: ImageHandle| Descriptor::SampledImage {
-                binding,
-                view: ctx.image(h).view,
-                sampler,
-            };
-            ctx.cmd.bind(
-                &pipe,
-                &[
-                    frame_for_slot(i.frame_descriptor, i.frame_stride, ctx.slot),
-                    sampled(1, i.normal),
-                    sampled(2, i.depth),
-                    sampled(3, i.voxels),
-                    Descriptor::storage_buffer(4, ctx.buffer(lut).raw),
-                    sampled(5, volume),
-                    sampled(6, normal),
-                    Descriptor::StorageImage {
-                        binding: 8,
-                        view: ctx.image(irradiance).view,
-                    },
-                    sampled(9, i.specular.unwrap_or(i.albedo)),
-                    sampled(10, i.albedo),
-                ],
-            );
-            ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
-            ctx.cmd.dispatch(groups.0, groups.1, 1);
-        });
+        add_ray_pass(
+            g,
+            "gi_hemisphere_volume",
+            pipe,
+            &i,
+            lut,
+            sampler,
+            &[(5, volume), (6, normal)],
+            (irradiance, Access::StorageWrite(Shader::Compute)),
+            None,
+            move || push,
+        );
         irradiance
     }
 }
@@ -1021,6 +927,72 @@ fn attribute_triangles(scene: &Scene, t_s: f32) -> Vec<[[f32; 4]; 3]> {
         }
     }
     out
+}
+
+/// Declares one of the GI ray passes (`gi_hemisphere`, `gi_hemisphere_volume`,
+/// `gi_pathtrace`): they share the frame, G-buffer, voxel and ray-mask inputs (bindings 0-4) and
+/// the specular and albedo images (9, 10); `own` are the pass's further sampled images by
+/// binding, `out` its output image at binding 8, `materials` an optional buffer at binding 11,
+/// and `push` its push constants at record time.
+#[allow(clippy::too_many_arguments)]
+fn add_ray_pass(
+    g: &mut RenderGraph,
+    name: &str,
+    pipe: ComputePipeline,
+    i: &GiInputs,
+    lut: BufferHandle,
+    sampler: vk::Sampler,
+    own: &[(u32, ImageHandle)],
+    (out, out_access): (ImageHandle, Access),
+    materials: Option<vk::Buffer>,
+    push: impl Fn() -> GpuGiPush + 'static,
+) {
+    let read = Access::Sampled(Shader::Compute);
+    let i = *i;
+    let own = own.to_vec();
+    let groups = (i.width.div_ceil(8), i.height.div_ceil(8));
+    let mut pass = g
+        .add_pass(name)
+        .read(i.albedo, read)
+        .read(i.frame, Access::StorageRead(Shader::Compute))
+        .read(i.normal, read)
+        .read(i.depth, read)
+        .read(i.voxels, read)
+        .read(lut, Access::StorageRead(Shader::Compute))
+        .write(out, out_access);
+    for &(_, h) in &own {
+        pass = pass.read(h, read);
+    }
+    if let Some(sp) = i.specular {
+        pass = pass.read(sp, read);
+    }
+    pass.record(move |ctx| {
+        let sampled = |binding, h: ImageHandle| Descriptor::SampledImage {
+            binding,
+            view: ctx.image(h).view,
+            sampler,
+        };
+        let mut descriptors = vec![
+            frame_for_slot(i.frame_descriptor, i.frame_stride, ctx.slot),
+            sampled(1, i.normal),
+            sampled(2, i.depth),
+            sampled(3, i.voxels),
+            Descriptor::storage_buffer(4, ctx.buffer(lut).raw),
+            Descriptor::StorageImage {
+                binding: 8,
+                view: ctx.image(out).view,
+            },
+            sampled(9, i.specular.unwrap_or(i.albedo)),
+            sampled(10, i.albedo),
+        ];
+        descriptors.extend(own.iter().map(|&(b, h)| sampled(b, h)));
+        if let Some(m) = materials {
+            descriptors.push(Descriptor::storage_buffer(11, m));
+        }
+        ctx.cmd.bind(&pipe, &descriptors);
+        ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push()));
+        ctx.cmd.dispatch(groups.0, groups.1, 1);
+    });
 }
 
 /// The frame-constants descriptor of frame slot `slot`.
