@@ -205,54 +205,13 @@ fn bunny_scene_atlas_vs_cpu_256x256x128() {
     check_flat("assets/scenes/cornell_bunny.toml", 256);
 }
 
-/// Static Cornell walls and a keyframed cube that moves and turns (as in voxel_dynamic.rs).
-fn animated_scene() -> voxgi::scene::Scene {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes");
-    voxgi::scene::Scene::from_toml_str(
-        r#"
-[camera]
-position = [0.278, 0.273, -0.800]
-target = [0.278, 0.273, 0.0]
-up = [0.0, 1.0, 0.0]
-fov_y_deg = 39.3
-near = 0.01
-far = 10.0
-
-[[objects]]
-name = "walls"
-builtin = "cornell_walls"
-
-[[objects]]
-name = "mover"
-builtin = "cube"
-scale = 0.12
-
-[objects.animation]
-loop = false
-
-[[objects.animation.keyframes]]
-time_s = 0.0
-translate = [0.2, 0.15, 0.2]
-rotate_deg = [0.0, 0.0, 0.0]
-
-[[objects.animation.keyframes]]
-time_s = 1.0
-translate = [0.45, 0.35, 0.4]
-rotate_deg = [30.0, 45.0, 10.0]
-"#,
-        Path::new("<animated test scene>"),
-        &dir,
-    )
-    .expect("test scene parses")
-}
-
 /// The renderer's `VoxelFrame` with `--voxelizer atlas`: static walls voxelized once, the
 /// rigid mover's atlas points transformed per frame; each frame's mip 0 against the CPU.
 #[test]
 fn voxel_frame_atlas_follows_a_moving_object() {
     use voxgi::voxel::gpu::{VoxelFrame, VoxelSettings, Voxelizer};
     let ctx = common::context();
-    let s = animated_scene();
+    let s = common::animated_scene();
     let settings = VoxelSettings {
         voxelizer: Voxelizer::Atlas,
         ..Default::default()

@@ -6,13 +6,11 @@ mod common;
 
 use glam::Vec3;
 use std::path::Path;
-use voxgi::graph::{Access, RenderGraph};
-use voxgi::vk::{vk, Context};
-use voxgi::voxel::bits::mip_extent;
+use voxgi::graph::RenderGraph;
+use voxgi::vk::Context;
 use voxgi::voxel::gpu::{
-    add_store_and_mip_passes, add_voxelize_passes, column_bytes, image_extent, readback_buffer,
-    run_once, scene_triangles, voxelize_static, ColumnBase, GpuVoxelGrid, TriangleBuffer,
-    VoxelPipelines,
+    add_store_and_mip_passes, add_voxelize_passes, column_bytes, run_once, scene_triangles,
+    voxelize_static, ColumnBase, GpuVoxelGrid, TriangleBuffer, VoxelPipelines,
 };
 use voxgi::voxel::voxelize::voxelize_triangles;
 use voxgi::voxel::{Axis, BitGrid, BitHierarchy, GridDesc, VoxelGrid};
@@ -32,24 +30,7 @@ fn gpu_levels(
     // Static geometry voxelized once; the frame copies it and inserts the dynamic triangles.
     let static_columns = voxelize_static(ctx, &pipes, grid, &st).expect("static voxelization");
 
-    let (w, h) = image_extent(grid);
-    let layers = grid.layers();
-    let levels = voxels.mip_levels();
-    let sizes: Vec<(u32, u32)> = (0..levels)
-        .map(|l| ((w >> l).max(1), (h >> l).max(1)))
-        .collect();
-    let readbacks: Vec<_> = sizes
-        .iter()
-        .enumerate()
-        .map(|(l, &(lw, lh))| {
-            readback_buffer(
-                ctx,
-                &format!("voxel readback {l}"),
-                u64::from(lw * lh * layers) * 16,
-            )
-            .expect("readback buffer")
-        })
-        .collect();
+    let readback = common::VoxelReadback::new(ctx, grid, voxels.mip_levels());
 
     let mut g = RenderGraph::new();
     let image = voxels.import(&mut g);
@@ -63,62 +44,13 @@ fn gpu_levels(
         &[&dy],
     );
     add_store_and_mip_passes(&mut g, &pipes, &voxels, columns, image);
-    let outs: Vec<_> = readbacks
-        .iter()
-        .map(|b| g.import_buffer(b, Access::HostRead))
-        .collect();
-    let mut pass = g
-        .add_pass("voxel_readback")
-        .read(image, Access::TransferRead);
-    for &o in &outs {
-        pass = pass.write(o, Access::TransferWrite);
-    }
-    let sizes_c = sizes.clone();
-    pass.record(move |ctx| {
-        for (l, (&o, &(lw, lh))) in outs.iter().zip(&sizes_c).enumerate() {
-            ctx.cmd.copy_image_to_buffer(
-                ctx.image(image).raw,
-                vk::Extent3D {
-                    width: lw,
-                    height: lh,
-                    depth: 1,
-                },
-                l as u32,
-                layers,
-                ctx.buffer(o).raw,
-            );
-        }
-    });
+    readback.add_pass(&mut g, image);
     let timings = run_once(ctx, g).expect("voxel graph runs");
     let names: Vec<&str> = timings.iter().map(|t| t.name.as_str()).collect();
     assert!(names.contains(&"voxel_store"), "{names:?}");
 
-    let mut out = Vec::new();
-    for (l, (b, &(lw, lh))) in readbacks.iter().zip(&sizes).enumerate() {
-        let bytes = &b.mapped().expect("host-visible")[..(lw * lh * layers * 16) as usize];
-        let full = BitGrid::from_gpu_bytes(lw, lh, layers, bytes).expect("read-back size");
-        let (cw, ch) = (
-            mip_extent(grid.res_x(), l as u32),
-            mip_extent(grid.res_y(), l as u32),
-        );
-        let mut crop = BitGrid::new(cw, ch, layers);
-        for layer in 0..layers {
-            for y in 0..lh {
-                for x in 0..lw {
-                    let c = full.column(x, y, layer);
-                    if x < cw && y < ch {
-                        *crop.column_mut(x, y, layer) = c;
-                    } else {
-                        assert_eq!(c, [0; 4], "padding texel ({x},{y}) of level {l} is set");
-                    }
-                }
-            }
-        }
-        out.push(crop);
-    }
-    for b in readbacks {
-        ctx.destroy_buffer(b);
-    }
+    let out = readback.levels(grid);
+    readback.destroy(ctx);
     ctx.destroy_buffer(static_columns);
     st.destroy(ctx);
     dy.destroy(ctx);

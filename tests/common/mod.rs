@@ -54,3 +54,120 @@ pub fn run_frames(
     exec.destroy(ctx);
     renderer.hdr_image()
 }
+
+/// Host-visible copies of every mip level of a GPU voxel column image, for comparing it with
+/// the CPU hierarchy.
+pub struct VoxelReadback {
+    buffers: Vec<voxgi::vk::Buffer>,
+    /// Image size of each level (power-of-two padded, see `voxel::gpu`).
+    sizes: Vec<(u32, u32)>,
+    layers: u32,
+}
+
+impl VoxelReadback {
+    pub fn new(ctx: &Context, grid: &voxgi::voxel::VoxelGrid, levels: u32) -> Self {
+        let (w, h) = voxgi::voxel::gpu::image_extent(grid);
+        let layers = grid.layers();
+        let sizes: Vec<(u32, u32)> = (0..levels)
+            .map(|l| ((w >> l).max(1), (h >> l).max(1)))
+            .collect();
+        let buffers = sizes
+            .iter()
+            .enumerate()
+            .map(|(l, &(lw, lh))| {
+                voxgi::voxel::gpu::readback_buffer(
+                    ctx,
+                    &format!("voxel readback {l}"),
+                    u64::from(lw * lh * layers) * 16,
+                )
+                .expect("readback buffer")
+            })
+            .collect();
+        Self {
+            buffers,
+            sizes,
+            layers,
+        }
+    }
+
+    /// Declares the pass that copies every level of `image` into the buffers.
+    pub fn add_pass(&self, g: &mut voxgi::graph::RenderGraph, image: voxgi::graph::ImageHandle) {
+        use voxgi::graph::Access;
+        let outs: Vec<_> = self
+            .buffers
+            .iter()
+            .map(|b| g.import_buffer(b, Access::HostRead))
+            .collect();
+        let mut pass = g
+            .add_pass("voxel_readback")
+            .read(image, Access::TransferRead);
+        for &o in &outs {
+            pass = pass.write(o, Access::TransferWrite);
+        }
+        let (sizes, layers) = (self.sizes.clone(), self.layers);
+        pass.record(move |ctx| {
+            for (l, (&o, &(lw, lh))) in outs.iter().zip(&sizes).enumerate() {
+                let extent = voxgi::vk::vk::Extent3D {
+                    width: lw,
+                    height: lh,
+                    depth: 1,
+                };
+                ctx.cmd.copy_image_to_buffer(
+                    ctx.image(image).raw,
+                    extent,
+                    l as u32,
+                    layers,
+                    ctx.buffer(o).raw,
+                );
+            }
+        });
+    }
+
+    /// Every level read back (after the frame completed), cropped to the CPU hierarchy's
+    /// sizes for `grid`. Panics if the padding holds any bit.
+    pub fn levels(&self, grid: &voxgi::voxel::VoxelGrid) -> Vec<voxgi::voxel::BitGrid> {
+        use voxgi::voxel::bits::mip_extent;
+        use voxgi::voxel::BitGrid;
+        let layers = self.layers;
+        let mut out = Vec::new();
+        for (l, (b, &(lw, lh))) in self.buffers.iter().zip(&self.sizes).enumerate() {
+            let bytes = &b.mapped().expect("host-visible")[..(lw * lh * layers * 16) as usize];
+            let full = BitGrid::from_gpu_bytes(lw, lh, layers, bytes).expect("read-back size");
+            let (cw, ch) = (
+                mip_extent(grid.res_x(), l as u32),
+                mip_extent(grid.res_y(), l as u32),
+            );
+            let mut crop = BitGrid::new(cw, ch, layers);
+            for layer in 0..layers {
+                for y in 0..lh {
+                    for x in 0..lw {
+                        let c = full.column(x, y, layer);
+                        if x < cw && y < ch {
+                            *crop.column_mut(x, y, layer) = c;
+                        } else {
+                            assert_eq!(c, [0; 4], "padding texel ({x},{y}) of level {l} is set");
+                        }
+                    }
+                }
+            }
+            out.push(crop);
+        }
+        out
+    }
+
+    pub fn destroy(self, ctx: &Context) {
+        for b in self.buffers {
+            ctx.destroy_buffer(b);
+        }
+    }
+}
+
+/// The shipped animated test scene: Cornell walls and a keyframed cube that moves, turns and
+/// partly leaves the box (`assets/scenes/cornell_mover.toml`).
+pub fn animated_scene() -> voxgi::scene::Scene {
+    voxgi::scene::Scene::load(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/assets/scenes/cornell_mover.toml"
+    ))
+    .expect("animated test scene loads")
+}
