@@ -8,8 +8,9 @@
 // guarantees correctly rounded +, -, *; division and sqrt only bound the per-column depth
 // range, widened by a voxel, and never decide a bit).
 //
-// One workgroup per triangle; its invocations share out the columns of the triangle's
-// voxel bounding box, and each walks its column's depth range, ORing whole words.
+// One workgroup per triangle (times the dispatch's z splits for large triangles); its
+// invocations share out the columns of the triangle's voxel bounding box, and each walks its
+// column's depth range, ORing whole words.
 #include "voxel_bits.glsl"
 
 // Invocations per triangle (specialization constant; VoxelPipelines picks it).

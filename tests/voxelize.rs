@@ -10,7 +10,7 @@ use voxgi::graph::RenderGraph;
 use voxgi::vk::Context;
 use voxgi::voxel::gpu::{
     add_store_and_mip_passes, add_voxelize_passes, column_bytes, run_once, scene_triangles,
-    voxelize_static, ColumnBase, GpuVoxelGrid, TriangleBuffer, VoxelPipelines,
+    voxelize_static, ColumnBase, GpuVoxelGrid, TriangleBuffer, VoxelPipelines, VOXELIZE_GROUP_SIZE,
 };
 use voxgi::voxel::voxelize::voxelize_triangles;
 use voxgi::voxel::{Axis, BitGrid, BitHierarchy, GridDesc, VoxelGrid};
@@ -23,7 +23,18 @@ fn gpu_levels(
     static_tris: &[[Vec3; 3]],
     dynamic_tris: &[[Vec3; 3]],
 ) -> Vec<BitGrid> {
-    let pipes = VoxelPipelines::new(ctx).expect("voxel pipelines");
+    gpu_levels_with(ctx, VOXELIZE_GROUP_SIZE, grid, static_tris, dynamic_tris)
+}
+
+/// [`gpu_levels`] with `group_size` invocations per triangle.
+fn gpu_levels_with(
+    ctx: &Context,
+    group_size: u32,
+    grid: &VoxelGrid,
+    static_tris: &[[Vec3; 3]],
+    dynamic_tris: &[[Vec3; 3]],
+) -> Vec<BitGrid> {
+    let pipes = VoxelPipelines::with_group_size(ctx, group_size).expect("voxel pipelines");
     let voxels = GpuVoxelGrid::new(ctx, grid).expect("voxel image");
     let st = TriangleBuffer::upload(ctx, "static triangles", static_tris).expect("upload");
     let dy = TriangleBuffer::upload(ctx, "dynamic triangles", dynamic_tris).expect("upload");
@@ -80,10 +91,15 @@ fn diff(a: &BitGrid, b: &BitGrid, max: usize) -> (u64, Vec<(u32, u32, u32)>) {
 
 /// GPU (static split from dynamic at `split`) == CPU, at every hierarchy level.
 fn check(what: &str, grid: &VoxelGrid, tris: &[[Vec3; 3]], split: usize) {
+    check_with(what, VOXELIZE_GROUP_SIZE, grid, tris, split);
+}
+
+/// [`check`] with `group_size` invocations per triangle.
+fn check_with(what: &str, group_size: u32, grid: &VoxelGrid, tris: &[[Vec3; 3]], split: usize) {
     let ctx = common::context();
     let mut cpu = BitGrid::for_grid(grid);
     voxelize_triangles(grid, &mut cpu, tris).expect("cpu voxelization");
-    let gpu = gpu_levels(&ctx, grid, &tris[..split], &tris[split..]);
+    let gpu = gpu_levels_with(&ctx, group_size, grid, &tris[..split], &tris[split..]);
     let (n, first) = diff(&gpu[0], &cpu, 8);
     assert_eq!(
         n,
@@ -113,6 +129,10 @@ fn scene(path: &str) -> voxgi::scene::Scene {
 }
 
 fn check_scene(name: &str, layers: u32, max_res_xy: u32) {
+    check_scene_with(name, VOXELIZE_GROUP_SIZE, layers, max_res_xy);
+}
+
+fn check_scene_with(name: &str, group_size: u32, layers: u32, max_res_xy: u32) {
     let s = scene(name);
     let aabb = s.aabb_at(0.0);
     let grid = VoxelGrid::around(
@@ -129,8 +149,9 @@ fn check_scene(name: &str, layers: u32, max_res_xy: u32) {
     let split = tris.len();
     tris.extend(scene_triangles(&s, 0.0, true));
     // Split the static objects in two so the copy-then-insert path is exercised too.
-    check(
+    check_with(
         &format!("{name} {}x{}x{}", grid.res_x(), grid.res_y(), grid.depth()),
+        group_size,
         &grid,
         &tris,
         split / 2,
@@ -155,6 +176,48 @@ fn bunny_scene_gpu_equals_cpu_one_layer() {
 #[test]
 fn bunny_scene_gpu_equals_cpu_two_layers() {
     check_scene("assets/scenes/cornell_bunny.toml", 2, 256);
+}
+
+// Lavapipe (llvmpipe's gallivm) ends every loop of a shader invocation once 65,535 loop
+// iterations have run in it, all loops together (LP_MAX_TGSI_LOOP_ITERATIONS), silently. A
+// triangle whose columns and depth range give one invocation more iterations than that lost
+// its later columns: the bunny box's ceiling at group size 8 (10,082 voxels missing), and a
+// steep triangle across a large grid even at the default group size. The voxelizer now splits
+// such triangles over more workgroups.
+
+#[test]
+fn bunny_scene_two_layers_at_group_size_8() {
+    check_scene_with("assets/scenes/cornell_bunny.toml", 8, 2, 256);
+}
+
+#[test]
+fn steep_triangles_across_a_large_grid_at_every_group_size() {
+    // Nearly parallel to the depth axis (no plane bound: every column walks all 256 depths)
+    // and diagonal across 256x256 columns: 65,536 columns x 256 depths, far beyond one
+    // invocation's 65,535 loop iterations at group size 64, let alone 8.
+    let grid =
+        VoxelGrid::from_box(Vec3::ZERO, Vec3::ONE, Some(Axis::Z), 256, 256, 2).expect("grid");
+    let tris = vec![
+        [
+            Vec3::new(0.0, 0.0, 0.0),
+            Vec3::new(1.0, 1.0, 0.02),
+            Vec3::new(0.02, 0.0, 1.0),
+        ],
+        [
+            Vec3::new(1.0, 0.0, 1.0),
+            Vec3::new(0.0, 1.0, 0.98),
+            Vec3::new(0.97, 0.0, 0.0),
+        ],
+    ];
+    for group_size in [VOXELIZE_GROUP_SIZE, 8, 1] {
+        check_with(
+            &format!("steep, group size {group_size}"),
+            group_size,
+            &grid,
+            &tris,
+            1,
+        );
+    }
 }
 
 struct Lcg(u64);

@@ -472,6 +472,8 @@ struct PathTracer {
     attributes: ComputePipeline,
     triangles: Buffer,
     triangle_count: u32,
+    /// Workgroups per triangle that keep the voxelizer within lavapipe's loop budget.
+    splits: u32,
     voxelize_push: GpuVoxelizePush,
     albedo: Image,
     normal: Image,
@@ -491,6 +493,9 @@ struct AnimatedTriangles {
     /// Per slot: the region changed and the volumes must be rewritten in that slot's frame.
     dirty: Arc<[AtomicBool; MAX_FRAMES_IN_FLIGHT]>,
     counts: Arc<[AtomicU32; MAX_FRAMES_IN_FLIGHT]>,
+    /// Per slot, workgroups per triangle (see `attribute_splits`).
+    splits: Arc<[AtomicU32; MAX_FRAMES_IN_FLIGHT]>,
+    grid: VoxelGrid,
 }
 
 /// The direct-radiance volume (rgba16f, congruent with the bits) and its passes.
@@ -567,12 +572,15 @@ impl PathTracer {
                 }
             }
             let count = tris.len() as u32;
+            let splits = attribute_splits(grid, &tris);
             let animated = AnimatedTriangles {
                 scene: scene.clone(),
                 capacity,
                 last: Some(tris.clone()),
                 dirty: Arc::new(std::array::from_fn(|_| AtomicBool::new(false))),
                 counts: Arc::new(std::array::from_fn(|_| AtomicU32::new(count))),
+                splits: Arc::new(std::array::from_fn(|_| AtomicU32::new(splits))),
+                grid: *grid,
             };
             (buffer, Some(animated))
         } else {
@@ -621,6 +629,7 @@ impl PathTracer {
             radiance,
             attributes,
             triangle_count: tris.len() as u32,
+            splits: attribute_splits(grid, &tris),
             voxelize_push: GpuVoxelizePush::new(grid, tris.len() as u32, 0),
             triangles,
             albedo,
@@ -655,6 +664,8 @@ impl PathTracer {
             m[slot * region..slot * region + bytes.len()].copy_from_slice(bytes);
         }
         a.counts[slot % MAX_FRAMES_IN_FLIGHT].store(n as u32, Ordering::SeqCst);
+        a.splits[slot % MAX_FRAMES_IN_FLIGHT]
+            .store(attribute_splits(&a.grid, &tris[..n]), Ordering::SeqCst);
         a.dirty[slot % MAX_FRAMES_IN_FLIGHT].store(true, Ordering::SeqCst);
         a.last = Some(tris);
         true
@@ -674,10 +685,11 @@ impl PathTracer {
         let normal = g.import_image(&self.normal, read);
         let tris = g.import_buffer(&self.triangles, Access::StorageRead(Shader::Compute));
         let (pipe, count, vpush) = (self.attributes, self.triangle_count, self.voxelize_push);
+        let splits = self.splits;
         let written = self.volumes_written.clone();
         let per_slot = self.animated.as_ref().map(|a| {
             let region = (a.capacity * std::mem::size_of::<[[f32; 4]; 3]>()) as u64;
-            (region, a.dirty.clone(), a.counts.clone())
+            (region, a.dirty.clone(), a.counts.clone(), a.splits.clone())
         });
         // The first frame writes the volumes; later frames keep them until something moves.
         g.add_pass("voxelize_attributes")
@@ -687,8 +699,8 @@ impl PathTracer {
             .record(move |ctx| {
                 let first = !written.swap(true, Ordering::SeqCst);
                 let slot = ctx.slot % MAX_FRAMES_IN_FLIGHT;
-                let (triangles, count) = match &per_slot {
-                    Some((region, dirty, counts)) => {
+                let (triangles, count, splits) = match &per_slot {
+                    Some((region, dirty, counts, slot_splits)) => {
                         let moved = dirty[slot].swap(false, Ordering::SeqCst);
                         if !(first || moved) {
                             return;
@@ -699,9 +711,14 @@ impl PathTracer {
                             offset: slot as u64 * region,
                             range: *region,
                         };
-                        (d, counts[slot].load(Ordering::SeqCst))
+                        let n = counts[slot].load(Ordering::SeqCst);
+                        (d, n, slot_splits[slot].load(Ordering::SeqCst))
                     }
-                    None if first => (Descriptor::storage_buffer(0, ctx.buffer(tris).raw), count),
+                    None if first => (
+                        Descriptor::storage_buffer(0, ctx.buffer(tris).raw),
+                        count,
+                        splits,
+                    ),
                     None => return,
                 };
                 if count == 0 {
@@ -725,7 +742,7 @@ impl PathTracer {
                 );
                 ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&vpush));
                 let x = count.min(65_535);
-                ctx.cmd.dispatch(x, count.div_ceil(x), 1);
+                ctx.cmd.dispatch(x, count.div_ceil(x), splits);
             });
         let Some(pipe) = self.pathtrace else {
             return match &self.radiance {
@@ -903,6 +920,20 @@ impl RadianceVolume {
 
 /// World-space triangles of the scene at `t_s`, each vertex's w holding one channel of the
 /// material's albedo (the layout `voxelize_attributes.comp` reads).
+/// Workgroups per attribute triangle: the triangle voxelizer's z splits
+/// ([`crate::voxel::gpu::voxelize_loads`]; the shaders share voxelize_core.glsl).
+fn attribute_splits(grid: &VoxelGrid, tris: &[[[f32; 4]; 3]]) -> u32 {
+    let loads = tris
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|v| glam::Vec3::new(v[0], v[1], v[2]));
+            crate::voxel::gpu::voxelize_loads(grid, a.min(b).min(c), a.max(b).max(c))
+        })
+        .max()
+        .unwrap_or(0);
+    crate::voxel::gpu::voxelize_splits(loads, ATTRIBUTE_GROUP_SIZE)
+}
+
 fn attribute_triangles(scene: &Scene, t_s: f32) -> Vec<[[f32; 4]; 3]> {
     let mut out = Vec::new();
     for object in &scene.objects {

@@ -35,7 +35,7 @@ use crate::vk::{
     MemoryLocation, PassTiming, VkError, MAX_FRAMES_IN_FLIGHT,
 };
 use glam::Vec3;
-use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU32, AtomicU64, Ordering};
 use std::sync::Arc;
 
 /// Format of the binary column image: one texel = one column of 128 voxels.
@@ -43,6 +43,58 @@ pub const COLUMN_FORMAT: vk::Format = vk::Format::R32G32B32A32_UINT;
 
 /// Largest workgroup count per dispatch dimension that every Vulkan device supports.
 const MAX_GROUPS_X: u32 = 65535;
+
+/// Loop iterations one invocation of the triangle voxelizer may run. Lavapipe (llvmpipe's
+/// gallivm) counts the iterations of all loops of a shader invocation together and at 65,535
+/// (`LP_MAX_TGSI_LOOP_ITERATIONS`) ends every loop early, without an error: voxels go missing.
+/// The margin is for iterations outside the column and depth loops.
+const LOOP_BUDGET: u64 = 60_000;
+
+/// How many invocations' worth of loop work the triangle voxelizer needs for a triangle whose
+/// world-space bounds are `[lo, hi]` in `grid`: the columns of its voxel bounding box over the
+/// columns one invocation can walk within [`LOOP_BUDGET`] at its depth range (the shader's
+/// worst case, without the plane bound). A set of triangles is dispatched with
+/// `ceil(max loads / group size)` workgroups per triangle (z splits), so no invocation runs
+/// past the budget. 0 for triangles outside the grid.
+pub fn voxelize_loads(grid: &VoxelGrid, lo: Vec3, hi: Vec3) -> u64 {
+    let (a, b) = (grid.world_to_voxel(lo), grid.world_to_voxel(hi));
+    let (lo, hi) = (a.min(b), a.max(b));
+    let dims_f = grid.extent_voxels().as_vec3();
+    // Same bounds as voxelize_core.glsl (NaN compares false there as here).
+    if hi.cmplt(Vec3::ZERO).any() || lo.cmpgt(dims_f).any() {
+        return 0;
+    }
+    let first = (lo.ceil() - 1.0).clamp(Vec3::ZERO, dims_f - 1.0).as_uvec3();
+    let last = hi.floor().clamp(Vec3::ZERO, dims_f - 1.0).as_uvec3();
+    let columns = u64::from(last.x - first.x + 1) * u64::from(last.y - first.y + 1);
+    // Per column: its depth loop's iterations plus one of the column loop.
+    let per_column = u64::from(last.z - first.z + 1) + 1;
+    columns.div_ceil((LOOP_BUDGET / per_column).max(1))
+}
+
+/// World-space bounds of a triangle.
+fn bounds(tri: [Vec3; 3]) -> [Vec3; 2] {
+    [
+        tri[0].min(tri[1]).min(tri[2]),
+        tri[0].max(tri[1]).max(tri[2]),
+    ]
+}
+
+/// The largest [`voxelize_loads`] of a set of triangle bounds.
+fn max_loads(grid: &VoxelGrid, bounds: &[[Vec3; 2]]) -> u64 {
+    bounds
+        .iter()
+        .map(|b| voxelize_loads(grid, b[0], b[1]))
+        .max()
+        .unwrap_or(0)
+}
+
+/// Workgroups per triangle (dispatch z) for a set whose largest load is `loads`.
+pub fn voxelize_splits(loads: u64, group_size: u32) -> u32 {
+    loads
+        .div_ceil(u64::from(group_size.max(1)))
+        .clamp(1, u64::from(MAX_GROUPS_X)) as u32
+}
 
 /// Errors of the GPU voxel passes.
 #[derive(Debug, thiserror::Error)]
@@ -121,20 +173,20 @@ pub fn column_bytes(grid: &VoxelGrid) -> u64 {
 /// The pipelines of the voxel passes.
 pub struct VoxelPipelines {
     voxelize: ComputePipeline,
+    group_size: u32,
     mip: ComputePipeline,
     sampler: vk::Sampler,
 }
 
 /// Invocations per triangle of `voxelize_triangles` (see [`VoxelPipelines::with_group_size`]).
 ///
-/// Open issue: on lavapipe a group of 8 (its SIMD width) is 1.5–6× faster, but then grids
-/// with two layers (D = 256) lose runs of voxels against the CPU reference (tests/voxelize.rs
-/// fails); 64 is exact on every test. Not yet understood (driver or shader), so 64 stays.
-/// Narrowed down so far (group size 8): the GPU only *misses* voxels (never adds any), the
-/// counts are deterministic (bunny 256×255×256: 10,082 of 333,361), and they stay identical
-/// with per-bit atomics instead of batched words, with another sentinel word, and without
-/// the per-column plane bound, which makes a one-layer soup fail too: it is not the word
-/// batching, the depth bound or the layer count.
+/// Every group size is exact. Smaller groups once lost voxels on lavapipe (the bunny box at
+/// 256×255×256 and group size 8 missed 10,082 of 333,361): lavapipe ends all loops of an
+/// invocation after 65,535 iterations of them together, and one invocation walked 125 columns
+/// of the ceiling's bounding box at 246 depths each. Large steep triangles hit the same limit
+/// at 64. The dispatch now splits such triangles over more workgroups ([`voxelize_loads`]),
+/// and the shader no longer loops over the nine edge axes. A group of 8 (lavapipe's SIMD
+/// width) is faster there; 64 stays the default until the benchmark compares them.
 pub const VOXELIZE_GROUP_SIZE: u32 = 64;
 
 impl VoxelPipelines {
@@ -164,6 +216,7 @@ impl VoxelPipelines {
         let sampler = ctx.create_sampler(vk::Filter::NEAREST, false)?;
         Ok(Self {
             voxelize,
+            group_size: group_size.max(1),
             mip,
             sampler,
         })
@@ -229,6 +282,8 @@ impl GpuVoxelGrid {
 pub struct TriangleBuffer {
     pub buffer: Buffer,
     pub count: u32,
+    /// World-space bounds per triangle, to size the dispatch ([`voxelize_loads`]).
+    bounds: Vec<[Vec3; 2]>,
 }
 
 impl TriangleBuffer {
@@ -248,6 +303,7 @@ impl TriangleBuffer {
         Ok(Self {
             buffer,
             count: triangles.len() as u32,
+            bounds: triangles.iter().map(|&t| bounds(t)).collect(),
         })
     }
 
@@ -343,11 +399,19 @@ pub struct DynamicTriangles {
     stride: u64,
     capacity: u32,
     counts: Arc<[AtomicU32; MAX_FRAMES_IN_FLIGHT]>,
+    /// Per slot, the largest [`voxelize_loads`] of its triangles in `grid`.
+    loads: Arc<[AtomicU64; MAX_FRAMES_IN_FLIGHT]>,
+    grid: VoxelGrid,
 }
 
 impl DynamicTriangles {
-    /// Room for `capacity` triangles per slot.
-    pub fn new(ctx: &Context, name: &str, capacity: u32) -> Result<Self, VkError> {
+    /// Room for `capacity` triangles per slot, voxelized into `grid`.
+    pub fn new(
+        ctx: &Context,
+        name: &str,
+        grid: &VoxelGrid,
+        capacity: u32,
+    ) -> Result<Self, VkError> {
         // Slot offsets must respect minStorageBufferOffsetAlignment (at most 256 bytes).
         let stride = (u64::from(capacity.max(1)) * std::mem::size_of::<GpuTriangle>() as u64)
             .next_multiple_of(256);
@@ -362,6 +426,8 @@ impl DynamicTriangles {
             stride,
             capacity,
             counts: Arc::new(std::array::from_fn(|_| AtomicU32::new(0))),
+            loads: Arc::new(std::array::from_fn(|_| AtomicU64::new(0))),
+            grid: *grid,
         })
     }
 
@@ -379,6 +445,13 @@ impl DynamicTriangles {
             return 0;
         };
         m[offset..offset + bytes.len()].copy_from_slice(bytes);
+        let written: Vec<[Vec3; 2]> = triangles[..n]
+            .iter()
+            .map(|t| bounds(t.v.map(|p| Vec3::new(p[0], p[1], p[2]))))
+            .collect();
+        if let Some(l) = self.loads.get(slot) {
+            l.store(max_loads(&self.grid, &written), Ordering::Release);
+        }
         if let Some(c) = self.counts.get(slot) {
             c.store(n as u32, Ordering::Release);
         }
@@ -399,24 +472,31 @@ pub enum TriangleSource<'a> {
     PerSlot(&'a DynamicTriangles),
 }
 
-/// How a recording closure finds a set's triangles: `(offset, range, count)` for a slot.
+/// How a recording closure finds a set's triangles: `(offset, range, count, loads)` for a
+/// slot, `loads` being the set's largest [`voxelize_loads`].
 #[derive(Clone)]
 enum SetRange {
-    Fixed(u32),
+    Fixed(u32, u64),
     PerSlot {
         stride: u64,
         counts: Arc<[AtomicU32; MAX_FRAMES_IN_FLIGHT]>,
+        loads: Arc<[AtomicU64; MAX_FRAMES_IN_FLIGHT]>,
     },
 }
 
 impl SetRange {
-    fn at(&self, slot: usize) -> (u64, u64, u32) {
+    fn at(&self, slot: usize) -> (u64, u64, u32, u64) {
         match self {
-            SetRange::Fixed(n) => (0, vk::WHOLE_SIZE, *n),
-            SetRange::PerSlot { stride, counts } => (
+            SetRange::Fixed(n, loads) => (0, vk::WHOLE_SIZE, *n, *loads),
+            SetRange::PerSlot {
+                stride,
+                counts,
+                loads,
+            } => (
                 slot as u64 * stride,
                 *stride,
                 counts.get(slot).map_or(0, |c| c.load(Ordering::Acquire)),
+                loads.get(slot).map_or(0, |l| l.load(Ordering::Acquire)),
             ),
         }
     }
@@ -477,13 +557,17 @@ pub fn add_voxelize_passes_gated(
     let sets: Vec<(BufferHandle, SetRange)> = triangles
         .iter()
         .filter_map(|t| match *t {
-            TriangleSource::Fixed(t) if t.count > 0 => Some((&t.buffer, SetRange::Fixed(t.count))),
+            TriangleSource::Fixed(t) if t.count > 0 => Some((
+                &t.buffer,
+                SetRange::Fixed(t.count, max_loads(grid, &t.bounds)),
+            )),
             TriangleSource::Fixed(_) => None,
             TriangleSource::PerSlot(d) => Some((
                 &d.buffer,
                 SetRange::PerSlot {
                     stride: d.stride,
                     counts: d.counts.clone(),
+                    loads: d.loads.clone(),
                 },
             )),
         })
@@ -493,6 +577,7 @@ pub fn add_voxelize_passes_gated(
         return;
     }
     let pipe = pipelines.voxelize;
+    let group_size = pipelines.group_size;
     let grid = *grid;
     let mut pass = g
         .add_pass("voxelize_triangles")
@@ -505,7 +590,7 @@ pub fn add_voxelize_passes_gated(
             return;
         }
         for (h, range) in &sets {
-            let (offset, range, count) = range.at(ctx.slot);
+            let (offset, range, count, loads) = range.at(ctx.slot);
             if count == 0 {
                 continue;
             }
@@ -521,14 +606,16 @@ pub fn add_voxelize_passes_gated(
                     Descriptor::storage_buffer(1, ctx.buffer(columns).raw),
                 ],
             );
-            // One workgroup per triangle; rows of MAX_GROUPS_X workgroups past the limit.
+            // One workgroup per triangle, rows of MAX_GROUPS_X workgroups past the limit, and
+            // z splits so that no invocation outruns lavapipe's loop budget.
+            let splits = voxelize_splits(loads, group_size);
             let mut first = 0;
             while first < count {
                 let n = (count - first).min(MAX_GROUPS_X * MAX_GROUPS_X);
                 let push = GpuVoxelizePush::new(&grid, n, first);
                 ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
                 let x = n.min(MAX_GROUPS_X);
-                ctx.cmd.dispatch(x, n.div_ceil(x), 1);
+                ctx.cmd.dispatch(x, n.div_ceil(x), splits);
                 first += n;
             }
         }
@@ -850,6 +937,7 @@ impl VoxelFrame {
             let mut triangles = DynamicTriangles::new(
                 ctx,
                 "dynamic triangles",
+                &grid,
                 dynamic_capacity(&dyn_scene).max(tris.len() as u32),
             )?;
             for slot in 0..MAX_FRAMES_IN_FLIGHT {
@@ -1028,6 +1116,43 @@ pub fn readback_buffer(ctx: &Context, name: &str, size_bytes: u64) -> Result<Buf
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn large_steep_triangles_are_split_within_the_loop_budget() {
+        let grid = VoxelGrid::from_box(
+            Vec3::ZERO,
+            Vec3::ONE,
+            Some(super::super::Axis::Z),
+            256,
+            256,
+            2,
+        )
+        .expect("grid");
+        // A voxel-sized triangle: one invocation's worth.
+        let h = 0.5 / 256.0;
+        assert_eq!(
+            voxelize_loads(&grid, Vec3::splat(0.5), Vec3::splat(0.5 + h)),
+            1
+        );
+        assert_eq!(
+            voxelize_loads(&grid, Vec3::splat(2.0), Vec3::splat(3.0)),
+            0,
+            "outside"
+        );
+        // The whole box: 256 x 256 columns of 256 depths (+1 for the column loop), at most
+        // 60,000 / 257 = 233 columns per invocation.
+        let loads = voxelize_loads(&grid, Vec3::ZERO, Vec3::ONE);
+        assert_eq!(loads, (256u64 * 256).div_ceil(233));
+        let splits = voxelize_splits(loads, 64);
+        let per_invocation = (256u64 * 256).div_ceil(64 * u64::from(splits));
+        assert!(per_invocation * 257 <= LOOP_BUDGET, "{splits} splits");
+        assert_eq!(
+            voxelize_splits(0, 64),
+            1,
+            "at least one workgroup per triangle"
+        );
+        assert_eq!(voxelize_splits(1 << 40, 1), MAX_GROUPS_X);
+    }
 
     #[test]
     fn gpu_struct_layouts_match_glsl() {
