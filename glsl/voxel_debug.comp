@@ -3,14 +3,19 @@
 // mode 0 (voxels): hierarchical first hit, shaded by the face the ray entered through (N.L);
 // mode 1 (steps): hierarchical traversal step count on a heat ramp;
 // mode 2 (level): occupancy of hierarchy level `level` (texel x,y blocks of 2^level voxels,
-//                 one voxel deep) by an exact walk, shaded like mode 0.
-// Writes the debug quantity (shade, steps or occupancy) to `value` and its color to `color`.
+//                 one voxel deep) by an exact walk, shaded like mode 0;
+// mode 3 (albedo): hierarchical first hit, the albedo volume's value at the hit voxel (the
+//                  color half shaded like mode 0).
+// Writes the debug quantity (shade, steps, occupancy or albedo) to `value` and its color to
+// `color`.
 layout(local_size_x = 8, local_size_y = 8) in;
 
 layout(set = 0, binding = 0) uniform usampler2DArray columns;  // all mips: the OR hierarchy
 layout(set = 0, binding = 1, std430) readonly buffer RayMasks { uvec4 ray_masks[]; };
 layout(set = 0, binding = 2, rgba32f) uniform writeonly image2D value;
 layout(set = 0, binding = 3, rgba8) uniform writeonly image2D color;
+// Congruent with the bits (x, y, depth k); a placeholder outside mode 3.
+layout(set = 0, binding = 4) uniform sampler3D albedo_volume;
 
 layout(push_constant) uniform Push {
     mat4 ndc_to_voxel;  // Vulkan NDC (z 0 near, 1 far) -> continuous voxel coordinates
@@ -98,6 +103,14 @@ void main() {
         float steps = float(h.steps);
         v = vec4(steps, h.hit ? 1.0 : 0.0, h.ran_out ? 1.0 : 0.0, 1.0);
         c = heat(steps / max(pc.light.w, 1.0));
+    } else if (mode == 3u) {
+        if (h.hit) {
+            vec3 albedo = texelFetch(albedo_volume, ivec3(h.voxel), 0).rgb;
+            v = vec4(albedo, 1.0);
+            // Half shaded like mode 0, in the picture only: same-colored surfaces separate,
+            // and walls facing away from the light keep their color.
+            c = albedo * (0.5 + 0.5 * face_shade(o, d, h.voxel, h.t, 1.0));
+        }
     } else if (h.hit) {
         float s = face_shade(o, d, h.voxel, h.t, cell);
         v = vec4(vec3(s), 1.0);

@@ -1,7 +1,8 @@
-//! The voxel debug views (`voxgi render --debug voxels|steps|level`): camera rays through the
-//! GPU column image. Checks on read-back pixels: background black, the Cornell floor lit by
-//! its +y face, step counts within the iteration cap, the hierarchical view equal to the exact
-//! walk, and coarser levels covering finer ones. Validation and synchronization validation on.
+//! The voxel debug views (`voxgi render --debug voxels|steps|level|albedo`): camera rays
+//! through the GPU column image. Checks on read-back pixels: background black, the Cornell
+//! floor lit by its +y face, step counts within the iteration cap, the hierarchical view equal
+//! to the exact walk, coarser levels covering finer ones, and the albedo view showing each
+//! wall's material. Validation and synchronization validation on.
 
 mod common;
 
@@ -29,6 +30,13 @@ fn render(scene: &Scene, view: DebugView, level: u32) -> RenderOutput {
     let out = render_image(&ctx, scene, &settings).expect("renders the debug view");
     common::assert_no_validation_messages(&ctx);
     assert!(out.live_passes.iter().any(|p| p == "voxel_debug"));
+    // Only the albedo view needs the albedo volume.
+    assert_eq!(
+        out.live_passes.iter().any(|p| p == "voxelize_attributes"),
+        view == DebugView::Albedo,
+        "{view:?}: {:?}",
+        out.live_passes
+    );
     for culled in ["deferred_direct", "tonemap", "gbuffer", "shadow_depth"] {
         assert!(
             !out.live_passes.iter().any(|p| p == culled),
@@ -82,6 +90,66 @@ fn cornell_voxels_view_lights_the_floor_and_equals_the_exact_walk() {
         .count();
     assert_eq!(differ, 0, "hierarchical and DDA debug images differ");
     assert_eq!(voxels.ldr, walk.ldr);
+}
+
+#[test]
+fn cornell_albedo_view_shows_each_walls_material() {
+    let scene = builtin("cornell").expect("cornell");
+    let albedo_of = |name: &str| {
+        scene
+            .materials
+            .iter()
+            .find(|m| m.name.contains(name))
+            .unwrap_or_else(|| panic!("material {name}"))
+            .albedo
+    };
+    let albedo = render(&scene, DebugView::Albedo, 0);
+    // Mid-wall points above both blocks, seen past them: the red wall at x = 0.55 m (left in
+    // the image), the green one at x = 0, the white back wall at z = 0.56.
+    let walls = [
+        ("cornell_red", Vec3::new(0.55, 0.42, 0.4), 0),
+        ("cornell_green", Vec3::new(0.0, 0.42, 0.4), 1),
+        ("cornell_white", Vec3::new(0.28, 0.42, 0.559), 3),
+    ];
+    // RGBA8 UNORM volume: half a step of rounding, plus float slack.
+    let tol = 0.5 / 255.0 + 1e-4;
+    for (name, p, dominant) in walls {
+        let kd = albedo_of(name);
+        let (x, y) = pixel_of(&scene, p);
+        let v = Vec3::from(value(&albedo.hdr, x, y));
+        assert!(
+            (v - kd).abs().max_element() <= tol,
+            "{name} at pixel ({x}, {y}): albedo {v}, material Kd {kd}"
+        );
+        let i = ((y * SIZE + x) * 4) as usize;
+        let rgb = &albedo.ldr[i..i + 3];
+        if dominant < 3 {
+            let others = (0..3).filter(|&c| c != dominant);
+            for c in others {
+                assert!(
+                    rgb[dominant] > rgb[c] + 40,
+                    "{name} pixel ({x}, {y}) is not dominated by channel {dominant}: {rgb:?}"
+                );
+            }
+        } else {
+            // White, shaded: gray and lit.
+            let gray = rgb.iter().all(|&c| c.abs_diff(rgb[0]) <= 1);
+            assert!(gray && rgb[0] > 40, "{name}: {rgb:?}");
+        }
+    }
+    // The same rays hit the same voxels as the voxels view, and every hit voxel has an albedo
+    // (no Cornell material is black): the volume covers every bit.
+    let voxels = render(&scene, DebugView::Voxels, 0);
+    for (i, (a, v)) in albedo.hdr.data.iter().zip(&voxels.hdr.data).enumerate() {
+        let albedo_hit = a.iter().any(|&c| c > 0.0);
+        assert_eq!(
+            albedo_hit,
+            v[0] > 0.0,
+            "pixel {i}: albedo {a:?}, shade {v:?}"
+        );
+    }
+    let st = debug_stats(DebugView::Albedo, &albedo.hdr);
+    assert_eq!(st.hits, debug_stats(DebugView::Voxels, &voxels.hdr).hits);
 }
 
 #[test]
@@ -148,7 +216,12 @@ rotate_deg = [20.0, 30.0, 0.0]
         &dir,
     )
     .expect("test scene parses");
-    for view in [DebugView::Voxels, DebugView::Steps, DebugView::Level] {
+    for view in [
+        DebugView::Voxels,
+        DebugView::Steps,
+        DebugView::Level,
+        DebugView::Albedo,
+    ] {
         let out = render(&scene, view, 1);
         let center = value(&out.hdr, SIZE / 2, SIZE / 2);
         let hit = if view == DebugView::Steps {

@@ -268,17 +268,25 @@ fn viewer_renders_a_scene_with_gi_table_and_gi_flags_without_validation_messages
 }
 
 #[test]
-fn viewer_shows_a_voxel_debug_view_without_validation_messages() {
+fn viewer_shows_voxel_debug_views_without_validation_messages() {
     require_display();
     let _display = lock_display();
     let dir = scratch_dir("window-debug");
-    let shot = dir.join("voxels.png");
+    // The albedo view also creates and writes the albedo volume.
+    for view in ["voxels", "albedo"] {
+        viewer_shows_debug_view(&dir, view);
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+fn viewer_shows_debug_view(dir: &Path, view: &str) {
+    let shot = dir.join(format!("{view}.png"));
     let out = voxgi_with(
         &[
             "--validate",
             "view",
             "--debug",
-            "voxels",
+            view,
             "--width",
             "320",
             "--height",
@@ -290,9 +298,8 @@ fn viewer_shows_a_voxel_debug_view_without_validation_messages() {
         ],
         |_| {},
     );
-    assert_success(&out, "voxgi --validate view --debug voxels");
+    assert_success(&out, &format!("voxgi --validate view --debug {view}"));
     assert_not_blank(&load(&shot));
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 fn assert_not_blank(img: &image::RgbaImage) {

@@ -235,12 +235,7 @@ pub fn draw(ctx: &egui::Context, c: &mut Controls, stats: &TimingStats, info: &P
                     egui::ComboBox::from_label("image")
                         .selected_text(debug_name(c.debug))
                         .show_ui(ui, |ui| {
-                            for v in [
-                                None,
-                                Some(DebugView::Voxels),
-                                Some(DebugView::Steps),
-                                Some(DebugView::Level),
-                            ] {
+                            for v in VIEWS {
                                 ui.selectable_value(&mut c.debug, v, debug_name(v));
                             }
                         });
@@ -257,6 +252,15 @@ pub fn draw(ctx: &egui::Context, c: &mut Controls, stats: &TimingStats, info: &P
     panel.response.rect.width()
 }
 
+/// The "View" combo's entries: the lit image, then every debug view.
+const VIEWS: [Option<DebugView>; 5] = [
+    None,
+    Some(DebugView::Voxels),
+    Some(DebugView::Steps),
+    Some(DebugView::Level),
+    Some(DebugView::Albedo),
+];
+
 /// Name of a debug view in the panel.
 fn debug_name(v: Option<DebugView>) -> &'static str {
     match v {
@@ -264,6 +268,7 @@ fn debug_name(v: Option<DebugView>) -> &'static str {
         Some(DebugView::Voxels) => "voxels",
         Some(DebugView::Steps) => "traversal steps",
         Some(DebugView::Level) => "hierarchy level",
+        Some(DebugView::Albedo) => "albedo",
     }
 }
 
@@ -323,6 +328,17 @@ fn gi_controls(ui: &mut egui::Ui, gi: &mut GiSettings, frames: Option<u32>) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_view_combo_offers_every_debug_view_once() {
+        use clap::ValueEnum;
+        for v in DebugView::value_variants() {
+            let n = VIEWS.iter().filter(|&&e| e == Some(*v)).count();
+            assert_eq!(n, 1, "{v:?} appears {n} times in the panel's View combo");
+        }
+        let names: std::collections::HashSet<_> = VIEWS.iter().map(|&v| debug_name(v)).collect();
+        assert_eq!(names.len(), VIEWS.len(), "entries share a name");
+    }
 
     fn frame(values: &[(&str, f64)]) -> Vec<PassTiming> {
         values

@@ -318,7 +318,8 @@ impl Renderer {
         let voxel_debug = match (&settings.debug, &voxels) {
             (Some(d), Some(v)) => Some(crate::voxel::debug_view::VoxelDebugPass::new(
                 ctx,
-                &scene.camera,
+                scene,
+                settings.time_s,
                 settings.width as f32 / settings.height as f32,
                 d,
                 v,
@@ -447,6 +448,9 @@ impl Renderer {
         if let Some((gi, _)) = &mut self.gi {
             gi.update_dynamic(self.settings.time_s, slot);
             gi.advance();
+        }
+        if let Some(pass) = &mut self.voxel_debug {
+            pass.update(self.settings.time_s, slot);
         }
         if let Some(v) = &mut self.voxels {
             if let Err(e) = v.update(self.settings.time_s, slot) {

@@ -7,18 +7,24 @@
 //!   red → yellow → white at `steps_scale`); the value image holds the raw counts.
 //! - [`DebugView::Level`]: occupancy of one hierarchy level, walked exactly (blocks of
 //!   2^ℓ × 2^ℓ voxels, one voxel deep).
+//! - [`DebugView::Albedo`]: hierarchical first hit; the value image holds the albedo volume
+//!   at the hit voxel (linear), the color image that albedo half shaded like the voxels
+//!   view. Only this view creates the albedo volume ([`AttributeVolumes`]); the others bind
+//!   a tiny placeholder in its slot. Its voxels are the triangle voxelizer's, so bits that
+//!   only the atlas voxelizer sets show black.
 //!
-//! The pass writes an `RGBA32F` value image (shade, step count or occupancy: what tests and
-//! `--exr` read) and the `RGBA8` color image the renderer reads back as its picture.
+//! The pass writes an `RGBA32F` value image (shade, step count, occupancy or albedo: what
+//! tests and `--exr` read) and the `RGBA8` color image the renderer reads back as its picture.
 
+use super::attributes::{AttributeVolumes, ATTRIBUTE_VOLUME_STATE};
 use super::gpu::{GpuVoxelError, GpuVoxelGrid, VoxelFrame};
 use super::ray_mask::RayMaskLut;
 use super::traverse::TraversalParams;
 use super::VoxelGrid;
 use crate::eval::HdrImage;
 use crate::graph::{Access, ImageHandle, RenderGraph, Shader};
-use crate::scene::Camera;
-use crate::vk::{vk, Buffer, ComputePipeline, Context, Descriptor, VkError};
+use crate::scene::Scene;
+use crate::vk::{vk, Buffer, ComputePipeline, Context, Descriptor, Image, ImageDesc, VkError};
 use glam::{Mat4, Vec3};
 
 /// Which debug view a frame shows instead of the lit image.
@@ -31,6 +37,8 @@ pub enum DebugView {
     Steps,
     /// Occupancy of one hierarchy level.
     Level,
+    /// Ray-cast voxels colored by the albedo volume.
+    Albedo,
 }
 
 impl DebugView {
@@ -39,6 +47,7 @@ impl DebugView {
             DebugView::Voxels => 0,
             DebugView::Steps => 1,
             DebugView::Level => 2,
+            DebugView::Albedo => 3,
         }
     }
 }
@@ -113,24 +122,36 @@ impl GpuVoxelDebugPush {
     }
 }
 
-/// The pipeline, ray-mask LUT (uploaded once) and push constants of a debug view.
+/// The pipeline, ray-mask LUT (uploaded once) and push constants of a debug view, and what
+/// it samples as albedo: the albedo volume in the albedo view, else a placeholder.
 pub struct VoxelDebugPass {
     pipeline: ComputePipeline,
     lut: Buffer,
     sampler: vk::Sampler,
     push: GpuVoxelDebugPush,
+    albedo: AlbedoSource,
+}
+
+/// Binding 4 of `voxel_debug.comp`.
+enum AlbedoSource {
+    Volumes(Box<AttributeVolumes>),
+    /// 1×1×2, never read: the shader reads albedo in the albedo view only.
+    Placeholder(Image),
 }
 
 impl VoxelDebugPass {
-    /// The debug view of `frame`'s grid seen by `camera` (`aspect` = width / height), lit
-    /// from over the camera's shoulder.
+    /// The debug view of `frame`'s grid seen by `scene`'s camera (`aspect` = width / height),
+    /// lit from over the camera's shoulder; the albedo view voxelizes `scene`'s albedo at
+    /// `time_s`.
     pub fn new(
         ctx: &Context,
-        camera: &Camera,
+        scene: &Scene,
+        time_s: f32,
         aspect: f32,
         settings: &DebugSettings,
         frame: &VoxelFrame,
     ) -> Result<Self, GpuVoxelError> {
+        let camera = &scene.camera;
         let levels = frame.voxels.mip_levels();
         if settings.level >= levels {
             return Err(GpuVoxelError::BadDebugLevel {
@@ -148,10 +169,31 @@ impl VoxelDebugPass {
             light,
             settings,
         );
-        Ok(Self::with_push(ctx, push)?)
+        let albedo = AlbedoSource::new(ctx, scene, time_s, settings.view, frame)?;
+        match Self::pipeline_parts(ctx) {
+            Ok((pipeline, lut, sampler)) => Ok(Self {
+                pipeline,
+                lut,
+                sampler,
+                push,
+                albedo,
+            }),
+            Err(e) => {
+                albedo.destroy(ctx);
+                Err(e.into())
+            }
+        }
     }
 
-    fn with_push(ctx: &Context, push: GpuVoxelDebugPush) -> Result<Self, VkError> {
+    /// For scenes with moving objects: rewrites the albedo volume of frame slot `slot` at
+    /// `t_s` when they moved (albedo view only).
+    pub fn update(&mut self, t_s: f32, slot: usize) {
+        if let AlbedoSource::Volumes(v) = &mut self.albedo {
+            v.update(t_s, slot);
+        }
+    }
+
+    fn pipeline_parts(ctx: &Context) -> Result<(ComputePipeline, Buffer, vk::Sampler), VkError> {
         let lut = ctx.upload_buffer(
             "ray mask lut",
             &RayMaskLut::new().to_gpu_bytes(),
@@ -164,6 +206,7 @@ impl VoxelDebugPass {
                 (1, vk::DescriptorType::STORAGE_BUFFER),
                 (2, vk::DescriptorType::STORAGE_IMAGE),
                 (3, vk::DescriptorType::STORAGE_IMAGE),
+                (4, vk::DescriptorType::COMBINED_IMAGE_SAMPLER),
             ],
             std::mem::size_of::<GpuVoxelDebugPush>() as u32,
             &[],
@@ -183,16 +226,12 @@ impl VoxelDebugPass {
                 return Err(e);
             }
         };
-        Ok(Self {
-            pipeline,
-            lut,
-            sampler,
-            push,
-        })
+        Ok((pipeline, lut, sampler))
     }
 
-    /// Declares `voxel_debug`: reads the column image `columns` (every mip) and writes
-    /// `value` (`RGBA32F`) and `color` (`RGBA8`), both `extent` pixels.
+    /// Declares `voxel_debug`: reads the column image `columns` (every mip) and the albedo
+    /// (after `voxelize_attributes` in the albedo view) and writes `value` (`RGBA32F`) and
+    /// `color` (`RGBA8`), both `extent` pixels.
     pub fn add_pass(
         &self,
         g: &mut RenderGraph,
@@ -208,8 +247,13 @@ impl VoxelDebugPass {
         let lut = g.import_buffer(&self.lut, read);
         let pipe = self.pipeline;
         let sampler = self.sampler;
+        let albedo = match &self.albedo {
+            AlbedoSource::Volumes(v) => v.add_pass(g).0,
+            AlbedoSource::Placeholder(image) => g.import_image(image, ATTRIBUTE_VOLUME_STATE),
+        };
         g.add_pass("voxel_debug")
             .read(columns, Access::Sampled(Shader::Compute))
+            .read(albedo, Access::Sampled(Shader::Compute))
             .read(lut, read)
             .write(value, Access::StorageWrite(Shader::Compute))
             .write(color, Access::StorageWrite(Shader::Compute))
@@ -231,6 +275,11 @@ impl VoxelDebugPass {
                             binding: 3,
                             view: ctx.image(color).view,
                         },
+                        Descriptor::SampledImage {
+                            binding: 4,
+                            view: ctx.image(albedo).view,
+                            sampler,
+                        },
                     ],
                 );
                 ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
@@ -243,6 +292,43 @@ impl VoxelDebugPass {
         ctx.destroy_compute_pipeline(self.pipeline);
         ctx.destroy_buffer(self.lut);
         ctx.destroy_sampler(self.sampler);
+        self.albedo.destroy(ctx);
+    }
+}
+
+impl AlbedoSource {
+    fn new(
+        ctx: &Context,
+        scene: &Scene,
+        time_s: f32,
+        view: DebugView,
+        frame: &VoxelFrame,
+    ) -> Result<Self, VkError> {
+        if view == DebugView::Albedo {
+            let grid = &frame.voxels.grid;
+            return Ok(Self::Volumes(Box::new(AttributeVolumes::new(
+                ctx, scene, time_s, grid,
+            )?)));
+        }
+        // Two texels deep: `ImageDesc` makes a 3D image (the shader's sampler3D) only for
+        // depth > 1.
+        let desc = ImageDesc::new_2d("albedo placeholder", vk::Format::R8G8B8A8_UNORM, 1, 1)
+            .with_depth(2)
+            .with_usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST);
+        let image = ctx.create_image(&desc)?;
+        let zero = vk::ClearColorValue { float32: [0.0; 4] };
+        if let Err(e) = ctx.clear_new_image(&image, zero, ATTRIBUTE_VOLUME_STATE.info().layout) {
+            ctx.destroy_image(image);
+            return Err(e);
+        }
+        Ok(Self::Placeholder(image))
+    }
+
+    fn destroy(self, ctx: &Context) {
+        match self {
+            AlbedoSource::Volumes(v) => v.destroy(ctx),
+            AlbedoSource::Placeholder(image) => ctx.destroy_image(image),
+        }
     }
 }
 
@@ -273,6 +359,9 @@ pub fn debug_stats(view: DebugView, value: &HdrImage) -> DebugStats {
             s.max_steps = s.max_steps.max(steps);
             s.hits += usize::from(p[1] > 0.5);
             s.ran_out += usize::from(p[2] > 0.5);
+        } else if view == DebugView::Albedo {
+            // Albedo: a hit on a black voxel reads as a miss.
+            s.hits += usize::from(p.iter().any(|&c| c > 0.0));
         } else {
             s.hits += usize::from(p[0] > 0.0);
         }
@@ -306,6 +395,10 @@ pub fn describe(settings: &DebugSettings, value: &HdrImage) -> String {
                 st.ran_out
             )
         }
+        DebugView::Albedo => format!(
+            "albedo view: {hit_share:.1}% of pixels hit a voxel with albedo (color = albedo, half \
+             shaded; the value image holds the albedo)"
+        ),
         DebugView::Level => format!(
             "level {} view: blocks of {n}x{n}x1 voxels; {hit_share:.1}% of pixels hit",
             settings.level,
