@@ -100,6 +100,9 @@ enum Command {
         /// Start with a voxel debug view instead of the lit image (the panel switches views).
         #[arg(long, value_enum)]
         debug: Option<voxgi::voxel::debug_view::DebugView>,
+        /// The object whose atlas the atlas view shows: its name or index in the scene.
+        #[arg(long, default_value = "0")]
+        object: String,
         /// Scripted run (tests): exit after N presented frames, writing --screenshot.
         #[arg(long)]
         frames: Option<u64>,
@@ -320,11 +323,14 @@ struct FrameArgs {
     /// Traversal steps shown white by --debug steps.
     #[arg(long, default_value_t = 64)]
     debug_steps_scale: u32,
+    /// The object whose atlas --debug atlas shows: its name or index in the scene.
+    #[arg(long, default_value = "0")]
+    object: String,
 }
 
 impl FrameArgs {
     /// The frame's settings; GI values not given as flags come from the scene's `[gi]`.
-    fn settings(&self, scene: &Scene) -> RenderSettings {
+    fn settings(&self, scene: &Scene) -> Result<RenderSettings> {
         let mut s = RenderSettings {
             width: self.width,
             height: self.height,
@@ -349,15 +355,22 @@ impl FrameArgs {
                 revoxelize_static: self.revoxelize,
                 voxelizer: self.voxelizer,
             });
+        let object = match self.debug {
+            Some(voxgi::voxel::debug_view::DebugView::Atlas) => {
+                voxgi::voxel::atlas_view::find_object(scene, &self.object)?
+            }
+            _ => 0,
+        };
         s.debug = self
             .debug
             .map(|view| voxgi::voxel::debug_view::DebugSettings {
                 view,
                 level: self.debug_level,
                 steps_scale: self.debug_steps_scale,
+                object,
                 ..Default::default()
             });
-        s
+        Ok(s)
     }
 }
 
@@ -448,11 +461,22 @@ fn run(cli: Cli) -> Result<()> {
             screenshot,
             gi,
             debug,
+            object,
         } => {
             let scene = load_scene_arg(scene.as_deref())?;
+            // Checked when the viewer starts in the atlas view; the panel may switch to it
+            // later, then showing this object if it exists, else the first.
+            let object = match voxgi::voxel::atlas_view::find_object(&scene, &object) {
+                Ok(i) => i,
+                Err(e) if debug == Some(voxgi::voxel::debug_view::DebugView::Atlas) => {
+                    return Err(e.into())
+                }
+                Err(_) => 0,
+            };
             let mut settings = RenderSettings {
                 debug: debug.map(|view| voxgi::voxel::debug_view::DebugSettings {
                     view,
+                    object,
                     ..Default::default()
                 }),
                 ..Default::default()
@@ -518,7 +542,7 @@ fn run(cli: Cli) -> Result<()> {
                 demo.destroy(&ctx);
             } else {
                 let scene = load_scene_arg(scene.as_deref())?;
-                let renderer = voxgi::render::Renderer::new(&ctx, &scene, frame.settings(&scene))?;
+                let renderer = voxgi::render::Renderer::new(&ctx, &scene, frame.settings(&scene)?)?;
                 let exec = voxgi::graph::GraphExecutor::new(&ctx, renderer.graph(), 1)?;
                 dump(&exec);
                 exec.destroy(&ctx);
@@ -535,7 +559,7 @@ fn run(cli: Cli) -> Result<()> {
         } => {
             let scene = load_scene_arg(scene.as_deref())?;
             let ctx = context(cli.validate, cli.device)?;
-            let settings = frame.settings(&scene);
+            let settings = frame.settings(&scene)?;
             let out = render_image(&ctx, &scene, &settings)?;
             image::save_buffer(
                 &output,
@@ -553,8 +577,8 @@ fn run(cli: Cli) -> Result<()> {
             for t in &out.timings {
                 println!("  {:<16} {:>9.3} ms", t.name, t.gpu_ms);
             }
-            if let Some(d) = settings.debug {
-                println!("{}", voxgi::voxel::debug_view::describe(&d, &out.hdr));
+            if let Some(d) = &out.debug_description {
+                println!("{d}");
             }
             if let Some(reference) = compare {
                 let r = voxgi::eval::HdrImage::load(&reference)?;
@@ -579,7 +603,7 @@ fn run(cli: Cli) -> Result<()> {
                     .clone()
                     .unwrap_or_else(|| voxgi::scene::DEFAULT_SCENE.into());
                 let scene = load_scene_arg(scene.as_deref())?;
-                let run = profile_scene(&ctx, &scene, &frame.settings(&scene), frames, warmup)?;
+                let run = profile_scene(&ctx, &scene, &frame.settings(&scene)?, frames, warmup)?;
                 let mut report = ProfileReport::from_frames(&ctx.info.name, &run.frames, warmup);
                 report.notes.push(("scene".into(), scene_name));
                 report.notes.push((

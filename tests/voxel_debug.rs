@@ -1,17 +1,22 @@
 //! The voxel debug views (`voxgi render --debug voxels|steps|level|albedo`): camera rays
 //! through the GPU column image. Checks on read-back pixels: background black, the Cornell
 //! floor lit by its +y face, step counts within the iteration cap, the hierarchical view equal
-//! to the exact walk, coarser levels covering finer ones, and the albedo view showing each
-//! wall's material. Validation and synchronization validation on.
+//! to the exact walk, coarser levels covering finer ones, the albedo view showing each wall's
+//! material, and the atlas view (`--debug atlas`) drawing exactly the CPU atlas's valid
+//! texels. Validation and synchronization validation on.
 
 mod common;
 
 use glam::{Vec3, Vec4Swizzles};
+use std::collections::HashSet;
 use std::path::Path;
 use voxgi::eval::HdrImage;
 use voxgi::render::{render_image, RenderOutput, RenderSettings};
 use voxgi::scene::{builtin, Scene};
+use voxgi::voxel::atlas::AtlasCache;
+use voxgi::voxel::atlas_view::{find_object, object_atlas};
 use voxgi::voxel::debug_view::{debug_stats, DebugSettings, DebugView};
+use voxgi::voxel::gpu::VoxelSettings;
 
 const SIZE: u32 = 96;
 
@@ -150,6 +155,103 @@ fn cornell_albedo_view_shows_each_walls_material() {
     }
     let st = debug_stats(DebugView::Albedo, &albedo.hdr);
     assert_eq!(st.hits, debug_stats(DebugView::Voxels, &voxels.hdr).hits);
+}
+
+#[test]
+fn atlas_view_draws_exactly_the_cpu_atlas_valid_texels() {
+    let scene = builtin("cornell").expect("cornell");
+    let object = find_object(&scene, "tall_block").expect("the tall block");
+    assert_eq!(find_object(&scene, &object.to_string()).ok(), Some(object));
+    let grid = VoxelSettings::default()
+        .grid_for(&scene, 0.0)
+        .expect("grid");
+    let atlas = object_atlas(&scene, 0.0, &grid, object, &mut AtlasCache::default())
+        .expect("the block's atlas");
+    let cpu: HashSet<(u32, u32)> = (0..atlas.triangles.len())
+        .flat_map(|t| atlas.texels(t))
+        .collect();
+    // One pixel per texel plus a margin that shows the background past the atlas.
+    let (w, h) = (atlas.width + 8, atlas.height + 8);
+    let ctx = common::context();
+    let settings = RenderSettings {
+        width: w,
+        height: h,
+        debug: Some(DebugSettings {
+            view: DebugView::Atlas,
+            object,
+            ..Default::default()
+        }),
+        ..Default::default()
+    };
+    let out = render_image(&ctx, &scene, &settings).expect("renders the atlas view");
+    common::assert_no_validation_messages(&ctx);
+    assert!(out.live_passes.iter().any(|p| p == "atlas_positions"));
+    assert!(out.live_passes.iter().any(|p| p == "atlas_debug"));
+    for unneeded in ["voxelize_triangles", "voxel_debug", "gbuffer", "tonemap"] {
+        assert!(
+            !out.live_passes.iter().any(|p| p == unneeded),
+            "{unneeded} runs in the atlas view: {:?}",
+            out.live_passes
+        );
+    }
+    let mut gpu = HashSet::new();
+    let mut colors = HashSet::new();
+    for (i, p) in out.hdr.data.iter().enumerate() {
+        let (x, y) = (i as u32 % w, i as u32 / w);
+        let rgb = &out.ldr[i * 4..i * 4 + 3];
+        if x >= atlas.width || y >= atlas.height {
+            assert_eq!(p[0], -1.0, "pixel ({x}, {y}) is past the atlas");
+            continue;
+        }
+        assert_eq!((p[1], p[2]), (x as f32, y as f32), "zoom 1: pixel = texel");
+        if p[0] > 0.5 {
+            gpu.insert((x, y));
+            colors.insert([rgb[0], rgb[1], rgb[2]]);
+            assert!(
+                rgb.iter().any(|&c| c >= 38),
+                "valid texel ({x}, {y}) is lit: {rgb:?}"
+            );
+        } else {
+            assert_eq!(rgb, &[0, 0, 0], "invalid texel ({x}, {y}) is black");
+        }
+    }
+    let only_gpu: Vec<_> = gpu.difference(&cpu).take(5).collect();
+    let only_cpu: Vec<_> = cpu.difference(&gpu).take(5).collect();
+    assert_eq!(
+        gpu.len(),
+        cpu.len(),
+        "valid texels: GPU {} vs CPU {}; only GPU e.g. {only_gpu:?}, only CPU e.g. {only_cpu:?}",
+        gpu.len(),
+        cpu.len()
+    );
+    assert_eq!(
+        gpu, cpu,
+        "same count, different texels: {only_gpu:?} {only_cpu:?}"
+    );
+    let coverage = gpu.len() as f64 / f64::from(atlas.width * atlas.height);
+    assert!(coverage > 0.2, "coverage {coverage}");
+    // Positions as colors: a gradient over the block's faces, not one flat color.
+    assert!(colors.len() > 1000, "{} distinct colors", colors.len());
+    let described = out.debug_description.expect("a description");
+    assert!(
+        described.contains(&format!("{} valid texels", cpu.len())),
+        "{described}"
+    );
+}
+
+#[test]
+fn atlas_view_names_the_objects_when_one_is_missing() {
+    let scene = builtin("cornell").expect("cornell");
+    let err = find_object(&scene, "teapot").expect_err("no teapot in the box");
+    let msg = err.to_string();
+    assert!(
+        msg.contains("'tall_block'") && msg.contains("--object"),
+        "{msg}"
+    );
+    assert!(
+        find_object(&scene, "3").is_err(),
+        "3 objects: indices 0..=2"
+    );
 }
 
 #[test]

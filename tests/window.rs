@@ -272,8 +272,9 @@ fn viewer_shows_voxel_debug_views_without_validation_messages() {
     require_display();
     let _display = lock_display();
     let dir = scratch_dir("window-debug");
-    // The albedo view also creates and writes the albedo volume.
-    for view in ["voxels", "albedo"] {
+    // The albedo view also creates and writes the albedo volume; the atlas view draws an
+    // atlas instead of casting rays.
+    for view in ["voxels", "albedo", "atlas"] {
         viewer_shows_debug_view(&dir, view);
     }
     let _ = std::fs::remove_dir_all(&dir);

@@ -253,12 +253,13 @@ pub fn draw(ctx: &egui::Context, c: &mut Controls, stats: &TimingStats, info: &P
 }
 
 /// The "View" combo's entries: the lit image, then every debug view.
-const VIEWS: [Option<DebugView>; 5] = [
+const VIEWS: [Option<DebugView>; 6] = [
     None,
     Some(DebugView::Voxels),
     Some(DebugView::Steps),
     Some(DebugView::Level),
     Some(DebugView::Albedo),
+    Some(DebugView::Atlas),
 ];
 
 /// Name of a debug view in the panel.
@@ -269,6 +270,7 @@ fn debug_name(v: Option<DebugView>) -> &'static str {
         Some(DebugView::Steps) => "traversal steps",
         Some(DebugView::Level) => "hierarchy level",
         Some(DebugView::Albedo) => "albedo",
+        Some(DebugView::Atlas) => "object atlas (--object)",
     }
 }
 

@@ -151,6 +151,7 @@ pub struct Renderer {
     /// Indirect-light passes and the light-map pipeline, when a GI method is on.
     gi: Option<(crate::gi::GiPasses, GraphicsPipeline)>,
     voxel_debug: Option<crate::voxel::debug_view::VoxelDebugPass>,
+    atlas_view: Option<crate::voxel::atlas_view::AtlasViewPass>,
 }
 
 /// Meters of height per unit of a height (bump) map, times the MTL `-bm` multiplier: MTL has
@@ -283,10 +284,14 @@ impl Renderer {
         {
             return Err(RenderError::GiNeedsCubeShadows);
         }
-        let voxel_settings = settings
-            .voxels
-            .or(gi_on.then(Default::default))
-            .or(settings.debug.map(|_| Default::default()));
+        // The atlas view only needs the grid's voxel size, not a voxelization.
+        let atlas_view_on = settings
+            .debug
+            .is_some_and(|d| d.view == crate::voxel::debug_view::DebugView::Atlas);
+        let voxel_settings = settings.voxels.or(gi_on.then(Default::default)).or(settings
+            .debug
+            .filter(|_| !atlas_view_on)
+            .map(|_| Default::default()));
         let voxels = match &voxel_settings {
             Some(v) => Some(crate::voxel::gpu::VoxelFrame::new(
                 ctx,
@@ -315,15 +320,34 @@ impl Renderer {
             }
             _ => None,
         };
+        let atlas_view = match &settings.debug {
+            Some(d) if atlas_view_on => {
+                let grid = settings
+                    .voxels
+                    .unwrap_or_default()
+                    .grid_for(scene, settings.time_s)
+                    .map_err(crate::voxel::gpu::GpuVoxelError::from)?;
+                Some(crate::voxel::atlas_view::AtlasViewPass::new(
+                    ctx,
+                    scene,
+                    settings.time_s,
+                    &grid,
+                    d.object,
+                )?)
+            }
+            _ => None,
+        };
         let voxel_debug = match (&settings.debug, &voxels) {
-            (Some(d), Some(v)) => Some(crate::voxel::debug_view::VoxelDebugPass::new(
-                ctx,
-                scene,
-                settings.time_s,
-                settings.width as f32 / settings.height as f32,
-                d,
-                v,
-            )?),
+            (Some(d), Some(v)) if !atlas_view_on => {
+                Some(crate::voxel::debug_view::VoxelDebugPass::new(
+                    ctx,
+                    scene,
+                    settings.time_s,
+                    settings.width as f32 / settings.height as f32,
+                    d,
+                    v,
+                )?)
+            }
             _ => None,
         };
         let mut r = Self {
@@ -348,6 +372,7 @@ impl Renderer {
             voxels,
             gi,
             voxel_debug,
+            atlas_view,
         };
         r.prepare(scene)?;
         Ok(r)
@@ -861,6 +886,19 @@ impl Renderer {
         // A debug view replaces the lit image: the read-backs take its images, and the graph
         // culls deferred light, tone mapping, G-buffer and shadows, which nothing reads then.
         let (radiance, ldr) = match (&self.voxel_debug, &self.voxels, voxel_image) {
+            _ if self.atlas_view.is_some() => {
+                let value = g.create_image(ImageDesc::new_2d("atlas debug value", HDR, w, h));
+                let color = g.create_image(ImageDesc::new_2d(
+                    "atlas debug color",
+                    vk::Format::R8G8B8A8_UNORM,
+                    w,
+                    h,
+                ));
+                if let Some(pass) = &self.atlas_view {
+                    pass.add_passes(g, value, color, (w, h));
+                }
+                (value, color)
+            }
             (Some(pass), Some(v), Some(image)) => {
                 let value = g.create_image(ImageDesc::new_2d("voxel debug value", HDR, w, h));
                 let color = g.create_image(ImageDesc::new_2d(
@@ -907,8 +945,20 @@ impl Renderer {
             .unwrap_or_default()
     }
 
+    /// What the debug view shows and measured in `value` (its value image), for the CLI.
+    pub fn debug_description(&self, value: &HdrImage) -> Option<String> {
+        match (&self.atlas_view, &self.settings.debug) {
+            (Some(pass), _) => Some(pass.describe(value)),
+            (None, Some(d)) => Some(crate::voxel::debug_view::describe(d, value)),
+            _ => None,
+        }
+    }
+
     pub fn destroy(self, ctx: &Context) {
         if let Some(pass) = self.voxel_debug {
+            pass.destroy(ctx);
+        }
+        if let Some(pass) = self.atlas_view {
             pass.destroy(ctx);
         }
         if let Some(v) = self.voxels {
@@ -1204,6 +1254,8 @@ pub struct RenderOutput {
     /// Compiled-graph facts: live passes, culled passes, transient bytes aliased / not.
     pub live_passes: Vec<String>,
     pub transient_bytes: (u64, u64),
+    /// A debug view's description ([`Renderer::debug_description`]).
+    pub debug_description: Option<String>,
 }
 
 /// Renders one frame of `scene` headless.
@@ -1222,14 +1274,17 @@ pub fn render_image(
     let out = result.map(|timings| {
         let hdr = renderer.hdr_image();
         let ldr = renderer.ldr_pixels();
-        (hdr, ldr, timings)
+        let description = renderer.debug_description(&hdr);
+        (hdr, ldr, (timings, description))
     });
     let (exec_facts, out) = match out {
-        Ok((hdr, ldr, (timings, live, bytes))) => (Some((live, bytes)), Ok((hdr, ldr, timings))),
+        Ok((hdr, ldr, ((timings, live, bytes), description))) => {
+            (Some((live, bytes)), Ok((hdr, ldr, timings, description)))
+        }
         Err(e) => (None, Err(e)),
     };
     renderer.destroy(ctx);
-    let (hdr, ldr, timings) = out?;
+    let (hdr, ldr, timings, debug_description) = out?;
     let (live_passes, transient_bytes) = exec_facts.unwrap_or_default();
     Ok(RenderOutput {
         hdr,
@@ -1237,6 +1292,7 @@ pub fn render_image(
         timings,
         live_passes,
         transient_bytes,
+        debug_description,
     })
 }
 

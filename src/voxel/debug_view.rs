@@ -39,6 +39,8 @@ pub enum DebugView {
     Level,
     /// Ray-cast voxels colored by the albedo volume.
     Albedo,
+    /// One object's position atlas (`--object`; see [`super::atlas_view`]).
+    Atlas,
 }
 
 impl DebugView {
@@ -48,6 +50,8 @@ impl DebugView {
             DebugView::Steps => 1,
             DebugView::Level => 2,
             DebugView::Albedo => 3,
+            // Drawn by `atlas_debug` (super::atlas_view), never by `voxel_debug`.
+            DebugView::Atlas => 0,
         }
     }
 }
@@ -62,6 +66,8 @@ pub struct DebugSettings {
     pub traversal: TraversalParams,
     /// Step count shown white by [`DebugView::Steps`].
     pub steps_scale: u32,
+    /// Scene object index whose atlas [`DebugView::Atlas`] shows.
+    pub object: usize,
 }
 
 impl Default for DebugSettings {
@@ -71,6 +77,7 @@ impl Default for DebugSettings {
             level: 0,
             traversal: TraversalParams::default(),
             steps_scale: 64,
+            object: 0,
         }
     }
 }
@@ -359,6 +366,8 @@ pub fn debug_stats(view: DebugView, value: &HdrImage) -> DebugStats {
             s.max_steps = s.max_steps.max(steps);
             s.hits += usize::from(p[1] > 0.5);
             s.ran_out += usize::from(p[2] > 0.5);
+        } else if view == DebugView::Atlas {
+            s.hits += usize::from(p[0] > 0.5);
         } else if view == DebugView::Albedo {
             // Albedo: a hit on a black voxel reads as a miss.
             s.hits += usize::from(p.iter().any(|&c| c > 0.0));
@@ -399,6 +408,13 @@ pub fn describe(settings: &DebugSettings, value: &HdrImage) -> String {
             "albedo view: {hit_share:.1}% of pixels hit a voxel with albedo (color = albedo, half \
              shaded; the value image holds the albedo)"
         ),
+        DebugView::Atlas => {
+            let cov = super::atlas_view::atlas_coverage(value);
+            format!(
+                "atlas view: {} valid of {} texels shown (black = invalid)",
+                cov.valid, cov.shown
+            )
+        }
         DebugView::Level => format!(
             "level {} view: blocks of {n}x{n}x1 voxels; {hit_share:.1}% of pixels hit",
             settings.level,

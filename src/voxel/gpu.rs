@@ -109,6 +109,10 @@ pub enum GpuVoxelError {
     Atlas(#[from] super::atlas::AtlasError),
     #[error("debug level {level} does not exist: the voxel grid has levels 0..={max}; pass a smaller --debug-level")]
     BadDebugLevel { level: u32, max: u32 },
+    #[error("the scene has no object '{object}'; pass --object with one of: {names}")]
+    NoSuchObject { object: String, names: String },
+    #[error("object '{object}' has no atlas: OBJ-sequence animations deform, so the atlas voxelizer leaves them to the triangle voxelizer; pick another --object")]
+    NoAtlas { object: String },
 }
 
 /// One world-space triangle as the shader reads it (`struct Triangle` in
@@ -777,6 +781,22 @@ pub struct VoxelSettings {
     pub voxelizer: Voxelizer,
 }
 
+impl VoxelSettings {
+    /// The grid these settings put around `scene` at `t_s`.
+    pub fn grid_for(&self, scene: &Scene, t_s: f32) -> Result<VoxelGrid, VoxelError> {
+        let aabb = scene.aabb_at(t_s);
+        VoxelGrid::around(
+            aabb.min,
+            aabb.max,
+            &super::GridDesc {
+                layers: self.layers,
+                max_res_xy: self.max_res_xy,
+                ..Default::default()
+            },
+        )
+    }
+}
+
 /// The two voxelizers of DESIGN.md "Voxel representation".
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
 pub enum Voxelizer {
@@ -872,16 +892,7 @@ impl VoxelFrame {
         t_s: f32,
         settings: &VoxelSettings,
     ) -> Result<Self, GpuVoxelError> {
-        let aabb = scene.aabb_at(t_s);
-        let grid = VoxelGrid::around(
-            aabb.min,
-            aabb.max,
-            &super::GridDesc {
-                layers: settings.layers,
-                max_res_xy: settings.max_res_xy,
-                ..Default::default()
-            },
-        )?;
+        let grid = settings.grid_for(scene, t_s)?;
         let pipelines = VoxelPipelines::new(ctx)?;
         let voxels = GpuVoxelGrid::new(ctx, &grid)?;
         let atlas_mode = settings.voxelizer == Voxelizer::Atlas;

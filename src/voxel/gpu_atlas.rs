@@ -24,7 +24,7 @@
 use super::atlas::{AtlasCache, MeshAtlas};
 use super::gpu::{image_extent, run_once, GpuVoxelError, SlotGate};
 use super::VoxelGrid;
-use crate::graph::{Access, BufferHandle, RenderGraph, Shader};
+use crate::graph::{Access, BufferHandle, ImageHandle, RenderGraph, Shader};
 use crate::scene::{Animation, Scene};
 use crate::vk::{
     vk, Attachment, Buffer, BufferDesc, ComputePipeline, Context, Descriptor, GraphicsPipeline,
@@ -126,16 +126,13 @@ impl AtlasPoints {
     }
 }
 
-/// Renders the position atlas of a mesh (`atlas_positions`) and compacts its valid texels
-/// (`atlas_points`), once.
-pub fn render_atlas_points(
-    ctx: &Context,
-    pipes: &AtlasPipelines,
+/// The triangles of `atlas` as `atlas_positions` reads them (model-space vertices).
+pub fn gpu_atlas_triangles(
     atlas: &MeshAtlas,
     positions: &[Vec3],
     indices: &[u32],
-) -> Result<AtlasPoints, GpuVoxelError> {
-    let tris: Vec<GpuAtlasTriangle> = atlas
+) -> Vec<GpuAtlasTriangle> {
+    atlas
         .triangles
         .iter()
         .zip(indices.chunks_exact(3))
@@ -152,7 +149,57 @@ pub fn render_atlas_points(
             uv2: [t.uv[2].x, t.uv[2].y, 0.0, 0.0],
             cell: t.cell,
         })
-        .collect();
+        .collect()
+}
+
+/// Declares `atlas_positions`: renders the `count` atlas triangles of `triangles` into a new
+/// `extent` position atlas ([`ATLAS_FORMAT`], invalid texels cleared to 0), returned.
+pub fn add_atlas_positions_pass(
+    g: &mut RenderGraph,
+    pipes: &AtlasPipelines,
+    triangles: BufferHandle,
+    count: u32,
+    (w, h): (u32, u32),
+) -> ImageHandle {
+    let image = g.create_image(ImageDesc::new_2d("position atlas", ATLAS_FORMAT, w, h));
+    let (pipe, size) = (pipes.positions, [w as f32, h as f32, 0.0, 0.0]);
+    g.add_pass("atlas_positions")
+        .read(triangles, Access::StorageRead(Shader::Graphics))
+        .write(image, Access::ColorAttachment)
+        .record(move |ctx| {
+            let target = ctx.image(image);
+            let clear = vk::ClearValue {
+                color: vk::ClearColorValue { float32: [0.0; 4] },
+            };
+            ctx.cmd.begin_rendering(
+                target.extent_2d(),
+                &[Attachment {
+                    view: target.view,
+                    clear: Some(clear),
+                }],
+                None,
+            );
+            ctx.cmd.bind(
+                &pipe,
+                &[Descriptor::storage_buffer(0, ctx.buffer(triangles).raw)],
+            );
+            ctx.cmd.push_constants(&pipe, bytemuck::cast_slice(&size));
+            ctx.cmd.draw(6 * count, 1);
+            ctx.cmd.end_rendering();
+        });
+    image
+}
+
+/// Renders the position atlas of a mesh (`atlas_positions`) and compacts its valid texels
+/// (`atlas_points`), once.
+pub fn render_atlas_points(
+    ctx: &Context,
+    pipes: &AtlasPipelines,
+    atlas: &MeshAtlas,
+    positions: &[Vec3],
+    indices: &[u32],
+) -> Result<AtlasPoints, GpuVoxelError> {
+    let tris = gpu_atlas_triangles(atlas, positions, indices);
     let (w, h) = (atlas.width, atlas.height);
     let tri_buffer = ctx.upload_buffer(
         "atlas triangles",
@@ -175,33 +222,7 @@ pub fn render_atlas_points(
         let mut g = RenderGraph::new();
         let tri_h = g.import_buffer(&tri_buffer, Access::StorageRead(Shader::Graphics));
         let out = g.import_buffer(&scratch, Access::HostRead);
-        let image = g.create_image(ImageDesc::new_2d("position atlas", ATLAS_FORMAT, w, h));
-        let n = tris.len() as u32;
-        let (pipe, size) = (pipes.positions, [w as f32, h as f32, 0.0, 0.0]);
-        g.add_pass("atlas_positions")
-            .read(tri_h, Access::StorageRead(Shader::Graphics))
-            .write(image, Access::ColorAttachment)
-            .record(move |ctx| {
-                let target = ctx.image(image);
-                let clear = vk::ClearValue {
-                    color: vk::ClearColorValue { float32: [0.0; 4] },
-                };
-                ctx.cmd.begin_rendering(
-                    target.extent_2d(),
-                    &[Attachment {
-                        view: target.view,
-                        clear: Some(clear),
-                    }],
-                    None,
-                );
-                ctx.cmd.bind(
-                    &pipe,
-                    &[Descriptor::storage_buffer(0, ctx.buffer(tri_h).raw)],
-                );
-                ctx.cmd.push_constants(&pipe, bytemuck::cast_slice(&size));
-                ctx.cmd.draw(6 * n, 1);
-                ctx.cmd.end_rendering();
-            });
+        let image = add_atlas_positions_pass(&mut g, pipes, tri_h, tris.len() as u32, (w, h));
         g.add_pass("atlas_points_clear")
             .write(out, Access::TransferWrite)
             .record(move |ctx| ctx.cmd.fill_buffer(ctx.buffer(out).raw, 0));

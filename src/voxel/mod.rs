@@ -37,6 +37,7 @@
 //!   truth, and the 1-bit / 3-bit marching baselines (§4.8).
 
 pub mod atlas;
+pub mod atlas_view;
 pub mod attributes;
 pub mod bench;
 pub mod bits;
