@@ -604,7 +604,8 @@ fn run(cli: Cli) -> Result<()> {
                     .unwrap_or_else(|| voxgi::scene::DEFAULT_SCENE.into());
                 let scene = load_scene_arg(scene.as_deref())?;
                 let run = profile_scene(&ctx, &scene, &frame.settings(&scene)?, frames, warmup)?;
-                let mut report = ProfileReport::from_frames(&ctx.info.name, &run.frames, warmup);
+                let mut report = ProfileReport::from_frames(&ctx.info.name, &run.frames, warmup)
+                    .with_setup(&run.setup);
                 report.notes.push(("scene".into(), scene_name));
                 report.notes.push((
                     "resolution".into(),

@@ -13,7 +13,17 @@ pub struct PassStats {
     pub samples: usize,
 }
 
-/// A profiling run: per-pass statistics, in execution order, plus the frame sum.
+/// A one-time pass run before the first frame, outside the frame graph (atlas building,
+/// static voxelization); runs of the same pass (one per atlas) are summed.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct SetupStats {
+    pub name: String,
+    pub total_ms: f64,
+    pub runs: usize,
+}
+
+/// A profiling run: per-pass statistics, in execution order, plus the frame sum, and the
+/// one-time setup passes apart from them.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct ProfileReport {
     pub device: String,
@@ -22,6 +32,8 @@ pub struct ProfileReport {
     pub passes: Vec<PassStats>,
     /// Median over frames of the sum of all pass times.
     pub frame_median_ms: f64,
+    /// One-time passes before the first frame, in order of first run; not in the frame sum.
+    pub setup: Vec<SetupStats>,
     /// Free-form facts about the run (resolution, transient memory, culled passes...).
     pub notes: Vec<(String, String)>,
 }
@@ -79,8 +91,27 @@ impl ProfileReport {
             warmup_frames,
             passes,
             frame_median_ms: median(&totals),
+            setup: Vec::new(),
             notes: Vec::new(),
         }
+    }
+
+    /// Adds the one-time passes (`timings` in execution order), summing repeated names.
+    pub fn with_setup(mut self, timings: &[PassTiming]) -> Self {
+        for t in timings {
+            match self.setup.iter_mut().find(|s| s.name == t.name) {
+                Some(s) => {
+                    s.total_ms += t.gpu_ms;
+                    s.runs += 1;
+                }
+                None => self.setup.push(SetupStats {
+                    name: t.name.clone(),
+                    total_ms: t.gpu_ms,
+                    runs: 1,
+                }),
+            }
+        }
+        self
     }
 
     /// A fixed-width table for terminals.
@@ -89,9 +120,10 @@ impl ProfileReport {
             .passes
             .iter()
             .map(|p| p.name.len())
+            .chain(self.setup.iter().map(|p| p.name.len()))
             .max()
             .unwrap_or(4)
-            .max(5);
+            .max(11);
         let mut s = format!(
             "GPU time per pass on {} ({} frames after {} warm-up)\n",
             self.device, self.frames, self.warmup_frames
@@ -107,6 +139,15 @@ impl ProfileReport {
             );
         }
         s += &format!("{:<width$}  {:>10.4}\n", "frame", self.frame_median_ms);
+        if !self.setup.is_empty() {
+            s += "\nsetup (once, before the first frame; not in the frame sum)\n";
+            s += &format!("{:<width$}  {:>10}  {:>10}\n", "pass", "total ms", "runs");
+            for p in &self.setup {
+                s += &format!("{:<width$}  {:>10.4}  {:>10}\n", p.name, p.total_ms, p.runs);
+            }
+            let total: f64 = self.setup.iter().map(|p| p.total_ms).sum();
+            s += &format!("{:<width$}  {:>10.4}\n\n", "setup total", total);
+        }
         for (k, v) in &self.notes {
             s += &format!("{k}: {v}\n");
         }
@@ -157,5 +198,59 @@ mod tests {
         assert!(table.contains("a") && table.contains("20.0000"));
         let json = serde_json::to_string(&r).expect("serializes");
         assert!(json.contains("\"median_ms\":2.0"));
+        assert!(
+            !table.contains("setup"),
+            "no setup section without setup passes"
+        );
+    }
+
+    #[test]
+    fn setup_passes_are_listed_apart_from_the_frame() {
+        let frames = vec![vec![t("a", 1.0)], vec![t("a", 3.0)]];
+        let setup = [
+            t("atlas_positions", 4.0),
+            t("atlas_points", 1.0),
+            t("atlas_positions", 2.0),
+            t("voxel_store", 0.5),
+        ];
+        let r = ProfileReport::from_frames("dev", &frames, 0).with_setup(&setup);
+        // Two atlases: one row each pass, runs summed, first-run order.
+        let names: Vec<&str> = r.setup.iter().map(|s| s.name.as_str()).collect();
+        assert_eq!(names, ["atlas_positions", "atlas_points", "voxel_store"]);
+        assert_eq!((r.setup[0].total_ms, r.setup[0].runs), (6.0, 2));
+        assert_eq!(r.frame_median_ms, 2.0, "setup is not in the frame sum");
+        assert_eq!(r.passes.len(), 1);
+        let table = r.table();
+        let lines: Vec<&str> = table.lines().collect();
+        let frame = lines
+            .iter()
+            .position(|l| l.starts_with("frame"))
+            .expect("frame line");
+        let header = lines
+            .iter()
+            .position(|l| l.starts_with("setup (once"))
+            .expect("setup section");
+        assert!(
+            header > frame,
+            "the setup section follows the frame passes:\n{table}"
+        );
+        let row = |name: &str| lines.iter().position(|l| l.starts_with(name));
+        for name in names {
+            assert!(
+                row(name).is_some_and(|i| i > header),
+                "{name} under setup:\n{table}"
+            );
+        }
+        assert!(lines[row("atlas_positions").unwrap_or(0)].contains("6.0000"));
+        let total = lines
+            .iter()
+            .find(|l| l.starts_with("setup total"))
+            .expect("total");
+        assert!(total.contains("7.5000"), "{total}");
+        let json = serde_json::to_string(&r).expect("serializes");
+        assert!(
+            json.contains("\"setup\":[{\"name\":\"atlas_positions\""),
+            "{json}"
+        );
     }
 }

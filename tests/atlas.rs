@@ -276,3 +276,52 @@ fn voxel_frame_atlas_follows_a_moving_object() {
     frame.destroy(&ctx);
     common::assert_no_validation_messages(&ctx);
 }
+
+#[test]
+fn profile_lists_the_one_time_atlas_passes_apart_from_the_frame() {
+    // Three objects, three atlases, each rendered and compacted once by a one-time submit
+    // before the first frame; the frames never run them.
+    let ctx = common::context();
+    let s = scene("cornell");
+    let settings = voxgi::render::RenderSettings {
+        width: 64,
+        height: 64,
+        voxels: Some(voxgi::voxel::gpu::VoxelSettings {
+            max_res_xy: 64,
+            voxelizer: voxgi::voxel::gpu::Voxelizer::Atlas,
+            ..Default::default()
+        }),
+        ..Default::default()
+    };
+    let run = voxgi::render::profile_scene(&ctx, &s, &settings, 2, 1).expect("profiles");
+    common::assert_no_validation_messages(&ctx);
+    let runs = |name: &str| run.setup.iter().filter(|t| t.name == name).count();
+    assert_eq!(runs("atlas_positions"), 3, "{:?}", run.setup);
+    assert_eq!(runs("atlas_points"), 3);
+    // Nothing moves: the static grid is voxelized once too.
+    assert_eq!(runs("voxelize_atlas"), 1);
+    assert!(run
+        .setup
+        .iter()
+        .all(|t| t.gpu_ms.is_finite() && t.gpu_ms >= 0.0));
+    assert!(!run.frames.is_empty());
+    for frame in &run.frames {
+        for t in frame {
+            assert!(
+                !t.name.starts_with("atlas_") && t.name != "voxelize_atlas",
+                "{} runs per frame",
+                t.name
+            );
+        }
+    }
+    let report = voxgi::profile::ProfileReport::from_frames("lavapipe", &run.frames, 1)
+        .with_setup(&run.setup);
+    let table = report.table();
+    let section = table.find("setup (once").expect("a setup section");
+    let positions = table
+        .find("atlas_positions")
+        .expect("atlas_positions listed");
+    assert!(positions > section, "{table}");
+    let row = table.lines().find(|l| l.starts_with("atlas_positions"));
+    assert!(row.is_some_and(|r| r.trim_end().ends_with('3')), "{table}");
+}

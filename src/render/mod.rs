@@ -945,6 +945,15 @@ impl Renderer {
             .unwrap_or_default()
     }
 
+    /// GPU times of the one-time passes the renderer submitted outside its frame graph
+    /// (atlas building, static voxelization), in order.
+    pub fn setup_timings(&self) -> Vec<PassTiming> {
+        self.voxels
+            .as_ref()
+            .map(|v| v.setup_timings().to_vec())
+            .unwrap_or_default()
+    }
+
     /// What the debug view shows and measured in `value` (its value image), for the CLI.
     pub fn debug_description(&self, value: &HdrImage) -> Option<String> {
         match (&self.atlas_view, &self.settings.debug) {
@@ -1354,6 +1363,8 @@ pub struct ProfileRun {
     pub culled_passes: Vec<String>,
     /// Transient bytes with and without aliasing.
     pub transient_bytes: (u64, u64),
+    /// One-time passes submitted before the first frame, outside the frame graph.
+    pub setup: Vec<PassTiming>,
 }
 
 /// Per-pass GPU timing over many frames of a scene (for `voxgi profile`).
@@ -1404,6 +1415,7 @@ pub fn profile_scene(
             live_passes: live,
             culled_passes: culled,
             transient_bytes: bytes,
+            setup: renderer.setup_timings(),
         })
     })();
     renderer.destroy(ctx);

@@ -750,6 +750,16 @@ pub fn voxelize_static(
     grid: &VoxelGrid,
     triangles: &TriangleBuffer,
 ) -> Result<Buffer, GpuVoxelError> {
+    voxelize_static_timed(ctx, pipelines, grid, triangles).map(|(b, _)| b)
+}
+
+/// [`voxelize_static`], also returning its passes' GPU times.
+pub fn voxelize_static_timed(
+    ctx: &Context,
+    pipelines: &VoxelPipelines,
+    grid: &VoxelGrid,
+    triangles: &TriangleBuffer,
+) -> Result<(Buffer, Vec<PassTiming>), GpuVoxelError> {
     let columns = ctx.create_buffer(&BufferDesc {
         name: "voxel static columns".into(),
         size_bytes: column_bytes(grid),
@@ -761,11 +771,13 @@ pub fn voxelize_static(
     let mut g = RenderGraph::new();
     let h = g.import_buffer(&columns, Access::TransferRead);
     add_voxelize_passes(&mut g, pipelines, grid, h, ColumnBase::Clear, &[triangles]);
-    if let Err(e) = run_once(ctx, g) {
-        ctx.destroy_buffer(columns);
-        return Err(e);
+    match run_once(ctx, g) {
+        Ok(timings) => Ok((columns, timings)),
+        Err(e) => {
+            ctx.destroy_buffer(columns);
+            Err(e)
+        }
     }
-    Ok(columns)
 }
 
 /// What the renderer's frame voxelizes (absent: no voxel passes at all).
@@ -845,6 +857,9 @@ pub struct VoxelFrame {
     atlas_models: Option<Vec<glam::Mat4>>,
     /// Open in the frame slots that re-voxelize (present when anything is dynamic).
     gate: Option<Arc<SlotGate>>,
+    /// GPU times of the one-time passes run before the first frame (atlas building, the
+    /// static voxelization), in order.
+    setup: Vec<PassTiming>,
 }
 
 /// The moving part of a [`VoxelFrame`].
@@ -916,6 +931,7 @@ impl VoxelFrame {
             atlas_cache: Default::default(),
             atlas_models: None,
             gate: None,
+            setup: Vec::new(),
         };
         if let Err(e) = frame.init(ctx, scene, t_s, atlas_mode) {
             frame.destroy(ctx);
@@ -935,7 +951,9 @@ impl VoxelFrame {
         if atlas_mode {
             let a =
                 super::gpu_atlas::AtlasScene::new(ctx, scene, t_s, &grid, &mut self.atlas_cache);
-            self.atlas = Some(a?);
+            let a = a?;
+            self.setup.extend(a.setup_timings().cloned());
+            self.atlas = Some(a);
         }
         let tri_dynamic = |o: &crate::scene::Object| {
             (o.dynamic || o.is_animated()) && !(atlas_mode && super::gpu_atlas::uses_atlas(o))
@@ -966,7 +984,7 @@ impl VoxelFrame {
         }
         if !self.revoxelize_static && (self.static_tris.count > 0 || atlas_static) {
             if self.has_frame_passes() {
-                self.static_columns = Some(match &self.atlas {
+                let (columns, timings) = match &self.atlas {
                     Some(a) => super::gpu_atlas::voxelize_static_atlas(
                         ctx,
                         a,
@@ -974,8 +992,10 @@ impl VoxelFrame {
                         &grid,
                         &self.static_tris,
                     )?,
-                    None => voxelize_static(ctx, &self.pipelines, &grid, &self.static_tris)?,
-                });
+                    None => voxelize_static_timed(ctx, &self.pipelines, &grid, &self.static_tris)?,
+                };
+                self.static_columns = Some(columns);
+                self.setup.extend(timings);
             } else {
                 // Nothing ever moves: build the grid and its hierarchy now, once.
                 let mut g = RenderGraph::new();
@@ -993,10 +1013,15 @@ impl VoxelFrame {
                     a.add_pass(&mut g, &grid, columns, true, false, None);
                 }
                 add_store_and_mip_passes(&mut g, &self.pipelines, &self.voxels, columns, image);
-                run_once(ctx, g)?;
+                self.setup.extend(run_once(ctx, g)?);
             }
         }
         Ok(())
+    }
+
+    /// GPU times of the one-time passes that ran before the first frame, in order.
+    pub fn setup_timings(&self) -> &[PassTiming] {
+        &self.setup
     }
 
     /// Whether the frame declares voxel passes (dynamic objects, or `revoxelize_static`).

@@ -28,7 +28,7 @@ use crate::graph::{Access, BufferHandle, ImageHandle, RenderGraph, Shader};
 use crate::scene::{Animation, Scene};
 use crate::vk::{
     vk, Attachment, Buffer, BufferDesc, ComputePipeline, Context, Descriptor, GraphicsPipeline,
-    GraphicsPipelineDesc, ImageDesc, MemoryLocation, VkError, MAX_FRAMES_IN_FLIGHT,
+    GraphicsPipelineDesc, ImageDesc, MemoryLocation, PassTiming, VkError, MAX_FRAMES_IN_FLIGHT,
 };
 use glam::{Mat4, Vec3};
 use std::sync::{Arc, Mutex};
@@ -118,6 +118,9 @@ pub struct AtlasPoints {
     pub count: u32,
     /// The atlas's `(width, height)` in texels.
     pub atlas_extent: (u32, u32),
+    /// GPU times of the one-time passes that built the point list (`voxgi profile` lists
+    /// them apart from the frame's).
+    pub setup_timings: Vec<PassTiming>,
 }
 
 impl AtlasPoints {
@@ -245,7 +248,7 @@ pub fn render_atlas_points(
                 ctx.cmd.dispatch(w.div_ceil(8), h.div_ceil(8), 1);
             });
         g.mark_output(out);
-        run_once(ctx, g)?;
+        let setup_timings = run_once(ctx, g)?;
         let bytes = scratch.mapped().unwrap_or(&[]);
         let count = bytes
             .get(..4)
@@ -261,6 +264,7 @@ pub fn render_atlas_points(
             buffer,
             count,
             atlas_extent: (w, h),
+            setup_timings,
         })
     })();
     ctx.destroy_buffer(scratch);
@@ -443,6 +447,11 @@ impl AtlasScene {
         !self.static_instances.is_empty()
     }
 
+    /// GPU times of every atlas's one-time `atlas_positions` / `atlas_points` passes.
+    pub fn setup_timings(&self) -> impl Iterator<Item = &PassTiming> {
+        self.points.iter().flat_map(|p| &p.setup_timings)
+    }
+
     pub fn has_dynamic(&self) -> bool {
         !self.dynamic_instances.is_empty()
     }
@@ -509,14 +518,15 @@ impl AtlasScene {
 }
 
 /// Voxelizes the static atlas instances once into a persistent column buffer (resting state
-/// `TransferRead`), like [`super::gpu::voxelize_static`] for triangles.
+/// `TransferRead`), like [`super::gpu::voxelize_static`] for triangles; returns it with the
+/// passes' GPU times.
 pub fn voxelize_static_atlas(
     ctx: &Context,
     atlas: &AtlasScene,
     tri_pipes: &super::gpu::VoxelPipelines,
     grid: &VoxelGrid,
     triangles: &super::gpu::TriangleBuffer,
-) -> Result<Buffer, GpuVoxelError> {
+) -> Result<(Buffer, Vec<PassTiming>), GpuVoxelError> {
     let columns = ctx.create_buffer(&BufferDesc {
         name: "voxel static columns".into(),
         size_bytes: super::gpu::column_bytes(grid),
@@ -536,11 +546,13 @@ pub fn voxelize_static_atlas(
         &[triangles],
     );
     atlas.add_pass(&mut g, grid, h, true, false, None);
-    if let Err(e) = run_once(ctx, g) {
-        ctx.destroy_buffer(columns);
-        return Err(e);
+    match run_once(ctx, g) {
+        Ok(timings) => Ok((columns, timings)),
+        Err(e) => {
+            ctx.destroy_buffer(columns);
+            Err(e)
+        }
     }
-    Ok(columns)
 }
 
 #[cfg(test)]
