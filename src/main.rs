@@ -165,6 +165,20 @@ enum Command {
 
 #[derive(Subcommand)]
 enum BenchCommand {
+    /// Voxelization GPU time, atlas and triangle voxelizer side by side: Cornell, bunny-in-box
+    /// and a dense generated scene (64 bunnies) at each x,y resolution (D = 128), and a cube
+    /// tessellated 1x and 16x (same surface). One-time atlas work is listed apart.
+    Voxelize {
+        /// x = y resolutions of the scene rows.
+        #[arg(long, value_delimiter = ',', default_values_t = [64, 128, 256, 512])]
+        resolutions: Vec<u32>,
+        /// Timed runs per measurement (the median is printed).
+        #[arg(long, default_value_t = 5)]
+        reps: usize,
+        /// Print JSON instead of a table.
+        #[arg(long)]
+        json: bool,
+    },
     /// Hierarchical voxel ray test vs uniform 1-bit marching on the same rays (thesis §9.3.1):
     /// GPU ms, rays/s, steps per ray, and the marching samples needed to match >= 99% of
     /// the hierarchical results.
@@ -437,6 +451,25 @@ fn run(cli: Cli) -> Result<()> {
                 ..Default::default()
             };
             let report = voxgi::voxel::bench::bench_traverse(&ctx, &scene, &desc)?;
+            if json {
+                println!("{}", serde_json::to_string_pretty(&report)?);
+            } else {
+                print!("{}", report.table());
+            }
+            check_validation(&ctx)
+        }
+        Command::Bench(BenchCommand::Voxelize {
+            resolutions,
+            reps,
+            json,
+        }) => {
+            let ctx = context(cli.validate, cli.device)?;
+            let desc = voxgi::voxel::bench::VoxelizeBenchDesc {
+                resolutions,
+                reps,
+                ..Default::default()
+            };
+            let report = voxgi::voxel::bench::bench_voxelize(&ctx, &desc)?;
             if json {
                 println!("{}", serde_json::to_string_pretty(&report)?);
             } else {

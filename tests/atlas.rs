@@ -325,3 +325,51 @@ fn profile_lists_the_one_time_atlas_passes_apart_from_the_frame() {
     let row = table.lines().find(|l| l.starts_with("atlas_positions"));
     assert!(row.is_some_and(|r| r.trim_end().ends_with('3')), "{table}");
 }
+
+#[test]
+fn voxelize_bench_prints_every_scene_resolution_and_tessellation() {
+    let ctx = common::context();
+    let desc = voxgi::voxel::bench::VoxelizeBenchDesc {
+        reps: 1,
+        resolutions: vec![16, 24],
+        tessellations: vec![1, 4],
+    };
+    let report = voxgi::voxel::bench::bench_voxelize(&ctx, &desc).expect("bench runs");
+    common::assert_no_validation_messages(&ctx);
+    let names: Vec<(&str, u32)> = report
+        .rows
+        .iter()
+        .map(|r| (r.scene.as_str(), r.resolution))
+        .collect();
+    assert_eq!(
+        names,
+        [
+            ("cornell", 16),
+            ("cornell", 24),
+            ("bunny-in-box", 16),
+            ("bunny-in-box", 24),
+            ("dense-bunnies", 16),
+            ("dense-bunnies", 24),
+            ("cube 1x", 128),
+            ("cube 16x", 128),
+        ]
+    );
+    for r in &report.rows {
+        let a = r.atlas.as_ref().expect("small atlases fit every device");
+        assert!(r.voxels > 0 && a.points > 0 && r.triangle_ms > 0.0, "{r:?}");
+    }
+    // The same surface sets the same voxels however it is tessellated, and the atlas splats
+    // about as many points (its cost follows the surface, not the triangles).
+    let (c1, c16) = (&report.rows[6], &report.rows[7]);
+    assert_eq!(c16.triangles, 16 * c1.triangles);
+    assert_eq!(c1.voxels, c16.voxels);
+    let points = |r: &voxgi::voxel::bench::VoxelizeRow| r.atlas.as_ref().map_or(0, |a| a.points);
+    let ratio = points(c16) as f64 / points(c1) as f64;
+    assert!((0.8..1.25).contains(&ratio), "points 16x / 1x = {ratio}");
+    let table = report.table();
+    for (scene, res) in names {
+        let row = format!("{scene:<14} {:>5}", format!("{res}²"));
+        assert!(table.contains(&row), "no row {row:?}:\n{table}");
+    }
+    assert!(table.contains("atlas/tri"), "{table}");
+}

@@ -73,6 +73,8 @@ pub struct DeviceInfo {
     pub timestamp_valid_bits: u32,
     pub max_sampler_anisotropy: f32,
     pub non_coherent_atom_size: u64,
+    /// Largest storage-buffer binding range (128 MiB on lavapipe).
+    pub max_storage_buffer_range: u32,
 }
 
 pub struct Context {
@@ -524,6 +526,7 @@ fn pick_device(
         timestamp_valid_bits: families[family as usize].timestamp_valid_bits,
         max_sampler_anisotropy: props.limits.max_sampler_anisotropy,
         non_coherent_atom_size: props.limits.non_coherent_atom_size,
+        max_storage_buffer_range: props.limits.max_storage_buffer_range,
     };
     Ok((pd, family, info))
 }

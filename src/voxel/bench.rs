@@ -1,14 +1,26 @@
+//! `voxgi bench voxelize`: voxelization time versus resolution and scene, atlas against triangle
+//! voxelizer ([`bench_voxelize`]); see below.
+//!
 //! `voxgi bench traverse`: the thesis's speed comparison (§9.3.1, Fig. 44/45) measured side by
 //! side in one GPU run. Rays start at the camera-visible surface points of a scene (a G-buffer
 //! traced on the CPU), offset along the normal (§4.4), cosine-distributed around it, with a
 //! length limited by a radius. The hierarchical test and 1-bit marching cast the same rays.
 
+use super::atlas::{build_atlas, texel_size_for_voxel, AtlasCache, AtlasError};
+use super::gpu::{
+    add_voxelize_passes, column_bytes, run_once, scene_triangles, ColumnBase, GpuVoxelError,
+    TriangleBuffer, VoxelPipelines, VOXELIZE_GROUP_SIZE,
+};
+use super::gpu_atlas::{
+    add_voxelize_atlas_pass, render_atlas_points, AtlasPipelines, AtlasScene, ModelAt,
+};
 use super::gpu_rays::{GpuRay, RayCastError, RayMethod, VoxelRayCaster};
 use super::{
     voxelize_scene, BitGrid, BitHierarchy, GridDesc, TraversalParams, VoxelError, VoxelGrid,
 };
-use crate::scene::Scene;
-use crate::vk::Context;
+use crate::graph::{Access, BufferHandle, RenderGraph};
+use crate::scene::{Scene, SceneError};
+use crate::vk::{vk, BufferDesc, Context, MemoryLocation};
 use glam::Vec3;
 use serde::Serialize;
 
@@ -91,6 +103,12 @@ pub enum BenchError {
     Vk(#[from] crate::vk::VkError),
     #[error("the camera sees no geometry: nothing to cast rays from")]
     NoSurface,
+    #[error(transparent)]
+    Gpu(#[from] GpuVoxelError),
+    #[error(transparent)]
+    Atlas(#[from] AtlasError),
+    #[error(transparent)]
+    Scene(#[from] SceneError),
 }
 
 /// World-space triangles of the scene at time 0.
@@ -318,5 +336,509 @@ impl TraverseBenchReport {
             }
         }
         s
+    }
+}
+
+/// Parameters of `voxgi bench voxelize`.
+#[derive(Clone, Debug)]
+pub struct VoxelizeBenchDesc {
+    /// Timed runs per measurement (the median is reported).
+    pub reps: usize,
+    /// x = y resolutions of the scene rows (one depth layer, D = 128).
+    pub resolutions: Vec<u32>,
+    /// Cube tessellations (quads per face edge) of the same-surface rows, at 128²×128.
+    pub tessellations: Vec<u32>,
+}
+
+impl Default for VoxelizeBenchDesc {
+    fn default() -> Self {
+        Self {
+            reps: 5,
+            resolutions: vec![64, 128, 256, 512],
+            tessellations: vec![1, 4],
+        }
+    }
+}
+
+/// One scene at one resolution, both voxelizers.
+#[derive(Clone, Debug, Serialize)]
+pub struct VoxelizeRow {
+    pub scene: String,
+    pub resolution: u32,
+    pub triangles: usize,
+    /// Voxels the triangle voxelizer sets (the exact conservative set).
+    pub voxels: u64,
+    /// Texels of the scene's distinct atlases.
+    pub atlas_texels: u64,
+    /// One-time CPU atlas packing.
+    pub pack_cpu_ms: f64,
+    /// Median GPU ms per voxelization of `voxelize_triangles`.
+    pub triangle_ms: f64,
+    /// The atlas voxelizer, absent where the device cannot run it (`atlas_error` says why).
+    pub atlas: Option<AtlasTimes>,
+    pub atlas_error: Option<String>,
+}
+
+/// The atlas voxelizer's side of a [`VoxelizeRow`].
+#[derive(Clone, Debug, Serialize)]
+pub struct AtlasTimes {
+    /// Points splatted per voxelization (all instances).
+    pub points: u64,
+    /// One-time GPU `atlas_positions` + `atlas_points`.
+    pub setup_gpu_ms: f64,
+    /// Median GPU ms per voxelization of `voxelize_atlas`.
+    pub voxelize_ms: f64,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct VoxelizeBenchReport {
+    pub device: String,
+    pub reps: usize,
+    pub group_size: u32,
+    pub rows: Vec<VoxelizeRow>,
+}
+
+/// The scene rows' scenes: Cornell, bunny-in-box and [`dense_scene`].
+pub fn bench_scenes() -> Result<Vec<(String, Scene)>, BenchError> {
+    let scenes_dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes");
+    Ok(vec![
+        ("cornell".into(), crate::scene::load_scene_arg(None)?),
+        (
+            "bunny-in-box".into(),
+            Scene::load(scenes_dir.join("cornell_bunny.toml"))?,
+        ),
+        ("dense-bunnies".into(), dense_scene(&scenes_dir)?),
+    ])
+}
+
+/// Bunnies per axis of [`dense_scene`].
+pub const DENSE_BUNNIES_PER_AXIS: u32 = 4;
+
+/// The dense generated scene: the Cornell walls around a 4×4×4 grid of Stanford bunnies
+/// (64 instances of `assets/meshes/bunny.obj`, 3,674 triangles each, 0.1 m tall; 235,146
+/// triangles with the walls), one per cell of the box's interior, each turned a further 30°
+/// about y than the previous so that neighbours differ. Deterministic; `scenes_dir` resolves
+/// the mesh path. The instances share one atlas, so the atlas voxelizer packs it once and
+/// splats its points 64 times.
+pub fn dense_scene(scenes_dir: &std::path::Path) -> Result<Scene, BenchError> {
+    let n = DENSE_BUNNIES_PER_AXIS;
+    // bunny.obj spans x [-4.96, 4.95], y [0, 9.65], z [-3.73, 3.81] (cornell_bunny.toml):
+    // within 6.26 of its vertical axis, so at any turn it stays inside its cell.
+    let cell_m = 0.54 / n as f32;
+    let scale = 0.95 * 0.5 * cell_m / 6.26;
+    let mut toml = String::from(
+        "[camera]\nposition = [0.278, 0.273, -0.800]\ntarget = [0.278, 0.273, 0.0]\n\
+         fov_y_deg = 39.3\nnear = 0.01\nfar = 10.0\n\n\
+         [[lights]]\nkind = \"spot\"\nposition = [0.278, 0.540, 0.2796]\n\
+         direction = [0.0, -1.0, 0.0]\nintensity_w_sr = [1.0, 1.0, 1.0]\n\
+         cutoff_deg = 50.0\nbeam_deg = 40.0\n\n\
+         [[objects]]\nname = \"walls\"\nbuiltin = \"cornell_walls\"\n",
+    );
+    let mut k = 0;
+    for j in 0..n {
+        for i in 0..n {
+            for l in 0..n {
+                let x = 0.005 + (i as f32 + 0.5) * cell_m;
+                // A millimetre up: the mesh's base dips just below y = 0.
+                let y = 0.001 + j as f32 * cell_m;
+                let z = 0.01 + (l as f32 + 0.5) * cell_m;
+                toml += &format!(
+                    "\n[[objects]]\nname = \"bunny_{k}\"\nmesh = \"../meshes/bunny.obj\"\n\
+                     translate = [{x}, {y}, {z}]\nrotate_deg = [0.0, {}, 0.0]\n\
+                     scale = {scale}\nmaterial = {{ albedo = [0.73, 0.73, 0.73] }}\n",
+                    (30 * k) % 360
+                );
+                k += 1;
+            }
+        }
+    }
+    Ok(Scene::from_toml_str(
+        &toml,
+        std::path::Path::new("<dense generated scene>"),
+        scenes_dir,
+    )?)
+}
+
+/// Median of the finite values; 0 when none.
+fn median_ms(mut v: Vec<f64>) -> f64 {
+    v.retain(|x| x.is_finite());
+    v.sort_by(f64::total_cmp);
+    v.get(v.len() / 2).copied().unwrap_or(0.0)
+}
+
+/// Median GPU ms of the passes named `name` over `reps` one-time runs of what `build`
+/// declares.
+fn time_pass(
+    ctx: &Context,
+    reps: usize,
+    name: &str,
+    build: &dyn Fn(&mut RenderGraph),
+) -> Result<f64, BenchError> {
+    let mut ms = Vec::new();
+    for _ in 0..reps.max(1) {
+        let mut g = RenderGraph::new();
+        build(&mut g);
+        let t = run_once(ctx, g)?;
+        ms.push(t.iter().filter(|p| p.name == name).map(|p| p.gpu_ms).sum());
+    }
+    Ok(median_ms(ms))
+}
+
+/// Voxels the triangle voxelizer sets for `triangles` in `grid` (a read-back popcount).
+fn count_voxels(
+    ctx: &Context,
+    pipes: &VoxelPipelines,
+    grid: &VoxelGrid,
+    triangles: &TriangleBuffer,
+) -> Result<u64, BenchError> {
+    let columns = ctx.create_buffer(&BufferDesc {
+        name: "bench columns (read back)".into(),
+        size_bytes: column_bytes(grid),
+        usage: vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+        location: MemoryLocation::GpuToCpu,
+    })?;
+    let mut g = RenderGraph::new();
+    let h = g.import_buffer(&columns, Access::HostRead);
+    add_voxelize_passes(&mut g, pipes, grid, h, ColumnBase::Clear, &[triangles]);
+    g.mark_output(h);
+    let run = run_once(ctx, g);
+    let count = columns.mapped().map_or(0, |m| {
+        m.chunks_exact(4)
+            .map(|w| u64::from(u32::from_ne_bytes([w[0], w[1], w[2], w[3]]).count_ones()))
+            .sum()
+    });
+    ctx.destroy_buffer(columns);
+    run?;
+    Ok(count)
+}
+
+/// Median GPU ms per voxelization of `triangles` into `grid` by the triangle voxelizer.
+fn time_triangles(
+    ctx: &Context,
+    reps: usize,
+    pipes: &VoxelPipelines,
+    grid: &VoxelGrid,
+    triangles: &TriangleBuffer,
+) -> Result<f64, BenchError> {
+    let size = column_bytes(grid);
+    time_pass(ctx, reps, "voxelize_triangles", &|g| {
+        let c = g.create_buffer("columns", size);
+        add_voxelize_passes(g, pipes, grid, c, ColumnBase::Clear, &[triangles]);
+        g.mark_output(c);
+    })
+}
+
+/// Median GPU ms per voxelization by the atlas voxelizer of what `splat` declares into the
+/// column buffer.
+fn time_atlas(
+    ctx: &Context,
+    reps: usize,
+    pipes: &VoxelPipelines,
+    grid: &VoxelGrid,
+    splat: &dyn Fn(&mut RenderGraph, BufferHandle),
+) -> Result<f64, BenchError> {
+    let size = column_bytes(grid);
+    time_pass(ctx, reps, "voxelize_atlas", &|g| {
+        let c = g.create_buffer("columns", size);
+        add_voxelize_passes(g, pipes, grid, c, ColumnBase::Clear, &[]);
+        splat(g, c);
+        g.mark_output(c);
+    })
+}
+
+/// Voxelization time versus x,y resolution and scene ([`bench_scenes`]), atlas and triangle
+/// voxelizer side by side in one run, and the atlas cost on the same surface (a cube)
+/// tessellated 1× and 16× (`desc.tessellations`). Atlas times are the per-voxelization
+/// `voxelize_atlas` splat of rigid objects; the one-time atlas work is listed apart.
+pub fn bench_voxelize(
+    ctx: &Context,
+    desc: &VoxelizeBenchDesc,
+) -> Result<VoxelizeBenchReport, BenchError> {
+    let pipes = VoxelPipelines::new(ctx)?;
+    let atlas_pipes = match AtlasPipelines::new(ctx) {
+        Ok(p) => p,
+        Err(e) => {
+            pipes.destroy(ctx);
+            return Err(e.into());
+        }
+    };
+    let rows = (|| -> Result<Vec<VoxelizeRow>, BenchError> {
+        let mut rows = Vec::new();
+        for (name, scene) in bench_scenes()? {
+            let mut tris = scene_triangles(&scene, 0.0, false);
+            tris.extend(scene_triangles(&scene, 0.0, true));
+            let buf = TriangleBuffer::upload(ctx, "bench triangles", &tris)?;
+            let aabb = scene.aabb_at(0.0);
+            let pad = Vec3::splat(0.01 * aabb.extent().max_element());
+            let r = (|| -> Result<(), BenchError> {
+                for &res in &desc.resolutions {
+                    let grid =
+                        VoxelGrid::from_box(aabb.min - pad, aabb.max + pad, None, res, res, 1)?;
+                    let t0 = std::time::Instant::now();
+                    let mut cache = AtlasCache::default();
+                    let texel_m = texel_size_for_voxel(grid.voxel_size_m().min_element());
+                    let mut texels = 0u64;
+                    let mut seen = Vec::new();
+                    for o in &scene.objects {
+                        let Some(m) = scene.meshes.get(o.mesh) else {
+                            continue;
+                        };
+                        let scale = o.transform_components_at(0.0).scale;
+                        let a = cache.get(&m.name, &m.positions, &m.indices, scale, texel_m)?;
+                        if !seen.iter().any(|s| std::sync::Arc::ptr_eq(s, &a)) {
+                            texels += u64::from(a.width) * u64::from(a.height);
+                            seen.push(a);
+                        }
+                    }
+                    let pack_cpu_ms = t0.elapsed().as_secs_f64() * 1e3;
+                    let voxels = count_voxels(ctx, &pipes, &grid, &buf)?;
+                    let triangle_ms = time_triangles(ctx, desc.reps, &pipes, &grid, &buf)?;
+                    let (atlas, atlas_error) =
+                        match AtlasScene::new(ctx, &scene, 0.0, &grid, &mut cache) {
+                            Ok(a) => {
+                                let t = (|| {
+                                    Ok::<_, BenchError>(AtlasTimes {
+                                        points: a.point_count(),
+                                        setup_gpu_ms: a.setup_timings().map(|t| t.gpu_ms).sum(),
+                                        voxelize_ms: time_atlas(
+                                            ctx,
+                                            desc.reps,
+                                            &pipes,
+                                            &grid,
+                                            &|g, c| a.add_pass(g, &grid, c, true, true, None),
+                                        )?,
+                                    })
+                                })();
+                                a.destroy(ctx);
+                                (Some(t?), None)
+                            }
+                            Err(e @ GpuVoxelError::AtlasPointsTooLarge { .. }) => {
+                                (None, Some(e.to_string()))
+                            }
+                            Err(e) => return Err(e.into()),
+                        };
+                    rows.push(VoxelizeRow {
+                        scene: name.clone(),
+                        resolution: res,
+                        triangles: tris.len(),
+                        voxels,
+                        atlas_texels: texels,
+                        pack_cpu_ms,
+                        triangle_ms,
+                        atlas,
+                        atlas_error,
+                    });
+                }
+                Ok(())
+            })();
+            buf.destroy(ctx);
+            r?;
+        }
+        // Same surface, more triangles, at 128²×128.
+        let grid = VoxelGrid::from_box(Vec3::ZERO, Vec3::ONE, None, 128, 128, 1)?;
+        let texel_m = texel_size_for_voxel(grid.voxel_size_m().min_element());
+        for &n in &desc.tessellations {
+            let (pos, idx) = tessellated_cube(n);
+            let tris: Vec<[Vec3; 3]> = idx
+                .chunks_exact(3)
+                .map(|t| [0, 1, 2].map(|k| pos[t[k] as usize]))
+                .collect();
+            let t0 = std::time::Instant::now();
+            let atlas = build_atlas("cube", &pos, &idx, Vec3::ONE, texel_m)?;
+            let pack_cpu_ms = t0.elapsed().as_secs_f64() * 1e3;
+            let buf = TriangleBuffer::upload(ctx, "bench triangles", &tris)?;
+            let row = (|| {
+                let points = render_atlas_points(ctx, &atlas_pipes, &atlas, &pos, &idx)?;
+                let r = (|| {
+                    let voxels = count_voxels(ctx, &pipes, &grid, &buf)?;
+                    let instances = [(&points, ModelAt::Fixed(glam::Mat4::IDENTITY))];
+                    let triangle_ms = time_triangles(ctx, desc.reps, &pipes, &grid, &buf)?;
+                    let voxelize_ms = time_atlas(ctx, desc.reps, &pipes, &grid, &|g, c| {
+                        add_voxelize_atlas_pass(g, &atlas_pipes, &grid, c, &instances, None)
+                    })?;
+                    Ok::<_, BenchError>(VoxelizeRow {
+                        scene: format!("cube {}x", n * n),
+                        resolution: 128,
+                        triangles: tris.len(),
+                        voxels,
+                        atlas_texels: u64::from(atlas.width) * u64::from(atlas.height),
+                        pack_cpu_ms,
+                        triangle_ms,
+                        atlas: Some(AtlasTimes {
+                            points: u64::from(points.count),
+                            setup_gpu_ms: points.setup_timings.iter().map(|t| t.gpu_ms).sum(),
+                            voxelize_ms,
+                        }),
+                        atlas_error: None,
+                    })
+                })();
+                points.destroy(ctx);
+                r
+            })();
+            buf.destroy(ctx);
+            rows.push(row?);
+        }
+        Ok(rows)
+    })();
+    atlas_pipes.destroy(ctx);
+    pipes.destroy(ctx);
+    Ok(VoxelizeBenchReport {
+        device: ctx.info.name.clone(),
+        reps: desc.reps,
+        group_size: VOXELIZE_GROUP_SIZE,
+        rows: rows?,
+    })
+}
+
+/// A cube of edge 0.8 inside the unit box, each face split into `n`×`n` quads (12·n²
+/// triangles): the same surface at any `n`.
+pub fn tessellated_cube(n: u32) -> (Vec<Vec3>, Vec<u32>) {
+    let n = n.max(1);
+    let (mut pos, mut idx) = (Vec::new(), Vec::new());
+    for axis in 0..3 {
+        for side in [0.0f32, 1.0] {
+            let base = pos.len() as u32;
+            for j in 0..=n {
+                for i in 0..=n {
+                    let (u, v) = (i as f32 / n as f32, j as f32 / n as f32);
+                    let mut p = [0.0; 3];
+                    p[axis] = side;
+                    p[(axis + 1) % 3] = u;
+                    p[(axis + 2) % 3] = v;
+                    pos.push(Vec3::from(p) * 0.8 + 0.1);
+                }
+            }
+            for j in 0..n {
+                for i in 0..n {
+                    let a = base + j * (n + 1) + i;
+                    idx.extend([a, a + 1, a + n + 1, a + 1, a + n + 2, a + n + 1]);
+                }
+            }
+        }
+    }
+    (pos, idx)
+}
+
+impl VoxelizeBenchReport {
+    pub fn table(&self) -> String {
+        let mut s = format!(
+            "voxelization benchmark on {} (D = 128, median of {} runs, triangle voxelizer \
+             group size {})\n\
+             GPU ms per voxelization: tri = voxelize_triangles, atlas = voxelize_atlas (rigid \
+             objects' points splatted);\n\
+             one-time atlas work apart: pack = CPU packing, setup = GPU atlas_positions + \
+             atlas_points\n\n",
+            self.device, self.reps, self.group_size
+        );
+        s += &format!(
+            "{:<14} {:>5} {:>9} {:>9} {:>10} {:>10} {:>9} {:>9} {:>9} {:>9} {:>11}\n",
+            "scene",
+            "res",
+            "triangles",
+            "voxels",
+            "points",
+            "texels",
+            "pack ms",
+            "setup ms",
+            "tri ms",
+            "atlas ms",
+            "atlas/tri"
+        );
+        let mut notes = Vec::new();
+        for r in &self.rows {
+            let na = || format!("{:>9}", "-");
+            let (points, setup, atlas, ratio) = match &r.atlas {
+                Some(a) => (
+                    format!("{:>10}", a.points),
+                    format!("{:>9.2}", a.setup_gpu_ms),
+                    format!("{:>9.3}", a.voxelize_ms),
+                    format!("{:>11.3}", a.voxelize_ms / r.triangle_ms.max(1e-9)),
+                ),
+                None => (format!("{:>10}", "-"), na(), na(), format!("{:>11}", "-")),
+            };
+            if let Some(e) = &r.atlas_error {
+                notes.push(format!("{} {}²: no atlas row: {e}", r.scene, r.resolution));
+            }
+            s += &format!(
+                "{:<14} {:>5} {:>9} {:>9} {points} {:>10} {:>9.1} {setup} {:>9.3} {atlas} {ratio}\n",
+                r.scene,
+                format!("{}²", r.resolution),
+                r.triangles,
+                r.voxels,
+                r.atlas_texels,
+                r.pack_cpu_ms,
+                r.triangle_ms,
+            );
+        }
+        for n in notes {
+            s += &format!("{n}\n");
+        }
+        s
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_dense_scene_fills_the_box_with_disjoint_bunnies() {
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes");
+        let s = dense_scene(&dir).expect("the dense scene builds");
+        let n = DENSE_BUNNIES_PER_AXIS.pow(3) as usize;
+        assert_eq!(s.objects.len(), n + 1, "walls and the bunnies");
+        // Tight bounds of each object's transformed vertices.
+        let bounds = |o: &crate::scene::Object| {
+            let m = o.transform_at(0.0);
+            let mesh = &s.meshes[o.mesh];
+            mesh.positions
+                .iter()
+                .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &p| {
+                    let p = m.transform_point3(p);
+                    (lo.min(p), hi.max(p))
+                })
+        };
+        let walls = bounds(&s.objects[0]);
+        let boxes: Vec<_> = s.objects[1..].iter().map(bounds).collect();
+        for b in &boxes {
+            assert!(
+                b.0.cmpge(walls.0).all() && b.1.cmple(walls.1).all(),
+                "{b:?}"
+            );
+        }
+        for (i, a) in boxes.iter().enumerate() {
+            for b in &boxes[i + 1..] {
+                let overlap = a.0.cmplt(b.1).all() && b.0.cmplt(a.1).all();
+                assert!(!overlap, "{a:?} overlaps {b:?}");
+            }
+        }
+        let tris =
+            |s: &Scene| scene_triangles(s, 0.0, false).len() + scene_triangles(s, 0.0, true).len();
+        assert_eq!(tris(&s), 235_146);
+        let again = dense_scene(&dir).expect("builds again");
+        assert_eq!(
+            scene_triangles(&again, 0.0, false),
+            scene_triangles(&s, 0.0, false),
+            "deterministic"
+        );
+    }
+
+    #[test]
+    fn tessellated_cubes_share_one_surface() {
+        let area = |n: u32| {
+            let (p, idx) = tessellated_cube(n);
+            idx.chunks_exact(3)
+                .map(|t| {
+                    let [a, b, c] = [0, 1, 2].map(|k| p[t[k] as usize]);
+                    0.5 * (b - a).cross(c - a).length()
+                })
+                .sum::<f32>()
+        };
+        assert_eq!(
+            tessellated_cube(4).1.len() / 3,
+            16 * tessellated_cube(1).1.len() / 3
+        );
+        assert!((area(1) - 6.0 * 0.64).abs() < 1e-4);
+        assert!((area(4) - area(1)).abs() < 1e-4);
     }
 }

@@ -113,6 +113,13 @@ pub enum GpuVoxelError {
     NoSuchObject { object: String, names: String },
     #[error("object '{object}' has no atlas: OBJ-sequence animations deform, so the atlas voxelizer leaves them to the triangle voxelizer; pick another --object")]
     NoAtlas { object: String },
+    #[error("a {width}x{height} atlas needs a {bytes}-byte point list, above this device's {max}-byte storage-buffer range; use fewer voxels (--voxels) or --voxelizer triangle")]
+    AtlasPointsTooLarge {
+        width: u32,
+        height: u32,
+        bytes: u64,
+        max: u64,
+    },
 }
 
 /// One world-space triangle as the shader reads it (`struct Triangle` in

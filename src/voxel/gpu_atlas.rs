@@ -204,6 +204,18 @@ pub fn render_atlas_points(
 ) -> Result<AtlasPoints, GpuVoxelError> {
     let tris = gpu_atlas_triangles(atlas, positions, indices);
     let (w, h) = (atlas.width, atlas.height);
+    // atlas_points binds a scratch list with room for every texel; past the device's
+    // storage-buffer range the points would be lost.
+    let scratch_bytes = 16 + u64::from(w) * u64::from(h) * 16;
+    let max = u64::from(ctx.info.max_storage_buffer_range);
+    if scratch_bytes > max {
+        return Err(GpuVoxelError::AtlasPointsTooLarge {
+            width: w,
+            height: h,
+            bytes: scratch_bytes,
+            max,
+        });
+    }
     let tri_buffer = ctx.upload_buffer(
         "atlas triangles",
         bytemuck::cast_slice(&tris),
@@ -211,7 +223,7 @@ pub fn render_atlas_points(
     )?;
     let scratch = match ctx.create_buffer(&BufferDesc {
         name: "atlas points (scratch)".into(),
-        size_bytes: 16 + u64::from(w) * u64::from(h) * 16,
+        size_bytes: scratch_bytes,
         usage: vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
         location: MemoryLocation::GpuToCpu,
     }) {
