@@ -473,6 +473,10 @@ fn run(cli: Cli) -> Result<()> {
                 screenshot,
             };
             let report = voxgi::app::run(scene, &opts)?;
+            if let Some(camera) = &report.camera {
+                // Pasteable into a scene file, to start there next time.
+                print!("camera at exit:\n{}", camera.toml_table());
+            }
             for p in &report.screenshots {
                 println!("wrote {}", p.display());
             }
