@@ -160,6 +160,10 @@ const BUMP_SCALE_M: f32 = 0.01;
 const GBUFFER_COLOR: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
 const DEPTH: vk::Format = vk::Format::D32_SFLOAT;
 const HDR: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
+/// Reflected radiance in the light maps. f32, not f16: light intensities from 1e-6 to 1e6 W/sr
+/// (DESIGN.md, extremes) put it outside f16's range (max 65504, normal down to 6e-5); f16
+/// lost 1.5% of the peak at 1e-6 and overflowed to Inf at 1e6 (tests/extremes.rs).
+const LIGHT_MAP_RADIANCE: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 
 impl Renderer {
     pub fn new(
@@ -736,7 +740,7 @@ impl Renderer {
                 let mut rlm = |name: &str, format| {
                     g.create_image(ImageDesc::new_2d(name, format, res, res).with_layers(layers))
                 };
-                let rlm_radiance = rlm("light map radiance", vk::Format::R16G16B16A16_SFLOAT);
+                let rlm_radiance = rlm("light map radiance", LIGHT_MAP_RADIANCE);
                 let rlm_position = rlm("light map position", vk::Format::R32G32B32A32_SFLOAT);
                 let rlm_normal = rlm("light map normal", vk::Format::R16G16B16A16_SFLOAT);
                 let rlm_depth = rlm("light map depth", DEPTH);
@@ -1076,7 +1080,7 @@ fn create_light_map_pipeline(ctx: &Context) -> Result<GraphicsPipeline, VkError>
         topology: vk::PrimitiveTopology::TRIANGLE_LIST,
         cull_mode: vk::CullModeFlags::NONE,
         color_formats: vec![
-            vk::Format::R16G16B16A16_SFLOAT,
+            LIGHT_MAP_RADIANCE,
             vk::Format::R32G32B32A32_SFLOAT,
             vk::Format::R16G16B16A16_SFLOAT,
         ],
