@@ -534,16 +534,26 @@ fn normal_and_bump_maps_perturb_the_shading_normal() {
     // A ramp along u (texel values 8, 24, ..., 248: slope 16/255 per texel, 16 texels per unit
     // of u) scaled by -bm 100 at 1 cm per unit over a 2 m quad: world slope
     // 0.01 * 100 * (16 * 16 / 255) / 2 = 0.502, so E scales by cos(atan(0.502)) = 0.894.
-    // The screen-space finite differences of the filtered height are not exact on lavapipe
-    // (measured 0.860 with its anisotropic sampler, 0.917 without), so the bound only says the
-    // ramp tilts the normal by about the right amount; a flat result (bump ignored) fails.
+    // The height's gradient is taken in texture space and carried to the screen exactly
+    // (gbuffer.frag), so the ramp gives the closed form; a flat result (bump ignored) fails.
     let ramp = textured_quad_center_with("map_bump -bm 100 map.png", "ramp", |x, _| {
         [(16 * x + 8) as u8; 3]
     });
+    let want = 1.0 / (1.0f32 + (0.01f32 * 100.0 * (16.0 * 16.0 / 255.0) / 2.0).powi(2)).sqrt();
     let ratio = ramp.x / flat.x;
     assert!(
-        (0.80..0.95).contains(&ratio),
-        "a height ramp with -bm 100 scales radiance by {ratio} (closed form 0.894)"
+        (ratio - want).abs() <= 0.01 * want,
+        "a height ramp with -bm 100 scales radiance by {ratio}, closed form {want}"
+    );
+    // The same ramp along v (image rows run against v) tilts the normal as much.
+    let ramp_v = textured_quad_center_with("map_bump -bm 100 map.png", "rampv", |_, y| {
+        [(16 * y + 8) as u8; 3]
+    });
+    let ratio_v = ramp_v.x / flat.x;
+    println!("height ramp: radiance ratio {ratio} along u, {ratio_v} along v, closed form {want}");
+    assert!(
+        (ratio_v - want).abs() <= 0.01 * want,
+        "a height ramp along v scales radiance by {ratio_v}, closed form {want}"
     );
 }
 
