@@ -4,6 +4,8 @@
 layout(constant_id = 0) const bool HAS_PHONG = false;
 layout(constant_id = 1) const bool HAS_TEXTURES = false;
 layout(constant_id = 2) const bool HAS_BUMP = false;
+// Some material has MTL d < 1 (dissolve.glsl); otherwise no fragment is ever discarded.
+layout(constant_id = 3) const bool HAS_DISSOLVE = false;
 
 struct GpuMaterial {
     vec4 albedo;    // rgb albedo, a opacity
@@ -13,6 +15,7 @@ struct GpuMaterial {
 };
 
 #include "frame.glsl"
+#include "dissolve.glsl"
 layout(set = 0, binding = 0, std430) readonly buffer FrameBuf { GpuFrame frame; };
 layout(set = 0, binding = 1, std430) readonly buffer Materials { GpuMaterial materials[]; };
 // The draw's albedo texture (a 1x1 placeholder when the material has none).
@@ -74,6 +77,8 @@ vec2 height_gradient(sampler2D map, vec2 uv) {
 
 void main() {
     GpuMaterial m = materials[pc.material];
+    // Before anything that can discard: the threshold takes derivatives.
+    float coverage_threshold = HAS_DISSOLVE ? dissolve_threshold(in_world) : 0.0;
     vec3 n = normalize(in_normal);
     // Two-sided surfaces: shade the side the camera sees. Decided geometrically, not by
     // gl_FrontFacing, because the y-flipped projection inverts the winding.
@@ -91,6 +96,8 @@ void main() {
         vec3 bumped = bump_height(n, in_world, dot(grad, dFdx(tex_uv)), dot(grad, dFdy(tex_uv)));
         if (!any(isnan(bumped))) n = bumped;
     }
+    // After the bump's derivatives, which a discarded neighbour would leave undefined.
+    if (HAS_DISSOLVE && m.albedo.a < coverage_threshold) discard;
     out_albedo = vec4(albedo, 1.0);
     out_normal = vec4(n, m.specular.a);
     if (HAS_PHONG) out_specular = vec4(m.specular.rgb, 1.0);

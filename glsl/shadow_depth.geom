@@ -23,6 +23,7 @@ layout(set = 0, binding = 0, std430) readonly buffer FrameBuf { GpuFrame frame; 
 layout(push_constant) uniform Push {
     mat4 model;
     uint view;
+    uint material;
 } pc;
 
 // Paraboloid only: uv of the fragment (exact, as w = 1), the triangle's vertices in the
@@ -32,6 +33,8 @@ layout(location = 1) flat out vec4 out_v0;
 layout(location = 2) flat out vec3 out_v1;
 layout(location = 3) flat out vec3 out_v2;
 layout(location = 4) flat out vec2 out_range;
+// The other projections: world position, for dissolve coverage (shadow_depth.frag).
+layout(location = 5) out vec3 out_world;
 
 vec2 paraboloid_uv(vec3 d) {
     return d.xy / max(length(d) + d.z, 1e-30);
@@ -63,6 +66,7 @@ void emit_corner(vec2 uv, GpuShadowView sv, vec3 tri[3]) {
     out_v1 = tri[1];
     out_v2 = tri[2];
     out_range = sv.params.zw;
+    out_world = vec3(0.0);
     EmitVertex();
 }
 
@@ -77,6 +81,7 @@ void main() {
             out_v1 = vec3(0.0);
             out_v2 = vec3(0.0);
             out_range = sv.params.zw;
+            out_world = gl_in[i].gl_Position.xyz;
             EmitVertex();
         }
         EndPrimitive();

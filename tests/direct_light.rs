@@ -638,3 +638,157 @@ fn obj_sequence_frames_follow_the_scene_time_after_prepare() {
     );
     common::assert_no_validation_messages(&ctx);
 }
+
+/// World point on the plane y = `height` seen through the center of pixel (x, y).
+fn point_at_height(scene: &Scene, x: u32, y: u32, height: f32) -> Vec3 {
+    let p0 = plane_point(scene, x, y);
+    let eye = scene.camera.position;
+    eye + (p0 - eye) * ((eye.y - height) / (eye.y - p0.y))
+}
+
+/// Mean radiance over the pixels whose point on the plane y = `height` lies in the rectangle
+/// x in `xs`, z in `zs`, and how many there were.
+fn region_mean(
+    scene: &Scene,
+    img: &HdrImage,
+    height: f32,
+    xs: (f32, f32),
+    zs: (f32, f32),
+) -> (Vec3, u32) {
+    let (mut sum, mut n) = (Vec3::ZERO, 0);
+    for y in 0..SIZE {
+        for x in 0..SIZE {
+            let p = point_at_height(scene, x, y, height);
+            if (xs.0..xs.1).contains(&p.x) && (zs.0..zs.1).contains(&p.z) {
+                sum += pixel(img, x, y);
+                n += 1;
+            }
+        }
+    }
+    (sum / n.max(1) as f32, n)
+}
+
+/// A sun 60 degrees from the zenith towards +x: shadows of things 1 m up move 1.73 m along +x,
+/// out of the region the camera sees through them.
+const SUN_60: &str = "[[lights]]\nkind = \"directional\"\ndirection = [0.8660254, -0.5, 0.0]\nirradiance_w_m2 = [3.0, 3.0, 3.0]\n";
+
+#[test]
+fn a_half_dissolved_plane_shows_half_of_what_is_behind_it() {
+    // Two 0.8 x 0.7 m quads 1 m above the lit plane: d = 0.5 at z < 0, d = 1 at z > 0.
+    let front = Vec3::new(0.9, 0.6, 0.1);
+    let quads = |with_dissolved: bool| {
+        let dissolved = format!(
+            "[[objects]]\nname = \"dissolved\"\nbuiltin = \"quad\"\ntranslate = [0.0, 1.0, -0.45]\nscale = [0.8, 1.0, 0.7]\n\
+             material = {{ albedo = [{}, {}, {}], opacity = 0.5 }}\n",
+            front.x, front.y, front.z
+        );
+        format!(
+            "{CAMERA_DOWN}{PLANE}{SUN_60}{}[[objects]]\nname = \"opaque\"\nbuiltin = \"quad\"\ntranslate = [0.0, 1.0, 0.45]\n\
+             scale = [0.8, 1.0, 0.7]\nmaterial = {{ albedo = [{}, {}, {}], opacity = 1.0 }}\n",
+            if with_dissolved { dissolved } else { String::new() },
+            front.x,
+            front.y,
+            front.z
+        )
+    };
+    let s = scene(&quads(true));
+    let img = render(&s);
+    let irradiance = 3.0 * 0.5; // E cos(60 deg)
+    let want_front = front / std::f32::consts::PI * irradiance;
+    let want_back = ALBEDO / std::f32::consts::PI * irradiance;
+    let (mean, n) = region_mean(&s, &img, 1.0, (-0.3, 0.3), (-0.7, -0.2));
+    let want = 0.5 * want_front + 0.5 * want_back;
+    println!("d = 0.5 over {n} pixels: {mean}, expected {want}");
+    assert!(n > 300, "{n} pixels in the region");
+    assert_close(mean, want, 0.03, "mean over a d = 0.5 quad");
+    // Every pixel is either the quad or the plane behind it, about half each.
+    let (mut on_front, mut total) = (0, 0);
+    for y in 0..SIZE {
+        for x in 0..SIZE {
+            let p = point_at_height(&s, x, y, 1.0);
+            if p.x.abs() < 0.3 && (-0.7..-0.2).contains(&p.z) {
+                let got = pixel(&img, x, y);
+                let is_front = (got - want_front).abs().max_element() < 0.01 * want_front.x;
+                let is_back = (got - want_back).abs().max_element() < 0.01 * want_back.z;
+                assert!(
+                    is_front || is_back,
+                    "pixel ({x}, {y}): {got} is neither layer"
+                );
+                on_front += usize::from(is_front);
+                total += 1;
+            }
+        }
+    }
+    let share = on_front as f32 / total as f32;
+    assert!(
+        (share - 0.5).abs() < 0.04,
+        "{share} of the pixels show the quad"
+    );
+    // A d = 1 material is drawn as before, as if no material dissolved (no holes, same values).
+    let (opaque, _) = region_mean(&s, &img, 1.0, (-0.3, 0.3), (0.2, 0.7));
+    assert_close(opaque, want_front, 0.01, "the d = 1 quad");
+    let s_opaque = scene(&quads(false));
+    let img_opaque = render(&s_opaque);
+    for y in 0..SIZE {
+        for x in 0..SIZE {
+            let p = point_at_height(&s, x, y, 1.0);
+            if p.x.abs() < 0.3 && (0.2..0.7).contains(&p.z) {
+                assert_eq!(
+                    pixel(&img, x, y),
+                    pixel(&img_opaque, x, y),
+                    "pixel ({x}, {y}) of the d = 1 quad"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn a_half_dissolved_blocker_casts_half_a_shadow() {
+    // A 0.6 m quad 0.5 m up. Each light throws its shadow to +x, beside the quad's image;
+    // `region` is inside that shadow, 0.1 m or more from its edges.
+    let point = "[[lights]]\nkind = \"point\"\nposition = [-1.0, 1.5, 0.0]\nintensity_w_sr = [2.0, 2.0, 2.0]\n";
+    let cases = [
+        ("sun", SUN_60, PointShadow::Cube, (0.67, 1.07), (-0.2, 0.2)),
+        (
+            "point, cube",
+            point,
+            PointShadow::Cube,
+            (0.45, 0.85),
+            (-0.3, 0.3),
+        ),
+        (
+            "point, paraboloid",
+            point,
+            PointShadow::DualParaboloid,
+            (0.45, 0.85),
+            (-0.3, 0.3),
+        ),
+    ];
+    for (name, light, technique, xs, zs) in cases {
+        let blocker = |opacity: Option<f32>| {
+            let b = opacity.map_or(String::new(), |o| {
+                format!(
+                    "[[objects]]\nname = \"blocker\"\nbuiltin = \"quad\"\ntranslate = [0.0, 0.5, 0.0]\nscale = 0.6\n\
+                     material = {{ albedo = [0.5, 0.5, 0.5], opacity = {o} }}\n"
+                )
+            });
+            let s = scene(&format!("{CAMERA_DOWN}{PLANE}{light}{b}"));
+            region_mean(&s, &render_with(&s, technique), 0.0, xs, zs)
+        };
+        let (lit, n) = blocker(None);
+        let (half, _) = blocker(Some(0.5));
+        let (full, _) = blocker(Some(1.0));
+        let ratio = half.x / lit.x;
+        println!("{name}: d = 0.5 shadow over {n} pixels keeps {ratio} of the light");
+        assert!(n > 100, "{name}: {n} pixels in the region");
+        assert!(
+            (ratio - 0.5).abs() < 0.05,
+            "{name}: a d = 0.5 blocker keeps {ratio} of the light (expected 0.5)"
+        );
+        assert!(
+            full.max_element() < 1e-6,
+            "{name}: a d = 1 blocker still casts a full shadow: {full}"
+        );
+    }
+}
