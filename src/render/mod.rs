@@ -211,13 +211,6 @@ impl Renderer {
             vk::BufferUsageFlags::STORAGE_BUFFER,
         )?;
         let has_phong = !scene.is_all_lambert();
-        for m in scene.used_materials().filter(|m| !m.is_opaque()) {
-            log::warn!(
-                "material `{}` has opacity {} (MTL `d`): voxgi renders it opaque (no transparency yet)",
-                m.name,
-                m.opacity
-            );
-        }
         let frame_stride = (std::mem::size_of::<GpuFrame>() as u64).next_multiple_of(256);
         let frame = ctx.create_buffer(&BufferDesc {
             name: "frame constants".into(),
@@ -277,6 +270,7 @@ impl Renderer {
             has_phong,
             has_textures,
             scene.has_bump_maps(),
+            scene.has_transparency(),
             paraboloid,
         )?;
         let sampler = ctx.create_sampler(vk::Filter::NEAREST, false)?;
@@ -314,7 +308,7 @@ impl Renderer {
                         has_phong,
                     },
                 )?;
-                let light_map = create_light_map_pipeline(ctx)?;
+                let light_map = create_light_map_pipeline(ctx, scene.has_transparency())?;
                 Some((passes, light_map))
             }
             _ => None,
@@ -567,7 +561,10 @@ impl Renderer {
                 };
                 ctx.cmd
                     .begin_rendering_layers(map.extent_2d(), views.max(1), &[], Some(depth));
-                ctx.cmd.bind(&pipe, &[frame_desc(ctx.slot)]);
+                ctx.cmd.bind(
+                    &pipe,
+                    &[frame_desc(ctx.slot), Descriptor::storage_buffer(1, mb)],
+                );
                 ctx.cmd.bind_vertex_buffer(vb);
                 ctx.cmd.bind_index_buffer(ib);
                 if let Ok(lists) = draws.read() {
@@ -576,7 +573,8 @@ impl Renderer {
                             let push = GpuDrawPush {
                                 model: d.model.to_cols_array(),
                                 index: v as u32,
-                                _pad: [0; 3],
+                                material: d.material,
+                                _pad: [0; 2],
                             };
                             ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
                             ctx.cmd
@@ -678,7 +676,8 @@ impl Renderer {
                     let push = GpuDrawPush {
                         model: d.model.to_cols_array(),
                         index: d.material,
-                        _pad: [0; 3],
+                        material: d.material,
+                        _pad: [0; 2],
                     };
                     ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
                     ctx.cmd
@@ -1063,8 +1062,12 @@ fn upload_geometry(ctx: &Context, scene: &Scene, t_s: f32) -> Result<Geometry, R
     })
 }
 
-/// The reflective light-map pipeline (`light_map.{vert,geom,frag}`).
-fn create_light_map_pipeline(ctx: &Context) -> Result<GraphicsPipeline, VkError> {
+/// The reflective light-map pipeline (`light_map.{vert,geom,frag}`); `has_dissolve`: some
+/// material has MTL d < 1, whose coverage the light map shares with the shadow maps.
+fn create_light_map_pipeline(
+    ctx: &Context,
+    has_dissolve: bool,
+) -> Result<GraphicsPipeline, VkError> {
     let storage = vk::DescriptorType::STORAGE_BUFFER;
     ctx.graphics_pipeline(&GraphicsPipelineDesc {
         vertex: "light_map.vert".into(),
@@ -1089,7 +1092,7 @@ fn create_light_map_pipeline(ctx: &Context) -> Result<GraphicsPipeline, VkError>
         depth_write: true,
         depth_bias: false,
         logic_op: None,
-        spec: vec![],
+        spec: vec![(0, u32::from(has_dissolve))],
     })
 }
 
@@ -1109,6 +1112,7 @@ fn create_pipelines(
     has_phong: bool,
     has_textures: bool,
     has_bump: bool,
+    has_dissolve: bool,
     paraboloid_shadows: bool,
 ) -> Result<Pipelines, VkError> {
     let storage = vk::DescriptorType::STORAGE_BUFFER;
@@ -1143,6 +1147,7 @@ fn create_pipelines(
             (0, u32::from(has_phong)),
             (1, u32::from(has_textures)),
             (2, u32::from(has_bump)),
+            (3, u32::from(has_dissolve)),
         ],
     })?;
     let shadow = ctx.graphics_pipeline(&GraphicsPipelineDesc {
@@ -1153,7 +1158,7 @@ fn create_pipelines(
         } else {
             "shadow_depth.frag".into()
         },
-        bindings: vec![(0, storage)],
+        bindings: vec![(0, storage), (1, storage)],
         push_constant_bytes: push,
         vertex_stride: std::mem::size_of::<GpuVertex>() as u32,
         vertex_attributes: vec![(vk::Format::R32G32B32_SFLOAT, 0)],
@@ -1165,7 +1170,7 @@ fn create_pipelines(
         depth_write: true,
         depth_bias: false,
         logic_op: None,
-        spec: vec![],
+        spec: vec![(0, u32::from(has_dissolve))],
     })?;
     let deferred = ctx.compute_pipeline(
         "deferred_direct.comp",
