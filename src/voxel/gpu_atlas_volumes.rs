@@ -420,10 +420,12 @@ fn add_splat_pass(
     gate: Option<Arc<SlotGate>>,
 ) {
     let read = Access::StorageRead(Shader::Graphics);
+    // A plain attachment write: the pass clears on load, so blending reads only what the
+    // pass itself wrote, never the contents of an earlier pass.
     let mut pass = g
         .add_pass("voxelize_atlas_volumes")
-        .write(albedo, Access::ColorAttachmentReadWrite)
-        .write(normal, Access::ColorAttachmentReadWrite);
+        .write(albedo, Access::ColorAttachment)
+        .write(normal, Access::ColorAttachment);
     for (p, _, t, _) in &splats {
         pass = pass.read(*p, read).read(*t, read);
     }
