@@ -4,7 +4,9 @@
 // congruent with the bits) and the normalized normal sum. Two sources add up: the static
 // objects' sums (splatted once) and this frame's dynamic objects (thesis §3.5 keeps a static
 // copy the same way). Every voxel is written, so voxels that emptied are cleared.
-layout(local_size_x = 4, local_size_y = 4, local_size_z = 4) in;
+// One depth slice per workgroup row: the sums are 2D array layers, so a group stays inside
+// one layer of each.
+layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 
 layout(set = 0, binding = 0) uniform sampler2DArray static_albedo;   // rgb sum, a = count
 layout(set = 0, binding = 1) uniform sampler2DArray static_normal;   // xyz sum

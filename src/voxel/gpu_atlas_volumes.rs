@@ -389,7 +389,7 @@ impl AtlasVolumes {
             );
             ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
             ctx.cmd
-                .dispatch(ext.x.div_ceil(4), ext.y.div_ceil(4), ext.z.div_ceil(4));
+                .dispatch(ext.x.div_ceil(8), ext.y.div_ceil(8), ext.z);
         });
     }
 
