@@ -292,6 +292,7 @@ fn path_tracer_restarts_and_follows_moving_objects() {
     // normal volumes and restarts accumulation: after the same number of frames it shows
     // exactly what a renderer made at t = 0.5 shows (the sample sequences restart too).
     use voxgi::render::Renderer;
+    use voxgi::voxel::gpu::{VoxelSettings, Voxelizer};
     let toml = r#"
 [camera]
 position = [0.0, 2.5, -2.5]
@@ -318,37 +319,45 @@ keyframes = [ { time_s = 0.0, translate = [-0.8, 0.25, 0.0] }, { time_s = 1.0, t
     let scene = voxgi::scene::Scene::from_toml_str(toml, Path::new("<moving>"), Path::new(ROOT))
         .expect("parses");
     let ctx = common::context();
-    let settings = |t: f32| RenderSettings {
-        width: 64,
-        height: 64,
-        time_s: t,
-        gi: GiSettings {
-            method: GiMethod::Pathtrace,
-            rays: 4,
-            bounces: 2,
+    // Both voxelizers: with the atlas one, its points rewrite the volumes (static walls once,
+    // the cube per move) and the move restarts accumulation.
+    for voxelizer in [Voxelizer::Triangle, Voxelizer::Atlas] {
+        let settings = |t: f32| RenderSettings {
+            width: 64,
+            height: 64,
+            time_s: t,
+            gi: GiSettings {
+                method: GiMethod::Pathtrace,
+                rays: 4,
+                bounces: 2,
+                ..Default::default()
+            },
+            voxels: Some(VoxelSettings {
+                voxelizer,
+                ..Default::default()
+            }),
             ..Default::default()
-        },
-        ..Default::default()
-    };
-    let mut moved = Renderer::new(&ctx, &scene, settings(0.0)).expect("renderer");
-    let before = common::run_frames(&ctx, &mut moved, 2);
-    moved.settings.time_s = 0.5;
-    moved.prepare(&scene).expect("prepare");
-    let after = common::run_frames(&ctx, &mut moved, 3);
-    assert_eq!(
-        moved.gi_accumulated_frames(),
-        Some(3),
-        "accumulation restarted when the cube moved"
-    );
-    moved.destroy(&ctx);
-    let mut fresh = Renderer::new(&ctx, &scene, settings(0.5)).expect("renderer");
-    let expected = common::run_frames(&ctx, &mut fresh, 3);
-    fresh.destroy(&ctx);
-    assert_ne!(before.data, after.data, "the cube moved");
-    assert_eq!(
-        after.data, expected.data,
-        "a moved renderer shows what a fresh one at t = 0.5 shows"
-    );
+        };
+        let mut moved = Renderer::new(&ctx, &scene, settings(0.0)).expect("renderer");
+        let before = common::run_frames(&ctx, &mut moved, 2);
+        moved.settings.time_s = 0.5;
+        moved.prepare(&scene).expect("prepare");
+        let after = common::run_frames(&ctx, &mut moved, 3);
+        assert_eq!(
+            moved.gi_accumulated_frames(),
+            Some(3),
+            "{voxelizer:?}: accumulation restarted when the cube moved"
+        );
+        moved.destroy(&ctx);
+        let mut fresh = Renderer::new(&ctx, &scene, settings(0.5)).expect("renderer");
+        let expected = common::run_frames(&ctx, &mut fresh, 3);
+        fresh.destroy(&ctx);
+        assert_ne!(before.data, after.data, "{voxelizer:?}: the cube moved");
+        assert_eq!(
+            after.data, expected.data,
+            "{voxelizer:?}: a moved renderer shows what a fresh one at t = 0.5 shows"
+        );
+    }
     common::assert_no_validation_messages(&ctx);
 }
 
