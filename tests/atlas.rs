@@ -523,3 +523,27 @@ fn atlas_volumes_follow_a_moving_object() {
     frame.destroy(&ctx);
     common::assert_no_validation_messages(&ctx);
 }
+
+/// The thesis's raster bit pass (`voxelize_atlas_bits`: single-bit LUT, logicOp OR, layer =
+/// depth chunk) sets exactly the bits of the compute pass `voxelize_atlas`, one and two
+/// depth layers (`voxgi bench voxelize` runs the same comparison with timings).
+#[test]
+fn raster_atlas_bits_equal_compute_atlas_bits() {
+    use voxgi::voxel::bench::{bench_voxelize_atlas, VoxelizeBenchDesc};
+    let ctx = common::context();
+    for (path, layers) in [("cornell", 1), ("assets/scenes/cornell_bunny.toml", 2)] {
+        let desc = VoxelizeBenchDesc {
+            resolution: 128,
+            layers,
+            repeats: 1,
+        };
+        let r = bench_voxelize_atlas(&ctx, &scene(path), &desc).expect("bench runs");
+        print!("{}", r.table());
+        assert!(r.voxels > 10_000, "{path}: {} voxels", r.voxels);
+        assert_eq!(
+            r.differing_words, 0,
+            "{path}: raster and compute bits differ"
+        );
+    }
+    common::assert_no_validation_messages(&ctx);
+}

@@ -472,16 +472,8 @@ impl AtlasScene {
         }
     }
 
-    /// Declares `voxelize_atlas` for the static objects, the dynamic ones, or both.
-    pub fn add_pass(
-        &self,
-        g: &mut RenderGraph,
-        grid: &VoxelGrid,
-        columns: BufferHandle,
-        statics: bool,
-        dynamics: bool,
-        gate: Option<Arc<SlotGate>>,
-    ) {
+    /// The point lists of the static objects, the dynamic ones, or both, with their models.
+    pub fn instances(&self, statics: bool, dynamics: bool) -> Vec<(&AtlasPoints, ModelAt)> {
         let mut inst: Vec<(&AtlasPoints, ModelAt)> = Vec::new();
         if statics {
             inst.extend(
@@ -497,6 +489,20 @@ impl AtlasScene {
                     .map(|(p, _, m, _)| (&self.points[*p], ModelAt::PerSlot(m.clone()))),
             );
         }
+        inst
+    }
+
+    /// Declares `voxelize_atlas` for the static objects, the dynamic ones, or both.
+    pub fn add_pass(
+        &self,
+        g: &mut RenderGraph,
+        grid: &VoxelGrid,
+        columns: BufferHandle,
+        statics: bool,
+        dynamics: bool,
+        gate: Option<Arc<SlotGate>>,
+    ) {
+        let inst = self.instances(statics, dynamics);
         add_voxelize_atlas_pass(g, &self.pipelines, grid, columns, &inst, gate);
     }
 
