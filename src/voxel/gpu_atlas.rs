@@ -240,10 +240,19 @@ pub fn render_atlas_points(
             .get(..4)
             .map_or(0, |b| u32::from_ne_bytes([b[0], b[1], b[2], b[3]]))
             .min(w.saturating_mul(h));
-        let points = bytes.get(16..16 + count as usize * 16).unwrap_or(&[]);
+        let raw = bytes.get(16..16 + count as usize * 16).unwrap_or(&[]);
+        // `atlas_points` appends in whatever order its atomics ran. Sorted, the list has one
+        // order per atlas, so `voxelize_atlas_volumes`, whose additive blending sums in
+        // primitive order, gives the same f16 sums (hence volumes) every time it is built.
+        let mut points: Vec<[u32; 4]> = raw
+            .chunks_exact(16)
+            .map(bytemuck::pod_read_unaligned::<[u32; 4]>)
+            .collect();
+        points.sort_unstable_by_key(|p| (p[3], p[0], p[1], p[2]));
+        let sorted: &[u8] = bytemuck::cast_slice(&points);
         let buffer = ctx.upload_buffer(
             "atlas points",
-            if points.is_empty() { &[0; 16] } else { points },
+            if sorted.is_empty() { &[0; 16] } else { sorted },
             vk::BufferUsageFlags::STORAGE_BUFFER,
         )?;
         Ok(AtlasPoints {
