@@ -188,6 +188,25 @@ enum BenchCommand {
         #[arg(long)]
         json: bool,
     },
+    /// Atlas binary voxelization two ways on the same points: the compute pass (atomicOr into
+    /// the column buffer) vs the thesis's raster pass (single-bit LUT, logicOp OR): GPU ms and
+    /// whether the bits agree.
+    Voxelize {
+        /// A built-in scene or a TOML scene file. Default: cornell.
+        scene: Option<String>,
+        /// Voxel grid x/y resolution cap.
+        #[arg(long, default_value_t = 128)]
+        resolution: u32,
+        /// Depth layers of 128 voxels.
+        #[arg(long, default_value_t = 1)]
+        layers: u32,
+        /// Runs of each pass (the median is reported).
+        #[arg(long, default_value_t = 10)]
+        repeats: u32,
+        /// Print JSON instead of a table.
+        #[arg(long)]
+        json: bool,
+    },
 }
 
 /// Indirect-light flags of `render`, `profile`, `graph` and `view`. Each one given overrides the
@@ -442,6 +461,28 @@ fn run(cli: Cli) -> Result<()> {
                 outln!("{}", serde_json::to_string_pretty(&report)?);
             } else {
                 out!("{}", report.table());
+            }
+            check_validation(&ctx)
+        }
+        Command::Bench(BenchCommand::Voxelize {
+            scene,
+            resolution,
+            layers,
+            repeats,
+            json,
+        }) => {
+            let scene = load_scene_arg(scene.as_deref())?;
+            let ctx = context(cli.validate, cli.device)?;
+            let desc = voxgi::voxel::bench::VoxelizeBenchDesc {
+                resolution,
+                layers,
+                repeats,
+            };
+            let report = voxgi::voxel::bench::bench_voxelize_atlas(&ctx, &scene, &desc)?;
+            if json {
+                println!("{}", serde_json::to_string_pretty(&report)?);
+            } else {
+                print!("{}", report.table());
             }
             check_validation(&ctx)
         }

@@ -9,6 +9,7 @@ use crate::vk::{
     VkError, MAX_FRAMES_IN_FLIGHT,
 };
 use crate::voxel::gpu::GpuVoxelizePush;
+use crate::voxel::gpu_atlas_volumes::AttributeVolumes;
 use crate::voxel::ray_mask::RayMaskLut;
 use crate::voxel::VoxelGrid;
 use bytemuck::{Pod, Zeroable};
@@ -150,6 +151,10 @@ pub struct GiTarget<'a> {
     pub size: (u32, u32),
     /// The scene has Phong materials (the G-buffer has a specular image).
     pub has_phong: bool,
+    /// The atlas voxelizer writes the attribute volumes of the objects it voxelizes
+    /// ([`crate::voxel::gpu::VoxelFrame::enable_attribute_volumes`]); the triangle
+    /// attribute pass covers only the others.
+    pub atlas_attributes: bool,
 }
 
 /// Pipelines and constant data of the GI passes.
@@ -178,8 +183,8 @@ impl GiPasses {
             time_s,
             grid,
             shadow_resolution,
-            size: (width, height),
             has_phong,
+            ..
         } = *target;
         let scene_diagonal_m = scene.aabb_at(time_s).extent().length();
         let b = vk::DescriptorType::STORAGE_BUFFER;
@@ -247,16 +252,10 @@ impl GiPasses {
                 settings.ray_offset_max_voxels,
             ],
         };
-        let radiance_volume = settings.method == GiMethod::Hemisphere
-            && settings.radiance_source == RadianceSource::Volume;
-        let pathtracer = if settings.method == GiMethod::Pathtrace || radiance_volume {
+        let pathtracer = if Self::needs_attribute_volumes(&settings) {
             Some(PathTracer::new(
                 ctx,
-                scene,
-                time_s,
-                grid,
-                (width, height),
-                has_phong,
+                target,
                 settings.method == GiMethod::Pathtrace,
             )?)
         } else {
@@ -302,11 +301,39 @@ impl GiPasses {
         self.frames.load(Ordering::SeqCst)
     }
 
+    /// Whether the chosen method reads the albedo and normal volumes.
+    pub fn needs_attribute_volumes(settings: &GiSettings) -> bool {
+        settings.method == GiMethod::Pathtrace
+            || (settings.method == GiMethod::Hemisphere
+                && settings.radiance_source == RadianceSource::Volume)
+    }
+
     /// Declares the indirect-light, filter and composite passes; returns the total radiance.
-    pub fn add_passes(&self, g: &mut RenderGraph, inp: &GiInputs) -> ImageHandle {
+    /// `voxels` declares the atlas part of the attribute volumes when it has one
+    /// ([`GiTarget::atlas_attributes`]).
+    pub fn add_passes(
+        &self,
+        g: &mut RenderGraph,
+        inp: &GiInputs,
+        voxels: Option<&crate::voxel::gpu::VoxelFrame>,
+    ) -> ImageHandle {
         let lut = g.import_buffer(&self.lut, Access::StorageRead(Shader::Compute));
         let irradiance = match &self.pathtracer {
-            Some(pt) => pt.add_passes(g, inp, lut, self.push, self.sampler, self.frames.clone()),
+            Some(pt) => {
+                let attributes = |g: &mut RenderGraph, a, n| {
+                    if let Some(v) = voxels {
+                        v.add_attribute_passes(g, a, n);
+                    }
+                };
+                pt.add_passes(
+                    g,
+                    inp,
+                    lut,
+                    (self.push, self.sampler),
+                    self.frames.clone(),
+                    attributes,
+                )
+            }
             None => self.add_hemisphere(g, inp, lut),
         };
         self.add_filter_and_composite(g, inp, irradiance)
@@ -472,9 +499,10 @@ struct PathTracer {
     attributes: ComputePipeline,
     triangles: Buffer,
     triangle_count: u32,
+    /// Some object's attributes come from triangles (all without the atlas voxelizer).
+    triangle_objects: bool,
     voxelize_push: GpuVoxelizePush,
-    albedo: Image,
-    normal: Image,
+    volumes: AttributeVolumes,
     history: Image,
     /// The volumes hold the static scene once written.
     volumes_written: Arc<AtomicBool>,
@@ -506,15 +534,16 @@ struct RadianceVolume {
 const ATTRIBUTE_GROUP_SIZE: u32 = 64;
 
 impl PathTracer {
-    fn new(
-        ctx: &Context,
-        scene: &Scene,
-        time_s: f32,
-        grid: &VoxelGrid,
-        (w, h): (u32, u32),
-        has_phong: bool,
-        path_trace: bool,
-    ) -> Result<Self, VkError> {
+    fn new(ctx: &Context, target: &GiTarget<'_>, path_trace: bool) -> Result<Self, VkError> {
+        let GiTarget {
+            scene,
+            time_s,
+            grid,
+            size: (w, h),
+            has_phong,
+            atlas_attributes,
+            ..
+        } = *target;
         let storage = vk::DescriptorType::STORAGE_BUFFER;
         let image = vk::DescriptorType::STORAGE_IMAGE;
         let sampled = vk::DescriptorType::COMBINED_IMAGE_SAMPLER;
@@ -546,6 +575,14 @@ impl PathTracer {
                 )
             })
             .transpose()?;
+        // Objects the atlas voxelizer handles get their attributes from its points.
+        let mut tri_scene = scene.clone();
+        if atlas_attributes {
+            tri_scene
+                .objects
+                .retain(|o| !crate::voxel::gpu_atlas::uses_atlas(o));
+        }
+        let scene = &tri_scene;
         let tris = attribute_triangles(scene, time_s);
         let bytes: &[u8] = if tris.is_empty() {
             &[0; 48]
@@ -585,21 +622,12 @@ impl PathTracer {
             )?;
             (buffer, None)
         };
-        let ext = grid.extent_voxels();
         let usage = vk::ImageUsageFlags::STORAGE
             | vk::ImageUsageFlags::SAMPLED
             | vk::ImageUsageFlags::TRANSFER_DST;
-        let volume = |name: &str, format| {
-            ImageDesc::new_2d(name, format, ext.x, ext.y)
-                .with_depth(ext.z)
-                .with_usage(usage)
-        };
         let resting = Access::Sampled(Shader::Compute).info().layout;
         let zero = vk::ClearColorValue { float32: [0.0; 4] };
-        let albedo = ctx.create_image(&volume("albedo volume", vk::Format::R8G8B8A8_UNORM))?;
-        ctx.clear_new_image(&albedo, zero, resting)?;
-        let normal = ctx.create_image(&volume("normal volume", vk::Format::R8G8B8A8_SNORM))?;
-        ctx.clear_new_image(&normal, zero, resting)?;
+        let volumes = AttributeVolumes::new(ctx, grid)?;
         // The history exists for the path tracer only; the radiance volume for the hemisphere
         // method reading it (1x1 placeholder history otherwise, never bound).
         let (hw, hh) = if path_trace { (w, h) } else { (1, 1) };
@@ -623,10 +651,10 @@ impl PathTracer {
             radiance,
             attributes,
             triangle_count: tris.len() as u32,
+            triangle_objects: !scene.objects.is_empty(),
             voxelize_push: GpuVoxelizePush::new(grid, tris.len() as u32, 0),
             triangles,
-            albedo,
-            normal,
+            volumes,
             history,
             volumes_written: Arc::new(AtomicBool::new(false)),
             animated,
@@ -667,13 +695,14 @@ impl PathTracer {
         g: &mut RenderGraph,
         i: &GiInputs,
         lut: BufferHandle,
-        push: GpuGiPush,
-        sampler: vk::Sampler,
+        (push, sampler): (GpuGiPush, vk::Sampler),
         frames: Arc<AtomicU32>,
+        atlas_attributes: impl FnOnce(&mut RenderGraph, ImageHandle, ImageHandle),
     ) -> ImageHandle {
         let read = Access::Sampled(Shader::Compute);
-        let albedo = g.import_image(&self.albedo, read);
-        let normal = g.import_image(&self.normal, read);
+        let (albedo, normal) = self.volumes.import(g);
+        // The atlas resolve writes every voxel; triangle objects then write theirs on top.
+        atlas_attributes(g, albedo, normal);
         let tris = g.import_buffer(&self.triangles, Access::StorageRead(Shader::Compute));
         let (pipe, count, vpush) = (self.attributes, self.triangle_count, self.voxelize_push);
         let written = self.volumes_written.clone();
@@ -682,53 +711,57 @@ impl PathTracer {
             (region, a.dirty.clone(), a.counts.clone())
         });
         // The first frame writes the volumes; later frames keep them until something moves.
-        g.add_pass("voxelize_attributes")
-            .read(tris, Access::StorageRead(Shader::Compute))
-            .write(albedo, Access::StorageWrite(Shader::Compute))
-            .write(normal, Access::StorageWrite(Shader::Compute))
-            .record(move |ctx| {
-                let first = !written.swap(true, Ordering::SeqCst);
-                let slot = ctx.slot % MAX_FRAMES_IN_FLIGHT;
-                let (triangles, count) = match &per_slot {
-                    Some((region, dirty, counts)) => {
-                        let moved = dirty[slot].swap(false, Ordering::SeqCst);
-                        if !(first || moved) {
-                            return;
+        if self.triangle_objects {
+            g.add_pass("voxelize_attributes")
+                .read(tris, Access::StorageRead(Shader::Compute))
+                .write(albedo, Access::StorageWrite(Shader::Compute))
+                .write(normal, Access::StorageWrite(Shader::Compute))
+                .record(move |ctx| {
+                    let first = !written.swap(true, Ordering::SeqCst);
+                    let slot = ctx.slot % MAX_FRAMES_IN_FLIGHT;
+                    let (triangles, count) = match &per_slot {
+                        Some((region, dirty, counts)) => {
+                            let moved = dirty[slot].swap(false, Ordering::SeqCst);
+                            if !(first || moved) {
+                                return;
+                            }
+                            let d = Descriptor::StorageBuffer {
+                                binding: 0,
+                                buffer: ctx.buffer(tris).raw,
+                                offset: slot as u64 * region,
+                                range: *region,
+                            };
+                            (d, counts[slot].load(Ordering::SeqCst))
                         }
-                        let d = Descriptor::StorageBuffer {
-                            binding: 0,
-                            buffer: ctx.buffer(tris).raw,
-                            offset: slot as u64 * region,
-                            range: *region,
-                        };
-                        (d, counts[slot].load(Ordering::SeqCst))
+                        None if first => {
+                            (Descriptor::storage_buffer(0, ctx.buffer(tris).raw), count)
+                        }
+                        None => return,
+                    };
+                    if count == 0 {
+                        return;
                     }
-                    None if first => (Descriptor::storage_buffer(0, ctx.buffer(tris).raw), count),
-                    None => return,
-                };
-                if count == 0 {
-                    return;
-                }
-                let mut vpush = vpush;
-                vpush.extent[2] = count;
-                ctx.cmd.bind(
-                    &pipe,
-                    &[
-                        triangles,
-                        Descriptor::StorageImage {
-                            binding: 1,
-                            view: ctx.image(albedo).view,
-                        },
-                        Descriptor::StorageImage {
-                            binding: 2,
-                            view: ctx.image(normal).view,
-                        },
-                    ],
-                );
-                ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&vpush));
-                let x = count.min(65_535);
-                ctx.cmd.dispatch(x, count.div_ceil(x), 1);
-            });
+                    let mut vpush = vpush;
+                    vpush.extent[2] = count;
+                    ctx.cmd.bind(
+                        &pipe,
+                        &[
+                            triangles,
+                            Descriptor::StorageImage {
+                                binding: 1,
+                                view: ctx.image(albedo).view,
+                            },
+                            Descriptor::StorageImage {
+                                binding: 2,
+                                view: ctx.image(normal).view,
+                            },
+                        ],
+                    );
+                    ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&vpush));
+                    let x = count.min(65_535);
+                    ctx.cmd.dispatch(x, count.div_ceil(x), 1);
+                });
+        }
         let Some(pipe) = self.pathtrace else {
             return match &self.radiance {
                 Some(rv) => rv.add_passes(g, i, lut, albedo, normal, push, sampler),
@@ -769,8 +802,7 @@ impl PathTracer {
         }
         ctx.destroy_compute_pipeline(self.attributes);
         ctx.destroy_buffer(self.triangles);
-        ctx.destroy_image(self.albedo);
-        ctx.destroy_image(self.normal);
+        self.volumes.destroy(ctx);
         ctx.destroy_image(self.history);
     }
 }

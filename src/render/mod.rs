@@ -285,7 +285,7 @@ impl Renderer {
             .voxels
             .or(gi_on.then(Default::default))
             .or(settings.debug.map(|_| Default::default()));
-        let voxels = match &voxel_settings {
+        let mut voxels = match &voxel_settings {
             Some(v) => Some(crate::voxel::gpu::VoxelFrame::new(
                 ctx,
                 scene,
@@ -294,8 +294,11 @@ impl Renderer {
             )?),
             None => None,
         };
-        let gi = match (&voxels, gi_on) {
+        let gi = match (&mut voxels, gi_on) {
             (Some(v), true) => {
+                // With the atlas voxelizer its points write the volumes (digest §3.4).
+                let atlas_attributes = crate::gi::GiPasses::needs_attribute_volumes(&settings.gi)
+                    && v.enable_attribute_volumes(ctx, scene)?;
                 let passes = crate::gi::GiPasses::new(
                     ctx,
                     settings.gi,
@@ -306,6 +309,7 @@ impl Renderer {
                         shadow_resolution: settings.shadow.resolution,
                         size: (settings.width, settings.height),
                         has_phong,
+                        atlas_attributes,
                     },
                 )?;
                 let light_map = create_light_map_pipeline(ctx, scene.has_transparency())?;
@@ -442,14 +446,19 @@ impl Renderer {
     /// Writes the frame constants of frame slot `slot` (call after the slot's fence), and the
     /// dynamic objects' voxels at `settings.time_s`.
     pub fn write_frame(&mut self, slot: usize) {
-        if let Some((gi, _)) = &mut self.gi {
-            gi.update_dynamic(self.settings.time_s, slot);
-            gi.advance();
-        }
+        let mut attributes_moved = false;
         if let Some(v) = &mut self.voxels {
             if let Err(e) = v.update(self.settings.time_s, slot) {
                 log::warn!("dynamic objects not re-voxelized: {e}");
             }
+            attributes_moved = v.attributes_moved();
+        }
+        if let Some((gi, _)) = &mut self.gi {
+            gi.update_dynamic(self.settings.time_s, slot);
+            if attributes_moved {
+                gi.reset();
+            }
+            gi.advance();
         }
         let offset = (slot as u64 * self.frame_stride) as usize;
         let bytes = bytemuck::bytes_of(&self.frame_data);
@@ -820,6 +829,7 @@ impl Renderer {
                         width: w,
                         height: h,
                     },
+                    self.voxels.as_ref(),
                 )
             }
             _ => radiance,

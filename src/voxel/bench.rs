@@ -2,6 +2,11 @@
 //! side in one GPU run. Rays start at the camera-visible surface points of a scene (a G-buffer
 //! traced on the CPU), offset along the normal (§4.4), cosine-distributed around it, with a
 //! length limited by a radius. The hierarchical test and 1-bit marching cast the same rays.
+//!
+//! `voxgi bench voxelize`: the atlas points' binary voxelization both ways, in one run: the
+//! renderer's compute pass `voxelize_atlas` (atomicOr into the column buffer) against the
+//! thesis's raster pass `voxelize_atlas_bits` (single-bit LUT, logicOp OR; digest §3.3),
+//! with the GPU time of each and whether their bits agree.
 
 use super::gpu_rays::{GpuRay, RayCastError, RayMethod, VoxelRayCaster};
 use super::{
@@ -89,6 +94,8 @@ pub enum BenchError {
     Cast(#[from] RayCastError),
     #[error(transparent)]
     Vk(#[from] crate::vk::VkError),
+    #[error(transparent)]
+    GpuVoxel(#[from] super::gpu::GpuVoxelError),
     #[error("the camera sees no geometry: nothing to cast rays from")]
     NoSurface,
 }
@@ -318,5 +325,182 @@ impl TraverseBenchReport {
             }
         }
         s
+    }
+}
+
+/// Parameters of `voxgi bench voxelize`.
+#[derive(Clone, Debug)]
+pub struct VoxelizeBenchDesc {
+    /// Voxel grid x/y resolution cap.
+    pub resolution: u32,
+    /// Depth layers of 128 voxels.
+    pub layers: u32,
+    /// Runs of each pass; the report gives the median.
+    pub repeats: u32,
+}
+
+/// The two atlas bit passes on one scene.
+#[derive(Clone, Debug, Serialize)]
+pub struct VoxelizeBenchReport {
+    pub device: String,
+    pub grid: [u32; 3],
+    /// Atlas points splatted per run.
+    pub points: u64,
+    pub repeats: u32,
+    /// Median GPU ms of `voxelize_atlas` (compute, atomicOr).
+    pub compute_ms: f64,
+    /// Median GPU ms of `voxelize_atlas_bits` (raster, logicOp OR, clear included).
+    pub raster_ms: f64,
+    pub raster_over_compute: f64,
+    /// Voxels set by the compute pass.
+    pub voxels: u64,
+    /// 32-bit column words in which the two passes differ (0: the same bits).
+    pub differing_words: usize,
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(|a, b| a.total_cmp(b));
+    v.get(v.len() / 2).copied().unwrap_or(0.0)
+}
+
+fn pass_ms(timings: &[crate::vk::PassTiming], name: &str) -> f64 {
+    timings
+        .iter()
+        .filter(|t| t.name == name)
+        .map(|t| t.gpu_ms)
+        .sum()
+}
+
+/// Runs both atlas bit passes `desc.repeats` times on `scene` at time 0 and compares their
+/// bits.
+pub fn bench_voxelize_atlas(
+    ctx: &Context,
+    scene: &Scene,
+    desc: &VoxelizeBenchDesc,
+) -> Result<VoxelizeBenchReport, BenchError> {
+    use super::gpu::{column_bytes, image_extent, readback_buffer, run_once, COLUMN_FORMAT};
+    use crate::graph::{Access, RenderGraph};
+    use crate::vk::{vk, ImageDesc};
+    let aabb = scene.aabb_at(0.0);
+    let grid = VoxelGrid::around(
+        aabb.min,
+        aabb.max,
+        &GridDesc {
+            layers: desc.layers,
+            max_res_xy: desc.resolution,
+            ..Default::default()
+        },
+    )?;
+    let mut cache = super::atlas::AtlasCache::default();
+    let atlas = super::gpu_atlas::AtlasScene::new(ctx, scene, 0.0, &grid, &mut cache)?;
+    let raster = match super::gpu_atlas_raster::AtlasRasterBits::new(ctx) {
+        Ok(r) => r,
+        Err(e) => {
+            atlas.destroy(ctx);
+            return Err(e.into());
+        }
+    };
+    let size = column_bytes(&grid);
+    let (w, h) = image_extent(&grid);
+    let layers = grid.layers();
+    let mut buffers = Vec::new();
+    let result = (|| -> Result<VoxelizeBenchReport, BenchError> {
+        buffers.push(readback_buffer(ctx, "compute bits readback", size)?);
+        buffers.push(readback_buffer(ctx, "raster bits readback", size)?);
+        let instances = atlas.instances(true, true);
+        let (mut compute_ms, mut raster_ms) = (Vec::new(), Vec::new());
+        for _ in 0..desc.repeats.max(1) {
+            let mut g = RenderGraph::new();
+            let columns = g.create_buffer("voxel column buffer", size);
+            g.add_pass("voxel_clear")
+                .write(columns, Access::TransferWrite)
+                .record(move |ctx| ctx.cmd.fill_buffer(ctx.buffer(columns).raw, 0));
+            atlas.add_pass(&mut g, &grid, columns, true, true, None);
+            let out = g.import_buffer(&buffers[0], Access::HostRead);
+            g.add_pass("bits_readback")
+                .read(columns, Access::TransferRead)
+                .write(out, Access::TransferWrite)
+                .record(move |ctx| {
+                    ctx.cmd
+                        .copy_buffer(ctx.buffer(columns).raw, ctx.buffer(out).raw, size)
+                });
+            compute_ms.push(pass_ms(&run_once(ctx, g)?, "voxelize_atlas"));
+
+            let mut g = RenderGraph::new();
+            let image = g.create_image(
+                ImageDesc::new_2d("voxel columns (raster)", COLUMN_FORMAT, w, h)
+                    .with_layers(layers),
+            );
+            raster.add_pass(&mut g, &grid, image, &instances);
+            let out = g.import_buffer(&buffers[1], Access::HostRead);
+            g.add_pass("bits_readback")
+                .read(image, Access::TransferRead)
+                .write(out, Access::TransferWrite)
+                .record(move |ctx| {
+                    let extent = vk::Extent3D {
+                        width: w,
+                        height: h,
+                        depth: 1,
+                    };
+                    let raw = ctx.image(image).raw;
+                    ctx.cmd
+                        .copy_image_to_buffer(raw, extent, 0, layers, ctx.buffer(out).raw)
+                });
+            raster_ms.push(pass_ms(&run_once(ctx, g)?, "voxelize_atlas_bits"));
+        }
+        let words = |b: &crate::vk::Buffer| -> Vec<u32> {
+            b.mapped()
+                .unwrap_or(&[])
+                .chunks_exact(4)
+                .take(size as usize / 4)
+                .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+                .collect()
+        };
+        let (a, b) = (words(&buffers[0]), words(&buffers[1]));
+        let differing_words =
+            a.iter().zip(&b).filter(|(x, y)| x != y).count() + a.len().abs_diff(b.len());
+        let (compute_ms, raster_ms) = (median(compute_ms), median(raster_ms));
+        let ext = grid.extent_voxels();
+        Ok(VoxelizeBenchReport {
+            device: ctx.info.name.clone(),
+            grid: [ext.x, ext.y, ext.z],
+            points: atlas.point_count(),
+            repeats: desc.repeats.max(1),
+            compute_ms,
+            raster_ms,
+            raster_over_compute: raster_ms / compute_ms.max(1e-9),
+            voxels: a.iter().map(|w| u64::from(w.count_ones())).sum(),
+            differing_words,
+        })
+    })();
+    for b in buffers {
+        ctx.destroy_buffer(b);
+    }
+    raster.destroy(ctx);
+    atlas.destroy(ctx);
+    result
+}
+
+impl VoxelizeBenchReport {
+    pub fn table(&self) -> String {
+        format!(
+            "atlas voxelization benchmark on {} — grid {}x{}x{}, {} points, median of {} runs\n\
+             pass                               GPU ms\n\
+             voxelize_atlas (compute, atomicOr) {:>9.3}\n\
+             voxelize_atlas_bits (raster, OR)   {:>9.3}\n\
+             raster / compute                   {:>9.2}\n\
+             voxels set: {}; differing column words: {}\n",
+            self.device,
+            self.grid[0],
+            self.grid[1],
+            self.grid[2],
+            self.points,
+            self.repeats,
+            self.compute_ms,
+            self.raster_ms,
+            self.raster_over_compute,
+            self.voxels,
+            self.differing_words
+        )
     }
 }
