@@ -1,7 +1,8 @@
 #version 450
 // Model-space position of the atlas texel's sample: the closest point of the triangle to the
 // texel centre, kept when it is within √2/2 texel (the coverage rule of src/voxel/atlas.rs,
-// whose `closest_point` this mirrors). Unowned texels stay cleared (w = 0 = invalid).
+// whose `closest_point` this mirrors). w = triangle index + 1, exact in f32 below 2^24
+// (render_atlas_points checks the count); unowned texels stay cleared (w = 0 = invalid).
 #include "atlas_triangle.glsl"
 
 layout(set = 0, binding = 0, std430) readonly buffer Triangles { AtlasTriangle tris[]; };
@@ -57,5 +58,6 @@ void main() {
     if (distance(closest, q) > COVER_RADIUS) {
         discard;
     }
-    o_position = vec4(bary.x * t.p[0].xyz + bary.y * t.p[1].xyz + bary.z * t.p[2].xyz, 1.0);
+    o_position = vec4(bary.x * t.p[0].xyz + bary.y * t.p[1].xyz + bary.z * t.p[2].xyz,
+                      float(v_tri + 1u));
 }

@@ -4,6 +4,8 @@
 layout(constant_id = 0) const bool HAS_PHONG = false;
 layout(constant_id = 1) const bool HAS_TEXTURES = false;
 layout(constant_id = 2) const bool HAS_BUMP = false;
+// Some material has MTL d < 1 (dissolve.glsl); otherwise no fragment is ever discarded.
+layout(constant_id = 3) const bool HAS_DISSOLVE = false;
 
 struct GpuMaterial {
     vec4 albedo;    // rgb albedo, a opacity
@@ -13,6 +15,7 @@ struct GpuMaterial {
 };
 
 #include "frame.glsl"
+#include "dissolve.glsl"
 layout(set = 0, binding = 0, std430) readonly buffer FrameBuf { GpuFrame frame; };
 layout(set = 0, binding = 1, std430) readonly buffer Materials { GpuMaterial materials[]; };
 // The draw's albedo texture (a 1x1 placeholder when the material has none).
@@ -45,18 +48,37 @@ mat3 cotangent_frame(vec3 n, vec3 p, vec2 uv) {
     return mat3(t * inv, b * inv, n);
 }
 
-// Height-map bump (Mikkelsen 2010, "Bump mapping unparametrized surfaces on the GPU"):
-// perturbs n by the screen-space gradient of the height h (meters) over the surface.
-vec3 bump_height(vec3 n, vec3 p, float h) {
+// Height-map bump (Mikkelsen 2010, "Bump mapping unparametrized surfaces on the GPU", eq. 2-4):
+// n' = n - surface gradient of the height h (meters), the exact normal of p + h n over a plane.
+// Mikkelsen takes h's screen derivatives from dFdx(h), but finite differences of a filtered
+// texture across a 2x2 quad are not h's derivatives (bilinear kinks at texel centers, the
+// anisotropic footprint): lavapipe gave 0.860 or 0.917 for a ramp whose closed form is 0.894.
+// Instead h's gradient is taken in texture space (height_gradient) and carried to the screen
+// by the chain rule, dh/dx = grad . dFdx(uv), exact because uv is affine over the triangle.
+vec3 bump_height(vec3 n, vec3 p, float dhdx, float dhdy) {
     vec3 dpdx = dFdx(p), dpdy = dFdy(p);
     vec3 r1 = cross(dpdy, n), r2 = cross(n, dpdx);
     float det = dot(dpdx, r1);
-    vec3 grad = sign(det) * (dFdx(h) * r1 + dFdy(h) * r2);
+    vec3 grad = sign(det) * (dhdx * r1 + dhdy * r2);
     return normalize(abs(det) * n - grad);
+}
+
+// Gradient of the height map (first channel, map units) per unit of uv, by central differences
+// half a texel of the level the sampler would read on either side: the slope across one texel
+// of that level, exact for a height linear in uv (every box-filtered mip of a linear ramp is
+// the same ramp).
+vec2 height_gradient(sampler2D map, vec2 uv) {
+    float lod = textureQueryLod(map, uv).x;
+    vec2 h = 0.5 * exp2(lod) / vec2(textureSize(map, 0));
+    float du = textureLod(map, uv + vec2(h.x, 0.0), lod).r - textureLod(map, uv - vec2(h.x, 0.0), lod).r;
+    float dv = textureLod(map, uv + vec2(0.0, h.y), lod).r - textureLod(map, uv - vec2(0.0, h.y), lod).r;
+    return vec2(du, dv) / (2.0 * h);
 }
 
 void main() {
     GpuMaterial m = materials[pc.material];
+    // Before anything that can discard: the threshold takes derivatives.
+    float coverage_threshold = HAS_DISSOLVE ? dissolve_threshold(in_world) : 0.0;
     vec3 n = normalize(in_normal);
     // Two-sided surfaces: shade the side the camera sees. Decided geometrically, not by
     // gl_FrontFacing, because the y-flipped projection inverts the winding.
@@ -70,10 +92,12 @@ void main() {
         vec3 bumped = normalize(cotangent_frame(n, in_world, in_uv) * t);
         if (!any(isnan(bumped))) n = bumped;
     } else if (HAS_BUMP && m.flags.y == 1u) {
-        float h = texture(bump_texture, tex_uv).r * uintBitsToFloat(m.flags.z);
-        vec3 bumped = bump_height(n, in_world, h);
+        vec2 grad = height_gradient(bump_texture, tex_uv) * uintBitsToFloat(m.flags.z);
+        vec3 bumped = bump_height(n, in_world, dot(grad, dFdx(tex_uv)), dot(grad, dFdy(tex_uv)));
         if (!any(isnan(bumped))) n = bumped;
     }
+    // After the bump's derivatives, which a discarded neighbour would leave undefined.
+    if (HAS_DISSOLVE && m.albedo.a < coverage_threshold) discard;
     out_albedo = vec4(albedo, 1.0);
     out_normal = vec4(n, m.specular.a);
     if (HAS_PHONG) out_specular = vec4(m.specular.rgb, 1.0);

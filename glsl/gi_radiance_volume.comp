@@ -12,7 +12,7 @@ layout(set = 0, binding = 1) uniform usampler2DArray voxels;
 layout(set = 0, binding = 2) uniform sampler3D albedo_volume;
 layout(set = 0, binding = 3) uniform sampler3D normal_volume;
 layout(set = 0, binding = 4) uniform sampler2DArray shadow_maps;
-layout(set = 0, binding = 5, rgba16f) uniform writeonly image3D radiance_volume;
+layout(set = 0, binding = 5, rgba32f) uniform writeonly image3D radiance_volume;
 
 #include "shadow.glsl"
 

@@ -4,6 +4,10 @@
 // falloff; the diffuse part), its world position and material and its normal, for lookups at
 // voxel ray hits (§6.1).
 #include "frame.glsl"
+#include "dissolve.glsl"
+
+// Some material has MTL d < 1: its texels are covered as in the shadow maps (dissolve.glsl).
+layout(constant_id = 0) const bool HAS_DISSOLVE = false;
 
 layout(set = 0, binding = 0, std430) readonly buffer FrameBuf { GpuFrame frame; };
 struct GpuMaterial { vec4 albedo; vec4 specular; uvec4 flags; };
@@ -25,6 +29,8 @@ layout(location = 2) out vec4 out_normal;
 #define PI 3.14159265358979323846
 
 void main() {
+    // Before any discard: the threshold takes derivatives.
+    float coverage_threshold = HAS_DISSOLVE ? dissolve_threshold(in_world) : 0.0;
     // The shadow views index their light through the light table.
     GpuLight l;
     for (uint i = 0u; i < frame.counts.x; ++i) {
@@ -46,6 +52,7 @@ void main() {
         e = l.intensity.rgb * (falloff * max(dot(n, wi), 0.0) / d2);
     }
     GpuMaterial m = materials[pc.material];
+    if (HAS_DISSOLVE && m.albedo.a < coverage_threshold) discard;
     out_radiance = vec4(m.albedo.rgb / PI * e, 1.0);
     // w: material index + 1 (0 marks texels the light sees nothing in), so lookups can
     // evaluate a glossy sender's lobe toward the ray (§6.1).

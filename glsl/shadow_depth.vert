@@ -6,6 +6,7 @@ layout(location = 0) in vec3 in_position;
 layout(push_constant) uniform Push {
     mat4 model;
     uint view;
+    uint material;
 } pc;
 
 void main() {

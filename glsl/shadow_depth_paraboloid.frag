@@ -1,57 +1,71 @@
 #version 450
-// Shadow maps of a frame with paraboloid views (see shadow_depth.geom). The paraboloid map is
-// not linear, so the rasterizer's interpolated depth is only exact at the vertices; instead the
-// distance along the texel's ray to the triangle's plane is written, clamped to the distances
-// the triangle has: where the rasterized chord overshoots the curved edge, the plane's extension
-// could otherwise shadow whatever lies beyond that edge. Other views keep their rasterized
+// Shadow maps of a frame with paraboloid views (see shadow_depth.geom, which covers a box
+// around each triangle's curved image). A texel keeps a triangle exactly when the ray through
+// its center hits the triangle, and stores the exact distance along that ray. Both interpolated
+// depth (linear between the mapped vertices, while the map is not) and rasterized coverage
+// (chords instead of arcs) are wrong inside large triangles (Brabec et al. 2002 and
+// digest_001_004.md A.1 ask to tessellate finely instead). Other views keep their rasterized
 // depth. Paraboloid inverse (stereographic): d = (2x, 2y, 1 - x^2 - y^2) / (1 + x^2 + y^2).
+// Materials with MTL d < 1 cover a fraction d of the texels (dissolve.glsl).
+layout(constant_id = 0) const bool HAS_DISSOLVE = false;
+
+#include "dissolve.glsl"
+
+struct GpuMaterial {
+    vec4 albedo;  // a: opacity (gbuffer.frag has the whole layout)
+    vec4 specular;
+    uvec4 flags;
+};
+layout(set = 0, binding = 1, std430) readonly buffer Materials { GpuMaterial materials[]; };
+
+layout(push_constant) uniform Push {
+    mat4 model;
+    uint view;
+    uint material;
+} pc;
 
 layout(location = 0) in vec2 in_uv;
 layout(location = 1) flat in vec4 in_v0;  // w 1: a paraboloid view
 layout(location = 2) flat in vec3 in_v1;
 layout(location = 3) flat in vec3 in_v2;
 layout(location = 4) flat in vec2 in_range;  // near, far
-
-// Closest point of triangle abc to p (Ericson, Real-Time Collision Detection, 5.1.5).
-vec3 closest_on_triangle(vec3 p, vec3 a, vec3 b, vec3 c) {
-    vec3 ab = b - a, ac = c - a, ap = p - a;
-    float d1 = dot(ab, ap), d2 = dot(ac, ap);
-    if (d1 <= 0.0 && d2 <= 0.0) return a;
-    vec3 bp = p - b;
-    float d3 = dot(ab, bp), d4 = dot(ac, bp);
-    if (d3 >= 0.0 && d4 <= d3) return b;
-    float vc = d1 * d4 - d3 * d2;
-    if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) return a + ab * (d1 / (d1 - d3));
-    vec3 cp = p - c;
-    float d5 = dot(ab, cp), d6 = dot(ac, cp);
-    if (d6 >= 0.0 && d5 <= d6) return c;
-    float vb = d5 * d2 - d1 * d6;
-    if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) return a + ac * (d2 / (d2 - d6));
-    float va = d3 * d6 - d5 * d4;
-    if (va <= 0.0 && d4 - d3 >= 0.0 && d5 - d6 >= 0.0) {
-        return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
-    }
-    float denom = 1.0 / (va + vb + vc);
-    return a + ab * (vb * denom) + ac * (vc * denom);
-}
+layout(location = 5) in vec3 in_world;        // the other projections
 
 void main() {
+    float opacity = materials[pc.material].albedo.a;
     gl_FragDepth = gl_FragCoord.z;
-    if (in_v0.w == 0.0) return;
-    vec3 a = in_v0.xyz;
-    vec3 n = cross(in_v1 - a, in_v2 - a);
+    if (in_v0.w == 0.0) {
+        if (HAS_DISSOLVE && opacity < dissolve_threshold(in_world)) discard;
+        return;
+    }
     float r2 = dot(in_uv, in_uv);
     vec3 dir = vec3(2.0 * in_uv, 1.0 - r2) / (1.0 + r2);
+    vec3 a = in_v0.xyz, b = in_v1, c = in_v2;
+    vec3 ab = cross(a, b), bc = cross(b, c), ca = cross(c, a);
+    // Ray-plane distance: n . (t dir) = n . a with n = (b - a) x (c - a), whose n . a is
+    // det(a, b, c).
+    float orient = dot(a, bc);
+    vec3 n = cross(b - a, c - a);
     float cos_n = dot(n, dir);
-    // Edge-on to the light: the interpolated depth is as good as any.
-    if (abs(cos_n) <= 1e-6 * length(n)) return;
-    float t = dot(n, a) / cos_n;
-    if (t <= 0.0) return;
-    // Distances on the triangle lie between its point nearest to the light and its farthest
-    // vertex; moving the hit point onto the triangle instead would shift it sideways and
-    // break the exact depth that coplanar neighbours (a quad's diagonal) rely on.
-    float lo = length(closest_on_triangle(vec3(0.0), a, in_v1, in_v2));
-    float hi = max(length(a), max(length(in_v1), length(in_v2)));
-    float dist = clamp(t, lo, hi);
+    float dist = orient / cos_n;
+    // Dissolve takes derivatives of the hit point: before any discard (the hemisphere frame is
+    // rigid, as good as world space for a pattern that sticks to the surface).
+    float coverage_threshold = HAS_DISSOLVE ? dissolve_threshold(dir * dist) : 0.0;
+    // Past the rim is the other hemisphere's, and no lookup reads it (shadow.glsl).
+    if (r2 > 1.0) discard;
+    // Edge-on to the light: the triangle covers no solid angle; its neighbours cover the rest.
+    if (orient == 0.0) discard;
+    // The ray from the light (the origin) hits the triangle iff it lies on the inner side of
+    // the three planes through the light and an edge (the triangle's cone), on the side that
+    // the triangle's own orientation det(a, b, c) calls inner. The neighbour across an edge
+    // evaluates the same cross product negated, so shared edges leave no gap; the tolerance
+    // (relative, 1e-6) lets both keep a texel that rounding puts exactly on the edge.
+    float s = sign(orient);
+    if (s * dot(dir, ab) < -1e-6 * length(ab) || s * dot(dir, bc) < -1e-6 * length(bc) ||
+        s * dot(dir, ca) < -1e-6 * length(ca)) {
+        discard;
+    }
+    if (s * cos_n <= 0.0) discard;
+    if (HAS_DISSOLVE && opacity < coverage_threshold) discard;
     gl_FragDepth = clamp((dist - in_range.x) / (in_range.y - in_range.x), 0.0, 1.0);
 }

@@ -4,6 +4,7 @@
 // same column buffer as voxelize_triangles (atomicOr) instead of an RGBA32UI target with
 // logicOp OR, so both voxelizers share voxel_clear / voxel_copy_static / voxel_store.
 #include "voxel_bits.glsl"
+#include "atlas_voxel.glsl"
 
 layout(local_size_x = 64) in;
 
@@ -24,14 +25,9 @@ void main() {
     if (i >= pc.extent.z) {
         return;
     }
-    vec3 world = (pc.model * vec4(points[i].xyz, 1.0)).xyz;
-    vec3 d = world - pc.grid_min.xyz;
-    vec3 f = pc.dims.w == 0u ? d.yzx : (pc.dims.w == 1u ? d.zxy : d);
-    vec3 v = floor(f * pc.scale.xyz);
-    // Points outside the grid are clipped, not wrapped.
-    if (any(lessThan(v, vec3(0.0))) || any(greaterThanEqual(v, vec3(pc.dims.xyz)))) {
+    uvec3 u;
+    if (!atlas_point_voxel(pc.model, points[i].xyz, pc.grid_min.xyz, pc.scale.xyz, pc.dims, u)) {
         return;
     }
-    uvec3 u = uvec3(v);
     atomicOr(words[voxel_word_index(u.xy, u.z, pc.extent.xy)], 1u << voxel_bit(u.z));
 }

@@ -2,6 +2,7 @@
 
 use anyhow::{bail, Context as _, Result};
 use clap::{Parser, Subcommand};
+use std::io::Write as _;
 use std::path::PathBuf;
 use voxgi::demo::Demo;
 use voxgi::gi::GiMethod;
@@ -168,7 +169,7 @@ enum BenchCommand {
     /// Voxelization GPU time, atlas and triangle voxelizer side by side: Cornell, bunny-in-box
     /// and a dense generated scene (64 bunnies) at each x,y resolution (D = 128), and a cube
     /// tessellated 1x and 16x (same surface). One-time atlas work is listed apart.
-    Voxelize {
+    VoxelizeSweep {
         /// x = y resolutions of the scene rows.
         #[arg(long, value_delimiter = ',', default_values_t = [64, 128, 256, 512])]
         resolutions: Vec<u32>,
@@ -201,6 +202,25 @@ enum BenchCommand {
         #[arg(long, default_value_t = 1024)]
         max_iterations: u32,
         /// Print JSON instead of tables.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Atlas binary voxelization two ways on the same points: the compute pass (atomicOr into
+    /// the column buffer) vs the thesis's raster pass (single-bit LUT, logicOp OR): GPU ms and
+    /// whether the bits agree.
+    Voxelize {
+        /// A built-in scene or a TOML scene file. Default: cornell.
+        scene: Option<String>,
+        /// Voxel grid x/y resolution cap.
+        #[arg(long, default_value_t = 128)]
+        resolution: u32,
+        /// Depth layers of 128 voxels.
+        #[arg(long, default_value_t = 1)]
+        layers: u32,
+        /// Runs of each pass (the median is reported).
+        #[arg(long, default_value_t = 10)]
+        repeats: u32,
+        /// Print JSON instead of a table.
         #[arg(long)]
         json: bool,
     },
@@ -388,19 +408,32 @@ impl FrameArgs {
     }
 }
 
+/// `println!` that hands a closed stdout (`voxgi compare a b | head -1`) back as an error
+/// instead of panicking; `main` ends quietly on it, like other CLI tools.
+macro_rules! outln {
+    ($($arg:tt)*) => {
+        writeln!(std::io::stdout(), $($arg)*)?
+    };
+}
+
+/// `print!` with the same broken-pipe handling as [`outln!`].
+macro_rules! out {
+    ($($arg:tt)*) => {
+        write!(std::io::stdout(), $($arg)*)?
+    };
+}
+
 fn main() {
-    // `voxgi compare a b | head -1` closes stdout early: end quietly like other CLI tools
-    // instead of panicking in println!.
-    let default_hook = std::panic::take_hook();
-    std::panic::set_hook(Box::new(move |info| {
-        if info.to_string().contains("failed printing to stdout") {
-            std::process::exit(0);
-        }
-        default_hook(info);
-    }));
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
     let cli = Cli::parse();
     if let Err(e) = run(cli) {
+        let broken_pipe = e.chain().any(|c| {
+            c.downcast_ref::<std::io::Error>()
+                .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+        });
+        if broken_pipe {
+            std::process::exit(0);
+        }
         eprintln!("error: {e:#}");
         std::process::exit(1);
     }
@@ -421,7 +454,7 @@ fn run(cli: Cli) -> Result<()> {
             for w in &report.warnings {
                 eprintln!("warning: {w}");
             }
-            println!(
+            outln!(
                 "wrote {} ({} shapes, {} triangles)",
                 report.xml_path.display(),
                 report.shape_count,
@@ -452,24 +485,27 @@ fn run(cli: Cli) -> Result<()> {
             };
             let report = voxgi::voxel::bench::bench_traverse(&ctx, &scene, &desc)?;
             if json {
-                println!("{}", serde_json::to_string_pretty(&report)?);
+                outln!("{}", serde_json::to_string_pretty(&report)?);
             } else {
-                print!("{}", report.table());
+                out!("{}", report.table());
             }
             check_validation(&ctx)
         }
         Command::Bench(BenchCommand::Voxelize {
-            resolutions,
-            reps,
+            scene,
+            resolution,
+            layers,
+            repeats,
             json,
         }) => {
+            let scene = load_scene_arg(scene.as_deref())?;
             let ctx = context(cli.validate, cli.device)?;
             let desc = voxgi::voxel::bench::VoxelizeBenchDesc {
-                resolutions,
-                reps,
-                ..Default::default()
+                resolution,
+                layers,
+                repeats,
             };
-            let report = voxgi::voxel::bench::bench_voxelize(&ctx, &desc)?;
+            let report = voxgi::voxel::bench::bench_voxelize_atlas(&ctx, &scene, &desc)?;
             if json {
                 println!("{}", serde_json::to_string_pretty(&report)?);
             } else {
@@ -477,8 +513,27 @@ fn run(cli: Cli) -> Result<()> {
             }
             check_validation(&ctx)
         }
+        Command::Bench(BenchCommand::VoxelizeSweep {
+            resolutions,
+            reps,
+            json,
+        }) => {
+            let ctx = context(cli.validate, cli.device)?;
+            let desc = voxgi::voxel::bench::VoxelizeSweepDesc {
+                resolutions,
+                reps,
+                ..Default::default()
+            };
+            let report = voxgi::voxel::bench::bench_voxelize_sweep(&ctx, &desc)?;
+            if json {
+                outln!("{}", serde_json::to_string_pretty(&report)?);
+            } else {
+                out!("{}", report.table());
+            }
+            check_validation(&ctx)
+        }
         Command::Devices => {
-            print!("{}", voxgi::vk::describe_devices()?);
+            out!("{}", voxgi::vk::describe_devices()?);
             Ok(())
         }
         Command::View {
@@ -530,11 +585,15 @@ fn run(cli: Cli) -> Result<()> {
                 screenshot,
             };
             let report = voxgi::app::run(scene, &opts)?;
+            if let Some(camera) = &report.camera {
+                // Pasteable into a scene file, to start there next time.
+                out!("camera at exit:\n{}", camera.toml_table());
+            }
             for p in &report.screenshots {
-                println!("wrote {}", p.display());
+                outln!("wrote {}", p.display());
             }
             if report.skipped_minimized > 0 {
-                println!(
+                outln!(
                     "skipped {} frames while minimized",
                     report.skipped_minimized
                 );
@@ -562,22 +621,23 @@ fn run(cli: Cli) -> Result<()> {
             let dump = |exec: &voxgi::graph::GraphExecutor| {
                 let c = exec.compiled();
                 if dot {
-                    print!("{}", c.dump_dot(exec.graph()));
+                    out!("{}", c.dump_dot(exec.graph()));
                 } else {
-                    print!("{}", c.dump_text(exec.graph()));
+                    out!("{}", c.dump_text(exec.graph()));
                 }
+                Ok::<(), anyhow::Error>(())
             };
             if demo {
                 let demo = Demo::new(&ctx, frame.width, frame.height)?;
                 let exec = demo.executor(&ctx, 1)?;
-                dump(&exec);
+                dump(&exec)?;
                 exec.destroy(&ctx);
                 demo.destroy(&ctx);
             } else {
                 let scene = load_scene_arg(scene.as_deref())?;
                 let renderer = voxgi::render::Renderer::new(&ctx, &scene, frame.settings(&scene)?)?;
                 let exec = voxgi::graph::GraphExecutor::new(&ctx, renderer.graph(), 1)?;
-                dump(&exec);
+                dump(&exec)?;
                 exec.destroy(&ctx);
                 renderer.destroy(&ctx);
             }
@@ -602,21 +662,21 @@ fn run(cli: Cli) -> Result<()> {
                 image::ColorType::Rgba8,
             )
             .with_context(|| format!("writing {}", output.display()))?;
-            println!("wrote {}", output.display());
+            outln!("wrote {}", output.display());
             if let Some(path) = exr {
                 out.hdr.save_exr(&path)?;
-                println!("wrote {}", path.display());
+                outln!("wrote {}", path.display());
             }
             for t in &out.timings {
-                println!("  {:<16} {:>9.3} ms", t.name, t.gpu_ms);
+                outln!("  {:<16} {:>9.3} ms", t.name, t.gpu_ms);
             }
             if let Some(d) = &out.debug_description {
-                println!("{d}");
+                outln!("{d}");
             }
             if let Some(reference) = compare {
                 let r = voxgi::eval::HdrImage::load(&reference)?;
                 let m = voxgi::eval::compare(&r, &out.hdr, None)?;
-                print_metrics(&m);
+                print_metrics(&m)?;
             }
             check_validation(&ctx)
         }
@@ -657,9 +717,9 @@ fn run(cli: Cli) -> Result<()> {
                 report
             };
             if json {
-                println!("{}", serde_json::to_string_pretty(&report)?);
+                outln!("{}", serde_json::to_string_pretty(&report)?);
             } else {
-                print!("{}", report.table());
+                out!("{}", report.table());
             }
             check_validation(&ctx)
         }
@@ -779,21 +839,22 @@ fn compare(
             .with_context(|| format!("writing the heatmap {}", path.display()))?;
     }
     if json {
-        println!("{}", serde_json::to_string_pretty(&m)?);
+        outln!("{}", serde_json::to_string_pretty(&m)?);
     } else {
-        print_metrics(&m);
+        print_metrics(&m)?;
     }
     Ok(())
 }
 
-fn print_metrics(m: &voxgi::eval::Metrics) {
-    println!("relMSE    {:.6}", m.rel_mse);
-    println!("PSNR      {:.2} dB", m.psnr_db);
-    println!("SSIM      {:.4}", m.ssim);
-    println!("FLIP      {:.4}", m.flip_mean);
-    println!("mean |e|  {:.6}", m.mean_abs);
-    println!("max |e|   {:.6}", m.max_abs);
-    println!("pixels    {}", m.pixels);
+fn print_metrics(m: &voxgi::eval::Metrics) -> Result<()> {
+    outln!("relMSE    {:.6}", m.rel_mse);
+    outln!("PSNR      {:.2} dB", m.psnr_db);
+    outln!("SSIM      {:.4}", m.ssim);
+    outln!("FLIP      {:.4}", m.flip_mean);
+    outln!("mean |e|  {:.6}", m.mean_abs);
+    outln!("max |e|   {:.6}", m.max_abs);
+    outln!("pixels    {}", m.pixels);
+    Ok(())
 }
 
 #[cfg(test)]

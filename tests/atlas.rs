@@ -329,12 +329,12 @@ fn profile_lists_the_one_time_atlas_passes_apart_from_the_frame() {
 #[test]
 fn voxelize_bench_prints_every_scene_resolution_and_tessellation() {
     let ctx = common::context();
-    let desc = voxgi::voxel::bench::VoxelizeBenchDesc {
+    let desc = voxgi::voxel::bench::VoxelizeSweepDesc {
         reps: 1,
         resolutions: vec![16, 24],
         tessellations: vec![1, 4],
     };
-    let report = voxgi::voxel::bench::bench_voxelize(&ctx, &desc).expect("bench runs");
+    let report = voxgi::voxel::bench::bench_voxelize_sweep(&ctx, &desc).expect("bench runs");
     common::assert_no_validation_messages(&ctx);
     let names: Vec<(&str, u32)> = report
         .rows
@@ -363,7 +363,8 @@ fn voxelize_bench_prints_every_scene_resolution_and_tessellation() {
     let (c1, c16) = (&report.rows[6], &report.rows[7]);
     assert_eq!(c16.triangles, 16 * c1.triangles);
     assert_eq!(c1.voxels, c16.voxels);
-    let points = |r: &voxgi::voxel::bench::VoxelizeRow| r.atlas.as_ref().map_or(0, |a| a.points);
+    let points =
+        |r: &voxgi::voxel::bench::VoxelizeSweepRow| r.atlas.as_ref().map_or(0, |a| a.points);
     let ratio = points(c16) as f64 / points(c1) as f64;
     assert!((0.8..1.25).contains(&ratio), "points 16x / 1x = {ratio}");
     let table = report.table();
@@ -372,4 +373,275 @@ fn voxelize_bench_prints_every_scene_resolution_and_tessellation() {
         assert!(table.contains(&row), "no row {row:?}:\n{table}");
     }
     assert!(table.contains("atlas/tri"), "{table}");
+}
+
+/// The voxel frame's bits (mip 0) and attribute volumes after one frame in slot 0.
+struct Volumes {
+    bits: BitGrid,
+    albedo: Vec<[u8; 4]>,
+    normal: Vec<[i8; 4]>,
+}
+
+fn run_volume_frame(
+    ctx: &Context,
+    frame: &voxgi::voxel::gpu::VoxelFrame,
+    volumes: &voxgi::voxel::gpu_atlas_volumes::AttributeVolumes,
+) -> (Volumes, Vec<String>) {
+    let grid = frame.voxels.grid;
+    let ext = grid.extent_voxels();
+    let size = u64::from(ext.x * ext.y * ext.z) * 4;
+    let bits = common::VoxelReadback::new(ctx, &grid, 1);
+    let outs = [
+        readback_buffer(ctx, "albedo readback", size).expect("readback"),
+        readback_buffer(ctx, "normal readback", size).expect("readback"),
+    ];
+    let mut g = RenderGraph::new();
+    let image = frame.add_passes(&mut g);
+    let (albedo, normal) = volumes.import(&mut g);
+    frame.add_attribute_passes(&mut g, albedo, normal);
+    bits.add_pass(&mut g, image);
+    let out = outs
+        .each_ref()
+        .map(|b| g.import_buffer(b, Access::HostRead));
+    g.add_pass("volume_readback")
+        .read(albedo, Access::TransferRead)
+        .read(normal, Access::TransferRead)
+        .write(out[0], Access::TransferWrite)
+        .write(out[1], Access::TransferWrite)
+        .record(move |ctx| {
+            let extent = voxgi::vk::vk::Extent3D {
+                width: ext.x,
+                height: ext.y,
+                depth: ext.z,
+            };
+            for (img, buf) in [(albedo, out[0]), (normal, out[1])] {
+                ctx.cmd
+                    .copy_image_to_buffer(ctx.image(img).raw, extent, 0, 1, ctx.buffer(buf).raw);
+            }
+        });
+    let timings = run_once(ctx, g).expect("frame runs");
+    let names = timings.into_iter().map(|t| t.name).collect();
+    let texels = |b: &voxgi::vk::Buffer| -> Vec<[u8; 4]> {
+        b.mapped().expect("mapped")[..size as usize]
+            .chunks_exact(4)
+            .map(|c| [c[0], c[1], c[2], c[3]])
+            .collect()
+    };
+    let v = Volumes {
+        bits: bits.levels(&grid).remove(0),
+        albedo: texels(&outs[0]),
+        normal: texels(&outs[1])
+            .into_iter()
+            .map(|t| t.map(|c| c as i8))
+            .collect(),
+    };
+    bits.destroy(ctx);
+    for b in outs {
+        ctx.destroy_buffer(b);
+    }
+    (v, names)
+}
+
+/// Congruence (DESIGN.md "Voxel representation"): a voxel has an attribute (albedo alpha
+/// 1, a unit normal or a cancelled one) exactly where its bit is set, and nothing elsewhere.
+fn assert_congruent(v: &Volumes, grid: &VoxelGrid, what: &str) -> usize {
+    let ext = grid.extent_voxels();
+    let (mut set, mut mismatches) = (0, Vec::new());
+    for k in 0..ext.z {
+        for y in 0..ext.y {
+            for x in 0..ext.x {
+                let i = ((k * ext.y + y) * ext.x + x) as usize;
+                let bit = v.bits.get(x, y, k);
+                let a = v.albedo[i];
+                assert!(
+                    a[3] == 0 || a[3] == 255,
+                    "{what}: alpha {} at {x},{y},{k}",
+                    a[3]
+                );
+                if bit != (a[3] == 255) {
+                    mismatches.push((x, y, k, bit, a));
+                }
+                if !bit {
+                    assert_eq!(
+                        v.normal[i], [0; 4],
+                        "{what}: normal in empty voxel {x},{y},{k}"
+                    );
+                }
+                set += usize::from(bit);
+            }
+        }
+    }
+    assert!(
+        mismatches.is_empty(),
+        "{what}: {} of {set} voxels differ (bit, albedo), first: {:?}",
+        mismatches.len(),
+        &mismatches[..mismatches.len().min(8)]
+    );
+    assert!(set > 1000, "{what}: only {set} voxels set");
+    set
+}
+
+/// `--voxelizer atlas` with a volume GI method: the layered pass `voxelize_atlas_volumes`
+/// writes albedo and normal volumes congruent with the bits; on the Cornell box's red wall
+/// the albedo is the wall's material and the normal points into the box.
+#[test]
+fn atlas_volumes_match_the_bits_and_the_red_wall() {
+    use voxgi::voxel::gpu::{VoxelFrame, VoxelSettings, Voxelizer};
+    use voxgi::voxel::gpu_atlas_volumes::AttributeVolumes;
+    let ctx = common::context();
+    let s = scene("cornell");
+    let settings = VoxelSettings {
+        voxelizer: Voxelizer::Atlas,
+        ..Default::default()
+    };
+    let mut frame = VoxelFrame::new(&ctx, &s, 0.0, &settings).expect("voxel frame");
+    assert!(!frame.has_attribute_volumes(), "created only on request");
+    assert!(frame.enable_attribute_volumes(&ctx, &s).expect("volumes"));
+    let grid = frame.voxels.grid;
+    let volumes = AttributeVolumes::new(&ctx, &grid).expect("volumes");
+    let (v, names) = run_volume_frame(&ctx, &frame, &volumes);
+    // Static scene: the statics were splatted once at enable time; the frame only resolves.
+    assert!(
+        names.iter().any(|n| n == "voxelize_atlas_resolve"),
+        "{names:?}"
+    );
+    assert!(
+        !names.iter().any(|n| n == "voxelize_atlas_volumes"),
+        "{names:?}"
+    );
+    let set = assert_congruent(&v, &grid, "cornell");
+    println!("cornell: {set} voxels, congruent");
+
+    // The red wall: every voxel around the centroids of its triangles.
+    let red = s
+        .materials
+        .iter()
+        .position(|m| m.albedo.x > 2.0 * m.albedo.y && m.albedo.x > 2.0 * m.albedo.z)
+        .expect("a red material");
+    let center = s.aabb_at(0.0).center();
+    let ext = grid.extent_voxels();
+    let mut checked = 0;
+    for o in &s.objects {
+        let mesh = &s.meshes[o.mesh];
+        let model = o.transform_at(0.0);
+        for (si, sub) in mesh.submeshes.iter().enumerate() {
+            if o.materials.get(si).copied().unwrap_or(sub.material) != red {
+                continue;
+            }
+            let range = sub.first_index as usize..(sub.first_index + sub.index_count) as usize;
+            for t in mesh.indices[range].chunks_exact(3) {
+                let p = [0, 1, 2].map(|j| model.transform_point3(mesh.positions[t[j] as usize]));
+                // Interior points (barycentrics >= 0.2): their 3x3x3 neighbourhoods stay
+                // off the adjacent walls.
+                let interior = (2..=6).flat_map(|i| (2..=6).map(move |j| (i, j)));
+                let samples = interior.filter(|&(i, j)| i + j <= 8).map(|(i, j)| {
+                    let (b1, b2) = (i as f32 / 10.0, j as f32 / 10.0);
+                    p[0] + (p[1] - p[0]) * b1 + (p[2] - p[0]) * b2
+                });
+                for c in samples {
+                    let inward = (center - c).normalize();
+                    let vc = grid.world_to_voxel(c).floor().as_ivec3();
+                    for d in itertools_product() {
+                        let q = vc + glam::IVec3::new(d.0 as i32, d.1 as i32, d.2 as i32);
+                        if q.min_element() < 0 || q.cmpge(ext.as_ivec3()).any() {
+                            continue;
+                        }
+                        let (x, y, k) = (q.x as u32, q.y as u32, q.z as u32);
+                        if !v.bits.get(x, y, k) {
+                            continue;
+                        }
+                        let i = ((k * ext.y + y) * ext.x + x) as usize;
+                        let a =
+                            Vec3::from_array(v.albedo[i].map(f32::from)[..3].try_into().unwrap())
+                                / 255.0;
+                        let want = s.materials[red].albedo;
+                        assert!(
+                            (a - want).abs().max_element() <= 2.0 / 255.0,
+                            "red wall voxel {q}: albedo {a} != {want}"
+                        );
+                        let n = Vec3::new(
+                            f32::from(v.normal[i][0]),
+                            f32::from(v.normal[i][1]),
+                            f32::from(v.normal[i][2]),
+                        ) / 127.0;
+                        assert!((n.length() - 1.0).abs() < 0.02, "unit normal {n} at {q}");
+                        let face = (p[1] - p[0]).cross(p[2] - p[0]).normalize();
+                        assert!(
+                            n.dot(face) > 0.99,
+                            "normal {n} != face normal {face} at {q}"
+                        );
+                        assert!(
+                            n.dot(inward) > 0.0,
+                            "normal {n} points out of the box at {q}"
+                        );
+                        checked += 1;
+                    }
+                }
+            }
+        }
+    }
+    println!("red wall: {checked} voxels checked");
+    assert!(checked > 0, "no red-wall voxel found");
+    volumes.destroy(&ctx);
+    frame.destroy(&ctx);
+    common::assert_no_validation_messages(&ctx);
+}
+
+/// The moving cube of `cornell_mover.toml`: static walls splatted once, the mover per frame;
+/// the volumes follow it (voxels it leaves are cleared) and stay congruent with the bits.
+#[test]
+fn atlas_volumes_follow_a_moving_object() {
+    use voxgi::voxel::gpu::{VoxelFrame, VoxelSettings, Voxelizer};
+    use voxgi::voxel::gpu_atlas_volumes::AttributeVolumes;
+    let ctx = common::context();
+    let s = common::animated_scene();
+    let settings = VoxelSettings {
+        voxelizer: Voxelizer::Atlas,
+        ..Default::default()
+    };
+    let mut frame = VoxelFrame::new(&ctx, &s, 0.0, &settings).expect("voxel frame");
+    assert!(frame.enable_attribute_volumes(&ctx, &s).expect("volumes"));
+    let grid = frame.voxels.grid;
+    let volumes = AttributeVolumes::new(&ctx, &grid).expect("volumes");
+    let mut counts = Vec::new();
+    for t in [0.0, 0.5, 1.0] {
+        assert!(frame.update(t, 0).expect("update"), "the mover moved");
+        assert!(frame.attributes_moved());
+        let (v, names) = run_volume_frame(&ctx, &frame, &volumes);
+        assert!(
+            names.iter().any(|n| n == "voxelize_atlas_volumes"),
+            "{names:?}"
+        );
+        counts.push(assert_congruent(&v, &grid, &format!("t = {t}")));
+    }
+    println!("voxels set per frame: {counts:?}");
+    assert!(!frame.update(1.0, 0).expect("update"));
+    assert!(!frame.attributes_moved());
+    volumes.destroy(&ctx);
+    frame.destroy(&ctx);
+    common::assert_no_validation_messages(&ctx);
+}
+
+/// The thesis's raster bit pass (`voxelize_atlas_bits`: single-bit LUT, logicOp OR, layer =
+/// depth chunk) sets exactly the bits of the compute pass `voxelize_atlas`, one and two
+/// depth layers (`voxgi bench voxelize` runs the same comparison with timings).
+#[test]
+fn raster_atlas_bits_equal_compute_atlas_bits() {
+    use voxgi::voxel::bench::{bench_voxelize_atlas, VoxelizeBenchDesc};
+    let ctx = common::context();
+    for (path, layers) in [("cornell", 1), ("assets/scenes/cornell_bunny.toml", 2)] {
+        let desc = VoxelizeBenchDesc {
+            resolution: 128,
+            layers,
+            repeats: 1,
+        };
+        let r = bench_voxelize_atlas(&ctx, &scene(path), &desc).expect("bench runs");
+        print!("{}", r.table());
+        assert!(r.voxels > 10_000, "{path}: {} voxels", r.voxels);
+        assert_eq!(
+            r.differing_words, 0,
+            "{path}: raster and compute bits differ"
+        );
+    }
+    common::assert_no_validation_messages(&ctx);
 }

@@ -350,3 +350,102 @@ fn assert_matches_render(img: &image::RgbaImage, dir: &Path) {
         "the viewer's frame differs from `voxgi render` by up to {max_diff}/255"
     );
 }
+
+/// Runs `xdotool ARGS` on the test's display; without xdotool the test fails with the hint.
+fn xdotool(args: &[&str]) -> String {
+    let out = Command::new("xdotool")
+        .args(args)
+        .output()
+        .unwrap_or_else(|e| {
+            panic!(
+                "cannot run xdotool ({e}): the input test drives the window with real X events \
+                 (Debian/Ubuntu: apt-get install xdotool, or run tools/setup)"
+            )
+        });
+    assert!(
+        out.status.success(),
+        "xdotool {args:?} failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout).trim().to_string()
+}
+
+/// Parses `key = [x, y, z]` from the viewer's "camera at exit" table.
+fn camera_vec(stdout: &str, key: &str) -> glam::Vec3 {
+    let line = stdout
+        .lines()
+        .find_map(|l| l.strip_prefix(key)?.trim_start().strip_prefix('='))
+        .unwrap_or_else(|| panic!("no `{key} = [..]` in the viewer's output:\n{stdout}"));
+    let v: Vec<f32> = line
+        .trim()
+        .trim_start_matches('[')
+        .trim_end_matches(']')
+        .split(',')
+        .map(|x| x.trim().parse().expect("a number"))
+        .collect();
+    glam::Vec3::from_slice(&v)
+}
+
+#[test]
+fn viewer_flies_with_real_keyboard_and_mouse_events() {
+    require_display();
+    let _display = lock_display();
+    // The viewer runs until Escape; X events go through the server (XTEST), the same path as a
+    // person's keyboard and mouse, so winit's event decoding is part of what is tested.
+    let mut child = Command::new(env!("CARGO_BIN_EXE_voxgi"))
+        .args(["--validate", "view", "--width", "480", "--height", "320"])
+        .env_remove("WAYLAND_DISPLAY")
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("run the voxgi binary");
+    let window = xdotool(&["search", "--sync", "--onlyvisible", "--name", "^voxgi$"]);
+    let window = window.lines().next().expect("a window id").to_string();
+    xdotool(&["windowfocus", "--sync", &window]);
+    // Hold W: fly forward for a while (the fly camera integrates frame times).
+    xdotool(&["keydown", "w"]);
+    std::thread::sleep(Duration::from_millis(1500));
+    xdotool(&["keyup", "w"]);
+    // Look right: drag with the right button held, over the scene (right of the panel).
+    xdotool(&["mousemove", "--window", &window, "400", "160"]);
+    std::thread::sleep(Duration::from_millis(300));
+    xdotool(&["mousedown", "3"]);
+    std::thread::sleep(Duration::from_millis(300));
+    for _ in 0..5 {
+        xdotool(&["mousemove_relative", "--", "10", "0"]);
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    xdotool(&["mouseup", "3"]);
+    std::thread::sleep(Duration::from_millis(300));
+    xdotool(&["key", "Escape"]);
+
+    let started = Instant::now();
+    while child.try_wait().expect("poll the viewer").is_none() {
+        if started.elapsed() > Duration::from_secs(60) {
+            let _ = child.kill();
+            panic!("the viewer did not close within 60 s of Escape");
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    let out = child
+        .wait_with_output()
+        .expect("collect the viewer's output");
+    assert_success(&out, "voxgi --validate view driven by xdotool");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+
+    // The built-in Cornell box's camera: at z = -0.8 looking along +Z.
+    let start = glam::Vec3::new(0.278, 0.273, -0.8);
+    let position = camera_vec(&stdout, "position");
+    let forward = camera_vec(&stdout, "forward");
+    let moved = position - start;
+    assert!(
+        moved.z > 0.05 && moved.x.abs() < 0.2 * moved.z && moved.y.abs() < 1e-4,
+        "holding W should fly forward along +Z; moved by {moved}"
+    );
+    // Dragging right turns right: from +Z towards -X (screen right of a camera looking along
+    // +Z with y up is -X).
+    assert!(
+        forward.x < -0.05 && forward.y.abs() < 1e-3,
+        "dragging right should turn right; forward is {forward}"
+    );
+}

@@ -116,6 +116,8 @@ pub struct ViewerReport {
     pub skipped_minimized: u64,
     /// Validation messages (errors and warnings); any is a bug.
     pub validation_messages: Vec<String>,
+    /// Where the fly camera was when the viewer closed.
+    pub camera: Option<Camera>,
 }
 
 /// Scripted runs give up after this long.
@@ -909,6 +911,7 @@ impl Viewer {
         if let Some(s) = self.swapchain.take() {
             s.destroy(ctx);
         }
+        self.report.camera = Some(self.fly.apply(&self.lens));
         std::mem::take(&mut self.report)
     }
 }

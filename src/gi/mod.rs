@@ -4,12 +4,16 @@
 
 use crate::graph::{Access, BufferHandle, ImageHandle, RenderGraph, Shader};
 use crate::scene::Scene;
-use crate::vk::{vk, Buffer, ComputePipeline, Context, Descriptor, Image, ImageDesc, VkError};
-use crate::voxel::attributes::AttributeVolumes;
+use crate::vk::{
+    vk, Buffer, BufferDesc, ComputePipeline, Context, Descriptor, Image, ImageDesc, MemoryLocation,
+    VkError, MAX_FRAMES_IN_FLIGHT,
+};
+use crate::voxel::gpu::GpuVoxelizePush;
+use crate::voxel::gpu_atlas_volumes::AttributeVolumes;
 use crate::voxel::ray_mask::RayMaskLut;
 use crate::voxel::VoxelGrid;
 use bytemuck::{Pod, Zeroable};
-use std::sync::atomic::{AtomicU32, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 use std::sync::Arc;
 
 /// A GI method of the speed/accuracy ladder.
@@ -147,6 +151,10 @@ pub struct GiTarget<'a> {
     pub size: (u32, u32),
     /// The scene has Phong materials (the G-buffer has a specular image).
     pub has_phong: bool,
+    /// The atlas voxelizer writes the attribute volumes of the objects it voxelizes
+    /// ([`crate::voxel::gpu::VoxelFrame::enable_attribute_volumes`]); the triangle
+    /// attribute pass covers only the others.
+    pub atlas_attributes: bool,
 }
 
 /// Pipelines and constant data of the GI passes.
@@ -175,8 +183,8 @@ impl GiPasses {
             time_s,
             grid,
             shadow_resolution,
-            size: (width, height),
             has_phong,
+            ..
         } = *target;
         let scene_diagonal_m = scene.aabb_at(time_s).extent().length();
         let b = vk::DescriptorType::STORAGE_BUFFER;
@@ -244,16 +252,10 @@ impl GiPasses {
                 settings.ray_offset_max_voxels,
             ],
         };
-        let radiance_volume = settings.method == GiMethod::Hemisphere
-            && settings.radiance_source == RadianceSource::Volume;
-        let pathtracer = if settings.method == GiMethod::Pathtrace || radiance_volume {
+        let pathtracer = if Self::needs_attribute_volumes(&settings) {
             Some(PathTracer::new(
                 ctx,
-                scene,
-                time_s,
-                grid,
-                (width, height),
-                has_phong,
+                target,
                 settings.method == GiMethod::Pathtrace,
             )?)
         } else {
@@ -278,7 +280,7 @@ impl GiPasses {
         if self
             .pathtracer
             .as_mut()
-            .is_some_and(|pt| pt.volumes.update(t_s, slot))
+            .is_some_and(|pt| pt.update(t_s, slot))
         {
             self.reset();
         }
@@ -299,11 +301,39 @@ impl GiPasses {
         self.frames.load(Ordering::SeqCst)
     }
 
+    /// Whether the chosen method reads the albedo and normal volumes.
+    pub fn needs_attribute_volumes(settings: &GiSettings) -> bool {
+        settings.method == GiMethod::Pathtrace
+            || (settings.method == GiMethod::Hemisphere
+                && settings.radiance_source == RadianceSource::Volume)
+    }
+
     /// Declares the indirect-light, filter and composite passes; returns the total radiance.
-    pub fn add_passes(&self, g: &mut RenderGraph, inp: &GiInputs) -> ImageHandle {
+    /// `voxels` declares the atlas part of the attribute volumes when it has one
+    /// ([`GiTarget::atlas_attributes`]).
+    pub fn add_passes(
+        &self,
+        g: &mut RenderGraph,
+        inp: &GiInputs,
+        voxels: Option<&crate::voxel::gpu::VoxelFrame>,
+    ) -> ImageHandle {
         let lut = g.import_buffer(&self.lut, Access::StorageRead(Shader::Compute));
         let irradiance = match &self.pathtracer {
-            Some(pt) => pt.add_passes(g, inp, lut, self.push, self.sampler, self.frames.clone()),
+            Some(pt) => {
+                let attributes = |g: &mut RenderGraph, a, n| {
+                    if let Some(v) = voxels {
+                        v.add_attribute_passes(g, a, n);
+                    }
+                };
+                pt.add_passes(
+                    g,
+                    inp,
+                    lut,
+                    (self.push, self.sampler),
+                    self.frames.clone(),
+                    attributes,
+                )
+            }
             None => self.add_hemisphere(g, inp, lut),
         };
         self.add_filter_and_composite(g, inp, irradiance)
@@ -466,30 +496,68 @@ impl GiPasses {
 struct PathTracer {
     pathtrace: Option<ComputePipeline>,
     radiance: Option<RadianceVolume>,
+    attributes: ComputePipeline,
+    triangles: Buffer,
+    triangle_count: u32,
+    /// Workgroups per triangle that keep the voxelizer within lavapipe's loop budget.
+    splits: u32,
+    /// Some object's attributes come from triangles (all without the atlas voxelizer).
+    triangle_objects: bool,
+    voxelize_push: GpuVoxelizePush,
     volumes: AttributeVolumes,
     history: Image,
+    /// The volumes hold the static scene once written.
+    volumes_written: Arc<AtomicBool>,
+    /// Scenes with moving objects: triangles per frame slot, rewritten when they change.
+    animated: Option<AnimatedTriangles>,
 }
 
-/// The direct-radiance volume (rgba16f, congruent with the bits) and its passes.
+/// The attribute triangles of a scene with moving objects: one region of the host-visible
+/// triangle buffer per frame slot, written after the slot's fence (see `Renderer::write_frame`).
+struct AnimatedTriangles {
+    scene: Scene,
+    capacity: usize,
+    last: Option<Vec<[[f32; 4]; 3]>>,
+    /// Per slot: the region changed and the volumes must be rewritten in that slot's frame.
+    dirty: Arc<[AtomicBool; MAX_FRAMES_IN_FLIGHT]>,
+    counts: Arc<[AtomicU32; MAX_FRAMES_IN_FLIGHT]>,
+    /// Per slot, workgroups per triangle (see `attribute_splits`).
+    splits: Arc<[AtomicU32; MAX_FRAMES_IN_FLIGHT]>,
+    grid: VoxelGrid,
+}
+
+/// The direct-radiance volume (rgba32f, congruent with the bits) and its passes. f32 because
+/// f16 cannot hold radiance from lights of 1e-6 to 1e6 W/sr (tests/extremes.rs): 16 bytes per
+/// voxel, 33.5 MB at 128³.
 struct RadianceVolume {
     volume_pipeline: ComputePipeline,
     hemisphere_pipeline: ComputePipeline,
     image: Image,
 }
 
+/// Group size of the attribute voxelizer (one workgroup per triangle).
+const ATTRIBUTE_GROUP_SIZE: u32 = 64;
+
 impl PathTracer {
-    fn new(
-        ctx: &Context,
-        scene: &Scene,
-        time_s: f32,
-        grid: &VoxelGrid,
-        (w, h): (u32, u32),
-        has_phong: bool,
-        path_trace: bool,
-    ) -> Result<Self, VkError> {
+    fn new(ctx: &Context, target: &GiTarget<'_>, path_trace: bool) -> Result<Self, VkError> {
+        let GiTarget {
+            scene,
+            time_s,
+            grid,
+            size: (w, h),
+            has_phong,
+            atlas_attributes,
+            ..
+        } = *target;
         let storage = vk::DescriptorType::STORAGE_BUFFER;
         let image = vk::DescriptorType::STORAGE_IMAGE;
         let sampled = vk::DescriptorType::COMBINED_IMAGE_SAMPLER;
+        let attributes = ctx.compute_pipeline(
+            "voxelize_attributes.comp",
+            &[(0, storage), (1, image), (2, image)],
+            std::mem::size_of::<GpuVoxelizePush>() as u32,
+            &[(0, ATTRIBUTE_GROUP_SIZE)],
+        )?;
         let pathtrace = path_trace
             .then(|| {
                 ctx.compute_pipeline(
@@ -512,12 +580,62 @@ impl PathTracer {
                 )
             })
             .transpose()?;
-        let volumes = AttributeVolumes::new(ctx, scene, time_s, grid)?;
+        // Objects the atlas voxelizer handles get their attributes from its points.
+        let mut tri_scene = scene.clone();
+        if atlas_attributes {
+            tri_scene
+                .objects
+                .retain(|o| !crate::voxel::gpu_atlas::uses_atlas(o));
+        }
+        let scene = &tri_scene;
+        let tris = attribute_triangles(scene, time_s);
+        let bytes: &[u8] = if tris.is_empty() {
+            &[0; 48]
+        } else {
+            bytemuck::cast_slice(&tris)
+        };
+        let (triangles, animated) = if scene.has_animation() {
+            // Headroom for OBJ sequences whose frames differ in triangle count.
+            let capacity = (tris.len() * 2).max(1);
+            let region = (capacity * std::mem::size_of::<[[f32; 4]; 3]>()) as u64;
+            let mut buffer = ctx.create_buffer(&BufferDesc {
+                name: "attribute triangles (per frame slot)".into(),
+                size_bytes: region * MAX_FRAMES_IN_FLIGHT as u64,
+                usage: vk::BufferUsageFlags::STORAGE_BUFFER,
+                location: MemoryLocation::CpuToGpu,
+            })?;
+            if let Some(m) = buffer.mapped_mut() {
+                for slot in 0..MAX_FRAMES_IN_FLIGHT {
+                    let at = slot * region as usize;
+                    m[at..at + bytes.len()].copy_from_slice(bytes);
+                }
+            }
+            let count = tris.len() as u32;
+            let splits = attribute_splits(grid, &tris);
+            let animated = AnimatedTriangles {
+                scene: scene.clone(),
+                capacity,
+                last: Some(tris.clone()),
+                dirty: Arc::new(std::array::from_fn(|_| AtomicBool::new(false))),
+                counts: Arc::new(std::array::from_fn(|_| AtomicU32::new(count))),
+                splits: Arc::new(std::array::from_fn(|_| AtomicU32::new(splits))),
+                grid: *grid,
+            };
+            (buffer, Some(animated))
+        } else {
+            let buffer = ctx.upload_buffer(
+                "attribute triangles",
+                bytes,
+                vk::BufferUsageFlags::STORAGE_BUFFER,
+            )?;
+            (buffer, None)
+        };
         let usage = vk::ImageUsageFlags::STORAGE
             | vk::ImageUsageFlags::SAMPLED
             | vk::ImageUsageFlags::TRANSFER_DST;
         let resting = Access::Sampled(Shader::Compute).info().layout;
         let zero = vk::ClearColorValue { float32: [0.0; 4] };
+        let volumes = AttributeVolumes::new(ctx, grid)?;
         // The history exists for the path tracer only; the radiance volume for the hemisphere
         // method reading it (1x1 placeholder history otherwise, never bound).
         let (hw, hh) = if path_trace { (w, h) } else { (1, 1) };
@@ -539,9 +657,48 @@ impl PathTracer {
         Ok(Self {
             pathtrace,
             radiance,
+            attributes,
+            triangle_count: tris.len() as u32,
+            splits: attribute_splits(grid, &tris),
+            triangle_objects: !scene.objects.is_empty(),
+            voxelize_push: GpuVoxelizePush::new(grid, tris.len() as u32, 0),
+            triangles,
             volumes,
             history,
+            volumes_written: Arc::new(AtomicBool::new(false)),
+            animated,
         })
+    }
+
+    /// For scenes with moving objects: writes frame slot `slot`'s triangles at `t_s` when they
+    /// changed, so that frame rewrites the volumes. Returns whether they changed.
+    fn update(&mut self, t_s: f32, slot: usize) -> bool {
+        let Some(a) = &mut self.animated else {
+            return false;
+        };
+        let tris = attribute_triangles(&a.scene, t_s);
+        if a.last.as_ref() == Some(&tris) {
+            return false;
+        }
+        let n = tris.len().min(a.capacity);
+        if n < tris.len() {
+            log::warn!(
+                "{} attribute triangles exceed the buffer's {}; extra ones are dropped",
+                tris.len(),
+                a.capacity
+            );
+        }
+        let region = a.capacity * std::mem::size_of::<[[f32; 4]; 3]>();
+        if let Some(m) = self.triangles.mapped_mut() {
+            let bytes: &[u8] = bytemuck::cast_slice(&tris[..n]);
+            m[slot * region..slot * region + bytes.len()].copy_from_slice(bytes);
+        }
+        a.counts[slot % MAX_FRAMES_IN_FLIGHT].store(n as u32, Ordering::SeqCst);
+        a.splits[slot % MAX_FRAMES_IN_FLIGHT]
+            .store(attribute_splits(&a.grid, &tris[..n]), Ordering::SeqCst);
+        a.dirty[slot % MAX_FRAMES_IN_FLIGHT].store(true, Ordering::SeqCst);
+        a.last = Some(tris);
+        true
     }
 
     fn add_passes(
@@ -549,12 +706,76 @@ impl PathTracer {
         g: &mut RenderGraph,
         i: &GiInputs,
         lut: BufferHandle,
-        push: GpuGiPush,
-        sampler: vk::Sampler,
+        (push, sampler): (GpuGiPush, vk::Sampler),
         frames: Arc<AtomicU32>,
+        atlas_attributes: impl FnOnce(&mut RenderGraph, ImageHandle, ImageHandle),
     ) -> ImageHandle {
         let read = Access::Sampled(Shader::Compute);
-        let (albedo, normal) = self.volumes.add_pass(g);
+        let (albedo, normal) = self.volumes.import(g);
+        // The atlas resolve writes every voxel; triangle objects then write theirs on top.
+        atlas_attributes(g, albedo, normal);
+        let tris = g.import_buffer(&self.triangles, Access::StorageRead(Shader::Compute));
+        let (pipe, count, vpush) = (self.attributes, self.triangle_count, self.voxelize_push);
+        let splits = self.splits;
+        let written = self.volumes_written.clone();
+        let per_slot = self.animated.as_ref().map(|a| {
+            let region = (a.capacity * std::mem::size_of::<[[f32; 4]; 3]>()) as u64;
+            (region, a.dirty.clone(), a.counts.clone(), a.splits.clone())
+        });
+        // The first frame writes the volumes; later frames keep them until something moves.
+        if self.triangle_objects {
+            g.add_pass("voxelize_attributes")
+                .read(tris, Access::StorageRead(Shader::Compute))
+                .write(albedo, Access::StorageWrite(Shader::Compute))
+                .write(normal, Access::StorageWrite(Shader::Compute))
+                .record(move |ctx| {
+                    let first = !written.swap(true, Ordering::SeqCst);
+                    let slot = ctx.slot % MAX_FRAMES_IN_FLIGHT;
+                    let (triangles, count, splits) = match &per_slot {
+                        Some((region, dirty, counts, slot_splits)) => {
+                            let moved = dirty[slot].swap(false, Ordering::SeqCst);
+                            if !(first || moved) {
+                                return;
+                            }
+                            let d = Descriptor::StorageBuffer {
+                                binding: 0,
+                                buffer: ctx.buffer(tris).raw,
+                                offset: slot as u64 * region,
+                                range: *region,
+                            };
+                            let n = counts[slot].load(Ordering::SeqCst);
+                            (d, n, slot_splits[slot].load(Ordering::SeqCst))
+                        }
+                        None if first => {
+                            let d = Descriptor::storage_buffer(0, ctx.buffer(tris).raw);
+                            (d, count, splits)
+                        }
+                        None => return,
+                    };
+                    if count == 0 {
+                        return;
+                    }
+                    let mut vpush = vpush;
+                    vpush.extent[2] = count;
+                    ctx.cmd.bind(
+                        &pipe,
+                        &[
+                            triangles,
+                            Descriptor::StorageImage {
+                                binding: 1,
+                                view: ctx.image(albedo).view,
+                            },
+                            Descriptor::StorageImage {
+                                binding: 2,
+                                view: ctx.image(normal).view,
+                            },
+                        ],
+                    );
+                    ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&vpush));
+                    let x = count.min(65_535);
+                    ctx.cmd.dispatch(x, count.div_ceil(x), splits);
+                });
+        }
         let Some(pipe) = self.pathtrace else {
             return match &self.radiance {
                 Some(rv) => rv.add_passes(g, i, lut, albedo, normal, push, sampler),
@@ -593,6 +814,8 @@ impl PathTracer {
             ctx.destroy_compute_pipeline(rv.hemisphere_pipeline);
             ctx.destroy_image(rv.image);
         }
+        ctx.destroy_compute_pipeline(self.attributes);
+        ctx.destroy_buffer(self.triangles);
         self.volumes.destroy(ctx);
         ctx.destroy_image(self.history);
     }
@@ -634,7 +857,7 @@ impl RadianceVolume {
         let image = ctx.create_image(
             &ImageDesc::new_2d(
                 "direct radiance volume",
-                vk::Format::R16G16B16A16_SFLOAT,
+                vk::Format::R32G32B32A32_SFLOAT,
                 ext.x,
                 ext.y,
             )
@@ -728,6 +951,46 @@ impl RadianceVolume {
 
 /// World-space triangles of the scene at `t_s`, each vertex's w holding one channel of the
 /// material's albedo (the layout `voxelize_attributes.comp` reads).
+/// Workgroups per attribute triangle: the triangle voxelizer's z splits
+/// ([`crate::voxel::gpu::voxelize_loads`]; the shaders share voxelize_core.glsl).
+fn attribute_splits(grid: &VoxelGrid, tris: &[[[f32; 4]; 3]]) -> u32 {
+    let loads = tris
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|v| glam::Vec3::new(v[0], v[1], v[2]));
+            crate::voxel::gpu::voxelize_loads(grid, a.min(b).min(c), a.max(b).max(c))
+        })
+        .max()
+        .unwrap_or(0);
+    crate::voxel::gpu::voxelize_splits(loads, ATTRIBUTE_GROUP_SIZE)
+}
+
+fn attribute_triangles(scene: &Scene, t_s: f32) -> Vec<[[f32; 4]; 3]> {
+    let mut out = Vec::new();
+    for object in &scene.objects {
+        let Some(mesh) = scene.meshes.get(object.mesh_at(t_s)) else {
+            continue;
+        };
+        let m = object.transform_at(t_s);
+        for (si, sub) in mesh.submeshes.iter().enumerate() {
+            let material = object.materials.get(si).copied().unwrap_or(sub.material);
+            let albedo = scene
+                .materials
+                .get(material)
+                .map(|m| m.albedo)
+                .unwrap_or(glam::Vec3::splat(0.5));
+            let range = sub.first_index as usize..(sub.first_index + sub.index_count) as usize;
+            for t in mesh.indices[range].chunks_exact(3) {
+                out.push([0, 1, 2].map(|k| {
+                    let v = m.transform_point3(mesh.positions[t[k] as usize]);
+                    [v.x, v.y, v.z, albedo[k]]
+                }));
+            }
+        }
+    }
+    out
+}
+
 /// Declares one of the GI ray passes (`gi_hemisphere`, `gi_hemisphere_volume`,
 /// `gi_pathtrace`): they share the frame, G-buffer, voxel and ray-mask inputs (bindings 0-4) and
 /// the specular and albedo images (9, 10); `own` are the pass's further sampled images by

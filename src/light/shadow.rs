@@ -15,7 +15,8 @@ pub enum PointShadow {
     #[default]
     Cube,
     /// Two paraboloid hemispheres around ±Y (Brabec et al. 2002; digest_001_004.md A.1):
-    /// a third of the layers and draws, at the cost of curved edges (see `shadow_depth.geom`).
+    /// a third of the layers and draws; each triangle's curved image is covered exactly, by a
+    /// ray-triangle test per texel (see `shadow_depth.geom`).
     #[value(name = "paraboloid")]
     DualParaboloid,
 }

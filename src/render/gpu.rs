@@ -74,7 +74,9 @@ pub struct GpuDrawPush {
     pub model: [f32; 16],
     /// Material (G-buffer) or shadow view (shadow pass).
     pub index: u32,
-    pub _pad: [u32; 3],
+    /// Material (shadow pass: dissolve coverage).
+    pub material: u32,
+    pub _pad: [u32; 2],
 }
 
 /// Push constants of the reflective light-map pass.
@@ -124,6 +126,7 @@ mod tests {
         assert_eq!(size_of::<GpuVertex>(), 32);
         assert_eq!(offset_of!(GpuVertex, uv), 24);
         assert_eq!(size_of::<GpuDrawPush>(), 80);
+        assert_eq!(offset_of!(GpuDrawPush, material), 68);
         assert_eq!(size_of::<GpuTonemapPush>(), 16);
         assert_eq!(size_of::<GpuLightMapPush>(), 80);
         assert_eq!(offset_of!(GpuLightMapPush, material), 68);

@@ -161,6 +161,10 @@ const BUMP_SCALE_M: f32 = 0.01;
 const GBUFFER_COLOR: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
 const DEPTH: vk::Format = vk::Format::D32_SFLOAT;
 const HDR: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
+/// Reflected radiance in the light maps. f32, not f16: light intensities from 1e-6 to 1e6 W/sr
+/// (DESIGN.md, extremes) put it outside f16's range (max 65504, normal down to 6e-5); f16
+/// lost 1.5% of the peak at 1e-6 and overflowed to Inf at 1e6 (tests/extremes.rs).
+const LIGHT_MAP_RADIANCE: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 
 impl Renderer {
     pub fn new(
@@ -208,13 +212,6 @@ impl Renderer {
             vk::BufferUsageFlags::STORAGE_BUFFER,
         )?;
         let has_phong = !scene.is_all_lambert();
-        for m in scene.used_materials().filter(|m| !m.is_opaque()) {
-            log::warn!(
-                "material `{}` has opacity {} (MTL `d`): voxgi renders it opaque (no transparency yet)",
-                m.name,
-                m.opacity
-            );
-        }
         let frame_stride = (std::mem::size_of::<GpuFrame>() as u64).next_multiple_of(256);
         let frame = ctx.create_buffer(&BufferDesc {
             name: "frame constants".into(),
@@ -274,6 +271,7 @@ impl Renderer {
             has_phong,
             has_textures,
             scene.has_bump_maps(),
+            scene.has_transparency(),
             paraboloid,
         )?;
         let sampler = ctx.create_sampler(vk::Filter::NEAREST, false)?;
@@ -292,7 +290,7 @@ impl Renderer {
             .debug
             .filter(|_| !atlas_view_on)
             .map(|_| Default::default()));
-        let voxels = match &voxel_settings {
+        let mut voxels = match &voxel_settings {
             Some(v) => Some(crate::voxel::gpu::VoxelFrame::new(
                 ctx,
                 scene,
@@ -301,8 +299,11 @@ impl Renderer {
             )?),
             None => None,
         };
-        let gi = match (&voxels, gi_on) {
+        let gi = match (&mut voxels, gi_on) {
             (Some(v), true) => {
+                // With the atlas voxelizer its points write the volumes (digest §3.4).
+                let atlas_attributes = crate::gi::GiPasses::needs_attribute_volumes(&settings.gi)
+                    && v.enable_attribute_volumes(ctx, scene)?;
                 let passes = crate::gi::GiPasses::new(
                     ctx,
                     settings.gi,
@@ -313,9 +314,10 @@ impl Renderer {
                         shadow_resolution: settings.shadow.resolution,
                         size: (settings.width, settings.height),
                         has_phong,
+                        atlas_attributes,
                     },
                 )?;
-                let light_map = create_light_map_pipeline(ctx)?;
+                let light_map = create_light_map_pipeline(ctx, scene.has_transparency())?;
                 Some((passes, light_map))
             }
             _ => None,
@@ -470,17 +472,22 @@ impl Renderer {
     /// Writes the frame constants of frame slot `slot` (call after the slot's fence), and the
     /// dynamic objects' voxels at `settings.time_s`.
     pub fn write_frame(&mut self, slot: usize) {
-        if let Some((gi, _)) = &mut self.gi {
-            gi.update_dynamic(self.settings.time_s, slot);
-            gi.advance();
-        }
-        if let Some(pass) = &mut self.voxel_debug {
-            pass.update(self.settings.time_s, slot);
-        }
+        let mut attributes_moved = false;
         if let Some(v) = &mut self.voxels {
             if let Err(e) = v.update(self.settings.time_s, slot) {
                 log::warn!("dynamic objects not re-voxelized: {e}");
             }
+            attributes_moved = v.attributes_moved();
+        }
+        if let Some((gi, _)) = &mut self.gi {
+            gi.update_dynamic(self.settings.time_s, slot);
+            if attributes_moved {
+                gi.reset();
+            }
+            gi.advance();
+        }
+        if let Some(pass) = &mut self.voxel_debug {
+            pass.update(self.settings.time_s, slot);
         }
         let offset = (slot as u64 * self.frame_stride) as usize;
         let bytes = bytemuck::bytes_of(&self.frame_data);
@@ -592,7 +599,10 @@ impl Renderer {
                 };
                 ctx.cmd
                     .begin_rendering_layers(map.extent_2d(), views.max(1), &[], Some(depth));
-                ctx.cmd.bind(&pipe, &[frame_desc(ctx.slot)]);
+                ctx.cmd.bind(
+                    &pipe,
+                    &[frame_desc(ctx.slot), Descriptor::storage_buffer(1, mb)],
+                );
                 ctx.cmd.bind_vertex_buffer(vb);
                 ctx.cmd.bind_index_buffer(ib);
                 if let Ok(lists) = draws.read() {
@@ -601,7 +611,8 @@ impl Renderer {
                             let push = GpuDrawPush {
                                 model: d.model.to_cols_array(),
                                 index: v as u32,
-                                _pad: [0; 3],
+                                material: d.material,
+                                _pad: [0; 2],
                             };
                             ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
                             ctx.cmd
@@ -703,7 +714,8 @@ impl Renderer {
                     let push = GpuDrawPush {
                         model: d.model.to_cols_array(),
                         index: d.material,
-                        _pad: [0; 3],
+                        material: d.material,
+                        _pad: [0; 2],
                     };
                     ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
                     ctx.cmd
@@ -765,7 +777,7 @@ impl Renderer {
                 let mut rlm = |name: &str, format| {
                     g.create_image(ImageDesc::new_2d(name, format, res, res).with_layers(layers))
                 };
-                let rlm_radiance = rlm("light map radiance", vk::Format::R16G16B16A16_SFLOAT);
+                let rlm_radiance = rlm("light map radiance", LIGHT_MAP_RADIANCE);
                 let rlm_position = rlm("light map position", vk::Format::R32G32B32A32_SFLOAT);
                 let rlm_normal = rlm("light map normal", vk::Format::R16G16B16A16_SFLOAT);
                 let rlm_depth = rlm("light map depth", DEPTH);
@@ -846,6 +858,7 @@ impl Renderer {
                         width: w,
                         height: h,
                     },
+                    self.voxels.as_ref(),
                 )
             }
             _ => radiance,
@@ -1122,8 +1135,12 @@ fn upload_geometry(ctx: &Context, scene: &Scene, t_s: f32) -> Result<Geometry, R
     })
 }
 
-/// The reflective light-map pipeline (`light_map.{vert,geom,frag}`).
-fn create_light_map_pipeline(ctx: &Context) -> Result<GraphicsPipeline, VkError> {
+/// The reflective light-map pipeline (`light_map.{vert,geom,frag}`); `has_dissolve`: some
+/// material has MTL d < 1, whose coverage the light map shares with the shadow maps.
+fn create_light_map_pipeline(
+    ctx: &Context,
+    has_dissolve: bool,
+) -> Result<GraphicsPipeline, VkError> {
     let storage = vk::DescriptorType::STORAGE_BUFFER;
     ctx.graphics_pipeline(&GraphicsPipelineDesc {
         vertex: "light_map.vert".into(),
@@ -1139,7 +1156,7 @@ fn create_light_map_pipeline(ctx: &Context) -> Result<GraphicsPipeline, VkError>
         topology: vk::PrimitiveTopology::TRIANGLE_LIST,
         cull_mode: vk::CullModeFlags::NONE,
         color_formats: vec![
-            vk::Format::R16G16B16A16_SFLOAT,
+            LIGHT_MAP_RADIANCE,
             vk::Format::R32G32B32A32_SFLOAT,
             vk::Format::R16G16B16A16_SFLOAT,
         ],
@@ -1148,7 +1165,7 @@ fn create_light_map_pipeline(ctx: &Context) -> Result<GraphicsPipeline, VkError>
         depth_write: true,
         depth_bias: false,
         logic_op: None,
-        spec: vec![],
+        spec: vec![(0, u32::from(has_dissolve))],
     })
 }
 
@@ -1168,6 +1185,7 @@ fn create_pipelines(
     has_phong: bool,
     has_textures: bool,
     has_bump: bool,
+    has_dissolve: bool,
     paraboloid_shadows: bool,
 ) -> Result<Pipelines, VkError> {
     let storage = vk::DescriptorType::STORAGE_BUFFER;
@@ -1202,6 +1220,7 @@ fn create_pipelines(
             (0, u32::from(has_phong)),
             (1, u32::from(has_textures)),
             (2, u32::from(has_bump)),
+            (3, u32::from(has_dissolve)),
         ],
     })?;
     let shadow = ctx.graphics_pipeline(&GraphicsPipelineDesc {
@@ -1212,7 +1231,7 @@ fn create_pipelines(
         } else {
             "shadow_depth.frag".into()
         },
-        bindings: vec![(0, storage)],
+        bindings: vec![(0, storage), (1, storage)],
         push_constant_bytes: push,
         vertex_stride: std::mem::size_of::<GpuVertex>() as u32,
         vertex_attributes: vec![(vk::Format::R32G32B32_SFLOAT, 0)],
@@ -1224,7 +1243,7 @@ fn create_pipelines(
         depth_write: true,
         depth_bias: false,
         logic_op: None,
-        spec: vec![],
+        spec: vec![(0, u32::from(has_dissolve))],
     })?;
     let deferred = ctx.compute_pipeline(
         "deferred_direct.comp",

@@ -50,6 +50,21 @@ impl Camera {
         let half = (self.fov_y_deg.to_radians() * 0.5).tan() * aspect;
         2.0 * half.atan().to_degrees()
     }
+
+    /// The camera as a scene file's `[camera]` table, exact (floats print in their shortest
+    /// round-trip form), so a pose found in the viewer can be pasted into a scene.
+    pub fn toml_table(&self) -> String {
+        let v = |v: Vec3| format!("[{:?}, {:?}, {:?}]", v.x, v.y, v.z);
+        format!(
+            "[camera]\nposition = {}\nforward = {}\nup = {}\nfov_y_deg = {:?}\nnear = {:?}\nfar = {:?}\n",
+            v(self.position),
+            v(self.forward),
+            v(self.up),
+            self.fov_y_deg,
+            self.near,
+            self.far
+        )
+    }
 }
 
 #[cfg(test)]

@@ -26,7 +26,8 @@ pub struct Material {
     pub bump_kind: BumpKind,
     /// MTL `-bm` multiplier of a height map (1 when absent).
     pub bump_scale: f32,
-    /// Opacity (MTL `d`), 1 = opaque.
+    /// Opacity (MTL `d`), 1 = opaque; below 1 the surface covers that fraction of the pixels
+    /// and shadow-map texels (glsl/include/dissolve.glsl).
     pub opacity: f32,
 }
 

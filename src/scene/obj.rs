@@ -288,6 +288,13 @@ impl AssetStore {
             }
         }
         let finite_or = |v: Option<f32>, d: f32| v.filter(|x| x.is_finite()).unwrap_or(d);
+        if m.dissolve_texture.is_some() {
+            log::warn!(
+                "{}: map_d is not supported; the constant d = {} is used (remove map_d or bake it into d)",
+                field("map_d"),
+                finite_or(m.dissolve, 1.0)
+            );
+        }
         let material = Material {
             name: m.name.clone(),
             albedo: rgb(m.diffuse, BuiltinMaterial::Default.albedo()),

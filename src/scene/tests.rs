@@ -262,6 +262,16 @@ fn zero_length_direction() {
 }
 
 #[test]
+fn camera_toml_table_round_trips() {
+    let scene = load_ok(&format!("{CAMERA}{LIGHT}{CUBE}"), &[]);
+    let mut cam = scene.camera;
+    cam.position = Vec3::new(0.1, -2.5e-3, 1.0 / 3.0);
+    cam.forward = Vec3::new(0.3, -0.2, 0.9).normalize();
+    let text = format!("{}{LIGHT}{CUBE}", cam.toml_table());
+    assert_eq!(load_ok(&text, &[]).camera, cam, "{text}");
+}
+
+#[test]
 fn bad_camera() {
     for (from, to, field) in [
         ("fov_y_deg = 40", "fov_y_deg = 0", "camera.fov_y_deg"),

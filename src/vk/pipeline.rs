@@ -178,7 +178,7 @@ impl Context {
         &self,
         desc: &GraphicsPipelineDesc,
     ) -> Result<GraphicsPipeline, VkError> {
-        self.graphics_pipeline_blend(desc, false)
+        self.graphics_pipeline_blend(desc, Blend::None)
     }
 
     /// A graphics pipeline whose color attachments blend premultiplied-alpha "over" the
@@ -187,13 +187,22 @@ impl Context {
         &self,
         desc: &GraphicsPipelineDesc,
     ) -> Result<GraphicsPipeline, VkError> {
-        self.graphics_pipeline_blend(desc, true)
+        self.graphics_pipeline_blend(desc, Blend::Premultiplied)
+    }
+
+    /// A graphics pipeline whose color attachments add the fragment to the existing contents
+    /// (`ONE, ONE`): sums, such as the per-voxel attribute sums of layered voxelization.
+    pub fn graphics_pipeline_additive(
+        &self,
+        desc: &GraphicsPipelineDesc,
+    ) -> Result<GraphicsPipeline, VkError> {
+        self.graphics_pipeline_blend(desc, Blend::Additive)
     }
 
     fn graphics_pipeline_blend(
         &self,
         desc: &GraphicsPipelineDesc,
-        premultiplied: bool,
+        blend: Blend,
     ) -> Result<GraphicsPipeline, VkError> {
         let mut modules = vec![
             (
@@ -272,17 +281,26 @@ impl Context {
             .map(|_| {
                 let b = vk::PipelineColorBlendAttachmentState::builder()
                     .color_write_mask(vk::ColorComponentFlags::RGBA);
-                if premultiplied {
-                    b.blend_enable(true)
+                match blend {
+                    Blend::Premultiplied => b
+                        .blend_enable(true)
                         .src_color_blend_factor(vk::BlendFactor::ONE)
                         .dst_color_blend_factor(vk::BlendFactor::ONE_MINUS_SRC_ALPHA)
                         .color_blend_op(vk::BlendOp::ADD)
                         .src_alpha_blend_factor(vk::BlendFactor::ONE_MINUS_DST_ALPHA)
                         .dst_alpha_blend_factor(vk::BlendFactor::ONE)
                         .alpha_blend_op(vk::BlendOp::ADD)
-                        .build()
-                } else {
-                    b.build()
+                        .build(),
+                    Blend::Additive => b
+                        .blend_enable(true)
+                        .src_color_blend_factor(vk::BlendFactor::ONE)
+                        .dst_color_blend_factor(vk::BlendFactor::ONE)
+                        .color_blend_op(vk::BlendOp::ADD)
+                        .src_alpha_blend_factor(vk::BlendFactor::ONE)
+                        .dst_alpha_blend_factor(vk::BlendFactor::ONE)
+                        .alpha_blend_op(vk::BlendOp::ADD)
+                        .build(),
+                    Blend::None => b.build(),
                 }
             })
             .collect();
@@ -385,6 +403,14 @@ impl Context {
         // SAFETY: the caller waited for all GPU work using the sampler.
         unsafe { self.device.destroy_sampler(s, None) };
     }
+}
+
+/// How a graphics pipeline's color attachments combine with their contents.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Blend {
+    None,
+    Premultiplied,
+    Additive,
 }
 
 /// Map entries and data of 32-bit specialization constants.

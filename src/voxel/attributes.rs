@@ -1,11 +1,15 @@
-//! Albedo and normal volumes congruent with the bit grid, for the methods that read more than
-//! occupancy (DESIGN.md "Voxel representation"): the voxel path tracer, the hemisphere
-//! method's radiance volume and the albedo debug view. Nothing creates them otherwise.
+//! Albedo and normal volumes congruent with the bit grid, written from triangles, for the
+//! albedo debug view (DESIGN.md "Voxel representation": non-binary volumes exist only when
+//! something reads them). Nothing else creates them.
 //!
 //! Pass `voxelize_attributes` (`glsl/voxelize_attributes.comp`) sets the voxels of the bits'
 //! exact conservative test (both shaders include `voxelize_core.glsl`); each stores its
 //! triangle's material albedo (RGBA8 UNORM) and world-space face normal (RGBA8 SNORM). It runs
 //! in the first frame, and again in a frame whose moving objects moved.
+//!
+//! The GI methods' volumes (`gi::PathTracer`, with the atlas voxelizer's part from
+//! [`super::gpu_atlas_volumes`]) still carry their own copy of this triangle pass; moving it
+//! onto this type is open.
 
 use super::gpu::{voxelize_loads, voxelize_splits, GpuVoxelizePush};
 use super::VoxelGrid;
@@ -30,7 +34,7 @@ const ATTRIBUTE_GROUP_SIZE: u32 = 64;
 type AttributeTriangle = [[f32; 4]; 3];
 
 /// The albedo and normal volumes with the triangles and pipeline that write them.
-pub struct AttributeVolumes {
+pub struct TriangleAttributeVolumes {
     pipeline: ComputePipeline,
     triangles: Buffer,
     triangle_count: u32,
@@ -59,7 +63,7 @@ struct AnimatedTriangles {
     grid: VoxelGrid,
 }
 
-impl AttributeVolumes {
+impl TriangleAttributeVolumes {
     /// Cleared volumes for `grid` and the pipeline and triangles of `scene` at `time_s` that
     /// fill them in the first frame.
     pub fn new(

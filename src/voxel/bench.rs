@@ -1,10 +1,16 @@
-//! `voxgi bench voxelize`: voxelization time versus resolution and scene, atlas against triangle
-//! voxelizer ([`bench_voxelize`]); see below.
+//! `voxgi bench voxelize-sweep`: voxelization time versus resolution and scene, atlas against
+//! triangle voxelizer ([`bench_voxelize_sweep`]); `voxgi bench voxelize`: the atlas voxelizer's
+//! compute and raster bit passes on one scene ([`bench_voxelize_atlas`]).
 //!
 //! `voxgi bench traverse`: the thesis's speed comparison (§9.3.1, Fig. 44/45) measured side by
 //! side in one GPU run. Rays start at the camera-visible surface points of a scene (a G-buffer
 //! traced on the CPU), offset along the normal (§4.4), cosine-distributed around it, with a
 //! length limited by a radius. The hierarchical test and 1-bit marching cast the same rays.
+//!
+//! `voxgi bench voxelize`: the atlas points' binary voxelization both ways, in one run: the
+//! renderer's compute pass `voxelize_atlas` (atomicOr into the column buffer) against the
+//! thesis's raster pass `voxelize_atlas_bits` (single-bit LUT, logicOp OR; digest §3.3),
+//! with the GPU time of each and whether their bits agree.
 
 use super::atlas::{build_atlas, texel_size_for_voxel, AtlasCache, AtlasError};
 use super::gpu::{
@@ -101,10 +107,10 @@ pub enum BenchError {
     Cast(#[from] RayCastError),
     #[error(transparent)]
     Vk(#[from] crate::vk::VkError),
+    #[error(transparent)]
+    GpuVoxel(#[from] super::gpu::GpuVoxelError),
     #[error("the camera sees no geometry: nothing to cast rays from")]
     NoSurface,
-    #[error(transparent)]
-    Gpu(#[from] GpuVoxelError),
     #[error(transparent)]
     Atlas(#[from] AtlasError),
     #[error(transparent)]
@@ -342,6 +348,183 @@ impl TraverseBenchReport {
 /// Parameters of `voxgi bench voxelize`.
 #[derive(Clone, Debug)]
 pub struct VoxelizeBenchDesc {
+    /// Voxel grid x/y resolution cap.
+    pub resolution: u32,
+    /// Depth layers of 128 voxels.
+    pub layers: u32,
+    /// Runs of each pass; the report gives the median.
+    pub repeats: u32,
+}
+
+/// The two atlas bit passes on one scene.
+#[derive(Clone, Debug, Serialize)]
+pub struct VoxelizeBenchReport {
+    pub device: String,
+    pub grid: [u32; 3],
+    /// Atlas points splatted per run.
+    pub points: u64,
+    pub repeats: u32,
+    /// Median GPU ms of `voxelize_atlas` (compute, atomicOr).
+    pub compute_ms: f64,
+    /// Median GPU ms of `voxelize_atlas_bits` (raster, logicOp OR, clear included).
+    pub raster_ms: f64,
+    pub raster_over_compute: f64,
+    /// Voxels set by the compute pass.
+    pub voxels: u64,
+    /// 32-bit column words in which the two passes differ (0: the same bits).
+    pub differing_words: usize,
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(|a, b| a.total_cmp(b));
+    v.get(v.len() / 2).copied().unwrap_or(0.0)
+}
+
+fn pass_ms(timings: &[crate::vk::PassTiming], name: &str) -> f64 {
+    timings
+        .iter()
+        .filter(|t| t.name == name)
+        .map(|t| t.gpu_ms)
+        .sum()
+}
+
+/// Runs both atlas bit passes `desc.repeats` times on `scene` at time 0 and compares their
+/// bits.
+pub fn bench_voxelize_atlas(
+    ctx: &Context,
+    scene: &Scene,
+    desc: &VoxelizeBenchDesc,
+) -> Result<VoxelizeBenchReport, BenchError> {
+    use super::gpu::{column_bytes, image_extent, readback_buffer, run_once, COLUMN_FORMAT};
+    use crate::graph::{Access, RenderGraph};
+    use crate::vk::{vk, ImageDesc};
+    let aabb = scene.aabb_at(0.0);
+    let grid = VoxelGrid::around(
+        aabb.min,
+        aabb.max,
+        &GridDesc {
+            layers: desc.layers,
+            max_res_xy: desc.resolution,
+            ..Default::default()
+        },
+    )?;
+    let mut cache = super::atlas::AtlasCache::default();
+    let atlas = super::gpu_atlas::AtlasScene::new(ctx, scene, 0.0, &grid, &mut cache)?;
+    let raster = match super::gpu_atlas_raster::AtlasRasterBits::new(ctx) {
+        Ok(r) => r,
+        Err(e) => {
+            atlas.destroy(ctx);
+            return Err(e.into());
+        }
+    };
+    let size = column_bytes(&grid);
+    let (w, h) = image_extent(&grid);
+    let layers = grid.layers();
+    let mut buffers = Vec::new();
+    let result = (|| -> Result<VoxelizeBenchReport, BenchError> {
+        buffers.push(readback_buffer(ctx, "compute bits readback", size)?);
+        buffers.push(readback_buffer(ctx, "raster bits readback", size)?);
+        let instances = atlas.instances(true, true);
+        let (mut compute_ms, mut raster_ms) = (Vec::new(), Vec::new());
+        for _ in 0..desc.repeats.max(1) {
+            let mut g = RenderGraph::new();
+            let columns = g.create_buffer("voxel column buffer", size);
+            g.add_pass("voxel_clear")
+                .write(columns, Access::TransferWrite)
+                .record(move |ctx| ctx.cmd.fill_buffer(ctx.buffer(columns).raw, 0));
+            atlas.add_pass(&mut g, &grid, columns, true, true, None);
+            let out = g.import_buffer(&buffers[0], Access::HostRead);
+            g.add_pass("bits_readback")
+                .read(columns, Access::TransferRead)
+                .write(out, Access::TransferWrite)
+                .record(move |ctx| {
+                    ctx.cmd
+                        .copy_buffer(ctx.buffer(columns).raw, ctx.buffer(out).raw, size)
+                });
+            compute_ms.push(pass_ms(&run_once(ctx, g)?, "voxelize_atlas"));
+
+            let mut g = RenderGraph::new();
+            let image = g.create_image(
+                ImageDesc::new_2d("voxel columns (raster)", COLUMN_FORMAT, w, h)
+                    .with_layers(layers),
+            );
+            raster.add_pass(&mut g, &grid, image, &instances);
+            let out = g.import_buffer(&buffers[1], Access::HostRead);
+            g.add_pass("bits_readback")
+                .read(image, Access::TransferRead)
+                .write(out, Access::TransferWrite)
+                .record(move |ctx| {
+                    let extent = vk::Extent3D {
+                        width: w,
+                        height: h,
+                        depth: 1,
+                    };
+                    let raw = ctx.image(image).raw;
+                    ctx.cmd
+                        .copy_image_to_buffer(raw, extent, 0, layers, ctx.buffer(out).raw)
+                });
+            raster_ms.push(pass_ms(&run_once(ctx, g)?, "voxelize_atlas_bits"));
+        }
+        let words = |b: &crate::vk::Buffer| -> Vec<u32> {
+            b.mapped()
+                .unwrap_or(&[])
+                .chunks_exact(4)
+                .take(size as usize / 4)
+                .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+                .collect()
+        };
+        let (a, b) = (words(&buffers[0]), words(&buffers[1]));
+        let differing_words =
+            a.iter().zip(&b).filter(|(x, y)| x != y).count() + a.len().abs_diff(b.len());
+        let (compute_ms, raster_ms) = (median(compute_ms), median(raster_ms));
+        let ext = grid.extent_voxels();
+        Ok(VoxelizeBenchReport {
+            device: ctx.info.name.clone(),
+            grid: [ext.x, ext.y, ext.z],
+            points: atlas.point_count(),
+            repeats: desc.repeats.max(1),
+            compute_ms,
+            raster_ms,
+            raster_over_compute: raster_ms / compute_ms.max(1e-9),
+            voxels: a.iter().map(|w| u64::from(w.count_ones())).sum(),
+            differing_words,
+        })
+    })();
+    for b in buffers {
+        ctx.destroy_buffer(b);
+    }
+    raster.destroy(ctx);
+    atlas.destroy(ctx);
+    result
+}
+
+impl VoxelizeBenchReport {
+    pub fn table(&self) -> String {
+        format!(
+            "atlas voxelization benchmark on {} — grid {}x{}x{}, {} points, median of {} runs\n\
+             pass                               GPU ms\n\
+             voxelize_atlas (compute, atomicOr) {:>9.3}\n\
+             voxelize_atlas_bits (raster, OR)   {:>9.3}\n\
+             raster / compute                   {:>9.2}\n\
+             voxels set: {}; differing column words: {}\n",
+            self.device,
+            self.grid[0],
+            self.grid[1],
+            self.grid[2],
+            self.points,
+            self.repeats,
+            self.compute_ms,
+            self.raster_ms,
+            self.raster_over_compute,
+            self.voxels,
+            self.differing_words
+        )
+    }
+}
+
+/// Parameters of `voxgi bench voxelize-sweep`.
+#[derive(Clone, Debug)]
+pub struct VoxelizeSweepDesc {
     /// Timed runs per measurement (the median is reported).
     pub reps: usize,
     /// x = y resolutions of the scene rows (one depth layer, D = 128).
@@ -350,7 +533,7 @@ pub struct VoxelizeBenchDesc {
     pub tessellations: Vec<u32>,
 }
 
-impl Default for VoxelizeBenchDesc {
+impl Default for VoxelizeSweepDesc {
     fn default() -> Self {
         Self {
             reps: 5,
@@ -362,7 +545,7 @@ impl Default for VoxelizeBenchDesc {
 
 /// One scene at one resolution, both voxelizers.
 #[derive(Clone, Debug, Serialize)]
-pub struct VoxelizeRow {
+pub struct VoxelizeSweepRow {
     pub scene: String,
     pub resolution: u32,
     pub triangles: usize,
@@ -379,7 +562,7 @@ pub struct VoxelizeRow {
     pub atlas_error: Option<String>,
 }
 
-/// The atlas voxelizer's side of a [`VoxelizeRow`].
+/// The atlas voxelizer's side of a [`VoxelizeSweepRow`].
 #[derive(Clone, Debug, Serialize)]
 pub struct AtlasTimes {
     /// Points splatted per voxelization (all instances).
@@ -391,11 +574,11 @@ pub struct AtlasTimes {
 }
 
 #[derive(Clone, Debug, Serialize)]
-pub struct VoxelizeBenchReport {
+pub struct VoxelizeSweepReport {
     pub device: String,
     pub reps: usize,
     pub group_size: u32,
-    pub rows: Vec<VoxelizeRow>,
+    pub rows: Vec<VoxelizeSweepRow>,
 }
 
 /// The scene rows' scenes: Cornell, bunny-in-box and [`dense_scene`].
@@ -550,10 +733,10 @@ fn time_atlas(
 /// voxelizer side by side in one run, and the atlas cost on the same surface (a cube)
 /// tessellated 1× and 16× (`desc.tessellations`). Atlas times are the per-voxelization
 /// `voxelize_atlas` splat of rigid objects; the one-time atlas work is listed apart.
-pub fn bench_voxelize(
+pub fn bench_voxelize_sweep(
     ctx: &Context,
-    desc: &VoxelizeBenchDesc,
-) -> Result<VoxelizeBenchReport, BenchError> {
+    desc: &VoxelizeSweepDesc,
+) -> Result<VoxelizeSweepReport, BenchError> {
     let pipes = VoxelPipelines::new(ctx)?;
     let atlas_pipes = match AtlasPipelines::new(ctx) {
         Ok(p) => p,
@@ -562,7 +745,7 @@ pub fn bench_voxelize(
             return Err(e.into());
         }
     };
-    let rows = (|| -> Result<Vec<VoxelizeRow>, BenchError> {
+    let rows = (|| -> Result<Vec<VoxelizeSweepRow>, BenchError> {
         let mut rows = Vec::new();
         for (name, scene) in bench_scenes()? {
             let mut tris = scene_triangles(&scene, 0.0, false);
@@ -617,7 +800,7 @@ pub fn bench_voxelize(
                             }
                             Err(e) => return Err(e.into()),
                         };
-                    rows.push(VoxelizeRow {
+                    rows.push(VoxelizeSweepRow {
                         scene: name.clone(),
                         resolution: res,
                         triangles: tris.len(),
@@ -656,7 +839,7 @@ pub fn bench_voxelize(
                     let voxelize_ms = time_atlas(ctx, desc.reps, &pipes, &grid, &|g, c| {
                         add_voxelize_atlas_pass(g, &atlas_pipes, &grid, c, &instances, None)
                     })?;
-                    Ok::<_, BenchError>(VoxelizeRow {
+                    Ok::<_, BenchError>(VoxelizeSweepRow {
                         scene: format!("cube {}x", n * n),
                         resolution: 128,
                         triangles: tris.len(),
@@ -682,7 +865,7 @@ pub fn bench_voxelize(
     })();
     atlas_pipes.destroy(ctx);
     pipes.destroy(ctx);
-    Ok(VoxelizeBenchReport {
+    Ok(VoxelizeSweepReport {
         device: ctx.info.name.clone(),
         reps: desc.reps,
         group_size: VOXELIZE_GROUP_SIZE,
@@ -719,10 +902,10 @@ pub fn tessellated_cube(n: u32) -> (Vec<Vec3>, Vec<u32>) {
     (pos, idx)
 }
 
-impl VoxelizeBenchReport {
+impl VoxelizeSweepReport {
     pub fn table(&self) -> String {
         let mut s = format!(
-            "voxelization benchmark on {} (D = 128, median of {} runs, triangle voxelizer \
+            "voxelization sweep on {} (D = 128, median of {} runs, triangle voxelizer \
              group size {})\n\
              GPU ms per voxelization: tri = voxelize_triangles, atlas = voxelize_atlas (rigid \
              objects' points splatted);\n\

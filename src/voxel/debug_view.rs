@@ -9,14 +9,14 @@
 //!   2^ℓ × 2^ℓ voxels, one voxel deep).
 //! - [`DebugView::Albedo`]: hierarchical first hit; the value image holds the albedo volume
 //!   at the hit voxel (linear), the color image that albedo half shaded like the voxels
-//!   view. Only this view creates the albedo volume ([`AttributeVolumes`]); the others bind
+//!   view. Only this view creates the albedo volume ([`TriangleAttributeVolumes`]); the others bind
 //!   a tiny placeholder in its slot. Its voxels are the triangle voxelizer's, so bits that
 //!   only the atlas voxelizer sets show black.
 //!
 //! The pass writes an `RGBA32F` value image (shade, step count, occupancy or albedo: what
 //! tests and `--exr` read) and the `RGBA8` color image the renderer reads back as its picture.
 
-use super::attributes::{AttributeVolumes, ATTRIBUTE_VOLUME_STATE};
+use super::attributes::{TriangleAttributeVolumes, ATTRIBUTE_VOLUME_STATE};
 use super::gpu::{GpuVoxelError, GpuVoxelGrid, VoxelFrame};
 use super::ray_mask::RayMaskLut;
 use super::traverse::TraversalParams;
@@ -141,7 +141,7 @@ pub struct VoxelDebugPass {
 
 /// Binding 4 of `voxel_debug.comp`.
 enum AlbedoSource {
-    Volumes(Box<AttributeVolumes>),
+    Volumes(Box<TriangleAttributeVolumes>),
     /// 1×1×2, never read: the shader reads albedo in the albedo view only.
     Placeholder(Image),
 }
@@ -313,7 +313,7 @@ impl AlbedoSource {
     ) -> Result<Self, VkError> {
         if view == DebugView::Albedo {
             let grid = &frame.voxels.grid;
-            return Ok(Self::Volumes(Box::new(AttributeVolumes::new(
+            return Ok(Self::Volumes(Box::new(TriangleAttributeVolumes::new(
                 ctx, scene, time_s, grid,
             )?)));
         }

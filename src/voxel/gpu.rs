@@ -107,6 +107,8 @@ pub enum GpuVoxelError {
     Voxel(#[from] VoxelError),
     #[error(transparent)]
     Atlas(#[from] super::atlas::AtlasError),
+    #[error("a mesh with {mesh_triangles} triangles is too large for the atlas voxelizer (at most {max}); use --voxelizer triangle or split the mesh")]
+    TooManyAtlasTriangles { mesh_triangles: usize, max: usize },
     #[error("debug level {level} does not exist: the voxel grid has levels 0..={max}; pass a smaller --debug-level")]
     BadDebugLevel { level: u32, max: u32 },
     #[error("the scene has no object '{object}'; pass --object with one of: {names}")]
@@ -867,6 +869,8 @@ pub struct VoxelFrame {
     /// GPU times of the one-time passes run before the first frame (atlas building, the
     /// static voxelization), in order.
     setup: Vec<PassTiming>,
+    /// The last [`VoxelFrame::update`] moved an atlas object (its attribute volumes change).
+    atlas_moved: bool,
 }
 
 /// The moving part of a [`VoxelFrame`].
@@ -939,6 +943,7 @@ impl VoxelFrame {
             atlas_models: None,
             gate: None,
             setup: Vec::new(),
+            atlas_moved: false,
         };
         if let Err(e) = frame.init(ctx, scene, t_s, atlas_mode) {
             frame.destroy(ctx);
@@ -1056,6 +1061,7 @@ impl VoxelFrame {
             _ => false,
         };
         let run = self.revoxelize_static || tris_changed || models_changed;
+        self.atlas_moved = models_changed;
         if run {
             if let (Some(d), Some(tris)) = (&mut self.dynamic, tris) {
                 d.triangles.write(slot, &tris);
@@ -1070,6 +1076,71 @@ impl VoxelFrame {
             g.set(slot, run);
         }
         Ok(run)
+    }
+
+    /// Creates the albedo and normal volumes' atlas passes (digest §3.4) when the atlas
+    /// voxelizer is active, for a GI method that reads them; static objects are splatted now,
+    /// once. Returns whether the atlas writes the volumes (then
+    /// [`Self::add_attribute_passes`] declares the per-frame part). Objects that keep the
+    /// triangle voxelizer (OBJ sequences) are left to the caller's triangle attributes.
+    pub fn enable_attribute_volumes(
+        &mut self,
+        ctx: &Context,
+        scene: &Scene,
+    ) -> Result<bool, GpuVoxelError> {
+        let grid = self.voxels.grid;
+        let statics_once = !self.revoxelize_static;
+        let Some(atlas) = &mut self.atlas else {
+            return Ok(false);
+        };
+        if atlas.volumes.is_none() && atlas.point_count() > 0 {
+            let v = super::gpu_atlas_volumes::AtlasVolumes::new(
+                ctx,
+                atlas,
+                scene,
+                &grid,
+                statics_once,
+            )?;
+            atlas.volumes = Some(v);
+        }
+        Ok(atlas.volumes.is_some())
+    }
+
+    /// Whether the atlas writes the attribute volumes ([`Self::enable_attribute_volumes`]).
+    pub fn has_attribute_volumes(&self) -> bool {
+        self.atlas.as_ref().is_some_and(|a| a.volumes.is_some())
+    }
+
+    /// Whether the last [`Self::update`] moved an object whose attributes the atlas writes
+    /// (accumulated GI restarts then).
+    pub fn attributes_moved(&self) -> bool {
+        self.atlas_moved && self.has_attribute_volumes()
+    }
+
+    /// Declares `voxelize_atlas_volumes` and `voxelize_atlas_resolve` writing the imported
+    /// attribute volumes (see [`super::gpu_atlas_volumes`]); nothing without
+    /// [`Self::enable_attribute_volumes`]. Record in the same frames as [`Self::add_passes`].
+    pub fn add_attribute_passes(
+        &self,
+        g: &mut RenderGraph,
+        albedo: ImageHandle,
+        normal: ImageHandle,
+    ) {
+        let Some(atlas) = &self.atlas else {
+            return;
+        };
+        let Some(v) = &atlas.volumes else {
+            return;
+        };
+        v.add_passes(
+            g,
+            atlas,
+            &self.voxels.grid,
+            albedo,
+            normal,
+            self.revoxelize_static,
+            self.gate.clone(),
+        );
     }
 
     /// Declares the frame's voxel passes (none when [`Self::has_frame_passes`] is false);

@@ -36,6 +36,9 @@ use std::sync::{Arc, Mutex};
 /// Format of the position atlas (model-space xyz, w = 1 where a triangle owns the texel).
 pub const ATLAS_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 
+/// The position atlas's w holds the triangle index + 1 as an f32, exact below 2^24.
+const ATLAS_MAX_TRIANGLES: usize = 1 << 24;
+
 /// Points per row of `voxelize_atlas` workgroups past which the dispatch gets a second
 /// dimension (65535 groups of 64).
 const MAX_POINTS_X: u32 = 65535 * 64;
@@ -112,7 +115,8 @@ impl AtlasPipelines {
     }
 }
 
-/// The valid texels of one atlas: model-space points (`vec4`, w = 1) in a device buffer.
+/// The valid texels of one atlas in a device buffer: `uvec4` per point, the model-space
+/// position's f32 bits and the index of the triangle it lies on (`atlas_points.comp`).
 pub struct AtlasPoints {
     pub buffer: Buffer,
     pub count: u32,
@@ -203,6 +207,12 @@ pub fn render_atlas_points(
     indices: &[u32],
 ) -> Result<AtlasPoints, GpuVoxelError> {
     let tris = gpu_atlas_triangles(atlas, positions, indices);
+    if tris.len() >= ATLAS_MAX_TRIANGLES {
+        return Err(GpuVoxelError::TooManyAtlasTriangles {
+            mesh_triangles: tris.len(),
+            max: ATLAS_MAX_TRIANGLES,
+        });
+    }
     let (w, h) = (atlas.width, atlas.height);
     // atlas_points binds a scratch list with room for every texel; past the device's
     // storage-buffer range the points would be lost.
@@ -266,10 +276,19 @@ pub fn render_atlas_points(
             .get(..4)
             .map_or(0, |b| u32::from_ne_bytes([b[0], b[1], b[2], b[3]]))
             .min(w.saturating_mul(h));
-        let points = bytes.get(16..16 + count as usize * 16).unwrap_or(&[]);
+        let raw = bytes.get(16..16 + count as usize * 16).unwrap_or(&[]);
+        // `atlas_points` appends in whatever order its atomics ran. Sorted, the list has one
+        // order per atlas, so `voxelize_atlas_volumes`, whose additive blending sums in
+        // primitive order, gives the same f16 sums (hence volumes) every time it is built.
+        let mut points: Vec<[u32; 4]> = raw
+            .chunks_exact(16)
+            .map(bytemuck::pod_read_unaligned::<[u32; 4]>)
+            .collect();
+        points.sort_unstable_by_key(|p| (p[3], p[0], p[1], p[2]));
+        let sorted: &[u8] = bytemuck::cast_slice(&points);
         let buffer = ctx.upload_buffer(
             "atlas points",
-            if points.is_empty() { &[0; 16] } else { points },
+            if sorted.is_empty() { &[0; 16] } else { sorted },
             vk::BufferUsageFlags::STORAGE_BUFFER,
         )?;
         Ok(AtlasPoints {
@@ -312,6 +331,16 @@ pub enum ModelAt {
     PerSlot(Arc<SlotMatrices>),
 }
 
+impl ModelAt {
+    /// The model matrix of frame slot `slot`.
+    pub fn at(&self, slot: usize) -> Mat4 {
+        match self {
+            ModelAt::Fixed(m) => *m,
+            ModelAt::PerSlot(s) => s.get(slot),
+        }
+    }
+}
+
 /// Declares `voxelize_atlas`: each `(points, model)` instance ORs its transformed points
 /// into `columns` (which `voxel_clear` or `voxel_copy_static` initialised). Records only in
 /// slots `gate` leaves open.
@@ -350,10 +379,7 @@ pub fn add_voxelize_atlas_pass(
             return;
         }
         for (buf, count, model) in &sets {
-            let model = match model {
-                ModelAt::Fixed(m) => *m,
-                ModelAt::PerSlot(s) => s.get(ctx.slot),
-            };
+            let model = model.at(ctx.slot);
             let ext = grid.extent_voxels();
             let push = GpuAtlasVoxelizePush {
                 model: model.to_cols_array(),
@@ -386,10 +412,13 @@ pub fn uses_atlas(object: &crate::scene::Object) -> bool {
 /// instanced by the objects with their model matrices.
 pub struct AtlasScene {
     pub pipelines: AtlasPipelines,
-    points: Vec<AtlasPoints>,
-    static_instances: Vec<(usize, Mat4)>,
-    /// `(points, the object, model per slot)`.
-    dynamic_instances: Vec<(usize, crate::scene::Object, Arc<SlotMatrices>)>,
+    pub(super) points: Vec<AtlasPoints>,
+    /// `(points, model, index of the object in the scene)`.
+    pub(super) static_instances: Vec<(usize, Mat4, usize)>,
+    /// `(points, the object, model per slot, index of the object in the scene)`.
+    pub(super) dynamic_instances: Vec<(usize, crate::scene::Object, Arc<SlotMatrices>, usize)>,
+    /// Albedo and normal volumes from the same points, when a GI method reads them.
+    pub(super) volumes: Option<super::gpu_atlas_volumes::AtlasVolumes>,
 }
 
 impl AtlasScene {
@@ -408,10 +437,11 @@ impl AtlasScene {
             points: Vec::new(),
             static_instances: Vec::new(),
             dynamic_instances: Vec::new(),
+            volumes: None,
         };
         let mut built: Vec<(Arc<MeshAtlas>, usize)> = Vec::new();
         let r = (|| -> Result<(), GpuVoxelError> {
-            for o in &scene.objects {
+            for (oi, o) in scene.objects.iter().enumerate() {
                 if !uses_atlas(o) {
                     continue;
                 }
@@ -441,9 +471,9 @@ impl AtlasScene {
                     for s in 0..MAX_FRAMES_IN_FLIGHT {
                         m.set(s, o.transform_at(t_s));
                     }
-                    me.dynamic_instances.push((pi, o.clone(), m));
+                    me.dynamic_instances.push((pi, o.clone(), m, oi));
                 } else {
-                    me.static_instances.push((pi, o.transform_at(t_s)));
+                    me.static_instances.push((pi, o.transform_at(t_s), oi));
                 }
             }
             Ok(())
@@ -472,8 +502,8 @@ impl AtlasScene {
     pub fn point_count(&self) -> u64 {
         self.static_instances
             .iter()
-            .map(|&(p, _)| p)
-            .chain(self.dynamic_instances.iter().map(|(p, _, _)| *p))
+            .map(|&(p, _, _)| p)
+            .chain(self.dynamic_instances.iter().map(|(p, _, _, _)| *p))
             .map(|p| u64::from(self.points[p].count))
             .sum()
     }
@@ -482,15 +512,35 @@ impl AtlasScene {
     pub fn models_at(&self, t_s: f32) -> Vec<Mat4> {
         self.dynamic_instances
             .iter()
-            .map(|(_, o, _)| o.transform_at(t_s))
+            .map(|(_, o, _, _)| o.transform_at(t_s))
             .collect()
     }
 
     /// Writes the dynamic objects' model matrices for frame slot `slot` (after its fence).
     pub fn write_models(&self, slot: usize, models: &[Mat4]) {
-        for ((_, _, m), &model) in self.dynamic_instances.iter().zip(models) {
+        for ((_, _, m, _), &model) in self.dynamic_instances.iter().zip(models) {
             m.set(slot, model);
         }
+    }
+
+    /// The point lists of the static objects, the dynamic ones, or both, with their models.
+    pub fn instances(&self, statics: bool, dynamics: bool) -> Vec<(&AtlasPoints, ModelAt)> {
+        let mut inst: Vec<(&AtlasPoints, ModelAt)> = Vec::new();
+        if statics {
+            inst.extend(
+                self.static_instances
+                    .iter()
+                    .map(|&(p, m, _)| (&self.points[p], ModelAt::Fixed(m))),
+            );
+        }
+        if dynamics {
+            inst.extend(
+                self.dynamic_instances
+                    .iter()
+                    .map(|(p, _, m, _)| (&self.points[*p], ModelAt::PerSlot(m.clone()))),
+            );
+        }
+        inst
     }
 
     /// Declares `voxelize_atlas` for the static objects, the dynamic ones, or both.
@@ -503,25 +553,14 @@ impl AtlasScene {
         dynamics: bool,
         gate: Option<Arc<SlotGate>>,
     ) {
-        let mut inst: Vec<(&AtlasPoints, ModelAt)> = Vec::new();
-        if statics {
-            inst.extend(
-                self.static_instances
-                    .iter()
-                    .map(|&(p, m)| (&self.points[p], ModelAt::Fixed(m))),
-            );
-        }
-        if dynamics {
-            inst.extend(
-                self.dynamic_instances
-                    .iter()
-                    .map(|(p, _, m)| (&self.points[*p], ModelAt::PerSlot(m.clone()))),
-            );
-        }
+        let inst = self.instances(statics, dynamics);
         add_voxelize_atlas_pass(g, &self.pipelines, grid, columns, &inst, gate);
     }
 
     pub fn destroy(self, ctx: &Context) {
+        if let Some(v) = self.volumes {
+            v.destroy(ctx);
+        }
         for p in self.points {
             p.destroy(ctx);
         }

@@ -32,6 +32,11 @@
 //! - [`atlas`]: automatic injective per-mesh atlases (packing, coverage rule, density).
 //! - [`gpu_atlas`]: the thesis's atlas voxelizer (`atlas_positions`, `atlas_points`,
 //!   `voxelize_atlas`), selected by [`gpu::Voxelizer::Atlas`].
+//! - [`gpu_atlas_volumes`]: albedo and normal volumes from the same atlas points by layered
+//!   rendering (`voxelize_atlas_volumes`, `voxelize_atlas_resolve`), for the GI methods that
+//!   read more than occupancy.
+//! - [`gpu_atlas_raster`]: the thesis's raster bit pass (`voxelize_atlas_bits`, logicOp OR),
+//!   measured against the compute pass by `voxgi bench voxelize`.
 //! - [`ray_mask`]: the 128×128 ray-mask LUT (thesis §4.5, Fig. 16) and single-bit LUT (§3.3).
 //! - [`traverse`]: hierarchical first hit and visibility (§4.5–§4.7), the exact DDA ground
 //!   truth, and the 1-bit / 3-bit marching baselines (§4.8).
@@ -44,6 +49,8 @@ pub mod bits;
 pub mod debug_view;
 pub mod gpu;
 pub mod gpu_atlas;
+pub mod gpu_atlas_raster;
+pub mod gpu_atlas_volumes;
 pub mod gpu_rays;
 pub mod grid;
 pub mod ray_mask;

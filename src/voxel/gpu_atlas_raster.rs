@@ -1,0 +1,126 @@
+//! The thesis's binary atlas voxelization as a raster pass (Thiedemann 2010, digest §3.3):
+//! the atlas points drawn as `POINT_LIST` into the `R32G32B32A32_UINT` column image, each
+//! fragment writing the single-bit LUT entry of its depth and `logicOp OR` merging the bits.
+//! The renderer uses the compute twin `voxelize_atlas` (atomicOr into the column buffer that
+//! the triangle voxelizer shares, see [`super::gpu_atlas`]); this pass exists to measure the
+//! thesis's way against it (`voxgi bench voxelize`) and sets the same bits: both find a
+//! point's voxel with `atlas_voxel.glsl`.
+//!
+//! # Pass (named after its GLSL stem)
+//! - `voxelize_atlas_bits` (graphics): vertex pulling from the point buffer, the geometry
+//!   shader picks the layer of the point's 128-voxel depth chunk (`k / 128`), the fragment
+//!   shader reads the single-bit LUT ([`super::ray_mask::ColumnLut1d::single_bit`]).
+
+use super::gpu::{image_extent, COLUMN_FORMAT};
+use super::gpu_atlas::{AtlasPoints, GpuAtlasVoxelizePush, ModelAt};
+use super::ray_mask::ColumnLut1d;
+use super::VoxelGrid;
+use crate::graph::{Access, ImageHandle, RenderGraph, Shader};
+use crate::vk::{
+    vk, Attachment, Buffer, Context, Descriptor, GraphicsPipeline, GraphicsPipelineDesc, VkError,
+};
+
+/// The raster pipeline and its single-bit LUT.
+pub struct AtlasRasterBits {
+    pipe: GraphicsPipeline,
+    lut: Buffer,
+}
+
+impl AtlasRasterBits {
+    pub fn new(ctx: &Context) -> Result<Self, VkError> {
+        let storage = vk::DescriptorType::STORAGE_BUFFER;
+        let mut desc = GraphicsPipelineDesc::fullscreen(
+            "voxelize_atlas_bits.vert",
+            "voxelize_atlas_bits.frag",
+            COLUMN_FORMAT,
+        );
+        desc.geometry = Some("voxelize_atlas_bits.geom".into());
+        desc.topology = vk::PrimitiveTopology::POINT_LIST;
+        desc.bindings = vec![(0, storage), (1, storage)];
+        desc.push_constant_bytes = std::mem::size_of::<GpuAtlasVoxelizePush>() as u32;
+        desc.logic_op = Some(vk::LogicOp::OR);
+        let pipe = ctx.graphics_pipeline(&desc)?;
+        let lut = ctx.upload_buffer(
+            "single-bit lut",
+            &ColumnLut1d::single_bit().to_gpu_bytes(),
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+        );
+        match lut {
+            Ok(lut) => Ok(Self { pipe, lut }),
+            Err(e) => {
+                ctx.destroy_graphics_pipeline(pipe);
+                Err(e)
+            }
+        }
+    }
+
+    /// Declares `voxelize_atlas_bits`: clears `image` (a 2D array of [`COLUMN_FORMAT`] with
+    /// [`image_extent`] texels and one layer per 128 voxels of depth) and ORs every
+    /// instance's points into it.
+    pub fn add_pass(
+        &self,
+        g: &mut RenderGraph,
+        grid: &VoxelGrid,
+        image: ImageHandle,
+        instances: &[(&AtlasPoints, ModelAt)],
+    ) {
+        let read = Access::StorageRead(Shader::Graphics);
+        let lut = g.import_buffer(&self.lut, read);
+        let sets: Vec<_> = instances
+            .iter()
+            .filter(|(p, _)| p.count > 0)
+            .map(|(p, m)| (g.import_buffer(&p.buffer, read), p.count, m.clone()))
+            .collect();
+        // Cleared on load, so the logic op reads only what this pass wrote.
+        let mut pass = g
+            .add_pass("voxelize_atlas_bits")
+            .read(lut, read)
+            .write(image, Access::ColorAttachment);
+        for (h, _, _) in &sets {
+            pass = pass.read(*h, read);
+        }
+        let (pipe, grid) = (self.pipe, *grid);
+        let (w, h) = image_extent(&grid);
+        pass.record(move |ctx| {
+            let clear = Some(vk::ClearValue {
+                color: vk::ClearColorValue { uint32: [0; 4] },
+            });
+            let target = [Attachment {
+                view: ctx.image(image).view,
+                clear,
+            }];
+            // The whole (padded) image: the viewport maps columns to texels 1:1.
+            let extent = vk::Extent2D {
+                width: w,
+                height: h,
+            };
+            ctx.cmd
+                .begin_rendering_layers(extent, grid.layers(), &target, None);
+            for (points, count, model) in &sets {
+                let ext = grid.extent_voxels();
+                let push = GpuAtlasVoxelizePush {
+                    model: model.at(ctx.slot).to_cols_array(),
+                    grid_min: grid.world_min().extend(0.0).to_array(),
+                    scale: grid.voxels_per_meter().extend(0.0).to_array(),
+                    dims: [ext.x, ext.y, ext.z, grid.axis().index() as u32],
+                    extent: [w, h, *count, 0],
+                };
+                ctx.cmd.bind(
+                    &pipe,
+                    &[
+                        Descriptor::storage_buffer(0, ctx.buffer(*points).raw),
+                        Descriptor::storage_buffer(1, ctx.buffer(lut).raw),
+                    ],
+                );
+                ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
+                ctx.cmd.draw(*count, 1);
+            }
+            ctx.cmd.end_rendering();
+        });
+    }
+
+    pub fn destroy(self, ctx: &Context) {
+        ctx.destroy_graphics_pipeline(self.pipe);
+        ctx.destroy_buffer(self.lut);
+    }
+}

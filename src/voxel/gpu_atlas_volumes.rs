@@ -1,0 +1,524 @@
+//! Non-binary atlas voxelization (Thiedemann 2010, `seeds/000`, digest §3.4): the atlas
+//! points that set the bits ([`super::gpu_atlas`]) also write albedo and normal volumes
+//! congruent with them, for the GI methods that read more than occupancy (the voxel path
+//! tracer and the direct-radiance volume). They exist only when such a method runs
+//! ([`super::gpu::VoxelFrame::enable_attribute_volumes`]).
+//!
+//! # Passes (named after their GLSL stems)
+//! - `voxelize_atlas_volumes` (graphics): the point lists drawn as `POINT_LIST`, one vertex
+//!   per point pulled from its buffer; the vertex shader finds the point's voxel with the
+//!   same f32 operations as `voxelize_atlas.comp` (`atlas_voxel.glsl`), places it at its
+//!   column in a viewport of the grid's x,y resolution, and the geometry shader sets
+//!   `gl_Layer` = its depth index. Targets: two `RGBA16F` 2D arrays with one layer per depth
+//!   index, blended additively: (albedo, 1) and the unit normal per point.
+//! - `voxelize_atlas_resolve` (compute): static sums + this frame's sums → the `RGBA8` albedo
+//!   and `RGBA8_SNORM` normal 3D volumes the path tracer samples; alpha = 1 exactly where a
+//!   point landed.
+//!
+//! # Why averaging, not the thesis's last writer
+//! The thesis keeps the last point drawn into a voxel (§3.4), which depends on the order of
+//! the point list (built by atomics, so arbitrary) and shows back-face normals on thin parts
+//! (the elephant's ear). Every atlas texel stands for the same area in meters, so summing
+//! (albedo, 1) and dividing gives the area-weighted mean albedo, independent of the order;
+//! summed normals give the mean orientation (a voxel on an edge gets the bisector).
+//!
+//! # Static and dynamic objects (thesis §3.5)
+//! Like the bits: the static objects' sums are splatted once into persistent layers, each
+//! frame that re-voxelizes splats only the dynamic objects into transient layers, and the
+//! resolve adds both. Nothing records while nothing moves (the voxel frame's [`SlotGate`]).
+
+use super::gpu::{run_once, GpuVoxelError, SlotGate};
+use super::gpu_atlas::{AtlasPoints, AtlasScene, GpuAtlasVoxelizePush, ModelAt};
+use super::VoxelGrid;
+use crate::graph::{Access, BufferHandle, ImageHandle, RenderGraph, Shader};
+use crate::scene::Scene;
+use crate::vk::{
+    vk, Attachment, Buffer, ComputePipeline, Context, Descriptor, GraphicsPipeline,
+    GraphicsPipelineDesc, Image, ImageDesc, VkError,
+};
+use glam::Vec3;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+
+/// Format of the per-voxel sums: f16 counts are exact up to 2048 points per voxel, far more
+/// than an atlas sized for the grid puts into one (a few per surface crossing it).
+pub const SUM_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
+/// Formats of the resolved volumes (what `gi_pathtrace.comp` samples).
+pub const ALBEDO_FORMAT: vk::Format = vk::Format::R8G8B8A8_UNORM;
+pub const NORMAL_FORMAT: vk::Format = vk::Format::R8G8B8A8_SNORM;
+
+/// State of the resolved volumes between frames: sampled by compute shaders.
+pub const VOLUME_STATE: Access = Access::Sampled(Shader::Compute);
+
+/// Push constants of `voxelize_atlas_resolve.comp`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GpuAtlasResolvePush {
+    /// `res_x, res_y, D`, and bit 0: static sums bound, bit 1: frame sums bound.
+    pub dims: [u32; 4],
+}
+
+/// The albedo (`RGBA8`, a = 1 where occupied) and normal (`RGBA8_SNORM`) 3D volumes,
+/// one texel per voxel, in the voxel grid's (x, y, depth) order.
+pub struct AttributeVolumes {
+    pub albedo: Image,
+    pub normal: Image,
+}
+
+impl AttributeVolumes {
+    /// Cleared volumes in their resting state [`VOLUME_STATE`].
+    pub fn new(ctx: &Context, grid: &VoxelGrid) -> Result<Self, VkError> {
+        let ext = grid.extent_voxels();
+        let usage = vk::ImageUsageFlags::STORAGE
+            | vk::ImageUsageFlags::SAMPLED
+            | vk::ImageUsageFlags::TRANSFER_SRC
+            | vk::ImageUsageFlags::TRANSFER_DST;
+        let volume = |name: &str, format| {
+            ImageDesc::new_2d(name, format, ext.x, ext.y)
+                .with_depth(ext.z)
+                .with_usage(usage)
+        };
+        let resting = VOLUME_STATE.info().layout;
+        let zero = vk::ClearColorValue { float32: [0.0; 4] };
+        let albedo = ctx.create_image(&volume("albedo volume", ALBEDO_FORMAT))?;
+        let normal = match ctx.create_image(&volume("normal volume", NORMAL_FORMAT)) {
+            Ok(n) => n,
+            Err(e) => {
+                ctx.destroy_image(albedo);
+                return Err(e);
+            }
+        };
+        let me = Self { albedo, normal };
+        let cleared = ctx
+            .clear_new_image(&me.albedo, zero, resting)
+            .and_then(|()| ctx.clear_new_image(&me.normal, zero, resting));
+        if let Err(e) = cleared {
+            me.destroy(ctx);
+            return Err(e);
+        }
+        Ok(me)
+    }
+
+    /// Imports both volumes into `g` in their resting state: `(albedo, normal)`.
+    pub fn import(&self, g: &mut RenderGraph) -> (ImageHandle, ImageHandle) {
+        (
+            g.import_image(&self.albedo, VOLUME_STATE),
+            g.import_image(&self.normal, VOLUME_STATE),
+        )
+    }
+
+    pub fn destroy(self, ctx: &Context) {
+        ctx.destroy_image(self.albedo);
+        ctx.destroy_image(self.normal);
+    }
+}
+
+/// Pipelines, per-instance triangle attributes and the static objects' sums.
+pub struct AtlasVolumes {
+    splat: GraphicsPipeline,
+    resolve: ComputePipeline,
+    sampler: vk::Sampler,
+    /// Per instance (static instances first, then dynamic, as in [`AtlasScene`]): the mesh's
+    /// triangles in model space with the object's material albedo in the vertices' w (the
+    /// layout of `voxelize_attributes.comp`), indexed by the points' triangle index.
+    triangles: Vec<Buffer>,
+    /// `(albedo sums, normal sums)` of the static instances, splatted once; absent when the
+    /// statics are splatted every frame (`revoxelize_static`) or there are none.
+    static_sums: Option<(Image, Image)>,
+    /// Without a slot gate (nothing ever moves) the volumes are resolved by the first frame.
+    resolved: Arc<AtomicBool>,
+}
+
+/// A draw of one instance's points: `(points, count, triangles, model)`.
+type Splat = (BufferHandle, u32, BufferHandle, ModelAt);
+
+impl AtlasVolumes {
+    /// Builds the pipelines and triangle attributes of `atlas`'s instances and, when
+    /// `statics_once`, splats the static instances once.
+    pub fn new(
+        ctx: &Context,
+        atlas: &AtlasScene,
+        scene: &Scene,
+        grid: &VoxelGrid,
+        statics_once: bool,
+    ) -> Result<Self, GpuVoxelError> {
+        let storage = vk::DescriptorType::STORAGE_BUFFER;
+        let mut desc = GraphicsPipelineDesc::fullscreen(
+            "voxelize_atlas_volumes.vert",
+            "voxelize_atlas_volumes.frag",
+            SUM_FORMAT,
+        );
+        desc.geometry = Some("voxelize_atlas_volumes.geom".into());
+        desc.topology = vk::PrimitiveTopology::POINT_LIST;
+        desc.color_formats = vec![SUM_FORMAT, SUM_FORMAT];
+        desc.bindings = vec![(0, storage), (1, storage)];
+        desc.push_constant_bytes = std::mem::size_of::<GpuAtlasVoxelizePush>() as u32;
+        let splat = ctx.graphics_pipeline_additive(&desc)?;
+        let sampled = vk::DescriptorType::COMBINED_IMAGE_SAMPLER;
+        let image = vk::DescriptorType::STORAGE_IMAGE;
+        let resolve = ctx.compute_pipeline(
+            "voxelize_atlas_resolve.comp",
+            &[
+                (0, sampled),
+                (1, sampled),
+                (2, sampled),
+                (3, sampled),
+                (4, image),
+                (5, image),
+            ],
+            std::mem::size_of::<GpuAtlasResolvePush>() as u32,
+            &[],
+        );
+        let resolve = match resolve {
+            Ok(r) => r,
+            Err(e) => {
+                ctx.destroy_graphics_pipeline(splat);
+                return Err(e.into());
+            }
+        };
+        let mut me = Self {
+            splat,
+            resolve,
+            sampler: vk::Sampler::null(),
+            triangles: Vec::new(),
+            static_sums: None,
+            resolved: Arc::new(AtomicBool::new(false)),
+        };
+        if let Err(e) = me.init(ctx, atlas, scene, grid, statics_once) {
+            me.destroy(ctx);
+            return Err(e);
+        }
+        Ok(me)
+    }
+
+    fn init(
+        &mut self,
+        ctx: &Context,
+        atlas: &AtlasScene,
+        scene: &Scene,
+        grid: &VoxelGrid,
+        statics_once: bool,
+    ) -> Result<(), GpuVoxelError> {
+        self.sampler = ctx.create_sampler(vk::Filter::NEAREST, false)?;
+        let objects = atlas
+            .static_instances
+            .iter()
+            .map(|&(_, _, o)| o)
+            .chain(atlas.dynamic_instances.iter().map(|&(_, _, _, o)| o));
+        for o in objects {
+            let tris = model_triangles(scene, o);
+            let bytes: &[u8] = if tris.is_empty() {
+                &[0; 48]
+            } else {
+                bytemuck::cast_slice(&tris)
+            };
+            self.triangles.push(ctx.upload_buffer(
+                "atlas triangle attributes",
+                bytes,
+                vk::BufferUsageFlags::STORAGE_BUFFER,
+            )?);
+        }
+        if !(statics_once && atlas.has_static()) {
+            return Ok(());
+        }
+        let ext = grid.extent_voxels();
+        let sums = |name: &str| {
+            ImageDesc::new_2d(name, SUM_FORMAT, ext.x, ext.y)
+                .with_layers(ext.z)
+                .with_usage(
+                    vk::ImageUsageFlags::COLOR_ATTACHMENT
+                        | vk::ImageUsageFlags::SAMPLED
+                        | vk::ImageUsageFlags::TRANSFER_DST,
+                )
+        };
+        let zero = vk::ClearColorValue { float32: [0.0; 4] };
+        let resting = VOLUME_STATE.info().layout;
+        let albedo = ctx.create_image(&sums("atlas static albedo sums"))?;
+        let normal = match ctx.create_image(&sums("atlas static normal sums")) {
+            Ok(n) => n,
+            Err(e) => {
+                ctx.destroy_image(albedo);
+                return Err(e.into());
+            }
+        };
+        self.static_sums = Some((albedo, normal));
+        let Some((albedo, normal)) = &self.static_sums else {
+            return Ok(());
+        };
+        ctx.clear_new_image(albedo, zero, resting)?;
+        ctx.clear_new_image(normal, zero, resting)?;
+        let mut g = RenderGraph::new();
+        let targets = (
+            g.import_image(albedo, VOLUME_STATE),
+            g.import_image(normal, VOLUME_STATE),
+        );
+        let splats = self.splats(&mut g, atlas, true, false);
+        add_splat_pass(&mut g, self.splat, grid, targets, splats, None);
+        run_once(ctx, g)?;
+        Ok(())
+    }
+
+    /// Imports the point and triangle buffers of the static and/or dynamic instances.
+    fn splats(
+        &self,
+        g: &mut RenderGraph,
+        atlas: &AtlasScene,
+        statics: bool,
+        dynamics: bool,
+    ) -> Vec<Splat> {
+        let read = Access::StorageRead(Shader::Graphics);
+        let n_static = atlas.static_instances.len();
+        let mut inst: Vec<(&AtlasPoints, ModelAt, usize)> = Vec::new();
+        if statics {
+            inst.extend(
+                atlas
+                    .static_instances
+                    .iter()
+                    .enumerate()
+                    .map(|(i, &(p, m, _))| (&atlas.points[p], ModelAt::Fixed(m), i)),
+            );
+        }
+        if dynamics {
+            inst.extend(
+                atlas
+                    .dynamic_instances
+                    .iter()
+                    .enumerate()
+                    .map(|(i, (p, _, m, _))| {
+                        (&atlas.points[*p], ModelAt::PerSlot(m.clone()), n_static + i)
+                    }),
+            );
+        }
+        inst.into_iter()
+            .filter(|(p, _, _)| p.count > 0)
+            .filter_map(|(p, m, i)| {
+                let tris = self.triangles.get(i)?;
+                Some((
+                    g.import_buffer(&p.buffer, read),
+                    p.count,
+                    g.import_buffer(tris, read),
+                    m,
+                ))
+            })
+            .collect()
+    }
+
+    /// Declares this frame's `voxelize_atlas_volumes` (the dynamic instances, and the static
+    /// ones when `statics_per_frame`) and `voxelize_atlas_resolve` into `albedo` and `normal`
+    /// (imported [`AttributeVolumes`]). With a `gate`, both record only in the slots that
+    /// re-voxelize the bits; without one (nothing moves) the first frame resolves, once.
+    #[allow(clippy::too_many_arguments)]
+    pub fn add_passes(
+        &self,
+        g: &mut RenderGraph,
+        atlas: &AtlasScene,
+        grid: &VoxelGrid,
+        albedo: ImageHandle,
+        normal: ImageHandle,
+        statics_per_frame: bool,
+        gate: Option<Arc<SlotGate>>,
+    ) {
+        let ext = grid.extent_voxels();
+        let splats = self.splats(g, atlas, statics_per_frame, true);
+        let frame_sums = if splats.is_empty() {
+            None
+        } else {
+            let mut sums = |name: &str| {
+                g.create_image(ImageDesc::new_2d(name, SUM_FORMAT, ext.x, ext.y).with_layers(ext.z))
+            };
+            let targets = (sums("atlas albedo sums"), sums("atlas normal sums"));
+            add_splat_pass(g, self.splat, grid, targets, splats, gate.clone());
+            Some(targets)
+        };
+        let static_sums = self.static_sums.as_ref().map(|(a, n)| {
+            (
+                g.import_image(a, VOLUME_STATE),
+                g.import_image(n, VOLUME_STATE),
+            )
+        });
+        let Some(first) = static_sums.or(frame_sums) else {
+            return;
+        };
+        let second = frame_sums.unwrap_or(first);
+        let push = GpuAtlasResolvePush {
+            dims: [
+                ext.x,
+                ext.y,
+                ext.z,
+                u32::from(static_sums.is_some()) | (u32::from(frame_sums.is_some()) << 1),
+            ],
+        };
+        let read = Access::Sampled(Shader::Compute);
+        let mut pass = g
+            .add_pass("voxelize_atlas_resolve")
+            .write(albedo, Access::StorageWrite(Shader::Compute))
+            .write(normal, Access::StorageWrite(Shader::Compute));
+        for (a, n) in static_sums.into_iter().chain(frame_sums) {
+            pass = pass.read(a, read).read(n, read);
+        }
+        let (pipe, sampler, resolved) = (self.resolve, self.sampler, self.resolved.clone());
+        pass.record(move |ctx| {
+            let run = match &gate {
+                Some(g) => g.is_open(ctx.slot),
+                None => !resolved.swap(true, Ordering::SeqCst),
+            };
+            if !run {
+                return;
+            }
+            let sampled = |binding, h: ImageHandle| Descriptor::SampledImage {
+                binding,
+                view: ctx.image(h).view,
+                sampler,
+            };
+            ctx.cmd.bind(
+                &pipe,
+                &[
+                    sampled(0, first.0),
+                    sampled(1, first.1),
+                    sampled(2, second.0),
+                    sampled(3, second.1),
+                    Descriptor::StorageImage {
+                        binding: 4,
+                        view: ctx.image(albedo).view,
+                    },
+                    Descriptor::StorageImage {
+                        binding: 5,
+                        view: ctx.image(normal).view,
+                    },
+                ],
+            );
+            ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
+            ctx.cmd
+                .dispatch(ext.x.div_ceil(8), ext.y.div_ceil(8), ext.z);
+        });
+    }
+
+    pub fn destroy(self, ctx: &Context) {
+        if let Some((a, n)) = self.static_sums {
+            ctx.destroy_image(a);
+            ctx.destroy_image(n);
+        }
+        for b in self.triangles {
+            ctx.destroy_buffer(b);
+        }
+        if self.sampler != vk::Sampler::null() {
+            ctx.destroy_sampler(self.sampler);
+        }
+        ctx.destroy_graphics_pipeline(self.splat);
+        ctx.destroy_compute_pipeline(self.resolve);
+    }
+}
+
+/// Declares `voxelize_atlas_volumes`: clears the sum layers `(albedo, normal)` and draws
+/// every splat's points into them. Records only in slots `gate` leaves open.
+fn add_splat_pass(
+    g: &mut RenderGraph,
+    pipe: GraphicsPipeline,
+    grid: &VoxelGrid,
+    (albedo, normal): (ImageHandle, ImageHandle),
+    splats: Vec<Splat>,
+    gate: Option<Arc<SlotGate>>,
+) {
+    let read = Access::StorageRead(Shader::Graphics);
+    // A plain attachment write: the pass clears on load, so blending reads only what the
+    // pass itself wrote, never the contents of an earlier pass.
+    let mut pass = g
+        .add_pass("voxelize_atlas_volumes")
+        .write(albedo, Access::ColorAttachment)
+        .write(normal, Access::ColorAttachment);
+    for (p, _, t, _) in &splats {
+        pass = pass.read(*p, read).read(*t, read);
+    }
+    let grid = *grid;
+    pass.record(move |ctx| {
+        if !gate.as_ref().map_or(true, |g| g.is_open(ctx.slot)) {
+            return;
+        }
+        let ext = grid.extent_voxels();
+        let clear = Some(vk::ClearValue {
+            color: vk::ClearColorValue { float32: [0.0; 4] },
+        });
+        let colors = [albedo, normal].map(|h| Attachment {
+            view: ctx.image(h).view,
+            clear,
+        });
+        // The viewport is the grid's x,y resolution: a point's raster position is its column.
+        ctx.cmd.begin_rendering_layers(
+            vk::Extent2D {
+                width: ext.x,
+                height: ext.y,
+            },
+            ext.z,
+            &colors,
+            None,
+        );
+        for (points, count, tris, model) in &splats {
+            let push = GpuAtlasVoxelizePush {
+                model: model.at(ctx.slot).to_cols_array(),
+                grid_min: grid.world_min().extend(0.0).to_array(),
+                scale: grid.voxels_per_meter().extend(0.0).to_array(),
+                dims: [ext.x, ext.y, ext.z, grid.axis().index() as u32],
+                extent: [0, 0, *count, 0],
+            };
+            ctx.cmd.bind(
+                &pipe,
+                &[
+                    Descriptor::storage_buffer(0, ctx.buffer(*points).raw),
+                    Descriptor::storage_buffer(1, ctx.buffer(*tris).raw),
+                ],
+            );
+            ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
+            ctx.cmd.draw(*count, 1);
+        }
+        ctx.cmd.end_rendering();
+    });
+}
+
+/// Object `object`'s mesh triangles in model space, each vertex's w holding one channel of
+/// its submesh's material albedo (the object's material overrides first, as the renderer
+/// and `gi::attribute_triangles` resolve them). Triangle i is the atlas's triangle i.
+fn model_triangles(scene: &Scene, object: usize) -> Vec<[[f32; 4]; 3]> {
+    let Some(o) = scene.objects.get(object) else {
+        return Vec::new();
+    };
+    let Some(mesh) = scene.meshes.get(o.mesh) else {
+        return Vec::new();
+    };
+    let mut albedo = vec![Vec3::splat(0.5); mesh.indices.len() / 3];
+    for (si, sub) in mesh.submeshes.iter().enumerate() {
+        let material = o.materials.get(si).copied().unwrap_or(sub.material);
+        let a = scene
+            .materials
+            .get(material)
+            .map_or(Vec3::splat(0.5), |m| m.albedo);
+        let first = sub.first_index as usize / 3;
+        let end = (first + sub.index_count as usize / 3).min(albedo.len());
+        for slot in albedo.get_mut(first..end).into_iter().flatten() {
+            *slot = a;
+        }
+    }
+    mesh.indices
+        .chunks_exact(3)
+        .zip(albedo)
+        .map(|(t, a)| {
+            [0, 1, 2].map(|k| {
+                let p = mesh
+                    .positions
+                    .get(t[k] as usize)
+                    .copied()
+                    .unwrap_or(Vec3::ZERO);
+                [p.x, p.y, p.z, a[k]]
+            })
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn resolve_push_matches_glsl() {
+        assert_eq!(std::mem::size_of::<GpuAtlasResolvePush>(), 16);
+    }
+}

@@ -1,0 +1,212 @@
+//! Light intensities at the extremes (DESIGN.md: "light intensities from 1e-6 to 1e6, no
+//! NaN/Inf in any buffer"): radiance is linear in the light, so an image rendered with every
+//! light scaled by s, divided by s, must equal the unscaled image, for direct light and for
+//! every indirect-light path (light maps, radiance volume, path tracer). Likewise a scene
+//! scaled from meters to millimeters or kilometers (lights scaled to keep the irradiance)
+//! renders the same image. Validation on.
+
+mod common;
+
+use voxgi::gi::{GiMethod, GiSettings, RadianceSource};
+use voxgi::render::{render_image, RenderSettings};
+use voxgi::scene::{load_scene_arg, Light, Scene};
+
+fn scaled(scene: &Scene, s: f32) -> Scene {
+    let mut scene = scene.clone();
+    for light in &mut scene.lights {
+        match light {
+            Light::Point { intensity_w_sr, .. } | Light::Spot { intensity_w_sr, .. } => {
+                *intensity_w_sr *= s
+            }
+            Light::Directional {
+                irradiance_w_m2, ..
+            } => *irradiance_w_m2 *= s,
+        }
+    }
+    scene
+}
+
+/// The HDR image of `scene` with its lights scaled by `s`, divided by `s`.
+fn render_per_unit(
+    ctx: &voxgi::vk::Context,
+    scene: &Scene,
+    gi: &GiSettings,
+    s: f32,
+) -> Vec<[f32; 3]> {
+    let settings = RenderSettings {
+        width: 64,
+        height: 64,
+        gi: *gi,
+        ..Default::default()
+    };
+    let out = render_image(ctx, &scaled(scene, s), &settings).expect("renders");
+    common::assert_no_validation_messages(ctx);
+    out.hdr
+        .data
+        .iter()
+        .map(|p| {
+            assert!(
+                p.iter().all(|c| c.is_finite() && *c >= 0.0),
+                "lights × {s:e}: a pixel is {p:?} ({:?})",
+                gi.method
+            );
+            p.map(|c| c / s)
+        })
+        .collect()
+}
+
+#[test]
+fn radiance_scales_linearly_with_light_intensity_from_1e_minus_6_to_1e6() {
+    let scene = load_scene_arg(None).expect("the built-in Cornell box");
+    let ctx = common::context();
+    let methods = [
+        ("direct", GiSettings::default()),
+        (
+            "hemisphere, light maps",
+            GiSettings {
+                method: GiMethod::Hemisphere,
+                rays: 4,
+                ..Default::default()
+            },
+        ),
+        (
+            "hemisphere, radiance volume",
+            GiSettings {
+                method: GiMethod::Hemisphere,
+                rays: 4,
+                radiance_source: RadianceSource::Volume,
+                ..Default::default()
+            },
+        ),
+        (
+            "path tracer",
+            GiSettings {
+                method: GiMethod::Pathtrace,
+                rays: 2,
+                bounces: 2,
+                ..Default::default()
+            },
+        ),
+    ];
+    for (name, gi) in methods {
+        let unit = render_per_unit(&ctx, &scene, &gi, 1.0);
+        let peak = unit
+            .iter()
+            .flat_map(|p| p.iter().copied())
+            .fold(0.0f32, f32::max);
+        assert!(peak > 0.0, "{name}: the unscaled image is black");
+        for s in [1e-6f32, 1e6] {
+            let img = render_per_unit(&ctx, &scene, &gi, s);
+            // Relative to the image's peak. f32 arithmetic differs by ~1e-7; radiance kept in
+            // f16 (light maps and the radiance volume once were) loses ~1.5e-2 at 1e-6 and
+            // overflows at 1e6.
+            let worst = unit
+                .iter()
+                .zip(&img)
+                .flat_map(|(a, b)| (0..3).map(move |c| (a[c] - b[c]).abs()))
+                .fold(0.0f32, f32::max)
+                / peak;
+            println!("{name}: lights × {s:e}: largest per-unit difference {worst:.2e} of the peak");
+            assert!(
+                worst < 1e-5,
+                "{name}: lights × {s:e} differ from the unscaled image by {worst:.2e} of the peak"
+            );
+        }
+    }
+}
+
+/// `scene` scaled by `k` about the origin, with point and spot intensities scaled by k² so that
+/// irradiance E = I cosθ / d², and hence every pixel's radiance, stays the same.
+fn rescaled(scene: &Scene, k: f32) -> Scene {
+    let mut scene = scene.clone();
+    for o in &mut scene.objects {
+        assert!(o.animation.is_none(), "the test scene is static");
+        o.transform.translate *= k;
+        o.transform.scale *= k;
+    }
+    let cam = &mut scene.camera;
+    cam.position *= k;
+    cam.near *= k;
+    cam.far *= k;
+    for light in &mut scene.lights {
+        match light {
+            Light::Point {
+                position,
+                intensity_w_sr,
+            }
+            | Light::Spot {
+                position,
+                intensity_w_sr,
+                ..
+            } => {
+                *position *= k;
+                *intensity_w_sr *= k * k;
+            }
+            Light::Directional { .. } => {}
+        }
+    }
+    scene
+}
+
+#[test]
+fn a_millimeter_and_a_kilometer_cornell_box_render_like_the_meter_one() {
+    let scene = load_scene_arg(None).expect("the built-in Cornell box");
+    let ctx = common::context();
+    let methods = [
+        ("direct", GiSettings::default()),
+        (
+            "hemisphere",
+            GiSettings {
+                method: GiMethod::Hemisphere,
+                rays: 4,
+                ..Default::default()
+            },
+        ),
+        (
+            "path tracer",
+            GiSettings {
+                method: GiMethod::Pathtrace,
+                rays: 2,
+                bounces: 2,
+                ..Default::default()
+            },
+        ),
+    ];
+    for (name, gi) in methods {
+        let unit = render_per_unit(&ctx, &scene, &gi, 1.0);
+        let mean = |img: &[[f32; 3]]| {
+            img.iter()
+                .flat_map(|p| p.iter())
+                .map(|&c| f64::from(c))
+                .sum::<f64>()
+                / (img.len() * 3) as f64
+        };
+        for k in [1e-3f32, 1e3] {
+            let img = render_per_unit(&ctx, &rescaled(&scene, k), &gi, 1.0);
+            let diff: Vec<f32> = unit
+                .iter()
+                .zip(&img)
+                .flat_map(|(a, b)| (0..3).map(move |c| (a[c] - b[c]).abs()))
+                .collect();
+            let mean_rel =
+                diff.iter().map(|&d| f64::from(d)).sum::<f64>() / diff.len() as f64 / mean(&unit);
+            let peak = unit
+                .iter()
+                .flat_map(|p| p.iter().copied())
+                .fold(0.0f32, f32::max);
+            let outliers = diff.iter().filter(|&&d| d > 1e-3 * peak).count();
+            println!(
+                "{name}: scene × {k:e}: mean difference {mean_rel:.2e} of the mean, {outliers} \
+                 channel values off by more than 1e-3 of the peak"
+            );
+            // Measured: mean 2e-4..8e-4, at most 114 of 12,288 values off (silhouette and
+            // shadow-edge pixels whose coverage rounds the other way).
+            assert!(
+                mean_rel < 3e-3 && outliers < diff.len() / 30,
+                "{name}: the Cornell box × {k:e} differs from the meter one: mean {mean_rel:.2e} \
+                 of the mean, {outliers} of {} values off by more than 1e-3 of the peak",
+                diff.len()
+            );
+        }
+    }
+}
