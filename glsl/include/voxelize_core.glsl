@@ -40,22 +40,6 @@ vec3 to_voxel(vec3 p) {
 
 const vec3 HALF = vec3(0.5);
 
-const vec3 X_AXIS = vec3(1.0, 0.0, 0.0);
-const vec3 Y_AXIS = vec3(0.0, 1.0, 0.0);
-const vec3 Z_AXIS = vec3(0.0, 0.0, 1.0);
-
-// Whether the axis unit x edge separates the triangle v0 v1 v2 from the box [-HALF, HALF].
-bool separates(vec3 unit, vec3 edge, vec3 v0, vec3 v1, vec3 v2) {
-    vec3 axis = cross_exact(unit, edge);
-    float p0 = dot_exact(axis, v0);
-    float p1 = dot_exact(axis, v1);
-    float p2 = dot_exact(axis, v2);
-    float rad = dot_exact(HALF, abs(axis));
-    float pmin = min(min(p0, p1), p2);
-    float pmax = max(max(p0, p1), p2);
-    return pmin > rad || pmax < -rad;
-}
-
 bool tri_box_overlap(vec3 center, vec3 t0, vec3 t1, vec3 t2) {
     precise vec3 v0 = t0 - center;
     precise vec3 v1 = t1 - center;
@@ -65,20 +49,24 @@ bool tri_box_overlap(vec3 center, vec3 t0, vec3 t1, vec3 t2) {
     if (any(greaterThan(lo, HALF)) || any(lessThan(hi, -HALF))) {
         return false;
     }
-    precise vec3 e0 = v1 - v0;
-    precise vec3 e1 = v2 - v1;
-    precise vec3 e2 = v0 - v2;
-    // The nine edge axes written out, not looped: on lavapipe every loop iteration counts
-    // against the invocation's loop budget (see voxelize_triangle_core).
-    if (separates(X_AXIS, e0, v0, v1, v2) || separates(Y_AXIS, e0, v0, v1, v2)
-        || separates(Z_AXIS, e0, v0, v1, v2) || separates(X_AXIS, e1, v0, v1, v2)
-        || separates(Y_AXIS, e1, v0, v1, v2) || separates(Z_AXIS, e1, v0, v1, v2)
-        || separates(X_AXIS, e2, v0, v1, v2) || separates(Y_AXIS, e2, v0, v1, v2)
-        || separates(Z_AXIS, e2, v0, v1, v2)) {
-        return false;
+    precise vec3 edges[3] = vec3[3](v1 - v0, v2 - v1, v0 - v2);
+    for (int i = 0; i < 3; ++i) {
+        for (int j = 0; j < 3; ++j) {
+            vec3 unit = vec3(j == 0 ? 1.0 : 0.0, j == 1 ? 1.0 : 0.0, j == 2 ? 1.0 : 0.0);
+            vec3 axis = cross_exact(unit, edges[i]);
+            float p0 = dot_exact(axis, v0);
+            float p1 = dot_exact(axis, v1);
+            float p2 = dot_exact(axis, v2);
+            float rad = dot_exact(HALF, abs(axis));
+            float pmin = min(min(p0, p1), p2);
+            float pmax = max(max(p0, p1), p2);
+            if (pmin > rad || pmax < -rad) {
+                return false;
+            }
+        }
     }
-    vec3 n = cross_exact(e0, e1);
-    if (is_degenerate(e0, e1, n)) {
+    vec3 n = cross_exact(edges[0], edges[1]);
+    if (is_degenerate(edges[0], edges[1], n)) {
         return true;
     }
     float d = dot_exact(n, v0);

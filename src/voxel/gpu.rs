@@ -50,6 +50,10 @@ const MAX_GROUPS_X: u32 = 65535;
 /// The margin is for iterations outside the column and depth loops.
 const LOOP_BUDGET: u64 = 60_000;
 
+/// Loop iterations per depth step of the triangle voxelizer at worst: the depth loop's own
+/// plus the 3 × 3 edge-axis loops of the overlap test (12), if the compiler keeps them.
+const ITERATIONS_PER_DEPTH: u64 = 13;
+
 /// How many invocations' worth of loop work the triangle voxelizer needs for a triangle whose
 /// world-space bounds are `[lo, hi]` in `grid`: the columns of its voxel bounding box over the
 /// columns one invocation can walk within [`LOOP_BUDGET`] at its depth range (the shader's
@@ -67,8 +71,8 @@ pub fn voxelize_loads(grid: &VoxelGrid, lo: Vec3, hi: Vec3) -> u64 {
     let first = (lo.ceil() - 1.0).clamp(Vec3::ZERO, dims_f - 1.0).as_uvec3();
     let last = hi.floor().clamp(Vec3::ZERO, dims_f - 1.0).as_uvec3();
     let columns = u64::from(last.x - first.x + 1) * u64::from(last.y - first.y + 1);
-    // Per column: its depth loop's iterations plus one of the column loop.
-    let per_column = u64::from(last.z - first.z + 1) + 1;
+    // Per column: its depth steps' iterations plus one of the column loop.
+    let per_column = ITERATIONS_PER_DEPTH * u64::from(last.z - first.z + 1) + 1;
     columns.div_ceil((LOOP_BUDGET / per_column).max(1))
 }
 
@@ -197,9 +201,9 @@ pub struct VoxelPipelines {
 /// 256×255×256 and group size 8 missed 10,082 of 333,361): lavapipe ends all loops of an
 /// invocation after 65,535 iterations of them together, and one invocation walked 125 columns
 /// of the ceiling's bounding box at 246 depths each. Large steep triangles hit the same limit
-/// at 64. The dispatch now splits such triangles over more workgroups ([`voxelize_loads`]),
-/// and the shader no longer loops over the nine edge axes. A group of 8 (lavapipe's SIMD
-/// width) is faster there; 64 stays the default until the benchmark compares them.
+/// at 64. The dispatch now splits such triangles over more workgroups ([`voxelize_loads`]).
+/// A group of 8 (lavapipe's SIMD width) is faster there; 64 stays the default until the
+/// benchmark compares them.
 pub const VOXELIZE_GROUP_SIZE: u32 = 64;
 
 impl VoxelPipelines {
@@ -1253,13 +1257,13 @@ mod tests {
             0,
             "outside"
         );
-        // The whole box: 256 x 256 columns of 256 depths (+1 for the column loop), at most
-        // 60,000 / 257 = 233 columns per invocation.
+        // The whole box: 256 x 256 columns of 256 depths (13 iterations each, +1 for the
+        // column loop), at most 60,000 / 3,329 = 18 columns per invocation.
         let loads = voxelize_loads(&grid, Vec3::ZERO, Vec3::ONE);
-        assert_eq!(loads, (256u64 * 256).div_ceil(233));
+        assert_eq!(loads, (256u64 * 256).div_ceil(18));
         let splits = voxelize_splits(loads, 64);
         let per_invocation = (256u64 * 256).div_ceil(64 * u64::from(splits));
-        assert!(per_invocation * 257 <= LOOP_BUDGET, "{splits} splits");
+        assert!(per_invocation * 3329 <= LOOP_BUDGET, "{splits} splits");
         assert_eq!(
             voxelize_splits(0, 64),
             1,
