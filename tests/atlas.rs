@@ -561,7 +561,7 @@ fn sequence_scene(tag: &str) -> voxgi::scene::Scene {
             for i in 0..=nu {
                 let (u, v) = (i as f32 / nu as f32, j as f32 / nv as f32);
                 // The wave keeps the y range of every frame, so the t = 0 grid holds them all.
-                let y = 0.55 + 0.3 * (std::f32::consts::TAU * u).sin() * (0.5 + v);
+                let y = 0.55 + 0.2 * (std::f32::consts::TAU * u).sin() * (0.5 + v);
                 obj += &format!("v {} {y} {}\n", (2.0 * u - 1.0) * half_x, v - 0.5);
             }
         }
@@ -607,7 +607,11 @@ fn voxel_frame_atlas_follows_an_obj_sequence() {
     let bits = common::VoxelReadback::new(&ctx, &grid, 1);
     let mut seen = Vec::new();
     for (t, f) in SEQUENCE_TIMES {
-        assert_eq!(s.objects[1].mesh_at(t), s.meshes.len() - 5 + f, "frame at {t}");
+        assert_eq!(
+            s.objects[1].mesh_at(t),
+            s.meshes.len() - 5 + f,
+            "frame at {t}"
+        );
         assert!(frame.update(t, 0).expect("update"), "frame {f} is new");
         let mut g = RenderGraph::new();
         let image = frame.add_passes(&mut g);
@@ -660,7 +664,10 @@ fn atlas_volumes_follow_an_obj_sequence() {
     let mut counts = Vec::new();
     for (t, _) in SEQUENCE_TIMES {
         assert!(frame.update(t, 0).expect("update"));
-        assert!(frame.attributes_moved(), "a new frame changes the attributes");
+        assert!(
+            frame.attributes_moved(),
+            "a new frame changes the attributes"
+        );
         let (v, names) = run_volume_frame(&ctx, &frame, &volumes);
         assert!(
             names.iter().any(|n| n == "voxelize_atlas_volumes"),

@@ -846,7 +846,8 @@ impl VoxelFrame {
             self.atlas = Some(a?);
         }
         let tri_dynamic = |o: &crate::scene::Object| {
-            (o.dynamic || o.is_animated()) && !(atlas_mode && super::gpu_atlas::uses_atlas(scene, o))
+            (o.dynamic || o.is_animated())
+                && !(atlas_mode && super::gpu_atlas::uses_atlas(scene, o))
         };
         if scene.objects.iter().any(tri_dynamic) {
             let mut dyn_scene = scene.clone();

@@ -370,7 +370,16 @@ pub struct ImportedInstance {
     pub model: ModelAt,
 }
 
-impl AtlasInstance<'_> {
+impl<'a> AtlasInstance<'a> {
+    /// A rigid object's one point list at a fixed model matrix.
+    pub fn rigid(points: &'a AtlasPoints, model: Mat4) -> Self {
+        Self {
+            frames: vec![points],
+            frame: FrameAt::Fixed(0),
+            model: ModelAt::Fixed(model),
+        }
+    }
+
     /// Imports every frame's points (all are declared read: the slot picks one at record
     /// time); `None` when no frame has points.
     pub fn import(&self, g: &mut RenderGraph, access: Access) -> Option<ImportedInstance> {
@@ -414,10 +423,7 @@ pub fn add_voxelize_atlas_pass(
     gate: Option<Arc<SlotGate>>,
 ) {
     let read = Access::StorageRead(Shader::Compute);
-    let sets: Vec<ImportedInstance> = instances
-        .iter()
-        .filter_map(|i| i.import(g, read))
-        .collect();
+    let sets: Vec<ImportedInstance> = instances.iter().filter_map(|i| i.import(g, read)).collect();
     if sets.is_empty() {
         return;
     }
@@ -568,10 +574,7 @@ impl AtlasScene {
                 let meshes = match atlas_frames(scene, o) {
                     Ok(m) => m,
                     Err(reason) => {
-                        log::info!(
-                            "object '{}' keeps the triangle voxelizer: {reason}",
-                            o.name
-                        );
+                        log::info!("object '{}' keeps the triangle voxelizer: {reason}", o.name);
                         continue;
                     }
                 };
@@ -690,11 +693,15 @@ impl AtlasScene {
     pub fn instances(&self, statics: bool, dynamics: bool) -> Vec<AtlasInstance<'_>> {
         let mut inst = Vec::new();
         if statics {
-            inst.extend(self.static_instances.iter().map(|&(p, m, _)| AtlasInstance {
-                frames: vec![&self.points[p]],
-                frame: FrameAt::Fixed(0),
-                model: ModelAt::Fixed(m),
-            }));
+            inst.extend(
+                self.static_instances
+                    .iter()
+                    .map(|&(p, m, _)| AtlasInstance {
+                        frames: vec![&self.points[p]],
+                        frame: FrameAt::Fixed(0),
+                        model: ModelAt::Fixed(m),
+                    }),
+            );
         }
         if dynamics {
             inst.extend(self.dynamic_instances.iter().map(|d| AtlasInstance {

@@ -66,10 +66,8 @@ impl AtlasRasterBits {
     ) {
         let read = Access::StorageRead(Shader::Graphics);
         let lut = g.import_buffer(&self.lut, read);
-        let sets: Vec<ImportedInstance> = instances
-            .iter()
-            .filter_map(|i| i.import(g, read))
-            .collect();
+        let sets: Vec<ImportedInstance> =
+            instances.iter().filter_map(|i| i.import(g, read)).collect();
         // Cleared on load, so the logic op reads only what this pass wrote.
         let mut pass = g
             .add_pass("voxelize_atlas_bits")

@@ -471,8 +471,7 @@ fn add_splat_pass(
         );
         for splat in &splats {
             let f = splat.frame.at(ctx.slot);
-            let Some(&(points, count, tris)) = splat.frames.get(f).or(splat.frames.first())
-            else {
+            let Some(&(points, count, tris)) = splat.frames.get(f).or(splat.frames.first()) else {
                 continue;
             };
             if count == 0 {
