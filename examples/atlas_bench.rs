@@ -19,7 +19,7 @@ use voxgi::voxel::gpu::{
     add_voxelize_passes, column_bytes, run_once, ColumnBase, TriangleBuffer, VoxelPipelines,
 };
 use voxgi::voxel::gpu_atlas::{
-    add_voxelize_atlas_pass, render_atlas_points, AtlasPipelines, AtlasScene, ModelAt,
+    add_voxelize_atlas_pass, render_atlas_points, AtlasInstance, AtlasPipelines, AtlasScene,
 };
 use voxgi::voxel::VoxelGrid;
 
@@ -191,7 +191,7 @@ fn main() -> Result<()> {
         let atlas_ms = time_pass(&ctx, reps, "voxelize_atlas", &|g| {
             let c = g.create_buffer("columns", size);
             add_voxelize_passes(g, &tri_pipes, &grid, c, ColumnBase::Clear, &[]);
-            let inst = [(&points, ModelAt::Fixed(glam::Mat4::IDENTITY))];
+            let inst = [AtlasInstance::rigid(&points, glam::Mat4::IDENTITY)];
             add_voxelize_atlas_pass(g, &pipes, &grid, c, &inst, None);
             g.mark_output(c);
         })?;

@@ -645,3 +645,138 @@ fn raster_atlas_bits_equal_compute_atlas_bits() {
     }
     common::assert_no_validation_messages(&ctx);
 }
+
+/// An OBJ sequence of 5 frames (1 fps, not looping) over a static floor: a wavy 12×6-quad
+/// sheet that stretches from 1× to 3× along x, written to a temp dir.
+fn sequence_scene(tag: &str) -> voxgi::scene::Scene {
+    let dir = std::env::temp_dir().join(format!("voxgi-atlas-seq-{tag}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let (nu, nv) = (12u32, 6u32);
+    for f in 0..5 {
+        let half_x = 0.5 * (1.0 + 0.5 * f as f32);
+        let mut obj = String::new();
+        for j in 0..=nv {
+            for i in 0..=nu {
+                let (u, v) = (i as f32 / nu as f32, j as f32 / nv as f32);
+                // The wave keeps the y range of every frame, so the t = 0 grid holds them all.
+                let y = 0.55 + 0.2 * (std::f32::consts::TAU * u).sin() * (0.5 + v);
+                obj += &format!("v {} {y} {}\n", (2.0 * u - 1.0) * half_x, v - 0.5);
+            }
+        }
+        for j in 0..nv {
+            for i in 0..nu {
+                let a = j * (nu + 1) + i + 1;
+                let (b, c, d) = (a + 1, a + nu + 2, a + nu + 1);
+                obj += &format!("f {a} {b} {c}\nf {a} {c} {d}\n");
+            }
+        }
+        std::fs::write(dir.join(format!("sheet_{f}.obj")), obj).expect("obj frame");
+    }
+    let toml = "[camera]\nposition = [0.0, 3.0, 3.0]\ntarget = [0.0, 0.0, 0.0]\nup = [0.0, 1.0, 0.0]\nfov_y_deg = 60.0\nnear = 0.05\nfar = 10.0\n\
+        [[objects]]\nname = \"floor\"\nbuiltin = \"quad\"\nscale = [4.0, 1.0, 4.0]\n\
+        [[objects]]\nname = \"sheet\"\nmaterial = { albedo = [0.8, 0.3, 0.2] }\n\
+        [objects.animation]\nobj_sequence = \"sheet_{}.obj\"\nframes = 5\nfps = 1.0\nloop = false\n";
+    voxgi::scene::Scene::from_toml_str(toml, Path::new("<sequence>"), &dir).expect("parses")
+}
+
+/// Times of the sequence tests and the frame each shows.
+const SEQUENCE_TIMES: [(f32, usize); 4] = [(0.0, 0), (1.5, 1), (2.5, 2), (4.2, 4)];
+
+/// Issue 4: an OBJ sequence whose frames share topology shares one atlas. With
+/// `--voxelizer atlas` no triangle pass runs; at every frame the bits match the CPU
+/// reference of that frame as closely as the rigid atlas tests do.
+#[test]
+fn voxel_frame_atlas_follows_an_obj_sequence() {
+    use voxgi::voxel::gpu::{VoxelFrame, VoxelSettings, Voxelizer};
+    let ctx = common::context();
+    let s = sequence_scene("bits");
+    let sheet = s.objects.iter().find(|o| o.name == "sheet").expect("sheet");
+    assert!(voxgi::voxel::gpu_atlas::uses_atlas(&s, sheet));
+    let settings = VoxelSettings {
+        voxelizer: Voxelizer::Atlas,
+        ..Default::default()
+    };
+    let mut frame = VoxelFrame::new(&ctx, &s, 0.0, &settings).expect("voxel frame");
+    assert!(frame.has_frame_passes());
+    // The floor's atlas and one for the whole sequence; a point list per sequence frame.
+    assert_eq!(frame.atlases_packed(), 2);
+    assert_eq!(frame.atlas_point_lists(), 1 + 5);
+    let grid = frame.voxels.grid;
+    let bits = common::VoxelReadback::new(&ctx, &grid, 1);
+    let mut seen = Vec::new();
+    for (t, f) in SEQUENCE_TIMES {
+        assert_eq!(
+            s.objects[1].mesh_at(t),
+            s.meshes.len() - 5 + f,
+            "frame at {t}"
+        );
+        assert!(frame.update(t, 0).expect("update"), "frame {f} is new");
+        let mut g = RenderGraph::new();
+        let image = frame.add_passes(&mut g);
+        bits.add_pass(&mut g, image);
+        let timings = run_once(&ctx, g).expect("frame runs");
+        let names: Vec<_> = timings.iter().map(|t| t.name.as_str()).collect();
+        assert!(names.contains(&"voxelize_atlas"), "{names:?}");
+        assert!(!names.contains(&"voxelize_triangles"), "{names:?}");
+        let gpu = bits.levels(&grid).remove(0);
+        let mut cpu = BitGrid::for_grid(&grid);
+        voxgi::voxel::voxelize_scene(&grid, &mut cpu, &s, t).expect("cpu");
+        let (recall, precision, near) = compare(&cpu, &gpu);
+        println!(
+            "sequence frame {f} (t = {t}): cpu {} voxels, atlas {} voxels, recall {recall:.4}, \
+             precision {precision:.5}, precision (dilated) {near:.5}",
+            cpu.count_ones(),
+            gpu.count_ones()
+        );
+        assert_eq!(near, 1.0, "frame {f}: an atlas voxel is off the surface");
+        assert!(precision >= 0.999, "frame {f}: precision {precision}");
+        assert!(recall >= MIN_RECALL, "frame {f}: recall {recall}");
+        seen.push(gpu);
+    }
+    // The frames differ (the sheet stretches), so a stale point list would have failed.
+    assert!(seen.windows(2).all(|w| w[0] != w[1]));
+    // Same frame (not looping, past the end): nothing re-voxelizes; still one atlas.
+    assert!(!frame.update(4.7, 0).expect("update"));
+    assert_eq!(frame.atlases_packed(), 2);
+    bits.destroy(&ctx);
+    frame.destroy(&ctx);
+    common::assert_no_validation_messages(&ctx);
+}
+
+/// The attribute volumes of an OBJ sequence follow its frames and stay congruent with the
+/// bits (the layered pass splats the slot's frame list with that frame's triangles).
+#[test]
+fn atlas_volumes_follow_an_obj_sequence() {
+    use voxgi::voxel::gpu::{VoxelFrame, VoxelSettings, Voxelizer};
+    use voxgi::voxel::gpu_atlas_volumes::AttributeVolumes;
+    let ctx = common::context();
+    let s = sequence_scene("volumes");
+    let settings = VoxelSettings {
+        voxelizer: Voxelizer::Atlas,
+        ..Default::default()
+    };
+    let mut frame = VoxelFrame::new(&ctx, &s, 0.0, &settings).expect("voxel frame");
+    assert!(frame.enable_attribute_volumes(&ctx, &s).expect("volumes"));
+    let grid = frame.voxels.grid;
+    let volumes = AttributeVolumes::new(&ctx, &grid).expect("volumes");
+    let mut counts = Vec::new();
+    for (t, _) in SEQUENCE_TIMES {
+        assert!(frame.update(t, 0).expect("update"));
+        assert!(
+            frame.attributes_moved(),
+            "a new frame changes the attributes"
+        );
+        let (v, names) = run_volume_frame(&ctx, &frame, &volumes);
+        assert!(
+            names.iter().any(|n| n == "voxelize_atlas_volumes"),
+            "{names:?}"
+        );
+        counts.push(assert_congruent(&v, &grid, &format!("t = {t}")));
+    }
+    println!("sequence voxels set per frame: {counts:?}");
+    assert!(counts.windows(2).any(|w| w[0] != w[1]), "{counts:?}");
+    assert_eq!(frame.atlases_packed(), 2);
+    volumes.destroy(&ctx);
+    frame.destroy(&ctx);
+    common::assert_no_validation_messages(&ctx);
+}

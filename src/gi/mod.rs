@@ -585,7 +585,7 @@ impl PathTracer {
         if atlas_attributes {
             tri_scene
                 .objects
-                .retain(|o| !crate::voxel::gpu_atlas::uses_atlas(o));
+                .retain(|o| !crate::voxel::gpu_atlas::uses_atlas(scene, o));
         }
         let scene = &tri_scene;
         let tris = attribute_triangles(scene, time_s);

@@ -41,6 +41,21 @@
 //! √2/2-texel rim) are ~41% of the atlas. Fine for a position atlas that is rendered once
 //! and then read only through its compacted point list.
 //!
+//! # OBJ sequences (one atlas for all frames)
+//! The thesis shares one atlas across an OBJ sequence whose vertex order is identical and
+//! whose deformation is moderate (digest §3.1), and notes that a growing triangle makes
+//! holes (§3.6). [`build_sequence_atlas`] removes that limit: each triangle is laid out
+//! isometrically from the frame where its area is largest, then scaled by
+//! `s = max(1, max_f σ_f)`, where `σ_f` is the largest singular value of the affine map from
+//! the layout (texels) to frame `f`'s triangle (texels). The map from the scaled layout,
+//! `A_f / s`, then lengthens no atlas distance, so the argument of "Resolution" holds in
+//! every frame: the texel containing a point's preimage has its sample within
+//! `σ_f/s · √2/2 ≤ √2/2` texels of the point, i.e. within `h·√2/2` meters. Cost: atlas area grows by `s²` for triangles that
+//! stretch in different directions in different frames; a triangle that only grows or only
+//! shrinks keeps `s = 1` (its largest frame dominates every other frame).
+//! Triangles of zero area in every frame (segments) are laid out along their longest frame
+//! and scaled by the largest edge-length ratio instead.
+//!
 //! # Cache
 //! [`AtlasCache`] keeps built atlases in memory (per renderer, not on disk), keyed by mesh
 //! content, object scale and texel size, so a static mesh is packed once per run and objects
@@ -78,6 +93,8 @@ pub enum AtlasError {
     },
     #[error("mesh '{mesh}': triangle {triangle} has a vertex index out of range or a non-finite position; fix the mesh")]
     BadTriangle { mesh: String, triangle: usize },
+    #[error("OBJ sequence '{mesh}' has no frames; give `frames = N` with N >= 1")]
+    NoFrames { mesh: String },
 }
 
 /// One triangle's place in the atlas.
@@ -195,26 +212,46 @@ pub fn build_atlas(
     scale: Vec3,
     texel_m: f32,
 ) -> Result<MeshAtlas, AtlasError> {
+    build_sequence_atlas(name, &[positions], indices, scale, texel_m)
+}
+
+/// Builds one atlas shared by every frame of an OBJ sequence (`frames[f]` = frame `f`'s
+/// model-space positions, all indexed by `indices`): no frame gets holes (module doc,
+/// "OBJ sequences"). With one frame this is the isometric atlas of [`build_atlas`].
+pub fn build_sequence_atlas(
+    name: &str,
+    frames: &[&[Vec3]],
+    indices: &[u32],
+    scale: Vec3,
+    texel_m: f32,
+) -> Result<MeshAtlas, AtlasError> {
     if !(texel_m.is_finite() && texel_m > 0.0) {
         return Err(AtlasError::BadTexelSize(texel_m));
     }
+    if frames.is_empty() {
+        return Err(AtlasError::NoFrames {
+            mesh: name.to_owned(),
+        });
+    }
     let inv = 1.0 / texel_m;
-    // Per triangle: isometric layout (texels) with its box at the origin.
+    // Per triangle: layout (texels) with its box at the origin.
     let mut local = Vec::with_capacity(indices.len() / 3);
+    let mut per_frame = vec![[Vec3::ZERO; 3]; frames.len()];
     for (t, tri) in indices.chunks_exact(3).enumerate() {
         let bad = || AtlasError::BadTriangle {
             mesh: name.to_owned(),
             triangle: t,
         };
-        let mut v = [Vec3::ZERO; 3];
-        for (k, &i) in tri.iter().enumerate() {
-            let p = *positions.get(i as usize).ok_or_else(bad)? * scale * inv;
-            if !p.is_finite() {
-                return Err(bad());
+        for (positions, v) in frames.iter().zip(per_frame.iter_mut()) {
+            for (k, &i) in tri.iter().enumerate() {
+                let p = *positions.get(i as usize).ok_or_else(bad)? * scale * inv;
+                if !p.is_finite() {
+                    return Err(bad());
+                }
+                v[k] = p;
             }
-            v[k] = p;
         }
-        local.push(layout_triangle(v));
+        local.push(layout_sequence_triangle(&per_frame));
     }
     // Cells, packed by shelves, tallest first.
     let size = |uv: &[Vec2; 3]| {
@@ -274,6 +311,62 @@ pub fn build_atlas(
     })
 }
 
+/// Lays out one triangle of a sequence (`v[f]` = its vertices in frame `f`, in texels):
+/// isometric from the frame of largest area, scaled so that no frame's map from the layout
+/// stretches by more than 1 (module doc, "OBJ sequences").
+fn layout_sequence_triangle(v: &[[Vec3; 3]]) -> [Vec2; 3] {
+    let area = |t: &[Vec3; 3]| (t[1] - t[0]).cross(t[2] - t[0]).length();
+    let longest = |t: &[Vec3; 3]| {
+        (0..3)
+            .map(|e| t[e].distance(t[(e + 1) % 3]))
+            .fold(0.0f32, f32::max)
+    };
+    // Largest area first, then the longest edge (all-degenerate triangles).
+    let Some(reference) = v.iter().max_by(|a, b| {
+        (area(a), longest(a))
+            .partial_cmp(&(area(b), longest(b)))
+            .unwrap_or(std::cmp::Ordering::Equal)
+    }) else {
+        return [Vec2::ZERO; 3];
+    };
+    let layout = layout_triangle(*reference);
+    if v.len() == 1 {
+        // Isometric by construction: σ = 1.
+        return layout;
+    }
+    let s = v
+        .iter()
+        .map(|f| max_stretch(layout, f))
+        .fold(1.0f32, f32::max);
+    layout.map(|p| p * s)
+}
+
+/// The largest singular value of the affine map taking the 2D triangle `uv` to the 3D
+/// triangle `p` (how much it lengthens an atlas distance at most). For a degenerate `uv`
+/// (a segment) the largest edge-length ratio, the stretch along the segment.
+pub fn max_stretch(uv: [Vec2; 3], p: &[Vec3; 3]) -> f32 {
+    let (e1, e2) = ((uv[1] - uv[0]).as_dvec2(), (uv[2] - uv[0]).as_dvec2());
+    let (f1, f2) = ((p[1] - p[0]).as_dvec3(), (p[2] - p[0]).as_dvec3());
+    let det = e1.perp_dot(e2);
+    let scale2 = e1.length_squared().max(e2.length_squared());
+    if det.abs() > 1e-9 * scale2 && scale2 > 0.0 {
+        // J = [f1 f2]·[e1 e2]⁻¹, columns j1 = J·x̂, j2 = J·ŷ.
+        let j1 = (f1 * e2.y - f2 * e1.y) / det;
+        let j2 = (f2 * e1.x - f1 * e2.x) / det;
+        let (a, b, c) = (j1.length_squared(), j1.dot(j2), j2.length_squared());
+        // Largest eigenvalue of JᵀJ = [[a, b], [b, c]].
+        let lambda = 0.5 * (a + c) + (0.25 * (a - c) * (a - c) + b * b).sqrt();
+        return lambda.sqrt() as f32;
+    }
+    (0..3)
+        .filter_map(|e| {
+            let l2 = uv[e].distance(uv[(e + 1) % 3]);
+            let l3 = p[e].distance(p[(e + 1) % 3]);
+            (l2 > 0.0).then(|| l3 / l2)
+        })
+        .fold(1.0f32, f32::max)
+}
+
 /// Lays out a 3D triangle isometrically in 2D: longest edge along +u, third vertex above,
 /// box at the origin.
 fn layout_triangle(v: [Vec3; 3]) -> [Vec2; 3] {
@@ -319,9 +412,26 @@ impl AtlasCache {
         scale: Vec3,
         texel_m: f32,
     ) -> Result<Arc<MeshAtlas>, AtlasError> {
+        self.get_sequence(name, &[positions], indices, scale, texel_m)
+    }
+
+    /// The shared atlas of an OBJ sequence's frames ([`build_sequence_atlas`]), packed on
+    /// first use; one frame is the atlas of [`Self::get`].
+    pub fn get_sequence(
+        &mut self,
+        name: &str,
+        frames: &[&[Vec3]],
+        indices: &[u32],
+        scale: Vec3,
+        texel_m: f32,
+    ) -> Result<Arc<MeshAtlas>, AtlasError> {
         let mut h = std::collections::hash_map::DefaultHasher::new();
-        for p in positions {
-            p.to_array().map(f32::to_bits).hash(&mut h);
+        frames.len().hash(&mut h);
+        for positions in frames {
+            positions.len().hash(&mut h);
+            for p in *positions {
+                p.to_array().map(f32::to_bits).hash(&mut h);
+            }
         }
         indices.hash(&mut h);
         scale.to_array().map(f32::to_bits).hash(&mut h);
@@ -330,7 +440,7 @@ impl AtlasCache {
         if let Some(a) = self.atlases.get(&key) {
             return Ok(a.clone());
         }
-        let atlas = Arc::new(build_atlas(name, positions, indices, scale, texel_m)?);
+        let atlas = Arc::new(build_sequence_atlas(name, frames, indices, scale, texel_m)?);
         self.packed += 1;
         self.atlases.insert(key, atlas.clone());
         Ok(atlas)
@@ -429,6 +539,143 @@ mod tests {
             .get("a", &pos, &idx, Vec3::splat(2.0), 0.01)
             .expect("atlas");
         assert_eq!(cache.packed, 2);
+    }
+
+    /// Frame `f`'s 3D sample of every texel triangle `t` owns: the closest triangle point to
+    /// the texel centre (barycentric in the atlas) carried to that frame's vertices.
+    fn frame_samples(atlas: &MeshAtlas, t: usize, p: [Vec3; 3]) -> Vec<Vec3> {
+        let uv = atlas.triangles[t].uv;
+        atlas
+            .texels(t)
+            .into_iter()
+            .map(|(i, j)| {
+                let (_, b) = closest_point(uv, Vec2::new(i as f32 + 0.5, j as f32 + 0.5));
+                p[0] * b[0] + p[1] * b[1] + p[2] * b[2]
+            })
+            .collect()
+    }
+
+    /// The largest distance from a point of any triangle of any frame to the nearest of
+    /// that frame's samples of the triangle (dense barycentric grid of points).
+    fn worst_gap(atlas: &MeshAtlas, frames: &[Vec<Vec3>], idx: &[u32]) -> f32 {
+        let mut worst = 0.0f32;
+        for positions in frames {
+            for (t, tri) in idx.chunks_exact(3).enumerate() {
+                let p = [0, 1, 2].map(|k| positions[tri[k] as usize]);
+                let samples = frame_samples(atlas, t, p);
+                const N: u32 = 40;
+                for i in 0..=N {
+                    for j in 0..=N - i {
+                        let (b1, b2) = (i as f32 / N as f32, j as f32 / N as f32);
+                        let q = p[0] + (p[1] - p[0]) * b1 + (p[2] - p[0]) * b2;
+                        let d = samples
+                            .iter()
+                            .map(|s| s.distance(q))
+                            .fold(f32::INFINITY, f32::min);
+                        worst = worst.max(d);
+                    }
+                }
+            }
+        }
+        worst
+    }
+
+    /// A unit quad (two triangles) scaled by `(sx, sy)` in its plane, tilted out of the
+    /// axes so no layout is trivially axis-aligned.
+    fn quad_frame(sx: f32, sy: f32) -> Vec<Vec3> {
+        let tilt = glam::Quat::from_euler(glam::EulerRot::XYZ, 0.4, 0.3, 0.2);
+        [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)]
+            .map(|(x, y)| tilt * Vec3::new(x * sx, y * sy, 0.0) * 0.1)
+            .to_vec()
+    }
+
+    #[test]
+    fn sequence_atlas_has_no_holes_in_any_frame() {
+        let idx = [0u32, 1, 2, 0, 2, 3];
+        let voxel_m = 1.0 / 64.0;
+        let texel_m = texel_size_for_voxel(voxel_m);
+        // The density test's hole-free bound: every surface point within h·√2/2 of a sample.
+        let bound = texel_m * std::f32::consts::FRAC_1_SQRT_2;
+        assert!(bound <= 0.36 * voxel_m);
+        let sequences: [(&str, Vec<Vec<Vec3>>); 2] = [
+            // Stretched 1x -> 3x along one axis over the frames.
+            (
+                "stretch",
+                (0..5)
+                    .map(|f| quad_frame(1.0 + 0.5 * f as f32, 1.0))
+                    .collect(),
+            ),
+            // Stretched along x, then along y: no frame dominates the others, so the
+            // layout must be scaled (s = 1.5 from the 2x2 frame).
+            (
+                "cross",
+                [(1.0, 1.0), (3.0, 1.0), (1.0, 3.0), (2.0, 2.0)]
+                    .map(|(x, y)| quad_frame(x, y))
+                    .to_vec(),
+            ),
+        ];
+        for (name, frames) in &sequences {
+            let refs: Vec<&[Vec3]> = frames.iter().map(Vec::as_slice).collect();
+            let atlas = build_sequence_atlas(name, &refs, &idx, Vec3::ONE, texel_m).expect("atlas");
+            let gap = worst_gap(&atlas, frames, &idx);
+            println!(
+                "{name}: worst gap {gap} m, bound {bound} m, {}x{} texels",
+                atlas.width, atlas.height
+            );
+            // 1e-4 relative: f32 rounding of the samples.
+            assert!(gap <= bound * 1.0001, "{name}: gap {gap} > {bound}");
+            // Texel sets stay disjoint and non-empty.
+            let mut seen = HashSet::new();
+            for t in 0..atlas.triangles.len() {
+                let texels = atlas.texels(t);
+                assert!(!texels.is_empty());
+                assert!(texels.into_iter().all(|px| seen.insert(px)));
+            }
+            // The same frames through a one-frame atlas of frame 0 (the thesis's shared
+            // atlas, laid out once) leave holes: the test can tell the two apart.
+            let naive = build_atlas(name, &frames[0], &idx, Vec3::ONE, texel_m).expect("atlas");
+            let naive_gap = worst_gap(&naive, frames, &idx);
+            assert!(
+                naive_gap > 1.5 * bound,
+                "{name}: frame-0 atlas gap {naive_gap} unexpectedly within {bound}"
+            );
+        }
+    }
+
+    #[test]
+    fn max_stretch_is_the_largest_singular_value() {
+        let uv = [Vec2::ZERO, Vec2::new(2.0, 0.0), Vec2::new(0.0, 1.0)];
+        // (u, v) -> (3u, 0.5v, 0): σ = 3.
+        let p = [
+            Vec3::ZERO,
+            Vec3::new(6.0, 0.0, 0.0),
+            Vec3::new(0.0, 0.5, 0.0),
+        ];
+        assert!((max_stretch(uv, &p) - 3.0).abs() < 1e-5);
+        // A rotation is isometric.
+        let r = glam::Quat::from_rotation_y(0.7);
+        let q = uv.map(|u| r * u.extend(0.0));
+        assert!((max_stretch(uv, &q) - 1.0).abs() < 1e-5);
+        // Degenerate layout: the edge ratio.
+        let seg = [Vec2::ZERO, Vec2::new(1.0, 0.0), Vec2::new(0.5, 0.0)];
+        let ps = [
+            Vec3::ZERO,
+            Vec3::new(2.0, 0.0, 0.0),
+            Vec3::new(1.0, 0.0, 0.0),
+        ];
+        assert!((max_stretch(seg, &ps) - 2.0).abs() < 1e-5);
+    }
+
+    #[test]
+    fn one_frame_sequence_equals_the_mesh_atlas() {
+        let (pos, idx) = random_soup(60, 11);
+        let a = build_atlas("a", &pos, &idx, Vec3::ONE, 0.01).expect("atlas");
+        let b = build_sequence_atlas("a", &[&pos], &idx, Vec3::ONE, 0.01).expect("atlas");
+        assert_eq!(a, b);
+        assert_eq!(
+            build_sequence_atlas("a", &[], &idx, Vec3::ONE, 0.01),
+            Err(AtlasError::NoFrames { mesh: "a".into() })
+        );
     }
 
     #[test]

@@ -14,7 +14,9 @@
 
 use super::atlas::{texel_size_for_voxel, AtlasCache, MeshAtlas};
 use super::gpu::GpuVoxelError;
-use super::gpu_atlas::{add_atlas_positions_pass, gpu_atlas_triangles, uses_atlas, AtlasPipelines};
+use super::gpu_atlas::{
+    add_atlas_positions_pass, atlas_frames, gpu_atlas_triangles, AtlasPipelines,
+};
 use super::VoxelGrid;
 use crate::eval::HdrImage;
 use crate::graph::{Access, ImageHandle, RenderGraph, Shader};
@@ -88,16 +90,20 @@ pub fn object_atlas(
             object: index.to_string(),
             names: object_names(scene),
         })?;
-    let mesh = scene
-        .meshes
-        .get(object.mesh)
-        .filter(|_| uses_atlas(object))
-        .ok_or_else(|| GpuVoxelError::NoAtlas {
-            object: object.name.clone(),
-        })?;
+    // One atlas for all frames of an OBJ sequence, as AtlasScene builds it.
+    let no_atlas = || GpuVoxelError::NoAtlas {
+        object: object.name.clone(),
+    };
+    let frames: Vec<&crate::scene::Mesh> = atlas_frames(scene, object)
+        .map_err(|_| no_atlas())?
+        .iter()
+        .filter_map(|&m| scene.meshes.get(m))
+        .collect();
+    let mesh = frames.first().ok_or_else(no_atlas)?;
+    let positions: Vec<&[Vec3]> = frames.iter().map(|m| m.positions.as_slice()).collect();
     let texel_m = texel_size_for_voxel(grid.voxel_size_m().min_element());
     let scale = object.transform_components_at(t_s).scale;
-    Ok(cache.get(&mesh.name, &mesh.positions, &mesh.indices, scale, texel_m)?)
+    Ok(cache.get_sequence(&mesh.name, &positions, &mesh.indices, scale, texel_m)?)
 }
 
 /// The atlas view's pipelines, the object's atlas triangles and its push constants.
@@ -123,13 +129,13 @@ impl AtlasViewPass {
         index: usize,
     ) -> Result<Self, GpuVoxelError> {
         let atlas = object_atlas(scene, t_s, grid, index, &mut AtlasCache::default())?;
-        // object_atlas found both.
+        // object_atlas found both; a sequence shows its frame at t_s.
         let (Some(object), Some(mesh)) = (
             scene.objects.get(index),
             scene
                 .objects
                 .get(index)
-                .and_then(|o| scene.meshes.get(o.mesh)),
+                .and_then(|o| scene.meshes.get(o.mesh_at(t_s))),
         ) else {
             return Err(GpuVoxelError::NoSuchObject {
                 object: index.to_string(),

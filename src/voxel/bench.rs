@@ -18,7 +18,7 @@ use super::gpu::{
     TriangleBuffer, VoxelPipelines, VOXELIZE_GROUP_SIZE,
 };
 use super::gpu_atlas::{
-    add_voxelize_atlas_pass, render_atlas_points, AtlasPipelines, AtlasScene, ModelAt,
+    add_voxelize_atlas_pass, render_atlas_points, AtlasInstance, AtlasPipelines, AtlasScene,
 };
 use super::gpu_rays::{GpuRay, RayCastError, RayMethod, VoxelRayCaster};
 use super::{
@@ -834,7 +834,7 @@ pub fn bench_voxelize_sweep(
                 let points = render_atlas_points(ctx, &atlas_pipes, &atlas, &pos, &idx)?;
                 let r = (|| {
                     let voxels = count_voxels(ctx, &pipes, &grid, &buf)?;
-                    let instances = [(&points, ModelAt::Fixed(glam::Mat4::IDENTITY))];
+                    let instances = [AtlasInstance::rigid(&points, glam::Mat4::IDENTITY)];
                     let triangle_ms = time_triangles(ctx, desc.reps, &pipes, &grid, &buf)?;
                     let voxelize_ms = time_atlas(ctx, desc.reps, &pipes, &grid, &|g, c| {
                         add_voxelize_atlas_pass(g, &atlas_pipes, &grid, c, &instances, None)

@@ -117,7 +117,7 @@ pub enum GpuVoxelError {
     BadDebugLevel { level: u32, max: u32 },
     #[error("the scene has no object '{object}'; pass --object with one of: {names}")]
     NoSuchObject { object: String, names: String },
-    #[error("object '{object}' has no atlas: OBJ-sequence animations deform, so the atlas voxelizer leaves them to the triangle voxelizer; pick another --object")]
+    #[error("object '{object}' has no atlas: its OBJ-sequence frames differ in topology, so the atlas voxelizer leaves it to the triangle voxelizer; pick another --object")]
     NoAtlas { object: String },
     #[error("a {width}x{height} atlas needs a {bytes}-byte point list, above this device's {max}-byte storage-buffer range; use fewer voxels (--voxels) or --voxelizer triangle")]
     AtlasPointsTooLarge {
@@ -829,8 +829,8 @@ pub enum Voxelizer {
     /// reference.
     #[default]
     Triangle,
-    /// The thesis's texture-atlas splatting with automatic atlases; objects animated by OBJ
-    /// sequences (deforming) still use the triangle voxelizer.
+    /// The thesis's texture-atlas splatting with automatic atlases (one per OBJ sequence);
+    /// sequences whose frames differ in topology still use the triangle voxelizer.
     // See `voxel::gpu_atlas` (no intra-doc link: clap shows this text in --help).
     Atlas,
 }
@@ -866,8 +866,9 @@ pub struct VoxelFrame {
     /// in memory for the renderer's lifetime, so a static mesh is packed once per run.
     atlas: Option<super::gpu_atlas::AtlasScene>,
     atlas_cache: super::atlas::AtlasCache,
-    /// The dynamic atlas objects' model matrices in the grid (as `DynamicVoxels::voxelized`).
-    atlas_models: Option<Vec<glam::Mat4>>,
+    /// The dynamic atlas objects' model matrices and sequence frames in the grid (as
+    /// `DynamicVoxels::voxelized`).
+    atlas_pose: Option<super::gpu_atlas::AtlasPose>,
     /// Open in the frame slots that re-voxelize (present when anything is dynamic).
     gate: Option<Arc<SlotGate>>,
     /// GPU times of the one-time passes run before the first frame (atlas building, the
@@ -944,7 +945,7 @@ impl VoxelFrame {
             revoxelize_static: settings.revoxelize_static,
             atlas: None,
             atlas_cache: Default::default(),
-            atlas_models: None,
+            atlas_pose: None,
             gate: None,
             setup: Vec::new(),
             atlas_moved: false,
@@ -972,7 +973,8 @@ impl VoxelFrame {
             self.atlas = Some(a);
         }
         let tri_dynamic = |o: &crate::scene::Object| {
-            (o.dynamic || o.is_animated()) && !(atlas_mode && super::gpu_atlas::uses_atlas(o))
+            (o.dynamic || o.is_animated())
+                && !(atlas_mode && super::gpu_atlas::uses_atlas(scene, o))
         };
         if scene.objects.iter().any(tri_dynamic) {
             let mut dyn_scene = scene.clone();
@@ -1040,6 +1042,17 @@ impl VoxelFrame {
         &self.setup
     }
 
+    /// How many atlases the atlas voxelizer packed (0 without it): one per distinct mesh and
+    /// scale, one per OBJ sequence.
+    pub fn atlases_packed(&self) -> u32 {
+        self.atlas_cache.packed
+    }
+
+    /// How many atlas point lists were built (one per atlas and sequence frame).
+    pub fn atlas_point_lists(&self) -> usize {
+        self.atlas.as_ref().map_or(0, |a| a.point_lists())
+    }
+
     /// Whether the frame declares voxel passes (dynamic objects, or `revoxelize_static`).
     pub fn has_frame_passes(&self) -> bool {
         self.dynamic.is_some()
@@ -1055,13 +1068,13 @@ impl VoxelFrame {
             Some(d) => Some(dynamic_triangles(&d.scene, t_s)?),
             None => None,
         };
-        let models = self.atlas.as_ref().map(|a| a.models_at(t_s));
+        let pose = self.atlas.as_ref().map(|a| a.pose_at(t_s));
         let tris_changed = match (&self.dynamic, &tris) {
             (Some(d), Some(t)) => d.voxelized.as_ref() != Some(t),
             _ => false,
         };
-        let models_changed = match &models {
-            Some(m) if !m.is_empty() => self.atlas_models.as_ref() != Some(m),
+        let models_changed = match &pose {
+            Some(p) if !p.models.is_empty() => self.atlas_pose.as_ref() != Some(p),
             _ => false,
         };
         let run = self.revoxelize_static || tris_changed || models_changed;
@@ -1071,9 +1084,9 @@ impl VoxelFrame {
                 d.triangles.write(slot, &tris);
                 d.voxelized = Some(tris);
             }
-            if let (Some(a), Some(models)) = (&self.atlas, models) {
-                a.write_models(slot, &models);
-                self.atlas_models = Some(models);
+            if let (Some(a), Some(pose)) = (&self.atlas, pose) {
+                a.write_pose(slot, &pose);
+                self.atlas_pose = Some(pose);
             }
         }
         if let Some(g) = &self.gate {
@@ -1086,7 +1099,8 @@ impl VoxelFrame {
     /// voxelizer is active, for a GI method that reads them; static objects are splatted now,
     /// once. Returns whether the atlas writes the volumes (then
     /// [`Self::add_attribute_passes`] declares the per-frame part). Objects that keep the
-    /// triangle voxelizer (OBJ sequences) are left to the caller's triangle attributes.
+    /// triangle voxelizer (OBJ sequences whose frames differ in topology) are left to the
+    /// caller's triangle attributes.
     pub fn enable_attribute_volumes(
         &mut self,
         ctx: &Context,

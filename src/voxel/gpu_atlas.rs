@@ -15,8 +15,19 @@
 //!   `atomicOr`. The thesis ORs a single-bit LUT into an `RGBA32UI` target with `logicOp OR`;
 //!   the buffer is chosen here because the triangle voxelizer already writes it, so both
 //!   voxelizers share `voxel_clear` / `voxel_copy_static` (static grid + dynamic objects),
-//!   `voxel_store` and the mip chain, and can be mixed in one frame (objects animated by OBJ
-//!   sequences, which deform, keep the triangle voxelizer).
+//!   `voxel_store` and the mip chain, and can be mixed in one frame.
+//!
+//! # OBJ sequences (issue 4)
+//! A sequence whose frames share topology gets one atlas for all frames
+//! ([`super::atlas::build_sequence_atlas`], hole-free in every frame). Its position atlas
+//! is rendered once per frame with that frame's vertices through the shared layout, giving
+//! one point list per frame, built once at load (the thesis re-rasterizes animated objects'
+//! atlases every frame, digest §3.2; here a frame change only picks another list). Per
+//! frame slot the instance splats the list of the frame `Object::mesh_at` selects
+//! ([`SlotFrames`], next to the model matrix of [`SlotMatrices`]). The alternative, one list
+//! of (triangle, barycentric) points and per-frame vertex buffers, would keep memory at one
+//! list, but changes every splatting shader; per-frame lists cost frames × points × 16 bytes.
+//! A sequence whose frames differ in topology keeps the triangle voxelizer (logged).
 //!
 //! Every sample lies on its triangle, so the atlas voxels are a subset of the conservative
 //! triangle voxelization ([`super::voxelize`]) up to f32 rounding at voxel boundaries.
@@ -31,6 +42,7 @@ use crate::vk::{
     GraphicsPipelineDesc, ImageDesc, MemoryLocation, PassTiming, VkError, MAX_FRAMES_IN_FLIGHT,
 };
 use glam::{Mat4, Vec3};
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 
 /// Format of the position atlas (model-space xyz, w = 1 where a triangle owns the texel).
@@ -341,36 +353,122 @@ impl ModelAt {
     }
 }
 
-/// Declares `voxelize_atlas`: each `(points, model)` instance ORs its transformed points
-/// into `columns` (which `voxel_clear` or `voxel_copy_static` initialised). Records only in
+/// A sequence frame index per frame slot, written by the host after the slot's fence: which
+/// of an OBJ sequence's point lists the slot splats.
+#[derive(Debug, Default)]
+pub struct SlotFrames {
+    frames: [AtomicUsize; MAX_FRAMES_IN_FLIGHT],
+}
+
+impl SlotFrames {
+    pub fn set(&self, slot: usize, frame: usize) {
+        if let Some(f) = self.frames.get(slot) {
+            f.store(frame, Ordering::SeqCst);
+        }
+    }
+
+    fn get(&self, slot: usize) -> usize {
+        self.frames
+            .get(slot)
+            .map_or(0, |f| f.load(Ordering::SeqCst))
+    }
+}
+
+/// Which of an instance's point lists a slot splats.
+#[derive(Clone, Debug)]
+pub enum FrameAt {
+    Fixed(usize),
+    PerSlot(Arc<SlotFrames>),
+}
+
+impl FrameAt {
+    pub fn at(&self, slot: usize) -> usize {
+        match self {
+            FrameAt::Fixed(f) => *f,
+            FrameAt::PerSlot(s) => s.get(slot),
+        }
+    }
+}
+
+/// One object's atlas points for a splatting pass: one list per sequence frame (one for
+/// rigid objects), the frame and the model matrix per slot.
+#[derive(Clone)]
+pub struct AtlasInstance<'a> {
+    pub frames: Vec<&'a AtlasPoints>,
+    pub frame: FrameAt,
+    pub model: ModelAt,
+}
+
+/// An [`AtlasInstance`] imported into a graph: every frame's `(points, count)`.
+#[derive(Clone)]
+pub struct ImportedInstance {
+    pub frames: Vec<(BufferHandle, u32)>,
+    pub frame: FrameAt,
+    pub model: ModelAt,
+}
+
+impl<'a> AtlasInstance<'a> {
+    /// A rigid object's one point list at a fixed model matrix.
+    pub fn rigid(points: &'a AtlasPoints, model: Mat4) -> Self {
+        Self {
+            frames: vec![points],
+            frame: FrameAt::Fixed(0),
+            model: ModelAt::Fixed(model),
+        }
+    }
+
+    /// Imports every frame's points (all are declared read: the slot picks one at record
+    /// time); `None` when no frame has points.
+    pub fn import(&self, g: &mut RenderGraph, access: Access) -> Option<ImportedInstance> {
+        if self.frames.iter().all(|p| p.count == 0) {
+            return None;
+        }
+        Some(ImportedInstance {
+            frames: self
+                .frames
+                .iter()
+                .map(|p| (g.import_buffer(&p.buffer, access), p.count))
+                .collect(),
+            frame: self.frame.clone(),
+            model: self.model.clone(),
+        })
+    }
+}
+
+impl ImportedInstance {
+    /// `(points, count, model)` that slot `slot` splats (count 0: nothing).
+    pub fn at(&self, slot: usize) -> (BufferHandle, u32, Mat4) {
+        let f = self.frame.at(slot).min(self.frames.len().saturating_sub(1));
+        let (h, n) = self.frames[f];
+        (h, n, self.model.at(slot))
+    }
+
+    pub fn handles(&self) -> impl Iterator<Item = BufferHandle> + '_ {
+        self.frames.iter().map(|&(h, _)| h)
+    }
+}
+
+/// Declares `voxelize_atlas`: each instance ORs its slot's transformed points into
+/// `columns` (which `voxel_clear` or `voxel_copy_static` initialised). Records only in
 /// slots `gate` leaves open.
 pub fn add_voxelize_atlas_pass(
     g: &mut RenderGraph,
     pipes: &AtlasPipelines,
     grid: &VoxelGrid,
     columns: BufferHandle,
-    instances: &[(&AtlasPoints, ModelAt)],
+    instances: &[AtlasInstance],
     gate: Option<Arc<SlotGate>>,
 ) {
-    let sets: Vec<(BufferHandle, u32, ModelAt)> = instances
-        .iter()
-        .filter(|(p, _)| p.count > 0)
-        .map(|(p, m)| {
-            (
-                g.import_buffer(&p.buffer, Access::StorageRead(Shader::Compute)),
-                p.count,
-                m.clone(),
-            )
-        })
-        .collect();
+    let read = Access::StorageRead(Shader::Compute);
+    let sets: Vec<ImportedInstance> = instances.iter().filter_map(|i| i.import(g, read)).collect();
     if sets.is_empty() {
         return;
     }
     let mut pass = g
         .add_pass("voxelize_atlas")
         .write(columns, Access::StorageReadWrite(Shader::Compute));
-    for (h, _, _) in &sets {
-        pass = pass.read(*h, Access::StorageRead(Shader::Compute));
+    for h in sets.iter().flat_map(ImportedInstance::handles) {
+        pass = pass.read(h, read);
     }
     let (pipe, grid) = (pipes.voxelize, *grid);
     let (w, h) = image_extent(&grid);
@@ -378,34 +476,100 @@ pub fn add_voxelize_atlas_pass(
         if !gate.as_ref().map_or(true, |g| g.is_open(ctx.slot)) {
             return;
         }
-        for (buf, count, model) in &sets {
-            let model = model.at(ctx.slot);
+        for inst in &sets {
+            let (buf, count, model) = inst.at(ctx.slot);
+            if count == 0 {
+                continue;
+            }
             let ext = grid.extent_voxels();
             let push = GpuAtlasVoxelizePush {
                 model: model.to_cols_array(),
                 grid_min: grid.world_min().extend(0.0).to_array(),
                 scale: grid.voxels_per_meter().extend(0.0).to_array(),
                 dims: [ext.x, ext.y, ext.z, grid.axis().index() as u32],
-                extent: [w, h, *count, 0],
+                extent: [w, h, count, 0],
             };
             ctx.cmd.bind(
                 &pipe,
                 &[
-                    Descriptor::storage_buffer(0, ctx.buffer(*buf).raw),
+                    Descriptor::storage_buffer(0, ctx.buffer(buf).raw),
                     Descriptor::storage_buffer(1, ctx.buffer(columns).raw),
                 ],
             );
             ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
-            let x = (*count).min(MAX_POINTS_X);
+            let x = count.min(MAX_POINTS_X);
             ctx.cmd.dispatch(x.div_ceil(64), count.div_ceil(x), 1);
         }
     });
 }
 
 /// Whether the atlas voxelizer handles `object` when atlases are selected: everything but
-/// OBJ sequences, which deform (the atlas method's limit) and keep the triangle voxelizer.
-pub fn uses_atlas(object: &crate::scene::Object) -> bool {
-    !matches!(object.animation, Some(Animation::ObjSequence { .. }))
+/// OBJ sequences whose frames differ in topology ([`atlas_frames`]).
+pub fn uses_atlas(scene: &Scene, object: &crate::scene::Object) -> bool {
+    atlas_frames(scene, object).is_ok()
+}
+
+/// The meshes (indices into `scene.meshes`) that share `object`'s atlas, one per sequence
+/// frame (just the mesh for other objects), or why they cannot share one: one atlas lays
+/// out the triangles of an index buffer, so every frame needs the same indices and vertex
+/// count (scene loading checks this for OBJ files; scenes built in code may not).
+pub fn atlas_frames(scene: &Scene, object: &crate::scene::Object) -> Result<Vec<usize>, String> {
+    let meshes = match &object.animation {
+        Some(Animation::ObjSequence { meshes, .. }) if !meshes.is_empty() => meshes.clone(),
+        _ => vec![object.mesh],
+    };
+    let mesh = |m: usize| {
+        scene
+            .meshes
+            .get(m)
+            .ok_or_else(|| format!("mesh {m} of object '{}' is missing", object.name))
+    };
+    let first = mesh(meshes[0])?;
+    for (f, &m) in meshes.iter().enumerate().skip(1) {
+        let other = mesh(m)?;
+        if other.indices != first.indices || other.positions.len() != first.positions.len() {
+            return Err(format!(
+                "frame {f} ('{}') differs in topology from frame 0 ('{}': {} vertices, {} \
+                 triangles vs {} and {}), so no atlas fits both",
+                other.name,
+                first.name,
+                other.positions.len(),
+                other.indices.len() / 3,
+                first.positions.len(),
+                first.indices.len() / 3,
+            ));
+        }
+    }
+    Ok(meshes)
+}
+
+/// A dynamic (moving, animated or sequence) object's atlas instance.
+pub(super) struct DynamicInstance {
+    /// Per sequence frame: `(mesh in the scene, its point list in AtlasScene::points)`.
+    pub(super) frames: Vec<(usize, usize)>,
+    pub(super) object: crate::scene::Object,
+    pub(super) models: Arc<SlotMatrices>,
+    pub(super) frame: Arc<SlotFrames>,
+    /// Index of the object in the scene.
+    pub(super) object_index: usize,
+}
+
+impl DynamicInstance {
+    /// The sequence frame (index into `frames`) drawn at `t_s`.
+    fn frame_at(&self, t_s: f32) -> usize {
+        let mesh = self.object.mesh_at(t_s);
+        self.frames
+            .iter()
+            .position(|&(m, _)| m == mesh)
+            .unwrap_or(0)
+    }
+}
+
+/// What the dynamic atlas objects show at a time: model matrix and sequence frame each.
+#[derive(Clone, Debug, PartialEq)]
+pub struct AtlasPose {
+    pub models: Vec<Mat4>,
+    pub frames: Vec<usize>,
 }
 
 /// The atlas side of a scene's voxelization: one point list per distinct (mesh, scale),
@@ -415,15 +579,15 @@ pub struct AtlasScene {
     pub(super) points: Vec<AtlasPoints>,
     /// `(points, model, index of the object in the scene)`.
     pub(super) static_instances: Vec<(usize, Mat4, usize)>,
-    /// `(points, the object, model per slot, index of the object in the scene)`.
-    pub(super) dynamic_instances: Vec<(usize, crate::scene::Object, Arc<SlotMatrices>, usize)>,
+    pub(super) dynamic_instances: Vec<DynamicInstance>,
     /// Albedo and normal volumes from the same points, when a GI method reads them.
     pub(super) volumes: Option<super::gpu_atlas_volumes::AtlasVolumes>,
 }
 
 impl AtlasScene {
-    /// Builds (or takes from `cache`) the atlas of every object that [`uses_atlas`], renders
-    /// and compacts each once. Texels are sized for `grid`'s smallest voxel edge.
+    /// Builds (or takes from `cache`) the atlas of every object that [`uses_atlas`] (one per
+    /// OBJ sequence), renders and compacts each (each frame's) once. Texels are sized for
+    /// `grid`'s smallest voxel edge.
     pub fn new(
         ctx: &Context,
         scene: &Scene,
@@ -439,41 +603,67 @@ impl AtlasScene {
             dynamic_instances: Vec::new(),
             volumes: None,
         };
-        let mut built: Vec<(Arc<MeshAtlas>, usize)> = Vec::new();
+        // `(atlas, sequence frame, index into points)`: objects sharing a mesh (sequence)
+        // and scale share its point lists.
+        let mut built: Vec<(Arc<MeshAtlas>, usize, usize)> = Vec::new();
         let r = (|| -> Result<(), GpuVoxelError> {
             for (oi, o) in scene.objects.iter().enumerate() {
-                if !uses_atlas(o) {
-                    continue;
-                }
-                let Some(mesh) = scene.meshes.get(o.mesh) else {
+                let meshes = match atlas_frames(scene, o) {
+                    Ok(m) => m,
+                    Err(reason) => {
+                        log::info!("object '{}' keeps the triangle voxelizer: {reason}", o.name);
+                        continue;
+                    }
+                };
+                let frames: Vec<&crate::scene::Mesh> =
+                    meshes.iter().filter_map(|&m| scene.meshes.get(m)).collect();
+                let Some(mesh) = frames.first() else {
                     continue;
                 };
                 let scale = o.transform_components_at(t_s).scale;
+                let positions: Vec<&[Vec3]> =
+                    frames.iter().map(|m| m.positions.as_slice()).collect();
                 let atlas =
-                    cache.get(&mesh.name, &mesh.positions, &mesh.indices, scale, texel_m)?;
-                let pi = match built.iter().find(|(k, _)| Arc::ptr_eq(k, &atlas)) {
-                    Some(&(_, i)) => i,
-                    None => {
-                        let p = render_atlas_points(
-                            ctx,
-                            &me.pipelines,
-                            &atlas,
-                            &mesh.positions,
-                            &mesh.indices,
-                        )?;
-                        me.points.push(p);
-                        built.push((atlas.clone(), me.points.len() - 1));
-                        me.points.len() - 1
-                    }
-                };
+                    cache.get_sequence(&mesh.name, &positions, &mesh.indices, scale, texel_m)?;
+                let mut lists = Vec::with_capacity(frames.len());
+                for (f, m) in frames.iter().enumerate() {
+                    let found = built
+                        .iter()
+                        .find(|(k, kf, _)| Arc::ptr_eq(k, &atlas) && *kf == f);
+                    let pi = match found {
+                        Some(&(_, _, i)) => i,
+                        None => {
+                            let p = render_atlas_points(
+                                ctx,
+                                &me.pipelines,
+                                &atlas,
+                                &m.positions,
+                                &m.indices,
+                            )?;
+                            me.points.push(p);
+                            built.push((atlas.clone(), f, me.points.len() - 1));
+                            me.points.len() - 1
+                        }
+                    };
+                    lists.push((meshes[f], pi));
+                }
                 if o.dynamic || o.is_animated() {
-                    let m = Arc::new(SlotMatrices::default());
+                    let inst = DynamicInstance {
+                        frames: lists,
+                        object: o.clone(),
+                        models: Arc::new(SlotMatrices::default()),
+                        frame: Arc::new(SlotFrames::default()),
+                        object_index: oi,
+                    };
+                    let f = inst.frame_at(t_s);
                     for s in 0..MAX_FRAMES_IN_FLIGHT {
-                        m.set(s, o.transform_at(t_s));
+                        inst.models.set(s, o.transform_at(t_s));
+                        inst.frame.set(s, f);
                     }
-                    me.dynamic_instances.push((pi, o.clone(), m, oi));
+                    me.dynamic_instances.push(inst);
                 } else {
-                    me.static_instances.push((pi, o.transform_at(t_s), oi));
+                    me.static_instances
+                        .push((lists[0].1, o.transform_at(t_s), oi));
                 }
             }
             Ok(())
@@ -498,47 +688,69 @@ impl AtlasScene {
         !self.dynamic_instances.is_empty()
     }
 
-    /// Total points splatted per full voxelization (static and dynamic instances).
+    /// Total points splatted per full voxelization (static and dynamic instances; a
+    /// sequence counts its first frame, all frames have the same texels).
     pub fn point_count(&self) -> u64 {
         self.static_instances
             .iter()
             .map(|&(p, _, _)| p)
-            .chain(self.dynamic_instances.iter().map(|(p, _, _, _)| *p))
+            .chain(self.dynamic_instances.iter().map(|d| d.frames[0].1))
             .map(|p| u64::from(self.points[p].count))
             .sum()
     }
 
-    /// The dynamic objects' model matrices at `t_s`.
-    pub fn models_at(&self, t_s: f32) -> Vec<Mat4> {
-        self.dynamic_instances
-            .iter()
-            .map(|(_, o, _, _)| o.transform_at(t_s))
-            .collect()
+    /// Point lists built, one per distinct (atlas, sequence frame).
+    pub fn point_lists(&self) -> usize {
+        self.points.len()
     }
 
-    /// Writes the dynamic objects' model matrices for frame slot `slot` (after its fence).
-    pub fn write_models(&self, slot: usize, models: &[Mat4]) {
-        for ((_, _, m, _), &model) in self.dynamic_instances.iter().zip(models) {
-            m.set(slot, model);
+    /// The dynamic objects' model matrices and sequence frames at `t_s`.
+    pub fn pose_at(&self, t_s: f32) -> AtlasPose {
+        AtlasPose {
+            models: self
+                .dynamic_instances
+                .iter()
+                .map(|d| d.object.transform_at(t_s))
+                .collect(),
+            frames: self
+                .dynamic_instances
+                .iter()
+                .map(|d| d.frame_at(t_s))
+                .collect(),
         }
     }
 
-    /// The point lists of the static objects, the dynamic ones, or both, with their models.
-    pub fn instances(&self, statics: bool, dynamics: bool) -> Vec<(&AtlasPoints, ModelAt)> {
-        let mut inst: Vec<(&AtlasPoints, ModelAt)> = Vec::new();
+    /// Writes the dynamic objects' pose for frame slot `slot` (after its fence).
+    pub fn write_pose(&self, slot: usize, pose: &AtlasPose) {
+        for (d, &model) in self.dynamic_instances.iter().zip(&pose.models) {
+            d.models.set(slot, model);
+        }
+        for (d, &f) in self.dynamic_instances.iter().zip(&pose.frames) {
+            d.frame.set(slot, f);
+        }
+    }
+
+    /// The point lists of the static objects, the dynamic ones, or both, with their models
+    /// and frames.
+    pub fn instances(&self, statics: bool, dynamics: bool) -> Vec<AtlasInstance<'_>> {
+        let mut inst = Vec::new();
         if statics {
             inst.extend(
                 self.static_instances
                     .iter()
-                    .map(|&(p, m, _)| (&self.points[p], ModelAt::Fixed(m))),
+                    .map(|&(p, m, _)| AtlasInstance {
+                        frames: vec![&self.points[p]],
+                        frame: FrameAt::Fixed(0),
+                        model: ModelAt::Fixed(m),
+                    }),
             );
         }
         if dynamics {
-            inst.extend(
-                self.dynamic_instances
-                    .iter()
-                    .map(|(p, _, m, _)| (&self.points[*p], ModelAt::PerSlot(m.clone()))),
-            );
+            inst.extend(self.dynamic_instances.iter().map(|d| AtlasInstance {
+                frames: d.frames.iter().map(|&(_, p)| &self.points[p]).collect(),
+                frame: FrameAt::PerSlot(d.frame.clone()),
+                model: ModelAt::PerSlot(d.models.clone()),
+            }));
         }
         inst
     }

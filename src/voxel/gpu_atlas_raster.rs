@@ -12,7 +12,7 @@
 //!   shader reads the single-bit LUT ([`super::ray_mask::ColumnLut1d::single_bit`]).
 
 use super::gpu::{image_extent, COLUMN_FORMAT};
-use super::gpu_atlas::{AtlasPoints, GpuAtlasVoxelizePush, ModelAt};
+use super::gpu_atlas::{AtlasInstance, GpuAtlasVoxelizePush, ImportedInstance};
 use super::ray_mask::ColumnLut1d;
 use super::VoxelGrid;
 use crate::graph::{Access, ImageHandle, RenderGraph, Shader};
@@ -62,22 +62,19 @@ impl AtlasRasterBits {
         g: &mut RenderGraph,
         grid: &VoxelGrid,
         image: ImageHandle,
-        instances: &[(&AtlasPoints, ModelAt)],
+        instances: &[AtlasInstance],
     ) {
         let read = Access::StorageRead(Shader::Graphics);
         let lut = g.import_buffer(&self.lut, read);
-        let sets: Vec<_> = instances
-            .iter()
-            .filter(|(p, _)| p.count > 0)
-            .map(|(p, m)| (g.import_buffer(&p.buffer, read), p.count, m.clone()))
-            .collect();
+        let sets: Vec<ImportedInstance> =
+            instances.iter().filter_map(|i| i.import(g, read)).collect();
         // Cleared on load, so the logic op reads only what this pass wrote.
         let mut pass = g
             .add_pass("voxelize_atlas_bits")
             .read(lut, read)
             .write(image, Access::ColorAttachment);
-        for (h, _, _) in &sets {
-            pass = pass.read(*h, read);
+        for h in sets.iter().flat_map(ImportedInstance::handles) {
+            pass = pass.read(h, read);
         }
         let (pipe, grid) = (self.pipe, *grid);
         let (w, h) = image_extent(&grid);
@@ -96,24 +93,28 @@ impl AtlasRasterBits {
             };
             ctx.cmd
                 .begin_rendering_layers(extent, grid.layers(), &target, None);
-            for (points, count, model) in &sets {
+            for inst in &sets {
+                let (points, count, model) = inst.at(ctx.slot);
+                if count == 0 {
+                    continue;
+                }
                 let ext = grid.extent_voxels();
                 let push = GpuAtlasVoxelizePush {
-                    model: model.at(ctx.slot).to_cols_array(),
+                    model: model.to_cols_array(),
                     grid_min: grid.world_min().extend(0.0).to_array(),
                     scale: grid.voxels_per_meter().extend(0.0).to_array(),
                     dims: [ext.x, ext.y, ext.z, grid.axis().index() as u32],
-                    extent: [w, h, *count, 0],
+                    extent: [w, h, count, 0],
                 };
                 ctx.cmd.bind(
                     &pipe,
                     &[
-                        Descriptor::storage_buffer(0, ctx.buffer(*points).raw),
+                        Descriptor::storage_buffer(0, ctx.buffer(points).raw),
                         Descriptor::storage_buffer(1, ctx.buffer(lut).raw),
                     ],
                 );
                 ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
-                ctx.cmd.draw(*count, 1);
+                ctx.cmd.draw(count, 1);
             }
             ctx.cmd.end_rendering();
         });

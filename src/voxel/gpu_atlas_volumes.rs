@@ -28,7 +28,7 @@
 //! resolve adds both. Nothing records while nothing moves (the voxel frame's [`SlotGate`]).
 
 use super::gpu::{run_once, GpuVoxelError, SlotGate};
-use super::gpu_atlas::{AtlasPoints, AtlasScene, GpuAtlasVoxelizePush, ModelAt};
+use super::gpu_atlas::{AtlasScene, FrameAt, GpuAtlasVoxelizePush, ModelAt};
 use super::VoxelGrid;
 use crate::graph::{Access, BufferHandle, ImageHandle, RenderGraph, Shader};
 use crate::scene::Scene;
@@ -118,10 +118,12 @@ pub struct AtlasVolumes {
     splat: GraphicsPipeline,
     resolve: ComputePipeline,
     sampler: vk::Sampler,
-    /// Per instance (static instances first, then dynamic, as in [`AtlasScene`]): the mesh's
-    /// triangles in model space with the object's material albedo in the vertices' w (the
-    /// layout of `voxelize_attributes.comp`), indexed by the points' triangle index.
-    triangles: Vec<Buffer>,
+    /// Per instance (static instances first, then dynamic, as in [`AtlasScene`]) and per
+    /// sequence frame (one for rigid objects): the frame's triangles in model space with
+    /// the object's material albedo in the vertices' w (the layout of
+    /// `voxelize_attributes.comp`), indexed by the points' triangle index. Per frame because
+    /// a deforming frame turns its faces (the normals follow).
+    triangles: Vec<Vec<Buffer>>,
     /// `(albedo sums, normal sums)` of the static instances, splatted once; absent when the
     /// statics are splatted every frame (`revoxelize_static`) or there are none.
     static_sums: Option<(Image, Image)>,
@@ -129,8 +131,13 @@ pub struct AtlasVolumes {
     resolved: Arc<AtomicBool>,
 }
 
-/// A draw of one instance's points: `(points, count, triangles, model)`.
-type Splat = (BufferHandle, u32, BufferHandle, ModelAt);
+/// A draw of one instance: per sequence frame `(points, count, triangles)`, and which frame
+/// and model matrix a slot uses.
+struct Splat {
+    frames: Vec<(BufferHandle, u32, BufferHandle)>,
+    frame: FrameAt,
+    model: ModelAt,
+}
 
 impl AtlasVolumes {
     /// Builds the pipelines and triangle attributes of `atlas`'s instances and, when
@@ -203,20 +210,36 @@ impl AtlasVolumes {
         let objects = atlas
             .static_instances
             .iter()
-            .map(|&(_, _, o)| o)
-            .chain(atlas.dynamic_instances.iter().map(|&(_, _, _, o)| o));
-        for o in objects {
-            let tris = model_triangles(scene, o);
-            let bytes: &[u8] = if tris.is_empty() {
-                &[0; 48]
-            } else {
-                bytemuck::cast_slice(&tris)
-            };
-            self.triangles.push(ctx.upload_buffer(
-                "atlas triangle attributes",
-                bytes,
-                vk::BufferUsageFlags::STORAGE_BUFFER,
-            )?);
+            .map(|&(_, _, o)| (o, scene.objects.get(o).map(|o| vec![o.mesh])))
+            .chain(atlas.dynamic_instances.iter().map(|d| {
+                (
+                    d.object_index,
+                    Some(d.frames.iter().map(|&(m, _)| m).collect()),
+                )
+            }));
+        for (o, meshes) in objects {
+            let mut per_frame = Vec::new();
+            for mesh in meshes.unwrap_or_default() {
+                let tris = model_triangles(scene, o, mesh);
+                let bytes: &[u8] = if tris.is_empty() {
+                    &[0; 48]
+                } else {
+                    bytemuck::cast_slice(&tris)
+                };
+                let b = ctx.upload_buffer(
+                    "atlas triangle attributes",
+                    bytes,
+                    vk::BufferUsageFlags::STORAGE_BUFFER,
+                );
+                match b {
+                    Ok(b) => per_frame.push(b),
+                    Err(e) => {
+                        self.triangles.push(per_frame);
+                        return Err(e.into());
+                    }
+                }
+            }
+            self.triangles.push(per_frame);
         }
         if !(statics_once && atlas.has_static()) {
             return Ok(());
@@ -267,38 +290,32 @@ impl AtlasVolumes {
         dynamics: bool,
     ) -> Vec<Splat> {
         let read = Access::StorageRead(Shader::Graphics);
-        let n_static = atlas.static_instances.len();
-        let mut inst: Vec<(&AtlasPoints, ModelAt, usize)> = Vec::new();
-        if statics {
-            inst.extend(
-                atlas
-                    .static_instances
+        // Instance i of `instances(true, true)` is `self.triangles[i]`.
+        let first = if statics {
+            0
+        } else {
+            atlas.static_instances.len()
+        };
+        atlas
+            .instances(statics, dynamics)
+            .into_iter()
+            .zip(self.triangles.iter().skip(first))
+            .filter(|(inst, _)| inst.frames.iter().any(|p| p.count > 0))
+            .map(|(inst, tris)| Splat {
+                frames: inst
+                    .frames
                     .iter()
-                    .enumerate()
-                    .map(|(i, &(p, m, _))| (&atlas.points[p], ModelAt::Fixed(m), i)),
-            );
-        }
-        if dynamics {
-            inst.extend(
-                atlas
-                    .dynamic_instances
-                    .iter()
-                    .enumerate()
-                    .map(|(i, (p, _, m, _))| {
-                        (&atlas.points[*p], ModelAt::PerSlot(m.clone()), n_static + i)
-                    }),
-            );
-        }
-        inst.into_iter()
-            .filter(|(p, _, _)| p.count > 0)
-            .filter_map(|(p, m, i)| {
-                let tris = self.triangles.get(i)?;
-                Some((
-                    g.import_buffer(&p.buffer, read),
-                    p.count,
-                    g.import_buffer(tris, read),
-                    m,
-                ))
+                    .zip(tris)
+                    .map(|(p, t)| {
+                        (
+                            g.import_buffer(&p.buffer, read),
+                            p.count,
+                            g.import_buffer(t, read),
+                        )
+                    })
+                    .collect(),
+                frame: inst.frame,
+                model: inst.model,
             })
             .collect()
     }
@@ -398,7 +415,7 @@ impl AtlasVolumes {
             ctx.destroy_image(a);
             ctx.destroy_image(n);
         }
-        for b in self.triangles {
+        for b in self.triangles.into_iter().flatten() {
             ctx.destroy_buffer(b);
         }
         if self.sampler != vk::Sampler::null() {
@@ -426,7 +443,7 @@ fn add_splat_pass(
         .add_pass("voxelize_atlas_volumes")
         .write(albedo, Access::ColorAttachment)
         .write(normal, Access::ColorAttachment);
-    for (p, _, t, _) in &splats {
+    for (p, _, t) in splats.iter().flat_map(|s| &s.frames) {
         pass = pass.read(*p, read).read(*t, read);
     }
     let grid = *grid;
@@ -452,36 +469,44 @@ fn add_splat_pass(
             &colors,
             None,
         );
-        for (points, count, tris, model) in &splats {
+        for splat in &splats {
+            let f = splat.frame.at(ctx.slot);
+            let Some(&(points, count, tris)) = splat.frames.get(f).or(splat.frames.first()) else {
+                continue;
+            };
+            if count == 0 {
+                continue;
+            }
             let push = GpuAtlasVoxelizePush {
-                model: model.at(ctx.slot).to_cols_array(),
+                model: splat.model.at(ctx.slot).to_cols_array(),
                 grid_min: grid.world_min().extend(0.0).to_array(),
                 scale: grid.voxels_per_meter().extend(0.0).to_array(),
                 dims: [ext.x, ext.y, ext.z, grid.axis().index() as u32],
-                extent: [0, 0, *count, 0],
+                extent: [0, 0, count, 0],
             };
             ctx.cmd.bind(
                 &pipe,
                 &[
-                    Descriptor::storage_buffer(0, ctx.buffer(*points).raw),
-                    Descriptor::storage_buffer(1, ctx.buffer(*tris).raw),
+                    Descriptor::storage_buffer(0, ctx.buffer(points).raw),
+                    Descriptor::storage_buffer(1, ctx.buffer(tris).raw),
                 ],
             );
             ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
-            ctx.cmd.draw(*count, 1);
+            ctx.cmd.draw(count, 1);
         }
         ctx.cmd.end_rendering();
     });
 }
 
-/// Object `object`'s mesh triangles in model space, each vertex's w holding one channel of
-/// its submesh's material albedo (the object's material overrides first, as the renderer
-/// and `gi::attribute_triangles` resolve them). Triangle i is the atlas's triangle i.
-fn model_triangles(scene: &Scene, object: usize) -> Vec<[[f32; 4]; 3]> {
+/// Object `object`'s triangles of mesh `mesh` (its mesh, or one of its sequence frames) in
+/// model space, each vertex's w holding one channel of its submesh's material albedo (the
+/// object's material overrides first, as the renderer and `gi::attribute_triangles` resolve
+/// them). Triangle i is the atlas's triangle i.
+fn model_triangles(scene: &Scene, object: usize, mesh: usize) -> Vec<[[f32; 4]; 3]> {
     let Some(o) = scene.objects.get(object) else {
         return Vec::new();
     };
-    let Some(mesh) = scene.meshes.get(o.mesh) else {
+    let Some(mesh) = scene.meshes.get(mesh) else {
         return Vec::new();
     };
     let mut albedo = vec![Vec3::splat(0.5); mesh.indices.len() / 3];
