@@ -4,16 +4,13 @@
 
 use crate::graph::{Access, BufferHandle, ImageHandle, RenderGraph, Shader};
 use crate::scene::Scene;
-use crate::vk::{
-    vk, Buffer, BufferDesc, ComputePipeline, Context, Descriptor, Image, ImageDesc, MemoryLocation,
-    VkError, MAX_FRAMES_IN_FLIGHT,
-};
-use crate::voxel::gpu::GpuVoxelizePush;
+use crate::vk::{vk, Buffer, ComputePipeline, Context, Descriptor, Image, ImageDesc, VkError};
+use crate::voxel::attributes::TriangleAttributes;
 use crate::voxel::gpu_atlas_volumes::AttributeVolumes;
 use crate::voxel::ray_mask::RayMaskLut;
 use crate::voxel::VoxelGrid;
 use bytemuck::{Pod, Zeroable};
-use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
+use std::sync::atomic::{AtomicU32, Ordering};
 use std::sync::Arc;
 
 /// A GI method of the speed/accuracy ladder.
@@ -496,34 +493,11 @@ impl GiPasses {
 struct PathTracer {
     pathtrace: Option<ComputePipeline>,
     radiance: Option<RadianceVolume>,
-    attributes: ComputePipeline,
-    triangles: Buffer,
-    triangle_count: u32,
-    /// Workgroups per triangle that keep the voxelizer within lavapipe's loop budget.
-    splits: u32,
-    /// Some object's attributes come from triangles (all without the atlas voxelizer).
-    triangle_objects: bool,
-    voxelize_push: GpuVoxelizePush,
+    /// Writes the attributes of the objects the atlas voxelizer does not handle (all of them
+    /// without it); `None` when there are none.
+    triangles: Option<TriangleAttributes>,
     volumes: AttributeVolumes,
     history: Image,
-    /// The volumes hold the static scene once written.
-    volumes_written: Arc<AtomicBool>,
-    /// Scenes with moving objects: triangles per frame slot, rewritten when they change.
-    animated: Option<AnimatedTriangles>,
-}
-
-/// The attribute triangles of a scene with moving objects: one region of the host-visible
-/// triangle buffer per frame slot, written after the slot's fence (see `Renderer::write_frame`).
-struct AnimatedTriangles {
-    scene: Scene,
-    capacity: usize,
-    last: Option<Vec<[[f32; 4]; 3]>>,
-    /// Per slot: the region changed and the volumes must be rewritten in that slot's frame.
-    dirty: Arc<[AtomicBool; MAX_FRAMES_IN_FLIGHT]>,
-    counts: Arc<[AtomicU32; MAX_FRAMES_IN_FLIGHT]>,
-    /// Per slot, workgroups per triangle (see `attribute_splits`).
-    splits: Arc<[AtomicU32; MAX_FRAMES_IN_FLIGHT]>,
-    grid: VoxelGrid,
 }
 
 /// The direct-radiance volume (rgba32f, congruent with the bits) and its passes. f32 because
@@ -534,9 +508,6 @@ struct RadianceVolume {
     hemisphere_pipeline: ComputePipeline,
     image: Image,
 }
-
-/// Group size of the attribute voxelizer (one workgroup per triangle).
-const ATTRIBUTE_GROUP_SIZE: u32 = 64;
 
 impl PathTracer {
     fn new(ctx: &Context, target: &GiTarget<'_>, path_trace: bool) -> Result<Self, VkError> {
@@ -552,12 +523,6 @@ impl PathTracer {
         let storage = vk::DescriptorType::STORAGE_BUFFER;
         let image = vk::DescriptorType::STORAGE_IMAGE;
         let sampled = vk::DescriptorType::COMBINED_IMAGE_SAMPLER;
-        let attributes = ctx.compute_pipeline(
-            "voxelize_attributes.comp",
-            &[(0, storage), (1, image), (2, image)],
-            std::mem::size_of::<GpuVoxelizePush>() as u32,
-            &[(0, ATTRIBUTE_GROUP_SIZE)],
-        )?;
         let pathtrace = path_trace
             .then(|| {
                 ctx.compute_pipeline(
@@ -587,48 +552,10 @@ impl PathTracer {
                 .objects
                 .retain(|o| !crate::voxel::gpu_atlas::uses_atlas(scene, o));
         }
-        let scene = &tri_scene;
-        let tris = attribute_triangles(scene, time_s);
-        let bytes: &[u8] = if tris.is_empty() {
-            &[0; 48]
+        let triangles = if tri_scene.objects.is_empty() {
+            None
         } else {
-            bytemuck::cast_slice(&tris)
-        };
-        let (triangles, animated) = if scene.has_animation() {
-            // Headroom for OBJ sequences whose frames differ in triangle count.
-            let capacity = (tris.len() * 2).max(1);
-            let region = (capacity * std::mem::size_of::<[[f32; 4]; 3]>()) as u64;
-            let mut buffer = ctx.create_buffer(&BufferDesc {
-                name: "attribute triangles (per frame slot)".into(),
-                size_bytes: region * MAX_FRAMES_IN_FLIGHT as u64,
-                usage: vk::BufferUsageFlags::STORAGE_BUFFER,
-                location: MemoryLocation::CpuToGpu,
-            })?;
-            if let Some(m) = buffer.mapped_mut() {
-                for slot in 0..MAX_FRAMES_IN_FLIGHT {
-                    let at = slot * region as usize;
-                    m[at..at + bytes.len()].copy_from_slice(bytes);
-                }
-            }
-            let count = tris.len() as u32;
-            let splits = attribute_splits(grid, &tris);
-            let animated = AnimatedTriangles {
-                scene: scene.clone(),
-                capacity,
-                last: Some(tris.clone()),
-                dirty: Arc::new(std::array::from_fn(|_| AtomicBool::new(false))),
-                counts: Arc::new(std::array::from_fn(|_| AtomicU32::new(count))),
-                splits: Arc::new(std::array::from_fn(|_| AtomicU32::new(splits))),
-                grid: *grid,
-            };
-            (buffer, Some(animated))
-        } else {
-            let buffer = ctx.upload_buffer(
-                "attribute triangles",
-                bytes,
-                vk::BufferUsageFlags::STORAGE_BUFFER,
-            )?;
-            (buffer, None)
+            Some(TriangleAttributes::new(ctx, &tri_scene, time_s, grid)?)
         };
         let usage = vk::ImageUsageFlags::STORAGE
             | vk::ImageUsageFlags::SAMPLED
@@ -657,48 +584,16 @@ impl PathTracer {
         Ok(Self {
             pathtrace,
             radiance,
-            attributes,
-            triangle_count: tris.len() as u32,
-            splits: attribute_splits(grid, &tris),
-            triangle_objects: !scene.objects.is_empty(),
-            voxelize_push: GpuVoxelizePush::new(grid, tris.len() as u32, 0),
             triangles,
             volumes,
             history,
-            volumes_written: Arc::new(AtomicBool::new(false)),
-            animated,
         })
     }
 
     /// For scenes with moving objects: writes frame slot `slot`'s triangles at `t_s` when they
     /// changed, so that frame rewrites the volumes. Returns whether they changed.
     fn update(&mut self, t_s: f32, slot: usize) -> bool {
-        let Some(a) = &mut self.animated else {
-            return false;
-        };
-        let tris = attribute_triangles(&a.scene, t_s);
-        if a.last.as_ref() == Some(&tris) {
-            return false;
-        }
-        let n = tris.len().min(a.capacity);
-        if n < tris.len() {
-            log::warn!(
-                "{} attribute triangles exceed the buffer's {}; extra ones are dropped",
-                tris.len(),
-                a.capacity
-            );
-        }
-        let region = a.capacity * std::mem::size_of::<[[f32; 4]; 3]>();
-        if let Some(m) = self.triangles.mapped_mut() {
-            let bytes: &[u8] = bytemuck::cast_slice(&tris[..n]);
-            m[slot * region..slot * region + bytes.len()].copy_from_slice(bytes);
-        }
-        a.counts[slot % MAX_FRAMES_IN_FLIGHT].store(n as u32, Ordering::SeqCst);
-        a.splits[slot % MAX_FRAMES_IN_FLIGHT]
-            .store(attribute_splits(&a.grid, &tris[..n]), Ordering::SeqCst);
-        a.dirty[slot % MAX_FRAMES_IN_FLIGHT].store(true, Ordering::SeqCst);
-        a.last = Some(tris);
-        true
+        self.triangles.as_mut().is_some_and(|t| t.update(t_s, slot))
     }
 
     fn add_passes(
@@ -714,67 +609,9 @@ impl PathTracer {
         let (albedo, normal) = self.volumes.import(g);
         // The atlas resolve writes every voxel; triangle objects then write theirs on top.
         atlas_attributes(g, albedo, normal);
-        let tris = g.import_buffer(&self.triangles, Access::StorageRead(Shader::Compute));
-        let (pipe, count, vpush) = (self.attributes, self.triangle_count, self.voxelize_push);
-        let splits = self.splits;
-        let written = self.volumes_written.clone();
-        let per_slot = self.animated.as_ref().map(|a| {
-            let region = (a.capacity * std::mem::size_of::<[[f32; 4]; 3]>()) as u64;
-            (region, a.dirty.clone(), a.counts.clone(), a.splits.clone())
-        });
         // The first frame writes the volumes; later frames keep them until something moves.
-        if self.triangle_objects {
-            g.add_pass("voxelize_attributes")
-                .read(tris, Access::StorageRead(Shader::Compute))
-                .write(albedo, Access::StorageWrite(Shader::Compute))
-                .write(normal, Access::StorageWrite(Shader::Compute))
-                .record(move |ctx| {
-                    let first = !written.swap(true, Ordering::SeqCst);
-                    let slot = ctx.slot % MAX_FRAMES_IN_FLIGHT;
-                    let (triangles, count, splits) = match &per_slot {
-                        Some((region, dirty, counts, slot_splits)) => {
-                            let moved = dirty[slot].swap(false, Ordering::SeqCst);
-                            if !(first || moved) {
-                                return;
-                            }
-                            let d = Descriptor::StorageBuffer {
-                                binding: 0,
-                                buffer: ctx.buffer(tris).raw,
-                                offset: slot as u64 * region,
-                                range: *region,
-                            };
-                            let n = counts[slot].load(Ordering::SeqCst);
-                            (d, n, slot_splits[slot].load(Ordering::SeqCst))
-                        }
-                        None if first => {
-                            let d = Descriptor::storage_buffer(0, ctx.buffer(tris).raw);
-                            (d, count, splits)
-                        }
-                        None => return,
-                    };
-                    if count == 0 {
-                        return;
-                    }
-                    let mut vpush = vpush;
-                    vpush.extent[2] = count;
-                    ctx.cmd.bind(
-                        &pipe,
-                        &[
-                            triangles,
-                            Descriptor::StorageImage {
-                                binding: 1,
-                                view: ctx.image(albedo).view,
-                            },
-                            Descriptor::StorageImage {
-                                binding: 2,
-                                view: ctx.image(normal).view,
-                            },
-                        ],
-                    );
-                    ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&vpush));
-                    let x = count.min(65_535);
-                    ctx.cmd.dispatch(x, count.div_ceil(x), splits);
-                });
+        if let Some(t) = &self.triangles {
+            t.add_passes(g, albedo, normal);
         }
         let Some(pipe) = self.pathtrace else {
             return match &self.radiance {
@@ -814,8 +651,9 @@ impl PathTracer {
             ctx.destroy_compute_pipeline(rv.hemisphere_pipeline);
             ctx.destroy_image(rv.image);
         }
-        ctx.destroy_compute_pipeline(self.attributes);
-        ctx.destroy_buffer(self.triangles);
+        if let Some(t) = self.triangles {
+            t.destroy(ctx);
+        }
         self.volumes.destroy(ctx);
         ctx.destroy_image(self.history);
     }
@@ -947,48 +785,6 @@ impl RadianceVolume {
         );
         irradiance
     }
-}
-
-/// World-space triangles of the scene at `t_s`, each vertex's w holding one channel of the
-/// material's albedo (the layout `voxelize_attributes.comp` reads).
-/// Workgroups per attribute triangle: the triangle voxelizer's z splits
-/// ([`crate::voxel::gpu::voxelize_loads`]; the shaders share voxelize_core.glsl).
-fn attribute_splits(grid: &VoxelGrid, tris: &[[[f32; 4]; 3]]) -> u32 {
-    let loads = tris
-        .iter()
-        .map(|t| {
-            let [a, b, c] = t.map(|v| glam::Vec3::new(v[0], v[1], v[2]));
-            crate::voxel::gpu::voxelize_loads(grid, a.min(b).min(c), a.max(b).max(c))
-        })
-        .max()
-        .unwrap_or(0);
-    crate::voxel::gpu::voxelize_splits(loads, ATTRIBUTE_GROUP_SIZE)
-}
-
-fn attribute_triangles(scene: &Scene, t_s: f32) -> Vec<[[f32; 4]; 3]> {
-    let mut out = Vec::new();
-    for object in &scene.objects {
-        let Some(mesh) = scene.meshes.get(object.mesh_at(t_s)) else {
-            continue;
-        };
-        let m = object.transform_at(t_s);
-        for (si, sub) in mesh.submeshes.iter().enumerate() {
-            let material = object.materials.get(si).copied().unwrap_or(sub.material);
-            let albedo = scene
-                .materials
-                .get(material)
-                .map(|m| m.albedo)
-                .unwrap_or(glam::Vec3::splat(0.5));
-            let range = sub.first_index as usize..(sub.first_index + sub.index_count) as usize;
-            for t in mesh.indices[range].chunks_exact(3) {
-                out.push([0, 1, 2].map(|k| {
-                    let v = m.transform_point3(mesh.positions[t[k] as usize]);
-                    [v.x, v.y, v.z, albedo[k]]
-                }));
-            }
-        }
-    }
-    out
 }
 
 /// Declares one of the GI ray passes (`gi_hemisphere`, `gi_hemisphere_volume`,

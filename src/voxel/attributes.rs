@@ -1,17 +1,19 @@
-//! Albedo and normal volumes congruent with the bit grid, written from triangles, for the
-//! albedo debug view (DESIGN.md "Voxel representation": non-binary volumes exist only when
-//! something reads them). Nothing else creates them.
+//! Albedo and normal volumes congruent with the bit grid, written from triangles (DESIGN.md
+//! "Voxel representation": non-binary volumes exist only when something reads them): for the
+//! GI methods that read volumes (`gi::PathTracer`, for the objects the atlas voxelizer does
+//! not handle; [`super::gpu_atlas_volumes`] writes the others) and for the albedo debug view.
 //!
-//! Pass `voxelize_attributes` (`glsl/voxelize_attributes.comp`) sets the voxels of the bits'
-//! exact conservative test (both shaders include `voxelize_core.glsl`); each stores its
-//! triangle's material albedo (RGBA8 UNORM) and world-space face normal (RGBA8 SNORM). It runs
-//! in the first frame, and again in a frame whose moving objects moved.
-//!
-//! The GI methods' volumes (`gi::PathTracer`, with the atlas voxelizer's part from
-//! [`super::gpu_atlas_volumes`]) still carry their own copy of this triangle pass; moving it
-//! onto this type is open.
+//! Pass `voxelize_attributes` (`glsl/voxelize_attributes.comp`) visits the voxels of the bits'
+//! exact conservative test (both shaders include `voxelize_core.glsl`); each voxel keeps the
+//! smallest index of the triangles touching it (atomic min on an owner volume). Pass
+//! `voxelize_attributes_resolve` then stores the owner's material albedo (RGBA8 UNORM) and
+//! world-space face normal (RGBA8 SNORM) and resets the owners. "Last writer wins" instead
+//! made a voxel shared by two triangles (a cube standing on a floor) depend on the order the
+//! GPU ran them, so two renders of one scene differed. Both passes run in the first frame, and
+//! again in a frame whose moving objects moved.
 
 use super::gpu::{voxelize_loads, voxelize_splits, GpuVoxelizePush};
+use super::gpu_atlas_volumes::AttributeVolumes;
 use super::VoxelGrid;
 use crate::graph::{Access, ImageHandle, RenderGraph, Shader};
 use crate::scene::Scene;
@@ -24,25 +26,34 @@ use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 use std::sync::Arc;
 
 /// State of both volumes between frames: sampled by compute shaders.
-pub const ATTRIBUTE_VOLUME_STATE: Access = Access::Sampled(Shader::Compute);
+pub const ATTRIBUTE_VOLUME_STATE: Access = super::gpu_atlas_volumes::VOLUME_STATE;
 
 /// Group size of the attribute voxelizer (one workgroup per triangle).
 const ATTRIBUTE_GROUP_SIZE: u32 = 64;
+
+/// Owner volume value of a voxel no triangle touches.
+const NO_OWNER: u32 = u32::MAX;
+
+/// The owner volume rests between rewrites as the resolve pass left it: all [`NO_OWNER`].
+const OWNER_STATE: Access = Access::StorageReadWrite(Shader::Compute);
 
 /// A triangle as `voxelize_attributes.comp` reads it: world-space vertices, the w of vertex
 /// i = the material albedo's channel i.
 type AttributeTriangle = [[f32; 4]; 3];
 
-/// The albedo and normal volumes with the triangles and pipeline that write them.
-pub struct TriangleAttributeVolumes {
+/// The triangles, pipelines and owner volume that write the albedo and normal volumes of a
+/// scene's objects.
+pub struct TriangleAttributes {
     pipeline: ComputePipeline,
+    resolve_pipeline: ComputePipeline,
     triangles: Buffer,
     triangle_count: u32,
     /// Workgroups per triangle that keep the voxelizer within lavapipe's loop budget.
     splits: u32,
     push: GpuVoxelizePush,
-    albedo: Image,
-    normal: Image,
+    /// Per voxel, the smallest index of the triangles touching it ([`NO_OWNER`] between
+    /// rewrites).
+    owner: Image,
     /// The volumes hold the static scene once written.
     written: Arc<AtomicBool>,
     /// Scenes with moving objects: triangles per frame slot, rewritten when they change.
@@ -63,9 +74,50 @@ struct AnimatedTriangles {
     grid: VoxelGrid,
 }
 
+/// Triangle-written albedo and normal volumes of a whole scene (the albedo debug view).
+pub struct TriangleAttributeVolumes {
+    pub volumes: AttributeVolumes,
+    pub writer: TriangleAttributes,
+}
+
 impl TriangleAttributeVolumes {
-    /// Cleared volumes for `grid` and the pipeline and triangles of `scene` at `time_s` that
-    /// fill them in the first frame.
+    pub fn new(
+        ctx: &Context,
+        scene: &Scene,
+        time_s: f32,
+        grid: &VoxelGrid,
+    ) -> Result<Self, VkError> {
+        let volumes = AttributeVolumes::new(ctx, grid)?;
+        match TriangleAttributes::new(ctx, scene, time_s, grid) {
+            Ok(writer) => Ok(Self { volumes, writer }),
+            Err(e) => {
+                volumes.destroy(ctx);
+                Err(e)
+            }
+        }
+    }
+
+    /// See [`TriangleAttributes::update`].
+    pub fn update(&mut self, t_s: f32, slot: usize) -> bool {
+        self.writer.update(t_s, slot)
+    }
+
+    /// Declares the writing passes and returns the `(albedo, normal)` volumes.
+    pub fn add_pass(&self, g: &mut RenderGraph) -> (ImageHandle, ImageHandle) {
+        let (albedo, normal) = self.volumes.import(g);
+        self.writer.add_passes(g, albedo, normal);
+        (albedo, normal)
+    }
+
+    pub fn destroy(self, ctx: &Context) {
+        self.writer.destroy(ctx);
+        self.volumes.destroy(ctx);
+    }
+}
+
+impl TriangleAttributes {
+    /// The pipelines and triangles of `scene`'s objects at `time_s` that fill the volumes in
+    /// the first frame.
     pub fn new(
         ctx: &Context,
         scene: &Scene,
@@ -76,75 +128,109 @@ impl TriangleAttributeVolumes {
         let image = vk::DescriptorType::STORAGE_IMAGE;
         let pipeline = ctx.compute_pipeline(
             "voxelize_attributes.comp",
-            &[(0, storage), (1, image), (2, image)],
+            &[(0, storage), (1, image)],
             std::mem::size_of::<GpuVoxelizePush>() as u32,
             &[(0, ATTRIBUTE_GROUP_SIZE)],
         )?;
+        let resolve_pipeline = match ctx.compute_pipeline(
+            "voxelize_attributes_resolve.comp",
+            &[(0, storage), (1, image), (2, image), (3, image)],
+            0,
+            &[],
+        ) {
+            Ok(p) => p,
+            Err(e) => {
+                ctx.destroy_compute_pipeline(pipeline);
+                return Err(e);
+            }
+        };
+        let destroy_pipelines = || {
+            ctx.destroy_compute_pipeline(pipeline);
+            ctx.destroy_compute_pipeline(resolve_pipeline);
+        };
         let tris = attribute_triangles(scene, time_s);
         let bytes: &[u8] = if tris.is_empty() {
             &[0; 48]
         } else {
             bytemuck::cast_slice(&tris)
         };
-        let (triangles, animated) = if scene.has_animation() {
+        let made = if scene.has_animation() {
             // Headroom for OBJ sequences whose frames differ in triangle count.
             let capacity = (tris.len() * 2).max(1);
             let region = (capacity * std::mem::size_of::<AttributeTriangle>()) as u64;
-            let mut buffer = ctx.create_buffer(&BufferDesc {
+            ctx.create_buffer(&BufferDesc {
                 name: "attribute triangles (per frame slot)".into(),
                 size_bytes: region * MAX_FRAMES_IN_FLIGHT as u64,
                 usage: vk::BufferUsageFlags::STORAGE_BUFFER,
                 location: MemoryLocation::CpuToGpu,
-            })?;
-            if let Some(m) = buffer.mapped_mut() {
-                for slot in 0..MAX_FRAMES_IN_FLIGHT {
-                    let at = slot * region as usize;
-                    m[at..at + bytes.len()].copy_from_slice(bytes);
+            })
+            .map(|mut buffer| {
+                if let Some(m) = buffer.mapped_mut() {
+                    for slot in 0..MAX_FRAMES_IN_FLIGHT {
+                        let at = slot * region as usize;
+                        m[at..at + bytes.len()].copy_from_slice(bytes);
+                    }
                 }
-            }
-            let count = tris.len() as u32;
-            let splits = attribute_splits(grid, &tris);
-            let animated = AnimatedTriangles {
-                scene: scene.clone(),
-                capacity,
-                last: Some(tris.clone()),
-                dirty: Arc::new(std::array::from_fn(|_| AtomicBool::new(false))),
-                counts: Arc::new(std::array::from_fn(|_| AtomicU32::new(count))),
-                splits: Arc::new(std::array::from_fn(|_| AtomicU32::new(splits))),
-                grid: *grid,
-            };
-            (buffer, Some(animated))
+                let count = tris.len() as u32;
+                let splits = attribute_splits(grid, &tris);
+                let animated = AnimatedTriangles {
+                    scene: scene.clone(),
+                    capacity,
+                    last: Some(tris.clone()),
+                    dirty: Arc::new(std::array::from_fn(|_| AtomicBool::new(false))),
+                    counts: Arc::new(std::array::from_fn(|_| AtomicU32::new(count))),
+                    splits: Arc::new(std::array::from_fn(|_| AtomicU32::new(splits))),
+                    grid: *grid,
+                };
+                (buffer, Some(animated))
+            })
         } else {
-            let buffer = ctx.upload_buffer(
+            ctx.upload_buffer(
                 "attribute triangles",
                 bytes,
                 vk::BufferUsageFlags::STORAGE_BUFFER,
-            )?;
-            (buffer, None)
+            )
+            .map(|buffer| (buffer, None))
+        };
+        let (triangles, animated) = match made {
+            Ok(m) => m,
+            Err(e) => {
+                destroy_pipelines();
+                return Err(e);
+            }
         };
         let ext = grid.extent_voxels();
-        let usage = vk::ImageUsageFlags::STORAGE
-            | vk::ImageUsageFlags::SAMPLED
-            | vk::ImageUsageFlags::TRANSFER_DST;
-        let volume = |name: &str, format| {
-            ImageDesc::new_2d(name, format, ext.x, ext.y)
-                .with_depth(ext.z)
-                .with_usage(usage)
+        let desc = ImageDesc::new_2d("attribute owner volume", vk::Format::R32_UINT, ext.x, ext.y)
+            .with_depth(ext.z)
+            .with_usage(vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_DST);
+        let none = vk::ClearColorValue {
+            uint32: [NO_OWNER; 4],
         };
-        let resting = ATTRIBUTE_VOLUME_STATE.info().layout;
-        let zero = vk::ClearColorValue { float32: [0.0; 4] };
-        let albedo = ctx.create_image(&volume("albedo volume", vk::Format::R8G8B8A8_UNORM))?;
-        ctx.clear_new_image(&albedo, zero, resting)?;
-        let normal = ctx.create_image(&volume("normal volume", vk::Format::R8G8B8A8_SNORM))?;
-        ctx.clear_new_image(&normal, zero, resting)?;
+        let owner = ctx.create_image(&desc).and_then(|owner| {
+            match ctx.clear_new_image(&owner, none, OWNER_STATE.info().layout) {
+                Ok(()) => Ok(owner),
+                Err(e) => {
+                    ctx.destroy_image(owner);
+                    Err(e)
+                }
+            }
+        });
+        let owner = match owner {
+            Ok(o) => o,
+            Err(e) => {
+                destroy_pipelines();
+                ctx.destroy_buffer(triangles);
+                return Err(e);
+            }
+        };
         Ok(Self {
             pipeline,
+            resolve_pipeline,
             triangles,
             triangle_count: tris.len() as u32,
             splits: attribute_splits(grid, &tris),
             push: GpuVoxelizePush::new(grid, tris.len() as u32, 0),
-            albedo,
-            normal,
+            owner,
             written: Arc::new(AtomicBool::new(false)),
             animated,
         })
@@ -168,12 +254,12 @@ impl TriangleAttributeVolumes {
                 a.capacity
             );
         }
+        let slot = slot % MAX_FRAMES_IN_FLIGHT;
         let region = a.capacity * std::mem::size_of::<AttributeTriangle>();
         if let Some(m) = self.triangles.mapped_mut() {
             let bytes: &[u8] = bytemuck::cast_slice(&tris[..n]);
             m[slot * region..slot * region + bytes.len()].copy_from_slice(bytes);
         }
-        let slot = slot % MAX_FRAMES_IN_FLIGHT;
         a.counts[slot].store(n as u32, Ordering::SeqCst);
         a.splits[slot].store(attribute_splits(&a.grid, &tris[..n]), Ordering::SeqCst);
         a.dirty[slot].store(true, Ordering::SeqCst);
@@ -181,12 +267,12 @@ impl TriangleAttributeVolumes {
         true
     }
 
-    /// Declares `voxelize_attributes` and returns the `(albedo, normal)` volumes (resting
-    /// state [`ATTRIBUTE_VOLUME_STATE`]). The pass records in the first frame, and in a frame
-    /// whose slot [`Self::update`] rewrote; otherwise the volumes keep their contents.
-    pub fn add_pass(&self, g: &mut RenderGraph) -> (ImageHandle, ImageHandle) {
-        let albedo = g.import_image(&self.albedo, ATTRIBUTE_VOLUME_STATE);
-        let normal = g.import_image(&self.normal, ATTRIBUTE_VOLUME_STATE);
+    /// Declares `voxelize_attributes` and `voxelize_attributes_resolve`, writing the voxels of
+    /// this writer's triangles into `albedo` and `normal` (other voxels keep their values).
+    /// The passes record in the first frame, and in a frame whose slot [`Self::update`]
+    /// rewrote; otherwise the volumes keep their contents.
+    pub fn add_passes(&self, g: &mut RenderGraph, albedo: ImageHandle, normal: ImageHandle) {
+        let owner = g.import_image(&self.owner, OWNER_STATE);
         let tris = g.import_buffer(&self.triangles, Access::StorageRead(Shader::Compute));
         let (pipe, count, splits, vpush) =
             (self.pipeline, self.triangle_count, self.splits, self.push);
@@ -195,51 +281,44 @@ impl TriangleAttributeVolumes {
             let region = (a.capacity * std::mem::size_of::<AttributeTriangle>()) as u64;
             (region, a.dirty.clone(), a.counts.clone(), a.splits.clone())
         });
+        let region = per_slot.as_ref().map(|p| p.0);
+        // What `voxelize_attributes` decided this frame, for the resolve pass after it.
+        let rewrite = Arc::new(AtomicBool::new(false));
+        let rewrite_read = rewrite.clone();
         g.add_pass("voxelize_attributes")
             .read(tris, Access::StorageRead(Shader::Compute))
-            .write(albedo, Access::StorageWrite(Shader::Compute))
-            .write(normal, Access::StorageWrite(Shader::Compute))
+            .write(owner, Access::StorageReadWrite(Shader::Compute))
             .record(move |ctx| {
+                rewrite.store(false, Ordering::SeqCst);
                 let first = !written.swap(true, Ordering::SeqCst);
                 let slot = ctx.slot % MAX_FRAMES_IN_FLIGHT;
-                let (triangles, count, splits) = match &per_slot {
-                    Some((region, dirty, counts, slot_splits)) => {
+                let (count, splits) = match &per_slot {
+                    Some((_, dirty, counts, slot_splits)) => {
                         let moved = dirty[slot].swap(false, Ordering::SeqCst);
                         if !(first || moved) {
                             return;
                         }
-                        let d = Descriptor::StorageBuffer {
-                            binding: 0,
-                            buffer: ctx.buffer(tris).raw,
-                            offset: slot as u64 * region,
-                            range: *region,
-                        };
-                        let n = counts[slot].load(Ordering::SeqCst);
-                        (d, n, slot_splits[slot].load(Ordering::SeqCst))
+                        (
+                            counts[slot].load(Ordering::SeqCst),
+                            slot_splits[slot].load(Ordering::SeqCst),
+                        )
                     }
-                    None if first => (
-                        Descriptor::storage_buffer(0, ctx.buffer(tris).raw),
-                        count,
-                        splits,
-                    ),
+                    None if first => (count, splits),
                     None => return,
                 };
                 if count == 0 {
                     return;
                 }
+                rewrite.store(true, Ordering::SeqCst);
                 let mut vpush = vpush;
                 vpush.extent[2] = count;
                 ctx.cmd.bind(
                     &pipe,
                     &[
-                        triangles,
+                        triangle_descriptor(ctx.buffer(tris).raw, region, slot),
                         Descriptor::StorageImage {
                             binding: 1,
-                            view: ctx.image(albedo).view,
-                        },
-                        Descriptor::StorageImage {
-                            binding: 2,
-                            view: ctx.image(normal).view,
+                            view: ctx.image(owner).view,
                         },
                     ],
                 );
@@ -247,14 +326,56 @@ impl TriangleAttributeVolumes {
                 let x = count.min(65_535);
                 ctx.cmd.dispatch(x, count.div_ceil(x), splits);
             });
-        (albedo, normal)
+        let resolve = self.resolve_pipeline;
+        let d = &self.owner.desc;
+        let extent = (d.width, d.height, d.depth);
+        g.add_pass("voxelize_attributes_resolve")
+            .read(tris, Access::StorageRead(Shader::Compute))
+            .write(owner, Access::StorageReadWrite(Shader::Compute))
+            .write(albedo, Access::StorageReadWrite(Shader::Compute))
+            .write(normal, Access::StorageReadWrite(Shader::Compute))
+            .record(move |ctx| {
+                if !rewrite_read.load(Ordering::SeqCst) {
+                    return;
+                }
+                let slot = ctx.slot % MAX_FRAMES_IN_FLIGHT;
+                let storage = |binding, h| Descriptor::StorageImage {
+                    binding,
+                    view: ctx.image(h).view,
+                };
+                ctx.cmd.bind(
+                    &resolve,
+                    &[
+                        triangle_descriptor(ctx.buffer(tris).raw, region, slot),
+                        storage(1, owner),
+                        storage(2, albedo),
+                        storage(3, normal),
+                    ],
+                );
+                ctx.cmd
+                    .dispatch(extent.0.div_ceil(8), extent.1.div_ceil(8), extent.2);
+            });
     }
 
     pub fn destroy(self, ctx: &Context) {
         ctx.destroy_compute_pipeline(self.pipeline);
+        ctx.destroy_compute_pipeline(self.resolve_pipeline);
         ctx.destroy_buffer(self.triangles);
-        ctx.destroy_image(self.albedo);
-        ctx.destroy_image(self.normal);
+        ctx.destroy_image(self.owner);
+    }
+}
+
+/// The triangles a frame's passes read: the whole buffer, or frame slot `slot`'s region of
+/// `region` bytes in scenes with moving objects.
+fn triangle_descriptor(buffer: vk::Buffer, region: Option<u64>, slot: usize) -> Descriptor {
+    match region {
+        Some(region) => Descriptor::StorageBuffer {
+            binding: 0,
+            buffer,
+            offset: slot as u64 * region,
+            range: region,
+        },
+        None => Descriptor::storage_buffer(0, buffer),
     }
 }
 
