@@ -378,11 +378,13 @@ impl FrameArgs {
         s.shadow.point_technique = self.point_shadows;
         let default_res = voxgi::voxel::gpu::VoxelSettings::default().max_res_xy;
         s.gi = self.gi.settings(scene);
-        // GI and debug views voxelize without --voxels; they then honour --voxelizer too.
-        let needs_voxels = s.gi.method != GiMethod::None || self.debug.is_some();
+        // GI and the voxel debug views voxelize without --voxels, honouring --voxelizer,
+        // --voxel-layers and --revoxelize (the atlas view draws an atlas, not voxels).
+        let atlas_view = self.debug == Some(voxgi::voxel::debug_view::DebugView::Atlas);
+        let needs_voxels = s.gi.method != GiMethod::None || (self.debug.is_some() && !atlas_view);
         s.voxels = self
             .voxels
-            .or((needs_voxels && self.voxelizer != Default::default()).then_some(default_res))
+            .or(needs_voxels.then_some(default_res))
             .map(|max_res_xy| voxgi::voxel::gpu::VoxelSettings {
                 max_res_xy,
                 layers: self.voxel_layers,
@@ -867,6 +869,29 @@ mod tests {
             Command::Render { frame, .. } => frame.gi.overrides(),
             _ => unreachable!(),
         }
+    }
+
+    fn render_settings(args: &[&str]) -> RenderSettings {
+        let cli = Cli::try_parse_from([&["voxgi", "render"], args].concat()).expect("parses");
+        let scene = load_scene_arg(None).expect("the built-in scene");
+        match cli.command {
+            Command::Render { frame, .. } => frame.settings(&scene).expect("settings"),
+            _ => unreachable!(),
+        }
+    }
+
+    #[test]
+    fn voxel_flags_apply_to_gi_and_debug_grids_without_voxels() {
+        let v = render_settings(&["--gi", "pathtrace", "--revoxelize", "--voxel-layers", "2"])
+            .voxels
+            .expect("GI voxelizes");
+        assert!(v.revoxelize_static && v.layers == 2, "{v:?}");
+        let v = render_settings(&["--debug", "voxels", "--voxelizer", "atlas"])
+            .voxels
+            .expect("the voxel view voxelizes");
+        assert_eq!(v.voxelizer, voxgi::voxel::gpu::Voxelizer::Atlas);
+        assert!(render_settings(&["--debug", "atlas"]).voxels.is_none());
+        assert!(render_settings(&[]).voxels.is_none());
     }
 
     #[test]

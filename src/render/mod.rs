@@ -339,8 +339,12 @@ impl Renderer {
             }
             _ => None,
         };
-        let voxel_debug = match (&settings.debug, &voxels) {
+        let voxel_debug = match (&settings.debug, &mut voxels) {
             (Some(d), Some(v)) if !atlas_view_on => {
+                // With the atlas voxelizer its points write the albedo the view shows.
+                if d.view == crate::voxel::debug_view::DebugView::Albedo {
+                    v.enable_attribute_volumes(ctx, scene)?;
+                }
                 Some(crate::voxel::debug_view::VoxelDebugPass::new(
                     ctx,
                     scene,
@@ -920,7 +924,7 @@ impl Renderer {
                     w,
                     h,
                 ));
-                pass.add_pass(g, &v.voxels, image, value, color, (w, h));
+                pass.add_pass(g, v, image, value, color, (w, h));
                 (value, color)
             }
             _ => (radiance, ldr),

@@ -74,10 +74,11 @@ struct AnimatedTriangles {
     grid: VoxelGrid,
 }
 
-/// Triangle-written albedo and normal volumes of a whole scene (the albedo debug view).
+/// Albedo and normal volumes with the triangle writer of a scene's objects (the albedo debug
+/// view); no writer when the scene given has no objects (the atlas writes them all).
 pub struct TriangleAttributeVolumes {
     pub volumes: AttributeVolumes,
-    pub writer: TriangleAttributes,
+    pub writer: Option<TriangleAttributes>,
 }
 
 impl TriangleAttributeVolumes {
@@ -88,8 +89,17 @@ impl TriangleAttributeVolumes {
         grid: &VoxelGrid,
     ) -> Result<Self, VkError> {
         let volumes = AttributeVolumes::new(ctx, grid)?;
+        if scene.objects.is_empty() {
+            return Ok(Self {
+                volumes,
+                writer: None,
+            });
+        }
         match TriangleAttributes::new(ctx, scene, time_s, grid) {
-            Ok(writer) => Ok(Self { volumes, writer }),
+            Ok(writer) => Ok(Self {
+                volumes,
+                writer: Some(writer),
+            }),
             Err(e) => {
                 volumes.destroy(ctx);
                 Err(e)
@@ -99,18 +109,13 @@ impl TriangleAttributeVolumes {
 
     /// See [`TriangleAttributes::update`].
     pub fn update(&mut self, t_s: f32, slot: usize) -> bool {
-        self.writer.update(t_s, slot)
-    }
-
-    /// Declares the writing passes and returns the `(albedo, normal)` volumes.
-    pub fn add_pass(&self, g: &mut RenderGraph) -> (ImageHandle, ImageHandle) {
-        let (albedo, normal) = self.volumes.import(g);
-        self.writer.add_passes(g, albedo, normal);
-        (albedo, normal)
+        self.writer.as_mut().is_some_and(|w| w.update(t_s, slot))
     }
 
     pub fn destroy(self, ctx: &Context) {
-        self.writer.destroy(ctx);
+        if let Some(w) = self.writer {
+            w.destroy(ctx);
+        }
         self.volumes.destroy(ctx);
     }
 }

@@ -17,7 +17,7 @@
 //! tests and `--exr` read) and the `RGBA8` color image the renderer reads back as its picture.
 
 use super::attributes::{TriangleAttributeVolumes, ATTRIBUTE_VOLUME_STATE};
-use super::gpu::{GpuVoxelError, GpuVoxelGrid, VoxelFrame};
+use super::gpu::{GpuVoxelError, VoxelFrame};
 use super::ray_mask::RayMaskLut;
 use super::traverse::TraversalParams;
 use super::VoxelGrid;
@@ -242,20 +242,28 @@ impl VoxelDebugPass {
     pub fn add_pass(
         &self,
         g: &mut RenderGraph,
-        voxels: &GpuVoxelGrid,
+        frame: &VoxelFrame,
         columns: ImageHandle,
         value: ImageHandle,
         color: ImageHandle,
         extent: (u32, u32),
     ) {
         let push = self.push;
-        debug_assert_eq!(push.dims[3] as u32 + 1, voxels.mip_levels());
+        debug_assert_eq!(push.dims[3] as u32 + 1, frame.voxels.mip_levels());
         let read = Access::StorageRead(Shader::Compute);
         let lut = g.import_buffer(&self.lut, read);
         let pipe = self.pipeline;
         let sampler = self.sampler;
         let albedo = match &self.albedo {
-            AlbedoSource::Volumes(v) => v.add_pass(g).0,
+            AlbedoSource::Volumes(v) => {
+                // The atlas resolve writes every voxel; triangle objects then write theirs.
+                let (albedo, normal) = v.volumes.import(g);
+                frame.add_attribute_passes(g, albedo, normal);
+                if let Some(w) = &v.writer {
+                    w.add_passes(g, albedo, normal);
+                }
+                albedo
+            }
             AlbedoSource::Placeholder(image) => g.import_image(image, ATTRIBUTE_VOLUME_STATE),
         };
         g.add_pass("voxel_debug")
@@ -313,8 +321,15 @@ impl AlbedoSource {
     ) -> Result<Self, VkError> {
         if view == DebugView::Albedo {
             let grid = &frame.voxels.grid;
+            // Objects the atlas voxelizer handles get their albedo from its points.
+            let mut tri_scene = scene.clone();
+            if frame.has_attribute_volumes() {
+                tri_scene
+                    .objects
+                    .retain(|o| !super::gpu_atlas::uses_atlas(scene, o));
+            }
             return Ok(Self::Volumes(Box::new(TriangleAttributeVolumes::new(
-                ctx, scene, time_s, grid,
+                ctx, &tri_scene, time_s, grid,
             )?)));
         }
         // Two texels deep: `ImageDesc` makes a 3D image (the shader's sampler3D) only for
