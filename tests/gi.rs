@@ -362,6 +362,92 @@ keyframes = [ { time_s = 0.0, translate = [-0.8, 0.25, 0.0] }, { time_s = 1.0, t
 }
 
 #[test]
+fn radiance_volume_is_kept_between_frames_and_recomputed_when_objects_move() {
+    // The hemisphere method on the direct-radiance volume computes the volume in the first
+    // frame after a restart only. A renderer run for frames at t = 0, then moved to t = 0.5,
+    // must show exactly what a fresh renderer at 0.5 shows; and its third frame at t = 0 what
+    // its first showed (the volume kept, not lost).
+    use voxgi::gi::RadianceSource;
+    use voxgi::render::Renderer;
+    let toml = r#"
+[camera]
+position = [0.0, 2.5, -2.5]
+target = [0.0, 0.0, 0.0]
+fov_y_deg = 45.0
+near = 0.05
+far = 20.0
+[[lights]]
+kind = "point"
+position = [0.0, 1.5, 0.0]
+intensity_w_sr = 2.0
+[[objects]]
+builtin = "quad"
+scale = [4.0, 1.0, 4.0]
+material = { albedo = [0.7, 0.7, 0.7] }
+[[objects]]
+name = "mover"
+builtin = "cube"
+scale = 0.5
+material = { albedo = [0.9, 0.1, 0.1] }
+[objects.animation]
+keyframes = [ { time_s = 0.0, translate = [-0.8, 0.25, 0.0] }, { time_s = 1.0, translate = [0.8, 0.25, 0.0] } ]
+"#;
+    let scene = voxgi::scene::Scene::from_toml_str(toml, Path::new("<moving>"), Path::new(ROOT))
+        .expect("parses");
+    let ctx = common::context();
+    let settings = |t: f32| RenderSettings {
+        width: 64,
+        height: 64,
+        time_s: t,
+        gi: GiSettings {
+            method: GiMethod::Hemisphere,
+            rays: 4,
+            radiance_source: RadianceSource::Volume,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let mut direct = Renderer::new(
+        &ctx,
+        &scene,
+        RenderSettings {
+            gi: GiSettings::default(),
+            ..settings(0.0)
+        },
+    )
+    .expect("renderer");
+    let direct_only = common::run_frames(&ctx, &mut direct, 1);
+    direct.destroy(&ctx);
+    let mut moved = Renderer::new(&ctx, &scene, settings(0.0)).expect("renderer");
+    let first = common::run_frames(&ctx, &mut moved, 1);
+    let sum = |img: &voxgi::eval::HdrImage| img.data.iter().flatten().sum::<f32>();
+    assert!(
+        sum(&first) > 1.005 * sum(&direct_only),
+        "the volume adds indirect light (measured: 1.1% of the image): {} vs direct {}",
+        sum(&first),
+        sum(&direct_only)
+    );
+    let third = common::run_frames(&ctx, &mut moved, 2);
+    assert_eq!(
+        first.data, third.data,
+        "the kept volume gives the same image"
+    );
+    moved.settings.time_s = 0.5;
+    moved.prepare(&scene).expect("prepare");
+    let after = common::run_frames(&ctx, &mut moved, 2);
+    moved.destroy(&ctx);
+    let mut fresh = Renderer::new(&ctx, &scene, settings(0.5)).expect("renderer");
+    let expected = common::run_frames(&ctx, &mut fresh, 2);
+    fresh.destroy(&ctx);
+    assert_ne!(first.data, after.data, "the cube moved");
+    assert_eq!(
+        after.data, expected.data,
+        "a moved renderer shows what a fresh one at t = 0.5 shows"
+    );
+    common::assert_no_validation_messages(&ctx);
+}
+
+#[test]
 fn glossy_senders_reflect_light_onto_receivers() {
     // A black floor lit at 45 degrees reflects nothing diffusely; with rho_s = 0.5 it throws a
     // specular reflection onto the white wall ahead: the mirror image of a directional light
