@@ -795,7 +795,7 @@ pub fn bench_voxelize_sweep(
                                 a.destroy(ctx);
                                 (Some(t?), None)
                             }
-                            Err(e @ GpuVoxelError::AtlasPointsTooLarge { .. }) => {
+                            Err(e @ GpuVoxelError::AtlasRowTooLarge { .. }) => {
                                 (None, Some(e.to_string()))
                             }
                             Err(e) => return Err(e.into()),
@@ -848,7 +848,7 @@ pub fn bench_voxelize_sweep(
                         pack_cpu_ms,
                         triangle_ms,
                         atlas: Some(AtlasTimes {
-                            points: u64::from(points.count),
+                            points: points.count,
                             setup_gpu_ms: points.setup_timings.iter().map(|t| t.gpu_ms).sum(),
                             voxelize_ms,
                         }),
