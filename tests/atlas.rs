@@ -266,11 +266,12 @@ fn cornell_box_atlas_vs_cpu_128() {
     check("cornell", 128, 1);
 }
 
-/// Point lists past the device's storage-buffer range (Cornell at 512²) are split into
-/// chunks; here 256 KiB chunks (and 256 KiB `atlas_points` scratch bands) stand in for the
-/// limit at 128³, where one chunk holds each list. The chunked lists set exactly the same
-/// bits (`voxelize_atlas`, a dispatch per chunk) and write exactly the same volumes
-/// (`voxelize_atlas_volumes`, a draw per chunk, blending in the same order).
+/// Point lists and `atlas_points` scratch past the device's storage-buffer range (at 512²:
+/// Cornell's scratch, the dense-bunnies list) are split into chunks; here 256 KiB chunks
+/// (and 256 KiB scratch bands) stand in for the limit at 128³, where one chunk holds each
+/// list. The chunked lists set exactly the same bits (`voxelize_atlas`, a dispatch per
+/// chunk) and write exactly the same volumes (`voxelize_atlas_volumes`, a draw per chunk,
+/// blending in the same order).
 #[test]
 fn chunked_point_lists_voxelize_like_whole_ones_on_the_cornell_box() {
     const CHUNK_BYTES: u64 = 1 << 18;
@@ -310,6 +311,21 @@ fn chunked_point_lists_voxelize_like_whole_ones_on_the_cornell_box() {
     let differ = |a: &[u8], b: &[u8]| a.iter().zip(b).filter(|(x, y)| x != y).count();
     assert_eq!(differ(&albedo, &c_albedo), 0, "chunked albedo differs");
     assert_eq!(differ(&normal, &c_normal), 0, "chunked normals differ");
+
+    // The raster bit pass (`voxelize_atlas_bits`, a draw per chunk) against the compute
+    // one, both chunked: with the equality above, it too matches the whole lists.
+    use voxgi::voxel::bench::{bench_voxelize_atlas_chunked, VoxelizeBenchDesc};
+    let desc = VoxelizeBenchDesc {
+        resolution: 128,
+        layers: 1,
+        repeats: 1,
+    };
+    let r = bench_voxelize_atlas_chunked(&ctx, &s, &desc, CHUNK_BYTES).expect("bench runs");
+    assert_eq!(r.voxels, whole.count_ones(), "raster bench grid differs");
+    assert_eq!(
+        r.differing_words, 0,
+        "chunked raster and compute bits differ"
+    );
     common::assert_no_validation_messages(&ctx);
 }
 

@@ -136,9 +136,10 @@ pub struct PointChunk {
 /// The valid texels of one atlas in device buffers: `uvec4` per point, the model-space
 /// position's f32 bits and the index of the triangle it lies on (`atlas_points.comp`).
 ///
-/// A shader binding can address at most `maxStorageBufferRange` bytes (128 MiB on
-/// lavapipe, 11.2 M points at Cornell 512²), so the list is split into chunks of at most
-/// that many bytes, each its own buffer, and every consumer dispatches or draws per chunk.
+/// A shader binding can address at most `maxStorageBufferRange` bytes (128 MiB, 8.4 M
+/// points, on lavapipe; the dense-bunnies scene has 14.6 M at 512², and the compaction's
+/// room for every texel passes 128 MiB already at Cornell 512²), so the list is split into
+/// chunks of at most that many bytes, each its own buffer, and every consumer dispatches or draws per chunk.
 /// Separate buffers rather than one buffer bound at per-chunk offsets: no chunk's size has
 /// to respect `minStorageBufferOffsetAlignment`, and no single allocation has to hold the
 /// whole list (`maxMemoryAllocationSize`).
