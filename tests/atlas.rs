@@ -26,7 +26,7 @@ use voxgi::voxel::gpu::{
     add_voxelize_passes, column_bytes, image_extent, readback_buffer, run_once, scene_triangles,
     ColumnBase, VoxelPipelines,
 };
-use voxgi::voxel::gpu_atlas::AtlasScene;
+use voxgi::voxel::gpu_atlas::{device_chunk_bytes, AtlasScene};
 use voxgi::voxel::voxelize::voxelize_triangles;
 use voxgi::voxel::{BitGrid, GridDesc, VoxelGrid};
 
@@ -43,9 +43,32 @@ fn scene(path: &str) -> voxgi::scene::Scene {
 
 /// The atlas voxelization of `s` at time 0, read back from the column buffer.
 fn atlas_bits(ctx: &Context, grid: &VoxelGrid, s: &voxgi::scene::Scene) -> (BitGrid, u64) {
+    let (bits, points, _) = atlas_bits_chunked(ctx, grid, s, device_chunk_bytes(ctx));
+    (bits, points)
+}
+
+/// [`atlas_bits`] with point-list chunks of at most `chunk_bytes`; also returns how many
+/// chunks the lists took.
+fn atlas_bits_chunked(
+    ctx: &Context,
+    grid: &VoxelGrid,
+    s: &voxgi::scene::Scene,
+    chunk_bytes: u64,
+) -> (BitGrid, u64, usize) {
     let tri_pipes = VoxelPipelines::new(ctx).expect("voxel pipelines");
     let mut cache = AtlasCache::default();
-    let atlas = AtlasScene::new(ctx, s, 0.0, grid, &mut cache).expect("atlas scene");
+    let atlas =
+        AtlasScene::new_chunked(ctx, s, 0.0, grid, &mut cache, chunk_bytes).expect("atlas scene");
+    for list in atlas.lists() {
+        let counted: u64 = list.chunks.iter().map(|c| u64::from(c.count)).sum();
+        assert_eq!(counted, list.count, "the chunks hold the whole list");
+        for c in &list.chunks {
+            assert!(
+                u64::from(c.count) * 16 <= chunk_bytes,
+                "a chunk over the limit"
+            );
+        }
+    }
     let size = column_bytes(grid);
     let readback = readback_buffer(ctx, "atlas voxels readback", size).expect("readback");
     let mut g = RenderGraph::new();
@@ -79,10 +102,68 @@ fn atlas_bits(ctx: &Context, grid: &VoxelGrid, s: &voxgi::scene::Scene) -> (BitG
         }
     }
     let points = atlas.point_count();
+    let chunks = atlas.lists().iter().map(|l| l.chunks.len()).sum();
     ctx.destroy_buffer(readback);
     atlas.destroy(ctx);
     tri_pipes.destroy(ctx);
-    (bits, points)
+    (bits, points, chunks)
+}
+
+/// The albedo and normal volumes (`RGBA8` and `RGBA8_SNORM` bytes) that
+/// `voxelize_atlas_volumes` + `voxelize_atlas_resolve` write for `s` at time 0, with
+/// point-list chunks of at most `chunk_bytes`.
+fn atlas_volumes_chunked(
+    ctx: &Context,
+    grid: &VoxelGrid,
+    s: &voxgi::scene::Scene,
+    chunk_bytes: u64,
+) -> [Vec<u8>; 2] {
+    use voxgi::voxel::gpu_atlas_volumes::{AtlasVolumes, AttributeVolumes};
+    let mut cache = AtlasCache::default();
+    let atlas =
+        AtlasScene::new_chunked(ctx, s, 0.0, grid, &mut cache, chunk_bytes).expect("atlas scene");
+    let splat = AtlasVolumes::new(ctx, &atlas, s, grid, false).expect("atlas volumes");
+    let volumes = AttributeVolumes::new(ctx, grid).expect("attribute volumes");
+    let ext = grid.extent_voxels();
+    let size = u64::from(ext.x * ext.y * ext.z) * 4;
+    let outs = [
+        readback_buffer(ctx, "albedo readback", size).expect("readback"),
+        readback_buffer(ctx, "normal readback", size).expect("readback"),
+    ];
+    let mut g = RenderGraph::new();
+    let (albedo, normal) = volumes.import(&mut g);
+    splat.add_passes(&mut g, &atlas, grid, albedo, normal, true, None);
+    let out = outs
+        .each_ref()
+        .map(|b| g.import_buffer(b, Access::HostRead));
+    g.add_pass("volume_readback")
+        .read(albedo, Access::TransferRead)
+        .read(normal, Access::TransferRead)
+        .write(out[0], Access::TransferWrite)
+        .write(out[1], Access::TransferWrite)
+        .record(move |ctx| {
+            let extent = voxgi::vk::vk::Extent3D {
+                width: ext.x,
+                height: ext.y,
+                depth: ext.z,
+            };
+            for (img, buf) in [(albedo, out[0]), (normal, out[1])] {
+                ctx.cmd
+                    .copy_image_to_buffer(ctx.image(img).raw, extent, 0, 1, ctx.buffer(buf).raw);
+            }
+        });
+    let timings = run_once(ctx, g).expect("volume graph runs");
+    assert!(timings.iter().any(|t| t.name == "voxelize_atlas_volumes"));
+    let bytes = outs
+        .each_ref()
+        .map(|b| b.mapped().expect("host-visible")[..size as usize].to_vec());
+    for b in outs {
+        ctx.destroy_buffer(b);
+    }
+    volumes.destroy(ctx);
+    splat.destroy(ctx);
+    atlas.destroy(ctx);
+    bytes
 }
 
 /// `(recall, precision, precision against the CPU set dilated by one voxel)`.
@@ -183,6 +264,69 @@ fn check_grid(name: &str, grid: &VoxelGrid) {
 #[test]
 fn cornell_box_atlas_vs_cpu_128() {
     check("cornell", 128, 1);
+}
+
+/// Point lists and `atlas_points` scratch past the device's storage-buffer range (at 512²:
+/// Cornell's scratch, the dense-bunnies list) are split into chunks; here 256 KiB chunks
+/// (and 256 KiB scratch bands) stand in for the limit at 128³, where one chunk holds each
+/// list. The chunked lists set exactly the same bits (`voxelize_atlas`, a dispatch per
+/// chunk) and write exactly the same volumes (`voxelize_atlas_volumes`, a draw per chunk,
+/// blending in the same order).
+#[test]
+fn chunked_point_lists_voxelize_like_whole_ones_on_the_cornell_box() {
+    const CHUNK_BYTES: u64 = 1 << 18;
+    let ctx = common::context();
+    let s = scene("cornell");
+    let aabb = s.aabb_at(0.0);
+    let desc = GridDesc {
+        layers: 1,
+        max_res_xy: 128,
+        ..Default::default()
+    };
+    let grid = VoxelGrid::around(aabb.min, aabb.max, &desc).expect("grid");
+    let (whole, points, whole_chunks) =
+        atlas_bits_chunked(&ctx, &grid, &s, device_chunk_bytes(&ctx));
+    let (chunked, chunked_points, chunks) = atlas_bits_chunked(&ctx, &grid, &s, CHUNK_BYTES);
+    println!(
+        "cornell 128: {points} points, {whole_chunks} chunks at the device limit, {chunks} \
+         of {CHUNK_BYTES} bytes; {} voxels",
+        whole.count_ones()
+    );
+    assert_eq!(chunked_points, points, "chunking loses no point");
+    assert!(
+        chunks as u64 >= points * 16 / CHUNK_BYTES,
+        "{chunks} chunks for {points} points"
+    );
+    assert!(chunks > whole_chunks, "the small limit splits the lists");
+    assert!(whole.count_ones() > 10_000, "{} voxels", whole.count_ones());
+    assert!(
+        whole == chunked,
+        "chunked bits differ from the whole lists'"
+    );
+
+    let [albedo, normal] = atlas_volumes_chunked(&ctx, &grid, &s, device_chunk_bytes(&ctx));
+    let [c_albedo, c_normal] = atlas_volumes_chunked(&ctx, &grid, &s, CHUNK_BYTES);
+    let occupied = albedo.chunks_exact(4).filter(|t| t[3] == 255).count();
+    assert!(occupied > 10_000, "{occupied} voxels with albedo");
+    let differ = |a: &[u8], b: &[u8]| a.iter().zip(b).filter(|(x, y)| x != y).count();
+    assert_eq!(differ(&albedo, &c_albedo), 0, "chunked albedo differs");
+    assert_eq!(differ(&normal, &c_normal), 0, "chunked normals differ");
+
+    // The raster bit pass (`voxelize_atlas_bits`, a draw per chunk) against the compute
+    // one, both chunked: with the equality above, it too matches the whole lists.
+    use voxgi::voxel::bench::{bench_voxelize_atlas_chunked, VoxelizeBenchDesc};
+    let desc = VoxelizeBenchDesc {
+        resolution: 128,
+        layers: 1,
+        repeats: 1,
+    };
+    let r = bench_voxelize_atlas_chunked(&ctx, &s, &desc, CHUNK_BYTES).expect("bench runs");
+    assert_eq!(r.voxels, whole.count_ones(), "raster bench grid differs");
+    assert_eq!(
+        r.differing_words, 0,
+        "chunked raster and compute bits differ"
+    );
+    common::assert_no_validation_messages(&ctx);
 }
 
 #[test]

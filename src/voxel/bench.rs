@@ -395,6 +395,18 @@ pub fn bench_voxelize_atlas(
     scene: &Scene,
     desc: &VoxelizeBenchDesc,
 ) -> Result<VoxelizeBenchReport, BenchError> {
+    let chunk_bytes = super::gpu_atlas::device_chunk_bytes(ctx);
+    bench_voxelize_atlas_chunked(ctx, scene, desc, chunk_bytes)
+}
+
+/// [`bench_voxelize_atlas`] with point-list chunks of at most `chunk_bytes`
+/// ([`super::gpu_atlas::render_atlas_points_chunked`]).
+pub fn bench_voxelize_atlas_chunked(
+    ctx: &Context,
+    scene: &Scene,
+    desc: &VoxelizeBenchDesc,
+    chunk_bytes: u64,
+) -> Result<VoxelizeBenchReport, BenchError> {
     use super::gpu::{column_bytes, image_extent, readback_buffer, run_once, COLUMN_FORMAT};
     use crate::graph::{Access, RenderGraph};
     use crate::vk::{vk, ImageDesc};
@@ -409,7 +421,8 @@ pub fn bench_voxelize_atlas(
         },
     )?;
     let mut cache = super::atlas::AtlasCache::default();
-    let atlas = super::gpu_atlas::AtlasScene::new(ctx, scene, 0.0, &grid, &mut cache)?;
+    let atlas =
+        super::gpu_atlas::AtlasScene::new_chunked(ctx, scene, 0.0, &grid, &mut cache, chunk_bytes)?;
     let raster = match super::gpu_atlas_raster::AtlasRasterBits::new(ctx) {
         Ok(r) => r,
         Err(e) => {
@@ -795,7 +808,7 @@ pub fn bench_voxelize_sweep(
                                 a.destroy(ctx);
                                 (Some(t?), None)
                             }
-                            Err(e @ GpuVoxelError::AtlasPointsTooLarge { .. }) => {
+                            Err(e @ GpuVoxelError::AtlasRowTooLarge { .. }) => {
                                 (None, Some(e.to_string()))
                             }
                             Err(e) => return Err(e.into()),
@@ -848,7 +861,7 @@ pub fn bench_voxelize_sweep(
                         pack_cpu_ms,
                         triangle_ms,
                         atlas: Some(AtlasTimes {
-                            points: u64::from(points.count),
+                            points: points.count,
                             setup_gpu_ms: points.setup_timings.iter().map(|t| t.gpu_ms).sum(),
                             voxelize_ms,
                         }),

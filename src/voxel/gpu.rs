@@ -119,13 +119,8 @@ pub enum GpuVoxelError {
     NoSuchObject { object: String, names: String },
     #[error("object '{object}' has no atlas: its OBJ-sequence frames differ in topology, so the atlas voxelizer leaves it to the triangle voxelizer; pick another --object")]
     NoAtlas { object: String },
-    #[error("a {width}x{height} atlas needs a {bytes}-byte point list, above this device's {max}-byte storage-buffer range; use fewer voxels (--voxels) or --voxelizer triangle")]
-    AtlasPointsTooLarge {
-        width: u32,
-        height: u32,
-        bytes: u64,
-        max: u64,
-    },
+    #[error("one {width}-texel atlas row needs {bytes} bytes of point scratch, above the {max}-byte point-list chunk; use fewer voxels (--voxels) or --voxelizer triangle")]
+    AtlasRowTooLarge { width: u32, bytes: u64, max: u64 },
 }
 
 /// One world-space triangle as the shader reads it (`struct Triangle` in

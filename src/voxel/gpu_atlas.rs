@@ -101,7 +101,7 @@ impl AtlasPipelines {
                 (0, vk::DescriptorType::COMBINED_IMAGE_SAMPLER),
                 (1, storage),
             ],
-            0,
+            16,
             &[],
         )?;
         let voxelize = ctx.compute_pipeline(
@@ -127,11 +127,28 @@ impl AtlasPipelines {
     }
 }
 
-/// The valid texels of one atlas in a device buffer: `uvec4` per point, the model-space
-/// position's f32 bits and the index of the triangle it lies on (`atlas_points.comp`).
-pub struct AtlasPoints {
+/// One chunk of a point list: its own buffer, at most the device's storage-buffer range.
+pub struct PointChunk {
     pub buffer: Buffer,
     pub count: u32,
+}
+
+/// The valid texels of one atlas in device buffers: `uvec4` per point, the model-space
+/// position's f32 bits and the index of the triangle it lies on (`atlas_points.comp`).
+///
+/// A shader binding can address at most `maxStorageBufferRange` bytes (128 MiB, 8.4 M
+/// points, on lavapipe; the dense-bunnies scene has 14.6 M at 512², and the compaction's
+/// room for every texel passes 128 MiB already at Cornell 512²), so the list is split into
+/// chunks of at most that many bytes, each its own buffer, and every consumer dispatches or draws per chunk.
+/// Separate buffers rather than one buffer bound at per-chunk offsets: no chunk's size has
+/// to respect `minStorageBufferOffsetAlignment`, and no single allocation has to hold the
+/// whole list (`maxMemoryAllocationSize`).
+pub struct AtlasPoints {
+    /// The sorted list in order, each chunk full but the last; empty when there are no
+    /// points.
+    pub chunks: Vec<PointChunk>,
+    /// Points in all chunks.
+    pub count: u64,
     /// The atlas's `(width, height)` in texels.
     pub atlas_extent: (u32, u32),
     /// GPU times of the one-time passes that built the point list (`voxgi profile` lists
@@ -141,8 +158,40 @@ pub struct AtlasPoints {
 
 impl AtlasPoints {
     pub fn destroy(self, ctx: &Context) {
-        ctx.destroy_buffer(self.buffer);
+        for c in self.chunks {
+            ctx.destroy_buffer(c.buffer);
+        }
     }
+}
+
+/// The bytes one point-list chunk may hold on `ctx`'s device: its storage-buffer range,
+/// whole points only.
+pub fn device_chunk_bytes(ctx: &Context) -> u64 {
+    u64::from(ctx.info.max_storage_buffer_range) / POINT_BYTES * POINT_BYTES
+}
+
+/// Bytes per point (`uvec4`).
+const POINT_BYTES: u64 = 16;
+
+/// Bytes of `atlas_points`'s count header (one `uint` padded to a `uvec4`).
+const SCRATCH_HEADER_BYTES: u64 = 16;
+
+/// The atlas row bands `[first row, row count)` that `atlas_points` compacts each into its
+/// own scratch buffer: a band's scratch (header + room for every texel) fits `chunk_bytes`.
+/// `None` when not even one row fits.
+fn scratch_bands(w: u32, h: u32, chunk_bytes: u64) -> Option<Vec<(u32, u32)>> {
+    let row_bytes = u64::from(w) * POINT_BYTES;
+    let rows = chunk_bytes.checked_sub(SCRATCH_HEADER_BYTES)? / row_bytes.max(1);
+    let rows = u32::try_from(rows).unwrap_or(u32::MAX).min(h.max(1));
+    if rows == 0 {
+        return None;
+    }
+    Some(
+        (0..h)
+            .step_by(rows as usize)
+            .map(|y| (y, rows.min(h - y)))
+            .collect(),
+    )
 }
 
 /// The triangles of `atlas` as `atlas_positions` reads them (model-space vertices).
@@ -210,13 +259,32 @@ pub fn add_atlas_positions_pass(
 }
 
 /// Renders the position atlas of a mesh (`atlas_positions`) and compacts its valid texels
-/// (`atlas_points`), once.
+/// (`atlas_points`), once, into chunks of at most the device's storage-buffer range.
 pub fn render_atlas_points(
     ctx: &Context,
     pipes: &AtlasPipelines,
     atlas: &MeshAtlas,
     positions: &[Vec3],
     indices: &[u32],
+) -> Result<AtlasPoints, GpuVoxelError> {
+    let chunk_bytes = device_chunk_bytes(ctx);
+    render_atlas_points_chunked(ctx, pipes, atlas, positions, indices, chunk_bytes)
+}
+
+/// [`render_atlas_points`] with chunks (and `atlas_points` scratch bands) of at most
+/// `chunk_bytes` (at most [`device_chunk_bytes`]; smaller to test the chunking).
+///
+/// `atlas_points` appends with an atomic counter, so it cannot know in which chunk a point
+/// ends up. Instead each band of atlas rows is compacted into its own scratch buffer with
+/// room for all its texels (so a band's scratch fits one binding), and the host, which
+/// reads the points back anyway to sort them, splits the sorted list into full chunks.
+pub fn render_atlas_points_chunked(
+    ctx: &Context,
+    pipes: &AtlasPipelines,
+    atlas: &MeshAtlas,
+    positions: &[Vec3],
+    indices: &[u32],
+    chunk_bytes: u64,
 ) -> Result<AtlasPoints, GpuVoxelError> {
     let tris = gpu_atlas_triangles(atlas, positions, indices);
     if tris.len() >= ATLAS_MAX_TRIANGLES {
@@ -226,48 +294,57 @@ pub fn render_atlas_points(
         });
     }
     let (w, h) = (atlas.width, atlas.height);
-    // atlas_points binds a scratch list with room for every texel; past the device's
-    // storage-buffer range the points would be lost.
-    let scratch_bytes = 16 + u64::from(w) * u64::from(h) * 16;
-    let max = u64::from(ctx.info.max_storage_buffer_range);
-    if scratch_bytes > max {
-        return Err(GpuVoxelError::AtlasPointsTooLarge {
+    let chunk_bytes = chunk_bytes.min(device_chunk_bytes(ctx)) / POINT_BYTES * POINT_BYTES;
+    let Some(bands) = scratch_bands(w, h, chunk_bytes) else {
+        return Err(GpuVoxelError::AtlasRowTooLarge {
             width: w,
-            height: h,
-            bytes: scratch_bytes,
-            max,
+            bytes: SCRATCH_HEADER_BYTES + u64::from(w) * POINT_BYTES,
+            max: chunk_bytes,
         });
-    }
+    };
     let tri_buffer = ctx.upload_buffer(
         "atlas triangles",
         bytemuck::cast_slice(&tris),
         vk::BufferUsageFlags::STORAGE_BUFFER,
     )?;
-    let scratch = match ctx.create_buffer(&BufferDesc {
-        name: "atlas points (scratch)".into(),
-        size_bytes: scratch_bytes,
-        usage: vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
-        location: MemoryLocation::GpuToCpu,
-    }) {
-        Ok(b) => b,
-        Err(e) => {
-            ctx.destroy_buffer(tri_buffer);
-            return Err(e.into());
-        }
-    };
+    let mut scratch = Vec::with_capacity(bands.len());
     let result = (|| {
+        for (i, &(_, rows)) in bands.iter().enumerate() {
+            scratch.push(ctx.create_buffer(&BufferDesc {
+                name: format!("atlas points (scratch band {i})"),
+                size_bytes: SCRATCH_HEADER_BYTES + u64::from(w) * u64::from(rows) * POINT_BYTES,
+                usage: vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+                location: MemoryLocation::GpuToCpu,
+            })?);
+        }
         let mut g = RenderGraph::new();
         let tri_h = g.import_buffer(&tri_buffer, Access::StorageRead(Shader::Graphics));
-        let out = g.import_buffer(&scratch, Access::HostRead);
+        let outs: Vec<(BufferHandle, u32, u32)> = scratch
+            .iter()
+            .zip(&bands)
+            .map(|(b, &(row0, rows))| (g.import_buffer(b, Access::HostRead), row0, rows))
+            .collect();
         let image = add_atlas_positions_pass(&mut g, pipes, tri_h, tris.len() as u32, (w, h));
-        g.add_pass("atlas_points_clear")
-            .write(out, Access::TransferWrite)
-            .record(move |ctx| ctx.cmd.fill_buffer(ctx.buffer(out).raw, 0));
+        let mut clear = g.add_pass("atlas_points_clear");
+        for &(out, _, _) in &outs {
+            clear = clear.write(out, Access::TransferWrite);
+        }
+        let cleared = outs.clone();
+        clear.record(move |ctx| {
+            for &(out, _, _) in &cleared {
+                ctx.cmd.fill_buffer(ctx.buffer(out).raw, 0);
+            }
+        });
         let (pipe, sampler) = (pipes.points, pipes.sampler);
-        g.add_pass("atlas_points")
-            .read(image, Access::Sampled(Shader::Compute))
-            .write(out, Access::StorageReadWrite(Shader::Compute))
-            .record(move |ctx| {
+        let mut pass = g
+            .add_pass("atlas_points")
+            .read(image, Access::Sampled(Shader::Compute));
+        for &(out, _, _) in &outs {
+            pass = pass.write(out, Access::StorageReadWrite(Shader::Compute));
+        }
+        let bands_h = outs.clone();
+        pass.record(move |ctx| {
+            for &(out, row0, rows) in &bands_h {
                 ctx.cmd.bind(
                     &pipe,
                     &[
@@ -279,38 +356,68 @@ pub fn render_atlas_points(
                         Descriptor::storage_buffer(1, ctx.buffer(out).raw),
                     ],
                 );
-                ctx.cmd.dispatch(w.div_ceil(8), h.div_ceil(8), 1);
-            });
-        g.mark_output(out);
+                ctx.cmd
+                    .push_constants(&pipe, bytemuck::bytes_of(&[row0, rows, 0, 0]));
+                ctx.cmd.dispatch(w.div_ceil(8), rows.div_ceil(8), 1);
+            }
+        });
+        for &(out, _, _) in &outs {
+            g.mark_output(out);
+        }
         let setup_timings = run_once(ctx, g)?;
-        let bytes = scratch.mapped().unwrap_or(&[]);
-        let count = bytes
-            .get(..4)
-            .map_or(0, |b| u32::from_ne_bytes([b[0], b[1], b[2], b[3]]))
-            .min(w.saturating_mul(h));
-        let raw = bytes.get(16..16 + count as usize * 16).unwrap_or(&[]);
+        let mut points: Vec<[u32; 4]> = Vec::new();
+        for (b, &(_, rows)) in scratch.iter().zip(&bands) {
+            let bytes = b.mapped().unwrap_or(&[]);
+            let count = bytes
+                .get(..4)
+                .map_or(0, |b| u32::from_ne_bytes([b[0], b[1], b[2], b[3]]))
+                .min(w.saturating_mul(rows));
+            let first = SCRATCH_HEADER_BYTES as usize;
+            let raw = bytes
+                .get(first..first + count as usize * POINT_BYTES as usize)
+                .unwrap_or(&[]);
+            points.extend(
+                raw.chunks_exact(POINT_BYTES as usize)
+                    .map(bytemuck::pod_read_unaligned::<[u32; 4]>),
+            );
+        }
         // `atlas_points` appends in whatever order its atomics ran. Sorted, the list has one
-        // order per atlas, so `voxelize_atlas_volumes`, whose additive blending sums in
-        // primitive order, gives the same f16 sums (hence volumes) every time it is built.
-        let mut points: Vec<[u32; 4]> = raw
-            .chunks_exact(16)
-            .map(bytemuck::pod_read_unaligned::<[u32; 4]>)
-            .collect();
+        // order per atlas (whatever the bands), so `voxelize_atlas_volumes`, whose additive
+        // blending sums in primitive order (across the chunks' draws too), gives the same
+        // f16 sums (hence volumes) every time it is built.
         points.sort_unstable_by_key(|p| (p[3], p[0], p[1], p[2]));
-        let sorted: &[u8] = bytemuck::cast_slice(&points);
-        let buffer = ctx.upload_buffer(
-            "atlas points",
-            if sorted.is_empty() { &[0; 16] } else { sorted },
-            vk::BufferUsageFlags::STORAGE_BUFFER,
-        )?;
+        let per_chunk = (chunk_bytes / POINT_BYTES).max(1) as usize;
+        let mut chunks = Vec::with_capacity(points.len().div_ceil(per_chunk));
+        let uploaded = (|| {
+            for (i, c) in points.chunks(per_chunk).enumerate() {
+                let buffer = ctx.upload_buffer(
+                    &format!("atlas points (chunk {i})"),
+                    bytemuck::cast_slice(c),
+                    vk::BufferUsageFlags::STORAGE_BUFFER,
+                )?;
+                chunks.push(PointChunk {
+                    buffer,
+                    count: c.len() as u32,
+                });
+            }
+            Ok::<_, VkError>(())
+        })();
+        if let Err(e) = uploaded {
+            for c in chunks {
+                ctx.destroy_buffer(c.buffer);
+            }
+            return Err(e.into());
+        }
         Ok(AtlasPoints {
-            buffer,
-            count,
+            chunks,
+            count: points.len() as u64,
             atlas_extent: (w, h),
             setup_timings,
         })
     })();
-    ctx.destroy_buffer(scratch);
+    for b in scratch {
+        ctx.destroy_buffer(b);
+    }
     ctx.destroy_buffer(tri_buffer);
     result
 }
@@ -399,10 +506,10 @@ pub struct AtlasInstance<'a> {
     pub model: ModelAt,
 }
 
-/// An [`AtlasInstance`] imported into a graph: every frame's `(points, count)`.
+/// An [`AtlasInstance`] imported into a graph: every frame's chunks `(points, count)`.
 #[derive(Clone)]
 pub struct ImportedInstance {
-    pub frames: Vec<(BufferHandle, u32)>,
+    pub frames: Vec<Vec<(BufferHandle, u32)>>,
     pub frame: FrameAt,
     pub model: ModelAt,
 }
@@ -417,8 +524,8 @@ impl<'a> AtlasInstance<'a> {
         }
     }
 
-    /// Imports every frame's points (all are declared read: the slot picks one at record
-    /// time); `None` when no frame has points.
+    /// Imports every chunk of every frame's points (all are declared read: the slot picks
+    /// one frame at record time); `None` when no frame has points.
     pub fn import(&self, g: &mut RenderGraph, access: Access) -> Option<ImportedInstance> {
         if self.frames.iter().all(|p| p.count == 0) {
             return None;
@@ -427,7 +534,7 @@ impl<'a> AtlasInstance<'a> {
             frames: self
                 .frames
                 .iter()
-                .map(|p| (g.import_buffer(&p.buffer, access), p.count))
+                .map(|p| import_chunks(g, p, access))
                 .collect(),
             frame: self.frame.clone(),
             model: self.model.clone(),
@@ -435,22 +542,35 @@ impl<'a> AtlasInstance<'a> {
     }
 }
 
+/// Imports every chunk of `points`: `(buffer, count)` each, in list order.
+pub fn import_chunks(
+    g: &mut RenderGraph,
+    points: &AtlasPoints,
+    access: Access,
+) -> Vec<(BufferHandle, u32)> {
+    points
+        .chunks
+        .iter()
+        .map(|c| (g.import_buffer(&c.buffer, access), c.count))
+        .collect()
+}
+
 impl ImportedInstance {
-    /// `(points, count, model)` that slot `slot` splats (count 0: nothing).
-    pub fn at(&self, slot: usize) -> (BufferHandle, u32, Mat4) {
+    /// The chunks `(points, count)` that slot `slot` splats (none: nothing), and its model.
+    pub fn at(&self, slot: usize) -> (&[(BufferHandle, u32)], Mat4) {
         let f = self.frame.at(slot).min(self.frames.len().saturating_sub(1));
-        let (h, n) = self.frames[f];
-        (h, n, self.model.at(slot))
+        let chunks = self.frames.get(f).map_or(&[][..], Vec::as_slice);
+        (chunks, self.model.at(slot))
     }
 
     pub fn handles(&self) -> impl Iterator<Item = BufferHandle> + '_ {
-        self.frames.iter().map(|&(h, _)| h)
+        self.frames.iter().flatten().map(|&(h, _)| h)
     }
 }
 
 /// Declares `voxelize_atlas`: each instance ORs its slot's transformed points into
-/// `columns` (which `voxel_clear` or `voxel_copy_static` initialised). Records only in
-/// slots `gate` leaves open.
+/// `columns` (which `voxel_clear` or `voxel_copy_static` initialised), one dispatch per
+/// chunk. Records only in slots `gate` leaves open.
 pub fn add_voxelize_atlas_pass(
     g: &mut RenderGraph,
     pipes: &AtlasPipelines,
@@ -477,28 +597,30 @@ pub fn add_voxelize_atlas_pass(
             return;
         }
         for inst in &sets {
-            let (buf, count, model) = inst.at(ctx.slot);
-            if count == 0 {
-                continue;
+            let (chunks, model) = inst.at(ctx.slot);
+            for &(buf, count) in chunks {
+                if count == 0 {
+                    continue;
+                }
+                let ext = grid.extent_voxels();
+                let push = GpuAtlasVoxelizePush {
+                    model: model.to_cols_array(),
+                    grid_min: grid.world_min().extend(0.0).to_array(),
+                    scale: grid.voxels_per_meter().extend(0.0).to_array(),
+                    dims: [ext.x, ext.y, ext.z, grid.axis().index() as u32],
+                    extent: [w, h, count, 0],
+                };
+                ctx.cmd.bind(
+                    &pipe,
+                    &[
+                        Descriptor::storage_buffer(0, ctx.buffer(buf).raw),
+                        Descriptor::storage_buffer(1, ctx.buffer(columns).raw),
+                    ],
+                );
+                ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
+                let x = count.min(MAX_POINTS_X);
+                ctx.cmd.dispatch(x.div_ceil(64), count.div_ceil(x), 1);
             }
-            let ext = grid.extent_voxels();
-            let push = GpuAtlasVoxelizePush {
-                model: model.to_cols_array(),
-                grid_min: grid.world_min().extend(0.0).to_array(),
-                scale: grid.voxels_per_meter().extend(0.0).to_array(),
-                dims: [ext.x, ext.y, ext.z, grid.axis().index() as u32],
-                extent: [w, h, count, 0],
-            };
-            ctx.cmd.bind(
-                &pipe,
-                &[
-                    Descriptor::storage_buffer(0, ctx.buffer(buf).raw),
-                    Descriptor::storage_buffer(1, ctx.buffer(columns).raw),
-                ],
-            );
-            ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
-            let x = count.min(MAX_POINTS_X);
-            ctx.cmd.dispatch(x.div_ceil(64), count.div_ceil(x), 1);
         }
     });
 }
@@ -595,6 +717,19 @@ impl AtlasScene {
         grid: &VoxelGrid,
         cache: &mut AtlasCache,
     ) -> Result<Self, GpuVoxelError> {
+        Self::new_chunked(ctx, scene, t_s, grid, cache, device_chunk_bytes(ctx))
+    }
+
+    /// [`Self::new`] with point-list chunks of at most `chunk_bytes` (see
+    /// [`render_atlas_points_chunked`]).
+    pub fn new_chunked(
+        ctx: &Context,
+        scene: &Scene,
+        t_s: f32,
+        grid: &VoxelGrid,
+        cache: &mut AtlasCache,
+        chunk_bytes: u64,
+    ) -> Result<Self, GpuVoxelError> {
         let texel_m = super::atlas::texel_size_for_voxel(grid.voxel_size_m().min_element());
         let mut me = Self {
             pipelines: AtlasPipelines::new(ctx)?,
@@ -633,12 +768,13 @@ impl AtlasScene {
                     let pi = match found {
                         Some(&(_, _, i)) => i,
                         None => {
-                            let p = render_atlas_points(
+                            let p = render_atlas_points_chunked(
                                 ctx,
                                 &me.pipelines,
                                 &atlas,
                                 &m.positions,
                                 &m.indices,
+                                chunk_bytes,
                             )?;
                             me.points.push(p);
                             built.push((atlas.clone(), f, me.points.len() - 1));
@@ -695,13 +831,18 @@ impl AtlasScene {
             .iter()
             .map(|&(p, _, _)| p)
             .chain(self.dynamic_instances.iter().map(|d| d.frames[0].1))
-            .map(|p| u64::from(self.points[p].count))
+            .map(|p| self.points[p].count)
             .sum()
     }
 
     /// Point lists built, one per distinct (atlas, sequence frame).
     pub fn point_lists(&self) -> usize {
         self.points.len()
+    }
+
+    /// The point lists themselves (their chunks), in build order.
+    pub fn lists(&self) -> &[AtlasPoints] {
+        &self.points
     }
 
     /// The dynamic objects' model matrices and sequence frames at `t_s`.
@@ -830,5 +971,35 @@ mod tests {
         assert_eq!(std::mem::size_of::<GpuAtlasVoxelizePush>(), 128);
         assert_eq!(std::mem::offset_of!(GpuAtlasVoxelizePush, grid_min), 64);
         assert_eq!(std::mem::offset_of!(GpuAtlasVoxelizePush, extent), 112);
+    }
+
+    #[test]
+    fn scratch_bands_cover_every_row_once_within_the_chunk() {
+        for (w, h, chunk) in [
+            (840, 837, 1 << 20),
+            (3355, 3355, 1 << 27),
+            (7, 5, 16 + 7 * 16),
+        ] {
+            let bands = scratch_bands(w, h, chunk).expect("a row fits");
+            let mut next = 0;
+            for &(row0, rows) in &bands {
+                assert_eq!(row0, next, "{w}x{h}: bands are contiguous");
+                assert!(rows > 0);
+                let bytes = SCRATCH_HEADER_BYTES + u64::from(w) * u64::from(rows) * POINT_BYTES;
+                assert!(
+                    bytes <= chunk,
+                    "{w}x{h}: band of {rows} rows is {bytes} bytes"
+                );
+                next += rows;
+            }
+            assert_eq!(next, h, "{w}x{h}: every row in a band");
+        }
+        assert_eq!(scratch_bands(7, 5, 16 + 7 * 16).map(|b| b.len()), Some(5));
+        assert_eq!(scratch_bands(840, 837, 1 << 27).map(|b| b.len()), Some(1));
+        assert!(
+            scratch_bands(8, 5, 16 + 7 * 16).is_none(),
+            "a row over the chunk"
+        );
+        assert!(scratch_bands(8, 5, 8).is_none(), "no room for the header");
     }
 }

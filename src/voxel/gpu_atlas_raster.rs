@@ -56,7 +56,7 @@ impl AtlasRasterBits {
 
     /// Declares `voxelize_atlas_bits`: clears `image` (a 2D array of [`COLUMN_FORMAT`] with
     /// [`image_extent`] texels and one layer per 128 voxels of depth) and ORs every
-    /// instance's points into it.
+    /// instance's points into it, one draw per point-list chunk.
     pub fn add_pass(
         &self,
         g: &mut RenderGraph,
@@ -93,28 +93,30 @@ impl AtlasRasterBits {
             };
             ctx.cmd
                 .begin_rendering_layers(extent, grid.layers(), &target, None);
+            let ext = grid.extent_voxels();
             for inst in &sets {
-                let (points, count, model) = inst.at(ctx.slot);
-                if count == 0 {
-                    continue;
+                let (chunks, model) = inst.at(ctx.slot);
+                for &(points, count) in chunks {
+                    if count == 0 {
+                        continue;
+                    }
+                    let push = GpuAtlasVoxelizePush {
+                        model: model.to_cols_array(),
+                        grid_min: grid.world_min().extend(0.0).to_array(),
+                        scale: grid.voxels_per_meter().extend(0.0).to_array(),
+                        dims: [ext.x, ext.y, ext.z, grid.axis().index() as u32],
+                        extent: [w, h, count, 0],
+                    };
+                    ctx.cmd.bind(
+                        &pipe,
+                        &[
+                            Descriptor::storage_buffer(0, ctx.buffer(points).raw),
+                            Descriptor::storage_buffer(1, ctx.buffer(lut).raw),
+                        ],
+                    );
+                    ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
+                    ctx.cmd.draw(count, 1);
                 }
-                let ext = grid.extent_voxels();
-                let push = GpuAtlasVoxelizePush {
-                    model: model.to_cols_array(),
-                    grid_min: grid.world_min().extend(0.0).to_array(),
-                    scale: grid.voxels_per_meter().extend(0.0).to_array(),
-                    dims: [ext.x, ext.y, ext.z, grid.axis().index() as u32],
-                    extent: [w, h, count, 0],
-                };
-                ctx.cmd.bind(
-                    &pipe,
-                    &[
-                        Descriptor::storage_buffer(0, ctx.buffer(points).raw),
-                        Descriptor::storage_buffer(1, ctx.buffer(lut).raw),
-                    ],
-                );
-                ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
-                ctx.cmd.draw(count, 1);
             }
             ctx.cmd.end_rendering();
         });

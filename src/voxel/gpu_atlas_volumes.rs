@@ -28,7 +28,7 @@
 //! resolve adds both. Nothing records while nothing moves (the voxel frame's [`SlotGate`]).
 
 use super::gpu::{run_once, GpuVoxelError, SlotGate};
-use super::gpu_atlas::{AtlasScene, FrameAt, GpuAtlasVoxelizePush, ModelAt};
+use super::gpu_atlas::{import_chunks, AtlasScene, FrameAt, GpuAtlasVoxelizePush, ModelAt};
 use super::VoxelGrid;
 use crate::graph::{Access, BufferHandle, ImageHandle, RenderGraph, Shader};
 use crate::scene::Scene;
@@ -131,10 +131,10 @@ pub struct AtlasVolumes {
     resolved: Arc<AtomicBool>,
 }
 
-/// A draw of one instance: per sequence frame `(points, count, triangles)`, and which frame
-/// and model matrix a slot uses.
+/// A draw of one instance: per sequence frame its point chunks `(points, count)` and its
+/// triangles, and which frame and model matrix a slot uses.
 struct Splat {
-    frames: Vec<(BufferHandle, u32, BufferHandle)>,
+    frames: Vec<(Vec<(BufferHandle, u32)>, BufferHandle)>,
     frame: FrameAt,
     model: ModelAt,
 }
@@ -306,13 +306,7 @@ impl AtlasVolumes {
                     .frames
                     .iter()
                     .zip(tris)
-                    .map(|(p, t)| {
-                        (
-                            g.import_buffer(&p.buffer, read),
-                            p.count,
-                            g.import_buffer(t, read),
-                        )
-                    })
+                    .map(|(p, t)| (import_chunks(g, p, read), g.import_buffer(t, read)))
                     .collect(),
                 frame: inst.frame,
                 model: inst.model,
@@ -427,7 +421,7 @@ impl AtlasVolumes {
 }
 
 /// Declares `voxelize_atlas_volumes`: clears the sum layers `(albedo, normal)` and draws
-/// every splat's points into them. Records only in slots `gate` leaves open.
+/// every splat's points into them, one draw per point-list chunk. Records only in slots `gate` leaves open.
 fn add_splat_pass(
     g: &mut RenderGraph,
     pipe: GraphicsPipeline,
@@ -443,8 +437,11 @@ fn add_splat_pass(
         .add_pass("voxelize_atlas_volumes")
         .write(albedo, Access::ColorAttachment)
         .write(normal, Access::ColorAttachment);
-    for (p, _, t) in splats.iter().flat_map(|s| &s.frames) {
-        pass = pass.read(*p, read).read(*t, read);
+    for (chunks, t) in splats.iter().flat_map(|s| &s.frames) {
+        for &(p, _) in chunks {
+            pass = pass.read(p, read);
+        }
+        pass = pass.read(*t, read);
     }
     let grid = *grid;
     pass.record(move |ctx| {
@@ -471,28 +468,33 @@ fn add_splat_pass(
         );
         for splat in &splats {
             let f = splat.frame.at(ctx.slot);
-            let Some(&(points, count, tris)) = splat.frames.get(f).or(splat.frames.first()) else {
+            let Some((chunks, tris)) = splat.frames.get(f).or(splat.frames.first()) else {
                 continue;
             };
-            if count == 0 {
-                continue;
+            let model = splat.model.at(ctx.slot).to_cols_array();
+            // The chunks in list order: blending sums in primitive order across draws too,
+            // so the sums equal one draw of the whole list.
+            for &(points, count) in chunks {
+                if count == 0 {
+                    continue;
+                }
+                let push = GpuAtlasVoxelizePush {
+                    model,
+                    grid_min: grid.world_min().extend(0.0).to_array(),
+                    scale: grid.voxels_per_meter().extend(0.0).to_array(),
+                    dims: [ext.x, ext.y, ext.z, grid.axis().index() as u32],
+                    extent: [0, 0, count, 0],
+                };
+                ctx.cmd.bind(
+                    &pipe,
+                    &[
+                        Descriptor::storage_buffer(0, ctx.buffer(points).raw),
+                        Descriptor::storage_buffer(1, ctx.buffer(*tris).raw),
+                    ],
+                );
+                ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
+                ctx.cmd.draw(count, 1);
             }
-            let push = GpuAtlasVoxelizePush {
-                model: splat.model.at(ctx.slot).to_cols_array(),
-                grid_min: grid.world_min().extend(0.0).to_array(),
-                scale: grid.voxels_per_meter().extend(0.0).to_array(),
-                dims: [ext.x, ext.y, ext.z, grid.axis().index() as u32],
-                extent: [0, 0, count, 0],
-            };
-            ctx.cmd.bind(
-                &pipe,
-                &[
-                    Descriptor::storage_buffer(0, ctx.buffer(points).raw),
-                    Descriptor::storage_buffer(1, ctx.buffer(tris).raw),
-                ],
-            );
-            ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
-            ctx.cmd.draw(count, 1);
         }
         ctx.cmd.end_rendering();
     });
