@@ -286,14 +286,8 @@ fn radiance_volume_matches_light_maps() {
     );
 }
 
-#[test]
-fn path_tracer_restarts_and_follows_moving_objects() {
-    // A path-traced renderer made at t = 0, run, then moved to t = 0.5 rewrites its albedo and
-    // normal volumes and restarts accumulation: after the same number of frames it shows
-    // exactly what a renderer made at t = 0.5 shows (the sample sequences restart too).
-    use voxgi::render::Renderer;
-    use voxgi::voxel::gpu::{VoxelSettings, Voxelizer};
-    let toml = r#"
+/// A floor and a red cube keyframed from x = -0.8 (t = 0) to 0.8 (t = 1), lit by a point light.
+const MOVING_CUBE_SCENE: &str = r#"
 [camera]
 position = [0.0, 2.5, -2.5]
 target = [0.0, 0.0, 0.0]
@@ -316,6 +310,15 @@ material = { albedo = [0.9, 0.1, 0.1] }
 [objects.animation]
 keyframes = [ { time_s = 0.0, translate = [-0.8, 0.25, 0.0] }, { time_s = 1.0, translate = [0.8, 0.25, 0.0] } ]
 "#;
+
+#[test]
+fn path_tracer_restarts_and_follows_moving_objects() {
+    // A path-traced renderer made at t = 0, run, then moved to t = 0.5 rewrites its albedo and
+    // normal volumes and restarts accumulation: after the same number of frames it shows
+    // exactly what a renderer made at t = 0.5 shows (the sample sequences restart too).
+    use voxgi::render::Renderer;
+    use voxgi::voxel::gpu::{VoxelSettings, Voxelizer};
+    let toml = MOVING_CUBE_SCENE;
     let scene = voxgi::scene::Scene::from_toml_str(toml, Path::new("<moving>"), Path::new(ROOT))
         .expect("parses");
     let ctx = common::context();
@@ -369,29 +372,7 @@ fn radiance_volume_is_kept_between_frames_and_recomputed_when_objects_move() {
     // its first showed (the volume kept, not lost).
     use voxgi::gi::RadianceSource;
     use voxgi::render::Renderer;
-    let toml = r#"
-[camera]
-position = [0.0, 2.5, -2.5]
-target = [0.0, 0.0, 0.0]
-fov_y_deg = 45.0
-near = 0.05
-far = 20.0
-[[lights]]
-kind = "point"
-position = [0.0, 1.5, 0.0]
-intensity_w_sr = 2.0
-[[objects]]
-builtin = "quad"
-scale = [4.0, 1.0, 4.0]
-material = { albedo = [0.7, 0.7, 0.7] }
-[[objects]]
-name = "mover"
-builtin = "cube"
-scale = 0.5
-material = { albedo = [0.9, 0.1, 0.1] }
-[objects.animation]
-keyframes = [ { time_s = 0.0, translate = [-0.8, 0.25, 0.0] }, { time_s = 1.0, translate = [0.8, 0.25, 0.0] } ]
-"#;
+    let toml = MOVING_CUBE_SCENE;
     let scene = voxgi::scene::Scene::from_toml_str(toml, Path::new("<moving>"), Path::new(ROOT))
         .expect("parses");
     let ctx = common::context();

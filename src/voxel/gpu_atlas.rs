@@ -76,6 +76,21 @@ pub struct GpuAtlasVoxelizePush {
     pub extent: [u32; 4],
 }
 
+impl GpuAtlasVoxelizePush {
+    /// `count` points placed by `model` into `grid`, whose column target is `columns_px`
+    /// (width, height; unused by the passes that write images).
+    pub fn new(grid: &VoxelGrid, model: Mat4, columns_px: (u32, u32), count: u32) -> Self {
+        let ext = grid.extent_voxels();
+        Self {
+            model: model.to_cols_array(),
+            grid_min: grid.world_min().extend(0.0).to_array(),
+            scale: grid.voxels_per_meter().extend(0.0).to_array(),
+            dims: [ext.x, ext.y, ext.z, grid.axis().index() as u32],
+            extent: [columns_px.0, columns_px.1, count, 0],
+        }
+    }
+}
+
 /// The pipelines of the atlas passes.
 pub struct AtlasPipelines {
     positions: GraphicsPipeline,
@@ -602,14 +617,7 @@ pub fn add_voxelize_atlas_pass(
                 if count == 0 {
                     continue;
                 }
-                let ext = grid.extent_voxels();
-                let push = GpuAtlasVoxelizePush {
-                    model: model.to_cols_array(),
-                    grid_min: grid.world_min().extend(0.0).to_array(),
-                    scale: grid.voxels_per_meter().extend(0.0).to_array(),
-                    dims: [ext.x, ext.y, ext.z, grid.axis().index() as u32],
-                    extent: [w, h, count, 0],
-                };
+                let push = GpuAtlasVoxelizePush::new(&grid, model, (w, h), count);
                 ctx.cmd.bind(
                     &pipe,
                     &[

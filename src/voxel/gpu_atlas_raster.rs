@@ -93,20 +93,13 @@ impl AtlasRasterBits {
             };
             ctx.cmd
                 .begin_rendering_layers(extent, grid.layers(), &target, None);
-            let ext = grid.extent_voxels();
             for inst in &sets {
                 let (chunks, model) = inst.at(ctx.slot);
                 for &(points, count) in chunks {
                     if count == 0 {
                         continue;
                     }
-                    let push = GpuAtlasVoxelizePush {
-                        model: model.to_cols_array(),
-                        grid_min: grid.world_min().extend(0.0).to_array(),
-                        scale: grid.voxels_per_meter().extend(0.0).to_array(),
-                        dims: [ext.x, ext.y, ext.z, grid.axis().index() as u32],
-                        extent: [w, h, count, 0],
-                    };
+                    let push = GpuAtlasVoxelizePush::new(&grid, model, (w, h), count);
                     ctx.cmd.bind(
                         &pipe,
                         &[

@@ -471,20 +471,14 @@ fn add_splat_pass(
             let Some((chunks, tris)) = splat.frames.get(f).or(splat.frames.first()) else {
                 continue;
             };
-            let model = splat.model.at(ctx.slot).to_cols_array();
+            let model = splat.model.at(ctx.slot);
             // The chunks in list order: blending sums in primitive order across draws too,
             // so the sums equal one draw of the whole list.
             for &(points, count) in chunks {
                 if count == 0 {
                     continue;
                 }
-                let push = GpuAtlasVoxelizePush {
-                    model,
-                    grid_min: grid.world_min().extend(0.0).to_array(),
-                    scale: grid.voxels_per_meter().extend(0.0).to_array(),
-                    dims: [ext.x, ext.y, ext.z, grid.axis().index() as u32],
-                    extent: [0, 0, count, 0],
-                };
+                let push = GpuAtlasVoxelizePush::new(&grid, model, (0, 0), count);
                 ctx.cmd.bind(
                     &pipe,
                     &[
