@@ -40,6 +40,23 @@ vec3 to_voxel(vec3 p) {
 
 const vec3 HALF = vec3(0.5);
 
+const vec3 X_AXIS = vec3(1.0, 0.0, 0.0);
+const vec3 Y_AXIS = vec3(0.0, 1.0, 0.0);
+const vec3 Z_AXIS = vec3(0.0, 0.0, 1.0);
+
+// Whether the axis unit x edge separates the triangle v0 v1 v2 from the box [-HALF, HALF]
+// (the same operations, in the same order, as the CPU reference).
+bool separates(vec3 unit, vec3 edge, vec3 v0, vec3 v1, vec3 v2) {
+    vec3 axis = cross_exact(unit, edge);
+    float p0 = dot_exact(axis, v0);
+    float p1 = dot_exact(axis, v1);
+    float p2 = dot_exact(axis, v2);
+    float rad = dot_exact(HALF, abs(axis));
+    float pmin = min(min(p0, p1), p2);
+    float pmax = max(max(p0, p1), p2);
+    return pmin > rad || pmax < -rad;
+}
+
 bool tri_box_overlap(vec3 center, vec3 t0, vec3 t1, vec3 t2) {
     precise vec3 v0 = t0 - center;
     precise vec3 v1 = t1 - center;
@@ -50,20 +67,14 @@ bool tri_box_overlap(vec3 center, vec3 t0, vec3 t1, vec3 t2) {
         return false;
     }
     precise vec3 edges[3] = vec3[3](v1 - v0, v2 - v1, v0 - v2);
-    for (int i = 0; i < 3; ++i) {
-        for (int j = 0; j < 3; ++j) {
-            vec3 unit = vec3(j == 0 ? 1.0 : 0.0, j == 1 ? 1.0 : 0.0, j == 2 ? 1.0 : 0.0);
-            vec3 axis = cross_exact(unit, edges[i]);
-            float p0 = dot_exact(axis, v0);
-            float p1 = dot_exact(axis, v1);
-            float p2 = dot_exact(axis, v2);
-            float rad = dot_exact(HALF, abs(axis));
-            float pmin = min(min(p0, p1), p2);
-            float pmax = max(max(p0, p1), p2);
-            if (pmin > rad || pmax < -rad) {
-                return false;
-            }
-        }
+    // The nine edge x axis tests written out: lavapipe counts loop iterations against a
+    // per-invocation budget (see voxelize_loads in gpu.rs) and runs loops slowly.
+    if (separates(X_AXIS, edges[0], v0, v1, v2) || separates(Y_AXIS, edges[0], v0, v1, v2)
+        || separates(Z_AXIS, edges[0], v0, v1, v2) || separates(X_AXIS, edges[1], v0, v1, v2)
+        || separates(Y_AXIS, edges[1], v0, v1, v2) || separates(Z_AXIS, edges[1], v0, v1, v2)
+        || separates(X_AXIS, edges[2], v0, v1, v2) || separates(Y_AXIS, edges[2], v0, v1, v2)
+        || separates(Z_AXIS, edges[2], v0, v1, v2)) {
+        return false;
     }
     vec3 n = cross_exact(edges[0], edges[1]);
     if (is_degenerate(edges[0], edges[1], n)) {
