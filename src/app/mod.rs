@@ -186,6 +186,7 @@ struct Viewer {
     scene: Scene,
     base_lights: Vec<Light>,
     light_names: Vec<String>,
+    object_names: Vec<String>,
     lens: Camera,
     fly: FlyCamera,
     keys: MoveKeys,
@@ -239,6 +240,19 @@ fn needs_new_graph(a: &RenderSettings, b: &RenderSettings) -> bool {
 fn needs_new_renderer(a: &RenderSettings, b: &RenderSettings) -> bool {
     let sized = a.gi.method != GiMethod::None || a.debug.is_some();
     a.gi != b.gi || a.debug != b.debug || (sized && (a.width, a.height) != (b.width, b.height))
+}
+
+/// The debug view the panel asks for, keeping `current`'s other debug parameters (level,
+/// steps scale).
+fn debug_settings(
+    c: &Controls,
+    current: Option<crate::voxel::debug_view::DebugSettings>,
+) -> Option<crate::voxel::debug_view::DebugSettings> {
+    c.debug.map(|view| crate::voxel::debug_view::DebugSettings {
+        view,
+        object: c.atlas_object,
+        ..current.unwrap_or_default()
+    })
 }
 
 /// One line about the indirect light, for the log.
@@ -334,12 +348,14 @@ impl Viewer {
             time_s: opts.settings.time_s,
             animate: false,
             debug: opts.settings.debug.map(|d| d.view),
+            atlas_object: opts.settings.debug.map_or(0, |d| d.object),
             screenshot: false,
         };
         Self {
             opts: opts.clone(),
             base_lights: scene.lights.clone(),
             light_names,
+            object_names: scene.objects.iter().map(|o| o.name.clone()).collect(),
             lens: scene.camera,
             fly,
             scene,
@@ -577,13 +593,7 @@ impl Viewer {
         // Each GI edit costs a new renderer: apply them once no slider is being dragged.
         if !self.egui_ctx.input(|i| i.pointer.any_down()) {
             settings.gi = self.controls.gi;
-            settings.debug =
-                self.controls
-                    .debug
-                    .map(|view| crate::voxel::debug_view::DebugSettings {
-                        view,
-                        ..settings.debug.unwrap_or_default()
-                    });
+            settings.debug = debug_settings(&self.controls, settings.debug);
         }
         if needs_new_renderer(&current, &settings) {
             self.replace_renderer(ctx, &mut settings)?;
@@ -708,6 +718,7 @@ impl Viewer {
             extent_px: (extent.width, extent.height),
             frame_ms: self.frame_ms,
             light_names: &self.light_names,
+            object_names: &self.object_names,
             status: &self.status,
             gi_frames: self
                 .renderer
@@ -920,6 +931,48 @@ impl Viewer {
 mod tests {
     use super::*;
     use glam::Vec3;
+
+    #[test]
+    fn the_panels_atlas_object_reaches_the_renderer_settings() {
+        use crate::voxel::debug_view::{DebugSettings, DebugView};
+        let current = RenderSettings {
+            debug: Some(DebugSettings {
+                view: DebugView::Level,
+                level: 3,
+                ..Default::default()
+            }),
+            ..Default::default()
+        };
+        let mut c = Controls {
+            tonemap: current.tonemap,
+            shadow: current.shadow,
+            gi: current.gi,
+            light_scale: Vec::new(),
+            speed_m_s: 1.0,
+            time_s: 0.0,
+            animate: false,
+            debug: Some(DebugView::Atlas),
+            atlas_object: 2,
+            screenshot: false,
+        };
+        let d = debug_settings(&c, current.debug).expect("a debug view");
+        assert_eq!((d.view, d.object, d.level), (DebugView::Atlas, 2, 3));
+        let picked = RenderSettings {
+            debug: Some(d),
+            ..current.clone()
+        };
+        c.atlas_object = 1;
+        let other = RenderSettings {
+            debug: debug_settings(&c, picked.debug),
+            ..current.clone()
+        };
+        assert!(
+            needs_new_renderer(&picked, &other),
+            "another object needs a new renderer"
+        );
+        c.debug = None;
+        assert_eq!(debug_settings(&c, picked.debug), None);
+    }
 
     #[test]
     fn light_scale_scales_the_radiometric_quantity() {

@@ -83,6 +83,8 @@ pub struct Controls {
     pub animate: bool,
     /// A voxel debug view instead of the lit image (a change needs a new renderer).
     pub debug: Option<DebugView>,
+    /// The object whose atlas the atlas view shows (index into the scene's objects).
+    pub atlas_object: usize,
     /// Set by the button (or F12); the viewer clears it after saving.
     pub screenshot: bool,
 }
@@ -93,6 +95,8 @@ pub struct PanelInfo<'a> {
     pub extent_px: (u32, u32),
     pub frame_ms: f32,
     pub light_names: &'a [String],
+    /// The scene's objects, for the atlas view's picker.
+    pub object_names: &'a [String],
     pub status: &'a str,
     /// Frames the indirect light has accumulated (`None`: GI off).
     pub gi_frames: Option<u32>,
@@ -239,6 +243,16 @@ pub fn draw(ctx: &egui::Context, c: &mut Controls, stats: &TimingStats, info: &P
                                 ui.selectable_value(&mut c.debug, v, debug_name(v));
                             }
                         });
+                    if c.debug == Some(DebugView::Atlas) {
+                        let name = |i: usize| info.object_names.get(i).map_or("?", |n| n.as_str());
+                        egui::ComboBox::from_label("object")
+                            .selected_text(name(c.atlas_object))
+                            .show_ui(ui, |ui| {
+                                for i in 0..info.object_names.len() {
+                                    ui.selectable_value(&mut c.atlas_object, i, name(i));
+                                }
+                            });
+                    }
                 });
 
             ui.separator();
@@ -270,7 +284,7 @@ fn debug_name(v: Option<DebugView>) -> &'static str {
         Some(DebugView::Steps) => "traversal steps",
         Some(DebugView::Level) => "hierarchy level",
         Some(DebugView::Albedo) => "albedo",
-        Some(DebugView::Atlas) => "object atlas (--object)",
+        Some(DebugView::Atlas) => "object atlas",
     }
 }
 
