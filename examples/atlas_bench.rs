@@ -15,6 +15,7 @@ use voxgi::graph::RenderGraph;
 use voxgi::scene::Scene;
 use voxgi::vk::{Context, ContextDesc};
 use voxgi::voxel::atlas::{build_atlas, texel_size_for_voxel, AtlasCache};
+use voxgi::voxel::bench::tessellated_cube;
 use voxgi::voxel::gpu::{
     add_voxelize_passes, column_bytes, run_once, ColumnBase, TriangleBuffer, VoxelPipelines,
 };
@@ -43,33 +44,6 @@ fn time_pass(
         ms.push(t.iter().filter(|p| p.name == name).map(|p| p.gpu_ms).sum());
     }
     Ok(median(ms))
-}
-
-/// A unit cube with each face split into `n`×`n` quads (12·n² triangles).
-fn tessellated_cube(n: u32) -> (Vec<Vec3>, Vec<u32>) {
-    let (mut pos, mut idx) = (Vec::new(), Vec::new());
-    for axis in 0..3 {
-        for side in [0.0f32, 1.0] {
-            let base = pos.len() as u32;
-            for j in 0..=n {
-                for i in 0..=n {
-                    let (u, v) = (i as f32 / n as f32, j as f32 / n as f32);
-                    let mut p = [0.0; 3];
-                    p[axis] = side;
-                    p[(axis + 1) % 3] = u;
-                    p[(axis + 2) % 3] = v;
-                    pos.push(Vec3::from(p) * 0.8 + 0.1);
-                }
-            }
-            for j in 0..n {
-                for i in 0..n {
-                    let a = base + j * (n + 1) + i;
-                    idx.extend([a, a + 1, a + n + 1, a + 1, a + n + 2, a + n + 1]);
-                }
-            }
-        }
-    }
-    (pos, idx)
 }
 
 fn main() -> Result<()> {

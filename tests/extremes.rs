@@ -55,11 +55,10 @@ fn render_per_unit(
         .collect()
 }
 
-#[test]
-fn radiance_scales_linearly_with_light_intensity_from_1e_minus_6_to_1e6() {
-    let scene = load_scene_arg(None).expect("the built-in Cornell box");
-    let ctx = common::context();
-    let methods = [
+/// Direct light and every indirect-light path: the light maps, the radiance volume, the
+/// path tracer.
+fn every_gi_path() -> [(&'static str, GiSettings); 4] {
+    [
         ("direct", GiSettings::default()),
         (
             "hemisphere, light maps",
@@ -87,7 +86,14 @@ fn radiance_scales_linearly_with_light_intensity_from_1e_minus_6_to_1e6() {
                 ..Default::default()
             },
         ),
-    ];
+    ]
+}
+
+#[test]
+fn radiance_scales_linearly_with_light_intensity_from_1e_minus_6_to_1e6() {
+    let scene = load_scene_arg(None).expect("the built-in Cornell box");
+    let ctx = common::context();
+    let methods = every_gi_path();
     for (name, gi) in methods {
         let unit = render_per_unit(&ctx, &scene, &gi, 1.0);
         let peak = unit
@@ -152,26 +158,7 @@ fn rescaled(scene: &Scene, k: f32) -> Scene {
 fn a_millimeter_and_a_kilometer_cornell_box_render_like_the_meter_one() {
     let scene = load_scene_arg(None).expect("the built-in Cornell box");
     let ctx = common::context();
-    let methods = [
-        ("direct", GiSettings::default()),
-        (
-            "hemisphere",
-            GiSettings {
-                method: GiMethod::Hemisphere,
-                rays: 4,
-                ..Default::default()
-            },
-        ),
-        (
-            "path tracer",
-            GiSettings {
-                method: GiMethod::Pathtrace,
-                rays: 2,
-                bounces: 2,
-                ..Default::default()
-            },
-        ),
-    ];
+    let methods = every_gi_path();
     for (name, gi) in methods {
         let unit = render_per_unit(&ctx, &scene, &gi, 1.0);
         let mean = |img: &[[f32; 3]]| {

@@ -16,7 +16,7 @@ use crate::light::{shadow_views, PointShadow, ShadowSettings};
 use crate::post::ToneMap;
 use crate::scene::{BumpKind, Light, Scene};
 use crate::vk::{
-    vk, Attachment, Buffer, BufferDesc, ComputePipeline, Context, Descriptor, FrameLoop,
+    vk, Attachment, Buffer, BufferDesc, Cmd, ComputePipeline, Context, Descriptor, FrameLoop,
     GraphicsPipeline, GraphicsPipelineDesc, ImageDesc, MemoryLocation, PassTiming, VkError,
     MAX_FRAMES_IN_FLIGHT,
 };
@@ -609,21 +609,12 @@ impl Renderer {
                 );
                 ctx.cmd.bind_vertex_buffer(vb);
                 ctx.cmd.bind_index_buffer(ib);
-                if let Ok(lists) = draws.read() {
-                    for (v, list) in lists.shadow.iter().enumerate() {
-                        for d in list {
-                            let push = GpuDrawPush {
-                                model: d.model.to_cols_array(),
-                                index: v as u32,
-                                material: d.material,
-                                _pad: [0; 2],
-                            };
-                            ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
-                            ctx.cmd
-                                .draw_indexed(d.index_count, d.first_index, d.vertex_offset);
-                        }
-                    }
-                }
+                draw_shadow_views(ctx.cmd, &pipe, &draws, |d, v| GpuDrawPush {
+                    model: d.model.to_cols_array(),
+                    index: v,
+                    material: d.material,
+                    _pad: [0; 2],
+                });
                 ctx.cmd.end_rendering();
             });
 
@@ -822,24 +813,12 @@ impl Renderer {
                         );
                         ctx.cmd.bind_vertex_buffer(vb);
                         ctx.cmd.bind_index_buffer(ib);
-                        if let Ok(lists) = draws.read() {
-                            for (v, list) in lists.shadow.iter().enumerate() {
-                                for d in list {
-                                    let push = GpuLightMapPush {
-                                        model: d.model.to_cols_array(),
-                                        view: v as u32,
-                                        material: d.material,
-                                        _pad: [0; 2],
-                                    };
-                                    ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
-                                    ctx.cmd.draw_indexed(
-                                        d.index_count,
-                                        d.first_index,
-                                        d.vertex_offset,
-                                    );
-                                }
-                            }
-                        }
+                        draw_shadow_views(ctx.cmd, &pipe, &draws, |d, v| GpuLightMapPush {
+                            model: d.model.to_cols_array(),
+                            view: v,
+                            material: d.material,
+                            _pad: [0; 2],
+                        });
                         ctx.cmd.end_rendering();
                     });
                 gi.add_passes(
@@ -1137,6 +1116,25 @@ fn upload_geometry(ctx: &Context, scene: &Scene, t_s: f32) -> Result<Geometry, R
         draws,
         mesh_base,
     })
+}
+
+/// Draws every shadow view's draw list with `pipe` (bound with its buffers), the push
+/// constants of draw `d` in view `v` from `push(d, v)`: the shadow-depth and light-map passes.
+fn draw_shadow_views<P: bytemuck::Pod>(
+    cmd: &Cmd,
+    pipe: &GraphicsPipeline,
+    draws: &RwLock<DrawLists>,
+    push: impl Fn(&Draw, u32) -> P,
+) {
+    let Ok(lists) = draws.read() else {
+        return;
+    };
+    for (v, list) in lists.shadow.iter().enumerate() {
+        for d in list {
+            cmd.push_constants(pipe, bytemuck::bytes_of(&push(d, v as u32)));
+            cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset);
+        }
+    }
 }
 
 /// The reflective light-map pipeline (`light_map.{vert,geom,frag}`); `has_dissolve`: some
