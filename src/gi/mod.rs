@@ -5,8 +5,7 @@
 use crate::graph::{Access, BufferHandle, ImageHandle, RenderGraph, Shader};
 use crate::scene::Scene;
 use crate::vk::{vk, Buffer, ComputePipeline, Context, Descriptor, Image, ImageDesc, VkError};
-use crate::voxel::attributes::TriangleAttributes;
-use crate::voxel::gpu_atlas_volumes::AttributeVolumes;
+use crate::voxel::attributes::TriangleAttributeVolumes;
 use crate::voxel::ray_mask::RayMaskLut;
 use crate::voxel::VoxelGrid;
 use bytemuck::{Pod, Zeroable};
@@ -495,8 +494,7 @@ struct PathTracer {
     radiance: Option<RadianceVolume>,
     /// Writes the attributes of the objects the atlas voxelizer does not handle (all of them
     /// without it); `None` when there are none.
-    triangles: Option<TriangleAttributes>,
-    volumes: AttributeVolumes,
+    volumes: TriangleAttributeVolumes,
     history: Image,
 }
 
@@ -545,24 +543,13 @@ impl PathTracer {
                 )
             })
             .transpose()?;
-        // Objects the atlas voxelizer handles get their attributes from its points.
-        let mut tri_scene = scene.clone();
-        if atlas_attributes {
-            tri_scene
-                .objects
-                .retain(|o| !crate::voxel::gpu_atlas::uses_atlas(scene, o));
-        }
-        let triangles = if tri_scene.objects.is_empty() {
-            None
-        } else {
-            Some(TriangleAttributes::new(ctx, &tri_scene, time_s, grid)?)
-        };
         let usage = vk::ImageUsageFlags::STORAGE
             | vk::ImageUsageFlags::SAMPLED
             | vk::ImageUsageFlags::TRANSFER_DST;
         let resting = Access::Sampled(Shader::Compute).info().layout;
         let zero = vk::ClearColorValue { float32: [0.0; 4] };
-        let volumes = AttributeVolumes::new(ctx, grid)?;
+        // Objects the atlas voxelizer handles get their attributes from its points.
+        let volumes = TriangleAttributeVolumes::new(ctx, scene, time_s, grid, atlas_attributes)?;
         // The history exists for the path tracer only; the radiance volume for the hemisphere
         // method reading it (1x1 placeholder history otherwise, never bound).
         let (hw, hh) = if path_trace { (w, h) } else { (1, 1) };
@@ -584,7 +571,6 @@ impl PathTracer {
         Ok(Self {
             pathtrace,
             radiance,
-            triangles,
             volumes,
             history,
         })
@@ -593,7 +579,7 @@ impl PathTracer {
     /// For scenes with moving objects: writes frame slot `slot`'s triangles at `t_s` when they
     /// changed, so that frame rewrites the volumes. Returns whether they changed.
     fn update(&mut self, t_s: f32, slot: usize) -> bool {
-        self.triangles.as_mut().is_some_and(|t| t.update(t_s, slot))
+        self.volumes.update(t_s, slot)
     }
 
     fn add_passes(
@@ -606,13 +592,8 @@ impl PathTracer {
         atlas_attributes: impl FnOnce(&mut RenderGraph, ImageHandle, ImageHandle),
     ) -> ImageHandle {
         let read = Access::Sampled(Shader::Compute);
-        let (albedo, normal) = self.volumes.import(g);
-        // The atlas resolve writes every voxel; triangle objects then write theirs on top.
-        atlas_attributes(g, albedo, normal);
         // The first frame writes the volumes; later frames keep them until something moves.
-        if let Some(t) = &self.triangles {
-            t.add_passes(g, albedo, normal);
-        }
+        let (albedo, normal) = self.volumes.add_passes(g, atlas_attributes);
         let Some(pipe) = self.pathtrace else {
             return match &self.radiance {
                 Some(rv) => rv.add_passes(g, i, lut, (albedo, normal), (push, sampler), frames),
@@ -650,9 +631,6 @@ impl PathTracer {
             ctx.destroy_compute_pipeline(rv.volume_pipeline);
             ctx.destroy_compute_pipeline(rv.hemisphere_pipeline);
             ctx.destroy_image(rv.image);
-        }
-        if let Some(t) = self.triangles {
-            t.destroy(ctx);
         }
         self.volumes.destroy(ctx);
         ctx.destroy_image(self.history);

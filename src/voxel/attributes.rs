@@ -74,20 +74,31 @@ struct AnimatedTriangles {
     grid: VoxelGrid,
 }
 
-/// Albedo and normal volumes with the triangle writer of a scene's objects (the albedo debug
-/// view); no writer when the scene given has no objects (the atlas writes them all).
+/// Albedo and normal volumes with the triangle writer of the objects the atlas voxelizer does
+/// not write (the GI methods that read volumes, the albedo debug view); no writer when the
+/// atlas writes them all.
 pub struct TriangleAttributeVolumes {
     pub volumes: AttributeVolumes,
     pub writer: Option<TriangleAttributes>,
 }
 
 impl TriangleAttributeVolumes {
+    /// `atlas_writes`: the atlas voxelizer writes the attributes of the objects it handles
+    /// ([`super::gpu::VoxelFrame::enable_attribute_volumes`]).
     pub fn new(
         ctx: &Context,
         scene: &Scene,
         time_s: f32,
         grid: &VoxelGrid,
+        atlas_writes: bool,
     ) -> Result<Self, VkError> {
+        let mut tri_scene = scene.clone();
+        if atlas_writes {
+            tri_scene
+                .objects
+                .retain(|o| !super::gpu_atlas::uses_atlas(scene, o));
+        }
+        let scene = &tri_scene;
         let volumes = AttributeVolumes::new(ctx, grid)?;
         if scene.objects.is_empty() {
             return Ok(Self {
@@ -110,6 +121,22 @@ impl TriangleAttributeVolumes {
     /// See [`TriangleAttributes::update`].
     pub fn update(&mut self, t_s: f32, slot: usize) -> bool {
         self.writer.as_mut().is_some_and(|w| w.update(t_s, slot))
+    }
+
+    /// Declares the passes that write the volumes and returns them `(albedo, normal)`:
+    /// `atlas` declares the atlas voxelizer's part (its resolve writes every voxel), then the
+    /// triangle objects write theirs on top.
+    pub fn add_passes(
+        &self,
+        g: &mut RenderGraph,
+        atlas: impl FnOnce(&mut RenderGraph, ImageHandle, ImageHandle),
+    ) -> (ImageHandle, ImageHandle) {
+        let (albedo, normal) = self.volumes.import(g);
+        atlas(g, albedo, normal);
+        if let Some(w) = &self.writer {
+            w.add_passes(g, albedo, normal);
+        }
+        (albedo, normal)
     }
 
     pub fn destroy(self, ctx: &Context) {

@@ -256,13 +256,8 @@ impl VoxelDebugPass {
         let sampler = self.sampler;
         let albedo = match &self.albedo {
             AlbedoSource::Volumes(v) => {
-                // The atlas resolve writes every voxel; triangle objects then write theirs.
-                let (albedo, normal) = v.volumes.import(g);
-                frame.add_attribute_passes(g, albedo, normal);
-                if let Some(w) = &v.writer {
-                    w.add_passes(g, albedo, normal);
-                }
-                albedo
+                v.add_passes(g, |g, a, n| frame.add_attribute_passes(g, a, n))
+                    .0
             }
             AlbedoSource::Placeholder(image) => g.import_image(image, ATTRIBUTE_VOLUME_STATE),
         };
@@ -321,15 +316,12 @@ impl AlbedoSource {
     ) -> Result<Self, VkError> {
         if view == DebugView::Albedo {
             let grid = &frame.voxels.grid;
-            // Objects the atlas voxelizer handles get their albedo from its points.
-            let mut tri_scene = scene.clone();
-            if frame.has_attribute_volumes() {
-                tri_scene
-                    .objects
-                    .retain(|o| !super::gpu_atlas::uses_atlas(scene, o));
-            }
             return Ok(Self::Volumes(Box::new(TriangleAttributeVolumes::new(
-                ctx, &tri_scene, time_s, grid,
+                ctx,
+                scene,
+                time_s,
+                grid,
+                frame.has_attribute_volumes(),
             )?)));
         }
         // Two texels deep: `ImageDesc` makes a 3D image (the shader's sampler3D) only for
