@@ -24,28 +24,14 @@ pub struct Demo {
 
 impl Demo {
     pub fn new(ctx: &Context, width: u32, height: u32) -> Result<Self, VkError> {
-        let gradient = ctx.compute_pipeline(
-            "demo_gradient.comp",
-            &[(0, vk::DescriptorType::STORAGE_IMAGE)],
-            0,
-            &[],
-        )?;
-        let mut blit_desc = GraphicsPipelineDesc::fullscreen(
+        let gradient = ctx.compute_pipeline("demo_gradient.comp", None, &[])?;
+        let blit_desc = GraphicsPipelineDesc::fullscreen(
             "fullscreen.vert",
             "demo_blit.frag",
             vk::Format::R32G32B32A32_SFLOAT,
         );
-        blit_desc.bindings = vec![(0, vk::DescriptorType::COMBINED_IMAGE_SAMPLER)];
         let blit = ctx.graphics_pipeline(&blit_desc)?;
-        let pack = ctx.compute_pipeline(
-            "demo_pack.comp",
-            &[
-                (0, vk::DescriptorType::COMBINED_IMAGE_SAMPLER),
-                (1, vk::DescriptorType::STORAGE_IMAGE),
-            ],
-            0,
-            &[],
-        )?;
+        let pack = ctx.compute_pipeline("demo_pack.comp", None, &[])?;
         let sampler = ctx.create_sampler(vk::Filter::NEAREST, false)?;
         let readback = ctx.create_buffer(&BufferDesc {
             name: "demo readback".into(),

@@ -11,6 +11,15 @@ use bytemuck::{Pod, Zeroable};
 use std::cell::RefCell;
 use std::rc::Rc;
 
+/// Push constants of `egui.vert`: the screen size in egui points.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct GpuEguiPush {
+    screen_size_points: [f32; 2],
+}
+
+crate::push_constants!(GpuEguiPush { screen_size_points });
+
 /// One egui vertex as `glsl/egui.vert` reads it.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
@@ -66,8 +75,7 @@ impl Overlay {
             vertex: "egui.vert".into(),
             geometry: None,
             fragment: "egui.frag".into(),
-            bindings: vec![(0, vk::DescriptorType::COMBINED_IMAGE_SAMPLER)],
-            push_constant_bytes: 8,
+            push: crate::vk::PushLayout::of::<GpuEguiPush>(),
             vertex_stride: std::mem::size_of::<GpuEguiVertex>() as u32,
             vertex_attributes: vec![
                 (vk::Format::R32G32_SFLOAT, 0),
@@ -280,8 +288,12 @@ impl Overlay {
                         sampler,
                     }],
                 );
-                ctx.cmd
-                    .push_constants(&pipe, bytemuck::bytes_of(&f.screen_size_points));
+                ctx.cmd.push_constants(
+                    &pipe,
+                    bytemuck::bytes_of(&GpuEguiPush {
+                        screen_size_points: f.screen_size_points,
+                    }),
+                );
                 ctx.cmd.bind_vertex_buffer(ctx.buffer(vertices).raw);
                 ctx.cmd.bind_index_buffer(ctx.buffer(indices).raw);
                 for d in &f.draws {

@@ -102,6 +102,14 @@ pub struct GpuGiPush {
     pub params2: [f32; 4],
 }
 
+crate::push_constants!(GpuGiPush {
+    world_to_voxel,
+    dims,
+    params,
+    iparams,
+    params2
+});
+
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 struct GpuFilterPush {
@@ -109,6 +117,12 @@ struct GpuFilterPush {
     radius: i32,
     plane_tolerance: f32,
 }
+
+crate::push_constants!(GpuFilterPush {
+    direction,
+    radius,
+    plane_tolerance
+});
 
 /// The G-buffer and light inputs of the GI passes.
 #[derive(Clone, Copy, Debug)]
@@ -183,41 +197,18 @@ impl GiPasses {
             ..
         } = *target;
         let scene_diagonal_m = scene.aabb_at(time_s).extent().length();
-        let b = vk::DescriptorType::STORAGE_BUFFER;
-        let s = vk::DescriptorType::COMBINED_IMAGE_SAMPLER;
-        let i = vk::DescriptorType::STORAGE_IMAGE;
-        let push = std::mem::size_of::<GpuGiPush>() as u32;
         let hemisphere = ctx.compute_pipeline(
             "gi_hemisphere.comp",
-            &[
-                (0, b),
-                (1, s),
-                (2, s),
-                (3, s),
-                (4, b),
-                (5, s),
-                (6, s),
-                (7, s),
-                (8, i),
-                (9, s),
-                (10, s),
-                (11, b),
-            ],
-            push,
+            crate::vk::PushLayout::of::<GpuGiPush>(),
             &[(0, u32::from(has_phong))],
         )?;
         let filter = ctx.compute_pipeline(
             "gi_filter.comp",
-            &[(0, b), (1, s), (2, s), (3, s), (4, i)],
-            std::mem::size_of::<GpuFilterPush>() as u32,
+            crate::vk::PushLayout::of::<GpuFilterPush>(),
             &[],
         )?;
-        let composite = ctx.compute_pipeline(
-            "gi_composite.comp",
-            &[(0, s), (1, s), (2, s), (3, i), (4, s)],
-            0,
-            &[(0, u32::from(has_phong))],
-        )?;
+        let composite =
+            ctx.compute_pipeline("gi_composite.comp", None, &[(0, u32::from(has_phong))])?;
         let lut = ctx.upload_buffer(
             "ray mask lut",
             &RayMaskLut::new().to_gpu_bytes(),
@@ -518,27 +509,11 @@ impl PathTracer {
             atlas_attributes,
             ..
         } = *target;
-        let storage = vk::DescriptorType::STORAGE_BUFFER;
-        let image = vk::DescriptorType::STORAGE_IMAGE;
-        let sampled = vk::DescriptorType::COMBINED_IMAGE_SAMPLER;
         let pathtrace = path_trace
             .then(|| {
                 ctx.compute_pipeline(
                     "gi_pathtrace.comp",
-                    &[
-                        (0, storage),
-                        (1, sampled),
-                        (2, sampled),
-                        (3, sampled),
-                        (4, storage),
-                        (5, sampled),
-                        (6, sampled),
-                        (7, sampled),
-                        (8, image),
-                        (9, sampled),
-                        (10, sampled),
-                    ],
-                    std::mem::size_of::<GpuGiPush>() as u32,
+                    crate::vk::PushLayout::of::<GpuGiPush>(),
                     &[(0, u32::from(has_phong))],
                 )
             })
@@ -639,31 +614,14 @@ impl PathTracer {
 
 impl RadianceVolume {
     fn new(ctx: &Context, grid: &VoxelGrid, has_phong: bool) -> Result<Self, VkError> {
-        let b = vk::DescriptorType::STORAGE_BUFFER;
-        let s = vk::DescriptorType::COMBINED_IMAGE_SAMPLER;
-        let i = vk::DescriptorType::STORAGE_IMAGE;
-        let push = std::mem::size_of::<GpuGiPush>() as u32;
         let volume_pipeline = ctx.compute_pipeline(
             "gi_radiance_volume.comp",
-            &[(0, b), (1, s), (2, s), (3, s), (4, s), (5, i)],
-            push,
+            crate::vk::PushLayout::of::<GpuGiPush>(),
             &[],
         )?;
         let hemisphere_pipeline = ctx.compute_pipeline(
             "gi_hemisphere_volume.comp",
-            &[
-                (0, b),
-                (1, s),
-                (2, s),
-                (3, s),
-                (4, b),
-                (5, s),
-                (6, s),
-                (8, i),
-                (9, s),
-                (10, s),
-            ],
-            push,
+            crate::vk::PushLayout::of::<GpuGiPush>(),
             &[(0, u32::from(has_phong))],
         )?;
         let ext = grid.extent_voxels();

@@ -609,9 +609,9 @@ impl Renderer {
                 );
                 ctx.cmd.bind_vertex_buffer(vb);
                 ctx.cmd.bind_index_buffer(ib);
-                draw_shadow_views(ctx.cmd, &pipe, &draws, |d, v| GpuDrawPush {
+                draw_shadow_views(ctx.cmd, &pipe, &draws, |d, v| GpuShadowPush {
                     model: d.model.to_cols_array(),
-                    index: v,
+                    view: v,
                     material: d.material,
                     _pad: [0; 2],
                 });
@@ -706,11 +706,10 @@ impl Renderer {
                             .push_descriptors(&pipe, &[texture(2, d.texture), texture(3, d.bump)]);
                         bound = (d.texture, d.bump);
                     }
-                    let push = GpuDrawPush {
+                    let push = GpuGbufferPush {
                         model: d.model.to_cols_array(),
-                        index: d.material,
                         material: d.material,
-                        _pad: [0; 2],
+                        _pad: [0; 3],
                     };
                     ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
                     ctx.cmd
@@ -1143,13 +1142,11 @@ fn create_light_map_pipeline(
     ctx: &Context,
     has_dissolve: bool,
 ) -> Result<GraphicsPipeline, VkError> {
-    let storage = vk::DescriptorType::STORAGE_BUFFER;
     ctx.graphics_pipeline(&GraphicsPipelineDesc {
         vertex: "light_map.vert".into(),
         geometry: Some("light_map.geom".into()),
         fragment: "light_map.frag".into(),
-        bindings: vec![(0, storage), (1, storage)],
-        push_constant_bytes: std::mem::size_of::<GpuLightMapPush>() as u32,
+        push: crate::vk::PushLayout::of::<GpuLightMapPush>(),
         vertex_stride: std::mem::size_of::<GpuVertex>() as u32,
         vertex_attributes: vec![
             (vk::Format::R32G32B32_SFLOAT, 0),
@@ -1190,9 +1187,6 @@ fn create_pipelines(
     has_dissolve: bool,
     paraboloid_shadows: bool,
 ) -> Result<Pipelines, VkError> {
-    let storage = vk::DescriptorType::STORAGE_BUFFER;
-    let sampled = vk::DescriptorType::COMBINED_IMAGE_SAMPLER;
-    let push = std::mem::size_of::<GpuDrawPush>() as u32;
     let vertex_attributes = vec![
         (vk::Format::R32G32B32_SFLOAT, 0),
         (vk::Format::R32G32B32_SFLOAT, 12),
@@ -1206,8 +1200,7 @@ fn create_pipelines(
         vertex: "gbuffer.vert".into(),
         geometry: None,
         fragment: "gbuffer.frag".into(),
-        bindings: vec![(0, storage), (1, storage), (2, sampled), (3, sampled)],
-        push_constant_bytes: push,
+        push: crate::vk::PushLayout::of::<GpuGbufferPush>(),
         vertex_stride: std::mem::size_of::<GpuVertex>() as u32,
         vertex_attributes: vertex_attributes.clone(),
         topology: vk::PrimitiveTopology::TRIANGLE_LIST,
@@ -1233,8 +1226,7 @@ fn create_pipelines(
         } else {
             "shadow_depth.frag".into()
         },
-        bindings: vec![(0, storage), (1, storage)],
-        push_constant_bytes: push,
+        push: crate::vk::PushLayout::of::<GpuShadowPush>(),
         vertex_stride: std::mem::size_of::<GpuVertex>() as u32,
         vertex_attributes: vec![(vk::Format::R32G32B32_SFLOAT, 0)],
         topology: vk::PrimitiveTopology::TRIANGLE_LIST,
@@ -1247,24 +1239,11 @@ fn create_pipelines(
         logic_op: None,
         spec: vec![(0, u32::from(has_dissolve))],
     })?;
-    let deferred = ctx.compute_pipeline(
-        "deferred_direct.comp",
-        &[
-            (0, storage),
-            (1, sampled),
-            (2, sampled),
-            (3, sampled),
-            (4, sampled),
-            (5, sampled),
-            (6, vk::DescriptorType::STORAGE_IMAGE),
-        ],
-        0,
-        &[(0, u32::from(has_phong))],
-    )?;
+    let deferred =
+        ctx.compute_pipeline("deferred_direct.comp", None, &[(0, u32::from(has_phong))])?;
     let tonemap = ctx.compute_pipeline(
         "tonemap.comp",
-        &[(0, sampled), (1, vk::DescriptorType::STORAGE_IMAGE)],
-        std::mem::size_of::<GpuTonemapPush>() as u32,
+        crate::vk::PushLayout::of::<GpuTonemapPush>(),
         &[],
     )?;
     Ok(Pipelines {

@@ -188,6 +188,25 @@ impl<'a> Cmd<'a> {
         if descriptors.is_empty() {
             return;
         }
+        debug_assert!(
+            descriptors.iter().all(|d| pipeline
+                .interface()
+                .bindings
+                .get(&d.binding())
+                .is_some_and(|r| super::descriptor_type(r.kind) == d.descriptor_type())),
+            "descriptors {:?} do not fit the bindings `{}` declares: {:?}",
+            descriptors
+                .iter()
+                .map(|d| (d.binding(), d.descriptor_type()))
+                .collect::<Vec<_>>(),
+            pipeline.interface().name,
+            pipeline
+                .interface()
+                .bindings
+                .values()
+                .map(|r| (r.binding, r.kind))
+                .collect::<Vec<_>>()
+        );
         let (bind_point, _, layout) = pipeline.bind_info();
         let mut image_infos: Vec<[vk::DescriptorImageInfo; 1]> =
             Vec::with_capacity(descriptors.len());
@@ -255,18 +274,24 @@ impl<'a> Cmd<'a> {
         };
     }
 
-    /// Push constants for the pipeline last bound (all stages).
+    /// Push constants for the pipeline last bound (all stages). Pushes the bytes the shaders'
+    /// block covers: a Rust struct may end in padding the block does not have (its layout was
+    /// checked against the block when the pipeline was created).
     pub fn push_constants(&self, pipeline: &impl Bindable, bytes: &[u8]) {
         let (_, _, layout) = pipeline.bind_info();
-        // SAFETY: Cmd invariant; the layout declares a push-constant range of ALL stages that
-        // covers `bytes` (checked when the pipeline was created).
+        let size = (pipeline.push_bytes() as usize).min(bytes.len());
+        if size == 0 {
+            return;
+        }
+        // SAFETY: Cmd invariant; the layout declares a push-constant range of ALL stages of
+        // `push_bytes()` bytes, and `size` does not exceed it.
         unsafe {
             self.ctx.device.cmd_push_constants(
                 self.raw,
                 layout,
                 vk::ShaderStageFlags::ALL,
                 0,
-                bytes,
+                &bytes[..size],
             )
         };
     }

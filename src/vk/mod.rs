@@ -5,6 +5,7 @@ mod cmd;
 mod context;
 mod frame;
 mod pipeline;
+pub mod reflect;
 mod resources;
 mod swapchain;
 
@@ -13,8 +14,10 @@ pub use cmd::{Attachment, Cmd};
 pub use context::{describe_devices, Context, ContextDesc, DeviceInfo, ValidationLog};
 pub use frame::{FrameLoop, FrameSlot, PassTiming, TimestampRecorder, MAX_FRAMES_IN_FLIGHT};
 pub use pipeline::{
-    Bindable, ComputePipeline, Descriptor, GraphicsPipeline, GraphicsPipelineDesc, ShaderModule,
+    descriptor_type, interface_of, Bindable, ComputePipeline, Descriptor, GraphicsPipeline,
+    GraphicsPipelineDesc, PushLayout, ShaderModule,
 };
+pub use reflect::{BindingKind, PushConstants, ShaderInterface};
 pub use resources::{Buffer, BufferDesc, Image, ImageDesc, MemoryLocation};
 pub use swapchain::{surface_extensions, Acquired, Swapchain};
 
@@ -42,6 +45,8 @@ pub enum VkError {
     MissingShader(String),
     #[error("invalid SPIR-V for shader `{name}`: {reason}")]
     InvalidSpirv { name: String, reason: String },
+    #[error("{0}")]
+    ShaderInterface(String),
     #[error("{0}")]
     Invalid(String),
 }

@@ -1,7 +1,11 @@
-//! Shader modules, compute and graphics pipelines with one push-descriptor set, samplers.
+//! Shader modules, compute and graphics pipelines with one push-descriptor set whose layout
+//! is reflected from the shaders, samplers.
 
+use super::reflect::{self, BindingKind, PushConstants, ShaderInterface};
 use super::{shaders, Context, VkError};
 use ash::vk;
+use std::collections::HashMap;
+use std::sync::{Mutex, OnceLock};
 
 /// A descriptor pushed at bind time, addressed by its binding in set 0.
 #[derive(Clone, Copy, Debug)]
@@ -60,6 +64,100 @@ impl Descriptor {
 /// Anything `Cmd::bind` accepts.
 pub trait Bindable {
     fn bind_info(&self) -> (vk::PipelineBindPoint, vk::Pipeline, vk::PipelineLayout);
+    /// The bindings and push constants its shaders declare.
+    fn interface(&self) -> &'static ShaderInterface;
+    /// Bytes of its push-constant range (0: none).
+    fn push_bytes(&self) -> u32 {
+        push_bytes(self.interface())
+    }
+}
+
+/// A Rust push-constant struct's layout, checked against the shader's block when a pipeline
+/// is created.
+#[derive(Clone, Debug)]
+pub struct PushLayout {
+    pub type_name: &'static str,
+    pub fields: Vec<(&'static str, u32, u32)>,
+    pub size_bytes: u32,
+}
+
+impl PushLayout {
+    pub fn of<T: PushConstants>() -> Option<PushLayout> {
+        Some(PushLayout {
+            type_name: std::any::type_name::<T>()
+                .rsplit("::")
+                .next()
+                .unwrap_or("push constants"),
+            fields: T::fields(),
+            size_bytes: std::mem::size_of::<T>() as u32,
+        })
+    }
+}
+
+fn check_push_layout(
+    interface: &ShaderInterface,
+    push: Option<&PushLayout>,
+) -> Result<(), VkError> {
+    let (name, fields, size) = match push {
+        Some(p) => (p.type_name, p.fields.as_slice(), p.size_bytes),
+        None => ("no push constants", &[][..], 0),
+    };
+    reflect::check_push(interface.push.as_ref(), name, fields, size).map_err(|problems| {
+        VkError::ShaderInterface(format!(
+            "pipeline `{}`: push constants do not match the shader: {problems}",
+            interface.name
+        ))
+    })
+}
+
+/// The push-constant range of an interface: its block's size, rounded to the 4 bytes Vulkan
+/// ranges are counted in.
+fn push_bytes(interface: &ShaderInterface) -> u32 {
+    interface
+        .push
+        .as_ref()
+        .map_or(0, |p| p.size_bytes.next_multiple_of(4))
+}
+
+pub fn descriptor_type(kind: BindingKind) -> vk::DescriptorType {
+    match kind {
+        BindingKind::CombinedImageSampler => vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
+        BindingKind::StorageImage => vk::DescriptorType::STORAGE_IMAGE,
+        BindingKind::StorageBuffer => vk::DescriptorType::STORAGE_BUFFER,
+        BindingKind::UniformBuffer => vk::DescriptorType::UNIFORM_BUFFER,
+    }
+}
+
+/// The interface of the pipeline made of the embedded shaders `files`, reflected once per
+/// combination and kept for the program's life: the set of shaders is fixed at build time,
+/// so the leak is bounded by it.
+pub fn interface_of(files: &[&str]) -> Result<&'static ShaderInterface, VkError> {
+    static CACHE: OnceLock<Mutex<HashMap<String, &'static ShaderInterface>>> = OnceLock::new();
+    let key = files.join("+");
+    let cache = CACHE.get_or_init(Default::default);
+    if let Some(i) = cache.lock().unwrap_or_else(|e| e.into_inner()).get(&key) {
+        return Ok(i);
+    }
+    let mut stages = Vec::with_capacity(files.len());
+    for f in files {
+        let bytes = shaders::get(f).ok_or_else(|| VkError::MissingShader((*f).into()))?;
+        let words = ash::util::read_spv(&mut std::io::Cursor::new(bytes)).map_err(|e| {
+            VkError::InvalidSpirv {
+                name: (*f).into(),
+                reason: e.to_string(),
+            }
+        })?;
+        stages.push(
+            reflect::reflect(f, &words).map_err(|e| VkError::ShaderInterface(e.to_string()))?,
+        );
+    }
+    let merged = reflect::merge(&stages).map_err(|e| VkError::ShaderInterface(e.to_string()))?;
+    let interned: &'static ShaderInterface = Box::leak(Box::new(merged));
+    cache
+        .lock()
+        .unwrap_or_else(|e| e.into_inner())
+        .insert(key, interned);
+    Ok(interned)
 }
 
 pub struct ShaderModule {
@@ -94,18 +192,20 @@ impl Context {
         unsafe { self.device.destroy_shader_module(m.raw, None) };
     }
 
+    /// The push-descriptor set layout and pipeline layout of a reflected interface: every
+    /// binding the shaders declare, and a push-constant range covering their block.
     fn push_layout(
         &self,
-        bindings: &[(u32, vk::DescriptorType)],
-        push_constant_bytes: u32,
+        interface: &ShaderInterface,
     ) -> Result<(vk::DescriptorSetLayout, vk::PipelineLayout), VkError> {
-        let b: Vec<vk::DescriptorSetLayoutBinding> = bindings
-            .iter()
-            .map(|&(binding, ty)| {
+        let b: Vec<vk::DescriptorSetLayoutBinding> = interface
+            .bindings
+            .values()
+            .map(|r| {
                 vk::DescriptorSetLayoutBinding::builder()
-                    .binding(binding)
-                    .descriptor_type(ty)
-                    .descriptor_count(1)
+                    .binding(r.binding)
+                    .descriptor_type(descriptor_type(r.kind))
+                    .descriptor_count(r.count)
                     .stage_flags(vk::ShaderStageFlags::ALL)
                     .build()
             })
@@ -116,6 +216,7 @@ impl Context {
         // SAFETY: valid device and create info.
         let set_layout = unsafe { self.device.create_descriptor_set_layout(&info, None) }
             .map_err(VkError::vk("create a descriptor set layout"))?;
+        let push_constant_bytes = push_bytes(interface);
         let ranges = [vk::PushConstantRange {
             stage_flags: vk::ShaderStageFlags::ALL,
             offset: 0,
@@ -132,17 +233,20 @@ impl Context {
         Ok((set_layout, layout))
     }
 
-    /// A compute pipeline of `glsl/<file_name>` with the given set-0 bindings and push-constant
-    /// size. `spec` holds 32-bit specialization constants by constant id.
+    /// A compute pipeline of `glsl/<file_name>`. Its set-0 bindings and push-constant range
+    /// come from the shader itself (reflected SPIR-V); `push` is the Rust struct pushed to it,
+    /// whose fields must match the shader's block by name, offset and size. `spec` holds
+    /// 32-bit specialization constants by constant id.
     pub fn compute_pipeline(
         &self,
         file_name: &str,
-        bindings: &[(u32, vk::DescriptorType)],
-        push_constant_bytes: u32,
+        push: Option<PushLayout>,
         spec: &[(u32, u32)],
     ) -> Result<ComputePipeline, VkError> {
+        let interface = interface_of(&[file_name])?;
+        check_push_layout(interface, push.as_ref())?;
         let module = self.shader_module(file_name)?;
-        let (set_layout, layout) = self.push_layout(bindings, push_constant_bytes)?;
+        let (set_layout, layout) = self.push_layout(interface)?;
         let (entries, data) = spec_data(spec);
         let spec_info = vk::SpecializationInfo::builder()
             .map_entries(&entries)
@@ -171,6 +275,7 @@ impl Context {
             raw: pipeline,
             layout,
             set_layout,
+            interface,
         })
     }
 
@@ -204,6 +309,11 @@ impl Context {
         desc: &GraphicsPipelineDesc,
         blend: Blend,
     ) -> Result<GraphicsPipeline, VkError> {
+        let mut files = vec![desc.vertex.as_str()];
+        files.extend(desc.geometry.as_deref());
+        files.push(desc.fragment.as_str());
+        let interface = interface_of(&files)?;
+        check_push_layout(interface, desc.push.as_ref())?;
         let mut modules = vec![
             (
                 vk::ShaderStageFlags::VERTEX,
@@ -217,7 +327,7 @@ impl Context {
         if let Some(g) = &desc.geometry {
             modules.push((vk::ShaderStageFlags::GEOMETRY, self.shader_module(g)?));
         }
-        let (set_layout, layout) = self.push_layout(&desc.bindings, desc.push_constant_bytes)?;
+        let (set_layout, layout) = self.push_layout(interface)?;
         let (entries, data) = spec_data(&desc.spec);
         let spec_info = vk::SpecializationInfo::builder()
             .map_entries(&entries)
@@ -347,6 +457,7 @@ impl Context {
             raw: pipeline,
             layout,
             set_layout,
+            interface,
         })
     }
 
@@ -433,11 +544,16 @@ pub struct ComputePipeline {
     pub raw: vk::Pipeline,
     pub layout: vk::PipelineLayout,
     pub set_layout: vk::DescriptorSetLayout,
+    /// What the shader declares (interned for the program's life, so pipelines stay `Copy`).
+    pub interface: &'static ShaderInterface,
 }
 
 impl Bindable for ComputePipeline {
     fn bind_info(&self) -> (vk::PipelineBindPoint, vk::Pipeline, vk::PipelineLayout) {
         (vk::PipelineBindPoint::COMPUTE, self.raw, self.layout)
+    }
+    fn interface(&self) -> &'static ShaderInterface {
+        self.interface
     }
 }
 
@@ -446,11 +562,16 @@ pub struct GraphicsPipeline {
     pub raw: vk::Pipeline,
     pub layout: vk::PipelineLayout,
     pub set_layout: vk::DescriptorSetLayout,
+    /// What the stages declare together (see [`ComputePipeline::interface`]).
+    pub interface: &'static ShaderInterface,
 }
 
 impl Bindable for GraphicsPipeline {
     fn bind_info(&self) -> (vk::PipelineBindPoint, vk::Pipeline, vk::PipelineLayout) {
         (vk::PipelineBindPoint::GRAPHICS, self.raw, self.layout)
+    }
+    fn interface(&self) -> &'static ShaderInterface {
+        self.interface
     }
 }
 
@@ -460,8 +581,9 @@ pub struct GraphicsPipelineDesc {
     pub vertex: String,
     pub geometry: Option<String>,
     pub fragment: String,
-    pub bindings: Vec<(u32, vk::DescriptorType)>,
-    pub push_constant_bytes: u32,
+    /// The Rust struct pushed as push constants (`None`: the shaders declare none). Bindings
+    /// and the push range come from the shaders.
+    pub push: Option<PushLayout>,
     /// Stride of vertex binding 0; 0 means no vertex buffer (e.g. a full-screen triangle).
     pub vertex_stride: u32,
     /// (format, offset) per location.
@@ -486,8 +608,7 @@ impl GraphicsPipelineDesc {
             vertex: vertex.into(),
             geometry: None,
             fragment: fragment.into(),
-            bindings: vec![],
-            push_constant_bytes: 0,
+            push: None,
             vertex_stride: 0,
             vertex_attributes: vec![],
             topology: vk::PrimitiveTopology::TRIANGLE_LIST,

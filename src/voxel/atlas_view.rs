@@ -36,6 +36,12 @@ pub struct GpuAtlasDebugPush {
     pub box_scale: [f32; 4],
 }
 
+crate::push_constants!(GpuAtlasDebugPush {
+    atlas_zoom,
+    box_min,
+    box_scale
+});
+
 /// `(num, den)` mapping image pixels to atlas texels (`texel = pixel · den / num`): the largest
 /// integer zoom at which a `atlas` atlas fits into `image` pixels, else the smallest integer
 /// reduction.
@@ -154,12 +160,7 @@ impl AtlasViewPass {
         let parts = (|| -> Result<_, VkError> {
             let pipeline = ctx.compute_pipeline(
                 "atlas_debug.comp",
-                &[
-                    (0, vk::DescriptorType::COMBINED_IMAGE_SAMPLER),
-                    (1, vk::DescriptorType::STORAGE_IMAGE),
-                    (2, vk::DescriptorType::STORAGE_IMAGE),
-                ],
-                std::mem::size_of::<GpuAtlasDebugPush>() as u32,
+                crate::vk::PushLayout::of::<GpuAtlasDebugPush>(),
                 &[],
             )?;
             let sampler = match ctx.create_sampler(vk::Filter::NEAREST, false) {

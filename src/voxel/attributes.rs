@@ -156,26 +156,19 @@ impl TriangleAttributes {
         time_s: f32,
         grid: &VoxelGrid,
     ) -> Result<Self, VkError> {
-        let storage = vk::DescriptorType::STORAGE_BUFFER;
-        let image = vk::DescriptorType::STORAGE_IMAGE;
         let pipeline = ctx.compute_pipeline(
             "voxelize_attributes.comp",
-            &[(0, storage), (1, image)],
-            std::mem::size_of::<GpuVoxelizePush>() as u32,
+            crate::vk::PushLayout::of::<GpuVoxelizePush>(),
             &[(0, ATTRIBUTE_GROUP_SIZE)],
         )?;
-        let resolve_pipeline = match ctx.compute_pipeline(
-            "voxelize_attributes_resolve.comp",
-            &[(0, storage), (1, image), (2, image), (3, image)],
-            0,
-            &[],
-        ) {
-            Ok(p) => p,
-            Err(e) => {
-                ctx.destroy_compute_pipeline(pipeline);
-                return Err(e);
-            }
-        };
+        let resolve_pipeline =
+            match ctx.compute_pipeline("voxelize_attributes_resolve.comp", None, &[]) {
+                Ok(p) => p,
+                Err(e) => {
+                    ctx.destroy_compute_pipeline(pipeline);
+                    return Err(e);
+                }
+            };
         let destroy_pipelines = || {
             ctx.destroy_compute_pipeline(pipeline);
             ctx.destroy_compute_pipeline(resolve_pipeline);

@@ -96,6 +96,13 @@ pub struct GpuVoxelDebugPush {
     pub light: [f32; 4],
 }
 
+crate::push_constants!(GpuVoxelDebugPush {
+    ndc_to_voxel,
+    dims,
+    params,
+    light
+});
+
 impl GpuVoxelDebugPush {
     /// `view_proj` is the camera's world → clip matrix; `light_dir` the world direction
     /// towards the light.
@@ -208,14 +215,7 @@ impl VoxelDebugPass {
         )?;
         let pipeline = ctx.compute_pipeline(
             "voxel_debug.comp",
-            &[
-                (0, vk::DescriptorType::COMBINED_IMAGE_SAMPLER),
-                (1, vk::DescriptorType::STORAGE_BUFFER),
-                (2, vk::DescriptorType::STORAGE_IMAGE),
-                (3, vk::DescriptorType::STORAGE_IMAGE),
-                (4, vk::DescriptorType::COMBINED_IMAGE_SAMPLER),
-            ],
-            std::mem::size_of::<GpuVoxelDebugPush>() as u32,
+            crate::vk::PushLayout::of::<GpuVoxelDebugPush>(),
             &[],
         );
         let pipeline = match pipeline {

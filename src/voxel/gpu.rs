@@ -154,6 +154,13 @@ pub struct GpuVoxelizePush {
     pub extent: [u32; 4],
 }
 
+crate::push_constants!(GpuVoxelizePush {
+    grid_min,
+    scale,
+    dims,
+    extent
+});
+
 impl GpuVoxelizePush {
     pub fn new(grid: &VoxelGrid, count: u32, first: u32) -> Self {
         let (w, h) = image_extent(grid);
@@ -209,22 +216,12 @@ impl VoxelPipelines {
     /// Pipelines whose voxelizer shares each triangle's columns among `group_size`
     /// invocations (one workgroup per triangle).
     pub fn with_group_size(ctx: &Context, group_size: u32) -> Result<Self, VkError> {
-        let storage = vk::DescriptorType::STORAGE_BUFFER;
         let voxelize = ctx.compute_pipeline(
             "voxelize_triangles.comp",
-            &[(0, storage), (1, storage)],
-            std::mem::size_of::<GpuVoxelizePush>() as u32,
+            crate::vk::PushLayout::of::<GpuVoxelizePush>(),
             &[(0, group_size.max(1))],
         )?;
-        let mip = ctx.compute_pipeline(
-            "voxel_mip.comp",
-            &[
-                (0, vk::DescriptorType::COMBINED_IMAGE_SAMPLER),
-                (1, vk::DescriptorType::STORAGE_IMAGE),
-            ],
-            0,
-            &[],
-        )?;
+        let mip = ctx.compute_pipeline("voxel_mip.comp", None, &[])?;
         let sampler = ctx.create_sampler(vk::Filter::NEAREST, false)?;
         Ok(Self {
             voxelize,

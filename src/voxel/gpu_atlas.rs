@@ -65,6 +65,26 @@ pub struct GpuAtlasTriangle {
     pub cell: [u32; 4],
 }
 
+/// Push constants of `atlas_positions.vert`: the atlas size in texels (xy).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+struct GpuAtlasPositionsPush {
+    atlas_size: [f32; 4],
+}
+
+crate::push_constants!(GpuAtlasPositionsPush { atlas_size });
+
+/// Push constants of `atlas_points.comp`: the band of atlas rows one dispatch converts.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+struct GpuAtlasPointsPush {
+    row0: u32,
+    rows: u32,
+    _pad: [u32; 2],
+}
+
+crate::push_constants!(GpuAtlasPointsPush { row0, rows, _pad });
+
 /// Push constants of `voxelize_atlas.comp`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
@@ -75,6 +95,14 @@ pub struct GpuAtlasVoxelizePush {
     pub dims: [u32; 4],
     pub extent: [u32; 4],
 }
+
+crate::push_constants!(GpuAtlasVoxelizePush {
+    model,
+    grid_min,
+    scale,
+    dims,
+    extent
+});
 
 impl GpuAtlasVoxelizePush {
     /// `count` points placed by `model` into `grid`, whose column target is `columns_px`
@@ -101,28 +129,21 @@ pub struct AtlasPipelines {
 
 impl AtlasPipelines {
     pub fn new(ctx: &Context) -> Result<Self, VkError> {
-        let storage = vk::DescriptorType::STORAGE_BUFFER;
         let mut desc = GraphicsPipelineDesc::fullscreen(
             "atlas_positions.vert",
             "atlas_positions.frag",
             ATLAS_FORMAT,
         );
-        desc.bindings = vec![(0, storage)];
-        desc.push_constant_bytes = 16;
+        desc.push = crate::vk::PushLayout::of::<GpuAtlasPositionsPush>();
         let positions = ctx.graphics_pipeline(&desc)?;
         let points = ctx.compute_pipeline(
             "atlas_points.comp",
-            &[
-                (0, vk::DescriptorType::COMBINED_IMAGE_SAMPLER),
-                (1, storage),
-            ],
-            16,
+            crate::vk::PushLayout::of::<GpuAtlasPointsPush>(),
             &[],
         )?;
         let voxelize = ctx.compute_pipeline(
             "voxelize_atlas.comp",
-            &[(0, storage), (1, storage)],
-            std::mem::size_of::<GpuAtlasVoxelizePush>() as u32,
+            crate::vk::PushLayout::of::<GpuAtlasVoxelizePush>(),
             &[],
         )?;
         let sampler = ctx.create_sampler(vk::Filter::NEAREST, false)?;
@@ -266,7 +287,10 @@ pub fn add_atlas_positions_pass(
                 &pipe,
                 &[Descriptor::storage_buffer(0, ctx.buffer(triangles).raw)],
             );
-            ctx.cmd.push_constants(&pipe, bytemuck::cast_slice(&size));
+            ctx.cmd.push_constants(
+                &pipe,
+                bytemuck::bytes_of(&GpuAtlasPositionsPush { atlas_size: size }),
+            );
             ctx.cmd.draw(6 * count, 1);
             ctx.cmd.end_rendering();
         });
@@ -371,8 +395,14 @@ pub fn render_atlas_points_chunked(
                         Descriptor::storage_buffer(1, ctx.buffer(out).raw),
                     ],
                 );
-                ctx.cmd
-                    .push_constants(&pipe, bytemuck::bytes_of(&[row0, rows, 0, 0]));
+                ctx.cmd.push_constants(
+                    &pipe,
+                    bytemuck::bytes_of(&GpuAtlasPointsPush {
+                        row0,
+                        rows,
+                        _pad: [0; 2],
+                    }),
+                );
                 ctx.cmd.dispatch(w.div_ceil(8), rows.div_ceil(8), 1);
             }
         });

@@ -28,7 +28,6 @@ pub struct AtlasRasterBits {
 
 impl AtlasRasterBits {
     pub fn new(ctx: &Context) -> Result<Self, VkError> {
-        let storage = vk::DescriptorType::STORAGE_BUFFER;
         let mut desc = GraphicsPipelineDesc::fullscreen(
             "voxelize_atlas_bits.vert",
             "voxelize_atlas_bits.frag",
@@ -36,8 +35,7 @@ impl AtlasRasterBits {
         );
         desc.geometry = Some("voxelize_atlas_bits.geom".into());
         desc.topology = vk::PrimitiveTopology::POINT_LIST;
-        desc.bindings = vec![(0, storage), (1, storage)];
-        desc.push_constant_bytes = std::mem::size_of::<GpuAtlasVoxelizePush>() as u32;
+        desc.push = crate::vk::PushLayout::of::<GpuAtlasVoxelizePush>();
         desc.logic_op = Some(vk::LogicOp::OR);
         let pipe = ctx.graphics_pipeline(&desc)?;
         let lut = ctx.upload_buffer(

@@ -58,6 +58,8 @@ pub struct GpuAtlasResolvePush {
     pub dims: [u32; 4],
 }
 
+crate::push_constants!(GpuAtlasResolvePush { dims });
+
 /// The albedo (`RGBA8`, a = 1 where occupied) and normal (`RGBA8_SNORM`) 3D volumes,
 /// one texel per voxel, in the voxel grid's (x, y, depth) order.
 pub struct AttributeVolumes {
@@ -149,7 +151,6 @@ impl AtlasVolumes {
         grid: &VoxelGrid,
         statics_once: bool,
     ) -> Result<Self, GpuVoxelError> {
-        let storage = vk::DescriptorType::STORAGE_BUFFER;
         let mut desc = GraphicsPipelineDesc::fullscreen(
             "voxelize_atlas_volumes.vert",
             "voxelize_atlas_volumes.frag",
@@ -158,22 +159,11 @@ impl AtlasVolumes {
         desc.geometry = Some("voxelize_atlas_volumes.geom".into());
         desc.topology = vk::PrimitiveTopology::POINT_LIST;
         desc.color_formats = vec![SUM_FORMAT, SUM_FORMAT];
-        desc.bindings = vec![(0, storage), (1, storage)];
-        desc.push_constant_bytes = std::mem::size_of::<GpuAtlasVoxelizePush>() as u32;
+        desc.push = crate::vk::PushLayout::of::<GpuAtlasVoxelizePush>();
         let splat = ctx.graphics_pipeline_additive(&desc)?;
-        let sampled = vk::DescriptorType::COMBINED_IMAGE_SAMPLER;
-        let image = vk::DescriptorType::STORAGE_IMAGE;
         let resolve = ctx.compute_pipeline(
             "voxelize_atlas_resolve.comp",
-            &[
-                (0, sampled),
-                (1, sampled),
-                (2, sampled),
-                (3, sampled),
-                (4, image),
-                (5, image),
-            ],
-            std::mem::size_of::<GpuAtlasResolvePush>() as u32,
+            crate::vk::PushLayout::of::<GpuAtlasResolvePush>(),
             &[],
         );
         let resolve = match resolve {

@@ -48,6 +48,12 @@ struct GpuRaysPush {
     params2: [u32; 4],
 }
 
+crate::push_constants!(GpuRaysPush {
+    dims,
+    params,
+    params2
+});
+
 /// Which ray test a batch uses.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum RayMethod {
@@ -113,11 +119,9 @@ impl VoxelRayCaster {
         let columns = ctx.upload_buffer("voxel columns", &columns, storage)?;
         let levels = ctx.upload_buffer("voxel levels", bytemuck::cast_slice(&levels), storage)?;
         let lut = ctx.upload_buffer("ray mask lut", &RayMaskLut::new().to_gpu_bytes(), storage)?;
-        let b = vk::DescriptorType::STORAGE_BUFFER;
         let pipeline = ctx.compute_pipeline(
             "voxel_rays.comp",
-            &[(0, b), (1, b), (2, b), (3, b), (4, b)],
-            std::mem::size_of::<GpuRaysPush>() as u32,
+            crate::vk::PushLayout::of::<GpuRaysPush>(),
             &[],
         )?;
         let base = h.base();

@@ -1,0 +1,792 @@
+//! SPIR-V reflection: the descriptor bindings and the push-constant block a shader declares.
+//!
+//! The shader is the one statement of a pipeline's interface. Pipeline layouts are built from
+//! what this module reads out of the SPIR-V, and the render graph checks each pass's declared
+//! bindings against it (`graph::bind`), so a binding is never typed in twice. Pure logic: it
+//! reads the words `build.rs` embedded and needs no device.
+//!
+//! Only what voxgi's shaders use is understood: descriptor set 0, combined image samplers,
+//! storage images, storage and uniform buffers (arrays of them count as one binding with a
+//! count), and one push-constant block per stage. Anything else is an error naming the shader,
+//! not a silent gap.
+
+#![forbid(unsafe_code)]
+
+use std::collections::{BTreeMap, HashMap};
+
+/// The kind of descriptor a binding takes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum BindingKind {
+    /// `sampler2D` and friends: an image view with a sampler.
+    CombinedImageSampler,
+    /// `image2D` and friends.
+    StorageImage,
+    /// `buffer` blocks (std430).
+    StorageBuffer,
+    /// `uniform` blocks (std140).
+    UniformBuffer,
+}
+
+impl BindingKind {
+    pub fn glsl_name(self) -> &'static str {
+        match self {
+            BindingKind::CombinedImageSampler => "combined image sampler",
+            BindingKind::StorageImage => "storage image",
+            BindingKind::StorageBuffer => "storage buffer",
+            BindingKind::UniformBuffer => "uniform buffer",
+        }
+    }
+}
+
+/// Shader stages, as a small bit set (the Vulkan flags live in the `vk` layer's callers).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
+pub struct Stages(pub u8);
+
+impl Stages {
+    pub const VERTEX: Stages = Stages(1);
+    pub const GEOMETRY: Stages = Stages(2);
+    pub const FRAGMENT: Stages = Stages(4);
+    pub const COMPUTE: Stages = Stages(8);
+
+    pub fn union(self, other: Stages) -> Stages {
+        Stages(self.0 | other.0)
+    }
+    pub fn contains(self, other: Stages) -> bool {
+        self.0 & other.0 == other.0
+    }
+    /// The stage of a shader file by its extension (`.vert`, `.geom`, `.frag`, `.comp`).
+    pub fn of_file(file_name: &str) -> Option<Stages> {
+        match file_name.rsplit('.').next()? {
+            "vert" => Some(Stages::VERTEX),
+            "geom" => Some(Stages::GEOMETRY),
+            "frag" => Some(Stages::FRAGMENT),
+            "comp" => Some(Stages::COMPUTE),
+            _ => None,
+        }
+    }
+    /// Stage names joined by `+`, for messages.
+    pub fn names(self) -> String {
+        let all = [
+            (Stages::VERTEX, "vertex"),
+            (Stages::GEOMETRY, "geometry"),
+            (Stages::FRAGMENT, "fragment"),
+            (Stages::COMPUTE, "compute"),
+        ];
+        let v: Vec<&str> = all
+            .iter()
+            .filter(|(s, _)| self.contains(*s))
+            .map(|(_, n)| *n)
+            .collect();
+        v.join("+")
+    }
+}
+
+/// One descriptor binding of set 0.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ReflectedBinding {
+    pub binding: u32,
+    pub kind: BindingKind,
+    /// The GLSL variable (or block instance/type) name, for messages.
+    pub name: String,
+    /// Array length (1 for a single descriptor).
+    pub count: u32,
+    /// Declared `readonly` (images) or every member `readonly` (buffers).
+    pub read_only: bool,
+    /// Declared `writeonly`.
+    pub write_only: bool,
+    /// Stages that declare it.
+    pub stages: Stages,
+}
+
+/// One member of the push-constant block.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct PushMember {
+    pub name: String,
+    pub offset: u32,
+    pub size_bytes: u32,
+}
+
+/// The push-constant block.
+#[derive(Clone, Debug, PartialEq, Eq, Default)]
+pub struct PushBlock {
+    pub members: Vec<PushMember>,
+    /// End of the last member (what a pipeline layout's range must cover).
+    pub size_bytes: u32,
+}
+
+/// What one shader, or the stages of one pipeline together, declares.
+#[derive(Clone, Debug, PartialEq, Eq, Default)]
+pub struct ShaderInterface {
+    /// The shader files, joined by `+` for a pipeline of several stages.
+    pub name: String,
+    pub bindings: BTreeMap<u32, ReflectedBinding>,
+    pub push: Option<PushBlock>,
+}
+
+/// Why a shader's interface could not be read.
+#[derive(Debug, thiserror::Error, PartialEq, Eq)]
+pub enum ReflectError {
+    #[error("shader `{0}`: not SPIR-V (bad magic number or truncated)")]
+    NotSpirv(String),
+    #[error("shader `{shader}`: `{name}` is in descriptor set {set}; voxgi pipelines have one push-descriptor set: use set = 0")]
+    OtherSet {
+        shader: String,
+        name: String,
+        set: u32,
+    },
+    #[error("shader `{shader}`: `{name}` at binding {binding} is a {what}, which voxgi does not bind: use a combined image sampler, storage image, storage buffer or uniform buffer")]
+    Unsupported {
+        shader: String,
+        name: String,
+        binding: u32,
+        what: &'static str,
+    },
+    #[error("pipeline `{pipeline}`: binding {binding} is a {a} in one stage and a {b} in another: declare it the same way in every stage")]
+    StageConflict {
+        pipeline: String,
+        binding: u32,
+        a: &'static str,
+        b: &'static str,
+    },
+    #[error("pipeline `{pipeline}`: the push-constant blocks of its stages disagree on member `{member}` ({a} vs {b}): declare the same block in every stage")]
+    PushConflict {
+        pipeline: String,
+        member: String,
+        a: String,
+        b: String,
+    },
+}
+
+// SPIR-V opcodes, decorations and storage classes used here (SPIR-V 1.6 specification, §3).
+const OP_NAME: u16 = 5;
+const OP_MEMBER_NAME: u16 = 6;
+const OP_TYPE_INT: u16 = 21;
+const OP_TYPE_FLOAT: u16 = 22;
+const OP_TYPE_VECTOR: u16 = 23;
+const OP_TYPE_MATRIX: u16 = 24;
+const OP_TYPE_IMAGE: u16 = 25;
+const OP_TYPE_SAMPLER: u16 = 26;
+const OP_TYPE_SAMPLED_IMAGE: u16 = 27;
+const OP_TYPE_ARRAY: u16 = 28;
+const OP_TYPE_RUNTIME_ARRAY: u16 = 29;
+const OP_TYPE_STRUCT: u16 = 30;
+const OP_TYPE_POINTER: u16 = 32;
+const OP_CONSTANT: u16 = 43;
+const OP_VARIABLE: u16 = 59;
+const OP_DECORATE: u16 = 71;
+const OP_MEMBER_DECORATE: u16 = 72;
+
+const DEC_BLOCK: u32 = 2;
+const DEC_BUFFER_BLOCK: u32 = 3;
+const DEC_ARRAY_STRIDE: u32 = 6;
+const DEC_MATRIX_STRIDE: u32 = 7;
+const DEC_NON_WRITABLE: u32 = 24;
+const DEC_NON_READABLE: u32 = 25;
+const DEC_BINDING: u32 = 33;
+const DEC_DESCRIPTOR_SET: u32 = 34;
+const DEC_OFFSET: u32 = 35;
+
+const SC_UNIFORM_CONSTANT: u32 = 0;
+const SC_UNIFORM: u32 = 2;
+const SC_PUSH_CONSTANT: u32 = 9;
+const SC_STORAGE_BUFFER: u32 = 12;
+
+#[derive(Clone, Debug)]
+enum Type {
+    Scalar {
+        bytes: u32,
+    },
+    Vector {
+        component: u32,
+        count: u32,
+    },
+    Matrix {
+        column: u32,
+        count: u32,
+    },
+    /// `sampled`: 1 sampled, 2 storage (OpTypeImage's "Sampled" operand).
+    Image {
+        sampled: u32,
+    },
+    Sampler,
+    SampledImage,
+    Array {
+        element: u32,
+        length_id: u32,
+    },
+    RuntimeArray {
+        element: u32,
+    },
+    Struct {
+        members: Vec<u32>,
+    },
+    Pointer {
+        pointee: u32,
+    },
+}
+
+#[derive(Default)]
+struct Module {
+    names: HashMap<u32, String>,
+    member_names: HashMap<(u32, u32), String>,
+    decorations: HashMap<u32, Vec<(u32, u32)>>,
+    member_decorations: HashMap<(u32, u32), Vec<(u32, u32)>>,
+    types: HashMap<u32, Type>,
+    constants: HashMap<u32, u32>,
+    /// (id, pointer type, storage class)
+    variables: Vec<(u32, u32, u32)>,
+}
+
+impl Module {
+    fn parse(shader: &str, words: &[u32]) -> Result<Module, ReflectError> {
+        if words.len() < 5 || words[0] != 0x0723_0203 {
+            return Err(ReflectError::NotSpirv(shader.into()));
+        }
+        let mut m = Module::default();
+        let mut i = 5;
+        while i < words.len() {
+            let count = (words[i] >> 16) as usize;
+            let opcode = (words[i] & 0xffff) as u16;
+            if count == 0 || i + count > words.len() {
+                return Err(ReflectError::NotSpirv(shader.into()));
+            }
+            let ops = &words[i + 1..i + count];
+            let at = |k: usize| ops.get(k).copied().unwrap_or(0);
+            match opcode {
+                OP_NAME => {
+                    m.names.insert(at(0), string(&ops[1.min(ops.len())..]));
+                }
+                OP_MEMBER_NAME => {
+                    m.member_names
+                        .insert((at(0), at(1)), string(&ops[2.min(ops.len())..]));
+                }
+                OP_DECORATE => m.decorations.entry(at(0)).or_default().push((at(1), at(2))),
+                OP_MEMBER_DECORATE => m
+                    .member_decorations
+                    .entry((at(0), at(1)))
+                    .or_default()
+                    .push((at(2), at(3))),
+                OP_TYPE_INT | OP_TYPE_FLOAT => {
+                    m.types.insert(at(0), Type::Scalar { bytes: at(1) / 8 });
+                }
+                OP_TYPE_VECTOR => {
+                    m.types.insert(
+                        at(0),
+                        Type::Vector {
+                            component: at(1),
+                            count: at(2),
+                        },
+                    );
+                }
+                OP_TYPE_MATRIX => {
+                    m.types.insert(
+                        at(0),
+                        Type::Matrix {
+                            column: at(1),
+                            count: at(2),
+                        },
+                    );
+                }
+                OP_TYPE_IMAGE => {
+                    m.types.insert(at(0), Type::Image { sampled: at(6) });
+                }
+                OP_TYPE_SAMPLER => {
+                    m.types.insert(at(0), Type::Sampler);
+                }
+                OP_TYPE_SAMPLED_IMAGE => {
+                    m.types.insert(at(0), Type::SampledImage);
+                }
+                OP_TYPE_ARRAY => {
+                    m.types.insert(
+                        at(0),
+                        Type::Array {
+                            element: at(1),
+                            length_id: at(2),
+                        },
+                    );
+                }
+                OP_TYPE_RUNTIME_ARRAY => {
+                    m.types.insert(at(0), Type::RuntimeArray { element: at(1) });
+                }
+                OP_TYPE_STRUCT => {
+                    m.types.insert(
+                        at(0),
+                        Type::Struct {
+                            members: ops.get(1..).unwrap_or(&[]).to_vec(),
+                        },
+                    );
+                }
+                OP_TYPE_POINTER => {
+                    m.types.insert(at(0), Type::Pointer { pointee: at(2) });
+                }
+                // 32-bit constants only: array lengths.
+                OP_CONSTANT => {
+                    m.constants.insert(at(1), at(2));
+                }
+                OP_VARIABLE => m.variables.push((at(1), at(0), at(2))),
+                _ => {}
+            }
+            i += count;
+        }
+        Ok(m)
+    }
+
+    fn decoration(&self, id: u32, dec: u32) -> Option<u32> {
+        self.decorations
+            .get(&id)?
+            .iter()
+            .find(|(d, _)| *d == dec)
+            .map(|(_, v)| *v)
+    }
+
+    fn member_decoration(&self, ty: u32, member: u32, dec: u32) -> Option<u32> {
+        self.member_decorations
+            .get(&(ty, member))?
+            .iter()
+            .find(|(d, _)| *d == dec)
+            .map(|(_, v)| *v)
+    }
+
+    /// Size in bytes of a type laid out with its explicit strides and offsets.
+    fn size_of(&self, ty: u32) -> u32 {
+        match self.types.get(&ty) {
+            Some(Type::Scalar { bytes }) => *bytes,
+            Some(Type::Vector { component, count }) => self.size_of(*component) * count,
+            Some(Type::Matrix { column, count }) => self.size_of(*column) * count,
+            Some(Type::Array { element, length_id }) => {
+                let stride = self
+                    .decoration(ty, DEC_ARRAY_STRIDE)
+                    .unwrap_or_else(|| self.size_of(*element));
+                stride * self.constants.get(length_id).copied().unwrap_or(1)
+            }
+            Some(Type::Struct { members }) => (0..members.len() as u32)
+                .map(|k| self.member_end(ty, k))
+                .max()
+                .unwrap_or(0),
+            _ => 0,
+        }
+    }
+
+    /// Offset + size of struct member `k` (a matrix member's size uses its MatrixStride).
+    fn member_end(&self, ty: u32, k: u32) -> u32 {
+        let Some(Type::Struct { members }) = self.types.get(&ty) else {
+            return 0;
+        };
+        let member = members.get(k as usize).copied().unwrap_or(0);
+        let offset = self.member_decoration(ty, k, DEC_OFFSET).unwrap_or(0);
+        let size = match (
+            self.types.get(&member),
+            self.member_decoration(ty, k, DEC_MATRIX_STRIDE),
+        ) {
+            (Some(Type::Matrix { count, .. }), Some(stride)) => count * stride,
+            _ => self.size_of(member),
+        };
+        offset + size
+    }
+
+    fn name_of(&self, id: u32) -> String {
+        self.names.get(&id).cloned().unwrap_or_default()
+    }
+}
+
+/// Decodes a nul-terminated SPIR-V literal string.
+fn string(words: &[u32]) -> String {
+    let bytes: Vec<u8> = words
+        .iter()
+        .flat_map(|w| w.to_le_bytes())
+        .take_while(|&b| b != 0)
+        .collect();
+    String::from_utf8_lossy(&bytes).into_owned()
+}
+
+/// Reads the set-0 bindings and the push-constant block of one shader stage.
+pub fn reflect(shader: &str, words: &[u32]) -> Result<ShaderInterface, ReflectError> {
+    let m = Module::parse(shader, words)?;
+    let stage = Stages::of_file(shader).unwrap_or_default();
+    let mut out = ShaderInterface {
+        name: shader.into(),
+        ..Default::default()
+    };
+    for &(var, pointer, class) in &m.variables {
+        let Some(Type::Pointer { pointee }) = m.types.get(&pointer) else {
+            continue;
+        };
+        if class == SC_PUSH_CONSTANT {
+            let Some(Type::Struct { members }) = m.types.get(pointee) else {
+                continue;
+            };
+            let members: Vec<PushMember> = (0..members.len() as u32)
+                .map(|k| {
+                    let offset = m.member_decoration(*pointee, k, DEC_OFFSET).unwrap_or(0);
+                    PushMember {
+                        name: m
+                            .member_names
+                            .get(&(*pointee, k))
+                            .cloned()
+                            .unwrap_or_default(),
+                        offset,
+                        size_bytes: m.member_end(*pointee, k) - offset,
+                    }
+                })
+                .collect();
+            out.push = Some(PushBlock {
+                size_bytes: m.size_of(*pointee),
+                members,
+            });
+            continue;
+        }
+        if ![SC_UNIFORM_CONSTANT, SC_UNIFORM, SC_STORAGE_BUFFER].contains(&class) {
+            continue;
+        }
+        let Some(binding) = m.decoration(var, DEC_BINDING) else {
+            continue;
+        };
+        // The variable's name; blocks declared without an instance name are named by type.
+        let mut name = m.name_of(var);
+        if name.is_empty() {
+            name = m.name_of(*pointee);
+        }
+        let set = m.decoration(var, DEC_DESCRIPTOR_SET).unwrap_or(0);
+        if set != 0 {
+            return Err(ReflectError::OtherSet {
+                shader: shader.into(),
+                name,
+                set,
+            });
+        }
+        // Arrays of descriptors: unwrap to the element, counting.
+        let mut ty = *pointee;
+        let mut count = 1;
+        loop {
+            match m.types.get(&ty) {
+                Some(Type::Array { element, length_id }) => {
+                    count *= m.constants.get(length_id).copied().unwrap_or(1);
+                    ty = *element;
+                }
+                Some(Type::RuntimeArray { element }) if class == SC_UNIFORM_CONSTANT => {
+                    ty = *element;
+                }
+                _ => break,
+            }
+        }
+        let unsupported = |what| ReflectError::Unsupported {
+            shader: shader.into(),
+            name: name.clone(),
+            binding,
+            what,
+        };
+        let has = |dec| m.decoration(var, dec).is_some();
+        let (kind, read_only, write_only) = match (class, m.types.get(&ty)) {
+            (SC_UNIFORM_CONSTANT, Some(Type::SampledImage)) => {
+                (BindingKind::CombinedImageSampler, true, false)
+            }
+            (SC_UNIFORM_CONSTANT, Some(Type::Image { sampled: 2 })) => (
+                BindingKind::StorageImage,
+                has(DEC_NON_WRITABLE),
+                has(DEC_NON_READABLE),
+            ),
+            (SC_UNIFORM_CONSTANT, Some(Type::Image { .. })) => {
+                return Err(unsupported("separate sampled image"))
+            }
+            (SC_UNIFORM_CONSTANT, Some(Type::Sampler)) => {
+                return Err(unsupported("separate sampler"))
+            }
+            (SC_UNIFORM | SC_STORAGE_BUFFER, Some(Type::Struct { members })) => {
+                let storage =
+                    class == SC_STORAGE_BUFFER || m.decoration(ty, DEC_BUFFER_BLOCK).is_some();
+                if !storage && m.decoration(ty, DEC_BLOCK).is_none() {
+                    return Err(unsupported("uniform without a block"));
+                }
+                let all = |dec| {
+                    has(dec)
+                        || (0..members.len() as u32)
+                            .all(|k| m.member_decoration(ty, k, dec).is_some())
+                };
+                if storage {
+                    (
+                        BindingKind::StorageBuffer,
+                        all(DEC_NON_WRITABLE),
+                        all(DEC_NON_READABLE),
+                    )
+                } else {
+                    (BindingKind::UniformBuffer, true, false)
+                }
+            }
+            _ => return Err(unsupported("resource of an unknown type")),
+        };
+        out.bindings.insert(
+            binding,
+            ReflectedBinding {
+                binding,
+                kind,
+                name,
+                count,
+                read_only,
+                write_only,
+                stages: stage,
+            },
+        );
+    }
+    Ok(out)
+}
+
+/// The interface of a pipeline made of several stages: the union of their bindings (each
+/// binding of one kind in every stage that declares it) and their push-constant blocks.
+pub fn merge(stages: &[ShaderInterface]) -> Result<ShaderInterface, ReflectError> {
+    let name = stages
+        .iter()
+        .map(|s| s.name.as_str())
+        .collect::<Vec<_>>()
+        .join("+");
+    let mut out = ShaderInterface {
+        name: name.clone(),
+        ..Default::default()
+    };
+    for s in stages {
+        for (b, r) in &s.bindings {
+            match out.bindings.get_mut(b) {
+                Some(existing) if existing.kind != r.kind => {
+                    return Err(ReflectError::StageConflict {
+                        pipeline: name,
+                        binding: *b,
+                        a: existing.kind.glsl_name(),
+                        b: r.kind.glsl_name(),
+                    })
+                }
+                Some(existing) => {
+                    existing.stages = existing.stages.union(r.stages);
+                    existing.read_only &= r.read_only;
+                    existing.write_only &= r.write_only;
+                    existing.count = existing.count.max(r.count);
+                }
+                None => {
+                    out.bindings.insert(*b, r.clone());
+                }
+            }
+        }
+        if let Some(p) = &s.push {
+            let merged = out.push.get_or_insert_with(Default::default);
+            for member in &p.members {
+                match merged.members.iter().find(|x| x.offset == member.offset) {
+                    Some(x) if x.name != member.name || x.size_bytes != member.size_bytes => {
+                        return Err(ReflectError::PushConflict {
+                            pipeline: name,
+                            member: member.name.clone(),
+                            a: format!("`{}` at {} ({} bytes)", x.name, x.offset, x.size_bytes),
+                            b: format!(
+                                "`{}` at {} ({} bytes)",
+                                member.name, member.offset, member.size_bytes
+                            ),
+                        })
+                    }
+                    Some(_) => {}
+                    None => merged.members.push(member.clone()),
+                }
+            }
+            merged.members.sort_by_key(|x| x.offset);
+            merged.size_bytes = merged.size_bytes.max(p.size_bytes);
+        }
+    }
+    Ok(out)
+}
+
+/// A Rust struct pushed as push constants: its named fields, checked against the shader's
+/// block by [`check_push`]. Implement it with [`push_constants!`](crate::push_constants).
+pub trait PushConstants: bytemuck::Pod {
+    /// (field name, byte offset, size in bytes), in declaration order.
+    fn fields() -> Vec<(&'static str, u32, u32)>;
+}
+
+/// Implements [`PushConstants`] for a `#[repr(C)]` struct from the list of its fields. Fields
+/// whose names start with `_` are padding and need no shader member.
+#[macro_export]
+macro_rules! push_constants {
+    ($ty:ty { $($field:ident),* $(,)? }) => {
+        impl $crate::vk::reflect::PushConstants for $ty {
+            fn fields() -> Vec<(&'static str, u32, u32)> {
+                fn size_of_field<T, F>(_: impl Fn(&T) -> &F) -> u32 {
+                    std::mem::size_of::<F>() as u32
+                }
+                vec![$((
+                    stringify!($field),
+                    std::mem::offset_of!($ty, $field) as u32,
+                    size_of_field(|s: &$ty| &s.$field),
+                )),*]
+            }
+        }
+    };
+}
+
+/// Checks that the Rust push-constant struct `rust` (its fields, see [`PushConstants`]) has the
+/// shader's block layout: every shader member has a Rust field of the same name, offset and
+/// size, every Rust field not starting with `_` is a shader member, and the struct is at least
+/// as large as the block. Returns what differs, for an error naming the pipeline.
+pub fn check_push(
+    block: Option<&PushBlock>,
+    rust_name: &str,
+    fields: &[(&'static str, u32, u32)],
+    rust_size: u32,
+) -> Result<(), String> {
+    let empty = PushBlock::default();
+    let block = block.unwrap_or(&empty);
+    let mut problems = Vec::new();
+    for m in &block.members {
+        match fields.iter().find(|f| f.0 == m.name) {
+            None => problems.push(format!(
+                "shader member `{}` (offset {}) has no field in `{rust_name}`",
+                m.name, m.offset
+            )),
+            Some(&(_, offset, size)) if offset != m.offset || size != m.size_bytes => {
+                problems.push(format!(
+                    "`{}` is at offset {offset} ({size} bytes) in `{rust_name}` but at {} ({} bytes) in the shader",
+                    m.name, m.offset, m.size_bytes
+                ))
+            }
+            Some(_) => {}
+        }
+    }
+    for &(name, offset, _) in fields {
+        if !name.starts_with('_') && !block.members.iter().any(|m| m.name == name) {
+            problems.push(format!(
+                "field `{name}` (offset {offset}) of `{rust_name}` is not in the shader's push-constant block"
+            ));
+        }
+    }
+    if rust_size < block.size_bytes {
+        problems.push(format!(
+            "`{rust_name}` has {rust_size} bytes, the shader's block {}",
+            block.size_bytes
+        ));
+    }
+    if problems.is_empty() {
+        Ok(())
+    } else {
+        Err(problems.join("; "))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn words(file: &str) -> Vec<u32> {
+        let bytes = crate::vk::shaders::get(file).expect("embedded shader");
+        bytes
+            .chunks_exact(4)
+            .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+            .collect()
+    }
+
+    /// `tonemap.comp` declares `sampler2D hdr` at 0, `writeonly image2D` at 1 and a block of
+    /// four 32-bit members: the layout std430 gives them is 0, 4, 8, 12 (16 bytes).
+    #[test]
+    fn tonemap_interface() {
+        let i = reflect("tonemap.comp", &words("tonemap.comp")).unwrap();
+        assert_eq!(i.bindings.len(), 2);
+        assert_eq!(i.bindings[&0].kind, BindingKind::CombinedImageSampler);
+        assert_eq!(i.bindings[&1].kind, BindingKind::StorageImage);
+        assert_eq!(i.bindings[&1].stages, Stages::COMPUTE);
+        let push = i.push.unwrap();
+        let names: Vec<(&str, u32)> = push
+            .members
+            .iter()
+            .map(|m| (m.name.as_str(), m.offset))
+            .collect();
+        assert_eq!(
+            names,
+            [("exposure", 0), ("op", 4), ("white", 8), ("drago_bias", 12)]
+        );
+        assert_eq!(push.size_bytes, 16);
+    }
+
+    /// `gbuffer.vert`'s block is `mat4 model; uint material;`: 64 + 4 bytes.
+    #[test]
+    fn matrix_member_size_uses_its_stride() {
+        let i = reflect("gbuffer.vert", &words("gbuffer.vert")).unwrap();
+        let push = i.push.unwrap();
+        assert_eq!(push.members[0].size_bytes, 64);
+        assert_eq!(push.size_bytes, 68);
+        assert_eq!(i.bindings[&0].kind, BindingKind::StorageBuffer);
+    }
+
+    #[test]
+    fn every_embedded_shader_reflects() {
+        for (name, _) in crate::vk::shaders::ALL {
+            reflect(name, &words(name)).unwrap_or_else(|e| panic!("{e}"));
+        }
+    }
+
+    #[test]
+    fn stages_merge_and_conflicts_are_errors() {
+        let a = reflect("shadow_depth.vert", &words("shadow_depth.vert")).unwrap();
+        let b = reflect("shadow_depth.geom", &words("shadow_depth.geom")).unwrap();
+        let m = merge(&[a, b.clone()]).unwrap();
+        assert_eq!(m.name, "shadow_depth.vert+shadow_depth.geom");
+        assert!(!b.bindings.is_empty());
+        let mut c = b.clone();
+        if let Some(first) = c.bindings.values_mut().next() {
+            first.kind = BindingKind::UniformBuffer;
+        }
+        c.name = "x.frag".into();
+        assert!(matches!(
+            merge(&[b, c]),
+            Err(ReflectError::StageConflict { .. })
+        ));
+    }
+
+    #[test]
+    fn garbage_is_not_spirv() {
+        assert_eq!(
+            reflect("x.comp", &[1, 2, 3]),
+            Err(ReflectError::NotSpirv("x.comp".into()))
+        );
+        // A header followed by an instruction claiming more words than there are.
+        assert!(reflect("x.comp", &[0x0723_0203, 0, 0, 10, 0, 0x00ff_0005]).is_err());
+    }
+
+    #[repr(C)]
+    #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+    struct Tonemap {
+        exposure: f32,
+        op: u32,
+        white: f32,
+        drago_bias: f32,
+    }
+    crate::push_constants!(Tonemap {
+        exposure,
+        op,
+        white,
+        drago_bias
+    });
+
+    #[repr(C)]
+    #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+    struct Swapped {
+        op: u32,
+        exposure: f32,
+        white: f32,
+        drago_bias: f32,
+    }
+    crate::push_constants!(Swapped {
+        op,
+        exposure,
+        white,
+        drago_bias
+    });
+
+    #[test]
+    fn push_structs_are_checked_by_name_and_offset() {
+        let i = reflect("tonemap.comp", &words("tonemap.comp")).unwrap();
+        assert_eq!(
+            check_push(i.push.as_ref(), "Tonemap", &Tonemap::fields(), 16),
+            Ok(())
+        );
+        let err = check_push(i.push.as_ref(), "Swapped", &Swapped::fields(), 16).unwrap_err();
+        assert!(err.contains("`exposure` is at offset 4"), "{err}");
+        let err = check_push(i.push.as_ref(), "Tonemap", &Tonemap::fields()[..3], 12).unwrap_err();
+        assert!(
+            err.contains("`drago_bias` (offset 12) has no field"),
+            "{err}"
+        );
+    }
+}
