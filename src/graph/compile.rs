@@ -110,6 +110,7 @@ impl RenderGraph {
     /// Compiles the declared frame (see the module doc for the steps).
     pub fn compile(&self, oracle: &dyn MemoryOracle) -> Result<CompiledGraph, GraphError> {
         self.validate()?;
+        super::bind::check(self)?;
         let (order, culled) = self.cull()?;
         let (image_usage, buffer_usage) = self.usage_flags(&order);
         let lifetimes = self.lifetimes(&order);

@@ -3,9 +3,13 @@
 //! inserting the barriers the compile step derived.
 
 use super::compile::{CompiledGraph, MemoryOracle, MemoryRequirements, ResourceDeclView};
-use super::{BufferHandle, GraphError, ImageHandle, Origin, RenderGraph, ResourceId, ResourceKind};
+use super::{
+    Access, BufferHandle, GraphError, ImageHandle, Load, Origin, RenderGraph, ResourceId,
+    ResourceKind,
+};
 use crate::vk::{
-    vk, Buffer, BufferDesc, Cmd, Context, Image, ImageDesc, MemoryLocation, TimestampRecorder,
+    vk, Attachment, Bindable, Buffer, BufferDesc, Cmd, Context, Descriptor, Image, ImageDesc,
+    MemoryLocation, TimestampRecorder,
 };
 
 /// GPU handles of an image as a pass sees it.
@@ -38,6 +42,9 @@ impl GpuImage {
 #[derive(Clone, Copy, Debug)]
 pub struct GpuBuffer {
     pub raw: vk::Buffer,
+    /// The window the pass sees: the whole buffer (offset 0), or its slot's window of a buffer
+    /// imported per slot.
+    pub offset: u64,
     pub size_bytes: u64,
 }
 
@@ -53,27 +60,168 @@ pub struct PassContext<'a> {
     /// Frame slot being recorded (0..frames in flight), for per-slot data such as uniforms.
     pub slot: usize,
     resources: &'a [Option<GpuResource>],
+    decls: &'a [super::ResourceDecl],
+    pass: &'a super::PassDecl,
 }
 
 impl PassContext<'_> {
+    /// Panics unless this pass declared `id`: a resource used without a declaration has no
+    /// barrier, so the use would race. Handles are created by the graph and passes are
+    /// declared in code, so this is a programming error, caught by the first frame any test
+    /// records.
+    fn declared(&self, id: ResourceId) {
+        if !self.pass.accesses.iter().any(|a| a.0 == id) {
+            panic!(
+                "pass `{}` uses `{}`, which it did not declare: add a `.read()`, `.write()` or `.bind()` for it",
+                self.pass.name,
+                self.decls.get(id.0 as usize).map_or("?", |r| r.name.as_str())
+            );
+        }
+    }
+
     /// The image behind a handle this pass declared.
     ///
     /// # Panics
-    /// If the handle is not an image of this graph: handles are typed and created by the
-    /// same graph, so this is a programming error, not a user error.
+    /// If the pass did not declare it (see `declared`), or the handle is of another graph.
     pub fn image(&self, h: ImageHandle) -> &GpuImage {
+        self.declared(h.0);
         match self.resources.get(h.0 .0 as usize) {
             Some(Some(GpuResource::Image(i))) => i,
             _ => panic!("image handle {:?} does not belong to this graph", h.0),
         }
     }
 
-    /// The buffer behind a handle this pass declared (see `image` for the panic).
+    /// The buffer behind a handle this pass declared (see `image` for the panics). A buffer
+    /// imported per slot is seen as the window of the slot being recorded.
     pub fn buffer(&self, h: BufferHandle) -> GpuBuffer {
+        self.declared(h.0);
         match self.resources.get(h.0 .0 as usize) {
-            Some(Some(GpuResource::Buffer(b))) => *b,
+            Some(Some(GpuResource::Buffer(b))) => {
+                let mut b = *b;
+                if let Some((stride, size)) = self.decls[h.0 .0 as usize].slot_window {
+                    b.offset = self.slot as u64 * stride;
+                    b.size_bytes = size;
+                }
+                b
+            }
             _ => panic!("buffer handle {:?} does not belong to this graph", h.0),
         }
+    }
+
+    /// The descriptors of the bindings this pass declared, in binding order.
+    pub fn descriptors(&self) -> Vec<Descriptor> {
+        let mut out: Vec<Descriptor> = self
+            .pass
+            .bindings
+            .iter()
+            .filter_map(|b| {
+                let id = b.resource?;
+                Some(match self.resources.get(id.0 as usize) {
+                    Some(Some(GpuResource::Image(img))) => match b.sampler {
+                        Some(sampler) => Descriptor::SampledImage {
+                            binding: b.binding,
+                            view: img.view,
+                            sampler,
+                        },
+                        None => Descriptor::StorageImage {
+                            binding: b.binding,
+                            view: img.view,
+                        },
+                    },
+                    Some(Some(GpuResource::Buffer(_))) => {
+                        let buf = self.buffer(BufferHandle(id));
+                        let (offset, range) = match self.decls[id.0 as usize].slot_window {
+                            Some(_) => (buf.offset, buf.size_bytes),
+                            None => (0, vk::WHOLE_SIZE),
+                        };
+                        match b.access {
+                            Access::Uniform(_) => Descriptor::UniformBuffer {
+                                binding: b.binding,
+                                buffer: buf.raw,
+                                offset,
+                                range,
+                            },
+                            _ => Descriptor::StorageBuffer {
+                                binding: b.binding,
+                                buffer: buf.raw,
+                                offset,
+                                range,
+                            },
+                        }
+                    }
+                    _ => return None,
+                })
+            })
+            .collect();
+        out.sort_by_key(|d| d.binding());
+        out
+    }
+
+    /// Binds `pipeline` and pushes the descriptors this pass declared for it.
+    ///
+    /// # Panics
+    /// If `pipeline` is not the one the pass declared with `.pipeline()` (its bindings were
+    /// checked against that one's shaders).
+    pub fn bind(&self, pipeline: &impl Bindable) {
+        let declared = self.pass.interface.map(|i| i as *const _);
+        if declared != Some(pipeline.interface() as *const _) {
+            panic!(
+                "pass `{}` binds a pipeline of `{}` but declared {}: declare it with `.pipeline()`",
+                self.pass.name,
+                pipeline.interface().name,
+                self.pass
+                    .interface
+                    .map_or("none".to_owned(), |i| format!("`{}`", i.name))
+            );
+        }
+        self.cmd.bind(pipeline, &self.descriptors());
+    }
+
+    /// Begins dynamic rendering into the attachments this pass declared, with their load ops,
+    /// over their extent and all their layers.
+    pub fn begin_rendering(&self) {
+        let mut colors = Vec::new();
+        let mut depth = None;
+        let mut extent = vk::Extent2D::default();
+        let mut layers = 1;
+        for a in &self.pass.attachments {
+            let img = self.image(a.image);
+            extent = img.extent_2d();
+            layers = img.desc.layers.max(1);
+            let clear = match a.load {
+                Load::Clear(c) => Some(vk::ClearValue {
+                    color: vk::ClearColorValue { float32: c },
+                }),
+                Load::ClearDepth(d) => Some(vk::ClearValue {
+                    depth_stencil: vk::ClearDepthStencilValue {
+                        depth: d,
+                        stencil: 0,
+                    },
+                }),
+                Load::Keep => None,
+            };
+            let att = Attachment {
+                view: img.view,
+                clear,
+            };
+            if a.depth {
+                depth = Some(att);
+            } else {
+                colors.push(att);
+            }
+        }
+        self.cmd
+            .begin_rendering_layers(extent, layers, &colors, depth);
+    }
+
+    /// Binds a declared buffer as vertex buffer 0.
+    pub fn bind_vertex_buffer(&self, h: BufferHandle) {
+        self.cmd.bind_vertex_buffer(self.buffer(h).raw);
+    }
+
+    /// Binds a declared buffer as the index buffer (u32 indices).
+    pub fn bind_index_buffer(&self, h: BufferHandle) {
+        self.cmd.bind_index_buffer(self.buffer(h).raw);
     }
 }
 
@@ -194,6 +342,7 @@ impl GraphExecutor {
                     ResourceKind::Buffer { size_bytes, .. },
                 ) => Some(GpuResource::Buffer(GpuBuffer {
                     raw: *b,
+                    offset: 0,
                     size_bytes: *size_bytes,
                 })),
                 (Origin::Transient, kind) => {
@@ -226,6 +375,7 @@ impl GraphExecutor {
                             ctx.create_buffer_in(&desc, memory, place.offset).map(|b| {
                                 let g = GpuBuffer {
                                     raw: b.raw,
+                                    offset: 0,
                                     size_bytes: *size_bytes,
                                 };
                                 slot.buffers.push(b);
@@ -326,6 +476,8 @@ impl GraphExecutor {
                     cmd,
                     slot,
                     resources: &s.resources,
+                    decls: &self.graph.resources,
+                    pass,
                 });
             }
             timestamps.end(cmd, ts);

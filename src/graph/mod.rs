@@ -26,19 +26,21 @@
 //! were imported with, so one compiled graph serves every frame.
 
 mod access;
+mod bind;
 pub mod buddy;
 mod compile;
 mod dump;
 mod execute;
 
 pub use access::{Access, AccessInfo, Shader, Subresource, SubresourceSel};
+pub use bind::Load;
 pub use compile::{
     texel_bytes, Arena, Barrier, CompiledGraph, EstimateOracle, MemoryOracle, MemoryRequirements,
     MemoryStats, Placement, ResourceDeclView,
 };
 pub use execute::{GpuBuffer, GpuImage, GraphExecutor, PassContext};
 
-use crate::vk::{vk, Buffer, Image, ImageDesc};
+use crate::vk::{vk, Bindable, Buffer, Image, ImageDesc, ShaderInterface};
 
 /// Errors of graph declaration and compilation. Each names the pass and resource.
 #[derive(Debug, thiserror::Error, PartialEq, Eq)]
@@ -80,6 +82,63 @@ pub enum GraphError {
     DuplicatePassName(String),
     #[error("the graph has no output: import a resource or mark one with `mark_output`, otherwise every pass is culled")]
     NoOutput,
+    #[error("pass `{pass}` binds nothing at binding {binding}, where `{shader}` declares `{name}` ({kind}): bind a resource there with `.bind*()`, or declare it `.bind_per_draw()` if the pass pushes it itself")]
+    UnboundBinding {
+        pass: String,
+        shader: String,
+        binding: u32,
+        name: String,
+        kind: &'static str,
+    },
+    #[error("pass `{pass}` binds `{resource}` at binding {binding}, which `{shader}` does not declare: fix the binding number or remove the binding")]
+    UnknownBinding {
+        pass: String,
+        shader: String,
+        binding: u32,
+        resource: String,
+    },
+    #[error("pass `{pass}` binds `{resource}` at binding {binding} as a {declared}, but `{shader}` declares `{name}` there as a {expected}")]
+    BindingKindMismatch {
+        pass: String,
+        shader: String,
+        binding: u32,
+        resource: String,
+        name: String,
+        declared: &'static str,
+        expected: &'static str,
+    },
+    #[error("pass `{pass}` declares `{resource}` at binding {binding} for the {declared} stage, but `{shader}` uses `{name}` in the {used} stage: declare the access for every stage that uses it, or the barrier will not cover them")]
+    BindingStageMismatch {
+        pass: String,
+        shader: String,
+        binding: u32,
+        resource: String,
+        name: String,
+        declared: String,
+        used: String,
+    },
+    #[error("pass `{pass}` declares a read of `{resource}` at binding {binding}, but `{shader}` does not declare `{name}` readonly, so it may write: add `readonly` in the shader, or declare a write")]
+    ReadOfWritableBinding {
+        pass: String,
+        shader: String,
+        binding: u32,
+        resource: String,
+        name: String,
+    },
+    #[error("pass `{pass}` declares a write of `{resource}` at binding {binding}, but `{shader}` declares `{name}` readonly: declare a read")]
+    WriteOfReadonlyBinding {
+        pass: String,
+        shader: String,
+        binding: u32,
+        resource: String,
+        name: String,
+    },
+    #[error("pass `{pass}` binds binding {binding} twice")]
+    DuplicateBinding { pass: String, binding: u32 },
+    #[error("pass `{pass}` declares bindings but no pipeline: call `.pipeline(&p)` so its bindings can be checked against the shader")]
+    BindingsWithoutPipeline { pass: String },
+    #[error("pass `{pass}` declares attachments of different sizes (`{a}` and `{b}`): render to attachments of one size")]
+    AttachmentSizeMismatch { pass: String, a: String, b: String },
     #[error("transient `{resource}` cannot be placed: {reason}")]
     Placement { resource: String, reason: String },
     #[error("GPU error while building the graph: {0}")]
@@ -141,6 +200,9 @@ pub(crate) struct ResourceDecl {
     pub kind: ResourceKind,
     pub origin: Origin,
     pub output: bool,
+    /// For a buffer holding one window per frame slot: (stride, size) in bytes. A pass that
+    /// binds it sees the window of the slot it records.
+    pub slot_window: Option<(u64, u64)>,
 }
 
 impl ResourceDecl {
@@ -166,6 +228,11 @@ pub(crate) struct PassDecl {
     /// (resource, access, selection, declared with `.read()`)
     pub accesses: Vec<(ResourceId, Access, SubresourceSel, bool)>,
     pub record: Option<RecordFn>,
+    /// The shaders of the pipeline the pass binds, when it declares its bindings.
+    pub interface: Option<&'static ShaderInterface>,
+    pub bindings: Vec<bind::BindingDecl>,
+    /// Color attachments in location order, then at most one depth attachment.
+    pub attachments: Vec<bind::AttachmentDecl>,
 }
 
 /// The declared frame.
@@ -186,6 +253,7 @@ impl RenderGraph {
             kind,
             origin,
             output: false,
+            slot_window: None,
         });
         ResourceId(self.resources.len() as u32 - 1)
     }
@@ -242,6 +310,21 @@ impl RenderGraph {
         ))
     }
 
+    /// Imports a persistent buffer that holds one `size_bytes` window per frame slot,
+    /// `stride_bytes` apart (per-frame constants the host writes while other slots are in
+    /// flight). A pass binding it sees its slot's window.
+    pub fn import_buffer_per_slot(
+        &mut self,
+        buffer: &Buffer,
+        stride_bytes: u64,
+        size_bytes: u64,
+        state: Access,
+    ) -> BufferHandle {
+        let h = self.import_buffer(buffer, state);
+        self.resources[h.0 .0 as usize].slot_window = Some((stride_bytes, size_bytes));
+        h
+    }
+
     /// Imports an image by description only (no GPU handle): for compiling without a GPU.
     pub fn import_image_desc(&mut self, desc: ImageDesc, state: Access) -> ImageHandle {
         let name = desc.name.clone();
@@ -290,6 +373,9 @@ impl RenderGraph {
             name: name.to_owned(),
             accesses: Vec::new(),
             record: None,
+            interface: None,
+            bindings: Vec::new(),
+            attachments: Vec::new(),
         });
         let index = self.passes.len() - 1;
         PassBuilder { graph: self, index }
@@ -335,6 +421,82 @@ impl PassBuilder<'_> {
     /// Declares a write of some mips/layers of an image.
     pub fn write_sub(self, r: ImageHandle, access: Access, sel: SubresourceSel) -> Self {
         self.add(r.into(), access, sel, false)
+    }
+    /// The pipeline whose set-0 bindings this pass fills: the compile step checks every
+    /// binding the pass declares against what its shaders declare, and [`PassContext::bind`]
+    /// pushes them.
+    pub fn pipeline(self, pipeline: &impl Bindable) -> Self {
+        self.graph.passes[self.index].interface = Some(pipeline.interface());
+        self
+    }
+    fn add_binding(self, decl: bind::BindingDecl, sel: SubresourceSel) -> Self {
+        let writes = decl.access.info().writes;
+        let access = decl.access;
+        let Some(r) = decl.resource else {
+            self.graph.passes[self.index].bindings.push(decl);
+            return self;
+        };
+        self.graph.passes[self.index].bindings.push(decl);
+        self.add(r, access, sel, !writes)
+    }
+    /// Declares `resource` with `access` at `binding` of the pass's pipeline: a storage image
+    /// or buffer (`Storage*`), or a uniform buffer (`Uniform`). Read or write follows the access.
+    pub fn bind(self, binding: u32, resource: impl Into<ResourceId>, access: Access) -> Self {
+        self.add_binding(
+            bind::BindingDecl::new(binding, resource.into(), access),
+            SubresourceSel::whole(),
+        )
+    }
+    /// Declares a sampled read of `image` through `sampler` at `binding`, by `shader`.
+    pub fn bind_sampled(
+        self,
+        binding: u32,
+        image: ImageHandle,
+        sampler: vk::Sampler,
+        shader: Shader,
+    ) -> Self {
+        let mut decl = bind::BindingDecl::new(binding, image.into(), Access::Sampled(shader));
+        decl.sampler = Some(sampler);
+        self.add_binding(decl, SubresourceSel::whole())
+    }
+    /// Declares `binding` as pushed by the record closure itself, per draw (textures that
+    /// change between draws): the resources it may read are declared with `.read()`.
+    pub fn bind_per_draw(self, binding: u32) -> Self {
+        self.graph.passes[self.index]
+            .bindings
+            .push(bind::BindingDecl::per_draw(binding));
+        self
+    }
+    /// Declares a color attachment (the next location), loaded as `load` says.
+    pub fn color(self, image: ImageHandle, load: Load) -> Self {
+        let access = match load {
+            Load::Keep => Access::ColorAttachmentReadWrite,
+            _ => Access::ColorAttachment,
+        };
+        self.graph.passes[self.index]
+            .attachments
+            .push(bind::AttachmentDecl {
+                image,
+                load,
+                depth: false,
+            });
+        self.add(image.into(), access, SubresourceSel::whole(), false)
+    }
+    /// Declares the depth attachment (tested and written), loaded as `load` says.
+    pub fn depth(self, image: ImageHandle, load: Load) -> Self {
+        self.graph.passes[self.index]
+            .attachments
+            .push(bind::AttachmentDecl {
+                image,
+                load,
+                depth: true,
+            });
+        self.add(
+            image.into(),
+            Access::DepthAttachment,
+            SubresourceSel::whole(),
+            false,
+        )
     }
     /// Hands over the recording closure; ends the declaration.
     pub fn record(self, f: impl Fn(&PassContext) + 'static) {

@@ -1,0 +1,400 @@
+//! A pass's bindings and attachments, declared once with their access.
+//!
+//! `.bind(binding, resource, access)` is the only statement of a descriptor: the graph derives
+//! the barrier from the access, [`PassContext::bind`](super::PassContext::bind) writes the
+//! descriptor from it, and [`check`] (run by `compile`) holds it against the bindings the
+//! pipeline's shaders declare (reflected SPIR-V), so a wrong number, kind, stage or a read of
+//! a binding the shader may write is an error naming the pass, the binding and the shader —
+//! before any GPU work. Attachments likewise: `.color(image, Load::Clear(..))` states the load
+//! op once and `PassContext::begin_rendering` begins with it.
+
+use super::{Access, GraphError, ImageHandle, RenderGraph, ResourceId, Shader};
+use crate::vk::reflect::{BindingKind, Stages};
+use crate::vk::vk;
+
+/// How an attachment starts its pass.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Load {
+    /// Cleared to this color (color attachments).
+    Clear([f32; 4]),
+    /// Cleared to this depth (depth attachments).
+    ClearDepth(f32),
+    /// Keeps its contents (drawing over what an earlier pass wrote).
+    Keep,
+}
+
+/// One declared descriptor binding.
+#[derive(Clone, Debug)]
+pub(crate) struct BindingDecl {
+    pub binding: u32,
+    /// `None`: pushed per draw by the record closure.
+    pub resource: Option<ResourceId>,
+    pub access: Access,
+    pub sampler: Option<vk::Sampler>,
+}
+
+impl BindingDecl {
+    pub fn new(binding: u32, resource: ResourceId, access: Access) -> Self {
+        Self {
+            binding,
+            resource: Some(resource),
+            access,
+            sampler: None,
+        }
+    }
+    pub fn per_draw(binding: u32) -> Self {
+        Self {
+            binding,
+            resource: None,
+            access: Access::Sampled(Shader::Fragment),
+            sampler: None,
+        }
+    }
+}
+
+/// One declared attachment.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct AttachmentDecl {
+    pub image: ImageHandle,
+    pub load: Load,
+    pub depth: bool,
+}
+
+/// The descriptor kind an access of a resource takes (`None`: not a descriptor access).
+fn kind_of(access: Access, is_image: bool) -> Option<BindingKind> {
+    match (access, is_image) {
+        (Access::Sampled(_), true) => Some(BindingKind::CombinedImageSampler),
+        (Access::StorageRead(_) | Access::StorageWrite(_) | Access::StorageReadWrite(_), true) => {
+            Some(BindingKind::StorageImage)
+        }
+        (Access::StorageRead(_) | Access::StorageWrite(_) | Access::StorageReadWrite(_), false) => {
+            Some(BindingKind::StorageBuffer)
+        }
+        (Access::Uniform(_), false) => Some(BindingKind::UniformBuffer),
+        _ => None,
+    }
+}
+
+fn stages_of(shader: Shader) -> Stages {
+    match shader {
+        Shader::Vertex => Stages::VERTEX,
+        Shader::Geometry => Stages::GEOMETRY,
+        Shader::Fragment => Stages::FRAGMENT,
+        Shader::Graphics => Stages::VERTEX
+            .union(Stages::GEOMETRY)
+            .union(Stages::FRAGMENT),
+        Shader::Compute => Stages::COMPUTE,
+    }
+}
+
+fn shader_of(access: Access) -> Option<Shader> {
+    match access {
+        Access::Sampled(s)
+        | Access::StorageRead(s)
+        | Access::StorageWrite(s)
+        | Access::StorageReadWrite(s)
+        | Access::Uniform(s) => Some(s),
+        _ => None,
+    }
+}
+
+fn describe(kind: Option<BindingKind>, access: Access) -> &'static str {
+    match kind {
+        Some(k) => k.glsl_name(),
+        None => match access {
+            Access::Sampled(_) => "sampled buffer",
+            Access::Uniform(_) => "uniform image",
+            _ => "non-descriptor access",
+        },
+    }
+}
+
+/// Checks every pass's declared bindings against its pipeline's reflected interface.
+pub(crate) fn check(graph: &RenderGraph) -> Result<(), GraphError> {
+    for pass in &graph.passes {
+        let pass_name = || pass.name.clone();
+        let Some(interface) = pass.interface else {
+            if !pass.bindings.is_empty() {
+                return Err(GraphError::BindingsWithoutPipeline { pass: pass_name() });
+            }
+            continue;
+        };
+        let shader = || interface.name.clone();
+        for (i, b) in pass.bindings.iter().enumerate() {
+            if pass.bindings[..i].iter().any(|o| o.binding == b.binding) {
+                return Err(GraphError::DuplicateBinding {
+                    pass: pass_name(),
+                    binding: b.binding,
+                });
+            }
+        }
+        for b in &pass.bindings {
+            let Some(resource) = b.resource else {
+                if !interface.bindings.contains_key(&b.binding) {
+                    return Err(GraphError::UnknownBinding {
+                        pass: pass_name(),
+                        shader: shader(),
+                        binding: b.binding,
+                        resource: "(per draw)".into(),
+                    });
+                }
+                continue;
+            };
+            let decl = &graph.resources[resource.0 as usize];
+            let resource_name = || decl.name.clone();
+            let Some(reflected) = interface.bindings.get(&b.binding) else {
+                return Err(GraphError::UnknownBinding {
+                    pass: pass_name(),
+                    shader: shader(),
+                    binding: b.binding,
+                    resource: resource_name(),
+                });
+            };
+            let kind = kind_of(b.access, decl.is_image());
+            if kind != Some(reflected.kind) {
+                return Err(GraphError::BindingKindMismatch {
+                    pass: pass_name(),
+                    shader: shader(),
+                    binding: b.binding,
+                    resource: resource_name(),
+                    name: reflected.name.clone(),
+                    declared: describe(kind, b.access),
+                    expected: reflected.kind.glsl_name(),
+                });
+            }
+            let declared = shader_of(b.access).map_or(Stages::default(), stages_of);
+            if !declared.contains(reflected.stages) {
+                return Err(GraphError::BindingStageMismatch {
+                    pass: pass_name(),
+                    shader: shader(),
+                    binding: b.binding,
+                    resource: resource_name(),
+                    name: reflected.name.clone(),
+                    declared: declared.names(),
+                    used: reflected.stages.names(),
+                });
+            }
+            let info = b.access.info();
+            let storage = matches!(
+                reflected.kind,
+                BindingKind::StorageImage | BindingKind::StorageBuffer
+            );
+            if storage && !info.writes && !reflected.read_only {
+                return Err(GraphError::ReadOfWritableBinding {
+                    pass: pass_name(),
+                    shader: shader(),
+                    binding: b.binding,
+                    resource: resource_name(),
+                    name: reflected.name.clone(),
+                });
+            }
+            if info.writes && reflected.read_only {
+                return Err(GraphError::WriteOfReadonlyBinding {
+                    pass: pass_name(),
+                    shader: shader(),
+                    binding: b.binding,
+                    resource: resource_name(),
+                    name: reflected.name.clone(),
+                });
+            }
+        }
+        for (binding, reflected) in &interface.bindings {
+            if !pass.bindings.iter().any(|b| b.binding == *binding) {
+                return Err(GraphError::UnboundBinding {
+                    pass: pass_name(),
+                    shader: shader(),
+                    binding: *binding,
+                    name: reflected.name.clone(),
+                    kind: reflected.kind.glsl_name(),
+                });
+            }
+        }
+        let sizes: Vec<(String, (u32, u32))> = pass
+            .attachments
+            .iter()
+            .filter_map(|a| match &graph.resources[a.image.0 .0 as usize].kind {
+                super::ResourceKind::Image(d) => Some((d.name.clone(), (d.width, d.height))),
+                super::ResourceKind::Buffer { .. } => None,
+            })
+            .collect();
+        if let Some(((a, _), (b, _))) = sizes
+            .first()
+            .and_then(|f| sizes.iter().find(|o| o.1 != f.1).map(|o| (f, o)))
+        {
+            return Err(GraphError::AttachmentSizeMismatch {
+                pass: pass_name(),
+                a: a.clone(),
+                b: b.clone(),
+            });
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::graph::{Access, RenderGraph, Shader};
+    use crate::vk::reflect::{ReflectedBinding, ShaderInterface};
+    use crate::vk::ImageDesc;
+
+    /// An interface like `tonemap.comp`'s: a sampler at 0, a writeonly storage image at 1.
+    fn tonemap_like() -> &'static ShaderInterface {
+        let mut i = ShaderInterface {
+            name: "t.comp".into(),
+            ..Default::default()
+        };
+        for (binding, kind, read_only, write_only) in [
+            (0, BindingKind::CombinedImageSampler, true, false),
+            (1, BindingKind::StorageImage, false, true),
+            (2, BindingKind::StorageBuffer, true, false),
+        ] {
+            i.bindings.insert(
+                binding,
+                ReflectedBinding {
+                    binding,
+                    kind,
+                    name: format!("b{binding}"),
+                    count: 1,
+                    read_only,
+                    write_only,
+                    stages: Stages::COMPUTE,
+                },
+            );
+        }
+        Box::leak(Box::new(i))
+    }
+
+    struct Fake(&'static ShaderInterface);
+    impl crate::vk::Bindable for Fake {
+        fn bind_info(&self) -> (vk::PipelineBindPoint, vk::Pipeline, vk::PipelineLayout) {
+            (
+                vk::PipelineBindPoint::COMPUTE,
+                vk::Pipeline::null(),
+                vk::PipelineLayout::null(),
+            )
+        }
+        fn interface(&self) -> &'static ShaderInterface {
+            self.0
+        }
+    }
+
+    /// Declares the pass with `edit` applied to the correct declaration's list.
+    fn graph_with(
+        edit: impl FnOnce(
+            crate::graph::PassBuilder<'_>,
+            crate::graph::ImageHandle,
+            crate::graph::ImageHandle,
+            crate::graph::BufferHandle,
+        ) -> crate::graph::PassBuilder<'_>,
+    ) -> Result<(), GraphError> {
+        let mut g = RenderGraph::new();
+        let src = g.import_image_desc(
+            ImageDesc::new_2d("src", vk::Format::R8G8B8A8_UNORM, 4, 4),
+            Access::Sampled(Shader::Compute),
+        );
+        let dst = g.import_image_desc(
+            ImageDesc::new_2d("dst", vk::Format::R8G8B8A8_UNORM, 4, 4),
+            Access::StorageWrite(Shader::Compute),
+        );
+        let buf = g.import_buffer_desc("buf", 64, Access::StorageRead(Shader::Compute));
+        let pipe = Fake(tonemap_like());
+        let p = g.add_pass("t").pipeline(&pipe);
+        edit(p, src, dst, buf).record(|_| {});
+        check(&g)
+    }
+
+    #[test]
+    fn a_correct_declaration_passes() {
+        let sampler = vk::Sampler::null();
+        graph_with(|p, src, dst, buf| {
+            p.bind_sampled(0, src, sampler, Shader::Compute)
+                .bind(1, dst, Access::StorageWrite(Shader::Compute))
+                .bind(2, buf, Access::StorageRead(Shader::Compute))
+        })
+        .unwrap();
+    }
+
+    #[test]
+    fn every_disagreement_with_the_shader_is_an_error() {
+        let s = vk::Sampler::null();
+        let c = Shader::Compute;
+        let missing = graph_with(|p, src, dst, _| {
+            p.bind_sampled(0, src, s, c)
+                .bind(1, dst, Access::StorageWrite(c))
+        });
+        assert!(matches!(
+            missing,
+            Err(GraphError::UnboundBinding { binding: 2, .. })
+        ));
+        let unknown = graph_with(|p, src, dst, buf| {
+            p.bind_sampled(0, src, s, c)
+                .bind(1, dst, Access::StorageWrite(c))
+                .bind(2, buf, Access::StorageRead(c))
+                .bind(7, buf, Access::StorageRead(c))
+        });
+        assert!(matches!(
+            unknown,
+            Err(GraphError::UnknownBinding { binding: 7, .. })
+        ));
+        let kind = graph_with(|p, src, dst, buf| {
+            p.bind(0, src, Access::StorageRead(c))
+                .bind(1, dst, Access::StorageWrite(c))
+                .bind(2, buf, Access::StorageRead(c))
+        });
+        assert!(matches!(
+            kind,
+            Err(GraphError::BindingKindMismatch { binding: 0, .. })
+        ));
+        let stage = graph_with(|p, src, dst, buf| {
+            p.bind_sampled(0, src, s, Shader::Fragment)
+                .bind(1, dst, Access::StorageWrite(c))
+                .bind(2, buf, Access::StorageRead(c))
+        });
+        assert!(matches!(
+            stage,
+            Err(GraphError::BindingStageMismatch { binding: 0, .. })
+        ));
+        let write_of_readonly = graph_with(|p, src, dst, buf| {
+            p.bind_sampled(0, src, s, c)
+                .bind(1, dst, Access::StorageWrite(c))
+                .bind(2, buf, Access::StorageReadWrite(c))
+        });
+        assert!(matches!(
+            write_of_readonly,
+            Err(GraphError::WriteOfReadonlyBinding { binding: 2, .. })
+        ));
+        let read_of_writable = graph_with(|p, src, dst, buf| {
+            p.bind_sampled(0, src, s, c)
+                .bind(1, dst, Access::StorageRead(c))
+                .bind(2, buf, Access::StorageRead(c))
+        });
+        assert!(matches!(
+            read_of_writable,
+            Err(GraphError::ReadOfWritableBinding { binding: 1, .. })
+        ));
+        let twice = graph_with(|p, src, dst, buf| {
+            p.bind_sampled(0, src, s, c)
+                .bind(1, dst, Access::StorageWrite(c))
+                .bind(2, buf, Access::StorageRead(c))
+                .bind(2, buf, Access::StorageRead(c))
+        });
+        assert!(matches!(
+            twice,
+            Err(GraphError::DuplicateBinding { binding: 2, .. })
+        ));
+    }
+
+    #[test]
+    fn bindings_need_a_pipeline() {
+        let mut g = RenderGraph::new();
+        let buf = g.import_buffer_desc("buf", 64, Access::StorageRead(Shader::Compute));
+        g.add_pass("p")
+            .bind(0, buf, Access::StorageRead(Shader::Compute))
+            .record(|_| {});
+        assert!(matches!(
+            check(&g),
+            Err(GraphError::BindingsWithoutPipeline { .. })
+        ));
+    }
+}
