@@ -31,30 +31,103 @@ uint shadow_view_index(GpuLight l, vec3 p) {
     return first + face;
 }
 
+// Self-shadowing (shadow acne) and how the lookup avoids it.
+//
+// The map stores, per texel, the depth of the nearest surface at the texel's center. A PCF tap
+// compares the receiver's depth with a texel center up to (r + 1/2) sqrt(2) texels from the
+// receiver's own position in the map (floor of its texel coordinate plus the tap offset; r the
+// kernel radius). If the receiver's own surface is stored there, it is a plane whose depth
+// changes by tan(beta) per texel of lateral distance, beta being the angle between the
+// surface normal and the axis along which depth is measured (the view axis for perspective
+// and orthographic maps, the ray for the paraboloid's radial depth). The receiver then reads
+// itself as an occluder unless the bias covers (r + 1/2) sqrt(2) tan(beta) texels, which has
+// no bound as beta -> 90 degrees. That was the moire on the Cornell box's tall block, whose
+// front face the spot light grazes at 87-89 degrees: a bias of 1 + min(tan, 10) texels and a
+// normal offset of sin(theta) texels (worth tan(theta) texels of depth) covered
+// 1 + 10 + tan texels, short of the 2.1 tan that the outer taps of the 3x3 kernel need from
+// 84 degrees on; the dots are where the outer taps' texel centers fall behind the receiver
+// (their grid beating against the pixel grid). It vanished with a 1x1 kernel, and the other
+// suspects are far smaller: the D32 depth's precision (z^2 / near * 2^-24, under a third of a
+// texel) and the G-buffer's reconstructed position (about 1e-5 m of 1e-3 m texels).
+//
+// Two remedies, each with a cost, are combined so that neither grows without bound. Let
+// `reach` be the kernel's farthest texel center against the normal's lateral direction, times
+// sin(beta) (texels; shadow_texel_and_reach). A point of the surface of constant depth
+// through the lookup point, `reach` texels away, is then up to reach texels (in the normal's
+// direction) behind the receiver's plane, which a tap sees as reach / cos(beta) texels of depth.
+//  - A slope-scaled depth bias of reach / cos(beta) texels covers it, but at grazing angles a
+//    large depth bias hides real occluders near the receiver (peter-panning), so it is capped
+//    at `frame.shadow.y` texels.
+//  - Moving the lookup point off the surface along its normal by k texels raises every point
+//    of that constant-depth surface k texels above the plane (Holbert 2011, "normal offset
+//    shadows"); its cost is that shadow edges move by up to k texels in the map.
+// The bias takes what it can, the normal offset the rest: k = reach - bias cos(beta), which
+// is 0 up to tan(beta) = cap / reach (about 63 degrees for a 3-texel cap and r = 1) and tends
+// to reach (at most (r + 1/2) sqrt(2), 2.1 texels for r = 1) as beta -> 90 degrees. A planar
+// receiver then never shadows itself at any angle. Moving along the normal lifts the point
+// towards the light rather than sideways, so a contact shadow stays at its contact line. The
+// constant bias (`frame.shadow.x` texels) and the depth format's rounding
+// (shadow_depth_precision) come on top; `frame.shadow.z` adds a normal-offset margin.
+
+// Depth error of a stored value at linear depth z, meters: 4 ulps of a D32 value near 1
+// (2^-24 each), through d = f (z - n) / (z (f - n)) (perspective: dz/dd = z^2 (f - n) / (n f))
+// or d = (z - n) / (f - n) (orthographic, paraboloid).
+float shadow_depth_precision(GpuShadowView sv, float z) {
+    float n = sv.params.z, f = sv.params.w;
+    float dz_dd = sv.params.y > 0.5 ? f - n : z * z * (f - n) / max(n * f, 1e-30);
+    return exp2(-22.0) * dz_dd;
+}
+
+// Normal offset and slope-scaled depth bias, both in texels, for a kernel `reach` texels
+// against a normal at angle beta to the depth axis (see above).
+vec2 shadow_offset_and_slope_bias(float reach, float sin_beta, float cos_beta) {
+    float slope = min(reach / max(cos_beta, 1e-6), frame.shadow.y);
+    float offset = max(reach - slope * cos_beta, 0.0) + frame.shadow.z * sin_beta;
+    return vec2(offset, slope);
+}
+
+// Depth bias in meters: the constant and the slope part (texels), plus the depth format's
+// rounding at depth z.
+float shadow_depth_bias(GpuShadowView sv, float texel_m, float z, float slope_texels) {
+    return texel_m * (frame.shadow.x + slope_texels) + shadow_depth_precision(sv, z);
+}
+
 // Paraboloid hemispheres (shadow_depth.geom): uv = d.xy / (|d| + d.z) in the hemisphere frame
 // (view_proj), depth = radial distance. The map is stereographic, hence conformal: a texel
 // spans 2/res in uv, i.e. 2 (1 + z) / res radians at cos(angle to the axis) z, so at distance
 // |d| one texel is params.x * |d| * (1 + z) meters (params.x = 2/res), between 1x at the rim
-// and 2x at the axis of the cube map's 2/res per meter. Bias and normal offset use the same
-// texel semantics as the other views. PCF taps past the rim (|uv| > 1) read the other
-// hemisphere, whose frame shares x and y: there the same direction is at uv / |uv|^2.
-float paraboloid_visibility(sampler2DArray maps, GpuShadowView sv, uint v, uint other, vec3 p,
-                            vec3 n, float cos_theta) {
-    vec3 d0 = (sv.view_proj * vec4(p, 1.0)).xyz;
-    float dist0 = max(length(d0), 1e-30);
-    float texel_m = sv.params.x * dist0 * (1.0 + max(d0.z, 0.0) / dist0);
+// and 2x at the axis of the cube map's 2/res per meter. Depth is radial, so beta is the angle
+// to the ray: sin(theta). PCF taps past the rim (|uv| > 1) read the other hemisphere, whose
+// frame shares x and y: there the same direction is at uv / |uv|^2, rounded to that map's
+// texel, which can add half a texel diagonal to the reach.
+float paraboloid_texel_m(GpuShadowView sv, vec3 p) {
+    vec3 d = (sv.view_proj * vec4(p, 1.0)).xyz;
+    float dist = max(length(d), 1e-30);
+    return sv.params.x * dist * (1.0 + max(d.z, 0.0) / dist);
+}
+
+float paraboloid_visibility(sampler2DArray maps, GpuLight l, vec3 p, vec3 n, float cos_theta) {
+    int r = int(frame.shadow.w);
+    ivec2 size = textureSize(maps, 0).xy;
     float sin_theta = sqrt(max(1.0 - cos_theta * cos_theta, 0.0));
-    vec3 po = p + n * (frame.shadow.z * texel_m * sin_theta);
+    // The map's axes turn with the point, so the diagonal bound, plus the rim's rounding.
+    float reach = (float(r) + 1.0) * sqrt(2.0) * sin_theta;
+    vec2 os = shadow_offset_and_slope_bias(reach, sin_theta, cos_theta);
+    // p's own hemisphere has the larger texel at p (1 + z with z >= 0 there), so it also
+    // covers a moved point that crosses the rim.
+    float texel_m = paraboloid_texel_m(frame.shadow_views[shadow_view_index(l, p)], p);
+    vec3 po = p + n * (os.x * texel_m);
+    // The hemisphere of the moved point, so that its own texel is inside its map.
+    uint v = shadow_view_index(l, po);
+    uint other = v == l.info.y ? v + 1u : l.info.y;
+    GpuShadowView sv = frame.shadow_views[v];  // 96 bytes: one view, not the frame
     vec3 d = (sv.view_proj * vec4(po, 1.0)).xyz;
     float dist = length(d);
     if (dist >= sv.params.w) return 1.0;
     vec2 uv = d.xy / max(dist + d.z, 1e-30);
-    ivec2 size = textureSize(maps, 0).xy;
     vec2 st = (uv * 0.5 + 0.5) * vec2(size);
     ivec2 center = ivec2(floor(st));
-    float tan_theta = min(sin_theta / max(cos_theta, 1e-3), 10.0);
-    float bias_m = texel_m * (frame.shadow.x + frame.shadow.y * tan_theta);
-    int r = int(frame.shadow.w);
+    float bias_m = shadow_depth_bias(sv, texel_m, dist, os.y);
     float lit = 0.0, total = 0.0;
     for (int y = -r; y <= r; ++y) {
         for (int x = -r; x <= r; ++x) {
@@ -76,23 +149,46 @@ float paraboloid_visibility(sampler2DArray maps, GpuShadowView sv, uint v, uint 
     return lit / total;
 }
 
+// World size of a texel of perspective or orthographic view sv at p, and for unit normal n
+// the normal offset and slope bias in texels (see above). The map's x and y axes are the
+// view's (rows 0 and 1 of view_proj, up to scale), so n's components a, b along them give
+// sin(beta) = |(a, b)|, and the kernel's farthest texel center against the normal's lateral
+// direction is (r + 1/2) (|a| + |b|) / |(a, b)| texels away (the sqrt(2) bound only on the
+// diagonal): reach = (r + 1/2) (|a| + |b|).
+vec3 shadow_texel_offset_slope(GpuShadowView sv, vec3 p, vec3 n, int r) {
+    float z = sv.params.y > 0.5 ? 1.0 : max((sv.view_proj * vec4(p, 1.0)).w, 1e-30);
+    mat4 m = sv.view_proj;
+    float a = dot(n, normalize(vec3(m[0][0], m[1][0], m[2][0])));
+    float b = dot(n, normalize(vec3(m[0][1], m[1][1], m[2][1])));
+    float sin_beta = min(length(vec2(a, b)), 1.0);
+    float cos_beta = sqrt(max(1.0 - sin_beta * sin_beta, 0.0));
+    vec2 os = shadow_offset_and_slope_bias((float(r) + 0.5) * (abs(a) + abs(b)), sin_beta, cos_beta);
+    return vec3(sv.params.x * z, os);
+}
+
 // Fraction of the PCF footprint around p that the light reaches. n: unit surface normal,
 // cos_theta: cosine between n and the direction to the light.
 float shadow_visibility(sampler2DArray maps, GpuLight l, vec3 p, vec3 n, float cos_theta) {
     if (l.info.z == 0u) return 1.0;
-    uint v = shadow_view_index(l, p);
-    GpuShadowView sv = frame.shadow_views[v];  // 96 bytes: one view, not the frame
-    if (sv.params.y > 1.5) {
-        // The light's two hemispheres are consecutive views.
-        uint other = v == l.info.y ? v + 1u : l.info.y;
-        return paraboloid_visibility(maps, sv, v, other, p, n, cos_theta);
+    if (frame.shadow_views[l.info.y].params.y > 1.5) {
+        return paraboloid_visibility(maps, l, p, n, cos_theta);
     }
-    // World size of one shadow texel at p.
-    vec4 c0 = sv.view_proj * vec4(p, 1.0);
-    float dist = sv.params.y > 0.5 ? 1.0 : max(c0.w, 1e-30);
-    float texel_m = sv.params.x * dist;
-    float sin_theta = sqrt(max(1.0 - cos_theta * cos_theta, 0.0));
-    vec3 po = p + n * (frame.shadow.z * texel_m * sin_theta);
+    int r = int(frame.shadow.w);
+    uint v = shadow_view_index(l, p);
+    vec3 tos = shadow_texel_offset_slope(frame.shadow_views[v], p, n, r);
+    float offset_m = tos.x * tos.y;
+    // A cube face is wider than 90 degrees by r + 1 texels only, less than the offset can
+    // move the point: the face is picked for the moved point (where its kernel fits), and
+    // offset and bias are the larger of the two faces' when they differ.
+    uint v2 = shadow_view_index(l, p + n * offset_m);
+    if (v2 != v) {
+        vec3 tos2 = shadow_texel_offset_slope(frame.shadow_views[v2], p, n, r);
+        offset_m = max(offset_m, tos2.x * tos2.y);
+        tos = max(tos, tos2);
+        v = v2;
+    }
+    vec3 po = p + n * offset_m;
+    GpuShadowView sv = frame.shadow_views[v];  // 96 bytes: one view, not the frame
     vec4 c = sv.view_proj * vec4(po, 1.0);
     if (c.w <= 0.0) return 1.0;
     vec3 ndc = c.xyz / c.w;
@@ -100,10 +196,10 @@ float shadow_visibility(sampler2DArray maps, GpuLight l, vec3 p, vec3 n, float c
     vec2 uv = ndc.xy * 0.5 + 0.5;
     ivec2 size = textureSize(maps, 0).xy;
     ivec2 center = ivec2(floor(uv * vec2(size)));
-    float ref = shadow_linear_depth(sv, clamp(ndc.z, 0.0, 1.0));
-    float tan_theta = min(sin_theta / max(cos_theta, 1e-3), 10.0);
-    float bias_m = texel_m * (frame.shadow.x + frame.shadow.y * tan_theta);
-    int r = int(frame.shadow.w);
+    // The view depth in meters straight from the clip coordinates (w for perspective), not
+    // through the stored depth's nonlinear encoding, which would round it like a stored value.
+    float ref = sv.params.y > 0.5 ? shadow_linear_depth(sv, clamp(ndc.z, 0.0, 1.0)) : c.w;
+    float bias_m = shadow_depth_bias(sv, tos.x, ref, tos.z);
     float lit = 0.0, total = 0.0;
     for (int y = -r; y <= r; ++y) {
         for (int x = -r; x <= r; ++x) {

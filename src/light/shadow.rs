@@ -49,11 +49,17 @@ pub struct ShadowSettings {
     pub resolution: u32,
     /// PCF kernel radius in texels ((2r+1)² taps).
     pub pcf_radius: u32,
-    /// Constant depth bias, in shadow-map texels (scale-free).
+    /// Constant depth bias, in shadow-map texels (scale-free), on top of the depth format's
+    /// own rounding, which the shader adds.
     pub bias_texels: f32,
-    /// Slope-scaled bias: texels per unit of tan(theta).
+    /// Cap of the slope-scaled depth bias, in texels. Against self-shadowing the shader needs
+    /// (r + 1/2) sqrt(2) tan(beta) texels of depth at most (beta: the normal's angle to the
+    /// depth axis), unbounded at grazing angles; it spends a slope bias up to this cap and
+    /// covers the rest with a normal offset of at most (r + 1/2) sqrt(2) texels
+    /// (glsl/include/shadow.glsl explains the trade: bias hides occluders, offset moves edges).
     pub slope_bias_texels: f32,
-    /// Normal offset of the lookup position, in texels (times sin(theta)).
+    /// Normal offset of the lookup position on top of the one the PCF kernel needs, in texels
+    /// (times sin(beta)); 0 is enough for planar receivers at any angle.
     pub normal_offset_texels: f32,
     /// Cube or dual-paraboloid maps for point lights.
     pub point_technique: PointShadow,
@@ -65,8 +71,8 @@ impl Default for ShadowSettings {
             resolution: 1024,
             pcf_radius: 1,
             bias_texels: 1.0,
-            slope_bias_texels: 1.0,
-            normal_offset_texels: 1.0,
+            slope_bias_texels: 3.0,
+            normal_offset_texels: 0.0,
             point_technique: PointShadow::Cube,
         }
     }
