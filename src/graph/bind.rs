@@ -8,7 +8,7 @@
 //! before any GPU work. Attachments likewise: `.color(image, Load::Clear(..))` states the load
 //! op once and `PassContext::begin_rendering` begins with it.
 
-use super::{Access, GraphError, ImageHandle, RenderGraph, ResourceId, Shader};
+use super::{Access, BindingError, GraphError, ImageHandle, RenderGraph, ResourceId, Shader};
 use crate::vk::reflect::{BindingKind, Stages};
 use crate::vk::vk;
 
@@ -109,50 +109,56 @@ fn describe(kind: Option<BindingKind>, access: Access) -> &'static str {
     }
 }
 
+fn binding_error(e: BindingError) -> GraphError {
+    GraphError::Binding(Box::new(e))
+}
+
 /// Checks every pass's declared bindings against its pipeline's reflected interface.
 pub(crate) fn check(graph: &RenderGraph) -> Result<(), GraphError> {
     for pass in &graph.passes {
         let pass_name = || pass.name.clone();
         let Some(interface) = pass.interface else {
             if !pass.bindings.is_empty() {
-                return Err(GraphError::BindingsWithoutPipeline { pass: pass_name() });
+                return Err(binding_error(BindingError::BindingsWithoutPipeline {
+                    pass: pass_name(),
+                }));
             }
             continue;
         };
         let shader = || interface.name.clone();
         for (i, b) in pass.bindings.iter().enumerate() {
             if pass.bindings[..i].iter().any(|o| o.binding == b.binding) {
-                return Err(GraphError::DuplicateBinding {
+                return Err(binding_error(BindingError::DuplicateBinding {
                     pass: pass_name(),
                     binding: b.binding,
-                });
+                }));
             }
         }
         for b in &pass.bindings {
             let Some(resource) = b.resource else {
                 if !interface.bindings.contains_key(&b.binding) {
-                    return Err(GraphError::UnknownBinding {
+                    return Err(binding_error(BindingError::UnknownBinding {
                         pass: pass_name(),
                         shader: shader(),
                         binding: b.binding,
                         resource: "(per draw)".into(),
-                    });
+                    }));
                 }
                 continue;
             };
             let decl = &graph.resources[resource.0 as usize];
             let resource_name = || decl.name.clone();
             let Some(reflected) = interface.bindings.get(&b.binding) else {
-                return Err(GraphError::UnknownBinding {
+                return Err(binding_error(BindingError::UnknownBinding {
                     pass: pass_name(),
                     shader: shader(),
                     binding: b.binding,
                     resource: resource_name(),
-                });
+                }));
             };
             let kind = kind_of(b.access, decl.is_image());
             if kind != Some(reflected.kind) {
-                return Err(GraphError::BindingKindMismatch {
+                return Err(binding_error(BindingError::BindingKindMismatch {
                     pass: pass_name(),
                     shader: shader(),
                     binding: b.binding,
@@ -160,11 +166,11 @@ pub(crate) fn check(graph: &RenderGraph) -> Result<(), GraphError> {
                     name: reflected.name.clone(),
                     declared: describe(kind, b.access),
                     expected: reflected.kind.glsl_name(),
-                });
+                }));
             }
             let declared = shader_of(b.access).map_or(Stages::default(), stages_of);
             if !declared.contains(reflected.stages) {
-                return Err(GraphError::BindingStageMismatch {
+                return Err(binding_error(BindingError::BindingStageMismatch {
                     pass: pass_name(),
                     shader: shader(),
                     binding: b.binding,
@@ -172,7 +178,7 @@ pub(crate) fn check(graph: &RenderGraph) -> Result<(), GraphError> {
                     name: reflected.name.clone(),
                     declared: declared.names(),
                     used: reflected.stages.names(),
-                });
+                }));
             }
             let info = b.access.info();
             let storage = matches!(
@@ -180,33 +186,33 @@ pub(crate) fn check(graph: &RenderGraph) -> Result<(), GraphError> {
                 BindingKind::StorageImage | BindingKind::StorageBuffer
             );
             if storage && !info.writes && !reflected.read_only {
-                return Err(GraphError::ReadOfWritableBinding {
+                return Err(binding_error(BindingError::ReadOfWritableBinding {
                     pass: pass_name(),
                     shader: shader(),
                     binding: b.binding,
                     resource: resource_name(),
                     name: reflected.name.clone(),
-                });
+                }));
             }
             if info.writes && reflected.read_only {
-                return Err(GraphError::WriteOfReadonlyBinding {
+                return Err(binding_error(BindingError::WriteOfReadonlyBinding {
                     pass: pass_name(),
                     shader: shader(),
                     binding: b.binding,
                     resource: resource_name(),
                     name: reflected.name.clone(),
-                });
+                }));
             }
         }
         for (binding, reflected) in &interface.bindings {
             if !pass.bindings.iter().any(|b| b.binding == *binding) {
-                return Err(GraphError::UnboundBinding {
+                return Err(binding_error(BindingError::UnboundBinding {
                     pass: pass_name(),
                     shader: shader(),
                     binding: *binding,
                     name: reflected.name.clone(),
                     kind: reflected.kind.glsl_name(),
-                });
+                }));
             }
         }
         let sizes: Vec<(String, (u32, u32))> = pass
@@ -221,11 +227,11 @@ pub(crate) fn check(graph: &RenderGraph) -> Result<(), GraphError> {
             .first()
             .and_then(|f| sizes.iter().find(|o| o.1 != f.1).map(|o| (f, o)))
         {
-            return Err(GraphError::AttachmentSizeMismatch {
+            return Err(binding_error(BindingError::AttachmentSizeMismatch {
                 pass: pass_name(),
                 a: a.clone(),
                 b: b.clone(),
-            });
+            }));
         }
     }
     Ok(())
@@ -325,7 +331,7 @@ mod tests {
         });
         assert!(matches!(
             missing,
-            Err(GraphError::UnboundBinding { binding: 2, .. })
+            Err(GraphError::Binding(b)) if matches!(*b, BindingError::UnboundBinding { binding: 2, .. })
         ));
         let unknown = graph_with(|p, src, dst, buf| {
             p.bind_sampled(0, src, s, c)
@@ -335,7 +341,7 @@ mod tests {
         });
         assert!(matches!(
             unknown,
-            Err(GraphError::UnknownBinding { binding: 7, .. })
+            Err(GraphError::Binding(b)) if matches!(*b, BindingError::UnknownBinding { binding: 7, .. })
         ));
         let kind = graph_with(|p, src, dst, buf| {
             p.bind(0, src, Access::StorageRead(c))
@@ -344,7 +350,7 @@ mod tests {
         });
         assert!(matches!(
             kind,
-            Err(GraphError::BindingKindMismatch { binding: 0, .. })
+            Err(GraphError::Binding(b)) if matches!(*b, BindingError::BindingKindMismatch { binding: 0, .. })
         ));
         let stage = graph_with(|p, src, dst, buf| {
             p.bind_sampled(0, src, s, Shader::Fragment)
@@ -353,7 +359,7 @@ mod tests {
         });
         assert!(matches!(
             stage,
-            Err(GraphError::BindingStageMismatch { binding: 0, .. })
+            Err(GraphError::Binding(b)) if matches!(*b, BindingError::BindingStageMismatch { binding: 0, .. })
         ));
         let write_of_readonly = graph_with(|p, src, dst, buf| {
             p.bind_sampled(0, src, s, c)
@@ -362,7 +368,7 @@ mod tests {
         });
         assert!(matches!(
             write_of_readonly,
-            Err(GraphError::WriteOfReadonlyBinding { binding: 2, .. })
+            Err(GraphError::Binding(b)) if matches!(*b, BindingError::WriteOfReadonlyBinding { binding: 2, .. })
         ));
         let read_of_writable = graph_with(|p, src, dst, buf| {
             p.bind_sampled(0, src, s, c)
@@ -371,7 +377,7 @@ mod tests {
         });
         assert!(matches!(
             read_of_writable,
-            Err(GraphError::ReadOfWritableBinding { binding: 1, .. })
+            Err(GraphError::Binding(b)) if matches!(*b, BindingError::ReadOfWritableBinding { binding: 1, .. })
         ));
         let twice = graph_with(|p, src, dst, buf| {
             p.bind_sampled(0, src, s, c)
@@ -381,7 +387,7 @@ mod tests {
         });
         assert!(matches!(
             twice,
-            Err(GraphError::DuplicateBinding { binding: 2, .. })
+            Err(GraphError::Binding(b)) if matches!(*b, BindingError::DuplicateBinding { binding: 2, .. })
         ));
     }
 
@@ -394,7 +400,7 @@ mod tests {
             .record(|_| {});
         assert!(matches!(
             check(&g),
-            Err(GraphError::BindingsWithoutPipeline { .. })
+            Err(GraphError::Binding(b)) if matches!(*b, BindingError::BindingsWithoutPipeline { .. })
         ));
     }
 }

@@ -82,6 +82,18 @@ pub enum GraphError {
     DuplicatePassName(String),
     #[error("the graph has no output: import a resource or mark one with `mark_output`, otherwise every pass is culled")]
     NoOutput,
+    #[error(transparent)]
+    Binding(Box<BindingError>),
+    #[error("transient `{resource}` cannot be placed: {reason}")]
+    Placement { resource: String, reason: String },
+    #[error("GPU error while building the graph: {0}")]
+    Gpu(String),
+}
+
+/// A pass's declared bindings or attachments disagree with its pipeline's shaders or each
+/// other (boxed into [`GraphError::Binding`]: the messages carry several names).
+#[derive(Debug, thiserror::Error, PartialEq, Eq)]
+pub enum BindingError {
     #[error("pass `{pass}` binds nothing at binding {binding}, where `{shader}` declares `{name}` ({kind}): bind a resource there with `.bind*()`, or declare it `.bind_per_draw()` if the pass pushes it itself")]
     UnboundBinding {
         pass: String,
@@ -139,10 +151,6 @@ pub enum GraphError {
     BindingsWithoutPipeline { pass: String },
     #[error("pass `{pass}` declares attachments of different sizes (`{a}` and `{b}`): render to attachments of one size")]
     AttachmentSizeMismatch { pass: String, a: String, b: String },
-    #[error("transient `{resource}` cannot be placed: {reason}")]
-    Placement { resource: String, reason: String },
-    #[error("GPU error while building the graph: {0}")]
-    Gpu(String),
 }
 
 /// A resource in the graph; typed handles wrap it.
