@@ -288,7 +288,7 @@ fn viewer_panel_table_keeps_names_and_times_apart() {
     // The default window, and one narrower than the panel's default width (240 points), which
     // squeezes the panel: long pass names must give way, not run into their times.
     let mut faults = Vec::new();
-    for (width, height, resize) in [(1280, 720, None), (640, 480, Some((200, 400)))] {
+    for (width, height, resize) in [(1280, 720, None), (640, 480, Some((160, 400)))] {
         let shot = dir.join("shot.png");
         let (w, h) = (width.to_string(), height.to_string());
         let mut args = vec!["--validate", "view", "--width", &w, "--height", &h];
@@ -340,7 +340,7 @@ fn panel_table_faults(stderr: &str, window_width: f32) -> Vec<String> {
     let json = stderr
         .lines()
         .filter_map(|l| l.split_once("panel timing table: ").map(|(_, j)| j))
-        .last()
+        .next_back()
         .unwrap_or_else(|| panic!("the viewer did not log its panel table:\n{stderr}"));
     let table: serde_json::Value = serde_json::from_str(json).expect("the table is JSON");
     let panel = rect(&table["panel"]);

@@ -161,9 +161,9 @@ impl PanelLayout {
 /// The GPU-time table: pass names on the left, median milliseconds right-aligned in a column as
 /// wide as the widest number, then the total. The name column takes what is left of the
 /// panel's width; a longer name is elided with "…" and shows in full on hover (egui's
-/// truncating label), so names never run into the numbers however narrow the panel. Returns
-/// (name, name text, time text) per row.
-fn timing_table(ui: &mut egui::Ui, medians: &[(String, f64)]) -> Vec<TableRow> {
+/// truncating label), so names never run into the numbers however narrow the panel. The table
+/// ends at `right_x`. Returns (name, name text, time text) per row.
+fn timing_table(ui: &mut egui::Ui, medians: &[(String, f64)], right_x: f32) -> Vec<TableRow> {
     let total: f64 = medians.iter().map(|(_, ms)| ms).sum();
     let rows: Vec<(egui::RichText, egui::RichText)> = medians
         .iter()
@@ -187,7 +187,8 @@ fn timing_table(ui: &mut egui::Ui, medians: &[(String, f64)]) -> Vec<TableRow> {
     let gap = ui.spacing().item_spacing.x;
     // At least a few characters of each name, even in a panel too narrow for both columns
     // (the rows then widen the panel rather than overlap).
-    let name_w = (ui.available_width() - time_w - gap).max(3.0 * font.size);
+    let width = ui.available_width().min(right_x - ui.cursor().min.x);
+    let name_w = (width - time_w - gap).max(3.0 * font.size);
     let size = egui::vec2(name_w + gap + time_w, ui.spacing().interact_size.y);
     let stripe = ui.visuals().faint_bg_color;
     let row = |ui: &mut egui::Ui, name: egui::RichText, time: egui::RichText, striped| {
@@ -234,6 +235,10 @@ pub fn draw(
         .resizable(false)
         .default_width(240.0)
         .show(ctx, |ui| {
+            // The panel's inner right edge as this frame lays it out (within the window): a
+            // control wider than that (a collapsing header's title, a slider) widens the
+            // `Ui` as it is added, and the table would follow it off the window.
+            let right_x = ui.max_rect().right();
             ui.heading("voxgi");
             ui.label(format!(
                 "{} · {}×{} · {:.1} ms/frame",
@@ -245,7 +250,7 @@ pub fn draw(
             egui::CollapsingHeader::new("GPU time per pass (median)")
                 .default_open(true)
                 .show(ui, |ui| {
-                    rows = timing_table(ui, &stats.medians());
+                    rows = timing_table(ui, &stats.medians(), right_x);
                 });
 
             egui::CollapsingHeader::new("Camera")
@@ -480,7 +485,12 @@ mod table_tests {
     #[test]
     fn timing_table_keeps_names_and_times_apart_at_any_window_size() {
         let mut faults = Vec::new();
-        for (w, h) in [(1280.0, 720.0), (640.0, 480.0), (200.0, 480.0)] {
+        for (w, h) in [
+            (1280.0, 720.0),
+            (640.0, 480.0),
+            (200.0, 480.0),
+            (160.0, 420.0),
+        ] {
             let (layout, _) = draw_headless(egui::vec2(w, h), None);
             let names: Vec<&str> = layout.rows.iter().map(|(n, ..)| n.as_str()).collect();
             let mut wanted: Vec<&str> = PASSES.iter().map(|(n, _)| *n).collect();
