@@ -280,6 +280,123 @@ fn viewer_shows_voxel_debug_views_without_validation_messages() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+#[test]
+fn viewer_panel_table_keeps_names_and_times_apart() {
+    require_display();
+    let _display = lock_display();
+    let dir = scratch_dir("window-panel");
+    // The default window, and one narrower than the panel's default width (240 points), which
+    // squeezes the panel: long pass names must give way, not run into their times.
+    let mut faults = Vec::new();
+    for (width, height, resize) in [(1280, 720, None), (640, 480, Some((160, 400)))] {
+        let shot = dir.join("shot.png");
+        let (w, h) = (width.to_string(), height.to_string());
+        let mut args = vec!["--validate", "view", "--width", &w, "--height", &h];
+        let resize_arg = resize.map(|(w, h): (u32, u32)| format!("{w}x{h}"));
+        if let Some(r) = &resize_arg {
+            args.extend(["--resize", r.as_str()]);
+        }
+        // Enough frames after the resize for timestamps to come back (the graph is rebuilt
+        // and the timings restart); the table then has every pass of the frame.
+        args.extend([
+            "--frames",
+            "10",
+            "--screenshot",
+            shot.to_str().expect("utf-8 path"),
+        ]);
+        let out = voxgi_with(&args, |cmd| {
+            cmd.env("RUST_LOG", "warn,voxgi::app=info");
+        });
+        assert_success(&out, "voxgi --validate view (panel table)");
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        let window_width = resize.map_or(width, |(w, _)| w) as f32;
+        faults.extend(panel_table_faults(&stderr, window_width));
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+    assert!(
+        faults.is_empty(),
+        "the panel's GPU-time table:\n{}",
+        faults.join("\n")
+    );
+}
+
+/// A rectangle `[min x, min y, max x, max y]` of the viewer's panel log.
+fn rect(v: &serde_json::Value) -> [f32; 4] {
+    let a: Vec<f32> = v
+        .as_array()
+        .unwrap_or_else(|| panic!("not a rectangle: {v}"))
+        .iter()
+        .map(|x| x.as_f64().expect("a number") as f32)
+        .collect();
+    a.try_into()
+        .unwrap_or_else(|_| panic!("not 4 numbers: {v}"))
+}
+
+/// What is wrong with the GPU-time table the viewer drew on its last frame (logged as "panel
+/// timing table: JSON", positions in points): a pass name running into its time, times not
+/// ending at one right edge, rows overlapping, a cell outside the panel or the window. Panics
+/// when the table is missing or lacks the frame's passes.
+fn panel_table_faults(stderr: &str, window_width: f32) -> Vec<String> {
+    let json = stderr
+        .lines()
+        .filter_map(|l| l.split_once("panel timing table: ").map(|(_, j)| j))
+        .next_back()
+        .unwrap_or_else(|| panic!("the viewer did not log its panel table:\n{stderr}"));
+    let table: serde_json::Value = serde_json::from_str(json).expect("the table is JSON");
+    let panel = rect(&table["panel"]);
+    let rows = table["rows"].as_array().expect("rows");
+    let names: Vec<&str> = rows
+        .iter()
+        .map(|r| r["name"].as_str().expect("a name"))
+        .collect();
+    // The direct-light frame's passes (at least shadows, G-buffer, lighting, tone mapping),
+    // then the total.
+    assert!(
+        names.len() >= 5 && names.contains(&"shadow_depth") && names.last() == Some(&"total"),
+        "the table lists {names:?}"
+    );
+    // Inside the panel, and in view: a window narrower than the panel's widest control cuts
+    // the panel off, not the table (under Xvfb a point is a pixel).
+    let inside = |r: [f32; 4]| {
+        r[0] >= panel[0].max(0.0)
+            && r[1] >= panel[1]
+            && r[2] <= panel[2].min(window_width)
+            && r[3] <= panel[3]
+    };
+    let right = rect(&rows[0]["time_rect"])[2];
+    let mut above = f32::NEG_INFINITY;
+    let mut faults = Vec::new();
+    for (row, name) in rows.iter().zip(&names) {
+        let (n, t) = (rect(&row["name_rect"]), rect(&row["time_rect"]));
+        if n[2] > t[0] {
+            faults.push(format!(
+                "{window_width} px, {name}: name {n:?} runs into time {t:?}"
+            ));
+        }
+        // A hundredth of a point is far below a pixel: right-aligned labels end at one x.
+        if (t[2] - right).abs() > 0.01 {
+            faults.push(format!(
+                "{window_width} px, {name}: time ends at x = {}, not {right}",
+                t[2]
+            ));
+        }
+        if n[1].min(t[1]) < above {
+            faults.push(format!(
+                "{window_width} px, {name}: row overlaps the row above"
+            ));
+        }
+        above = n[3].max(t[3]);
+        for (what, r) in [("name", n), ("time", t)] {
+            if !inside(r) {
+                faults.push(format!(
+                    "{window_width} px, {name}: {what} {r:?} outside the panel {panel:?} or the window"
+                ));
+            }
+        }
+    }
+    faults
+}
+
 fn viewer_shows_debug_view(dir: &Path, view: &str) {
     let shot = dir.join(format!("{view}.png"));
     let out = voxgi_with(

@@ -213,6 +213,8 @@ struct Viewer {
     minimized: bool,
     /// Width of the side panel in pixels: the scene renders to the right of it.
     panel_px: u32,
+    /// Where the panel's GPU-time table was drawn last frame (logged by scripted runs).
+    panel_layout: panel::PanelLayout,
 }
 
 /// Where a scripted minimize (`ViewerOptions::minimize_at`) stands.
@@ -385,6 +387,7 @@ impl Viewer {
             },
             minimized: false,
             panel_px: 0,
+            panel_layout: panel::PanelLayout::default(),
         }
     }
 
@@ -569,6 +572,10 @@ impl Viewer {
                     .map_or(true, |(w, h)| (extent.width, extent.height) == (w, h))
         });
         let (prims, ppp) = self.run_ui(ctx, window, extent)?;
+        if last_scripted {
+            // For the window tests: they check the table's geometry at the window's size.
+            log::info!("panel timing table: {}", self.panel_layout.to_json());
+        }
 
         // Apply the panel.
         for (i, base) in self.base_lights.iter().enumerate() {
@@ -726,12 +733,15 @@ impl Viewer {
                 .and_then(Renderer::gi_accumulated_frames),
         };
         let (controls, stats) = (&mut self.controls, &self.stats);
-        let mut panel_points = 0.0;
+        let mut layout = panel::PanelLayout::default();
         let out = egui_ctx.run(raw, |c| {
-            panel_points = panel::draw(c, controls, stats, &info);
+            layout = panel::draw(c, controls, stats, &info);
         });
         // Rounded down: the scene starts under the panel's edge rather than leaving a gap.
-        self.panel_px = (panel_points * out.pixels_per_point).max(0.0).floor() as u32;
+        self.panel_px = (layout.panel.width() * out.pixels_per_point)
+            .max(0.0)
+            .floor() as u32;
+        self.panel_layout = layout;
         self.fly.speed_m_s = self.controls.speed_m_s;
         self.egui_state
             .handle_platform_output(window, out.platform_output);

@@ -123,12 +123,122 @@ const OPERATORS: [ToneOperator; 4] = [
     ToneOperator::Filmic,
 ];
 
-/// Draws the panel; returns its width in points.
-pub fn draw(ctx: &egui::Context, c: &mut Controls, stats: &TimingStats, info: &PanelInfo) -> f32 {
+/// Where the GPU-time table's text landed in the last drawn frame, in points: the viewer logs
+/// it at the end of a scripted run so that tests can check the table's geometry.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PanelLayout {
+    /// The whole side panel.
+    pub panel: egui::Rect,
+    /// Per pass, then the total.
+    pub rows: Vec<TableRow>,
+}
+
+/// A row of the GPU-time table: the pass name, where its name and its time were drawn.
+pub type TableRow = (String, egui::Rect, egui::Rect);
+
+impl Default for PanelLayout {
+    fn default() -> Self {
+        Self {
+            panel: egui::Rect::NOTHING,
+            rows: Vec::new(),
+        }
+    }
+}
+
+impl PanelLayout {
+    /// One line of JSON; rectangles as `[min x, min y, max x, max y]`.
+    pub fn to_json(&self) -> String {
+        let r = |r: &egui::Rect| [r.min.x, r.min.y, r.max.x, r.max.y];
+        let rows: Vec<_> = self
+            .rows
+            .iter()
+            .map(|(name, n, t)| serde_json::json!({ "name": name, "name_rect": r(n), "time_rect": r(t) }))
+            .collect();
+        serde_json::json!({ "panel": r(&self.panel), "rows": rows }).to_string()
+    }
+}
+
+/// The GPU-time table: pass names on the left, median milliseconds right-aligned in a column as
+/// wide as the widest number, then the total. The name column takes what is left of the
+/// panel's width; a longer name is elided with "…" and shows in full on hover (egui's
+/// truncating label), so names never run into the numbers however narrow the panel. The table
+/// ends at `right_x`. Returns (name, name text, time text) per row.
+fn timing_table(ui: &mut egui::Ui, medians: &[(String, f64)], right_x: f32) -> Vec<TableRow> {
+    let total: f64 = medians.iter().map(|(_, ms)| ms).sum();
+    let rows: Vec<(egui::RichText, egui::RichText)> = medians
+        .iter()
+        .map(|(name, ms)| (name.into(), format!("{ms:.3}").into()))
+        .chain([(
+            egui::RichText::new("total").strong(),
+            egui::RichText::new(format!("{total:.3}")).strong(),
+        )])
+        .collect();
+    // Monospace digits: right-aligned numbers with three decimals line up on the point.
+    let font = egui::TextStyle::Monospace.resolve(ui.style());
+    let color = ui.visuals().text_color();
+    let time_w = rows.iter().fold(0.0f32, |w, (_, t)| {
+        let text = t.text().to_owned();
+        w.max(
+            ui.fonts(|f| f.layout_no_wrap(text, font.clone(), color))
+                .size()
+                .x,
+        )
+    });
+    let gap = ui.spacing().item_spacing.x;
+    // At least a few characters of each name, even in a panel too narrow for both columns
+    // (the rows then widen the panel rather than overlap).
+    let width = ui.available_width().min(right_x - ui.cursor().min.x);
+    let name_w = (width - time_w - gap).max(3.0 * font.size);
+    let size = egui::vec2(name_w + gap + time_w, ui.spacing().interact_size.y);
+    let stripe = ui.visuals().faint_bg_color;
+    let row = |ui: &mut egui::Ui, name: egui::RichText, time: egui::RichText, striped| {
+        let (rect, _) = ui.allocate_exact_size(size, egui::Sense::hover());
+        if striped {
+            // Stripes lead the eye from a name to its number.
+            ui.painter().rect_filled(rect, 2.0, stripe);
+        }
+        let name_cell = egui::Rect::from_min_size(rect.min, egui::vec2(name_w, size.y));
+        let time_cell = egui::Rect::from_min_max(rect.max - egui::vec2(time_w, size.y), rect.max);
+        let left = egui::Layout::left_to_right(egui::Align::Center);
+        let right = egui::Layout::right_to_left(egui::Align::Center);
+        let n = ui
+            .child_ui(name_cell, left)
+            .add(egui::Label::new(name).truncate(true));
+        let t = ui.child_ui(time_cell, right).label(time.monospace());
+        (n.rect, t.rect)
+    };
+    row(
+        ui,
+        egui::RichText::new("pass").weak(),
+        egui::RichText::new("ms").weak(),
+        false,
+    );
+    rows.into_iter()
+        .enumerate()
+        .map(|(i, (name, time))| {
+            let label = name.text().to_owned();
+            let (n, t) = row(ui, name, time, i % 2 == 0);
+            (label, n, t)
+        })
+        .collect()
+}
+
+/// Draws the panel; returns where it and its GPU-time table landed.
+pub fn draw(
+    ctx: &egui::Context,
+    c: &mut Controls,
+    stats: &TimingStats,
+    info: &PanelInfo,
+) -> PanelLayout {
+    let mut rows = Vec::new();
     let panel = egui::SidePanel::left("voxgi panel")
         .resizable(false)
         .default_width(240.0)
         .show(ctx, |ui| {
+            // The panel's inner right edge as this frame lays it out (within the window): a
+            // control wider than that (a collapsing header's title, a slider) widens the
+            // `Ui` as it is added, and the table would follow it off the window.
+            let right_x = ui.max_rect().right();
             ui.heading("voxgi");
             ui.label(format!(
                 "{} · {}×{} · {:.1} ms/frame",
@@ -140,20 +250,7 @@ pub fn draw(ctx: &egui::Context, c: &mut Controls, stats: &TimingStats, info: &P
             egui::CollapsingHeader::new("GPU time per pass (median)")
                 .default_open(true)
                 .show(ui, |ui| {
-                    let medians = stats.medians();
-                    egui::Grid::new("timings").striped(true).show(ui, |ui| {
-                        for (name, ms) in &medians {
-                            ui.label(name);
-                            ui.label(format!("{ms:8.3} ms"));
-                            ui.end_row();
-                        }
-                        ui.strong("total");
-                        ui.strong(format!(
-                            "{:8.3} ms",
-                            medians.iter().map(|(_, ms)| ms).sum::<f64>()
-                        ));
-                        ui.end_row();
-                    });
+                    rows = timing_table(ui, &stats.medians(), right_x);
                 });
 
             egui::CollapsingHeader::new("Camera")
@@ -263,7 +360,185 @@ pub fn draw(ctx: &egui::Context, c: &mut Controls, stats: &TimingStats, info: &P
                 ui.label(info.status);
             }
         });
-    panel.response.rect.width()
+    PanelLayout {
+        panel: panel.response.rect,
+        rows,
+    }
+}
+
+#[cfg(test)]
+mod table_tests {
+    use super::*;
+
+    /// Pass names as the renderer's graphs name them, the longest ones included, with times
+    /// from 0.1 ms to seconds (lavapipe's GI passes).
+    const PASSES: [(&str, f64); 10] = [
+        ("shadow_depth", 18.546),
+        ("gbuffer", 3.25),
+        ("voxelize_atlas_attributes", 250.125),
+        ("voxelize_attributes_resolve", 1.0),
+        ("gi_radiance_volume", 1234.5),
+        ("gi_filter[0h]", 4.5),
+        ("gi_filter[0v]", 0.125),
+        ("deferred_direct", 12.0),
+        ("tonemap", 0.75),
+        ("egui", 0.25),
+    ];
+
+    /// Draws the panel in a headless egui context of the given size, as the viewer does each
+    /// frame, then hovers `hover` (a point) if given; returns the layout of the last frame
+    /// and the texts drawn in it, each with whether it was elided.
+    fn draw_headless(
+        size: egui::Vec2,
+        hover: Option<egui::Pos2>,
+    ) -> (PanelLayout, Vec<(String, bool)>) {
+        let ctx = egui::Context::default();
+        ctx.set_visuals(egui::Visuals::dark());
+        let mut stats = TimingStats::new(2);
+        stats.push(
+            PASSES
+                .iter()
+                .map(|&(n, ms)| PassTiming {
+                    name: n.into(),
+                    gpu_ms: ms,
+                })
+                .collect(),
+        );
+        let mut c = Controls {
+            tonemap: ToneMap::default(),
+            shadow: ShadowSettings::default(),
+            gi: GiSettings::default(),
+            light_scale: vec![1.0],
+            speed_m_s: 1.0,
+            time_s: 0.0,
+            animate: false,
+            debug: None,
+            atlas_object: 0,
+            screenshot: false,
+        };
+        let lights = ["point 0".to_string()];
+        let info = PanelInfo {
+            device: "llvmpipe (LLVM 15.0.7, 256 bits)",
+            extent_px: (size.x as u32, size.y as u32),
+            frame_ms: 16.7,
+            light_names: &lights,
+            object_names: &[],
+            status: "",
+            gi_frames: None,
+        };
+        let mut layout = PanelLayout::default();
+        let mut texts = Vec::new();
+        // Panels and grids size themselves from earlier frames: draw a few, as the viewer
+        // does, and hover (move, then hold still past the tooltip delay) in the last ones.
+        for frame in 0..6 {
+            let mut raw = egui::RawInput {
+                screen_rect: Some(egui::Rect::from_min_size(egui::Pos2::ZERO, size)),
+                time: Some(f64::from(frame)),
+                ..Default::default()
+            };
+            if let (Some(p), 3) = (hover, frame) {
+                raw.events.push(egui::Event::PointerMoved(p));
+            }
+            let out = ctx.run(raw, |ctx| layout = draw(ctx, &mut c, &stats, &info));
+            texts = out
+                .shapes
+                .iter()
+                .filter_map(|s| match &s.shape {
+                    egui::Shape::Text(t) => Some((t.galley.text().to_string(), t.galley.elided)),
+                    _ => None,
+                })
+                .collect();
+        }
+        (layout, texts)
+    }
+
+    /// What is wrong with the table's geometry: a name overlapping its time, times not
+    /// right-aligned to one edge, rows overlapping, a cell outside the panel.
+    fn table_faults(l: &PanelLayout) -> Vec<String> {
+        let mut faults = Vec::new();
+        let right = l.rows.first().map_or(0.0, |(_, _, t)| t.max.x);
+        let mut above = f32::NEG_INFINITY;
+        for (name, n, t) in &l.rows {
+            if n.max.x > t.min.x {
+                faults.push(format!("{name}: name {n:?} runs into time {t:?}"));
+            }
+            // Labels sit at fractional positions; a hundredth of a point is far below a pixel.
+            if (t.max.x - right).abs() > 0.01 {
+                faults.push(format!("{name}: time ends at x = {}, not {right}", t.max.x));
+            }
+            if n.min.y.min(t.min.y) < above {
+                faults.push(format!("{name}: row overlaps the row above"));
+            }
+            above = n.max.y.max(t.max.y);
+            for (what, r) in [("name", n), ("time", t)] {
+                if !l.panel.contains_rect(*r) {
+                    faults.push(format!(
+                        "{name}: {what} {r:?} outside the panel {:?}",
+                        l.panel
+                    ));
+                }
+            }
+        }
+        faults
+    }
+
+    #[test]
+    fn timing_table_keeps_names_and_times_apart_at_any_window_size() {
+        let mut faults = Vec::new();
+        for (w, h) in [
+            (1280.0, 720.0),
+            (640.0, 480.0),
+            (200.0, 480.0),
+            (160.0, 420.0),
+        ] {
+            let (layout, _) = draw_headless(egui::vec2(w, h), None);
+            let names: Vec<&str> = layout.rows.iter().map(|(n, ..)| n.as_str()).collect();
+            let mut wanted: Vec<&str> = PASSES.iter().map(|(n, _)| *n).collect();
+            wanted.push("total");
+            assert_eq!(names, wanted, "rows of the table at {w}x{h}");
+            faults.extend(
+                table_faults(&layout)
+                    .iter()
+                    .map(|f| format!("{w}x{h}: {f}")),
+            );
+            // A window narrower than the panel's widgets cuts the panel off: the table must
+            // still be in view.
+            for (name, n, t) in &layout.rows {
+                if n.min.x < 0.0 || t.max.x > w {
+                    faults.push(format!("{w}x{h}: {name}: {n:?} or {t:?} off the window"));
+                }
+            }
+        }
+        assert!(faults.is_empty(), "{}", faults.join("\n"));
+    }
+
+    #[test]
+    fn long_pass_names_are_elided_and_shown_in_full_on_hover() {
+        let long = "voxelize_attributes_resolve";
+        let narrow = egui::vec2(200.0, 480.0);
+        let (layout, texts) = draw_headless(narrow, None);
+        let drawn =
+            |texts: &[(String, bool)], elided| texts.iter().any(|(t, e)| t == long && *e == elided);
+        assert!(drawn(&texts, true), "{long} is not elided at 200 points");
+        assert!(
+            !drawn(&texts, false),
+            "{long} is drawn in full at 200 points"
+        );
+        assert!(
+            texts.iter().any(|(t, e)| t == "egui" && !e),
+            "a short name is elided"
+        );
+        let (_, name_rect, _) = layout
+            .rows
+            .iter()
+            .find(|(n, ..)| n == long)
+            .expect("the long name's row");
+        let (_, hovered) = draw_headless(narrow, Some(name_rect.center()));
+        assert!(
+            drawn(&hovered, false),
+            "hovering the elided {long} shows no tooltip with the full name"
+        );
+    }
 }
 
 /// The "View" combo's entries: the lit image, then every debug view.
