@@ -50,6 +50,10 @@ pub struct Placement {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Arena {
     pub memory_type: u32,
+    /// Buffers and (optimal-tiling) images never share an arena: placed at exact offsets,
+    /// a buffer and an image alive together could meet inside one
+    /// `bufferImageGranularity` page, which Vulkan counts as aliasing.
+    pub holds_buffers: bool,
     /// High-water mark of the placements: the bytes to allocate.
     pub size_bytes: u64,
 }
@@ -61,7 +65,7 @@ pub struct MemoryStats {
     pub peak_aliased_bytes: u64,
     /// Bytes every transient takes back to back, each at its own aligned offset.
     pub unaliased_bytes: u64,
-    /// The most bytes the transients alive at one pass ask for (summed over memory types):
+    /// The most bytes the transients alive at one pass ask for (summed over arenas):
     /// no placement can take less.
     pub live_peak_bytes: u64,
     /// Bytes the chosen plan reserves beyond what the transients ask for (buddy blocks
@@ -406,19 +410,24 @@ impl RenderGraph {
         buffer_usage: &[vk::BufferUsageFlags],
     ) -> Result<(Vec<Option<Placement>>, Vec<Arena>, MemoryStats), GraphError> {
         let reqs = self.requirements(lifetimes, oracle, image_usage, buffer_usage);
-        // One arena per memory type, in type order for determinism; members in declaration
-        // order (the unaliased plan's order).
-        let mut types: Vec<u32> = reqs.iter().flatten().map(|r| r.memory_type).collect();
-        types.sort_unstable();
-        types.dedup();
-        let members: Vec<Vec<(usize, MemoryRequirements, (usize, usize))>> = types
+        // One arena per memory type and resource kind (see `Arena::holds_buffers`), in key
+        // order for determinism; members in declaration order (the unaliased plan's order).
+        let key = |i: usize, r: &MemoryRequirements| (r.memory_type, !self.resources[i].is_image());
+        let mut keys: Vec<(u32, bool)> = reqs
             .iter()
-            .map(|&ty| {
+            .enumerate()
+            .filter_map(|(i, r)| Some(key(i, r.as_ref()?)))
+            .collect();
+        keys.sort_unstable();
+        keys.dedup();
+        let members: Vec<Vec<(usize, MemoryRequirements, (usize, usize))>> = keys
+            .iter()
+            .map(|&k| {
                 reqs.iter()
                     .zip(lifetimes)
                     .enumerate()
                     .filter_map(|(i, (r, life))| match (r, life) {
-                        (Some(r), Some(life)) if r.memory_type == ty => Some((i, *r, *life)),
+                        (Some(r), Some(life)) if key(i, r) == k => Some((i, *r, *life)),
                         _ => None,
                     })
                     .collect()
@@ -466,8 +475,10 @@ impl RenderGraph {
             ..MemoryStats::default()
         };
         let mut placements = vec![None; self.resources.len()];
-        let mut arenas = Vec::with_capacity(types.len());
-        for (arena, ((&ty, m), plan)) in types.iter().zip(&members).zip(&choice.plans).enumerate() {
+        let mut arenas = Vec::with_capacity(keys.len());
+        for (arena, ((&(ty, holds_buffers), m), plan)) in
+            keys.iter().zip(&members).zip(&choice.plans).enumerate()
+        {
             for (&(i, r, _), slot) in m.iter().zip(&plan.slots) {
                 stats.rounding_bytes += slot.reserved_bytes - r.size_bytes;
                 stats.transient_count += 1;
@@ -481,6 +492,7 @@ impl RenderGraph {
             stats.live_peak_bytes += placement::live_peak_bytes(&items[arena]);
             arenas.push(Arena {
                 memory_type: ty,
+                holds_buffers,
                 size_bytes: plan.size_bytes,
             });
         }
@@ -1400,6 +1412,7 @@ mod tests {
     #[derive(Clone, Debug)]
     struct RandomTransient {
         req: MemoryRequirements,
+        image: bool,
         first: usize,
         len: usize,
     }
@@ -1407,13 +1420,15 @@ mod tests {
     fn random_transient() -> impl proptest::strategy::Strategy<Value = RandomTransient> {
         use proptest::prelude::*;
         let size = prop_oneof![1u64..=4096, 1u64..=1 << 24];
-        (size, 0u32..=16, 0u32..3, 0..RANDOM_PASSES, 0..RANDOM_PASSES).prop_map(
-            |(size_bytes, align_log2, memory_type, first, len)| RandomTransient {
+        let life = (0..RANDOM_PASSES, 0..RANDOM_PASSES);
+        (size, 0u32..=16, 0u32..3, any::<bool>(), life).prop_map(
+            |(size_bytes, align_log2, memory_type, image, (first, len))| RandomTransient {
                 req: MemoryRequirements {
                     size_bytes,
                     alignment: 1 << align_log2,
                     memory_type,
                 },
+                image,
                 first,
                 len,
             },
@@ -1421,13 +1436,23 @@ mod tests {
     }
 
     /// A graph whose passes all write one imported buffer (so none is culled and pass `k` is
-    /// at position `k`); transient `i` is written at its first pass and read at its last.
-    /// Returns the graph, each transient's resource index and its expected lifetime.
+    /// at position `k`); transient `i` (a storage image or buffer, its size from the oracle)
+    /// is written at its first pass and read at its last. Returns the graph, each
+    /// transient's resource index and its expected lifetime.
     fn random_graph(ts: &[RandomTransient]) -> (RenderGraph, Vec<usize>, Vec<(usize, usize)>) {
         let mut g = RenderGraph::new();
         let out = g.import_buffer_desc("out", 4, Access::HostRead);
-        let handles: Vec<_> = (0..ts.len())
-            .map(|i| g.create_buffer(&format!("t{i}"), 4))
+        let handles: Vec<ResourceId> = ts
+            .iter()
+            .enumerate()
+            .map(|(i, t)| {
+                let name = format!("t{i}");
+                if t.image {
+                    g.create_image(img(&name, 4)).into()
+                } else {
+                    g.create_buffer(&name, 4).into()
+                }
+            })
             .collect();
         let lives: Vec<(usize, usize)> = ts
             .iter()
@@ -1446,7 +1471,7 @@ mod tests {
             }
             p.record(|_| {});
         }
-        let ids = handles.iter().map(|h| h.0 .0 as usize).collect();
+        let ids = handles.iter().map(|h| h.0 as usize).collect();
         (g, ids, lives)
     }
 
@@ -1470,6 +1495,7 @@ mod tests {
                 let p = c.placements[id].ok_or_else(|| TestCaseError::fail("not placed"))?;
                 let arena = c.arenas[p.arena];
                 prop_assert_eq!(arena.memory_type, t.req.memory_type);
+                prop_assert_eq!(arena.holds_buffers, !t.image, "buffers and images share an arena");
                 prop_assert_eq!(p.offset % t.req.alignment, 0, "misaligned");
                 prop_assert!(p.size_bytes >= t.req.size_bytes);
                 prop_assert!(p.offset + p.size_bytes <= arena.size_bytes);
@@ -1485,16 +1511,21 @@ mod tests {
                 }
             }
 
-            // Independent bounds, per memory type. Back to back, each offset is padded by
-            // less than its alignment, so sum(size) <= unaliased <= sum(size + align - 1).
-            // No placement takes less than the bytes alive at one pass (the live peak).
-            let mut types: Vec<u32> = ts.iter().map(|t| t.req.memory_type).collect();
-            types.sort_unstable();
-            types.dedup();
-            prop_assert_eq!(c.arenas.len(), types.len());
+            // Independent bounds, per arena (memory type and kind). Back to back, each offset
+            // is padded by less than its alignment, so sum(size) <= unaliased <=
+            // sum(size + align - 1). No placement takes less than the bytes alive at one pass
+            // (the live peak).
+            let mut keys: Vec<(u32, bool)> = ts.iter().map(|t| (t.req.memory_type, t.image)).collect();
+            keys.sort_unstable();
+            keys.dedup();
+            prop_assert_eq!(c.arenas.len(), keys.len());
             let (mut sizes, mut padded, mut live_peak) = (0u64, 0u64, 0u64);
-            for &ty in &types {
-                let of_type = || ts.iter().zip(&lives).filter(|(t, _)| t.req.memory_type == ty);
+            for &key in &keys {
+                let of_type = || {
+                    ts.iter()
+                        .zip(&lives)
+                        .filter(move |(t, _)| (t.req.memory_type, t.image) == key)
+                };
                 sizes += of_type().map(|(t, _)| t.req.size_bytes).sum::<u64>();
                 padded += of_type()
                     .map(|(t, _)| t.req.size_bytes + t.req.alignment - 1)

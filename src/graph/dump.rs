@@ -89,8 +89,10 @@ impl CompiledGraph {
         for (i, a) in self.arenas.iter().enumerate() {
             let _ = writeln!(
                 s,
-                "  arena {i}: memory type {}, {} bytes",
-                a.memory_type, a.size_bytes
+                "  arena {i}: memory type {}, {}, {} bytes",
+                a.memory_type,
+                if a.holds_buffers { "buffers" } else { "images" },
+                a.size_bytes
             );
         }
         s
