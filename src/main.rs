@@ -706,13 +706,9 @@ fn run(cli: Cli) -> Result<()> {
                     "resolution".into(),
                     format!("{}x{}", frame.width, frame.height),
                 ));
-                report.notes.push((
-                    "transient memory".into(),
-                    format!(
-                        "{} bytes aliased, {} bytes without aliasing",
-                        run.transient_bytes.0, run.transient_bytes.1
-                    ),
-                ));
+                report
+                    .notes
+                    .push(("transient memory".into(), run.transient_memory.summary()));
                 report
                     .notes
                     .push(("culled passes".into(), run.culled_passes.join(", ")));
@@ -796,13 +792,9 @@ fn profile_demo(
     report
         .notes
         .push(("resolution".into(), format!("{width}x{height}")));
-    report.notes.push((
-        "transient memory".into(),
-        format!(
-            "{} bytes aliased, {} bytes without aliasing",
-            c.memory.peak_aliased_bytes, c.memory.unaliased_bytes
-        ),
-    ));
+    report
+        .notes
+        .push(("transient memory".into(), c.memory.summary()));
     let culled: Vec<&str> = c.culled.iter().map(|&p| c.pass_names[p].as_str()).collect();
     report
         .notes

@@ -1,10 +1,15 @@
 //! Buddy sub-allocator for placing transient render-graph resources inside one large
 //! device-memory block.
 //!
+//! The graph compiler builds one of its candidate transient plans with it (the "buddy" plan,
+//! see `compile::placement`): the thesis's placement, kept when it needs the fewest bytes.
+//! Power-of-two rounding makes it lose to exact-size interval packing on most frames, which
+//! `MemoryStats::buddy_bytes` shows next to the chosen plan.
+//!
 //! # Design
 //!
-//! This follows the memory manager of `seeds/002` (Oetke 2017, §3.2 "Memory management",
-//! after Knuth's buddy system \[Kno65\]): the block has a power-of-two capacity, every
+//! This follows the memory manager of Oetke 2017 (§3.2 "Memory management", after Knuth's
+//! buddy system \[Kno65\]): the block has a power-of-two capacity, every
 //! sub-allocation is a power-of-two block placed at an offset that is a multiple of its own
 //! size, a request is rounded up to the next power of two, larger free blocks are split in
 //! halves until one fits, and on free a block is merged with its buddy for as long as the

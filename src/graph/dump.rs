@@ -81,12 +81,20 @@ impl CompiledGraph {
         }
         let _ = writeln!(
             s,
-            "transient memory: {} bytes aliased, {} bytes without aliasing ({} transients, {} arenas)",
-            self.memory.peak_aliased_bytes,
-            self.memory.unaliased_bytes,
+            "transient memory ({} transients, {} arenas): {}",
             self.memory.transient_count,
-            self.arenas.len()
+            self.arenas.len(),
+            self.memory.summary()
         );
+        for (i, a) in self.arenas.iter().enumerate() {
+            let _ = writeln!(
+                s,
+                "  arena {i}: memory type {}, {}, {} bytes",
+                a.memory_type,
+                if a.holds_buffers { "buffers" } else { "images" },
+                a.size_bytes
+            );
+        }
         s
     }
 

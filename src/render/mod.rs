@@ -1361,8 +1361,8 @@ pub struct ProfileRun {
     pub frames: Vec<Vec<PassTiming>>,
     pub live_passes: Vec<String>,
     pub culled_passes: Vec<String>,
-    /// Transient bytes with and without aliasing.
-    pub transient_bytes: (u64, u64),
+    /// Transient memory with and without aliasing.
+    pub transient_memory: crate::graph::MemoryStats,
     /// One-time passes submitted before the first frame, outside the frame graph.
     pub setup: Vec<PassTiming>,
 }
@@ -1408,13 +1408,13 @@ pub fn profile_scene(
         let c = exec.compiled();
         let live = c.order.iter().map(|&p| c.pass_names[p].clone()).collect();
         let culled = c.culled.iter().map(|&p| c.pass_names[p].clone()).collect();
-        let bytes = (c.memory.peak_aliased_bytes, c.memory.unaliased_bytes);
+        let memory = c.memory;
         exec.destroy(ctx);
         r.map(|frames| ProfileRun {
             frames,
             live_passes: live,
             culled_passes: culled,
-            transient_bytes: bytes,
+            transient_memory: memory,
             setup: renderer.setup_timings(),
         })
     })();
