@@ -1,5 +1,9 @@
 //! Post-processing: tone mapping (and, with the GI methods, geometry-aware filtering).
 
+mod tonemap;
+
+pub use tonemap::{GpuTonemapPush, TonemapPass};
+
 use serde::{Deserialize, Serialize};
 
 /// Tone-mapping operator of `glsl/tonemap.comp`.

@@ -1,6 +1,7 @@
-//! `Gpu*` structs shared with GLSL (`glsl/include/frame.glsl`, `glsl/gbuffer.frag`). Buffer
-//! layouts are checked by the tests below; push-constant structs against the shaders' reflected
-//! blocks when their pipelines are created.
+//! `Gpu*` buffer structs shared with GLSL (`glsl/include/frame.glsl`, `glsl/gbuffer.frag`),
+//! their std430 layouts checked by the tests below. Each pass's push-constant struct lives
+//! with its pass and is checked against the shader's reflected block when its pipeline is
+//! created.
 
 use bytemuck::{Pod, Zeroable};
 
@@ -67,73 +68,6 @@ pub struct GpuVertex {
     pub normal: [f32; 3],
     pub uv: [f32; 2],
 }
-
-/// Push constants of the G-buffer pass (`gbuffer.vert`).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
-pub struct GpuGbufferPush {
-    pub model: [f32; 16],
-    pub material: u32,
-    pub _pad: [u32; 3],
-}
-
-crate::push_constants!(GpuGbufferPush {
-    model,
-    material,
-    _pad
-});
-
-/// Push constants of the shadow-depth pass (`shadow_depth.vert`): the model matrix, the shadow
-/// view the geometry shader renders, and the material (dissolve coverage).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
-pub struct GpuShadowPush {
-    pub model: [f32; 16],
-    pub view: u32,
-    pub material: u32,
-    pub _pad: [u32; 2],
-}
-
-crate::push_constants!(GpuShadowPush {
-    model,
-    view,
-    material,
-    _pad
-});
-
-/// Push constants of the reflective light-map pass.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
-pub struct GpuLightMapPush {
-    pub model: [f32; 16],
-    pub view: u32,
-    pub material: u32,
-    pub _pad: [u32; 2],
-}
-
-crate::push_constants!(GpuLightMapPush {
-    model,
-    view,
-    material,
-    _pad
-});
-
-/// Push constants of `tonemap.comp`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
-pub struct GpuTonemapPush {
-    pub exposure: f32,
-    pub op: u32,
-    pub white: f32,
-    pub drago_bias: f32,
-}
-
-crate::push_constants!(GpuTonemapPush {
-    exposure,
-    op,
-    white,
-    drago_bias
-});
 
 #[cfg(test)]
 mod tests {

@@ -1,29 +1,44 @@
-//! The frame of voxgi: shadow maps → G-buffer → deferred direct light → tone mapping, with
-//! read-back of the linear HDR radiance and the tone-mapped image.
+//! The frame of voxgi: shadow maps → G-buffer → deferred direct light → (indirect light) →
+//! tone mapping, with read-back of the linear HDR radiance and the tone-mapped image.
 //!
-//! [`Renderer`] uploads a [`Scene`] once, owns the pipelines, and declares the frame as a
-//! render graph; [`render_image`] runs one frame headless.
+//! Each pass lives in the file named after its shader (`shadow_depth.rs` for
+//! `glsl/shadow_depth.*`, …) with its pipeline, push constants and declaration; [`Renderer`]
+//! owns them and the scene on the GPU ([`SceneGpu`]) and assembles the frame in
+//! [`Renderer::declare`]. [`render_image`] and [`profile_scene`] run frames headless.
 
 mod cull;
+mod deferred_direct;
+mod gbuffer;
 pub mod gpu;
+mod light_map;
+mod run;
+mod scene_gpu;
+mod shadow_depth;
 mod textures;
 
 pub use cull::aabb_visible;
+pub use gbuffer::Gbuffer;
+pub use light_map::LightMaps;
+pub use run::{profile_scene, render_image, ProfileRun, RenderOutput};
+pub use scene_gpu::{Draw, DrawLists, SceneGpu, SceneInputs};
 
 use crate::eval::HdrImage;
-use crate::graph::{Access, GraphError, GraphExecutor, ImageHandle, RenderGraph, Shader};
+use crate::graph::{Access, GraphError, ImageHandle, RenderGraph};
 use crate::light::{shadow_views, PointShadow, ShadowSettings};
-use crate::post::ToneMap;
-use crate::scene::{BumpKind, Light, Scene};
-use crate::vk::{
-    vk, Attachment, Buffer, BufferDesc, Cmd, ComputePipeline, Context, Descriptor, FrameLoop,
-    GraphicsPipeline, GraphicsPipelineDesc, ImageDesc, MemoryLocation, PassTiming, VkError,
-    MAX_FRAMES_IN_FLIGHT,
-};
+use crate::post::{ToneMap, TonemapPass};
+use crate::scene::{Light, Scene};
+use crate::vk::{vk, Buffer, BufferDesc, Context, ImageDesc, MemoryLocation, PassTiming, VkError};
 use bytemuck::Zeroable;
-use glam::{Mat4, Vec3};
+use deferred_direct::DeferredDirectPass;
+use gbuffer::GbufferPass;
+use glam::Vec3;
 use gpu::*;
-use std::sync::{Arc, RwLock};
+use light_map::LightMapPass;
+use shadow_depth::ShadowDepthPass;
+
+const GBUFFER_COLOR: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
+const DEPTH: vk::Format = vk::Format::D32_SFLOAT;
+const HDR: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 
 /// Errors of building or running a frame.
 #[derive(Debug, thiserror::Error)]
@@ -89,82 +104,27 @@ pub struct FrameImages {
     pub ldr: ImageHandle,
 }
 
-/// One indexed draw of a submesh of an object.
-#[derive(Clone, Copy, Debug)]
-struct Draw {
-    first_index: u32,
-    index_count: u32,
-    vertex_offset: i32,
-    material: u32,
-    /// Index into the renderer's textures (the albedo map of the material).
-    texture: Option<usize>,
-    /// Index into the renderer's textures of the material's bump or normal map.
-    bump: Option<usize>,
-    /// The object drawn (its transform and, for OBJ sequences, its frame follow the scene
-    /// time), the submesh, and the mesh's local box.
-    object: usize,
-    submesh: usize,
-    local_aabb: crate::scene::Aabb,
-    model: Mat4,
-    aabb: crate::scene::Aabb,
-}
-
-/// Draw lists after culling, read by the recording closures.
-#[derive(Clone, Debug, Default)]
-struct DrawLists {
-    camera: Vec<Draw>,
-    /// Per shadow view.
-    shadow: Vec<Vec<Draw>>,
-}
-
-struct Pipelines {
-    gbuffer: GraphicsPipeline,
-    shadow: GraphicsPipeline,
-    deferred: ComputePipeline,
-    tonemap: ComputePipeline,
-}
-
-/// A scene on the GPU with the pipelines of the direct-light frame.
+/// A scene on the GPU with the passes of its frame.
 pub struct Renderer {
     pub settings: RenderSettings,
-    vertices: Buffer,
-    indices: Buffer,
-    materials: Buffer,
-    /// `MAX_FRAMES_IN_FLIGHT` copies of `GpuFrame`, `frame_stride` bytes apart.
-    frame: Buffer,
-    frame_stride: u64,
+    scene: SceneGpu,
     readback_hdr: Buffer,
     readback_ldr: Buffer,
-    pipelines: Pipelines,
+    /// Nearest-neighbour sampler of the G-buffer, shadow maps and radiance.
     sampler: vk::Sampler,
-    /// Albedo textures of the scene, then a 1x1 white placeholder (always last).
-    textures: Vec<crate::vk::Image>,
-    texture_sampler: vk::Sampler,
+    shadow_depth: ShadowDepthPass,
+    gbuffer: GbufferPass,
+    deferred: DeferredDirectPass,
+    tonemap: TonemapPass,
     has_phong: bool,
     shadow_view_count: u32,
-    draws: Arc<RwLock<DrawLists>>,
-    all_draws: Vec<Draw>,
-    /// Vertex and index offsets of every mesh in the shared buffers.
-    mesh_base: Vec<(i32, u32)>,
     frame_data: GpuFrame,
     voxels: Option<crate::voxel::gpu::VoxelFrame>,
-    /// Indirect-light passes and the light-map pipeline, when a GI method is on.
-    gi: Option<(crate::gi::GiPasses, GraphicsPipeline)>,
+    /// Indirect-light passes and the light-map pass, when a GI method is on.
+    gi: Option<(crate::gi::GiPasses, LightMapPass)>,
     voxel_debug: Option<crate::voxel::debug_view::VoxelDebugPass>,
     atlas_view: Option<crate::voxel::atlas_view::AtlasViewPass>,
 }
-
-/// Meters of height per unit of a height (bump) map, times the MTL `-bm` multiplier: MTL has
-/// no unit for heights.
-const BUMP_SCALE_M: f32 = 0.01;
-
-const GBUFFER_COLOR: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
-const DEPTH: vk::Format = vk::Format::D32_SFLOAT;
-const HDR: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
-/// Reflected radiance in the light maps. f32, not f16: light intensities from 1e-6 to 1e6 W/sr
-/// (DESIGN.md, extremes) put it outside f16's range (max 65504, normal down to 6e-5); f16
-/// lost 1.5% of the peak at 1e-6 and overflowed to Inf at 1e6 (tests/extremes.rs).
-const LIGHT_MAP_RADIANCE: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 
 impl Renderer {
     pub fn new(
@@ -182,43 +142,7 @@ impl Renderer {
         if scene.lights.len() > MAX_LIGHTS {
             return Err(RenderError::TooManyLights(scene.lights.len()));
         }
-        let Geometry {
-            vertices,
-            indices,
-            draws: all_draws,
-            mesh_base,
-        } = upload_geometry(ctx, scene, settings.time_s)?;
-        let materials: Vec<GpuMaterial> = scene
-            .materials
-            .iter()
-            .map(|m| GpuMaterial {
-                albedo: [m.albedo.x, m.albedo.y, m.albedo.z, m.opacity],
-                specular: [m.specular.x, m.specular.y, m.specular.z, m.shininess],
-                flags: [
-                    u32::from(m.albedo_texture.is_some()),
-                    match (m.bump_texture, m.bump_kind) {
-                        (None, _) => 0,
-                        (Some(_), BumpKind::Height) => 1,
-                        (Some(_), BumpKind::TangentNormal) => 2,
-                    },
-                    (BUMP_SCALE_M * m.bump_scale).to_bits(),
-                    0,
-                ],
-            })
-            .collect();
-        let materials_buf = ctx.upload_buffer(
-            "materials",
-            bytemuck::cast_slice(&materials),
-            vk::BufferUsageFlags::STORAGE_BUFFER,
-        )?;
         let has_phong = !scene.is_all_lambert();
-        let frame_stride = (std::mem::size_of::<GpuFrame>() as u64).next_multiple_of(256);
-        let frame = ctx.create_buffer(&BufferDesc {
-            name: "frame constants".into(),
-            size_bytes: frame_stride * MAX_FRAMES_IN_FLIGHT as u64,
-            usage: vk::BufferUsageFlags::STORAGE_BUFFER,
-            location: MemoryLocation::CpuToGpu,
-        })?;
         let pixels = u64::from(settings.width) * u64::from(settings.height);
         let readback_hdr = ctx.create_buffer(&BufferDesc {
             name: "readback hdr".into(),
@@ -232,33 +156,7 @@ impl Renderer {
             usage: vk::BufferUsageFlags::TRANSFER_DST,
             location: MemoryLocation::GpuToCpu,
         })?;
-        let has_textures = scene.has_albedo_textures();
-        let mut textures = Vec::new();
-        for (i, t) in scene.textures.iter().enumerate() {
-            if scene
-                .materials
-                .iter()
-                .any(|m| m.albedo_texture == Some(i) || m.bump_texture == Some(i))
-            {
-                textures.push(textures::upload_texture(
-                    ctx,
-                    t,
-                    &format!("texture {}", t.path.display()),
-                )?);
-            } else {
-                textures.push(textures::upload_texture(
-                    ctx,
-                    &placeholder_texture(),
-                    "unused texture slot",
-                )?);
-            }
-        }
-        textures.push(textures::upload_texture(
-            ctx,
-            &placeholder_texture(),
-            "texture placeholder",
-        )?);
-        let texture_sampler = ctx.create_sampler(vk::Filter::LINEAR, true)?;
+        let scene_gpu = SceneGpu::new(ctx, scene, settings.time_s)?;
         // Paraboloid maps write their depth per fragment, which costs the other maps their
         // early depth test: only scenes that have them pay for it.
         let paraboloid = settings.shadow.point_technique == PointShadow::DualParaboloid
@@ -266,15 +164,17 @@ impl Renderer {
                 .lights
                 .iter()
                 .any(|l| matches!(l, Light::Point { .. }));
-        let pipelines = create_pipelines(
+        let sampler = ctx.create_sampler(vk::Filter::NEAREST, false)?;
+        let shadow_depth = ShadowDepthPass::new(ctx, paraboloid, scene.has_transparency())?;
+        let gbuffer = GbufferPass::new(
             ctx,
             has_phong,
-            has_textures,
+            scene.has_albedo_textures(),
             scene.has_bump_maps(),
             scene.has_transparency(),
-            paraboloid,
         )?;
-        let sampler = ctx.create_sampler(vk::Filter::NEAREST, false)?;
+        let deferred = DeferredDirectPass::new(ctx, has_phong, sampler)?;
+        let tonemap = TonemapPass::new(ctx, sampler)?;
         let gi_on = settings.gi.method != crate::gi::GiMethod::None;
         if gi_on
             && settings.shadow.point_technique == PointShadow::DualParaboloid
@@ -317,7 +217,7 @@ impl Renderer {
                         atlas_attributes,
                     },
                 )?;
-                let light_map = create_light_map_pipeline(ctx, scene.has_transparency())?;
+                let light_map = LightMapPass::new(ctx, scene.has_transparency())?;
                 Some((passes, light_map))
             }
             _ => None,
@@ -358,22 +258,16 @@ impl Renderer {
         };
         let mut r = Self {
             settings,
-            vertices,
-            indices,
-            materials: materials_buf,
-            frame,
-            frame_stride,
+            scene: scene_gpu,
             readback_hdr,
             readback_ldr,
-            pipelines,
             sampler,
-            textures,
-            texture_sampler,
+            shadow_depth,
+            gbuffer,
+            deferred,
+            tonemap,
             has_phong,
             shadow_view_count: 0,
-            draws: Arc::new(RwLock::new(DrawLists::default())),
-            all_draws,
-            mesh_base,
             frame_data: GpuFrame::zeroed(),
             voxels,
             gi,
@@ -388,7 +282,7 @@ impl Renderer {
     /// lights and `settings`. Call again after changing them (the viewer does, every frame);
     /// a new size, shadow resolution or tone map also needs a new graph.
     pub fn prepare(&mut self, scene: &Scene) -> Result<(), RenderError> {
-        let s = &self.settings;
+        let s = self.settings.clone();
         let (views, per_light) = shadow_views(scene, s.time_s, &s.shadow);
         if views.len() > MAX_SHADOW_VIEWS {
             return Err(RenderError::TooManyShadowViews(views.len()));
@@ -429,47 +323,7 @@ impl Renderer {
         }
         self.frame_data = f;
         self.shadow_view_count = views.len() as u32;
-        // Animated objects follow the scene time: keyframes move them, OBJ sequences switch
-        // to the frame's mesh (frames share topology, so only the buffer offsets change).
-        for d in &mut self.all_draws {
-            let Some(o) = scene.objects.get(d.object).filter(|o| o.is_animated()) else {
-                continue;
-            };
-            let mesh_index = o.mesh_at(s.time_s);
-            if let (Some(mesh), Some(&(vbase, ibase))) =
-                (scene.meshes.get(mesh_index), self.mesh_base.get(mesh_index))
-            {
-                if let Some(sub) = mesh.submeshes.get(d.submesh) {
-                    d.first_index = ibase + sub.first_index;
-                    d.index_count = sub.index_count;
-                    d.vertex_offset = vbase;
-                    d.local_aabb = mesh.aabb;
-                }
-            }
-            d.model = o.transform_at(s.time_s);
-            d.aabb = d.local_aabb.transformed(&d.model);
-        }
-        let lists = DrawLists {
-            camera: self
-                .all_draws
-                .iter()
-                .copied()
-                .filter(|d| aabb_visible(&view_proj, &d.aabb))
-                .collect(),
-            shadow: views
-                .iter()
-                .map(|v| {
-                    self.all_draws
-                        .iter()
-                        .copied()
-                        .filter(|d| v.may_see(&d.aabb))
-                        .collect()
-                })
-                .collect(),
-        };
-        if let Ok(mut d) = self.draws.write() {
-            *d = lists;
-        }
+        self.scene.update_draws(scene, s.time_s, &view_proj, &views);
         Ok(())
     }
 
@@ -493,11 +347,7 @@ impl Renderer {
         if let Some(pass) = &mut self.voxel_debug {
             pass.update(self.settings.time_s, slot);
         }
-        let offset = (slot as u64 * self.frame_stride) as usize;
-        let bytes = bytemuck::bytes_of(&self.frame_data);
-        if let Some(m) = self.frame.mapped_mut() {
-            m[offset..offset + bytes.len()].copy_from_slice(bytes);
-        }
+        self.scene.write_frame(slot, &self.frame_data);
     }
 
     /// Frames the indirect light has accumulated since the last reset (`None`: GI off).
@@ -507,8 +357,8 @@ impl Renderer {
 
     /// Number of culled camera draws and total draws (for statistics and tests).
     pub fn camera_draws(&self) -> (usize, usize) {
-        let visible = self.draws.read().map(|d| d.camera.len()).unwrap_or(0);
-        (visible, self.all_draws.len())
+        let visible = self.scene.draws.read().map(|d| d.camera.len()).unwrap_or(0);
+        (visible, self.scene.all_draws.len())
     }
 
     pub fn shadow_view_count(&self) -> u32 {
@@ -565,318 +415,50 @@ impl Renderer {
     pub fn declare(&self, g: &mut RenderGraph) -> FrameImages {
         let s = &self.settings;
         let (w, h) = (s.width, s.height);
-        let frame = g.import_buffer(&self.frame, Access::StorageRead(Shader::Compute));
-        let frame_raw = self.frame.raw;
-        let stride = self.frame_stride;
-        let frame_size = std::mem::size_of::<GpuFrame>() as u64;
-        let frame_desc = move |slot: usize| Descriptor::StorageBuffer {
-            binding: 0,
-            buffer: frame_raw,
-            offset: slot as u64 * stride,
-            range: frame_size,
-        };
-        let (vb, ib, mb) = (self.vertices.raw, self.indices.raw, self.materials.raw);
-        let voxel_image = self.voxels.as_ref().map(|v| v.add_passes(g));
-
-        // Shadow maps: one layer per shadow view (a 1x1 cleared layer when there are none, so
-        // the shading pass always has a map to bind).
+        let scene = self.scene.import(g);
         let views = self.shadow_view_count;
-        let res = if views == 0 { 1 } else { s.shadow.resolution };
-        let shadow_map = g.create_image(
-            ImageDesc::new_2d("shadow maps", DEPTH, res, res).with_layers(views.max(1)),
-        );
-        let pipe = self.pipelines.shadow;
-        let draws = self.draws.clone();
-        g.add_pass("shadow_depth")
-            .read(frame, Access::StorageRead(Shader::Geometry))
-            .write(shadow_map, Access::DepthAttachment)
-            .record(move |ctx| {
-                let map = ctx.image(shadow_map);
-                let depth = Attachment {
-                    view: map.view,
-                    clear: Some(vk::ClearValue {
-                        depth_stencil: vk::ClearDepthStencilValue {
-                            depth: 1.0,
-                            stencil: 0,
-                        },
-                    }),
-                };
-                ctx.cmd
-                    .begin_rendering_layers(map.extent_2d(), views.max(1), &[], Some(depth));
-                ctx.cmd.bind(
-                    &pipe,
-                    &[frame_desc(ctx.slot), Descriptor::storage_buffer(1, mb)],
-                );
-                ctx.cmd.bind_vertex_buffer(vb);
-                ctx.cmd.bind_index_buffer(ib);
-                draw_shadow_views(ctx.cmd, &pipe, &draws, |d, v| GpuShadowPush {
-                    model: d.model.to_cols_array(),
-                    view: v,
-                    material: d.material,
-                    _pad: [0; 2],
-                });
-                ctx.cmd.end_rendering();
-            });
-
-        // G-buffer.
-        let albedo = g.create_image(ImageDesc::new_2d("gbuffer albedo", GBUFFER_COLOR, w, h));
-        let normal = g.create_image(ImageDesc::new_2d("gbuffer normal", GBUFFER_COLOR, w, h));
-        let specular = self
-            .has_phong
-            .then(|| g.create_image(ImageDesc::new_2d("gbuffer specular", GBUFFER_COLOR, w, h)));
-        let depth = g.create_image(ImageDesc::new_2d("gbuffer depth", DEPTH, w, h));
-        let pipe = self.pipelines.gbuffer;
-        let draws = self.draws.clone();
-        let tex_handles: Vec<_> = self
-            .textures
-            .iter()
-            .map(|t| g.import_image(t, Access::Sampled(Shader::Fragment)))
-            .collect();
-        let tex_sampler = self.texture_sampler;
-        let mut pass = g
-            .add_pass("gbuffer")
-            .read(frame, Access::StorageRead(Shader::Graphics))
-            .write(albedo, Access::ColorAttachment)
-            .write(normal, Access::ColorAttachment)
-            .write(depth, Access::DepthAttachment);
-        if let Some(spec) = specular {
-            pass = pass.write(spec, Access::ColorAttachment);
-        }
-        for &t in &tex_handles {
-            pass = pass.read(t, Access::Sampled(Shader::Fragment));
-        }
-        let placeholder = tex_handles[tex_handles.len() - 1];
-        pass.record(move |ctx| {
-            let clear = Some(vk::ClearValue {
-                color: vk::ClearColorValue { float32: [0.0; 4] },
-            });
-            let mut colors = vec![
-                Attachment {
-                    view: ctx.image(albedo).view,
-                    clear,
-                },
-                Attachment {
-                    view: ctx.image(normal).view,
-                    clear,
-                },
-            ];
-            if let Some(spec) = specular {
-                colors.push(Attachment {
-                    view: ctx.image(spec).view,
-                    clear,
-                });
-            }
-            let depth_att = Attachment {
-                view: ctx.image(depth).view,
-                clear: Some(vk::ClearValue {
-                    depth_stencil: vk::ClearDepthStencilValue {
-                        depth: 1.0,
-                        stencil: 0,
-                    },
-                }),
-            };
-            ctx.cmd
-                .begin_rendering(ctx.image(albedo).extent_2d(), &colors, Some(depth_att));
-            let texture = |binding: u32, t: Option<usize>| Descriptor::SampledImage {
-                binding,
-                view: ctx
-                    .image(
-                        t.and_then(|i| tex_handles.get(i).copied())
-                            .unwrap_or(placeholder),
-                    )
-                    .view,
-                sampler: tex_sampler,
-            };
-            ctx.cmd.bind(
-                &pipe,
-                &[
-                    frame_desc(ctx.slot),
-                    Descriptor::storage_buffer(1, mb),
-                    texture(2, None),
-                    texture(3, None),
-                ],
-            );
-            ctx.cmd.bind_vertex_buffer(vb);
-            ctx.cmd.bind_index_buffer(ib);
-            if let Ok(lists) = draws.read() {
-                let mut bound = (None, None);
-                for d in &lists.camera {
-                    if (d.texture, d.bump) != bound {
-                        ctx.cmd
-                            .push_descriptors(&pipe, &[texture(2, d.texture), texture(3, d.bump)]);
-                        bound = (d.texture, d.bump);
-                    }
-                    let push = GpuGbufferPush {
-                        model: d.model.to_cols_array(),
-                        material: d.material,
-                        _pad: [0; 3],
-                    };
-                    ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
-                    ctx.cmd
-                        .draw_indexed(d.index_count, d.first_index, d.vertex_offset);
-                }
-            }
-            ctx.cmd.end_rendering();
-        });
-
-        // Deferred direct light.
-        let radiance = g.create_image(ImageDesc::new_2d("radiance", HDR, w, h));
-        let pipe = self.pipelines.deferred;
-        let sampler = self.sampler;
-        let groups = (w.div_ceil(8), h.div_ceil(8));
-        let mut pass = g
-            .add_pass("deferred_direct")
-            .read(frame, Access::StorageRead(Shader::Compute))
-            .read(albedo, Access::Sampled(Shader::Compute))
-            .read(normal, Access::Sampled(Shader::Compute))
-            .read(depth, Access::Sampled(Shader::Compute))
-            .read(shadow_map, Access::Sampled(Shader::Compute))
-            .write(radiance, Access::StorageWrite(Shader::Compute));
-        if let Some(spec) = specular {
-            pass = pass.read(spec, Access::Sampled(Shader::Compute));
-        }
-        pass.record(move |ctx| {
-            let sampled = |binding, view| Descriptor::SampledImage {
-                binding,
-                view,
-                sampler,
-            };
-            // Without Phong materials the specular binding is never read; bind albedo there.
-            let spec_view = specular
-                .map(|s| ctx.image(s).view)
-                .unwrap_or(ctx.image(albedo).view);
-            ctx.cmd.bind(
-                &pipe,
-                &[
-                    frame_desc(ctx.slot),
-                    sampled(1, ctx.image(albedo).view),
-                    sampled(2, ctx.image(normal).view),
-                    sampled(3, spec_view),
-                    sampled(4, ctx.image(depth).view),
-                    sampled(5, ctx.image(shadow_map).view),
-                    Descriptor::StorageImage {
-                        binding: 6,
-                        view: ctx.image(radiance).view,
-                    },
-                ],
-            );
-            ctx.cmd.dispatch(groups.0, groups.1, 1);
-        });
-
-        // Indirect light: reflective light maps over the shadow views, then the GI passes.
+        let voxel_image = self.voxels.as_ref().map(|v| v.add_passes(g));
+        let shadow_map = self
+            .shadow_depth
+            .declare(g, &scene, views, s.shadow.resolution);
+        let gbuffer = self.gbuffer.declare(g, &scene, w, h);
+        let direct = self
+            .deferred
+            .declare(g, &scene, &gbuffer, shadow_map, (w, h));
         let radiance = match (&self.gi, voxel_image) {
-            (Some((gi, light_map_pipe)), Some(voxels)) => {
-                let res = gi.settings.light_map_resolution.max(1);
-                let layers = views.max(1);
-                let mut rlm = |name: &str, format| {
-                    g.create_image(ImageDesc::new_2d(name, format, res, res).with_layers(layers))
-                };
-                let rlm_radiance = rlm("light map radiance", LIGHT_MAP_RADIANCE);
-                let rlm_position = rlm("light map position", vk::Format::R32G32B32A32_SFLOAT);
-                let rlm_normal = rlm("light map normal", vk::Format::R16G16B16A16_SFLOAT);
-                let rlm_depth = rlm("light map depth", DEPTH);
-                let pipe = *light_map_pipe;
-                let draws = self.draws.clone();
-                g.add_pass("light_map")
-                    .read(frame, Access::StorageRead(Shader::Graphics))
-                    .write(rlm_radiance, Access::ColorAttachment)
-                    .write(rlm_position, Access::ColorAttachment)
-                    .write(rlm_normal, Access::ColorAttachment)
-                    .write(rlm_depth, Access::DepthAttachment)
-                    .record(move |ctx| {
-                        let clear = Some(vk::ClearValue {
-                            color: vk::ClearColorValue { float32: [0.0; 4] },
-                        });
-                        let colors = [rlm_radiance, rlm_position, rlm_normal].map(|h| Attachment {
-                            view: ctx.image(h).view,
-                            clear,
-                        });
-                        let depth = Attachment {
-                            view: ctx.image(rlm_depth).view,
-                            clear: Some(vk::ClearValue {
-                                depth_stencil: vk::ClearDepthStencilValue {
-                                    depth: 1.0,
-                                    stencil: 0,
-                                },
-                            }),
-                        };
-                        ctx.cmd.begin_rendering_layers(
-                            ctx.image(rlm_depth).extent_2d(),
-                            layers,
-                            &colors,
-                            Some(depth),
-                        );
-                        ctx.cmd.bind(
-                            &pipe,
-                            &[frame_desc(ctx.slot), Descriptor::storage_buffer(1, mb)],
-                        );
-                        ctx.cmd.bind_vertex_buffer(vb);
-                        ctx.cmd.bind_index_buffer(ib);
-                        draw_shadow_views(ctx.cmd, &pipe, &draws, |d, v| GpuLightMapPush {
-                            model: d.model.to_cols_array(),
-                            view: v,
-                            material: d.material,
-                            _pad: [0; 2],
-                        });
-                        ctx.cmd.end_rendering();
-                    });
+            (Some((gi, light_map)), Some(voxels)) => {
+                let maps = light_map.declare(g, &scene, views, gi.settings.light_map_resolution);
                 gi.add_passes(
                     g,
                     &crate::gi::GiInputs {
-                        frame,
-                        frame_descriptor: frame_desc(0),
-                        frame_stride: stride,
-                        albedo,
-                        normal,
-                        depth,
-                        direct: radiance,
+                        frame: scene.frame,
+                        frame_descriptor: crate::vk::Descriptor::StorageBuffer {
+                            binding: 0,
+                            buffer: scene.frame_raw,
+                            offset: 0,
+                            range: std::mem::size_of::<GpuFrame>() as u64,
+                        },
+                        frame_stride: scene.frame_stride,
+                        albedo: gbuffer.albedo,
+                        normal: gbuffer.normal,
+                        depth: gbuffer.depth,
+                        direct,
                         voxels,
-                        rlm_radiance,
-                        rlm_position,
-                        rlm_normal,
+                        rlm_radiance: maps.radiance,
+                        rlm_position: maps.position,
+                        rlm_normal: maps.normal,
                         shadow_map,
-                        specular,
-                        materials: mb,
+                        specular: gbuffer.specular,
+                        materials: scene.materials_raw,
                         width: w,
                         height: h,
                     },
                     self.voxels.as_ref(),
                 )
             }
-            _ => radiance,
+            _ => direct,
         };
-
-        // Tone mapping.
-        let ldr = g.create_image(ImageDesc::new_2d("ldr", vk::Format::R8G8B8A8_UNORM, w, h));
-        let pipe = self.pipelines.tonemap;
-        let tm = s.tonemap;
-        g.add_pass("tonemap")
-            .read(radiance, Access::Sampled(Shader::Compute))
-            .write(ldr, Access::StorageWrite(Shader::Compute))
-            .record(move |ctx| {
-                ctx.cmd.bind(
-                    &pipe,
-                    &[
-                        Descriptor::SampledImage {
-                            binding: 0,
-                            view: ctx.image(radiance).view,
-                            sampler,
-                        },
-                        Descriptor::StorageImage {
-                            binding: 1,
-                            view: ctx.image(ldr).view,
-                        },
-                    ],
-                );
-                let push = GpuTonemapPush {
-                    exposure: tm.exposure,
-                    op: tm.operator.shader_id(),
-                    white: tm.white,
-                    drago_bias: tm.drago_bias,
-                };
-                ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
-                ctx.cmd.dispatch(groups.0, groups.1, 1);
-            });
+        let ldr = self.tonemap.declare(g, radiance, s.tonemap, (w, h));
 
         // A debug view replaces the lit image: the read-backs take its images, and the graph
         // culls deferred light, tone mapping, G-buffer and shadows, which nothing reads then.
@@ -970,27 +552,16 @@ impl Renderer {
         }
         if let Some((gi, light_map)) = self.gi {
             gi.destroy(ctx);
-            ctx.destroy_graphics_pipeline(light_map);
+            light_map.destroy(ctx);
         }
-        ctx.destroy_graphics_pipeline(self.pipelines.gbuffer);
-        ctx.destroy_graphics_pipeline(self.pipelines.shadow);
-        ctx.destroy_compute_pipeline(self.pipelines.deferred);
-        ctx.destroy_compute_pipeline(self.pipelines.tonemap);
+        self.shadow_depth.destroy(ctx);
+        self.gbuffer.destroy(ctx);
+        self.deferred.destroy(ctx);
+        self.tonemap.destroy(ctx);
         ctx.destroy_sampler(self.sampler);
-        ctx.destroy_sampler(self.texture_sampler);
-        for t in self.textures {
-            ctx.destroy_image(t);
-        }
-        for b in [
-            self.vertices,
-            self.indices,
-            self.materials,
-            self.frame,
-            self.readback_hdr,
-            self.readback_ldr,
-        ] {
-            ctx.destroy_buffer(b);
-        }
+        self.scene.destroy(ctx);
+        ctx.destroy_buffer(self.readback_hdr);
+        ctx.destroy_buffer(self.readback_ldr);
     }
 }
 
@@ -1034,390 +605,4 @@ fn gpu_light(light: &Light, first_view: u32, views: u32) -> GpuLight {
             ..Default::default()
         },
     }
-}
-
-/// Uploads every mesh into one vertex and one index buffer; returns one draw per submesh of
-/// The scene's meshes on the GPU: one vertex and one index buffer, a draw per submesh of each
-/// object, and each mesh's offsets in the buffers.
-struct Geometry {
-    vertices: Buffer,
-    indices: Buffer,
-    draws: Vec<Draw>,
-    mesh_base: Vec<(i32, u32)>,
-}
-
-/// each object at time `t_s`.
-fn upload_geometry(ctx: &Context, scene: &Scene, t_s: f32) -> Result<Geometry, RenderError> {
-    let mut vertices: Vec<GpuVertex> = Vec::new();
-    let mut indices: Vec<u32> = Vec::new();
-    let mut mesh_base = Vec::with_capacity(scene.meshes.len());
-    for mesh in &scene.meshes {
-        mesh_base.push((vertices.len() as i32, indices.len() as u32));
-        for (i, p) in mesh.positions.iter().enumerate() {
-            let n = mesh.normals.get(i).copied().unwrap_or(Vec3::Y);
-            let uv = mesh
-                .uvs
-                .as_ref()
-                .and_then(|u| u.get(i).copied())
-                .unwrap_or_default();
-            vertices.push(GpuVertex {
-                position: p.to_array(),
-                normal: n.to_array(),
-                uv: uv.to_array(),
-            });
-        }
-        indices.extend_from_slice(&mesh.indices);
-    }
-    if vertices.is_empty() || indices.is_empty() {
-        return Err(RenderError::EmptyScene);
-    }
-    let mut draws = Vec::new();
-    for (object_index, object) in scene.objects.iter().enumerate() {
-        let mesh_index = object.mesh_at(t_s);
-        let Some(mesh) = scene.meshes.get(mesh_index) else {
-            continue;
-        };
-        let (vbase, ibase) = mesh_base[mesh_index];
-        let model = object.transform_at(t_s);
-        let aabb = mesh.aabb.transformed(&model);
-        for (si, sub) in mesh.submeshes.iter().enumerate() {
-            let material = object.materials.get(si).copied().unwrap_or(sub.material);
-            let texture = scene.materials.get(material).and_then(|m| m.albedo_texture);
-            let bump = scene.materials.get(material).and_then(|m| m.bump_texture);
-            draws.push(Draw {
-                first_index: ibase + sub.first_index,
-                index_count: sub.index_count,
-                vertex_offset: vbase,
-                material: material as u32,
-                texture,
-                bump,
-                object: object_index,
-                submesh: si,
-                local_aabb: mesh.aabb,
-                model,
-                aabb,
-            });
-        }
-    }
-    let vb = ctx.upload_buffer(
-        "vertices",
-        bytemuck::cast_slice(&vertices),
-        vk::BufferUsageFlags::VERTEX_BUFFER,
-    )?;
-    let ib = ctx.upload_buffer(
-        "indices",
-        bytemuck::cast_slice(&indices),
-        vk::BufferUsageFlags::INDEX_BUFFER,
-    )?;
-    Ok(Geometry {
-        vertices: vb,
-        indices: ib,
-        draws,
-        mesh_base,
-    })
-}
-
-/// Draws every shadow view's draw list with `pipe` (bound with its buffers), the push
-/// constants of draw `d` in view `v` from `push(d, v)`: the shadow-depth and light-map passes.
-fn draw_shadow_views<P: bytemuck::Pod>(
-    cmd: &Cmd,
-    pipe: &GraphicsPipeline,
-    draws: &RwLock<DrawLists>,
-    push: impl Fn(&Draw, u32) -> P,
-) {
-    let Ok(lists) = draws.read() else {
-        return;
-    };
-    for (v, list) in lists.shadow.iter().enumerate() {
-        for d in list {
-            cmd.push_constants(pipe, bytemuck::bytes_of(&push(d, v as u32)));
-            cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset);
-        }
-    }
-}
-
-/// The reflective light-map pipeline (`light_map.{vert,geom,frag}`); `has_dissolve`: some
-/// material has MTL d < 1, whose coverage the light map shares with the shadow maps.
-fn create_light_map_pipeline(
-    ctx: &Context,
-    has_dissolve: bool,
-) -> Result<GraphicsPipeline, VkError> {
-    ctx.graphics_pipeline(&GraphicsPipelineDesc {
-        vertex: "light_map.vert".into(),
-        geometry: Some("light_map.geom".into()),
-        fragment: "light_map.frag".into(),
-        push: crate::vk::PushLayout::of::<GpuLightMapPush>(),
-        vertex_stride: std::mem::size_of::<GpuVertex>() as u32,
-        vertex_attributes: vec![
-            (vk::Format::R32G32B32_SFLOAT, 0),
-            (vk::Format::R32G32B32_SFLOAT, 12),
-        ],
-        topology: vk::PrimitiveTopology::TRIANGLE_LIST,
-        cull_mode: vk::CullModeFlags::NONE,
-        color_formats: vec![
-            LIGHT_MAP_RADIANCE,
-            vk::Format::R32G32B32A32_SFLOAT,
-            vk::Format::R16G16B16A16_SFLOAT,
-        ],
-        depth_format: Some(DEPTH),
-        depth_test: true,
-        depth_write: true,
-        depth_bias: false,
-        logic_op: None,
-        spec: vec![(0, u32::from(has_dissolve))],
-    })
-}
-
-/// A 1x1 white texture bound where a draw has no albedo map.
-fn placeholder_texture() -> crate::scene::TextureData {
-    crate::scene::TextureData {
-        path: "placeholder".into(),
-        width: 1,
-        height: 1,
-        rgba8: vec![255; 4],
-        srgb: true,
-    }
-}
-
-fn create_pipelines(
-    ctx: &Context,
-    has_phong: bool,
-    has_textures: bool,
-    has_bump: bool,
-    has_dissolve: bool,
-    paraboloid_shadows: bool,
-) -> Result<Pipelines, VkError> {
-    let vertex_attributes = vec![
-        (vk::Format::R32G32B32_SFLOAT, 0),
-        (vk::Format::R32G32B32_SFLOAT, 12),
-        (vk::Format::R32G32_SFLOAT, 24),
-    ];
-    let mut colors = vec![GBUFFER_COLOR, GBUFFER_COLOR];
-    if has_phong {
-        colors.push(GBUFFER_COLOR);
-    }
-    let gbuffer = ctx.graphics_pipeline(&GraphicsPipelineDesc {
-        vertex: "gbuffer.vert".into(),
-        geometry: None,
-        fragment: "gbuffer.frag".into(),
-        push: crate::vk::PushLayout::of::<GpuGbufferPush>(),
-        vertex_stride: std::mem::size_of::<GpuVertex>() as u32,
-        vertex_attributes: vertex_attributes.clone(),
-        topology: vk::PrimitiveTopology::TRIANGLE_LIST,
-        cull_mode: vk::CullModeFlags::NONE,
-        color_formats: colors,
-        depth_format: Some(DEPTH),
-        depth_test: true,
-        depth_write: true,
-        depth_bias: false,
-        logic_op: None,
-        spec: vec![
-            (0, u32::from(has_phong)),
-            (1, u32::from(has_textures)),
-            (2, u32::from(has_bump)),
-            (3, u32::from(has_dissolve)),
-        ],
-    })?;
-    let shadow = ctx.graphics_pipeline(&GraphicsPipelineDesc {
-        vertex: "shadow_depth.vert".into(),
-        geometry: Some("shadow_depth.geom".into()),
-        fragment: if paraboloid_shadows {
-            "shadow_depth_paraboloid.frag".into()
-        } else {
-            "shadow_depth.frag".into()
-        },
-        push: crate::vk::PushLayout::of::<GpuShadowPush>(),
-        vertex_stride: std::mem::size_of::<GpuVertex>() as u32,
-        vertex_attributes: vec![(vk::Format::R32G32B32_SFLOAT, 0)],
-        topology: vk::PrimitiveTopology::TRIANGLE_LIST,
-        cull_mode: vk::CullModeFlags::NONE,
-        color_formats: vec![],
-        depth_format: Some(DEPTH),
-        depth_test: true,
-        depth_write: true,
-        depth_bias: false,
-        logic_op: None,
-        spec: vec![(0, u32::from(has_dissolve))],
-    })?;
-    let deferred =
-        ctx.compute_pipeline("deferred_direct.comp", None, &[(0, u32::from(has_phong))])?;
-    let tonemap = ctx.compute_pipeline(
-        "tonemap.comp",
-        crate::vk::PushLayout::of::<GpuTonemapPush>(),
-        &[],
-    )?;
-    Ok(Pipelines {
-        gbuffer,
-        shadow,
-        deferred,
-        tonemap,
-    })
-}
-
-/// The result of [`render_image`].
-pub struct RenderOutput {
-    pub hdr: HdrImage,
-    /// Tone-mapped sRGB RGBA8.
-    pub ldr: Vec<u8>,
-    pub timings: Vec<PassTiming>,
-    /// Compiled-graph facts: live passes, culled passes, transient bytes aliased / not.
-    pub live_passes: Vec<String>,
-    pub transient_bytes: (u64, u64),
-    /// A debug view's description ([`Renderer::debug_description`]).
-    pub debug_description: Option<String>,
-}
-
-/// Renders one frame of `scene` headless.
-pub fn render_image(
-    ctx: &Context,
-    scene: &Scene,
-    settings: &RenderSettings,
-) -> Result<RenderOutput, RenderError> {
-    let mut renderer = Renderer::new(ctx, scene, settings.clone())?;
-    // The path tracer converges over frames; everything else is done in one.
-    let frames = match settings.gi.method {
-        crate::gi::GiMethod::Pathtrace => settings.gi.accumulate_frames.max(1) as usize,
-        _ => 1,
-    };
-    let result = run_frames(ctx, &mut renderer, frames);
-    let out = result.map(|timings| {
-        let hdr = renderer.hdr_image();
-        let ldr = renderer.ldr_pixels();
-        let description = renderer.debug_description(&hdr);
-        (hdr, ldr, (timings, description))
-    });
-    let (exec_facts, out) = match out {
-        Ok((hdr, ldr, ((timings, live, bytes), description))) => {
-            (Some((live, bytes)), Ok((hdr, ldr, timings, description)))
-        }
-        Err(e) => (None, Err(e)),
-    };
-    renderer.destroy(ctx);
-    let (hdr, ldr, timings, debug_description) = out?;
-    let (live_passes, transient_bytes) = exec_facts.unwrap_or_default();
-    Ok(RenderOutput {
-        hdr,
-        ldr,
-        timings,
-        live_passes,
-        transient_bytes,
-        debug_description,
-    })
-}
-
-type FrameFacts = (Vec<PassTiming>, Vec<String>, (u64, u64));
-
-/// Runs `frames` frames; returns the last frame's timings and graph facts.
-fn run_frames(
-    ctx: &Context,
-    renderer: &mut Renderer,
-    frames: usize,
-) -> Result<FrameFacts, RenderError> {
-    let exec = GraphExecutor::new(ctx, renderer.graph(), MAX_FRAMES_IN_FLIGHT)?;
-    let result = (|| -> Result<FrameFacts, RenderError> {
-        let mut frame_loop = FrameLoop::new(
-            ctx,
-            MAX_FRAMES_IN_FLIGHT,
-            exec.compiled().order.len() as u32,
-        )?;
-        let mut last = Vec::new();
-        let run = (|| -> Result<(), RenderError> {
-            for _ in 0..frames {
-                let slot = frame_loop.current_slot();
-                // begin() waits for the slot's fence before the frame constants are rewritten.
-                let (slot_b, cmd, ts, done) = frame_loop.begin(ctx)?;
-                debug_assert_eq!(slot, slot_b);
-                if !done.is_empty() {
-                    last = done;
-                }
-                renderer.write_frame(slot);
-                exec.record(&cmd, slot, ts);
-                frame_loop.submit(ctx, &[], &[])?;
-            }
-            Ok(())
-        })();
-        let finished = frame_loop.finish(ctx);
-        frame_loop.destroy(ctx);
-        run?;
-        if let Some(t) = finished?.into_iter().last() {
-            last = t;
-        }
-        let c = exec.compiled();
-        let live = c.order.iter().map(|&p| c.pass_names[p].clone()).collect();
-        Ok((
-            last,
-            live,
-            (c.memory.peak_aliased_bytes, c.memory.unaliased_bytes),
-        ))
-    })();
-    let _ = ctx.wait_idle();
-    exec.destroy(ctx);
-    result
-}
-
-/// What [`profile_scene`] measured.
-pub struct ProfileRun {
-    /// Per measured frame, the timings of each pass in order.
-    pub frames: Vec<Vec<PassTiming>>,
-    pub live_passes: Vec<String>,
-    pub culled_passes: Vec<String>,
-    /// Transient memory with and without aliasing.
-    pub transient_memory: crate::graph::MemoryStats,
-    /// One-time passes submitted before the first frame, outside the frame graph.
-    pub setup: Vec<PassTiming>,
-}
-
-/// Per-pass GPU timing over many frames of a scene (for `voxgi profile`).
-pub fn profile_scene(
-    ctx: &Context,
-    scene: &Scene,
-    settings: &RenderSettings,
-    frames: usize,
-    warmup: usize,
-) -> Result<ProfileRun, RenderError> {
-    let mut renderer = Renderer::new(ctx, scene, settings.clone())?;
-    let result = (|| {
-        let exec = GraphExecutor::new(ctx, renderer.graph(), MAX_FRAMES_IN_FLIGHT)?;
-        let r = (|| -> Result<Vec<Vec<PassTiming>>, RenderError> {
-            let mut frame_loop = FrameLoop::new(
-                ctx,
-                MAX_FRAMES_IN_FLIGHT,
-                exec.compiled().order.len() as u32,
-            )?;
-            let mut measured = Vec::new();
-            let run = (|| -> Result<(), RenderError> {
-                for i in 0..warmup + frames {
-                    let slot = frame_loop.current_slot();
-                    let (_, cmd, ts, done) = frame_loop.begin(ctx)?;
-                    if i >= warmup + MAX_FRAMES_IN_FLIGHT && !done.is_empty() {
-                        measured.push(done);
-                    }
-                    renderer.write_frame(slot);
-                    exec.record(&cmd, slot, ts);
-                    frame_loop.submit(ctx, &[], &[])?;
-                }
-                Ok(())
-            })();
-            let finished = frame_loop.finish(ctx);
-            frame_loop.destroy(ctx);
-            run?;
-            measured.extend(finished?.into_iter().filter(|t| !t.is_empty()));
-            Ok(measured)
-        })();
-        let _ = ctx.wait_idle();
-        let c = exec.compiled();
-        let live = c.order.iter().map(|&p| c.pass_names[p].clone()).collect();
-        let culled = c.culled.iter().map(|&p| c.pass_names[p].clone()).collect();
-        let memory = c.memory;
-        exec.destroy(ctx);
-        r.map(|frames| ProfileRun {
-            frames,
-            live_passes: live,
-            culled_passes: culled,
-            transient_memory: memory,
-            setup: renderer.setup_timings(),
-        })
-    })();
-    renderer.destroy(ctx);
-    result
 }

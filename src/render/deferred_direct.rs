@@ -1,0 +1,56 @@
+//! `deferred_direct`: direct light of every light at every G-buffer pixel, with shadow-map
+//! visibility (`glsl/deferred_direct.comp`).
+
+use super::gbuffer::Gbuffer;
+use super::scene_gpu::SceneInputs;
+use super::HDR;
+use crate::graph::{Access, ImageHandle, RenderGraph, Shader};
+use crate::vk::{vk, ComputePipeline, Context, ImageDesc, VkError};
+
+pub struct DeferredDirectPass {
+    pipeline: ComputePipeline,
+    sampler: vk::Sampler,
+}
+
+impl DeferredDirectPass {
+    /// `sampler`: the nearest-neighbour sampler the G-buffer and shadow maps are read with.
+    pub fn new(ctx: &Context, has_phong: bool, sampler: vk::Sampler) -> Result<Self, VkError> {
+        let pipeline =
+            ctx.compute_pipeline("deferred_direct.comp", None, &[(0, u32::from(has_phong))])?;
+        Ok(Self { pipeline, sampler })
+    }
+
+    /// Declares the pass; returns the linear radiance it writes (RGBA32F).
+    pub fn declare(
+        &self,
+        g: &mut RenderGraph,
+        scene: &SceneInputs,
+        gbuffer: &Gbuffer,
+        shadow_maps: ImageHandle,
+        (w, h): (u32, u32),
+    ) -> ImageHandle {
+        let radiance = g.create_image(ImageDesc::new_2d("radiance", HDR, w, h));
+        let pipe = self.pipeline;
+        let (s, c) = (self.sampler, Shader::Compute);
+        // Without Phong materials the shader never reads its specular binding; albedo fills it.
+        let specular = gbuffer.specular.unwrap_or(gbuffer.albedo);
+        g.add_pass("deferred_direct")
+            .pipeline(&pipe)
+            .bind(0, scene.frame, Access::StorageRead(c))
+            .bind_sampled(1, gbuffer.albedo, s, c)
+            .bind_sampled(2, gbuffer.normal, s, c)
+            .bind_sampled(3, specular, s, c)
+            .bind_sampled(4, gbuffer.depth, s, c)
+            .bind_sampled(5, shadow_maps, s, c)
+            .bind(6, radiance, Access::StorageWrite(c))
+            .record(move |ctx| {
+                ctx.bind(&pipe);
+                ctx.cmd.dispatch(w.div_ceil(8), h.div_ceil(8), 1);
+            });
+        radiance
+    }
+
+    pub fn destroy(self, ctx: &Context) {
+        ctx.destroy_compute_pipeline(self.pipeline);
+    }
+}

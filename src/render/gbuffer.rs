@@ -1,0 +1,160 @@
+//! `gbuffer`: albedo, normal, (Phong scenes) specular and depth of the camera view
+//! (`glsl/gbuffer.{vert,frag}`). Textures and bump maps are pushed per draw.
+
+use super::scene_gpu::{vertex_attributes, SceneInputs};
+use super::{DEPTH, GBUFFER_COLOR};
+use crate::graph::{Access, ImageHandle, Load, RenderGraph, Shader};
+use crate::vk::{
+    vk, Context, Descriptor, GraphicsPipeline, GraphicsPipelineDesc, ImageDesc, VkError,
+};
+
+/// Push constants of `gbuffer.vert`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GpuGbufferPush {
+    pub model: [f32; 16],
+    pub material: u32,
+    pub _pad: [u32; 3],
+}
+
+crate::push_constants!(GpuGbufferPush {
+    model,
+    material,
+    _pad
+});
+
+/// The G-buffer images of a frame.
+#[derive(Clone, Copy, Debug)]
+pub struct Gbuffer {
+    pub albedo: ImageHandle,
+    pub normal: ImageHandle,
+    /// Only in scenes with Phong materials.
+    pub specular: Option<ImageHandle>,
+    pub depth: ImageHandle,
+}
+
+pub struct GbufferPass {
+    pipeline: GraphicsPipeline,
+    has_phong: bool,
+}
+
+impl GbufferPass {
+    /// The specular target, texture sampling, bump mapping and dissolve are compiled in only
+    /// for scenes that have them (specialization constants).
+    pub fn new(
+        ctx: &Context,
+        has_phong: bool,
+        has_textures: bool,
+        has_bump: bool,
+        has_dissolve: bool,
+    ) -> Result<Self, VkError> {
+        let mut colors = vec![GBUFFER_COLOR, GBUFFER_COLOR];
+        if has_phong {
+            colors.push(GBUFFER_COLOR);
+        }
+        let pipeline = ctx.graphics_pipeline(&GraphicsPipelineDesc {
+            vertex: "gbuffer.vert".into(),
+            geometry: None,
+            fragment: "gbuffer.frag".into(),
+            push: crate::vk::PushLayout::of::<GpuGbufferPush>(),
+            vertex_stride: std::mem::size_of::<super::gpu::GpuVertex>() as u32,
+            vertex_attributes: vertex_attributes(),
+            topology: vk::PrimitiveTopology::TRIANGLE_LIST,
+            cull_mode: vk::CullModeFlags::NONE,
+            color_formats: colors,
+            depth_format: Some(DEPTH),
+            depth_test: true,
+            depth_write: true,
+            depth_bias: false,
+            logic_op: None,
+            spec: vec![
+                (0, u32::from(has_phong)),
+                (1, u32::from(has_textures)),
+                (2, u32::from(has_bump)),
+                (3, u32::from(has_dissolve)),
+            ],
+        })?;
+        Ok(Self {
+            pipeline,
+            has_phong,
+        })
+    }
+
+    pub fn declare(&self, g: &mut RenderGraph, scene: &SceneInputs, w: u32, h: u32) -> Gbuffer {
+        let out = Gbuffer {
+            albedo: g.create_image(ImageDesc::new_2d("gbuffer albedo", GBUFFER_COLOR, w, h)),
+            normal: g.create_image(ImageDesc::new_2d("gbuffer normal", GBUFFER_COLOR, w, h)),
+            specular: self.has_phong.then(|| {
+                g.create_image(ImageDesc::new_2d("gbuffer specular", GBUFFER_COLOR, w, h))
+            }),
+            depth: g.create_image(ImageDesc::new_2d("gbuffer depth", DEPTH, w, h)),
+        };
+        let pipe = self.pipeline;
+        let (vertices, indices) = (scene.vertices, scene.indices);
+        let draws = scene.draws.clone();
+        let textures = scene.textures.clone();
+        let placeholder = scene.placeholder();
+        let sampler = scene.texture_sampler;
+        let clear = Load::Clear([0.0; 4]);
+        let mut pass = g
+            .add_pass("gbuffer")
+            .pipeline(&pipe)
+            .bind(0, scene.frame, Access::StorageRead(Shader::Graphics))
+            .bind(1, scene.materials, Access::StorageRead(Shader::Fragment))
+            .bind_per_draw(2)
+            .bind_per_draw(3)
+            .read(vertices, Access::VertexBuffer)
+            .read(indices, Access::IndexBuffer)
+            .color(out.albedo, clear)
+            .color(out.normal, clear);
+        if let Some(spec) = out.specular {
+            pass = pass.color(spec, clear);
+        }
+        pass = pass.depth(out.depth, Load::ClearDepth(1.0));
+        for &t in &textures {
+            pass = pass.read(t, Access::Sampled(Shader::Fragment));
+        }
+        pass.record(move |ctx| {
+            ctx.begin_rendering();
+            let texture = |binding: u32, t: Option<usize>| Descriptor::SampledImage {
+                binding,
+                view: ctx
+                    .image(
+                        t.and_then(|i| textures.get(i).copied())
+                            .unwrap_or(placeholder),
+                    )
+                    .view,
+                sampler,
+            };
+            let mut descriptors = ctx.descriptors();
+            descriptors.extend([texture(2, None), texture(3, None)]);
+            ctx.cmd.bind(&pipe, &descriptors);
+            ctx.bind_vertex_buffer(vertices);
+            ctx.bind_index_buffer(indices);
+            if let Ok(lists) = draws.read() {
+                let mut bound = (None, None);
+                for d in &lists.camera {
+                    if (d.texture, d.bump) != bound {
+                        ctx.cmd
+                            .push_descriptors(&pipe, &[texture(2, d.texture), texture(3, d.bump)]);
+                        bound = (d.texture, d.bump);
+                    }
+                    let push = GpuGbufferPush {
+                        model: d.model.to_cols_array(),
+                        material: d.material,
+                        _pad: [0; 3],
+                    };
+                    ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
+                    ctx.cmd
+                        .draw_indexed(d.index_count, d.first_index, d.vertex_offset);
+                }
+            }
+            ctx.cmd.end_rendering();
+        });
+        out
+    }
+
+    pub fn destroy(self, ctx: &Context) {
+        ctx.destroy_graphics_pipeline(self.pipeline);
+    }
+}

@@ -1,0 +1,372 @@
+//! The scene on the GPU, shared by the frame's passes: one vertex and one index buffer, the
+//! materials, the textures, the per-slot frame constants, and the culled draw lists.
+//!
+//! [`SceneGpu::import`] brings these into a graph as [`SceneInputs`]: read-only resources the
+//! passes declare like any other, so the graph sees every use.
+
+use super::gpu::{GpuFrame, GpuMaterial, GpuVertex};
+use super::{textures, RenderError};
+use crate::graph::{Access, BufferHandle, ImageHandle, RenderGraph, Shader};
+use crate::scene::{Aabb, BumpKind, Scene};
+use crate::vk::{
+    vk, Buffer, BufferDesc, Cmd, Context, GraphicsPipeline, Image, MemoryLocation,
+    MAX_FRAMES_IN_FLIGHT,
+};
+use glam::{Mat4, Vec3};
+use std::sync::{Arc, RwLock};
+
+/// Meters of height per unit of a height (bump) map, times the MTL `-bm` multiplier: MTL has
+/// no unit for heights.
+const BUMP_SCALE_M: f32 = 0.01;
+
+/// One indexed draw of a submesh of an object.
+#[derive(Clone, Copy, Debug)]
+pub struct Draw {
+    pub first_index: u32,
+    pub index_count: u32,
+    pub vertex_offset: i32,
+    pub material: u32,
+    /// Index into the scene's textures (the albedo map of the material).
+    pub texture: Option<usize>,
+    /// Index into the scene's textures of the material's bump or normal map.
+    pub bump: Option<usize>,
+    /// The object drawn (its transform and, for OBJ sequences, its frame follow the scene
+    /// time), the submesh, and the mesh's local box.
+    pub object: usize,
+    pub submesh: usize,
+    pub local_aabb: Aabb,
+    pub model: Mat4,
+    pub aabb: Aabb,
+}
+
+/// Draw lists after culling, read by the recording closures.
+#[derive(Clone, Debug, Default)]
+pub struct DrawLists {
+    pub camera: Vec<Draw>,
+    /// Per shadow view.
+    pub shadow: Vec<Vec<Draw>>,
+}
+
+/// The scene's GPU resources.
+pub struct SceneGpu {
+    vertices: Buffer,
+    indices: Buffer,
+    materials: Buffer,
+    /// `MAX_FRAMES_IN_FLIGHT` copies of `GpuFrame`, `frame_stride` bytes apart.
+    frame: Buffer,
+    frame_stride: u64,
+    /// Textures of the scene (a placeholder where a texture is unused), then a 1x1 white
+    /// placeholder (always last).
+    textures: Vec<Image>,
+    texture_sampler: vk::Sampler,
+    pub draws: Arc<RwLock<DrawLists>>,
+    pub all_draws: Vec<Draw>,
+    /// Vertex and index offsets of every mesh in the shared buffers.
+    mesh_base: Vec<(i32, u32)>,
+}
+
+/// The scene's resources imported into one graph.
+#[derive(Clone)]
+pub struct SceneInputs {
+    /// Frame constants (`GpuFrame`), one window per frame slot.
+    pub frame: BufferHandle,
+    pub vertices: BufferHandle,
+    pub indices: BufferHandle,
+    pub materials: BufferHandle,
+    /// The scene's textures, the placeholder last.
+    pub textures: Vec<ImageHandle>,
+    pub texture_sampler: vk::Sampler,
+    pub draws: Arc<RwLock<DrawLists>>,
+    /// Raw handles for the passes not yet declared through bindings (GI, voxels).
+    pub frame_raw: vk::Buffer,
+    pub frame_stride: u64,
+    pub materials_raw: vk::Buffer,
+}
+
+impl SceneInputs {
+    /// The placeholder texture's handle (bound where a draw has no map).
+    pub fn placeholder(&self) -> ImageHandle {
+        self.textures[self.textures.len() - 1]
+    }
+}
+
+impl SceneGpu {
+    pub fn new(ctx: &Context, scene: &Scene, time_s: f32) -> Result<Self, RenderError> {
+        let geometry = upload_geometry(ctx, scene, time_s)?;
+        let materials: Vec<GpuMaterial> = scene
+            .materials
+            .iter()
+            .map(|m| GpuMaterial {
+                albedo: [m.albedo.x, m.albedo.y, m.albedo.z, m.opacity],
+                specular: [m.specular.x, m.specular.y, m.specular.z, m.shininess],
+                flags: [
+                    u32::from(m.albedo_texture.is_some()),
+                    match (m.bump_texture, m.bump_kind) {
+                        (None, _) => 0,
+                        (Some(_), BumpKind::Height) => 1,
+                        (Some(_), BumpKind::TangentNormal) => 2,
+                    },
+                    (BUMP_SCALE_M * m.bump_scale).to_bits(),
+                    0,
+                ],
+            })
+            .collect();
+        let materials = ctx.upload_buffer(
+            "materials",
+            bytemuck::cast_slice(&materials),
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+        )?;
+        let frame_stride = (std::mem::size_of::<GpuFrame>() as u64).next_multiple_of(256);
+        let frame = ctx.create_buffer(&BufferDesc {
+            name: "frame constants".into(),
+            size_bytes: frame_stride * MAX_FRAMES_IN_FLIGHT as u64,
+            usage: vk::BufferUsageFlags::STORAGE_BUFFER,
+            location: MemoryLocation::CpuToGpu,
+        })?;
+        let mut textures = Vec::new();
+        for (i, t) in scene.textures.iter().enumerate() {
+            let used = scene
+                .materials
+                .iter()
+                .any(|m| m.albedo_texture == Some(i) || m.bump_texture == Some(i));
+            textures.push(if used {
+                textures::upload_texture(ctx, t, &format!("texture {}", t.path.display()))?
+            } else {
+                textures::upload_texture(ctx, &placeholder_texture(), "unused texture slot")?
+            });
+        }
+        textures.push(textures::upload_texture(
+            ctx,
+            &placeholder_texture(),
+            "texture placeholder",
+        )?);
+        let texture_sampler = ctx.create_sampler(vk::Filter::LINEAR, true)?;
+        Ok(Self {
+            vertices: geometry.vertices,
+            indices: geometry.indices,
+            materials,
+            frame,
+            frame_stride,
+            textures,
+            texture_sampler,
+            draws: Arc::new(RwLock::new(DrawLists::default())),
+            all_draws: geometry.draws,
+            mesh_base: geometry.mesh_base,
+        })
+    }
+
+    /// Imports the scene's resources into `g`.
+    pub fn import(&self, g: &mut RenderGraph) -> SceneInputs {
+        SceneInputs {
+            frame: g.import_buffer_per_slot(
+                &self.frame,
+                self.frame_stride,
+                std::mem::size_of::<GpuFrame>() as u64,
+                Access::StorageRead(Shader::Compute),
+            ),
+            vertices: g.import_buffer(&self.vertices, Access::VertexBuffer),
+            indices: g.import_buffer(&self.indices, Access::IndexBuffer),
+            materials: g.import_buffer(&self.materials, Access::StorageRead(Shader::Compute)),
+            textures: self
+                .textures
+                .iter()
+                .map(|t| g.import_image(t, Access::Sampled(Shader::Fragment)))
+                .collect(),
+            texture_sampler: self.texture_sampler,
+            draws: self.draws.clone(),
+            frame_raw: self.frame.raw,
+            frame_stride: self.frame_stride,
+            materials_raw: self.materials.raw,
+        }
+    }
+
+    /// Moves animated objects to the scene time `time_s` (keyframes move them, OBJ sequences
+    /// switch to the frame's mesh; frames share topology, so only the buffer offsets change),
+    /// then culls the draw lists against the camera and each shadow view.
+    pub fn update_draws(
+        &mut self,
+        scene: &Scene,
+        time_s: f32,
+        view_proj: &Mat4,
+        shadow_views: &[crate::light::ShadowView],
+    ) {
+        for d in &mut self.all_draws {
+            let Some(o) = scene.objects.get(d.object).filter(|o| o.is_animated()) else {
+                continue;
+            };
+            let mesh_index = o.mesh_at(time_s);
+            if let (Some(mesh), Some(&(vbase, ibase))) =
+                (scene.meshes.get(mesh_index), self.mesh_base.get(mesh_index))
+            {
+                if let Some(sub) = mesh.submeshes.get(d.submesh) {
+                    d.first_index = ibase + sub.first_index;
+                    d.index_count = sub.index_count;
+                    d.vertex_offset = vbase;
+                    d.local_aabb = mesh.aabb;
+                }
+            }
+            d.model = o.transform_at(time_s);
+            d.aabb = d.local_aabb.transformed(&d.model);
+        }
+        let lists = DrawLists {
+            camera: self
+                .all_draws
+                .iter()
+                .copied()
+                .filter(|d| super::aabb_visible(view_proj, &d.aabb))
+                .collect(),
+            shadow: shadow_views
+                .iter()
+                .map(|v| {
+                    self.all_draws
+                        .iter()
+                        .copied()
+                        .filter(|d| v.may_see(&d.aabb))
+                        .collect()
+                })
+                .collect(),
+        };
+        if let Ok(mut d) = self.draws.write() {
+            *d = lists;
+        }
+    }
+
+    /// Writes the frame constants of frame slot `slot` (after the slot's fence).
+    pub fn write_frame(&mut self, slot: usize, frame: &GpuFrame) {
+        let offset = (slot as u64 * self.frame_stride) as usize;
+        let bytes = bytemuck::bytes_of(frame);
+        if let Some(m) = self.frame.mapped_mut() {
+            m[offset..offset + bytes.len()].copy_from_slice(bytes);
+        }
+    }
+
+    pub fn destroy(self, ctx: &Context) {
+        ctx.destroy_sampler(self.texture_sampler);
+        for t in self.textures {
+            ctx.destroy_image(t);
+        }
+        for b in [self.vertices, self.indices, self.materials, self.frame] {
+            ctx.destroy_buffer(b);
+        }
+    }
+}
+
+/// Draws every shadow view's draw list with `pipe` (bound with its buffers), the push
+/// constants of draw `d` in view `v` from `push(d, v)`: the shadow-depth and light-map passes.
+pub fn draw_shadow_views<P: bytemuck::Pod>(
+    cmd: &Cmd,
+    pipe: &GraphicsPipeline,
+    draws: &RwLock<DrawLists>,
+    push: impl Fn(&Draw, u32) -> P,
+) {
+    let Ok(lists) = draws.read() else {
+        return;
+    };
+    for (v, list) in lists.shadow.iter().enumerate() {
+        for d in list {
+            cmd.push_constants(pipe, bytemuck::bytes_of(&push(d, v as u32)));
+            cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset);
+        }
+    }
+}
+
+/// The vertex layout every mesh pass reads: position, normal, uv.
+pub fn vertex_attributes() -> Vec<(vk::Format, u32)> {
+    vec![
+        (vk::Format::R32G32B32_SFLOAT, 0),
+        (vk::Format::R32G32B32_SFLOAT, 12),
+        (vk::Format::R32G32_SFLOAT, 24),
+    ]
+}
+
+/// A 1x1 white texture bound where a draw has no albedo map.
+fn placeholder_texture() -> crate::scene::TextureData {
+    crate::scene::TextureData {
+        path: "placeholder".into(),
+        width: 1,
+        height: 1,
+        rgba8: vec![255; 4],
+        srgb: true,
+    }
+}
+
+/// The scene's meshes on the GPU: one vertex and one index buffer, a draw per submesh of each
+/// object, and each mesh's offsets in the buffers.
+struct Geometry {
+    vertices: Buffer,
+    indices: Buffer,
+    draws: Vec<Draw>,
+    mesh_base: Vec<(i32, u32)>,
+}
+
+/// Uploads every mesh into one vertex and one index buffer; one draw per submesh of each
+/// object at time `t_s`.
+fn upload_geometry(ctx: &Context, scene: &Scene, t_s: f32) -> Result<Geometry, RenderError> {
+    let mut vertices: Vec<GpuVertex> = Vec::new();
+    let mut indices: Vec<u32> = Vec::new();
+    let mut mesh_base = Vec::with_capacity(scene.meshes.len());
+    for mesh in &scene.meshes {
+        mesh_base.push((vertices.len() as i32, indices.len() as u32));
+        for (i, p) in mesh.positions.iter().enumerate() {
+            let n = mesh.normals.get(i).copied().unwrap_or(Vec3::Y);
+            let uv = mesh
+                .uvs
+                .as_ref()
+                .and_then(|u| u.get(i).copied())
+                .unwrap_or_default();
+            vertices.push(GpuVertex {
+                position: p.to_array(),
+                normal: n.to_array(),
+                uv: uv.to_array(),
+            });
+        }
+        indices.extend_from_slice(&mesh.indices);
+    }
+    if vertices.is_empty() || indices.is_empty() {
+        return Err(RenderError::EmptyScene);
+    }
+    let mut draws = Vec::new();
+    for (object_index, object) in scene.objects.iter().enumerate() {
+        let mesh_index = object.mesh_at(t_s);
+        let Some(mesh) = scene.meshes.get(mesh_index) else {
+            continue;
+        };
+        let (vbase, ibase) = mesh_base[mesh_index];
+        let model = object.transform_at(t_s);
+        let aabb = mesh.aabb.transformed(&model);
+        for (si, sub) in mesh.submeshes.iter().enumerate() {
+            let material = object.materials.get(si).copied().unwrap_or(sub.material);
+            let texture = scene.materials.get(material).and_then(|m| m.albedo_texture);
+            let bump = scene.materials.get(material).and_then(|m| m.bump_texture);
+            draws.push(Draw {
+                first_index: ibase + sub.first_index,
+                index_count: sub.index_count,
+                vertex_offset: vbase,
+                material: material as u32,
+                texture,
+                bump,
+                object: object_index,
+                submesh: si,
+                local_aabb: mesh.aabb,
+                model,
+                aabb,
+            });
+        }
+    }
+    let vertices = ctx.upload_buffer(
+        "vertices",
+        bytemuck::cast_slice(&vertices),
+        vk::BufferUsageFlags::VERTEX_BUFFER,
+    )?;
+    let indices = ctx.upload_buffer(
+        "indices",
+        bytemuck::cast_slice(&indices),
+        vk::BufferUsageFlags::INDEX_BUFFER,
+    )?;
+    Ok(Geometry {
+        vertices,
+        indices,
+        draws,
+        mesh_base,
+    })
+}
