@@ -1,5 +1,5 @@
 //! voxgi: a Vulkan-native real-time global-illumination renderer (voxel GI after Thiedemann
-//! 2010, on a render graph after Oetke 2017). See DESIGN.md for the architecture map.
+//! 2010, on a render graph after Oetke 2017). `docs/ARCHITECTURE.md` is the map of the code.
 //!
 //! `vk` is the only module that calls Vulkan; `graph` derives every barrier; the remaining
 //! modules are safe Rust.
