@@ -11,11 +11,11 @@ use anyhow::Result;
 use glam::Vec3;
 use std::path::Path;
 use std::time::Instant;
+use voxgi::bench::tessellated_cube;
 use voxgi::graph::RenderGraph;
 use voxgi::scene::Scene;
 use voxgi::vk::{Context, ContextDesc};
 use voxgi::voxel::atlas::{build_atlas, texel_size_for_voxel, AtlasCache};
-use voxgi::voxel::bench::tessellated_cube;
 use voxgi::voxel::gpu::{
     add_voxelize_passes, column_bytes, run_once, ColumnBase, TriangleBuffer, VoxelPipelines,
 };

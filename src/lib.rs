@@ -8,6 +8,8 @@
 
 #[forbid(unsafe_code)]
 pub mod app;
+#[forbid(unsafe_code)]
+pub mod bench;
 pub mod demo;
 #[forbid(unsafe_code)]
 pub mod eval;

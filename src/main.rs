@@ -475,7 +475,7 @@ fn run(cli: Cli) -> Result<()> {
         }) => {
             let scene = load_scene_arg(scene.as_deref())?;
             let ctx = context(cli.validate, cli.device)?;
-            let desc = voxgi::voxel::bench::TraverseBenchDesc {
+            let desc = voxgi::bench::TraverseBenchDesc {
                 resolution,
                 gbuffer_size: gbuffer,
                 rays_per_point: rays,
@@ -485,7 +485,7 @@ fn run(cli: Cli) -> Result<()> {
                 },
                 ..Default::default()
             };
-            let report = voxgi::voxel::bench::bench_traverse(&ctx, &scene, &desc)?;
+            let report = voxgi::bench::bench_traverse(&ctx, &scene, &desc)?;
             if json {
                 outln!("{}", serde_json::to_string_pretty(&report)?);
             } else {
@@ -502,12 +502,12 @@ fn run(cli: Cli) -> Result<()> {
         }) => {
             let scene = load_scene_arg(scene.as_deref())?;
             let ctx = context(cli.validate, cli.device)?;
-            let desc = voxgi::voxel::bench::VoxelizeBenchDesc {
+            let desc = voxgi::bench::VoxelizeBenchDesc {
                 resolution,
                 layers,
                 repeats,
             };
-            let report = voxgi::voxel::bench::bench_voxelize_atlas(&ctx, &scene, &desc)?;
+            let report = voxgi::bench::bench_voxelize_atlas(&ctx, &scene, &desc)?;
             if json {
                 println!("{}", serde_json::to_string_pretty(&report)?);
             } else {
@@ -521,12 +521,12 @@ fn run(cli: Cli) -> Result<()> {
             json,
         }) => {
             let ctx = context(cli.validate, cli.device)?;
-            let desc = voxgi::voxel::bench::VoxelizeSweepDesc {
+            let desc = voxgi::bench::VoxelizeSweepDesc {
                 resolutions,
                 reps,
                 ..Default::default()
             };
-            let report = voxgi::voxel::bench::bench_voxelize_sweep(&ctx, &desc)?;
+            let report = voxgi::bench::bench_voxelize_sweep(&ctx, &desc)?;
             if json {
                 outln!("{}", serde_json::to_string_pretty(&report)?);
             } else {
