@@ -14,6 +14,7 @@ use std::time::Instant;
 use voxgi::bench::tessellated_cube;
 use voxgi::graph::RenderGraph;
 use voxgi::scene::Scene;
+use voxgi::stats::median;
 use voxgi::vk::{Context, ContextDesc};
 use voxgi::voxel::atlas::{build_atlas, texel_size_for_voxel, AtlasCache};
 use voxgi::voxel::gpu::{
@@ -23,11 +24,6 @@ use voxgi::voxel::gpu_atlas::{
     add_voxelize_atlas_pass, render_atlas_points, AtlasInstance, AtlasPipelines, AtlasScene,
 };
 use voxgi::voxel::VoxelGrid;
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
-}
 
 /// Median GPU ms of pass `name` over `reps` runs of the graph `build` declares.
 fn time_pass(
@@ -43,7 +39,7 @@ fn time_pass(
         let t = run_once(ctx, g)?;
         ms.push(t.iter().filter(|p| p.name == name).map(|p| p.gpu_ms).sum());
     }
-    Ok(median(ms))
+    Ok(median(&ms))
 }
 
 fn main() -> Result<()> {

@@ -27,6 +27,8 @@ pub mod profile;
 pub mod render;
 #[forbid(unsafe_code)]
 pub mod scene;
+#[forbid(unsafe_code)]
+pub mod stats;
 pub mod vk;
 #[forbid(unsafe_code)]
 pub mod voxel;

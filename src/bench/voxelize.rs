@@ -10,6 +10,7 @@ use super::scenes::{bench_scenes, tessellated_cube};
 use super::BenchError;
 use crate::graph::{Access, BufferHandle, RenderGraph};
 use crate::scene::Scene;
+use crate::stats::median;
 use crate::vk::{vk, BufferDesc, Context, ImageDesc, MemoryLocation};
 use crate::voxel::atlas::{build_atlas, texel_size_for_voxel, AtlasCache};
 use crate::voxel::gpu::{
@@ -51,11 +52,6 @@ pub struct VoxelizeBenchReport {
     pub voxels: u64,
     /// 32-bit column words in which the two passes differ (0: the same bits).
     pub differing_words: usize,
-}
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(|a, b| a.total_cmp(b));
-    v.get(v.len() / 2).copied().unwrap_or(0.0)
 }
 
 fn pass_ms(timings: &[crate::vk::PassTiming], name: &str) -> f64 {
@@ -170,7 +166,7 @@ pub fn bench_voxelize_atlas_chunked(
         let (a, b) = (words(&buffers[0]), words(&buffers[1]));
         let differing_words =
             a.iter().zip(&b).filter(|(x, y)| x != y).count() + a.len().abs_diff(b.len());
-        let (compute_ms, raster_ms) = (median(compute_ms), median(raster_ms));
+        let (compute_ms, raster_ms) = (median(&compute_ms), median(&raster_ms));
         let ext = grid.extent_voxels();
         Ok(VoxelizeBenchReport {
             device: ctx.info.name.clone(),
@@ -275,13 +271,6 @@ pub struct VoxelizeSweepReport {
     pub rows: Vec<VoxelizeSweepRow>,
 }
 
-/// Median of the finite values; 0 when none.
-fn median_ms(mut v: Vec<f64>) -> f64 {
-    v.retain(|x| x.is_finite());
-    v.sort_by(f64::total_cmp);
-    v.get(v.len() / 2).copied().unwrap_or(0.0)
-}
-
 /// Median GPU ms of the passes named `name` over `reps` one-time runs of what `build`
 /// declares.
 fn time_pass(
@@ -297,7 +286,7 @@ fn time_pass(
         let t = run_once(ctx, g)?;
         ms.push(t.iter().filter(|p| p.name == name).map(|p| p.gpu_ms).sum());
     }
-    Ok(median_ms(ms))
+    Ok(median(&ms))
 }
 
 /// Voxels the triangle voxelizer sets for `triangles` in `grid` (a read-back popcount).
