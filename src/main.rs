@@ -392,9 +392,7 @@ impl FrameArgs {
                 voxelizer: self.voxelizer,
             });
         let object = match self.debug {
-            Some(voxgi::voxel::debug_view::DebugView::Atlas) => {
-                voxgi::voxel::atlas_view::find_object(scene, &self.object)?
-            }
+            Some(voxgi::voxel::debug_view::DebugView::Atlas) => scene.find_object(&self.object)?,
             _ => 0,
         };
         s.debug = self
@@ -556,7 +554,7 @@ fn run(cli: Cli) -> Result<()> {
             let scene = load_scene_arg(scene.as_deref())?;
             // Checked when the viewer starts in the atlas view; the panel may switch to it
             // later, then showing this object if it exists, else the first.
-            let object = match voxgi::voxel::atlas_view::find_object(&scene, &object) {
+            let object = match scene.find_object(&object) {
                 Ok(i) => i,
                 Err(e) if debug == Some(voxgi::voxel::debug_view::DebugView::Atlas) => {
                     return Err(e.into())

@@ -115,8 +115,8 @@ pub enum GpuVoxelError {
     TooManyAtlasTriangles { mesh_triangles: usize, max: usize },
     #[error("debug level {level} does not exist: the voxel grid has levels 0..={max}; pass a smaller --debug-level")]
     BadDebugLevel { level: u32, max: u32 },
-    #[error("the scene has no object '{object}'; pass --object with one of: {names}")]
-    NoSuchObject { object: String, names: String },
+    #[error(transparent)]
+    NoSuchObject(#[from] crate::scene::NoSuchObject),
     #[error("object '{object}' has no atlas: its OBJ-sequence frames differ in topology, so the atlas voxelizer leaves it to the triangle voxelizer; pick another --object")]
     NoAtlas { object: String },
     #[error("one {width}-texel atlas row needs {bytes} bytes of point scratch, above the {max}-byte point-list chunk; use fewer voxels (--voxels) or --voxelizer triangle")]
