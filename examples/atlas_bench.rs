@@ -12,13 +12,14 @@ use glam::Vec3;
 use std::path::Path;
 use std::time::Instant;
 use voxgi::bench::tessellated_cube;
+use voxgi::graph::run_once;
 use voxgi::graph::RenderGraph;
 use voxgi::scene::Scene;
 use voxgi::stats::median;
 use voxgi::vk::{Context, ContextDesc};
 use voxgi::voxel::atlas::{build_atlas, texel_size_for_voxel, AtlasCache};
 use voxgi::voxel::gpu::{
-    add_voxelize_passes, column_bytes, run_once, ColumnBase, TriangleBuffer, VoxelPipelines,
+    add_voxelize_passes, column_bytes, ColumnBase, TriangleBuffer, VoxelPipelines,
 };
 use voxgi::voxel::gpu_atlas::{
     add_voxelize_atlas_pass, render_atlas_points, AtlasInstance, AtlasPipelines, AtlasScene,

@@ -7,13 +7,14 @@
 use anyhow::Result;
 use glam::Vec3;
 use std::path::Path;
+use voxgi::graph::run_once;
 use voxgi::graph::RenderGraph;
 use voxgi::scene::Scene;
 use voxgi::stats::median;
 use voxgi::vk::{Context, ContextDesc};
 use voxgi::voxel::gpu::{
-    add_store_and_mip_passes, add_voxelize_passes, column_bytes, run_once, scene_triangles,
-    ColumnBase, GpuVoxelGrid, TriangleBuffer, VoxelPipelines, VOXELIZE_GROUP_SIZE,
+    add_store_and_mip_passes, add_voxelize_passes, column_bytes, scene_triangles, ColumnBase,
+    GpuVoxelGrid, TriangleBuffer, VoxelPipelines, VOXELIZE_GROUP_SIZE,
 };
 use voxgi::voxel::VoxelGrid;
 

@@ -19,12 +19,12 @@ mod common;
 
 use glam::Vec3;
 use std::path::Path;
+use voxgi::graph::{readback_buffer, run_once};
 use voxgi::graph::{Access, RenderGraph};
 use voxgi::vk::Context;
 use voxgi::voxel::atlas::AtlasCache;
 use voxgi::voxel::gpu::{
-    add_voxelize_passes, column_bytes, image_extent, readback_buffer, run_once, scene_triangles,
-    ColumnBase, VoxelPipelines,
+    add_voxelize_passes, column_bytes, image_extent, scene_triangles, ColumnBase, VoxelPipelines,
 };
 use voxgi::voxel::gpu_atlas::{device_chunk_bytes, AtlasScene};
 use voxgi::voxel::voxelize::voxelize_triangles;

@@ -38,6 +38,8 @@ pub enum BenchError {
     #[error(transparent)]
     Vk(#[from] crate::vk::VkError),
     #[error(transparent)]
+    Run(#[from] crate::graph::OneShotError),
+    #[error(transparent)]
     GpuVoxel(#[from] GpuVoxelError),
     #[error("the camera sees no geometry: nothing to cast rays from")]
     NoSurface,

@@ -8,14 +8,14 @@
 
 use super::scenes::{bench_scenes, tessellated_cube};
 use super::BenchError;
-use crate::graph::{Access, BufferHandle, RenderGraph};
+use crate::graph::{readback_buffer, run_once, Access, BufferHandle, RenderGraph};
 use crate::scene::Scene;
 use crate::stats::median;
 use crate::vk::{vk, BufferDesc, Context, ImageDesc, MemoryLocation};
 use crate::voxel::atlas::{build_atlas, texel_size_for_voxel, AtlasCache};
 use crate::voxel::gpu::{
-    add_voxelize_passes, column_bytes, image_extent, readback_buffer, run_once, scene_triangles,
-    ColumnBase, GpuVoxelError, TriangleBuffer, VoxelPipelines, COLUMN_FORMAT, VOXELIZE_GROUP_SIZE,
+    add_voxelize_passes, column_bytes, image_extent, scene_triangles, ColumnBase, GpuVoxelError,
+    TriangleBuffer, VoxelPipelines, COLUMN_FORMAT, VOXELIZE_GROUP_SIZE,
 };
 use crate::voxel::gpu_atlas::{
     add_voxelize_atlas_pass, render_atlas_points, AtlasInstance, AtlasPipelines, AtlasScene,
