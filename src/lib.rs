@@ -10,6 +10,8 @@
 pub mod app;
 #[forbid(unsafe_code)]
 pub mod bench;
+#[forbid(unsafe_code)]
+pub mod cli;
 pub mod demo;
 #[forbid(unsafe_code)]
 pub mod eval;
