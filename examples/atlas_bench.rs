@@ -11,23 +11,20 @@ use anyhow::Result;
 use glam::Vec3;
 use std::path::Path;
 use std::time::Instant;
+use voxgi::bench::tessellated_cube;
+use voxgi::graph::run_once;
 use voxgi::graph::RenderGraph;
 use voxgi::scene::Scene;
+use voxgi::stats::median;
 use voxgi::vk::{Context, ContextDesc};
 use voxgi::voxel::atlas::{build_atlas, texel_size_for_voxel, AtlasCache};
-use voxgi::voxel::bench::tessellated_cube;
 use voxgi::voxel::gpu::{
-    add_voxelize_passes, column_bytes, run_once, ColumnBase, TriangleBuffer, VoxelPipelines,
+    add_voxelize_passes, column_bytes, ColumnBase, TriangleBuffer, VoxelPipelines,
 };
 use voxgi::voxel::gpu_atlas::{
     add_voxelize_atlas_pass, render_atlas_points, AtlasInstance, AtlasPipelines, AtlasScene,
 };
 use voxgi::voxel::VoxelGrid;
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
-}
 
 /// Median GPU ms of pass `name` over `reps` runs of the graph `build` declares.
 fn time_pass(
@@ -43,7 +40,7 @@ fn time_pass(
         let t = run_once(ctx, g)?;
         ms.push(t.iter().filter(|p| p.name == name).map(|p| p.gpu_ms).sum());
     }
-    Ok(median(ms))
+    Ok(median(&ms))
 }
 
 fn main() -> Result<()> {

@@ -7,19 +7,16 @@
 use anyhow::Result;
 use glam::Vec3;
 use std::path::Path;
+use voxgi::graph::run_once;
 use voxgi::graph::RenderGraph;
 use voxgi::scene::Scene;
+use voxgi::stats::median;
 use voxgi::vk::{Context, ContextDesc};
 use voxgi::voxel::gpu::{
-    add_store_and_mip_passes, add_voxelize_passes, column_bytes, run_once, scene_triangles,
-    ColumnBase, GpuVoxelGrid, TriangleBuffer, VoxelPipelines, VOXELIZE_GROUP_SIZE,
+    add_store_and_mip_passes, add_voxelize_passes, column_bytes, scene_triangles, ColumnBase,
+    GpuVoxelGrid, TriangleBuffer, VoxelPipelines, VOXELIZE_GROUP_SIZE,
 };
 use voxgi::voxel::VoxelGrid;
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
-}
 
 fn main() -> Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -81,9 +78,9 @@ fn main() -> Result<()> {
                     group,
                     format!("{res}²"),
                     tris.len(),
-                    median(vox),
-                    median(store),
-                    median(mips)
+                    median(&vox),
+                    median(&store),
+                    median(&mips)
                 );
                 voxels.destroy(&ctx);
             }

@@ -8,6 +8,10 @@
 
 #[forbid(unsafe_code)]
 pub mod app;
+#[forbid(unsafe_code)]
+pub mod bench;
+#[forbid(unsafe_code)]
+pub mod cli;
 pub mod demo;
 #[forbid(unsafe_code)]
 pub mod eval;
@@ -25,6 +29,8 @@ pub mod profile;
 pub mod render;
 #[forbid(unsafe_code)]
 pub mod scene;
+#[forbid(unsafe_code)]
+pub mod stats;
 pub mod vk;
 #[forbid(unsafe_code)]
 pub mod voxel;

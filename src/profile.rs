@@ -1,5 +1,6 @@
 //! Per-pass GPU timing statistics over many frames (median, min, max), as a table and JSON.
 
+use crate::stats::median;
 use crate::vk::PassTiming;
 use serde::Serialize;
 
@@ -36,21 +37,6 @@ pub struct ProfileReport {
     pub setup: Vec<SetupStats>,
     /// Free-form facts about the run (resolution, transient memory, culled passes...).
     pub notes: Vec<(String, String)>,
-}
-
-/// Median of a sample set (mean of the two middle values for even counts); 0 when empty.
-pub fn median(values: &[f64]) -> f64 {
-    let mut v: Vec<f64> = values.iter().copied().filter(|x| x.is_finite()).collect();
-    if v.is_empty() {
-        return 0.0;
-    }
-    v.sort_by(|a, b| a.total_cmp(b));
-    let n = v.len();
-    if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    }
 }
 
 impl ProfileReport {
@@ -164,14 +150,6 @@ mod tests {
             name: name.into(),
             gpu_ms: ms,
         }
-    }
-
-    #[test]
-    fn median_of_odd_and_even_sets() {
-        assert_eq!(median(&[3.0, 1.0, 2.0]), 2.0);
-        assert_eq!(median(&[4.0, 1.0, 2.0, 3.0]), 2.5);
-        assert_eq!(median(&[]), 0.0);
-        assert_eq!(median(&[f64::NAN, 1.0]), 1.0);
     }
 
     #[test]

@@ -19,12 +19,12 @@ mod common;
 
 use glam::Vec3;
 use std::path::Path;
+use voxgi::graph::{readback_buffer, run_once};
 use voxgi::graph::{Access, RenderGraph};
 use voxgi::vk::Context;
 use voxgi::voxel::atlas::AtlasCache;
 use voxgi::voxel::gpu::{
-    add_voxelize_passes, column_bytes, image_extent, readback_buffer, run_once, scene_triangles,
-    ColumnBase, VoxelPipelines,
+    add_voxelize_passes, column_bytes, image_extent, scene_triangles, ColumnBase, VoxelPipelines,
 };
 use voxgi::voxel::gpu_atlas::{device_chunk_bytes, AtlasScene};
 use voxgi::voxel::voxelize::voxelize_triangles;
@@ -314,7 +314,7 @@ fn chunked_point_lists_voxelize_like_whole_ones_on_the_cornell_box() {
 
     // The raster bit pass (`voxelize_atlas_bits`, a draw per chunk) against the compute
     // one, both chunked: with the equality above, it too matches the whole lists.
-    use voxgi::voxel::bench::{bench_voxelize_atlas_chunked, VoxelizeBenchDesc};
+    use voxgi::bench::{bench_voxelize_atlas_chunked, VoxelizeBenchDesc};
     let desc = VoxelizeBenchDesc {
         resolution: 128,
         layers: 1,
@@ -473,12 +473,12 @@ fn profile_lists_the_one_time_atlas_passes_apart_from_the_frame() {
 #[test]
 fn voxelize_bench_prints_every_scene_resolution_and_tessellation() {
     let ctx = common::context();
-    let desc = voxgi::voxel::bench::VoxelizeSweepDesc {
+    let desc = voxgi::bench::VoxelizeSweepDesc {
         reps: 1,
         resolutions: vec![16, 24],
         tessellations: vec![1, 4],
     };
-    let report = voxgi::voxel::bench::bench_voxelize_sweep(&ctx, &desc).expect("bench runs");
+    let report = voxgi::bench::bench_voxelize_sweep(&ctx, &desc).expect("bench runs");
     common::assert_no_validation_messages(&ctx);
     let names: Vec<(&str, u32)> = report
         .rows
@@ -507,8 +507,7 @@ fn voxelize_bench_prints_every_scene_resolution_and_tessellation() {
     let (c1, c16) = (&report.rows[6], &report.rows[7]);
     assert_eq!(c16.triangles, 16 * c1.triangles);
     assert_eq!(c1.voxels, c16.voxels);
-    let points =
-        |r: &voxgi::voxel::bench::VoxelizeSweepRow| r.atlas.as_ref().map_or(0, |a| a.points);
+    let points = |r: &voxgi::bench::VoxelizeSweepRow| r.atlas.as_ref().map_or(0, |a| a.points);
     let ratio = points(c16) as f64 / points(c1) as f64;
     assert!((0.8..1.25).contains(&ratio), "points 16x / 1x = {ratio}");
     let table = report.table();
@@ -771,7 +770,7 @@ fn atlas_volumes_follow_a_moving_object() {
 /// depth layers (`voxgi bench voxelize` runs the same comparison with timings).
 #[test]
 fn raster_atlas_bits_equal_compute_atlas_bits() {
-    use voxgi::voxel::bench::{bench_voxelize_atlas, VoxelizeBenchDesc};
+    use voxgi::bench::{bench_voxelize_atlas, VoxelizeBenchDesc};
     let ctx = common::context();
     for (path, layers) in [("cornell", 1), ("assets/scenes/cornell_bunny.toml", 2)] {
         let desc = VoxelizeBenchDesc {

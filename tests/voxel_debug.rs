@@ -14,7 +14,7 @@ use voxgi::eval::HdrImage;
 use voxgi::render::{render_image, RenderOutput, RenderSettings};
 use voxgi::scene::{builtin, Scene};
 use voxgi::voxel::atlas::AtlasCache;
-use voxgi::voxel::atlas_view::{find_object, object_atlas};
+use voxgi::voxel::atlas_view::object_atlas;
 use voxgi::voxel::debug_view::{debug_stats, DebugSettings, DebugView};
 use voxgi::voxel::gpu::{VoxelSettings, Voxelizer};
 
@@ -183,8 +183,8 @@ fn cornell_albedo_view_with(voxelizer: Voxelizer) {
 #[test]
 fn atlas_view_draws_exactly_the_cpu_atlas_valid_texels() {
     let scene = builtin("cornell").expect("cornell");
-    let object = find_object(&scene, "tall_block").expect("the tall block");
-    assert_eq!(find_object(&scene, &object.to_string()).ok(), Some(object));
+    let object = scene.find_object("tall_block").expect("the tall block");
+    assert_eq!(scene.find_object(&object.to_string()).ok(), Some(object));
     let grid = VoxelSettings::default()
         .grid_for(&scene, 0.0)
         .expect("grid");
@@ -265,16 +265,15 @@ fn atlas_view_draws_exactly_the_cpu_atlas_valid_texels() {
 #[test]
 fn atlas_view_names_the_objects_when_one_is_missing() {
     let scene = builtin("cornell").expect("cornell");
-    let err = find_object(&scene, "teapot").expect_err("no teapot in the box");
+    let err = scene
+        .find_object("teapot")
+        .expect_err("no teapot in the box");
     let msg = err.to_string();
     assert!(
         msg.contains("'tall_block'") && msg.contains("--object"),
         "{msg}"
     );
-    assert!(
-        find_object(&scene, "3").is_err(),
-        "3 objects: indices 0..=2"
-    );
+    assert!(scene.find_object("3").is_err(), "3 objects: indices 0..=2");
 }
 
 #[test]

@@ -6,11 +6,12 @@ mod common;
 
 use glam::Vec3;
 use std::path::Path;
+use voxgi::graph::run_once;
 use voxgi::graph::RenderGraph;
 use voxgi::vk::Context;
 use voxgi::voxel::gpu::{
-    add_store_and_mip_passes, add_voxelize_passes, column_bytes, run_once, scene_triangles,
-    voxelize_static, ColumnBase, GpuVoxelGrid, TriangleBuffer, VoxelPipelines, VOXELIZE_GROUP_SIZE,
+    add_store_and_mip_passes, add_voxelize_passes, column_bytes, scene_triangles, voxelize_static,
+    ColumnBase, GpuVoxelGrid, TriangleBuffer, VoxelPipelines, VOXELIZE_GROUP_SIZE,
 };
 use voxgi::voxel::voxelize::voxelize_triangles;
 use voxgi::voxel::{Axis, BitGrid, BitHierarchy, GridDesc, VoxelGrid};

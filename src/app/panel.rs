@@ -47,23 +47,14 @@ impl TimingStats {
         latest
             .iter()
             .map(|t| {
-                let mut v: Vec<f64> = self
+                let v: Vec<f64> = self
                     .frames
                     .iter()
                     .flat_map(|f| f.iter().filter(|p| p.name == t.name).map(|p| p.gpu_ms))
                     .collect();
-                v.sort_by(f64::total_cmp);
-                (t.name.clone(), median_sorted(&v))
+                (t.name.clone(), crate::stats::median(&v))
             })
             .collect()
-    }
-}
-
-fn median_sorted(v: &[f64]) -> f64 {
-    match v.len() {
-        0 => 0.0,
-        n if n % 2 == 1 => v[n / 2],
-        n => 0.5 * (v[n / 2 - 1] + v[n / 2]),
     }
 }
 
@@ -658,11 +649,5 @@ mod tests {
         assert_eq!(s.medians(), vec![("a".to_string(), 3.0)]);
         s.clear();
         assert!(s.medians().is_empty());
-    }
-
-    #[test]
-    fn even_count_median_averages() {
-        assert_eq!(median_sorted(&[1.0, 2.0, 4.0, 8.0]), 3.0);
-        assert_eq!(median_sorted(&[]), 0.0);
     }
 }

@@ -31,6 +31,7 @@ pub mod buddy;
 mod compile;
 mod dump;
 mod execute;
+mod oneshot;
 
 pub use access::{Access, AccessInfo, Shader, Subresource, SubresourceSel};
 pub use bind::Load;
@@ -39,6 +40,7 @@ pub use compile::{
     MemoryStats, Placement, ResourceDeclView,
 };
 pub use execute::{GpuBuffer, GpuImage, GraphExecutor, PassContext};
+pub use oneshot::{readback_buffer, run_once, OneShotError};
 
 use crate::vk::{vk, Bindable, Buffer, Image, ImageDesc, ShaderInterface};
 

@@ -103,6 +103,7 @@ mod material;
 mod mesh;
 mod obj;
 mod object;
+mod query;
 
 use std::path::{Path, PathBuf};
 
@@ -114,6 +115,7 @@ pub use light::{spot_falloff, Light};
 pub use material::{BumpKind, Material, TextureData};
 pub use mesh::{area_weighted_normals, Aabb, Mesh, SubMesh, BUILTIN_MESH_NAMES};
 pub use object::{rotation_from_euler_xyz_deg, Animation, Keyframe, Object, Transform};
+pub use query::NoSuchObject;
 
 /// A loaded, validated scene: everything finite, directions unit length, indices in range.
 #[derive(Clone, Debug)]

@@ -20,7 +20,7 @@ use super::gpu_atlas::{
 use super::VoxelGrid;
 use crate::eval::HdrImage;
 use crate::graph::{Access, ImageHandle, RenderGraph, Shader};
-use crate::scene::Scene;
+use crate::scene::{NoSuchObject, Scene};
 use crate::vk::{vk, Buffer, ComputePipeline, Context, Descriptor, VkError};
 use glam::Vec3;
 use std::sync::Arc;
@@ -56,31 +56,6 @@ pub fn atlas_zoom(atlas: (u32, u32), image: (u32, u32)) -> (u32, u32) {
     }
 }
 
-/// The index of the scene object that `selector` names: its name, or its index in the scene
-/// file's order.
-pub fn find_object(scene: &Scene, selector: &str) -> Result<usize, GpuVoxelError> {
-    if let Some(i) = scene.objects.iter().position(|o| o.name == selector) {
-        return Ok(i);
-    }
-    match selector.parse::<usize>() {
-        Ok(i) if i < scene.objects.len() => Ok(i),
-        _ => Err(GpuVoxelError::NoSuchObject {
-            object: selector.to_owned(),
-            names: object_names(scene),
-        }),
-    }
-}
-
-fn object_names(scene: &Scene) -> String {
-    let names: Vec<String> = scene
-        .objects
-        .iter()
-        .enumerate()
-        .map(|(i, o)| format!("{i} '{}'", o.name))
-        .collect();
-    names.join(", ")
-}
-
 /// The atlas of object `index` for voxels of `grid`, as the atlas voxelizer builds it.
 pub fn object_atlas(
     scene: &Scene,
@@ -92,10 +67,7 @@ pub fn object_atlas(
     let object = scene
         .objects
         .get(index)
-        .ok_or_else(|| GpuVoxelError::NoSuchObject {
-            object: index.to_string(),
-            names: object_names(scene),
-        })?;
+        .ok_or_else(|| NoSuchObject::new(scene, &index.to_string()))?;
     // One atlas for all frames of an OBJ sequence, as AtlasScene builds it.
     let no_atlas = || GpuVoxelError::NoAtlas {
         object: object.name.clone(),
@@ -143,10 +115,7 @@ impl AtlasViewPass {
                 .get(index)
                 .and_then(|o| scene.meshes.get(o.mesh_at(t_s))),
         ) else {
-            return Err(GpuVoxelError::NoSuchObject {
-                object: index.to_string(),
-                names: object_names(scene),
-            });
+            return Err(NoSuchObject::new(scene, &index.to_string()).into());
         };
         let tris = gpu_atlas_triangles(&atlas, &mesh.positions, &mesh.indices);
         let lo = mesh.positions.iter().fold(Vec3::INFINITY, |a, &p| a.min(p));

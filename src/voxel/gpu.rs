@@ -27,12 +27,13 @@
 use super::bits::mip_count;
 use super::{VoxelError, VoxelGrid};
 use crate::graph::{
-    Access, BufferHandle, GraphError, GraphExecutor, ImageHandle, RenderGraph, Shader, Subresource,
+    run_once, Access, BufferHandle, GraphError, ImageHandle, OneShotError, RenderGraph, Shader,
+    Subresource,
 };
 use crate::scene::Scene;
 use crate::vk::{
-    vk, Buffer, BufferDesc, ComputePipeline, Context, Descriptor, FrameLoop, Image, ImageDesc,
-    MemoryLocation, PassTiming, VkError, MAX_FRAMES_IN_FLIGHT,
+    vk, Buffer, BufferDesc, ComputePipeline, Context, Descriptor, Image, ImageDesc, MemoryLocation,
+    PassTiming, VkError, MAX_FRAMES_IN_FLIGHT,
 };
 use glam::Vec3;
 use std::sync::atomic::{AtomicBool, AtomicU32, AtomicU64, Ordering};
@@ -115,12 +116,21 @@ pub enum GpuVoxelError {
     TooManyAtlasTriangles { mesh_triangles: usize, max: usize },
     #[error("debug level {level} does not exist: the voxel grid has levels 0..={max}; pass a smaller --debug-level")]
     BadDebugLevel { level: u32, max: u32 },
-    #[error("the scene has no object '{object}'; pass --object with one of: {names}")]
-    NoSuchObject { object: String, names: String },
+    #[error(transparent)]
+    NoSuchObject(#[from] crate::scene::NoSuchObject),
     #[error("object '{object}' has no atlas: its OBJ-sequence frames differ in topology, so the atlas voxelizer leaves it to the triangle voxelizer; pick another --object")]
     NoAtlas { object: String },
     #[error("one {width}-texel atlas row needs {bytes} bytes of point scratch, above the {max}-byte point-list chunk; use fewer voxels (--voxels) or --voxelizer triangle")]
     AtlasRowTooLarge { width: u32, bytes: u64, max: u64 },
+}
+
+impl From<OneShotError> for GpuVoxelError {
+    fn from(e: OneShotError) -> Self {
+        match e {
+            OneShotError::Graph(e) => Self::Graph(e),
+            OneShotError::Vk(e) => Self::Vk(e),
+        }
+    }
 }
 
 /// One world-space triangle as the shader reads it (`struct Triangle` in
@@ -780,7 +790,7 @@ pub fn voxelize_static_timed(
         Ok(timings) => Ok((columns, timings)),
         Err(e) => {
             ctx.destroy_buffer(columns);
-            Err(e)
+            Err(e.into())
         }
     }
 }
@@ -1205,36 +1215,6 @@ impl VoxelFrame {
         self.voxels.destroy(ctx);
         self.pipelines.destroy(ctx);
     }
-}
-
-/// Runs a graph once, waits, and returns the timings of its passes.
-pub fn run_once(ctx: &Context, graph: RenderGraph) -> Result<Vec<PassTiming>, GpuVoxelError> {
-    let exec = GraphExecutor::new(ctx, graph, 1)?;
-    let result = (|| -> Result<Vec<PassTiming>, GpuVoxelError> {
-        let mut frames = FrameLoop::new(ctx, 1, exec.compiled().order.len() as u32)?;
-        let run = (|| -> Result<(), VkError> {
-            let (slot, cmd, ts, _) = frames.begin(ctx)?;
-            exec.record(&cmd, slot, ts);
-            frames.submit(ctx, &[], &[])
-        })();
-        let finished = frames.finish(ctx);
-        frames.destroy(ctx);
-        run?;
-        Ok(finished?.into_iter().last().unwrap_or_default())
-    })();
-    let _ = ctx.wait_idle();
-    exec.destroy(ctx);
-    result
-}
-
-/// A host-visible buffer for reading back GPU data.
-pub fn readback_buffer(ctx: &Context, name: &str, size_bytes: u64) -> Result<Buffer, VkError> {
-    ctx.create_buffer(&BufferDesc {
-        name: name.into(),
-        size_bytes,
-        usage: vk::BufferUsageFlags::TRANSFER_DST,
-        location: MemoryLocation::GpuToCpu,
-    })
 }
 
 #[cfg(test)]

@@ -33,9 +33,9 @@
 //! triangle voxelization ([`super::voxelize`]) up to f32 rounding at voxel boundaries.
 
 use super::atlas::{AtlasCache, MeshAtlas};
-use super::gpu::{image_extent, run_once, GpuVoxelError, SlotGate};
+use super::gpu::{image_extent, GpuVoxelError, SlotGate};
 use super::VoxelGrid;
-use crate::graph::{Access, BufferHandle, ImageHandle, RenderGraph, Shader};
+use crate::graph::{run_once, Access, BufferHandle, ImageHandle, RenderGraph, Shader};
 use crate::scene::{Animation, Scene};
 use crate::vk::{
     vk, Attachment, Buffer, BufferDesc, ComputePipeline, Context, Descriptor, GraphicsPipeline,
@@ -992,7 +992,7 @@ pub fn voxelize_static_atlas(
         Ok(timings) => Ok((columns, timings)),
         Err(e) => {
             ctx.destroy_buffer(columns);
-            Err(e)
+            Err(e.into())
         }
     }
 }

@@ -27,9 +27,10 @@
 //! frame that re-voxelizes splats only the dynamic objects into transient layers, and the
 //! resolve adds both. Nothing records while nothing moves (the voxel frame's [`SlotGate`]).
 
-use super::gpu::{run_once, GpuVoxelError, SlotGate};
+use super::gpu::{GpuVoxelError, SlotGate};
 use super::gpu_atlas::{import_chunks, AtlasScene, FrameAt, GpuAtlasVoxelizePush, ModelAt};
 use super::VoxelGrid;
+use crate::graph::run_once;
 use crate::graph::{Access, BufferHandle, ImageHandle, RenderGraph, Shader};
 use crate::scene::Scene;
 use crate::vk::{

@@ -44,7 +44,6 @@
 pub mod atlas;
 pub mod atlas_view;
 pub mod attributes;
-pub mod bench;
 pub mod bits;
 pub mod debug_view;
 pub mod gpu;

@@ -75,7 +75,7 @@ impl VoxelReadback {
             .iter()
             .enumerate()
             .map(|(l, &(lw, lh))| {
-                voxgi::voxel::gpu::readback_buffer(
+                voxgi::graph::readback_buffer(
                     ctx,
                     &format!("voxel readback {l}"),
                     u64::from(lw * lh * layers) * 16,

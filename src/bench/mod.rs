@@ -1,0 +1,50 @@
+//! Benchmarks, measured side by side in one GPU run and printed as ratios (not tests).
+//!
+//! - [`bench_traverse`] (`voxgi bench traverse`): the thesis's hierarchical ray test against
+//!   1-bit marching on the same rays (Thiedemann 2010, §9.3.1).
+//! - [`bench_voxelize_sweep`] (`voxgi bench voxelize-sweep`): voxelization time versus
+//!   resolution and scene, atlas against triangle voxelizer.
+//! - [`bench_voxelize_atlas`] (`voxgi bench voxelize`): the atlas voxelizer's compute and
+//!   raster bit passes on one scene.
+//! - [`bench_scenes`], [`dense_scene`], [`tessellated_cube`]: the generated scenes they run on.
+
+mod scenes;
+mod traverse;
+mod voxelize;
+
+pub use scenes::{bench_scenes, dense_scene, tessellated_cube, DENSE_BUNNIES_PER_AXIS};
+pub use traverse::{
+    bench_traverse, gbuffer_points, MethodResult, RadiusResult, TraverseBenchDesc,
+    TraverseBenchReport,
+};
+pub use voxelize::{
+    bench_voxelize_atlas, bench_voxelize_atlas_chunked, bench_voxelize_sweep, AtlasTimes,
+    VoxelizeBenchDesc, VoxelizeBenchReport, VoxelizeSweepDesc, VoxelizeSweepReport,
+    VoxelizeSweepRow,
+};
+
+use crate::scene::SceneError;
+use crate::voxel::atlas::AtlasError;
+use crate::voxel::gpu::GpuVoxelError;
+use crate::voxel::gpu_rays::RayCastError;
+use crate::voxel::VoxelError;
+
+#[derive(Debug, thiserror::Error)]
+pub enum BenchError {
+    #[error(transparent)]
+    Voxel(#[from] VoxelError),
+    #[error(transparent)]
+    Cast(#[from] RayCastError),
+    #[error(transparent)]
+    Vk(#[from] crate::vk::VkError),
+    #[error(transparent)]
+    Run(#[from] crate::graph::OneShotError),
+    #[error(transparent)]
+    GpuVoxel(#[from] GpuVoxelError),
+    #[error("the camera sees no geometry: nothing to cast rays from")]
+    NoSurface,
+    #[error(transparent)]
+    Atlas(#[from] AtlasError),
+    #[error(transparent)]
+    Scene(#[from] SceneError),
+}

@@ -1,0 +1,310 @@
+//! `voxgi bench traverse`: the thesis's speed comparison (§9.3.1, Fig. 44/45) measured side
+//! by side in one GPU run. Rays start at the camera-visible surface points of a scene (a
+//! G-buffer traced on the CPU), offset along the normal (§4.4), cosine-distributed around it,
+//! with a length limited by a radius. The hierarchical test and 1-bit marching cast the same
+//! rays.
+
+use super::BenchError;
+use crate::scene::Scene;
+use crate::vk::Context;
+use crate::voxel::gpu_rays::{GpuRay, RayMethod, VoxelRayCaster};
+use crate::voxel::{voxelize_scene, BitGrid, BitHierarchy, GridDesc, TraversalParams, VoxelGrid};
+use glam::Vec3;
+use serde::Serialize;
+
+/// Parameters of the benchmark.
+#[derive(Clone, Debug)]
+pub struct TraverseBenchDesc {
+    /// Voxel grid x/y resolution cap (depth 128).
+    pub resolution: u32,
+    /// G-buffer size (points = width × height, background excluded).
+    pub gbuffer_size: u32,
+    /// Rays per G-buffer point.
+    pub rays_per_point: u32,
+    /// Radii in units of the thesis's test box (≈ 6 units wide), scaled to the scene:
+    /// radius_m = r / 6 × the scene's largest extent.
+    pub radii_box_units: Vec<f32>,
+    /// Marching sample counts to try.
+    pub march_steps: Vec<u32>,
+    /// Normal offset, in voxel diagonals (thesis §4.4, k₁).
+    pub normal_offset_voxels: f32,
+    pub params: TraversalParams,
+}
+
+impl Default for TraverseBenchDesc {
+    fn default() -> Self {
+        Self {
+            resolution: 128,
+            gbuffer_size: 128,
+            rays_per_point: 16,
+            radii_box_units: vec![2.0, 4.0, 8.0],
+            march_steps: vec![8, 16, 32, 64, 128, 256, 512],
+            normal_offset_voxels: 1.0,
+            params: TraversalParams {
+                start_level: 1,
+                max_iterations: 1024,
+            },
+        }
+    }
+}
+
+/// One method at one radius.
+#[derive(Clone, Debug, Serialize)]
+pub struct MethodResult {
+    pub method: String,
+    pub gpu_ms: f64,
+    pub rays_per_s: f64,
+    pub mean_steps: f64,
+    /// Share of rays whose hit/miss agrees with the hierarchical test.
+    pub agreement: f64,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct RadiusResult {
+    pub radius_box_units: f32,
+    pub radius_m: f32,
+    pub rays: usize,
+    pub hit_fraction: f64,
+    pub methods: Vec<MethodResult>,
+    /// Fewest marching samples whose results agree with the hierarchical test on ≥ 99% of
+    /// rays, if any tried count does.
+    pub march_steps_for_99: Option<u32>,
+    /// GPU time of that marching run divided by the hierarchical test's.
+    pub speedup_at_99: Option<f64>,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct TraverseBenchReport {
+    pub device: String,
+    pub grid: [u32; 3],
+    pub points: usize,
+    pub radii: Vec<RadiusResult>,
+}
+
+/// World-space triangles of the scene at time 0.
+fn triangles(scene: &Scene) -> Vec<[Vec3; 3]> {
+    let mut out = Vec::new();
+    for o in &scene.objects {
+        let Some(mesh) = scene.meshes.get(o.mesh_at(0.0)) else {
+            continue;
+        };
+        let m = o.transform_at(0.0);
+        for t in mesh.indices.chunks_exact(3) {
+            let p = |i: u32| m.transform_point3(mesh.positions[i as usize]);
+            out.push([p(t[0]), p(t[1]), p(t[2])]);
+        }
+    }
+    out
+}
+
+/// Möller–Trumbore: distance along a unit ray to the triangle, if hit in front.
+fn intersect(o: Vec3, d: Vec3, t: &[Vec3; 3]) -> Option<f32> {
+    let (e1, e2) = (t[1] - t[0], t[2] - t[0]);
+    let p = d.cross(e2);
+    let det = e1.dot(p);
+    if det.abs() < 1e-12 {
+        return None;
+    }
+    let inv = 1.0 / det;
+    let s = o - t[0];
+    let u = s.dot(p) * inv;
+    let q = s.cross(e1);
+    let v = d.dot(q) * inv;
+    let dist = e2.dot(q) * inv;
+    (u >= 0.0 && v >= 0.0 && u + v <= 1.0 && dist > 1e-6).then_some(dist)
+}
+
+/// Camera-visible surface points and normals (facing the camera): a CPU-traced G-buffer.
+pub fn gbuffer_points(scene: &Scene, size: u32) -> Vec<(Vec3, Vec3)> {
+    let tris = triangles(scene);
+    let inv = scene.camera.view_proj(1.0).inverse();
+    let mut out = Vec::new();
+    for y in 0..size {
+        for x in 0..size {
+            let ndc = |z: f32| {
+                let p = inv
+                    * glam::Vec4::new(
+                        (x as f32 + 0.5) / size as f32 * 2.0 - 1.0,
+                        (y as f32 + 0.5) / size as f32 * 2.0 - 1.0,
+                        z,
+                        1.0,
+                    );
+                p.truncate() / p.w
+            };
+            let o = scene.camera.position;
+            let d = (ndc(1.0) - ndc(0.0)).normalize();
+            let mut best: Option<(f32, usize)> = None;
+            for (i, t) in tris.iter().enumerate() {
+                if let Some(dist) = intersect(o, d, t) {
+                    if best.map_or(true, |(b, _)| dist < b) {
+                        best = Some((dist, i));
+                    }
+                }
+            }
+            if let Some((dist, i)) = best {
+                let t = &tris[i];
+                let mut n = (t[1] - t[0]).cross(t[2] - t[0]).normalize_or_zero();
+                if n.dot(d) > 0.0 {
+                    n = -n;
+                }
+                out.push((o + d * dist, n));
+            }
+        }
+    }
+    out
+}
+
+/// Cosine-distributed direction around `n` from two uniform numbers (Malley's method).
+fn cosine_dir(n: Vec3, u1: f32, u2: f32) -> Vec3 {
+    let r = u1.sqrt();
+    let phi = std::f32::consts::TAU * u2;
+    let local = Vec3::new(r * phi.cos(), r * phi.sin(), (1.0 - u1).max(0.0).sqrt());
+    let t = if n.x.abs() > 0.9 { Vec3::Y } else { Vec3::X };
+    let b1 = n.cross(t).normalize();
+    let b2 = n.cross(b1);
+    (b1 * local.x + b2 * local.y + n * local.z).normalize()
+}
+
+/// Radical inverse in base 2 (Hammersley's second coordinate).
+fn radical_inverse(mut i: u32) -> f32 {
+    i = i.reverse_bits();
+    i as f32 * (1.0 / 4_294_967_296.0)
+}
+
+/// Runs the benchmark on `scene`.
+pub fn bench_traverse(
+    ctx: &Context,
+    scene: &Scene,
+    desc: &TraverseBenchDesc,
+) -> Result<TraverseBenchReport, BenchError> {
+    let aabb = scene.aabb_at(0.0);
+    let grid = VoxelGrid::around(
+        aabb.min,
+        aabb.max,
+        &GridDesc {
+            max_res_xy: desc.resolution,
+            ..Default::default()
+        },
+    )?;
+    let mut bits = BitGrid::for_grid(&grid);
+    voxelize_scene(&grid, &mut bits, scene, 0.0)?;
+    let h = BitHierarchy::build(bits);
+    let points = gbuffer_points(scene, desc.gbuffer_size);
+    if points.is_empty() {
+        return Err(BenchError::NoSurface);
+    }
+    let offset = desc.normal_offset_voxels * grid.voxel_diagonal_m();
+    let scene_size = aabb.extent().max_element();
+    let caster = VoxelRayCaster::new(ctx, &h)?;
+    let mut radii = Vec::new();
+    let result = (|| -> Result<(), BenchError> {
+        for &r in &desc.radii_box_units {
+            let radius_m = r / 6.0 * scene_size;
+            let mut rays = Vec::with_capacity(points.len() * desc.rays_per_point as usize);
+            for (pi, &(p, n)) in points.iter().enumerate() {
+                // Per-point Cranley–Patterson rotation of a Hammersley set.
+                let rot = (
+                    radical_inverse(pi as u32 * 7 + 1),
+                    radical_inverse(pi as u32 * 13 + 3),
+                );
+                for j in 0..desc.rays_per_point {
+                    let u1 = ((j as f32 + 0.5) / desc.rays_per_point as f32 + rot.0).fract();
+                    let u2 = (radical_inverse(j) + rot.1).fract();
+                    let d = cosine_dir(n, u1, u2);
+                    let o = grid.world_to_voxel(p + n * offset);
+                    rays.push(GpuRay::new(o, grid.dir_world_to_voxel(d), radius_m));
+                }
+            }
+            let mut methods = vec![RayMethod::Hierarchical(desc.params)];
+            methods.extend(desc.march_steps.iter().map(|&s| RayMethod::March1(s)));
+            let batches = caster.cast(ctx, &rays, &methods)?;
+            let reference = &batches[0];
+            let hits = reference.hits.iter().filter(|h| h.hit).count();
+            let mut results = Vec::new();
+            let mut steps_99 = None;
+            let mut speedup = None;
+            for b in &batches {
+                let agree = b
+                    .hits
+                    .iter()
+                    .zip(&reference.hits)
+                    .filter(|(a, r)| a.hit == r.hit)
+                    .count();
+                let agreement = agree as f64 / rays.len() as f64;
+                let mean_steps =
+                    b.hits.iter().map(|h| f64::from(h.steps)).sum::<f64>() / rays.len() as f64;
+                if let RayMethod::March1(s) = b.method {
+                    if agreement >= 0.99 && steps_99.is_none() {
+                        steps_99 = Some(s);
+                        speedup = Some(b.gpu_ms / reference.gpu_ms.max(1e-9));
+                    }
+                }
+                results.push(MethodResult {
+                    method: b.method.name(),
+                    gpu_ms: b.gpu_ms,
+                    rays_per_s: rays.len() as f64 / (b.gpu_ms.max(1e-9) * 1e-3),
+                    mean_steps,
+                    agreement,
+                });
+            }
+            radii.push(RadiusResult {
+                radius_box_units: r,
+                radius_m,
+                rays: rays.len(),
+                hit_fraction: hits as f64 / rays.len() as f64,
+                methods: results,
+                march_steps_for_99: steps_99,
+                speedup_at_99: speedup,
+            });
+        }
+        Ok(())
+    })();
+    caster.destroy(ctx);
+    result?;
+    let b = h.base();
+    Ok(TraverseBenchReport {
+        device: ctx.info.name.clone(),
+        grid: [b.res_x(), b.res_y(), b.depth()],
+        points: points.len(),
+        radii,
+    })
+}
+
+impl TraverseBenchReport {
+    pub fn table(&self) -> String {
+        let mut s = format!(
+            "traversal benchmark on {} — grid {}x{}x{}, {} surface points\n",
+            self.device, self.grid[0], self.grid[1], self.grid[2], self.points
+        );
+        for r in &self.radii {
+            s += &format!(
+                "\nradius {} box units ({:.3} m): {} rays, {:.1}% hit\n",
+                r.radius_box_units,
+                r.radius_m,
+                r.rays,
+                100.0 * r.hit_fraction
+            );
+            s += &format!(
+                "  {:<14} {:>10} {:>12} {:>10} {:>10}\n",
+                "method", "GPU ms", "Mrays/s", "steps/ray", "agree %"
+            );
+            for m in &r.methods {
+                s += &format!(
+                    "  {:<14} {:>10.3} {:>12.2} {:>10.2} {:>10.2}\n",
+                    m.method,
+                    m.gpu_ms,
+                    m.rays_per_s * 1e-6,
+                    m.mean_steps,
+                    100.0 * m.agreement
+                );
+            }
+            match (r.march_steps_for_99, r.speedup_at_99) {
+                (Some(n), Some(x)) => {
+                    s += &format!("  1-bit marching needs {n} samples to agree on >= 99% of rays; hierarchical is {x:.2}x faster than that\n")
+                }
+                _ => s += "  no tried marching sample count agrees on >= 99% of rays\n",
+            }
+        }
+        s
+    }
+}

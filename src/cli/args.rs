@@ -1,0 +1,293 @@
+//! The flags shared by several commands, and their conversion into the renderer's settings.
+
+use crate::gi::GiMethod;
+use crate::light::PointShadow;
+use crate::post::ToneOperator;
+use crate::render::RenderSettings;
+use crate::scene::{resolve_gi, GiOverrides, NoSuchObject, Scene};
+
+/// Indirect-light flags of `render`, `profile`, `graph` and `view`. Each one given overrides the
+/// scene file's `[gi]` value, which overrides the default shown.
+#[derive(clap::Args, Clone, Debug, Default)]
+pub struct GiArgs {
+    /// Indirect-light method (none: direct light only) [default: the scene's `[gi] method`,
+    /// else none].
+    #[arg(long, value_enum)]
+    pub gi: Option<GiMethod>,
+    /// Where hemisphere sampling reads the radiance at ray hits: reflective light maps or a
+    /// direct-radiance voxel volume.
+    #[arg(long, value_enum, default_value_t = crate::gi::RadianceSource::Maps)]
+    pub gi_radiance: crate::gi::RadianceSource,
+    /// Hierarchy level GI rays start their traversal at (thesis §4.5).
+    #[arg(long, default_value_t = 1)]
+    pub gi_start_level: u32,
+    /// Iteration cap of GI rays' hierarchical traversal (too low shows as missing indirect
+    /// shadows, thesis Fig. 46).
+    #[arg(long, default_value_t = 1024)]
+    pub gi_max_iterations: u32,
+    /// GI rays per pixel [default: the scene's `[gi] rays`, else 16].
+    #[arg(long, value_name = "N")]
+    pub gi_rays: Option<u32>,
+    /// GI ray length in meters [default: the scene's `[gi] radius_m`, else the scene's
+    /// diagonal].
+    #[arg(long, value_name = "M")]
+    pub gi_radius: Option<f32>,
+    /// Self-intersection offset along the normal, in voxel diagonals (thesis k1) [default: the
+    /// scene's `[gi] normal_offset_voxels`, else 1].
+    #[arg(long, value_name = "K1")]
+    pub gi_normal_offset: Option<f32>,
+    /// Self-intersection offset along the ray, in voxel diagonals over cos (thesis k2)
+    /// [default: the scene's `[gi] ray_offset_voxels`, else 0].
+    #[arg(long, value_name = "K2")]
+    pub gi_ray_offset: Option<f32>,
+    /// Geometry-aware filter radius in pixels, 0: off [default: the scene's `[gi]
+    /// filter_radius`, else 4].
+    #[arg(long, value_name = "R")]
+    pub gi_filter_radius: Option<u32>,
+    /// Geometry-aware filter passes, each horizontal + vertical [default: the scene's `[gi]
+    /// filter_passes`, else 2].
+    #[arg(long, value_name = "P")]
+    pub gi_filter_passes: Option<u32>,
+    /// Path-tracer bounces [default: the scene's `[gi] bounces`, else 2].
+    #[arg(long, value_name = "B")]
+    pub gi_bounces: Option<u32>,
+    /// Frames the path tracer accumulates in a headless render [default: the scene's `[gi]
+    /// accumulate_frames`, else 1].
+    #[arg(long, value_name = "F")]
+    pub gi_frames: Option<u32>,
+    /// Reflective light-map resolution per light view [default: the scene's `[gi]
+    /// light_map_resolution`, else 256].
+    #[arg(long, value_name = "L")]
+    pub light_map_resolution: Option<u32>,
+}
+
+impl GiArgs {
+    /// The flags given, for [`crate::scene::resolve_gi`].
+    pub fn overrides(&self) -> GiOverrides {
+        GiOverrides {
+            method: self.gi,
+            rays: self.gi_rays,
+            bounces: self.gi_bounces,
+            radius_m: self.gi_radius,
+            normal_offset_voxels: self.gi_normal_offset,
+            ray_offset_voxels: self.gi_ray_offset,
+            filter_radius: self.gi_filter_radius,
+            filter_passes: self.gi_filter_passes,
+            light_map_resolution: self.light_map_resolution,
+            accumulate_frames: self.gi_frames,
+        }
+    }
+
+    /// The scene's `[gi]` values, overridden by the flags given.
+    pub fn settings(&self, scene: &Scene) -> crate::gi::GiSettings {
+        crate::gi::GiSettings {
+            radiance_source: self.gi_radiance,
+            start_level: self.gi_start_level,
+            max_iterations: self.gi_max_iterations,
+            ..resolve_gi(&scene.gi, &self.overrides())
+        }
+    }
+}
+
+/// Frame settings shared by `render` and `profile`.
+#[derive(clap::Args, Clone)]
+pub struct FrameArgs {
+    #[arg(long, default_value_t = 512)]
+    pub width: u32,
+    #[arg(long, default_value_t = 512)]
+    pub height: u32,
+    /// Scene time in seconds (animations).
+    #[arg(long, default_value_t = 0.0)]
+    pub time: f32,
+    #[arg(long, value_enum, default_value_t = ToneOperator::Filmic)]
+    pub tonemap: ToneOperator,
+    #[arg(long, default_value_t = 1.0)]
+    pub exposure: f32,
+    /// Shadow-map resolution (texels per side).
+    #[arg(long, default_value_t = 1024)]
+    pub shadow_resolution: u32,
+    /// PCF radius in texels.
+    #[arg(long, default_value_t = 1)]
+    pub pcf_radius: u32,
+    /// Shadow maps of point lights: six cube faces or two paraboloid hemispheres.
+    #[arg(long, value_enum, default_value_t = PointShadow::Cube)]
+    pub point_shadows: PointShadow,
+    /// Voxelize the scene into a grid of at most N×N columns: static geometry once, dynamic
+    /// objects in the frames they move (`profile` then shows those voxel passes).
+    #[arg(long, value_name = "N")]
+    pub voxels: Option<u32>,
+    /// Depth layers of 128 voxels of the voxel grid.
+    #[arg(long, default_value_t = 1)]
+    pub voxel_layers: u32,
+    /// Re-voxelize static geometry every frame too (measures the full voxelization).
+    #[arg(long)]
+    pub revoxelize: bool,
+    /// Voxelizer: exact triangle/box test, or the thesis's texture-atlas splatting with
+    /// automatic atlases (applies to --voxels, GI and --debug voxel grids).
+    #[arg(long, value_enum, default_value_t = crate::voxel::gpu::Voxelizer::Triangle)]
+    pub voxelizer: crate::voxel::gpu::Voxelizer,
+    #[command(flatten)]
+    pub gi: GiArgs,
+    /// Show a voxel debug view instead of the lit image (voxelizes at 128 unless --voxels).
+    #[arg(long, value_enum)]
+    pub debug: Option<crate::voxel::debug_view::DebugView>,
+    /// Hierarchy level shown by --debug level (0 = the voxels).
+    #[arg(long, default_value_t = 0)]
+    pub debug_level: u32,
+    /// Traversal steps shown white by --debug steps.
+    #[arg(long, default_value_t = 64)]
+    pub debug_steps_scale: u32,
+    /// The object whose atlas --debug atlas shows: its name or index in the scene.
+    #[arg(long, default_value = "0")]
+    pub object: String,
+}
+
+impl FrameArgs {
+    /// The frame's settings; GI values not given as flags come from the scene's `[gi]`.
+    pub fn settings(&self, scene: &Scene) -> Result<RenderSettings, NoSuchObject> {
+        let mut s = RenderSettings {
+            width: self.width,
+            height: self.height,
+            time_s: self.time,
+            ..Default::default()
+        };
+        s.tonemap.operator = self.tonemap;
+        s.tonemap.exposure = self.exposure;
+        s.shadow.resolution = self.shadow_resolution;
+        s.shadow.pcf_radius = self.pcf_radius;
+        s.shadow.point_technique = self.point_shadows;
+        let default_res = crate::voxel::gpu::VoxelSettings::default().max_res_xy;
+        s.gi = self.gi.settings(scene);
+        // GI and the voxel debug views voxelize without --voxels, honouring --voxelizer,
+        // --voxel-layers and --revoxelize (the atlas view draws an atlas, not voxels).
+        let atlas_view = self.debug == Some(crate::voxel::debug_view::DebugView::Atlas);
+        let needs_voxels = s.gi.method != GiMethod::None || (self.debug.is_some() && !atlas_view);
+        s.voxels = self
+            .voxels
+            .or(needs_voxels.then_some(default_res))
+            .map(|max_res_xy| crate::voxel::gpu::VoxelSettings {
+                max_res_xy,
+                layers: self.voxel_layers,
+                revoxelize_static: self.revoxelize,
+                voxelizer: self.voxelizer,
+            });
+        let object = match self.debug {
+            Some(crate::voxel::debug_view::DebugView::Atlas) => scene.find_object(&self.object)?,
+            _ => 0,
+        };
+        s.debug = self
+            .debug
+            .map(|view| crate::voxel::debug_view::DebugSettings {
+                view,
+                level: self.debug_level,
+                steps_scale: self.debug_steps_scale,
+                object,
+                ..Default::default()
+            });
+        Ok(s)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `render`'s frame flags alone.
+    #[derive(clap::Parser)]
+    struct Frame {
+        #[command(flatten)]
+        frame: FrameArgs,
+    }
+
+    fn parse(args: &[&str]) -> FrameArgs {
+        use clap::Parser as _;
+        Frame::try_parse_from([&["voxgi"], args].concat())
+            .expect("parses")
+            .frame
+    }
+
+    fn render_gi(args: &[&str]) -> GiOverrides {
+        parse(args).gi.overrides()
+    }
+
+    fn render_settings(args: &[&str]) -> RenderSettings {
+        let scene = crate::scene::load_scene_arg(None).expect("the built-in scene");
+        parse(args).settings(&scene).expect("settings")
+    }
+
+    #[test]
+    fn voxel_flags_apply_to_gi_and_debug_grids_without_voxels() {
+        let v = render_settings(&["--gi", "pathtrace", "--revoxelize", "--voxel-layers", "2"])
+            .voxels
+            .expect("GI voxelizes");
+        assert!(v.revoxelize_static && v.layers == 2, "{v:?}");
+        let v = render_settings(&["--debug", "voxels", "--voxelizer", "atlas"])
+            .voxels
+            .expect("the voxel view voxelizes");
+        assert_eq!(v.voxelizer, crate::voxel::gpu::Voxelizer::Atlas);
+        assert!(render_settings(&["--debug", "atlas"]).voxels.is_none());
+        assert!(render_settings(&[]).voxels.is_none());
+    }
+
+    #[test]
+    fn gi_flags_not_given_leave_the_scene_values() {
+        assert!(render_gi(&[]).is_empty());
+        let scene = GiOverrides {
+            method: Some(GiMethod::Pathtrace),
+            rays: Some(4),
+            bounces: Some(3),
+            ..Default::default()
+        };
+        let s = resolve_gi(&scene, &render_gi(&[]));
+        assert_eq!((s.method, s.rays, s.bounces), (GiMethod::Pathtrace, 4, 3));
+        let s = resolve_gi(
+            &scene,
+            &render_gi(&["--gi", "hemisphere", "--gi-rays", "32", "--gi-frames", "8"]),
+        );
+        assert_eq!(
+            (s.method, s.rays, s.bounces, s.accumulate_frames),
+            (GiMethod::Hemisphere, 32, 3, 8)
+        );
+    }
+
+    #[test]
+    fn every_gi_flag_maps_to_its_field() {
+        let o = render_gi(&[
+            "--gi",
+            "pathtrace",
+            "--gi-rays",
+            "2",
+            "--gi-bounces",
+            "3",
+            "--gi-radius",
+            "0.5",
+            "--gi-normal-offset",
+            "0.25",
+            "--gi-ray-offset",
+            "1.5",
+            "--gi-filter-radius",
+            "6",
+            "--gi-filter-passes",
+            "7",
+            "--gi-frames",
+            "9",
+            "--light-map-resolution",
+            "128",
+        ]);
+        assert_eq!(
+            o,
+            GiOverrides {
+                method: Some(GiMethod::Pathtrace),
+                rays: Some(2),
+                bounces: Some(3),
+                radius_m: Some(0.5),
+                normal_offset_voxels: Some(0.25),
+                ray_offset_voxels: Some(1.5),
+                filter_radius: Some(6),
+                filter_passes: Some(7),
+                light_map_resolution: Some(128),
+                accumulate_frames: Some(9),
+            }
+        );
+    }
+}

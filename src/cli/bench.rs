@@ -1,0 +1,153 @@
+//! `voxgi bench traverse|voxelize|voxelize-sweep`: the benchmarks of [`crate::bench`].
+
+use super::{check_validation, context, out, outln, CliError, Global};
+use crate::bench::{
+    bench_traverse, bench_voxelize_atlas, bench_voxelize_sweep, TraverseBenchDesc,
+    VoxelizeBenchDesc, VoxelizeSweepDesc,
+};
+use crate::scene::load_scene_arg;
+use crate::voxel::TraversalParams;
+use serde::Serialize;
+use std::io::Write;
+
+/// The benchmarks.
+#[derive(clap::Subcommand, Clone)]
+pub enum BenchCommand {
+    /// Voxelization GPU time, atlas and triangle voxelizer side by side: Cornell, bunny-in-box
+    /// and a dense generated scene (64 bunnies) at each x,y resolution (D = 128), and a cube
+    /// tessellated 1x and 16x (same surface). One-time atlas work is listed apart.
+    VoxelizeSweep {
+        /// x = y resolutions of the scene rows.
+        #[arg(long, value_delimiter = ',', default_values_t = [64, 128, 256, 512])]
+        resolutions: Vec<u32>,
+        /// Timed runs per measurement (the median is printed).
+        #[arg(long, default_value_t = 5)]
+        reps: usize,
+        /// Print JSON instead of a table.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Hierarchical voxel ray test vs uniform 1-bit marching on the same rays (thesis §9.3.1):
+    /// GPU ms, rays/s, steps per ray, and the marching samples needed to match >= 99% of
+    /// the hierarchical results.
+    Traverse {
+        /// A built-in scene or a TOML scene file. Default: cornell.
+        scene: Option<String>,
+        /// Voxel grid x/y resolution (depth 128).
+        #[arg(long, default_value_t = 128)]
+        resolution: u32,
+        /// G-buffer size in pixels per side (surface points rays start from).
+        #[arg(long, default_value_t = 128)]
+        gbuffer: u32,
+        /// Rays per surface point.
+        #[arg(long, default_value_t = 16)]
+        rays: u32,
+        /// Hierarchy level the traversal starts at (thesis §4.5).
+        #[arg(long, default_value_t = 1)]
+        start_level: u32,
+        /// Iteration cap of the hierarchical traversal.
+        #[arg(long, default_value_t = 1024)]
+        max_iterations: u32,
+        /// Print JSON instead of tables.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Atlas binary voxelization two ways on the same points: the compute pass (atomicOr into
+    /// the column buffer) vs the thesis's raster pass (single-bit LUT, logicOp OR): GPU ms and
+    /// whether the bits agree.
+    Voxelize {
+        /// A built-in scene or a TOML scene file. Default: cornell.
+        scene: Option<String>,
+        /// Voxel grid x/y resolution cap.
+        #[arg(long, default_value_t = 128)]
+        resolution: u32,
+        /// Depth layers of 128 voxels.
+        #[arg(long, default_value_t = 1)]
+        layers: u32,
+        /// Runs of each pass (the median is reported).
+        #[arg(long, default_value_t = 10)]
+        repeats: u32,
+        /// Print JSON instead of a table.
+        #[arg(long)]
+        json: bool,
+    },
+}
+
+/// Runs one benchmark and prints its report (a table, or JSON with `--json`).
+pub fn bench(global: &Global, command: &BenchCommand, out: &mut dyn Write) -> Result<(), CliError> {
+    match command {
+        BenchCommand::Traverse {
+            scene,
+            resolution,
+            gbuffer,
+            rays,
+            start_level,
+            max_iterations,
+            json,
+        } => {
+            let scene = load_scene_arg(scene.as_deref())?;
+            let ctx = context(global)?;
+            let desc = TraverseBenchDesc {
+                resolution: *resolution,
+                gbuffer_size: *gbuffer,
+                rays_per_point: *rays,
+                params: TraversalParams {
+                    start_level: *start_level,
+                    max_iterations: *max_iterations,
+                },
+                ..Default::default()
+            };
+            let report = bench_traverse(&ctx, &scene, &desc)?;
+            print(out, *json, &report, || report.table())?;
+            check_validation(&ctx)
+        }
+        BenchCommand::Voxelize {
+            scene,
+            resolution,
+            layers,
+            repeats,
+            json,
+        } => {
+            let scene = load_scene_arg(scene.as_deref())?;
+            let ctx = context(global)?;
+            let desc = VoxelizeBenchDesc {
+                resolution: *resolution,
+                layers: *layers,
+                repeats: *repeats,
+            };
+            let report = bench_voxelize_atlas(&ctx, &scene, &desc)?;
+            print(out, *json, &report, || report.table())?;
+            check_validation(&ctx)
+        }
+        BenchCommand::VoxelizeSweep {
+            resolutions,
+            reps,
+            json,
+        } => {
+            let ctx = context(global)?;
+            let desc = VoxelizeSweepDesc {
+                resolutions: resolutions.clone(),
+                reps: *reps,
+                ..Default::default()
+            };
+            let report = bench_voxelize_sweep(&ctx, &desc)?;
+            print(out, *json, &report, || report.table())?;
+            check_validation(&ctx)
+        }
+    }
+}
+
+/// A report as pretty JSON or as its table.
+fn print(
+    out: &mut dyn Write,
+    json: bool,
+    report: &impl Serialize,
+    table: impl FnOnce() -> String,
+) -> Result<(), CliError> {
+    if json {
+        outln!(out, "{}", serde_json::to_string_pretty(report)?);
+    } else {
+        out!(out, "{}", table());
+    }
+    Ok(())
+}

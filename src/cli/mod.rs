@@ -1,0 +1,111 @@
+//! What each `voxgi` command does, behind the argument parsing of `main.rs`: one function per
+//! command, which writes its report to the `out` it is given (stdout in `main.rs`) and
+//! returns a [`CliError`] that reads as advice.
+//!
+//! - [`args`]: the frame and GI flags several commands share, and their conversion into
+//!   [`crate::render::RenderSettings`].
+//! - [`render`]: `render`; [`view`]: `view`; [`profile`]: `profile` and `graph`;
+//!   [`bench`]: `bench traverse|voxelize|voxelize-sweep`; [`compare`]: `compare`;
+//!   [`export`]: `export-mitsuba`; [`devices`]: `devices`.
+
+pub mod args;
+pub mod bench;
+pub mod compare;
+pub mod devices;
+pub mod export;
+pub mod profile;
+pub mod render;
+pub mod view;
+
+pub use args::{FrameArgs, GiArgs};
+
+use crate::vk::{Context, ContextDesc};
+use std::path::PathBuf;
+
+/// The flags every command takes.
+#[derive(Clone, Debug, Default)]
+pub struct Global {
+    /// Khronos validation with synchronization validation; any message fails the command.
+    pub validate: bool,
+    /// Vulkan device: index or part of its name.
+    pub device: Option<String>,
+}
+
+/// Errors of the commands: the layers' own errors, passed through unchanged, and the
+/// command line's (writing outputs, validation messages).
+#[derive(Debug, thiserror::Error)]
+pub enum CliError {
+    #[error(transparent)]
+    Vk(#[from] crate::vk::VkError),
+    #[error(transparent)]
+    Graph(#[from] crate::graph::GraphError),
+    #[error(transparent)]
+    Scene(#[from] crate::scene::SceneError),
+    #[error(transparent)]
+    NoSuchObject(#[from] crate::scene::NoSuchObject),
+    #[error(transparent)]
+    Render(#[from] crate::render::RenderError),
+    #[error(transparent)]
+    Eval(#[from] crate::eval::EvalError),
+    #[error(transparent)]
+    Mitsuba(#[from] crate::eval::mitsuba::MitsubaExportError),
+    #[error(transparent)]
+    Bench(#[from] crate::bench::BenchError),
+    #[error(transparent)]
+    App(#[from] crate::app::AppError),
+    #[error(transparent)]
+    Json(#[from] serde_json::Error),
+    /// Writing the report failed, e.g. a closed pipe (`voxgi compare a b | head -1`); the
+    /// `io::Error` stays the source so that `main` can end quietly on a broken pipe.
+    #[error("cannot write to stdout")]
+    Stdout(#[source] std::io::Error),
+    #[error("writing {}", path.display())]
+    WriteImage {
+        path: PathBuf,
+        #[source]
+        source: image::ImageError,
+    },
+    #[error("writing the heatmap {}", path.display())]
+    WriteHeatmap {
+        path: PathBuf,
+        #[source]
+        source: crate::eval::EvalError,
+    },
+    #[error("the validation layers reported {count} message(s) (see the log above); this is a bug in voxgi, please report it")]
+    Validation { count: usize },
+}
+
+/// `writeln!` into a command's `out`, a failed write becoming [`CliError::Stdout`].
+macro_rules! outln {
+    ($out:expr, $($arg:tt)*) => {
+        writeln!($out, $($arg)*).map_err($crate::cli::CliError::Stdout)?
+    };
+}
+
+/// `write!` with the same error as [`outln!`].
+macro_rules! out {
+    ($out:expr, $($arg:tt)*) => {
+        write!($out, $($arg)*).map_err($crate::cli::CliError::Stdout)?
+    };
+}
+
+pub(crate) use {out, outln};
+
+/// The Vulkan context the global flags ask for.
+pub fn context(global: &Global) -> Result<Context, CliError> {
+    Ok(Context::new(&ContextDesc {
+        validation: global.validate,
+        device: global.device.clone(),
+        ..Default::default()
+    })?)
+}
+
+/// Fails when the validation layers reported anything during the command.
+pub fn check_validation(ctx: &Context) -> Result<(), CliError> {
+    match ctx.validation.total() {
+        0 => Ok(()),
+        count => Err(CliError::Validation {
+            count: count as usize,
+        }),
+    }
+}

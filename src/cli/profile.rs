@@ -1,0 +1,170 @@
+//! `voxgi profile` (per-pass GPU times over many frames) and `voxgi graph` (the compiled
+//! render graph), for a scene's frame or the render-graph demo frame.
+
+use super::args::FrameArgs;
+use super::{check_validation, context, out, outln, CliError, Global};
+use crate::demo::Demo;
+use crate::graph::GraphExecutor;
+use crate::profile::ProfileReport;
+use crate::render::profile_scene;
+use crate::scene::load_scene_arg;
+use crate::vk::{Context, FrameLoop, MAX_FRAMES_IN_FLIGHT};
+use std::io::Write;
+
+/// Arguments of `voxgi profile`.
+#[derive(clap::Args, Clone)]
+pub struct ProfileArgs {
+    /// A built-in scene or a TOML scene file. Default: cornell.
+    pub scene: Option<String>,
+    /// Profile the render-graph demo frame instead of a scene.
+    #[arg(long)]
+    pub demo: bool,
+    #[command(flatten)]
+    pub frame: FrameArgs,
+    /// Frames measured after warm-up.
+    #[arg(long, default_value_t = 100)]
+    pub frames: usize,
+    /// Frames run before measuring.
+    #[arg(long, default_value_t = 10)]
+    pub warmup: usize,
+    /// Print JSON instead of a table.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Arguments of `voxgi graph`.
+#[derive(clap::Args, Clone)]
+pub struct GraphArgs {
+    /// A built-in scene or a TOML scene file. Default: cornell.
+    pub scene: Option<String>,
+    /// The render-graph demo frame instead of a scene's frame.
+    #[arg(long)]
+    pub demo: bool,
+    /// Graphviz dot instead of text.
+    #[arg(long)]
+    pub dot: bool,
+    #[command(flatten)]
+    pub frame: FrameArgs,
+}
+
+/// Runs the frame `--warmup` + `--frames` times and prints the per-pass statistics.
+pub fn profile(global: &Global, args: &ProfileArgs, out: &mut dyn Write) -> Result<(), CliError> {
+    let frame = &args.frame;
+    let ctx = context(global)?;
+    let report = if args.demo {
+        profile_demo(&ctx, args.frames, args.warmup, frame.width, frame.height)?
+    } else {
+        let scene_name = args
+            .scene
+            .clone()
+            .unwrap_or_else(|| crate::scene::DEFAULT_SCENE.into());
+        let scene = load_scene_arg(args.scene.as_deref())?;
+        let run = profile_scene(
+            &ctx,
+            &scene,
+            &frame.settings(&scene)?,
+            args.frames,
+            args.warmup,
+        )?;
+        let mut report = ProfileReport::from_frames(&ctx.info.name, &run.frames, args.warmup)
+            .with_setup(&run.setup);
+        report.notes.push(("scene".into(), scene_name));
+        report.notes.push((
+            "resolution".into(),
+            format!("{}x{}", frame.width, frame.height),
+        ));
+        report
+            .notes
+            .push(("transient memory".into(), run.transient_memory.summary()));
+        report
+            .notes
+            .push(("culled passes".into(), run.culled_passes.join(", ")));
+        report
+    };
+    if args.json {
+        outln!(out, "{}", serde_json::to_string_pretty(&report)?);
+    } else {
+        out!(out, "{}", report.table());
+    }
+    check_validation(&ctx)
+}
+
+/// The demo frame's statistics, measured like a scene's.
+fn profile_demo(
+    ctx: &Context,
+    frames: usize,
+    warmup: usize,
+    width: u32,
+    height: u32,
+) -> Result<ProfileReport, CliError> {
+    let demo = Demo::new(ctx, width, height)?;
+    let exec = demo.executor(ctx, MAX_FRAMES_IN_FLIGHT)?;
+    let mut frame_loop = FrameLoop::new(
+        ctx,
+        MAX_FRAMES_IN_FLIGHT,
+        exec.compiled().order.len() as u32,
+    )?;
+    let mut measured = Vec::new();
+    for i in 0..warmup + frames {
+        let (slot, cmd, ts, done) = frame_loop.begin(ctx)?;
+        exec.record(&cmd, slot, ts);
+        if i >= warmup + MAX_FRAMES_IN_FLIGHT && !done.is_empty() {
+            measured.push(done);
+        }
+        frame_loop.submit(ctx, &[], &[])?;
+    }
+    measured.extend(
+        frame_loop
+            .finish(ctx)?
+            .into_iter()
+            .filter(|t| !t.is_empty()),
+    );
+    let c = exec.compiled();
+    let mut report = ProfileReport::from_frames(&ctx.info.name, &measured, warmup);
+    report
+        .notes
+        .push(("graph".into(), "demo (4 live passes, 1 culled)".into()));
+    report
+        .notes
+        .push(("resolution".into(), format!("{width}x{height}")));
+    report
+        .notes
+        .push(("transient memory".into(), c.memory.summary()));
+    let culled: Vec<&str> = c.culled.iter().map(|&p| c.pass_names[p].as_str()).collect();
+    report
+        .notes
+        .push(("culled passes".into(), culled.join(", ")));
+    exec.destroy(ctx);
+    frame_loop.destroy(ctx);
+    demo.destroy(ctx);
+    Ok(report)
+}
+
+/// Prints the compiled graph as text or Graphviz dot.
+pub fn graph(global: &Global, args: &GraphArgs, out: &mut dyn Write) -> Result<(), CliError> {
+    let ctx = context(global)?;
+    let mut dump = |exec: &GraphExecutor| -> Result<(), CliError> {
+        let c = exec.compiled();
+        if args.dot {
+            out!(out, "{}", c.dump_dot(exec.graph()));
+        } else {
+            out!(out, "{}", c.dump_text(exec.graph()));
+        }
+        Ok(())
+    };
+    if args.demo {
+        let demo = Demo::new(&ctx, args.frame.width, args.frame.height)?;
+        let exec = demo.executor(&ctx, 1)?;
+        dump(&exec)?;
+        exec.destroy(&ctx);
+        demo.destroy(&ctx);
+    } else {
+        let scene = load_scene_arg(args.scene.as_deref())?;
+        let renderer = crate::render::Renderer::new(&ctx, &scene, args.frame.settings(&scene)?)?;
+        let exec = GraphExecutor::new(&ctx, renderer.graph(), 1)?;
+        dump(&exec)?;
+        exec.destroy(&ctx);
+        renderer.destroy(&ctx);
+    }
+    check_validation(&ctx)
+}

@@ -1,0 +1,154 @@
+//! `voxgi view`: the interactive viewer.
+
+use super::args::GiArgs;
+use super::{out, outln, CliError, Global};
+use crate::post::ToneOperator;
+use crate::render::RenderSettings;
+use crate::scene::load_scene_arg;
+use crate::voxel::debug_view::{DebugSettings, DebugView};
+use std::io::Write;
+use std::path::PathBuf;
+
+/// Arguments of `voxgi view`.
+#[derive(clap::Args, Clone)]
+pub struct ViewArgs {
+    /// A built-in scene or a TOML scene file. Default: cornell.
+    pub scene: Option<String>,
+    /// Initial window width and height, pixels.
+    #[arg(long, default_value_t = 1280)]
+    pub width: u32,
+    #[arg(long, default_value_t = 720)]
+    pub height: u32,
+    #[arg(long, value_enum, default_value_t = ToneOperator::Filmic)]
+    pub tonemap: ToneOperator,
+    #[arg(long, default_value_t = 1.0)]
+    pub exposure: f32,
+    /// Start with a voxel debug view instead of the lit image (the panel switches views).
+    #[arg(long, value_enum)]
+    pub debug: Option<DebugView>,
+    /// The object whose atlas the atlas view shows: its name or index in the scene.
+    #[arg(long, default_value = "0")]
+    pub object: String,
+    /// Scripted run (tests): exit after N presented frames, writing --screenshot.
+    #[arg(long)]
+    pub frames: Option<u64>,
+    /// Scripted run: resize the window to WxH halfway through.
+    #[arg(long, value_parser = parse_size)]
+    pub resize: Option<(u32, u32)>,
+    /// Scripted run: minimize the window after FRAME presented frames, restore it after
+    /// --restore-after skipped redraws (needs a window manager; under Xvfb e.g. openbox).
+    #[arg(long, value_name = "FRAME")]
+    pub minimize_at: Option<u64>,
+    /// Scripted run: redraws to skip while minimized before restoring the window.
+    #[arg(long, value_name = "N", default_value_t = 10)]
+    pub restore_after: u64,
+    /// Screenshot PNG path (F12 / the panel button; the end of a scripted run).
+    #[arg(long)]
+    pub screenshot: Option<PathBuf>,
+    // The initial indirect light; the panel changes it.
+    #[command(flatten)]
+    pub gi: GiArgs,
+}
+
+/// `WxH` → (W, H), both positive.
+fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("`{s}` is not WxH (e.g. 640x480)"))?;
+    let parse = |v: &str| {
+        v.trim()
+            .parse::<u32>()
+            .ok()
+            .filter(|&n| (1..=16384).contains(&n))
+            .ok_or_else(|| format!("`{v}` in `{s}` is not a size between 1 and 16384"))
+    };
+    Ok((parse(w)?, parse(h)?))
+}
+
+/// Runs the viewer until its window closes (or a scripted run ends), then prints the camera
+/// as a pasteable `[camera]` table and the screenshots written.
+pub fn view(global: &Global, args: ViewArgs, out: &mut dyn Write) -> Result<(), CliError> {
+    let scene = load_scene_arg(args.scene.as_deref())?;
+    // Checked when the viewer starts in the atlas view; the panel may switch to it
+    // later, then showing this object if it exists, else the first.
+    let object = match scene.find_object(&args.object) {
+        Ok(i) => i,
+        Err(e) if args.debug == Some(DebugView::Atlas) => return Err(e.into()),
+        Err(_) => 0,
+    };
+    let mut settings = RenderSettings {
+        debug: args.debug.map(|view| DebugSettings {
+            view,
+            object,
+            ..Default::default()
+        }),
+        ..Default::default()
+    };
+    settings.tonemap.operator = args.tonemap;
+    settings.tonemap.exposure = args.exposure;
+    settings.gi = args.gi.settings(&scene);
+    let opts = crate::app::ViewerOptions {
+        validation: global.validate,
+        device: global.device.clone(),
+        width: args.width,
+        height: args.height,
+        settings,
+        frames: args.frames,
+        resize_to: args.resize,
+        minimize_at: args.minimize_at,
+        restore_after: args.restore_after,
+        screenshot: args.screenshot,
+    };
+    let report = crate::app::run(scene, &opts)?;
+    if let Some(camera) = &report.camera {
+        // Pasteable into a scene file, to start there next time.
+        out!(out, "camera at exit:\n{}", camera.toml_table());
+    }
+    for p in &report.screenshots {
+        outln!(out, "wrote {}", p.display());
+    }
+    if report.skipped_minimized > 0 {
+        outln!(
+            out,
+            "skipped {} frames while minimized",
+            report.skipped_minimized
+        );
+    }
+    match report.validation_messages.len() {
+        0 => Ok(()),
+        count => Err(CliError::Validation { count }),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gi::GiMethod;
+    use clap::Parser as _;
+
+    #[derive(clap::Parser)]
+    struct View {
+        #[command(flatten)]
+        args: ViewArgs,
+    }
+
+    #[test]
+    fn the_viewer_takes_the_gi_flags() {
+        let v = View::try_parse_from(["view", "--gi", "pathtrace", "--gi-bounces", "1"])
+            .expect("parses")
+            .args;
+        assert_eq!(
+            (v.gi.gi, v.gi.gi_bounces, v.gi.gi_rays),
+            (Some(GiMethod::Pathtrace), Some(1), None)
+        );
+    }
+
+    #[test]
+    fn sizes_parse_as_width_x_height_within_limits() {
+        assert_eq!(parse_size("640x480"), Ok((640, 480)));
+        assert_eq!(parse_size("16384X1"), Ok((16384, 1)));
+        for bad in ["640", "0x480", "640x16385", "ax1", "640x-1"] {
+            assert!(parse_size(bad).is_err(), "{bad}");
+        }
+    }
+}
