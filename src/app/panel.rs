@@ -533,13 +533,16 @@ mod table_tests {
 }
 
 /// The "View" combo's entries: the lit image, then every debug view.
-const VIEWS: [Option<DebugView>; 6] = [
+const VIEWS: [Option<DebugView>; 9] = [
     None,
     Some(DebugView::Voxels),
     Some(DebugView::Steps),
     Some(DebugView::Level),
     Some(DebugView::Albedo),
     Some(DebugView::Atlas),
+    Some(DebugView::GbufferAlbedo),
+    Some(DebugView::GbufferNormal),
+    Some(DebugView::GbufferDistance),
 ];
 
 /// Name of a debug view in the panel.
@@ -551,6 +554,9 @@ fn debug_name(v: Option<DebugView>) -> &'static str {
         Some(DebugView::Level) => "hierarchy level",
         Some(DebugView::Albedo) => "albedo",
         Some(DebugView::Atlas) => "object atlas",
+        Some(DebugView::GbufferAlbedo) => "G-buffer albedo",
+        Some(DebugView::GbufferNormal) => "G-buffer normal",
+        Some(DebugView::GbufferDistance) => "G-buffer distance",
     }
 }
 

@@ -128,7 +128,9 @@ pub struct FrameArgs {
     pub voxelizer: crate::voxel::gpu::Voxelizer,
     #[command(flatten)]
     pub gi: GiArgs,
-    /// Show a voxel debug view instead of the lit image (voxelizes at 128 unless --voxels).
+    /// Show a debug view instead of the lit image: the voxel views (voxels, steps, level,
+    /// albedo) voxelize at 128 unless --voxels; atlas shows an object's atlas; gbuffer-albedo,
+    /// gbuffer-normal and gbuffer-distance show a G-buffer channel.
     #[arg(long, value_enum)]
     pub debug: Option<crate::voxel::debug_view::DebugView>,
     /// Hierarchy level shown by --debug level (0 = the voxels).
@@ -159,9 +161,9 @@ impl FrameArgs {
         let default_res = crate::voxel::gpu::VoxelSettings::default().max_res_xy;
         s.gi = self.gi.settings(scene);
         // GI and the voxel debug views voxelize without --voxels, honouring --voxelizer,
-        // --voxel-layers and --revoxelize (the atlas view draws an atlas, not voxels).
-        let atlas_view = self.debug == Some(crate::voxel::debug_view::DebugView::Atlas);
-        let needs_voxels = s.gi.method != GiMethod::None || (self.debug.is_some() && !atlas_view);
+        // --voxel-layers and --revoxelize (the atlas and G-buffer views draw no voxels).
+        let needs_voxels =
+            s.gi.method != GiMethod::None || self.debug.is_some_and(|d| d.shows_voxels());
         s.voxels = self
             .voxels
             .or(needs_voxels.then_some(default_res))

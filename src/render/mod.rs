@@ -9,6 +9,7 @@
 mod cull;
 mod deferred_direct;
 mod gbuffer;
+mod gbuffer_view;
 pub mod gpu;
 mod light_map;
 mod run;
@@ -124,6 +125,7 @@ pub struct Renderer {
     gi: Option<(crate::gi::GiPasses, LightMapPass)>,
     voxel_debug: Option<crate::voxel::debug_view::VoxelDebugPass>,
     atlas_view: Option<crate::voxel::atlas_view::AtlasViewPass>,
+    gbuffer_view: Option<gbuffer_view::GbufferViewPass>,
 }
 
 impl Renderer {
@@ -182,14 +184,28 @@ impl Renderer {
         {
             return Err(RenderError::GiNeedsCubeShadows);
         }
-        // The atlas view only needs the grid's voxel size, not a voxelization.
+        // The atlas view only needs the grid's voxel size, not a voxelization; the G-buffer
+        // views not even that.
         let atlas_view_on = settings
             .debug
             .is_some_and(|d| d.view == crate::voxel::debug_view::DebugView::Atlas);
-        let voxel_settings = settings.voxels.or(gi_on.then(Default::default)).or(settings
-            .debug
-            .filter(|_| !atlas_view_on)
-            .map(|_| Default::default()));
+        let voxel_view_on = settings.debug.is_some_and(|d| d.view.shows_voxels());
+        let voxel_settings = settings
+            .voxels
+            .or(gi_on.then(Default::default))
+            .or(voxel_view_on.then(Default::default));
+        let gbuffer_view = match settings.debug.and_then(|d| gbuffer_view::channel(d.view)) {
+            Some(channel) => {
+                // The distance view draws the farthest point of the scene's box black.
+                let b = scene.aabb_at(settings.time_s);
+                let far_m = scene.camera.position.distance((b.min + b.max) * 0.5)
+                    + 0.5 * (b.max - b.min).length();
+                Some(gbuffer_view::GbufferViewPass::new(
+                    ctx, sampler, channel, far_m,
+                )?)
+            }
+            None => None,
+        };
         let mut voxels = match &voxel_settings {
             Some(v) => Some(crate::voxel::gpu::VoxelFrame::new(
                 ctx,
@@ -201,7 +217,7 @@ impl Renderer {
         };
         let gi = match (&mut voxels, gi_on) {
             (Some(v), true) => {
-                // With the atlas voxelizer its points write the volumes (digest §3.4).
+                // With the atlas voxelizer its points write the volumes (Thiedemann 2010, §4.3.2).
                 let atlas_attributes = crate::gi::GiPasses::needs_attribute_volumes(&settings.gi)
                     && v.enable_attribute_volumes(ctx, scene)?;
                 let passes = crate::gi::GiPasses::new(
@@ -240,7 +256,7 @@ impl Renderer {
             _ => None,
         };
         let voxel_debug = match (&settings.debug, &mut voxels) {
-            (Some(d), Some(v)) if !atlas_view_on => {
+            (Some(d), Some(v)) if voxel_view_on => {
                 // With the atlas voxelizer its points write the albedo the view shows.
                 if d.view == crate::voxel::debug_view::DebugView::Albedo {
                     v.enable_attribute_volumes(ctx, scene)?;
@@ -273,6 +289,7 @@ impl Renderer {
             gi,
             voxel_debug,
             atlas_view,
+            gbuffer_view,
         };
         r.prepare(scene)?;
         Ok(r)
@@ -463,6 +480,10 @@ impl Renderer {
         // A debug view replaces the lit image: the read-backs take its images, and the graph
         // culls deferred light, tone mapping, G-buffer and shadows, which nothing reads then.
         let (radiance, ldr) = match (&self.voxel_debug, &self.voxels, voxel_image) {
+            _ if self.gbuffer_view.is_some() => match &self.gbuffer_view {
+                Some(pass) => pass.declare(g, &scene, &gbuffer, (w, h)),
+                None => (radiance, ldr),
+            },
             _ if self.atlas_view.is_some() => {
                 let value = g.create_image(ImageDesc::new_2d("atlas debug value", HDR, w, h));
                 let color = g.create_image(ImageDesc::new_2d(
@@ -533,6 +554,9 @@ impl Renderer {
 
     /// What the debug view shows and measured in `value` (its value image), for the CLI.
     pub fn debug_description(&self, value: &HdrImage) -> Option<String> {
+        if let Some(pass) = &self.gbuffer_view {
+            return Some(pass.describe(value));
+        }
         match (&self.atlas_view, &self.settings.debug) {
             (Some(pass), _) => Some(pass.describe(value)),
             (None, Some(d)) => Some(crate::voxel::debug_view::describe(d, value)),
@@ -545,6 +569,9 @@ impl Renderer {
             pass.destroy(ctx);
         }
         if let Some(pass) = self.atlas_view {
+            pass.destroy(ctx);
+        }
+        if let Some(pass) = self.gbuffer_view {
             pass.destroy(ctx);
         }
         if let Some(v) = self.voxels {

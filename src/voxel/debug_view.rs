@@ -41,6 +41,12 @@ pub enum DebugView {
     Albedo,
     /// One object's position atlas (`--object`; see [`super::atlas_view`]).
     Atlas,
+    /// The G-buffer's albedo (drawn by the renderer's `gbuffer_view` pass).
+    GbufferAlbedo,
+    /// The G-buffer's world-space normal, (n + 1) / 2 as color.
+    GbufferNormal,
+    /// The distance from the camera of the G-buffer's surface.
+    GbufferDistance,
 }
 
 impl DebugView {
@@ -50,9 +56,21 @@ impl DebugView {
             DebugView::Steps => 1,
             DebugView::Level => 2,
             DebugView::Albedo => 3,
-            // Drawn by `atlas_debug` (super::atlas_view), never by `voxel_debug`.
-            DebugView::Atlas => 0,
+            // Drawn by `atlas_debug` (super::atlas_view) or the renderer's `gbuffer_view`,
+            // never by `voxel_debug`.
+            DebugView::Atlas
+            | DebugView::GbufferAlbedo
+            | DebugView::GbufferNormal
+            | DebugView::GbufferDistance => 0,
         }
+    }
+
+    /// Whether the view shows the voxel grid (and so needs a voxelization).
+    pub fn shows_voxels(self) -> bool {
+        matches!(
+            self,
+            DebugView::Voxels | DebugView::Steps | DebugView::Level | DebugView::Albedo
+        )
     }
 }
 
@@ -427,6 +445,10 @@ pub fn describe(settings: &DebugSettings, value: &HdrImage) -> String {
             settings.level,
             n = 1u32 << settings.level.min(31)
         ),
+        // Described by the renderer's `gbuffer_view` pass, which knows its scale.
+        DebugView::GbufferAlbedo | DebugView::GbufferNormal | DebugView::GbufferDistance => {
+            format!("{:?} view", settings.view)
+        }
     }
 }
 
