@@ -3,7 +3,7 @@
 // hemisphere of a point light) is one layer of a single depth array; the geometry shader routes
 // triangles to their layer.
 //
-// Paraboloid views (Brabec et al. 2002; digest_001_004.md A.1): a direction d of the hemisphere
+// Paraboloid views (Brabec et al. 2002): a direction d of the hemisphere
 // frame lands at uv = d.xy / (|d| + d.z). The map is stereographic, so a straight edge (a great-
 // circle arc seen from the light) maps to a circular arc, not to the chord between its mapped
 // vertices. Rasterizing the mapped triangle would cover the wrong texels: up to 4 texels at

@@ -4,8 +4,9 @@
 // its center hits the triangle, and stores the exact distance along that ray. Both interpolated
 // depth (linear between the mapped vertices, while the map is not) and rasterized coverage
 // (chords instead of arcs) are wrong inside large triangles (Brabec et al. 2002 and
-// digest_001_004.md A.1 ask to tessellate finely instead). Other views keep their rasterized
-// depth. Paraboloid inverse (stereographic): d = (2x, 2y, 1 - x^2 - y^2) / (1 + x^2 + y^2).
+// Dachsbacher 2014, "Echtzeit-Schattenverfahren Teil 3", ask to tessellate finely instead). Other
+// views keep their rasterized depth. Paraboloid inverse (stereographic):
+// d = (2x, 2y, 1 - x^2 - y^2) / (1 + x^2 + y^2).
 // Materials with MTL d < 1 cover a fraction d of the texels (dissolve.glsl).
 layout(constant_id = 0) const bool HAS_DISSOLVE = false;
 

@@ -1,5 +1,5 @@
 #version 450
-// Tone mapping of linear HDR radiance to sRGB-encoded 8-bit (seeds/000 post-processing):
+// Tone mapping of linear HDR radiance to sRGB-encoded 8-bit (Thiedemann 2010, tone mapping):
 // 0 linear (exposure, clamp), 1 logarithmic, 2 Drago et al. 2003, 3 filmic (ACES fit,
 // Narkowicz 2015). Luminance-based operators scale the color by Ld / Lw.
 layout(local_size_x = 8, local_size_y = 8) in;

@@ -1,9 +1,9 @@
 #version 450
-// Albedo and normal volumes congruent with the bit grid (DESIGN.md "Voxel representation"),
-// for methods that need more than occupancy (the voxel path tracer), step 1 of 2. The same
-// exact conservative triangle test as voxelize_triangles.comp visits the same voxels; each
-// voxel keeps the smallest index of the triangles that touch it (atomicMin), so where
-// triangles share a voxel the result does not depend on the order the GPU runs them in.
+// Albedo and normal volumes congruent with the bit grid (docs/ARCHITECTURE.md, "The voxel
+// representation"), for methods that need more than occupancy (the voxel path tracer), step 1 of 2.
+// The same exact conservative triangle test as voxelize_triangles.comp visits the same voxels; each
+// voxel keeps the smallest index of the triangles that touch it (atomicMin), so where triangles
+// share a voxel the result does not depend on the order the GPU runs them in.
 // voxelize_attributes_resolve.comp then writes that triangle's albedo and normal.
 #include "voxel_bits.glsl"
 

@@ -1,7 +1,7 @@
 #version 450
-// Conservative surface voxelization by the exact triangle/box overlap test (Akenine-Möller,
-// digest_001_004 §A.9), bit for bit the CPU reference src/voxel/voxelize.rs: every voxel
-// whose closed box the triangle touches is set.
+// Conservative surface voxelization by the exact triangle/box overlap test (Akenine-Möller
+// 2001, "Fast 3D triangle-box overlap testing", separating-axis test), bit for bit the CPU
+// reference src/voxel/voxelize.rs: every voxel whose closed box the triangle touches is set.
 //
 // Exactness: the f32 operations are those of the reference in the same order. Every value
 // that mixes products and sums is `precise`, so no fused multiply-add is contracted (Vulkan

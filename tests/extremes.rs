@@ -1,9 +1,9 @@
-//! Light intensities at the extremes (DESIGN.md: "light intensities from 1e-6 to 1e6, no
-//! NaN/Inf in any buffer"): radiance is linear in the light, so an image rendered with every
-//! light scaled by s, divided by s, must equal the unscaled image, for direct light and for
-//! every indirect-light path (light maps, radiance volume, path tracer). Likewise a scene
-//! scaled from meters to millimeters or kilometers (lights scaled to keep the irradiance)
-//! renders the same image. Validation on.
+//! Light intensities at the extremes (light intensities from 1e-6 to 1e6 W/sr
+//! must give no NaN/Inf in any buffer): radiance is linear in the light, so an image rendered with
+//! every light scaled by s, divided by s, must equal the unscaled image, for direct light and for
+//! every indirect-light path (light maps, radiance volume, path tracer). Likewise a scene scaled
+//! from meters to millimeters or kilometers (lights scaled to keep the irradiance) renders the same
+//! image. Validation on.
 
 mod common;
 

@@ -3,7 +3,7 @@
 // and voxelize_atlas_volumes.vert (albedo and normal volumes) so both pick the same voxel for
 // every point: every value is `precise` and the matrix product is spelled out in one order,
 // so no stage may fuse or reorder differently (Vulkan rounds +, -, * correctly), and the
-// volumes stay congruent with the bits (DESIGN.md "Voxel representation").
+// volumes stay congruent with the bits (docs/ARCHITECTURE.md, "The voxel representation").
 #ifndef ATLAS_VOXEL_GLSL
 #define ATLAS_VOXEL_GLSL
 

@@ -1,4 +1,4 @@
-// BRDFs of voxgi (DESIGN.md "Scenes, units, radiometry").
+// BRDFs of voxgi (docs/ARCHITECTURE.md, "The path of a frame", step 1).
 #ifndef BRDF_GLSL
 #define BRDF_GLSL
 

@@ -1,4 +1,5 @@
-// Shadow-map visibility with percentage-closer filtering (seeds/001, digest_001_004.md A.1-A.4).
+// Shadow-map visibility with percentage-closer filtering (Dachsbacher 2014, KIT lecture
+// notes "Echtzeit-Schattenverfahren", part 3: shadow maps, PCF, bias, aliasing).
 // Depths are compared in meters along the view axis, with bias and normal offset measured in
 // shadow-map texels, so the same settings work from millimeter to kilometer scenes.
 // The including shader declares `frame` (a GpuFrame in a storage buffer) before including

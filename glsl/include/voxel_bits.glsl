@@ -1,4 +1,5 @@
-// Binary voxel columns (DESIGN.md "Voxel representation"; src/voxel/bits.rs is the CPU twin).
+// Binary voxel columns (docs/ARCHITECTURE.md, "The voxel representation";
+// src/voxel/bits.rs is the CPU twin).
 // Depth index k counts from the voxel camera's near plane: layer = k / 128,
 // channel = (k mod 128) / 32, bit = k mod 32, least significant bit = nearest.
 #ifndef VOXEL_BITS_GLSL

@@ -1,6 +1,7 @@
 // Hierarchical voxel ray test (thesis §4.5-§4.8), a line-by-line port of the CPU twin in
 // src/voxel/traverse.rs (read its module doc for the conventions and the deviations from the
-// thesis). Voxel space: origin + t*dir, t in [0, t_max]; bit convention of DESIGN.md.
+// thesis). Voxel space: origin + t*dir, t in [0, t_max]; bit convention of
+// docs/ARCHITECTURE.md, "The voxel representation".
 //
 // The including shader defines, before including this file:
 //   uvec4 vx_column(uint level, int x, int y, uint layer);  // OR-hierarchy texel

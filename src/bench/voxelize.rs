@@ -3,8 +3,8 @@
 //!
 //! `voxgi bench voxelize`: the atlas points' binary voxelization both ways, in one run: the
 //! renderer's compute pass `voxelize_atlas` (atomicOr into the column buffer) against the
-//! thesis's raster pass `voxelize_atlas_bits` (single-bit LUT, logicOp OR; digest §3.3),
-//! with the GPU time of each and whether their bits agree ([`bench_voxelize_atlas`]).
+//! thesis's raster pass `voxelize_atlas_bits` (single-bit LUT, logicOp OR; Thiedemann 2010,
+//! §4.3.1), with the GPU time of each and whether their bits agree ([`bench_voxelize_atlas`]).
 
 use super::scenes::{bench_scenes, tessellated_cube};
 use super::BenchError;

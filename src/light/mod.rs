@@ -1,6 +1,6 @@
 //! Direct light: shadow-map views per light (spot: perspective map; point: six cube faces or
 //! two paraboloid hemispheres; directional: an orthographic map fitted to the scene), after
-//! seeds/001 (digest_001_004.md).
+//! Dachsbacher 2014 (KIT lecture notes, "Echtzeit-Schattenverfahren", part 3).
 
 mod shadow;
 

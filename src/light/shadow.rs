@@ -14,7 +14,7 @@ pub enum PointShadow {
     /// Six perspective cube faces.
     #[default]
     Cube,
-    /// Two paraboloid hemispheres around ±Y (Brabec et al. 2002; digest_001_004.md A.1):
+    /// Two paraboloid hemispheres around ±Y (Brabec et al. 2002):
     /// a third of the layers and draws; each triangle's curved image is covered exactly, by a
     /// ray-triangle test per texel (see `shadow_depth.geom`).
     #[value(name = "paraboloid")]

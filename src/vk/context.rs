@@ -1,6 +1,7 @@
 //! Instance, validation messenger, device choice and the persistent-memory allocator.
 //!
-//! Teardown order (STYLE.md): wait idle → allocator → device → messenger → instance.
+//! Teardown order (docs/ARCHITECTURE.md, "Errors, ownership, tests"): wait idle → allocator →
+//! device → messenger → instance.
 
 use super::VkError;
 use ash::extensions::{ext, khr};

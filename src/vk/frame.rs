@@ -1,7 +1,8 @@
 //! Frames in flight: per-frame command buffers, fences, and timestamp query pools.
 //!
 //! Timestamps of a frame are read when its slot comes around again, after its fence has
-//! signalled, so reading never stalls the GPU (DESIGN.md "Execute").
+//! signalled, so reading never stalls the GPU (docs/ARCHITECTURE.md, "The path of
+//! a frame").
 
 use super::{Cmd, Context, VkError};
 use ash::vk;

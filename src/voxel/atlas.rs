@@ -1,5 +1,5 @@
 //! Automatic injective texture atlases for the thesis's atlas voxelizer (Thiedemann 2010,
-//! `seeds/000`, digest §3.1–§3.3), generated here instead of by hand in Blender.
+//! §4.2–§4.3.1), generated here instead of by hand in Blender.
 //!
 //! # Layout
 //! Every triangle gets its own rectangular *cell*. Inside it the triangle is laid out
@@ -43,7 +43,7 @@
 //!
 //! # OBJ sequences (one atlas for all frames)
 //! The thesis shares one atlas across an OBJ sequence whose vertex order is identical and
-//! whose deformation is moderate (digest §3.1), and notes that a growing triangle makes
+//! whose deformation is moderate (§4.2.1), and notes that a growing triangle makes
 //! holes (§3.6). [`build_sequence_atlas`] removes that limit: each triangle is laid out
 //! isometrically from the frame where its area is largest, then scaled by
 //! `s = max(1, max_f σ_f)`, where `σ_f` is the largest singular value of the affine map from

@@ -1,7 +1,8 @@
-//! Albedo and normal volumes congruent with the bit grid, written from triangles (DESIGN.md
-//! "Voxel representation": non-binary volumes exist only when something reads them): for the
-//! GI methods that read volumes (`gi::PathTracer`, for the objects the atlas voxelizer does
-//! not handle; [`super::gpu_atlas_volumes`] writes the others) and for the albedo debug view.
+//! Albedo and normal volumes congruent with the bit grid, written from triangles
+//! (docs/ARCHITECTURE.md, "The voxel representation": non-binary volumes exist only when something
+//! reads them): for the GI methods that read volumes (`gi::PathTracer`, for the objects the atlas
+//! voxelizer does not handle; [`super::gpu_atlas_volumes`] writes the others) and for the albedo
+//! debug view.
 //!
 //! Pass `voxelize_attributes` (`glsl/voxelize_attributes.comp`) visits the voxels of the bits'
 //! exact conservative test (both shaders include `voxelize_core.glsl`); each voxel keeps the

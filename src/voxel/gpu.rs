@@ -824,7 +824,7 @@ impl VoxelSettings {
     }
 }
 
-/// The two voxelizers of DESIGN.md "Voxel representation".
+/// The two voxelizers of docs/ARCHITECTURE.md, "The voxel representation".
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
 pub enum Voxelizer {
     /// Exact conservative triangle/box test (`voxelize_triangles`), bit for bit the CPU
@@ -1097,7 +1097,7 @@ impl VoxelFrame {
         Ok(run)
     }
 
-    /// Creates the albedo and normal volumes' atlas passes (digest §3.4) when the atlas
+    /// Creates the albedo and normal volumes' atlas passes (Thiedemann 2010, §4.3.2) when the atlas
     /// voxelizer is active, for a GI method that reads them; static objects are splatted now,
     /// once. Returns whether the atlas writes the volumes (then
     /// [`Self::add_attribute_passes`] declares the per-frame part). Objects that keep the

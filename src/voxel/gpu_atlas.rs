@@ -1,4 +1,4 @@
-//! The thesis's atlas voxelizer on the GPU (Thiedemann 2010, `seeds/000`, digest §3.2–§3.3)
+//! The thesis's atlas voxelizer on the GPU (Thiedemann 2010, §4.2.2–§4.3.1)
 //! with the automatic atlases of [`super::atlas`].
 //!
 //! # Passes (named after their GLSL stems)
@@ -7,9 +7,9 @@
 //!   **model-space** position of the closest triangle point for the texels the triangle owns
 //!   (conservative: thin and tiny triangles keep at least one texel).
 //! - `atlas_points` (compute, once per atlas): compacts the valid texels into a point list
-//!   (digest §3.3 step 2). Rigid objects therefore pay the rasterization once; per frame only
-//!   their points are transformed, so the cost follows the atlas size (the surface area over
-//!   the voxel size), not the triangle count.
+//!   (Thiedemann 2010, §4.3.1 step 2). Rigid objects therefore pay the rasterization once; per
+//!   frame only their points are transformed, so the cost follows the atlas size (the surface area
+//!   over the voxel size), not the triangle count.
 //! - `voxelize_atlas` (compute, per voxelization): one invocation per point transforms it by
 //!   the object's model matrix and ORs its single bit into the **column buffer** with
 //!   `atomicOr`. The thesis ORs a single-bit LUT into an `RGBA32UI` target with `logicOp OR`;
@@ -22,7 +22,7 @@
 //! ([`super::atlas::build_sequence_atlas`], hole-free in every frame). Its position atlas
 //! is rendered once per frame with that frame's vertices through the shared layout, giving
 //! one point list per frame, built once at load (the thesis re-rasterizes animated objects'
-//! atlases every frame, digest §3.2; here a frame change only picks another list). Per
+//! atlases every frame, §4.2.2; here a frame change only picks another list). Per
 //! frame slot the instance splats the list of the frame `Object::mesh_at` selects
 //! ([`SlotFrames`], next to the model matrix of [`SlotMatrices`]). The alternative, one list
 //! of (triangle, barycentric) points and per-frame vertex buffers, would keep memory at one

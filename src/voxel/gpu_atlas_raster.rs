@@ -1,4 +1,4 @@
-//! The thesis's binary atlas voxelization as a raster pass (Thiedemann 2010, digest §3.3):
+//! The thesis's binary atlas voxelization as a raster pass (Thiedemann 2010, §4.3.1):
 //! the atlas points drawn as `POINT_LIST` into the `R32G32B32A32_UINT` column image, each
 //! fragment writing the single-bit LUT entry of its depth and `logicOp OR` merging the bits.
 //! The renderer uses the compute twin `voxelize_atlas` (atomicOr into the column buffer that

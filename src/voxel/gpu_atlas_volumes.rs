@@ -1,4 +1,4 @@
-//! Non-binary atlas voxelization (Thiedemann 2010, `seeds/000`, digest §3.4): the atlas
+//! Non-binary atlas voxelization (Thiedemann 2010, §4.3.2): the atlas
 //! points that set the bits ([`super::gpu_atlas`]) also write albedo and normal volumes
 //! congruent with them, for the GI methods that read more than occupancy (the voxel path
 //! tracer and the direct-radiance volume). They exist only when such a method runs

@@ -1,7 +1,7 @@
 //! Binary voxel grid: placement, CPU reference voxelizer, OR mip hierarchy and ray tests.
 //!
-//! This module is the CPU twin of the GPU voxel pipeline (Thiedemann 2010, `seeds/000`,
-//! digest §3–§4). Everything here is plain, safe Rust so tests can hold the GPU against it.
+//! This module is the CPU twin of the GPU voxel pipeline (Thiedemann 2010,
+//! Ch. 4–5). Everything here is plain, safe Rust so tests can hold the GPU against it.
 //!
 //! # Spaces
 //! - **World**: meters.

@@ -1,5 +1,6 @@
 //! Tests of the ray queries: hierarchical == DDA on random grids and rays, the DDA against an
-//! independent f64 brute force, and the numerical extremes of DESIGN.md.
+//! independent f64 brute force, and the numerical extremes listed in the README's
+//! Tests section.
 
 use glam::{DVec3, UVec3, Vec3};
 

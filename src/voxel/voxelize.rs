@@ -2,10 +2,10 @@
 //!
 //! Every voxel whose *closed* box `[i,i+1]×[j,j+1]×[k,k+1]` (voxel space) the triangle
 //! overlaps is set, decided by the Akenine-Möller triangle/box separating-axis test
-//! (digest_001_004 §A.9: the triangle's plane cuts the box and the 2D projections overlap,
-//! plus the nine edge×axis axes). Touching counts, so a triangle lying exactly on a voxel face
-//! sets the voxels on both sides: the reference is conservative, never thinner than a GPU
-//! voxelizer that rounds depths either way.
+//! (Akenine-Möller 2001, "Fast 3D triangle-box overlap testing": the triangle's plane cuts the box
+//! and the 2D projections overlap, plus the nine edge×axis axes). Touching counts, so a triangle
+//! lying exactly on a voxel face sets the voxels on both sides: the reference is conservative,
+//! never thinner than a GPU voxelizer that rounds depths either way.
 //!
 //! The test runs in voxel space: the world→voxel map is affine, and affine maps preserve
 //! overlap, so the unit voxel boxes are exact there.
