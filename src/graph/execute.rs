@@ -471,7 +471,8 @@ impl GraphExecutor {
             cmd.begin_label(&pass.name, label_color(p));
             let ts = timestamps.begin(cmd, &pass.name);
             self.emit(cmd, s, &self.compiled.pass_barriers[pos]);
-            if let Some(f) = &pass.record {
+            let runs = pass.condition.as_ref().map_or(true, |c| c.is_open(slot));
+            if let Some(f) = pass.record.as_ref().filter(|_| runs) {
                 f(&PassContext {
                     cmd,
                     slot,

@@ -233,6 +233,39 @@ impl ResourceDecl {
 /// The closure a pass records with.
 pub type RecordFn = Box<dyn Fn(&PassContext) + 'static>;
 
+/// Per frame slot, whether the passes that declare it (`.when()`) record: a chain that has
+/// nothing new to do in a frame (voxelization while nothing moved) is skipped there, and its
+/// outputs keep what an earlier frame wrote (an imported image keeps its contents across
+/// layout changes). The executor still emits the passes' barriers and timestamps, so the
+/// compiled frame stays one frame for every slot; the host opens or closes the slot before
+/// recording it.
+#[derive(Debug)]
+pub struct SlotCondition {
+    open: [std::sync::atomic::AtomicBool; crate::vk::MAX_FRAMES_IN_FLIGHT],
+}
+
+impl Default for SlotCondition {
+    fn default() -> Self {
+        Self {
+            open: std::array::from_fn(|_| std::sync::atomic::AtomicBool::new(true)),
+        }
+    }
+}
+
+impl SlotCondition {
+    pub fn set(&self, slot: usize, open: bool) {
+        if let Some(g) = self.open.get(slot) {
+            g.store(open, std::sync::atomic::Ordering::Release);
+        }
+    }
+
+    pub fn is_open(&self, slot: usize) -> bool {
+        self.open
+            .get(slot)
+            .map_or(true, |g| g.load(std::sync::atomic::Ordering::Acquire))
+    }
+}
+
 pub(crate) struct PassDecl {
     pub name: String,
     /// (resource, access, selection, declared with `.read()`)
@@ -243,6 +276,8 @@ pub(crate) struct PassDecl {
     pub bindings: Vec<bind::BindingDecl>,
     /// Color attachments in location order, then at most one depth attachment.
     pub attachments: Vec<bind::AttachmentDecl>,
+    /// Records only in the slots this leaves open (`None`: always).
+    pub condition: Option<std::sync::Arc<SlotCondition>>,
 }
 
 /// The declared frame.
@@ -386,6 +421,7 @@ impl RenderGraph {
             interface: None,
             bindings: Vec::new(),
             attachments: Vec::new(),
+            condition: None,
         });
         let index = self.passes.len() - 1;
         PassBuilder { graph: self, index }
@@ -507,6 +543,11 @@ impl PassBuilder<'_> {
             SubresourceSel::whole(),
             false,
         )
+    }
+    /// Records the pass only in the frame slots `condition` leaves open (`None`: always).
+    pub fn when(self, condition: Option<std::sync::Arc<SlotCondition>>) -> Self {
+        self.graph.passes[self.index].condition = condition;
+        self
     }
     /// Hands over the recording closure; ends the declaration.
     pub fn record(self, f: impl Fn(&PassContext) + 'static) {

@@ -36,7 +36,7 @@ use crate::vk::{
     PassTiming, VkError, MAX_FRAMES_IN_FLIGHT,
 };
 use glam::Vec3;
-use std::sync::atomic::{AtomicBool, AtomicU32, AtomicU64, Ordering};
+use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
 use std::sync::Arc;
 
 /// Format of the binary column image: one texel = one column of 128 voxels.
@@ -375,40 +375,8 @@ pub enum ColumnBase<'a> {
     Copy(&'a Buffer),
 }
 
-/// Per frame slot, whether the voxel passes run: the recording closures of a gated chain
-/// record nothing in a slot whose frame has nothing new to voxelize, so the image keeps the
-/// grid of an earlier frame (an imported image keeps its contents across layout changes).
-#[derive(Debug)]
-pub struct SlotGate {
-    open: [AtomicBool; MAX_FRAMES_IN_FLIGHT],
-}
-
-impl Default for SlotGate {
-    fn default() -> Self {
-        Self {
-            open: std::array::from_fn(|_| AtomicBool::new(true)),
-        }
-    }
-}
-
-impl SlotGate {
-    pub fn set(&self, slot: usize, open: bool) {
-        if let Some(g) = self.open.get(slot) {
-            g.store(open, Ordering::Release);
-        }
-    }
-
-    pub fn is_open(&self, slot: usize) -> bool {
-        self.open
-            .get(slot)
-            .map_or(true, |g| g.load(Ordering::Acquire))
-    }
-}
-
-/// Whether a (possibly ungated) pass records in `slot`.
-fn runs(gate: &Option<Arc<SlotGate>>, slot: usize) -> bool {
-    gate.as_ref().map_or(true, |g| g.is_open(slot))
-}
+/// Per frame slot, whether the voxel passes run (the graph skips them where it is closed).
+pub use crate::graph::SlotCondition as SlotGate;
 
 /// World-space triangles rewritten by the host per frame slot: one region of `stride` bytes
 /// per slot in a host-visible buffer (the frame loop waits on a slot's fence before the host
@@ -549,27 +517,22 @@ pub fn add_voxelize_passes_gated(
     triangles: &[TriangleSource<'_>],
     gate: Option<Arc<SlotGate>>,
 ) {
-    let gate_c = gate.clone();
     match base {
         ColumnBase::Clear => g
             .add_pass("voxel_clear")
             .write(columns, Access::TransferWrite)
-            .record(move |ctx| {
-                if runs(&gate_c, ctx.slot) {
-                    ctx.cmd.fill_buffer(ctx.buffer(columns).raw, 0)
-                }
-            }),
+            .when(gate.clone())
+            .record(move |ctx| ctx.cmd.fill_buffer(ctx.buffer(columns).raw, 0)),
         ColumnBase::Copy(static_columns) => {
             let size = column_bytes(grid);
             let src = g.import_buffer(static_columns, Access::TransferRead);
             g.add_pass("voxel_copy_static")
                 .read(src, Access::TransferRead)
                 .write(columns, Access::TransferWrite)
+                .when(gate.clone())
                 .record(move |ctx| {
-                    if runs(&gate_c, ctx.slot) {
-                        ctx.cmd
-                            .copy_buffer(ctx.buffer(src).raw, ctx.buffer(columns).raw, size)
-                    }
+                    ctx.cmd
+                        .copy_buffer(ctx.buffer(src).raw, ctx.buffer(columns).raw, size)
                 })
         }
     }
@@ -600,14 +563,12 @@ pub fn add_voxelize_passes_gated(
     let grid = *grid;
     let mut pass = g
         .add_pass("voxelize_triangles")
+        .when(gate)
         .write(columns, Access::StorageReadWrite(Shader::Compute));
     for (h, _) in &sets {
         pass = pass.read(*h, Access::StorageRead(Shader::Compute));
     }
     pass.record(move |ctx| {
-        if !runs(&gate, ctx.slot) {
-            return;
-        }
         for (h, range) in &sets {
             let (offset, range, count, loads) = range.at(ctx.slot);
             if count == 0 {
@@ -663,14 +624,11 @@ pub fn add_store_and_mip_passes_gated(
 ) {
     let (w, h) = image_extent(&voxels.grid);
     let layers = voxels.grid.layers();
-    let gate_c = gate.clone();
     g.add_pass("voxel_store")
         .read(columns, Access::TransferRead)
         .write_sub(image, Access::TransferWrite, Subresource::mip(0))
+        .when(gate.clone())
         .record(move |ctx| {
-            if !runs(&gate_c, ctx.slot) {
-                return;
-            }
             ctx.cmd.copy_buffer_to_image(
                 ctx.buffer(columns).raw,
                 ctx.image(image).raw,
@@ -732,10 +690,8 @@ fn mip_passes(
                 Access::StorageWrite(Shader::Compute),
                 Subresource::mip(level),
             )
+            .when(gate)
             .record(move |ctx| {
-                if !runs(&gate, ctx.slot) {
-                    return;
-                }
                 let img = ctx.image(image);
                 ctx.cmd.bind(
                     &pipe,

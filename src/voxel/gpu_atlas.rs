@@ -631,6 +631,7 @@ pub fn add_voxelize_atlas_pass(
     }
     let mut pass = g
         .add_pass("voxelize_atlas")
+        .when(gate)
         .write(columns, Access::StorageReadWrite(Shader::Compute));
     for h in sets.iter().flat_map(ImportedInstance::handles) {
         pass = pass.read(h, read);
@@ -638,9 +639,6 @@ pub fn add_voxelize_atlas_pass(
     let (pipe, grid) = (pipes.voxelize, *grid);
     let (w, h) = image_extent(&grid);
     pass.record(move |ctx| {
-        if !gate.as_ref().map_or(true, |g| g.is_open(ctx.slot)) {
-            return;
-        }
         for inst in &sets {
             let (chunks, model) = inst.at(ctx.slot);
             for &(buf, count) in chunks {

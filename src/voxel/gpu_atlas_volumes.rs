@@ -426,6 +426,7 @@ fn add_splat_pass(
     // pass itself wrote, never the contents of an earlier pass.
     let mut pass = g
         .add_pass("voxelize_atlas_volumes")
+        .when(gate)
         .write(albedo, Access::ColorAttachment)
         .write(normal, Access::ColorAttachment);
     for (chunks, t) in splats.iter().flat_map(|s| &s.frames) {
@@ -436,9 +437,6 @@ fn add_splat_pass(
     }
     let grid = *grid;
     pass.record(move |ctx| {
-        if !gate.as_ref().map_or(true, |g| g.is_open(ctx.slot)) {
-            return;
-        }
         let ext = grid.extent_voxels();
         let clear = Some(vk::ClearValue {
             color: vk::ClearColorValue { float32: [0.0; 4] },
