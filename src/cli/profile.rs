@@ -8,7 +8,7 @@ use crate::graph::GraphExecutor;
 use crate::profile::ProfileReport;
 use crate::render::profile_scene;
 use crate::scene::load_scene_arg;
-use crate::vk::{Context, FrameLoop, MAX_FRAMES_IN_FLIGHT};
+use crate::vk::{Context, MAX_FRAMES_IN_FLIGHT};
 use std::io::Write;
 
 /// Arguments of `voxgi profile`.
@@ -99,26 +99,15 @@ fn profile_demo(
 ) -> Result<ProfileReport, CliError> {
     let demo = Demo::new(ctx, width, height)?;
     let exec = demo.executor(ctx, MAX_FRAMES_IN_FLIGHT)?;
-    let mut frame_loop = FrameLoop::new(
-        ctx,
-        MAX_FRAMES_IN_FLIGHT,
-        exec.compiled().order.len() as u32,
-    )?;
-    let mut measured = Vec::new();
-    for i in 0..warmup + frames {
-        let (slot, cmd, ts, done) = frame_loop.begin(ctx)?;
-        exec.record(&cmd, slot, ts);
-        if i >= warmup + MAX_FRAMES_IN_FLIGHT && !done.is_empty() {
-            measured.push(done);
+    let measured = crate::graph::run_frames(ctx, &exec, warmup + frames, warmup, |_| {});
+    let measured = match measured {
+        Ok(m) => m,
+        Err(e) => {
+            exec.destroy(ctx);
+            demo.destroy(ctx);
+            return Err(e.into());
         }
-        frame_loop.submit(ctx, &[], &[])?;
-    }
-    measured.extend(
-        frame_loop
-            .finish(ctx)?
-            .into_iter()
-            .filter(|t| !t.is_empty()),
-    );
+    };
     let c = exec.compiled();
     let mut report = ProfileReport::from_frames(&ctx.info.name, &measured, warmup);
     report
@@ -135,7 +124,6 @@ fn profile_demo(
         .notes
         .push(("culled passes".into(), culled.join(", ")));
     exec.destroy(ctx);
-    frame_loop.destroy(ctx);
     demo.destroy(ctx);
     Ok(report)
 }

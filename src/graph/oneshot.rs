@@ -1,5 +1,7 @@
-//! Running a graph once, outside a frame loop: one-time setup work (atlases, static
-//! voxelization), read-backs in tests, and benchmarks.
+//! Running a compiled graph headless: [`run_frames`] is the one frame driver of headless
+//! renders, profiles, tests and benchmarks (the viewer's loop adds a swapchain); [`run_once`]
+//! runs a graph a single time (one-time setup work: atlases, static voxelization; read-backs
+//! in tests).
 
 use super::{GraphError, GraphExecutor, RenderGraph};
 use crate::vk::{vk, Buffer, BufferDesc, Context, FrameLoop, MemoryLocation, PassTiming, VkError};
@@ -31,6 +33,52 @@ pub fn run_once(ctx: &Context, graph: RenderGraph) -> Result<Vec<PassTiming>, On
     let _ = ctx.wait_idle();
     exec.destroy(ctx);
     Ok(result?)
+}
+
+/// Runs `frames` frames of `exec` with `MAX_FRAMES_IN_FLIGHT` slots. Before recording each
+/// frame, after its slot's fence, `write(slot)` writes the slot's host data (frame
+/// constants). Returns the per-pass timings of every finished frame whose index is at least
+/// `keep_from` (frames without timings are skipped), and waits for the GPU before returning.
+pub fn run_frames(
+    ctx: &Context,
+    exec: &GraphExecutor,
+    frames: usize,
+    keep_from: usize,
+    mut write: impl FnMut(usize),
+) -> Result<Vec<Vec<PassTiming>>, VkError> {
+    let in_flight = crate::vk::MAX_FRAMES_IN_FLIGHT;
+    let mut frame_loop = FrameLoop::new(ctx, in_flight, exec.compiled().order.len() as u32)?;
+    let mut kept = Vec::new();
+    let run = (|| -> Result<(), VkError> {
+        for i in 0..frames {
+            let slot = frame_loop.current_slot();
+            // begin() waits for the slot's fence, so the host may rewrite its data after it;
+            // the timings it returns are those of frame i - in_flight.
+            let (_, cmd, ts, done) = frame_loop.begin(ctx)?;
+            if i >= keep_from + in_flight && !done.is_empty() {
+                kept.push(done);
+            }
+            write(slot);
+            exec.record(&cmd, slot, ts);
+            frame_loop.submit(ctx, &[], &[])?;
+        }
+        Ok(())
+    })();
+    let finished = frame_loop.finish(ctx);
+    frame_loop.destroy(ctx);
+    let _ = ctx.wait_idle();
+    run?;
+    let finished = finished?;
+    // The last `in_flight` frames finish here, oldest first.
+    let first_finished = frames.saturating_sub(finished.len());
+    kept.extend(
+        finished
+            .into_iter()
+            .enumerate()
+            .filter(|(k, t)| first_finished + k >= keep_from && !t.is_empty())
+            .map(|(_, t)| t),
+    );
+    Ok(kept)
 }
 
 /// A host-visible buffer for reading back GPU data.

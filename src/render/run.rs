@@ -5,7 +5,7 @@ use super::{RenderError, Renderer};
 use crate::eval::HdrImage;
 use crate::graph::GraphExecutor;
 use crate::scene::Scene;
-use crate::vk::{Context, FrameLoop, PassTiming, MAX_FRAMES_IN_FLIGHT};
+use crate::vk::{Context, PassTiming, MAX_FRAMES_IN_FLIGHT};
 
 /// The result of [`render_image`].
 pub struct RenderOutput {
@@ -67,45 +67,14 @@ fn run_frames(
     frames: usize,
 ) -> Result<FrameFacts, RenderError> {
     let exec = GraphExecutor::new(ctx, renderer.graph(), MAX_FRAMES_IN_FLIGHT)?;
-    let result = (|| -> Result<FrameFacts, RenderError> {
-        let mut frame_loop = FrameLoop::new(
-            ctx,
-            MAX_FRAMES_IN_FLIGHT,
-            exec.compiled().order.len() as u32,
-        )?;
-        let mut last = Vec::new();
-        let run = (|| -> Result<(), RenderError> {
-            for _ in 0..frames {
-                let slot = frame_loop.current_slot();
-                // begin() waits for the slot's fence before the frame constants are rewritten.
-                let (slot_b, cmd, ts, done) = frame_loop.begin(ctx)?;
-                debug_assert_eq!(slot, slot_b);
-                if !done.is_empty() {
-                    last = done;
-                }
-                renderer.write_frame(slot);
-                exec.record(&cmd, slot, ts);
-                frame_loop.submit(ctx, &[], &[])?;
-            }
-            Ok(())
-        })();
-        let finished = frame_loop.finish(ctx);
-        frame_loop.destroy(ctx);
-        run?;
-        if let Some(t) = finished?.into_iter().last() {
-            last = t;
-        }
-        let c = exec.compiled();
-        let live = c.order.iter().map(|&p| c.pass_names[p].clone()).collect();
-        Ok((
-            last,
-            live,
-            (c.memory.peak_aliased_bytes, c.memory.unaliased_bytes),
-        ))
-    })();
-    let _ = ctx.wait_idle();
+    let timings =
+        crate::graph::run_frames(ctx, &exec, frames, 0, |slot| renderer.write_frame(slot));
+    let c = exec.compiled();
+    let live = c.order.iter().map(|&p| c.pass_names[p].clone()).collect();
+    let bytes = (c.memory.peak_aliased_bytes, c.memory.unaliased_bytes);
     exec.destroy(ctx);
-    result
+    let last = timings?.into_iter().last().unwrap_or_default();
+    Ok((last, live, bytes))
 }
 
 /// What [`profile_scene`] measured.
@@ -131,40 +100,16 @@ pub fn profile_scene(
     let mut renderer = Renderer::new(ctx, scene, settings.clone())?;
     let result = (|| {
         let exec = GraphExecutor::new(ctx, renderer.graph(), MAX_FRAMES_IN_FLIGHT)?;
-        let r = (|| -> Result<Vec<Vec<PassTiming>>, RenderError> {
-            let mut frame_loop = FrameLoop::new(
-                ctx,
-                MAX_FRAMES_IN_FLIGHT,
-                exec.compiled().order.len() as u32,
-            )?;
-            let mut measured = Vec::new();
-            let run = (|| -> Result<(), RenderError> {
-                for i in 0..warmup + frames {
-                    let slot = frame_loop.current_slot();
-                    let (_, cmd, ts, done) = frame_loop.begin(ctx)?;
-                    if i >= warmup + MAX_FRAMES_IN_FLIGHT && !done.is_empty() {
-                        measured.push(done);
-                    }
-                    renderer.write_frame(slot);
-                    exec.record(&cmd, slot, ts);
-                    frame_loop.submit(ctx, &[], &[])?;
-                }
-                Ok(())
-            })();
-            let finished = frame_loop.finish(ctx);
-            frame_loop.destroy(ctx);
-            run?;
-            measured.extend(finished?.into_iter().filter(|t| !t.is_empty()));
-            Ok(measured)
-        })();
-        let _ = ctx.wait_idle();
+        let frames = crate::graph::run_frames(ctx, &exec, warmup + frames, warmup, |slot| {
+            renderer.write_frame(slot)
+        });
         let c = exec.compiled();
         let live = c.order.iter().map(|&p| c.pass_names[p].clone()).collect();
         let culled = c.culled.iter().map(|&p| c.pass_names[p].clone()).collect();
         let memory = c.memory;
         exec.destroy(ctx);
-        r.map(|frames| ProfileRun {
-            frames,
+        Ok(ProfileRun {
+            frames: frames?,
             live_passes: live,
             culled_passes: culled,
             transient_memory: memory,

@@ -39,18 +39,10 @@ pub fn run_frames(
     frames: usize,
 ) -> voxgi::eval::HdrImage {
     use voxgi::graph::GraphExecutor;
-    use voxgi::vk::{FrameLoop, MAX_FRAMES_IN_FLIGHT};
+    use voxgi::vk::MAX_FRAMES_IN_FLIGHT;
     let exec = GraphExecutor::new(ctx, renderer.graph(), MAX_FRAMES_IN_FLIGHT).expect("graph");
-    let mut frame_loop = FrameLoop::new(ctx, MAX_FRAMES_IN_FLIGHT, 64).expect("frame loop");
-    for _ in 0..frames {
-        let slot = frame_loop.current_slot();
-        let (_, cmd, ts, _) = frame_loop.begin(ctx).expect("begin frame");
-        renderer.write_frame(slot);
-        exec.record(&cmd, slot, ts);
-        frame_loop.submit(ctx, &[], &[]).expect("submit");
-    }
-    frame_loop.finish(ctx).expect("finish");
-    frame_loop.destroy(ctx);
+    voxgi::graph::run_frames(ctx, &exec, frames, 0, |slot| renderer.write_frame(slot))
+        .expect("frames run");
     exec.destroy(ctx);
     renderer.hdr_image()
 }
