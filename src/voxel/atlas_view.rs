@@ -21,7 +21,7 @@ use super::VoxelGrid;
 use crate::eval::HdrImage;
 use crate::graph::{Access, ImageHandle, RenderGraph, Shader};
 use crate::scene::{NoSuchObject, Scene};
-use crate::vk::{vk, Buffer, ComputePipeline, Context, Descriptor, VkError};
+use crate::vk::{vk, Buffer, ComputePipeline, Context, VkError};
 use glam::Vec3;
 use std::sync::Arc;
 
@@ -203,29 +203,14 @@ impl AtlasViewPass {
             box_scale: self.box_scale.extend(0.0).to_array(),
         };
         let (pipe, sampler) = (self.pipeline, self.sampler);
+        let c = Shader::Compute;
         g.add_pass("atlas_debug")
-            .read(atlas, Access::Sampled(Shader::Compute))
-            .write(value, Access::StorageWrite(Shader::Compute))
-            .write(color, Access::StorageWrite(Shader::Compute))
+            .pipeline(&pipe)
+            .bind_sampled(0, atlas, sampler, c)
+            .bind(1, value, Access::StorageWrite(c))
+            .bind(2, color, Access::StorageWrite(c))
             .record(move |ctx| {
-                ctx.cmd.bind(
-                    &pipe,
-                    &[
-                        Descriptor::SampledImage {
-                            binding: 0,
-                            view: ctx.image(atlas).view,
-                            sampler,
-                        },
-                        Descriptor::StorageImage {
-                            binding: 1,
-                            view: ctx.image(value).view,
-                        },
-                        Descriptor::StorageImage {
-                            binding: 2,
-                            view: ctx.image(color).view,
-                        },
-                    ],
-                );
+                ctx.bind(&pipe);
                 ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
                 ctx.cmd
                     .dispatch(extent.0.div_ceil(8), extent.1.div_ceil(8), 1);

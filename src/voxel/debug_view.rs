@@ -24,7 +24,7 @@ use super::VoxelGrid;
 use crate::eval::HdrImage;
 use crate::graph::{Access, ImageHandle, RenderGraph, Shader};
 use crate::scene::Scene;
-use crate::vk::{vk, Buffer, ComputePipeline, Context, Descriptor, Image, ImageDesc, VkError};
+use crate::vk::{vk, Buffer, ComputePipeline, Context, Image, ImageDesc, VkError};
 use glam::{Mat4, Vec3};
 
 /// Which debug view a frame shows instead of the lit image.
@@ -279,37 +279,16 @@ impl VoxelDebugPass {
             }
             AlbedoSource::Placeholder(image) => g.import_image(image, ATTRIBUTE_VOLUME_STATE),
         };
+        let c = Shader::Compute;
         g.add_pass("voxel_debug")
-            .read(columns, Access::Sampled(Shader::Compute))
-            .read(albedo, Access::Sampled(Shader::Compute))
-            .read(lut, read)
-            .write(value, Access::StorageWrite(Shader::Compute))
-            .write(color, Access::StorageWrite(Shader::Compute))
+            .pipeline(&pipe)
+            .bind_sampled(0, columns, sampler, c)
+            .bind(1, lut, Access::StorageRead(c))
+            .bind(2, value, Access::StorageWrite(c))
+            .bind(3, color, Access::StorageWrite(c))
+            .bind_sampled(4, albedo, sampler, c)
             .record(move |ctx| {
-                ctx.cmd.bind(
-                    &pipe,
-                    &[
-                        Descriptor::SampledImage {
-                            binding: 0,
-                            view: ctx.image(columns).view,
-                            sampler,
-                        },
-                        Descriptor::storage_buffer(1, ctx.buffer(lut).raw),
-                        Descriptor::StorageImage {
-                            binding: 2,
-                            view: ctx.image(value).view,
-                        },
-                        Descriptor::StorageImage {
-                            binding: 3,
-                            view: ctx.image(color).view,
-                        },
-                        Descriptor::SampledImage {
-                            binding: 4,
-                            view: ctx.image(albedo).view,
-                            sampler,
-                        },
-                    ],
-                );
+                ctx.bind(&pipe);
                 ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
                 ctx.cmd
                     .dispatch(extent.0.div_ceil(8), extent.1.div_ceil(8), 1);
