@@ -31,6 +31,8 @@ pub(crate) struct BindingDecl {
     pub resource: Option<ResourceId>,
     pub access: Access,
     pub sampler: Option<vk::Sampler>,
+    /// An image binding of one mip level's view (`None`: the whole image).
+    pub mip: Option<u32>,
 }
 
 impl BindingDecl {
@@ -40,6 +42,7 @@ impl BindingDecl {
             resource: Some(resource),
             access,
             sampler: None,
+            mip: None,
         }
     }
     pub fn per_draw(binding: u32) -> Self {
@@ -48,6 +51,7 @@ impl BindingDecl {
             resource: None,
             access: Access::Sampled(Shader::Fragment),
             sampler: None,
+            mip: None,
         }
     }
 }

@@ -117,17 +117,20 @@ impl PassContext<'_> {
             .filter_map(|b| {
                 let id = b.resource?;
                 Some(match self.resources.get(id.0 as usize) {
-                    Some(Some(GpuResource::Image(img))) => match b.sampler {
-                        Some(sampler) => Descriptor::SampledImage {
-                            binding: b.binding,
-                            view: img.view,
-                            sampler,
-                        },
-                        None => Descriptor::StorageImage {
-                            binding: b.binding,
-                            view: img.view,
-                        },
-                    },
+                    Some(Some(GpuResource::Image(img))) => {
+                        let view = b.mip.map_or(img.view, |level| img.mip_view(level));
+                        match b.sampler {
+                            Some(sampler) => Descriptor::SampledImage {
+                                binding: b.binding,
+                                view,
+                                sampler,
+                            },
+                            None => Descriptor::StorageImage {
+                                binding: b.binding,
+                                view,
+                            },
+                        }
+                    }
                     Some(Some(GpuResource::Buffer(_))) => {
                         let buf = self.buffer(BufferHandle(id));
                         let (offset, range) = match self.decls[id.0 as usize].slot_window {

@@ -505,6 +505,21 @@ impl PassBuilder<'_> {
         decl.sampler = Some(sampler);
         self.add_binding(decl, SubresourceSel::whole())
     }
+    /// Declares mip `level` of `image` (its one-level view) with `access` at `binding`: a
+    /// storage image (`Storage*`), or, with `sampler`, a sampled one (`Sampled`).
+    pub fn bind_mip(
+        self,
+        binding: u32,
+        image: ImageHandle,
+        level: u32,
+        access: Access,
+        sampler: Option<vk::Sampler>,
+    ) -> Self {
+        let mut decl = bind::BindingDecl::new(binding, image.into(), access);
+        decl.sampler = sampler;
+        decl.mip = Some(level);
+        self.add_binding(decl, Subresource::mip(level))
+    }
     /// Declares `binding` as pushed by the record closure itself, per draw (textures that
     /// change between draws): the resources it may read are declared with `.read()`.
     pub fn bind_per_draw(self, binding: u32) -> Self {

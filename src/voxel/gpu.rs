@@ -679,34 +679,14 @@ fn mip_passes(
         let pipe = pipelines.mip;
         let sampler = pipelines.sampler;
         let (w, h) = ((extent.0 >> level).max(1), (extent.1 >> level).max(1));
+        let c = Shader::Compute;
         g.add_pass(&format!("voxel_mip_{level}"))
-            .read_sub(
-                image,
-                Access::Sampled(Shader::Compute),
-                Subresource::mip(level - 1),
-            )
-            .write_sub(
-                image,
-                Access::StorageWrite(Shader::Compute),
-                Subresource::mip(level),
-            )
+            .pipeline(&pipe)
+            .bind_mip(0, image, level - 1, Access::Sampled(c), Some(sampler))
+            .bind_mip(1, image, level, Access::StorageWrite(c), None)
             .when(gate)
             .record(move |ctx| {
-                let img = ctx.image(image);
-                ctx.cmd.bind(
-                    &pipe,
-                    &[
-                        Descriptor::SampledImage {
-                            binding: 0,
-                            view: img.mip_view(level - 1),
-                            sampler,
-                        },
-                        Descriptor::StorageImage {
-                            binding: 1,
-                            view: img.mip_view(level),
-                        },
-                    ],
-                );
+                ctx.bind(&pipe);
                 ctx.cmd.dispatch(w.div_ceil(8), h.div_ceil(8), layers);
             });
     }
