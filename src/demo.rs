@@ -7,8 +7,8 @@
 
 use crate::graph::{Access, GraphExecutor, RenderGraph, Shader};
 use crate::vk::{
-    vk, Buffer, BufferDesc, ComputePipeline, Context, Descriptor, GraphicsPipeline,
-    GraphicsPipelineDesc, ImageDesc, MemoryLocation, VkError,
+    vk, Buffer, BufferDesc, ComputePipeline, Context, GraphicsPipeline, GraphicsPipelineDesc,
+    ImageDesc, MemoryLocation, VkError,
 };
 
 /// Pipelines and the read-back buffer of the demo graph.
@@ -81,65 +81,37 @@ impl Demo {
         let readback = g.import_buffer(&self.readback, Access::HostRead);
         let groups = (w.div_ceil(8), h.div_ceil(8));
 
+        let c = Shader::Compute;
         let pipe = self.gradient;
         g.add_pass("demo_gradient")
-            .write(pattern, Access::StorageWrite(Shader::Compute))
+            .pipeline(&pipe)
+            .bind(0, pattern, Access::StorageWrite(c))
             .record(move |ctx| {
-                ctx.cmd.bind(
-                    &pipe,
-                    &[Descriptor::StorageImage {
-                        binding: 0,
-                        view: ctx.image(pattern).view,
-                    }],
-                );
+                ctx.bind(&pipe);
                 ctx.cmd.dispatch(groups.0, groups.1, 1);
             });
 
         let (pipe, sampler) = (self.blit, self.sampler);
         g.add_pass("demo_blit")
-            .read(pattern, Access::Sampled(Shader::Fragment))
-            .write(color, Access::ColorAttachment)
+            .pipeline(&pipe)
+            .bind_sampled(0, pattern, sampler, Shader::Fragment)
+            // The full-screen triangle covers every pixel; the clear only avoids loading
+            // undefined contents.
+            .color(color, crate::graph::Load::Clear([0.0; 4]))
             .record(move |ctx| {
-                let target = ctx.image(color);
-                ctx.cmd.begin_rendering(
-                    target.extent_2d(),
-                    &[crate::vk::Attachment {
-                        view: target.view,
-                        clear: None,
-                    }],
-                    None,
-                );
-                ctx.cmd.bind(
-                    &pipe,
-                    &[Descriptor::SampledImage {
-                        binding: 0,
-                        view: ctx.image(pattern).view,
-                        sampler,
-                    }],
-                );
+                ctx.begin_rendering();
+                ctx.bind(&pipe);
                 ctx.cmd.draw(3, 1);
                 ctx.cmd.end_rendering();
             });
 
         let pipe = self.pack;
         g.add_pass("demo_pack")
-            .read(color, Access::Sampled(Shader::Compute))
-            .write(packed, Access::StorageWrite(Shader::Compute))
+            .pipeline(&pipe)
+            .bind_sampled(0, color, sampler, c)
+            .bind(1, packed, Access::StorageWrite(c))
             .record(move |ctx| {
-                ctx.cmd.bind(
-                    &pipe,
-                    &[
-                        Descriptor::SampledImage {
-                            binding: 0,
-                            view: ctx.image(color).view,
-                            sampler,
-                        },
-                        Descriptor::StorageImage {
-                            binding: 1,
-                            view: ctx.image(packed).view,
-                        },
-                    ],
-                );
+                ctx.bind(&pipe);
                 ctx.cmd.dispatch(groups.0, groups.1, 1);
             });
 
