@@ -4,7 +4,7 @@
 //! point light adds six cube faces (or two paraboloid hemispheres), a spot light one
 //! perspective map, a directional light one orthographic map; no lights, no shadow views.
 
-use crate::render::aabb_visible;
+use crate::scene::aabb_visible;
 use crate::scene::{Aabb, Light, Scene};
 use glam::{Mat4, Vec3};
 

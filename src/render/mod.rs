@@ -6,7 +6,6 @@
 //! owns them and the scene on the GPU ([`SceneGpu`]) and assembles the frame in
 //! [`Renderer::declare`]. [`render_image`] and [`profile_scene`] run frames headless.
 
-mod cull;
 mod deferred_direct;
 mod gbuffer;
 mod gbuffer_view;
@@ -17,7 +16,6 @@ mod scene_gpu;
 mod shadow_depth;
 mod textures;
 
-pub use cull::aabb_visible;
 pub use gbuffer::Gbuffer;
 pub use light_map::LightMaps;
 pub use run::{profile_scene, render_image, ProfileRun, RenderOutput};

@@ -213,7 +213,7 @@ impl SceneGpu {
                 .all_draws
                 .iter()
                 .copied()
-                .filter(|d| super::aabb_visible(view_proj, &d.aabb))
+                .filter(|d| crate::scene::aabb_visible(view_proj, &d.aabb))
                 .collect(),
             shadow: shadow_views
                 .iter()

@@ -95,6 +95,7 @@
 
 mod builtin;
 mod camera;
+mod cull;
 mod desc;
 mod error;
 mod gi;
@@ -109,6 +110,7 @@ use std::path::{Path, PathBuf};
 
 pub use builtin::{builtin, builtin_names, load_scene_arg, DEFAULT_SCENE};
 pub use camera::Camera;
+pub use cull::aabb_visible;
 pub use error::SceneError;
 pub use gi::{resolve_gi, GiOverrides};
 pub use light::{spot_falloff, Light};

@@ -1,6 +1,6 @@
 //! Frustum culling of world-space boxes against a view-projection (camera or shadow view).
 
-use crate::scene::Aabb;
+use super::Aabb;
 use glam::{Mat4, Vec4};
 
 /// False only when the box lies entirely outside one clip plane of `view_proj` (Vulkan clip
