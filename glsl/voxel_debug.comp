@@ -20,7 +20,10 @@ layout(set = 0, binding = 4) uniform sampler3D albedo_volume;
 layout(push_constant) uniform Push {
     mat4 ndc_to_voxel;  // Vulkan NDC (z 0 near, 1 far) -> continuous voxel coordinates
     ivec4 dims;         // xyz voxels, w coarsest level
-    uvec4 params;       // x mode, y level, z max iterations, w start level
+    uint mode;          // the view (DebugView::shader_mode)
+    uint level;         // the hierarchy level the level view shows
+    uint max_iterations;
+    uint start_level;
     vec4 light;         // xyz unit light direction in voxel axes, w steps at the ramp's top
 } pc;
 
@@ -87,15 +90,15 @@ void main() {
     vec4 b = pc.ndc_to_voxel * vec4(ndc, 1.0, 1.0);
     vec3 o = a.xyz / a.w;
     vec3 d = b.xyz / b.w - o;
-    uint mode = pc.params.x;
+    uint mode = pc.mode;
     VxHit h;
     float cell = 1.0;
     if (mode == 2u) {
-        g_level = min(pc.params.y, uint(pc.dims.w));
+        g_level = min(pc.level, uint(pc.dims.w));
         cell = float(1 << g_level);
         h = voxel_first_hit_dda(pc.dims.xyz, o, d, 1.0);
     } else {
-        h = voxel_first_hit(pc.dims.xyz, uint(pc.dims.w), o, d, 1.0, pc.params.w, pc.params.z);
+        h = voxel_first_hit(pc.dims.xyz, uint(pc.dims.w), o, d, 1.0, pc.start_level, pc.max_iterations);
     }
     vec4 v = vec4(0.0, 0.0, 0.0, 1.0);
     vec3 c = vec3(0.0);

@@ -13,9 +13,12 @@ struct Result { uvec4 hit_voxel; vec4 t_steps; };  // (hit, x, y, k), (t, steps,
 layout(set = 0, binding = 4, std430) writeonly buffer Results { Result results[]; };
 
 layout(push_constant) uniform Push {
-    ivec4 dims;     // xyz voxels, w max level
-    uvec4 params;   // x start level, y max iterations, z mode, w ray count
-    uvec4 params2;  // x marching samples
+    ivec4 dims;             // xyz voxels, w max level
+    uint start_level;       // hierarchical traversal: the level it starts at
+    uint max_iterations;    // hierarchical traversal: its iteration cap
+    uint mode;              // 0 hierarchical, 1 exact DDA, 2 1-bit march, 3 3-bit march
+    uint ray_count;
+    uint marching_samples;  // marching: samples along the ray
 } pc;
 
 uvec4 vx_column(uint level, int x, int y, uint layer) {
@@ -37,12 +40,12 @@ bool vx_voxel(int x, int y, int k) {
 
 void main() {
     uint i = gl_GlobalInvocationID.x;
-    if (i >= pc.params.w) return;
+    if (i >= pc.ray_count) return;
     Ray r = rays[i];
     VxHit h;
-    uint mode = pc.params.z;
-    if (mode == 0u) h = voxel_first_hit(pc.dims.xyz, uint(pc.dims.w), r.origin_tmax.xyz, r.dir.xyz, r.origin_tmax.w, pc.params.x, pc.params.y);
+    uint mode = pc.mode;
+    if (mode == 0u) h = voxel_first_hit(pc.dims.xyz, uint(pc.dims.w), r.origin_tmax.xyz, r.dir.xyz, r.origin_tmax.w, pc.start_level, pc.max_iterations);
     else if (mode == 1u) h = voxel_first_hit_dda(pc.dims.xyz, r.origin_tmax.xyz, r.dir.xyz, r.origin_tmax.w);
-    else h = voxel_march(pc.dims.xyz, r.origin_tmax.xyz, r.dir.xyz, r.origin_tmax.w, pc.params2.x, mode == 3u);
+    else h = voxel_march(pc.dims.xyz, r.origin_tmax.xyz, r.dir.xyz, r.origin_tmax.w, pc.marching_samples, mode == 3u);
     results[i] = Result(uvec4(h.hit ? 1u : 0u, h.voxel), vec4(h.t, float(h.steps), h.ran_out ? 1.0 : 0.0, 0.0));
 }

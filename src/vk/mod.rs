@@ -14,8 +14,8 @@ pub use cmd::{Attachment, Cmd};
 pub use context::{describe_devices, Context, ContextDesc, DeviceInfo, ValidationLog};
 pub use frame::{FrameLoop, FrameSlot, PassTiming, TimestampRecorder, MAX_FRAMES_IN_FLIGHT};
 pub use pipeline::{
-    descriptor_type, interface_of, Bindable, ComputePipeline, Descriptor, GraphicsPipeline,
-    GraphicsPipelineDesc, PushLayout, ShaderModule,
+    check_push_against, descriptor_type, interface_of, Bindable, ComputePipeline, Descriptor,
+    GraphicsPipeline, GraphicsPipelineDesc, PushLayout, ShaderModule,
 };
 pub use reflect::{BindingKind, PushConstants, ShaderInterface};
 pub use resources::{Buffer, BufferDesc, Image, ImageDesc, MemoryLocation};

@@ -110,6 +110,12 @@ fn check_push_layout(
     })
 }
 
+/// Checks the Rust push struct `push` against the block the embedded shaders `files` declare,
+/// without a device (what creating their pipeline checks): for tier-1 tests.
+pub fn check_push_against(files: &[&str], push: Option<PushLayout>) -> Result<(), VkError> {
+    check_push_layout(interface_of(files)?, push.as_ref())
+}
+
 /// The push-constant range of an interface: its block's size, rounded to the 4 bytes Vulkan
 /// ranges are counted in.
 fn push_bytes(interface: &ShaderInterface) -> u32 {

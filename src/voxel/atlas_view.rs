@@ -270,11 +270,12 @@ mod tests {
     use super::*;
 
     #[test]
-    fn push_layout_matches_glsl() {
-        // uvec4 + vec4 + vec4 (std430 push block).
-        assert_eq!(std::mem::size_of::<GpuAtlasDebugPush>(), 48);
-        assert_eq!(std::mem::offset_of!(GpuAtlasDebugPush, box_min), 16);
-        assert_eq!(std::mem::offset_of!(GpuAtlasDebugPush, box_scale), 32);
+    fn push_layout_matches_the_shader() {
+        crate::vk::check_push_against(
+            &["atlas_debug.comp"],
+            crate::vk::PushLayout::of::<GpuAtlasDebugPush>(),
+        )
+        .unwrap();
     }
 
     #[test]

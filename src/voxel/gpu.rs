@@ -1196,13 +1196,16 @@ mod tests {
 
     #[test]
     fn gpu_struct_layouts_match_glsl() {
-        // std430 `struct Triangle { vec4 v[3]; }` and the push block of
-        // voxelize_triangles.comp (four 16-byte vectors).
+        // std430 `struct Triangle { vec4 v[3]; }`.
         assert_eq!(std::mem::size_of::<GpuTriangle>(), 48);
-        assert_eq!(std::mem::size_of::<GpuVoxelizePush>(), 64);
-        assert_eq!(std::mem::offset_of!(GpuVoxelizePush, scale), 16);
-        assert_eq!(std::mem::offset_of!(GpuVoxelizePush, dims), 32);
-        assert_eq!(std::mem::offset_of!(GpuVoxelizePush, extent), 48);
+        // The push block, against the shaders' reflected blocks (by name, offset and size).
+        for shader in ["voxelize_triangles.comp", "voxelize_attributes.comp"] {
+            crate::vk::check_push_against(
+                &[shader],
+                crate::vk::PushLayout::of::<GpuVoxelizePush>(),
+            )
+            .unwrap();
+        }
     }
 
     #[test]

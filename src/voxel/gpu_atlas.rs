@@ -1004,9 +1004,21 @@ mod tests {
         assert_eq!(std::mem::size_of::<GpuAtlasTriangle>(), 96);
         assert_eq!(std::mem::offset_of!(GpuAtlasTriangle, uv01), 48);
         assert_eq!(std::mem::offset_of!(GpuAtlasTriangle, cell), 80);
-        assert_eq!(std::mem::size_of::<GpuAtlasVoxelizePush>(), 128);
-        assert_eq!(std::mem::offset_of!(GpuAtlasVoxelizePush, grid_min), 64);
-        assert_eq!(std::mem::offset_of!(GpuAtlasVoxelizePush, extent), 112);
+        // The push block, against the compute and raster voxelizers' reflected blocks.
+        for stages in [
+            &["voxelize_atlas.comp"][..],
+            &[
+                "voxelize_atlas_bits.vert",
+                "voxelize_atlas_bits.geom",
+                "voxelize_atlas_bits.frag",
+            ],
+        ] {
+            crate::vk::check_push_against(
+                stages,
+                crate::vk::PushLayout::of::<GpuAtlasVoxelizePush>(),
+            )
+            .unwrap();
+        }
     }
 
     #[test]

@@ -43,15 +43,25 @@ struct GpuRayResult {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 struct GpuRaysPush {
+    /// Voxels (x, y, depth), max hierarchy level.
     dims: [i32; 4],
-    params: [u32; 4],
-    params2: [u32; 4],
+    start_level: u32,
+    max_iterations: u32,
+    /// 0 hierarchical, 1 exact DDA, 2 1-bit march, 3 3-bit march.
+    mode: u32,
+    ray_count: u32,
+    marching_samples: u32,
+    _pad: [u32; 3],
 }
 
 crate::push_constants!(GpuRaysPush {
     dims,
-    params,
-    params2
+    start_level,
+    max_iterations,
+    mode,
+    ray_count,
+    marching_samples,
+    _pad
 });
 
 /// Which ray test a batch uses.
@@ -208,7 +218,7 @@ impl VoxelRayCaster {
         ];
         for (m, buf) in methods.iter().zip(results) {
             let out = g.import_buffer(buf, Access::HostRead);
-            let (mode, start, iters, samples) = match *m {
+            let (mode, start_level, max_iterations, marching_samples) = match *m {
                 RayMethod::Hierarchical(p) => (0, p.start_level, p.max_iterations, 0),
                 RayMethod::Dda => (1, 0, 0, 0),
                 RayMethod::March1(n) => (2, 0, 0, n),
@@ -216,8 +226,12 @@ impl VoxelRayCaster {
             };
             let push = GpuRaysPush {
                 dims,
-                params: [start, iters, mode, count],
-                params2: [samples, 0, 0, 0],
+                start_level,
+                max_iterations,
+                mode,
+                ray_count: count,
+                marching_samples,
+                _pad: [0; 3],
             };
             g.add_pass(&format!("voxel_rays[{}]", m.name()))
                 .read(columns, read)
