@@ -268,9 +268,10 @@ struct GiArgs {
     /// filter_passes`, else 2].
     #[arg(long, value_name = "P")]
     gi_filter_passes: Option<u32>,
-    /// Path-tracer bounces [default: the scene's `[gi] bounces`, else 2].
+    /// Path-tracer bounces, 1..=64, or `unbounded`: 3 bounces, then Russian roulette ends each
+    /// path (unbiased; capped at 64) [default: the scene's `[gi] bounces`, else 2].
     #[arg(long, value_name = "B")]
-    gi_bounces: Option<u32>,
+    gi_bounces: Option<voxgi::gi::Bounces>,
     /// Frames the path tracer accumulates in a headless render [default: the scene's `[gi]
     /// accumulate_frames`, else 1].
     #[arg(long, value_name = "F")]
@@ -892,18 +893,21 @@ mod tests {
         let scene = GiOverrides {
             method: Some(GiMethod::Pathtrace),
             rays: Some(4),
-            bounces: Some(3),
+            bounces: Some(voxgi::gi::Bounces::Fixed(3)),
             ..Default::default()
         };
         let s = resolve_gi(&scene, &render_gi(&[]));
-        assert_eq!((s.method, s.rays, s.bounces), (GiMethod::Pathtrace, 4, 3));
+        assert_eq!(
+            (s.method, s.rays, s.bounces),
+            (GiMethod::Pathtrace, 4, voxgi::gi::Bounces::Fixed(3))
+        );
         let s = resolve_gi(
             &scene,
             &render_gi(&["--gi", "hemisphere", "--gi-rays", "32", "--gi-frames", "8"]),
         );
         assert_eq!(
             (s.method, s.rays, s.bounces, s.accumulate_frames),
-            (GiMethod::Hemisphere, 32, 3, 8)
+            (GiMethod::Hemisphere, 32, voxgi::gi::Bounces::Fixed(3), 8)
         );
     }
 
@@ -936,7 +940,7 @@ mod tests {
             GiOverrides {
                 method: Some(GiMethod::Pathtrace),
                 rays: Some(2),
-                bounces: Some(3),
+                bounces: Some(voxgi::gi::Bounces::Fixed(3)),
                 radius_m: Some(0.5),
                 normal_offset_voxels: Some(0.25),
                 ray_offset_voxels: Some(1.5),
@@ -954,7 +958,11 @@ mod tests {
         };
         assert_eq!(
             (gi.gi, gi.gi_bounces, gi.gi_rays),
-            (Some(GiMethod::Pathtrace), Some(1), None)
+            (
+                Some(GiMethod::Pathtrace),
+                Some(voxgi::gi::Bounces::Fixed(1)),
+                None
+            )
         );
     }
 }
