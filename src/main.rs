@@ -883,8 +883,11 @@ mod tests {
             .voxels
             .expect("the voxel view voxelizes");
         assert_eq!(v.voxelizer, voxgi::voxel::gpu::Voxelizer::Atlas);
-        assert!(render_settings(&["--debug", "atlas"]).voxels.is_none());
-        assert!(render_settings(&[]).voxels.is_none());
+        // The built-in scene's `[gi]` table path-traces; direct light needs no voxels.
+        assert!(render_settings(&["--gi", "none", "--debug", "atlas"])
+            .voxels
+            .is_none());
+        assert!(render_settings(&["--gi", "none"]).voxels.is_none());
     }
 
     #[test]
