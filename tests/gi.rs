@@ -208,9 +208,9 @@ fn path_tracer_matches_the_furnace_closed_form() {
 /// Two checks. Absolute: within the fixed-bounce tests' 3% (voxel and shadow-map
 /// discretization) plus 5 sigma. Calibrated: the discretization scales every bounce's light
 /// alike (measured: the indirect part is 3.0%, 3.1%, 3.2% high at 1, 2, 3 bounces), so the
-/// fixed-3 render of the same run predicts the unbounded one as 1 + (r3 - 1) / (a + a^2 + a^3)
-/// * a / (1 - a); the tolerance is 5 sigma plus 0.5% of the indirect part for that scaling's
-/// spread. Paths cut at 4 or 5 bounces would be 0.064 and 0.032 low, a roulette without the
+/// fixed-3 render of the same run predicts the unbounded one as
+/// 1 + (r3 - 1) a / ((1 - a)(a + a^2 + a^3)); the tolerance is 5 sigma plus 0.5% of the
+/// indirect part for that scaling's spread. Paths cut at 4 or 5 bounces would be 0.064 and 0.032 low, a roulette without the
 /// division by q about 0.12 low: all outside it.
 #[test]
 fn unbounded_path_tracer_matches_the_infinite_furnace_series() {
