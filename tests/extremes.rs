@@ -82,7 +82,7 @@ fn every_gi_path() -> [(&'static str, GiSettings); 4] {
             GiSettings {
                 method: GiMethod::Pathtrace,
                 rays: 2,
-                bounces: 2,
+                bounces: voxgi::gi::Bounces::Fixed(2),
                 ..Default::default()
             },
         ),

@@ -123,6 +123,8 @@ fn viewer_renders_resizes_and_screenshots_without_validation_messages() {
     let out = voxgi(&[
         "--validate",
         "view",
+        "--gi",
+        "none",
         "--width",
         "320",
         "--height",
@@ -159,6 +161,8 @@ fn viewer_skips_frames_while_minimized_and_renders_after_restore() {
         &[
             "--validate",
             "view",
+            "--gi",
+            "none",
             "--width",
             "320",
             "--height",
@@ -291,7 +295,16 @@ fn viewer_panel_table_keeps_names_and_times_apart() {
     for (width, height, resize) in [(1280, 720, None), (640, 480, Some((160, 400)))] {
         let shot = dir.join("shot.png");
         let (w, h) = (width.to_string(), height.to_string());
-        let mut args = vec!["--validate", "view", "--width", &w, "--height", &h];
+        let mut args = vec![
+            "--validate",
+            "view",
+            "--gi",
+            "none",
+            "--width",
+            &w,
+            "--height",
+            &h,
+        ];
         let resize_arg = resize.map(|(w, h): (u32, u32)| format!("{w}x{h}"));
         if let Some(r) = &resize_arg {
             args.extend(["--resize", r.as_str()]);
@@ -403,6 +416,8 @@ fn viewer_shows_debug_view(dir: &Path, view: &str) {
         &[
             "--validate",
             "view",
+            "--gi",
+            "none",
             "--debug",
             view,
             "--width",
@@ -447,6 +462,8 @@ fn assert_matches_render(img: &image::RgbaImage, dir: &Path) {
     let out = voxgi(&[
         "--validate",
         "render",
+        "--gi",
+        "none",
         "--width",
         &w.to_string(),
         "--height",
@@ -510,7 +527,16 @@ fn viewer_flies_with_real_keyboard_and_mouse_events() {
     // The viewer runs until Escape; X events go through the server (XTEST), the same path as a
     // person's keyboard and mouse, so winit's event decoding is part of what is tested.
     let mut child = Command::new(env!("CARGO_BIN_EXE_voxgi"))
-        .args(["--validate", "view", "--width", "480", "--height", "320"])
+        .args([
+            "--validate",
+            "view",
+            "--gi",
+            "none",
+            "--width",
+            "480",
+            "--height",
+            "320",
+        ])
         .env_remove("WAYLAND_DISPLAY")
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())

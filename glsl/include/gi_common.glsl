@@ -10,7 +10,7 @@ layout(push_constant) uniform GiPush {
     ivec4 dims;      // voxels x, y, depth; w max hierarchy level
     vec4 params;     // x radius (m), y normal offset (voxel diagonals), z hit tolerance (voxel diagonals), w voxel diagonal (m)
     uvec4 iparams;   // x rays per pixel, y start level, z max iterations, w frame seed
-    vec4 params2;    // x light-map texel footprint scale (shadow res / light-map res), y bounces, z ray offset k2 (voxel diagonals), w its clamp (voxel diagonals)
+    vec4 params2;    // x light-map texel footprint scale (shadow res / light-map res), y path-tracer bounces (0: unbounded, Russian roulette), z ray offset k2 (voxel diagonals), w its clamp (voxel diagonals)
 } gi;
 
 // Radical inverse in base 2 (Hammersley's second coordinate).
@@ -18,15 +18,21 @@ float radical_inverse(uint i) {
     return float(bitfieldReverse(i)) * 2.3283064365386963e-10;
 }
 
-// A per-pixel hash for the Cranley-Patterson rotation (no visible tiling, unlike a small
-// random texture).
-vec2 pixel_rotation(uvec2 p, uint seed) {
-    uint h = p.x * 1973u + p.y * 9277u + seed * 26699u;
+// Wang's 32-bit integer hash; every step is invertible, so distinct inputs give distinct
+// outputs.
+uint wang_hash(uint h) {
     h = (h ^ 61u) ^ (h >> 16u);
     h *= 9u;
     h ^= h >> 4u;
     h *= 0x27d4eb2du;
     h ^= h >> 15u;
+    return h;
+}
+
+// A per-pixel hash for the Cranley-Patterson rotation (no visible tiling, unlike a small
+// random texture).
+vec2 pixel_rotation(uvec2 p, uint seed) {
+    uint h = wang_hash(p.x * 1973u + p.y * 9277u + seed * 26699u);
     uint h2 = h * 747796405u + 2891336453u;
     return vec2(float(h & 0xffffu), float(h2 >> 16u)) / 65536.0;
 }

@@ -1031,7 +1031,7 @@ mod tests {
         for change in [
             |g: &mut GiSettings| g.method = GiMethod::Pathtrace,
             |g: &mut GiSettings| g.rays += 1,
-            |g: &mut GiSettings| g.bounces += 1,
+            |g: &mut GiSettings| g.bounces = crate::gi::Bounces::Unbounded,
             |g: &mut GiSettings| g.radius_m = Some(1.0),
             |g: &mut GiSettings| g.filter_radius += 1,
             |g: &mut GiSettings| g.filter_passes += 1,

@@ -1,7 +1,7 @@
 //! The side panel: per-pass GPU timings, light, tone-mapping, shadow and global-illumination
 //! controls, screenshot.
 
-use crate::gi::{GiMethod, GiSettings};
+use crate::gi::{Bounces, GiMethod, GiSettings};
 use crate::light::ShadowSettings;
 use crate::post::{ToneMap, ToneOperator};
 use crate::vk::PassTiming;
@@ -579,7 +579,16 @@ fn gi_controls(ui: &mut egui::Ui, gi: &mut GiSettings, frames: Option<u32>) {
             .text("rays / pixel"),
     );
     if gi.method == GiMethod::Pathtrace {
-        ui.add(egui::Slider::new(&mut gi.bounces, 1..=8).text("bounces"));
+        let mut unbounded = gi.bounces == Bounces::Unbounded;
+        ui.checkbox(&mut unbounded, "unbounded (Russian roulette)");
+        match (unbounded, gi.bounces) {
+            (true, Bounces::Fixed(_)) => gi.bounces = Bounces::Unbounded,
+            (false, Bounces::Unbounded) => gi.bounces = Bounces::Fixed(2),
+            _ => {}
+        }
+        if let Bounces::Fixed(n) = &mut gi.bounces {
+            ui.add(egui::Slider::new(n, 1..=8).text("bounces"));
+        }
     }
     let mut limited = gi.radius_m.is_some();
     ui.checkbox(&mut limited, "limit ray length");

@@ -48,9 +48,10 @@ pub struct GiArgs {
     /// filter_passes`, else 2].
     #[arg(long, value_name = "P")]
     pub gi_filter_passes: Option<u32>,
-    /// Path-tracer bounces [default: the scene's `[gi] bounces`, else 2].
+    /// Path-tracer bounces, 1..=64, or `unbounded`: 3 bounces, then Russian roulette ends each
+    /// path (unbiased; capped at 64) [default: the scene's `[gi] bounces`, else 2].
     #[arg(long, value_name = "B")]
-    pub gi_bounces: Option<u32>,
+    pub gi_bounces: Option<crate::gi::Bounces>,
     /// Frames the path tracer accumulates in a headless render [default: the scene's `[gi]
     /// accumulate_frames`, else 1].
     #[arg(long, value_name = "F")]
@@ -227,8 +228,11 @@ mod tests {
             .voxels
             .expect("the voxel view voxelizes");
         assert_eq!(v.voxelizer, crate::voxel::gpu::Voxelizer::Atlas);
-        assert!(render_settings(&["--debug", "atlas"]).voxels.is_none());
-        assert!(render_settings(&[]).voxels.is_none());
+        // The built-in scene's `[gi]` table path-traces; direct light needs no voxels.
+        assert!(render_settings(&["--gi", "none", "--debug", "atlas"])
+            .voxels
+            .is_none());
+        assert!(render_settings(&["--gi", "none"]).voxels.is_none());
     }
 
     #[test]
@@ -237,18 +241,21 @@ mod tests {
         let scene = GiOverrides {
             method: Some(GiMethod::Pathtrace),
             rays: Some(4),
-            bounces: Some(3),
+            bounces: Some(crate::gi::Bounces::Fixed(3)),
             ..Default::default()
         };
         let s = resolve_gi(&scene, &render_gi(&[]));
-        assert_eq!((s.method, s.rays, s.bounces), (GiMethod::Pathtrace, 4, 3));
+        assert_eq!(
+            (s.method, s.rays, s.bounces),
+            (GiMethod::Pathtrace, 4, crate::gi::Bounces::Fixed(3))
+        );
         let s = resolve_gi(
             &scene,
             &render_gi(&["--gi", "hemisphere", "--gi-rays", "32", "--gi-frames", "8"]),
         );
         assert_eq!(
             (s.method, s.rays, s.bounces, s.accumulate_frames),
-            (GiMethod::Hemisphere, 32, 3, 8)
+            (GiMethod::Hemisphere, 32, crate::gi::Bounces::Fixed(3), 8)
         );
     }
 
@@ -281,7 +288,7 @@ mod tests {
             GiOverrides {
                 method: Some(GiMethod::Pathtrace),
                 rays: Some(2),
-                bounces: Some(3),
+                bounces: Some(crate::gi::Bounces::Fixed(3)),
                 radius_m: Some(0.5),
                 normal_offset_voxels: Some(0.25),
                 ray_offset_voxels: Some(1.5),

@@ -139,7 +139,11 @@ mod tests {
             .args;
         assert_eq!(
             (v.gi.gi, v.gi.gi_bounces, v.gi.gi_rays),
-            (Some(GiMethod::Pathtrace), Some(1), None)
+            (
+                Some(GiMethod::Pathtrace),
+                Some(crate::gi::Bounces::Fixed(1)),
+                None
+            )
         );
     }
 

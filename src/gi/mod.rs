@@ -50,12 +50,82 @@ pub struct GiSettings {
     pub filter_passes: u32,
     /// Seed of the per-pixel rotation (vary per frame to accumulate).
     pub seed: u32,
-    /// Path-tracer bounces.
-    pub bounces: u32,
+    /// Path-tracer bounces: a fixed count, or unbounded by Russian roulette.
+    pub bounces: Bounces,
     /// Frames a headless render accumulates (path tracer; the viewer accumulates while still).
     pub accumulate_frames: u32,
     /// Where the hemisphere method reads the radiance at ray hits.
     pub radiance_source: RadianceSource,
+}
+
+/// How long the path tracer's paths are.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Bounces {
+    /// Exactly this many bounces (1..=[`Bounces::MAX`]): biased low by the light of the
+    /// bounces left out.
+    Fixed(u32),
+    /// [`Bounces::ROULETTE_AFTER`] bounces, then Russian roulette: unbiased but for the
+    /// safety cap of [`Bounces::MAX`] bounces (see `glsl/gi_pathtrace.comp` for its bound).
+    Unbounded,
+}
+
+impl Bounces {
+    /// The most bounces a path takes: the largest fixed count and the safety cap of the
+    /// unbounded setting (`MAX_PATH_BOUNCES` in `glsl/gi_pathtrace.comp`).
+    pub const MAX: u32 = 64;
+    /// Bounces an unbounded path always takes before Russian roulette may end it
+    /// (`ROULETTE_AFTER` in `glsl/gi_pathtrace.comp`).
+    pub const ROULETTE_AFTER: u32 = 3;
+    /// The spelling of [`Bounces::Unbounded`] on the command line and in scene files.
+    pub const UNBOUNDED_NAME: &'static str = "unbounded";
+
+    /// The push-constant value (`gi.params2.y`): the count, or 0 for unbounded.
+    pub fn push_value(self) -> f32 {
+        match self {
+            Bounces::Fixed(n) => n.clamp(1, Self::MAX) as f32,
+            Bounces::Unbounded => 0.0,
+        }
+    }
+
+    /// What a flag or scene value must be, for error messages.
+    pub fn expected() -> String {
+        format!(
+            "an integer in [1, {}] or \"{}\" (Russian roulette)",
+            Self::MAX,
+            Self::UNBOUNDED_NAME
+        )
+    }
+
+    /// A fixed count checked against [1, MAX].
+    pub fn fixed(n: i64) -> Option<Bounces> {
+        (1..=i64::from(Self::MAX))
+            .contains(&n)
+            .then_some(Bounces::Fixed(n as u32))
+    }
+}
+
+impl std::fmt::Display for Bounces {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Bounces::Fixed(n) => write!(f, "{n}"),
+            Bounces::Unbounded => f.write_str(Self::UNBOUNDED_NAME),
+        }
+    }
+}
+
+/// Parses `--gi-bounces`: a count or `unbounded` (clap names the flag in its error).
+impl std::str::FromStr for Bounces {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        if s == Self::UNBOUNDED_NAME {
+            return Ok(Bounces::Unbounded);
+        }
+        s.parse::<i64>()
+            .ok()
+            .and_then(Bounces::fixed)
+            .ok_or_else(|| format!("expected {}", Bounces::expected()))
+    }
 }
 
 /// Where hemisphere sampling reads the radiance leaving a hit surface (thesis §6.1).
@@ -84,7 +154,7 @@ impl Default for GiSettings {
             filter_radius: 4,
             filter_passes: 2,
             seed: 0,
-            bounces: 2,
+            bounces: Bounces::Fixed(2),
             accumulate_frames: 1,
             radiance_source: RadianceSource::Maps,
         }
@@ -234,7 +304,7 @@ impl GiPasses {
             ],
             params2: [
                 shadow_resolution as f32 / settings.light_map_resolution.max(1) as f32,
-                settings.bounces.max(1) as f32,
+                settings.bounces.push_value(),
                 settings.ray_offset_voxels,
                 settings.ray_offset_max_voxels,
             ],
@@ -826,5 +896,28 @@ mod tests {
         assert_eq!(std::mem::offset_of!(GpuGiPush, dims), 64);
         assert_eq!(std::mem::offset_of!(GpuGiPush, params2), 112);
         assert_eq!(std::mem::size_of::<GpuFilterPush>(), 16);
+    }
+
+    #[test]
+    fn bounces_parse_print_and_encode() {
+        use std::str::FromStr;
+        for n in [1, 2, 3, 8, Bounces::MAX] {
+            let b = Bounces::from_str(&n.to_string());
+            assert_eq!(b, Ok(Bounces::Fixed(n)));
+            // Fixed counts reach the shader as before the unbounded setting existed.
+            assert_eq!(Bounces::Fixed(n).push_value(), n as f32);
+        }
+        assert_eq!(Bounces::from_str("unbounded"), Ok(Bounces::Unbounded));
+        assert_eq!(Bounces::Unbounded.push_value(), 0.0);
+        for b in [Bounces::Fixed(5), Bounces::Unbounded] {
+            assert_eq!(Bounces::from_str(&b.to_string()), Ok(b), "round trip");
+        }
+        for bad in ["0", "65", "-1", "inf", "Unbounded", "", "2.5"] {
+            let e = Bounces::from_str(bad).expect_err(bad);
+            assert!(
+                e.contains("[1, 64]") && e.contains("\"unbounded\""),
+                "{bad}: {e}"
+            );
+        }
     }
 }

@@ -7,7 +7,7 @@ use serde::Deserialize;
 
 use super::camera::Camera;
 use super::error::{field_ref, from_toml_error, SceneError};
-use super::gi::{GiOverrides, GI_METHOD_NAMES};
+use super::gi::{bounces_from_toml, GiOverrides, GI_METHOD_NAMES};
 use super::light::Light;
 use super::mesh::{Aabb, BUILTIN_MESH_NAMES};
 use super::obj::AssetStore;
@@ -50,7 +50,8 @@ pub(crate) struct SceneDesc {
 pub(crate) struct GiDesc {
     pub method: Option<String>,
     pub rays: Option<i64>,
-    pub bounces: Option<i64>,
+    /// An integer or `"unbounded"`, checked by [`build_gi`].
+    pub bounces: Option<toml::Value>,
     pub radius_m: Option<f32>,
     pub normal_offset_voxels: Option<f32>,
     pub ray_offset_voxels: Option<f32>,
@@ -426,7 +427,11 @@ fn build_gi(ck: &Check<'_>, g: &GiDesc) -> Result<GiOverrides, SceneError> {
     Ok(GiOverrides {
         method,
         rays: count("rays", g.rays, 1, 4096, "rays per pixel")?,
-        bounces: count("bounces", g.bounces, 1, 16, "path-tracer bounces")?,
+        bounces: g
+            .bounces
+            .as_ref()
+            .map(|v| bounces_from_toml(v).map_err(|e| ck.invalid("gi.bounces", e)))
+            .transpose()?,
         radius_m: length("radius_m", g.radius_m, true, "a ray length in meters")?,
         normal_offset_voxels: length(
             "normal_offset_voxels",

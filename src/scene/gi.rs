@@ -1,7 +1,7 @@
 //! The `[gi]` table of a scene file: the scene's defaults of the indirect-light settings,
 //! which command-line flags override.
 
-use crate::gi::{GiMethod, GiSettings};
+use crate::gi::{Bounces, GiMethod, GiSettings};
 
 /// Indirect-light settings given by a scene file's `[gi]` table or by command-line flags;
 /// `None`: not given there. See [`resolve_gi`] for the precedence.
@@ -11,7 +11,7 @@ pub struct GiOverrides {
     /// Rays per pixel.
     pub rays: Option<u32>,
     /// Path-tracer bounces.
-    pub bounces: Option<u32>,
+    pub bounces: Option<Bounces>,
     /// Ray length in meters.
     pub radius_m: Option<f32>,
     pub normal_offset_voxels: Option<f32>,
@@ -74,6 +74,17 @@ pub fn resolve_gi(scene: &GiOverrides, cli: &GiOverrides) -> GiSettings {
     cli.or(*scene).apply(GiSettings::default())
 }
 
+/// A scene file's `bounces`: an integer count or the string `"unbounded"`; `Err` holds what
+/// was expected, for the error naming the field.
+pub(crate) fn bounces_from_toml(v: &toml::Value) -> Result<Bounces, String> {
+    let parsed = match v {
+        toml::Value::Integer(n) => Bounces::fixed(*n),
+        toml::Value::String(s) if s == Bounces::UNBOUNDED_NAME => Some(Bounces::Unbounded),
+        _ => None,
+    };
+    parsed.ok_or_else(|| format!("{v}; expected path-tracer bounces, {}", Bounces::expected()))
+}
+
 /// The names a scene file may give `method`, and their methods.
 pub(crate) const GI_METHOD_NAMES: [(&str, GiMethod); 3] = [
     ("none", GiMethod::None),
@@ -96,7 +107,7 @@ mod tests {
         let scene = GiOverrides {
             method: Some(GiMethod::Pathtrace),
             rays: Some(4),
-            bounces: Some(3),
+            bounces: Some(Bounces::Fixed(3)),
             radius_m: Some(2.0),
             filter_radius: Some(0),
             ..Default::default()
@@ -104,7 +115,7 @@ mod tests {
         let s = resolve_gi(&scene, &GiOverrides::default());
         assert_eq!(
             (s.method, s.rays, s.bounces, s.radius_m, s.filter_radius),
-            (GiMethod::Pathtrace, 4, 3, Some(2.0), 0)
+            (GiMethod::Pathtrace, 4, Bounces::Fixed(3), Some(2.0), 0)
         );
         // Values the scene does not give keep their defaults.
         assert_eq!(
@@ -123,7 +134,10 @@ mod tests {
             (s.method, s.rays, s.filter_passes),
             (GiMethod::Hemisphere, 32, 5)
         );
-        assert_eq!((s.bounces, s.radius_m, s.filter_radius), (3, Some(2.0), 0));
+        assert_eq!(
+            (s.bounces, s.radius_m, s.filter_radius),
+            (Bounces::Fixed(3), Some(2.0), 0)
+        );
         assert_eq!(
             (s.light_map_resolution, s.seed, s.max_iterations),
             (d.light_map_resolution, d.seed, d.max_iterations)
@@ -141,7 +155,7 @@ mod tests {
         let all = GiOverrides {
             method: Some(GiMethod::Hemisphere),
             rays: Some(1),
-            bounces: Some(1),
+            bounces: Some(Bounces::Unbounded),
             radius_m: Some(0.5),
             normal_offset_voxels: Some(0.25),
             ray_offset_voxels: Some(0.75),

@@ -74,7 +74,8 @@
 //!            #   in brackets); command-line flags (`--gi`, `--gi-rays`, …) override them
 //! method = "pathtrace"              # "none" | "hemisphere" | "pathtrace" ["none"]
 //! rays = 16                         # rays per pixel, 1..=4096 [16]
-//! bounces = 2                       # path-tracer bounces, 1..=16 [2]
+//! bounces = 2                       # path-tracer bounces, 1..=64, or "unbounded": 3 bounces,
+//!                                   #   then Russian roulette (unbiased; capped at 64) [2]
 //! radius_m = 1.5                    # ray length in meters, > 0 [the scene's diagonal]
 //! normal_offset_voxels = 1.0        # start offset along the normal, voxel diagonals >= 0 [1]
 //! ray_offset_voxels = 0.0           # start offset along the ray, voxel diagonals >= 0 [0]

@@ -667,7 +667,7 @@ fn gi_table_parses_every_key() {
         GiOverrides {
             method: Some(crate::gi::GiMethod::Pathtrace),
             rays: Some(8),
-            bounces: Some(3),
+            bounces: Some(crate::gi::Bounces::Fixed(3)),
             radius_m: Some(1.5),
             normal_offset_voxels: Some(0.5),
             ray_offset_voxels: Some(2.0),
@@ -691,6 +691,18 @@ fn gi_table_parses_every_key() {
                 ..Default::default()
             }
         );
+    }
+    // Bounces: a count up to the safety cap, or unbounded (Russian roulette).
+    for (value, b) in [
+        ("1", crate::gi::Bounces::Fixed(1)),
+        ("64", crate::gi::Bounces::Fixed(64)),
+        ("\"unbounded\"", crate::gi::Bounces::Unbounded),
+    ] {
+        let s = load_ok(
+            &format!("{CAMERA}{LIGHT}{CUBE}[gi]\nbounces = {value}\n"),
+            &[],
+        );
+        assert_eq!(s.gi.bounces, Some(b), "{value}");
     }
     let s = load_ok(&format!("{CAMERA}{LIGHT}{CUBE}[gi]\nrays = 4\n"), &[]);
     let settings = resolve_gi(&s.gi, &GiOverrides::default());
@@ -729,6 +741,18 @@ fn gi_out_of_range_values_name_the_field() {
         ),
         ("rays = 0", "gi.rays", "[1, 4096]"),
         ("bounces = 0", "gi.bounces", "path-tracer bounces"),
+        ("bounces = 65", "gi.bounces", "[1, 64] or \"unbounded\""),
+        (
+            "bounces = \"inf\"",
+            "gi.bounces",
+            "\"inf\"; expected path-tracer bounces",
+        ),
+        (
+            "bounces = 2.5",
+            "gi.bounces",
+            "\"unbounded\" (Russian roulette)",
+        ),
+        ("bounces = true", "gi.bounces", "true; expected"),
         ("filter_radius = -1", "gi.filter_radius", "[0, 64]"),
         ("filter_passes = 100", "gi.filter_passes", "[0, 16]"),
         (
