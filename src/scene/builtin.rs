@@ -18,9 +18,9 @@ const CORNELL_TOML: &str = include_str!("../../assets/scenes/cornell.toml");
 /// The `[gi]` table of the built-in `cornell` (not in `cornell.toml`, which scene files copy
 /// and extend with tables of their own): the default render shows indirect light. The path
 /// tracer with unbounded paths is unbiased; 2 rays and one frame, smoothed by a filter of
-/// radius 8 pixels, render 512² in about 5 s on lavapipe (2 busy cores). At 256² the radius 8
-/// lowers relMSE against the Mitsuba reference from 0.032 (radius 4) to 0.022. `--gi none`
-/// gives direct light only.
+/// radius 8 pixels, render 512² in about 6 s on lavapipe (2 cores; 1 s with `--gi none`).
+/// At 256² the radius 8 lowers relMSE against the Mitsuba reference from 0.032 (radius 4) to
+/// 0.022.
 fn cornell_gi() -> GiDesc {
     GiDesc {
         method: Some("pathtrace".into()),
