@@ -437,7 +437,6 @@ impl GiPasses {
         let (w, h) = (inp.width, inp.height);
         let groups = (w.div_ceil(8), h.div_ceil(8));
         let sampler = self.sampler;
-        let read = Access::Sampled(Shader::Compute);
         let i = *inp;
 
         // Geometry-aware filter, horizontal then vertical, `filter_passes` times.
@@ -462,31 +461,16 @@ impl GiPasses {
                     radius: self.settings.filter_radius as i32,
                     plane_tolerance: 0.02,
                 };
+                let c = Shader::Compute;
                 g.add_pass(&format!("gi_filter[{p}{axis}]"))
-                    .read(i.frame, Access::StorageRead(Shader::Compute))
-                    .read(i.normal, read)
-                    .read(i.depth, read)
-                    .read(src, read)
-                    .write(out, Access::StorageWrite(Shader::Compute))
+                    .pipeline(&pipe)
+                    .bind(0, i.frame, Access::StorageRead(c))
+                    .bind_sampled(1, i.normal, sampler, c)
+                    .bind_sampled(2, i.depth, sampler, c)
+                    .bind_sampled(3, src, sampler, c)
+                    .bind(4, out, Access::StorageWrite(c))
                     .record(move |ctx| {
-                        let sampled = |binding, h: ImageHandle| Descriptor::SampledImage {
-                            binding,
-                            view: ctx.image(h).view,
-                            sampler,
-                        };
-                        ctx.cmd.bind(
-                            &pipe,
-                            &[
-                                frame_for_slot(i.frame_descriptor, i.frame_stride, ctx.slot),
-                                sampled(1, i.normal),
-                                sampled(2, i.depth),
-                                sampled(3, src),
-                                Descriptor::StorageImage {
-                                    binding: 4,
-                                    view: ctx.image(out).view,
-                                },
-                            ],
-                        );
+                        ctx.bind(&pipe);
                         ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&fp));
                         ctx.cmd.dispatch(groups.0, groups.1, 1);
                     });
@@ -502,36 +486,20 @@ impl GiPasses {
         ));
         let pipe = self.composite;
         let indirect = current;
-        let mut pass = g
-            .add_pass("gi_composite")
-            .read(i.direct, read)
-            .read(i.albedo, read)
-            .read(indirect, read)
-            .write(total, Access::StorageWrite(Shader::Compute));
-        if let Some(sp) = i.specular {
-            pass = pass.read(sp, read);
-        }
-        pass.record(move |ctx| {
-            let sampled = |binding, h: ImageHandle| Descriptor::SampledImage {
-                binding,
-                view: ctx.image(h).view,
-                sampler,
-            };
-            ctx.cmd.bind(
-                &pipe,
-                &[
-                    sampled(0, i.direct),
-                    sampled(1, i.albedo),
-                    sampled(2, indirect),
-                    Descriptor::StorageImage {
-                        binding: 3,
-                        view: ctx.image(total).view,
-                    },
-                    sampled(4, i.specular.unwrap_or(i.albedo)),
-                ],
-            );
-            ctx.cmd.dispatch(groups.0, groups.1, 1);
-        });
+        let c = Shader::Compute;
+        // Without Phong materials the shader never reads its specular binding; albedo fills it.
+        let specular = i.specular.unwrap_or(i.albedo);
+        g.add_pass("gi_composite")
+            .pipeline(&pipe)
+            .bind_sampled(0, i.direct, sampler, c)
+            .bind_sampled(1, i.albedo, sampler, c)
+            .bind_sampled(2, indirect, sampler, c)
+            .bind(3, total, Access::StorageWrite(c))
+            .bind_sampled(4, specular, sampler, c)
+            .record(move |ctx| {
+                ctx.bind(&pipe);
+                ctx.cmd.dispatch(groups.0, groups.1, 1);
+            });
         total
     }
 
