@@ -213,7 +213,7 @@ pub struct GiInputs {
     /// The G-buffer's specular image, present when the scene has Phong materials.
     pub specular: Option<ImageHandle>,
     /// The scene's materials (`GpuMaterial`), for glossy senders in the light maps.
-    pub materials: vk::Buffer,
+    pub materials: BufferHandle,
     pub width: u32,
     pub height: u32,
 }
@@ -781,52 +781,32 @@ fn add_ray_pass(
     sampler: vk::Sampler,
     own: &[(u32, ImageHandle)],
     (out, out_access): (ImageHandle, Access),
-    materials: Option<vk::Buffer>,
+    materials: Option<BufferHandle>,
     push: impl Fn() -> GpuGiPush + 'static,
 ) {
-    let read = Access::Sampled(Shader::Compute);
-    let i = *i;
-    let own = own.to_vec();
+    let c = Shader::Compute;
     let groups = (i.width.div_ceil(8), i.height.div_ceil(8));
+    // Without Phong materials the shaders never read their specular binding; albedo fills it.
+    let specular = i.specular.unwrap_or(i.albedo);
     let mut pass = g
         .add_pass(name)
-        .read(i.albedo, read)
-        .read(i.frame, Access::StorageRead(Shader::Compute))
-        .read(i.normal, read)
-        .read(i.depth, read)
-        .read(i.voxels, read)
-        .read(lut, Access::StorageRead(Shader::Compute))
-        .write(out, out_access);
-    for &(_, h) in &own {
-        pass = pass.read(h, read);
+        .pipeline(&pipe)
+        .bind(0, i.frame, Access::StorageRead(c))
+        .bind_sampled(1, i.normal, sampler, c)
+        .bind_sampled(2, i.depth, sampler, c)
+        .bind_sampled(3, i.voxels, sampler, c)
+        .bind(4, lut, Access::StorageRead(c))
+        .bind(8, out, out_access)
+        .bind_sampled(9, specular, sampler, c)
+        .bind_sampled(10, i.albedo, sampler, c);
+    for &(b, h) in own {
+        pass = pass.bind_sampled(b, h, sampler, c);
     }
-    if let Some(sp) = i.specular {
-        pass = pass.read(sp, read);
+    if let Some(m) = materials {
+        pass = pass.bind(11, m, Access::StorageRead(c));
     }
     pass.record(move |ctx| {
-        let sampled = |binding, h: ImageHandle| Descriptor::SampledImage {
-            binding,
-            view: ctx.image(h).view,
-            sampler,
-        };
-        let mut descriptors = vec![
-            frame_for_slot(i.frame_descriptor, i.frame_stride, ctx.slot),
-            sampled(1, i.normal),
-            sampled(2, i.depth),
-            sampled(3, i.voxels),
-            Descriptor::storage_buffer(4, ctx.buffer(lut).raw),
-            Descriptor::StorageImage {
-                binding: 8,
-                view: ctx.image(out).view,
-            },
-            sampled(9, i.specular.unwrap_or(i.albedo)),
-            sampled(10, i.albedo),
-        ];
-        descriptors.extend(own.iter().map(|&(b, h)| sampled(b, h)));
-        if let Some(m) = materials {
-            descriptors.push(Descriptor::storage_buffer(11, m));
-        }
-        ctx.cmd.bind(&pipe, &descriptors);
+        ctx.bind(&pipe);
         ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push()));
         ctx.cmd.dispatch(groups.0, groups.1, 1);
     });

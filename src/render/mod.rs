@@ -464,7 +464,7 @@ impl Renderer {
                         rlm_normal: maps.normal,
                         shadow_map,
                         specular: gbuffer.specular,
-                        materials: scene.materials_raw,
+                        materials: scene.materials,
                         width: w,
                         height: h,
                     },
