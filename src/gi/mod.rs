@@ -4,7 +4,7 @@
 
 use crate::graph::{Access, BufferHandle, ImageHandle, RenderGraph, Shader};
 use crate::scene::Scene;
-use crate::vk::{vk, Buffer, ComputePipeline, Context, Descriptor, Image, ImageDesc, VkError};
+use crate::vk::{vk, Buffer, ComputePipeline, Context, Image, ImageDesc, VkError};
 use crate::voxel::attributes::TriangleAttributeVolumes;
 use crate::voxel::ray_mask::RayMaskLut;
 use crate::voxel::VoxelGrid;
@@ -198,9 +198,6 @@ crate::push_constants!(GpuFilterPush {
 #[derive(Clone, Copy, Debug)]
 pub struct GiInputs {
     pub frame: BufferHandle,
-    /// Binding 0 of the frame constants of slot 0; slot k is `frame_stride` bytes further.
-    pub frame_descriptor: Descriptor,
-    pub frame_stride: u64,
     pub albedo: ImageHandle,
     pub normal: ImageHandle,
     pub depth: ImageHandle,
@@ -702,13 +699,15 @@ impl RadianceVolume {
         let volume = g.import_image(&self.image, read);
         let pipe = self.volume_pipeline;
         let dims = push.dims;
+        let c = Shader::Compute;
         g.add_pass("gi_radiance_volume")
-            .read(i.frame, Access::StorageRead(Shader::Compute))
-            .read(i.voxels, read)
-            .read(albedo, read)
-            .read(normal, read)
-            .read(i.shadow_map, read)
-            .write(volume, Access::StorageWrite(Shader::Compute))
+            .pipeline(&pipe)
+            .bind(0, i.frame, Access::StorageRead(c))
+            .bind_sampled(1, i.voxels, sampler, c)
+            .bind_sampled(2, albedo, sampler, c)
+            .bind_sampled(3, normal, sampler, c)
+            .bind_sampled(4, i.shadow_map, sampler, c)
+            .bind(5, volume, Access::StorageWrite(c))
             .record(move |ctx| {
                 // The direct radiance changes only with the lights, the shadow maps and the
                 // scene, and each of those restarts the frame count (`GiPasses::reset`): the
@@ -717,25 +716,7 @@ impl RadianceVolume {
                 if frames.load(Ordering::SeqCst) > 1 {
                     return;
                 }
-                let sampled = |binding, h: ImageHandle| Descriptor::SampledImage {
-                    binding,
-                    view: ctx.image(h).view,
-                    sampler,
-                };
-                ctx.cmd.bind(
-                    &pipe,
-                    &[
-                        frame_for_slot(i.frame_descriptor, i.frame_stride, ctx.slot),
-                        sampled(1, i.voxels),
-                        sampled(2, albedo),
-                        sampled(3, normal),
-                        sampled(4, i.shadow_map),
-                        Descriptor::StorageImage {
-                            binding: 5,
-                            view: ctx.image(volume).view,
-                        },
-                    ],
-                );
+                ctx.bind(&pipe);
                 ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
                 ctx.cmd.dispatch(
                     (dims[0] as u32).div_ceil(4),
@@ -810,24 +791,6 @@ fn add_ray_pass(
         ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push()));
         ctx.cmd.dispatch(groups.0, groups.1, 1);
     });
-}
-
-/// The frame-constants descriptor of frame slot `slot`.
-fn frame_for_slot(d: Descriptor, stride: u64, slot: usize) -> Descriptor {
-    match d {
-        Descriptor::StorageBuffer {
-            binding,
-            buffer,
-            offset,
-            range,
-        } => Descriptor::StorageBuffer {
-            binding,
-            buffer,
-            offset: offset + slot as u64 * stride,
-            range,
-        },
-        other => other,
-    }
 }
 
 #[cfg(test)]

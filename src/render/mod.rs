@@ -447,13 +447,6 @@ impl Renderer {
                     g,
                     &crate::gi::GiInputs {
                         frame: scene.frame,
-                        frame_descriptor: crate::vk::Descriptor::StorageBuffer {
-                            binding: 0,
-                            buffer: scene.frame_raw,
-                            offset: 0,
-                            range: std::mem::size_of::<GpuFrame>() as u64,
-                        },
-                        frame_stride: scene.frame_stride,
                         albedo: gbuffer.albedo,
                         normal: gbuffer.normal,
                         depth: gbuffer.depth,

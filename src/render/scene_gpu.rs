@@ -77,10 +77,6 @@ pub struct SceneInputs {
     pub textures: Vec<ImageHandle>,
     pub texture_sampler: vk::Sampler,
     pub draws: Arc<RwLock<DrawLists>>,
-    /// Raw handles for the passes not yet declared through bindings (GI, voxels).
-    pub frame_raw: vk::Buffer,
-    pub frame_stride: u64,
-    pub materials_raw: vk::Buffer,
 }
 
 impl SceneInputs {
@@ -174,9 +170,6 @@ impl SceneGpu {
                 .collect(),
             texture_sampler: self.texture_sampler,
             draws: self.draws.clone(),
-            frame_raw: self.frame.raw,
-            frame_stride: self.frame_stride,
-            materials_raw: self.materials.raw,
         }
     }
 
