@@ -2,7 +2,7 @@
 //! views — reflected radiance, world position and normal of the surfaces each light sees —
 //! which the GI methods read as the radiance at a ray's hit (`glsl/light_map.{vert,geom,frag}`).
 
-use super::scene_gpu::{draw_shadow_views, SceneInputs};
+use super::scene_gpu::{record_shadow_views, GpuShadowViewPush, SceneInputs};
 use super::DEPTH;
 use crate::graph::{Access, ImageHandle, Load, RenderGraph, Shader};
 use crate::vk::{vk, Context, GraphicsPipeline, GraphicsPipelineDesc, ImageDesc, VkError};
@@ -13,23 +13,6 @@ use crate::vk::{vk, Context, GraphicsPipeline, GraphicsPipelineDesc, ImageDesc, 
 const LIGHT_MAP_RADIANCE: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 const LIGHT_MAP_POSITION: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 const LIGHT_MAP_NORMAL: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
-
-/// Push constants of `light_map.vert` (the block of `shadow_depth.vert`).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct GpuLightMapPush {
-    pub model: [f32; 16],
-    pub view: u32,
-    pub material: u32,
-    pub _pad: [u32; 2],
-}
-
-crate::push_constants!(GpuLightMapPush {
-    model,
-    view,
-    material,
-    _pad
-});
 
 /// The light-map layers of a frame, one per shadow view.
 #[derive(Clone, Copy, Debug)]
@@ -51,7 +34,7 @@ impl LightMapPass {
             vertex: "light_map.vert".into(),
             geometry: Some("light_map.geom".into()),
             fragment: "light_map.frag".into(),
-            push: crate::vk::PushLayout::of::<GpuLightMapPush>(),
+            push: crate::vk::PushLayout::of::<GpuShadowViewPush>(),
             vertex_stride: std::mem::size_of::<super::gpu::GpuVertex>() as u32,
             vertex_attributes: vec![
                 (vk::Format::R32G32B32_SFLOAT, 0),
@@ -103,19 +86,7 @@ impl LightMapPass {
             .color(maps.position, clear)
             .color(maps.normal, clear)
             .depth(depth, Load::ClearDepth(1.0))
-            .record(move |ctx| {
-                ctx.begin_rendering();
-                ctx.bind(&pipe);
-                ctx.bind_vertex_buffer(vertices);
-                ctx.bind_index_buffer(indices);
-                draw_shadow_views(ctx.cmd, &pipe, &draws, |d, v| GpuLightMapPush {
-                    model: d.model.to_cols_array(),
-                    view: v,
-                    material: d.material,
-                    _pad: [0; 2],
-                });
-                ctx.cmd.end_rendering();
-            });
+            .record(move |ctx| record_shadow_views(ctx, &pipe, (vertices, indices), &draws));
         maps
     }
 

@@ -6,11 +6,10 @@
 
 use super::gpu::{GpuFrame, GpuMaterial, GpuVertex};
 use super::{textures, RenderError};
-use crate::graph::{Access, BufferHandle, ImageHandle, RenderGraph, Shader};
+use crate::graph::{Access, BufferHandle, ImageHandle, PassContext, RenderGraph, Shader};
 use crate::scene::{Aabb, BumpKind, Scene};
 use crate::vk::{
-    vk, Buffer, BufferDesc, Cmd, Context, GraphicsPipeline, Image, MemoryLocation,
-    MAX_FRAMES_IN_FLIGHT,
+    vk, Buffer, BufferDesc, Context, GraphicsPipeline, Image, MemoryLocation, MAX_FRAMES_IN_FLIGHT,
 };
 use glam::{Mat4, Vec3};
 use std::sync::{Arc, RwLock};
@@ -244,23 +243,53 @@ impl SceneGpu {
     }
 }
 
-/// Draws every shadow view's draw list with `pipe` (bound with its buffers), the push
-/// constants of draw `d` in view `v` from `push(d, v)`: the shadow-depth and light-map passes.
-pub fn draw_shadow_views<P: bytemuck::Pod>(
-    cmd: &Cmd,
+/// Push constants of the passes that draw every shadow view's draw list (`shadow_depth.vert`,
+/// `light_map.vert`): the model matrix, the shadow view the geometry shader routes the draw
+/// to, and the material (dissolve coverage).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GpuShadowViewPush {
+    pub model: [f32; 16],
+    pub view: u32,
+    pub material: u32,
+    pub _pad: [u32; 2],
+}
+
+crate::push_constants!(GpuShadowViewPush {
+    model,
+    view,
+    material,
+    _pad
+});
+
+/// Records a pass that draws every shadow view's draw list into its declared (layered)
+/// attachments with `pipe`: the shadow-depth and light-map passes.
+pub fn record_shadow_views(
+    ctx: &PassContext,
     pipe: &GraphicsPipeline,
+    scene: (BufferHandle, BufferHandle),
     draws: &RwLock<DrawLists>,
-    push: impl Fn(&Draw, u32) -> P,
 ) {
-    let Ok(lists) = draws.read() else {
-        return;
-    };
-    for (v, list) in lists.shadow.iter().enumerate() {
-        for d in list {
-            cmd.push_constants(pipe, bytemuck::bytes_of(&push(d, v as u32)));
-            cmd.draw_indexed(d.index_count, d.first_index, d.vertex_offset);
+    ctx.begin_rendering();
+    ctx.bind(pipe);
+    ctx.bind_vertex_buffer(scene.0);
+    ctx.bind_index_buffer(scene.1);
+    if let Ok(lists) = draws.read() {
+        for (v, list) in lists.shadow.iter().enumerate() {
+            for d in list {
+                let push = GpuShadowViewPush {
+                    model: d.model.to_cols_array(),
+                    view: v as u32,
+                    material: d.material,
+                    _pad: [0; 2],
+                };
+                ctx.cmd.push_constants(pipe, bytemuck::bytes_of(&push));
+                ctx.cmd
+                    .draw_indexed(d.index_count, d.first_index, d.vertex_offset);
+            }
         }
     }
+    ctx.cmd.end_rendering();
 }
 
 /// The vertex layout every mesh pass reads: position, normal, uv.

@@ -3,28 +3,10 @@
 //! each draw to its view's layer (`glsl/shadow_depth.{vert,geom,frag}`,
 //! `glsl/shadow_depth_paraboloid.frag`).
 
-use super::scene_gpu::{draw_shadow_views, SceneInputs};
+use super::scene_gpu::{record_shadow_views, GpuShadowViewPush, SceneInputs};
 use super::DEPTH;
 use crate::graph::{Access, ImageHandle, Load, RenderGraph, Shader};
 use crate::vk::{vk, Context, GraphicsPipeline, GraphicsPipelineDesc, ImageDesc, VkError};
-
-/// Push constants of `shadow_depth.vert`: the model matrix, the shadow view the geometry
-/// shader renders, and the material (dissolve coverage).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct GpuShadowPush {
-    pub model: [f32; 16],
-    pub view: u32,
-    pub material: u32,
-    pub _pad: [u32; 2],
-}
-
-crate::push_constants!(GpuShadowPush {
-    model,
-    view,
-    material,
-    _pad
-});
 
 pub struct ShadowDepthPass {
     pipeline: GraphicsPipeline,
@@ -43,7 +25,7 @@ impl ShadowDepthPass {
             } else {
                 "shadow_depth.frag".into()
             },
-            push: crate::vk::PushLayout::of::<GpuShadowPush>(),
+            push: crate::vk::PushLayout::of::<GpuShadowViewPush>(),
             vertex_stride: std::mem::size_of::<super::gpu::GpuVertex>() as u32,
             vertex_attributes: vec![(vk::Format::R32G32B32_SFLOAT, 0)],
             topology: vk::PrimitiveTopology::TRIANGLE_LIST,
@@ -82,19 +64,7 @@ impl ShadowDepthPass {
             .read(vertices, Access::VertexBuffer)
             .read(indices, Access::IndexBuffer)
             .depth(maps, Load::ClearDepth(1.0))
-            .record(move |ctx| {
-                ctx.begin_rendering();
-                ctx.bind(&pipe);
-                ctx.bind_vertex_buffer(vertices);
-                ctx.bind_index_buffer(indices);
-                draw_shadow_views(ctx.cmd, &pipe, &draws, |d, v| GpuShadowPush {
-                    model: d.model.to_cols_array(),
-                    view: v,
-                    material: d.material,
-                    _pad: [0; 2],
-                });
-                ctx.cmd.end_rendering();
-            });
+            .record(move |ctx| record_shadow_views(ctx, &pipe, (vertices, indices), &draws));
         maps
     }
 
