@@ -17,14 +17,15 @@ const CORNELL_TOML: &str = include_str!("../../assets/scenes/cornell.toml");
 
 /// The `[gi]` table of the built-in `cornell` (not in `cornell.toml`, which scene files copy
 /// and extend with tables of their own): the default render shows indirect light. The path
-/// tracer with unbounded paths is unbiased; 2 rays and one frame, smoothed by a filter of
-/// radius 8 pixels, render 512² in about 6 s on lavapipe (2 cores; 1 s with `--gi none`).
-/// At 256² the radius 8 lowers relMSE against the Mitsuba reference from 0.032 (radius 4) to
-/// 0.022.
+/// tracer with unbounded paths is unbiased; 4 rays × 2 frames, smoothed by a filter of radius
+/// 8 pixels, render 512² in about 9 s on lavapipe (2 cores; 1 s with `--gi none`). At 256²
+/// against the Mitsuba reference: relMSE 0.013, FLIP 0.112 (2 rays × 1 frame: 0.022, 0.169,
+/// with visible blotches; radius 4 instead of 8 at 2 rays: 0.032).
 fn cornell_gi() -> GiDesc {
     GiDesc {
         method: Some("pathtrace".into()),
-        rays: Some(2),
+        rays: Some(4),
+        accumulate_frames: Some(2),
         bounces: Some(toml::Value::String(
             crate::gi::Bounces::UNBOUNDED_NAME.into(),
         )),
@@ -147,7 +148,7 @@ mod tests {
         let gi = resolve_gi(&s.gi, &GiOverrides::default());
         assert_eq!(
             (gi.method, gi.bounces, gi.rays, gi.filter_radius),
-            (GiMethod::Pathtrace, Bounces::Unbounded, 2, 8)
+            (GiMethod::Pathtrace, Bounces::Unbounded, 4, 8)
         );
         let off = GiOverrides {
             method: Some(GiMethod::None),
