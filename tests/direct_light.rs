@@ -41,18 +41,7 @@ fn render_with(scene: &Scene, point_technique: PointShadow) -> HdrImage {
 
 /// World point on the plane y = 0 seen through the center of pixel (x, y).
 fn plane_point(scene: &Scene, x: u32, y: u32) -> Vec3 {
-    let inv = scene.camera.view_proj(1.0).inverse();
-    let ndc = |z: f32| {
-        let p = inv
-            * glam::Vec4::new(
-                (x as f32 + 0.5) / SIZE as f32 * 2.0 - 1.0,
-                (y as f32 + 0.5) / SIZE as f32 * 2.0 - 1.0,
-                z,
-                1.0,
-            );
-        p.xyz() / p.w
-    };
-    let (a, b) = (ndc(0.0), ndc(1.0));
+    let (a, b) = common::pixel_ray_points(scene, x, y, SIZE);
     let t = a.y / (a.y - b.y);
     a + (b - a) * t
 }

@@ -7,7 +7,7 @@
 
 mod common;
 
-use glam::{Vec3, Vec4};
+use glam::Vec3;
 use voxgi::render::{render_image, RenderOutput, RenderSettings};
 use voxgi::scene::{builtin, Scene};
 use voxgi::voxel::debug_view::{DebugSettings, DebugView};
@@ -53,19 +53,9 @@ struct Hit {
 }
 
 fn cast(scene: &Scene, x: u32, y: u32) -> Option<Hit> {
-    let inv = scene.camera.view_proj(1.0).inverse();
-    let ndc = |z: f32| {
-        let p = inv
-            * Vec4::new(
-                (x as f32 + 0.5) / SIZE as f32 * 2.0 - 1.0,
-                (y as f32 + 0.5) / SIZE as f32 * 2.0 - 1.0,
-                z,
-                1.0,
-            );
-        p.truncate() / p.w
-    };
+    let (near, far) = common::pixel_ray_points(scene, x, y, SIZE);
     let origin = scene.camera.position;
-    let dir = (ndc(1.0) - ndc(0.0)).normalize();
+    let dir = (far - near).normalize();
     let mut best: Option<Hit> = None;
     for object in &scene.objects {
         let mesh = &scene.meshes[object.mesh_at(0.0)];

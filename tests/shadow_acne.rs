@@ -6,7 +6,7 @@
 
 mod common;
 
-use glam::{Vec3, Vec4Swizzles};
+use glam::Vec3;
 use std::path::Path;
 use voxgi::eval::HdrImage;
 use voxgi::light::{shadow_views, PointShadow, ShadowProjection, ShadowSettings};
@@ -163,18 +163,7 @@ fn render(ctx: &voxgi::vk::Context, scene: &Scene, kind: Kind) -> HdrImage {
 /// The camera ray through the center of pixel (x, y): origin and the point where it meets the
 /// plane y = 0.
 fn pixel_ray(scene: &Scene, x: u32, y: u32) -> (Vec3, Vec3) {
-    let inv = scene.camera.view_proj(1.0).inverse();
-    let ndc = |z: f32| {
-        let p = inv
-            * glam::Vec4::new(
-                (x as f32 + 0.5) / SIZE as f32 * 2.0 - 1.0,
-                (y as f32 + 0.5) / SIZE as f32 * 2.0 - 1.0,
-                z,
-                1.0,
-            );
-        p.xyz() / p.w
-    };
-    let (a, b) = (ndc(0.0), ndc(1.0));
+    let (a, b) = common::pixel_ray_points(scene, x, y, SIZE);
     (scene.camera.position, a + (b - a) * (a.y / (a.y - b.y)))
 }
 
