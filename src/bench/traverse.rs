@@ -117,22 +117,12 @@ fn intersect(o: Vec3, d: Vec3, t: &[Vec3; 3]) -> Option<f32> {
 /// Camera-visible surface points and normals (facing the camera): a CPU-traced G-buffer.
 pub fn gbuffer_points(scene: &Scene, size: u32) -> Vec<(Vec3, Vec3)> {
     let tris = triangles(scene);
-    let inv = scene.camera.view_proj(1.0).inverse();
     let mut out = Vec::new();
     for y in 0..size {
         for x in 0..size {
-            let ndc = |z: f32| {
-                let p = inv
-                    * glam::Vec4::new(
-                        (x as f32 + 0.5) / size as f32 * 2.0 - 1.0,
-                        (y as f32 + 0.5) / size as f32 * 2.0 - 1.0,
-                        z,
-                        1.0,
-                    );
-                p.truncate() / p.w
-            };
+            let (near, far) = scene.camera.pixel_ray_points(x, y, size, size);
             let o = scene.camera.position;
-            let d = (ndc(1.0) - ndc(0.0)).normalize();
+            let d = (far - near).normalize();
             let mut best: Option<(f32, usize)> = None;
             for (i, t) in tris.iter().enumerate() {
                 if let Some(dist) = intersect(o, d, t) {

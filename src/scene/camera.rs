@@ -44,6 +44,23 @@ impl Camera {
         self.proj(aspect) * self.view()
     }
 
+    /// The world points where the ray through the center of pixel (x, y) of a
+    /// `width`×`height` image meets the near (NDC z = 0) and far (z = 1) planes.
+    pub fn pixel_ray_points(&self, x: u32, y: u32, width: u32, height: u32) -> (Vec3, Vec3) {
+        let inv = self.view_proj(width as f32 / height as f32).inverse();
+        let ndc = |z: f32| {
+            let p = inv
+                * glam::Vec4::new(
+                    (x as f32 + 0.5) / width as f32 * 2.0 - 1.0,
+                    (y as f32 + 0.5) / height as f32 * 2.0 - 1.0,
+                    z,
+                    1.0,
+                );
+            p.truncate() / p.w
+        };
+        (ndc(0.0), ndc(1.0))
+    }
+
     /// Horizontal field of view in degrees for a given aspect (width / height), as Mitsuba's
     /// `fov` with `fov_axis = "x"` expects it.
     pub fn fov_x_deg(&self, aspect: f32) -> f32 {

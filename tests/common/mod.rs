@@ -5,26 +5,14 @@
 use voxgi::vk::{Context, ContextDesc};
 
 /// The world points where the camera ray through the center of pixel (x, y) of a square
-/// `size`² image meets the near (NDC z = 0) and far (z = 1) planes: the independent CPU side
-/// of tests that check pixels against geometry.
+/// `size`² image meets the near and far planes (`Camera::pixel_ray_points`).
 pub fn pixel_ray_points(
     scene: &voxgi::scene::Scene,
     x: u32,
     y: u32,
     size: u32,
 ) -> (glam::Vec3, glam::Vec3) {
-    let inv = scene.camera.view_proj(1.0).inverse();
-    let ndc = |z: f32| {
-        let p = inv
-            * glam::Vec4::new(
-                (x as f32 + 0.5) / size as f32 * 2.0 - 1.0,
-                (y as f32 + 0.5) / size as f32 * 2.0 - 1.0,
-                z,
-                1.0,
-            );
-        p.truncate() / p.w
-    };
-    (ndc(0.0), ndc(1.0))
+    scene.camera.pixel_ray_points(x, y, size, size)
 }
 
 /// A validating context on the default device (lavapipe on CI). Without a Vulkan device the
