@@ -2,10 +2,10 @@
 //! derives its barriers). The font atlas is a persistent image, uploaded between frames when
 //! egui changes it (the first frame, new glyphs), like any other texture.
 
-use crate::graph::{Access, ImageHandle, RenderGraph, Shader};
+use crate::graph::{Access, ImageHandle, Load, RenderGraph, Shader};
 use crate::vk::{
-    vk, Attachment, Buffer, BufferDesc, Context, Descriptor, GraphicsPipeline,
-    GraphicsPipelineDesc, Image, ImageDesc, MemoryLocation, VkError, MAX_FRAMES_IN_FLIGHT,
+    vk, Buffer, BufferDesc, Context, GraphicsPipeline, GraphicsPipelineDesc, Image, ImageDesc,
+    MemoryLocation, VkError, MAX_FRAMES_IN_FLIGHT,
 };
 use bytemuck::{Pod, Zeroable};
 use std::cell::RefCell;
@@ -265,37 +265,26 @@ impl Overlay {
         let indices = g.import_buffer(&self.indices, Access::IndexBuffer);
         let (pipe, sampler, frames) = (self.pipeline, self.sampler, self.frames.clone());
         g.add_pass("egui")
-            .read(image, Access::Sampled(Shader::Fragment))
+            .pipeline(&pipe)
+            .bind_sampled(0, image, sampler, Shader::Fragment)
             .read(vertices, Access::VertexBuffer)
             .read(indices, Access::IndexBuffer)
-            .write(target, Access::ColorAttachmentReadWrite)
+            .color(target, Load::Keep)
             .record(move |ctx| {
                 let frames = frames.borrow();
                 let Some(f) = frames.get(ctx.slot) else {
                     return;
                 };
-                let t = ctx.image(target);
-                let color = Attachment {
-                    view: t.view,
-                    clear: None,
-                };
-                ctx.cmd.begin_rendering(t.extent_2d(), &[color], None);
-                ctx.cmd.bind(
-                    &pipe,
-                    &[Descriptor::SampledImage {
-                        binding: 0,
-                        view: ctx.image(image).view,
-                        sampler,
-                    }],
-                );
+                ctx.begin_rendering();
+                ctx.bind(&pipe);
                 ctx.cmd.push_constants(
                     &pipe,
                     bytemuck::bytes_of(&GpuEguiPush {
                         screen_size_points: f.screen_size_points,
                     }),
                 );
-                ctx.cmd.bind_vertex_buffer(ctx.buffer(vertices).raw);
-                ctx.cmd.bind_index_buffer(ctx.buffer(indices).raw);
+                ctx.bind_vertex_buffer(vertices);
+                ctx.bind_index_buffer(indices);
                 for d in &f.draws {
                     ctx.cmd.set_scissor(d.scissor);
                     ctx.cmd

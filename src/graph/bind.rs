@@ -9,7 +9,7 @@
 //! op once and `PassContext::begin_rendering` begins with it.
 
 use super::{Access, BindingError, GraphError, ImageHandle, RenderGraph, ResourceId, Shader};
-use crate::vk::reflect::{BindingKind, Stages};
+use crate::vk::reflect::{BindingKind, ShaderInterface, Stages};
 use crate::vk::vk;
 
 /// How an attachment starts its pass.
@@ -23,12 +23,22 @@ pub enum Load {
     Keep,
 }
 
+/// What fills a declared binding.
+#[derive(Clone, Debug)]
+pub(crate) enum BindingSource {
+    /// One resource, for the whole pass.
+    Fixed(ResourceId),
+    /// One of these resources, chosen per dispatch or draw by the record closure
+    /// ([`PassContext::bind_with`](super::PassContext::bind_with)): chunked point lists,
+    /// per-material textures.
+    OneOf(Vec<ResourceId>),
+}
+
 /// One declared descriptor binding.
 #[derive(Clone, Debug)]
 pub(crate) struct BindingDecl {
     pub binding: u32,
-    /// `None`: pushed per draw by the record closure.
-    pub resource: Option<ResourceId>,
+    pub source: BindingSource,
     pub access: Access,
     pub sampler: Option<vk::Sampler>,
     /// An image binding of one mip level's view (`None`: the whole image).
@@ -39,19 +49,26 @@ impl BindingDecl {
     pub fn new(binding: u32, resource: ResourceId, access: Access) -> Self {
         Self {
             binding,
-            resource: Some(resource),
+            source: BindingSource::Fixed(resource),
             access,
             sampler: None,
             mip: None,
         }
     }
-    pub fn per_draw(binding: u32) -> Self {
+    pub fn one_of(binding: u32, resources: Vec<ResourceId>, access: Access) -> Self {
         Self {
             binding,
-            resource: None,
-            access: Access::Sampled(Shader::Fragment),
+            source: BindingSource::OneOf(resources),
+            access,
             sampler: None,
             mip: None,
+        }
+    }
+    /// The resources that may fill the binding.
+    pub fn resources(&self) -> &[ResourceId] {
+        match &self.source {
+            BindingSource::Fixed(r) => std::slice::from_ref(r),
+            BindingSource::OneOf(rs) => rs,
         }
     }
 }
@@ -117,6 +134,76 @@ fn binding_error(e: BindingError) -> GraphError {
     GraphError::Binding(Box::new(e))
 }
 
+/// Holds one resource that may fill binding `b` of `pass` against the reflected binding.
+fn check_binding(
+    graph: &RenderGraph,
+    pass: &str,
+    interface: &ShaderInterface,
+    b: &BindingDecl,
+    resource: ResourceId,
+) -> Result<(), GraphError> {
+    let pass_name = || pass.to_owned();
+    let shader = || interface.name.clone();
+    let decl = &graph.resources[resource.0 as usize];
+    let resource_name = || decl.name.clone();
+    let Some(reflected) = interface.bindings.get(&b.binding) else {
+        return Err(binding_error(BindingError::UnknownBinding {
+            pass: pass_name(),
+            shader: shader(),
+            binding: b.binding,
+            resource: resource_name(),
+        }));
+    };
+    let kind = kind_of(b.access, decl.is_image());
+    if kind != Some(reflected.kind) {
+        return Err(binding_error(BindingError::BindingKindMismatch {
+            pass: pass_name(),
+            shader: shader(),
+            binding: b.binding,
+            resource: resource_name(),
+            name: reflected.name.clone(),
+            declared: describe(kind, b.access),
+            expected: reflected.kind.glsl_name(),
+        }));
+    }
+    let declared = shader_of(b.access).map_or(Stages::default(), stages_of);
+    if !declared.contains(reflected.stages) {
+        return Err(binding_error(BindingError::BindingStageMismatch {
+            pass: pass_name(),
+            shader: shader(),
+            binding: b.binding,
+            resource: resource_name(),
+            name: reflected.name.clone(),
+            declared: declared.names(),
+            used: reflected.stages.names(),
+        }));
+    }
+    let info = b.access.info();
+    let storage = matches!(
+        reflected.kind,
+        BindingKind::StorageImage | BindingKind::StorageBuffer
+    );
+    if storage && !info.writes && !reflected.read_only {
+        return Err(binding_error(BindingError::ReadOfWritableBinding {
+            pass: pass_name(),
+            shader: shader(),
+            binding: b.binding,
+            resource: resource_name(),
+            name: reflected.name.clone(),
+        }));
+    }
+    if info.writes && reflected.read_only {
+        return Err(binding_error(BindingError::WriteOfReadonlyBinding {
+            pass: pass_name(),
+            shader: shader(),
+            binding: b.binding,
+            resource: resource_name(),
+            name: reflected.name.clone(),
+        }));
+    }
+    Ok(())
+}
+
 /// Checks every pass's declared bindings against its pipeline's reflected interface.
 pub(crate) fn check(graph: &RenderGraph) -> Result<(), GraphError> {
     for pass in &graph.passes {
@@ -139,73 +226,14 @@ pub(crate) fn check(graph: &RenderGraph) -> Result<(), GraphError> {
             }
         }
         for b in &pass.bindings {
-            let Some(resource) = b.resource else {
-                if !interface.bindings.contains_key(&b.binding) {
-                    return Err(binding_error(BindingError::UnknownBinding {
-                        pass: pass_name(),
-                        shader: shader(),
-                        binding: b.binding,
-                        resource: "(per draw)".into(),
-                    }));
-                }
-                continue;
-            };
-            let decl = &graph.resources[resource.0 as usize];
-            let resource_name = || decl.name.clone();
-            let Some(reflected) = interface.bindings.get(&b.binding) else {
-                return Err(binding_error(BindingError::UnknownBinding {
+            if b.resources().is_empty() {
+                return Err(binding_error(BindingError::EmptyChoice {
                     pass: pass_name(),
-                    shader: shader(),
                     binding: b.binding,
-                    resource: resource_name(),
-                }));
-            };
-            let kind = kind_of(b.access, decl.is_image());
-            if kind != Some(reflected.kind) {
-                return Err(binding_error(BindingError::BindingKindMismatch {
-                    pass: pass_name(),
-                    shader: shader(),
-                    binding: b.binding,
-                    resource: resource_name(),
-                    name: reflected.name.clone(),
-                    declared: describe(kind, b.access),
-                    expected: reflected.kind.glsl_name(),
                 }));
             }
-            let declared = shader_of(b.access).map_or(Stages::default(), stages_of);
-            if !declared.contains(reflected.stages) {
-                return Err(binding_error(BindingError::BindingStageMismatch {
-                    pass: pass_name(),
-                    shader: shader(),
-                    binding: b.binding,
-                    resource: resource_name(),
-                    name: reflected.name.clone(),
-                    declared: declared.names(),
-                    used: reflected.stages.names(),
-                }));
-            }
-            let info = b.access.info();
-            let storage = matches!(
-                reflected.kind,
-                BindingKind::StorageImage | BindingKind::StorageBuffer
-            );
-            if storage && !info.writes && !reflected.read_only {
-                return Err(binding_error(BindingError::ReadOfWritableBinding {
-                    pass: pass_name(),
-                    shader: shader(),
-                    binding: b.binding,
-                    resource: resource_name(),
-                    name: reflected.name.clone(),
-                }));
-            }
-            if info.writes && reflected.read_only {
-                return Err(binding_error(BindingError::WriteOfReadonlyBinding {
-                    pass: pass_name(),
-                    shader: shader(),
-                    binding: b.binding,
-                    resource: resource_name(),
-                    name: reflected.name.clone(),
-                }));
+            for &resource in b.resources() {
+                check_binding(graph, &pass.name, interface, b, resource)?;
             }
         }
         for (binding, reflected) in &interface.bindings {

@@ -2,6 +2,7 @@
 //! records the frame, wrapping every pass in a debug label and a timestamp pair and
 //! inserting the barriers the compile step derived.
 
+use super::bind::BindingSource;
 use super::compile::{CompiledGraph, MemoryOracle, MemoryRequirements, ResourceDeclView};
 use super::{
     Access, BufferHandle, GraphError, ImageHandle, Load, Origin, RenderGraph, ResourceId,
@@ -108,64 +109,92 @@ impl PassContext<'_> {
         }
     }
 
-    /// The descriptors of the bindings this pass declared, in binding order.
+    /// The descriptor of `id` at the declared binding `b`.
+    fn descriptor(&self, b: &super::bind::BindingDecl, id: ResourceId) -> Option<Descriptor> {
+        Some(match self.resources.get(id.0 as usize) {
+            Some(Some(GpuResource::Image(img))) => {
+                let view = b.mip.map_or(img.view, |level| img.mip_view(level));
+                match b.sampler {
+                    Some(sampler) => Descriptor::SampledImage {
+                        binding: b.binding,
+                        view,
+                        sampler,
+                    },
+                    None => Descriptor::StorageImage {
+                        binding: b.binding,
+                        view,
+                    },
+                }
+            }
+            Some(Some(GpuResource::Buffer(_))) => {
+                let buf = self.buffer(BufferHandle(id));
+                let (offset, range) = match self.decls[id.0 as usize].slot_window {
+                    Some(_) => (buf.offset, buf.size_bytes),
+                    None => (0, vk::WHOLE_SIZE),
+                };
+                match b.access {
+                    Access::Uniform(_) => Descriptor::UniformBuffer {
+                        binding: b.binding,
+                        buffer: buf.raw,
+                        offset,
+                        range,
+                    },
+                    _ => Descriptor::StorageBuffer {
+                        binding: b.binding,
+                        buffer: buf.raw,
+                        offset,
+                        range,
+                    },
+                }
+            }
+            _ => return None,
+        })
+    }
+
+    /// The descriptors of the bindings this pass declared with one resource, in binding order.
     pub fn descriptors(&self) -> Vec<Descriptor> {
         let mut out: Vec<Descriptor> = self
             .pass
             .bindings
             .iter()
-            .filter_map(|b| {
-                let id = b.resource?;
-                Some(match self.resources.get(id.0 as usize) {
-                    Some(Some(GpuResource::Image(img))) => {
-                        let view = b.mip.map_or(img.view, |level| img.mip_view(level));
-                        match b.sampler {
-                            Some(sampler) => Descriptor::SampledImage {
-                                binding: b.binding,
-                                view,
-                                sampler,
-                            },
-                            None => Descriptor::StorageImage {
-                                binding: b.binding,
-                                view,
-                            },
-                        }
-                    }
-                    Some(Some(GpuResource::Buffer(_))) => {
-                        let buf = self.buffer(BufferHandle(id));
-                        let (offset, range) = match self.decls[id.0 as usize].slot_window {
-                            Some(_) => (buf.offset, buf.size_bytes),
-                            None => (0, vk::WHOLE_SIZE),
-                        };
-                        match b.access {
-                            Access::Uniform(_) => Descriptor::UniformBuffer {
-                                binding: b.binding,
-                                buffer: buf.raw,
-                                offset,
-                                range,
-                            },
-                            _ => Descriptor::StorageBuffer {
-                                binding: b.binding,
-                                buffer: buf.raw,
-                                offset,
-                                range,
-                            },
-                        }
-                    }
-                    _ => return None,
-                })
+            .filter_map(|b| match b.source {
+                BindingSource::Fixed(id) => self.descriptor(b, id),
+                BindingSource::OneOf(_) => None,
             })
             .collect();
         out.sort_by_key(|d| d.binding());
         out
     }
 
-    /// Binds `pipeline` and pushes the descriptors this pass declared for it.
+    /// The descriptors of `choices`: for each, a binding declared with `.bind_one_of()` and
+    /// the one of its resources to bind.
     ///
     /// # Panics
-    /// If `pipeline` is not the one the pass declared with `.pipeline()` (its bindings were
-    /// checked against that one's shaders).
-    pub fn bind(&self, pipeline: &impl Bindable) {
+    /// If a binding was not declared with `.bind_one_of()`, or the resource is not one of its
+    /// declared resources (it would have no barrier and was not checked against the shader).
+    fn chosen(&self, choices: &[(u32, ResourceId)]) -> Vec<Descriptor> {
+        choices
+            .iter()
+            .filter_map(|&(binding, id)| {
+                let decl = self.pass.bindings.iter().find(|b| b.binding == binding);
+                let allowed = decl.filter(|b| {
+                    matches!(&b.source, BindingSource::OneOf(rs) if rs.contains(&id))
+                });
+                let Some(b) = allowed else {
+                    panic!(
+                        "pass `{}` binds `{}` at binding {binding}, which it did not declare there: list it in `.bind_one_of({binding}, ..)`",
+                        self.pass.name,
+                        self.decls.get(id.0 as usize).map_or("?", |r| r.name.as_str())
+                    );
+                };
+                self.descriptor(b, id)
+            })
+            .collect()
+    }
+
+    /// Panics unless `pipeline` is the one the pass declared with `.pipeline()` (its bindings
+    /// were checked against that one's shaders).
+    fn check_pipeline(&self, pipeline: &impl Bindable) {
         let declared = self.pass.interface.map(|i| i as *const _);
         if declared != Some(pipeline.interface() as *const _) {
             panic!(
@@ -177,7 +206,48 @@ impl PassContext<'_> {
                     .map_or("none".to_owned(), |i| format!("`{}`", i.name))
             );
         }
+    }
+
+    /// Binds `pipeline` and pushes the descriptors this pass declared for it.
+    ///
+    /// # Panics
+    /// If `pipeline` is not the one the pass declared with `.pipeline()`.
+    pub fn bind(&self, pipeline: &impl Bindable) {
+        self.check_pipeline(pipeline);
         self.cmd.bind(pipeline, &self.descriptors());
+    }
+
+    /// [`Self::bind`], with the `.bind_one_of()` bindings filled by `choices`:
+    /// `(binding, resource)` pairs, each resource one of those declared at that binding.
+    ///
+    /// # Panics
+    /// As [`Self::bind`]; also if a choice was not declared (see `chosen`).
+    pub fn bind_with<R: Into<ResourceId> + Copy>(
+        &self,
+        pipeline: &impl Bindable,
+        choices: &[(u32, R)],
+    ) {
+        self.check_pipeline(pipeline);
+        let mut descriptors = self.descriptors();
+        descriptors.extend(self.chosen(&Self::ids(choices)));
+        descriptors.sort_by_key(|d| d.binding());
+        self.cmd.bind(pipeline, &descriptors);
+    }
+
+    /// Pushes only `choices` (see [`Self::bind_with`]) to the bound `pipeline`: switching
+    /// one-of bindings between draws without rebinding the rest.
+    pub fn push_with<R: Into<ResourceId> + Copy>(
+        &self,
+        pipeline: &impl Bindable,
+        choices: &[(u32, R)],
+    ) {
+        self.check_pipeline(pipeline);
+        self.cmd
+            .push_descriptors(pipeline, &self.chosen(&Self::ids(choices)));
+    }
+
+    fn ids<R: Into<ResourceId> + Copy>(choices: &[(u32, R)]) -> Vec<(u32, ResourceId)> {
+        choices.iter().map(|&(b, r)| (b, r.into())).collect()
     }
 
     /// Begins dynamic rendering into the attachments this pass declared, with their load ops,

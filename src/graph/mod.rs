@@ -96,7 +96,7 @@ pub enum GraphError {
 /// other (boxed into [`GraphError::Binding`]: the messages carry several names).
 #[derive(Debug, thiserror::Error, PartialEq, Eq)]
 pub enum BindingError {
-    #[error("pass `{pass}` binds nothing at binding {binding}, where `{shader}` declares `{name}` ({kind}): bind a resource there with `.bind*()`, or declare it `.bind_per_draw()` if the pass pushes it itself")]
+    #[error("pass `{pass}` binds nothing at binding {binding}, where `{shader}` declares `{name}` ({kind}): bind a resource there with `.bind*()` (`.bind_one_of()` if the record closure picks one per dispatch or draw)")]
     UnboundBinding {
         pass: String,
         shader: String,
@@ -147,6 +147,8 @@ pub enum BindingError {
         resource: String,
         name: String,
     },
+    #[error("pass `{pass}` declares binding {binding} as one of no resources: list at least one in `.bind_one_of()`, or do not declare the pass")]
+    EmptyChoice { pass: String, binding: u32 },
     #[error("pass `{pass}` binds binding {binding} twice")]
     DuplicateBinding { pass: String, binding: u32 },
     #[error("pass `{pass}` declares bindings but no pipeline: call `.pipeline(&p)` so its bindings can be checked against the shader")]
@@ -475,15 +477,15 @@ impl PassBuilder<'_> {
         self.graph.passes[self.index].interface = Some(pipeline.interface());
         self
     }
-    fn add_binding(self, decl: bind::BindingDecl, sel: SubresourceSel) -> Self {
-        let writes = decl.access.info().writes;
+    fn add_binding(mut self, decl: bind::BindingDecl, sel: SubresourceSel) -> Self {
+        let read = !decl.access.info().writes;
         let access = decl.access;
-        let Some(r) = decl.resource else {
-            self.graph.passes[self.index].bindings.push(decl);
-            return self;
-        };
+        let resources = decl.resources().to_vec();
         self.graph.passes[self.index].bindings.push(decl);
-        self.add(r, access, sel, !writes)
+        for r in resources {
+            self = self.add(r, access, sel, read);
+        }
+        self
     }
     /// Declares `resource` with `access` at `binding` of the pass's pipeline: a storage image
     /// or buffer (`Storage*`), or a uniform buffer (`Uniform`). Read or write follows the access.
@@ -520,13 +522,45 @@ impl PassBuilder<'_> {
         decl.mip = Some(level);
         self.add_binding(decl, Subresource::mip(level))
     }
-    /// Declares `binding` as pushed by the record closure itself, per draw (textures that
-    /// change between draws): the resources it may read are declared with `.read()`.
-    pub fn bind_per_draw(self, binding: u32) -> Self {
-        self.graph.passes[self.index]
-            .bindings
-            .push(bind::BindingDecl::per_draw(binding));
-        self
+    /// Declares `binding` as filled by one of `resources` at a time, all with `access`: the
+    /// record closure picks one per dispatch or draw with [`PassContext::bind_with`] or
+    /// [`PassContext::push_with`] (point lists in chunks, triangle sets, per-material
+    /// textures). Every one is checked against the shader and gets its barrier; a buffer
+    /// imported per slot is bound as its slot's window, like with `.bind()`.
+    pub fn bind_one_of<R: Into<ResourceId>>(
+        self,
+        binding: u32,
+        resources: impl IntoIterator<Item = R>,
+        access: Access,
+    ) -> Self {
+        let mut list: Vec<ResourceId> = Vec::new();
+        for r in resources.into_iter().map(Into::into) {
+            if !list.contains(&r) {
+                list.push(r);
+            }
+        }
+        self.add_binding(
+            bind::BindingDecl::one_of(binding, list, access),
+            SubresourceSel::whole(),
+        )
+    }
+    /// [`Self::bind_one_of`] for images sampled through `sampler` by `shader`.
+    pub fn bind_one_of_sampled(
+        self,
+        binding: u32,
+        images: impl IntoIterator<Item = ImageHandle>,
+        sampler: vk::Sampler,
+        shader: Shader,
+    ) -> Self {
+        let mut list: Vec<ResourceId> = Vec::new();
+        for r in images.into_iter().map(ResourceId::from) {
+            if !list.contains(&r) {
+                list.push(r);
+            }
+        }
+        let mut decl = bind::BindingDecl::one_of(binding, list, Access::Sampled(shader));
+        decl.sampler = Some(sampler);
+        self.add_binding(decl, SubresourceSel::whole())
     }
     /// Declares a color attachment (the next location), loaded as `load` says.
     pub fn color(self, image: ImageHandle, load: Load) -> Self {

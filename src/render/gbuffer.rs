@@ -1,12 +1,11 @@
 //! `gbuffer`: albedo, normal, (Phong scenes) specular and depth of the camera view
-//! (`glsl/gbuffer.{vert,frag}`). Textures and bump maps are pushed per draw.
+//! (`glsl/gbuffer.{vert,frag}`). Textures and bump maps are chosen per draw among the
+//! declared ones (`.bind_one_of_sampled`).
 
 use super::scene_gpu::{vertex_attributes, SceneInputs};
 use super::{DEPTH, GBUFFER_COLOR};
 use crate::graph::{Access, ImageHandle, Load, RenderGraph, Shader};
-use crate::vk::{
-    vk, Context, Descriptor, GraphicsPipeline, GraphicsPipelineDesc, ImageDesc, VkError,
-};
+use crate::vk::{vk, Context, GraphicsPipeline, GraphicsPipelineDesc, ImageDesc, VkError};
 
 /// Push constants of `gbuffer.vert`.
 #[repr(C)]
@@ -96,13 +95,15 @@ impl GbufferPass {
         let placeholder = scene.placeholder();
         let sampler = scene.texture_sampler;
         let clear = Load::Clear([0.0; 4]);
+        // Every texture a draw may bind (the placeholder, for draws without one, among them).
+        let choices = textures.clone();
         let mut pass = g
             .add_pass("gbuffer")
             .pipeline(&pipe)
             .bind(0, scene.frame, Access::StorageRead(Shader::Graphics))
             .bind(1, scene.materials, Access::StorageRead(Shader::Fragment))
-            .bind_per_draw(2)
-            .bind_per_draw(3)
+            .bind_one_of_sampled(2, choices.clone(), sampler, Shader::Fragment)
+            .bind_one_of_sampled(3, choices, sampler, Shader::Fragment)
             .read(vertices, Access::VertexBuffer)
             .read(indices, Access::IndexBuffer)
             .color(out.albedo, clear)
@@ -111,32 +112,21 @@ impl GbufferPass {
             pass = pass.color(spec, clear);
         }
         pass = pass.depth(out.depth, Load::ClearDepth(1.0));
-        for &t in &textures {
-            pass = pass.read(t, Access::Sampled(Shader::Fragment));
-        }
         pass.record(move |ctx| {
             ctx.begin_rendering();
-            let texture = |binding: u32, t: Option<usize>| Descriptor::SampledImage {
-                binding,
-                view: ctx
-                    .image(
-                        t.and_then(|i| textures.get(i).copied())
-                            .unwrap_or(placeholder),
-                    )
-                    .view,
-                sampler,
+            // A material's texture (or bump map), or the placeholder when it has none.
+            let texture = |t: Option<usize>| {
+                t.and_then(|i| textures.get(i).copied())
+                    .unwrap_or(placeholder)
             };
-            let mut descriptors = ctx.descriptors();
-            descriptors.extend([texture(2, None), texture(3, None)]);
-            ctx.cmd.bind(&pipe, &descriptors);
+            ctx.bind_with(&pipe, &[(2, texture(None)), (3, texture(None))]);
             ctx.bind_vertex_buffer(vertices);
             ctx.bind_index_buffer(indices);
             if let Ok(lists) = draws.read() {
                 let mut bound = (None, None);
                 for d in &lists.camera {
                     if (d.texture, d.bump) != bound {
-                        ctx.cmd
-                            .push_descriptors(&pipe, &[texture(2, d.texture), texture(3, d.bump)]);
+                        ctx.push_with(&pipe, &[(2, texture(d.texture)), (3, texture(d.bump))]);
                         bound = (d.texture, d.bump);
                     }
                     let push = GpuGbufferPush {

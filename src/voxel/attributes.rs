@@ -16,14 +16,14 @@
 use super::gpu::{voxelize_loads, voxelize_splits, GpuVoxelizePush};
 use super::gpu_atlas_volumes::AttributeVolumes;
 use super::VoxelGrid;
-use crate::graph::{Access, ImageHandle, RenderGraph, Shader};
+use crate::graph::{Access, ImageHandle, RenderGraph, Shader, SlotCondition};
 use crate::scene::Scene;
 use crate::vk::{
-    vk, Buffer, BufferDesc, ComputePipeline, Context, Descriptor, Image, ImageDesc, MemoryLocation,
-    VkError, MAX_FRAMES_IN_FLIGHT,
+    vk, Buffer, BufferDesc, ComputePipeline, Context, Image, ImageDesc, MemoryLocation, VkError,
+    MAX_FRAMES_IN_FLIGHT,
 };
 use glam::Vec3;
-use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
+use std::sync::atomic::{AtomicU32, Ordering};
 use std::sync::Arc;
 
 /// State of both volumes between frames: sampled by compute shaders.
@@ -55,8 +55,11 @@ pub struct TriangleAttributes {
     /// Per voxel, the smallest index of the triangles touching it ([`NO_OWNER`] between
     /// rewrites).
     owner: Image,
-    /// The volumes hold the static scene once written.
-    written: Arc<AtomicBool>,
+    /// A frame has been prepared to write the volumes ([`Self::update`]'s first call).
+    written: bool,
+    /// Open in the frame slots that rewrite the volumes: the first frame, and a frame whose
+    /// moving objects moved.
+    gate: Arc<SlotCondition>,
     /// Scenes with moving objects: triangles per frame slot, rewritten when they change.
     animated: Option<AnimatedTriangles>,
 }
@@ -67,8 +70,6 @@ struct AnimatedTriangles {
     scene: Scene,
     capacity: usize,
     last: Option<Vec<AttributeTriangle>>,
-    /// Per slot: the region changed and the volumes must be rewritten in that slot's frame.
-    dirty: Arc<[AtomicBool; MAX_FRAMES_IN_FLIGHT]>,
     counts: Arc<[AtomicU32; MAX_FRAMES_IN_FLIGHT]>,
     /// Per slot, workgroups per triangle (see [`attribute_splits`]).
     splits: Arc<[AtomicU32; MAX_FRAMES_IN_FLIGHT]>,
@@ -203,7 +204,6 @@ impl TriangleAttributes {
                     scene: scene.clone(),
                     capacity,
                     last: Some(tris.clone()),
-                    dirty: Arc::new(std::array::from_fn(|_| AtomicBool::new(false))),
                     counts: Arc::new(std::array::from_fn(|_| AtomicU32::new(count))),
                     splits: Arc::new(std::array::from_fn(|_| AtomicU32::new(splits))),
                     grid: *grid,
@@ -257,14 +257,29 @@ impl TriangleAttributes {
             splits: attribute_splits(grid, &tris),
             push: GpuVoxelizePush::new(grid, tris.len() as u32, 0),
             owner,
-            written: Arc::new(AtomicBool::new(false)),
+            written: false,
+            gate: Arc::new(SlotCondition::default()),
             animated,
         })
     }
 
-    /// For scenes with moving objects: writes frame slot `slot`'s triangles at `t_s` when they
-    /// changed, so that frame rewrites the volumes. Returns whether they changed.
+    /// Prepares frame slot `slot` at `t_s` (after the slot's fence, before recording it):
+    /// for scenes with moving objects, writes the slot's triangles when they changed; opens
+    /// the slot's passes in the first frame and when they changed (and there are triangles),
+    /// closes them otherwise. Returns whether the triangles changed.
     pub fn update(&mut self, t_s: f32, slot: usize) -> bool {
+        let slot = slot % MAX_FRAMES_IN_FLIGHT;
+        let first = !std::mem::replace(&mut self.written, true);
+        let changed = self.rewrite_triangles(t_s, slot);
+        let count = self.animated.as_ref().map_or(self.triangle_count, |a| {
+            a.counts[slot].load(Ordering::SeqCst)
+        });
+        self.gate.set(slot, (first || changed) && count > 0);
+        changed
+    }
+
+    /// Writes slot `slot`'s triangles at `t_s` when they differ from the last ones written.
+    fn rewrite_triangles(&mut self, t_s: f32, slot: usize) -> bool {
         let Some(a) = &mut self.animated else {
             return false;
         };
@@ -280,7 +295,6 @@ impl TriangleAttributes {
                 a.capacity
             );
         }
-        let slot = slot % MAX_FRAMES_IN_FLIGHT;
         let region = a.capacity * std::mem::size_of::<AttributeTriangle>();
         if let Some(m) = self.triangles.mapped_mut() {
             let bytes: &[u8] = bytemuck::cast_slice(&tris[..n]);
@@ -288,66 +302,51 @@ impl TriangleAttributes {
         }
         a.counts[slot].store(n as u32, Ordering::SeqCst);
         a.splits[slot].store(attribute_splits(&a.grid, &tris[..n]), Ordering::SeqCst);
-        a.dirty[slot].store(true, Ordering::SeqCst);
         a.last = Some(tris);
         true
     }
 
     /// Declares `voxelize_attributes` and `voxelize_attributes_resolve`, writing the voxels of
     /// this writer's triangles into `albedo` and `normal` (other voxels keep their values).
-    /// The passes record in the first frame, and in a frame whose slot [`Self::update`]
-    /// rewrote; otherwise the volumes keep their contents.
+    /// The passes record in the slots [`Self::update`] opened: the first frame, and a frame
+    /// whose moving objects moved; otherwise the volumes keep their contents.
     pub fn add_passes(&self, g: &mut RenderGraph, albedo: ImageHandle, normal: ImageHandle) {
+        let (read, rw) = (
+            Access::StorageRead(Shader::Compute),
+            Access::StorageReadWrite(Shader::Compute),
+        );
         let owner = g.import_image(&self.owner, OWNER_STATE);
-        let tris = g.import_buffer(&self.triangles, Access::StorageRead(Shader::Compute));
+        // With moving objects each frame slot reads its own region of the buffer.
+        let tris = match &self.animated {
+            Some(a) => {
+                let region = (a.capacity * std::mem::size_of::<AttributeTriangle>()) as u64;
+                g.import_buffer_per_slot(&self.triangles, region, region, read)
+            }
+            None => g.import_buffer(&self.triangles, read),
+        };
         let (pipe, count, splits, vpush) =
             (self.pipeline, self.triangle_count, self.splits, self.push);
-        let written = self.written.clone();
-        let per_slot = self.animated.as_ref().map(|a| {
-            let region = (a.capacity * std::mem::size_of::<AttributeTriangle>()) as u64;
-            (region, a.dirty.clone(), a.counts.clone(), a.splits.clone())
-        });
-        let region = per_slot.as_ref().map(|p| p.0);
-        // What `voxelize_attributes` decided this frame, for the resolve pass after it.
-        let rewrite = Arc::new(AtomicBool::new(false));
-        let rewrite_read = rewrite.clone();
+        let per_slot = self
+            .animated
+            .as_ref()
+            .map(|a| (a.counts.clone(), a.splits.clone()));
         g.add_pass("voxelize_attributes")
-            .read(tris, Access::StorageRead(Shader::Compute))
-            .write(owner, Access::StorageReadWrite(Shader::Compute))
+            .pipeline(&pipe)
+            .bind(0, tris, read)
+            .bind(1, owner, rw)
+            .when(Some(self.gate.clone()))
             .record(move |ctx| {
-                rewrite.store(false, Ordering::SeqCst);
-                let first = !written.swap(true, Ordering::SeqCst);
                 let slot = ctx.slot % MAX_FRAMES_IN_FLIGHT;
                 let (count, splits) = match &per_slot {
-                    Some((_, dirty, counts, slot_splits)) => {
-                        let moved = dirty[slot].swap(false, Ordering::SeqCst);
-                        if !(first || moved) {
-                            return;
-                        }
-                        (
-                            counts[slot].load(Ordering::SeqCst),
-                            slot_splits[slot].load(Ordering::SeqCst),
-                        )
-                    }
-                    None if first => (count, splits),
-                    None => return,
+                    Some((counts, slot_splits)) => (
+                        counts[slot].load(Ordering::SeqCst),
+                        slot_splits[slot].load(Ordering::SeqCst),
+                    ),
+                    None => (count, splits),
                 };
-                if count == 0 {
-                    return;
-                }
-                rewrite.store(true, Ordering::SeqCst);
                 let mut vpush = vpush;
                 vpush.extent[2] = count;
-                ctx.cmd.bind(
-                    &pipe,
-                    &[
-                        triangle_descriptor(ctx.buffer(tris).raw, region, slot),
-                        Descriptor::StorageImage {
-                            binding: 1,
-                            view: ctx.image(owner).view,
-                        },
-                    ],
-                );
+                ctx.bind(&pipe);
                 ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&vpush));
                 let x = count.min(65_535);
                 ctx.cmd.dispatch(x, count.div_ceil(x), splits);
@@ -356,28 +355,14 @@ impl TriangleAttributes {
         let d = &self.owner.desc;
         let extent = (d.width, d.height, d.depth);
         g.add_pass("voxelize_attributes_resolve")
-            .read(tris, Access::StorageRead(Shader::Compute))
-            .write(owner, Access::StorageReadWrite(Shader::Compute))
-            .write(albedo, Access::StorageReadWrite(Shader::Compute))
-            .write(normal, Access::StorageReadWrite(Shader::Compute))
+            .pipeline(&resolve)
+            .bind(0, tris, read)
+            .bind(1, owner, rw)
+            .bind(2, albedo, rw)
+            .bind(3, normal, rw)
+            .when(Some(self.gate.clone()))
             .record(move |ctx| {
-                if !rewrite_read.load(Ordering::SeqCst) {
-                    return;
-                }
-                let slot = ctx.slot % MAX_FRAMES_IN_FLIGHT;
-                let storage = |binding, h| Descriptor::StorageImage {
-                    binding,
-                    view: ctx.image(h).view,
-                };
-                ctx.cmd.bind(
-                    &resolve,
-                    &[
-                        triangle_descriptor(ctx.buffer(tris).raw, region, slot),
-                        storage(1, owner),
-                        storage(2, albedo),
-                        storage(3, normal),
-                    ],
-                );
+                ctx.bind(&resolve);
                 ctx.cmd
                     .dispatch(extent.0.div_ceil(8), extent.1.div_ceil(8), extent.2);
             });
@@ -388,20 +373,6 @@ impl TriangleAttributes {
         ctx.destroy_compute_pipeline(self.resolve_pipeline);
         ctx.destroy_buffer(self.triangles);
         ctx.destroy_image(self.owner);
-    }
-}
-
-/// The triangles a frame's passes read: the whole buffer, or frame slot `slot`'s region of
-/// `region` bytes in scenes with moving objects.
-fn triangle_descriptor(buffer: vk::Buffer, region: Option<u64>, slot: usize) -> Descriptor {
-    match region {
-        Some(region) => Descriptor::StorageBuffer {
-            binding: 0,
-            buffer,
-            offset: slot as u64 * region,
-            range: region,
-        },
-        None => Descriptor::storage_buffer(0, buffer),
     }
 }
 

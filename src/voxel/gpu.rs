@@ -32,8 +32,8 @@ use crate::graph::{
 };
 use crate::scene::Scene;
 use crate::vk::{
-    vk, Buffer, BufferDesc, ComputePipeline, Context, Descriptor, Image, ImageDesc, MemoryLocation,
-    PassTiming, VkError, MAX_FRAMES_IN_FLIGHT,
+    vk, Buffer, BufferDesc, ComputePipeline, Context, Image, ImageDesc, MemoryLocation, PassTiming,
+    VkError, MAX_FRAMES_IN_FLIGHT,
 };
 use glam::Vec3;
 use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
@@ -459,29 +459,23 @@ pub enum TriangleSource<'a> {
     PerSlot(&'a DynamicTriangles),
 }
 
-/// How a recording closure finds a set's triangles: `(offset, range, count, loads)` for a
-/// slot, `loads` being the set's largest [`voxelize_loads`].
+/// How a recording closure finds a set's triangles: `(count, loads)` for a slot, `loads`
+/// being the set's largest [`voxelize_loads`]. A per-slot set is imported per slot, so its
+/// binding is the slot's window.
 #[derive(Clone)]
 enum SetRange {
     Fixed(u32, u64),
     PerSlot {
-        stride: u64,
         counts: Arc<[AtomicU32; MAX_FRAMES_IN_FLIGHT]>,
         loads: Arc<[AtomicU64; MAX_FRAMES_IN_FLIGHT]>,
     },
 }
 
 impl SetRange {
-    fn at(&self, slot: usize) -> (u64, u64, u32, u64) {
+    fn at(&self, slot: usize) -> (u32, u64) {
         match self {
-            SetRange::Fixed(n, loads) => (0, vk::WHOLE_SIZE, *n, *loads),
-            SetRange::PerSlot {
-                stride,
-                counts,
-                loads,
-            } => (
-                slot as u64 * stride,
-                *stride,
+            SetRange::Fixed(n, loads) => (*n, *loads),
+            SetRange::PerSlot { counts, loads } => (
                 counts.get(slot).map_or(0, |c| c.load(Ordering::Acquire)),
                 loads.get(slot).map_or(0, |l| l.load(Ordering::Acquire)),
             ),
@@ -536,24 +530,23 @@ pub fn add_voxelize_passes_gated(
                 })
         }
     }
+    let read = Access::StorageRead(Shader::Compute);
     let sets: Vec<(BufferHandle, SetRange)> = triangles
         .iter()
         .filter_map(|t| match *t {
             TriangleSource::Fixed(t) if t.count > 0 => Some((
-                &t.buffer,
+                g.import_buffer(&t.buffer, read),
                 SetRange::Fixed(t.count, max_loads(grid, &t.bounds)),
             )),
             TriangleSource::Fixed(_) => None,
             TriangleSource::PerSlot(d) => Some((
-                &d.buffer,
+                g.import_buffer_per_slot(&d.buffer, d.stride, d.stride, read),
                 SetRange::PerSlot {
-                    stride: d.stride,
                     counts: d.counts.clone(),
                     loads: d.loads.clone(),
                 },
             )),
         })
-        .map(|(b, r)| (g.import_buffer(b, Access::StorageRead(Shader::Compute)), r))
         .collect();
     if sets.is_empty() {
         return;
@@ -561,45 +554,32 @@ pub fn add_voxelize_passes_gated(
     let pipe = pipelines.voxelize;
     let group_size = pipelines.group_size;
     let grid = *grid;
-    let mut pass = g
-        .add_pass("voxelize_triangles")
+    g.add_pass("voxelize_triangles")
+        .pipeline(&pipe)
+        .bind_one_of(0, sets.iter().map(|s| s.0), read)
+        .bind(1, columns, Access::StorageReadWrite(Shader::Compute))
         .when(gate)
-        .write(columns, Access::StorageReadWrite(Shader::Compute));
-    for (h, _) in &sets {
-        pass = pass.read(*h, Access::StorageRead(Shader::Compute));
-    }
-    pass.record(move |ctx| {
-        for (h, range) in &sets {
-            let (offset, range, count, loads) = range.at(ctx.slot);
-            if count == 0 {
-                continue;
+        .record(move |ctx| {
+            for (h, range) in &sets {
+                let (count, loads) = range.at(ctx.slot);
+                if count == 0 {
+                    continue;
+                }
+                ctx.bind_with(&pipe, &[(0, *h)]);
+                // One workgroup per triangle, rows of MAX_GROUPS_X workgroups past the limit,
+                // and z splits so that no invocation outruns lavapipe's loop budget.
+                let splits = voxelize_splits(loads, group_size);
+                let mut first = 0;
+                while first < count {
+                    let n = (count - first).min(MAX_GROUPS_X * MAX_GROUPS_X);
+                    let push = GpuVoxelizePush::new(&grid, n, first);
+                    ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
+                    let x = n.min(MAX_GROUPS_X);
+                    ctx.cmd.dispatch(x, n.div_ceil(x), splits);
+                    first += n;
+                }
             }
-            ctx.cmd.bind(
-                &pipe,
-                &[
-                    Descriptor::StorageBuffer {
-                        binding: 0,
-                        buffer: ctx.buffer(*h).raw,
-                        offset,
-                        range,
-                    },
-                    Descriptor::storage_buffer(1, ctx.buffer(columns).raw),
-                ],
-            );
-            // One workgroup per triangle, rows of MAX_GROUPS_X workgroups past the limit, and
-            // z splits so that no invocation outruns lavapipe's loop budget.
-            let splits = voxelize_splits(loads, group_size);
-            let mut first = 0;
-            while first < count {
-                let n = (count - first).min(MAX_GROUPS_X * MAX_GROUPS_X);
-                let push = GpuVoxelizePush::new(&grid, n, first);
-                ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
-                let x = n.min(MAX_GROUPS_X);
-                ctx.cmd.dispatch(x, n.div_ceil(x), splits);
-                first += n;
-            }
-        }
-    });
+        });
 }
 
 /// Declares `voxel_store` (column buffer → mip 0) and the OR mip chain `voxel_mip_1..`.
@@ -1002,6 +982,9 @@ impl VoxelFrame {
     /// the dynamic triangles when they changed since they were last voxelized. Returns
     /// whether this frame re-voxelizes.
     pub fn update(&mut self, t_s: f32, slot: usize) -> Result<bool, GpuVoxelError> {
+        if let Some(v) = self.atlas.as_mut().and_then(|a| a.volumes.as_mut()) {
+            v.prepare(slot);
+        }
         let tris = match &self.dynamic {
             Some(d) => Some(dynamic_triangles(&d.scene, t_s)?),
             None => None,

@@ -35,11 +35,11 @@
 use super::atlas::{AtlasCache, MeshAtlas};
 use super::gpu::{image_extent, GpuVoxelError, SlotGate};
 use super::VoxelGrid;
-use crate::graph::{run_once, Access, BufferHandle, ImageHandle, RenderGraph, Shader};
+use crate::graph::{run_once, Access, BufferHandle, ImageHandle, Load, RenderGraph, Shader};
 use crate::scene::{Animation, Scene};
 use crate::vk::{
-    vk, Attachment, Buffer, BufferDesc, ComputePipeline, Context, Descriptor, GraphicsPipeline,
-    GraphicsPipelineDesc, ImageDesc, MemoryLocation, PassTiming, VkError, MAX_FRAMES_IN_FLIGHT,
+    vk, Buffer, BufferDesc, ComputePipeline, Context, GraphicsPipeline, GraphicsPipelineDesc,
+    ImageDesc, MemoryLocation, PassTiming, VkError, MAX_FRAMES_IN_FLIGHT,
 };
 use glam::{Mat4, Vec3};
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -268,25 +268,12 @@ pub fn add_atlas_positions_pass(
     let image = g.create_image(ImageDesc::new_2d("position atlas", ATLAS_FORMAT, w, h));
     let (pipe, size) = (pipes.positions, [w as f32, h as f32, 0.0, 0.0]);
     g.add_pass("atlas_positions")
-        .read(triangles, Access::StorageRead(Shader::Graphics))
-        .write(image, Access::ColorAttachment)
+        .pipeline(&pipe)
+        .bind(0, triangles, Access::StorageRead(Shader::Graphics))
+        .color(image, Load::Clear([0.0; 4]))
         .record(move |ctx| {
-            let target = ctx.image(image);
-            let clear = vk::ClearValue {
-                color: vk::ClearColorValue { float32: [0.0; 4] },
-            };
-            ctx.cmd.begin_rendering(
-                target.extent_2d(),
-                &[Attachment {
-                    view: target.view,
-                    clear: Some(clear),
-                }],
-                None,
-            );
-            ctx.cmd.bind(
-                &pipe,
-                &[Descriptor::storage_buffer(0, ctx.buffer(triangles).raw)],
-            );
+            ctx.begin_rendering();
+            ctx.bind(&pipe);
             ctx.cmd.push_constants(
                 &pipe,
                 bytemuck::bytes_of(&GpuAtlasPositionsPush { atlas_size: size }),
@@ -375,37 +362,29 @@ pub fn render_atlas_points_chunked(
             }
         });
         let (pipe, sampler) = (pipes.points, pipes.sampler);
-        let mut pass = g
-            .add_pass("atlas_points")
-            .read(image, Access::Sampled(Shader::Compute));
-        for &(out, _, _) in &outs {
-            pass = pass.write(out, Access::StorageReadWrite(Shader::Compute));
-        }
         let bands_h = outs.clone();
-        pass.record(move |ctx| {
-            for &(out, row0, rows) in &bands_h {
-                ctx.cmd.bind(
-                    &pipe,
-                    &[
-                        Descriptor::SampledImage {
-                            binding: 0,
-                            view: ctx.image(image).view,
-                            sampler,
-                        },
-                        Descriptor::storage_buffer(1, ctx.buffer(out).raw),
-                    ],
-                );
-                ctx.cmd.push_constants(
-                    &pipe,
-                    bytemuck::bytes_of(&GpuAtlasPointsPush {
-                        row0,
-                        rows,
-                        _pad: [0; 2],
-                    }),
-                );
-                ctx.cmd.dispatch(w.div_ceil(8), rows.div_ceil(8), 1);
-            }
-        });
+        g.add_pass("atlas_points")
+            .pipeline(&pipe)
+            .bind_sampled(0, image, sampler, Shader::Compute)
+            .bind_one_of(
+                1,
+                outs.iter().map(|o| o.0),
+                Access::StorageReadWrite(Shader::Compute),
+            )
+            .record(move |ctx| {
+                for &(out, row0, rows) in &bands_h {
+                    ctx.bind_with(&pipe, &[(1, out)]);
+                    ctx.cmd.push_constants(
+                        &pipe,
+                        bytemuck::bytes_of(&GpuAtlasPointsPush {
+                            row0,
+                            rows,
+                            _pad: [0; 2],
+                        }),
+                    );
+                    ctx.cmd.dispatch(w.div_ceil(8), rows.div_ceil(8), 1);
+                }
+            });
         for &(out, _, _) in &outs {
             g.mark_output(out);
         }
@@ -629,36 +608,29 @@ pub fn add_voxelize_atlas_pass(
     if sets.is_empty() {
         return;
     }
-    let mut pass = g
-        .add_pass("voxelize_atlas")
-        .when(gate)
-        .write(columns, Access::StorageReadWrite(Shader::Compute));
-    for h in sets.iter().flat_map(ImportedInstance::handles) {
-        pass = pass.read(h, read);
-    }
     let (pipe, grid) = (pipes.voxelize, *grid);
     let (w, h) = image_extent(&grid);
-    pass.record(move |ctx| {
-        for inst in &sets {
-            let (chunks, model) = inst.at(ctx.slot);
-            for &(buf, count) in chunks {
-                if count == 0 {
-                    continue;
+    let chunks: Vec<BufferHandle> = sets.iter().flat_map(ImportedInstance::handles).collect();
+    g.add_pass("voxelize_atlas")
+        .pipeline(&pipe)
+        .bind_one_of(0, chunks, read)
+        .bind(1, columns, Access::StorageReadWrite(Shader::Compute))
+        .when(gate)
+        .record(move |ctx| {
+            for inst in &sets {
+                let (chunks, model) = inst.at(ctx.slot);
+                for &(buf, count) in chunks {
+                    if count == 0 {
+                        continue;
+                    }
+                    let push = GpuAtlasVoxelizePush::new(&grid, model, (w, h), count);
+                    ctx.bind_with(&pipe, &[(0, buf)]);
+                    ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
+                    let x = count.min(MAX_POINTS_X);
+                    ctx.cmd.dispatch(x.div_ceil(64), count.div_ceil(x), 1);
                 }
-                let push = GpuAtlasVoxelizePush::new(&grid, model, (w, h), count);
-                ctx.cmd.bind(
-                    &pipe,
-                    &[
-                        Descriptor::storage_buffer(0, ctx.buffer(buf).raw),
-                        Descriptor::storage_buffer(1, ctx.buffer(columns).raw),
-                    ],
-                );
-                ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
-                let x = count.min(MAX_POINTS_X);
-                ctx.cmd.dispatch(x.div_ceil(64), count.div_ceil(x), 1);
             }
-        }
-    });
+        });
 }
 
 /// Whether the atlas voxelizer handles `object` when atlases are selected: everything but

@@ -15,10 +15,8 @@ use super::gpu::{image_extent, COLUMN_FORMAT};
 use super::gpu_atlas::{AtlasInstance, GpuAtlasVoxelizePush, ImportedInstance};
 use super::ray_mask::ColumnLut1d;
 use super::VoxelGrid;
-use crate::graph::{Access, ImageHandle, RenderGraph, Shader};
-use crate::vk::{
-    vk, Attachment, Buffer, Context, Descriptor, GraphicsPipeline, GraphicsPipelineDesc, VkError,
-};
+use crate::graph::{Access, ImageHandle, Load, RenderGraph, Shader};
+use crate::vk::{vk, Buffer, Context, GraphicsPipeline, GraphicsPipelineDesc, VkError};
 
 /// The raster pipeline and its single-bit LUT.
 pub struct AtlasRasterBits {
@@ -66,51 +64,32 @@ impl AtlasRasterBits {
         let lut = g.import_buffer(&self.lut, read);
         let sets: Vec<ImportedInstance> =
             instances.iter().filter_map(|i| i.import(g, read)).collect();
-        // Cleared on load, so the logic op reads only what this pass wrote.
-        let mut pass = g
-            .add_pass("voxelize_atlas_bits")
-            .read(lut, read)
-            .write(image, Access::ColorAttachment);
-        for h in sets.iter().flat_map(ImportedInstance::handles) {
-            pass = pass.read(h, read);
-        }
+        let chunks: Vec<_> = sets.iter().flat_map(ImportedInstance::handles).collect();
         let (pipe, grid) = (self.pipe, *grid);
         let (w, h) = image_extent(&grid);
-        pass.record(move |ctx| {
-            let clear = Some(vk::ClearValue {
-                color: vk::ClearColorValue { uint32: [0; 4] },
-            });
-            let target = [Attachment {
-                view: ctx.image(image).view,
-                clear,
-            }];
-            // The whole (padded) image: the viewport maps columns to texels 1:1.
-            let extent = vk::Extent2D {
-                width: w,
-                height: h,
-            };
-            ctx.cmd
-                .begin_rendering_layers(extent, grid.layers(), &target, None);
-            for inst in &sets {
-                let (chunks, model) = inst.at(ctx.slot);
-                for &(points, count) in chunks {
-                    if count == 0 {
-                        continue;
+        // Cleared on load, so the logic op reads only what this pass wrote; the image is the
+        // whole (padded) grid, so the viewport maps columns to texels 1:1.
+        g.add_pass("voxelize_atlas_bits")
+            .pipeline(&pipe)
+            .bind_one_of(0, chunks, read)
+            .bind(1, lut, read)
+            .color(image, Load::Clear([0.0; 4]))
+            .record(move |ctx| {
+                ctx.begin_rendering();
+                for inst in &sets {
+                    let (chunks, model) = inst.at(ctx.slot);
+                    for &(points, count) in chunks {
+                        if count == 0 {
+                            continue;
+                        }
+                        let push = GpuAtlasVoxelizePush::new(&grid, model, (w, h), count);
+                        ctx.bind_with(&pipe, &[(0, points)]);
+                        ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
+                        ctx.cmd.draw(count, 1);
                     }
-                    let push = GpuAtlasVoxelizePush::new(&grid, model, (w, h), count);
-                    ctx.cmd.bind(
-                        &pipe,
-                        &[
-                            Descriptor::storage_buffer(0, ctx.buffer(points).raw),
-                            Descriptor::storage_buffer(1, ctx.buffer(lut).raw),
-                        ],
-                    );
-                    ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
-                    ctx.cmd.draw(count, 1);
                 }
-            }
-            ctx.cmd.end_rendering();
-        });
+                ctx.cmd.end_rendering();
+            });
     }
 
     pub fn destroy(self, ctx: &Context) {

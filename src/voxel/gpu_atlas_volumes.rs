@@ -31,14 +31,13 @@ use super::gpu::{GpuVoxelError, SlotGate};
 use super::gpu_atlas::{import_chunks, AtlasScene, FrameAt, GpuAtlasVoxelizePush, ModelAt};
 use super::VoxelGrid;
 use crate::graph::run_once;
-use crate::graph::{Access, BufferHandle, ImageHandle, RenderGraph, Shader};
+use crate::graph::{Access, BufferHandle, ImageHandle, Load, RenderGraph, Shader};
 use crate::scene::Scene;
 use crate::vk::{
-    vk, Attachment, Buffer, ComputePipeline, Context, Descriptor, GraphicsPipeline,
-    GraphicsPipelineDesc, Image, ImageDesc, VkError,
+    vk, Buffer, ComputePipeline, Context, GraphicsPipeline, GraphicsPipelineDesc, Image, ImageDesc,
+    VkError,
 };
 use glam::Vec3;
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
 /// Format of the per-voxel sums: f16 counts are exact up to 2048 points per voxel, far more
@@ -130,8 +129,11 @@ pub struct AtlasVolumes {
     /// `(albedo sums, normal sums)` of the static instances, splatted once; absent when the
     /// statics are splatted every frame (`revoxelize_static`) or there are none.
     static_sums: Option<(Image, Image)>,
-    /// Without a slot gate (nothing ever moves) the volumes are resolved by the first frame.
-    resolved: Arc<AtomicBool>,
+    /// Without a slot gate (nothing ever moves) the volumes are resolved by the first frame:
+    /// open in the slot of the first [`Self::prepare`], closed after.
+    resolve_once: Arc<SlotGate>,
+    /// [`Self::prepare`] has opened a first frame.
+    resolved: bool,
 }
 
 /// A draw of one instance: per sequence frame its point chunks `(points, count)` and its
@@ -180,7 +182,8 @@ impl AtlasVolumes {
             sampler: vk::Sampler::null(),
             triangles: Vec::new(),
             static_sums: None,
-            resolved: Arc::new(AtomicBool::new(false)),
+            resolve_once: Arc::new(SlotGate::default()),
+            resolved: false,
         };
         if let Err(e) = me.init(ctx, atlas, scene, grid, statics_once) {
             me.destroy(ctx);
@@ -305,6 +308,13 @@ impl AtlasVolumes {
             .collect()
     }
 
+    /// Prepares frame slot `slot` (before recording it): without a slot gate, the resolve
+    /// records in the first frame only.
+    pub fn prepare(&mut self, slot: usize) {
+        let first = !std::mem::replace(&mut self.resolved, true);
+        self.resolve_once.set(slot, first);
+    }
+
     /// Declares this frame's `voxelize_atlas_volumes` (the dynamic instances, and the static
     /// ones when `statics_per_frame`) and `voxelize_atlas_resolve` into `albedo` and `normal`
     /// (imported [`AttributeVolumes`]). With a `gate`, both record only in the slots that
@@ -350,49 +360,24 @@ impl AtlasVolumes {
                 u32::from(static_sums.is_some()) | (u32::from(frame_sums.is_some()) << 1),
             ],
         };
-        let read = Access::Sampled(Shader::Compute);
-        let mut pass = g
-            .add_pass("voxelize_atlas_resolve")
-            .write(albedo, Access::StorageWrite(Shader::Compute))
-            .write(normal, Access::StorageWrite(Shader::Compute));
-        for (a, n) in static_sums.into_iter().chain(frame_sums) {
-            pass = pass.read(a, read).read(n, read);
-        }
-        let (pipe, sampler, resolved) = (self.resolve, self.sampler, self.resolved.clone());
-        pass.record(move |ctx| {
-            let run = match &gate {
-                Some(g) => g.is_open(ctx.slot),
-                None => !resolved.swap(true, Ordering::SeqCst),
-            };
-            if !run {
-                return;
-            }
-            let sampled = |binding, h: ImageHandle| Descriptor::SampledImage {
-                binding,
-                view: ctx.image(h).view,
-                sampler,
-            };
-            ctx.cmd.bind(
-                &pipe,
-                &[
-                    sampled(0, first.0),
-                    sampled(1, first.1),
-                    sampled(2, second.0),
-                    sampled(3, second.1),
-                    Descriptor::StorageImage {
-                        binding: 4,
-                        view: ctx.image(albedo).view,
-                    },
-                    Descriptor::StorageImage {
-                        binding: 5,
-                        view: ctx.image(normal).view,
-                    },
-                ],
-            );
-            ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
-            ctx.cmd
-                .dispatch(ext.x.div_ceil(8), ext.y.div_ceil(8), ext.z);
-        });
+        let (pipe, sampler, c) = (self.resolve, self.sampler, Shader::Compute);
+        // Without a slot gate (nothing ever moves) the first frame resolves, once.
+        let gate = gate.unwrap_or_else(|| self.resolve_once.clone());
+        g.add_pass("voxelize_atlas_resolve")
+            .pipeline(&pipe)
+            .bind_sampled(0, first.0, sampler, c)
+            .bind_sampled(1, first.1, sampler, c)
+            .bind_sampled(2, second.0, sampler, c)
+            .bind_sampled(3, second.1, sampler, c)
+            .bind(4, albedo, Access::StorageWrite(c))
+            .bind(5, normal, Access::StorageWrite(c))
+            .when(Some(gate))
+            .record(move |ctx| {
+                ctx.bind(&pipe);
+                ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
+                ctx.cmd
+                    .dispatch(ext.x.div_ceil(8), ext.y.div_ceil(8), ext.z);
+            });
     }
 
     pub fn destroy(self, ctx: &Context) {
@@ -422,65 +407,44 @@ fn add_splat_pass(
     gate: Option<Arc<SlotGate>>,
 ) {
     let read = Access::StorageRead(Shader::Graphics);
-    // A plain attachment write: the pass clears on load, so blending reads only what the
-    // pass itself wrote, never the contents of an earlier pass.
-    let mut pass = g
-        .add_pass("voxelize_atlas_volumes")
-        .when(gate)
-        .write(albedo, Access::ColorAttachment)
-        .write(normal, Access::ColorAttachment);
-    for (chunks, t) in splats.iter().flat_map(|s| &s.frames) {
-        for &(p, _) in chunks {
-            pass = pass.read(p, read);
-        }
-        pass = pass.read(*t, read);
-    }
+    let (points, tris): (Vec<BufferHandle>, Vec<BufferHandle>) = splats
+        .iter()
+        .flat_map(|s| &s.frames)
+        .flat_map(|(chunks, t)| chunks.iter().map(move |&(p, _)| (p, *t)))
+        .unzip();
     let grid = *grid;
-    pass.record(move |ctx| {
-        let ext = grid.extent_voxels();
-        let clear = Some(vk::ClearValue {
-            color: vk::ClearColorValue { float32: [0.0; 4] },
-        });
-        let colors = [albedo, normal].map(|h| Attachment {
-            view: ctx.image(h).view,
-            clear,
-        });
-        // The viewport is the grid's x,y resolution: a point's raster position is its column.
-        ctx.cmd.begin_rendering_layers(
-            vk::Extent2D {
-                width: ext.x,
-                height: ext.y,
-            },
-            ext.z,
-            &colors,
-            None,
-        );
-        for splat in &splats {
-            let f = splat.frame.at(ctx.slot);
-            let Some((chunks, tris)) = splat.frames.get(f).or(splat.frames.first()) else {
-                continue;
-            };
-            let model = splat.model.at(ctx.slot);
-            // The chunks in list order: blending sums in primitive order across draws too,
-            // so the sums equal one draw of the whole list.
-            for &(points, count) in chunks {
-                if count == 0 {
+    // Plain attachment writes: the pass clears on load, so blending reads only what the pass
+    // itself wrote, never the contents of an earlier pass. The viewport is the grid's x,y
+    // resolution (the sums' extent): a point's raster position is its column.
+    g.add_pass("voxelize_atlas_volumes")
+        .pipeline(&pipe)
+        .bind_one_of(0, points, read)
+        .bind_one_of(1, tris, read)
+        .color(albedo, Load::Clear([0.0; 4]))
+        .color(normal, Load::Clear([0.0; 4]))
+        .when(gate)
+        .record(move |ctx| {
+            ctx.begin_rendering();
+            for splat in &splats {
+                let f = splat.frame.at(ctx.slot);
+                let Some((chunks, tris)) = splat.frames.get(f).or(splat.frames.first()) else {
                     continue;
+                };
+                let model = splat.model.at(ctx.slot);
+                // The chunks in list order: blending sums in primitive order across draws
+                // too, so the sums equal one draw of the whole list.
+                for &(points, count) in chunks {
+                    if count == 0 {
+                        continue;
+                    }
+                    let push = GpuAtlasVoxelizePush::new(&grid, model, (0, 0), count);
+                    ctx.bind_with(&pipe, &[(0, points), (1, *tris)]);
+                    ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
+                    ctx.cmd.draw(count, 1);
                 }
-                let push = GpuAtlasVoxelizePush::new(&grid, model, (0, 0), count);
-                ctx.cmd.bind(
-                    &pipe,
-                    &[
-                        Descriptor::storage_buffer(0, ctx.buffer(points).raw),
-                        Descriptor::storage_buffer(1, ctx.buffer(*tris).raw),
-                    ],
-                );
-                ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
-                ctx.cmd.draw(count, 1);
             }
-        }
-        ctx.cmd.end_rendering();
-    });
+            ctx.cmd.end_rendering();
+        });
 }
 
 /// Object `object`'s triangles of mesh `mesh` (its mesh, or one of its sequence frames) in

@@ -10,8 +10,7 @@ use super::ray_mask::RayMaskLut;
 use super::traverse::{HitResult, TraversalParams};
 use crate::graph::{Access, GraphError, GraphExecutor, RenderGraph, Shader};
 use crate::vk::{
-    vk, Buffer, BufferDesc, ComputePipeline, Context, Descriptor, FrameLoop, MemoryLocation,
-    VkError,
+    vk, Buffer, BufferDesc, ComputePipeline, Context, FrameLoop, MemoryLocation, VkError,
 };
 use bytemuck::{Pod, Zeroable};
 use glam::{UVec3, Vec3};
@@ -234,23 +233,14 @@ impl VoxelRayCaster {
                 _pad: [0; 3],
             };
             g.add_pass(&format!("voxel_rays[{}]", m.name()))
-                .read(columns, read)
-                .read(levels, read)
-                .read(lut, read)
-                .read(ray_h, read)
-                .write(out, Access::StorageWrite(Shader::Compute))
+                .pipeline(&pipe)
+                .bind(0, columns, read)
+                .bind(1, levels, read)
+                .bind(2, lut, read)
+                .bind(3, ray_h, read)
+                .bind(4, out, Access::StorageWrite(Shader::Compute))
                 .record(move |ctx| {
-                    let d = |binding, h| Descriptor::storage_buffer(binding, ctx.buffer(h).raw);
-                    ctx.cmd.bind(
-                        &pipe,
-                        &[
-                            d(0, columns),
-                            d(1, levels),
-                            d(2, lut),
-                            d(3, ray_h),
-                            d(4, out),
-                        ],
-                    );
+                    ctx.bind(&pipe);
                     ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
                     ctx.cmd.dispatch(count.div_ceil(64), 1, 1);
                 });
