@@ -424,6 +424,99 @@ mod tests {
     }
 
     #[test]
+    fn every_choice_of_a_one_of_binding_is_checked() {
+        let (s, c) = (vk::Sampler::null(), Shader::Compute);
+        let image_among_buffers = graph_with(|p, src, dst, buf| {
+            p.bind_sampled(0, src, s, c)
+                .bind(1, dst, Access::StorageWrite(c))
+                .bind_one_of(2, [buf.0, src.0], Access::StorageRead(c))
+        });
+        assert!(matches!(
+            image_among_buffers,
+            Err(GraphError::Binding(b)) if matches!(
+                &*b,
+                BindingError::BindingKindMismatch { binding: 2, resource, .. } if resource == "src"
+            )
+        ));
+        let write_of_readonly = graph_with(|p, src, dst, buf| {
+            p.bind_sampled(0, src, s, c)
+                .bind(1, dst, Access::StorageWrite(c))
+                .bind_one_of(2, [buf], Access::StorageReadWrite(c))
+        });
+        assert!(matches!(
+            write_of_readonly,
+            Err(GraphError::Binding(b)) if matches!(*b, BindingError::WriteOfReadonlyBinding { binding: 2, .. })
+        ));
+        let empty = graph_with(|p, src, dst, _| {
+            p.bind_sampled(0, src, s, c)
+                .bind(1, dst, Access::StorageWrite(c))
+                .bind_one_of(
+                    2,
+                    Vec::<crate::graph::BufferHandle>::new(),
+                    Access::StorageRead(c),
+                )
+        });
+        assert!(matches!(
+            empty,
+            Err(GraphError::Binding(b)) if matches!(*b, BindingError::EmptyChoice { binding: 2, .. })
+        ));
+        let sampled = graph_with(|p, src, dst, buf| {
+            p.bind_one_of_sampled(0, [src, src], s, c)
+                .bind(1, dst, Access::StorageWrite(c))
+                .bind_one_of(2, [buf], Access::StorageRead(c))
+        });
+        sampled.unwrap();
+    }
+
+    /// A one-of binding declares an access of each of its resources (once), so each gets the
+    /// barrier after the pass that wrote it, as a `.bind()` of it would.
+    #[test]
+    fn each_choice_gets_its_barrier() {
+        let c = Shader::Compute;
+        let mut g = RenderGraph::new();
+        let src = g.import_image_desc(
+            ImageDesc::new_2d("src", vk::Format::R8G8B8A8_UNORM, 4, 4),
+            Access::Sampled(c),
+        );
+        let dst = g.import_image_desc(
+            ImageDesc::new_2d("dst", vk::Format::R8G8B8A8_UNORM, 4, 4),
+            Access::StorageWrite(c),
+        );
+        let (a, b) = (
+            g.create_buffer("chunk a", 64),
+            g.create_buffer("chunk b", 64),
+        );
+        g.add_pass("fill")
+            .write(a, Access::TransferWrite)
+            .write(b, Access::TransferWrite)
+            .record(|_| {});
+        let pipe = Fake(tonemap_like());
+        g.add_pass("t")
+            .pipeline(&pipe)
+            .bind_sampled(0, src, vk::Sampler::null(), c)
+            .bind(1, dst, Access::StorageWrite(c))
+            .bind_one_of(2, [a, b, a], Access::StorageRead(c))
+            .record(|_| {});
+        let t = &g.passes[1];
+        assert_eq!(t.bindings[2].resources(), &[a.0, b.0], "choices are a set");
+        assert_eq!(t.accesses.iter().filter(|x| x.0 == a.0).count(), 1);
+        let compiled = g.compile(&crate::graph::EstimateOracle).unwrap();
+        let pos = compiled
+            .order
+            .iter()
+            .position(|&p| compiled.pass_names[p] == "t")
+            .unwrap();
+        for chunk in [a, b] {
+            let barrier = compiled.pass_barriers[pos]
+                .iter()
+                .find(|x| x.resource == chunk.0)
+                .expect("a barrier before the read");
+            assert_eq!(barrier.src_access, vk::AccessFlags2::TRANSFER_WRITE);
+            assert_eq!(barrier.dst_access, vk::AccessFlags2::SHADER_STORAGE_READ);
+        }
+    }
+
+    #[test]
     fn bindings_need_a_pipeline() {
         let mut g = RenderGraph::new();
         let buf = g.import_buffer_desc("buf", 64, Access::StorageRead(Shader::Compute));

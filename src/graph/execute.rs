@@ -99,9 +99,8 @@ impl PassContext<'_> {
         match self.resources.get(h.0 .0 as usize) {
             Some(Some(GpuResource::Buffer(b))) => {
                 let mut b = *b;
-                if let Some((stride, size)) = self.decls[h.0 .0 as usize].slot_window {
-                    b.offset = self.slot as u64 * stride;
-                    b.size_bytes = size;
+                if let window @ Some(_) = self.decls[h.0 .0 as usize].slot_window {
+                    (b.offset, b.size_bytes) = bound_range(window, self.slot);
                 }
                 b
             }
@@ -128,10 +127,7 @@ impl PassContext<'_> {
             }
             Some(Some(GpuResource::Buffer(_))) => {
                 let buf = self.buffer(BufferHandle(id));
-                let (offset, range) = match self.decls[id.0 as usize].slot_window {
-                    Some(_) => (buf.offset, buf.size_bytes),
-                    None => (0, vk::WHOLE_SIZE),
-                };
+                let (offset, range) = bound_range(self.decls[id.0 as usize].slot_window, self.slot);
                 match b.access {
                     Access::Uniform(_) => Descriptor::UniformBuffer {
                         binding: b.binding,
@@ -295,6 +291,16 @@ impl PassContext<'_> {
     /// Binds a declared buffer as the index buffer (u32 indices).
     pub fn bind_index_buffer(&self, h: BufferHandle) {
         self.cmd.bind_index_buffer(self.buffer(h).raw);
+    }
+}
+
+/// The `(offset, range)` of a buffer that a pass recording frame slot `slot` binds: its
+/// slot's window of a buffer imported per slot (`slot_window`: stride and size), the whole
+/// buffer otherwise.
+pub(crate) fn bound_range(slot_window: Option<(u64, u64)>, slot: usize) -> (u64, u64) {
+    match slot_window {
+        Some((stride, size)) => (slot as u64 * stride, size),
+        None => (0, vk::WHOLE_SIZE),
     }
 }
 
@@ -633,4 +639,25 @@ fn label_color(index: usize) -> [f32; 4] {
         0.5 + 0.5 * (std::f32::consts::TAU * (h + 0.67)).cos(),
         1.0,
     ]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Each frame slot binds its own window of a buffer imported per slot (the voxelizer's
+    /// per-slot triangles: slot s at s·stride), any other buffer whole.
+    #[test]
+    fn per_slot_buffers_bind_their_slot_window() {
+        let mut g = RenderGraph::new();
+        let read = Access::StorageRead(crate::graph::Shader::Compute);
+        let whole = g.import_buffer_desc("whole", 1024, read);
+        let per_slot = g.import_buffer_desc("per slot", 1024, read);
+        g.resources[per_slot.0 .0 as usize].slot_window = Some((512, 480));
+        let window =
+            |h: BufferHandle, slot| bound_range(g.resources[h.0 .0 as usize].slot_window, slot);
+        assert_eq!(window(per_slot, 0), (0, 480));
+        assert_eq!(window(per_slot, 1), (512, 480));
+        assert_eq!(window(whole, 1), (0, vk::WHOLE_SIZE));
+    }
 }
