@@ -1,5 +1,5 @@
 #version 450
-// Builds, once per atlas, the list of valid texels (thesis §3.3 step 2: a point list, not a
+// Builds, once per atlas, the list of valid texels (Thiedemann 2010, §4.3.1 step 2: a point list, not a
 // draw of every texel with discards): appends every rendered texel to a buffer whose first
 // word counts them, as (model-space position bits, triangle index): voxelize_atlas reads
 // the position, voxelize_atlas_volumes also the triangle's normal and albedo. One dispatch

@@ -1,7 +1,7 @@
 #version 450
 // Renders an automatic atlas (src/voxel/atlas.rs): each triangle's cell is drawn as a quad
 // (6 vertices per triangle, no vertex buffer) with the atlas position as clip position
-// (thesis §3.2, `gl_Position = uv*2-1`); the fragment shader keeps the texels the triangle
+// (Thiedemann 2010, §4.2.2, `gl_Position = uv*2-1`); the fragment shader keeps the texels the triangle
 // owns. Drawing the whole cell makes coverage conservative for thin and tiny triangles.
 #include "atlas_triangle.glsl"
 

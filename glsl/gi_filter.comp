@@ -1,5 +1,5 @@
 #version 450
-// Geometry-aware filter (Herzog et al. 2010 as used in thesis §7): a separable joint
+// Geometry-aware filter (Herzog et al. 2010 as used in Thiedemann 2010, §8.6.1): a separable joint
 // bilateral blur of the indirect irradiance, weighted by a spatial Gaussian, normal
 // similarity and distance from the center pixel's tangent plane. Run horizontally, then
 // vertically, `passes` times.

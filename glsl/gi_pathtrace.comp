@@ -1,5 +1,5 @@
 #version 450
-// The voxel path tracer (thesis §6.3): from each G-buffer point, `rays` paths of B bounces
+// The voxel path tracer (Thiedemann 2010, §6.4.2): from each G-buffer point, `rays` paths of B bounces
 // (or unbounded, see below) through the binary voxel hierarchy; at every hit the albedo and
 // normal come from the volumes congruent with the bits and the direct light there from the
 // shadow maps (next event estimation), so each bounce adds throughput * rho/pi * E_direct. Cosine sampling of

@@ -1,5 +1,5 @@
 #version 450
-// Direct-radiance voxel volume (thesis §6.1, the alternative to reflective light maps for
+// Direct-radiance voxel volume (Thiedemann 2010, §6.3.2, the alternative to reflective light maps for
 // diffuse senders): for every occupied voxel, the radiance its surface reflects from every
 // light, rho/pi * E with shadow-map visibility, on the side the light reaches (stored in a as
 // +1: along the normal volume's normal, -1: against it).

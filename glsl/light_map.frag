@@ -2,7 +2,7 @@
 // Reflective light maps: what the light sees is directly lit by it, so each texel stores the
 // radiance leaving that surface (Lambert: rho/pi * E, E = I cos / d^2 with Mitsuba's spot
 // falloff; the diffuse part), its world position and material and its normal, for lookups at
-// voxel ray hits (§6.1).
+// voxel ray hits (Thiedemann 2010, §6.3.3).
 #include "frame.glsl"
 #include "dissolve.glsl"
 
@@ -55,7 +55,7 @@ void main() {
     if (HAS_DISSOLVE && m.albedo.a < coverage_threshold) discard;
     out_radiance = vec4(m.albedo.rgb / PI * e, 1.0);
     // w: material index + 1 (0 marks texels the light sees nothing in), so lookups can
-    // evaluate a glossy sender's lobe toward the ray (§6.1).
+    // evaluate a glossy sender's lobe toward the ray (§6.4.3).
     out_position = vec4(in_world, float(pc.material + 1u));
     out_normal = vec4(n, 0.0);
 }

@@ -1,5 +1,5 @@
 #version 450
-// Reflective light maps (thesis §6.1): world position and normal of each vertex; the geometry
+// Reflective light maps (Thiedemann 2010, §6.3.3: spot and cube maps): world position and normal of each vertex; the geometry
 // shader projects into the light view's layer.
 layout(location = 0) in vec3 in_position;
 layout(location = 1) in vec3 in_normal;

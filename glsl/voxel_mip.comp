@@ -1,5 +1,5 @@
 #version 450
-// One level of the OR hierarchy (thesis §4.2): texel (x, y) of level l is the OR of texels
+// One level of the OR hierarchy (Thiedemann 2010, §5.2): texel (x, y) of level l is the OR of texels
 // 2x..2x+1, 2y..2y+1 of level l-1, all depth bits kept. Children outside the finer level
 // read as empty, matching the CPU BitHierarchy for any size.
 layout(local_size_x = 8, local_size_y = 8) in;

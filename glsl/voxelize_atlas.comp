@@ -1,5 +1,5 @@
 #version 450
-// Atlas voxelization (thesis §3.3): one point per valid atlas texel, transformed by the
+// Atlas voxelization (Thiedemann 2010, §4.3.1): one point per valid atlas texel, transformed by the
 // object's model matrix and the voxel camera, sets its voxel's bit. The bits go into the
 // same column buffer as voxelize_triangles (atomicOr) instead of an RGBA32UI target with
 // logicOp OR, so both voxelizers share voxel_clear / voxel_copy_static / voxel_store.

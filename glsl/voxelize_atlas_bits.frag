@@ -1,5 +1,5 @@
 #version 450
-// Writes the single-bit LUT entry of the point's depth (thesis §3.3, Fig. 12); the pipeline's
+// Writes the single-bit LUT entry of the point's depth (Thiedemann 2010, §4.3.1, Fig. 12); the pipeline's
 // logicOp OR merges it into the column.
 layout(set = 0, binding = 1, std430) readonly buffer Lut { uvec4 single_bit[128]; };
 layout(location = 0) flat in uint g_depth;

@@ -1,5 +1,5 @@
 #version 450
-// The thesis's binary atlas voxelization as a raster pass (thesis §3.3): one vertex per atlas
+// The thesis's binary atlas voxelization as a raster pass (Thiedemann 2010, §4.3.1): one vertex per atlas
 // point, drawn as a point list into the R32G32B32A32_UINT column image. The point's voxel
 // comes from atlas_voxel.glsl, as in the compute twin voxelize_atlas.comp, so both set the
 // same bits; its raster position is its column's centre (viewport = the image's extent).

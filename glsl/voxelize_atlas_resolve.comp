@@ -2,7 +2,7 @@
 // Resolves the atlas accumulation layers into the albedo and normal volumes that the path
 // tracer samples: mean albedo (a = 1 where any point landed, 0 elsewhere, so the volume is
 // congruent with the bits) and the normalized normal sum. Two sources add up: the static
-// objects' sums (splatted once) and this frame's dynamic objects (thesis §3.5 keeps a static
+// objects' sums (splatted once) and this frame's dynamic objects (Thiedemann 2010, §4.3.3 keeps a static
 // copy the same way). Every voxel is written, so voxels that emptied are cleared.
 // One depth slice per workgroup row: the sums are 2D array layers, so a group stays inside
 // one layer of each.

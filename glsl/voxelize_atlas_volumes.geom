@@ -1,5 +1,5 @@
 #version 450
-// Layered rendering into the volumes (thesis §3.4): the point's depth index is its layer, so
+// Layered rendering into the volumes (Thiedemann 2010, §4.3.2): the point's depth index is its layer, so
 // the fragment lands in the voxel whose bit voxelize_atlas sets. The thesis looks the layer
 // up in a 1D LUT so that its quantization matches the bits; here both stages share the
 // integer voxel of atlas_voxel.glsl, which is the same guarantee without a LUT.

@@ -1,5 +1,5 @@
 #version 450
-// Non-binary atlas voxelization (thesis §3.4): one vertex per atlas point (vertex pulling, no
+// Non-binary atlas voxelization (Thiedemann 2010, §4.3.2): one vertex per atlas point (vertex pulling, no
 // vertex buffer), drawn as a point list. The point goes to the same voxel as its bit in
 // voxelize_atlas.comp (atlas_voxel.glsl); its raster position is that voxel's column centre
 // (the viewport is the grid's x,y resolution) and the geometry shader routes it to the layer

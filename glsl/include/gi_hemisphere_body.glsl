@@ -1,9 +1,9 @@
 // Body of gi_hemisphere.comp (radiance at hits from the reflective light maps) and
 // gi_hemisphere_volume.comp (from the direct-radiance voxel volume, RADIANCE_FROM_VOLUME).
-// Indirect light by hemisphere sampling (thesis §6.2): from each G-buffer point, N
+// Indirect light by hemisphere sampling (Thiedemann 2010, §6.2, §6.4.1): from each G-buffer point, N
 // cosine-distributed rays (Hammersley points with a per-pixel Cranley-Patterson rotation)
 // are cast through the binary voxel hierarchy within a radius; at a hit, the radiance the
-// lights put there is read from the reflective light maps (§6.1), valid only if the map saw
+// lights put there is read from the reflective light maps (§6.3.3), valid only if the map saw
 // the same surface (distance tolerance) from the side the ray hits (back-face test). With
 // cosine sampling the irradiance estimate is E = pi/N * sum L.
 #include "frame.glsl"
@@ -73,7 +73,7 @@ vec3 light_map_radiance(vec3 hit, vec3 dir) {
         // Direction from the stored surface point to the light.
         vec3 wl = l.info.x == LIGHT_DIRECTIONAL ? -l.direction.xyz : normalize(l.position.xyz - pos.xyz);
         float cos_l = max(dot(n, wl), 0.0);
-        // Tolerance (§6.1): the hit lies on the boundary of the hit voxel (up to a diagonal
+        // Tolerance (§6.3.3): the hit lies on the boundary of the hit voxel (up to a diagonal
         // from the surface) plus the light-map texel's footprint on a surface at this slope,
         // clamped so grazing texels do not accept far points.
         float dist = sv.params.y > 0.5 ? 1.0 : c.w;
@@ -126,7 +126,7 @@ void main() {
     vec3 specular = HAS_PHONG ? texelFetch(gb_specular, px, 0).rgb : vec3(0.0);
     bool phong = HAS_PHONG && is_phong_pixel(specular);
     vec3 mirror = reflect(-normalize(frame.camera_position.xyz - p), n);
-    // Self-intersection offset along the normal (§4.4).
+    // Self-intersection offset along the normal (§5.3.1).
     vec3 origin = p + n * (gi.params.y * gi.params.w);
     vec3 ov = (gi.world_to_voxel * vec4(origin, 1.0)).xyz;
     mat3 dir_to_voxel = mat3(gi.world_to_voxel);
@@ -145,7 +145,7 @@ void main() {
         vec3 d = lobe ? phong_direction(mirror, ns.w, u) : cosine_direction(n, u);
         float cos_n = dot(d, n);
         if (cos_n <= 0.0) continue;  // a lobe sample below the surface contributes nothing
-        // Offset along the ray (§4.4): k2 * h / (d . n), clamped, so grazing rays leave the
+        // Offset along the ray (§5.3.1): k2 * h / (d . n), clamped, so grazing rays leave the
         // surface's own voxels too.
         float along = min(gi.params2.z * gi.params.w / max(dot(d, n), 1e-4), gi.params2.w * gi.params.w);
         vec3 o = origin + d * along;

@@ -1,4 +1,4 @@
-// Hierarchical voxel ray test (thesis §4.5-§4.8), a line-by-line port of the CPU twin in
+// Hierarchical voxel ray test (Thiedemann 2010, §5.3; uniform marching §6.4.1), a line-by-line port of the CPU twin in
 // src/voxel/traverse.rs (read its module doc for the conventions and the deviations from the
 // thesis). Voxel space: origin + t*dir, t in [0, t_max]; bit convention of
 // docs/ARCHITECTURE.md, "The voxel representation".
@@ -154,7 +154,7 @@ uint vx_highest_bit(uvec4 m) {
 }
 
 // First set voxel with depth in [k_in, k_out] in ray order in texel (x, y) of `level`:
-// one ray-mask LUT fetch and AND per layer the range spans (thesis §4.5, §4.7).
+// one ray-mask LUT fetch and AND per layer the range spans (thesis §5.3.2, §5.3.4).
 bool vx_first_in_range(uint level, int x, int y, uint k_in, uint k_out, out uint k) {
     bool forward = k_in <= k_out;
     uint lo = min(k_in, k_out), hi = max(k_in, k_out);
@@ -204,7 +204,7 @@ VxHit vx_point_query(vec3 origin, ivec3 v, float t, vec3 p) {
     return vx_miss(origin, 1u, false);
 }
 
-// First hit along origin + t*dir by hierarchical traversal of the OR mip hierarchy (§4.5).
+// First hit along origin + t*dir by hierarchical traversal of the OR mip hierarchy (§5.3.2).
 VxHit voxel_first_hit(ivec3 dims, uint max_level, vec3 origin, vec3 dir, float t_max, uint start_level, uint max_iterations) {
     VxRay r;
     ivec3 pv;
@@ -250,7 +250,7 @@ VxHit voxel_first_hit(ivec3 dims, uint max_level, vec3 origin, vec3 dir, float t
 }
 
 // Whether the segment a -> b (voxel space) is free of set voxels (both end voxels count:
-// apply the thesis's offsets, §4.4, first). Running out of iterations counts as visible.
+// apply the thesis's offsets, §5.3.1, first). Running out of iterations counts as visible.
 bool voxel_visible(ivec3 dims, uint max_level, vec3 a, vec3 b, uint start_level, uint max_iterations) {
     return !voxel_first_hit(dims, max_level, a, b - a, 1.0, start_level, max_iterations).hit;
 }
@@ -282,7 +282,7 @@ VxHit voxel_first_hit_dda(ivec3 dims, vec3 origin, vec3 dir, float t_max) {
     return vx_miss(origin, steps, false);
 }
 
-// Uniform marching baseline (§4.8): `samples` equidistant samples; each tests its voxel
+// Uniform marching baseline (§6.4.1): `samples` equidistant samples; each tests its voxel
 // (thick = false, 1-bit mask) or the voxels k-1..k+1 of its column (thick = true, 3-bit).
 VxHit voxel_march(ivec3 dims, vec3 origin, vec3 dir, float t_max, uint samples, bool thick) {
     VxRay r;

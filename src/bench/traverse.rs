@@ -1,6 +1,6 @@
-//! `voxgi bench traverse`: the thesis's speed comparison (§9.3.1, Fig. 44/45) measured side
+//! `voxgi bench traverse`: the speed comparison of Thiedemann 2010 (§9.3.1, Fig. 44/45) measured side
 //! by side in one GPU run. Rays start at the camera-visible surface points of a scene (a
-//! G-buffer traced on the CPU), offset along the normal (§4.4), cosine-distributed around it,
+//! G-buffer traced on the CPU), offset along the normal (§5.3.1), cosine-distributed around it,
 //! with a length limited by a radius. The hierarchical test and 1-bit marching cast the same
 //! rays.
 
@@ -26,7 +26,7 @@ pub struct TraverseBenchDesc {
     pub radii_box_units: Vec<f32>,
     /// Marching sample counts to try.
     pub march_steps: Vec<u32>,
-    /// Normal offset, in voxel diagonals (thesis §4.4, k₁).
+    /// Normal offset, in voxel diagonals (thesis §5.3.1, k₁).
     pub normal_offset_voxels: f32,
     pub params: TraversalParams,
 }

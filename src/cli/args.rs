@@ -18,7 +18,7 @@ pub struct GiArgs {
     /// direct-radiance voxel volume.
     #[arg(long, value_enum, default_value_t = crate::gi::RadianceSource::Maps)]
     pub gi_radiance: crate::gi::RadianceSource,
-    /// Hierarchy level GI rays start their traversal at (thesis §4.5).
+    /// Hierarchy level GI rays start their traversal at (Thiedemann 2010, §5.3.2).
     #[arg(long, default_value_t = 1)]
     pub gi_start_level: u32,
     /// Iteration cap of GI rays' hierarchical traversal (too low shows as missing indirect

@@ -27,7 +27,7 @@ pub enum BenchCommand {
         #[arg(long)]
         json: bool,
     },
-    /// Hierarchical voxel ray test vs uniform 1-bit marching on the same rays (thesis §9.3.1):
+    /// Hierarchical voxel ray test vs uniform 1-bit marching on the same rays (Thiedemann 2010, §9.3.1):
     /// GPU ms, rays/s, steps per ray, and the marching samples needed to match >= 99% of
     /// the hierarchical results.
     Traverse {
@@ -42,7 +42,7 @@ pub enum BenchCommand {
         /// Rays per surface point.
         #[arg(long, default_value_t = 16)]
         rays: u32,
-        /// Hierarchy level the traversal starts at (thesis §4.5).
+        /// Hierarchy level the traversal starts at (thesis §5.3.2).
         #[arg(long, default_value_t = 1)]
         start_level: u32,
         /// Iteration cap of the hierarchical traversal.

@@ -44,7 +44,7 @@
 //! # OBJ sequences (one atlas for all frames)
 //! The thesis shares one atlas across an OBJ sequence whose vertex order is identical and
 //! whose deformation is moderate (§4.2.1), and notes that a growing triangle makes
-//! holes (§3.6). [`build_sequence_atlas`] removes that limit: each triangle is laid out
+//! holes (§4.4). [`build_sequence_atlas`] removes that limit: each triangle is laid out
 //! isometrically from the frame where its area is largest, then scaled by
 //! `s = max(1, max_f σ_f)`, where `σ_f` is the largest singular value of the affine map from
 //! the layout (texels) to frame `f`'s triangle (texels). The map from the scaled layout,

@@ -1,4 +1,4 @@
-//! CPU copy of the binary column image and its OR mip hierarchy (thesis §3.3, §4.2).
+//! CPU copy of the binary column image and its OR mip hierarchy (Thiedemann 2010, §4.3.1, §5.2).
 //!
 //! A [`Column`] is one `R32G32B32A32_UINT` texel: 128 voxels of one layer, `[R, G, B, A]`,
 //! bit `k mod 32` of channel `(k mod 128) / 32`, least significant = nearest.
@@ -42,7 +42,7 @@ pub fn col_is_empty(a: Column) -> bool {
 }
 
 /// Lowest set bit index (0..128) of a column, i.e. the nearest voxel (GLSL `findLSB` on the
-/// first non-zero channel, thesis §4.7 "rear" trick mirrored for our bit order).
+/// first non-zero channel, thesis §5.3.4 "rear" trick mirrored for our bit order).
 #[inline]
 pub fn col_lowest_bit(a: Column) -> Option<u32> {
     let mut ch = 0;
@@ -228,7 +228,7 @@ impl BitGrid {
     }
 }
 
-/// The OR mip hierarchy over a [`BitGrid`] (thesis §4.2): level 0 is the grid itself.
+/// The OR mip hierarchy over a [`BitGrid`] (thesis §5.2): level 0 is the grid itself.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct BitHierarchy {
     levels: Vec<BitGrid>,

@@ -16,13 +16,13 @@
 //!   point landed.
 //!
 //! # Why averaging, not the thesis's last writer
-//! The thesis keeps the last point drawn into a voxel (§3.4), which depends on the order of
+//! The thesis keeps the last point drawn into a voxel (§4.3.2), which depends on the order of
 //! the point list (built by atomics, so arbitrary) and shows back-face normals on thin parts
 //! (the elephant's ear). Every atlas texel stands for the same area in meters, so summing
 //! (albedo, 1) and dividing gives the area-weighted mean albedo, independent of the order;
 //! summed normals give the mean orientation (a voxel on an edge gets the bisector).
 //!
-//! # Static and dynamic objects (thesis §3.5)
+//! # Static and dynamic objects (thesis §4.3.3)
 //! Like the bits: the static objects' sums are splatted once into persistent layers, each
 //! frame that re-voxelizes splats only the dynamic objects into transient layers, and the
 //! resolve adds both. Nothing records while nothing moves (the voxel frame's [`SlotGate`]).

@@ -66,13 +66,13 @@ crate::push_constants!(GpuRaysPush {
 /// Which ray test a batch uses.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum RayMethod {
-    /// Hierarchical traversal with ray masks (thesis §4.5).
+    /// Hierarchical traversal with ray masks (Thiedemann 2010, §5.3.2).
     Hierarchical(TraversalParams),
     /// Exact voxel walk (ground truth).
     Dda,
-    /// Uniform marching, 1-bit mask, this many samples (§4.8).
+    /// Uniform marching, 1-bit mask, this many samples (§6.4.1).
     March1(u32),
-    /// Uniform marching, 3-bit mask, this many samples (§4.8).
+    /// Uniform marching, 3-bit mask, this many samples (§6.4.1).
     March3(u32),
 }
 

@@ -1,6 +1,6 @@
 //! Grid placement: the world box, the voxel camera axis and the world→voxel transforms.
 //!
-//! The voxel camera is orthographic and looks along the box's shortest axis (thesis §4.5), so
+//! The voxel camera is orthographic and looks along the box's shortest axis (Thiedemann 2010, §4.5), so
 //! the fixed 128·L depth voxels go where the scene is thinnest and x,y resolution is free.
 //! Its frame `(u, v, w)` is a cyclic permutation of the world axes (a proper rotation, no
 //! mirror): looking along +Z gives `(X, Y, Z)`, along +X gives `(Y, Z, X)`, along +Y gives
@@ -245,7 +245,7 @@ impl VoxelGrid {
     }
 
     /// Length of a voxel's space diagonal in meters: the self-intersection offset unit of
-    /// thesis §4.4.
+    /// thesis §5.3.1.
     pub fn voxel_diagonal_m(&self) -> f32 {
         self.voxel_size_m().length()
     }
@@ -299,13 +299,13 @@ impl VoxelGrid {
     }
 
     /// Orthographic projection P: the view-space box `[0,e_u]×[0,e_v]×[0,e_w]` → GL NDC
-    /// `[-1,1]³`, near plane (w = 0) → −1 (thesis §4.3 uses GL conventions).
+    /// `[-1,1]³`, near plane (w = 0) → −1 (thesis §5.3.2 uses GL conventions).
     pub fn projection_matrix(&self) -> Mat4 {
         let e = self.frame_extent_m();
         Mat4::from_translation(Vec3::splat(-1.0)) * Mat4::from_scale(2.0 / e)
     }
 
-    /// The thesis's unit-cube matrix `M = T(½,½,½)·S(½,½,½)·P·V` (§4.3): world → `[0,1]³`,
+    /// The thesis's unit-cube matrix `M = T(½,½,½)·S(½,½,½)·P·V` (§5.3.2): world → `[0,1]³`,
     /// directly a texture coordinate, depth 0 at the near plane.
     pub fn world_to_unit(&self) -> Mat4 {
         Mat4::from_translation(Vec3::splat(0.5))

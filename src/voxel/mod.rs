@@ -11,17 +11,17 @@
 //!   ([`VoxelGrid::world_to_voxel`]), so a ray's parameter `t` is the same in both spaces when
 //!   its direction is mapped with [`VoxelGrid::dir_world_to_voxel`].
 //! - **Unit cube**: voxel space divided by `(res_x, res_y, D)`; the thesis's
-//!   `M = T(½)·S(½)·P·V` (§4.3), directly a texture coordinate.
+//!   `M = T(½)·S(½)·P·V` (Thiedemann 2010, §5.3.2), directly a texture coordinate.
 //!
 //! # Bit convention (used by the CPU reference, the LUTs and every shader)
 //! The voxel camera is orthographic and looks along the grid box's shortest axis (§4.5).
 //! Depth `D = 128 · L`. Depth index `k ∈ [0, D)` counts from the voxel camera's near plane:
 //! `layer = k / 128`, `channel = (k mod 128) / 32`, `bit = k mod 32`, least significant bit =
 //! nearest. One texel of the `R32G32B32A32_UINT` 2D array image (L layers) holds one column of
-//! 128 voxels; R holds the front 32 (thesis §3.3: "R holds the frontmost voxels").
+//! 128 voxels; R holds the front 32 (thesis §5.3.4: the red channel holds the frontmost voxels).
 //!
 //! # Hierarchy
-//! Mip level ℓ texel = OR of the 2×2 texels of level ℓ−1, all depth bits kept (thesis §4.2,
+//! Mip level ℓ texel = OR of the 2×2 texels of level ℓ−1, all depth bits kept (thesis §5.2,
 //! "128 stacked quadtrees"). Level sizes are `ceil(res / 2^ℓ)` down to 1×1; see [`bits`].
 //!
 //! # Submodules
@@ -37,9 +37,9 @@
 //!   read more than occupancy.
 //! - [`gpu_atlas_raster`]: the thesis's raster bit pass (`voxelize_atlas_bits`, logicOp OR),
 //!   measured against the compute pass by `voxgi bench voxelize`.
-//! - [`ray_mask`]: the 128×128 ray-mask LUT (thesis §4.5, Fig. 16) and single-bit LUT (§3.3).
-//! - [`traverse`]: hierarchical first hit and visibility (§4.5–§4.7), the exact DDA ground
-//!   truth, and the 1-bit / 3-bit marching baselines (§4.8).
+//! - [`ray_mask`]: the 128×128 ray-mask LUT (thesis §5.3.2, Fig. 16) and single-bit LUT (§4.3.1, Fig. 12).
+//! - [`traverse`]: hierarchical first hit and visibility (§5.3–§5.3.4), the exact DDA ground
+//!   truth, and the 1-bit / 3-bit marching baselines (§6.4.1).
 
 pub mod atlas;
 pub mod atlas_view;

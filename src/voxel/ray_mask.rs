@@ -1,14 +1,14 @@
 //! Bit-mask look-up tables of the ray test and the voxelizer.
 //!
-//! - Ray masks (thesis §4.5, Fig. 16): entry `(a, b)` has the bits `min(a,b)..=max(a,b)` of
+//! - Ray masks (Thiedemann 2010, §5.3.2, Fig. 16): entry `(a, b)` has the bits `min(a,b)..=max(a,b)` of
 //!   one 128-voxel column set, so one fetch turns the depth range a ray segment covers inside
 //!   a column into a mask to AND with the column. The thesis XORs two 1D masks; that gives
 //!   the range only for *prefix* masks, and the range must be inclusive at both ends (a
 //!   segment that enters voxel a and leaves through voxel b touches both), hence
 //!   `prefix(max) ^ prefix(min) | single(min)`.
-//! - Single-bit masks (thesis §3.3, Fig. 12): entry k has only bit k set; the splatting
+//! - Single-bit masks (thesis §4.3.1, Fig. 12): entry k has only bit k set; the splatting
 //!   voxelizer ORs it into the column.
-//! - March masks (thesis §4.8): the 1-bit mask is the single-bit mask; the "thick" 3-bit mask
+//! - March masks (thesis §6.4.1, Fig. 26): the 1-bit mask is the single-bit mask; the "thick" 3-bit mask
 //!   of entry k covers `k−1..=k+1` clamped to the column (Nichols et al. 2010).
 //!
 //! Depth indices here are local to one layer (`0..128`); see [`super`] for the convention.
@@ -120,14 +120,14 @@ pub struct ColumnLut1d {
 }
 
 impl ColumnLut1d {
-    /// Single-bit LUT: entry k = bit k (thesis §3.3, Fig. 12).
+    /// Single-bit LUT: entry k = bit k (thesis §4.3.1, Fig. 12).
     pub fn single_bit() -> Self {
         Self {
             entries: (0..COLUMN_BITS).map(single_bit).collect(),
         }
     }
 
-    /// 3-bit march LUT: entry k = bits k−1..=k+1 clamped (thesis §4.8).
+    /// 3-bit march LUT: entry k = bits k−1..=k+1 clamped (thesis §6.4.1).
     pub fn march3() -> Self {
         Self {
             entries: (0..COLUMN_BITS).map(march3_mask).collect(),

@@ -1,4 +1,4 @@
-//! CPU twin of the GPU ray test (thesis §4.5–§4.8), written to port line by line to GLSL:
+//! CPU twin of the GPU ray test (Thiedemann 2010, §5.3; the uniform marching baselines of §6.4.1), written to port line by line to GLSL:
 //! plain loops, no recursion, f32 math, integer bit operations on `uvec4` columns.
 //!
 //! All functions work in **voxel space** (see [`super`]): `origin + t·dir`, `t ∈ [0, t_max]`.
@@ -16,13 +16,13 @@
 //!
 //! # Deviations from the thesis, and why
 //! - The thesis advances past an empty box by `t = t_exit + ε` and re-derives the column
-//!   from the position (§4.5). An ε gap can skip a voxel corner the ray clips, and a too-small
+//!   from the position (§5.3.2). An ε gap can skip a voxel corner the ray clips, and a too-small
 //!   ε sticks on the boundary at large coordinates. Here the next column is found by integer
 //!   stepping across the exit face (as in Amanatides–Woo), so no gap exists and progress is
 //!   guaranteed; there is no ε parameter.
 //! - The depth range of a segment inside a column is derived from the same boundary
-//!   comparisons rather than by quantizing `z` (§4.5 `q(pos.z)`), so the ray mask is exact.
-//! - The voxel-accurate hit (§4.7) solves `t` at the entry of the hit voxel along the ray
+//!   comparisons rather than by quantizing `z` (§5.3.2), so the ray mask is exact.
+//! - The voxel-accurate hit (§5.3.4) solves `t` at the entry of the hit voxel along the ray
 //!   instead of replacing only the position's z.
 //! - The ray is first rebased to its entry point into the grid, so rays starting far outside
 //!   keep full precision inside.
@@ -31,7 +31,7 @@
 //! The direction is scaled so its largest component is ±1; components below
 //! [`DIR_EPS`] are then treated as exactly 0 (the ray drifts less than `DIR_EPS · 3·16384`
 //! voxels over the largest grid). This replaces the thesis's "replace tiny components by a
-//! tiny value" (§4.5) and keeps every `1/d` finite.
+//! tiny value" (§5.3.2) and keeps every `1/d` finite.
 
 use glam::{IVec3, UVec3, Vec3};
 
@@ -42,7 +42,7 @@ use super::COLUMN_BITS;
 /// Direction components below this (after scaling the largest to 1) count as 0.
 pub const DIR_EPS: f32 = 1e-12;
 
-/// Parameters of the hierarchical traversal (thesis §4.5).
+/// Parameters of the hierarchical traversal (thesis §5.3.2).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct TraversalParams {
     /// Mip level to start at (clamped to the coarsest). The thesis's example starts at 1.
@@ -267,8 +267,8 @@ impl Ray {
 
 /// First set voxel with depth index between `k_in` and `k_out` (inclusive, in ray order:
 /// from `k_in` towards `k_out`) in texel `(x, y)` of `level`. One ray-mask LUT fetch and AND
-/// per layer the range spans (thesis §4.5, Fig. 16); the nearest bit in ray order is the
-/// voxel-accurate hit (§4.7).
+/// per layer the range spans (thesis §5.3.2, Fig. 16); the nearest bit in ray order is the
+/// voxel-accurate hit (§5.3.4).
 #[inline]
 fn first_in_range(level: &BitGrid, x: u32, y: u32, k_in: u32, k_out: u32) -> Option<u32> {
     let forward = k_in <= k_out;
@@ -324,7 +324,7 @@ fn depth_range(ray: &Ray, t_in: f32, t_out: f32, end_inclusive: bool) -> Option<
 }
 
 /// Hit parameter inside the hit voxel's column: the column entry `t_col` if the hit is in the
-/// depth cell the segment starts in, else the entry into depth cell `k` along the ray (§4.7,
+/// depth cell the segment starts in, else the entry into depth cell `k` along the ray (§5.3.4,
 /// t solved along the ray). Same choice as the DDA, which enters a voxel by one step.
 #[inline]
 fn hit_t(ray: &Ray, t_col: f32, k_in: u32, k: u32) -> f32 {
@@ -366,7 +366,7 @@ fn point_query(bits: &BitGrid, origin: Vec3, v: IVec3, t: f32, p: Vec3) -> HitRe
 }
 
 /// First hit along `origin + t·dir`, `t ∈ [0, t_max]`, by hierarchical traversal of the OR
-/// mip hierarchy (thesis §4.5, Fig. 17): at the current level take the column box the ray is
+/// mip hierarchy (thesis §5.3.2, Fig. 17): at the current level take the column box the ray is
 /// in, AND the ray mask of the segment inside it with the column; empty → step into the next
 /// column and go one level coarser; non-empty → one level finer; non-empty at level 0 → hit.
 pub fn first_hit_hierarchical(
@@ -449,8 +449,8 @@ pub fn first_hit_hierarchical(
 
 /// Whether the segment `a → b` (voxel space) is free of set voxels, by
 /// [`first_hit_hierarchical`] with `t_max = 1`. Both end voxels count: apply the thesis's
-/// offsets (§4.4) before calling. A ray that exceeds the iteration cap counts as visible, as
-/// on the GPU (thesis §4.5: NO_HIT).
+/// offsets (§5.3.1) before calling. A ray that exceeds the iteration cap counts as visible, as
+/// on the GPU (thesis §5.3.2).
 pub fn visible(h: &BitHierarchy, a: Vec3, b: Vec3, params: &TraversalParams) -> bool {
     !first_hit_hierarchical(h, a, b - a, 1.0, params).hit
 }
@@ -495,7 +495,7 @@ pub fn first_hit_dda(bits: &BitGrid, origin: Vec3, dir: Vec3, t_max: f32) -> Hit
     HitResult::miss(origin, steps, false)
 }
 
-/// Uniform marching baseline (thesis §4.8): `steps` equidistant samples over the part of
+/// Uniform marching baseline (thesis §6.4.1, Fig. 26): `steps` equidistant samples over the part of
 /// `[0, t_max]` inside the grid (sample i at fraction `(i + ½)/steps`); each tests the voxel
 /// at the sample (`thick = false`, the 1-bit mask) or the voxels `k−1..=k+1` of its column
 /// (`thick = true`, the 3-bit mask of Nichols et al. 2010, thicker in depth only).
@@ -541,12 +541,12 @@ fn march(
     HitResult::miss(origin, steps, false)
 }
 
-/// Uniform marching with the 1-bit mask (thesis §4.8). Misses thin surfaces between samples.
+/// Uniform marching with the 1-bit mask (thesis §6.4.1). Misses thin surfaces between samples.
 pub fn march_1bit(bits: &BitGrid, origin: Vec3, dir: Vec3, t_max: f32, steps: u32) -> HitResult {
     march(bits, origin, dir, t_max, steps, false)
 }
 
-/// Uniform marching with the thick 3-bit mask (thesis §4.8). Catches more surfaces than the
+/// Uniform marching with the thick 3-bit mask (thesis §6.4.1). Catches more surfaces than the
 /// 1-bit version but can report false hits near surfaces (thesis Fig. 26).
 pub fn march_3bit(bits: &BitGrid, origin: Vec3, dir: Vec3, t_max: f32, steps: u32) -> HitResult {
     march(bits, origin, dir, t_max, steps, true)

@@ -448,7 +448,7 @@ fn iteration_cap_reports_ran_out() {
     assert!(!r.hit && r.ran_out && r.steps == 3);
     assert!(
         visible(&h, o, o + d, &capped),
-        "a capped ray counts as visible (thesis §4.5)"
+        "a capped ray counts as visible (Thiedemann 2010, §5.3.2)"
     );
     let r = first_hit_hierarchical(&h, o, d, 1.0, &GENEROUS);
     assert!(r.hit && r.voxel == UVec3::new(63, 63, 127));
