@@ -126,7 +126,7 @@ void main() {
     vec3 specular = HAS_PHONG ? texelFetch(gb_specular, px, 0).rgb : vec3(0.0);
     bool phong = HAS_PHONG && is_phong_pixel(specular);
     vec3 mirror = reflect(-normalize(frame.camera_position.xyz - p), n);
-    // Self-intersection offset along the normal (§4.4).
+    // Self-intersection offset along the normal (Thiedemann 2010 §5.3.1).
     vec3 origin = p + n * (gi.normal_offset_voxels * gi.voxel_diagonal_m);
     vec3 ov = (gi.world_to_voxel * vec4(origin, 1.0)).xyz;
     mat3 dir_to_voxel = mat3(gi.world_to_voxel);
@@ -145,7 +145,7 @@ void main() {
         vec3 d = lobe ? phong_direction(mirror, ns.w, u) : cosine_direction(n, u);
         float cos_n = dot(d, n);
         if (cos_n <= 0.0) continue;  // a lobe sample below the surface contributes nothing
-        // Offset along the ray (§4.4): k2 * h / (d . n), clamped, so grazing rays leave the
+        // Offset along the ray (Thiedemann 2010 §5.3.1): k2 * h / (d . n), clamped, so grazing rays leave the
         // surface's own voxels too.
         float along = min(gi.ray_offset_voxels * gi.voxel_diagonal_m / max(dot(d, n), 1e-4), gi.ray_offset_max_voxels * gi.voxel_diagonal_m);
         vec3 o = origin + d * along;

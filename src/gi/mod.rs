@@ -88,10 +88,7 @@ pub struct GiPasses {
     attributes: Option<TriangleAttributeVolumes>,
     filter: GiFilter,
     composite: GiComposite,
-    /// Frames accumulated since the last reset, counting the one being recorded.
-    frames: Arc<AtomicU32>,
-    /// Open in the slots recording the first frame after a reset ([`GiShared::first_frame`]).
-    first_frame: Arc<SlotCondition>,
+    accumulation: Accumulation,
     lut: Buffer,
     sampler: vk::Sampler,
     push: GpuGiPush,
@@ -126,8 +123,7 @@ impl GiPasses {
             attributes,
             filter: GiFilter::new(ctx)?,
             composite: GiComposite::new(ctx, target.has_phong)?,
-            frames: Arc::new(AtomicU32::new(0)),
-            first_frame: Arc::new(SlotCondition::default()),
+            accumulation: Accumulation::default(),
             lut: ctx.upload_buffer(
                 "ray mask lut",
                 &RayMaskLut::new().to_gpu_bytes(),
@@ -154,22 +150,17 @@ impl GiPasses {
     /// the path tracer accumulates into it, and the passes that run once per restart run in
     /// it only if it is the first.
     pub fn advance(&self, slot: usize) {
-        let frames = self.frames.fetch_add(1, Ordering::SeqCst) + 1;
-        self.first_frame.set(slot, frames <= 1);
+        self.accumulation.advance(slot);
     }
 
-    /// Restarts accumulation (camera, lights or scene changed): the next frame recorded in
-    /// any slot is a first frame.
+    /// Restarts accumulation (camera, lights or scene changed).
     pub fn reset(&self) {
-        self.frames.store(0, Ordering::SeqCst);
-        for slot in 0..crate::vk::MAX_FRAMES_IN_FLIGHT {
-            self.first_frame.set(slot, true);
-        }
+        self.accumulation.reset();
     }
 
     /// Frames accumulated so far.
     pub fn accumulated_frames(&self) -> u32 {
-        self.frames.load(Ordering::SeqCst)
+        self.accumulation.frames.load(Ordering::SeqCst)
     }
 
     /// Whether the chosen method reads the albedo and normal volumes.
@@ -201,8 +192,8 @@ impl GiPasses {
             lut,
             sampler: self.sampler,
             push: self.push,
-            frames: self.frames.clone(),
-            first_frame: self.first_frame.clone(),
+            frames: self.accumulation.frames.clone(),
+            first_frame: self.accumulation.first_frame.clone(),
             attributes,
         };
         let indirect = self.method.add_passes(g, inp, &shared);
@@ -226,5 +217,66 @@ impl GiPasses {
         self.composite.destroy(ctx);
         ctx.destroy_buffer(self.lut);
         ctx.destroy_sampler(self.sampler);
+    }
+}
+
+/// Frames accumulated since the last restart, and the condition of the passes that run once
+/// per restart.
+#[derive(Default)]
+struct Accumulation {
+    /// Counting the frame being recorded.
+    frames: Arc<AtomicU32>,
+    /// Open in the slots recording the first frame after a restart ([`GiShared::first_frame`]).
+    first_frame: Arc<SlotCondition>,
+}
+
+impl Accumulation {
+    fn advance(&self, slot: usize) {
+        let frames = self.frames.fetch_add(1, Ordering::SeqCst) + 1;
+        self.first_frame.set(slot, frames <= 1);
+    }
+
+    /// The next frame recorded, in any slot, is a first frame.
+    fn reset(&self) {
+        self.frames.store(0, Ordering::SeqCst);
+        for slot in 0..crate::vk::MAX_FRAMES_IN_FLIGHT {
+            self.first_frame.set(slot, true);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Two slots alternate: only the first frame after a start or a restart opens its slot,
+    /// whichever slot it is in; a restart between counting a frame and recording it opens
+    /// that frame's slot too (its volume must be recomputed).
+    #[test]
+    fn once_per_restart_passes_run_in_the_first_frame_only() {
+        let a = Accumulation::default();
+        let open = |slot| a.first_frame.is_open(slot);
+        a.advance(0);
+        assert!(open(0));
+        a.advance(1);
+        assert!(!open(1));
+        a.advance(0);
+        assert!(!open(0) && !open(1));
+        assert_eq!(a.frames.load(Ordering::SeqCst), 3);
+        a.reset();
+        assert!(
+            open(0) && open(1),
+            "the restart's frame runs wherever it is recorded"
+        );
+        a.advance(1);
+        assert!(open(1));
+        a.advance(0);
+        assert!(
+            !open(0) && open(1),
+            "slot 1 stays open until its next frame"
+        );
+        a.advance(1);
+        assert!(!open(1));
+        assert_eq!(a.frames.load(Ordering::SeqCst), 3);
     }
 }

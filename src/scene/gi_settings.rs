@@ -8,10 +8,11 @@ pub enum GiMethod {
     /// No indirect light.
     #[default]
     None,
-    /// One bounce: N rays per pixel, radiance at hits from reflective light maps (§6.2).
+    /// One bounce: N rays per pixel, radiance at hits from reflective light maps
+    /// (Thiedemann 2010 §6.2).
     Hemisphere,
     /// B bounces with albedo and normal from voxel volumes and direct light at every hit from
-    /// the shadow maps, accumulated over frames (§6.3).
+    /// the shadow maps, accumulated over frames (Thiedemann 2010 §6.3).
     Pathtrace,
 }
 
@@ -23,10 +24,11 @@ pub struct GiSettings {
     pub rays: u32,
     /// Ray length in meters; `None`: the scene's diagonal (unbounded in practice).
     pub radius_m: Option<f32>,
-    /// Self-intersection offset along the normal, in voxel diagonals (thesis §4.4, k₁).
+    /// Self-intersection offset along the normal, in voxel diagonals (Thiedemann 2010
+    /// §5.3.1, k₁).
     pub normal_offset_voxels: f32,
     /// Self-intersection offset along the ray, k₂ · h / (d·n) in voxel diagonals h, clamped
-    /// to `ray_offset_max_voxels` (thesis §4.4).
+    /// to `ray_offset_max_voxels` (Thiedemann 2010 §5.3.1).
     pub ray_offset_voxels: f32,
     pub ray_offset_max_voxels: f32,
     /// Light-map hit tolerance, in voxel diagonals (plus the map texel's footprint).
@@ -110,7 +112,7 @@ impl std::str::FromStr for Bounces {
     }
 }
 
-/// Where hemisphere sampling reads the radiance leaving a hit surface (thesis §6.1).
+/// Where hemisphere sampling reads the radiance leaving a hit surface (Thiedemann 2010 §6.1).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
 pub enum RadianceSource {
     /// Reflective light maps rendered per shadow view (radiance, position, normal).
