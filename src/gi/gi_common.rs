@@ -37,7 +37,7 @@ pub struct GpuGiPush {
     pub seed: u32,
     /// Light-map texel footprint scale: shadow-map resolution over light-map resolution.
     pub light_map_scale: f32,
-    /// Path-tracer bounces, 0 for unbounded ([`bounces_push_value`]).
+    /// Path-tracer bounces, 0 for unbounded (`bounces_push_value`).
     pub bounces: u32,
     /// Self-intersection offset along the ray, k₂ · h / (d·n) (Thiedemann 2010 §5.3.1).
     pub ray_offset_voxels: f32,
