@@ -113,7 +113,7 @@ void main() {
     ivec2 px = ivec2(gl_GlobalInvocationID.xy);
     ivec2 size = ivec2(frame.counts.zw);
     if (any(greaterThanEqual(px, size))) return;
-    uint frame_index = gi.iparams.w;
+    uint frame_index = gi.seed;
     float depth = texelFetch(gb_depth, px, 0).r;
     if (depth >= 1.0) {
         imageStore(history, px, vec4(0.0));
@@ -128,11 +128,11 @@ void main() {
     bool phong = HAS_PHONG && is_phong_pixel(specular);
     vec3 mirror = reflect(-normalize(frame.camera_position.xyz - p), n);
     // Phong pixels spend half their paths on the specular lobe (first bounce).
-    uint lobe_rays = phong ? max(gi.iparams.x, 1u) / 2u : 0u;
-    float offset = gi.params.y * gi.params.w;
+    uint lobe_rays = phong ? max(gi.rays, 1u) / 2u : 0u;
+    float offset = gi.normal_offset_voxels * gi.voxel_diagonal_m;
     mat3 dir_to_voxel = mat3(gi.world_to_voxel);
-    uint rays = max(gi.iparams.x, 1u);
-    uint bounce_param = uint(gi.params2.y);
+    uint rays = max(gi.rays, 1u);
+    uint bounce_param = gi.bounces;
     bool roulette = bounce_param == 0u;
     uint bounces = roulette ? MAX_PATH_BOUNCES : bounce_param;
     vec2 rot = pixel_rotation(uvec2(px), frame_index);
@@ -161,7 +161,7 @@ void main() {
                 if (cos_first <= 0.0) break;  // a lobe sample below the surface
             }
             vec3 ov = (gi.world_to_voxel * vec4(o, 1.0)).xyz;
-            VxHit h = voxel_first_hit(gi.dims.xyz, uint(gi.dims.w), ov, dir_to_voxel * d, gi.params.x, gi.iparams.y, gi.iparams.z);
+            VxHit h = voxel_first_hit(gi.dims, uint(gi.max_level), ov, dir_to_voxel * d, gi.radius_m, gi.start_level, gi.max_iterations);
             if (!h.hit) break;
             ivec3 v = ivec3(h.voxel);
             vec3 a = texelFetch(albedo_volume, v, 0).rgb;

@@ -18,7 +18,7 @@ layout(set = 0, binding = 5, rgba32f) uniform writeonly image3D radiance_volume;
 
 void main() {
     ivec3 v = ivec3(gl_GlobalInvocationID);
-    if (any(greaterThanEqual(v, gi.dims.xyz))) return;
+    if (any(greaterThanEqual(v, gi.dims))) return;
     uvec4 column = texelFetch(voxels, ivec3(v.xy, v.z / 128), 0);
     uint bit = uint(v.z) % 128u;
     if (((column[bit / 32u] >> (bit % 32u)) & 1u) == 0u) {
@@ -35,7 +35,7 @@ void main() {
         vec3 ns = side == 0 ? n : -n;
         // Shadow lookups from a voxel diagonal off the voxel center on that side, so the
         // surface inside the voxel does not shadow itself.
-        vec3 ps = p + ns * gi.params.w;
+        vec3 ps = p + ns * gi.voxel_diagonal_m;
         for (uint i = 0u; i < frame.counts.x; ++i) {
             GpuLight l = frame.lights[i];
             vec3 wi;

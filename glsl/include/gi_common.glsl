@@ -4,13 +4,24 @@
 
 #define PI 3.14159265358979323846
 
-// Mirrors `GpuGiPush` in src/gi/mod.rs.
+// Mirrors `GpuGiPush` in src/gi/gi_common.rs (checked against this block by name, offset and
+// size when a pipeline is created).
 layout(push_constant) uniform GiPush {
     mat4 world_to_voxel;
-    ivec4 dims;      // voxels x, y, depth; w max hierarchy level
-    vec4 params;     // x radius (m), y normal offset (voxel diagonals), z hit tolerance (voxel diagonals), w voxel diagonal (m)
-    uvec4 iparams;   // x rays per pixel, y start level, z max iterations, w frame seed
-    vec4 params2;    // x light-map texel footprint scale (shadow res / light-map res), y path-tracer bounces (0: unbounded, Russian roulette), z ray offset k2 (voxel diagonals), w its clamp (voxel diagonals)
+    ivec3 dims;                  // voxels x, y, depth
+    int max_level;               // the highest mip level of the hierarchy
+    float radius_m;              // ray length
+    float normal_offset_voxels;  // self-intersection offset along the normal, k1 (voxel diagonals)
+    float hit_tolerance_voxels;  // light-map hit tolerance (voxel diagonals)
+    float voxel_diagonal_m;
+    uint rays;                   // rays per pixel
+    uint start_level;            // mip level the traversal starts at
+    uint max_iterations;         // traversal steps before a ray gives up
+    uint seed;                   // per-pixel rotation seed; path tracer: frames accumulated before this one
+    float light_map_scale;       // light-map texel footprint scale (shadow resolution / light-map resolution)
+    uint bounces;                // path-tracer bounces (0: unbounded, Russian roulette)
+    float ray_offset_voxels;     // self-intersection offset along the ray, k2 (voxel diagonals)
+    float ray_offset_max_voxels; // its clamp (voxel diagonals)
 } gi;
 
 // Radical inverse in base 2 (Hammersley's second coordinate).

@@ -77,9 +77,9 @@ vec3 light_map_radiance(vec3 hit, vec3 dir) {
         // from the surface) plus the light-map texel's footprint on a surface at this slope,
         // clamped so grazing texels do not accept far points.
         float dist = sv.params.y > 0.5 ? 1.0 : c.w;
-        float texel_m = sv.params.x * gi.params2.x * dist;
-        float footprint = min(texel_m / max(cos_l, 0.05), 8.0 * gi.params.w);
-        float tol = gi.params.z * gi.params.w + 2.0 * footprint;
+        float texel_m = sv.params.x * gi.light_map_scale * dist;
+        float footprint = min(texel_m / max(cos_l, 0.05), 8.0 * gi.voxel_diagonal_m);
+        float tol = gi.hit_tolerance_voxels * gi.voxel_diagonal_m + 2.0 * footprint;
         if (distance(pos.xyz, hit) > tol) continue;
         if (dot(n, -dir) <= 0.0) continue;  // the ray reached the back of that surface
         vec3 radiance = texelFetch(rlm_radiance, ivec3(q, int(v)), 0).rgb;
@@ -126,15 +126,15 @@ void main() {
     vec3 specular = HAS_PHONG ? texelFetch(gb_specular, px, 0).rgb : vec3(0.0);
     bool phong = HAS_PHONG && is_phong_pixel(specular);
     vec3 mirror = reflect(-normalize(frame.camera_position.xyz - p), n);
-    // Self-intersection offset along the normal (§5.3.1).
-    vec3 origin = p + n * (gi.params.y * gi.params.w);
+    // Self-intersection offset along the normal (Thiedemann 2010 §5.3.1).
+    vec3 origin = p + n * (gi.normal_offset_voxels * gi.voxel_diagonal_m);
     vec3 ov = (gi.world_to_voxel * vec4(origin, 1.0)).xyz;
     mat3 dir_to_voxel = mat3(gi.world_to_voxel);
-    uint rays = max(gi.iparams.x, 1u);
+    uint rays = max(gi.rays, 1u);
     // Phong pixels spend half their rays on the specular lobe.
     uint lobe_rays = phong ? rays / 2u : 0u;
     uint diffuse_rays = rays - lobe_rays;
-    vec2 rot = pixel_rotation(uvec2(px), gi.iparams.w);
+    vec2 rot = pixel_rotation(uvec2(px), gi.seed);
     vec3 sum = vec3(0.0);
     vec3 lobe_sum = vec3(0.0);
     for (uint i = 0u; i < rays; ++i) {
@@ -145,11 +145,11 @@ void main() {
         vec3 d = lobe ? phong_direction(mirror, ns.w, u) : cosine_direction(n, u);
         float cos_n = dot(d, n);
         if (cos_n <= 0.0) continue;  // a lobe sample below the surface contributes nothing
-        // Offset along the ray (§5.3.1): k2 * h / (d . n), clamped, so grazing rays leave the
-        // surface's own voxels too.
-        float along = min(gi.params2.z * gi.params.w / max(dot(d, n), 1e-4), gi.params2.w * gi.params.w);
+        // Offset along the ray (Thiedemann 2010 §5.3.1): k2 * h / (d . n), clamped, so grazing
+        // rays leave the surface's own voxels too.
+        float along = min(gi.ray_offset_voxels * gi.voxel_diagonal_m / max(dot(d, n), 1e-4), gi.ray_offset_max_voxels * gi.voxel_diagonal_m);
         vec3 o = origin + d * along;
-        VxHit h = voxel_first_hit(gi.dims.xyz, uint(gi.dims.w), ov + dir_to_voxel * (d * along), dir_to_voxel * d, max(gi.params.x - along, 0.0), gi.iparams.y, gi.iparams.z);
+        VxHit h = voxel_first_hit(gi.dims, uint(gi.max_level), ov + dir_to_voxel * (d * along), dir_to_voxel * d, max(gi.radius_m - along, 0.0), gi.start_level, gi.max_iterations);
         if (!h.hit) continue;
         vec3 l = hit_radiance(h, o + d * h.t, d);
         if (lobe) lobe_sum += l * cos_n;

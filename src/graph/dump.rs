@@ -16,7 +16,12 @@ impl CompiledGraph {
             self.culled.len()
         );
         for (pos, &p) in self.order.iter().enumerate() {
-            let _ = writeln!(s, "  [{pos}] {}", self.pass_names[p]);
+            let _ = writeln!(
+                s,
+                "  [{pos}] {}{}",
+                self.pass_names[p],
+                conditional_note(graph, p)
+            );
             for (id, access, _, _) in &graph.passes[p].accesses {
                 let _ = writeln!(
                     s,
@@ -99,7 +104,7 @@ impl CompiledGraph {
     }
 
     /// Graphviz dot: passes as boxes, resources as ellipses, edges for reads and writes;
-    /// culled passes dashed.
+    /// culled passes dashed, conditional ones (`.when()`) dotted.
     pub fn dump_dot(&self, graph: &RenderGraph) -> String {
         let mut s = String::from("digraph voxgi {\n  rankdir=LR;\n");
         for (i, name) in self.resource_names.iter().enumerate() {
@@ -112,8 +117,17 @@ impl CompiledGraph {
         }
         for (p, pass) in graph.passes.iter().enumerate() {
             let culled = self.culled.contains(&p);
-            let style = if culled { ", style=dashed" } else { "" };
-            let _ = writeln!(s, "  p{p} [label=\"{}\", shape=box{style}];", pass.name);
+            let style = match (culled, pass.condition.is_some()) {
+                (true, _) => ", style=dashed",
+                (false, true) => ", style=dotted",
+                (false, false) => "",
+            };
+            let _ = writeln!(
+                s,
+                "  p{p} [label=\"{}{}\", shape=box{style}];",
+                pass.name,
+                conditional_note(graph, p)
+            );
             for (id, access, _, _) in &pass.accesses {
                 let info = access.info();
                 if info.reads {
@@ -126,6 +140,16 @@ impl CompiledGraph {
         }
         s.push_str("}\n");
         s
+    }
+}
+
+/// Marks a pass declared with `.when()`: it records only in the frame slots its condition
+/// leaves open (its barriers and timestamps are emitted in every frame).
+fn conditional_note(graph: &RenderGraph, pass: usize) -> &'static str {
+    if graph.passes[pass].condition.is_some() {
+        " (conditional)"
+    } else {
+        ""
     }
 }
 
@@ -144,6 +168,7 @@ mod tests {
             .write(a, Access::StorageWrite(Shader::Compute))
             .record(|_| {});
         g.add_pass("copy")
+            .when(Some(Default::default()))
             .read(a, Access::TransferRead)
             .write(out, Access::TransferWrite)
             .record(|_| {});
@@ -159,7 +184,13 @@ mod tests {
         ] {
             assert!(text.contains(word), "text dump lacks {word}:\n{text}");
         }
+        assert!(text.contains("] copy (conditional)"), "{text}");
+        assert!(!text.contains("draw (conditional)"), "{text}");
         let dot = c.dump_dot(&g);
+        assert!(
+            dot.contains("copy (conditional)\", shape=box, style=dotted"),
+            "{dot}"
+        );
         assert!(dot.starts_with("digraph") && dot.contains("p0 -> r0") && dot.contains("r0 -> p1"));
     }
 }

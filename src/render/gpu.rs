@@ -1,7 +1,7 @@
 //! `Gpu*` buffer structs shared with GLSL (`glsl/include/frame.glsl`, `glsl/gbuffer.frag`),
-//! their std430 layouts checked by the tests below. Each pass's push-constant struct lives
-//! with its pass and is checked against the shader's reflected block when its pipeline is
-//! created.
+//! each checked by the tests below against the layout reflected from every shader that
+//! declares it (`vk::check_struct_against`). Each pass's push-constant struct lives with its
+//! pass and is checked against the shader's reflected block when its pipeline is created.
 
 use bytemuck::{Pod, Zeroable};
 
@@ -24,6 +24,14 @@ pub struct GpuLight {
     pub info: [u32; 4],
 }
 
+crate::gpu_struct!(GpuLight {
+    position,
+    direction,
+    intensity,
+    spot,
+    info
+});
+
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct GpuShadowView {
@@ -34,6 +42,12 @@ pub struct GpuShadowView {
     /// xyz the view's axis (cube face, paraboloid hemisphere, spot or sun direction).
     pub axis: [f32; 4],
 }
+
+crate::gpu_struct!(GpuShadowView {
+    view_proj,
+    params,
+    axis
+});
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
@@ -49,6 +63,16 @@ pub struct GpuFrame {
     pub shadow_views: [GpuShadowView; MAX_SHADOW_VIEWS],
 }
 
+crate::gpu_struct!(GpuFrame {
+    view_proj,
+    inv_view_proj,
+    camera_position,
+    counts,
+    shadow,
+    lights,
+    shadow_views
+});
+
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct GpuMaterial {
@@ -59,6 +83,12 @@ pub struct GpuMaterial {
     /// x: 1 if an albedo texture replaces `albedo` (as in the Mitsuba export).
     pub flags: [u32; 4],
 }
+
+crate::gpu_struct!(GpuMaterial {
+    albedo,
+    specular,
+    flags
+});
 
 /// Interleaved vertex of every mesh.
 #[repr(C)]
@@ -72,28 +102,47 @@ pub struct GpuVertex {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use std::mem::{offset_of, size_of};
+    use crate::vk::check_struct_against;
 
+    /// Every shader that declares the frame constants (through `frame.glsl`) or the
+    /// materials (each declares its own copy of `GpuMaterial`) lays them out as the Rust
+    /// structs do: names, offsets, sizes and array strides, read from the SPIR-V.
     #[test]
-    fn layouts_match_std430() {
-        // std430: vec4/uvec4 16 bytes, mat4 64, struct arrays stride = struct size (x16).
-        assert_eq!(size_of::<GpuLight>(), 80);
-        assert_eq!(offset_of!(GpuLight, info), 64);
-        assert_eq!(size_of::<GpuShadowView>(), 96);
-        assert_eq!(offset_of!(GpuShadowView, params), 64);
-        assert_eq!(offset_of!(GpuFrame, inv_view_proj), 64);
-        assert_eq!(offset_of!(GpuFrame, camera_position), 128);
-        assert_eq!(offset_of!(GpuFrame, counts), 144);
-        assert_eq!(offset_of!(GpuFrame, shadow), 160);
-        assert_eq!(offset_of!(GpuFrame, lights), 176);
-        assert_eq!(offset_of!(GpuFrame, shadow_views), 176 + 80 * MAX_LIGHTS);
-        assert_eq!(
-            size_of::<GpuFrame>(),
-            176 + 80 * MAX_LIGHTS + 96 * MAX_SHADOW_VIEWS
-        );
-        assert_eq!(size_of::<GpuMaterial>(), 48);
-        assert_eq!(offset_of!(GpuMaterial, flags), 32);
-        assert_eq!(size_of::<GpuVertex>(), 32);
-        assert_eq!(offset_of!(GpuVertex, uv), 24);
+    fn buffer_structs_match_every_shader_that_declares_them() {
+        for (name, _) in crate::vk::shaders::ALL {
+            let Ok(i) = crate::vk::interface_of(&[name]) else {
+                continue;
+            };
+            let check = |r: Result<(), crate::vk::VkError>| r.unwrap_or_else(|e| panic!("{e}"));
+            if i.structs.contains_key("GpuFrame") {
+                check(check_struct_against::<GpuFrame>(&[name], "GpuFrame"));
+                check(check_struct_against::<GpuLight>(&[name], "GpuLight"));
+                check(check_struct_against::<GpuShadowView>(
+                    &[name],
+                    "GpuShadowView",
+                ));
+            }
+            if i.structs.contains_key("GpuMaterial") {
+                check(check_struct_against::<GpuMaterial>(&[name], "GpuMaterial"));
+            }
+        }
+        // The shaders named in this module's documentation and the materials' users do
+        // declare them (a shader that stopped declaring them would skip the loop's checks).
+        for name in ["deferred_direct.comp", "gbuffer.vert", "light_map.frag"] {
+            assert!(crate::vk::interface_of(&[name])
+                .unwrap()
+                .structs
+                .contains_key("GpuFrame"));
+        }
+        for name in [
+            "gbuffer.frag",
+            "light_map.frag",
+            "shadow_depth.frag",
+            "shadow_depth_paraboloid.frag",
+            "gi_hemisphere.comp",
+        ] {
+            let i = crate::vk::interface_of(&[name]).unwrap();
+            assert!(i.structs.contains_key("GpuMaterial"), "{name}");
+        }
     }
 }

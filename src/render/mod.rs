@@ -357,7 +357,7 @@ impl Renderer {
             if attributes_moved {
                 gi.reset();
             }
-            gi.advance();
+            gi.advance(slot);
         }
         if let Some(pass) = &mut self.voxel_debug {
             pass.update(self.settings.time_s, slot);

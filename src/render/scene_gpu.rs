@@ -295,9 +295,18 @@ pub fn record_shadow_views(
 /// The vertex layout every mesh pass reads: position, normal, uv.
 pub fn vertex_attributes() -> Vec<(vk::Format, u32)> {
     vec![
-        (vk::Format::R32G32B32_SFLOAT, 0),
-        (vk::Format::R32G32B32_SFLOAT, 12),
-        (vk::Format::R32G32_SFLOAT, 24),
+        (
+            vk::Format::R32G32B32_SFLOAT,
+            std::mem::offset_of!(GpuVertex, position) as u32,
+        ),
+        (
+            vk::Format::R32G32B32_SFLOAT,
+            std::mem::offset_of!(GpuVertex, normal) as u32,
+        ),
+        (
+            vk::Format::R32G32_SFLOAT,
+            std::mem::offset_of!(GpuVertex, uv) as u32,
+        ),
     ]
 }
 

@@ -27,7 +27,7 @@ fn cornell_gi() -> GiDesc {
         rays: Some(4),
         accumulate_frames: Some(2),
         bounces: Some(toml::Value::String(
-            crate::gi::Bounces::UNBOUNDED_NAME.into(),
+            crate::scene::Bounces::UNBOUNDED_NAME.into(),
         )),
         filter_radius: Some(8),
         ..Default::default()
@@ -142,8 +142,8 @@ mod tests {
 
     #[test]
     fn the_default_scene_renders_indirect_light_unless_switched_off() {
-        use crate::gi::{Bounces, GiMethod};
         use crate::scene::{resolve_gi, GiOverrides};
+        use crate::scene::{Bounces, GiMethod};
         let s = builtin(DEFAULT_SCENE).unwrap_or_else(|| panic!("{DEFAULT_SCENE}"));
         let gi = resolve_gi(&s.gi, &GiOverrides::default());
         assert_eq!(

@@ -1,7 +1,7 @@
 //! The `[gi]` table of a scene file: the scene's defaults of the indirect-light settings,
 //! which command-line flags override.
 
-use crate::gi::{Bounces, GiMethod, GiSettings};
+use super::gi_settings::{Bounces, GiMethod, GiSettings};
 
 /// Indirect-light settings given by a scene file's `[gi]` table or by command-line flags;
 /// `None`: not given there. See [`resolve_gi`] for the precedence.

@@ -665,9 +665,9 @@ fn gi_table_parses_every_key() {
     assert_eq!(
         s.gi,
         GiOverrides {
-            method: Some(crate::gi::GiMethod::Pathtrace),
+            method: Some(crate::scene::GiMethod::Pathtrace),
             rays: Some(8),
-            bounces: Some(crate::gi::Bounces::Fixed(3)),
+            bounces: Some(crate::scene::Bounces::Fixed(3)),
             radius_m: Some(1.5),
             normal_offset_voxels: Some(0.5),
             ray_offset_voxels: Some(2.0),
@@ -679,8 +679,8 @@ fn gi_table_parses_every_key() {
     );
     // Partial tables give only what they name; the rest stays the defaults'.
     for (method, m) in [
-        ("none", crate::gi::GiMethod::None),
-        ("hemisphere", crate::gi::GiMethod::Hemisphere),
+        ("none", crate::scene::GiMethod::None),
+        ("hemisphere", crate::scene::GiMethod::Hemisphere),
     ] {
         let text = format!("{CAMERA}{LIGHT}{CUBE}[gi]\nmethod = \"{method}\"\n");
         let s = load_ok(&text, &[]);
@@ -694,9 +694,9 @@ fn gi_table_parses_every_key() {
     }
     // Bounces: a count up to the safety cap, or unbounded (Russian roulette).
     for (value, b) in [
-        ("1", crate::gi::Bounces::Fixed(1)),
-        ("64", crate::gi::Bounces::Fixed(64)),
-        ("\"unbounded\"", crate::gi::Bounces::Unbounded),
+        ("1", crate::scene::Bounces::Fixed(1)),
+        ("64", crate::scene::Bounces::Fixed(64)),
+        ("\"unbounded\"", crate::scene::Bounces::Unbounded),
     ] {
         let s = load_ok(
             &format!("{CAMERA}{LIGHT}{CUBE}[gi]\nbounces = {value}\n"),
@@ -707,7 +707,7 @@ fn gi_table_parses_every_key() {
     let s = load_ok(&format!("{CAMERA}{LIGHT}{CUBE}[gi]\nrays = 4\n"), &[]);
     let settings = resolve_gi(&s.gi, &GiOverrides::default());
     assert_eq!(settings.rays, 4);
-    assert_eq!(settings.method, crate::gi::GiMethod::None);
+    assert_eq!(settings.method, crate::scene::GiMethod::None);
 }
 
 #[test]

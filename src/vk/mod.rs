@@ -14,10 +14,10 @@ pub use cmd::{Attachment, Cmd};
 pub use context::{describe_devices, Context, ContextDesc, DeviceInfo, ValidationLog};
 pub use frame::{FrameLoop, FrameSlot, PassTiming, TimestampRecorder, MAX_FRAMES_IN_FLIGHT};
 pub use pipeline::{
-    check_push_against, descriptor_type, interface_of, Bindable, ComputePipeline, Descriptor,
-    GraphicsPipeline, GraphicsPipelineDesc, PushLayout, ShaderModule,
+    check_push_against, check_struct_against, descriptor_type, interface_of, Bindable,
+    ComputePipeline, Descriptor, GraphicsPipeline, GraphicsPipelineDesc, PushLayout, ShaderModule,
 };
-pub use reflect::{BindingKind, PushConstants, ShaderInterface};
+pub use reflect::{BindingKind, GpuStruct, PushConstants, ShaderInterface};
 pub use resources::{Buffer, BufferDesc, Image, ImageDesc, MemoryLocation};
 pub use swapchain::{surface_extensions, Acquired, Swapchain};
 

@@ -116,6 +116,39 @@ pub fn check_push_against(files: &[&str], push: Option<PushLayout>) -> Result<()
     check_push_layout(interface_of(files)?, push.as_ref())
 }
 
+/// Checks the Rust struct `T` against the struct `glsl_struct` of the buffer blocks the
+/// embedded shaders `files` declare (name, offset and size of every member, and its array
+/// stride): for tests of the `Gpu*` buffer structs, without a device.
+pub fn check_struct_against<T: reflect::GpuStruct>(
+    files: &[&str],
+    glsl_struct: &str,
+) -> Result<(), VkError> {
+    let interface = interface_of(files)?;
+    let rust_name = std::any::type_name::<T>()
+        .rsplit("::")
+        .next()
+        .unwrap_or("struct");
+    let layout = interface.structs.get(glsl_struct).ok_or_else(|| {
+        VkError::ShaderInterface(format!(
+            "`{}` declares no buffer struct `{glsl_struct}` (declared: {:?})",
+            interface.name,
+            interface.structs.keys().collect::<Vec<_>>()
+        ))
+    })?;
+    reflect::check_struct(
+        layout,
+        rust_name,
+        &T::fields(),
+        std::mem::size_of::<T>() as u32,
+    )
+    .map_err(|problems| {
+        VkError::ShaderInterface(format!(
+            "`{}`: `{rust_name}` does not match the shader's `{glsl_struct}`: {problems}",
+            interface.name
+        ))
+    })
+}
+
 /// The push-constant range of an interface: its block's size, rounded to the 4 bytes Vulkan
 /// ranges are counted in.
 fn push_bytes(interface: &ShaderInterface) -> u32 {

@@ -1,9 +1,12 @@
-//! SPIR-V reflection: the descriptor bindings and the push-constant block a shader declares.
+//! SPIR-V reflection: the descriptor bindings, the push-constant block and the layouts of the
+//! structs in buffer blocks a shader declares.
 //!
 //! The shader is the one statement of a pipeline's interface. Pipeline layouts are built from
 //! what this module reads out of the SPIR-V, and the render graph checks each pass's declared
-//! bindings against it (`graph::bind`), so a binding is never typed in twice. Pure logic: it
-//! reads the words `build.rs` embedded and needs no device.
+//! bindings against it (`graph::bind`), so a binding is never typed in twice. Rust structs
+//! that mirror push blocks ([`push_constants!`](crate::push_constants)) or buffer structs
+//! ([`gpu_struct!`](crate::gpu_struct)) are checked against the reflected layouts by name,
+//! offset and size. Pure logic: it reads the words `build.rs` embedded and needs no device.
 //!
 //! Only what voxgi's shaders use is understood: descriptor set 0, combined image samplers,
 //! storage images, storage and uniform buffers (arrays of them count as one binding with a
@@ -114,6 +117,30 @@ pub struct PushBlock {
     pub size_bytes: u32,
 }
 
+/// One member of a struct in a buffer block.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct StructMember {
+    pub name: String,
+    pub offset: u32,
+    /// Bytes it spans: arrays stride × length, runtime arrays 0, matrices their columns'
+    /// stride × count.
+    pub size_bytes: u32,
+}
+
+/// The explicit layout (offsets and strides as std430 or std140 gave them) of a struct that a
+/// storage or uniform buffer block holds, or of the block itself.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct StructLayout {
+    /// The GLSL type name (the block's type name for a block).
+    pub name: String,
+    pub members: Vec<StructMember>,
+    /// End of the last member.
+    pub size_bytes: u32,
+    /// The array stride where the shader declares an array of it: the size a mirroring Rust
+    /// struct must have exactly.
+    pub array_stride: Option<u32>,
+}
+
 /// What one shader, or the stages of one pipeline together, declares.
 #[derive(Clone, Debug, PartialEq, Eq, Default)]
 pub struct ShaderInterface {
@@ -121,6 +148,9 @@ pub struct ShaderInterface {
     pub name: String,
     pub bindings: BTreeMap<u32, ReflectedBinding>,
     pub push: Option<PushBlock>,
+    /// The structs of its storage and uniform buffer blocks (nested ones too) and the blocks
+    /// themselves, by GLSL type name.
+    pub structs: BTreeMap<String, StructLayout>,
 }
 
 /// Why a shader's interface could not be read.
@@ -148,6 +178,8 @@ pub enum ReflectError {
         a: &'static str,
         b: &'static str,
     },
+    #[error("pipeline `{pipeline}`: its stages lay out struct `{name}` differently: declare it the same way in every stage")]
+    StructConflict { pipeline: String, name: String },
     #[error("pipeline `{pipeline}`: the push-constant blocks of its stages disagree on member `{member}` ({a} vs {b}): declare the same block in every stage")]
     PushConflict {
         pipeline: String,
@@ -387,6 +419,55 @@ impl Module {
     fn name_of(&self, id: u32) -> String {
         self.names.get(&id).cloned().unwrap_or_default()
     }
+
+    /// The struct under `ty` after unwrapping arrays, with the stride of the outermost array
+    /// (`None` when `ty` is no array).
+    fn struct_under(&self, mut ty: u32) -> Option<(u32, Option<u32>)> {
+        let mut stride = None;
+        loop {
+            match self.types.get(&ty)? {
+                Type::Array { element, .. } | Type::RuntimeArray { element } => {
+                    stride = stride.or(self.decoration(ty, DEC_ARRAY_STRIDE));
+                    ty = *element;
+                }
+                Type::Struct { .. } => return Some((ty, stride)),
+                _ => return None,
+            }
+        }
+    }
+
+    /// Adds the layout of struct `ty` and of the structs its members hold to `out`.
+    fn collect_structs(
+        &self,
+        ty: u32,
+        array_stride: Option<u32>,
+        out: &mut BTreeMap<String, StructLayout>,
+    ) {
+        let Some(Type::Struct { members }) = self.types.get(&ty) else {
+            return;
+        };
+        let layout = StructLayout {
+            name: self.name_of(ty),
+            members: (0..members.len() as u32)
+                .map(|k| {
+                    let offset = self.member_decoration(ty, k, DEC_OFFSET).unwrap_or(0);
+                    StructMember {
+                        name: self.member_names.get(&(ty, k)).cloned().unwrap_or_default(),
+                        offset,
+                        size_bytes: self.member_end(ty, k) - offset,
+                    }
+                })
+                .collect(),
+            size_bytes: self.size_of(ty),
+            array_stride,
+        };
+        for &member in members {
+            if let Some((inner, stride)) = self.struct_under(member) {
+                self.collect_structs(inner, stride, out);
+            }
+        }
+        out.entry(layout.name.clone()).or_insert(layout);
+    }
 }
 
 /// Decodes a nul-terminated SPIR-V literal string.
@@ -492,6 +573,7 @@ pub fn reflect(shader: &str, words: &[u32]) -> Result<ShaderInterface, ReflectEr
                 return Err(unsupported("separate sampler"))
             }
             (SC_UNIFORM | SC_STORAGE_BUFFER, Some(Type::Struct { members })) => {
+                m.collect_structs(ty, None, &mut out.structs);
                 let storage =
                     class == SC_STORAGE_BUFFER || m.decoration(ty, DEC_BUFFER_BLOCK).is_some();
                 if !storage && m.decoration(ty, DEC_BLOCK).is_none() {
@@ -564,6 +646,20 @@ pub fn merge(stages: &[ShaderInterface]) -> Result<ShaderInterface, ReflectError
                 }
             }
         }
+        for (struct_name, layout) in &s.structs {
+            match out.structs.get_mut(struct_name) {
+                Some(x) if x.members != layout.members => {
+                    return Err(ReflectError::StructConflict {
+                        pipeline: name,
+                        name: struct_name.clone(),
+                    })
+                }
+                Some(x) => x.array_stride = x.array_stride.or(layout.array_stride),
+                None => {
+                    out.structs.insert(struct_name.clone(), layout.clone());
+                }
+            }
+        }
         if let Some(p) = &s.push {
             let merged = out.push.get_or_insert_with(Default::default);
             for member in &p.members {
@@ -597,6 +693,31 @@ pub trait PushConstants: bytemuck::Pod {
     fn fields() -> Vec<(&'static str, u32, u32)>;
 }
 
+/// A Rust struct that mirrors a struct of the shaders' storage or uniform buffers: its named
+/// fields, checked against the reflected layout by [`check_struct`]. Implement it with
+/// [`gpu_struct!`](crate::gpu_struct).
+pub trait GpuStruct: bytemuck::Pod {
+    /// (field name, byte offset, size in bytes), in declaration order.
+    fn fields() -> Vec<(&'static str, u32, u32)>;
+}
+
+/// The (name, offset, size) list of a `#[repr(C)]` struct's fields, for [`push_constants!`]
+/// and [`gpu_struct!`](crate::gpu_struct).
+#[doc(hidden)]
+#[macro_export]
+macro_rules! struct_fields {
+    ($ty:ty { $($field:ident),* $(,)? }) => {{
+        fn size_of_field<T, F>(_: impl Fn(&T) -> &F) -> u32 {
+            std::mem::size_of::<F>() as u32
+        }
+        vec![$((
+            stringify!($field),
+            std::mem::offset_of!($ty, $field) as u32,
+            size_of_field(|s: &$ty| &s.$field),
+        )),*]
+    }};
+}
+
 /// Implements [`PushConstants`] for a `#[repr(C)]` struct from the list of its fields. Fields
 /// whose names start with `_` are padding and need no shader member.
 #[macro_export]
@@ -604,17 +725,63 @@ macro_rules! push_constants {
     ($ty:ty { $($field:ident),* $(,)? }) => {
         impl $crate::vk::reflect::PushConstants for $ty {
             fn fields() -> Vec<(&'static str, u32, u32)> {
-                fn size_of_field<T, F>(_: impl Fn(&T) -> &F) -> u32 {
-                    std::mem::size_of::<F>() as u32
-                }
-                vec![$((
-                    stringify!($field),
-                    std::mem::offset_of!($ty, $field) as u32,
-                    size_of_field(|s: &$ty| &s.$field),
-                )),*]
+                $crate::struct_fields!($ty { $($field),* })
             }
         }
     };
+}
+
+/// Implements [`GpuStruct`] for a `#[repr(C)]` struct from the list of its fields. Fields
+/// whose names start with `_` are padding and need no shader member.
+#[macro_export]
+macro_rules! gpu_struct {
+    ($ty:ty { $($field:ident),* $(,)? }) => {
+        impl $crate::vk::reflect::GpuStruct for $ty {
+            fn fields() -> Vec<(&'static str, u32, u32)> {
+                $crate::struct_fields!($ty { $($field),* })
+            }
+        }
+    };
+}
+
+/// Compares the shader's `members` (name, offset, size) with the Rust `fields`: every member
+/// needs a field of the same name, offset and size, every field not starting with `_` a
+/// member. `what` names the shader side in messages.
+fn check_fields(
+    members: &[(&str, u32, u32)],
+    what: &str,
+    rust_name: &str,
+    fields: &[(&'static str, u32, u32)],
+    problems: &mut Vec<String>,
+) {
+    for &(name, m_offset, m_size) in members {
+        match fields.iter().find(|f| f.0 == name) {
+            None => problems.push(format!(
+                "shader member `{name}` (offset {m_offset}) has no field in `{rust_name}`"
+            )),
+            Some(&(_, offset, size)) if offset != m_offset || size != m_size => {
+                problems.push(format!(
+                    "`{name}` is at offset {offset} ({size} bytes) in `{rust_name}` but at {m_offset} ({m_size} bytes) in the shader"
+                ))
+            }
+            Some(_) => {}
+        }
+    }
+    for &(name, offset, _) in fields {
+        if !name.starts_with('_') && !members.iter().any(|m| m.0 == name) {
+            problems.push(format!(
+                "field `{name}` (offset {offset}) of `{rust_name}` is not in the shader's {what}"
+            ));
+        }
+    }
+}
+
+fn problems_to_result(problems: Vec<String>) -> Result<(), String> {
+    if problems.is_empty() {
+        Ok(())
+    } else {
+        Err(problems.join("; "))
+    }
 }
 
 /// Checks that the Rust push-constant struct `rust` (its fields, see [`PushConstants`]) has the
@@ -629,40 +796,58 @@ pub fn check_push(
 ) -> Result<(), String> {
     let empty = PushBlock::default();
     let block = block.unwrap_or(&empty);
+    let members: Vec<(&str, u32, u32)> = block
+        .members
+        .iter()
+        .map(|m| (m.name.as_str(), m.offset, m.size_bytes))
+        .collect();
     let mut problems = Vec::new();
-    for m in &block.members {
-        match fields.iter().find(|f| f.0 == m.name) {
-            None => problems.push(format!(
-                "shader member `{}` (offset {}) has no field in `{rust_name}`",
-                m.name, m.offset
-            )),
-            Some(&(_, offset, size)) if offset != m.offset || size != m.size_bytes => {
-                problems.push(format!(
-                    "`{}` is at offset {offset} ({size} bytes) in `{rust_name}` but at {} ({} bytes) in the shader",
-                    m.name, m.offset, m.size_bytes
-                ))
-            }
-            Some(_) => {}
-        }
-    }
-    for &(name, offset, _) in fields {
-        if !name.starts_with('_') && !block.members.iter().any(|m| m.name == name) {
-            problems.push(format!(
-                "field `{name}` (offset {offset}) of `{rust_name}` is not in the shader's push-constant block"
-            ));
-        }
-    }
+    check_fields(
+        &members,
+        "push-constant block",
+        rust_name,
+        fields,
+        &mut problems,
+    );
     if rust_size < block.size_bytes {
         problems.push(format!(
             "`{rust_name}` has {rust_size} bytes, the shader's block {}",
             block.size_bytes
         ));
     }
-    if problems.is_empty() {
-        Ok(())
-    } else {
-        Err(problems.join("; "))
+    problems_to_result(problems)
+}
+
+/// Checks that the Rust struct `rust_name` (its fields, see [`GpuStruct`], and its size) has
+/// the layout of the shader's buffer struct `layout` (see [`ShaderInterface::structs`]):
+/// members as in [`check_push`], and the size equal to the shader's array stride where it
+/// declares arrays of the struct, else at least the end of its last member.
+pub fn check_struct(
+    layout: &StructLayout,
+    rust_name: &str,
+    fields: &[(&'static str, u32, u32)],
+    rust_size: u32,
+) -> Result<(), String> {
+    let members: Vec<(&str, u32, u32)> = layout
+        .members
+        .iter()
+        .map(|m| (m.name.as_str(), m.offset, m.size_bytes))
+        .collect();
+    let mut problems = Vec::new();
+    let what = format!("struct `{}`", layout.name);
+    check_fields(&members, &what, rust_name, fields, &mut problems);
+    match layout.array_stride {
+        Some(stride) if stride != rust_size => problems.push(format!(
+            "`{rust_name}` has {rust_size} bytes, the shader's array stride of `{}` is {stride}",
+            layout.name
+        )),
+        None if rust_size < layout.size_bytes => problems.push(format!(
+            "`{rust_name}` has {rust_size} bytes, the shader's `{}` {}",
+            layout.name, layout.size_bytes
+        )),
+        _ => {}
     }
+    problems_to_result(problems)
 }
 
 #[cfg(test)]
@@ -707,6 +892,103 @@ mod tests {
         assert_eq!(push.members[0].size_bytes, 64);
         assert_eq!(push.size_bytes, 68);
         assert_eq!(i.bindings[&0].kind, BindingKind::StorageBuffer);
+    }
+
+    fn members(layout: &StructLayout) -> Vec<(&str, u32, u32)> {
+        layout
+            .members
+            .iter()
+            .map(|m| (m.name.as_str(), m.offset, m.size_bytes))
+            .collect()
+    }
+
+    /// `gi_filter.comp` reads `buffer FrameBuf { GpuFrame frame; }` (`frame.glsl`). std430
+    /// (GLSL 4.50 §7.6.2.2) aligns vec4, mat4 and structs of them to 16 bytes and gives an
+    /// array of structs the struct's size as stride: GpuLight is five vec4 (80 bytes),
+    /// GpuShadowView a mat4 and two vec4 (96); GpuFrame two mat4 (0, 64), three vec4 (128,
+    /// 144, 160), 16 lights at 176 (1280 bytes) and 64 shadow views at 1456 (6144 bytes).
+    #[test]
+    fn buffer_structs_have_their_std430_layout() {
+        let i = reflect("gi_filter.comp", &words("gi_filter.comp")).unwrap();
+        let frame = &i.structs["GpuFrame"];
+        assert_eq!(
+            members(frame),
+            [
+                ("view_proj", 0, 64),
+                ("inv_view_proj", 64, 64),
+                ("camera_position", 128, 16),
+                ("counts", 144, 16),
+                ("shadow", 160, 16),
+                ("lights", 176, 1280),
+                ("shadow_views", 1456, 6144),
+            ]
+        );
+        assert_eq!((frame.size_bytes, frame.array_stride), (7600, None));
+        let light = &i.structs["GpuLight"];
+        assert_eq!(light.array_stride, Some(80));
+        assert_eq!(
+            light.members[4],
+            StructMember {
+                name: "info".into(),
+                offset: 64,
+                size_bytes: 16
+            }
+        );
+        assert_eq!(i.structs["GpuShadowView"].array_stride, Some(96));
+        assert_eq!(members(&i.structs["GpuShadowView"])[2], ("axis", 80, 16));
+        // The block itself, by its type name: one member, the struct.
+        assert_eq!(members(&i.structs["FrameBuf"]), [("frame", 0, 7600)]);
+        // A runtime array of structs: `Ray { vec4 origin_tmax; vec4 dir; }`, stride 32.
+        let rays = reflect("voxel_rays.comp", &words("voxel_rays.comp")).unwrap();
+        let ray = &rays.structs["Ray"];
+        assert_eq!(members(ray), [("origin_tmax", 0, 16), ("dir", 16, 16)]);
+        assert_eq!(ray.array_stride, Some(32));
+    }
+
+    #[repr(C)]
+    #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+    struct Ray {
+        origin_tmax: [f32; 4],
+        dir: [f32; 4],
+    }
+    crate::gpu_struct!(Ray { origin_tmax, dir });
+
+    #[repr(C)]
+    #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+    struct PaddedRay {
+        origin_tmax: [f32; 4],
+        dir: [f32; 4],
+        _pad: [f32; 4],
+    }
+    crate::gpu_struct!(PaddedRay {
+        origin_tmax,
+        dir,
+        _pad
+    });
+
+    #[repr(C)]
+    #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+    struct Renamed {
+        origin: [f32; 4],
+        dir: [f32; 4],
+    }
+    crate::gpu_struct!(Renamed { origin, dir });
+
+    #[test]
+    fn buffer_structs_are_checked_by_name_offset_and_stride() {
+        let i = reflect("voxel_rays.comp", &words("voxel_rays.comp")).unwrap();
+        let ray = &i.structs["Ray"];
+        assert_eq!(check_struct(ray, "Ray", &Ray::fields(), 32), Ok(()));
+        let err = check_struct(ray, "PaddedRay", &PaddedRay::fields(), 48).unwrap_err();
+        assert!(err.contains("array stride of `Ray` is 32"), "{err}");
+        let err = check_struct(ray, "Renamed", &Renamed::fields(), 32).unwrap_err();
+        assert!(
+            err.contains("`origin_tmax` (offset 0) has no field in `Renamed`")
+                && err.contains(
+                    "field `origin` (offset 0) of `Renamed` is not in the shader's struct `Ray`"
+                ),
+            "{err}"
+        );
     }
 
     #[test]

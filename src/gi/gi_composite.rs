@@ -1,0 +1,57 @@
+//! `gi_composite`: the frame's radiance, direct plus indirect (Lambert pixels: albedo / π
+//! times the filtered irradiance; Phong pixels: their indirect radiance as stored).
+
+use super::GiInputs;
+use crate::graph::{Access, ImageHandle, RenderGraph, Shader};
+use crate::vk::{vk, ComputePipeline, Context, ImageDesc, VkError};
+
+/// The composite's pipeline.
+pub struct GiComposite {
+    pipeline: ComputePipeline,
+}
+
+impl GiComposite {
+    /// `has_phong`: the G-buffer has a specular image (specialization constant 0).
+    pub fn new(ctx: &Context, has_phong: bool) -> Result<Self, VkError> {
+        let pipeline =
+            ctx.compute_pipeline("gi_composite.comp", None, &[(0, u32::from(has_phong))])?;
+        Ok(Self { pipeline })
+    }
+
+    /// Declares the composite of `i.direct` and `indirect`; returns the total radiance.
+    pub fn add_pass(
+        &self,
+        g: &mut RenderGraph,
+        i: &GiInputs,
+        sampler: vk::Sampler,
+        indirect: ImageHandle,
+    ) -> ImageHandle {
+        let groups = (i.width.div_ceil(8), i.height.div_ceil(8));
+        let total = g.create_image(ImageDesc::new_2d(
+            "radiance (direct + indirect)",
+            vk::Format::R32G32B32A32_SFLOAT,
+            i.width,
+            i.height,
+        ));
+        let pipe = self.pipeline;
+        let c = Shader::Compute;
+        // Without Phong materials the shader never reads its specular binding; albedo fills it.
+        let specular = i.specular.unwrap_or(i.albedo);
+        g.add_pass("gi_composite")
+            .pipeline(&pipe)
+            .bind_sampled(0, i.direct, sampler, c)
+            .bind_sampled(1, i.albedo, sampler, c)
+            .bind_sampled(2, indirect, sampler, c)
+            .bind(3, total, Access::StorageWrite(c))
+            .bind_sampled(4, specular, sampler, c)
+            .record(move |ctx| {
+                ctx.bind(&pipe);
+                ctx.cmd.dispatch(groups.0, groups.1, 1);
+            });
+        total
+    }
+
+    pub fn destroy(self, ctx: &Context) {
+        ctx.destroy_compute_pipeline(self.pipeline);
+    }
+}

@@ -1,0 +1,72 @@
+//! `gi_pathtrace`: B bounces through the voxels with albedo and normal from the attribute
+//! volumes and direct light at every hit from the shadow maps, accumulated over frames into a
+//! history image (Thiedemann 2010 §6.4.2).
+
+use super::gi_common::{add_ray_pass, GiShared, GpuGiPush};
+use super::{GiInputs, GiMethodPasses, GiTarget};
+use crate::graph::{Access, ImageHandle, RenderGraph, Shader};
+use crate::vk::{vk, ComputePipeline, Context, Image, ImageDesc, PushLayout, VkError};
+use std::sync::atomic::Ordering;
+
+/// The path tracer's pipeline and its accumulation history (the frame's size, rgba32f).
+pub struct GiPathtrace {
+    pipeline: ComputePipeline,
+    history: Image,
+}
+
+impl GiPathtrace {
+    pub fn new(ctx: &Context, target: &GiTarget<'_>) -> Result<Self, VkError> {
+        let (w, h) = target.size;
+        let pipeline = ctx.compute_pipeline(
+            "gi_pathtrace.comp",
+            PushLayout::of::<GpuGiPush>(),
+            &[(0, u32::from(target.has_phong))],
+        )?;
+        let usage = vk::ImageUsageFlags::STORAGE
+            | vk::ImageUsageFlags::SAMPLED
+            | vk::ImageUsageFlags::TRANSFER_DST;
+        let history = ctx.create_image(
+            &ImageDesc::new_2d("path tracer history", vk::Format::R32G32B32A32_SFLOAT, w, h)
+                .with_usage(usage),
+        )?;
+        ctx.clear_new_image(
+            &history,
+            vk::ClearColorValue { float32: [0.0; 4] },
+            Access::Sampled(Shader::Compute).info().layout,
+        )?;
+        Ok(Self { pipeline, history })
+    }
+}
+
+impl GiMethodPasses for GiPathtrace {
+    fn add_passes(&self, g: &mut RenderGraph, i: &GiInputs, shared: &GiShared) -> ImageHandle {
+        let history = g.import_image(&self.history, Access::Sampled(Shader::Compute));
+        // The assembly writes the volumes for the methods that need them (this one does).
+        let Some((albedo, normal)) = shared.attributes else {
+            return history;
+        };
+        let push = shared.push;
+        let frames = shared.frames.clone();
+        add_ray_pass(
+            g,
+            "gi_pathtrace",
+            self.pipeline,
+            i,
+            shared,
+            &[(5, albedo), (6, normal), (7, i.shadow_map)],
+            (history, Access::StorageReadWrite(Shader::Compute)),
+            None,
+            move || GpuGiPush {
+                // Frames accumulated before this one (`GiPasses::advance` ran before recording).
+                seed: frames.load(Ordering::SeqCst).saturating_sub(1),
+                ..push
+            },
+        );
+        history
+    }
+
+    fn destroy(self: Box<Self>, ctx: &Context) {
+        ctx.destroy_compute_pipeline(self.pipeline);
+        ctx.destroy_image(self.history);
+    }
+}

@@ -1,0 +1,171 @@
+//! The indirect-light settings: which GI method a frame uses and its parameters. Plain data
+//! (no GPU), here at the bottom so that scene files (`[gi]` tables), the command line
+//! and the viewer's panel share them with the GI passes (`crate::gi`, which re-exports them).
+
+/// A GI method of the speed/accuracy ladder.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+pub enum GiMethod {
+    /// No indirect light.
+    #[default]
+    None,
+    /// One bounce: N rays per pixel, radiance at hits from reflective light maps
+    /// (Thiedemann 2010 §6.4.1).
+    Hemisphere,
+    /// B bounces with albedo and normal from voxel volumes and direct light at every hit from
+    /// the shadow maps, accumulated over frames (Thiedemann 2010 §6.4.2).
+    Pathtrace,
+}
+
+/// Parameters of the indirect-light passes (all exposed on the command line).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GiSettings {
+    pub method: GiMethod,
+    /// Rays per pixel.
+    pub rays: u32,
+    /// Ray length in meters; `None`: the scene's diagonal (unbounded in practice).
+    pub radius_m: Option<f32>,
+    /// Self-intersection offset along the normal, in voxel diagonals (Thiedemann 2010
+    /// §5.3.1, k₁).
+    pub normal_offset_voxels: f32,
+    /// Self-intersection offset along the ray, k₂ · h / (d·n) in voxel diagonals h, clamped
+    /// to `ray_offset_max_voxels` (Thiedemann 2010 §5.3.1).
+    pub ray_offset_voxels: f32,
+    pub ray_offset_max_voxels: f32,
+    /// Light-map hit tolerance, in voxel diagonals (plus the map texel's footprint).
+    pub hit_tolerance_voxels: f32,
+    pub start_level: u32,
+    pub max_iterations: u32,
+    /// Reflective light-map resolution per view (the thesis used 256²).
+    pub light_map_resolution: u32,
+    /// Geometry-aware filter radius in pixels (0: off) and number of h+v passes.
+    pub filter_radius: u32,
+    pub filter_passes: u32,
+    /// Seed of the per-pixel rotation (vary per frame to accumulate).
+    pub seed: u32,
+    /// Path-tracer bounces: a fixed count, or unbounded by Russian roulette.
+    pub bounces: Bounces,
+    /// Frames a headless render accumulates (path tracer; the viewer accumulates while still).
+    pub accumulate_frames: u32,
+    /// Where the hemisphere method reads the radiance at ray hits.
+    pub radiance_source: RadianceSource,
+}
+
+/// How long the path tracer's paths are.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Bounces {
+    /// Exactly this many bounces (1..=[`Bounces::MAX`]): biased low by the light of the
+    /// bounces left out.
+    Fixed(u32),
+    /// [`Bounces::ROULETTE_AFTER`] bounces, then Russian roulette: unbiased but for the
+    /// safety cap of [`Bounces::MAX`] bounces (see `glsl/gi_pathtrace.comp` for its bound).
+    Unbounded,
+}
+
+impl Bounces {
+    /// The most bounces a path takes: the largest fixed count and the safety cap of the
+    /// unbounded setting (`MAX_PATH_BOUNCES` in `glsl/gi_pathtrace.comp`).
+    pub const MAX: u32 = 64;
+    /// Bounces an unbounded path always takes before Russian roulette may end it
+    /// (`ROULETTE_AFTER` in `glsl/gi_pathtrace.comp`).
+    pub const ROULETTE_AFTER: u32 = 3;
+    /// The spelling of [`Bounces::Unbounded`] on the command line and in scene files.
+    pub const UNBOUNDED_NAME: &'static str = "unbounded";
+
+    /// What a flag or scene value must be, for error messages.
+    pub fn expected() -> String {
+        format!(
+            "an integer in [1, {}] or \"{}\" (Russian roulette)",
+            Self::MAX,
+            Self::UNBOUNDED_NAME
+        )
+    }
+
+    /// A fixed count checked against [1, MAX].
+    pub fn fixed(n: i64) -> Option<Bounces> {
+        (1..=i64::from(Self::MAX))
+            .contains(&n)
+            .then_some(Bounces::Fixed(n as u32))
+    }
+}
+
+impl std::fmt::Display for Bounces {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Bounces::Fixed(n) => write!(f, "{n}"),
+            Bounces::Unbounded => f.write_str(Self::UNBOUNDED_NAME),
+        }
+    }
+}
+
+/// Parses `--gi-bounces`: a count or `unbounded` (clap names the flag in its error).
+impl std::str::FromStr for Bounces {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        if s == Self::UNBOUNDED_NAME {
+            return Ok(Bounces::Unbounded);
+        }
+        s.parse::<i64>()
+            .ok()
+            .and_then(Bounces::fixed)
+            .ok_or_else(|| format!("expected {}", Bounces::expected()))
+    }
+}
+
+/// Where hemisphere sampling reads the radiance leaving a hit surface (Thiedemann 2010 §6.3).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+pub enum RadianceSource {
+    /// Reflective light maps rendered per shadow view (radiance, position, normal).
+    #[default]
+    Maps,
+    /// A direct-radiance voxel volume congruent with the bits (diffuse senders).
+    Volume,
+}
+
+impl Default for GiSettings {
+    fn default() -> Self {
+        Self {
+            method: GiMethod::None,
+            rays: 16,
+            radius_m: None,
+            normal_offset_voxels: 1.0,
+            ray_offset_voxels: 0.0,
+            ray_offset_max_voxels: 4.0,
+            hit_tolerance_voxels: 1.5,
+            start_level: 1,
+            max_iterations: 1024,
+            light_map_resolution: 256,
+            filter_radius: 4,
+            filter_passes: 2,
+            seed: 0,
+            bounces: Bounces::Fixed(2),
+            accumulate_frames: 1,
+            radiance_source: RadianceSource::Maps,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bounces_parse_and_print() {
+        use std::str::FromStr;
+        for n in [1, 2, 3, 8, Bounces::MAX] {
+            let b = Bounces::from_str(&n.to_string());
+            assert_eq!(b, Ok(Bounces::Fixed(n)));
+        }
+        assert_eq!(Bounces::from_str("unbounded"), Ok(Bounces::Unbounded));
+        for b in [Bounces::Fixed(5), Bounces::Unbounded] {
+            assert_eq!(Bounces::from_str(&b.to_string()), Ok(b), "round trip");
+        }
+        for bad in ["0", "65", "-1", "inf", "Unbounded", "", "2.5"] {
+            let e = Bounces::from_str(bad).expect_err(bad);
+            assert!(
+                e.contains("[1, 64]") && e.contains("\"unbounded\""),
+                "{bad}: {e}"
+            );
+        }
+    }
+}
