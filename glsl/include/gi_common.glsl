@@ -4,7 +4,9 @@
 
 #define PI 3.14159265358979323846
 
-// Mirrors `GpuGiPush` in src/gi/mod.rs.
+// Mirrors `GpuGiPush` in src/gi/mod.rs. Passes with their own push block (the VPL passes)
+// define GI_OWN_PUSH before including this file.
+#ifndef GI_OWN_PUSH
 layout(push_constant) uniform GiPush {
     mat4 world_to_voxel;
     ivec4 dims;      // voxels x, y, depth; w max hierarchy level
@@ -12,6 +14,7 @@ layout(push_constant) uniform GiPush {
     uvec4 iparams;   // x rays per pixel, y start level, z max iterations, w frame seed
     vec4 params2;    // x light-map texel footprint scale (shadow res / light-map res), y path-tracer bounces (0: unbounded, Russian roulette), z ray offset k2 (voxel diagonals), w its clamp (voxel diagonals)
 } gi;
+#endif
 
 // Radical inverse in base 2 (Hammersley's second coordinate).
 float radical_inverse(uint i) {

@@ -60,6 +60,32 @@ pub struct GiArgs {
     /// light_map_resolution`, else 256].
     #[arg(long, value_name = "L")]
     pub light_map_resolution: Option<u32>,
+    /// `--gi vpl`: VPLs per interleaving set and light (thesis §7.2).
+    #[arg(long, value_name = "K", default_value_t = 16,
+          value_parser = clap::value_parser!(u32).range(1..=i64::from(crate::gi::vpl::VplSettings::MAX_PER_SET)))]
+    pub vpls: u32,
+    /// `--gi vpl`: interleaved-sampling pattern NxM, N·M VPL sets (thesis §7.3.2).
+    #[arg(long, value_name = "NxM", default_value = "4x4", value_parser = crate::gi::vpl::parse_pattern)]
+    pub vpl_pattern: [u32; 2],
+    /// `--gi vpl`: d_min of E = I cos cos / (d_min + d²), in m² (thesis §7.3).
+    #[arg(long, value_name = "M2", default_value_t = 0.01, value_parser = parse_d_min)]
+    pub vpl_d_min: f32,
+    /// `--gi vpl`: VPL bounces: 1 reflects the lights' direct light once, 2 adds one voxel
+    /// ray per VPL (thesis §7.2), up to 8.
+    #[arg(long, value_name = "B", default_value_t = 2,
+          value_parser = clap::value_parser!(u32).range(1..=i64::from(crate::gi::vpl::VplSettings::MAX_BOUNCES)))]
+    pub vpl_bounces: u32,
+    /// `--gi vpl`: visibility per VPL and pixel: the voxel segment test, or none (v = 1).
+    #[arg(long, value_enum, default_value_t = crate::gi::vpl::VplVisibility::Voxel)]
+    pub vpl_visibility: crate::gi::vpl::VplVisibility,
+}
+
+/// `--vpl-d-min`: a finite number ≥ 0.
+fn parse_d_min(s: &str) -> Result<f32, String> {
+    match s.parse::<f32>() {
+        Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
+        _ => Err("expected a finite number of square meters >= 0, e.g. 0.01".into()),
+    }
 }
 
 impl GiArgs {
@@ -85,6 +111,13 @@ impl GiArgs {
             radiance_source: self.gi_radiance,
             start_level: self.gi_start_level,
             max_iterations: self.gi_max_iterations,
+            vpl: crate::gi::vpl::VplSettings {
+                per_set: self.vpls,
+                pattern: self.vpl_pattern,
+                d_min_m2: self.vpl_d_min,
+                visibility: self.vpl_visibility,
+                bounces: self.vpl_bounces,
+            },
             ..resolve_gi(&scene.gi, &self.overrides())
         }
     }

@@ -2,6 +2,8 @@
 //! hemisphere sampling with radiance from reflective light maps, filtered by the
 //! geometry-aware filter and added to the direct light.
 
+pub mod vpl;
+
 use crate::graph::{Access, BufferHandle, ImageHandle, RenderGraph, Shader};
 use crate::scene::Scene;
 use crate::vk::{vk, Buffer, ComputePipeline, Context, Image, ImageDesc, VkError};
@@ -23,6 +25,9 @@ pub enum GiMethod {
     /// B bounces with albedo and normal from voxel volumes and direct light at every hit from
     /// the shadow maps, accumulated over frames (§6.3).
     Pathtrace,
+    /// Virtual point lights from the reflective light maps, B bounces, interleaved sampling
+    /// with voxel visibility and the geometry-aware filter (Ch. 7).
+    Vpl,
 }
 
 /// Parameters of the indirect-light passes (all exposed on the command line).
@@ -56,6 +61,8 @@ pub struct GiSettings {
     pub accumulate_frames: u32,
     /// Where the hemisphere method reads the radiance at ray hits.
     pub radiance_source: RadianceSource,
+    /// The VPL method's parameters.
+    pub vpl: vpl::VplSettings,
 }
 
 /// How long the path tracer's paths are.
@@ -157,6 +164,7 @@ impl Default for GiSettings {
             bounces: Bounces::Fixed(2),
             accumulate_frames: 1,
             radiance_source: RadianceSource::Maps,
+            vpl: vpl::VplSettings::default(),
         }
     }
 }
@@ -238,6 +246,7 @@ pub struct GiTarget<'a> {
 pub struct GiPasses {
     pub settings: GiSettings,
     pathtracer: Option<PathTracer>,
+    vpl: Option<vpl::VplPasses>,
     /// Frames accumulated since the last reset (path tracer).
     frames: Arc<AtomicU32>,
     hemisphere: ComputePipeline,
@@ -306,18 +315,23 @@ impl GiPasses {
                 settings.ray_offset_max_voxels,
             ],
         };
-        let pathtracer = if Self::needs_attribute_volumes(&settings) {
-            Some(PathTracer::new(
-                ctx,
-                target,
-                settings.method == GiMethod::Pathtrace,
-            )?)
-        } else {
-            None
-        };
+        let pathtracer =
+            if settings.method != GiMethod::Vpl && Self::needs_attribute_volumes(&settings) {
+                Some(PathTracer::new(
+                    ctx,
+                    target,
+                    settings.method == GiMethod::Pathtrace,
+                )?)
+            } else {
+                None
+            };
+        let vpl = (settings.method == GiMethod::Vpl)
+            .then(|| vpl::VplPasses::new(ctx, &settings, target))
+            .transpose()?;
         Ok(Self {
             settings,
             pathtracer,
+            vpl,
             frames: Arc::new(AtomicU32::new(0)),
             hemisphere,
             filter,
@@ -331,11 +345,12 @@ impl GiPasses {
     /// Prepares frame slot `slot` for scene time `t_s` (after the slot's fence): rewrites the
     /// attribute volumes and restarts accumulation when moving objects moved.
     pub fn update_dynamic(&mut self, t_s: f32, slot: usize) {
-        if self
+        let moved = self
             .pathtracer
             .as_mut()
-            .is_some_and(|pt| pt.update(t_s, slot))
-        {
+            .is_some_and(|pt| pt.update(t_s, slot));
+        let vpl_moved = self.vpl.as_mut().is_some_and(|v| v.update(t_s, slot));
+        if moved || vpl_moved {
             self.reset();
         }
     }
@@ -358,6 +373,7 @@ impl GiPasses {
     /// Whether the chosen method reads the albedo and normal volumes.
     pub fn needs_attribute_volumes(settings: &GiSettings) -> bool {
         settings.method == GiMethod::Pathtrace
+            || (settings.method == GiMethod::Vpl && settings.vpl.bounces > 1)
             || (settings.method == GiMethod::Hemisphere
                 && settings.radiance_source == RadianceSource::Volume)
     }
@@ -372,23 +388,22 @@ impl GiPasses {
         voxels: Option<&crate::voxel::gpu::VoxelFrame>,
     ) -> ImageHandle {
         let lut = g.import_buffer(&self.lut, Access::StorageRead(Shader::Compute));
-        let irradiance = match &self.pathtracer {
-            Some(pt) => {
-                let attributes = |g: &mut RenderGraph, a, n| {
-                    if let Some(v) = voxels {
-                        v.add_attribute_passes(g, a, n);
-                    }
-                };
-                pt.add_passes(
-                    g,
-                    inp,
-                    lut,
-                    (self.push, self.sampler),
-                    self.frames.clone(),
-                    attributes,
-                )
+        let attributes = |g: &mut RenderGraph, a, n| {
+            if let Some(v) = voxels {
+                v.add_attribute_passes(g, a, n);
             }
-            None => self.add_hemisphere(g, inp, lut),
+        };
+        let irradiance = match (&self.pathtracer, &self.vpl) {
+            (_, Some(v)) => v.add_passes(g, inp, (lut, self.sampler), attributes),
+            (Some(pt), None) => pt.add_passes(
+                g,
+                inp,
+                lut,
+                (self.push, self.sampler),
+                self.frames.clone(),
+                attributes,
+            ),
+            (None, None) => self.add_hemisphere(g, inp, lut),
         };
         self.add_filter_and_composite(g, inp, irradiance)
     }
@@ -503,6 +518,9 @@ impl GiPasses {
     pub fn destroy(self, ctx: &Context) {
         if let Some(pt) = self.pathtracer {
             pt.destroy(ctx);
+        }
+        if let Some(v) = self.vpl {
+            v.destroy(ctx);
         }
         ctx.destroy_compute_pipeline(self.hemisphere);
         ctx.destroy_compute_pipeline(self.filter);
