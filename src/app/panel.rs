@@ -641,11 +641,7 @@ fn vpl_controls(ui: &mut egui::Ui, gi: &mut GiSettings) {
         ui.add(egui::Slider::new(side, 1..=VplSettings::MAX_PATTERN).text(name));
     }
     ui.add(egui::Slider::new(&mut v.bounces, 1..=VplSettings::MAX_BOUNCES).text("bounces"));
-    ui.add(
-        egui::Slider::new(&mut v.d_min_m2, 0.0..=1.0)
-            .logarithmic(true)
-            .text("d_min m²"),
-    );
+    ui.add(egui::Slider::new(&mut v.d_min_voxels, 0.0..=64.0).text("d_min (voxel diagonals)"));
     let mut visible = v.visibility == VplVisibility::Voxel;
     ui.checkbox(&mut visible, "voxel visibility");
     v.visibility = if visible {

@@ -67,8 +67,9 @@ pub struct GiArgs {
     /// `--gi vpl`: interleaved-sampling pattern NxM, N·M VPL sets (thesis §7.3.2).
     #[arg(long, value_name = "NxM", default_value = "4x4", value_parser = crate::gi::vpl::parse_pattern)]
     pub vpl_pattern: [u32; 2],
-    /// `--gi vpl`: d_min of E = I cos cos / (d_min + d²), in m² (thesis §7.3).
-    #[arg(long, value_name = "M2", default_value_t = 0.01, value_parser = parse_d_min)]
+    /// `--gi vpl`: d_min of E = I cos cos / (d_min + d²) (thesis §7.3) as a distance in voxel
+    /// diagonals h: d_min = (D · h)².
+    #[arg(long, value_name = "D", default_value_t = 8.0, value_parser = parse_d_min)]
     pub vpl_d_min: f32,
     /// `--gi vpl`: VPL bounces: 1 reflects the lights' direct light once, 2 adds one voxel
     /// ray per VPL (thesis §7.2), up to 8.
@@ -84,7 +85,7 @@ pub struct GiArgs {
 fn parse_d_min(s: &str) -> Result<f32, String> {
     match s.parse::<f32>() {
         Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
-        _ => Err("expected a finite number of square meters >= 0, e.g. 0.01".into()),
+        _ => Err("expected a finite number of voxel diagonals >= 0, e.g. 8".into()),
     }
 }
 
@@ -114,7 +115,7 @@ impl GiArgs {
             vpl: crate::gi::vpl::VplSettings {
                 per_set: self.vpls,
                 pattern: self.vpl_pattern,
-                d_min_m2: self.vpl_d_min,
+                d_min_voxels: self.vpl_d_min,
                 visibility: self.vpl_visibility,
                 bounces: self.vpl_bounces,
             },

@@ -28,9 +28,11 @@ pub struct VplSettings {
     pub per_set: u32,
     /// Interleaving pattern N×M: N·M sets, each shading one pixel of every N×M tile.
     pub pattern: [u32; 2],
-    /// d_min of E = I cosθ_VPL cosθ_P / (d_min + d²), m² (thesis §7.3): bounds the
-    /// singularity of a VPL next to a receiver.
-    pub d_min_m2: f32,
+    /// d_min of E = I cosθ_VPL cosθ_P / (d_min + d²) (thesis §7.3), which bounds the
+    /// singularity of a VPL next to a receiver, as a distance in voxel diagonals h:
+    /// d_min = (d_min_voxels · h)² m². Relative to the grid, so that a scene renders the same
+    /// in millimeters or kilometers (tests/extremes.rs).
+    pub d_min_voxels: f32,
     pub visibility: VplVisibility,
     /// VPL generations: 1 = the lights' direct light reflected once, 2 adds one voxel ray per
     /// VPL (the thesis's maximum), up to [`VplSettings::MAX_BOUNCES`].
@@ -50,7 +52,7 @@ impl Default for VplSettings {
         Self {
             per_set: 16,
             pattern: [4, 4],
-            d_min_m2: 0.01,
+            d_min_voxels: 8.0,
             visibility: VplVisibility::Voxel,
             bounces: 2,
         }
@@ -223,7 +225,7 @@ impl VplPasses {
                 u32::from(v.visibility == VplVisibility::Voxel),
             ],
             trace: [settings.start_level, settings.max_iterations],
-            d_min_m2: v.d_min_m2,
+            d_min_m2: (v.d_min_voxels * diagonal_m).powi(2),
             voxel_diagonal_m: diagonal_m,
             offsets: [
                 settings.normal_offset_voxels,
