@@ -630,7 +630,7 @@ fn gi_controls(ui: &mut egui::Ui, gi: &mut GiSettings, frames: Option<u32>) {
 /// The VPL method's parameters (Thiedemann 2010, Ch. 7): VPLs per set, pattern, bounces,
 /// d_min, visibility.
 fn vpl_controls(ui: &mut egui::Ui, gi: &mut GiSettings) {
-    use crate::gi::vpl::{VplSettings, VplVisibility};
+    use crate::gi::vpl::{VplSettings, VplShading, VplVisibility};
     let v = &mut gi.vpl;
     ui.add(
         egui::Slider::new(&mut v.per_set, 1..=VplSettings::MAX_PER_SET)
@@ -648,6 +648,13 @@ fn vpl_controls(ui: &mut egui::Ui, gi: &mut GiSettings) {
         VplVisibility::Voxel
     } else {
         VplVisibility::None
+    };
+    let mut splat = v.shading == VplShading::Splat;
+    ui.checkbox(&mut splat, "splat (one pass per VPL)");
+    v.shading = if splat {
+        VplShading::Splat
+    } else {
+        VplShading::Gather
     };
 }
 

@@ -21,6 +21,17 @@ pub enum VplVisibility {
     None,
 }
 
+/// How the frame is shaded with the VPLs (Thiedemann 2010, §7.3).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+pub enum VplShading {
+    /// One pass, every VPL of the pixel's set in a loop.
+    #[default]
+    Gather,
+    /// One pass per VPL of a row, each adding its light to the image (the thesis's additive
+    /// splatting, there with blending).
+    Splat,
+}
+
 /// Parameters of the VPL method.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct VplSettings {
@@ -37,6 +48,7 @@ pub struct VplSettings {
     /// VPL generations: 1 = the lights' direct light reflected once, 2 adds one voxel ray per
     /// VPL (the thesis's maximum), up to [`VplSettings::MAX_BOUNCES`].
     pub bounces: u32,
+    pub shading: VplShading,
 }
 
 impl VplSettings {
@@ -55,9 +67,52 @@ impl Default for VplSettings {
             d_min_voxels: 8.0,
             visibility: VplVisibility::Voxel,
             bounces: 2,
+            shading: VplShading::Gather,
         }
     }
 }
+
+/// VPL settings given by a scene's `[gi]` table or by flags; `None`: not given there
+/// (see [`crate::scene::resolve_gi`] for the precedence).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct VplOverrides {
+    pub per_set: Option<u32>,
+    pub pattern: Option<[u32; 2]>,
+    pub bounces: Option<u32>,
+    pub d_min_voxels: Option<f32>,
+    pub visibility: Option<VplVisibility>,
+}
+
+impl VplOverrides {
+    /// Field by field: `self`'s value where given, else `fallback`'s.
+    pub fn or(self, fallback: VplOverrides) -> VplOverrides {
+        VplOverrides {
+            per_set: self.per_set.or(fallback.per_set),
+            pattern: self.pattern.or(fallback.pattern),
+            bounces: self.bounces.or(fallback.bounces),
+            d_min_voxels: self.d_min_voxels.or(fallback.d_min_voxels),
+            visibility: self.visibility.or(fallback.visibility),
+        }
+    }
+
+    /// `base` with the given values replaced.
+    pub fn apply(&self, base: VplSettings) -> VplSettings {
+        VplSettings {
+            per_set: self.per_set.unwrap_or(base.per_set),
+            pattern: self.pattern.unwrap_or(base.pattern),
+            bounces: self.bounces.unwrap_or(base.bounces),
+            d_min_voxels: self.d_min_voxels.unwrap_or(base.d_min_voxels),
+            visibility: self.visibility.unwrap_or(base.visibility),
+            shading: base.shading,
+        }
+    }
+}
+
+/// The names of [`VplVisibility`] in scene files and on the command line.
+pub const VISIBILITY_NAMES: [(&str, VplVisibility); 2] = [
+    ("voxel", VplVisibility::Voxel),
+    ("none", VplVisibility::None),
+];
 
 /// Parses `--vpl-pattern NxM` (e.g. `4x4`).
 pub fn parse_pattern(s: &str) -> Result<[u32; 2], String> {
@@ -125,8 +180,10 @@ pub struct GpuVplGatherPush {
     pub trace: [u32; 2],
     pub d_min_m2: f32,
     pub voxel_diagonal_m: f32,
-    /// Normal offset, ray offset k₂, its clamp (voxel diagonals), unused.
-    pub offsets: [f32; 4],
+    /// Normal offset, ray offset k₂, its clamp (voxel diagonals).
+    pub offsets: [f32; 3],
+    /// `gi_vpl_splat`: the row index of the VPL this pass adds.
+    pub splat_vpl: u32,
 }
 
 crate::push_constants!(GpuVplGatherPush {
@@ -136,7 +193,8 @@ crate::push_constants!(GpuVplGatherPush {
     trace,
     d_min_m2,
     voxel_diagonal_m,
-    offsets
+    offsets,
+    splat_vpl
 });
 
 /// The sizes of the VPL buffer: `sets` rows of `bounces × lights × per_set` VPLs.
@@ -175,6 +233,7 @@ pub struct VplPasses {
     layout: VplLayout,
     generate_push: GpuVplGeneratePush,
     gather_push: GpuVplGatherPush,
+    shading: VplShading,
 }
 
 impl VplPasses {
@@ -231,16 +290,20 @@ impl VplPasses {
                 settings.normal_offset_voxels,
                 settings.ray_offset_voxels,
                 settings.ray_offset_max_voxels,
-                0.0,
             ],
+            splat_vpl: 0,
         };
         let generate = ctx.compute_pipeline(
             "gi_vpl_generate.comp",
             PushLayout::of::<GpuVplGeneratePush>(),
             &[],
         )?;
+        let shader = match v.shading {
+            VplShading::Gather => "gi_vpl_gather.comp",
+            VplShading::Splat => "gi_vpl_splat.comp",
+        };
         let gather = ctx.compute_pipeline(
-            "gi_vpl_gather.comp",
+            shader,
             PushLayout::of::<GpuVplGatherPush>(),
             &[(0, u32::from(target.has_phong))],
         )?;
@@ -269,6 +332,7 @@ impl VplPasses {
             layout,
             generate_push,
             gather_push,
+            shading: v.shading,
         })
     }
 
@@ -377,22 +441,44 @@ impl VplPasses {
             (h.div_ceil(m) * m).div_ceil(8),
         );
         let specular = i.specular.unwrap_or(i.albedo);
-        g.add_pass("gi_vpl_gather")
-            .pipeline(&pipe)
-            .bind(0, i.frame, Access::StorageRead(c))
-            .bind_sampled(1, i.normal, s, c)
-            .bind_sampled(2, i.depth, s, c)
-            .bind_sampled(3, i.voxels, s, c)
-            .bind(4, lut, Access::StorageRead(c))
-            .bind(5, vpls, Access::StorageRead(c))
-            .bind(6, irradiance, Access::StorageWrite(c))
-            .bind_sampled(7, specular, s, c)
-            .bind_sampled(8, i.albedo, s, c)
-            .record(move |ctx| {
-                ctx.bind(&pipe);
-                ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
-                ctx.cmd.dispatch(groups.0, groups.1, 1);
-            });
+        // Splatting: one pass per VPL of a row, the first writing, the others adding.
+        let passes = match self.shading {
+            VplShading::Gather => {
+                vec![("gi_vpl_gather".to_string(), push, Access::StorageWrite(c))]
+            }
+            VplShading::Splat => (0..push.pattern[2].max(1))
+                .map(|k| {
+                    let access = if k == 0 {
+                        Access::StorageWrite(c)
+                    } else {
+                        Access::StorageReadWrite(c)
+                    };
+                    let p = GpuVplGatherPush {
+                        splat_vpl: k,
+                        ..push
+                    };
+                    (format!("gi_vpl_splat[{k}]"), p, access)
+                })
+                .collect(),
+        };
+        for (name, push, access) in passes {
+            g.add_pass(&name)
+                .pipeline(&pipe)
+                .bind(0, i.frame, Access::StorageRead(c))
+                .bind_sampled(1, i.normal, s, c)
+                .bind_sampled(2, i.depth, s, c)
+                .bind_sampled(3, i.voxels, s, c)
+                .bind(4, lut, Access::StorageRead(c))
+                .bind(5, vpls, Access::StorageRead(c))
+                .bind(6, irradiance, access)
+                .bind_sampled(7, specular, s, c)
+                .bind_sampled(8, i.albedo, s, c)
+                .record(move |ctx| {
+                    ctx.bind(&pipe);
+                    ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
+                    ctx.cmd.dispatch(groups.0, groups.1, 1);
+                });
+        }
         irradiance
     }
 

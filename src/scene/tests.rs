@@ -659,7 +659,8 @@ fn gi_table_parses_every_key() {
         "{CAMERA}{LIGHT}{CUBE}[gi]\nmethod = \"pathtrace\"\nrays = 8\nbounces = 3\n\
          radius_m = 1.5\nnormal_offset_voxels = 0.5\nray_offset_voxels = 2\n\
          filter_radius = 0\nfilter_passes = 1\nlight_map_resolution = 128\n\
-         accumulate_frames = 64\n"
+         accumulate_frames = 64\nvpls = 4\nvpl_pattern = [2, 3]\nvpl_bounces = 1\n\
+         vpl_d_min_voxels = 2.5\nvpl_visibility = \"none\"\n"
     );
     let s = load_ok(&text, &[]);
     assert_eq!(
@@ -675,6 +676,13 @@ fn gi_table_parses_every_key() {
             filter_passes: Some(1),
             light_map_resolution: Some(128),
             accumulate_frames: Some(64),
+            vpl: crate::gi::vpl::VplOverrides {
+                per_set: Some(4),
+                pattern: Some([2, 3]),
+                bounces: Some(1),
+                d_min_voxels: Some(2.5),
+                visibility: Some(crate::gi::vpl::VplVisibility::None),
+            },
         }
     );
     // Partial tables give only what they name; the rest stays the defaults'.
