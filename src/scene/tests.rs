@@ -720,7 +720,7 @@ fn gi_table_parses_every_key() {
 
 #[test]
 fn gi_unknown_method_names_file_field_and_choices() {
-    let text = format!("{CAMERA}{LIGHT}{CUBE}[gi]\nmethod = \"vpl\"\n");
+    let text = format!("{CAMERA}{LIGHT}{CUBE}[gi]\nmethod = \"photons\"\n");
     let (e, scene) = load_err(&text, &[]);
     assert!(
         matches!(e, SceneError::InvalidValue { ref field, .. } if field == "gi.method"),
@@ -731,10 +731,11 @@ fn gi_unknown_method_names_file_field_and_choices() {
         &scene,
         &[
             "`gi.method`",
-            "\"vpl\"",
+            "\"photons\"",
             "\"none\"",
             "\"hemisphere\"",
             "\"pathtrace\"",
+            "\"vpl\"",
         ],
     );
 }
