@@ -554,3 +554,28 @@ fn vpls_agree_with_hemisphere_sampling_for_every_light_kind() {
         assert!(eh > 0.0 && (ev / eh - 1.0).abs() < 0.06, "{kind}: VPL {ev} vs hemisphere {eh}");
     }
 }
+
+#[test]
+fn the_debug_view_draws_first_and_second_bounce_vpls() {
+    let scene = load_scene_arg(None).expect("the built-in Cornell box");
+    let ctx = common::context();
+    let img = render(
+        &ctx,
+        &scene,
+        vpl(VplSettings {
+            per_set: 2,
+            show: true,
+            ..Default::default()
+        }),
+        64,
+    );
+    // Dots have radiance 100 (yellow 1,1,0: first bounce; cyan 0,1,1: later), far above the
+    // box's own radiance (below 2 everywhere).
+    let count = |color: [f32; 3]| img.data.iter().filter(|p| **p == color).count();
+    let (first, later) = (count([100.0, 100.0, 0.0]), count([0.0, 100.0, 100.0]));
+    println!("dot pixels: {first} first bounce, {later} later");
+    assert!(
+        first > 0 && later > 0,
+        "{first} first-bounce and {later} later dot pixels"
+    );
+}

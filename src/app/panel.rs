@@ -656,6 +656,7 @@ fn vpl_controls(ui: &mut egui::Ui, gi: &mut GiSettings) {
     } else {
         VplShading::Gather
     };
+    ui.checkbox(&mut v.show, "show VPLs");
 }
 
 #[cfg(test)]

@@ -86,6 +86,10 @@ pub struct GiArgs {
     /// (the thesis's splatting).
     #[arg(long, value_enum, default_value_t = crate::gi::vpl::VplShading::Gather)]
     pub vpl_shading: crate::gi::vpl::VplShading,
+    /// `--gi vpl`: debug view, every VPL drawn as a dot over the image (first bounce yellow,
+    /// later ones cyan).
+    #[arg(long)]
+    pub vpl_show: bool,
 }
 
 /// `--vpl-d-min`: a finite number ≥ 0.
@@ -131,6 +135,7 @@ impl GiArgs {
         crate::gi::GiSettings {
             vpl: crate::gi::vpl::VplSettings {
                 shading: self.vpl_shading,
+                show: self.vpl_show,
                 ..s.vpl
             },
             ..s

@@ -393,8 +393,13 @@ impl GiPasses {
                 v.add_attribute_passes(g, a, n);
             }
         };
+        let mut vpls = None;
         let irradiance = match (&self.pathtracer, &self.vpl) {
-            (_, Some(v)) => v.add_passes(g, inp, (lut, self.sampler), attributes),
+            (_, Some(v)) => {
+                let (irradiance, buffer) = v.add_passes(g, inp, (lut, self.sampler), attributes);
+                vpls = Some((v, buffer));
+                irradiance
+            }
             (Some(pt), None) => pt.add_passes(
                 g,
                 inp,
@@ -405,7 +410,11 @@ impl GiPasses {
             ),
             (None, None) => self.add_hemisphere(g, inp, lut),
         };
-        self.add_filter_and_composite(g, inp, irradiance)
+        let total = self.add_filter_and_composite(g, inp, irradiance);
+        if let Some((v, buffer)) = vpls {
+            v.add_points(g, inp, buffer, total, self.sampler);
+        }
+        total
     }
 
     fn add_hemisphere(

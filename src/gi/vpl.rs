@@ -49,6 +49,8 @@ pub struct VplSettings {
     /// VPL (the thesis's maximum), up to [`VplSettings::MAX_BOUNCES`].
     pub bounces: u32,
     pub shading: VplShading,
+    /// Debug view: draw every VPL as a dot over the lit image (`gi_vpl_points`).
+    pub show: bool,
 }
 
 impl VplSettings {
@@ -68,6 +70,7 @@ impl Default for VplSettings {
             visibility: VplVisibility::Voxel,
             bounces: 2,
             shading: VplShading::Gather,
+            show: false,
         }
     }
 }
@@ -104,6 +107,7 @@ impl VplOverrides {
             d_min_voxels: self.d_min_voxels.unwrap_or(base.d_min_voxels),
             visibility: self.visibility.unwrap_or(base.visibility),
             shading: base.shading,
+            show: base.show,
         }
     }
 }
@@ -197,6 +201,16 @@ crate::push_constants!(GpuVplGatherPush {
     splat_vpl
 });
 
+/// Push constants of `gi_vpl_points` (the debug view).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct GpuVplPointsPush {
+    pub count: u32,
+    pub radiance_w: f32,
+}
+
+crate::push_constants!(GpuVplPointsPush { count, radiance_w });
+
 /// The sizes of the VPL buffer: `sets` rows of `bounces × lights × per_set` VPLs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct VplLayout {
@@ -228,6 +242,8 @@ pub struct VplPasses {
     generate: ComputePipeline,
     bounce: Option<ComputePipeline>,
     gather: ComputePipeline,
+    /// The debug view's pipeline, when it is on.
+    points: Option<ComputePipeline>,
     /// Albedo and normal volumes for bounces after the first.
     volumes: Option<TriangleAttributeVolumes>,
     layout: VplLayout,
@@ -307,6 +323,16 @@ impl VplPasses {
             PushLayout::of::<GpuVplGatherPush>(),
             &[(0, u32::from(target.has_phong))],
         )?;
+        let points = v
+            .show
+            .then(|| {
+                ctx.compute_pipeline(
+                    "gi_vpl_points.comp",
+                    PushLayout::of::<GpuVplPointsPush>(),
+                    &[],
+                )
+            })
+            .transpose()?;
         let (bounce, volumes) = if bounces > 1 {
             let p = ctx.compute_pipeline(
                 "gi_vpl_bounce.comp",
@@ -328,6 +354,7 @@ impl VplPasses {
             generate,
             bounce,
             gather,
+            points,
             volumes,
             layout,
             generate_push,
@@ -347,15 +374,16 @@ impl VplPasses {
     }
 
     /// Declares generation, bounces and the interleaved gather; returns the indirect
-    /// irradiance (radiance for Phong pixels), unfiltered. `atlas_attributes` declares the
-    /// atlas voxelizer's part of the attribute volumes.
+    /// irradiance (radiance for Phong pixels), unfiltered, and the VPL buffer (for
+    /// [`VplPasses::add_points`]). `atlas_attributes` declares the atlas voxelizer's part of
+    /// the attribute volumes.
     pub fn add_passes(
         &self,
         g: &mut RenderGraph,
         i: &GiInputs,
         (lut, sampler): (BufferHandle, vk::Sampler),
         atlas_attributes: impl FnOnce(&mut RenderGraph, ImageHandle, ImageHandle),
-    ) -> ImageHandle {
+    ) -> (ImageHandle, BufferHandle) {
         let vpls = g.create_buffer("vpls", self.layout.size_bytes());
         self.add_generate(g, i, vpls, sampler);
         if let (Some(pipe), Some(volumes)) = (self.bounce, &self.volumes) {
@@ -364,7 +392,39 @@ impl VplPasses {
                 self.add_bounce(g, (pipe, b), i, (lut, sampler), (albedo, normal), vpls);
             }
         }
-        self.add_gather(g, i, (lut, sampler), vpls)
+        (self.add_gather(g, i, (lut, sampler), vpls), vpls)
+    }
+
+    /// The debug view, when on: draws the VPLs into `radiance` (the lit image).
+    pub fn add_points(
+        &self,
+        g: &mut RenderGraph,
+        i: &GiInputs,
+        vpls: BufferHandle,
+        radiance: ImageHandle,
+        s: vk::Sampler,
+    ) {
+        let Some(pipe) = self.points else {
+            return;
+        };
+        let count = self.layout.sets * self.layout.row();
+        // Bright enough to saturate any tone map over the Cornell box's radiance (~1).
+        let push = GpuVplPointsPush {
+            count,
+            radiance_w: 100.0,
+        };
+        let c = Shader::Compute;
+        g.add_pass("gi_vpl_points")
+            .pipeline(&pipe)
+            .bind(0, i.frame, Access::StorageRead(c))
+            .bind_sampled(1, i.depth, s, c)
+            .bind(2, vpls, Access::StorageRead(c))
+            .bind(3, radiance, Access::StorageReadWrite(c))
+            .record(move |ctx| {
+                ctx.bind(&pipe);
+                ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
+                ctx.cmd.dispatch(count.div_ceil(64).max(1), 1, 1);
+            });
     }
 
     fn groups_1d(&self) -> u32 {
@@ -485,6 +545,9 @@ impl VplPasses {
     pub fn destroy(self, ctx: &Context) {
         ctx.destroy_compute_pipeline(self.generate);
         ctx.destroy_compute_pipeline(self.gather);
+        if let Some(p) = self.points {
+            ctx.destroy_compute_pipeline(p);
+        }
         if let Some(p) = self.bounce {
             ctx.destroy_compute_pipeline(p);
         }
