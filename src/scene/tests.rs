@@ -782,6 +782,19 @@ fn gi_out_of_range_values_name_the_field() {
             ">= 0",
         ),
         ("ray_offset_voxels = -0.5", "gi.ray_offset_voxels", ">= 0"),
+        (
+            "vpls = 0",
+            "gi.vpls",
+            "VPLs per set and light, an integer in [1, 1024]",
+        ),
+        ("vpl_pattern = [4, 17]", "gi.vpl_pattern[1]", "[1, 16]"),
+        ("vpl_bounces = 9", "gi.vpl_bounces", "[1, 8]"),
+        ("vpl_d_min_voxels = -1", "gi.vpl_d_min_voxels", ">= 0"),
+        (
+            "vpl_visibility = \"rays\"",
+            "gi.vpl_visibility",
+            "\"voxel\" or \"none\"",
+        ),
     ] {
         let text = format!("{CAMERA}{LIGHT}{CUBE}[gi]\n{line}\n");
         let (e, scene) = load_err(&text, &[]);
