@@ -1,7 +1,7 @@
 #version 450
 // Further VPL bounces (Thiedemann 2010, §7.2): from every VPL of bounce b-1 one ray,
 // cosine-distributed around its normal (Halton bases 5, 7, shifted per bounce), through the
-// binary voxel hierarchy; at the hit the albedo and normal come from the attribute volumes
+// binary voxel hierarchy (the Lambert part of a Phong sender's flux); at the hit the albedo and normal come from the attribute volumes
 // congruent with the bits, and the new VPL reflects Phi_b = Phi_(b-1) * rho_hit. Cosine
 // sampling makes this unbiased for a Lambert sender: the flux leaving the sender is Phi_(b-1),
 // and the ray picks where it arrives with probability proportional to that flux. A ray that
@@ -41,7 +41,7 @@ void main() {
     uint b = pc.trace.z;
     GpuVpl src = vpls[vpl_index(set_, b - 1u, light, kk)];
     uint dst = vpl_index(set_, b, light, kk);
-    GpuVpl none = GpuVpl(vec4(0.0), vec4(0.0, 0.0, 1.0, 0.0), vec4(0.0, 0.0, 0.0, float(b)));
+    GpuVpl none = GpuVpl(vec4(0.0), vec4(0.0, 0.0, 1.0, 0.0), vec4(0.0, 0.0, 0.0, float(b)), vec4(0.0), vec4(0.0));
     if (src.position.w == 0.0 || all(equal(src.flux.rgb, vec3(0.0)))) {
         vpls[dst] = none;
         return;
@@ -64,5 +64,6 @@ void main() {
     vec3 hn = texelFetch(normal_volume, v, 0).xyz;
     hn = dot(hn, hn) > 0.25 ? normalize(hn) : -d;
     if (dot(hn, d) > 0.0) hn = -hn;  // the side the ray arrives at
-    vpls[dst] = GpuVpl(vec4(o + d * h.t, 1.0), vec4(hn, 0.0), vec4(src.flux.rgb * albedo, float(b)));
+    // Diffuse senders only: the volumes hold the albedo, not the specular reflectance.
+    vpls[dst] = GpuVpl(vec4(o + d * h.t, 1.0), vec4(hn, 0.0), vec4(src.flux.rgb * albedo, float(b)), vec4(0.0), vec4(0.0));
 }

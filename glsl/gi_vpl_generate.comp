@@ -25,11 +25,13 @@ layout(set = 0, binding = 1) uniform sampler2DArray rlm_radiance;
 layout(set = 0, binding = 2) uniform sampler2DArray rlm_position;
 layout(set = 0, binding = 3) uniform sampler2DArray rlm_normal;
 layout(set = 0, binding = 4, std430) writeonly buffer Vpls { GpuVpl vpls[]; };
+struct GpuMaterial { vec4 albedo; vec4 specular; uvec4 flags; };
+layout(set = 0, binding = 5, std430) readonly buffer Materials { GpuMaterial materials[]; };
 
 #include "shadow.glsl"
 
 GpuVpl invalid_vpl() {
-    return GpuVpl(vec4(0.0), vec4(0.0, 0.0, 1.0, 0.0), vec4(0.0));
+    return GpuVpl(vec4(0.0), vec4(0.0, 0.0, 1.0, 0.0), vec4(0.0), vec4(0.0), vec4(0.0));
 }
 
 // Texel of the light map that shows world point `p` in view `v`; false if outside.
@@ -73,16 +75,29 @@ GpuVpl first_bounce(uint light, uint j) {
     vec3 n = normalize(texelFetch(rlm_normal, ivec3(q, int(v)), 0).xyz);
     vec3 radiance = texelFetch(rlm_radiance, ivec3(q, int(v)), 0).rgb;
     vec3 flux;
+    vec3 incident;  // Phi_in: the light's flux into the sample's solid angle (or area)
+    vec3 wl;        // unit direction to the light
     if (l.info.x == LIGHT_DIRECTIONAL) {
-        float cos_l = dot(n, -l.direction.xyz);
+        wl = -l.direction.xyz;
+        float cos_l = dot(n, wl);
         flux = cos_l > 1e-6 ? radiance * (PI * weight / cos_l) : vec3(0.0);
+        incident = cos_l > 1e-6 ? l.intensity.rgb * weight : vec3(0.0);  // E_perp A / K
     } else {
         vec3 to_light = l.position.xyz - pos.xyz;
         float d2 = dot(to_light, to_light);
-        float cos_l = dot(n, to_light) * inversesqrt(max(d2, 1e-30));
+        wl = to_light * inversesqrt(max(d2, 1e-30));
+        float cos_l = dot(n, wl);
         flux = cos_l > 1e-6 ? radiance * (PI * d2 * weight / cos_l) : vec3(0.0);
+        float falloff = l.info.x == LIGHT_SPOT ? spot_falloff(l, dot(-wl, l.direction.xyz)) : 1.0;
+        incident = cos_l > 1e-6 ? l.intensity.rgb * (falloff * weight) : vec3(0.0);
     }
-    return GpuVpl(vec4(pos.xyz, 1.0), vec4(n, 0.0), vec4(flux, 0.0));
+    // Phong senders (§7.3): the glossy part leaves around the incident light's mirror
+    // direction; the map holds only the diffuse part.
+    GpuMaterial m = materials[max(uint(pos.w + 0.5), 1u) - 1u];
+    bool glossy = m.specular.a > 0.0 && any(greaterThan(m.specular.rgb, vec3(0.0)));
+    vec4 lobe = glossy ? vec4(reflect(-wl, n), m.specular.a) : vec4(0.0);
+    vec4 specular = glossy ? vec4(m.specular.rgb * incident, 0.0) : vec4(0.0);
+    return GpuVpl(vec4(pos.xyz, 1.0), vec4(n, 0.0), vec4(flux, 0.0), lobe, specular);
 }
 
 void main() {

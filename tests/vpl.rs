@@ -90,7 +90,31 @@ material = { albedo = 0.5 }
 
 #[test]
 fn one_vpl_gives_the_closed_form_irradiance() {
-    let scene = scene_from(ONE_VPL_SCENE);
+    one_vpl_against_the_closed_form(None);
+}
+
+#[test]
+fn one_phong_vpl_gives_the_closed_form_irradiance() {
+    // The floor a Phong sender: ρ_s = 0.2, n = 10 (thesis §7.3).
+    one_vpl_against_the_closed_form(Some((0.2, 10.0)));
+}
+
+/// One VPL on the floor (Lambert, or Phong with (ρ_s, n)) lighting the wall.
+fn one_vpl_against_the_closed_form(phong: Option<(f32, f32)>) {
+    let text = match phong {
+        None => ONE_VPL_SCENE.to_string(),
+        Some((rho_s, n)) => ONE_VPL_SCENE.replace(
+            "scale = 4.0\nmaterial = { albedo = 0.8 }",
+            &format!(
+                "scale = 4.0\nmaterial = {{ albedo = 0.8, specular = {rho_s}, shininess = {n} }}"
+            ),
+        ),
+    };
+    assert!(
+        phong.is_none() || text != ONE_VPL_SCENE,
+        "the floor is glossy"
+    );
+    let scene = scene_from(&text);
     let ctx = common::context();
     let size = 96;
     let d_min_voxels = 20.0;
@@ -140,10 +164,19 @@ fn one_vpl_gives_the_closed_form_irradiance() {
             let cos_p = wall_n.dot(w);
             let cos_v = -Vec3::Y.dot(w);
             // E = I_max cos θ_VPL cos θ_P / (d_min + d²), I_max = Φ / π; L = ρ_wall / π E.
-            let e = flux / std::f32::consts::PI * cos_v * cos_p / (d_min_m2 + d2);
+            // A Phong sender adds ρ_s Φ_in (n+2)/(2π) cos^n α cos θ_VPL, α from the mirror
+            // direction of the incident light (Φ_in = I Ω).
+            let lobe = phong.map_or(0.0, |(rho_s, n)| {
+                let mirror = Vec3::new(dir.x, -dir.y, dir.z);
+                let cos_a = mirror.dot(-w).max(0.0);
+                rho_s * 1000.0 * omega * (n + 2.0) / (2.0 * std::f32::consts::PI)
+                    * cos_a.powf(n)
+                    * cos_v
+            });
+            let e = (flux / std::f32::consts::PI * cos_v + lobe) * cos_p / (d_min_m2 + d2);
             let expected = 0.5 / std::f32::consts::PI * e;
             let got = img.data[(y * size + x) as usize];
-            println!("{visibility:?} ({x}, {y}): {got:?} vs {expected}");
+            println!("{phong:?} {visibility:?} ({x}, {y}): {got:?} vs {expected}");
             for c in got {
                 let rel = (c - expected).abs() / expected;
                 assert!(

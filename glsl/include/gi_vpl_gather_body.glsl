@@ -11,7 +11,8 @@
 // ceil(W / N) x ceil(H / M); invocations past the frame's edge (sizes that are not a multiple
 // of the pattern) do nothing. The geometry-aware filter then removes the pattern.
 //
-// Each valid VPL is a cosine emitter of I(w) = I_max cos theta_VPL, I_max = Phi_VPL / pi, and
+// Each valid VPL is a cosine emitter of I(w) = I_max cos theta_VPL, I_max = Phi_VPL / pi (Phong
+// senders add their lobe, vpl_intensity in vpl.glsl), and
 // gives a receiver point E = I_max cos theta_VPL cos theta_P / (d_min + d^2) (§7.3), times
 // the visibility of the segment from the voxel ray test (offsets at both ends, §5.3.1), or 1
 // without visibility. Lambert pixels store E; Phong pixels their indirect radiance,
@@ -124,8 +125,8 @@ void main() {
         float cos_v = -dot(vpl.normal.xyz, dir);
         if (cos_p <= 0.0 || cos_v <= 0.0) continue;
         if (pc.pattern.w != 0u && !segment_visible(p, n, vpl.position.xyz, vpl.normal.xyz, dir, cos_p, cos_v)) continue;
-        // I cos theta_P / (d_min + d^2) with I = I_max cos theta_VPL.
-        vec3 arriving = vpl.flux.rgb * (cos_v / PI) * cos_p / (pc.d_min_m2 + d2);
+        // I cos theta_P / (d_min + d^2) with I = I_max cos theta_VPL (plus a Phong sender's lobe).
+        vec3 arriving = vpl_intensity(vpl, -dir) * cos_p / (pc.d_min_m2 + d2);
         e += arriving;
         if (phong) lobe += brdf_phong(specular, ns.w, n, dir, to_eye) * arriving;
     }

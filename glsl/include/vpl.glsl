@@ -11,8 +11,23 @@
 struct GpuVpl {
     vec4 position;  // xyz world position (m); w 1 valid, 0 invalid (the sample hit nothing)
     vec4 normal;    // xyz unit normal of the sending surface, facing where it sends light
-    vec4 flux;      // rgb reflected flux Phi_VPL (W); w the bounce (0: first)
+    vec4 flux;      // rgb diffusely reflected flux Phi_VPL (W); w the bounce (0: first)
+    vec4 lobe;      // Phong senders: xyz the mirror direction of the incident light, w shininess
+    vec4 specular;  // Phong senders: rgb rho_s * Phi_in (W), Phi_in the incident flux; 0 else
 };
+
+// Intensity of a VPL toward unit direction `w` leaving it (W/sr): the Lambert part
+// Phi / pi cos theta plus, for Phong senders, rho_s Phi_in (n + 2) / (2 pi) cos^n(alpha) cos theta
+// (normalized Phong, alpha the angle between w and the mirror direction; thesis §7.3).
+vec3 vpl_intensity(GpuVpl v, vec3 w) {
+    float c = max(dot(v.normal.xyz, w), 0.0);
+    vec3 i = v.flux.rgb * (c / 3.14159265358979323846);
+    if (v.lobe.w > 0.0) {
+        float ca = max(dot(v.lobe.xyz, w), 0.0);
+        i += v.specular.rgb * ((v.lobe.w + 2.0) / (2.0 * 3.14159265358979323846) * pow(ca, v.lobe.w) * c);
+    }
+    return i;
+}
 
 // Mirrors `GpuVplGeneratePush` in src/gi/vpl.rs.
 #ifdef VPL_GENERATE_PUSH

@@ -145,8 +145,12 @@ pub struct GpuVpl {
     pub position: [f32; 4],
     /// xyz unit normal of the sender.
     pub normal: [f32; 4],
-    /// rgb flux Φ_VPL (W); w the bounce.
+    /// rgb diffusely reflected flux Φ_VPL (W); w the bounce.
     pub flux: [f32; 4],
+    /// Phong senders: xyz the incident light's mirror direction, w the shininess.
+    pub lobe: [f32; 4],
+    /// Phong senders: rgb ρ_s Φ_in (W).
+    pub specular: [f32; 4],
 }
 
 /// Push constants of `gi_vpl_generate` and `gi_vpl_bounce` (`glsl/include/vpl.glsl`).
@@ -443,6 +447,7 @@ impl VplPasses {
             .bind_sampled(2, i.rlm_position, s, c)
             .bind_sampled(3, i.rlm_normal, s, c)
             .bind(4, vpls, Access::StorageWrite(c))
+            .bind(5, i.materials, Access::StorageRead(c))
             .record(move |ctx| {
                 ctx.bind(&pipe);
                 ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
@@ -566,7 +571,7 @@ mod tests {
         assert_eq!(std::mem::size_of::<GpuVplGeneratePush>(), 128);
         assert_eq!(std::mem::size_of::<GpuVplGatherPush>(), 128);
         assert_eq!(std::mem::offset_of!(GpuVplGatherPush, d_min_m2), 104);
-        assert_eq!(std::mem::size_of::<GpuVpl>(), 48);
+        assert_eq!(std::mem::size_of::<GpuVpl>(), 80);
     }
 
     #[test]
@@ -589,8 +594,8 @@ mod tests {
         };
         assert_eq!(l.row(), 32);
         assert_eq!(l.per_bounce(), 256);
-        assert_eq!(l.size_bytes(), 16 * 32 * 48);
+        assert_eq!(l.size_bytes(), 16 * 32 * 80);
         let none = VplLayout { lights: 0, ..l };
-        assert_eq!(none.size_bytes(), 48, "never an empty buffer");
+        assert_eq!(none.size_bytes(), 80, "never an empty buffer");
     }
 }
