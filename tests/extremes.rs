@@ -1,7 +1,7 @@
 //! Light intensities at the extremes (light intensities from 1e-6 to 1e6 W/sr
 //! must give no NaN/Inf in any buffer): radiance is linear in the light, so an image rendered with
 //! every light scaled by s, divided by s, must equal the unscaled image, for direct light and for
-//! every indirect-light path (light maps, radiance volume, path tracer). Likewise a scene scaled
+//! every indirect-light path (light maps, radiance volume, path tracer, VPLs). Likewise a scene scaled
 //! from meters to millimeters or kilometers (lights scaled to keep the irradiance) renders the same
 //! image. Validation on.
 
@@ -57,7 +57,7 @@ fn render_per_unit(
 
 /// Direct light and every indirect-light path: the light maps, the radiance volume, the
 /// path tracer.
-fn every_gi_path() -> [(&'static str, GiSettings); 4] {
+fn every_gi_path() -> [(&'static str, GiSettings); 5] {
     [
         ("direct", GiSettings::default()),
         (
@@ -83,6 +83,17 @@ fn every_gi_path() -> [(&'static str, GiSettings); 4] {
                 method: GiMethod::Pathtrace,
                 rays: 2,
                 bounces: voxgi::gi::Bounces::Fixed(2),
+                ..Default::default()
+            },
+        ),
+        (
+            "VPLs, 2 bounces",
+            GiSettings {
+                method: GiMethod::Vpl,
+                vpl: voxgi::gi::vpl::VplSettings {
+                    per_set: 4,
+                    ..Default::default()
+                },
                 ..Default::default()
             },
         ),

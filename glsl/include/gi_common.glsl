@@ -5,7 +5,9 @@
 #define PI 3.14159265358979323846
 
 // Mirrors `GpuGiPush` in src/gi/gi_common.rs (checked against this block by name, offset and
-// size when a pipeline is created).
+// size when a pipeline is created). Passes with their own push block (the VPL passes) define
+// GI_OWN_PUSH before including this file.
+#ifndef GI_OWN_PUSH
 layout(push_constant) uniform GiPush {
     mat4 world_to_voxel;
     ivec3 dims;                  // voxels x, y, depth
@@ -23,6 +25,7 @@ layout(push_constant) uniform GiPush {
     float ray_offset_voxels;     // self-intersection offset along the ray, k2 (voxel diagonals)
     float ray_offset_max_voxels; // its clamp (voxel diagonals)
 } gi;
+#endif
 
 // Radical inverse in base 2 (Hammersley's second coordinate).
 float radical_inverse(uint i) {

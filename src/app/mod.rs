@@ -269,6 +269,15 @@ fn describe_gi(gi: &GiSettings) -> String {
             "pathtrace, {} rays, {} bounces, filter {}×{}",
             gi.rays, gi.bounces, gi.filter_radius, gi.filter_passes
         ),
+        GiMethod::Vpl => format!(
+            "vpl, {} per set, {}×{} sets, {} bounces, filter {}×{}",
+            gi.vpl.per_set,
+            gi.vpl.pattern[0],
+            gi.vpl.pattern[1],
+            gi.vpl.bounces,
+            gi.filter_radius,
+            gi.filter_passes
+        ),
     }
 }
 

@@ -93,10 +93,11 @@ pub struct PanelInfo<'a> {
     pub gi_frames: Option<u32>,
 }
 
-const GI_METHODS: [(GiMethod, &str); 3] = [
+const GI_METHODS: [(GiMethod, &str); 4] = [
     (GiMethod::None, "none"),
     (GiMethod::Hemisphere, "hemisphere"),
     (GiMethod::Pathtrace, "pathtrace"),
+    (GiMethod::Vpl, "vpl"),
 ];
 
 fn gi_method_name(m: GiMethod) -> &'static str {
@@ -573,11 +574,15 @@ fn gi_controls(ui: &mut egui::Ui, gi: &mut GiSettings, frames: Option<u32>) {
         ui.label("direct light only");
         return;
     }
-    ui.add(
-        egui::Slider::new(&mut gi.rays, 1..=256)
-            .logarithmic(true)
-            .text("rays / pixel"),
-    );
+    if gi.method == GiMethod::Vpl {
+        vpl_controls(ui, gi);
+    } else {
+        ui.add(
+            egui::Slider::new(&mut gi.rays, 1..=256)
+                .logarithmic(true)
+                .text("rays / pixel"),
+        );
+    }
     if gi.method == GiMethod::Pathtrace {
         let mut unbounded = gi.bounces == Bounces::Unbounded;
         ui.checkbox(&mut unbounded, "unbounded (Russian roulette)");
@@ -620,6 +625,38 @@ fn gi_controls(ui: &mut egui::Ui, gi: &mut GiSettings, frames: Option<u32>) {
             None => ui.label("accumulated frames: –"),
         };
     }
+}
+
+/// The VPL method's parameters (Thiedemann 2010, Ch. 7): VPLs per set, pattern, bounces,
+/// d_min, visibility.
+fn vpl_controls(ui: &mut egui::Ui, gi: &mut GiSettings) {
+    use crate::gi::vpl::{VplSettings, VplShading, VplVisibility};
+    let v = &mut gi.vpl;
+    ui.add(
+        egui::Slider::new(&mut v.per_set, 1..=VplSettings::MAX_PER_SET)
+            .logarithmic(true)
+            .text("VPLs / set / light"),
+    );
+    for (side, name) in v.pattern.iter_mut().zip(["pattern N", "pattern M"]) {
+        ui.add(egui::Slider::new(side, 1..=VplSettings::MAX_PATTERN).text(name));
+    }
+    ui.add(egui::Slider::new(&mut v.bounces, 1..=VplSettings::MAX_BOUNCES).text("bounces"));
+    ui.add(egui::Slider::new(&mut v.d_min_voxels, 0.0..=64.0).text("d_min (voxel diagonals)"));
+    let mut visible = v.visibility == VplVisibility::Voxel;
+    ui.checkbox(&mut visible, "voxel visibility");
+    v.visibility = if visible {
+        VplVisibility::Voxel
+    } else {
+        VplVisibility::None
+    };
+    let mut splat = v.shading == VplShading::Splat;
+    ui.checkbox(&mut splat, "splat (one pass per VPL)");
+    v.shading = if splat {
+        VplShading::Splat
+    } else {
+        VplShading::Gather
+    };
+    ui.checkbox(&mut v.show, "show VPLs");
 }
 
 #[cfg(test)]

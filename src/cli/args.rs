@@ -60,6 +60,44 @@ pub struct GiArgs {
     /// light_map_resolution`, else 256].
     #[arg(long, value_name = "L")]
     pub light_map_resolution: Option<u32>,
+    /// `--gi vpl`: VPLs per interleaving set and light (thesis §7.2) [default: the scene's
+    /// `[gi] vpls`, else 16].
+    #[arg(long, value_name = "K",
+          value_parser = clap::value_parser!(u32).range(1..=i64::from(crate::gi::vpl::VplSettings::MAX_PER_SET)))]
+    pub vpls: Option<u32>,
+    /// `--gi vpl`: interleaved-sampling pattern NxM, N·M VPL sets (thesis §7.3.2) [default:
+    /// the scene's `[gi] vpl_pattern`, else 4x4].
+    #[arg(long, value_name = "NxM", value_parser = crate::gi::vpl::parse_pattern)]
+    pub vpl_pattern: Option<[u32; 2]>,
+    /// `--gi vpl`: d_min of E = I cos cos / (d_min + d²) (thesis §7.3) as a distance in voxel
+    /// diagonals h: d_min = (D · h)² [default: the scene's `[gi] vpl_d_min_voxels`, else 8].
+    #[arg(long, value_name = "D", value_parser = parse_d_min)]
+    pub vpl_d_min: Option<f32>,
+    /// `--gi vpl`: VPL bounces: 1 reflects the lights' direct light once, 2 adds one voxel
+    /// ray per VPL (thesis §7.2), up to 8 [default: the scene's `[gi] vpl_bounces`, else 2].
+    #[arg(long, value_name = "B",
+          value_parser = clap::value_parser!(u32).range(1..=i64::from(crate::gi::vpl::VplSettings::MAX_BOUNCES)))]
+    pub vpl_bounces: Option<u32>,
+    /// `--gi vpl`: visibility per VPL and pixel: the voxel segment test, or none (v = 1)
+    /// [default: the scene's `[gi] vpl_visibility`, else voxel].
+    #[arg(long, value_enum)]
+    pub vpl_visibility: Option<crate::gi::vpl::VplVisibility>,
+    /// `--gi vpl`: shade by one gather loop per pixel, or by one additive pass per VPL
+    /// (the thesis's splatting).
+    #[arg(long, value_enum, default_value_t = crate::gi::vpl::VplShading::Gather)]
+    pub vpl_shading: crate::gi::vpl::VplShading,
+    /// `--gi vpl`: debug view, every VPL drawn as a dot over the image (first bounce yellow,
+    /// later ones cyan).
+    #[arg(long)]
+    pub vpl_show: bool,
+}
+
+/// `--vpl-d-min`: a finite number ≥ 0.
+fn parse_d_min(s: &str) -> Result<f32, String> {
+    match s.parse::<f32>() {
+        Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
+        _ => Err("expected a finite number of voxel diagonals >= 0, e.g. 8".into()),
+    }
 }
 
 impl GiArgs {
@@ -76,16 +114,31 @@ impl GiArgs {
             filter_passes: self.gi_filter_passes,
             light_map_resolution: self.light_map_resolution,
             accumulate_frames: self.gi_frames,
+            vpl: crate::gi::vpl::VplOverrides {
+                per_set: self.vpls,
+                pattern: self.vpl_pattern,
+                bounces: self.vpl_bounces,
+                d_min_voxels: self.vpl_d_min,
+                visibility: self.vpl_visibility,
+            },
         }
     }
 
     /// The scene's `[gi]` values, overridden by the flags given.
     pub fn settings(&self, scene: &Scene) -> crate::gi::GiSettings {
-        crate::gi::GiSettings {
+        let s = crate::gi::GiSettings {
             radiance_source: self.gi_radiance,
             start_level: self.gi_start_level,
             max_iterations: self.gi_max_iterations,
             ..resolve_gi(&scene.gi, &self.overrides())
+        };
+        crate::gi::GiSettings {
+            vpl: crate::gi::vpl::VplSettings {
+                shading: self.vpl_shading,
+                show: self.vpl_show,
+                ..s.vpl
+            },
+            ..s
         }
     }
 }
@@ -282,6 +335,16 @@ mod tests {
             "9",
             "--light-map-resolution",
             "128",
+            "--vpls",
+            "5",
+            "--vpl-pattern",
+            "8x2",
+            "--vpl-bounces",
+            "3",
+            "--vpl-d-min",
+            "1.5",
+            "--vpl-visibility",
+            "none",
         ]);
         assert_eq!(
             o,
@@ -296,6 +359,13 @@ mod tests {
                 filter_passes: Some(7),
                 light_map_resolution: Some(128),
                 accumulate_frames: Some(9),
+                vpl: crate::gi::vpl::VplOverrides {
+                    per_set: Some(5),
+                    pattern: Some([8, 2]),
+                    bounces: Some(3),
+                    d_min_voxels: Some(1.5),
+                    visibility: Some(crate::gi::vpl::VplVisibility::None),
+                },
             }
         );
     }

@@ -2,8 +2,8 @@
 //! reflective light maps (Thiedemann 2010 §6.4.1).
 
 use super::gi_common::{add_ray_pass, GiShared, GpuGiPush};
-use super::{GiInputs, GiMethodPasses};
-use crate::graph::{Access, ImageHandle, RenderGraph, Shader};
+use super::{GiInputs, GiMethodPasses, GiOutput};
+use crate::graph::{Access, RenderGraph, Shader};
 use crate::vk::{vk, ComputePipeline, Context, ImageDesc, PushLayout, VkError};
 
 /// The hemisphere pass reading the light maps.
@@ -24,7 +24,7 @@ impl GiHemisphere {
 }
 
 impl GiMethodPasses for GiHemisphere {
-    fn add_passes(&self, g: &mut RenderGraph, i: &GiInputs, shared: &GiShared) -> ImageHandle {
+    fn add_passes(&self, g: &mut RenderGraph, i: &GiInputs, shared: &GiShared) -> GiOutput {
         let irradiance = g.create_image(ImageDesc::new_2d(
             "indirect irradiance",
             vk::Format::R32G32B32A32_SFLOAT,
@@ -43,7 +43,7 @@ impl GiMethodPasses for GiHemisphere {
             Some(i.materials),
             move || push,
         );
-        irradiance
+        irradiance.into()
     }
 
     fn destroy(self: Box<Self>, ctx: &Context) {

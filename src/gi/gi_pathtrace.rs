@@ -3,8 +3,8 @@
 //! history image (Thiedemann 2010 §6.4.2).
 
 use super::gi_common::{add_ray_pass, GiShared, GpuGiPush};
-use super::{GiInputs, GiMethodPasses, GiTarget};
-use crate::graph::{Access, ImageHandle, RenderGraph, Shader};
+use super::{GiInputs, GiMethodPasses, GiOutput, GiTarget};
+use crate::graph::{Access, RenderGraph, Shader};
 use crate::vk::{vk, ComputePipeline, Context, Image, ImageDesc, PushLayout, VkError};
 use std::sync::atomic::Ordering;
 
@@ -39,11 +39,11 @@ impl GiPathtrace {
 }
 
 impl GiMethodPasses for GiPathtrace {
-    fn add_passes(&self, g: &mut RenderGraph, i: &GiInputs, shared: &GiShared) -> ImageHandle {
+    fn add_passes(&self, g: &mut RenderGraph, i: &GiInputs, shared: &GiShared) -> GiOutput {
         let history = g.import_image(&self.history, Access::Sampled(Shader::Compute));
         // The assembly writes the volumes for the methods that need them (this one does).
         let Some((albedo, normal)) = shared.attributes else {
-            return history;
+            return history.into();
         };
         let push = shared.push;
         let frames = shared.frames.clone();
@@ -62,7 +62,7 @@ impl GiMethodPasses for GiPathtrace {
                 ..push
             },
         );
-        history
+        history.into()
     }
 
     fn destroy(self: Box<Self>, ctx: &Context) {

@@ -4,8 +4,8 @@
 //! maps, the second samples the hemisphere against it.
 
 use super::gi_common::{add_ray_pass, GiShared, GpuGiPush};
-use super::{GiInputs, GiMethodPasses, GiTarget};
-use crate::graph::{Access, ImageHandle, RenderGraph, Shader};
+use super::{GiInputs, GiMethodPasses, GiOutput, GiTarget};
+use crate::graph::{Access, RenderGraph, Shader};
 use crate::vk::{vk, ComputePipeline, Context, Image, ImageDesc, PushLayout, VkError};
 
 /// The direct-radiance volume (rgba32f, congruent with the bits) and its passes. f32 because
@@ -57,12 +57,12 @@ impl GiRadianceVolume {
 }
 
 impl GiMethodPasses for GiRadianceVolume {
-    fn add_passes(&self, g: &mut RenderGraph, i: &GiInputs, shared: &GiShared) -> ImageHandle {
+    fn add_passes(&self, g: &mut RenderGraph, i: &GiInputs, shared: &GiShared) -> GiOutput {
         let c = Shader::Compute;
         let volume = g.import_image(&self.image, Access::Sampled(c));
         // The assembly writes the volumes for the methods that need them (this one does).
         let Some((albedo, normal)) = shared.attributes else {
-            return volume;
+            return volume.into();
         };
         let pipe = self.volume_pipeline;
         let push = shared.push;
@@ -107,7 +107,7 @@ impl GiMethodPasses for GiRadianceVolume {
             None,
             move || push,
         );
-        irradiance
+        irradiance.into()
     }
 
     fn destroy(self: Box<Self>, ctx: &Context) {

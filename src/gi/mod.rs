@@ -12,6 +12,7 @@ mod gi_filter;
 mod gi_hemisphere;
 mod gi_pathtrace;
 mod gi_radiance_volume;
+pub mod vpl;
 
 pub use crate::scene::{Bounces, GiMethod, GiSettings, RadianceSource};
 pub use gi_common::GpuGiPush;
@@ -74,9 +75,30 @@ pub struct GiTarget<'a> {
 /// One GI method's indirect-light passes: what a method module implements.
 trait GiMethodPasses {
     /// Declares the method's passes; returns the image the filter and the composite read
-    /// (irradiance at Lambert pixels, indirect radiance at Phong pixels).
-    fn add_passes(&self, g: &mut RenderGraph, inp: &GiInputs, shared: &GiShared) -> ImageHandle;
+    /// (irradiance at Lambert pixels, indirect radiance at Phong pixels), and what the method
+    /// draws over the composite, if anything.
+    fn add_passes(&self, g: &mut RenderGraph, inp: &GiInputs, shared: &GiShared) -> GiOutput;
     fn destroy(self: Box<Self>, ctx: &Context);
+}
+
+/// What a GI method's passes produce.
+struct GiOutput {
+    /// The unfiltered indirect light.
+    indirect: ImageHandle,
+    /// Declares a debug view drawn into the lit image (direct + filtered indirect) after the
+    /// composite, e.g. the VPLs as dots.
+    overlay: Option<Overlay>,
+}
+
+type Overlay = Box<dyn FnOnce(&mut RenderGraph, ImageHandle)>;
+
+impl From<ImageHandle> for GiOutput {
+    fn from(indirect: ImageHandle) -> Self {
+        Self {
+            indirect,
+            overlay: None,
+        }
+    }
 }
 
 /// Pipelines and constant data of the GI passes.
@@ -103,6 +125,7 @@ impl GiPasses {
     ) -> Result<Self, VkError> {
         let method: Box<dyn GiMethodPasses> = match settings.method {
             GiMethod::Pathtrace => Box::new(GiPathtrace::new(ctx, target)?),
+            GiMethod::Vpl => Box::new(vpl::VplPasses::new(ctx, &settings, target)?),
             GiMethod::Hemisphere if settings.radiance_source == RadianceSource::Volume => {
                 Box::new(GiRadianceVolume::new(ctx, target)?)
             }
@@ -165,9 +188,13 @@ impl GiPasses {
 
     /// Whether the chosen method reads the albedo and normal volumes.
     pub fn needs_attribute_volumes(settings: &GiSettings) -> bool {
-        settings.method == GiMethod::Pathtrace
-            || (settings.method == GiMethod::Hemisphere
-                && settings.radiance_source == RadianceSource::Volume)
+        match settings.method {
+            GiMethod::Pathtrace => true,
+            GiMethod::Hemisphere => settings.radiance_source == RadianceSource::Volume,
+            // Bounces after the first read albedo and normal at their voxel hits.
+            GiMethod::Vpl => settings.vpl.bounces > 1,
+            GiMethod::None => false,
+        }
     }
 
     /// Declares the indirect-light, filter and composite passes; returns the total radiance.
@@ -196,7 +223,7 @@ impl GiPasses {
             first_frame: self.accumulation.first_frame.clone(),
             attributes,
         };
-        let indirect = self.method.add_passes(g, inp, &shared);
+        let GiOutput { indirect, overlay } = self.method.add_passes(g, inp, &shared);
         let s = &self.settings;
         let filtered = self.filter.add_passes(
             g,
@@ -205,7 +232,11 @@ impl GiPasses {
             (s.filter_radius, s.filter_passes),
             indirect,
         );
-        self.composite.add_pass(g, inp, self.sampler, filtered)
+        let total = self.composite.add_pass(g, inp, self.sampler, filtered);
+        if let Some(overlay) = overlay {
+            overlay(g, total);
+        }
+        total
     }
 
     pub fn destroy(self, ctx: &Context) {

@@ -59,6 +59,11 @@ pub(crate) struct GiDesc {
     pub filter_passes: Option<i64>,
     pub light_map_resolution: Option<i64>,
     pub accumulate_frames: Option<i64>,
+    pub vpls: Option<i64>,
+    pub vpl_pattern: Option<[i64; 2]>,
+    pub vpl_bounces: Option<i64>,
+    pub vpl_d_min_voxels: Option<f32>,
+    pub vpl_visibility: Option<String>,
 }
 
 #[derive(Clone, Debug, Deserialize)]
@@ -393,7 +398,8 @@ fn build_gi(ck: &Check<'_>, g: &GiDesc) -> Result<GiOverrides, SceneError> {
                         "gi.method",
                         format!(
                             "unknown method \"{name}\"; expected \"none\" (direct light only), \
-                             \"hemisphere\" (one bounce) or \"pathtrace\" (multi-bounce)"
+                             \"hemisphere\" (one bounce), \"pathtrace\" (multi-bounce) or \"vpl\" (virtual \
+                             point lights)"
                         ),
                     )
                 })?,
@@ -473,6 +479,70 @@ fn build_gi(ck: &Check<'_>, g: &GiDesc) -> Result<GiOverrides, SceneError> {
             1 << 20,
             "frames to accumulate",
         )?,
+        vpl: build_vpl(ck, g, &count, &length)?,
+    })
+}
+
+type CountCheck<'a> =
+    dyn Fn(&str, Option<i64>, i64, i64, &str) -> Result<Option<u32>, SceneError> + 'a;
+type LengthCheck<'a> =
+    dyn Fn(&str, Option<f32>, bool, &str) -> Result<Option<f32>, SceneError> + 'a;
+
+/// The `[gi]` table's VPL keys (`vpls`, `vpl_pattern`, `vpl_bounces`, `vpl_d_min_voxels`,
+/// `vpl_visibility`).
+fn build_vpl(
+    ck: &Check<'_>,
+    g: &GiDesc,
+    count: &CountCheck<'_>,
+    length: &LengthCheck<'_>,
+) -> Result<crate::scene::vpl_settings::VplOverrides, SceneError> {
+    use crate::scene::vpl_settings::{VplSettings, VISIBILITY_NAMES};
+    let side = i64::from(VplSettings::MAX_PATTERN);
+    let pattern = match g.vpl_pattern {
+        None => None,
+        Some([n, m]) => Some([
+            count("vpl_pattern[0]", Some(n), 1, side, "a pattern width")?.unwrap_or(1),
+            count("vpl_pattern[1]", Some(m), 1, side, "a pattern height")?.unwrap_or(1),
+        ]),
+    };
+    let visibility = match &g.vpl_visibility {
+        None => None,
+        Some(name) => Some(
+            VISIBILITY_NAMES
+                .iter()
+                .find(|(n, _)| *n == name.as_str())
+                .map(|&(_, v)| v)
+                .ok_or_else(|| {
+                    ck.invalid(
+                        "gi.vpl_visibility",
+                        format!("unknown visibility \"{name}\"; expected \"voxel\" or \"none\""),
+                    )
+                })?,
+        ),
+    };
+    Ok(crate::scene::vpl_settings::VplOverrides {
+        per_set: count(
+            "vpls",
+            g.vpls,
+            1,
+            i64::from(VplSettings::MAX_PER_SET),
+            "VPLs per set and light",
+        )?,
+        pattern,
+        bounces: count(
+            "vpl_bounces",
+            g.vpl_bounces,
+            1,
+            i64::from(VplSettings::MAX_BOUNCES),
+            "VPL bounces",
+        )?,
+        d_min_voxels: length(
+            "vpl_d_min_voxels",
+            g.vpl_d_min_voxels,
+            false,
+            "d_min in voxel diagonals",
+        )?,
+        visibility,
     })
 }
 

@@ -21,6 +21,8 @@ pub struct GiOverrides {
     pub light_map_resolution: Option<u32>,
     /// Frames a headless path-tracer render accumulates.
     pub accumulate_frames: Option<u32>,
+    /// The VPL method's parameters.
+    pub vpl: crate::scene::vpl_settings::VplOverrides,
 }
 
 impl GiOverrides {
@@ -42,6 +44,7 @@ impl GiOverrides {
             filter_passes: self.filter_passes.or(fallback.filter_passes),
             light_map_resolution: self.light_map_resolution.or(fallback.light_map_resolution),
             accumulate_frames: self.accumulate_frames.or(fallback.accumulate_frames),
+            vpl: self.vpl.or(fallback.vpl),
         }
     }
 
@@ -62,6 +65,7 @@ impl GiOverrides {
                 .light_map_resolution
                 .unwrap_or(base.light_map_resolution),
             accumulate_frames: self.accumulate_frames.unwrap_or(base.accumulate_frames),
+            vpl: self.vpl.apply(base.vpl),
             ..base
         }
     }
@@ -86,10 +90,11 @@ pub(crate) fn bounces_from_toml(v: &toml::Value) -> Result<Bounces, String> {
 }
 
 /// The names a scene file may give `method`, and their methods.
-pub(crate) const GI_METHOD_NAMES: [(&str, GiMethod); 3] = [
+pub(crate) const GI_METHOD_NAMES: [(&str, GiMethod); 4] = [
     ("none", GiMethod::None),
     ("hemisphere", GiMethod::Hemisphere),
     ("pathtrace", GiMethod::Pathtrace),
+    ("vpl", GiMethod::Vpl),
 ];
 
 #[cfg(test)]
@@ -163,6 +168,13 @@ mod tests {
             filter_passes: Some(9),
             light_map_resolution: Some(64),
             accumulate_frames: Some(11),
+            vpl: crate::scene::vpl_settings::VplOverrides {
+                per_set: Some(3),
+                pattern: Some([2, 5]),
+                bounces: Some(1),
+                d_min_voxels: Some(0.5),
+                visibility: Some(crate::scene::vpl_settings::VplVisibility::None),
+            },
         };
         assert!(!all.is_empty() && GiOverrides::default().is_empty());
         assert_eq!(GiOverrides::default().or(all), all);
@@ -179,6 +191,13 @@ mod tests {
             filter_passes: Some(s.filter_passes),
             light_map_resolution: Some(s.light_map_resolution),
             accumulate_frames: Some(s.accumulate_frames),
+            vpl: crate::scene::vpl_settings::VplOverrides {
+                per_set: Some(s.vpl.per_set),
+                pattern: Some(s.vpl.pattern),
+                bounces: Some(s.vpl.bounces),
+                d_min_voxels: Some(s.vpl.d_min_voxels),
+                visibility: Some(s.vpl.visibility),
+            },
         };
         assert_eq!(back, all);
     }

@@ -14,6 +14,9 @@ pub enum GiMethod {
     /// B bounces with albedo and normal from voxel volumes and direct light at every hit from
     /// the shadow maps, accumulated over frames (Thiedemann 2010 §6.4.2).
     Pathtrace,
+    /// Virtual point lights from the reflective light maps, B bounces, interleaved sampling
+    /// with voxel visibility and the geometry-aware filter (Thiedemann 2010 Ch. 7).
+    Vpl,
 }
 
 /// Parameters of the indirect-light passes (all exposed on the command line).
@@ -48,6 +51,8 @@ pub struct GiSettings {
     pub accumulate_frames: u32,
     /// Where the hemisphere method reads the radiance at ray hits.
     pub radiance_source: RadianceSource,
+    /// The VPL method's parameters.
+    pub vpl: super::VplSettings,
 }
 
 /// How long the path tracer's paths are.
@@ -141,6 +146,7 @@ impl Default for GiSettings {
             bounces: Bounces::Fixed(2),
             accumulate_frames: 1,
             radiance_source: RadianceSource::Maps,
+            vpl: super::VplSettings::default(),
         }
     }
 }

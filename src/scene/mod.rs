@@ -72,7 +72,7 @@
 //!
 //! [gi]       # optional: the scene's indirect-light defaults; every key optional (default
 //!            #   in brackets); command-line flags (`--gi`, `--gi-rays`, …) override them
-//! method = "pathtrace"              # "none" | "hemisphere" | "pathtrace" ["none"]
+//! method = "pathtrace"              # "none" | "hemisphere" | "pathtrace" | "vpl" ["none"]
 //! rays = 16                         # rays per pixel, 1..=4096 [16]
 //! bounces = 2                       # path-tracer bounces, 1..=64, or "unbounded": 3 bounces,
 //!                                   #   then Russian roulette (unbiased; capped at 64) [2]
@@ -83,6 +83,11 @@
 //! filter_passes = 2                 # filter passes (horizontal + vertical), 0..=16 [2]
 //! light_map_resolution = 256        # reflective light-map texels per side, 16..=8192 [256]
 //! accumulate_frames = 1             # frames a headless path-tracer render accumulates [1]
+//! vpls = 16                         # VPLs per interleaving set and light, 1..=1024 [16]
+//! vpl_pattern = [4, 4]              # interleaving pattern N x M, each 1..=16 [[4, 4]]
+//! vpl_bounces = 2                   # VPL bounces, 1..=8 [2]
+//! vpl_d_min_voxels = 8.0            # d_min of the VPL falloff, voxel diagonals >= 0 [8]
+//! vpl_visibility = "voxel"          # "voxel" (segment test) | "none" ["voxel"]
 //! ```
 //!
 //! A missing texture (or MTL file) is not an error: it is logged with `log::warn!` and the
@@ -107,6 +112,7 @@ mod mesh;
 mod obj;
 mod object;
 mod query;
+pub mod vpl_settings;
 
 use std::path::{Path, PathBuf};
 
@@ -121,6 +127,7 @@ pub use material::{BumpKind, Material, TextureData};
 pub use mesh::{area_weighted_normals, Aabb, Mesh, SubMesh, BUILTIN_MESH_NAMES};
 pub use object::{rotation_from_euler_xyz_deg, Animation, Keyframe, Object, Transform};
 pub use query::NoSuchObject;
+pub use vpl_settings::{VplOverrides, VplSettings, VplShading, VplVisibility};
 
 /// A loaded, validated scene: everything finite, directions unit length, indices in range.
 #[derive(Clone, Debug)]

@@ -659,7 +659,8 @@ fn gi_table_parses_every_key() {
         "{CAMERA}{LIGHT}{CUBE}[gi]\nmethod = \"pathtrace\"\nrays = 8\nbounces = 3\n\
          radius_m = 1.5\nnormal_offset_voxels = 0.5\nray_offset_voxels = 2\n\
          filter_radius = 0\nfilter_passes = 1\nlight_map_resolution = 128\n\
-         accumulate_frames = 64\n"
+         accumulate_frames = 64\nvpls = 4\nvpl_pattern = [2, 3]\nvpl_bounces = 1\n\
+         vpl_d_min_voxels = 2.5\nvpl_visibility = \"none\"\n"
     );
     let s = load_ok(&text, &[]);
     assert_eq!(
@@ -675,6 +676,13 @@ fn gi_table_parses_every_key() {
             filter_passes: Some(1),
             light_map_resolution: Some(128),
             accumulate_frames: Some(64),
+            vpl: crate::scene::vpl_settings::VplOverrides {
+                per_set: Some(4),
+                pattern: Some([2, 3]),
+                bounces: Some(1),
+                d_min_voxels: Some(2.5),
+                visibility: Some(crate::scene::vpl_settings::VplVisibility::None),
+            },
         }
     );
     // Partial tables give only what they name; the rest stays the defaults'.
@@ -712,7 +720,7 @@ fn gi_table_parses_every_key() {
 
 #[test]
 fn gi_unknown_method_names_file_field_and_choices() {
-    let text = format!("{CAMERA}{LIGHT}{CUBE}[gi]\nmethod = \"vpl\"\n");
+    let text = format!("{CAMERA}{LIGHT}{CUBE}[gi]\nmethod = \"photons\"\n");
     let (e, scene) = load_err(&text, &[]);
     assert!(
         matches!(e, SceneError::InvalidValue { ref field, .. } if field == "gi.method"),
@@ -723,10 +731,11 @@ fn gi_unknown_method_names_file_field_and_choices() {
         &scene,
         &[
             "`gi.method`",
-            "\"vpl\"",
+            "\"photons\"",
             "\"none\"",
             "\"hemisphere\"",
             "\"pathtrace\"",
+            "\"vpl\"",
         ],
     );
 }
@@ -773,6 +782,19 @@ fn gi_out_of_range_values_name_the_field() {
             ">= 0",
         ),
         ("ray_offset_voxels = -0.5", "gi.ray_offset_voxels", ">= 0"),
+        (
+            "vpls = 0",
+            "gi.vpls",
+            "VPLs per set and light, an integer in [1, 1024]",
+        ),
+        ("vpl_pattern = [4, 17]", "gi.vpl_pattern[1]", "[1, 16]"),
+        ("vpl_bounces = 9", "gi.vpl_bounces", "[1, 8]"),
+        ("vpl_d_min_voxels = -1", "gi.vpl_d_min_voxels", ">= 0"),
+        (
+            "vpl_visibility = \"rays\"",
+            "gi.vpl_visibility",
+            "\"voxel\" or \"none\"",
+        ),
     ] {
         let text = format!("{CAMERA}{LIGHT}{CUBE}[gi]\n{line}\n");
         let (e, scene) = load_err(&text, &[]);

@@ -1,0 +1,139 @@
+// Body of gi_vpl_gather.comp (every VPL of the set in one loop) and gi_vpl_splat.comp
+// (VPL_SPLAT: one pass per VPL index, each adding that VPL to the image, as the thesis's
+// additive splatting; the first pass writes, the others read and add).
+//
+// VPL shading with interleaved sampling (Thiedemann 2010, §7.3, §7.3.2). The frame is split
+// into N x M blocks, block (i, j) holding the pixels (x, y) with x mod N = i, y mod M = j, and
+// each block is shaded with its own VPL set s = j N + i; the inverse split writes each result
+// back to its pixel. Both splits are index maps of this dispatch — invocation (bx, by) of
+// block (i, j) shades pixel (bx N + i, by M + j) — so no G-buffer copy is made, and a
+// workgroup never straddles two blocks: all its invocations read the same VPL row. Blocks are
+// ceil(W / N) x ceil(H / M); invocations past the frame's edge (sizes that are not a multiple
+// of the pattern) do nothing. The geometry-aware filter then removes the pattern.
+//
+// Each valid VPL is a cosine emitter of I(w) = I_max cos theta_VPL, I_max = Phi_VPL / pi (Phong
+// senders add their lobe, vpl_intensity in vpl.glsl), and
+// gives a receiver point E = I_max cos theta_VPL cos theta_P / (d_min + d^2) (§7.3), times
+// the visibility of the segment from the voxel ray test (offsets at both ends, §5.3.1), or 1
+// without visibility. Lambert pixels store E; Phong pixels their indirect radiance,
+// rho / pi E plus the Phong lobe rho_s (n+2)/(2 pi) cos^n(alpha) times I cos theta_P / (d_min + d^2).
+#define GI_OWN_PUSH
+#include "frame.glsl"
+#include "gi_common.glsl"
+#include "brdf.glsl"
+#include "vpl.glsl"
+
+layout(constant_id = 0) const bool HAS_PHONG = false;
+
+layout(local_size_x = 8, local_size_y = 8) in;
+layout(set = 0, binding = 0, std430) readonly buffer FrameBuf { GpuFrame frame; };
+layout(set = 0, binding = 1) uniform sampler2D gb_normal;
+layout(set = 0, binding = 2) uniform sampler2D gb_depth;
+layout(set = 0, binding = 3) uniform usampler2DArray voxels;
+layout(set = 0, binding = 4, std430) readonly buffer RayMasks { uvec4 ray_masks[]; };
+layout(set = 0, binding = 5, std430) readonly buffer Vpls { GpuVpl vpls[]; };
+#ifdef VPL_SPLAT
+layout(set = 0, binding = 6, rgba32f) uniform image2D irradiance;
+#else
+layout(set = 0, binding = 6, rgba32f) uniform writeonly image2D irradiance;
+#endif
+layout(set = 0, binding = 7) uniform sampler2D gb_specular;   // albedo when !HAS_PHONG
+layout(set = 0, binding = 8) uniform sampler2D gb_albedo;
+
+// Mirrors `GpuVplGatherPush` in src/gi/vpl.rs (both shaders).
+layout(push_constant) uniform VplGatherPush {
+    mat4 world_to_voxel;
+    ivec4 dims;          // voxels x, y, depth; w max hierarchy level
+    uvec4 pattern;       // x N, y M, z VPLs per row, w visibility (1: voxel test, 0: none)
+    uvec2 trace;         // x start level, y max iterations
+    float d_min_m2;      // d_min of E = I cos cos / (d_min + d^2), m^2
+    float voxel_diagonal_m;
+    vec3 offsets;        // x normal offset, y ray offset k2, z its clamp (voxel diagonals)
+    uint splat_vpl;      // VPL_SPLAT: the index in the row this pass adds
+} pc;
+
+uvec4 vx_column(uint level, int x, int y, uint layer) {
+    return texelFetch(voxels, ivec3(x, y, int(layer)), int(level));
+}
+uvec4 vx_ray_mask(uint a, uint b) { return ray_masks[b * 128u + a]; }
+bool vx_voxel(int x, int y, int k) {
+    uvec4 c = vx_column(0u, x, y, uint(k) / 128u);
+    uint bit = uint(k) % 128u;
+    return ((c[bit / 32u] >> (bit % 32u)) & 1u) != 0u;
+}
+
+#include "voxel_traverse.glsl"
+
+// Whether the segment from receiver p (normal n) to the VPL at q (normal m) is free, both ends
+// moved off their surfaces along the normal by k1 and along the segment by
+// min(k2 h / cos, clamp) (thesis §5.3.1, as the hemisphere rays do at their origin).
+bool segment_visible(vec3 p, vec3 n, vec3 q, vec3 m, vec3 dir, float cos_p, float cos_v) {
+    float h = pc.voxel_diagonal_m;
+    float along_p = min(pc.offsets.y * h / max(cos_p, 1e-4), pc.offsets.z * h);
+    float along_v = min(pc.offsets.y * h / max(cos_v, 1e-4), pc.offsets.z * h);
+    vec3 a = p + n * (pc.offsets.x * h) + dir * along_p;
+    vec3 b = q + m * (pc.offsets.x * h) - dir * along_v;
+    // The offsets passed each other: the two points are closer than the voxels resolve.
+    if (dot(b - a, dir) <= 0.0) return true;
+    vec3 av = (pc.world_to_voxel * vec4(a, 1.0)).xyz;
+    vec3 bv = (pc.world_to_voxel * vec4(b, 1.0)).xyz;
+    return voxel_visible(pc.dims.xyz, uint(pc.dims.w), av, bv, pc.trace.x, pc.trace.y);
+}
+
+void main() {
+    uvec2 pattern = max(pc.pattern.xy, uvec2(1u));
+    ivec2 size = ivec2(frame.counts.zw);
+    uvec2 block = (uvec2(size) + pattern - 1u) / pattern;
+    uvec2 gid = gl_GlobalInvocationID.xy;
+    uvec2 cell = gid / block;     // the block (i, j): which set
+    uvec2 within = gid % block;   // position inside the block
+    if (any(greaterThanEqual(cell, pattern))) return;
+    ivec2 px = ivec2(within * pattern + cell);
+    if (any(greaterThanEqual(px, size))) return;
+    float depth = texelFetch(gb_depth, px, 0).r;
+    if (depth >= 1.0) {
+        imageStore(irradiance, px, vec4(0.0));
+        return;
+    }
+    vec2 uv = (vec2(px) + 0.5) / vec2(size);
+    vec4 wp = frame.inv_view_proj * vec4(uv * 2.0 - 1.0, depth, 1.0);
+    vec3 p = wp.xyz / wp.w;
+    vec4 ns = texelFetch(gb_normal, px, 0);
+    vec3 n = normalize(ns.xyz);
+    vec3 specular = HAS_PHONG ? texelFetch(gb_specular, px, 0).rgb : vec3(0.0);
+    bool phong = HAS_PHONG && is_phong_pixel(specular);
+    vec3 to_eye = normalize(frame.camera_position.xyz - p);
+    uint row = pc.pattern.z;
+    uint first = (cell.y * pattern.x + cell.x) * row;
+    vec3 e = vec3(0.0);
+    vec3 lobe = vec3(0.0);
+#ifdef VPL_SPLAT
+    uint begin = pc.splat_vpl;
+    uint end = min(begin + 1u, row);
+#else
+    uint begin = 0u;
+    uint end = row;
+#endif
+    for (uint i = begin; i < end; ++i) {
+        GpuVpl vpl = vpls[first + i];
+        if (vpl.position.w == 0.0) continue;  // invalid: carries no flux
+        vec3 to_vpl = vpl.position.xyz - p;
+        float d2 = dot(to_vpl, to_vpl);
+        if (d2 <= 0.0) continue;
+        vec3 dir = to_vpl * inversesqrt(d2);
+        float cos_p = dot(n, dir);
+        float cos_v = -dot(vpl.normal.xyz, dir);
+        if (cos_p <= 0.0 || cos_v <= 0.0) continue;
+        if (pc.pattern.w != 0u && !segment_visible(p, n, vpl.position.xyz, vpl.normal.xyz, dir, cos_p, cos_v)) continue;
+        // I cos theta_P / (d_min + d^2) with I = I_max cos theta_VPL (plus a Phong sender's lobe).
+        vec3 arriving = vpl_intensity(vpl, -dir) * cos_p / (pc.d_min_m2 + d2);
+        e += arriving;
+        if (phong) lobe += brdf_phong(specular, ns.w, n, dir, to_eye) * arriving;
+    }
+    vec3 result = e;
+    if (phong) result = texelFetch(gb_albedo, px, 0).rgb / PI * e + lobe;
+#ifdef VPL_SPLAT
+    if (pc.splat_vpl > 0u) result += imageLoad(irradiance, px).rgb;
+#endif
+    imageStore(irradiance, px, vec4(result, 1.0));
+}

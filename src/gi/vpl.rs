@@ -1,0 +1,472 @@
+//! `--gi vpl`: virtual point lights (Thiedemann 2010, Ch. 7). VPLs are generated from the
+//! reflective light maps by a 2D Halton sequence (§7.2, `glsl/gi_vpl_generate.comp`), further
+//! bounces by one voxel ray per VPL with albedo and normal from the attribute volumes
+//! (`glsl/gi_vpl_bounce.comp`), and the frame is shaded with interleaved sampling (§7.3.2): an
+//! N×M pattern of VPL sets, each pixel block with its own set, voxel visibility per VPL–pixel
+//! pair (`glsl/gi_vpl_gather.comp`); the geometry-aware filter then removes the pattern.
+
+pub use crate::scene::vpl_settings::{
+    parse_pattern, VplOverrides, VplSettings, VplShading, VplVisibility, VISIBILITY_NAMES,
+};
+
+use super::gi_common::GiShared;
+use super::{GiInputs, GiMethodPasses, GiOutput, GiSettings, GiTarget, Overlay};
+use crate::graph::{Access, BufferHandle, ImageHandle, RenderGraph, Shader};
+use crate::vk::{vk, ComputePipeline, Context, ImageDesc, PushLayout, VkError};
+use bytemuck::{Pod, Zeroable};
+
+/// One VPL (`GpuVpl` in `glsl/include/vpl.glsl`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct GpuVpl {
+    /// xyz world position (m); w 1 valid, 0 invalid.
+    pub position: [f32; 4],
+    /// xyz unit normal of the sender.
+    pub normal: [f32; 4],
+    /// rgb diffusely reflected flux Φ_VPL (W); w the bounce.
+    pub flux: [f32; 4],
+    /// Phong senders: xyz the incident light's mirror direction, w the shininess.
+    pub lobe: [f32; 4],
+    /// Phong senders: rgb ρ_s Φ_in (W).
+    pub specular: [f32; 4],
+}
+
+/// Push constants of `gi_vpl_generate` and `gi_vpl_bounce` (`glsl/include/vpl.glsl`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct GpuVplGeneratePush {
+    pub world_to_voxel: [f32; 16],
+    /// Voxels x, y, depth; w the top hierarchy level.
+    pub dims: [i32; 4],
+    /// Sets, lights, VPLs per set and light, bounces.
+    pub counts: [u32; 4],
+    /// Start level, max iterations, this pass's bounce, shadow-map resolution.
+    pub trace: [u32; 4],
+    /// Normal offset (voxel diagonals), voxel diagonal (m), ray length (m), unused.
+    pub params: [f32; 4],
+}
+
+crate::push_constants!(GpuVplGeneratePush {
+    world_to_voxel,
+    dims,
+    counts,
+    trace,
+    params
+});
+
+/// Push constants of `gi_vpl_gather`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct GpuVplGatherPush {
+    pub world_to_voxel: [f32; 16],
+    pub dims: [i32; 4],
+    /// N, M, VPLs per row, visibility (1 voxel test, 0 none).
+    pub pattern: [u32; 4],
+    /// Start level, max iterations.
+    pub trace: [u32; 2],
+    pub d_min_m2: f32,
+    pub voxel_diagonal_m: f32,
+    /// Normal offset, ray offset k₂, its clamp (voxel diagonals).
+    pub offsets: [f32; 3],
+    /// `gi_vpl_splat`: the row index of the VPL this pass adds.
+    pub splat_vpl: u32,
+}
+
+crate::push_constants!(GpuVplGatherPush {
+    world_to_voxel,
+    dims,
+    pattern,
+    trace,
+    d_min_m2,
+    voxel_diagonal_m,
+    offsets,
+    splat_vpl
+});
+
+/// Push constants of `gi_vpl_points` (the debug view).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct GpuVplPointsPush {
+    pub count: u32,
+    pub radiance_w: f32,
+}
+
+crate::push_constants!(GpuVplPointsPush { count, radiance_w });
+
+/// The sizes of the VPL buffer: `sets` rows of `bounces × lights × per_set` VPLs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct VplLayout {
+    pub sets: u32,
+    pub lights: u32,
+    pub per_set: u32,
+    pub bounces: u32,
+}
+
+impl VplLayout {
+    /// VPLs in one row (one set).
+    pub fn row(&self) -> u32 {
+        self.bounces * self.lights * self.per_set
+    }
+
+    /// VPLs generated per bounce (one invocation each).
+    pub fn per_bounce(&self) -> u32 {
+        self.sets * self.lights * self.per_set
+    }
+
+    /// The buffer's size in bytes (at least one VPL).
+    pub fn size_bytes(&self) -> u64 {
+        (u64::from(self.sets) * u64::from(self.row())).max(1) * std::mem::size_of::<GpuVpl>() as u64
+    }
+}
+
+/// The VPL method's pipelines and constants.
+pub struct VplPasses {
+    generate: ComputePipeline,
+    bounce: Option<ComputePipeline>,
+    gather: ComputePipeline,
+    /// The debug view's pipeline, when it is on.
+    points: Option<ComputePipeline>,
+    layout: VplLayout,
+    generate_push: GpuVplGeneratePush,
+    gather_push: GpuVplGatherPush,
+    shading: VplShading,
+}
+
+impl VplPasses {
+    pub fn new(
+        ctx: &Context,
+        settings: &GiSettings,
+        target: &GiTarget<'_>,
+    ) -> Result<Self, VkError> {
+        let v = settings.vpl;
+        let grid = target.grid;
+        let ext = grid.extent_voxels();
+        let levels = crate::voxel::bits::mip_count(grid.res_x(), grid.res_y());
+        let dims = [ext.x as i32, ext.y as i32, ext.z as i32, levels as i32 - 1];
+        let world_to_voxel = grid.world_to_voxel_matrix().to_cols_array();
+        let bounces = v.bounces.clamp(1, VplSettings::MAX_BOUNCES);
+        let layout = VplLayout {
+            sets: v.pattern[0].max(1) * v.pattern[1].max(1),
+            lights: target.scene.lights.len() as u32,
+            per_set: v.per_set.max(1),
+            bounces,
+        };
+        let diagonal_m = grid.voxel_diagonal_m();
+        let scene_diagonal_m = target.scene.aabb_at(target.time_s).extent().length();
+        let generate_push = GpuVplGeneratePush {
+            world_to_voxel,
+            dims,
+            counts: [layout.sets, layout.lights, layout.per_set, layout.bounces],
+            trace: [
+                settings.start_level,
+                settings.max_iterations,
+                0,
+                target.shadow_resolution,
+            ],
+            params: [
+                settings.normal_offset_voxels,
+                diagonal_m,
+                settings.radius_m.unwrap_or(scene_diagonal_m),
+                0.0,
+            ],
+        };
+        let gather_push = GpuVplGatherPush {
+            world_to_voxel,
+            dims,
+            pattern: [
+                v.pattern[0].max(1),
+                v.pattern[1].max(1),
+                layout.row(),
+                u32::from(v.visibility == VplVisibility::Voxel),
+            ],
+            trace: [settings.start_level, settings.max_iterations],
+            d_min_m2: (v.d_min_voxels * diagonal_m).powi(2),
+            voxel_diagonal_m: diagonal_m,
+            offsets: [
+                settings.normal_offset_voxels,
+                settings.ray_offset_voxels,
+                settings.ray_offset_max_voxels,
+            ],
+            splat_vpl: 0,
+        };
+        let generate = ctx.compute_pipeline(
+            "gi_vpl_generate.comp",
+            PushLayout::of::<GpuVplGeneratePush>(),
+            &[],
+        )?;
+        let shader = match v.shading {
+            VplShading::Gather => "gi_vpl_gather.comp",
+            VplShading::Splat => "gi_vpl_splat.comp",
+        };
+        let gather = ctx.compute_pipeline(
+            shader,
+            PushLayout::of::<GpuVplGatherPush>(),
+            &[(0, u32::from(target.has_phong))],
+        )?;
+        let points = v
+            .show
+            .then(|| {
+                ctx.compute_pipeline(
+                    "gi_vpl_points.comp",
+                    PushLayout::of::<GpuVplPointsPush>(),
+                    &[],
+                )
+            })
+            .transpose()?;
+        // Bounces after the first read the attribute volumes `GiPasses` keeps for them
+        // (`GiPasses::needs_attribute_volumes`).
+        let bounce = (bounces > 1)
+            .then(|| {
+                ctx.compute_pipeline(
+                    "gi_vpl_bounce.comp",
+                    PushLayout::of::<GpuVplGeneratePush>(),
+                    &[],
+                )
+            })
+            .transpose()?;
+        Ok(Self {
+            generate,
+            bounce,
+            gather,
+            points,
+            layout,
+            generate_push,
+            gather_push,
+            shading: v.shading,
+        })
+    }
+
+    /// The buffer layout (sets, lights, VPLs per set, bounces).
+    pub fn layout(&self) -> VplLayout {
+        self.layout
+    }
+
+    /// Declares generation, bounces and the interleaved gather; returns the indirect
+    /// irradiance (radiance for Phong pixels), unfiltered, and the VPL buffer (for
+    /// [`VplPasses::add_points`]).
+    fn add_vpl_passes(
+        &self,
+        g: &mut RenderGraph,
+        i: &GiInputs,
+        shared: &GiShared,
+    ) -> (ImageHandle, BufferHandle) {
+        let (lut, sampler) = (shared.lut, shared.sampler);
+        let vpls = g.create_buffer("vpls", self.layout.size_bytes());
+        self.add_generate(g, i, vpls, sampler);
+        if let (Some(pipe), Some((albedo, normal))) = (self.bounce, shared.attributes) {
+            for b in 1..self.layout.bounces {
+                self.add_bounce(g, (pipe, b), i, (lut, sampler), (albedo, normal), vpls);
+            }
+        }
+        (self.add_gather(g, i, (lut, sampler), vpls), vpls)
+    }
+
+    fn groups_1d(&self) -> u32 {
+        self.layout.per_bounce().div_ceil(64).max(1)
+    }
+
+    fn add_generate(&self, g: &mut RenderGraph, i: &GiInputs, vpls: BufferHandle, s: vk::Sampler) {
+        let c = Shader::Compute;
+        let pipe = self.generate;
+        let push = self.generate_push;
+        let groups = self.groups_1d();
+        g.add_pass("gi_vpl_generate")
+            .pipeline(&pipe)
+            .bind(0, i.frame, Access::StorageRead(c))
+            .bind_sampled(1, i.rlm_radiance, s, c)
+            .bind_sampled(2, i.rlm_position, s, c)
+            .bind_sampled(3, i.rlm_normal, s, c)
+            .bind(4, vpls, Access::StorageWrite(c))
+            .bind(5, i.materials, Access::StorageRead(c))
+            .record(move |ctx| {
+                ctx.bind(&pipe);
+                ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
+                ctx.cmd.dispatch(groups, 1, 1);
+            });
+    }
+
+    fn add_bounce(
+        &self,
+        g: &mut RenderGraph,
+        (pipe, bounce): (ComputePipeline, u32),
+        i: &GiInputs,
+        (lut, s): (BufferHandle, vk::Sampler),
+        (albedo, normal): (ImageHandle, ImageHandle),
+        vpls: BufferHandle,
+    ) {
+        let c = Shader::Compute;
+        let mut push = self.generate_push;
+        push.trace[2] = bounce;
+        let groups = self.groups_1d();
+        g.add_pass(&format!("gi_vpl_bounce[{bounce}]"))
+            .pipeline(&pipe)
+            .bind_sampled(0, i.voxels, s, c)
+            .bind(1, lut, Access::StorageRead(c))
+            .bind_sampled(2, albedo, s, c)
+            .bind_sampled(3, normal, s, c)
+            .bind(4, vpls, Access::StorageReadWrite(c))
+            .record(move |ctx| {
+                ctx.bind(&pipe);
+                ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
+                ctx.cmd.dispatch(groups, 1, 1);
+            });
+    }
+
+    fn add_gather(
+        &self,
+        g: &mut RenderGraph,
+        i: &GiInputs,
+        (lut, s): (BufferHandle, vk::Sampler),
+        vpls: BufferHandle,
+    ) -> ImageHandle {
+        let (w, h) = (i.width, i.height);
+        let irradiance = g.create_image(ImageDesc::new_2d(
+            "indirect irradiance",
+            vk::Format::R32G32B32A32_SFLOAT,
+            w,
+            h,
+        ));
+        let c = Shader::Compute;
+        let pipe = self.gather;
+        let push = self.gather_push;
+        // The split frame: N×M blocks of ceil(W/N)×ceil(H/M) pixels (gi_vpl_gather.comp).
+        let [n, m] = [push.pattern[0], push.pattern[1]];
+        let groups = (
+            (w.div_ceil(n) * n).div_ceil(8),
+            (h.div_ceil(m) * m).div_ceil(8),
+        );
+        let specular = i.specular.unwrap_or(i.albedo);
+        // Splatting: one pass per VPL of a row, the first writing, the others adding.
+        let passes = match self.shading {
+            VplShading::Gather => {
+                vec![("gi_vpl_gather".to_string(), push, Access::StorageWrite(c))]
+            }
+            VplShading::Splat => (0..push.pattern[2].max(1))
+                .map(|k| {
+                    let access = if k == 0 {
+                        Access::StorageWrite(c)
+                    } else {
+                        Access::StorageReadWrite(c)
+                    };
+                    let p = GpuVplGatherPush {
+                        splat_vpl: k,
+                        ..push
+                    };
+                    (format!("gi_vpl_splat[{k}]"), p, access)
+                })
+                .collect(),
+        };
+        for (name, push, access) in passes {
+            g.add_pass(&name)
+                .pipeline(&pipe)
+                .bind(0, i.frame, Access::StorageRead(c))
+                .bind_sampled(1, i.normal, s, c)
+                .bind_sampled(2, i.depth, s, c)
+                .bind_sampled(3, i.voxels, s, c)
+                .bind(4, lut, Access::StorageRead(c))
+                .bind(5, vpls, Access::StorageRead(c))
+                .bind(6, irradiance, access)
+                .bind_sampled(7, specular, s, c)
+                .bind_sampled(8, i.albedo, s, c)
+                .record(move |ctx| {
+                    ctx.bind(&pipe);
+                    ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
+                    ctx.cmd.dispatch(groups.0, groups.1, 1);
+                });
+        }
+        irradiance
+    }
+}
+
+impl GiMethodPasses for VplPasses {
+    fn add_passes(&self, g: &mut RenderGraph, i: &GiInputs, shared: &GiShared) -> GiOutput {
+        let (indirect, vpls) = self.add_vpl_passes(g, i, shared);
+        // The debug view draws the VPLs over the lit image, after the filter and composite.
+        let overlay = self.points.map(|pipe| {
+            let (layout, i, sampler) = (self.layout, *i, shared.sampler);
+            Box::new(move |g: &mut RenderGraph, lit: ImageHandle| {
+                add_points(g, pipe, layout, &i, vpls, lit, sampler)
+            }) as Overlay
+        });
+        GiOutput { indirect, overlay }
+    }
+
+    fn destroy(self: Box<Self>, ctx: &Context) {
+        ctx.destroy_compute_pipeline(self.generate);
+        ctx.destroy_compute_pipeline(self.gather);
+        if let Some(p) = self.points {
+            ctx.destroy_compute_pipeline(p);
+        }
+        if let Some(p) = self.bounce {
+            ctx.destroy_compute_pipeline(p);
+        }
+    }
+}
+
+/// The debug view (`gi_vpl_points`): draws every VPL as a dot into `radiance` (the lit image).
+fn add_points(
+    g: &mut RenderGraph,
+    pipe: ComputePipeline,
+    layout: VplLayout,
+    i: &GiInputs,
+    vpls: BufferHandle,
+    radiance: ImageHandle,
+    s: vk::Sampler,
+) {
+    let count = layout.sets * layout.row();
+    // Bright enough to saturate any tone map over the Cornell box's radiance (~1).
+    let push = GpuVplPointsPush {
+        count,
+        radiance_w: 100.0,
+    };
+    let c = Shader::Compute;
+    g.add_pass("gi_vpl_points")
+        .pipeline(&pipe)
+        .bind(0, i.frame, Access::StorageRead(c))
+        .bind_sampled(1, i.depth, s, c)
+        .bind(2, vpls, Access::StorageRead(c))
+        .bind(3, radiance, Access::StorageReadWrite(c))
+        .record(move |ctx| {
+            ctx.bind(&pipe);
+            ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
+            ctx.cmd.dispatch(count.div_ceil(64).max(1), 1, 1);
+        });
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn push_constants_fit_and_match_glsl() {
+        assert_eq!(std::mem::size_of::<GpuVplGeneratePush>(), 128);
+        assert_eq!(std::mem::size_of::<GpuVplGatherPush>(), 128);
+        assert_eq!(std::mem::offset_of!(GpuVplGatherPush, d_min_m2), 104);
+        assert_eq!(std::mem::size_of::<GpuVpl>(), 80);
+    }
+
+    #[test]
+    fn pattern_parses_and_rejects() {
+        assert_eq!(parse_pattern("4x4"), Ok([4, 4]));
+        assert_eq!(parse_pattern("8X2"), Ok([8, 2]));
+        for bad in ["4", "0x4", "4x17", "ax4", "", "4x4x4"] {
+            let e = parse_pattern(bad).expect_err(bad);
+            assert!(e.contains("NxM") && e.contains("[1, 16]"), "{bad}: {e}");
+        }
+    }
+
+    #[test]
+    fn buffer_rows_hold_every_bounce_of_every_light() {
+        let l = VplLayout {
+            sets: 16,
+            lights: 2,
+            per_set: 8,
+            bounces: 2,
+        };
+        assert_eq!(l.row(), 32);
+        assert_eq!(l.per_bounce(), 256);
+        assert_eq!(l.size_bytes(), 16 * 32 * 80);
+        let none = VplLayout { lights: 0, ..l };
+        assert_eq!(none.size_bytes(), 80, "never an empty buffer");
+    }
+}

@@ -1,0 +1,128 @@
+//! Parameters of the VPL method (`--gi vpl`, Thiedemann 2010, Ch. 7): plain data, read from
+//! flags, the scene's `[gi]` table and the viewer's panel (the passes are in `gi/vpl.rs`).
+
+/// Visibility of a VPL from a receiver.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+pub enum VplVisibility {
+    /// The voxel segment test with offsets at both ends (thesis §5.3, §7.3).
+    #[default]
+    Voxel,
+    /// Every VPL is visible (v = 1): the cost and the error of visibility, measured.
+    None,
+}
+
+/// How the frame is shaded with the VPLs (Thiedemann 2010, §7.3).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+pub enum VplShading {
+    /// One pass, every VPL of the pixel's set in a loop.
+    #[default]
+    Gather,
+    /// One pass per VPL of a row, each adding its light to the image (the thesis's additive
+    /// splatting, there with blending).
+    Splat,
+}
+
+/// Parameters of the VPL method.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct VplSettings {
+    /// VPLs per interleaving set and light (K).
+    pub per_set: u32,
+    /// Interleaving pattern N×M: N·M sets, each shading one pixel of every N×M tile.
+    pub pattern: [u32; 2],
+    /// d_min of E = I cosθ_VPL cosθ_P / (d_min + d²) (thesis §7.3), which bounds the
+    /// singularity of a VPL next to a receiver, as a distance in voxel diagonals h:
+    /// d_min = (d_min_voxels · h)² m². Relative to the grid, so that a scene renders the same
+    /// in millimeters or kilometers (tests/extremes.rs).
+    pub d_min_voxels: f32,
+    pub visibility: VplVisibility,
+    /// VPL generations: 1 = the lights' direct light reflected once, 2 adds one voxel ray per
+    /// VPL (the thesis's maximum), up to [`VplSettings::MAX_BOUNCES`].
+    pub bounces: u32,
+    pub shading: VplShading,
+    /// Debug view: draw every VPL as a dot over the lit image (`gi_vpl_points`).
+    pub show: bool,
+}
+
+impl VplSettings {
+    /// The most VPLs per set and light, and the largest pattern side.
+    pub const MAX_PER_SET: u32 = 1024;
+    pub const MAX_PATTERN: u32 = 16;
+    /// The most VPL bounces (each adds one ray per VPL and a row segment).
+    pub const MAX_BOUNCES: u32 = 8;
+}
+
+impl Default for VplSettings {
+    fn default() -> Self {
+        Self {
+            per_set: 16,
+            pattern: [4, 4],
+            d_min_voxels: 8.0,
+            visibility: VplVisibility::Voxel,
+            bounces: 2,
+            shading: VplShading::Gather,
+            show: false,
+        }
+    }
+}
+
+/// VPL settings given by a scene's `[gi]` table or by flags; `None`: not given there
+/// (see [`crate::scene::resolve_gi`] for the precedence).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct VplOverrides {
+    pub per_set: Option<u32>,
+    pub pattern: Option<[u32; 2]>,
+    pub bounces: Option<u32>,
+    pub d_min_voxels: Option<f32>,
+    pub visibility: Option<VplVisibility>,
+}
+
+impl VplOverrides {
+    /// Field by field: `self`'s value where given, else `fallback`'s.
+    pub fn or(self, fallback: VplOverrides) -> VplOverrides {
+        VplOverrides {
+            per_set: self.per_set.or(fallback.per_set),
+            pattern: self.pattern.or(fallback.pattern),
+            bounces: self.bounces.or(fallback.bounces),
+            d_min_voxels: self.d_min_voxels.or(fallback.d_min_voxels),
+            visibility: self.visibility.or(fallback.visibility),
+        }
+    }
+
+    /// `base` with the given values replaced.
+    pub fn apply(&self, base: VplSettings) -> VplSettings {
+        VplSettings {
+            per_set: self.per_set.unwrap_or(base.per_set),
+            pattern: self.pattern.unwrap_or(base.pattern),
+            bounces: self.bounces.unwrap_or(base.bounces),
+            d_min_voxels: self.d_min_voxels.unwrap_or(base.d_min_voxels),
+            visibility: self.visibility.unwrap_or(base.visibility),
+            shading: base.shading,
+            show: base.show,
+        }
+    }
+}
+
+/// The names of [`VplVisibility`] in scene files and on the command line.
+pub const VISIBILITY_NAMES: [(&str, VplVisibility); 2] = [
+    ("voxel", VplVisibility::Voxel),
+    ("none", VplVisibility::None),
+];
+
+/// Parses `--vpl-pattern NxM` (e.g. `4x4`).
+pub fn parse_pattern(s: &str) -> Result<[u32; 2], String> {
+    let bad = || {
+        format!(
+            "expected NxM with N and M in [1, {}], e.g. 4x4",
+            VplSettings::MAX_PATTERN
+        )
+    };
+    let (a, b) = s.split_once(['x', 'X']).ok_or_else(bad)?;
+    let n: u32 = a.trim().parse().map_err(|_| bad())?;
+    let m: u32 = b.trim().parse().map_err(|_| bad())?;
+    let ok = |v: u32| (1..=VplSettings::MAX_PATTERN).contains(&v);
+    if ok(n) && ok(m) {
+        Ok([n, m])
+    } else {
+        Err(bad())
+    }
+}
