@@ -6,12 +6,19 @@
 //!   resolution and scene, atlas against triangle voxelizer.
 //! - [`bench_voxelize_atlas`] (`voxgi bench voxelize`): the atlas voxelizer's compute and
 //!   raster bit passes on one scene.
+//! - [`bench_flicker`] (`voxgi bench flicker`): temporal stability of the GI methods along a
+//!   moving light's path, against a converged path tracer.
 //! - [`bench_scenes`], [`dense_scene`], [`tessellated_cube`]: the generated scenes they run on.
 
+mod flicker;
 mod scenes;
 mod traverse;
 mod voxelize;
 
+pub use flicker::{
+    bench_flicker, change_and_flicker, default_methods, scene_at_step, FlickerBenchDesc,
+    FlickerReport, FlickerRow,
+};
 pub use scenes::{bench_scenes, dense_scene, tessellated_cube, DENSE_BUNNIES_PER_AXIS};
 pub use traverse::{
     bench_traverse, gbuffer_points, MethodResult, RadiusResult, TraverseBenchDesc,
@@ -47,4 +54,12 @@ pub enum BenchError {
     Atlas(#[from] AtlasError),
     #[error(transparent)]
     Scene(#[from] SceneError),
+    #[error(transparent)]
+    Render(#[from] crate::render::RenderError),
+    #[error(transparent)]
+    Eval(#[from] crate::eval::EvalError),
+    #[error(
+        "the scene has no point or spot light to move: the flicker benchmark moves the first          one along a circle; add one to the scene"
+    )]
+    NoMovableLight,
 }

@@ -1,11 +1,11 @@
-//! `voxgi bench traverse|voxelize|voxelize-sweep`: the benchmarks of [`crate::bench`].
+//! `voxgi bench traverse|voxelize|voxelize-sweep|flicker`: the benchmarks of [`crate::bench`].
 
 use super::{check_validation, context, out, outln, CliError, Global};
 use crate::bench::{
-    bench_traverse, bench_voxelize_atlas, bench_voxelize_sweep, TraverseBenchDesc,
-    VoxelizeBenchDesc, VoxelizeSweepDesc,
+    bench_flicker, bench_traverse, bench_voxelize_atlas, bench_voxelize_sweep, FlickerBenchDesc,
+    TraverseBenchDesc, VoxelizeBenchDesc, VoxelizeSweepDesc,
 };
-use crate::scene::load_scene_arg;
+use crate::scene::{load_scene_arg, DEFAULT_SCENE};
 use crate::voxel::TraversalParams;
 use serde::Serialize;
 use std::io::Write;
@@ -49,6 +49,25 @@ pub enum BenchCommand {
         #[arg(long, default_value_t = 1024)]
         max_iterations: u32,
         /// Print JSON instead of tables.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Temporal stability: the first point or spot light moves along a circle; every method
+    /// renders each step and its frame-to-frame change is compared with a converged path
+    /// tracer's along the same path (flicker = the change the reference does not have).
+    Flicker {
+        /// A built-in scene or a TOML scene file. Default: cornell.
+        scene: Option<String>,
+        /// Light positions along the path.
+        #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u32).range(2..=1024))]
+        steps: u32,
+        /// Image width and height in pixels.
+        #[arg(long, default_value_t = 96, value_parser = clap::value_parser!(u32).range(8..=4096))]
+        size: u32,
+        /// Frames the reference path tracer accumulates per step.
+        #[arg(long, default_value_t = 32, value_parser = clap::value_parser!(u32).range(1..=4096))]
+        reference_frames: u32,
+        /// Print JSON instead of a table.
         #[arg(long)]
         json: bool,
     },
@@ -116,6 +135,26 @@ pub fn bench(global: &Global, command: &BenchCommand, out: &mut dyn Write) -> Re
                 repeats: *repeats,
             };
             let report = bench_voxelize_atlas(&ctx, &scene, &desc)?;
+            print(out, *json, &report, || report.table())?;
+            check_validation(&ctx)
+        }
+        BenchCommand::Flicker {
+            scene,
+            steps,
+            size,
+            reference_frames,
+            json,
+        } => {
+            let name = scene.clone().unwrap_or_else(|| DEFAULT_SCENE.to_owned());
+            let scene = load_scene_arg(scene.as_deref())?;
+            let ctx = context(global)?;
+            let desc = FlickerBenchDesc {
+                steps: *steps,
+                size: *size,
+                reference_frames: *reference_frames,
+                ..Default::default()
+            };
+            let report = bench_flicker(&ctx, &scene, &name, &desc)?;
             print(out, *json, &report, || report.table())?;
             check_validation(&ctx)
         }
