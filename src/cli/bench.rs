@@ -99,7 +99,7 @@ pub fn bench(global: &Global, command: &BenchCommand, out: &mut dyn Write) -> Re
             };
             let report = bench_traverse(&ctx, &scene, &desc)?;
             print(out, *json, &report, || report.table())?;
-            check_validation(&ctx)
+            check_validation(ctx)
         }
         BenchCommand::Voxelize {
             scene,
@@ -117,7 +117,7 @@ pub fn bench(global: &Global, command: &BenchCommand, out: &mut dyn Write) -> Re
             };
             let report = bench_voxelize_atlas(&ctx, &scene, &desc)?;
             print(out, *json, &report, || report.table())?;
-            check_validation(&ctx)
+            check_validation(ctx)
         }
         BenchCommand::VoxelizeSweep {
             resolutions,
@@ -132,7 +132,7 @@ pub fn bench(global: &Global, command: &BenchCommand, out: &mut dyn Write) -> Re
             };
             let report = bench_voxelize_sweep(&ctx, &desc)?;
             print(out, *json, &report, || report.table())?;
-            check_validation(&ctx)
+            check_validation(ctx)
         }
     }
 }

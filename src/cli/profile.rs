@@ -86,7 +86,7 @@ pub fn profile(global: &Global, args: &ProfileArgs, out: &mut dyn Write) -> Resu
     } else {
         out!(out, "{}", report.table());
     }
-    check_validation(&ctx)
+    check_validation(ctx)
 }
 
 /// The demo frame's statistics, measured like a scene's.
@@ -154,5 +154,5 @@ pub fn graph(global: &Global, args: &GraphArgs, out: &mut dyn Write) -> Result<(
         exec.destroy(&ctx);
         renderer.destroy(&ctx);
     }
-    check_validation(&ctx)
+    check_validation(ctx)
 }

@@ -59,5 +59,5 @@ pub fn render(global: &Global, args: &RenderArgs, out: &mut dyn Write) -> Result
         let m = crate::eval::compare(&r, &image.hdr, None)?;
         super::compare::print_metrics(&m, out)?;
     }
-    check_validation(&ctx)
+    check_validation(ctx)
 }

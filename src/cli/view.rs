@@ -114,10 +114,7 @@ pub fn view(global: &Global, args: ViewArgs, out: &mut dyn Write) -> Result<(), 
             report.skipped_minimized
         );
     }
-    match report.validation_messages.len() {
-        0 => Ok(()),
-        count => Err(CliError::Validation { count }),
-    }
+    super::check_teardown(&report.teardown)
 }
 
 #[cfg(test)]
