@@ -3,6 +3,7 @@
 
 use crate::gi::{Bounces, GiMethod, GiSettings};
 use crate::light::ShadowSettings;
+use crate::limits;
 use crate::post::{ToneMap, ToneOperator};
 use crate::vk::PassTiming;
 use crate::voxel::debug_view::DebugView;
@@ -282,9 +283,12 @@ pub fn draw(
                             }
                         });
                     ui.add(
-                        egui::Slider::new(&mut c.tonemap.exposure, 0.001..=1000.0)
-                            .logarithmic(true)
-                            .text("exposure"),
+                        egui::Slider::new(
+                            &mut c.tonemap.exposure,
+                            limits::EXPOSURE.slider(0.001, 1000.0),
+                        )
+                        .logarithmic(true)
+                        .text("exposure"),
                     );
                     ui.add(
                         egui::Slider::new(&mut c.tonemap.white, 0.01..=100.0)
@@ -303,7 +307,13 @@ pub fn draw(
                                 ui.selectable_value(&mut c.shadow.resolution, r, format!("{r}²"));
                             }
                         });
-                    ui.add(egui::Slider::new(&mut c.shadow.pcf_radius, 0..=4).text("PCF radius"));
+                    ui.add(
+                        egui::Slider::new(
+                            &mut c.shadow.pcf_radius,
+                            limits::PCF_RADIUS.slider(0, 4),
+                        )
+                        .text("PCF radius"),
+                    );
                     ui.add(
                         egui::Slider::new(&mut c.shadow.bias_texels, 0.0..=8.0).text("bias texels"),
                     );
@@ -574,7 +584,7 @@ fn gi_controls(ui: &mut egui::Ui, gi: &mut GiSettings, frames: Option<u32>) {
         return;
     }
     ui.add(
-        egui::Slider::new(&mut gi.rays, 1..=256)
+        egui::Slider::new(&mut gi.rays, limits::GI_RAYS.slider(1, 256))
             .logarithmic(true)
             .text("rays / pixel"),
     );
@@ -599,20 +609,47 @@ fn gi_controls(ui: &mut egui::Ui, gi: &mut GiSettings, frames: Option<u32>) {
     }
     if let Some(r) = &mut gi.radius_m {
         ui.add(
-            egui::Slider::new(r, 0.01..=100.0)
+            egui::Slider::new(r, limits::GI_RADIUS_M.slider(0.01, 100.0))
                 .logarithmic(true)
                 .text("radius m"),
         );
     }
-    ui.add(egui::Slider::new(&mut gi.filter_radius, 0..=16).text("filter radius"));
-    ui.add(egui::Slider::new(&mut gi.filter_passes, 0..=8).text("filter passes"));
-    ui.add(egui::Slider::new(&mut gi.normal_offset_voxels, 0.0..=4.0).text("normal offset k1"));
-    ui.add(egui::Slider::new(&mut gi.ray_offset_voxels, 0.0..=2.0).text("ray offset k2"));
-    ui.add(egui::Slider::new(&mut gi.start_level, 0..=8).text("start level"));
     ui.add(
-        egui::Slider::new(&mut gi.max_iterations, 16..=4096)
-            .logarithmic(true)
-            .text("max iterations"),
+        egui::Slider::new(
+            &mut gi.filter_radius,
+            limits::GI_FILTER_RADIUS.slider(0, 16),
+        )
+        .text("filter radius"),
+    );
+    ui.add(
+        egui::Slider::new(&mut gi.filter_passes, limits::GI_FILTER_PASSES.slider(0, 8))
+            .text("filter passes"),
+    );
+    ui.add(
+        egui::Slider::new(
+            &mut gi.normal_offset_voxels,
+            limits::GI_NORMAL_OFFSET.slider(0.0, 4.0),
+        )
+        .text("normal offset k1"),
+    );
+    ui.add(
+        egui::Slider::new(
+            &mut gi.ray_offset_voxels,
+            limits::GI_RAY_OFFSET.slider(0.0, 2.0),
+        )
+        .text("ray offset k2"),
+    );
+    ui.add(
+        egui::Slider::new(&mut gi.start_level, limits::GI_START_LEVEL.slider(0, 8))
+            .text("start level"),
+    );
+    ui.add(
+        egui::Slider::new(
+            &mut gi.max_iterations,
+            limits::GI_MAX_ITERATIONS.slider(16, 4096),
+        )
+        .logarithmic(true)
+        .text("max iterations"),
     );
     if gi.method == GiMethod::Pathtrace {
         match frames {

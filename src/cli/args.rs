@@ -4,7 +4,7 @@ use crate::gi::GiMethod;
 use crate::light::PointShadow;
 use crate::post::ToneOperator;
 use crate::render::RenderSettings;
-use crate::scene::{resolve_gi, GiOverrides, NoSuchObject, Scene};
+use crate::scene::{resolve_gi, GiOverrides, Scene};
 
 /// Indirect-light flags of `render`, `profile`, `graph` and `view`. Each one given overrides the
 /// scene file's `[gi]` value, which overrides the default shown.
@@ -146,8 +146,10 @@ pub struct FrameArgs {
 }
 
 impl FrameArgs {
-    /// The frame's settings; GI values not given as flags come from the scene's `[gi]`.
-    pub fn settings(&self, scene: &Scene) -> Result<RenderSettings, NoSuchObject> {
+    /// The frame's settings; GI values not given as flags come from the scene's `[gi]`. A
+    /// value out of its range ([`crate::limits`]) is an error naming its flag, before any
+    /// GPU work.
+    pub fn settings(&self, scene: &Scene) -> Result<RenderSettings, super::CliError> {
         let mut s = RenderSettings {
             width: self.width,
             height: self.height,
@@ -187,6 +189,7 @@ impl FrameArgs {
                 object,
                 ..Default::default()
             });
+        crate::limits::check_render_settings(&s)?;
         Ok(s)
     }
 }

@@ -55,6 +55,9 @@ pub enum CliError {
     App(#[from] crate::app::AppError),
     #[error(transparent)]
     Json(#[from] serde_json::Error),
+    /// A flag's value out of its range.
+    #[error(transparent)]
+    Settings(#[from] crate::limits::LimitError),
     /// Writing the report failed, e.g. a closed pipe (`voxgi compare a b | head -1`); the
     /// `io::Error` stays the source so that `main` can end quietly on a broken pipe.
     #[error("cannot write to stdout")]

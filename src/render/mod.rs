@@ -50,8 +50,9 @@ pub enum RenderError {
     TooManyLights(usize),
     #[error("the scene's lights need {0} shadow-map views; at most {MAX_SHADOW_VIEWS} fit (a point light takes 6, or 2 with paraboloid shadows): remove some point lights or use --point-shadows paraboloid")]
     TooManyShadowViews(usize),
-    #[error("image size {0}x{1} is invalid: width and height must be between 1 and 16384")]
-    BadSize(u32, u32),
+    /// A settings value out of its range ([`crate::limits`]), named by its flag.
+    #[error(transparent)]
+    Settings(#[from] crate::limits::LimitError),
     #[error("the scene has no geometry to render: add an object")]
     EmptyScene,
     #[error("indirect light reads reflective light maps, which exist for cube shadow maps only: use --point-shadows cube with --gi")]
@@ -132,13 +133,7 @@ impl Renderer {
         scene: &Scene,
         settings: RenderSettings,
     ) -> Result<Self, RenderError> {
-        if settings.width == 0
-            || settings.height == 0
-            || settings.width > 16384
-            || settings.height > 16384
-        {
-            return Err(RenderError::BadSize(settings.width, settings.height));
-        }
+        crate::limits::check_render_settings(&settings)?;
         if scene.lights.len() > MAX_LIGHTS {
             return Err(RenderError::TooManyLights(scene.lights.len()));
         }

@@ -765,14 +765,14 @@ fn gi_out_of_range_values_name_the_field() {
             "gi.accumulate_frames",
             "frames to accumulate",
         ),
-        ("radius_m = 0", "gi.radius_m", "> 0"),
+        ("radius_m = 0", "gi.radius_m", "in (0, "),
         ("radius_m = -2.5", "gi.radius_m", "a ray length in meters"),
         (
             "normal_offset_voxels = -1",
             "gi.normal_offset_voxels",
-            ">= 0",
+            "in [0, ",
         ),
-        ("ray_offset_voxels = -0.5", "gi.ray_offset_voxels", ">= 0"),
+        ("ray_offset_voxels = -0.5", "gi.ray_offset_voxels", "in [0, "),
     ] {
         let text = format!("{CAMERA}{LIGHT}{CUBE}[gi]\n{line}\n");
         let (e, scene) = load_err(&text, &[]);
