@@ -772,7 +772,11 @@ fn gi_out_of_range_values_name_the_field() {
             "gi.normal_offset_voxels",
             "in [0, ",
         ),
-        ("ray_offset_voxels = -0.5", "gi.ray_offset_voxels", "in [0, "),
+        (
+            "ray_offset_voxels = -0.5",
+            "gi.ray_offset_voxels",
+            "in [0, ",
+        ),
     ] {
         let text = format!("{CAMERA}{LIGHT}{CUBE}[gi]\n{line}\n");
         let (e, scene) = load_err(&text, &[]);
