@@ -150,7 +150,7 @@ struct Parts {
 
 impl Parts {
     /// The renderer, once every part it always has was made; else `self` back, to destroy.
-    fn into_renderer(mut self, settings: RenderSettings) -> Result<Renderer, Parts> {
+    fn into_renderer(mut self, settings: RenderSettings) -> Result<Renderer, Box<Parts>> {
         let always = (
             self.readback_hdr.take(),
             self.readback_ldr.take(),
@@ -182,7 +182,7 @@ impl Parts {
                 self.deferred,
                 self.tonemap,
             ) = always;
-            return Err(self);
+            return Err(Box::new(self));
         };
         Ok(Renderer {
             settings,
