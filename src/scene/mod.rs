@@ -225,4 +225,6 @@ impl Scene {
 }
 
 #[cfg(test)]
+mod input_tests;
+#[cfg(test)]
 mod tests;
