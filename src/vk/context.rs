@@ -276,25 +276,33 @@ impl Context {
         if let (true, Some(du)) = (desc.validation, debug_utils.as_ref()) {
             // SAFETY: the user data points into the Arc held by the Context (`validation`),
             // which outlives the messenger: Drop destroys the messenger first.
-            messenger =
-                unsafe { du.create_debug_utils_messenger(&messenger_info(&validation), None) }
-                    .map_err(VkError::vk("create the debug messenger"))?;
+            let created =
+                unsafe { du.create_debug_utils_messenger(&messenger_info(&validation), None) };
+            messenger = created.map_err(|r| {
+                // SAFETY: nothing was created from the instance yet.
+                unsafe { instance.destroy_instance(None) };
+                VkError::vk("create the debug messenger")(r)
+            })?;
         }
 
-        let (physical_device, queue_family, info) =
-            match pick_device(&instance, desc.device.clone(), desc.swapchain) {
-                Ok(v) => v,
-                Err(e) => {
-                    // SAFETY: nothing else was created from the instance besides the messenger.
-                    unsafe {
-                        if let Some(du) = &debug_utils {
-                            du.destroy_debug_utils_messenger(messenger, None);
-                        }
-                        instance.destroy_instance(None);
+        // Undoes the instance and messenger when a later step fails (the device, where it
+        // exists, is destroyed first by the caller).
+        let release_instance = |e: VkError| {
+            // SAFETY: nothing else created from the instance is alive: every failure path
+            // below destroys what it made (device, allocator) before calling this.
+            unsafe {
+                if let Some(du) = &debug_utils {
+                    if messenger != vk::DebugUtilsMessengerEXT::null() {
+                        du.destroy_debug_utils_messenger(messenger, None);
                     }
-                    return Err(e);
                 }
-            };
+                instance.destroy_instance(None);
+            }
+            e
+        };
+        let (physical_device, queue_family, info) =
+            pick_device(&instance, desc.device.clone(), desc.swapchain)
+                .map_err(release_instance)?;
         log::info!(
             "using Vulkan device: {} ({:?})",
             info.name,
@@ -334,7 +342,12 @@ impl Context {
             .push_next(&mut features12);
         // SAFETY: physical_device comes from this instance; all pointers refer to live locals.
         let device = unsafe { instance.create_device(physical_device, &device_info, None) }
-            .map_err(VkError::vk("create the logical device"))?;
+            .map_err(|r| release_instance(VkError::vk("create the logical device")(r)))?;
+        let release_device = |e: VkError| {
+            // SAFETY: the device is idle and nothing created from it is alive.
+            unsafe { device.destroy_device(None) };
+            release_instance(e)
+        };
         // SAFETY: the queue family and index 0 were requested in device_info.
         let queue = unsafe { device.get_device_queue(queue_family, 0) };
 
@@ -349,14 +362,21 @@ impl Context {
             buffer_device_address: false,
             allocation_sizes: Default::default(),
         })
-        .map_err(|e| VkError::Allocation(e.to_string()))?;
+        .map_err(|e| release_device(VkError::Allocation(e.to_string())))?;
 
         let pool_info = vk::CommandPoolCreateInfo::builder()
             .queue_family_index(queue_family)
             .flags(vk::CommandPoolCreateFlags::TRANSIENT);
         // SAFETY: device is valid; the pool is destroyed in Drop.
-        let upload_pool = unsafe { device.create_command_pool(&pool_info, None) }
-            .map_err(VkError::vk("create the upload command pool"))?;
+        let upload_pool = match unsafe { device.create_command_pool(&pool_info, None) } {
+            Ok(pool) => pool,
+            Err(r) => {
+                drop(allocator);
+                return Err(release_device(VkError::vk(
+                    "create the upload command pool",
+                )(r)));
+            }
+        };
 
         let push_descriptor = khr::PushDescriptor::new(&instance, &device);
         Ok(Self {
