@@ -98,6 +98,11 @@ fn commands_failing_after_the_device_is_up_release_everything() {
             ],
             "--point-shadows cube",
         ),
+        // Refused before the voxel grid is allocated, naming the flags to lower.
+        (
+            &["--validate", "--voxels", "16384", "--voxel-layers", "64"],
+            "lower --voxels or --voxel-layers",
+        ),
     ];
     for (extra, want) in cases {
         let stderr = render_fails(extra);

@@ -135,3 +135,29 @@ fn a_voxel_error_after_the_grid_is_built_releases_the_frame() {
     assert!(matches!(e, RenderError::Voxel(_)), "{e}");
     assert!(e.to_string().contains("--debug-level"), "{e}");
 }
+
+#[test]
+fn a_voxel_grid_larger_than_the_device_memory_is_refused_before_allocating() {
+    let ctx = common::context();
+    let scene = load_scene_arg(None).expect("built-in scene");
+    // 16384² columns × 64 layers × 16 B is 256 GiB for the image's mip 0 alone: more than
+    // any device heap (lavapipe reports a few GiB).
+    let s = RenderSettings {
+        voxels: Some(voxgi::voxel::gpu::VoxelSettings {
+            max_res_xy: 16384,
+            layers: 64,
+            ..Default::default()
+        }),
+        ..small()
+    };
+    let e = Renderer::new(&ctx, &scene, s).err().expect("too large");
+    assert!(
+        matches!(e, RenderError::VoxelGridTooLarge { layers: 64, need_bytes, heap_bytes, .. }
+            if need_bytes > heap_bytes),
+        "{e}"
+    );
+    assert!(
+        e.to_string().contains("--voxels") && e.to_string().contains("GiB"),
+        "{e}"
+    );
+}

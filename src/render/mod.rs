@@ -59,6 +59,41 @@ pub enum RenderError {
     GiNeedsCubeShadows,
     #[error(transparent)]
     Voxel(#[from] crate::voxel::gpu::GpuVoxelError),
+    #[error("the voxel grid of {res_x}×{res_y} columns × {layers} layer(s) needs at least {:.1} GiB of device memory, more than the device's largest memory heap ({:.1} GiB): lower --voxels or --voxel-layers", *need_bytes as f64 / GIB, *heap_bytes as f64 / GIB)]
+    VoxelGridTooLarge {
+        res_x: u32,
+        res_y: u32,
+        layers: u32,
+        need_bytes: u64,
+        heap_bytes: u64,
+    },
+}
+
+const GIB: f64 = (1u64 << 30) as f64;
+
+/// Refuses a voxel grid that cannot fit the device, before anything is allocated: its column
+/// image (mip 0) and the column buffer of the same size alone take `2 × column_bytes`.
+fn check_voxel_memory(
+    ctx: &Context,
+    scene: &Scene,
+    settings: &RenderSettings,
+    voxels: &crate::voxel::gpu::VoxelSettings,
+) -> Result<(), RenderError> {
+    let grid = voxels
+        .grid_for(scene, settings.time_s)
+        .map_err(crate::voxel::gpu::GpuVoxelError::from)?;
+    let need_bytes = crate::voxel::gpu::column_bytes(&grid).saturating_mul(2);
+    let heap_bytes = ctx.largest_device_local_heap_bytes();
+    if need_bytes > heap_bytes {
+        return Err(RenderError::VoxelGridTooLarge {
+            res_x: grid.res_x(),
+            res_y: grid.res_y(),
+            layers: grid.layers(),
+            need_bytes,
+            heap_bytes,
+        });
+    }
+    Ok(())
 }
 
 /// What a frame renders.
@@ -301,6 +336,14 @@ impl Renderer {
         {
             return Err(RenderError::GiNeedsCubeShadows);
         }
+        let voxel_view_on = settings.debug.is_some_and(|d| d.view.shows_voxels());
+        let voxel_settings = settings
+            .voxels
+            .or(gi_on.then(Default::default))
+            .or(voxel_view_on.then(Default::default));
+        if let Some(v) = &voxel_settings {
+            check_voxel_memory(ctx, scene, settings, v)?;
+        }
         let pixels = u64::from(settings.width) * u64::from(settings.height);
         parts.readback_hdr = Some(ctx.create_buffer(&BufferDesc {
             name: "readback hdr".into(),
@@ -343,11 +386,6 @@ impl Renderer {
         let atlas_view_on = settings
             .debug
             .is_some_and(|d| d.view == crate::voxel::debug_view::DebugView::Atlas);
-        let voxel_view_on = settings.debug.is_some_and(|d| d.view.shows_voxels());
-        let voxel_settings = settings
-            .voxels
-            .or(gi_on.then(Default::default))
-            .or(voxel_view_on.then(Default::default));
         if let Some(channel) = settings.debug.and_then(|d| gbuffer_view::channel(d.view)) {
             // The distance view draws the farthest point of the scene's box black.
             let b = scene.aabb_at(settings.time_s);

@@ -431,6 +431,18 @@ impl Context {
         let _ = unsafe { du.set_debug_utils_object_name(self.device.handle(), &info) };
     }
 
+    /// Size of the device's largest device-local memory heap: an upper bound on any one
+    /// resource set, checked before allocating large ones (voxel grids).
+    pub fn largest_device_local_heap_bytes(&self) -> u64 {
+        let props = self.memory_properties();
+        props.memory_heaps[..props.memory_heap_count as usize]
+            .iter()
+            .filter(|h| h.flags.contains(vk::MemoryHeapFlags::DEVICE_LOCAL))
+            .map(|h| h.size)
+            .max()
+            .unwrap_or(0)
+    }
+
     /// Memory properties of the chosen device (for the graph's transient arenas).
     pub fn memory_properties(&self) -> vk::PhysicalDeviceMemoryProperties {
         // SAFETY: physical_device belongs to instance.
