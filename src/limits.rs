@@ -259,6 +259,34 @@ pub fn check_render_settings(s: &RenderSettings) -> Result<(), LimitError> {
     Ok(())
 }
 
+/// Checks the image sizes of `s` against the device's `maxImageDimension2D`: the frame, shadow
+/// maps and light maps are 2D images. Within [`WIDTH`] etc. on every driver voxgi has met,
+/// but a device may offer less.
+pub fn check_device_limits(
+    s: &RenderSettings,
+    max_image_dimension_2d: u32,
+) -> Result<(), LimitError> {
+    let sizes = [
+        (&WIDTH, s.width),
+        (&HEIGHT, s.height),
+        (&SHADOW_RESOLUTION, s.shadow.resolution),
+        (&LIGHT_MAP_RESOLUTION, s.gi.light_map_resolution),
+    ];
+    for (limit, v) in sizes {
+        if v > max_image_dimension_2d {
+            return Err(LimitError {
+                name: limit.flag.to_owned(),
+                value: v.to_string(),
+                expected: format!(
+                    "{}, at most {max_image_dimension_2d} on this device (its largest image side)",
+                    limit.what
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
 /// Checks the indirect-light values (bounces are checked where they are parsed).
 pub fn check_gi(g: &crate::gi::GiSettings) -> Result<(), LimitError> {
     GI_RAYS.check_flag(g.rays)?;
@@ -305,6 +333,30 @@ mod tests {
         assert_eq!(EXPOSURE.check_flag(2.5), Ok(2.5));
         assert_eq!(GI_NORMAL_OFFSET.check_flag(0.0), Ok(0.0));
         assert!(GI_RADIUS_M.check_as("gi.radius_m", 0.0).is_err());
+    }
+
+    #[test]
+    fn image_sizes_beyond_the_device_name_their_flag() {
+        let s = RenderSettings {
+            width: 4097,
+            ..Default::default()
+        };
+        let e = check_device_limits(&s, 4096).unwrap_err();
+        assert_eq!(e.name, "--width");
+        assert!(e.expected.contains("at most 4096 on this device"), "{e}");
+        let mut s = RenderSettings::default();
+        s.shadow.resolution = 8192;
+        assert_eq!(
+            check_device_limits(&s, 4096).unwrap_err().name,
+            "--shadow-resolution"
+        );
+        let mut s = RenderSettings::default();
+        s.gi.light_map_resolution = 8192;
+        assert_eq!(
+            check_device_limits(&s, 4096).unwrap_err().name,
+            "--light-map-resolution"
+        );
+        check_device_limits(&RenderSettings::default(), 4096).expect("defaults fit 4096");
     }
 
     #[test]

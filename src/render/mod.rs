@@ -292,6 +292,7 @@ impl Renderer {
         settings: RenderSettings,
     ) -> Result<Self, RenderError> {
         crate::limits::check_render_settings(&settings)?;
+        crate::limits::check_device_limits(&settings, ctx.info.max_image_dimension_2d)?;
         if scene.lights.len() > MAX_LIGHTS {
             return Err(RenderError::TooManyLights(scene.lights.len()));
         }

@@ -143,6 +143,8 @@ pub struct DeviceInfo {
     pub non_coherent_atom_size: u64,
     /// Largest storage-buffer binding range (128 MiB on lavapipe).
     pub max_storage_buffer_range: u32,
+    /// Largest side of a 2D image (16384 on lavapipe and desktop drivers).
+    pub max_image_dimension_2d: u32,
 }
 
 pub struct Context {
@@ -657,6 +659,7 @@ fn pick_device(
         max_sampler_anisotropy: props.limits.max_sampler_anisotropy,
         non_coherent_atom_size: props.limits.non_coherent_atom_size,
         max_storage_buffer_range: props.limits.max_storage_buffer_range,
+        max_image_dimension_2d: props.limits.max_image_dimension2_d,
     };
     Ok((pd, family, info))
 }
