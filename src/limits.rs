@@ -122,7 +122,7 @@ impl Limit<f32> {
 /// `maxImageDimension2D` every Vulkan 1.3 desktop driver offers (lavapipe's too).
 pub const WIDTH: Limit<u32> = Limit::new("--width", None, "a width in pixels", 1, 16384);
 pub const HEIGHT: Limit<u32> = Limit::new("--height", None, "a height in pixels", 1, 16384);
-/// Scene time: any finite number of seconds.
+/// Scene time: any finite number of seconds within ±1e9 (animations are evaluated in f32).
 pub const TIME_S: Limit<f32> = Limit::new("--time", None, "a scene time in seconds", -1e9, 1e9);
 /// Exposure multiplies the radiance before tone mapping; 0 would be black, NaN garbage.
 pub const EXPOSURE: Limit<f32> = Limit {
