@@ -82,3 +82,11 @@ fn a_clean_context_reports_nothing_at_teardown() {
     let report = ctx.finish();
     assert!(report.is_clean(), "{report}");
 }
+
+/// The fixture every other test uses fails a test that leaks, when its context drops.
+#[test]
+#[should_panic(expected = "1 leaked allocation(s) over the context's life")]
+fn the_test_fixture_fails_a_test_that_leaks() {
+    let ctx = common::context();
+    std::mem::forget(transfer_buffer(&ctx, "leaked by the test"));
+}
