@@ -21,6 +21,7 @@ pub mod gi;
 pub mod graph;
 #[forbid(unsafe_code)]
 pub mod light;
+pub mod limits;
 #[forbid(unsafe_code)]
 pub mod post;
 #[forbid(unsafe_code)]

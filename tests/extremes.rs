@@ -208,3 +208,71 @@ fn a_millimeter_and_a_kilometer_cornell_box_render_like_the_meter_one() {
         }
     }
 }
+
+/// The HDR pixels of `scene` at 64² with `gi`.
+fn render_hdr(ctx: &voxgi::vk::Context, scene: &Scene, gi: &GiSettings) -> Vec<[f32; 3]> {
+    let settings = RenderSettings {
+        width: 64,
+        height: 64,
+        gi: *gi,
+        ..Default::default()
+    };
+    let out = render_image(ctx, scene, &settings).expect("renders");
+    common::assert_no_validation_messages(ctx);
+    out.hdr.data
+}
+
+#[test]
+fn a_1e6_a_1e_minus_6_and_a_zero_light_together_add_up() {
+    // Radiance is a sum over lights, so the image with lights {A, B, C} equals the image
+    // with A alone plus the image with B alone, for C of zero intensity (which must add
+    // nothing, not NaN). A = 1e6 W/sr at the ceiling, B = 1e-6 W/sr near the floor (it
+    // reaches pixels A's blocks shadow): twelve orders of magnitude in one frame.
+    let base = load_scene_arg(Some("cornell-point")).expect("built-in scene");
+    let light = |x: f32, y: f32, z: f32, i: f32| Light::Point {
+        position: glam::Vec3::new(x, y, z),
+        intensity_w_sr: glam::Vec3::splat(i),
+    };
+    let a = light(0.278, 0.54, 0.28, 1e6);
+    let b = light(0.05, 0.05, 0.05, 1e-6);
+    let c = light(0.5, 0.3, 0.4, 0.0);
+    let with = |lights: Vec<Light>| Scene {
+        lights,
+        ..base.clone()
+    };
+    let ctx = common::context();
+    let methods = [
+        ("direct", GiSettings::default()),
+        (
+            "hemisphere, light maps",
+            GiSettings {
+                method: GiMethod::Hemisphere,
+                rays: 4,
+                ..Default::default()
+            },
+        ),
+    ];
+    for (name, gi) in methods {
+        let all = render_hdr(&ctx, &with(vec![a, b, c]), &gi);
+        let only_a = render_hdr(&ctx, &with(vec![a]), &gi);
+        let only_b = render_hdr(&ctx, &with(vec![b]), &gi);
+        assert!(
+            only_b.iter().flatten().any(|&v| v > 0.0),
+            "{name}: the 1e-6 light lights nothing"
+        );
+        for (i, ((s, pa), pb)) in all.iter().zip(&only_a).zip(&only_b).enumerate() {
+            for ch in 0..3 {
+                let want = pa[ch] + pb[ch];
+                // Each pixel sums per-light terms in f32: a few ulps (~1e-7) relative, with
+                // room for the different summation order; any NaN fails the comparison.
+                let ok = (s[ch] - want).abs() <= 1e-5 * want;
+                assert!(
+                    ok,
+                    "{name}: pixel {i} channel {ch}: {} with all three lights, {} + {} = {want} \
+                     from A and B alone",
+                    s[ch], pa[ch], pb[ch]
+                );
+            }
+        }
+    }
+}

@@ -486,16 +486,31 @@ fn assert_matches_render(img: &image::RgbaImage, dir: &Path) {
 }
 
 /// Runs `xdotool ARGS` on the test's display; without xdotool the test fails with the hint.
+/// Every call has a time limit: `search --sync` waits forever for a window that never comes
+/// (a viewer that failed to start).
 fn xdotool(args: &[&str]) -> String {
-    let out = Command::new("xdotool")
+    const LIMIT: Duration = Duration::from_secs(60);
+    let mut child = Command::new("xdotool")
         .args(args)
-        .output()
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
         .unwrap_or_else(|e| {
             panic!(
                 "cannot run xdotool ({e}): the input test drives the window with real X events \
                  (Debian/Ubuntu: apt-get install xdotool, or run tools/setup)"
             )
         });
+    let started = Instant::now();
+    while child.try_wait().expect("poll xdotool").is_none() {
+        if started.elapsed() > LIMIT {
+            let _ = child.kill();
+            let _ = child.wait();
+            panic!("xdotool {args:?} did not finish within {LIMIT:?}");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let out = child.wait_with_output().expect("collect xdotool's output");
     assert!(
         out.status.success(),
         "xdotool {args:?} failed: {}",

@@ -114,8 +114,9 @@ pub struct ViewerReport {
     pub screenshots: Vec<PathBuf>,
     /// Redraws skipped because the window was minimized (or zero-sized).
     pub skipped_minimized: u64,
-    /// Validation messages (errors and warnings); any is a bug.
-    pub validation_messages: Vec<String>,
+    /// Validation messages (errors and warnings, teardown included) and GPU memory never
+    /// freed; anything in it is a bug.
+    pub teardown: crate::vk::TeardownReport,
     /// Where the fly camera was when the viewer closed.
     pub camera: Option<Camera>,
 }
@@ -154,9 +155,8 @@ pub fn run(scene: Scene, opts: &ViewerOptions) -> Result<ViewerReport, AppError>
     let report = viewer.destroy(&ctx);
     outcome?;
     loop_result.map_err(|e| AppError::Window(e.to_string()))?;
-    let _ = ctx.wait_idle();
     Ok(ViewerReport {
-        validation_messages: ctx.validation.messages(),
+        teardown: ctx.finish(),
         ..report
     })
 }

@@ -3,6 +3,7 @@
 
 use crate::gi::{Bounces, GiMethod, GiSettings};
 use crate::light::ShadowSettings;
+use crate::limits;
 use crate::post::{ToneMap, ToneOperator};
 use crate::vk::PassTiming;
 use crate::voxel::debug_view::DebugView;
@@ -283,9 +284,12 @@ pub fn draw(
                             }
                         });
                     ui.add(
-                        egui::Slider::new(&mut c.tonemap.exposure, 0.001..=1000.0)
-                            .logarithmic(true)
-                            .text("exposure"),
+                        egui::Slider::new(
+                            &mut c.tonemap.exposure,
+                            limits::EXPOSURE.slider(0.001, 1000.0),
+                        )
+                        .logarithmic(true)
+                        .text("exposure"),
                     );
                     ui.add(
                         egui::Slider::new(&mut c.tonemap.white, 0.01..=100.0)
@@ -304,7 +308,13 @@ pub fn draw(
                                 ui.selectable_value(&mut c.shadow.resolution, r, format!("{r}²"));
                             }
                         });
-                    ui.add(egui::Slider::new(&mut c.shadow.pcf_radius, 0..=4).text("PCF radius"));
+                    ui.add(
+                        egui::Slider::new(
+                            &mut c.shadow.pcf_radius,
+                            limits::PCF_RADIUS.slider(0, 4),
+                        )
+                        .text("PCF radius"),
+                    );
                     ui.add(
                         egui::Slider::new(&mut c.shadow.bias_texels, 0.0..=8.0).text("bias texels"),
                     );
@@ -578,7 +588,7 @@ fn gi_controls(ui: &mut egui::Ui, gi: &mut GiSettings, frames: Option<u32>) {
         vpl_controls(ui, gi);
     } else {
         ui.add(
-            egui::Slider::new(&mut gi.rays, 1..=256)
+            egui::Slider::new(&mut gi.rays, limits::GI_RAYS.slider(1, 256))
                 .logarithmic(true)
                 .text("rays / pixel"),
         );
@@ -604,20 +614,47 @@ fn gi_controls(ui: &mut egui::Ui, gi: &mut GiSettings, frames: Option<u32>) {
     }
     if let Some(r) = &mut gi.radius_m {
         ui.add(
-            egui::Slider::new(r, 0.01..=100.0)
+            egui::Slider::new(r, limits::GI_RADIUS_M.slider(0.01, 100.0))
                 .logarithmic(true)
                 .text("radius m"),
         );
     }
-    ui.add(egui::Slider::new(&mut gi.filter_radius, 0..=16).text("filter radius"));
-    ui.add(egui::Slider::new(&mut gi.filter_passes, 0..=8).text("filter passes"));
-    ui.add(egui::Slider::new(&mut gi.normal_offset_voxels, 0.0..=4.0).text("normal offset k1"));
-    ui.add(egui::Slider::new(&mut gi.ray_offset_voxels, 0.0..=2.0).text("ray offset k2"));
-    ui.add(egui::Slider::new(&mut gi.start_level, 0..=8).text("start level"));
     ui.add(
-        egui::Slider::new(&mut gi.max_iterations, 16..=4096)
-            .logarithmic(true)
-            .text("max iterations"),
+        egui::Slider::new(
+            &mut gi.filter_radius,
+            limits::GI_FILTER_RADIUS.slider(0, 16),
+        )
+        .text("filter radius"),
+    );
+    ui.add(
+        egui::Slider::new(&mut gi.filter_passes, limits::GI_FILTER_PASSES.slider(0, 8))
+            .text("filter passes"),
+    );
+    ui.add(
+        egui::Slider::new(
+            &mut gi.normal_offset_voxels,
+            limits::GI_NORMAL_OFFSET.slider(0.0, 4.0),
+        )
+        .text("normal offset k1"),
+    );
+    ui.add(
+        egui::Slider::new(
+            &mut gi.ray_offset_voxels,
+            limits::GI_RAY_OFFSET.slider(0.0, 2.0),
+        )
+        .text("ray offset k2"),
+    );
+    ui.add(
+        egui::Slider::new(&mut gi.start_level, limits::GI_START_LEVEL.slider(0, 8))
+            .text("start level"),
+    );
+    ui.add(
+        egui::Slider::new(
+            &mut gi.max_iterations,
+            limits::GI_MAX_ITERATIONS.slider(16, 4096),
+        )
+        .logarithmic(true)
+        .text("max iterations"),
     );
     if gi.method == GiMethod::Pathtrace {
         match frames {
@@ -630,18 +667,21 @@ fn gi_controls(ui: &mut egui::Ui, gi: &mut GiSettings, frames: Option<u32>) {
 /// The VPL method's parameters (Thiedemann 2010, Ch. 7): VPLs per set, pattern, bounces,
 /// d_min, visibility.
 fn vpl_controls(ui: &mut egui::Ui, gi: &mut GiSettings) {
-    use crate::gi::vpl::{VplSettings, VplShading, VplVisibility};
+    use crate::gi::vpl::{VplShading, VplVisibility};
     let v = &mut gi.vpl;
     ui.add(
-        egui::Slider::new(&mut v.per_set, 1..=VplSettings::MAX_PER_SET)
+        egui::Slider::new(&mut v.per_set, limits::VPLS.slider(1, 64))
             .logarithmic(true)
             .text("VPLs / set / light"),
     );
     for (side, name) in v.pattern.iter_mut().zip(["pattern N", "pattern M"]) {
-        ui.add(egui::Slider::new(side, 1..=VplSettings::MAX_PATTERN).text(name));
+        ui.add(egui::Slider::new(side, limits::VPL_PATTERN_SIDE.slider(1, 8)).text(name));
     }
-    ui.add(egui::Slider::new(&mut v.bounces, 1..=VplSettings::MAX_BOUNCES).text("bounces"));
-    ui.add(egui::Slider::new(&mut v.d_min_voxels, 0.0..=64.0).text("d_min (voxel diagonals)"));
+    ui.add(egui::Slider::new(&mut v.bounces, limits::VPL_BOUNCES.slider(1, 8)).text("bounces"));
+    ui.add(
+        egui::Slider::new(&mut v.d_min_voxels, limits::VPL_D_MIN.slider(0.0, 64.0))
+            .text("d_min (voxel diagonals)"),
+    );
     let mut visible = v.visibility == VplVisibility::Voxel;
     ui.checkbox(&mut visible, "voxel visibility");
     v.visibility = if visible {

@@ -4,7 +4,7 @@ use crate::gi::GiMethod;
 use crate::light::PointShadow;
 use crate::post::ToneOperator;
 use crate::render::RenderSettings;
-use crate::scene::{resolve_gi, GiOverrides, NoSuchObject, Scene};
+use crate::scene::{resolve_gi, GiOverrides, Scene};
 
 /// Indirect-light flags of `render`, `profile`, `graph` and `view`. Each one given overrides the
 /// scene file's `[gi]` value, which overrides the default shown.
@@ -62,8 +62,7 @@ pub struct GiArgs {
     pub light_map_resolution: Option<u32>,
     /// `--gi vpl`: VPLs per interleaving set and light (thesis §7.2) [default: the scene's
     /// `[gi] vpls`, else 16].
-    #[arg(long, value_name = "K",
-          value_parser = clap::value_parser!(u32).range(1..=i64::from(crate::gi::vpl::VplSettings::MAX_PER_SET)))]
+    #[arg(long, value_name = "K")]
     pub vpls: Option<u32>,
     /// `--gi vpl`: interleaved-sampling pattern NxM, N·M VPL sets (thesis §7.3.2) [default:
     /// the scene's `[gi] vpl_pattern`, else 4x4].
@@ -71,12 +70,11 @@ pub struct GiArgs {
     pub vpl_pattern: Option<[u32; 2]>,
     /// `--gi vpl`: d_min of E = I cos cos / (d_min + d²) (thesis §7.3) as a distance in voxel
     /// diagonals h: d_min = (D · h)² [default: the scene's `[gi] vpl_d_min_voxels`, else 8].
-    #[arg(long, value_name = "D", value_parser = parse_d_min)]
+    #[arg(long, value_name = "D")]
     pub vpl_d_min: Option<f32>,
     /// `--gi vpl`: VPL bounces: 1 reflects the lights' direct light once, 2 adds one voxel
     /// ray per VPL (thesis §7.2), up to 8 [default: the scene's `[gi] vpl_bounces`, else 2].
-    #[arg(long, value_name = "B",
-          value_parser = clap::value_parser!(u32).range(1..=i64::from(crate::gi::vpl::VplSettings::MAX_BOUNCES)))]
+    #[arg(long, value_name = "B")]
     pub vpl_bounces: Option<u32>,
     /// `--gi vpl`: visibility per VPL and pixel: the voxel segment test, or none (v = 1)
     /// [default: the scene's `[gi] vpl_visibility`, else voxel].
@@ -90,14 +88,6 @@ pub struct GiArgs {
     /// later ones cyan).
     #[arg(long)]
     pub vpl_show: bool,
-}
-
-/// `--vpl-d-min`: a finite number ≥ 0.
-fn parse_d_min(s: &str) -> Result<f32, String> {
-    match s.parse::<f32>() {
-        Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
-        _ => Err("expected a finite number of voxel diagonals >= 0, e.g. 8".into()),
-    }
 }
 
 impl GiArgs {
@@ -199,8 +189,10 @@ pub struct FrameArgs {
 }
 
 impl FrameArgs {
-    /// The frame's settings; GI values not given as flags come from the scene's `[gi]`.
-    pub fn settings(&self, scene: &Scene) -> Result<RenderSettings, NoSuchObject> {
+    /// The frame's settings; GI values not given as flags come from the scene's `[gi]`. A
+    /// value out of its range ([`crate::limits`]) is an error naming its flag, before any
+    /// GPU work.
+    pub fn settings(&self, scene: &Scene) -> Result<RenderSettings, super::CliError> {
         let mut s = RenderSettings {
             width: self.width,
             height: self.height,
@@ -240,6 +232,7 @@ impl FrameArgs {
                 object,
                 ..Default::default()
             });
+        crate::limits::check_render_settings(&s)?;
         Ok(s)
     }
 }

@@ -118,7 +118,7 @@ pub fn bench(global: &Global, command: &BenchCommand, out: &mut dyn Write) -> Re
             };
             let report = bench_traverse(&ctx, &scene, &desc)?;
             print(out, *json, &report, || report.table())?;
-            check_validation(&ctx)
+            check_validation(ctx)
         }
         BenchCommand::Voxelize {
             scene,
@@ -136,7 +136,7 @@ pub fn bench(global: &Global, command: &BenchCommand, out: &mut dyn Write) -> Re
             };
             let report = bench_voxelize_atlas(&ctx, &scene, &desc)?;
             print(out, *json, &report, || report.table())?;
-            check_validation(&ctx)
+            check_validation(ctx)
         }
         BenchCommand::Flicker {
             scene,
@@ -156,7 +156,7 @@ pub fn bench(global: &Global, command: &BenchCommand, out: &mut dyn Write) -> Re
             };
             let report = bench_flicker(&ctx, &scene, &name, &desc)?;
             print(out, *json, &report, || report.table())?;
-            check_validation(&ctx)
+            check_validation(ctx)
         }
         BenchCommand::VoxelizeSweep {
             resolutions,
@@ -171,7 +171,7 @@ pub fn bench(global: &Global, command: &BenchCommand, out: &mut dyn Write) -> Re
             };
             let report = bench_voxelize_sweep(&ctx, &desc)?;
             print(out, *json, &report, || report.table())?;
-            check_validation(&ctx)
+            check_validation(ctx)
         }
     }
 }

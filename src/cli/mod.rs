@@ -55,6 +55,9 @@ pub enum CliError {
     App(#[from] crate::app::AppError),
     #[error(transparent)]
     Json(#[from] serde_json::Error),
+    /// A flag's value out of its range.
+    #[error(transparent)]
+    Settings(#[from] crate::limits::LimitError),
     /// Writing the report failed, e.g. a closed pipe (`voxgi compare a b | head -1`); the
     /// `io::Error` stays the source so that `main` can end quietly on a broken pipe.
     #[error("cannot write to stdout")]
@@ -73,6 +76,8 @@ pub enum CliError {
     },
     #[error("the validation layers reported {count} message(s) (see the log above); this is a bug in voxgi, please report it")]
     Validation { count: usize },
+    #[error("GPU memory was never freed: {}; this is a bug in voxgi, please report it", names.join(", "))]
+    Leak { names: Vec<String> },
 }
 
 /// `writeln!` into a command's `out`, a failed write becoming [`CliError::Stdout`].
@@ -100,12 +105,23 @@ pub fn context(global: &Global) -> Result<Context, CliError> {
     })?)
 }
 
-/// Fails when the validation layers reported anything during the command.
-pub fn check_validation(ctx: &Context) -> Result<(), CliError> {
-    match ctx.validation.total() {
-        0 => Ok(()),
-        count => Err(CliError::Validation {
-            count: count as usize,
-        }),
+/// Destroys the context, then fails when the validation layers reported anything during the
+/// command or its teardown (objects never destroyed), or when GPU memory was never freed.
+pub fn check_validation(ctx: Context) -> Result<(), CliError> {
+    check_teardown(&ctx.finish())
+}
+
+/// The command's verdict on what a context's life left behind ([`Context::finish`]).
+pub fn check_teardown(report: &crate::vk::TeardownReport) -> Result<(), CliError> {
+    if !report.validation_messages.is_empty() {
+        return Err(CliError::Validation {
+            count: report.validation_messages.len(),
+        });
     }
+    if !report.leaked_allocations.is_empty() {
+        return Err(CliError::Leak {
+            names: report.leaked_allocations.clone(),
+        });
+    }
+    Ok(())
 }

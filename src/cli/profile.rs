@@ -50,22 +50,22 @@ pub struct GraphArgs {
 /// Runs the frame `--warmup` + `--frames` times and prints the per-pass statistics.
 pub fn profile(global: &Global, args: &ProfileArgs, out: &mut dyn Write) -> Result<(), CliError> {
     let frame = &args.frame;
+    // The scene and the flags are checked before the device is up.
+    let scene = match args.demo {
+        true => None,
+        false => {
+            let scene = load_scene_arg(args.scene.as_deref())?;
+            let settings = frame.settings(&scene)?;
+            Some((scene, settings))
+        }
+    };
     let ctx = context(global)?;
-    let report = if args.demo {
-        profile_demo(&ctx, args.frames, args.warmup, frame.width, frame.height)?
-    } else {
+    let report = if let Some((scene, settings)) = &scene {
         let scene_name = args
             .scene
             .clone()
             .unwrap_or_else(|| crate::scene::DEFAULT_SCENE.into());
-        let scene = load_scene_arg(args.scene.as_deref())?;
-        let run = profile_scene(
-            &ctx,
-            &scene,
-            &frame.settings(&scene)?,
-            args.frames,
-            args.warmup,
-        )?;
+        let run = profile_scene(&ctx, scene, settings, args.frames, args.warmup)?;
         let mut report = ProfileReport::from_frames(&ctx.info.name, &run.frames, args.warmup)
             .with_setup(&run.setup);
         report.notes.push(("scene".into(), scene_name));
@@ -80,13 +80,15 @@ pub fn profile(global: &Global, args: &ProfileArgs, out: &mut dyn Write) -> Resu
             .notes
             .push(("culled passes".into(), run.culled_passes.join(", ")));
         report
+    } else {
+        profile_demo(&ctx, args.frames, args.warmup, frame.width, frame.height)?
     };
     if args.json {
         outln!(out, "{}", serde_json::to_string_pretty(&report)?);
     } else {
         out!(out, "{}", report.table());
     }
-    check_validation(&ctx)
+    check_validation(ctx)
 }
 
 /// The demo frame's statistics, measured like a scene's.
@@ -130,6 +132,15 @@ fn profile_demo(
 
 /// Prints the compiled graph as text or Graphviz dot.
 pub fn graph(global: &Global, args: &GraphArgs, out: &mut dyn Write) -> Result<(), CliError> {
+    // The scene and the flags are checked before the device is up.
+    let scene = match args.demo {
+        true => None,
+        false => {
+            let scene = load_scene_arg(args.scene.as_deref())?;
+            let settings = args.frame.settings(&scene)?;
+            Some((scene, settings))
+        }
+    };
     let ctx = context(global)?;
     let mut dump = |exec: &GraphExecutor| -> Result<(), CliError> {
         let c = exec.compiled();
@@ -140,19 +151,30 @@ pub fn graph(global: &Global, args: &GraphArgs, out: &mut dyn Write) -> Result<(
         }
         Ok(())
     };
-    if args.demo {
-        let demo = Demo::new(&ctx, args.frame.width, args.frame.height)?;
-        let exec = demo.executor(&ctx, 1)?;
-        dump(&exec)?;
-        exec.destroy(&ctx);
-        demo.destroy(&ctx);
-    } else {
-        let scene = load_scene_arg(args.scene.as_deref())?;
-        let renderer = crate::render::Renderer::new(&ctx, &scene, args.frame.settings(&scene)?)?;
-        let exec = GraphExecutor::new(&ctx, renderer.graph(), 1)?;
-        dump(&exec)?;
-        exec.destroy(&ctx);
+    // Whatever fails (compiling, or writing to a closed stdout), everything made is released.
+    if let Some((scene, settings)) = scene {
+        let renderer = crate::render::Renderer::new(&ctx, &scene, settings)?;
+        let dumped = GraphExecutor::new(&ctx, renderer.graph(), 1)
+            .map_err(CliError::from)
+            .and_then(|exec| {
+                let dumped = dump(&exec);
+                exec.destroy(&ctx);
+                dumped
+            });
         renderer.destroy(&ctx);
+        dumped?;
+    } else {
+        let demo = Demo::new(&ctx, args.frame.width, args.frame.height)?;
+        let dumped = demo
+            .executor(&ctx, 1)
+            .map_err(CliError::from)
+            .and_then(|exec| {
+                let dumped = dump(&exec);
+                exec.destroy(&ctx);
+                dumped
+            });
+        demo.destroy(&ctx);
+        dumped?;
     }
-    check_validation(&ctx)
+    check_validation(ctx)
 }

@@ -29,8 +29,8 @@ pub struct RenderArgs {
 pub fn render(global: &Global, args: &RenderArgs, out: &mut dyn Write) -> Result<(), CliError> {
     let frame = &args.frame;
     let scene = load_scene_arg(args.scene.as_deref())?;
-    let ctx = context(global)?;
     let settings = frame.settings(&scene)?;
+    let ctx = context(global)?;
     let image = render_image(&ctx, &scene, &settings)?;
     image::save_buffer(
         &args.output,
@@ -59,5 +59,5 @@ pub fn render(global: &Global, args: &RenderArgs, out: &mut dyn Write) -> Result
         let m = crate::eval::compare(&r, &image.hdr, None)?;
         super::compare::print_metrics(&m, out)?;
     }
-    check_validation(&ctx)
+    check_validation(ctx)
 }

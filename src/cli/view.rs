@@ -87,6 +87,7 @@ pub fn view(global: &Global, args: ViewArgs, out: &mut dyn Write) -> Result<(), 
     settings.tonemap.operator = args.tonemap;
     settings.tonemap.exposure = args.exposure;
     settings.gi = args.gi.settings(&scene);
+    crate::limits::check_render_settings(&settings)?;
     let opts = crate::app::ViewerOptions {
         validation: global.validate,
         device: global.device.clone(),
@@ -114,10 +115,7 @@ pub fn view(global: &Global, args: ViewArgs, out: &mut dyn Write) -> Result<(), 
             report.skipped_minimized
         );
     }
-    match report.validation_messages.len() {
-        0 => Ok(()),
-        count => Err(CliError::Validation { count }),
-    }
+    super::check_teardown(&report.teardown)
 }
 
 #[cfg(test)]

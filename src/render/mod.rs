@@ -50,14 +50,50 @@ pub enum RenderError {
     TooManyLights(usize),
     #[error("the scene's lights need {0} shadow-map views; at most {MAX_SHADOW_VIEWS} fit (a point light takes 6, or 2 with paraboloid shadows): remove some point lights or use --point-shadows paraboloid")]
     TooManyShadowViews(usize),
-    #[error("image size {0}x{1} is invalid: width and height must be between 1 and 16384")]
-    BadSize(u32, u32),
+    /// A settings value out of its range ([`crate::limits`]), named by its flag.
+    #[error(transparent)]
+    Settings(#[from] crate::limits::LimitError),
     #[error("the scene has no geometry to render: add an object")]
     EmptyScene,
     #[error("indirect light reads reflective light maps, which exist for cube shadow maps only: use --point-shadows cube with --gi")]
     GiNeedsCubeShadows,
     #[error(transparent)]
     Voxel(#[from] crate::voxel::gpu::GpuVoxelError),
+    #[error("the voxel grid of {res_x}×{res_y} columns × {layers} layer(s) needs at least {:.1} GiB of device memory, more than the device's largest memory heap ({:.1} GiB): lower --voxels or --voxel-layers", *need_bytes as f64 / GIB, *heap_bytes as f64 / GIB)]
+    VoxelGridTooLarge {
+        res_x: u32,
+        res_y: u32,
+        layers: u32,
+        need_bytes: u64,
+        heap_bytes: u64,
+    },
+}
+
+const GIB: f64 = (1u64 << 30) as f64;
+
+/// Refuses a voxel grid that cannot fit the device, before anything is allocated: its column
+/// image (mip 0) and the column buffer of the same size alone take `2 × column_bytes`.
+fn check_voxel_memory(
+    ctx: &Context,
+    scene: &Scene,
+    settings: &RenderSettings,
+    voxels: &crate::voxel::gpu::VoxelSettings,
+) -> Result<(), RenderError> {
+    let grid = voxels
+        .grid_for(scene, settings.time_s)
+        .map_err(crate::voxel::gpu::GpuVoxelError::from)?;
+    let need_bytes = crate::voxel::gpu::column_bytes(&grid).saturating_mul(2);
+    let heap_bytes = ctx.largest_device_local_heap_bytes();
+    if need_bytes > heap_bytes {
+        return Err(RenderError::VoxelGridTooLarge {
+            res_x: grid.res_x(),
+            res_y: grid.res_y(),
+            layers: grid.layers(),
+            need_bytes,
+            heap_bytes,
+        });
+    }
+    Ok(())
 }
 
 /// What a frame renders.
@@ -126,37 +162,203 @@ pub struct Renderer {
     gbuffer_view: Option<gbuffer_view::GbufferViewPass>,
 }
 
+/// The resources and passes of a [`Renderer`] while [`Renderer::new`] creates them: on an
+/// error, [`Parts::destroy`] releases whatever was made so far.
+#[derive(Default)]
+struct Parts {
+    readback_hdr: Option<Buffer>,
+    readback_ldr: Option<Buffer>,
+    scene: Option<SceneGpu>,
+    sampler: Option<vk::Sampler>,
+    shadow_depth: Option<ShadowDepthPass>,
+    gbuffer: Option<GbufferPass>,
+    deferred: Option<DeferredDirectPass>,
+    tonemap: Option<TonemapPass>,
+    has_phong: bool,
+    voxels: Option<crate::voxel::gpu::VoxelFrame>,
+    gi: Option<crate::gi::GiPasses>,
+    light_map: Option<LightMapPass>,
+    voxel_debug: Option<crate::voxel::debug_view::VoxelDebugPass>,
+    atlas_view: Option<crate::voxel::atlas_view::AtlasViewPass>,
+    gbuffer_view: Option<gbuffer_view::GbufferViewPass>,
+}
+
+impl Parts {
+    /// The renderer, once every part it always has was made; else `self` back, to destroy.
+    fn into_renderer(mut self, settings: RenderSettings) -> Result<Renderer, Box<Parts>> {
+        let always = (
+            self.readback_hdr.take(),
+            self.readback_ldr.take(),
+            self.scene.take(),
+            self.sampler.take(),
+            self.shadow_depth.take(),
+            self.gbuffer.take(),
+            self.deferred.take(),
+            self.tonemap.take(),
+        );
+        let (
+            Some(readback_hdr),
+            Some(readback_ldr),
+            Some(scene),
+            Some(sampler),
+            Some(shadow_depth),
+            Some(gbuffer),
+            Some(deferred),
+            Some(tonemap),
+        ) = always
+        else {
+            (
+                self.readback_hdr,
+                self.readback_ldr,
+                self.scene,
+                self.sampler,
+                self.shadow_depth,
+                self.gbuffer,
+                self.deferred,
+                self.tonemap,
+            ) = always;
+            return Err(Box::new(self));
+        };
+        Ok(Renderer {
+            settings,
+            scene,
+            readback_hdr,
+            readback_ldr,
+            sampler,
+            shadow_depth,
+            gbuffer,
+            deferred,
+            tonemap,
+            has_phong: self.has_phong,
+            shadow_view_count: 0,
+            frame_data: GpuFrame::zeroed(),
+            voxels: self.voxels,
+            gi: self.gi.zip(self.light_map),
+            voxel_debug: self.voxel_debug,
+            atlas_view: self.atlas_view,
+            gbuffer_view: self.gbuffer_view,
+        })
+    }
+
+    /// Destroys every part made (after an error in [`Renderer::new`]).
+    fn destroy(self, ctx: &Context) {
+        let _ = ctx.wait_idle();
+        if let Some(pass) = self.voxel_debug {
+            pass.destroy(ctx);
+        }
+        if let Some(pass) = self.atlas_view {
+            pass.destroy(ctx);
+        }
+        if let Some(pass) = self.gbuffer_view {
+            pass.destroy(ctx);
+        }
+        if let Some(v) = self.voxels {
+            v.destroy(ctx);
+        }
+        if let Some(gi) = self.gi {
+            gi.destroy(ctx);
+        }
+        if let Some(light_map) = self.light_map {
+            light_map.destroy(ctx);
+        }
+        if let Some(p) = self.shadow_depth {
+            p.destroy(ctx);
+        }
+        if let Some(p) = self.gbuffer {
+            p.destroy(ctx);
+        }
+        if let Some(p) = self.deferred {
+            p.destroy(ctx);
+        }
+        if let Some(p) = self.tonemap {
+            p.destroy(ctx);
+        }
+        if let Some(s) = self.sampler {
+            ctx.destroy_sampler(s);
+        }
+        if let Some(s) = self.scene {
+            s.destroy(ctx);
+        }
+        for b in [self.readback_hdr, self.readback_ldr].into_iter().flatten() {
+            ctx.destroy_buffer(b);
+        }
+    }
+}
+
 impl Renderer {
     pub fn new(
         ctx: &Context,
         scene: &Scene,
         settings: RenderSettings,
     ) -> Result<Self, RenderError> {
-        if settings.width == 0
-            || settings.height == 0
-            || settings.width > 16384
-            || settings.height > 16384
-        {
-            return Err(RenderError::BadSize(settings.width, settings.height));
-        }
+        crate::limits::check_render_settings(&settings)?;
+        crate::limits::check_device_limits(&settings, ctx.info.max_image_dimension_2d)?;
         if scene.lights.len() > MAX_LIGHTS {
             return Err(RenderError::TooManyLights(scene.lights.len()));
         }
+        if scene.objects.is_empty() {
+            return Err(RenderError::EmptyScene);
+        }
+        // Everything is created into `parts`, so that an error half-way (a voxel grid that
+        // does not fit, a debug level beyond the hierarchy, …) releases what was made.
+        let mut parts = Parts::default();
+        if let Err(e) = Self::create_parts(ctx, scene, &settings, &mut parts) {
+            parts.destroy(ctx);
+            return Err(e);
+        }
+        let mut r = match parts.into_renderer(settings) {
+            Ok(r) => r,
+            Err(parts) => {
+                parts.destroy(ctx);
+                return Err(RenderError::Vk(VkError::Invalid(
+                    "Renderer::new made an incomplete renderer; please report this bug".into(),
+                )));
+            }
+        };
+        if let Err(e) = r.prepare(scene) {
+            r.destroy(ctx);
+            return Err(e);
+        }
+        Ok(r)
+    }
+
+    /// Creates the frame's resources and passes into `parts` (see [`Renderer::new`]).
+    fn create_parts(
+        ctx: &Context,
+        scene: &Scene,
+        settings: &RenderSettings,
+        parts: &mut Parts,
+    ) -> Result<(), RenderError> {
         let has_phong = !scene.is_all_lambert();
+        let gi_on = settings.gi.method != crate::gi::GiMethod::None;
+        if gi_on
+            && settings.shadow.point_technique == PointShadow::DualParaboloid
+            && scene.has_point_lights()
+        {
+            return Err(RenderError::GiNeedsCubeShadows);
+        }
+        let voxel_view_on = settings.debug.is_some_and(|d| d.view.shows_voxels());
+        let voxel_settings = settings
+            .voxels
+            .or(gi_on.then(Default::default))
+            .or(voxel_view_on.then(Default::default));
+        if let Some(v) = &voxel_settings {
+            check_voxel_memory(ctx, scene, settings, v)?;
+        }
         let pixels = u64::from(settings.width) * u64::from(settings.height);
-        let readback_hdr = ctx.create_buffer(&BufferDesc {
+        parts.readback_hdr = Some(ctx.create_buffer(&BufferDesc {
             name: "readback hdr".into(),
             size_bytes: pixels * 16,
             usage: vk::BufferUsageFlags::TRANSFER_DST,
             location: MemoryLocation::GpuToCpu,
-        })?;
-        let readback_ldr = ctx.create_buffer(&BufferDesc {
+        })?);
+        parts.readback_ldr = Some(ctx.create_buffer(&BufferDesc {
             name: "readback ldr".into(),
             size_bytes: pixels * 4,
             usage: vk::BufferUsageFlags::TRANSFER_DST,
             location: MemoryLocation::GpuToCpu,
-        })?;
-        let scene_gpu = SceneGpu::new(ctx, scene, settings.time_s)?;
+        })?);
+        parts.scene = Some(SceneGpu::new(ctx, scene, settings.time_s)?);
         // Paraboloid maps write their depth per fragment, which costs the other maps their
         // early depth test: only scenes that have them pay for it.
         let paraboloid = settings.shadow.point_technique == PointShadow::DualParaboloid
@@ -165,132 +367,94 @@ impl Renderer {
                 .iter()
                 .any(|l| matches!(l, Light::Point { .. }));
         let sampler = ctx.create_sampler(vk::Filter::NEAREST, false)?;
-        let shadow_depth = ShadowDepthPass::new(ctx, paraboloid, scene.has_transparency())?;
-        let gbuffer = GbufferPass::new(
+        parts.sampler = Some(sampler);
+        parts.shadow_depth = Some(ShadowDepthPass::new(
+            ctx,
+            paraboloid,
+            scene.has_transparency(),
+        )?);
+        parts.gbuffer = Some(GbufferPass::new(
             ctx,
             has_phong,
             scene.has_albedo_textures(),
             scene.has_bump_maps(),
             scene.has_transparency(),
-        )?;
-        let deferred = DeferredDirectPass::new(ctx, has_phong, sampler)?;
-        let tonemap = TonemapPass::new(ctx, sampler)?;
-        let gi_on = settings.gi.method != crate::gi::GiMethod::None;
-        if gi_on
-            && settings.shadow.point_technique == PointShadow::DualParaboloid
-            && scene.has_point_lights()
-        {
-            return Err(RenderError::GiNeedsCubeShadows);
-        }
+        )?);
+        parts.deferred = Some(DeferredDirectPass::new(ctx, has_phong, sampler)?);
+        parts.tonemap = Some(TonemapPass::new(ctx, sampler)?);
         // The atlas view only needs the grid's voxel size, not a voxelization; the G-buffer
         // views not even that.
         let atlas_view_on = settings
             .debug
             .is_some_and(|d| d.view == crate::voxel::debug_view::DebugView::Atlas);
-        let voxel_view_on = settings.debug.is_some_and(|d| d.view.shows_voxels());
-        let voxel_settings = settings
-            .voxels
-            .or(gi_on.then(Default::default))
-            .or(voxel_view_on.then(Default::default));
-        let gbuffer_view = match settings.debug.and_then(|d| gbuffer_view::channel(d.view)) {
-            Some(channel) => {
-                // The distance view draws the farthest point of the scene's box black.
-                let b = scene.aabb_at(settings.time_s);
-                let far_m = scene.camera.position.distance((b.min + b.max) * 0.5)
-                    + 0.5 * (b.max - b.min).length();
-                Some(gbuffer_view::GbufferViewPass::new(
-                    ctx, sampler, channel, far_m,
-                )?)
-            }
-            None => None,
-        };
-        let mut voxels = match &voxel_settings {
-            Some(v) => Some(crate::voxel::gpu::VoxelFrame::new(
+        if let Some(channel) = settings.debug.and_then(|d| gbuffer_view::channel(d.view)) {
+            // The distance view draws the farthest point of the scene's box black.
+            let b = scene.aabb_at(settings.time_s);
+            let far_m = scene.camera.position.distance((b.min + b.max) * 0.5)
+                + 0.5 * (b.max - b.min).length();
+            parts.gbuffer_view = Some(gbuffer_view::GbufferViewPass::new(
+                ctx, sampler, channel, far_m,
+            )?);
+        }
+        if let Some(v) = &voxel_settings {
+            parts.voxels = Some(crate::voxel::gpu::VoxelFrame::new(
                 ctx,
                 scene,
                 settings.time_s,
                 v,
-            )?),
-            None => None,
-        };
-        let gi = match (&mut voxels, gi_on) {
-            (Some(v), true) => {
-                // With the atlas voxelizer its points write the volumes (Thiedemann 2010, §4.3.2).
-                let atlas_attributes = crate::gi::GiPasses::needs_attribute_volumes(&settings.gi)
-                    && v.enable_attribute_volumes(ctx, scene)?;
-                let passes = crate::gi::GiPasses::new(
-                    ctx,
-                    settings.gi,
-                    &crate::gi::GiTarget {
-                        scene,
-                        time_s: settings.time_s,
-                        grid: &v.voxels.grid,
-                        shadow_resolution: settings.shadow.resolution,
-                        size: (settings.width, settings.height),
-                        has_phong,
-                        atlas_attributes,
-                    },
-                )?;
-                let light_map = LightMapPass::new(ctx, scene.has_transparency())?;
-                Some((passes, light_map))
-            }
-            _ => None,
-        };
-        let atlas_view = match &settings.debug {
-            Some(d) if atlas_view_on => {
-                let grid = settings
-                    .voxels
-                    .unwrap_or_default()
-                    .grid_for(scene, settings.time_s)
-                    .map_err(crate::voxel::gpu::GpuVoxelError::from)?;
-                Some(crate::voxel::atlas_view::AtlasViewPass::new(
-                    ctx,
+            )?);
+        }
+        if let (Some(v), true) = (&mut parts.voxels, gi_on) {
+            // With the atlas voxelizer its points write the volumes (Thiedemann 2010, §4.3.2).
+            let atlas_attributes = crate::gi::GiPasses::needs_attribute_volumes(&settings.gi)
+                && v.enable_attribute_volumes(ctx, scene)?;
+            parts.gi = Some(crate::gi::GiPasses::new(
+                ctx,
+                settings.gi,
+                &crate::gi::GiTarget {
                     scene,
-                    settings.time_s,
-                    &grid,
-                    d.object,
-                )?)
-            }
-            _ => None,
-        };
-        let voxel_debug = match (&settings.debug, &mut voxels) {
-            (Some(d), Some(v)) if voxel_view_on => {
+                    time_s: settings.time_s,
+                    grid: &v.voxels.grid,
+                    shadow_resolution: settings.shadow.resolution,
+                    size: (settings.width, settings.height),
+                    has_phong,
+                    atlas_attributes,
+                },
+            )?);
+            parts.light_map = Some(LightMapPass::new(ctx, scene.has_transparency())?);
+        }
+        if let Some(d) = settings.debug.filter(|_| atlas_view_on) {
+            let grid = settings
+                .voxels
+                .unwrap_or_default()
+                .grid_for(scene, settings.time_s)
+                .map_err(crate::voxel::gpu::GpuVoxelError::from)?;
+            parts.atlas_view = Some(crate::voxel::atlas_view::AtlasViewPass::new(
+                ctx,
+                scene,
+                settings.time_s,
+                &grid,
+                d.object,
+            )?);
+        }
+        if let (Some(d), Some(v)) = (&settings.debug, &mut parts.voxels) {
+            if voxel_view_on {
                 // With the atlas voxelizer its points write the albedo the view shows.
                 if d.view == crate::voxel::debug_view::DebugView::Albedo {
                     v.enable_attribute_volumes(ctx, scene)?;
                 }
-                Some(crate::voxel::debug_view::VoxelDebugPass::new(
+                parts.voxel_debug = Some(crate::voxel::debug_view::VoxelDebugPass::new(
                     ctx,
                     scene,
                     settings.time_s,
                     settings.width as f32 / settings.height as f32,
                     d,
                     v,
-                )?)
+                )?);
             }
-            _ => None,
-        };
-        let mut r = Self {
-            settings,
-            scene: scene_gpu,
-            readback_hdr,
-            readback_ldr,
-            sampler,
-            shadow_depth,
-            gbuffer,
-            deferred,
-            tonemap,
-            has_phong,
-            shadow_view_count: 0,
-            frame_data: GpuFrame::zeroed(),
-            voxels,
-            gi,
-            voxel_debug,
-            atlas_view,
-            gbuffer_view,
-        };
-        r.prepare(scene)?;
-        Ok(r)
+        }
+        parts.has_phong = has_phong;
+        Ok(())
     }
 
     /// Computes frame constants, shadow views and culled draw lists for the scene's camera and

@@ -13,6 +13,7 @@ use super::mesh::{Aabb, BUILTIN_MESH_NAMES};
 use super::obj::AssetStore;
 use super::object::{rotation_from_euler_xyz_deg, Animation, Keyframe, Object, Transform};
 use super::Scene;
+use crate::limits::{self, Limit};
 
 /// A number or three numbers (`scale = 2` or `scale = [1, 2, 1]`; `albedo = 0.5`).
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
@@ -405,88 +406,47 @@ fn build_gi(ck: &Check<'_>, g: &GiDesc) -> Result<GiOverrides, SceneError> {
                 })?,
         ),
     };
-    let count = |name: &str, v: Option<i64>, min: i64, max: i64, what: &str| {
+    // The ranges and words are those of the flags (`crate::limits`); the error names the key.
+    let count = |limit: &Limit<u32>, v: Option<i64>| {
         v.map(|v| {
-            if (min..=max).contains(&v) {
-                Ok(v as u32)
-            } else {
-                Err(ck.invalid(
-                    &format!("gi.{name}"),
-                    format!("{v}; expected {what}, an integer in [{min}, {max}]"),
-                ))
-            }
+            let key = limit.key.unwrap_or(limit.flag);
+            limit
+                .check_as(key, v)
+                .map_err(|e| ck.invalid(key, limit_message(&e)))
         })
         .transpose()
     };
-    let length = |name: &str, v: Option<f32>, positive: bool, what: &str| {
+    let length = |limit: &Limit<f32>, v: Option<f32>| {
         v.map(|v| {
-            let field = format!("gi.{name}");
-            let v = ck.scalar(&field, v)?;
-            if v < 0.0 || (positive && v == 0.0) {
-                let bound = if positive { "> 0" } else { ">= 0" };
-                return Err(ck.invalid(&field, format!("{v}; expected {what} {bound}")));
-            }
-            Ok(v)
+            let key = limit.key.unwrap_or(limit.flag);
+            let v = ck.scalar(key, v)?;
+            limit
+                .check_as(key, v)
+                .map_err(|e| ck.invalid(key, limit_message(&e)))
         })
         .transpose()
     };
     Ok(GiOverrides {
         method,
-        rays: count("rays", g.rays, 1, 4096, "rays per pixel")?,
+        rays: count(&limits::GI_RAYS, g.rays)?,
         bounces: g
             .bounces
             .as_ref()
             .map(|v| bounces_from_toml(v).map_err(|e| ck.invalid("gi.bounces", e)))
             .transpose()?,
-        radius_m: length("radius_m", g.radius_m, true, "a ray length in meters")?,
-        normal_offset_voxels: length(
-            "normal_offset_voxels",
-            g.normal_offset_voxels,
-            false,
-            "an offset along the normal in voxel diagonals",
-        )?,
-        ray_offset_voxels: length(
-            "ray_offset_voxels",
-            g.ray_offset_voxels,
-            false,
-            "an offset along the ray in voxel diagonals",
-        )?,
-        filter_radius: count(
-            "filter_radius",
-            g.filter_radius,
-            0,
-            64,
-            "a filter radius in pixels (0: off)",
-        )?,
-        filter_passes: count(
-            "filter_passes",
-            g.filter_passes,
-            0,
-            16,
-            "a number of filter passes",
-        )?,
-        light_map_resolution: count(
-            "light_map_resolution",
-            g.light_map_resolution,
-            16,
-            8192,
-            "texels per side of a light map",
-        )?,
-        accumulate_frames: count(
-            "accumulate_frames",
-            g.accumulate_frames,
-            1,
-            1 << 20,
-            "frames to accumulate",
-        )?,
+        radius_m: length(&limits::GI_RADIUS_M, g.radius_m)?,
+        normal_offset_voxels: length(&limits::GI_NORMAL_OFFSET, g.normal_offset_voxels)?,
+        ray_offset_voxels: length(&limits::GI_RAY_OFFSET, g.ray_offset_voxels)?,
+        filter_radius: count(&limits::GI_FILTER_RADIUS, g.filter_radius)?,
+        filter_passes: count(&limits::GI_FILTER_PASSES, g.filter_passes)?,
+        light_map_resolution: count(&limits::LIGHT_MAP_RESOLUTION, g.light_map_resolution)?,
+        accumulate_frames: count(&limits::GI_FRAMES, g.accumulate_frames)?,
         vpl: build_vpl(ck, g, &count, &length)?,
     })
 }
 
-type CountCheck<'a> =
-    dyn Fn(&str, Option<i64>, i64, i64, &str) -> Result<Option<u32>, SceneError> + 'a;
-type LengthCheck<'a> =
-    dyn Fn(&str, Option<f32>, bool, &str) -> Result<Option<f32>, SceneError> + 'a;
+type CountCheck<'a> = dyn Fn(&Limit<u32>, Option<i64>) -> Result<Option<u32>, SceneError> + 'a;
+type LengthCheck<'a> = dyn Fn(&Limit<f32>, Option<f32>) -> Result<Option<f32>, SceneError> + 'a;
 
 /// The `[gi]` table's VPL keys (`vpls`, `vpl_pattern`, `vpl_bounces`, `vpl_d_min_voxels`,
 /// `vpl_visibility`).
@@ -496,13 +456,12 @@ fn build_vpl(
     count: &CountCheck<'_>,
     length: &LengthCheck<'_>,
 ) -> Result<crate::scene::vpl_settings::VplOverrides, SceneError> {
-    use crate::scene::vpl_settings::{VplSettings, VISIBILITY_NAMES};
-    let side = i64::from(VplSettings::MAX_PATTERN);
+    use crate::scene::vpl_settings::VISIBILITY_NAMES;
     let pattern = match g.vpl_pattern {
         None => None,
         Some([n, m]) => Some([
-            count("vpl_pattern[0]", Some(n), 1, side, "a pattern width")?.unwrap_or(1),
-            count("vpl_pattern[1]", Some(m), 1, side, "a pattern height")?.unwrap_or(1),
+            count(&limits::VPL_PATTERN_SIDE, Some(n))?.unwrap_or(1),
+            count(&limits::VPL_PATTERN_SIDE, Some(m))?.unwrap_or(1),
         ]),
     };
     let visibility = match &g.vpl_visibility {
@@ -521,29 +480,17 @@ fn build_vpl(
         ),
     };
     Ok(crate::scene::vpl_settings::VplOverrides {
-        per_set: count(
-            "vpls",
-            g.vpls,
-            1,
-            i64::from(VplSettings::MAX_PER_SET),
-            "VPLs per set and light",
-        )?,
+        per_set: count(&limits::VPLS, g.vpls)?,
         pattern,
-        bounces: count(
-            "vpl_bounces",
-            g.vpl_bounces,
-            1,
-            i64::from(VplSettings::MAX_BOUNCES),
-            "VPL bounces",
-        )?,
-        d_min_voxels: length(
-            "vpl_d_min_voxels",
-            g.vpl_d_min_voxels,
-            false,
-            "d_min in voxel diagonals",
-        )?,
+        bounces: count(&limits::VPL_BOUNCES, g.vpl_bounces)?,
+        d_min_voxels: length(&limits::VPL_D_MIN, g.vpl_d_min_voxels)?,
         visibility,
     })
+}
+
+/// A limit's message without the key, which the scene error puts in front itself.
+fn limit_message(e: &limits::LimitError) -> String {
+    format!("{}; expected {}", e.value, e.expected)
 }
 
 fn build_light(ck: &Check<'_>, field: &str, l: &LightDesc) -> Result<Light, SceneError> {

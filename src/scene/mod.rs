@@ -234,4 +234,6 @@ impl Scene {
 }
 
 #[cfg(test)]
+mod input_tests;
+#[cfg(test)]
 mod tests;

@@ -333,11 +333,13 @@ impl AssetStore {
             self.textures_by_path.insert(key, None);
             return Ok(None);
         }
-        let img = image::open(path).map_err(|e| SceneError::TextureDecode {
+        let decode_error = |message: String| SceneError::TextureDecode {
             file: path.to_path_buf(),
-            message: e.to_string(),
+            message,
             referenced_by: referenced_by.to_string(),
-        })?;
+        };
+        check_texture_size(path).map_err(decode_error)?;
+        let img = image::open(path).map_err(|e| decode_error(e.to_string()))?;
         let rgba = img.to_rgba8();
         let i = self.textures.len();
         self.textures.push(TextureData {
@@ -350,6 +352,27 @@ impl AssetStore {
         self.textures_by_path.insert(key, Some(i));
         Ok(Some(i))
     }
+}
+
+/// The largest texture side voxgi uploads: the `maxImageDimension2D` every Vulkan 1.3 desktop
+/// driver offers (lavapipe's included).
+pub const MAX_TEXTURE_SIDE: u32 = 16384;
+
+/// Reads only the header of a texture file and refuses an empty image or one larger than
+/// [`MAX_TEXTURE_SIDE`], before decoding allocates its texels.
+fn check_texture_size(path: &Path) -> Result<(), String> {
+    let (w, h) = image::io::Reader::open(path)
+        .and_then(|r| r.with_guessed_format())
+        .map_err(|e| e.to_string())?
+        .into_dimensions()
+        .map_err(|e| e.to_string())?;
+    if w == 0 || h == 0 || w > MAX_TEXTURE_SIDE || h > MAX_TEXTURE_SIDE {
+        return Err(format!(
+            "the image is {w}×{h} texels; expected 1 to {MAX_TEXTURE_SIDE} texels per side \
+             (downscale it, e.g. to 4096×4096)"
+        ));
+    }
+    Ok(())
 }
 
 /// Runs a tobj call, turning a panic inside tobj (it unwraps in a few places on malformed

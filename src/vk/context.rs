@@ -7,6 +7,7 @@ use super::VkError;
 use ash::extensions::{ext, khr};
 use ash::vk;
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
+use std::collections::BTreeMap;
 use std::ffi::{c_void, CStr, CString};
 use std::mem::ManuallyDrop;
 use std::sync::atomic::{AtomicU32, Ordering};
@@ -63,6 +64,72 @@ impl ValidationLog {
     }
 }
 
+/// GPU memory handed out and not yet freed, keyed by (memory handle, offset), with the name
+/// it was allocated under: what [`Context::finish`] reports as leaked. gpu-allocator only logs
+/// its leaks at shutdown; this table lets teardown fail on them instead.
+#[derive(Debug, Default)]
+pub(super) struct LiveAllocations(Mutex<BTreeMap<(u64, u64), String>>);
+
+impl LiveAllocations {
+    pub(super) fn insert(&self, key: (u64, u64), name: &str) {
+        if let Ok(mut m) = self.0.lock() {
+            m.insert(key, name.to_owned());
+        }
+    }
+    pub(super) fn remove(&self, key: (u64, u64)) {
+        if let Ok(mut m) = self.0.lock() {
+            m.remove(&key);
+        }
+    }
+    /// The names of every allocation still alive, sorted.
+    fn names(&self) -> Vec<String> {
+        let mut names: Vec<String> = self
+            .0
+            .lock()
+            .map(|m| m.values().cloned().collect())
+            .unwrap_or_default();
+        names.sort();
+        names
+    }
+}
+
+/// What the whole life of a [`Context`] left behind, teardown included: the validation
+/// messages (also those raised while destroying the device and instance, e.g. objects never
+/// destroyed) and the GPU memory never freed. Tests and `--validate` fail unless it is clean.
+#[derive(Clone, Debug, Default)]
+pub struct TeardownReport {
+    /// Every validation message, oldest first.
+    pub validation_messages: Vec<String>,
+    /// Names of GPU memory allocations (persistent buffers, images, graph arenas) never freed.
+    pub leaked_allocations: Vec<String>,
+}
+
+impl TeardownReport {
+    /// No validation message and no leaked allocation.
+    pub fn is_clean(&self) -> bool {
+        self.validation_messages.is_empty() && self.leaked_allocations.is_empty()
+    }
+
+    /// One line per problem: the validation messages, then one line per leaked allocation.
+    pub fn problems(&self) -> Vec<String> {
+        let leaks = self
+            .leaked_allocations
+            .iter()
+            .map(|n| format!("GPU memory `{n}` was never freed (leak)"));
+        self.validation_messages
+            .iter()
+            .cloned()
+            .chain(leaks)
+            .collect()
+    }
+}
+
+impl std::fmt::Display for TeardownReport {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}", self.problems().join("\n---\n"))
+    }
+}
+
 /// Limits and properties the rest of the renderer needs.
 #[derive(Clone, Debug)]
 pub struct DeviceInfo {
@@ -76,6 +143,8 @@ pub struct DeviceInfo {
     pub non_coherent_atom_size: u64,
     /// Largest storage-buffer binding range (128 MiB on lavapipe).
     pub max_storage_buffer_range: u32,
+    /// Largest side of a 2D image (16384 on lavapipe and desktop drivers).
+    pub max_image_dimension_2d: u32,
 }
 
 pub struct Context {
@@ -92,6 +161,7 @@ pub struct Context {
     pub validation: Arc<ValidationLog>,
     pub(super) allocator: ManuallyDrop<Mutex<Allocator>>,
     pub(super) upload_pool: Mutex<vk::CommandPool>,
+    pub(super) live_allocations: LiveAllocations,
     messenger: vk::DebugUtilsMessengerEXT,
 }
 
@@ -183,53 +253,58 @@ impl Context {
             [vk::ValidationFeatureEnableEXT::SYNCHRONIZATION_VALIDATION];
         let mut validation_features = vk::ValidationFeaturesEXT::builder()
             .enabled_validation_features(&enabled_validation_features);
+        let validation = Arc::new(ValidationLog::default());
+        let mut instance_messenger_info = messenger_info(&validation);
         let mut instance_info = vk::InstanceCreateInfo::builder()
             .application_info(&app_info)
             .enabled_layer_names(&layers)
             .enabled_extension_names(&extensions);
         if desc.validation {
-            instance_info = instance_info.push_next(&mut validation_features);
+            // The chained messenger info also reports what vkCreateInstance and
+            // vkDestroyInstance find (e.g. a surface never destroyed), outside the lifetime of
+            // the messenger created below.
+            instance_info = instance_info
+                .push_next(&mut validation_features)
+                .push_next(&mut instance_messenger_info);
         }
-        // SAFETY: every pointer in instance_info refers to locals that outlive this call.
+        // SAFETY: every pointer in instance_info refers to locals that outlive this call; the
+        // chained messenger's user data points into `validation`, which the Context keeps
+        // until after it destroys the instance.
         let instance = unsafe { entry.create_instance(&instance_info, None) }
             .map_err(VkError::vk("create the Vulkan instance"))?;
 
-        let validation = Arc::new(ValidationLog::default());
         let debug_utils = debug_utils_available.then(|| ext::DebugUtils::new(&entry, &instance));
         let mut messenger = vk::DebugUtilsMessengerEXT::null();
         if let (true, Some(du)) = (desc.validation, debug_utils.as_ref()) {
-            let info = vk::DebugUtilsMessengerCreateInfoEXT::builder()
-                .message_severity(
-                    vk::DebugUtilsMessageSeverityFlagsEXT::WARNING
-                        | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR,
-                )
-                .message_type(
-                    vk::DebugUtilsMessageTypeFlagsEXT::GENERAL
-                        | vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
-                        | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE,
-                )
-                .pfn_user_callback(Some(debug_callback))
-                .user_data(Arc::as_ptr(&validation) as *mut c_void);
             // SAFETY: the user data points into the Arc held by the Context (`validation`),
             // which outlives the messenger: Drop destroys the messenger first.
-            messenger = unsafe { du.create_debug_utils_messenger(&info, None) }
-                .map_err(VkError::vk("create the debug messenger"))?;
+            let created =
+                unsafe { du.create_debug_utils_messenger(&messenger_info(&validation), None) };
+            messenger = created.map_err(|r| {
+                // SAFETY: nothing was created from the instance yet.
+                unsafe { instance.destroy_instance(None) };
+                VkError::vk("create the debug messenger")(r)
+            })?;
         }
 
-        let (physical_device, queue_family, info) =
-            match pick_device(&instance, desc.device.clone(), desc.swapchain) {
-                Ok(v) => v,
-                Err(e) => {
-                    // SAFETY: nothing else was created from the instance besides the messenger.
-                    unsafe {
-                        if let Some(du) = &debug_utils {
-                            du.destroy_debug_utils_messenger(messenger, None);
-                        }
-                        instance.destroy_instance(None);
+        // Undoes the instance and messenger when a later step fails (the device, where it
+        // exists, is destroyed first by the caller).
+        let release_instance = |e: VkError| {
+            // SAFETY: nothing else created from the instance is alive: every failure path
+            // below destroys what it made (device, allocator) before calling this.
+            unsafe {
+                if let Some(du) = &debug_utils {
+                    if messenger != vk::DebugUtilsMessengerEXT::null() {
+                        du.destroy_debug_utils_messenger(messenger, None);
                     }
-                    return Err(e);
                 }
-            };
+                instance.destroy_instance(None);
+            }
+            e
+        };
+        let (physical_device, queue_family, info) =
+            pick_device(&instance, desc.device.clone(), desc.swapchain)
+                .map_err(release_instance)?;
         log::info!(
             "using Vulkan device: {} ({:?})",
             info.name,
@@ -269,7 +344,12 @@ impl Context {
             .push_next(&mut features12);
         // SAFETY: physical_device comes from this instance; all pointers refer to live locals.
         let device = unsafe { instance.create_device(physical_device, &device_info, None) }
-            .map_err(VkError::vk("create the logical device"))?;
+            .map_err(|r| release_instance(VkError::vk("create the logical device")(r)))?;
+        let release_device = |e: VkError| {
+            // SAFETY: the device is idle and nothing created from it is alive.
+            unsafe { device.destroy_device(None) };
+            release_instance(e)
+        };
         // SAFETY: the queue family and index 0 were requested in device_info.
         let queue = unsafe { device.get_device_queue(queue_family, 0) };
 
@@ -284,14 +364,21 @@ impl Context {
             buffer_device_address: false,
             allocation_sizes: Default::default(),
         })
-        .map_err(|e| VkError::Allocation(e.to_string()))?;
+        .map_err(|e| release_device(VkError::Allocation(e.to_string())))?;
 
         let pool_info = vk::CommandPoolCreateInfo::builder()
             .queue_family_index(queue_family)
             .flags(vk::CommandPoolCreateFlags::TRANSIENT);
         // SAFETY: device is valid; the pool is destroyed in Drop.
-        let upload_pool = unsafe { device.create_command_pool(&pool_info, None) }
-            .map_err(VkError::vk("create the upload command pool"))?;
+        let upload_pool = match unsafe { device.create_command_pool(&pool_info, None) } {
+            Ok(pool) => pool,
+            Err(r) => {
+                drop(allocator);
+                return Err(release_device(VkError::vk(
+                    "create the upload command pool",
+                )(r)));
+            }
+        };
 
         let push_descriptor = khr::PushDescriptor::new(&instance, &device);
         Ok(Self {
@@ -307,6 +394,7 @@ impl Context {
             validation,
             allocator: ManuallyDrop::new(Mutex::new(allocator)),
             upload_pool: Mutex::new(upload_pool),
+            live_allocations: LiveAllocations::default(),
             messenger,
         })
     }
@@ -315,6 +403,20 @@ impl Context {
     pub fn wait_idle(&self) -> Result<(), VkError> {
         // SAFETY: the device is valid for the lifetime of self.
         unsafe { self.device.device_wait_idle() }.map_err(VkError::vk("wait for the device"))
+    }
+
+    /// Destroys the context and reports what its whole life left behind: every validation
+    /// message, including those raised while destroying the device and instance (objects
+    /// never destroyed, wrong destruction order), and the GPU memory never freed. Checking
+    /// the messages before teardown misses those; tests and `--validate` check this instead.
+    pub fn finish(self) -> TeardownReport {
+        let leaked_allocations = self.live_allocations.names();
+        let log = Arc::clone(&self.validation);
+        drop(self);
+        TeardownReport {
+            validation_messages: log.messages(),
+            leaked_allocations,
+        }
     }
 
     /// Gives a Vulkan object a name visible in validation messages and RenderDoc.
@@ -329,6 +431,18 @@ impl Context {
             .object_name(&cname);
         // SAFETY: object is a live handle of this device; naming failure is harmless.
         let _ = unsafe { du.set_debug_utils_object_name(self.device.handle(), &info) };
+    }
+
+    /// Size of the device's largest device-local memory heap: an upper bound on any one
+    /// resource set, checked before allocating large ones (voxel grids).
+    pub fn largest_device_local_heap_bytes(&self) -> u64 {
+        let props = self.memory_properties();
+        props.memory_heaps[..props.memory_heap_count as usize]
+            .iter()
+            .filter(|h| h.flags.contains(vk::MemoryHeapFlags::DEVICE_LOCAL))
+            .map(|h| h.size)
+            .max()
+            .unwrap_or(0)
     }
 
     /// Memory properties of the chosen device (for the graph's transient arenas).
@@ -360,6 +474,23 @@ impl Drop for Context {
             self.instance.destroy_instance(None);
         }
     }
+}
+
+/// The messenger settings: warnings and errors of every type, recorded into `log`.
+fn messenger_info(log: &Arc<ValidationLog>) -> vk::DebugUtilsMessengerCreateInfoEXT {
+    vk::DebugUtilsMessengerCreateInfoEXT::builder()
+        .message_severity(
+            vk::DebugUtilsMessageSeverityFlagsEXT::WARNING
+                | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR,
+        )
+        .message_type(
+            vk::DebugUtilsMessageTypeFlagsEXT::GENERAL
+                | vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
+                | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE,
+        )
+        .pfn_user_callback(Some(debug_callback))
+        .user_data(Arc::as_ptr(log) as *mut c_void)
+        .build()
 }
 
 unsafe extern "system" fn debug_callback(
@@ -528,6 +659,7 @@ fn pick_device(
         max_sampler_anisotropy: props.limits.max_sampler_anisotropy,
         non_coherent_atom_size: props.limits.non_coherent_atom_size,
         max_storage_buffer_range: props.limits.max_storage_buffer_range,
+        max_image_dimension_2d: props.limits.max_image_dimension2_d,
     };
     Ok((pd, family, info))
 }

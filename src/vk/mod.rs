@@ -11,7 +11,9 @@ mod swapchain;
 
 pub use ash::vk;
 pub use cmd::{Attachment, Cmd};
-pub use context::{describe_devices, Context, ContextDesc, DeviceInfo, ValidationLog};
+pub use context::{
+    describe_devices, Context, ContextDesc, DeviceInfo, TeardownReport, ValidationLog,
+};
 pub use frame::{FrameLoop, FrameSlot, PassTiming, TimestampRecorder, MAX_FRAMES_IN_FLIGHT};
 pub use pipeline::{
     check_push_against, check_struct_against, descriptor_type, interface_of, Bindable,

@@ -2,6 +2,7 @@
 
 use super::{Context, VkError};
 use ash::vk;
+use ash::vk::Handle;
 use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
 pub use gpu_allocator::MemoryLocation;
 
@@ -138,6 +139,13 @@ pub struct Image {
     allocation: Option<Allocation>,
 }
 
+/// The key of an allocation in the context's table of live allocations.
+fn allocation_key(allocation: &Allocation) -> (u64, u64) {
+    // SAFETY: only the handle's value is read, as a key; no memory is touched.
+    let memory = unsafe { allocation.memory() };
+    (memory.as_raw(), allocation.offset())
+}
+
 impl Context {
     pub fn create_buffer(&self, desc: &BufferDesc) -> Result<Buffer, VkError> {
         if desc.size_bytes == 0 {
@@ -165,11 +173,16 @@ impl Context {
             }
         };
         // SAFETY: memory and offset come from an allocation that satisfies `requirements`.
-        unsafe {
+        let bound = unsafe {
             self.device
                 .bind_buffer_memory(raw, allocation.memory(), allocation.offset())
+        };
+        if let Err(e) = bound {
+            // SAFETY: raw is unused.
+            unsafe { self.device.destroy_buffer(raw, None) };
+            self.free(allocation);
+            return Err(VkError::vk("bind buffer memory")(e));
         }
-        .map_err(VkError::vk("bind buffer memory"))?;
         self.set_name(raw, &desc.name);
         Ok(Buffer {
             raw,
@@ -202,13 +215,22 @@ impl Context {
                 }
             };
         // SAFETY: allocation satisfies `requirements`.
-        unsafe {
+        let bound = unsafe {
             self.device
                 .bind_image_memory(raw, allocation.memory(), allocation.offset())
         }
-        .map_err(VkError::vk("bind image memory"))?;
+        .map_err(VkError::vk("bind image memory"));
         self.set_name(raw, &desc.name);
-        let (view, mip_views) = self.create_views(raw, desc)?;
+        let views = bound.and_then(|()| self.create_views(raw, desc));
+        let (view, mip_views) = match views {
+            Ok(v) => v,
+            Err(e) => {
+                // SAFETY: raw is unused (a view that failed was never created).
+                unsafe { self.device.destroy_image(raw, None) };
+                self.free(allocation);
+                return Err(e);
+            }
+        };
         Ok(Image {
             raw,
             view,
@@ -298,7 +320,7 @@ impl Context {
             .allocator
             .lock()
             .map_err(|_| VkError::Allocation("allocator lock poisoned".into()))?;
-        alloc
+        let allocation = alloc
             .allocate(&AllocationCreateDesc {
                 name,
                 requirements,
@@ -306,10 +328,14 @@ impl Context {
                 linear,
                 allocation_scheme: AllocationScheme::GpuAllocatorManaged,
             })
-            .map_err(|e| VkError::Allocation(format!("`{name}`: {e}")))
+            .map_err(|e| VkError::Allocation(format!("`{name}`: {e}")))?;
+        self.live_allocations
+            .insert(allocation_key(&allocation), name);
+        Ok(allocation)
     }
 
     fn free(&self, allocation: Allocation) {
+        self.live_allocations.remove(allocation_key(&allocation));
         if let Ok(mut alloc) = self.allocator.lock() {
             if let Err(e) = alloc.free(allocation) {
                 log::error!("freeing GPU memory failed: {e}");
@@ -650,10 +676,13 @@ impl Context {
             ))
         })?;
         self.set_name(memory, name);
+        self.live_allocations
+            .insert((memory.as_raw(), u64::MAX), name);
         Ok(memory)
     }
 
     pub fn free_arena(&self, memory: vk::DeviceMemory) {
+        self.live_allocations.remove((memory.as_raw(), u64::MAX));
         // SAFETY: every resource bound to the arena was destroyed and no work is pending.
         unsafe { self.device.free_memory(memory, None) };
     }

@@ -1,8 +1,10 @@
 //! Shared fixture of the Vulkan integration tests: a context with the validation layer and
-//! synchronization validation on; `finish` asserts that no message was reported.
+//! synchronization validation on. Dropping it destroys the device and instance and fails the
+//! test on any validation message of its whole life, teardown included (objects never
+//! destroyed), and on GPU memory never freed.
 #![allow(dead_code)]
 
-use voxgi::vk::{Context, ContextDesc};
+use voxgi::vk::{Context, ContextDesc, TeardownReport};
 
 /// The world points where the camera ray through the center of pixel (x, y) of a square
 /// `size`² image meets the near and far planes (`Camera::pixel_ray_points`).
@@ -15,9 +17,55 @@ pub fn pixel_ray_points(
     scene.camera.pixel_ray_points(x, y, size, size)
 }
 
-/// A validating context on the default device (lavapipe on CI). Without a Vulkan device the
-/// test fails with the install hint: these tests never pass silently.
-pub fn context() -> Context {
+/// A validating [`Context`] that checks its own teardown: when it is dropped (at the end of the
+/// test, after everything created from it), it destroys the device and instance and panics if
+/// the validation layers reported anything at any time or GPU memory was never freed. A
+/// check before teardown would miss the layers' reports of objects never destroyed.
+pub struct TestContext(Option<Context>);
+
+impl TestContext {
+    /// Destroys the context and returns what it left behind instead of asserting on it: for
+    /// the tests that check that misuse is reported.
+    pub fn finish(mut self) -> TeardownReport {
+        self.0
+            .take()
+            .expect("context alive until finished")
+            .finish()
+    }
+}
+
+impl std::ops::Deref for TestContext {
+    type Target = Context;
+    fn deref(&self) -> &Context {
+        self.0.as_ref().expect("context alive until finished")
+    }
+}
+
+impl Drop for TestContext {
+    fn drop(&mut self) {
+        let Some(ctx) = self.0.take() else { return };
+        let report = ctx.finish();
+        // A test already failing keeps its own message (a second panic would abort).
+        if !report.is_clean() && !std::thread::panicking() {
+            panic!(
+                "{} validation message(s) and {} leaked allocation(s) over the context's life \
+                 (teardown included):\n{report}",
+                report.validation_messages.len(),
+                report.leaked_allocations.len()
+            );
+        }
+    }
+}
+
+/// A validating context on the default device (lavapipe on CI), checked at teardown (see
+/// [`TestContext`]). Without a Vulkan device the test fails with the install hint: these
+/// tests never pass silently.
+pub fn context() -> TestContext {
+    TestContext(Some(raw_context()))
+}
+
+/// A validating context that does not check itself at teardown; call [`Context::finish`].
+pub fn raw_context() -> Context {
     if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
         let dir = std::env::temp_dir().join("voxgi-xdg");
         let _ = std::fs::create_dir_all(&dir);
@@ -33,7 +81,8 @@ pub fn context() -> Context {
     }
 }
 
-/// Fails the test if the validation layers reported anything, listing the messages.
+/// Fails the test if the validation layers reported anything so far, listing the messages.
+/// (Teardown is checked when the [`TestContext`] drops.)
 pub fn assert_no_validation_messages(ctx: &Context) {
     let n = ctx.validation.total();
     if n > 0 {

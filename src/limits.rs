@@ -1,0 +1,463 @@
+//! The ranges of every settings value, in one place: command-line flags (`cli::args`), scene
+//! files' `[gi]` tables (`scene::desc`), the viewer's panel (`app::panel`) and
+//! [`check_render_settings`] (run by `Renderer::new` for every caller) all check against
+//! these, so a value is accepted or refused with the same range and words everywhere.
+//!
+//! A [`Limit`] names the value three ways: its flag, its scene-file key (where a scene file
+//! can give it) and what it is; an error from it names the one the user typed.
+
+use crate::render::RenderSettings;
+use std::fmt;
+use std::ops::RangeInclusive;
+
+/// The range of one settings value, inclusive at both ends unless `min_exclusive`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Limit<T> {
+    /// The command-line flag, e.g. `--gi-rays`.
+    pub flag: &'static str,
+    /// The scene-file key, e.g. `gi.rays`, where scene files take the value.
+    pub key: Option<&'static str>,
+    /// What the value is, for the message: "rays per pixel".
+    pub what: &'static str,
+    pub min: T,
+    pub max: T,
+    /// The minimum itself is refused (lengths that must be positive).
+    pub min_exclusive: bool,
+}
+
+/// A value outside its [`Limit`]: `name` is the flag or key the user gave, `expected` says
+/// what would be accepted.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("{name} = {value} is invalid; expected {expected}")]
+pub struct LimitError {
+    pub name: String,
+    pub value: String,
+    pub expected: String,
+}
+
+impl<T: Copy + PartialOrd + fmt::Display> Limit<T> {
+    const fn new(
+        flag: &'static str,
+        key: Option<&'static str>,
+        what: &'static str,
+        min: T,
+        max: T,
+    ) -> Self {
+        Self {
+            flag,
+            key,
+            what,
+            min,
+            max,
+            min_exclusive: false,
+        }
+    }
+
+    /// The span `lo..=hi` cut to the limit: a panel slider's range, which can never offer a
+    /// value the flags and scene files refuse. (With an exclusive minimum, `lo` must be above
+    /// it.)
+    pub fn slider(&self, lo: T, hi: T) -> RangeInclusive<T> {
+        let lo = if lo < self.min { self.min } else { lo };
+        let hi = if hi > self.max { self.max } else { hi };
+        debug_assert!(
+            self.contains(lo) && self.contains(hi),
+            "{} slider",
+            self.flag
+        );
+        lo..=hi
+    }
+
+    fn contains(&self, v: T) -> bool {
+        let above = if self.min_exclusive {
+            v > self.min
+        } else {
+            v >= self.min
+        };
+        above && v <= self.max
+    }
+
+    fn error(&self, name: &str, value: impl fmt::Display, kind: &str) -> LimitError {
+        let open = if self.min_exclusive { "(" } else { "[" };
+        LimitError {
+            name: name.to_owned(),
+            value: value.to_string(),
+            expected: format!("{}, {kind} in {open}{}, {}]", self.what, self.min, self.max),
+        }
+    }
+}
+
+impl Limit<u32> {
+    /// `v` (as typed: a TOML integer may be negative or huge) when in range, else the error
+    /// naming `name`.
+    pub fn check_as(&self, name: &str, v: i64) -> Result<u32, LimitError> {
+        match u32::try_from(v) {
+            Ok(u) if self.contains(u) => Ok(u),
+            _ => Err(self.error(name, v, "an integer")),
+        }
+    }
+
+    /// [`Self::check_as`] under the flag's name.
+    pub fn check_flag(&self, v: u32) -> Result<u32, LimitError> {
+        self.check_as(self.flag, i64::from(v))
+    }
+}
+
+impl Limit<f32> {
+    /// `v` when finite and in range, else the error naming `name`.
+    pub fn check_as(&self, name: &str, v: f32) -> Result<f32, LimitError> {
+        if v.is_finite() && self.contains(v) {
+            Ok(v)
+        } else {
+            Err(self.error(name, v, "a finite number"))
+        }
+    }
+
+    /// [`Self::check_as`] under the flag's name.
+    pub fn check_flag(&self, v: f32) -> Result<f32, LimitError> {
+        self.check_as(self.flag, v)
+    }
+}
+
+/// Frame width and height: the renderer's images are at most 16384 texels on a side, the
+/// `maxImageDimension2D` every Vulkan 1.3 desktop driver offers (lavapipe's too).
+pub const WIDTH: Limit<u32> = Limit::new("--width", None, "a width in pixels", 1, 16384);
+pub const HEIGHT: Limit<u32> = Limit::new("--height", None, "a height in pixels", 1, 16384);
+/// Scene time: any finite number of seconds within ±1e9 (animations are evaluated in f32).
+pub const TIME_S: Limit<f32> = Limit::new("--time", None, "a scene time in seconds", -1e9, 1e9);
+/// Exposure multiplies the radiance before tone mapping; 0 would be black, NaN garbage.
+pub const EXPOSURE: Limit<f32> = Limit {
+    min_exclusive: true,
+    ..Limit::new("--exposure", None, "an exposure factor", 0.0, 1e6)
+};
+pub const SHADOW_RESOLUTION: Limit<u32> = Limit::new(
+    "--shadow-resolution",
+    None,
+    "texels per side of a shadow map",
+    16,
+    8192,
+);
+/// The deferred pass filters (2r+1)² shadow-map taps per view.
+pub const PCF_RADIUS: Limit<u32> = Limit::new("--pcf-radius", None, "a PCF radius in texels", 0, 8);
+/// The voxel grid's x/y resolution cap: one image texel per column, at most 16384 per side.
+pub const VOXELS: Limit<u32> = Limit::new(
+    "--voxels",
+    None,
+    "a voxel grid resolution (columns per side)",
+    1,
+    crate::voxel::grid::MAX_RES_XY,
+);
+pub const VOXEL_LAYERS: Limit<u32> = Limit::new(
+    "--voxel-layers",
+    None,
+    "a number of depth layers of 128 voxels",
+    1,
+    crate::voxel::grid::MAX_LAYERS,
+);
+pub const GI_RAYS: Limit<u32> = Limit::new("--gi-rays", Some("gi.rays"), "rays per pixel", 1, 4096);
+pub const GI_RADIUS_M: Limit<f32> = Limit {
+    min_exclusive: true,
+    ..Limit::new(
+        "--gi-radius",
+        Some("gi.radius_m"),
+        "a ray length in meters",
+        0.0,
+        1e9,
+    )
+};
+pub const GI_NORMAL_OFFSET: Limit<f32> = Limit::new(
+    "--gi-normal-offset",
+    Some("gi.normal_offset_voxels"),
+    "an offset along the normal in voxel diagonals",
+    0.0,
+    1e3,
+);
+pub const GI_RAY_OFFSET: Limit<f32> = Limit::new(
+    "--gi-ray-offset",
+    Some("gi.ray_offset_voxels"),
+    "an offset along the ray in voxel diagonals",
+    0.0,
+    1e3,
+);
+pub const GI_FILTER_RADIUS: Limit<u32> = Limit::new(
+    "--gi-filter-radius",
+    Some("gi.filter_radius"),
+    "a filter radius in pixels (0: off)",
+    0,
+    64,
+);
+pub const GI_FILTER_PASSES: Limit<u32> = Limit::new(
+    "--gi-filter-passes",
+    Some("gi.filter_passes"),
+    "a number of filter passes",
+    0,
+    16,
+);
+pub const GI_FRAMES: Limit<u32> = Limit::new(
+    "--gi-frames",
+    Some("gi.accumulate_frames"),
+    "frames to accumulate",
+    1,
+    1 << 20,
+);
+pub const LIGHT_MAP_RESOLUTION: Limit<u32> = Limit::new(
+    "--light-map-resolution",
+    Some("gi.light_map_resolution"),
+    "texels per side of a light map",
+    16,
+    8192,
+);
+/// Traversal starts at most at the top of a 16384² hierarchy (log2 16384 = 14).
+pub const GI_START_LEVEL: Limit<u32> = Limit::new(
+    "--gi-start-level",
+    None,
+    "a hierarchy level to start traversal at",
+    0,
+    14,
+);
+pub const GI_MAX_ITERATIONS: Limit<u32> = Limit::new(
+    "--gi-max-iterations",
+    None,
+    "a traversal iteration cap",
+    1,
+    1 << 20,
+);
+/// Hierarchy levels of a 16384² grid: 0..=14.
+pub const DEBUG_LEVEL: Limit<u32> = Limit::new(
+    "--debug-level",
+    None,
+    "a hierarchy level (0: the voxels)",
+    0,
+    14,
+);
+pub const DEBUG_STEPS_SCALE: Limit<u32> = Limit::new(
+    "--debug-steps-scale",
+    None,
+    "a number of traversal steps shown white",
+    1,
+    1 << 20,
+);
+
+/// `--gi vpl`'s values (Thiedemann 2010, Ch. 7): VPLs per set and light, the interleaving
+/// pattern's sides, bounces (each adds one voxel ray per VPL), d_min in voxel diagonals.
+pub const VPLS: Limit<u32> = Limit::new(
+    "--vpls",
+    Some("gi.vpls"),
+    "VPLs per set and light",
+    1,
+    crate::scene::VplSettings::MAX_PER_SET,
+);
+pub const VPL_PATTERN_SIDE: Limit<u32> = Limit::new(
+    "--vpl-pattern",
+    Some("gi.vpl_pattern"),
+    "a side of the interleaving pattern",
+    1,
+    crate::scene::VplSettings::MAX_PATTERN,
+);
+pub const VPL_BOUNCES: Limit<u32> = Limit::new(
+    "--vpl-bounces",
+    Some("gi.vpl_bounces"),
+    "VPL bounces",
+    1,
+    crate::scene::VplSettings::MAX_BOUNCES,
+);
+pub const VPL_D_MIN: Limit<f32> = Limit::new(
+    "--vpl-d-min",
+    Some("gi.vpl_d_min_voxels"),
+    "d_min in voxel diagonals",
+    0.0,
+    1e6,
+);
+
+/// Checks every value of `s` that has a [`Limit`], naming the flag of the first one out of
+/// range. `Renderer::new` runs it, so values that reach the renderer by any path (flags,
+/// scene files, the panel, the library) are checked the same way.
+pub fn check_render_settings(s: &RenderSettings) -> Result<(), LimitError> {
+    WIDTH.check_flag(s.width)?;
+    HEIGHT.check_flag(s.height)?;
+    TIME_S.check_flag(s.time_s)?;
+    EXPOSURE.check_flag(s.tonemap.exposure)?;
+    SHADOW_RESOLUTION.check_flag(s.shadow.resolution)?;
+    PCF_RADIUS.check_flag(s.shadow.pcf_radius)?;
+    if let Some(v) = &s.voxels {
+        VOXELS.check_flag(v.max_res_xy)?;
+        VOXEL_LAYERS.check_flag(v.layers)?;
+    }
+    check_gi(&s.gi)?;
+    if let Some(d) = &s.debug {
+        DEBUG_LEVEL.check_flag(d.level)?;
+        DEBUG_STEPS_SCALE.check_flag(d.steps_scale)?;
+    }
+    Ok(())
+}
+
+/// Checks the image sizes of `s` against the device's `maxImageDimension2D`: the frame, shadow
+/// maps and light maps are 2D images. Within [`WIDTH`] etc. on every driver voxgi has met,
+/// but a device may offer less.
+pub fn check_device_limits(
+    s: &RenderSettings,
+    max_image_dimension_2d: u32,
+) -> Result<(), LimitError> {
+    let sizes = [
+        (&WIDTH, s.width),
+        (&HEIGHT, s.height),
+        (&SHADOW_RESOLUTION, s.shadow.resolution),
+        (&LIGHT_MAP_RESOLUTION, s.gi.light_map_resolution),
+    ];
+    for (limit, v) in sizes {
+        if v > max_image_dimension_2d {
+            return Err(LimitError {
+                name: limit.flag.to_owned(),
+                value: v.to_string(),
+                expected: format!(
+                    "{}, at most {max_image_dimension_2d} on this device (its largest image side)",
+                    limit.what
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Checks the indirect-light values (bounces are checked where they are parsed).
+pub fn check_gi(g: &crate::gi::GiSettings) -> Result<(), LimitError> {
+    GI_RAYS.check_flag(g.rays)?;
+    if let Some(r) = g.radius_m {
+        GI_RADIUS_M.check_flag(r)?;
+    }
+    GI_NORMAL_OFFSET.check_flag(g.normal_offset_voxels)?;
+    GI_RAY_OFFSET.check_flag(g.ray_offset_voxels)?;
+    GI_FILTER_RADIUS.check_flag(g.filter_radius)?;
+    GI_FILTER_PASSES.check_flag(g.filter_passes)?;
+    GI_FRAMES.check_flag(g.accumulate_frames)?;
+    LIGHT_MAP_RESOLUTION.check_flag(g.light_map_resolution)?;
+    GI_START_LEVEL.check_flag(g.start_level)?;
+    GI_MAX_ITERATIONS.check_flag(g.max_iterations)?;
+    VPLS.check_flag(g.vpl.per_set)?;
+    VPL_PATTERN_SIDE.check_flag(g.vpl.pattern[0])?;
+    VPL_PATTERN_SIDE.check_flag(g.vpl.pattern[1])?;
+    VPL_BOUNCES.check_flag(g.vpl.bounces)?;
+    VPL_D_MIN.check_flag(g.vpl.d_min_voxels)?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn integers_are_checked_at_both_ends_and_against_overflow() {
+        assert_eq!(GI_RAYS.check_flag(1), Ok(1));
+        assert_eq!(GI_RAYS.check_flag(4096), Ok(4096));
+        let e = GI_RAYS.check_flag(0).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "--gi-rays = 0 is invalid; expected rays per pixel, an integer in [1, 4096]"
+        );
+        assert!(GI_RAYS.check_flag(4097).is_err());
+        // A TOML integer beyond u32 is refused, not wrapped.
+        assert!(GI_RAYS.check_as("gi.rays", (1 << 32) + 5).is_err());
+        assert!(GI_RAYS.check_as("gi.rays", -1).is_err());
+    }
+
+    #[test]
+    fn floats_refuse_nan_infinity_and_an_open_minimum() {
+        for bad in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY, 0.0, -1.0] {
+            let e = EXPOSURE.check_flag(bad).unwrap_err();
+            assert!(e.to_string().starts_with("--exposure = "), "{e}");
+            assert!(e.to_string().contains("(0, 1000000]"), "{e}");
+        }
+        assert_eq!(EXPOSURE.check_flag(2.5), Ok(2.5));
+        assert_eq!(GI_NORMAL_OFFSET.check_flag(0.0), Ok(0.0));
+        assert!(GI_RADIUS_M.check_as("gi.radius_m", 0.0).is_err());
+    }
+
+    #[test]
+    fn image_sizes_beyond_the_device_name_their_flag() {
+        let s = RenderSettings {
+            width: 4097,
+            ..Default::default()
+        };
+        let e = check_device_limits(&s, 4096).unwrap_err();
+        assert_eq!(e.name, "--width");
+        assert!(e.expected.contains("at most 4096 on this device"), "{e}");
+        let mut s = RenderSettings::default();
+        s.shadow.resolution = 8192;
+        assert_eq!(
+            check_device_limits(&s, 4096).unwrap_err().name,
+            "--shadow-resolution"
+        );
+        let mut s = RenderSettings::default();
+        s.gi.light_map_resolution = 8192;
+        assert_eq!(
+            check_device_limits(&s, 4096).unwrap_err().name,
+            "--light-map-resolution"
+        );
+        check_device_limits(&RenderSettings::default(), 4096).expect("defaults fit 4096");
+    }
+
+    #[test]
+    fn the_default_settings_are_in_range() {
+        check_render_settings(&RenderSettings::default()).expect("defaults in range");
+        let s = RenderSettings {
+            voxels: Some(Default::default()),
+            debug: Some(Default::default()),
+            ..Default::default()
+        };
+        check_render_settings(&s).expect("defaults in range");
+    }
+
+    #[test]
+    fn each_render_setting_out_of_range_names_its_flag() {
+        type Edit = fn(&mut RenderSettings);
+        let cases: [(&str, Edit); 18] = [
+            ("--width", |s| s.width = 0),
+            ("--height", |s| s.height = 20_000),
+            ("--time", |s| s.time_s = f32::NAN),
+            ("--exposure", |s| s.tonemap.exposure = f32::NAN),
+            ("--shadow-resolution", |s| s.shadow.resolution = 0),
+            ("--pcf-radius", |s| s.shadow.pcf_radius = 100),
+            ("--voxels", |s| {
+                s.voxels = Some(crate::voxel::gpu::VoxelSettings {
+                    max_res_xy: 100_000,
+                    ..Default::default()
+                })
+            }),
+            ("--voxel-layers", |s| {
+                s.voxels = Some(crate::voxel::gpu::VoxelSettings {
+                    layers: 0,
+                    ..Default::default()
+                })
+            }),
+            ("--gi-rays", |s| s.gi.rays = 0),
+            ("--gi-radius", |s| s.gi.radius_m = Some(f32::NAN)),
+            ("--gi-normal-offset", |s| s.gi.normal_offset_voxels = -1.0),
+            ("--gi-ray-offset", |s| {
+                s.gi.ray_offset_voxels = f32::INFINITY
+            }),
+            ("--gi-filter-radius", |s| s.gi.filter_radius = 65),
+            ("--gi-filter-passes", |s| s.gi.filter_passes = 17),
+            ("--gi-frames", |s| s.gi.accumulate_frames = 0),
+            ("--light-map-resolution", |s| s.gi.light_map_resolution = 8),
+            ("--gi-start-level", |s| s.gi.start_level = 15),
+            ("--gi-max-iterations", |s| s.gi.max_iterations = 0),
+        ];
+        for (flag, edit) in cases {
+            let mut s = RenderSettings::default();
+            edit(&mut s);
+            let e = check_render_settings(&s).expect_err(flag);
+            assert_eq!(e.name, flag, "{e}");
+        }
+        let mut s = RenderSettings {
+            debug: Some(Default::default()),
+            ..Default::default()
+        };
+        s.debug.as_mut().unwrap().level = 15;
+        assert_eq!(check_render_settings(&s).unwrap_err().name, "--debug-level");
+        s.debug.as_mut().unwrap().level = 0;
+        s.debug.as_mut().unwrap().steps_scale = 0;
+        assert_eq!(
+            check_render_settings(&s).unwrap_err().name,
+            "--debug-steps-scale"
+        );
+    }
+}

@@ -1,0 +1,119 @@
+//! The command line refuses bad values with an error naming the flag, and a command that fails
+//! after the device is up releases everything: no gpu-allocator leak report, no validation
+//! message at teardown.
+
+use std::process::{Command, Output};
+
+fn voxgi(args: &[&str]) -> Output {
+    if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
+        let dir = std::env::temp_dir().join("voxgi-xdg");
+        let _ = std::fs::create_dir_all(&dir);
+        std::env::set_var("XDG_RUNTIME_DIR", dir);
+    }
+    Command::new(env!("CARGO_BIN_EXE_voxgi"))
+        .args(args)
+        .output()
+        .expect("voxgi runs")
+}
+
+/// Runs `render` (at 32² unless `extra` gives a size) with `extra`, expects failure and
+/// returns stderr.
+fn render_fails(extra: &[&str]) -> String {
+    let out_png = std::env::temp_dir().join(format!("voxgi-cli-errors-{}.png", std::process::id()));
+    let out_png = out_png.to_string_lossy().into_owned();
+    let mut args = vec!["render", "-o", &out_png];
+    for flag in ["--width", "--height"] {
+        if !extra.contains(&flag) {
+            args.extend([flag, "32"]);
+        }
+    }
+    args.extend_from_slice(extra);
+    let out = voxgi(&args);
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(!out.status.success(), "{extra:?} succeeded:\n{stderr}");
+    stderr
+}
+
+#[test]
+fn every_flag_out_of_range_is_refused_naming_the_flag() {
+    // One value past an end of each range of `voxgi::limits` (NaN for the real-valued ones).
+    let cases: &[(&[&str], &str)] = &[
+        (&["--width", "20000"], "--width = 20000"),
+        (&["--height", "0"], "--height = 0"),
+        (&["--time", "nan"], "--time = NaN"),
+        (&["--exposure", "nan"], "--exposure = NaN"),
+        (&["--exposure", "0"], "--exposure = 0"),
+        (&["--shadow-resolution", "8"], "--shadow-resolution = 8"),
+        (&["--pcf-radius", "9"], "--pcf-radius = 9"),
+        (&["--voxels", "0"], "--voxels = 0"),
+        (&["--voxels", "100000"], "--voxels = 100000"),
+        (&["--voxel-layers", "0"], "--voxel-layers = 0"),
+        (&["--gi-rays", "0"], "--gi-rays = 0"),
+        (&["--gi-radius", "nan"], "--gi-radius = NaN"),
+        (&["--gi-normal-offset=-1"], "--gi-normal-offset = -1"),
+        (&["--gi-ray-offset", "inf"], "--gi-ray-offset = inf"),
+        (&["--gi-filter-radius", "65"], "--gi-filter-radius = 65"),
+        (&["--gi-filter-passes", "17"], "--gi-filter-passes = 17"),
+        (&["--gi-frames", "0"], "--gi-frames = 0"),
+        (
+            &["--light-map-resolution", "8"],
+            "--light-map-resolution = 8",
+        ),
+        (&["--gi-start-level", "15"], "--gi-start-level = 15"),
+        (&["--gi-max-iterations", "0"], "--gi-max-iterations = 0"),
+        (
+            &["--debug", "level", "--debug-level", "15"],
+            "--debug-level = 15",
+        ),
+        (
+            &["--debug", "steps", "--debug-steps-scale", "0"],
+            "--debug-steps-scale = 0",
+        ),
+    ];
+    for (extra, want) in cases {
+        let stderr = render_fails(extra);
+        assert!(
+            stderr.contains(want) && stderr.contains("expected"),
+            "{extra:?}: {stderr}"
+        );
+    }
+}
+
+#[test]
+fn commands_failing_after_the_device_is_up_release_everything() {
+    let cases: &[(&[&str], &str)] = &[
+        // The debug pass refuses the level after the grid and every other pass exist.
+        (
+            &["--validate", "--debug", "level", "--debug-level", "12"],
+            "--debug-level",
+        ),
+        (
+            &[
+                "--validate",
+                "cornell-point",
+                "--gi",
+                "hemisphere",
+                "--point-shadows",
+                "paraboloid",
+            ],
+            "--point-shadows cube",
+        ),
+        // Refused before the voxel grid is allocated, naming the flags to lower.
+        (
+            &["--validate", "--voxels", "16384", "--voxel-layers", "64"],
+            "lower --voxels or --voxel-layers",
+        ),
+    ];
+    for (extra, want) in cases {
+        let stderr = render_fails(extra);
+        assert!(stderr.contains(want), "{extra:?}: {stderr}");
+        assert!(
+            !stderr.to_lowercase().contains("leak"),
+            "{extra:?} leaked:\n{stderr}"
+        );
+        assert!(
+            !stderr.contains("Validation"),
+            "{extra:?} left validation messages:\n{stderr}"
+        );
+    }
+}

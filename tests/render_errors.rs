@@ -1,0 +1,163 @@
+//! Every `RenderError` a user can cause, produced from a real input, and released cleanly:
+//! each test's context checks at teardown that the failed `Renderer::new` left no object and
+//! no GPU memory behind (`common::TestContext`).
+
+mod common;
+
+use voxgi::gi::GiMethod;
+use voxgi::light::PointShadow;
+use voxgi::render::{RenderError, RenderSettings, Renderer};
+use voxgi::scene::{load_scene_arg, Scene};
+
+/// A scene file in a fresh temporary directory, loaded.
+fn scene_from(name: &str, text: &str) -> Scene {
+    let dir =
+        std::env::temp_dir().join(format!("voxgi-render-errors-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let path = dir.join("scene.toml");
+    std::fs::write(&path, text).expect("write scene");
+    let scene = Scene::load(&path).unwrap_or_else(|e| panic!("{e}\n{text}"));
+    let _ = std::fs::remove_dir_all(&dir);
+    scene
+}
+
+/// A cube lit by `point_lights` point lights.
+fn cube_with_point_lights(name: &str, point_lights: usize) -> Scene {
+    let mut text =
+        String::from("[camera]\nposition = [0, 1, -3]\ntarget = [0, 0, 0]\nfov_y_deg = 40\n");
+    for i in 0..point_lights {
+        text += &format!(
+            "[[lights]]\nkind = \"point\"\nposition = [{}, 2, 0]\nintensity_w_sr = 1.0\n",
+            i as f32 * 0.1
+        );
+    }
+    text += "[[objects]]\nbuiltin = \"cube\"\n";
+    scene_from(name, &text)
+}
+
+fn small() -> RenderSettings {
+    RenderSettings {
+        width: 32,
+        height: 32,
+        ..Default::default()
+    }
+}
+
+#[test]
+fn more_lights_than_the_renderer_holds() {
+    let ctx = common::context();
+    // MAX_LIGHTS = 16 (render::gpu).
+    let scene = cube_with_point_lights("lights", 17);
+    let e = Renderer::new(&ctx, &scene, small())
+        .err()
+        .expect("17 lights refused");
+    assert!(matches!(e, RenderError::TooManyLights(17)), "{e}");
+    assert!(e.to_string().contains("remove some"), "{e}");
+}
+
+#[test]
+fn more_shadow_views_than_fit_unless_paraboloid() {
+    let ctx = common::context();
+    // 11 point lights × 6 cube faces = 66 > MAX_SHADOW_VIEWS = 64; as paraboloids 11 × 2 = 22.
+    let scene = cube_with_point_lights("views", 11);
+    let e = Renderer::new(&ctx, &scene, small())
+        .err()
+        .expect("66 views refused");
+    assert!(matches!(e, RenderError::TooManyShadowViews(66)), "{e}");
+    assert!(e.to_string().contains("--point-shadows paraboloid"), "{e}");
+    let mut s = small();
+    s.shadow.point_technique = PointShadow::DualParaboloid;
+    let r = Renderer::new(&ctx, &scene, s).expect("the advice works");
+    r.destroy(&ctx);
+}
+
+#[test]
+fn a_scene_without_geometry() {
+    let ctx = common::context();
+    // Scene files refuse this (no `[[objects]]`); a library caller can still clear them.
+    let mut scene = load_scene_arg(None).expect("built-in scene");
+    scene.objects.clear();
+    let e = Renderer::new(&ctx, &scene, small())
+        .err()
+        .expect("nothing to draw");
+    assert!(matches!(e, RenderError::EmptyScene), "{e}");
+}
+
+#[test]
+fn gi_with_paraboloid_point_shadows() {
+    let ctx = common::context();
+    let scene = load_scene_arg(Some("cornell-point")).expect("built-in scene");
+    let mut s = small();
+    s.gi.method = GiMethod::Hemisphere;
+    s.shadow.point_technique = PointShadow::DualParaboloid;
+    let e = Renderer::new(&ctx, &scene, s).err().expect("refused");
+    assert!(matches!(e, RenderError::GiNeedsCubeShadows), "{e}");
+}
+
+#[test]
+fn settings_out_of_range_name_their_flag() {
+    let ctx = common::context();
+    let scene = load_scene_arg(None).expect("built-in scene");
+    let mut s = small();
+    s.width = 0;
+    let e = Renderer::new(&ctx, &scene, s)
+        .err()
+        .expect("width 0 refused");
+    assert!(
+        matches!(&e, RenderError::Settings(l) if l.name == "--width"),
+        "{e}"
+    );
+    let mut s = small();
+    s.gi.rays = 0;
+    let e = Renderer::new(&ctx, &scene, s)
+        .err()
+        .expect("0 rays refused");
+    assert!(e.to_string().contains("--gi-rays = 0"), "{e}");
+}
+
+#[test]
+fn a_voxel_error_after_the_grid_is_built_releases_the_frame() {
+    let ctx = common::context();
+    let scene = load_scene_arg(None).expect("built-in scene");
+    // The default 128² grid has hierarchy levels 0..=7: level 12 fails in the debug pass,
+    // after the scene, the passes and the voxel grid were created.
+    let s = RenderSettings {
+        debug: Some(voxgi::voxel::debug_view::DebugSettings {
+            view: voxgi::voxel::debug_view::DebugView::Level,
+            level: 12,
+            ..Default::default()
+        }),
+        ..small()
+    };
+    let e = Renderer::new(&ctx, &scene, s)
+        .err()
+        .expect("level 12 refused");
+    assert!(matches!(e, RenderError::Voxel(_)), "{e}");
+    assert!(e.to_string().contains("--debug-level"), "{e}");
+}
+
+#[test]
+fn a_voxel_grid_larger_than_the_device_memory_is_refused_before_allocating() {
+    let ctx = common::context();
+    let scene = load_scene_arg(None).expect("built-in scene");
+    // 16384² columns × 64 layers × 16 B is 256 GiB for the image's mip 0 alone: more than
+    // any device heap (lavapipe reports a few GiB).
+    let s = RenderSettings {
+        voxels: Some(voxgi::voxel::gpu::VoxelSettings {
+            max_res_xy: 16384,
+            layers: 64,
+            ..Default::default()
+        }),
+        ..small()
+    };
+    let e = Renderer::new(&ctx, &scene, s).err().expect("too large");
+    assert!(
+        matches!(e, RenderError::VoxelGridTooLarge { layers: 64, need_bytes, heap_bytes, .. }
+            if need_bytes > heap_bytes),
+        "{e}"
+    );
+    assert!(
+        e.to_string().contains("--voxels") && e.to_string().contains("GiB"),
+        "{e}"
+    );
+}

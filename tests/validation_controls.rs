@@ -1,0 +1,92 @@
+//! Negative controls of the validation check itself: a deliberate misuse must be reported,
+//! or a broken messenger (or a check that reads the messages too early) would let every
+//! other test pass. Each misuse runs on a context of its own, which the test destroys with
+//! `finish` to read what its whole life left behind.
+
+mod common;
+
+use voxgi::graph::{run_once, Access, RenderGraph};
+use voxgi::vk::{vk, BufferDesc, MemoryLocation};
+
+fn transfer_buffer(ctx: &voxgi::vk::Context, name: &str) -> voxgi::vk::Buffer {
+    ctx.create_buffer(&BufferDesc {
+        name: name.into(),
+        size_bytes: 256,
+        usage: vk::BufferUsageFlags::TRANSFER_DST,
+        location: MemoryLocation::GpuToCpu,
+    })
+    .expect("buffer")
+}
+
+#[test]
+fn a_write_after_write_without_a_barrier_is_reported() {
+    let ctx = common::raw_context();
+    let target = transfer_buffer(&ctx, "hazard target");
+    let mut g = RenderGraph::new();
+    let out = g.import_buffer(&target, Access::HostRead);
+    // Two fills of one buffer in one pass: the graph places barriers only between passes, so
+    // nothing orders the second write after the first (synchronization validation's
+    // WRITE_AFTER_WRITE hazard).
+    g.add_pass("hazard")
+        .write(out, Access::TransferWrite)
+        .record(move |p| {
+            let raw = p.buffer(out).raw;
+            p.cmd.fill_buffer(raw, 1);
+            p.cmd.fill_buffer(raw, 2);
+        });
+    run_once(&ctx, g).expect("the graph runs");
+    ctx.destroy_buffer(target);
+    let report = ctx.finish();
+    assert!(report.leaked_allocations.is_empty(), "{report}");
+    assert!(
+        report
+            .validation_messages
+            .iter()
+            .any(|m| m.contains("SYNC-HAZARD-WRITE-AFTER-WRITE")),
+        "the hazard went unreported; messages: {:?}",
+        report.validation_messages
+    );
+}
+
+#[test]
+fn objects_and_memory_never_freed_are_reported_at_teardown() {
+    let ctx = common::raw_context();
+    let forgotten = transfer_buffer(&ctx, "forgotten on purpose");
+    let kept = forgotten.raw;
+    // Nothing is wrong yet: a check made here (before teardown) sees nothing.
+    assert_eq!(ctx.validation.total(), 0, "{:?}", ctx.validation.messages());
+    std::mem::forget(forgotten);
+    let report = ctx.finish();
+    assert_eq!(
+        report.leaked_allocations,
+        ["forgotten on purpose"],
+        "{report}"
+    );
+    // The layers name the buffer never destroyed when the device is destroyed.
+    let handle = format!("{:x}", vk::Handle::as_raw(kept));
+    assert!(
+        report
+            .validation_messages
+            .iter()
+            .any(|m| m.contains("VkBuffer") && m.to_lowercase().contains(&handle)),
+        "the leaked VkBuffer 0x{handle} went unreported; messages: {:?}",
+        report.validation_messages
+    );
+}
+
+#[test]
+fn a_clean_context_reports_nothing_at_teardown() {
+    let ctx = common::raw_context();
+    let b = transfer_buffer(&ctx, "freed");
+    ctx.destroy_buffer(b);
+    let report = ctx.finish();
+    assert!(report.is_clean(), "{report}");
+}
+
+/// The fixture every other test uses fails a test that leaks, when its context drops.
+#[test]
+#[should_panic(expected = "1 leaked allocation(s) over the context's life")]
+fn the_test_fixture_fails_a_test_that_leaks() {
+    let ctx = common::context();
+    std::mem::forget(transfer_buffer(&ctx, "leaked by the test"));
+}
