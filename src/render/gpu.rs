@@ -60,6 +60,17 @@ pub struct GpuMaterial {
     pub flags: [u32; 4],
 }
 
+/// The GGX and emission parameters of a material, in a table of their own next to
+/// [`GpuMaterial`] so that only the passes that shade them declare it.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct GpuMaterialPbr {
+    /// x roughness, y metallic, z 1 for a GGX material (0: Lambert or Phong).
+    pub ggx: [f32; 4],
+    /// rgb emitted radiance, W/(m²·sr).
+    pub emission: [f32; 4],
+}
+
 /// Interleaved vertex of every mesh.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
@@ -93,6 +104,8 @@ mod tests {
         );
         assert_eq!(size_of::<GpuMaterial>(), 48);
         assert_eq!(offset_of!(GpuMaterial, flags), 32);
+        assert_eq!(size_of::<GpuMaterialPbr>(), 32);
+        assert_eq!(offset_of!(GpuMaterialPbr, emission), 16);
         assert_eq!(size_of::<GpuVertex>(), 32);
         assert_eq!(offset_of!(GpuVertex, uv), 24);
     }

@@ -29,7 +29,7 @@ use crate::scene::{Light, Scene};
 use crate::vk::{vk, Buffer, BufferDesc, Context, ImageDesc, MemoryLocation, PassTiming, VkError};
 use bytemuck::Zeroable;
 use deferred_direct::DeferredDirectPass;
-use gbuffer::GbufferPass;
+use gbuffer::{GbufferFeatures, GbufferPass};
 use glam::Vec3;
 use gpu::*;
 use light_map::LightMapPass;
@@ -142,7 +142,7 @@ impl Renderer {
         if scene.lights.len() > MAX_LIGHTS {
             return Err(RenderError::TooManyLights(scene.lights.len()));
         }
-        let has_phong = !scene.is_all_lambert();
+        let has_phong = scene.has_phong();
         let pixels = u64::from(settings.width) * u64::from(settings.height);
         let readback_hdr = ctx.create_buffer(&BufferDesc {
             name: "readback hdr".into(),
@@ -166,14 +166,20 @@ impl Renderer {
                 .any(|l| matches!(l, Light::Point { .. }));
         let sampler = ctx.create_sampler(vk::Filter::NEAREST, false)?;
         let shadow_depth = ShadowDepthPass::new(ctx, paraboloid, scene.has_transparency())?;
-        let gbuffer = GbufferPass::new(
+        let features = GbufferFeatures {
+            phong: has_phong,
+            ggx: scene.has_ggx(),
+            emission: scene.has_emission(),
+            textures: scene.has_albedo_textures(),
+            bump: scene.has_bump_maps(),
+            dissolve: scene.has_transparency(),
+        };
+        let gbuffer = GbufferPass::new(ctx, features)?;
+        let deferred = DeferredDirectPass::new(
             ctx,
-            has_phong,
-            scene.has_albedo_textures(),
-            scene.has_bump_maps(),
-            scene.has_transparency(),
+            (features.phong, features.ggx, features.emission),
+            sampler,
         )?;
-        let deferred = DeferredDirectPass::new(ctx, has_phong, sampler)?;
         let tonemap = TonemapPass::new(ctx, sampler)?;
         let gi_on = settings.gi.method != crate::gi::GiMethod::None;
         if gi_on

@@ -114,6 +114,12 @@ pub(crate) struct MaterialDesc {
     pub specular: Option<ScalarOrVec3>,
     pub shininess: Option<f32>,
     pub opacity: Option<f32>,
+    /// GGX perceptual roughness in [0, 1] (α = roughness²); makes the material GGX.
+    pub roughness: Option<f32>,
+    /// GGX metalness in [0, 1]; makes the material GGX.
+    pub metallic: Option<f32>,
+    /// Emitted radiance, W/(m²·sr), >= 0.
+    pub emission_w_sr_m2: Option<ScalarOrVec3>,
 }
 
 #[derive(Clone, Debug, Deserialize)]
@@ -211,6 +217,21 @@ impl Check<'_> {
                     value: *x,
                 });
             }
+        }
+        Ok(v)
+    }
+
+    /// An emitted radiance: finite and >= 0 in every channel.
+    fn emission(&self, field: &str, v: ScalarOrVec3) -> Result<Vec3, SceneError> {
+        let v = self.vec3(field, v.to_array())?;
+        if v.min_element() < 0.0 {
+            return Err(self.invalid(
+                field,
+                format!(
+                    "emission {v} is negative; expected radiance in W/(m²·sr) >= 0 per channel \
+                     (0 switches a channel off)"
+                ),
+            ));
         }
         Ok(v)
     }
@@ -764,6 +785,31 @@ fn apply_override(
             ));
         }
     }
+    let unit = |name: &str, v: Option<f32>| -> Result<Option<f32>, SceneError> {
+        let field = format!("{field}.{name}");
+        match v.map(|x| ck.scalar(&field, x)).transpose()? {
+            Some(x) if !(0.0..=1.0).contains(&x) => Err(ck.invalid(
+                &field,
+                format!("{x} is outside [0, 1]; expected a value in [0, 1]"),
+            )),
+            x => Ok(x),
+        }
+    };
+    let roughness = unit("roughness", md.roughness)?;
+    let metallic = unit("metallic", md.metallic)?;
+    if (roughness.is_some() || metallic.is_some())
+        && (md.specular.is_some() || md.shininess.is_some())
+    {
+        return Err(ck.invalid(
+            field,
+            "sets both Phong (`specular`, `shininess`) and GGX (`roughness`, `metallic`) \
+             fields; a material is one or the other, remove one pair",
+        ));
+    }
+    let emission = md
+        .emission_w_sr_m2
+        .map(|e| ck.emission(&format!("{field}.emission_w_sr_m2"), e))
+        .transpose()?;
     let mut derived: Vec<(usize, usize)> = Vec::new();
     let mut out = Vec::with_capacity(submesh_materials.len());
     for &m in submesh_materials {
@@ -790,7 +836,20 @@ fn apply_override(
         if let Some(o) = opacity {
             mat.opacity = o;
         }
-        if (mat.albedo + mat.specular).max_element() > 1.0 {
+        if roughness.is_some() || metallic.is_some() {
+            let base = mat.ggx.unwrap_or(crate::scene::Ggx {
+                roughness: 1.0,
+                metallic: 0.0,
+            });
+            mat.ggx = Some(crate::scene::Ggx {
+                roughness: roughness.unwrap_or(base.roughness),
+                metallic: metallic.unwrap_or(base.metallic),
+            });
+        }
+        if let Some(e) = emission {
+            mat.emission = e;
+        }
+        if mat.ggx.is_none() && (mat.albedo + mat.specular).max_element() > 1.0 {
             log::warn!(
                 "{}: {field}: albedo + specular exceeds 1 in some channel, so the material \
                  reflects more energy than it receives; lower one of them",

@@ -115,7 +115,9 @@ pub use cull::aabb_visible;
 pub use error::SceneError;
 pub use gi::{resolve_gi, GiOverrides};
 pub use light::{spot_falloff, Light};
-pub use material::{BumpKind, Material, TextureData};
+pub use material::{
+    fresnel_schlick, ggx_brdf, ggx_d, ggx_g1, BumpKind, Ggx, Material, TextureData, DIELECTRIC_F0,
+};
 pub use mesh::{area_weighted_normals, Aabb, Mesh, SubMesh, BUILTIN_MESH_NAMES};
 pub use object::{rotation_from_euler_xyz_deg, Animation, Keyframe, Object, Transform};
 pub use query::NoSuchObject;
@@ -171,9 +173,24 @@ impl Scene {
             .filter_map(|&m| self.materials.get(m))
     }
 
-    /// No drawn material has a specular lobe: Phong passes can be skipped.
+    /// No drawn material has a specular lobe (Phong or GGX).
     pub fn is_all_lambert(&self) -> bool {
         self.used_materials().all(Material::is_lambert)
+    }
+
+    /// Some drawn material has a normalized-Phong lobe: the Phong passes are needed.
+    pub fn has_phong(&self) -> bool {
+        self.used_materials().any(Material::is_phong)
+    }
+
+    /// Some drawn material is GGX metal/roughness: the G-buffer carries its parameters.
+    pub fn has_ggx(&self) -> bool {
+        self.used_materials().any(|m| m.ggx.is_some())
+    }
+
+    /// Some drawn material emits: the G-buffer carries emission.
+    pub fn has_emission(&self) -> bool {
+        self.used_materials().any(Material::is_emissive)
     }
 
     /// Point lights need cube shadow maps.
