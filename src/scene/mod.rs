@@ -116,7 +116,8 @@ pub use error::SceneError;
 pub use gi::{resolve_gi, GiOverrides};
 pub use light::{spot_falloff, Light};
 pub use material::{
-    fresnel_schlick, ggx_brdf, ggx_d, ggx_g1, BumpKind, Ggx, Material, TextureData, DIELECTRIC_F0,
+    fresnel_schlick, ggx_brdf, ggx_d, ggx_diffuse, ggx_g1, ggx_specular, BumpKind, Ggx, Material,
+    TextureData, DIELECTRIC_F0,
 };
 pub use mesh::{area_weighted_normals, Aabb, Mesh, SubMesh, BUILTIN_MESH_NAMES};
 pub use object::{rotation_from_euler_xyz_deg, Animation, Keyframe, Object, Transform};
