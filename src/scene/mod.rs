@@ -243,4 +243,6 @@ impl Scene {
 }
 
 #[cfg(test)]
+mod material_tests;
+#[cfg(test)]
 mod tests;
