@@ -289,12 +289,6 @@ pub(crate) fn build(
             file: file.to_path_buf(),
         });
     }
-    if lights.is_empty() {
-        log::warn!(
-            "{}: the scene has no lights, so it will render black; add a `[[lights]]` table",
-            file.display()
-        );
-    }
     let mut store = AssetStore::default();
     let mut objects = Vec::with_capacity(desc.objects.len());
     for (i, o) in desc.objects.iter().enumerate() {
@@ -306,7 +300,7 @@ pub(crate) fn build(
             &mut store,
         )?);
     }
-    Ok(Scene {
+    let scene = Scene {
         camera,
         lights,
         objects,
@@ -316,7 +310,15 @@ pub(crate) fn build(
         voxel: desc.voxel,
         gi,
         source,
-    })
+    };
+    if scene.lights.is_empty() && !scene.has_emission() {
+        log::warn!(
+            "{}: the scene has no lights and no emissive materials, so it will render black; \
+             add a `[[lights]]` table",
+            file.display()
+        );
+    }
+    Ok(scene)
 }
 
 fn build_camera(ck: &Check<'_>, c: &CameraDesc) -> Result<Camera, SceneError> {
