@@ -62,10 +62,8 @@ impl GbufferPass {
         let f = features;
         let has_lobe = f.phong || f.ggx;
         let mut colors = vec![GBUFFER_COLOR, GBUFFER_COLOR];
-        colors.extend(std::iter::repeat_n(
-            GBUFFER_COLOR,
-            usize::from(has_lobe) + usize::from(f.emission),
-        ));
+        let extra = usize::from(has_lobe) + usize::from(f.emission);
+        colors.resize(2 + extra, GBUFFER_COLOR);
         let pipeline = ctx.graphics_pipeline(&GraphicsPipelineDesc {
             vertex: "gbuffer.vert".into(),
             geometry: None,
