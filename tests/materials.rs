@@ -76,37 +76,67 @@ const PIXELS: [(u32, u32); 8] = [
 #[test]
 fn ggx_plane_under_a_point_light_matches_the_analytic_brdf() {
     for (roughness, metallic) in [(0.3, 1.0), (0.5, 0.0), (0.7, 0.5), (1.0, 1.0)] {
-        let s = scene(&format!(
-            "{CAMERA}[[objects]]\nbuiltin = \"quad\"\nscale = [8.0, 1.0, 8.0]\n\
-             material = {{ albedo = [{}, {}, {}], roughness = {roughness}, metallic = {metallic} }}\n\
-             [[lights]]\nkind = \"point\"\nposition = [{}, {}, {}]\nintensity_w_sr = [{}, {}, {}]\n",
-            BASE.x, BASE.y, BASE.z, LIGHT_POSITION.x, LIGHT_POSITION.y, LIGHT_POSITION.z,
-            LIGHT_W_SR.x, LIGHT_W_SR.y, LIGHT_W_SR.z,
-        ));
-        let img = render(&s);
-        let ggx = Ggx {
-            roughness,
-            metallic,
-        };
-        for (x, y) in PIXELS {
-            // L = f(wi, wo) I cosθ_i / d² (point light, no occluder).
-            let p = plane_point(&s, x, y);
-            let d = LIGHT_POSITION - p;
-            let wi = d.normalize();
-            let wo = (s.camera.position - p).normalize();
-            let want =
-                ggx_brdf(BASE, ggx, Vec3::Y, wi, wo) * LIGHT_W_SR * wi.y / d.length_squared();
-            let got = pixel(&img, x, y);
-            for c in 0..3 {
-                assert!(
-                    (got[c] - want[c]).abs() <= 0.01 * want[c],
-                    "roughness {roughness}, metallic {metallic}, pixel ({x}, {y}) at {p}, \
-                     view angle {:.1}°: channel {c}: got {}, expected {}",
-                    wo.y.acos().to_degrees(),
-                    got[c],
-                    want[c]
-                );
-            }
+        check_ggx_plane(roughness, metallic, Vec3::ZERO, "");
+    }
+}
+
+#[test]
+fn ggx_emitter_next_to_phong_matches_the_analytic_brdf() {
+    // All three G-buffer features at once: a Phong cube behind the camera (so the scene has
+    // Phong, the lobe target holds both kinds and the shaders tell them apart per pixel) and an
+    // emitting GGX plane (the emission target at the second extra location).
+    let phong = "[[objects]]\nbuiltin = \"cube\"\ntranslate = [0.0, 3.0, -6.0]\n\
+                 material = { albedo = 0.2, specular = 0.5, shininess = 20.0 }\n";
+    check_ggx_plane(0.4, 0.3, Vec3::new(0.05, 0.1, 0.2), phong);
+}
+
+/// Renders the GGX plane (base color [`BASE`]) with `emission` and the `extra` objects and
+/// checks [`PIXELS`] against L = L_e + f(wi, wo) I cosθ_i / d² (point light, no occluder).
+fn check_ggx_plane(roughness: f32, metallic: f32, emission: Vec3, extra: &str) {
+    let s = scene(&format!(
+        "{CAMERA}{extra}[[objects]]\nbuiltin = \"quad\"\nscale = [8.0, 1.0, 8.0]\n\
+         material = {{ albedo = [{}, {}, {}], roughness = {roughness}, metallic = {metallic}, \
+         emission_w_sr_m2 = [{}, {}, {}] }}\n\
+         [[lights]]\nkind = \"point\"\nposition = [{}, {}, {}]\nintensity_w_sr = [{}, {}, {}]\n",
+        BASE.x,
+        BASE.y,
+        BASE.z,
+        emission.x,
+        emission.y,
+        emission.z,
+        LIGHT_POSITION.x,
+        LIGHT_POSITION.y,
+        LIGHT_POSITION.z,
+        LIGHT_W_SR.x,
+        LIGHT_W_SR.y,
+        LIGHT_W_SR.z,
+    ));
+    assert_eq!(
+        (s.has_phong(), s.has_ggx(), s.has_emission()),
+        (!extra.is_empty(), true, emission != Vec3::ZERO)
+    );
+    let img = render(&s);
+    let ggx = Ggx {
+        roughness,
+        metallic,
+    };
+    for (x, y) in PIXELS {
+        let p = plane_point(&s, x, y);
+        let d = LIGHT_POSITION - p;
+        let wi = d.normalize();
+        let wo = (s.camera.position - p).normalize();
+        let want = emission
+            + ggx_brdf(BASE, ggx, Vec3::Y, wi, wo) * LIGHT_W_SR * wi.y / d.length_squared();
+        let got = pixel(&img, x, y);
+        for c in 0..3 {
+            assert!(
+                (got[c] - want[c]).abs() <= 0.01 * want[c],
+                "roughness {roughness}, metallic {metallic}, pixel ({x}, {y}) at {p}, \
+                 view angle {:.1}°: channel {c}: got {}, expected {}",
+                wo.y.acos().to_degrees(),
+                got[c],
+                want[c]
+            );
         }
     }
 }
