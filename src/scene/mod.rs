@@ -48,7 +48,11 @@
 //! scale = 0.02                      # optional, a number or [x, y, z], non-zero
 //! material = { albedo = [0.8, 0.8, 0.8], specular = [0.1, 0.1, 0.1], shininess = 40.0 }
 //!                                   # optional: replaces these MTL fields on every submesh;
-//!                                   #   also `opacity` in [0, 1]; an `albedo` drops `map_Kd`
+//!                                   #   also `opacity` in [0, 1]; an `albedo` drops `map_Kd`;
+//!                                   #   `roughness`, `metallic` (each in [0, 1]) make it GGX
+//!                                   #   metal/roughness (MTL `Pr`, `Pm`; not together with
+//!                                   #   `specular`/`shininess`); `emission_w_sr_m2` (>= 0, a
+//!                                   #   number or RGB, MTL `Ke`) is emitted radiance
 //! dynamic = true                    # optional: re-voxelized every frame (default: animated)
 //!
 //! [objects.animation]               # optional; keyframes or an OBJ sequence
