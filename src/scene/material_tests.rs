@@ -132,3 +132,23 @@ fn bad_mtl_pr_pm_ke_name_the_file_line_and_key() {
         let _ = std::fs::remove_dir_all(path.parent().unwrap());
     }
 }
+
+#[test]
+fn asset_cornell_emissive_is_lit_only_by_its_emitter() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/cornell_emissive.toml");
+    let s = Scene::load(&path).unwrap();
+    assert!(s.lights.is_empty());
+    assert!(s.has_emission() && s.has_ggx() && !s.has_phong());
+    let sphere = s
+        .objects
+        .iter()
+        .find(|o| o.name == "copper_sphere")
+        .unwrap();
+    let copper = &s.materials[sphere.materials[0]];
+    assert_eq!(copper.ggx.map(|g| g.metallic), Some(1.0));
+    // The emitting side of the ceiling patch faces the floor.
+    let light = s.objects.iter().find(|o| o.name == "light").unwrap();
+    let mesh = &s.meshes[light.mesh];
+    let n = light.transform_at(0.0).transform_vector3(mesh.normals[0]);
+    assert!(n.y < -0.999, "{n}");
+}
