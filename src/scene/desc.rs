@@ -838,6 +838,10 @@ fn apply_override(
         if let Some(o) = opacity {
             mat.opacity = o;
         }
+        if md.specular.is_some() || md.shininess.is_some() {
+            // A Phong override turns a GGX material (MTL `Pr`/`Pm`) into Phong.
+            mat.ggx = None;
+        }
         if roughness.is_some() || metallic.is_some() {
             let base = mat.ggx.unwrap_or(crate::scene::Ggx {
                 roughness: 1.0,

@@ -116,7 +116,22 @@ fn mtl_pr_pm_ke_are_read() {
         (m.albedo, m.emission),
         (Vec3::new(0.8, 0.5, 0.2), Vec3::new(1.0, 2.0, 3.0))
     );
-    let _ = std::fs::remove_dir_all(path.parent().unwrap());
+    // A Phong override makes the GGX MTL material Phong; an emission override replaces `Ke`.
+    let dir = path.parent().unwrap();
+    let over = dir.join("over.toml");
+    std::fs::write(
+        &over,
+        format!(
+            "{HEAD}[[objects]]\nmesh = \"m.obj\"\n\
+             material = {{ specular = 0.3, shininess = 8, emission_w_sr_m2 = 0 }}\n"
+        ),
+    )
+    .unwrap();
+    let s = Scene::load(&over).unwrap();
+    let m = the_material(&s);
+    assert_eq!((m.ggx, m.emission), (None, Vec3::ZERO));
+    assert!(s.has_phong() && !s.has_ggx() && !s.has_emission());
+    let _ = std::fs::remove_dir_all(dir);
 }
 
 #[test]
