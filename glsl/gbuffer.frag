@@ -1,11 +1,19 @@
 #version 450
 // G-buffer pass: albedo (linear, 16-bit float so dark albedos keep 1% accuracy), world normal
-// and shininess, and, only when the scene has Phong materials, the specular color.
+// and lobe parameter, and, only when the scene has them, the specular lobe and the emission.
+// Specular lobe (Phong or GGX materials): rgb Phong rho_s or GGX F0 = mix(0.04, base, metallic),
+// a the lobe kind (1 Phong, 2 GGX); normal.w is the Phong exponent or the GGX roughness, and a
+// GGX pixel's albedo is its diffuse color (1 - metallic) base (brdf.glsl, brdf_ggx).
+// Color locations: 2 holds the specular lobe, or the emission when the scene has no lobe;
+// 3 the emission when both exist (attachments exist only for what the scene has).
 layout(constant_id = 0) const bool HAS_PHONG = false;
 layout(constant_id = 1) const bool HAS_TEXTURES = false;
 layout(constant_id = 2) const bool HAS_BUMP = false;
 // Some material has MTL d < 1 (dissolve.glsl); otherwise no fragment is ever discarded.
 layout(constant_id = 3) const bool HAS_DISSOLVE = false;
+layout(constant_id = 4) const bool HAS_GGX = false;
+layout(constant_id = 5) const bool HAS_EMISSION = false;
+const bool HAS_LOBE = HAS_PHONG || HAS_GGX;
 
 struct GpuMaterial {
     vec4 albedo;    // rgb albedo, a opacity
@@ -22,6 +30,12 @@ layout(set = 0, binding = 1, std430) readonly buffer Materials { GpuMaterial mat
 layout(set = 0, binding = 2) uniform sampler2D albedo_texture;
 // The draw's bump or normal map (the placeholder when it has none).
 layout(set = 0, binding = 3) uniform sampler2D bump_texture;
+// GGX parameters and emission per material (read only when HAS_GGX or HAS_EMISSION).
+struct GpuMaterialPbr {
+    vec4 ggx;       // x roughness, y metallic, z 1 for a GGX material
+    vec4 emission;  // rgb W/(m^2 sr)
+};
+layout(set = 0, binding = 4, std430) readonly buffer MaterialsPbr { GpuMaterialPbr pbr[]; };
 
 layout(push_constant) uniform Push {
     mat4 model;
@@ -34,7 +48,8 @@ layout(location = 2) in vec3 in_world;
 
 layout(location = 0) out vec4 out_albedo;
 layout(location = 1) out vec4 out_normal;
-layout(location = 2) out vec4 out_specular;
+layout(location = 2) out vec4 out_slot2;
+layout(location = 3) out vec4 out_slot3;
 
 // Tangent frame from screen-space derivatives (Schüler 2013, "Followup: normal mapping
 // without precomputed tangents"): no per-vertex tangents needed. uv has v up, as in OBJ.
@@ -82,7 +97,8 @@ void main() {
     vec3 n = normalize(in_normal);
     // Two-sided surfaces: shade the side the camera sees. Decided geometrically, not by
     // gl_FrontFacing, because the y-flipped projection inverts the winding.
-    if (dot(n, frame.camera_position.xyz - in_world) < 0.0) n = -n;
+    bool front = dot(n, frame.camera_position.xyz - in_world) >= 0.0;
+    if (!front) n = -n;
     vec3 albedo = m.albedo.rgb;
     // OBJ texture coordinates have v up; image rows start at the top.
     vec2 tex_uv = vec2(in_uv.x, 1.0 - in_uv.y);
@@ -98,7 +114,19 @@ void main() {
     }
     // After the bump's derivatives, which a discarded neighbour would leave undefined.
     if (HAS_DISSOLVE && m.albedo.a < coverage_threshold) discard;
+    vec4 lobe = vec4(m.specular.rgb, 1.0);
+    float lobe_parameter = m.specular.a;
+    if (HAS_GGX && pbr[pc.material].ggx.z != 0.0) {
+        float metallic = pbr[pc.material].ggx.y;
+        lobe = vec4(mix(vec3(0.04), albedo, metallic), 2.0);
+        lobe_parameter = pbr[pc.material].ggx.x;
+        albedo *= 1.0 - metallic;
+    }
     out_albedo = vec4(albedo, 1.0);
-    out_normal = vec4(n, m.specular.a);
-    if (HAS_PHONG) out_specular = vec4(m.specular.rgb, 1.0);
+    out_normal = vec4(n, lobe_parameter);
+    // Emission leaves the front side only, as Mitsuba's area emitter.
+    vec4 emission = vec4(front ? pbr[pc.material].emission.rgb : vec3(0.0), 1.0);
+    if (HAS_LOBE) out_slot2 = lobe;
+    if (HAS_EMISSION && HAS_LOBE) out_slot3 = emission;
+    if (HAS_EMISSION && !HAS_LOBE) out_slot2 = emission;
 }

@@ -9,6 +9,7 @@ layout(set = 0, binding = 1) uniform sampler2D gb_albedo;
 layout(set = 0, binding = 2) uniform sampler2D indirect_irradiance;
 layout(set = 0, binding = 3, rgba32f) uniform writeonly image2D radiance;
 layout(set = 0, binding = 4) uniform sampler2D gb_specular;   // albedo when !HAS_PHONG
+#include "gbuffer_lobe.glsl"
 
 #define PI 3.14159265358979323846
 
@@ -19,6 +20,6 @@ void main() {
     vec3 albedo = texelFetch(gb_albedo, p, 0).rgb;
     vec3 e = texelFetch(indirect_irradiance, p, 0).rgb;
     // Phong pixels already hold their indirect radiance (see gi_common.glsl).
-    bool phong = HAS_PHONG && any(greaterThan(texelFetch(gb_specular, p, 0).rgb, vec3(0.0)));
+    bool phong = HAS_PHONG && any(greaterThan(gbuffer_phong_specular(gb_specular, p), vec3(0.0)));
     imageStore(radiance, p, vec4(d.rgb + (phong ? e : albedo / PI * e), d.a));
 }

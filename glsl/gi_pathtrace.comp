@@ -49,6 +49,7 @@ bool vx_voxel(int x, int y, int k) {
 
 #include "voxel_traverse.glsl"
 #include "shadow.glsl"
+#include "gbuffer_lobe.glsl"
 
 // Outgoing Lambert radiance at p (normal n, albedo a) from every light, shadowed.
 vec3 direct_at(vec3 p, vec3 n, vec3 a) {
@@ -124,7 +125,7 @@ void main() {
     vec3 p = wp.xyz / wp.w;
     vec4 ns = texelFetch(gb_normal, px, 0);
     vec3 n = normalize(ns.xyz);
-    vec3 specular = HAS_PHONG ? texelFetch(gb_specular, px, 0).rgb : vec3(0.0);
+    vec3 specular = HAS_PHONG ? gbuffer_phong_specular(gb_specular, px) : vec3(0.0);
     bool phong = HAS_PHONG && is_phong_pixel(specular);
     vec3 mirror = reflect(-normalize(frame.camera_position.xyz - p), n);
     // Phong pixels spend half their paths on the specular lobe (first bounce).

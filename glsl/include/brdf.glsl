@@ -17,4 +17,37 @@ vec3 brdf_phong(vec3 specular, float shininess, vec3 n, vec3 wi, vec3 wo) {
     return specular * (shininess + 2.0) / (2.0 * PI) * pow(c, shininess);
 }
 
+// GGX metal/roughness (docs/ARCHITECTURE.md, units; the Rust twin is scene::ggx_brdf), from
+// the G-buffer's split: diffuse = (1 - metallic) base, f0 = mix(0.04, base, metallic),
+// alpha = roughness^2:
+// f = diffuse/pi (1 - F_d(n.wi)) (1 - F_d(n.wo)) + D(h) G1(wi) G1(wo) F(wo.h) / (4 (n.wi)(n.wo)),
+// D GGX, G1 exact Smith-GGX, F Schlick with f0, F_d Schlick with 0.04.
+float ggx_d(float alpha, float n_dot_h) {
+    float a2 = alpha * alpha;
+    float t = n_dot_h * n_dot_h * (a2 - 1.0) + 1.0;
+    return a2 / (PI * t * t);
+}
+
+float ggx_g1(float alpha, float c) {
+    float a2 = alpha * alpha;
+    return 2.0 * c / max(c + sqrt(a2 + (1.0 - a2) * c * c), 1e-30);
+}
+
+vec3 fresnel_schlick(vec3 f0, float c) {
+    return f0 + (1.0 - f0) * pow(1.0 - clamp(c, 0.0, 1.0), 5.0);
+}
+
+vec3 brdf_ggx(vec3 diffuse, vec3 f0, float roughness, vec3 n, vec3 wi, vec3 wo) {
+    float ci = dot(n, wi);
+    float co = dot(n, wo);
+    if (ci <= 0.0 || co <= 0.0) return vec3(0.0);
+    float alpha = roughness * roughness;
+    vec3 h = normalize(wi + wo);
+    vec3 specular = fresnel_schlick(f0, dot(wo, h)) * (ggx_d(alpha, dot(n, h)) * ggx_g1(alpha, ci)
+        * ggx_g1(alpha, co) / (4.0 * ci * co));
+    float fdi = 1.0 - fresnel_schlick(vec3(0.04), ci).x;
+    float fdo = 1.0 - fresnel_schlick(vec3(0.04), co).x;
+    return diffuse * (fdi * fdo / PI) + specular;
+}
+
 #endif

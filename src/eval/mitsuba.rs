@@ -190,10 +190,10 @@ fn write_sensor(xml: &mut String, scene: &Scene, width: u32, height: u32) {
 }
 
 fn write_lights(xml: &mut String, scene: &Scene, report: &mut ExportReport) {
-    if scene.lights.is_empty() {
-        report
-            .warnings
-            .push("the scene has no lights: the Mitsuba image will be black".to_owned());
+    if scene.lights.is_empty() && !scene.has_emission() {
+        report.warnings.push(
+            "the scene has no lights and no emitters: the Mitsuba image will be black".to_owned(),
+        );
     }
     for light in &scene.lights {
         match *light {
@@ -343,10 +343,20 @@ fn write_materials_and_shapes(
             report.shape_count += 1;
             report.triangle_count += piece.indices.len() / 3;
 
+            // Emission leaves the side the normals point to, as voxgi's G-buffer shows it.
+            let emitter = if material.is_emissive() {
+                format!(
+                    "        <emitter type=\"area\">\n            <rgb name=\"radiance\" \
+                     value=\"{}\"/>\n        </emitter>\n",
+                    vec3(material.emission)
+                )
+            } else {
+                String::new()
+            };
             let _ = writeln!(
                 xml,
                 "    <shape type=\"ply\" id=\"{stem}\">\n        <string name=\"filename\" \
-                 value=\"{rel}\"/>\n        <ref id=\"{material_id}\"/>\n    </shape>\n"
+                 value=\"{rel}\"/>\n        <ref id=\"{material_id}\"/>\n{emitter}    </shape>\n"
             );
         }
     }
@@ -480,7 +490,9 @@ fn write_material(
 
     let _ = writeln!(xml, "    <!-- {} -->", comment_text(&material.name));
     let _ = writeln!(xml, "    <bsdf type=\"twosided\" id=\"{id}\">");
-    if material.is_lambert() {
+    if let Some(ggx) = material.ggx {
+        write_ggx(xml, material, ggx, texture, out_dir, report)?;
+    } else if material.is_lambert() {
         let reflectance = match texture {
             Some((t, data)) => texture_xml(data, t, 1.0, out_dir, report)?,
             None => format!(
@@ -553,6 +565,61 @@ fn write_material(
         let _ = writeln!(xml, "        </bsdf>");
     }
     let _ = writeln!(xml, "    </bsdf>\n");
+    Ok(())
+}
+
+/// A GGX metal/roughness material as Mitsuba 3's `principled` BSDF (α = roughness², GGX with
+/// the exact separable Smith G, Schlick Fresnel on the base color for its metallic part). A pure
+/// metal (metallic 1) is exact: `principled` then has only that specular lobe. Below 1 the
+/// match is approximate (`principled`'s diffuse part is Disney's with retro-reflection, and its
+/// dielectric Fresnel is exact rather than Schlick), which the report says.
+fn write_ggx(
+    xml: &mut String,
+    material: &Material,
+    ggx: crate::scene::Ggx,
+    texture: Option<(usize, &crate::scene::TextureData)>,
+    out_dir: &Path,
+    report: &mut ExportReport,
+) -> Result<(), MitsubaExportError> {
+    if ggx.metallic < 1.0 {
+        report.warnings.push(format!(
+            "material `{}` is a GGX dielectric (metallic {}): exported as Mitsuba's principled \
+             BSDF, whose diffuse lobe (Disney, with retro-reflection) and exact dielectric \
+             Fresnel match voxgi's Fresnel-weighted Lambert and Schlick only approximately",
+            material.name, ggx.metallic
+        ));
+    }
+    let base = match texture {
+        Some((t, data)) => texture_xml(data, t, 1.0, out_dir, report)?.replacen(
+            "name=\"reflectance\"",
+            "name=\"base_color\"",
+            1,
+        ),
+        None => format!(
+            "<rgb name=\"base_color\" value=\"{}\"/>",
+            vec3(material.albedo)
+        ),
+    };
+    let _ = writeln!(
+        xml,
+        "        <!-- GGX metal/roughness, alpha = roughness^2 = {} -->",
+        ggx.roughness * ggx.roughness
+    );
+    let _ = writeln!(xml, "        <bsdf type=\"principled\">");
+    let _ = writeln!(xml, "            {base}");
+    let _ = writeln!(
+        xml,
+        "            <float name=\"roughness\" value=\"{}\"/>",
+        ggx.roughness
+    );
+    let _ = writeln!(
+        xml,
+        "            <float name=\"metallic\" value=\"{}\"/>",
+        ggx.metallic
+    );
+    // specular 0.5 is η = 1.5, F0 = 0.04, the dielectric F0 of voxgi's metal/roughness model.
+    let _ = writeln!(xml, "            <float name=\"specular\" value=\"0.5\"/>");
+    let _ = writeln!(xml, "        </bsdf>");
     Ok(())
 }
 
@@ -694,6 +761,13 @@ mod tests {
             + key.len()..];
         let v = &v[..v.find('"').unwrap()];
         v.split(',').map(|s| s.trim().parse().unwrap()).collect()
+    }
+
+    /// [`numbers`] of every `element` in document order, concatenated.
+    fn all_numbers(xml: &str, element: &str, attr: &str) -> Vec<f32> {
+        xml.match_indices(element)
+            .flat_map(|(i, _)| numbers(&xml[i..], element, attr))
+            .collect()
     }
 
     fn close(a: &[f32], b: &[f32]) -> bool {
@@ -868,6 +942,54 @@ mod tests {
         assert!(close(
             &numbers(&xml, "<rgb name=\"irradiance\"", "value"),
             &[2.0, 2.0, 2.0]
+        ));
+    }
+
+    #[test]
+    fn ggx_materials_and_emitters_are_exported() {
+        // A copper metal sphere (exact as principled, no warning), a GGX dielectric cube
+        // (approximate, one warning) and an emissive Lambert quad (an area emitter with the
+        // same radiance); the Lambert quad stays diffuse.
+        let text = format!(
+            "{CAMERA}[[objects]]\nbuiltin = \"sphere\"\n\
+             material = {{ albedo = [0.95, 0.64, 0.54], roughness = 0.3, metallic = 1.0 }}\n\
+             [[objects]]\nbuiltin = \"cube\"\ntranslate = [2, 0, 0]\n\
+             material = {{ albedo = 0.5, roughness = 0.8 }}\n\
+             [[objects]]\nbuiltin = \"quad\"\ntranslate = [0, 2, 0]\n\
+             material = {{ albedo = 0.7, emission_w_sr_m2 = [4, 3, 2] }}\n"
+        );
+        let scene = Scene::from_toml_str(&text, Path::new("<test>"), Path::new(".")).unwrap();
+        let dir = TempDir::new("ggx");
+        let report = export_mitsuba(&scene, 0.0, 32, 32, &dir.0).unwrap();
+        assert_eq!(report.warnings.len(), 1, "{:?}", report.warnings);
+        assert!(report.warnings[0].contains("GGX dielectric"));
+        let xml = std::fs::read_to_string(&report.xml_path).unwrap();
+        assert_eq!(xml.matches("<bsdf type=\"principled\">").count(), 2);
+        assert!(close(
+            &all_numbers(&xml, "<rgb name=\"base_color\"", "value"),
+            &[0.95, 0.64, 0.54, 0.5, 0.5, 0.5]
+        ));
+        assert!(close(
+            &all_numbers(&xml, "<float name=\"roughness\"", "value"),
+            &[0.3, 0.8]
+        ));
+        assert!(close(
+            &all_numbers(&xml, "<float name=\"metallic\"", "value"),
+            &[1.0, 0.0]
+        ));
+        assert!(close(
+            &all_numbers(&xml, "<float name=\"specular\"", "value"),
+            &[0.5, 0.5]
+        ));
+        assert_eq!(xml.matches("<bsdf type=\"diffuse\">").count(), 1);
+        // One area emitter, inside the quad's shape, with the radiance.
+        assert_eq!(xml.matches("<emitter type=\"area\">").count(), 1);
+        let quad = &xml[xml.find("<shape type=\"ply\" id=\"02_").unwrap()..];
+        let quad = &quad[..quad.find("</shape>").unwrap()];
+        assert!(quad.contains("<emitter type=\"area\">"), "{quad}");
+        assert!(close(
+            &numbers(quad, "<rgb name=\"radiance\"", "value"),
+            &[4.0, 3.0, 2.0]
         ));
     }
 

@@ -14,9 +14,22 @@ pub struct DeferredDirectPass {
 
 impl DeferredDirectPass {
     /// `sampler`: the nearest-neighbour sampler the G-buffer and shadow maps are read with.
-    pub fn new(ctx: &Context, has_phong: bool, sampler: vk::Sampler) -> Result<Self, VkError> {
-        let pipeline =
-            ctx.compute_pipeline("deferred_direct.comp", None, &[(0, u32::from(has_phong))])?;
+    /// `phong`, `ggx`, `emission`: which material models the scene has (the shader compiles in
+    /// only those).
+    pub fn new(
+        ctx: &Context,
+        (phong, ggx, emission): (bool, bool, bool),
+        sampler: vk::Sampler,
+    ) -> Result<Self, VkError> {
+        let pipeline = ctx.compute_pipeline(
+            "deferred_direct.comp",
+            None,
+            &[
+                (0, u32::from(phong)),
+                (1, u32::from(ggx)),
+                (2, u32::from(emission)),
+            ],
+        )?;
         Ok(Self { pipeline, sampler })
     }
 
@@ -32,8 +45,10 @@ impl DeferredDirectPass {
         let radiance = g.create_image(ImageDesc::new_2d("radiance", HDR, w, h));
         let pipe = self.pipeline;
         let (s, c) = (self.sampler, Shader::Compute);
-        // Without Phong materials the shader never reads its specular binding; albedo fills it.
+        // Without Phong/GGX materials or emitters the shader never reads those bindings;
+        // albedo fills them.
         let specular = gbuffer.specular.unwrap_or(gbuffer.albedo);
+        let emission = gbuffer.emission.unwrap_or(gbuffer.albedo);
         g.add_pass("deferred_direct")
             .pipeline(&pipe)
             .bind(0, scene.frame, Access::StorageRead(c))
@@ -43,6 +58,7 @@ impl DeferredDirectPass {
             .bind_sampled(4, gbuffer.depth, s, c)
             .bind_sampled(5, shadow_maps, s, c)
             .bind(6, radiance, Access::StorageWrite(c))
+            .bind_sampled(7, emission, s, c)
             .record(move |ctx| {
                 ctx.bind(&pipe);
                 ctx.cmd.dispatch(w.div_ceil(8), h.div_ceil(8), 1);

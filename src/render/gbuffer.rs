@@ -1,6 +1,6 @@
-//! `gbuffer`: albedo, normal, (Phong scenes) specular and depth of the camera view
-//! (`glsl/gbuffer.{vert,frag}`). Textures and bump maps are chosen per draw among the
-//! declared ones (`.bind_one_of_sampled`).
+//! `gbuffer`: albedo, normal, (Phong or GGX scenes) specular lobe, (scenes with emitters)
+//! emission, and depth of the camera view (`glsl/gbuffer.{vert,frag}`). Textures and bump maps
+//! are chosen per draw among the declared ones (`.bind_one_of_sampled`).
 
 use super::scene_gpu::{vertex_attributes, SceneInputs};
 use super::{DEPTH, GBUFFER_COLOR};
@@ -27,30 +27,41 @@ crate::push_constants!(GpuGbufferPush {
 pub struct Gbuffer {
     pub albedo: ImageHandle,
     pub normal: ImageHandle,
-    /// Only in scenes with Phong materials.
+    /// The specular lobe, only in scenes with Phong or GGX materials: rgb Phong ρs or GGX F0,
+    /// a the lobe kind (1 Phong, 2 GGX); `normal`'s w is the exponent or the roughness.
     pub specular: Option<ImageHandle>,
+    /// Emitted radiance (rgb, W/(m²·sr)), only in scenes with emissive materials.
+    pub emission: Option<ImageHandle>,
     pub depth: ImageHandle,
 }
 
 pub struct GbufferPass {
     pipeline: GraphicsPipeline,
-    has_phong: bool,
+    /// The scene has Phong or GGX materials.
+    has_lobe: bool,
+    has_emission: bool,
+}
+
+/// The material models a scene's G-buffer carries (each gates an attachment or shader code).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct GbufferFeatures {
+    pub phong: bool,
+    pub ggx: bool,
+    pub emission: bool,
+    pub textures: bool,
+    pub bump: bool,
+    pub dissolve: bool,
 }
 
 impl GbufferPass {
-    /// The specular target, texture sampling, bump mapping and dissolve are compiled in only
-    /// for scenes that have them (specialization constants).
-    pub fn new(
-        ctx: &Context,
-        has_phong: bool,
-        has_textures: bool,
-        has_bump: bool,
-        has_dissolve: bool,
-    ) -> Result<Self, VkError> {
+    /// The specular and emission targets, GGX shading, texture sampling, bump mapping and
+    /// dissolve are compiled in only for scenes that have them (specialization constants).
+    pub fn new(ctx: &Context, features: GbufferFeatures) -> Result<Self, VkError> {
+        let f = features;
+        let has_lobe = f.phong || f.ggx;
         let mut colors = vec![GBUFFER_COLOR, GBUFFER_COLOR];
-        if has_phong {
-            colors.push(GBUFFER_COLOR);
-        }
+        let extra = usize::from(has_lobe) + usize::from(f.emission);
+        colors.resize(2 + extra, GBUFFER_COLOR);
         let pipeline = ctx.graphics_pipeline(&GraphicsPipelineDesc {
             vertex: "gbuffer.vert".into(),
             geometry: None,
@@ -67,15 +78,18 @@ impl GbufferPass {
             depth_bias: false,
             logic_op: None,
             spec: vec![
-                (0, u32::from(has_phong)),
-                (1, u32::from(has_textures)),
-                (2, u32::from(has_bump)),
-                (3, u32::from(has_dissolve)),
+                (0, u32::from(f.phong)),
+                (1, u32::from(f.textures)),
+                (2, u32::from(f.bump)),
+                (3, u32::from(f.dissolve)),
+                (4, u32::from(f.ggx)),
+                (5, u32::from(f.emission)),
             ],
         })?;
         Ok(Self {
             pipeline,
-            has_phong,
+            has_lobe,
+            has_emission: f.emission,
         })
     }
 
@@ -83,8 +97,11 @@ impl GbufferPass {
         let out = Gbuffer {
             albedo: g.create_image(ImageDesc::new_2d("gbuffer albedo", GBUFFER_COLOR, w, h)),
             normal: g.create_image(ImageDesc::new_2d("gbuffer normal", GBUFFER_COLOR, w, h)),
-            specular: self.has_phong.then(|| {
+            specular: self.has_lobe.then(|| {
                 g.create_image(ImageDesc::new_2d("gbuffer specular", GBUFFER_COLOR, w, h))
+            }),
+            emission: self.has_emission.then(|| {
+                g.create_image(ImageDesc::new_2d("gbuffer emission", GBUFFER_COLOR, w, h))
             }),
             depth: g.create_image(ImageDesc::new_2d("gbuffer depth", DEPTH, w, h)),
         };
@@ -104,12 +121,18 @@ impl GbufferPass {
             .bind(1, scene.materials, Access::StorageRead(Shader::Fragment))
             .bind_one_of_sampled(2, choices.clone(), sampler, Shader::Fragment)
             .bind_one_of_sampled(3, choices, sampler, Shader::Fragment)
+            .bind(
+                4,
+                scene.materials_pbr,
+                Access::StorageRead(Shader::Fragment),
+            )
             .read(vertices, Access::VertexBuffer)
             .read(indices, Access::IndexBuffer)
             .color(out.albedo, clear)
             .color(out.normal, clear);
-        if let Some(spec) = out.specular {
-            pass = pass.color(spec, clear);
+        // In location order: the lobe, then the emission (gbuffer.frag).
+        for extra in [out.specular, out.emission].into_iter().flatten() {
+            pass = pass.color(extra, clear);
         }
         pass = pass.depth(out.depth, Load::ClearDepth(1.0));
         pass.record(move |ctx| {

@@ -90,6 +90,19 @@ crate::gpu_struct!(GpuMaterial {
     flags
 });
 
+/// The GGX and emission parameters of a material, in a table of their own next to
+/// [`GpuMaterial`] so that only the passes that shade them declare it.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct GpuMaterialPbr {
+    /// x roughness, y metallic, z 1 for a GGX material (0: Lambert or Phong).
+    pub ggx: [f32; 4],
+    /// rgb emitted radiance, W/(m²·sr).
+    pub emission: [f32; 4],
+}
+
+crate::gpu_struct!(GpuMaterialPbr { ggx, emission });
+
 /// Interleaved vertex of every mesh.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
@@ -125,6 +138,12 @@ mod tests {
             if i.structs.contains_key("GpuMaterial") {
                 check(check_struct_against::<GpuMaterial>(&[name], "GpuMaterial"));
             }
+            if i.structs.contains_key("GpuMaterialPbr") {
+                check(check_struct_against::<GpuMaterialPbr>(
+                    &[name],
+                    "GpuMaterialPbr",
+                ));
+            }
         }
         // The shaders named in this module's documentation and the materials' users do
         // declare them (a shader that stopped declaring them would skip the loop's checks).
@@ -144,5 +163,7 @@ mod tests {
             let i = crate::vk::interface_of(&[name]).unwrap();
             assert!(i.structs.contains_key("GpuMaterial"), "{name}");
         }
+        let i = crate::vk::interface_of(&["gbuffer.frag"]).unwrap();
+        assert!(i.structs.contains_key("GpuMaterialPbr"));
     }
 }

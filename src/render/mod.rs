@@ -29,7 +29,7 @@ use crate::scene::{Light, Scene};
 use crate::vk::{vk, Buffer, BufferDesc, Context, ImageDesc, MemoryLocation, PassTiming, VkError};
 use bytemuck::Zeroable;
 use deferred_direct::DeferredDirectPass;
-use gbuffer::GbufferPass;
+use gbuffer::{GbufferFeatures, GbufferPass};
 use glam::Vec3;
 use gpu::*;
 use light_map::LightMapPass;
@@ -329,7 +329,7 @@ impl Renderer {
         settings: &RenderSettings,
         parts: &mut Parts,
     ) -> Result<(), RenderError> {
-        let has_phong = !scene.is_all_lambert();
+        let has_phong = scene.has_phong();
         let gi_on = settings.gi.method != crate::gi::GiMethod::None;
         if gi_on
             && settings.shadow.point_technique == PointShadow::DualParaboloid
@@ -373,14 +373,20 @@ impl Renderer {
             paraboloid,
             scene.has_transparency(),
         )?);
-        parts.gbuffer = Some(GbufferPass::new(
+        let features = GbufferFeatures {
+            phong: has_phong,
+            ggx: scene.has_ggx(),
+            emission: scene.has_emission(),
+            textures: scene.has_albedo_textures(),
+            bump: scene.has_bump_maps(),
+            dissolve: scene.has_transparency(),
+        };
+        parts.gbuffer = Some(GbufferPass::new(ctx, features)?);
+        parts.deferred = Some(DeferredDirectPass::new(
             ctx,
-            has_phong,
-            scene.has_albedo_textures(),
-            scene.has_bump_maps(),
-            scene.has_transparency(),
+            (features.phong, features.ggx, features.emission),
+            sampler,
         )?);
-        parts.deferred = Some(DeferredDirectPass::new(ctx, has_phong, sampler)?);
         parts.tonemap = Some(TonemapPass::new(ctx, sampler)?);
         // The atlas view only needs the grid's voxel size, not a voxelization; the G-buffer
         // views not even that.

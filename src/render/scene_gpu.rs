@@ -4,7 +4,7 @@
 //! [`SceneGpu::import`] brings these into a graph as [`SceneInputs`]: read-only resources the
 //! passes declare like any other, so the graph sees every use.
 
-use super::gpu::{GpuFrame, GpuMaterial, GpuVertex};
+use super::gpu::{GpuFrame, GpuMaterial, GpuMaterialPbr, GpuVertex};
 use super::{textures, RenderError};
 use crate::graph::{Access, BufferHandle, ImageHandle, PassContext, RenderGraph, Shader};
 use crate::scene::{Aabb, BumpKind, Scene};
@@ -51,6 +51,8 @@ pub struct SceneGpu {
     vertices: Buffer,
     indices: Buffer,
     materials: Buffer,
+    /// `GpuMaterialPbr` per material.
+    materials_pbr: Buffer,
     /// `MAX_FRAMES_IN_FLIGHT` copies of `GpuFrame`, `frame_stride` bytes apart.
     frame: Buffer,
     frame_stride: u64,
@@ -72,6 +74,8 @@ pub struct SceneInputs {
     pub vertices: BufferHandle,
     pub indices: BufferHandle,
     pub materials: BufferHandle,
+    /// GGX parameters and emission per material (`GpuMaterialPbr`).
+    pub materials_pbr: BufferHandle,
     /// The scene's textures, the placeholder last.
     pub textures: Vec<ImageHandle>,
     pub texture_sampler: vk::Sampler,
@@ -111,6 +115,25 @@ impl SceneGpu {
             bytemuck::cast_slice(&materials),
             vk::BufferUsageFlags::STORAGE_BUFFER,
         )?;
+        let materials_pbr: Vec<GpuMaterialPbr> = scene
+            .materials
+            .iter()
+            .map(|m| {
+                let ggx = m
+                    .ggx
+                    .map_or([0.0; 4], |g| [g.roughness, g.metallic, 1.0, 0.0]);
+                let e = m.emission;
+                GpuMaterialPbr {
+                    ggx,
+                    emission: [e.x, e.y, e.z, 0.0],
+                }
+            })
+            .collect();
+        let materials_pbr = ctx.upload_buffer(
+            "materials pbr",
+            bytemuck::cast_slice(&materials_pbr),
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+        )?;
         let frame_stride = (std::mem::size_of::<GpuFrame>() as u64).next_multiple_of(256);
         let frame = ctx.create_buffer(&BufferDesc {
             name: "frame constants".into(),
@@ -140,6 +163,7 @@ impl SceneGpu {
             vertices: geometry.vertices,
             indices: geometry.indices,
             materials,
+            materials_pbr,
             frame,
             frame_stride,
             textures,
@@ -162,6 +186,8 @@ impl SceneGpu {
             vertices: g.import_buffer(&self.vertices, Access::VertexBuffer),
             indices: g.import_buffer(&self.indices, Access::IndexBuffer),
             materials: g.import_buffer(&self.materials, Access::StorageRead(Shader::Compute)),
+            materials_pbr: g
+                .import_buffer(&self.materials_pbr, Access::StorageRead(Shader::Compute)),
             textures: self
                 .textures
                 .iter()
@@ -237,7 +263,13 @@ impl SceneGpu {
         for t in self.textures {
             ctx.destroy_image(t);
         }
-        for b in [self.vertices, self.indices, self.materials, self.frame] {
+        for b in [
+            self.vertices,
+            self.indices,
+            self.materials,
+            self.materials_pbr,
+            self.frame,
+        ] {
             ctx.destroy_buffer(b);
         }
     }

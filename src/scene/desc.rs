@@ -120,6 +120,12 @@ pub(crate) struct MaterialDesc {
     pub specular: Option<ScalarOrVec3>,
     pub shininess: Option<f32>,
     pub opacity: Option<f32>,
+    /// GGX perceptual roughness in [0, 1] (α = roughness²); makes the material GGX.
+    pub roughness: Option<f32>,
+    /// GGX metalness in [0, 1]; makes the material GGX.
+    pub metallic: Option<f32>,
+    /// Emitted radiance, W/(m²·sr), >= 0.
+    pub emission_w_sr_m2: Option<ScalarOrVec3>,
 }
 
 #[derive(Clone, Debug, Deserialize)]
@@ -221,6 +227,21 @@ impl Check<'_> {
         Ok(v)
     }
 
+    /// An emitted radiance: finite and >= 0 in every channel.
+    fn emission(&self, field: &str, v: ScalarOrVec3) -> Result<Vec3, SceneError> {
+        let v = self.vec3(field, v.to_array())?;
+        if v.min_element() < 0.0 {
+            return Err(self.invalid(
+                field,
+                format!(
+                    "emission {v} is negative; expected radiance in W/(m²·sr) >= 0 per channel \
+                     (0 switches a channel off)"
+                ),
+            ));
+        }
+        Ok(v)
+    }
+
     fn reflectance(&self, field: &str, v: ScalarOrVec3) -> Result<Vec3, SceneError> {
         let v = self.vec3(field, v.to_array())?;
         if v.min_element() < 0.0 || v.max_element() > 1.0 {
@@ -274,12 +295,6 @@ pub(crate) fn build(
             file: file.to_path_buf(),
         });
     }
-    if lights.is_empty() {
-        log::warn!(
-            "{}: the scene has no lights, so it will render black; add a `[[lights]]` table",
-            file.display()
-        );
-    }
     let mut store = AssetStore::default();
     let mut objects = Vec::with_capacity(desc.objects.len());
     for (i, o) in desc.objects.iter().enumerate() {
@@ -291,7 +306,7 @@ pub(crate) fn build(
             &mut store,
         )?);
     }
-    Ok(Scene {
+    let scene = Scene {
         camera,
         lights,
         objects,
@@ -301,7 +316,15 @@ pub(crate) fn build(
         voxel: desc.voxel,
         gi,
         source,
-    })
+    };
+    if scene.lights.is_empty() && !scene.has_emission() {
+        log::warn!(
+            "{}: the scene has no lights and no emissive materials, so it will render black; \
+             add a `[[lights]]` table",
+            file.display()
+        );
+    }
+    Ok(scene)
 }
 
 fn build_camera(ck: &Check<'_>, c: &CameraDesc) -> Result<Camera, SceneError> {
@@ -781,6 +804,31 @@ fn apply_override(
             ));
         }
     }
+    let unit = |name: &str, v: Option<f32>| -> Result<Option<f32>, SceneError> {
+        let field = format!("{field}.{name}");
+        match v.map(|x| ck.scalar(&field, x)).transpose()? {
+            Some(x) if !(0.0..=1.0).contains(&x) => Err(ck.invalid(
+                &field,
+                format!("{x} is outside [0, 1]; expected a value in [0, 1]"),
+            )),
+            x => Ok(x),
+        }
+    };
+    let roughness = unit("roughness", md.roughness)?;
+    let metallic = unit("metallic", md.metallic)?;
+    if (roughness.is_some() || metallic.is_some())
+        && (md.specular.is_some() || md.shininess.is_some())
+    {
+        return Err(ck.invalid(
+            field,
+            "sets both Phong (`specular`, `shininess`) and GGX (`roughness`, `metallic`) \
+             fields; a material is one or the other, remove one pair",
+        ));
+    }
+    let emission = md
+        .emission_w_sr_m2
+        .map(|e| ck.emission(&format!("{field}.emission_w_sr_m2"), e))
+        .transpose()?;
     let mut derived: Vec<(usize, usize)> = Vec::new();
     let mut out = Vec::with_capacity(submesh_materials.len());
     for &m in submesh_materials {
@@ -807,7 +855,24 @@ fn apply_override(
         if let Some(o) = opacity {
             mat.opacity = o;
         }
-        if (mat.albedo + mat.specular).max_element() > 1.0 {
+        if md.specular.is_some() || md.shininess.is_some() {
+            // A Phong override turns a GGX material (MTL `Pr`/`Pm`) into Phong.
+            mat.ggx = None;
+        }
+        if roughness.is_some() || metallic.is_some() {
+            let base = mat.ggx.unwrap_or(crate::scene::Ggx {
+                roughness: 1.0,
+                metallic: 0.0,
+            });
+            mat.ggx = Some(crate::scene::Ggx {
+                roughness: roughness.unwrap_or(base.roughness),
+                metallic: metallic.unwrap_or(base.metallic),
+            });
+        }
+        if let Some(e) = emission {
+            mat.emission = e;
+        }
+        if mat.ggx.is_none() && (mat.albedo + mat.specular).max_element() > 1.0 {
             log::warn!(
                 "{}: {field}: albedo + specular exceeds 1 in some channel, so the material \
                  reflects more energy than it receives; lower one of them",

@@ -1,4 +1,5 @@
-//! Surface materials (Lambert + normalized Phong) and decoded textures.
+//! Surface materials (Lambert, normalized Phong, GGX metal/roughness, emission) and decoded
+//! textures.
 
 use std::path::PathBuf;
 
@@ -7,7 +8,9 @@ use glam::Vec3;
 /// A material. BRDF: f = albedo/π + specular·(n+2)/(2π)·cosⁿα with n = `shininess` and α the
 /// angle between the mirror direction and the outgoing direction (normalized Phong, as in
 /// Lafortune & Willems 1994, "Using the modified Phong reflectance model for physically based
-/// rendering"). A material with zero `specular` is Lambertian.
+/// rendering"). A material with zero `specular` is Lambertian. A material with [`Material::ggx`]
+/// uses the metal/roughness BRDF of [`ggx_brdf`] instead (its `specular` and `shininess` are
+/// ignored). Any material may emit ([`Material::emission`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Material {
     /// MTL name, `builtin:NAME`, or `OBJECT_NAME:override`.
@@ -29,6 +32,84 @@ pub struct Material {
     /// Opacity (MTL `d`), 1 = opaque; below 1 the surface covers that fraction of the pixels
     /// and shadow-map texels (glsl/include/dissolve.glsl).
     pub opacity: f32,
+    /// GGX metal/roughness parameters (MTL `Pr`/`Pm`, TOML `roughness`/`metallic`); `None` for
+    /// Lambert and Phong materials. `albedo` is then the base color.
+    pub ggx: Option<Ggx>,
+    /// Emitted radiance L_e (MTL `Ke`, TOML `emission_w_sr_m2`) in W/(m²·sr), linear RGB,
+    /// leaving the front side (the side the normals point to, as Mitsuba's `area` emitter).
+    pub emission: Vec3,
+}
+
+/// Metal/roughness parameters of the GGX BRDF ([`ggx_brdf`]), each in [0, 1].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ggx {
+    /// Perceptual roughness r; the GGX width is α = r².
+    pub roughness: f32,
+    /// 0 = dielectric (F0 = 0.04, diffuse base color), 1 = metal (F0 = base color, no diffuse).
+    pub metallic: f32,
+}
+
+/// Normal-incidence Fresnel reflectance of dielectrics in the metal/roughness workflow (an
+/// index of refraction of 1.5).
+pub const DIELECTRIC_F0: f32 = 0.04;
+
+/// Schlick's Fresnel approximation F(c) = F0 + (1 − F0)(1 − c)⁵.
+pub fn fresnel_schlick(f0: Vec3, cos: f32) -> Vec3 {
+    f0 + (Vec3::ONE - f0) * (1.0 - cos.clamp(0.0, 1.0)).powi(5)
+}
+
+/// GGX (Trowbridge-Reitz) normal distribution D(h) = α² / (π ((n·h)²(α² − 1) + 1)²).
+pub fn ggx_d(alpha: f32, n_dot_h: f32) -> f32 {
+    let a2 = alpha * alpha;
+    let t = n_dot_h * n_dot_h * (a2 - 1.0) + 1.0;
+    a2 / (std::f32::consts::PI * t * t)
+}
+
+/// Exact Smith masking of GGX for one direction, G1(v) = 2 (n·v) / ((n·v) + √(α² + (1 − α²)(n·v)²))
+/// (= 2 / (1 + √(1 + α² tan²θ)), the form Mitsuba's microfacet distribution evaluates).
+pub fn ggx_g1(alpha: f32, n_dot_v: f32) -> f32 {
+    let a2 = alpha * alpha;
+    let c = n_dot_v.max(0.0);
+    2.0 * c / (c + (a2 + (1.0 - a2) * c * c).sqrt()).max(1e-30)
+}
+
+/// The GGX metal/roughness BRDF f(wi, wo) (1/sr, without the cosine), every vector unit length:
+///
+/// f = (1 − m)·base/π·(1 − F_d(n·wi))(1 − F_d(n·wo)) + D(h)·G1(wi)·G1(wo)·F(wo·h) / (4 (n·wi)(n·wo))
+///
+/// with α = roughness², h = normalize(wi + wo), D GGX ([`ggx_d`]), G the separable exact
+/// Smith-GGX masking-shadowing ([`ggx_g1`], as Mitsuba's `roughconductor` and `principled`),
+/// F Schlick ([`fresnel_schlick`]) with F0 = mix(0.04, base, m), and F_d Schlick with F0 = 0.04.
+/// The diffuse lobe's (1 − F_d)(1 − F_d) weighting (reciprocal, as the diffuse term of Mitsuba's
+/// `roughplastic`) keeps a white dielectric from gaining energy at grazing angles; no
+/// multiple-scattering compensation is applied, so rough surfaces lose some energy
+/// (single-scattering GGX).
+pub fn ggx_brdf(base: Vec3, ggx: Ggx, n: Vec3, wi: Vec3, wo: Vec3) -> Vec3 {
+    let f0 = Vec3::splat(DIELECTRIC_F0).lerp(base, ggx.metallic);
+    let diffuse = base * (1.0 - ggx.metallic);
+    ggx_diffuse(diffuse, n, wi, wo) + ggx_specular(f0, ggx.roughness, n, wi, wo)
+}
+
+/// The diffuse lobe of [`ggx_brdf`], `diffuse`/π·(1 − F_d(n·wi))(1 − F_d(n·wo)).
+pub fn ggx_diffuse(diffuse: Vec3, n: Vec3, wi: Vec3, wo: Vec3) -> Vec3 {
+    let (ci, co) = (n.dot(wi), n.dot(wo));
+    if ci <= 0.0 || co <= 0.0 {
+        return Vec3::ZERO;
+    }
+    let fd = |c: f32| 1.0 - fresnel_schlick(Vec3::splat(DIELECTRIC_F0), c).x;
+    diffuse * (fd(ci) * fd(co) / std::f32::consts::PI)
+}
+
+/// The specular lobe of [`ggx_brdf`], D(h)·G1(wi)·G1(wo)·F(wo·h) / (4 (n·wi)(n·wo)), α = roughness².
+pub fn ggx_specular(f0: Vec3, roughness: f32, n: Vec3, wi: Vec3, wo: Vec3) -> Vec3 {
+    let (ci, co) = (n.dot(wi), n.dot(wo));
+    if ci <= 0.0 || co <= 0.0 {
+        return Vec3::ZERO;
+    }
+    let alpha = roughness * roughness;
+    let h = (wi + wo).normalize();
+    fresnel_schlick(f0, wo.dot(h))
+        * (ggx_d(alpha, n.dot(h)) * ggx_g1(alpha, ci) * ggx_g1(alpha, co) / (4.0 * ci * co))
 }
 
 /// How to read [`Material::bump_texture`].
@@ -53,12 +134,25 @@ impl Material {
             bump_kind: BumpKind::Height,
             bump_scale: 1.0,
             opacity: 1.0,
+            ggx: None,
+            emission: Vec3::ZERO,
         }
     }
 
-    /// True when the specular lobe is absent, so Phong passes can be skipped.
+    /// True when the material is Lambert (no Phong lobe, not GGX), so Phong passes can be
+    /// skipped.
     pub fn is_lambert(&self) -> bool {
-        self.specular.max_element() <= 0.0
+        self.ggx.is_none() && self.specular.max_element() <= 0.0
+    }
+
+    /// True when the material has a normalized-Phong lobe.
+    pub fn is_phong(&self) -> bool {
+        self.ggx.is_none() && self.specular.max_element() > 0.0
+    }
+
+    /// True when some channel of [`Material::emission`] is positive.
+    pub fn is_emissive(&self) -> bool {
+        self.emission.max_element() > 0.0
     }
 
     pub fn is_opaque(&self) -> bool {
@@ -87,5 +181,167 @@ impl std::fmt::Debug for TextureData {
             .field("height", &self.height)
             .field("srgb", &self.srgb)
             .finish_non_exhaustive()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::f64::consts::PI;
+
+    const N: Vec3 = Vec3::Y;
+
+    /// Unit vector at polar angle `theta` from +y, azimuth `phi`.
+    fn dir(theta: f64, phi: f64) -> Vec3 {
+        let (st, ct) = theta.sin_cos();
+        Vec3::new((st * phi.cos()) as f32, ct as f32, (st * phi.sin()) as f32)
+    }
+
+    /// ∫ g(h) dω_h over the upper hemisphere by the midpoint rule in the variables that make
+    /// D(h) cosθ_h uniform (tan²θ_h = α² t / (1 − t), φ = 2πs), so that sharp lobes are
+    /// resolved: dω_h = dt ds / (D(h) cosθ_h). The weight 1/cosθ_h diverges like 1/√(1 − t)
+    /// at the horizon, so t = 1 − u² (dt = 2u du) makes the integrand bounded.
+    fn integrate_h(alpha: f32, g: impl Fn(Vec3) -> f64) -> f64 {
+        let (nt, ns) = (1000, 64);
+        let mut sum = 0.0;
+        for i in 0..nt {
+            let u = (i as f64 + 0.5) / nt as f64;
+            let t = 1.0 - u * u;
+            let theta = (f64::from(alpha) * (t / (1.0 - t)).sqrt()).atan();
+            for j in 0..ns {
+                let h = dir(theta, 2.0 * PI * (j as f64 + 0.5) / ns as f64);
+                let pdf = f64::from(ggx_d(alpha, h.y)) * f64::from(h.y);
+                sum += 2.0 * u * g(h) / pdf;
+            }
+        }
+        sum / (nt * ns) as f64
+    }
+
+    /// ∫ g(wi) cosθ_i dω_i over the upper hemisphere (midpoint rule in cos²θ and φ).
+    fn integrate_cosine(g: impl Fn(Vec3) -> f64) -> f64 {
+        let (nu, np) = (400, 128);
+        let mut sum = 0.0;
+        for i in 0..nu {
+            let u = (i as f64 + 0.5) / nu as f64;
+            for j in 0..np {
+                sum += g(dir(
+                    u.sqrt().acos(),
+                    2.0 * PI * (j as f64 + 0.5) / np as f64,
+                ));
+            }
+        }
+        // cosθ dω = (1/2) d(cos²θ) dφ.
+        sum * PI / (nu * np) as f64
+    }
+
+    /// Directional albedo ∫ f(wi, wo) cosθ_i dω_i of the white (F0 = `f0`) specular lobe, in
+    /// half-vector space: wi = reflect(−wo, h), dω_i = 4 (wo·h) dω_h.
+    fn specular_albedo(f0: f32, roughness: f32, wo: Vec3) -> f64 {
+        integrate_h(roughness * roughness, |h| {
+            let wi = 2.0 * wo.dot(h) * h - wo;
+            let f = ggx_specular(Vec3::splat(f0), roughness, N, wi, wo).x;
+            f64::from(f * wi.y.max(0.0) * 4.0 * wo.dot(h).max(0.0))
+        })
+    }
+
+    fn diffuse_albedo(wo: Vec3) -> f64 {
+        integrate_cosine(|wi| f64::from(ggx_diffuse(Vec3::ONE, N, wi, wo).x))
+    }
+
+    const ROUGHNESS: [f32; 5] = [0.1, 0.25, 0.5, 0.75, 1.0];
+    const THETA_O_DEG: [f64; 5] = [0.0, 30.0, 60.0, 80.0, 89.0];
+
+    #[test]
+    fn ggx_d_and_smith_g1_satisfy_their_normalizations() {
+        // Closed forms (Heitz 2014, "Understanding the masking-shadowing function", eq. 4 and
+        // 17): ∫ D(h) cosθ_h dω_h = 1, and Smith's G1 makes the projected microfacet area
+        // equal the projected macro area, ∫ G1(wo) max(0, wo·h) D(h) dω_h = cosθ_o.
+        for r in ROUGHNESS {
+            let alpha = r * r;
+            let area = integrate_h(alpha, |h| f64::from(ggx_d(alpha, h.y) * h.y));
+            assert!((area - 1.0).abs() < 1e-3, "r {r}: ∫D cos = {area}");
+            for t in THETA_O_DEG {
+                let wo = dir(t.to_radians(), 0.3);
+                let g1 = f64::from(ggx_g1(alpha, wo.y));
+                let projected = integrate_h(alpha, |h| {
+                    g1 * f64::from(wo.dot(h).max(0.0) * ggx_d(alpha, h.y))
+                });
+                let want = f64::from(wo.y);
+                assert!(
+                    // The midpoint rule's error at the kink of max(0, wo·h): below 0.5%.
+                    (projected - want).abs() < 5e-3 * want.max(0.05),
+                    "r {r}, θo {t}°: {projected} vs cosθo {want}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn ggx_at_normal_incidence_matches_the_closed_form() {
+        // wi = wo = n: h = n, D = 1/(π α²), G1 = 1, F = F0, F_d = 0.04:
+        // f = F0/(4π α²) + (1 − m) base (0.96)²/π.
+        let base = Vec3::new(0.9, 0.5, 0.2);
+        for (r, m) in [(0.3, 0.0), (0.6, 1.0), (1.0, 0.4)] {
+            let f = ggx_brdf(
+                base,
+                Ggx {
+                    roughness: r,
+                    metallic: m,
+                },
+                N,
+                N,
+                N,
+            );
+            let alpha = r * r;
+            let f0 = Vec3::splat(DIELECTRIC_F0).lerp(base, m);
+            let pi = std::f32::consts::PI;
+            let want = f0 / (4.0 * pi * alpha * alpha) + (1.0 - m) * base * 0.96 * 0.96 / pi;
+            assert!(
+                (f - want).abs().max_element() < 1e-5 * want.max_element(),
+                "{f} vs {want}"
+            );
+        }
+    }
+
+    #[test]
+    fn white_furnace_ggx_never_gains_energy() {
+        // A white metal (F0 = 1) and a white dielectric (base 1, m = 0) in uniform unit
+        // radiance reflect their directional albedo; neither may exceed 1. Single-scattering
+        // GGX loses energy as roughness grows (no multiple-scattering compensation).
+        let mut loss_r1 = Vec::new();
+        for r in ROUGHNESS {
+            for t in THETA_O_DEG {
+                let wo = dir(t.to_radians(), 0.0);
+                let metal = specular_albedo(1.0, r, wo);
+                let dielectric = specular_albedo(DIELECTRIC_F0, r, wo) + diffuse_albedo(wo);
+                assert!(
+                    metal <= 1.0 + 2e-3,
+                    "white metal r {r}, θo {t}°: albedo {metal}"
+                );
+                assert!(
+                    dielectric <= 1.0 + 2e-3,
+                    "white dielectric r {r}, θo {t}°: albedo {dielectric}"
+                );
+                if r == 1.0 {
+                    loss_r1.push((t, 1.0 - metal, 1.0 - dielectric));
+                }
+            }
+        }
+        // Closed form at α = 1, wo = n: D = 1/π, G1(wi) = cos2θ_h / cos²θ_h for wi at
+        // 2θ_h < 90°, so the albedo is ∫₀^{π/4} 2 cos2θ tanθ dθ = 1 − ln 2.
+        let rough = specular_albedo(1.0, 1.0, N);
+        let want = 1.0 - std::f64::consts::LN_2;
+        assert!(
+            (rough - want).abs() < 1e-3,
+            "r 1 white metal albedo {rough} vs {want}"
+        );
+        // A smooth white metal keeps almost everything at normal incidence.
+        let smooth = specular_albedo(1.0, 0.1, N);
+        assert!(smooth > 0.99, "r 0.1 white metal albedo {smooth}");
+        for (t, metal, dielectric) in loss_r1 {
+            println!(
+                "roughness 1, θo {t}°: energy loss metal {metal:.4}, dielectric {dielectric:.4}"
+            );
+        }
     }
 }

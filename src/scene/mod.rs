@@ -48,7 +48,11 @@
 //! scale = 0.02                      # optional, a number or [x, y, z], non-zero
 //! material = { albedo = [0.8, 0.8, 0.8], specular = [0.1, 0.1, 0.1], shininess = 40.0 }
 //!                                   # optional: replaces these MTL fields on every submesh;
-//!                                   #   also `opacity` in [0, 1]; an `albedo` drops `map_Kd`
+//!                                   #   also `opacity` in [0, 1]; an `albedo` drops `map_Kd`;
+//!                                   #   `roughness`, `metallic` (each in [0, 1]) make it GGX
+//!                                   #   metal/roughness (MTL `Pr`, `Pm`; not together with
+//!                                   #   `specular`/`shininess`); `emission_w_sr_m2` (>= 0, a
+//!                                   #   number or RGB, MTL `Ke`) is emitted radiance
 //! dynamic = true                    # optional: re-voxelized every frame (default: animated)
 //!
 //! [objects.animation]               # optional; keyframes or an OBJ sequence
@@ -123,7 +127,10 @@ pub use error::SceneError;
 pub use gi::{resolve_gi, GiOverrides};
 pub use gi_settings::{Bounces, GiMethod, GiSettings, RadianceSource};
 pub use light::{spot_falloff, Light};
-pub use material::{BumpKind, Material, TextureData};
+pub use material::{
+    fresnel_schlick, ggx_brdf, ggx_d, ggx_diffuse, ggx_g1, ggx_specular, BumpKind, Ggx, Material,
+    TextureData, DIELECTRIC_F0,
+};
 pub use mesh::{area_weighted_normals, Aabb, Mesh, SubMesh, BUILTIN_MESH_NAMES};
 pub use object::{rotation_from_euler_xyz_deg, Animation, Keyframe, Object, Transform};
 pub use query::NoSuchObject;
@@ -180,9 +187,24 @@ impl Scene {
             .filter_map(|&m| self.materials.get(m))
     }
 
-    /// No drawn material has a specular lobe: Phong passes can be skipped.
+    /// No drawn material has a specular lobe (Phong or GGX).
     pub fn is_all_lambert(&self) -> bool {
         self.used_materials().all(Material::is_lambert)
+    }
+
+    /// Some drawn material has a normalized-Phong lobe: the Phong passes are needed.
+    pub fn has_phong(&self) -> bool {
+        self.used_materials().any(Material::is_phong)
+    }
+
+    /// Some drawn material is GGX metal/roughness: the G-buffer carries its parameters.
+    pub fn has_ggx(&self) -> bool {
+        self.used_materials().any(|m| m.ggx.is_some())
+    }
+
+    /// Some drawn material emits: the G-buffer carries emission.
+    pub fn has_emission(&self) -> bool {
+        self.used_materials().any(Material::is_emissive)
     }
 
     /// Point lights need cube shadow maps.
@@ -235,5 +257,7 @@ impl Scene {
 
 #[cfg(test)]
 mod input_tests;
+#[cfg(test)]
+mod material_tests;
 #[cfg(test)]
 mod tests;

@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 use glam::{Vec2, Vec3};
 
 use super::error::SceneError;
-use super::material::{BumpKind, Material, TextureData};
+use super::material::{BumpKind, Ggx, Material, TextureData};
 use super::mesh::{area_weighted_normals, builtin_shape, BuiltinMaterial, Mesh, SubMesh};
 
 /// Meshes, materials and textures of a scene under construction.
@@ -295,7 +295,31 @@ impl AssetStore {
                 finite_or(m.dissolve, 1.0)
             );
         }
+        for map in ["map_Pr", "map_Pm", "map_Ke"] {
+            if m.unknown_param.contains_key(map) {
+                log::warn!(
+                    "{}: {map} is not supported yet; the constant value is used (remove {map} \
+                     or bake it into the constant)",
+                    field(map)
+                );
+            }
+        }
+        let pbr = |key: &str| {
+            m.unknown_param
+                .get(key)
+                .and_then(|v| v.trim().parse::<f32>().ok())
+        };
+        // prescan_mtl already rejected values outside [0, 1].
+        let ggx = match (pbr("Pr"), pbr("Pm")) {
+            (None, None) => None,
+            (r, metal) => Some(Ggx {
+                roughness: r.unwrap_or(1.0),
+                metallic: metal.unwrap_or(0.0),
+            }),
+        };
         let material = Material {
+            ggx,
+            emission: rgb(m.emissive, Vec3::ZERO),
             name: m.name.clone(),
             albedo: rgb(m.diffuse, BuiltinMaterial::Default.albedo()),
             specular: rgb(m.specular, Vec3::ZERO),
@@ -382,7 +406,8 @@ fn guarded<T>(f: impl FnOnce() -> T) -> Option<T> {
 }
 
 /// Checks the MTL statements tobj would panic on or report without a line: colors need three
-/// numbers. Returns (line, message).
+/// numbers, emission (`Ke`) must not be negative, `Pr` and `Pm` need one number in [0, 1].
+/// Returns (line, message).
 fn prescan_mtl(text: &str) -> Result<(), (usize, String)> {
     for (i, raw) in text.lines().enumerate() {
         let l = raw.split('#').next().unwrap_or("");
@@ -394,6 +419,30 @@ fn prescan_mtl(text: &str) -> Result<(), (usize, String)> {
                 return Err((
                     i + 1,
                     format!("`{}`: expected `{kw} r g b` with three numbers", raw.trim()),
+                ));
+            }
+            let emission_ok = |t: &&str| t.parse::<f32>().is_ok_and(|v| v.is_finite() && v >= 0.0);
+            if kw == "Ke" && !nums.iter().take(3).all(emission_ok) {
+                return Err((
+                    i + 1,
+                    format!(
+                        "`{}`: Ke is emitted radiance in W/(m²·sr); expected three finite \
+                         numbers >= 0",
+                        raw.trim()
+                    ),
+                ));
+            }
+        } else if matches!(kw, "Pr" | "Pm") {
+            let nums: Vec<&str> = toks.collect();
+            let v = nums.first().and_then(|t| t.parse::<f32>().ok());
+            if nums.len() != 1 || !v.is_some_and(|v| (0.0..=1.0).contains(&v)) {
+                let what = if kw == "Pr" { "roughness" } else { "metalness" };
+                return Err((
+                    i + 1,
+                    format!(
+                        "`{}`: {kw} is the GGX {what}; expected one number in [0, 1]",
+                        raw.trim()
+                    ),
                 ));
             }
         }

@@ -200,10 +200,10 @@ fn unknown_key_is_named() {
     assert_eq!((line, key.as_str()), (11, "scal"));
     assert_msg(&e, &scene, &["unknown key `scal`", "`scale`", ":11:"]);
     // Also in nested tables.
-    let text = format!("{CAMERA}{LIGHT}{CUBE}material = {{ albedo = 0.5, roughness = 0.2 }}\n");
+    let text = format!("{CAMERA}{LIGHT}{CUBE}material = {{ albedo = 0.5, glossiness = 0.2 }}\n");
     let (e, _) = load_err(&text, &[]);
     assert!(
-        matches!(e, SceneError::UnknownKey { ref key, .. } if key == "roughness"),
+        matches!(e, SceneError::UnknownKey { ref key, .. } if key == "glossiness"),
         "{e}"
     );
 }

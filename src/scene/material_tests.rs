@@ -1,0 +1,169 @@
+//! Scene-file tests of the GGX and emission keys: TOML material overrides and the MTL PBR
+//! extension (`Pr`, `Pm`, `Ke`), and their errors, which name the file and the field.
+
+use std::path::{Path, PathBuf};
+
+use glam::Vec3;
+
+use super::*;
+
+const HEAD: &str = "[camera]\nposition = [0, 1, -3]\ntarget = [0, 0, 0]\nfov_y_deg = 40\n\
+                    [[lights]]\nkind = \"point\"\nposition = [0, 2, 0]\nintensity_w_sr = 1.0\n";
+
+fn toml(material: &str) -> Result<Scene, SceneError> {
+    let text = format!("{HEAD}[[objects]]\nbuiltin = \"cube\"\nmaterial = {{ {material} }}\n");
+    Scene::from_toml_str(&text, Path::new("mat.toml"), Path::new("."))
+}
+
+fn the_material(s: &Scene) -> &Material {
+    &s.materials[s.objects[0].materials[0]]
+}
+
+fn assert_err(r: Result<Scene, SceneError>, parts: &[&str]) {
+    let msg = r.expect_err("expected an error").to_string();
+    for p in parts {
+        assert!(msg.contains(p), "message lacks `{p}`: {msg}");
+    }
+}
+
+#[test]
+fn toml_ggx_and_emission_keys_make_a_ggx_emitter() {
+    let s =
+        toml("albedo = [0.9, 0.6, 0.3], roughness = 0.4, metallic = 1.0, emission_w_sr_m2 = 2.5")
+            .unwrap();
+    let m = the_material(&s);
+    assert_eq!(
+        m.ggx,
+        Some(Ggx {
+            roughness: 0.4,
+            metallic: 1.0
+        })
+    );
+    assert_eq!(m.emission, Vec3::splat(2.5));
+    assert!(s.has_ggx() && s.has_emission() && !s.has_phong() && !s.is_all_lambert());
+    // Only roughness: a dielectric.
+    let s = toml("roughness = 0.5").unwrap();
+    assert_eq!(the_material(&s).ggx.map(|g| g.metallic), Some(0.0));
+    // Emission alone keeps the material Lambert.
+    let s = toml("emission_w_sr_m2 = [0, 1, 2]").unwrap();
+    assert!(s.is_all_lambert() && s.has_emission() && !s.has_ggx());
+    // Neither: no GGX, no emission.
+    let s = toml("albedo = 0.5").unwrap();
+    assert!(!s.has_ggx() && !s.has_emission());
+}
+
+#[test]
+fn bad_toml_ggx_and_emission_values_name_the_file_and_field() {
+    assert_err(
+        toml("roughness = 1.5"),
+        &["mat.toml", "roughness", "outside [0, 1]"],
+    );
+    assert_err(
+        toml("metallic = -0.1"),
+        &["mat.toml", "metallic", "outside [0, 1]"],
+    );
+    assert_err(
+        toml("roughness = nan"),
+        &["mat.toml", "roughness", "finite"],
+    );
+    assert_err(
+        toml("emission_w_sr_m2 = [1, -1, 0]"),
+        &["mat.toml", "emission_w_sr_m2", "negative"],
+    );
+    assert_err(
+        toml("emission_w_sr_m2 = nan"),
+        &["mat.toml", "emission_w_sr_m2", "finite"],
+    );
+    assert_err(
+        toml("specular = 0.2, roughness = 0.5"),
+        &["mat.toml", "material", "Phong", "GGX"],
+    );
+}
+
+/// A temp directory with an OBJ triangle using material `a` of `m.mtl` = `mtl`, and a scene
+/// loading it; returns the scene path (the directory is left for the OS to clean).
+fn obj_scene(tag: &str, mtl: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("voxgi_mat_{tag}_{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("m.mtl"), mtl).unwrap();
+    std::fs::write(
+        dir.join("m.obj"),
+        "mtllib m.mtl\nusemtl a\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+    )
+    .unwrap();
+    let scene = dir.join("scene.toml");
+    std::fs::write(&scene, format!("{HEAD}[[objects]]\nmesh = \"m.obj\"\n")).unwrap();
+    scene
+}
+
+#[test]
+fn mtl_pr_pm_ke_are_read() {
+    let path = obj_scene(
+        "ok",
+        "newmtl a\nKd 0.8 0.5 0.2\nPr 0.35\nPm 0.9\nKe 1 2 3\nmap_Pr rough.png\n",
+    );
+    let s = Scene::load(&path).unwrap();
+    let m = the_material(&s);
+    assert_eq!(
+        m.ggx,
+        Some(Ggx {
+            roughness: 0.35,
+            metallic: 0.9
+        })
+    );
+    assert_eq!(
+        (m.albedo, m.emission),
+        (Vec3::new(0.8, 0.5, 0.2), Vec3::new(1.0, 2.0, 3.0))
+    );
+    // A Phong override makes the GGX MTL material Phong; an emission override replaces `Ke`.
+    let dir = path.parent().unwrap();
+    let over = dir.join("over.toml");
+    std::fs::write(
+        &over,
+        format!(
+            "{HEAD}[[objects]]\nmesh = \"m.obj\"\n\
+             material = {{ specular = 0.3, shininess = 8, emission_w_sr_m2 = 0 }}\n"
+        ),
+    )
+    .unwrap();
+    let s = Scene::load(&over).unwrap();
+    let m = the_material(&s);
+    assert_eq!((m.ggx, m.emission), (None, Vec3::ZERO));
+    assert!(s.has_phong() && !s.has_ggx() && !s.has_emission());
+    let _ = std::fs::remove_dir_all(dir);
+}
+
+#[test]
+fn bad_mtl_pr_pm_ke_name_the_file_line_and_key() {
+    for (tag, line, parts) in [
+        ("pr", "Pr 1.2", &["m.mtl", "line 2", "Pr", "[0, 1]"][..]),
+        ("pm", "Pm nan", &["m.mtl", "line 2", "Pm", "[0, 1]"]),
+        ("ke", "Ke 1 -2 0", &["m.mtl", "line 2", "Ke", ">= 0"]),
+        ("keinf", "Ke 1 inf 0", &["m.mtl", "line 2", "Ke", "finite"]),
+    ] {
+        let path = obj_scene(tag, &format!("newmtl a\n{line}\n"));
+        assert_err(Scene::load(&path), parts);
+        let _ = std::fs::remove_dir_all(path.parent().unwrap());
+    }
+}
+
+#[test]
+fn asset_cornell_emissive_is_lit_only_by_its_emitter() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/cornell_emissive.toml");
+    let s = Scene::load(&path).unwrap();
+    assert!(s.lights.is_empty());
+    assert!(s.has_emission() && s.has_ggx() && !s.has_phong());
+    let sphere = s
+        .objects
+        .iter()
+        .find(|o| o.name == "copper_sphere")
+        .unwrap();
+    let copper = &s.materials[sphere.materials[0]];
+    assert_eq!(copper.ggx.map(|g| g.metallic), Some(1.0));
+    // The emitting side of the ceiling patch faces the floor.
+    let light = s.objects.iter().find(|o| o.name == "light").unwrap();
+    let mesh = &s.meshes[light.mesh];
+    let n = light.transform_at(0.0).transform_vector3(mesh.normals[0]);
+    assert!(n.y < -0.999, "{n}");
+}
