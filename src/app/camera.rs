@@ -123,6 +123,7 @@ mod tests {
             fov_y_deg: 40.0,
             near: 0.01,
             far: 100.0,
+            shift_x_tan: 0.0,
         }
     }
 

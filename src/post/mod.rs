@@ -1,7 +1,10 @@
-//! Post-processing: tone mapping (and, with the GI methods, geometry-aware filtering).
+//! Post-processing: tone mapping (and, with the GI methods, geometry-aware filtering), and the
+//! packing of a stereo pair.
 
+mod stereo_pack;
 mod tonemap;
 
+pub use stereo_pack::{GpuStereoPackPush, Rows3, StereoMode, StereoPackPass};
 pub use tonemap::{GpuTonemapPush, TonemapPass};
 
 use serde::{Deserialize, Serialize};

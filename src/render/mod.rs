@@ -14,12 +14,14 @@ mod light_map;
 mod run;
 mod scene_gpu;
 mod shadow_depth;
+mod stereo;
 mod textures;
 
 pub use gbuffer::Gbuffer;
 pub use light_map::LightMaps;
 pub use run::{profile_scene, render_image, ProfileRun, RenderOutput};
 pub use scene_gpu::{Draw, DrawLists, SceneGpu, SceneInputs};
+pub use stereo::{eye_scene, pack as stereo_pack, render_stereo, StereoOutput, StereoSettings};
 
 use crate::eval::HdrImage;
 use crate::graph::{Access, GraphError, ImageHandle, RenderGraph};

@@ -27,27 +27,26 @@ pub fn render_image(
     settings: &super::RenderSettings,
 ) -> Result<RenderOutput, RenderError> {
     let mut renderer = Renderer::new(ctx, scene, settings.clone())?;
+    let out = render_frames(ctx, &mut renderer);
+    renderer.destroy(ctx);
+    out
+}
+
+/// Renders the frame `renderer` is prepared for: one frame, or the path tracer's
+/// accumulation; reads back its images.
+pub(super) fn render_frames(
+    ctx: &Context,
+    renderer: &mut Renderer,
+) -> Result<RenderOutput, RenderError> {
     // The path tracer converges over frames; everything else is done in one.
-    let frames = match settings.gi.method {
-        crate::gi::GiMethod::Pathtrace => settings.gi.accumulate_frames.max(1) as usize,
+    let frames = match renderer.settings.gi.method {
+        crate::gi::GiMethod::Pathtrace => renderer.settings.gi.accumulate_frames.max(1) as usize,
         _ => 1,
     };
-    let result = run_frames(ctx, &mut renderer, frames);
-    let out = result.map(|timings| {
-        let hdr = renderer.hdr_image();
-        let ldr = renderer.ldr_pixels();
-        let description = renderer.debug_description(&hdr);
-        (hdr, ldr, (timings, description))
-    });
-    let (exec_facts, out) = match out {
-        Ok((hdr, ldr, ((timings, live, bytes), description))) => {
-            (Some((live, bytes)), Ok((hdr, ldr, timings, description)))
-        }
-        Err(e) => (None, Err(e)),
-    };
-    renderer.destroy(ctx);
-    let (hdr, ldr, timings, debug_description) = out?;
-    let (live_passes, transient_bytes) = exec_facts.unwrap_or_default();
+    let (timings, live_passes, transient_bytes) = run_frames(ctx, renderer, frames)?;
+    let hdr = renderer.hdr_image();
+    let ldr = renderer.ldr_pixels();
+    let debug_description = renderer.debug_description(&hdr);
     Ok(RenderOutput {
         hdr,
         ldr,

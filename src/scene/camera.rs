@@ -17,6 +17,10 @@ pub struct Camera {
     /// Near and far plane distances in meters, 0 < near < far.
     pub near: f32,
     pub far: f32,
+    /// Horizontal off-axis shift of the frustum: the tangent (x / distance, view space) of the
+    /// direction the image center looks along. 0 for a symmetric frustum; a stereo eye's
+    /// asymmetric frustum ([`Camera::eye`]) has ±e / (2c). Not stored in scene files.
+    pub shift_x_tan: f32,
 }
 
 impl Camera {
@@ -37,6 +41,8 @@ impl Camera {
         let mut p = Mat4::perspective_rh(self.fov_y_deg.to_radians(), aspect, self.near, self.far);
         // glam's perspective_rh already maps depth to [0, 1]; Vulkan's y axis points down.
         p.y_axis.y = -p.y_axis.y;
+        // Off-axis: x_ndc = P00 (x_v / d - shift) with d = -z_v, so clip x gains P00 shift z_v.
+        p.z_axis.x += p.x_axis.x * self.shift_x_tan;
         p
     }
 
@@ -68,6 +74,34 @@ impl Camera {
         2.0 * half.atan().to_degrees()
     }
 
+    /// The unit vector to the right of the image (view-space +X) in world space.
+    pub fn right(&self) -> Vec3 {
+        self.forward.cross(self.up).normalize()
+    }
+
+    /// One eye of a stereo pair with parallel axes and asymmetric (off-axis) frusta: the eye
+    /// sits `separation_m / 2` to the side of this camera along [`Camera::right`], looks along
+    /// the same `forward`, and its frustum is shifted toward the center so that both eyes' image
+    /// windows coincide on the plane at `convergence_m` (zero disparity there). Any stereo
+    /// text derives the same pair, e.g. Bourke 1999, "Calculating stereo pairs".
+    ///
+    /// With the eye at lateral offset ±e/2 and the shift ∓e/(2c) in tangent units, a point at
+    /// lateral offset X and distance z projects to x_ndc = P00 ((X ∓ e/2) / z ± e/(2c)) with
+    /// P00 = 1 / (aspect · tan(fov_y / 2)); right minus left is the disparity
+    /// [`StereoRig::disparity_px`].
+    pub fn eye(&self, rig: StereoRig, eye: Eye) -> Camera {
+        let sign = match eye {
+            Eye::Left => -1.0,
+            Eye::Right => 1.0,
+        };
+        let half_e = 0.5 * rig.separation_m;
+        Camera {
+            position: self.position + self.right() * (sign * half_e),
+            shift_x_tan: self.shift_x_tan - sign * half_e / rig.convergence_m,
+            ..*self
+        }
+    }
+
     /// The camera as a scene file's `[camera]` table, exact (floats print in their shortest
     /// round-trip form), so a pose found in the viewer can be pasted into a scene.
     pub fn toml_table(&self) -> String {
@@ -84,6 +118,50 @@ impl Camera {
     }
 }
 
+/// Which eye of a stereo pair.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Eye {
+    Left,
+    Right,
+}
+
+/// Parallax control of a stereo pair: the eyes' distance and the distance of the plane that
+/// appears on the screen (nearer points come out of it, farther ones go behind).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StereoRig {
+    /// Interocular distance e in meters, > 0 (a human's is about 0.065).
+    pub separation_m: f32,
+    /// Convergence (zero-parallax) distance c in meters along `forward`, > 0.
+    pub convergence_m: f32,
+}
+
+impl Default for StereoRig {
+    fn default() -> Self {
+        Self {
+            separation_m: 0.065,
+            convergence_m: 2.0,
+        }
+    }
+}
+
+impl StereoRig {
+    /// Horizontal screen disparity x_right − x_left in pixels of a point at distance `z_m`
+    /// (along `forward`), for an image `width` pixels wide with focal length
+    /// f = P00 · width / 2 = height / (2 tan(fov_y / 2)) pixels:
+    ///
+    /// d = f · e · (1/c − 1/z) = (f e / c) · (1 − c / z)
+    ///
+    /// (from [`Camera::eye`]: the lateral offsets ∓e/2 give f·(∓e/2)/z, the shifts ±e/(2c)
+    /// give f·(±e/2)/c; the difference is independent of the point's lateral position). Zero
+    /// at z = c, negative (crossed, in front of the screen) for z < c, approaching f e / c as
+    /// z → ∞.
+    pub fn disparity_px(&self, camera: &Camera, height: u32, z_m: f32) -> f32 {
+        let f_px = height as f32 / (2.0 * (camera.fov_y_deg.to_radians() * 0.5).tan());
+        let (e, c) = (self.separation_m, self.convergence_m);
+        f_px * e / c * (1.0 - c / z_m)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -96,6 +174,7 @@ mod tests {
             fov_y_deg: 39.3,
             near: 0.01,
             far: 100.0,
+            shift_x_tan: 0.0,
         }
     }
 
@@ -137,5 +216,66 @@ mod tests {
         let c = cornell_cam();
         assert!((c.fov_x_deg(1.0) - 39.3).abs() < 1e-4);
         assert!(c.fov_x_deg(2.0) > 39.3 * 1.5);
+    }
+
+    /// Pixel x (continuous, 0 at the left edge) where `camera` sees `p` in a w×h image.
+    fn pixel_x(camera: &Camera, p: Vec3, w: u32, h: u32) -> f32 {
+        let ndc = camera.view_proj(w as f32 / h as f32).project_point3(p);
+        (ndc.x + 1.0) * 0.5 * w as f32
+    }
+
+    #[test]
+    fn eyes_are_parallel_and_separated_along_right() {
+        let c = cornell_cam();
+        let rig = StereoRig {
+            separation_m: 0.1,
+            convergence_m: 1.5,
+        };
+        let (l, r) = (c.eye(rig, Eye::Left), c.eye(rig, Eye::Right));
+        assert_eq!((l.forward, r.forward), (c.forward, c.forward));
+        assert!((r.position - l.position - c.right() * 0.1).length() < 1e-6);
+        assert!(((l.position + r.position) * 0.5 - c.position).length() < 1e-6);
+    }
+
+    #[test]
+    fn disparity_matches_the_closed_form() {
+        let c = cornell_cam();
+        let rig = StereoRig {
+            separation_m: 0.08,
+            convergence_m: 1.2,
+        };
+        let (l, r) = (c.eye(rig, Eye::Left), c.eye(rig, Eye::Right));
+        let (w, h) = (160, 120);
+        for z in [0.3, 0.7, 1.2, 2.0, 9.0] {
+            // Off the axis in x and y: disparity must not depend on the lateral position.
+            for lateral in [-0.2, 0.0, 0.15] {
+                let p = c.position + c.forward * z + c.right() * lateral + c.up * 0.05;
+                let d = pixel_x(&r, p, w, h) - pixel_x(&l, p, w, h);
+                let expected = rig.disparity_px(&c, h, z);
+                assert!((d - expected).abs() < 1e-3, "z {z}: {d} vs {expected}");
+            }
+        }
+        // Zero parallax exactly at the convergence distance; crossed (negative) nearer.
+        assert_eq!(rig.disparity_px(&c, h, 1.2), 0.0);
+        assert!(rig.disparity_px(&c, h, 0.5) < 0.0 && rig.disparity_px(&c, h, 3.0) > 0.0);
+    }
+
+    #[test]
+    fn eye_frusta_share_the_window_at_the_convergence_plane() {
+        let c = cornell_cam();
+        let rig = StereoRig::default();
+        let aspect = 1.5;
+        let t = (c.fov_y_deg.to_radians() / 2.0).tan();
+        // The corners of the centre camera's window at distance c land on both eyes' corners.
+        for (sx, sy) in [(-1.0, -1.0), (1.0, 1.0), (1.0, -1.0)] {
+            let p = c.position
+                + c.forward * rig.convergence_m
+                + c.right() * (sx * t * aspect * rig.convergence_m)
+                + Vec3::Y * (sy * t * rig.convergence_m);
+            for eye in [Eye::Left, Eye::Right] {
+                let ndc = c.eye(rig, eye).view_proj(aspect).project_point3(p);
+                assert!((ndc.x - sx).abs() < 1e-4 && (ndc.y + sy).abs() < 1e-4, "{ndc}");
+            }
+        }
     }
 }

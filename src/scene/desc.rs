@@ -405,6 +405,7 @@ fn build_camera(ck: &Check<'_>, c: &CameraDesc) -> Result<Camera, SceneError> {
         fov_y_deg: fov,
         near,
         far,
+        shift_x_tan: 0.0,
     })
 }
 

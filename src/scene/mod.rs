@@ -121,7 +121,7 @@ pub mod vpl_settings;
 use std::path::{Path, PathBuf};
 
 pub use builtin::{builtin, builtin_names, load_scene_arg, DEFAULT_SCENE};
-pub use camera::Camera;
+pub use camera::{Camera, Eye, StereoRig};
 pub use cull::aabb_visible;
 pub use error::SceneError;
 pub use gi::{resolve_gi, GiOverrides};
