@@ -268,6 +268,27 @@ pub const VPL_D_MIN: Limit<f32> = Limit::new(
     1e6,
 );
 
+/// Stereo eye separation: 0 gives two identical eyes (allowed, a mono check); 1e3 m is beyond
+/// any scene scale voxgi renders in f32.
+pub const STEREO_SEPARATION_M: Limit<f32> = Limit::new(
+    "--eye-separation",
+    None,
+    "an eye separation in meters",
+    0.0,
+    1e3,
+);
+/// Stereo convergence (zero-parallax) distance: positive, it divides the frustum shift.
+pub const STEREO_CONVERGENCE_M: Limit<f32> = Limit {
+    min_exclusive: true,
+    ..Limit::new(
+        "--convergence",
+        None,
+        "a convergence distance in meters",
+        0.0,
+        1e9,
+    )
+};
+
 /// Checks every value of `s` that has a [`Limit`], naming the flag of the first one out of
 /// range. `Renderer::new` runs it, so values that reach the renderer by any path (flags,
 /// scene files, the panel, the library) are checked the same way.
@@ -369,6 +390,17 @@ mod tests {
         assert_eq!(EXPOSURE.check_flag(2.5), Ok(2.5));
         assert_eq!(GI_NORMAL_OFFSET.check_flag(0.0), Ok(0.0));
         assert!(GI_RADIUS_M.check_as("gi.radius_m", 0.0).is_err());
+    }
+
+    #[test]
+    fn stereo_parallax_refuses_nan_and_negative() {
+        for bad in [f32::NAN, -0.01] {
+            assert!(STEREO_SEPARATION_M.check_flag(bad).is_err());
+            assert!(STEREO_CONVERGENCE_M.check_flag(bad).is_err());
+        }
+        assert!(STEREO_CONVERGENCE_M.check_flag(0.0).is_err());
+        assert_eq!(STEREO_SEPARATION_M.check_flag(0.0), Ok(0.0));
+        assert_eq!(STEREO_CONVERGENCE_M.check_flag(1.5), Ok(1.5));
     }
 
     #[test]

@@ -2,7 +2,7 @@
 
 use super::args::FrameArgs;
 use super::{check_validation, context, outln, CliError, Global};
-use crate::render::render_image;
+use crate::render::{render_image, render_stereo, StereoSettings};
 use crate::scene::load_scene_arg;
 use std::io::Write;
 use std::path::PathBuf;
@@ -23,20 +23,101 @@ pub struct RenderArgs {
     /// Compare the linear radiance with a reference EXR and print the metrics.
     #[arg(long)]
     pub compare: Option<PathBuf>,
+    #[command(flatten)]
+    pub stereo: StereoArgs,
+}
+
+/// Prints the eyes' parallax and what the second eye and the packing cost on the GPU.
+fn print_stereo(
+    stereo: &StereoSettings,
+    s: &crate::render::StereoOutput,
+    out: &mut dyn Write,
+) -> Result<(), CliError> {
+    let total = |t: &[crate::vk::PassTiming]| t.iter().map(|t| t.gpu_ms).sum::<f64>();
+    outln!(
+        out,
+        "stereo {:?}: eye separation {} m, convergence {} m; GPU ms left eye {:.3}, right eye {:.3}, packing {:.3}",
+        stereo.mode,
+        stereo.rig.separation_m,
+        stereo.rig.convergence_m,
+        total(&s.left.timings),
+        total(&s.right.timings),
+        total(&s.pack_timings)
+    );
+    Ok(())
+}
+
+/// Stereo flags of `voxgi render`.
+#[derive(clap::Args, Clone)]
+pub struct StereoArgs {
+    /// Render both eyes (off-axis parallel frusta) and pack them into --output: an anaglyph
+    /// (left eye red) or a spatial packing; side-by-side-full is twice --width wide. --exr and
+    /// --compare then take the left eye.
+    #[arg(long, value_enum, value_name = "MODE")]
+    pub stereo: Option<crate::post::StereoMode>,
+    /// Distance between the eyes in meters (with --stereo).
+    #[arg(long, value_name = "M", default_value_t = crate::scene::StereoRig::default().separation_m)]
+    pub eye_separation: f32,
+    /// Distance of the zero-parallax plane in meters along the view direction (with --stereo);
+    /// default: the distance to the centre of the scene's bounding box.
+    #[arg(long, value_name = "M")]
+    pub convergence: Option<f32>,
+}
+
+impl StereoArgs {
+    /// The stereo settings, `None` without --stereo; a value out of its range is an error
+    /// naming its flag.
+    pub fn settings(
+        &self,
+        scene: &crate::scene::Scene,
+        time_s: f32,
+    ) -> Result<Option<StereoSettings>, CliError> {
+        let Some(mode) = self.stereo else {
+            return Ok(None);
+        };
+        let convergence_m = match self.convergence {
+            Some(c) => c,
+            None => {
+                let b = scene.aabb_at(time_s);
+                let to_centre = (b.min + b.max) * 0.5 - scene.camera.position;
+                let along = to_centre.dot(scene.camera.forward);
+                if along > 0.0 { along } else { 2.0 }
+            }
+        };
+        let rig = crate::scene::StereoRig {
+            separation_m: crate::limits::STEREO_SEPARATION_M.check_flag(self.eye_separation)?,
+            convergence_m: crate::limits::STEREO_CONVERGENCE_M.check_flag(convergence_m)?,
+        };
+        Ok(Some(StereoSettings { mode, rig }))
+    }
 }
 
 /// Renders, writes the images and prints the pass times (and the metrics with `--compare`).
+/// With `--stereo` the PNG is the packed pair and the EXR, metrics and debug description are
+/// the left eye's.
 pub fn render(global: &Global, args: &RenderArgs, out: &mut dyn Write) -> Result<(), CliError> {
     let frame = &args.frame;
     let scene = load_scene_arg(args.scene.as_deref())?;
     let settings = frame.settings(&scene)?;
+    let stereo = args.stereo.settings(&scene, settings.time_s)?;
     let ctx = context(global)?;
-    let image = render_image(&ctx, &scene, &settings)?;
+    let (image, packed, packed_size) = match stereo {
+        None => {
+            let mut image = render_image(&ctx, &scene, &settings)?;
+            let ldr = std::mem::take(&mut image.ldr);
+            (image, ldr, (frame.width, frame.height))
+        }
+        Some(stereo) => {
+            let s = render_stereo(&ctx, &scene, &settings, stereo)?;
+            print_stereo(&stereo, &s, out)?;
+            (s.left, s.packed, s.packed_size)
+        }
+    };
     image::save_buffer(
         &args.output,
-        &image.ldr,
-        frame.width,
-        frame.height,
+        &packed,
+        packed_size.0,
+        packed_size.1,
         image::ColorType::Rgba8,
     )
     .map_err(|source| CliError::WriteImage {
