@@ -36,8 +36,10 @@ fn print_stereo(
     let total = |t: &[crate::vk::PassTiming]| t.iter().map(|t| t.gpu_ms).sum::<f64>();
     outln!(
         out,
-        "stereo {:?}: eye separation {} m, convergence {} m; GPU ms left eye {:.3}, right eye {:.3}, packing {:.3}",
-        stereo.mode,
+        "stereo {}: eye separation {} m, convergence {} m; GPU ms left eye {:.3}, right eye {:.3}, packing {:.3}",
+        clap::ValueEnum::to_possible_value(&stereo.mode)
+            .map(|v| v.get_name().to_owned())
+            .unwrap_or_default(),
         stereo.rig.separation_m,
         stereo.rig.convergence_m,
         total(&s.left.timings),
@@ -81,7 +83,11 @@ impl StereoArgs {
                 let b = scene.aabb_at(time_s);
                 let to_centre = (b.min + b.max) * 0.5 - scene.camera.position;
                 let along = to_centre.dot(scene.camera.forward);
-                if along > 0.0 { along } else { 2.0 }
+                if along > 0.0 {
+                    along
+                } else {
+                    2.0
+                }
             }
         };
         let rig = crate::scene::StereoRig {

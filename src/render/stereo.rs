@@ -17,7 +17,7 @@ use super::{RenderError, RenderOutput, RenderSettings, Renderer};
 use crate::graph::{run_once, Access, OneShotError, RenderGraph, Shader};
 use crate::post::{StereoMode, StereoPackPass};
 use crate::scene::{Eye, Scene, StereoRig};
-use crate::vk::{vk, Context, ImageDesc, Image, PassTiming};
+use crate::vk::{vk, Context, Image, ImageDesc, PassTiming};
 
 /// A stereo frame's settings: the packing and the eyes' parallax.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -99,7 +99,8 @@ pub fn pack(
     let result = (|| -> Result<(Vec<u8>, Vec<PassTiming>), RenderError> {
         made.push(ctx.upload_image(&eye_desc("left eye"), &[left.to_vec()])?);
         made.push(ctx.upload_image(&eye_desc("right eye"), &[right.to_vec()])?);
-        let readback = crate::graph::readback_buffer(ctx, "stereo read-back", u64::from(pw * ph * 4))?;
+        let readback =
+            crate::graph::readback_buffer(ctx, "stereo read-back", u64::from(pw * ph * 4))?;
         let mut g = RenderGraph::new();
         let l = g.import_image(&made[0], Access::Sampled(Shader::Compute));
         let r = g.import_image(&made[1], Access::Sampled(Shader::Compute));
@@ -114,8 +115,13 @@ pub fn pack(
             .read(packed, Access::TransferRead)
             .write(buf, Access::TransferWrite)
             .record(move |ctx| {
-                ctx.cmd
-                    .copy_image_to_buffer(ctx.image(packed).raw, extent, 0, 1, ctx.buffer(buf).raw)
+                ctx.cmd.copy_image_to_buffer(
+                    ctx.image(packed).raw,
+                    extent,
+                    0,
+                    1,
+                    ctx.buffer(buf).raw,
+                )
             });
         let timings = run_once(ctx, g).map_err(|e| match e {
             OneShotError::Graph(e) => RenderError::Graph(e),

@@ -274,7 +274,10 @@ mod tests {
                 + Vec3::Y * (sy * t * rig.convergence_m);
             for eye in [Eye::Left, Eye::Right] {
                 let ndc = c.eye(rig, eye).view_proj(aspect).project_point3(p);
-                assert!((ndc.x - sx).abs() < 1e-4 && (ndc.y + sy).abs() < 1e-4, "{ndc}");
+                assert!(
+                    (ndc.x - sx).abs() < 1e-4 && (ndc.y + sy).abs() < 1e-4,
+                    "{ndc}"
+                );
             }
         }
     }
