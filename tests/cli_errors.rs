@@ -69,6 +69,26 @@ fn every_flag_out_of_range_is_refused_naming_the_flag() {
             &["--debug", "steps", "--debug-steps-scale", "0"],
             "--debug-steps-scale = 0",
         ),
+        (
+            &["--stereo", "checkerboard", "--eye-separation", "nan"],
+            "--eye-separation = NaN",
+        ),
+        (
+            &["--stereo", "top-bottom", "--eye-separation=-0.1"],
+            "--eye-separation = -0.1",
+        ),
+        (
+            &["--stereo", "anaglyph-dubois", "--convergence=-2"],
+            "--convergence = -2",
+        ),
+        (
+            &["--stereo", "anaglyph-dubois", "--convergence", "0"],
+            "--convergence = 0",
+        ),
+        (
+            &["--stereo", "side-by-side-full", "--width", "8193"],
+            "--width = 8193",
+        ),
     ];
     for (extra, want) in cases {
         let stderr = render_fails(extra);
@@ -76,6 +96,26 @@ fn every_flag_out_of_range_is_refused_naming_the_flag() {
             stderr.contains(want) && stderr.contains("expected"),
             "{extra:?}: {stderr}"
         );
+    }
+}
+
+#[test]
+fn an_unknown_stereo_mode_lists_the_modes() {
+    let stderr = render_fails(&["--stereo", "anaglyph-magenta"]);
+    for mode in [
+        "anaglyph-true",
+        "anaglyph-gray",
+        "anaglyph-color",
+        "anaglyph-half-color",
+        "anaglyph-dubois",
+        "side-by-side",
+        "side-by-side-full",
+        "top-bottom",
+        "row-interleaved",
+        "column-interleaved",
+        "checkerboard",
+    ] {
+        assert!(stderr.contains(mode), "{mode} not listed: {stderr}");
     }
 }
 

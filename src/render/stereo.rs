@@ -53,6 +53,7 @@ pub fn render_stereo(
     settings: &RenderSettings,
     stereo: StereoSettings,
 ) -> Result<StereoOutput, RenderError> {
+    check_packed_width(stereo.mode, settings.width)?;
     let left_scene = eye_scene(scene, stereo.rig, Eye::Left);
     let right_scene = eye_scene(scene, stereo.rig, Eye::Right);
     let mut renderer = Renderer::new(ctx, &left_scene, settings.clone())?;
@@ -74,6 +75,24 @@ pub fn render_stereo(
         packed_size: stereo.mode.packed_size(eye_size),
         pack_timings,
     })
+}
+
+/// Refuses a packed image wider than the renderer's widest image ([`crate::limits::WIDTH`]):
+/// side-by-side-full doubles `--width`.
+fn check_packed_width(mode: StereoMode, width: u32) -> Result<(), crate::limits::LimitError> {
+    let (packed_w, _) = mode.packed_size((width, 1));
+    let max = crate::limits::WIDTH.max;
+    if packed_w > max {
+        return Err(crate::limits::LimitError {
+            name: "--width".into(),
+            value: width.to_string(),
+            expected: format!(
+                "at most {} with --stereo side-by-side-full, whose image is twice as wide (at most {max})",
+                max / 2
+            ),
+        });
+    }
+    Ok(())
 }
 
 /// Packs two sRGB RGBA8 eye images of `eye_size` with `mode` on the GPU (`stereo_pack`);
