@@ -330,7 +330,9 @@ impl Renderer {
         parts: &mut Parts,
     ) -> Result<(), RenderError> {
         let has_phong = scene.has_phong();
-        let gi_on = settings.gi.method != crate::gi::GiMethod::None;
+        // A debug view replaces the lit image, so nothing would read the indirect light (and
+        // the albedo view declares the attribute passes the GI methods would declare again).
+        let gi_on = settings.gi.method != crate::gi::GiMethod::None && settings.debug.is_none();
         if gi_on
             && settings.shadow.point_technique == PointShadow::DualParaboloid
             && scene.has_point_lights()
