@@ -620,3 +620,36 @@ fn path_tracer_on_atlas_volumes_matches_triangle_volumes() {
         );
     }
 }
+
+/// `voxgi bench flicker` runs every method along the light's path, validation clean, with
+/// finite measures; the path tracer is closer to its own converged frames than direct light.
+#[test]
+fn the_flicker_benchmark_runs_every_method_along_the_path() {
+    let ctx = common::context();
+    let scene = voxgi::scene::builtin("cornell").expect("cornell is built in");
+    let desc = voxgi::bench::FlickerBenchDesc {
+        steps: 3,
+        size: 24,
+        reference_frames: 2,
+        ..Default::default()
+    };
+    let report = voxgi::bench::bench_flicker(&ctx, &scene, "cornell", &desc).expect("runs");
+    assert_eq!(report.rows.len(), voxgi::bench::default_methods().len());
+    for r in &report.rows {
+        assert!(
+            r.change.is_finite() && r.flicker.is_finite() && r.flicker >= 0.0,
+            "{r:?}"
+        );
+    }
+    let rel_mse = |m: &str| {
+        report
+            .rows
+            .iter()
+            .find(|r| r.method.starts_with(m))
+            .unwrap()
+            .rel_mse
+    };
+    assert!(rel_mse("pathtrace") < rel_mse("direct"), "{report:?}");
+    assert!(report.reference_change > 0.0, "the light moved");
+    common::assert_no_validation_messages(&ctx);
+}
