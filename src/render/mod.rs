@@ -13,6 +13,7 @@ pub mod gpu;
 mod light_map;
 mod run;
 mod scene_gpu;
+mod settings_check;
 mod shadow_depth;
 mod textures;
 
@@ -20,6 +21,7 @@ pub use gbuffer::Gbuffer;
 pub use light_map::LightMaps;
 pub use run::{profile_scene, render_image, ProfileRun, RenderOutput};
 pub use scene_gpu::{Draw, DrawLists, SceneGpu, SceneInputs};
+pub use settings_check::{check_device_limits, check_render_settings};
 
 use crate::eval::HdrImage;
 use crate::graph::{Access, GraphError, ImageHandle, RenderGraph};
@@ -291,8 +293,8 @@ impl Renderer {
         scene: &Scene,
         settings: RenderSettings,
     ) -> Result<Self, RenderError> {
-        crate::limits::check_render_settings(&settings)?;
-        crate::limits::check_device_limits(&settings, ctx.info.max_image_dimension_2d)?;
+        check_render_settings(&settings)?;
+        check_device_limits(&settings, ctx.info.max_image_dimension_2d)?;
         if scene.lights.len() > MAX_LIGHTS {
             return Err(RenderError::TooManyLights(scene.lights.len()));
         }
