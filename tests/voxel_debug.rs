@@ -384,3 +384,35 @@ fn a_level_beyond_the_hierarchy_is_an_error() {
         .expect("level 40 is rejected");
     assert!(err.to_string().contains("--debug-level"), "{err}");
 }
+
+/// A debug view replaces the lit image, so a GI method chosen with it (as the built-in Cornell
+/// box's `[gi]` table chooses the path tracer) adds no passes: before, the albedo view and the
+/// path tracer both declared `voxelize_attributes` and the graph refused the frame.
+#[test]
+fn a_debug_view_with_a_gi_method_renders_the_view_alone() {
+    let ctx = common::context();
+    let scene = builtin("cornell").expect("cornell");
+    for view in [DebugView::Albedo, DebugView::Voxels] {
+        let settings = RenderSettings {
+            width: 32,
+            height: 32,
+            debug: Some(DebugSettings {
+                view,
+                ..Default::default()
+            }),
+            gi: voxgi::gi::GiSettings {
+                method: voxgi::gi::GiMethod::Pathtrace,
+                ..Default::default()
+            },
+            ..Default::default()
+        };
+        let out = render_image(&ctx, &scene, &settings).expect("renders the debug view");
+        assert!(out.live_passes.iter().any(|p| p == "voxel_debug"));
+        assert!(
+            !out.live_passes.iter().any(|p| p.starts_with("gi_")),
+            "{view:?}: {:?}",
+            out.live_passes
+        );
+    }
+    common::assert_no_validation_messages(&ctx);
+}

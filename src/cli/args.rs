@@ -232,7 +232,7 @@ impl FrameArgs {
                 object,
                 ..Default::default()
             });
-        crate::limits::check_render_settings(&s)?;
+        crate::render::check_render_settings(&s)?;
         Ok(s)
     }
 }

@@ -87,7 +87,7 @@ pub fn view(global: &Global, args: ViewArgs, out: &mut dyn Write) -> Result<(), 
     settings.tonemap.operator = args.tonemap;
     settings.tonemap.exposure = args.exposure;
     settings.gi = args.gi.settings(&scene);
-    crate::limits::check_render_settings(&settings)?;
+    crate::render::check_render_settings(&settings)?;
     let opts = crate::app::ViewerOptions {
         validation: global.validate,
         device: global.device.clone(),

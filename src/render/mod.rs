@@ -13,6 +13,7 @@ pub mod gpu;
 mod light_map;
 mod run;
 mod scene_gpu;
+mod settings_check;
 mod shadow_depth;
 mod stereo;
 mod textures;
@@ -21,6 +22,7 @@ pub use gbuffer::Gbuffer;
 pub use light_map::LightMaps;
 pub use run::{profile_scene, render_image, ProfileRun, RenderOutput};
 pub use scene_gpu::{Draw, DrawLists, SceneGpu, SceneInputs};
+pub use settings_check::{check_device_limits, check_render_settings};
 pub use stereo::{eye_scene, pack as stereo_pack, render_stereo, StereoOutput, StereoSettings};
 
 use crate::eval::HdrImage;
@@ -293,8 +295,8 @@ impl Renderer {
         scene: &Scene,
         settings: RenderSettings,
     ) -> Result<Self, RenderError> {
-        crate::limits::check_render_settings(&settings)?;
-        crate::limits::check_device_limits(&settings, ctx.info.max_image_dimension_2d)?;
+        check_render_settings(&settings)?;
+        check_device_limits(&settings, ctx.info.max_image_dimension_2d)?;
         if scene.lights.len() > MAX_LIGHTS {
             return Err(RenderError::TooManyLights(scene.lights.len()));
         }
@@ -332,7 +334,9 @@ impl Renderer {
         parts: &mut Parts,
     ) -> Result<(), RenderError> {
         let has_phong = scene.has_phong();
-        let gi_on = settings.gi.method != crate::gi::GiMethod::None;
+        // A debug view replaces the lit image, so nothing would read the indirect light (and
+        // the albedo view declares the attribute passes the GI methods would declare again).
+        let gi_on = settings.gi.method != crate::gi::GiMethod::None && settings.debug.is_none();
         if gi_on
             && settings.shadow.point_technique == PointShadow::DualParaboloid
             && scene.has_point_lights()

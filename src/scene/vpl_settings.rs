@@ -45,10 +45,10 @@ pub struct VplSettings {
 
 impl VplSettings {
     /// The most VPLs per set and light, and the largest pattern side.
-    pub const MAX_PER_SET: u32 = 1024;
-    pub const MAX_PATTERN: u32 = 16;
+    pub const MAX_PER_SET: u32 = crate::limits::VPLS.max;
+    pub const MAX_PATTERN: u32 = crate::limits::VPL_PATTERN_SIDE.max;
     /// The most VPL bounces (each adds one ray per VPL and a row segment).
-    pub const MAX_BOUNCES: u32 = 8;
+    pub const MAX_BOUNCES: u32 = crate::limits::VPL_BOUNCES.max;
 }
 
 impl Default for VplSettings {

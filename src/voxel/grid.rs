@@ -12,9 +12,9 @@ use super::{VoxelError, COLUMN_BITS};
 
 /// Largest accepted x/y resolution (Vulkan guarantees `maxImageDimension2D` ≥ 4096; common
 /// desktop GPUs allow 16384).
-pub const MAX_RES_XY: u32 = 16384;
+pub const MAX_RES_XY: u32 = crate::limits::VOXELS.max;
 /// Largest accepted number of 128-voxel layers (depth 8192).
-pub const MAX_LAYERS: u32 = 64;
+pub const MAX_LAYERS: u32 = crate::limits::VOXEL_LAYERS.max;
 
 /// World axis the voxel camera looks along (its depth axis).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
