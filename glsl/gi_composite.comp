@@ -1,7 +1,11 @@
 #version 450
 // Direct plus indirect light: L = L_direct + rho/pi * E_indirect for Lambert receivers; Phong
 // receivers' indirect radiance is stored as is (see gi_common.glsl).
+// With SAO (Oetke 2017 §2.5) the indirect term is multiplied by the half-resolution AO term
+// (nearest texel); SAO_VIEW writes the AO term itself as grey radiance (`--debug sao`).
 layout(constant_id = 0) const bool HAS_PHONG = false;
+layout(constant_id = 1) const bool HAS_SAO = false;
+layout(constant_id = 2) const bool SAO_VIEW = false;
 
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(set = 0, binding = 0) uniform sampler2D direct;
@@ -9,6 +13,7 @@ layout(set = 0, binding = 1) uniform sampler2D gb_albedo;
 layout(set = 0, binding = 2) uniform sampler2D indirect_irradiance;
 layout(set = 0, binding = 3, rgba32f) uniform writeonly image2D radiance;
 layout(set = 0, binding = 4) uniform sampler2D gb_specular;   // albedo when !HAS_PHONG
+layout(set = 0, binding = 5) uniform sampler2D sao;           // albedo when !HAS_SAO
 #include "gbuffer_lobe.glsl"
 
 #define PI 3.14159265358979323846
@@ -21,5 +26,10 @@ void main() {
     vec3 e = texelFetch(indirect_irradiance, p, 0).rgb;
     // Phong pixels already hold their indirect radiance (see gi_common.glsl).
     bool phong = HAS_PHONG && any(greaterThan(gbuffer_phong_specular(gb_specular, p), vec3(0.0)));
-    imageStore(radiance, p, vec4(d.rgb + (phong ? e : albedo / PI * e), d.a));
+    float ao = HAS_SAO ? texelFetch(sao, p / 2, 0).r : 1.0;
+    if (SAO_VIEW) {
+        imageStore(radiance, p, vec4(vec3(ao), d.a));
+        return;
+    }
+    imageStore(radiance, p, vec4(d.rgb + ao * (phong ? e : albedo / PI * e), d.a));
 }

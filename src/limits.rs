@@ -155,6 +155,32 @@ pub const VOXEL_LAYERS: Limit<u32> = Limit::new(
     64,
 );
 pub const GI_RAYS: Limit<u32> = Limit::new("--gi-rays", Some("gi.rays"), "rays per pixel", 1, 4096);
+/// SAO (Oetke 2017 §2.5): the world-space sample radius r.
+pub const SAO_RADIUS_M: Limit<f32> = Limit {
+    min_exclusive: true,
+    ..Limit::new("--sao-radius", None, "an SAO radius in meters", 0.0, 1e6)
+};
+/// SAO bias β, in meters of v·n (v the tap offset, n the normal).
+pub const SAO_BIAS: Limit<f32> = Limit::new("--sao-bias", None, "an SAO bias in meters", 0.0, 1e6);
+/// SAO contrast k, the exponent of the AO term.
+pub const SAO_CONTRAST: Limit<f32> = Limit::new(
+    "--sao-contrast",
+    None,
+    "an SAO contrast exponent",
+    0.0,
+    64.0,
+);
+/// SAO ε of the denominator v·v + ε, in m² (positive: keeps a tap at the centre finite).
+pub const SAO_EPSILON: Limit<f32> = Limit {
+    min_exclusive: true,
+    ..Limit::new(
+        "--sao-epsilon",
+        None,
+        "an SAO epsilon in square meters",
+        0.0,
+        1e6,
+    )
+};
 pub const GI_RADIUS_M: Limit<f32> = Limit {
     min_exclusive: true,
     ..Limit::new(

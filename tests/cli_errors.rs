@@ -89,6 +89,10 @@ fn every_flag_out_of_range_is_refused_naming_the_flag() {
             &["--stereo", "side-by-side-full", "--width", "8193"],
             "--width = 8193",
         ),
+        (&["--sao", "--sao-radius", "0"], "--sao-radius = 0"),
+        (&["--sao", "--sao-bias=-1"], "--sao-bias = -1"),
+        (&["--sao", "--sao-contrast", "nan"], "--sao-contrast = NaN"),
+        (&["--sao", "--sao-epsilon", "0"], "--sao-epsilon = 0"),
     ];
     for (extra, want) in cases {
         let stderr = render_fails(extra);

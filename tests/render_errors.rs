@@ -95,6 +95,19 @@ fn gi_with_paraboloid_point_shadows() {
 }
 
 #[test]
+fn sao_without_indirect_light() {
+    // SAO multiplies only the indirect light; with --gi none there is none to darken.
+    let ctx = common::context();
+    let scene = load_scene_arg(None).expect("built-in scene");
+    let mut s = small();
+    s.gi.method = GiMethod::None;
+    s.gi.sao = Some(voxgi::gi::SaoSettings::default());
+    let e = Renderer::new(&ctx, &scene, s).err().expect("refused");
+    assert!(matches!(e, RenderError::SaoWithoutGi), "{e}");
+    assert!(e.to_string().contains("--gi"), "{e}");
+}
+
+#[test]
 fn settings_out_of_range_name_their_flag() {
     let ctx = common::context();
     let scene = load_scene_arg(None).expect("built-in scene");

@@ -88,6 +88,25 @@ pub struct GiArgs {
     /// later ones cyan).
     #[arg(long)]
     pub vpl_show: bool,
+    /// Modified SAO (Oetke 2017 §2.5) at half resolution, multiplied into the indirect light
+    /// (needs a --gi method: direct light is not darkened).
+    #[arg(long)]
+    pub sao: bool,
+    /// `--sao`: sample radius r in meters.
+    #[arg(long, requires = "sao", default_value_t = crate::gi::SaoSettings::default().radius_m)]
+    pub sao_radius: f32,
+    /// `--sao`: bias β in meters of v·n.
+    #[arg(long, requires = "sao", default_value_t = crate::gi::SaoSettings::default().bias)]
+    pub sao_bias: f32,
+    /// `--sao`: contrast k, the AO term's exponent.
+    #[arg(long, requires = "sao", default_value_t = crate::gi::SaoSettings::default().contrast)]
+    pub sao_contrast: f32,
+    /// `--sao`: ε of v·v + ε in m².
+    #[arg(long, requires = "sao", default_value_t = crate::gi::SaoSettings::default().epsilon_m2)]
+    pub sao_epsilon: f32,
+    /// `--sao`: debug view, the AO term as grey (1 white = unoccluded) instead of the image.
+    #[arg(long, requires = "sao")]
+    pub sao_show: bool,
 }
 
 impl GiArgs {
@@ -128,6 +147,13 @@ impl GiArgs {
                 show: self.vpl_show,
                 ..s.vpl
             },
+            sao: self.sao.then_some(crate::gi::SaoSettings {
+                radius_m: self.sao_radius,
+                bias: self.sao_bias,
+                contrast: self.sao_contrast,
+                epsilon_m2: self.sao_epsilon,
+                view: self.sao_show,
+            }),
             ..s
         }
     }

@@ -1,5 +1,6 @@
 //! `gi_composite`: the frame's radiance, direct plus indirect (Lambert pixels: albedo / π
-//! times the filtered irradiance; Phong pixels: their indirect radiance as stored).
+//! times the filtered irradiance; Phong pixels: their indirect radiance as stored), the
+//! indirect term multiplied by the SAO term when there is one (Oetke 2017 §2.5).
 
 use super::GiInputs;
 use crate::graph::{Access, ImageHandle, RenderGraph, Shader};
@@ -11,20 +12,28 @@ pub struct GiComposite {
 }
 
 impl GiComposite {
-    /// `has_phong`: the G-buffer has a specular image (specialization constant 0).
-    pub fn new(ctx: &Context, has_phong: bool) -> Result<Self, VkError> {
-        let pipeline =
-            ctx.compute_pipeline("gi_composite.comp", None, &[(0, u32::from(has_phong))])?;
+    /// `has_phong`: the G-buffer has a specular image (specialization constant 0); `sao`:
+    /// an AO term multiplies the indirect light (constant 1), `sao_view`: the composite
+    /// writes the AO term instead (constant 2).
+    pub fn new(ctx: &Context, has_phong: bool, sao: bool, sao_view: bool) -> Result<Self, VkError> {
+        let spec = [
+            (0, u32::from(has_phong)),
+            (1, u32::from(sao)),
+            (2, u32::from(sao && sao_view)),
+        ];
+        let pipeline = ctx.compute_pipeline("gi_composite.comp", None, &spec)?;
         Ok(Self { pipeline })
     }
 
-    /// Declares the composite of `i.direct` and `indirect`; returns the total radiance.
+    /// Declares the composite of `i.direct` and `indirect` (times `ao`, the half-resolution
+    /// SAO term, when given); returns the total radiance.
     pub fn add_pass(
         &self,
         g: &mut RenderGraph,
         i: &GiInputs,
         sampler: vk::Sampler,
         indirect: ImageHandle,
+        ao: Option<ImageHandle>,
     ) -> ImageHandle {
         let groups = (i.width.div_ceil(8), i.height.div_ceil(8));
         let total = g.create_image(ImageDesc::new_2d(
@@ -37,6 +46,8 @@ impl GiComposite {
         let c = Shader::Compute;
         // Without Phong materials the shader never reads its specular binding; albedo fills it.
         let specular = i.specular.unwrap_or(i.albedo);
+        // Likewise its SAO binding without SAO.
+        let ao = ao.unwrap_or(i.albedo);
         g.add_pass("gi_composite")
             .pipeline(&pipe)
             .bind_sampled(0, i.direct, sampler, c)
@@ -44,6 +55,7 @@ impl GiComposite {
             .bind_sampled(2, indirect, sampler, c)
             .bind(3, total, Access::StorageWrite(c))
             .bind_sampled(4, specular, sampler, c)
+            .bind_sampled(5, ao, sampler, c)
             .record(move |ctx| {
                 ctx.bind(&pipe);
                 ctx.cmd.dispatch(groups.0, groups.1, 1);

@@ -2,7 +2,8 @@
 //! Each pass (or pass family) lives in the file named after its shader: `gi_hemisphere`
 //! (one bounce, radiance from reflective light maps), `gi_radiance_volume` (one bounce,
 //! radiance from a direct-radiance volume), `gi_pathtrace` (B bounces, accumulated), then
-//! `gi_filter` (geometry-aware filter) and `gi_composite` (direct + indirect); `gi_common`
+//! `gi_filter` (geometry-aware filter), `sao` (ambient obscurance, optional) and
+//! `gi_composite` (direct + indirect); `gi_common`
 //! holds what the ray passes share (push constants, common bindings). The settings are plain
 //! data in [`crate::scene`] (re-exported here).
 
@@ -12,10 +13,12 @@ mod gi_filter;
 mod gi_hemisphere;
 mod gi_pathtrace;
 mod gi_radiance_volume;
+mod sao;
 pub mod vpl;
 
-pub use crate::scene::{Bounces, GiMethod, GiSettings, RadianceSource};
+pub use crate::scene::{Bounces, GiMethod, GiSettings, RadianceSource, SaoSettings};
 pub use gi_common::GpuGiPush;
+pub use sao::GpuSaoPush;
 
 use crate::graph::{Access, BufferHandle, ImageHandle, RenderGraph, Shader, SlotCondition};
 use crate::scene::Scene;
@@ -109,6 +112,8 @@ pub struct GiPasses {
     /// The albedo and normal volumes, for the methods that read them.
     attributes: Option<TriangleAttributeVolumes>,
     filter: GiFilter,
+    /// Ambient obscurance multiplied into the indirect light, when on.
+    sao: Option<sao::Sao>,
     composite: GiComposite,
     accumulation: Accumulation,
     lut: Buffer,
@@ -145,7 +150,19 @@ impl GiPasses {
             method,
             attributes,
             filter: GiFilter::new(ctx)?,
-            composite: GiComposite::new(ctx, target.has_phong)?,
+            sao: settings
+                .sao
+                .map(|s| {
+                    let fov = target.scene.camera.fov_y_deg;
+                    sao::Sao::new(ctx, GpuSaoPush::new(&s, fov, target.size.1, settings.seed))
+                })
+                .transpose()?,
+            composite: GiComposite::new(
+                ctx,
+                target.has_phong,
+                settings.sao.is_some(),
+                settings.sao.is_some_and(|s| s.view),
+            )?,
             accumulation: Accumulation::default(),
             lut: ctx.upload_buffer(
                 "ray mask lut",
@@ -232,7 +249,11 @@ impl GiPasses {
             (s.filter_radius, s.filter_passes),
             indirect,
         );
-        let total = self.composite.add_pass(g, inp, self.sampler, filtered);
+        let ao = self
+            .sao
+            .as_ref()
+            .map(|s| s.add_passes(g, inp, self.sampler));
+        let total = self.composite.add_pass(g, inp, self.sampler, filtered, ao);
         if let Some(overlay) = overlay {
             overlay(g, total);
         }
@@ -245,6 +266,9 @@ impl GiPasses {
             a.destroy(ctx);
         }
         self.filter.destroy(ctx);
+        if let Some(s) = self.sao {
+            s.destroy(ctx);
+        }
         self.composite.destroy(ctx);
         ctx.destroy_buffer(self.lut);
         ctx.destroy_sampler(self.sampler);

@@ -61,6 +61,8 @@ pub enum RenderError {
     EmptyScene,
     #[error("indirect light reads reflective light maps, which exist for cube shadow maps only: use --point-shadows cube with --gi")]
     GiNeedsCubeShadows,
+    #[error("--sao darkens only indirect light, and --gi none has none: choose a --gi method (hemisphere, pathtrace, vpl) or leave out --sao")]
+    SaoWithoutGi,
     #[error(transparent)]
     Voxel(#[from] crate::voxel::gpu::GpuVoxelError),
     #[error("the voxel grid of {res_x}×{res_y} columns × {layers} layer(s) needs at least {:.1} GiB of device memory, more than the device's largest memory heap ({:.1} GiB): lower --voxels or --voxel-layers", *need_bytes as f64 / GIB, *heap_bytes as f64 / GIB)]
@@ -342,6 +344,9 @@ impl Renderer {
             && scene.has_point_lights()
         {
             return Err(RenderError::GiNeedsCubeShadows);
+        }
+        if !gi_on && settings.gi.sao.is_some() {
+            return Err(RenderError::SaoWithoutGi);
         }
         let voxel_view_on = settings.debug.is_some_and(|d| d.view.shows_voxels());
         let voxel_settings = settings

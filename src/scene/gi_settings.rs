@@ -53,6 +53,43 @@ pub struct GiSettings {
     pub radiance_source: RadianceSource,
     /// The VPL method's parameters.
     pub vpl: super::VplSettings,
+    /// Modified SAO multiplied into the indirect light (`None`: no SAO passes).
+    pub sao: Option<SaoSettings>,
+}
+
+/// Scalable Ambient Obscurance as modified by Oetke 2017 §2.5 (after McGuire et al. 2012):
+/// the estimator's constants, with the thesis's values as defaults.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SaoSettings {
+    /// r: world-space sample radius, meters (thesis: 1.8).
+    pub radius_m: f32,
+    /// β: bias subtracted from v·n, meters (thesis: 0.04).
+    pub bias: f32,
+    /// k: the contrast exponent of the AO term (thesis: 2).
+    pub contrast: f32,
+    /// ε in the denominator v·v + ε, m² (thesis: 0.01).
+    pub epsilon_m2: f32,
+    /// Show the AO term (grey, 1 = unoccluded) instead of the lit image (`--debug sao`).
+    pub view: bool,
+}
+
+impl SaoSettings {
+    /// Taps on the spiral (Oetke 2017 Eq. 2.20, N = 16).
+    pub const TAPS: u32 = 16;
+    /// Spiral turns τ (7, as the thesis's code uses).
+    pub const SPIRAL_TURNS: f32 = 7.0;
+}
+
+impl Default for SaoSettings {
+    fn default() -> Self {
+        Self {
+            radius_m: 1.8,
+            bias: 0.04,
+            contrast: 2.0,
+            epsilon_m2: 0.01,
+            view: false,
+        }
+    }
 }
 
 /// How long the path tracer's paths are.
@@ -147,6 +184,7 @@ impl Default for GiSettings {
             accumulate_frames: 1,
             radiance_source: RadianceSource::Maps,
             vpl: super::VplSettings::default(),
+            sao: None,
         }
     }
 }
