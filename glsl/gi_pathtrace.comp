@@ -23,6 +23,7 @@
 #include "gi_common.glsl"
 
 layout(constant_id = 0) const bool HAS_PHONG = false;
+layout(constant_id = 1) const bool HAS_EMISSION = false;
 
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(set = 0, binding = 0, std430) readonly buffer FrameBuf { GpuFrame frame; };
@@ -36,6 +37,7 @@ layout(set = 0, binding = 7) uniform sampler2DArray shadow_maps;
 layout(set = 0, binding = 8, rgba32f) uniform image2D history;
 layout(set = 0, binding = 9) uniform sampler2D gb_specular;   // albedo when !HAS_PHONG
 layout(set = 0, binding = 10) uniform sampler2D gb_albedo;
+layout(set = 0, binding = 12) uniform sampler3D emission_volume;  // albedo when !HAS_EMISSION
 
 uvec4 vx_column(uint level, int x, int y, uint layer) {
     return texelFetch(voxels, ivec3(x, y, int(layer)), int(level));
@@ -168,8 +170,12 @@ void main() {
             vec3 a = texelFetch(albedo_volume, v, 0).rgb;
             vec3 hn = texelFetch(normal_volume, v, 0).xyz;
             hn = dot(hn, hn) > 0.25 ? normalize(hn) : -d;
-            if (dot(hn, d) > 0.0) hn = -hn;  // the side the ray arrives at
+            bool back = dot(hn, d) > 0.0;
+            if (back) hn = -hn;  // the side the ray arrives at
             vec3 hp = o + d * h.t;
+            // An emitter sends its radiance from the side its normal points to (Mitsuba's area
+            // emitter); the camera's own view of emitters is deferred_direct's.
+            if (HAS_EMISSION && !back) l += throughput * texelFetch(emission_volume, v, 0).rgb;
             l += throughput * direct_at(hp, hn, a);
             throughput *= a;
             o = hp + hn * offset;
