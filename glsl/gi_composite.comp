@@ -2,6 +2,9 @@
 // Direct plus indirect light: L = L_direct + rho/pi * E_indirect for Lambert receivers; Phong
 // receivers' indirect radiance is stored as is (see gi_common.glsl).
 layout(constant_id = 0) const bool HAS_PHONG = false;
+// The path tracer stores GGX pixels' indirect radiance too (their lobe sampled at the first
+// bounce); the other methods store their irradiance.
+layout(constant_id = 1) const bool GGX_RADIANCE = false;
 
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(set = 0, binding = 0) uniform sampler2D direct;
@@ -21,5 +24,6 @@ void main() {
     vec3 e = texelFetch(indirect_irradiance, p, 0).rgb;
     // Phong pixels already hold their indirect radiance (see gi_common.glsl).
     bool phong = HAS_PHONG && any(greaterThan(gbuffer_phong_specular(gb_specular, p), vec3(0.0)));
+    phong = phong || (GGX_RADIANCE && texelFetch(gb_specular, p, 0).a > 1.5);
     imageStore(radiance, p, vec4(d.rgb + (phong ? e : albedo / PI * e), d.a));
 }

@@ -11,10 +11,15 @@ pub struct GiComposite {
 }
 
 impl GiComposite {
-    /// `has_phong`: the G-buffer has a specular image (specialization constant 0).
-    pub fn new(ctx: &Context, has_phong: bool) -> Result<Self, VkError> {
-        let pipeline =
-            ctx.compute_pipeline("gi_composite.comp", None, &[(0, u32::from(has_phong))])?;
+    /// `has_phong`: the G-buffer has a specular image (specialization constant 0);
+    /// `ggx_radiance`: the indirect image holds GGX pixels' radiance, not their irradiance
+    /// (the path tracer in scenes with GGX materials; constant 1).
+    pub fn new(ctx: &Context, has_phong: bool, ggx_radiance: bool) -> Result<Self, VkError> {
+        let pipeline = ctx.compute_pipeline(
+            "gi_composite.comp",
+            None,
+            &[(0, u32::from(has_phong)), (1, u32::from(ggx_radiance))],
+        )?;
         Ok(Self { pipeline })
     }
 

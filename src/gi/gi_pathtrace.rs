@@ -23,7 +23,8 @@ impl GiPathtrace {
             "gi_pathtrace.comp",
             PushLayout::of::<GpuGiPush>(),
             &[
-                (0, u32::from(target.has_phong)),
+                // The lobe target exists with Phong or GGX materials; both sample it.
+                (0, u32::from(target.has_phong || target.scene.has_ggx())),
                 (1, u32::from(target.scene.has_emission())),
             ],
         )?;

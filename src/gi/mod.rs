@@ -145,7 +145,11 @@ impl GiPasses {
             method,
             attributes,
             filter: GiFilter::new(ctx)?,
-            composite: GiComposite::new(ctx, target.has_phong)?,
+            composite: GiComposite::new(
+                ctx,
+                target.has_phong,
+                settings.method == GiMethod::Pathtrace && target.scene.has_ggx(),
+            )?,
             accumulation: Accumulation::default(),
             lut: ctx.upload_buffer(
                 "ray mask lut",
