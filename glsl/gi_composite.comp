@@ -6,6 +6,9 @@
 layout(constant_id = 0) const bool HAS_PHONG = false;
 layout(constant_id = 1) const bool HAS_SAO = false;
 layout(constant_id = 2) const bool SAO_VIEW = false;
+// The path tracer stores GGX pixels' indirect radiance too (their lobe sampled at the first
+// bounce); the other methods store their irradiance.
+layout(constant_id = 3) const bool GGX_RADIANCE = false;
 
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(set = 0, binding = 0) uniform sampler2D direct;
@@ -26,6 +29,7 @@ void main() {
     vec3 e = texelFetch(indirect_irradiance, p, 0).rgb;
     // Phong pixels already hold their indirect radiance (see gi_common.glsl).
     bool phong = HAS_PHONG && any(greaterThan(gbuffer_phong_specular(gb_specular, p), vec3(0.0)));
+    phong = phong || (GGX_RADIANCE && texelFetch(gb_specular, p, 0).a > 1.5);
     float ao = HAS_SAO ? texelFetch(sao, p / 2, 0).r : 1.0;
     if (SAO_VIEW) {
         imageStore(radiance, p, vec4(vec3(ao), d.a));

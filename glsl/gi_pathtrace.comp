@@ -22,7 +22,8 @@
 #include "frame.glsl"
 #include "gi_common.glsl"
 
-layout(constant_id = 0) const bool HAS_PHONG = false;
+layout(constant_id = 0) const bool HAS_PHONG = false;  // the G-buffer has a lobe target (Phong or GGX)
+layout(constant_id = 1) const bool HAS_EMISSION = false;
 
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(set = 0, binding = 0, std430) readonly buffer FrameBuf { GpuFrame frame; };
@@ -36,6 +37,7 @@ layout(set = 0, binding = 7) uniform sampler2DArray shadow_maps;
 layout(set = 0, binding = 8, rgba32f) uniform image2D history;
 layout(set = 0, binding = 9) uniform sampler2D gb_specular;   // albedo when !HAS_PHONG
 layout(set = 0, binding = 10) uniform sampler2D gb_albedo;
+layout(set = 0, binding = 12) uniform sampler3D emission_volume;  // albedo when !HAS_EMISSION
 
 uvec4 vx_column(uint level, int x, int y, uint layer) {
     return texelFetch(voxels, ivec3(x, y, int(layer)), int(level));
@@ -50,6 +52,30 @@ bool vx_voxel(int x, int y, int k) {
 #include "voxel_traverse.glsl"
 #include "shadow.glsl"
 #include "gbuffer_lobe.glsl"
+#include "brdf.glsl"
+
+// A GGX microfacet normal seen from wo (n the z axis), distributed as the visible normals
+// D_wo(h) = G1(wo) max(0, wo.h) D(h) / (n.wo) (Heitz 2018, "Sampling the GGX Distribution of
+// Visible Normals", listing 1). Reflecting wo about h then gives wi with the exact weight
+// f_spec (n.wi) / pdf(wi) = F(wo.h) G1(wi) for the separable Smith G = G1(wi) G1(wo).
+vec3 ggx_visible_normal(vec3 n, vec3 wo, float alpha, vec2 u) {
+    vec3 t = abs(n.x) > 0.9 ? vec3(0.0, 1.0, 0.0) : vec3(1.0, 0.0, 0.0);
+    vec3 b1 = normalize(cross(n, t));
+    vec3 b2 = cross(n, b1);
+    vec3 v = vec3(dot(wo, b1), dot(wo, b2), dot(wo, n));
+    vec3 vh = normalize(vec3(alpha * v.x, alpha * v.y, v.z));
+    float len2 = vh.x * vh.x + vh.y * vh.y;
+    vec3 t1 = len2 > 0.0 ? vec3(-vh.y, vh.x, 0.0) * inversesqrt(len2) : vec3(1.0, 0.0, 0.0);
+    vec3 t2 = cross(vh, t1);
+    float r = sqrt(u.x);
+    float phi = 2.0 * PI * u.y;
+    float p1 = r * cos(phi);
+    float s = 0.5 * (1.0 + vh.z);
+    float p2 = (1.0 - s) * sqrt(max(1.0 - p1 * p1, 0.0)) + s * r * sin(phi);
+    vec3 nh = p1 * t1 + p2 * t2 + sqrt(max(1.0 - p1 * p1 - p2 * p2, 0.0)) * vh;
+    vec3 h = normalize(vec3(alpha * nh.x, alpha * nh.y, max(nh.z, 0.0)));
+    return normalize(b1 * h.x + b2 * h.y + n * h.z);
+}
 
 // Outgoing Lambert radiance at p (normal n, albedo a) from every light, shadowed.
 vec3 direct_at(vec3 p, vec3 n, vec3 a) {
@@ -127,9 +153,14 @@ void main() {
     vec3 n = normalize(ns.xyz);
     vec3 specular = HAS_PHONG ? gbuffer_phong_specular(gb_specular, px) : vec3(0.0);
     bool phong = HAS_PHONG && is_phong_pixel(specular);
-    vec3 mirror = reflect(-normalize(frame.camera_position.xyz - p), n);
-    // Phong pixels spend half their paths on the specular lobe (first bounce).
-    uint lobe_rays = phong ? max(gi.rays, 1u) / 2u : 0u;
+    // GGX pixels (lobe kind 2): F0 in rgb, roughness in the normal's w.
+    vec4 lobe_px = HAS_PHONG ? texelFetch(gb_specular, px, 0) : vec4(0.0);
+    bool ggx = HAS_PHONG && lobe_px.a > 1.5;
+    float alpha = max(ns.w * ns.w, 1e-4);
+    vec3 wo = normalize(frame.camera_position.xyz - p);
+    vec3 mirror = reflect(-wo, n);
+    // Phong and GGX pixels spend half their paths on the specular lobe (first bounce).
+    uint lobe_rays = (phong || ggx) ? max(gi.rays, 1u) / 2u : 0u;
     float offset = gi.normal_offset_voxels * gi.voxel_diagonal_m;
     mat3 dir_to_voxel = mat3(gi.world_to_voxel);
     uint rays = max(gi.rays, 1u);
@@ -156,10 +187,24 @@ void main() {
                 throughput /= q;
             }
             vec2 u = bounce_sample(b, j, count, frame_index, rot);
-            vec3 d = (lobe && b == 0u) ? phong_direction(mirror, ns.w, u) : cosine_direction(nn, u);
+            vec3 d;
+            if (lobe && b == 0u && ggx) {
+                vec3 hm = ggx_visible_normal(n, wo, alpha, u);
+                d = reflect(-wo, hm);
+            } else {
+                d = (lobe && b == 0u) ? phong_direction(mirror, ns.w, u) : cosine_direction(nn, u);
+            }
             if (b == 0u) {
                 cos_first = dot(d, n);
                 if (cos_first <= 0.0) break;  // a lobe sample below the surface
+                // The exact sample weights of GGX pixels: F(wo.h) G1(wi) for the lobe, the
+                // diffuse term's (1 - F_d(n.wi)) for cosine samples (its (1 - F_d(n.wo)) below).
+                if (ggx) {
+                    vec3 hm = normalize(d + wo);
+                    throughput = lobe
+                        ? fresnel_schlick(lobe_px.rgb, dot(wo, hm)) * ggx_g1(alpha, cos_first)
+                        : vec3(1.0 - fresnel_schlick(vec3(0.04), cos_first).x);
+                }
             }
             vec3 ov = (gi.world_to_voxel * vec4(o, 1.0)).xyz;
             VxHit h = voxel_first_hit(gi.dims, uint(gi.max_level), ov, dir_to_voxel * d, gi.radius_m, gi.start_level, gi.max_iterations);
@@ -168,18 +213,27 @@ void main() {
             vec3 a = texelFetch(albedo_volume, v, 0).rgb;
             vec3 hn = texelFetch(normal_volume, v, 0).xyz;
             hn = dot(hn, hn) > 0.25 ? normalize(hn) : -d;
-            if (dot(hn, d) > 0.0) hn = -hn;  // the side the ray arrives at
+            bool back = dot(hn, d) > 0.0;
+            if (back) hn = -hn;  // the side the ray arrives at
             vec3 hp = o + d * h.t;
+            // An emitter sends its radiance from the side its normal points to (Mitsuba's area
+            // emitter); the camera's own view of emitters is deferred_direct's.
+            if (HAS_EMISSION && !back) l += throughput * texelFetch(emission_volume, v, 0).rgb;
             l += throughput * direct_at(hp, hn, a);
             throughput *= a;
             o = hp + hn * offset;
             nn = hn;
         }
-        if (lobe) lobe_sum += l * max(cos_first, 0.0);
+        if (lobe) lobe_sum += ggx ? l : l * max(cos_first, 0.0);
         else sum += l;
     }
     vec3 e = sum * (PI / float(max(diffuse_rays, 1u)));
-    if (phong) {
+    if (ggx) {
+        // Indirect radiance: the diffuse term and the lobe estimate (mean of L F G1(wi)).
+        vec3 diffuse = texelFetch(gb_albedo, px, 0).rgb;
+        float fdo = 1.0 - fresnel_schlick(vec3(0.04), max(dot(n, wo), 0.0)).x;
+        e = diffuse / PI * fdo * e + lobe_sum / float(max(lobe_rays, 1u));
+    } else if (phong) {
         vec3 albedo = texelFetch(gb_albedo, px, 0).rgb;
         e = albedo / PI * e + specular * ((ns.w + 2.0) / (ns.w + 1.0)) * lobe_sum / float(max(lobe_rays, 1u));
     }

@@ -2,9 +2,12 @@
 // Direct-radiance voxel volume (Thiedemann 2010, §6.3.2, the alternative to reflective light maps for
 // diffuse senders): for every occupied voxel, the radiance its surface reflects from every
 // light, rho/pi * E with shadow-map visibility, on the side the light reaches (stored in a as
-// +1: along the normal volume's normal, -1: against it).
+// +1: along the normal volume's normal, -1: against it). In scenes with emitters the emitted
+// radiance (emission volume, leaving the side the normal points to) adds to that side's.
 #include "frame.glsl"
 #include "gi_common.glsl"
+
+layout(constant_id = 0) const bool HAS_EMISSION = false;
 
 layout(local_size_x = 4, local_size_y = 4, local_size_z = 4) in;
 layout(set = 0, binding = 0, std430) readonly buffer FrameBuf { GpuFrame frame; };
@@ -13,6 +16,7 @@ layout(set = 0, binding = 2) uniform sampler3D albedo_volume;
 layout(set = 0, binding = 3) uniform sampler3D normal_volume;
 layout(set = 0, binding = 4) uniform sampler2DArray shadow_maps;
 layout(set = 0, binding = 5, rgba32f) uniform writeonly image3D radiance_volume;
+layout(set = 0, binding = 6) uniform sampler3D emission_volume;  // albedo when !HAS_EMISSION
 
 #include "shadow.glsl"
 
@@ -54,6 +58,7 @@ void main() {
             lit[side] += a / PI * e * shadow_visibility(shadow_maps, l, ps, ns, max(dot(ns, wi), 0.0));
         }
     }
+    if (HAS_EMISSION) lit[0] += texelFetch(emission_volume, v, 0).rgb;
     bool front = dot(lit[0], vec3(1.0)) >= dot(lit[1], vec3(1.0));
     imageStore(radiance_volume, v, vec4(front ? lit[0] : lit[1], front ? 1.0 : -1.0));
 }

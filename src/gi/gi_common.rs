@@ -111,9 +111,9 @@ pub struct GiShared {
     /// Open in the frame slots that record the first frame after a restart (camera, lights,
     /// scene or settings changed): passes whose output lasts until then run only there.
     pub first_frame: Arc<SlotCondition>,
-    /// The albedo and normal volumes `(albedo, normal)`, already written this frame, for the
-    /// methods that read them ([`super::GiPasses::needs_attribute_volumes`]).
-    pub attributes: Option<(ImageHandle, ImageHandle)>,
+    /// The albedo, normal and (scenes with emitters) emission volumes, already written this
+    /// frame, for the methods that read them ([`super::GiPasses::needs_attribute_volumes`]).
+    pub attributes: Option<crate::voxel::attributes::AttributeHandles>,
 }
 
 /// Declares one of the GI ray passes (`gi_hemisphere`, `gi_hemisphere_volume`,

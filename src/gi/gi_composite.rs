@@ -14,12 +14,20 @@ pub struct GiComposite {
 impl GiComposite {
     /// `has_phong`: the G-buffer has a specular image (specialization constant 0); `sao`:
     /// an AO term multiplies the indirect light (constant 1), `sao_view`: the composite
-    /// writes the AO term instead (constant 2).
-    pub fn new(ctx: &Context, has_phong: bool, sao: bool, sao_view: bool) -> Result<Self, VkError> {
+    /// writes the AO term instead (constant 2); `ggx_radiance`: the indirect image holds GGX
+    /// pixels' radiance, not their irradiance (the path tracer in scenes with GGX materials;
+    /// constant 3).
+    pub fn new(
+        ctx: &Context,
+        has_phong: bool,
+        (sao, sao_view): (bool, bool),
+        ggx_radiance: bool,
+    ) -> Result<Self, VkError> {
         let spec = [
             (0, u32::from(has_phong)),
             (1, u32::from(sao)),
             (2, u32::from(sao && sao_view)),
+            (3, u32::from(ggx_radiance)),
         ];
         let pipeline = ctx.compute_pipeline("gi_composite.comp", None, &spec)?;
         Ok(Self { pipeline })

@@ -1,6 +1,8 @@
 //! `gi_pathtrace`: B bounces through the voxels with albedo and normal from the attribute
 //! volumes and direct light at every hit from the shadow maps, accumulated over frames into a
-//! history image (Thiedemann 2010 §6.4.2).
+//! history image (Thiedemann 2010 §6.4.2). In scenes with emitters, a hit on an emitter's front
+//! side adds its emitted radiance from the emission volume (a specialization constant: no
+//! emission reads otherwise).
 
 use super::gi_common::{add_ray_pass, GiShared, GpuGiPush};
 use super::{GiInputs, GiMethodPasses, GiOutput, GiTarget};
@@ -20,7 +22,11 @@ impl GiPathtrace {
         let pipeline = ctx.compute_pipeline(
             "gi_pathtrace.comp",
             PushLayout::of::<GpuGiPush>(),
-            &[(0, u32::from(target.has_phong))],
+            &[
+                // The lobe target exists with Phong or GGX materials; both sample it.
+                (0, u32::from(target.has_phong || target.scene.has_ggx())),
+                (1, u32::from(target.scene.has_emission())),
+            ],
         )?;
         let usage = vk::ImageUsageFlags::STORAGE
             | vk::ImageUsageFlags::SAMPLED
@@ -42,9 +48,11 @@ impl GiMethodPasses for GiPathtrace {
     fn add_passes(&self, g: &mut RenderGraph, i: &GiInputs, shared: &GiShared) -> GiOutput {
         let history = g.import_image(&self.history, Access::Sampled(Shader::Compute));
         // The assembly writes the volumes for the methods that need them (this one does).
-        let Some((albedo, normal)) = shared.attributes else {
+        let Some(v) = shared.attributes else {
             return history.into();
         };
+        // Without emitters the shader never reads its emission binding; albedo fills it.
+        let emission = v.emission.unwrap_or(v.albedo);
         let push = shared.push;
         let frames = shared.frames.clone();
         add_ray_pass(
@@ -53,7 +61,12 @@ impl GiMethodPasses for GiPathtrace {
             self.pipeline,
             i,
             shared,
-            &[(5, albedo), (6, normal), (7, i.shadow_map)],
+            &[
+                (5, v.albedo),
+                (6, v.normal),
+                (7, i.shadow_map),
+                (12, emission),
+            ],
             (history, Access::StorageReadWrite(Shader::Compute)),
             None,
             move || GpuGiPush {

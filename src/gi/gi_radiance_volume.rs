@@ -22,7 +22,7 @@ impl GiRadianceVolume {
         let volume_pipeline = ctx.compute_pipeline(
             "gi_radiance_volume.comp",
             PushLayout::of::<GpuGiPush>(),
-            &[],
+            &[(0, u32::from(target.scene.has_emission()))],
         )?;
         let hemisphere_pipeline = ctx.compute_pipeline(
             "gi_hemisphere_volume.comp",
@@ -61,9 +61,12 @@ impl GiMethodPasses for GiRadianceVolume {
         let c = Shader::Compute;
         let volume = g.import_image(&self.image, Access::Sampled(c));
         // The assembly writes the volumes for the methods that need them (this one does).
-        let Some((albedo, normal)) = shared.attributes else {
+        let Some(v) = shared.attributes else {
             return volume.into();
         };
+        let (albedo, normal) = (v.albedo, v.normal);
+        // Without emitters the shader never reads its emission binding; albedo fills it.
+        let emission = v.emission.unwrap_or(albedo);
         let pipe = self.volume_pipeline;
         let push = shared.push;
         let dims = push.dims;
@@ -80,6 +83,7 @@ impl GiMethodPasses for GiRadianceVolume {
             .bind_sampled(3, normal, sampler, c)
             .bind_sampled(4, i.shadow_map, sampler, c)
             .bind(5, volume, Access::StorageWrite(c))
+            .bind_sampled(6, emission, sampler, c)
             .when(Some(shared.first_frame.clone()))
             .record(move |ctx| {
                 ctx.bind(&pipe);

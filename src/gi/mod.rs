@@ -160,8 +160,8 @@ impl GiPasses {
             composite: GiComposite::new(
                 ctx,
                 target.has_phong,
-                settings.sao.is_some(),
-                settings.sao.is_some_and(|s| s.view),
+                (settings.sao.is_some(), settings.sao.is_some_and(|s| s.view)),
+                settings.method == GiMethod::Pathtrace && target.scene.has_ggx(),
             )?,
             accumulation: Accumulation::default(),
             lut: ctx.upload_buffer(

@@ -253,7 +253,8 @@ impl VplPasses {
         let (lut, sampler) = (shared.lut, shared.sampler);
         let vpls = g.create_buffer("vpls", self.layout.size_bytes());
         self.add_generate(g, i, vpls, sampler);
-        if let (Some(pipe), Some((albedo, normal))) = (self.bounce, shared.attributes) {
+        if let (Some(pipe), Some(v)) = (self.bounce, shared.attributes) {
+            let (albedo, normal) = (v.albedo, v.normal);
             for b in 1..self.layout.bounces {
                 self.add_bounce(g, (pipe, b), i, (lut, sampler), (albedo, normal), vpls);
             }

@@ -12,6 +12,14 @@
 //! made a voxel shared by two triangles (a cube standing on a floor) depend on the order the
 //! GPU ran them, so two renders of one scene differed. Both passes run in the first frame, and
 //! again in a frame whose moving objects moved.
+//!
+//! Scenes with emitters also get an emission volume (`RGBA16F`, W/(m²·sr) leaving the side the
+//! face normal points to), written between the two passes by `voxelize_emission` from the same
+//! owners, so emissive surfaces send indirect light (the path tracer and the direct-radiance
+//! volume read it). The atlas voxelizer has no emission path: in scenes with emitters the
+//! triangle writer writes every object's attributes, on top of the atlas's (its exact
+//! conservative test touches every voxel the atlas points set). Other scenes have no emission
+//! volume, buffer or pass.
 
 use super::gpu::{voxelize_loads, voxelize_splits, GpuVoxelizePush};
 use super::gpu_atlas_volumes::AttributeVolumes;
@@ -42,6 +50,12 @@ const OWNER_STATE: Access = Access::StorageReadWrite(Shader::Compute);
 /// i = the material albedo's channel i.
 type AttributeTriangle = [[f32; 4]; 3];
 
+/// A triangle's emitted radiance as `voxelize_emission.comp` reads it (rgb W/(m²·sr), w unused).
+type TriangleEmission = [f32; 4];
+
+/// Format of the emission volume: radiance above 1 W/(m²·sr) must survive.
+const EMISSION_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
+
 /// The triangles, pipelines and owner volume that write the albedo and normal volumes of a
 /// scene's objects.
 pub struct TriangleAttributes {
@@ -62,6 +76,15 @@ pub struct TriangleAttributes {
     gate: Arc<SlotCondition>,
     /// Scenes with moving objects: triangles per frame slot, rewritten when they change.
     animated: Option<AnimatedTriangles>,
+    /// Scenes with emitters: the pass that writes the emission volume.
+    emission: Option<EmissionWriter>,
+}
+
+/// The `voxelize_emission` pipeline and the emitted radiance per attribute triangle (laid out
+/// like the triangle buffer: one region per frame slot for scenes with moving objects).
+struct EmissionWriter {
+    pipeline: ComputePipeline,
+    emissions: Buffer,
 }
 
 /// The attribute triangles of a scene with moving objects: one region of the host-visible
@@ -81,7 +104,18 @@ struct AnimatedTriangles {
 /// atlas writes them all.
 pub struct TriangleAttributeVolumes {
     pub volumes: AttributeVolumes,
+    /// Emitted radiance per voxel ([`EMISSION_FORMAT`]), only in scenes with emitters.
+    pub emission: Option<Image>,
     pub writer: Option<TriangleAttributes>,
+}
+
+/// The attribute volumes of one frame's graph.
+#[derive(Clone, Copy, Debug)]
+pub struct AttributeHandles {
+    pub albedo: ImageHandle,
+    pub normal: ImageHandle,
+    /// Only in scenes with emitters.
+    pub emission: Option<ImageHandle>,
 }
 
 impl TriangleAttributeVolumes {
@@ -95,26 +129,38 @@ impl TriangleAttributeVolumes {
         atlas_writes: bool,
     ) -> Result<Self, VkError> {
         let mut tri_scene = scene.clone();
-        if atlas_writes {
+        // The atlas voxelizer writes no emission: with emitters, triangles write everything.
+        let emits = scene.has_emission();
+        if atlas_writes && !emits {
             tri_scene
                 .objects
                 .retain(|o| !super::gpu_atlas::uses_atlas(scene, o));
         }
         let scene = &tri_scene;
         let volumes = AttributeVolumes::new(ctx, grid)?;
-        if scene.objects.is_empty() {
-            return Ok(Self {
-                volumes,
-                writer: None,
-            });
-        }
-        match TriangleAttributes::new(ctx, scene, time_s, grid) {
+        let emission = match emits.then(|| emission_volume(ctx, grid)).transpose() {
+            Ok(e) => e,
+            Err(e) => {
+                volumes.destroy(ctx);
+                return Err(e);
+            }
+        };
+        let writer = if scene.objects.is_empty() {
+            Ok(None)
+        } else {
+            TriangleAttributes::new(ctx, scene, time_s, grid).map(Some)
+        };
+        match writer {
             Ok(writer) => Ok(Self {
                 volumes,
-                writer: Some(writer),
+                emission,
+                writer,
             }),
             Err(e) => {
                 volumes.destroy(ctx);
+                if let Some(e) = emission {
+                    ctx.destroy_image(e);
+                }
                 Err(e)
             }
         }
@@ -125,25 +171,37 @@ impl TriangleAttributeVolumes {
         self.writer.as_mut().is_some_and(|w| w.update(t_s, slot))
     }
 
-    /// Declares the passes that write the volumes and returns them `(albedo, normal)`:
-    /// `atlas` declares the atlas voxelizer's part (its resolve writes every voxel), then the
-    /// triangle objects write theirs on top.
+    /// Declares the passes that write the volumes and returns them: `atlas` declares the atlas
+    /// voxelizer's part (its resolve writes every voxel), then the triangle objects write
+    /// theirs on top.
     pub fn add_passes(
         &self,
         g: &mut RenderGraph,
         atlas: impl FnOnce(&mut RenderGraph, ImageHandle, ImageHandle),
-    ) -> (ImageHandle, ImageHandle) {
+    ) -> AttributeHandles {
         let (albedo, normal) = self.volumes.import(g);
+        let emission = self
+            .emission
+            .as_ref()
+            .map(|e| g.import_image(e, ATTRIBUTE_VOLUME_STATE));
         atlas(g, albedo, normal);
+        let out = AttributeHandles {
+            albedo,
+            normal,
+            emission,
+        };
         if let Some(w) = &self.writer {
-            w.add_passes(g, albedo, normal);
+            w.add_passes(g, &out);
         }
-        (albedo, normal)
+        out
     }
 
     pub fn destroy(self, ctx: &Context) {
         if let Some(w) = self.writer {
             w.destroy(ctx);
+        }
+        if let Some(e) = self.emission {
+            ctx.destroy_image(e);
         }
         self.volumes.destroy(ctx);
     }
@@ -175,7 +233,7 @@ impl TriangleAttributes {
             ctx.destroy_compute_pipeline(pipeline);
             ctx.destroy_compute_pipeline(resolve_pipeline);
         };
-        let tris = attribute_triangles(scene, time_s);
+        let (tris, emissions) = attribute_triangles(scene, time_s);
         let bytes: &[u8] = if tris.is_empty() {
             &[0; 48]
         } else {
@@ -249,6 +307,20 @@ impl TriangleAttributes {
                 return Err(e);
             }
         };
+        let capacity = animated.as_ref().map(|a| a.capacity);
+        let emission = match scene
+            .has_emission()
+            .then(|| EmissionWriter::new(ctx, &emissions, capacity))
+            .transpose()
+        {
+            Ok(e) => e,
+            Err(e) => {
+                destroy_pipelines();
+                ctx.destroy_buffer(triangles);
+                ctx.destroy_image(owner);
+                return Err(e);
+            }
+        };
         Ok(Self {
             pipeline,
             resolve_pipeline,
@@ -260,6 +332,7 @@ impl TriangleAttributes {
             written: false,
             gate: Arc::new(SlotCondition::default()),
             animated,
+            emission,
         })
     }
 
@@ -283,7 +356,7 @@ impl TriangleAttributes {
         let Some(a) = &mut self.animated else {
             return false;
         };
-        let tris = attribute_triangles(&a.scene, t_s);
+        let (tris, emissions) = attribute_triangles(&a.scene, t_s);
         if a.last.as_ref() == Some(&tris) {
             return false;
         }
@@ -300,17 +373,22 @@ impl TriangleAttributes {
             let bytes: &[u8] = bytemuck::cast_slice(&tris[..n]);
             m[slot * region..slot * region + bytes.len()].copy_from_slice(bytes);
         }
+        if let Some(w) = &mut self.emission {
+            w.write_slot(slot, a.capacity, &emissions[..n]);
+        }
         a.counts[slot].store(n as u32, Ordering::SeqCst);
         a.splits[slot].store(attribute_splits(&a.grid, &tris[..n]), Ordering::SeqCst);
         a.last = Some(tris);
         true
     }
 
-    /// Declares `voxelize_attributes` and `voxelize_attributes_resolve`, writing the voxels of
-    /// this writer's triangles into `albedo` and `normal` (other voxels keep their values).
-    /// The passes record in the slots [`Self::update`] opened: the first frame, and a frame
-    /// whose moving objects moved; otherwise the volumes keep their contents.
-    pub fn add_passes(&self, g: &mut RenderGraph, albedo: ImageHandle, normal: ImageHandle) {
+    /// Declares `voxelize_attributes`, (with emitters) `voxelize_emission` and
+    /// `voxelize_attributes_resolve`, writing the voxels of this writer's triangles into the
+    /// volumes `v` (other voxels keep their values). The passes record in the slots
+    /// [`Self::update`] opened: the first frame, and a frame whose moving objects moved;
+    /// otherwise the volumes keep their contents.
+    pub fn add_passes(&self, g: &mut RenderGraph, v: &AttributeHandles) {
+        let (albedo, normal) = (v.albedo, v.normal);
         let (read, rw) = (
             Access::StorageRead(Shader::Compute),
             Access::StorageReadWrite(Shader::Compute),
@@ -351,9 +429,30 @@ impl TriangleAttributes {
                 let x = count.min(65_535);
                 ctx.cmd.dispatch(x, count.div_ceil(x), splits);
             });
-        let resolve = self.resolve_pipeline;
         let d = &self.owner.desc;
         let extent = (d.width, d.height, d.depth);
+        if let (Some(w), Some(volume)) = (&self.emission, v.emission) {
+            let emissions = match &self.animated {
+                Some(a) => {
+                    let region = (a.capacity * std::mem::size_of::<TriangleEmission>()) as u64;
+                    g.import_buffer_per_slot(&w.emissions, region, region, read)
+                }
+                None => g.import_buffer(&w.emissions, read),
+            };
+            let pipe = w.pipeline;
+            g.add_pass("voxelize_emission")
+                .pipeline(&pipe)
+                .bind(0, emissions, read)
+                .bind(1, owner, read)
+                .bind(2, volume, rw)
+                .when(Some(self.gate.clone()))
+                .record(move |ctx| {
+                    ctx.bind(&pipe);
+                    ctx.cmd
+                        .dispatch(extent.0.div_ceil(8), extent.1.div_ceil(8), extent.2);
+                });
+        }
+        let resolve = self.resolve_pipeline;
         g.add_pass("voxelize_attributes_resolve")
             .pipeline(&resolve)
             .bind(0, tris, read)
@@ -373,6 +472,90 @@ impl TriangleAttributes {
         ctx.destroy_compute_pipeline(self.resolve_pipeline);
         ctx.destroy_buffer(self.triangles);
         ctx.destroy_image(self.owner);
+        if let Some(w) = self.emission {
+            ctx.destroy_compute_pipeline(w.pipeline);
+            ctx.destroy_buffer(w.emissions);
+        }
+    }
+}
+
+impl EmissionWriter {
+    /// The pipeline and the emissions buffer: one region of `capacity` triangles per frame
+    /// slot for scenes with moving objects (`capacity` Some), else just `emissions`.
+    fn new(
+        ctx: &Context,
+        emissions: &[TriangleEmission],
+        capacity: Option<usize>,
+    ) -> Result<Self, VkError> {
+        let pipeline = ctx.compute_pipeline("voxelize_emission.comp", None, &[])?;
+        let bytes: &[u8] = if emissions.is_empty() {
+            &[0; 16]
+        } else {
+            bytemuck::cast_slice(emissions)
+        };
+        let made = match capacity {
+            Some(capacity) => {
+                let region = (capacity * std::mem::size_of::<TriangleEmission>()) as u64;
+                ctx.create_buffer(&BufferDesc {
+                    name: "attribute emissions (per frame slot)".into(),
+                    size_bytes: region * MAX_FRAMES_IN_FLIGHT as u64,
+                    usage: vk::BufferUsageFlags::STORAGE_BUFFER,
+                    location: MemoryLocation::CpuToGpu,
+                })
+                .map(|buffer| {
+                    let mut me = Self {
+                        pipeline,
+                        emissions: buffer,
+                    };
+                    for slot in 0..MAX_FRAMES_IN_FLIGHT {
+                        me.write_slot(slot, capacity, emissions);
+                    }
+                    me
+                })
+            }
+            None => ctx
+                .upload_buffer(
+                    "attribute emissions",
+                    bytes,
+                    vk::BufferUsageFlags::STORAGE_BUFFER,
+                )
+                .map(|emissions| Self {
+                    pipeline,
+                    emissions,
+                }),
+        };
+        made.inspect_err(|_| ctx.destroy_compute_pipeline(pipeline))
+    }
+
+    /// Writes frame slot `slot`'s region (of `capacity` triangles) of a per-slot buffer.
+    fn write_slot(&mut self, slot: usize, capacity: usize, emissions: &[TriangleEmission]) {
+        let region = capacity * std::mem::size_of::<TriangleEmission>();
+        let n = emissions.len().min(capacity);
+        if let Some(m) = self.emissions.mapped_mut() {
+            let bytes: &[u8] = bytemuck::cast_slice(&emissions[..n]);
+            m[slot * region..slot * region + bytes.len()].copy_from_slice(bytes);
+        }
+    }
+}
+
+/// A cleared emission volume congruent with `grid`, in [`ATTRIBUTE_VOLUME_STATE`].
+fn emission_volume(ctx: &Context, grid: &VoxelGrid) -> Result<Image, VkError> {
+    let ext = grid.extent_voxels();
+    let desc = ImageDesc::new_2d("emission volume", EMISSION_FORMAT, ext.x, ext.y)
+        .with_depth(ext.z)
+        .with_usage(
+            vk::ImageUsageFlags::STORAGE
+                | vk::ImageUsageFlags::SAMPLED
+                | vk::ImageUsageFlags::TRANSFER_DST,
+        );
+    let image = ctx.create_image(&desc)?;
+    let zero = vk::ClearColorValue { float32: [0.0; 4] };
+    match ctx.clear_new_image(&image, zero, ATTRIBUTE_VOLUME_STATE.info().layout) {
+        Ok(()) => Ok(image),
+        Err(e) => {
+            ctx.destroy_image(image);
+            Err(e)
+        }
     }
 }
 
@@ -390,9 +573,10 @@ fn attribute_splits(grid: &VoxelGrid, tris: &[AttributeTriangle]) -> u32 {
     voxelize_splits(loads, ATTRIBUTE_GROUP_SIZE)
 }
 
-/// Every triangle of `scene` at `t_s` with its material's albedo.
-fn attribute_triangles(scene: &Scene, t_s: f32) -> Vec<AttributeTriangle> {
+/// Every triangle of `scene` at `t_s` with its material's albedo, and its material's emission.
+fn attribute_triangles(scene: &Scene, t_s: f32) -> (Vec<AttributeTriangle>, Vec<TriangleEmission>) {
     let mut out = Vec::new();
+    let mut emissions = Vec::new();
     for object in &scene.objects {
         let Some(mesh) = scene.meshes.get(object.mesh_at(t_s)) else {
             continue;
@@ -400,19 +584,24 @@ fn attribute_triangles(scene: &Scene, t_s: f32) -> Vec<AttributeTriangle> {
         let m = object.transform_at(t_s);
         for (si, sub) in mesh.submeshes.iter().enumerate() {
             let material = object.materials.get(si).copied().unwrap_or(sub.material);
-            let albedo = scene
+            let (albedo, emission) = scene
                 .materials
                 .get(material)
-                .map(|m| m.albedo)
-                .unwrap_or(Vec3::splat(0.5));
+                .map_or((Vec3::splat(0.5), Vec3::ZERO), |m| (m.albedo, m.emission));
             let range = sub.first_index as usize..(sub.first_index + sub.index_count) as usize;
             for t in mesh.indices[range].chunks_exact(3) {
                 out.push([0, 1, 2].map(|k| {
                     let v = m.transform_point3(mesh.positions[t[k] as usize]);
                     [v.x, v.y, v.z, albedo[k]]
                 }));
+                emissions.push(emission.extend(0.0).to_array());
             }
         }
     }
-    out
+    // Emitters own the voxels they share (smallest index wins): a light patch just under a
+    // ceiling shares the ceiling's voxels, and must emit from them. A stable partition, so a
+    // scene without emitters keeps its order.
+    let mut both: Vec<_> = out.into_iter().zip(emissions).collect();
+    both.sort_by_key(|(_, e)| e[..3] == [0.0; 3]);
+    both.into_iter().unzip()
 }

@@ -280,7 +280,7 @@ impl VoxelDebugPass {
         let albedo = match &self.albedo {
             AlbedoSource::Volumes(v) => {
                 v.add_passes(g, |g, a, n| frame.add_attribute_passes(g, a, n))
-                    .0
+                    .albedo
             }
             AlbedoSource::Placeholder(image) => g.import_image(image, ATTRIBUTE_VOLUME_STATE),
         };
