@@ -115,11 +115,12 @@ pub fn parse_grid(spec: &str) -> Result<GridAxis, SweepError> {
         return Err(err("the method is chosen by --methods, not --grid".into()));
     }
     let known: Vec<&str> = GRID_KEYS.iter().map(|(k, _)| *k).collect();
-    let key = known
-        .iter()
-        .copied()
-        .find(|k| *k == key)
-        .ok_or_else(|| err(format!("unknown key `{key}`; expected one of {}", known.join(", "))))?;
+    let key = known.iter().copied().find(|k| *k == key).ok_or_else(|| {
+        err(format!(
+            "unknown key `{key}`; expected one of {}",
+            known.join(", ")
+        ))
+    })?;
     let values: Vec<String> = values.split(',').map(|v| v.trim().to_owned()).collect();
     if values.iter().any(String::is_empty) {
         return Err(err(format!("an empty value for {key}")));
@@ -514,10 +515,7 @@ pub fn gi_table(s: &GiSettings) -> toml::Table {
     t.insert("ray_offset_voxels".into(), toml_f32(s.ray_offset_voxels));
     t.insert("filter_radius".into(), int(s.filter_radius));
     t.insert("filter_passes".into(), int(s.filter_passes));
-    t.insert(
-        "light_map_resolution".into(),
-        int(s.light_map_resolution),
-    );
+    t.insert("light_map_resolution".into(), int(s.light_map_resolution));
     t.insert("accumulate_frames".into(), int(s.accumulate_frames));
     t.insert("vpls".into(), int(s.vpl.per_set));
     t.insert(
@@ -608,9 +606,8 @@ pub fn pareto_svg(scene: &str, rows: &[&SweepRow]) -> String {
     let (tx0, tx1) = decades(rows.iter().map(|r| r.image_ms));
     let (ey0, ey1) = decades(rows.iter().map(|r| r.rel_mse));
     let x = |ms: f64| left + (ms.max(1e-300).log10() - f64::from(tx0)) / f64::from(tx1 - tx0) * pw;
-    let y = |e: f64| {
-        top + ph - (e.max(1e-300).log10() - f64::from(ey0)) / f64::from(ey1 - ey0) * ph
-    };
+    let y =
+        |e: f64| top + ph - (e.max(1e-300).log10() - f64::from(ey0)) / f64::from(ey1 - ey0) * ph;
     let mut s = format!(
         "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{h}\" \
          font-family=\"sans-serif\" font-size=\"12\">\n\
@@ -736,12 +733,8 @@ mod tests {
             })
             .collect();
         let dominated = |i: usize| {
-            (0..p.len()).any(|j| {
-                j != i
-                    && p[j].0 <= p[i].0
-                    && p[j].1 <= p[i].1
-                    && (p[j] != p[i] || j < i)
-            })
+            (0..p.len())
+                .any(|j| j != i && p[j].0 <= p[i].0 && p[j].1 <= p[i].1 && (p[j] != p[i] || j < i))
         };
         let mut brute: Vec<usize> = (0..p.len()).filter(|&i| !dominated(i)).collect();
         let mut front = pareto_front(&p);
@@ -753,7 +746,10 @@ mod tests {
     #[test]
     fn grid_specs_parse_or_name_the_problem() {
         let a = parse_grid("gi-rays=4, 16").expect("parses");
-        assert_eq!((a.key, a.values), ("gi-rays", vec!["4".into(), "16".into()]));
+        assert_eq!(
+            (a.key, a.values),
+            ("gi-rays", vec!["4".into(), "16".into()])
+        );
         for (spec, says) in [
             ("gi-rays", "KEY=V1"),
             ("rays=4", "unknown key `rays`"),
@@ -776,16 +772,30 @@ mod tests {
             parse_grid("gi-frames=1,4").expect("frames"),
         ];
         let c = configs(
-            &[GiMethod::None, GiMethod::Hemisphere, GiMethod::Pathtrace, GiMethod::Vpl],
+            &[
+                GiMethod::None,
+                GiMethod::Hemisphere,
+                GiMethod::Pathtrace,
+                GiMethod::Vpl,
+            ],
             &grid,
         );
         let count = |m| c.iter().filter(|c| c.method == m).count();
         // none: 1; hemisphere: rays 2; pathtrace: rays 2 × frames 2; vpl: vpls 2.
         assert_eq!(
-            [GiMethod::None, GiMethod::Hemisphere, GiMethod::Pathtrace, GiMethod::Vpl].map(count),
+            [
+                GiMethod::None,
+                GiMethod::Hemisphere,
+                GiMethod::Pathtrace,
+                GiMethod::Vpl
+            ]
+            .map(count),
             [1, 2, 4, 2]
         );
-        let pt = c.iter().find(|c| c.method == GiMethod::Pathtrace).expect("pt");
+        let pt = c
+            .iter()
+            .find(|c| c.method == GiMethod::Pathtrace)
+            .expect("pt");
         assert_eq!(pt.label(), "pathtrace gi-rays=4 gi-frames=1");
         assert_eq!(
             pt.argv(),
@@ -860,7 +870,9 @@ mod tests {
         assert_eq!(pick(11.9).ok(), Some("hemisphere gi-rays=4"));
         assert_eq!(pick(12.0).ok(), Some("hemisphere gi-rays=16"));
         assert_eq!(pick(1e9).ok(), Some("pathtrace gi-frames=8"));
-        let e = tune(&rows, "sponza", 10.0, p).expect_err("no rows").to_string();
+        let e = tune(&rows, "sponza", 10.0, p)
+            .expect_err("no rows")
+            .to_string();
         assert!(e.contains("cornell, box"), "{e}");
         assert!(tune(&rows, "cornell", -1.0, p).is_err());
     }

@@ -185,9 +185,7 @@ fn job(config: &Config, scene: &Scene, size: u32) -> Result<Job, CliError> {
     let frame = FrameFlags::try_parse_from(&argv)
         .map_err(|e| flag_err(e.kind().to_string() + ": " + e.render().to_string().trim()))?
         .frame;
-    let settings = frame
-        .settings(scene)
-        .map_err(|e| flag_err(e.to_string()))?;
+    let settings = frame.settings(scene).map_err(|e| flag_err(e.to_string()))?;
     Ok(Job {
         config: config.clone(),
         settings,
@@ -206,7 +204,14 @@ pub fn is_gi_pass(name: &str) -> bool {
 fn frame_stats(frames: &[Vec<PassTiming>], keep: impl Fn(&str) -> bool) -> [f64; 3] {
     let sums: Vec<f64> = frames
         .iter()
-        .map(|f| f.iter().filter(|t| keep(&t.name)).map(|t| t.gpu_ms).sum())
+        .map(|f| {
+            // + 0.0: an empty float sum is -0.0, which would print as "-0".
+            f.iter()
+                .filter(|t| keep(&t.name))
+                .map(|t| t.gpu_ms)
+                .sum::<f64>()
+                + 0.0
+        })
         .collect();
     [
         median(&sums),
@@ -310,7 +315,8 @@ pub fn sweep(global: &Global, args: &SweepArgs, out: &mut dyn Write) -> Result<(
         (true, true) => read_csv(&csv)?,
         (false, _) => Vec::new(),
     };
-    let done = |rows: &[SweepRow], s: &str, c: &str| rows.iter().any(|r| r.scene == s && r.config == c);
+    let done =
+        |rows: &[SweepRow], s: &str, c: &str| rows.iter().any(|r| r.scene == s && r.config == c);
     let todo: Vec<(usize, &Job)> = scenes
         .iter()
         .enumerate()
@@ -422,7 +428,10 @@ mod tests {
         assert!(e.contains("hemisphere gi-rays=0"), "{e}");
         let grid = [parse_grid("vpl-pattern=4y4").expect("grid")];
         let c = configs(&[crate::gi::GiMethod::Vpl], &grid);
-        let e = job(&c[0], &scene, 32).err().expect("bad pattern").to_string();
+        let e = job(&c[0], &scene, 32)
+            .err()
+            .expect("bad pattern")
+            .to_string();
         assert!(e.contains("vpl-pattern") && e.contains("4y4"), "{e}");
         let ok = job(&configs(&[crate::gi::GiMethod::Vpl], &[])[0], &scene, 32).expect("ok");
         assert_eq!(ok.settings.width, 32);
@@ -430,7 +439,12 @@ mod tests {
 
     #[test]
     fn gi_passes_are_told_from_the_rest() {
-        for p in ["gi_hemisphere", "gi_vpl_generate", "light_map", "voxelize_triangles"] {
+        for p in [
+            "gi_hemisphere",
+            "gi_vpl_generate",
+            "light_map",
+            "voxelize_triangles",
+        ] {
             assert!(is_gi_pass(p), "{p}");
         }
         for p in ["gbuffer", "deferred_direct", "tonemap", "shadow_depth"] {
