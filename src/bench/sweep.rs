@@ -461,20 +461,17 @@ pub fn tune<'a>(
                 .total_cmp(&b.rel_mse)
                 .then(a.image_ms.total_cmp(&b.image_ms))
         });
-    match best {
-        Some(r) => Ok(r),
-        None => {
-            let fastest = of_scene
-                .iter()
-                .min_by(|a, b| a.image_ms.total_cmp(&b.image_ms))
-                .expect("not empty");
-            Err(SweepError::TuneOverBudget {
-                scene: scene.to_owned(),
-                budget_ms,
-                fastest: fastest.config.clone(),
-                fastest_ms: fastest.image_ms,
-            })
-        }
+    let fastest = of_scene
+        .iter()
+        .min_by(|a, b| a.image_ms.total_cmp(&b.image_ms));
+    match (best, fastest) {
+        (Some(r), _) => Ok(r),
+        (None, fastest) => Err(SweepError::TuneOverBudget {
+            scene: scene.to_owned(),
+            budget_ms,
+            fastest: fastest.map_or_else(String::new, |f| f.config.clone()),
+            fastest_ms: fastest.map_or(f64::NAN, |f| f.image_ms),
+        }),
     }
 }
 
@@ -865,7 +862,7 @@ mod tests {
         ];
         let p = Path::new("sweep.csv");
         let pick = |ms| tune(&rows, "cornell", ms, p).map(|r| r.config.as_str());
-        assert_eq!(pick(0.5).is_err(), true);
+        assert!(pick(0.5).is_err());
         assert_eq!(pick(1.0).ok(), Some("none"));
         assert_eq!(pick(11.9).ok(), Some("hemisphere gi-rays=4"));
         assert_eq!(pick(12.0).ok(), Some("hemisphere gi-rays=16"));
@@ -917,7 +914,7 @@ mod tests {
                 show: false,
                 ..s.vpl
             },
-            ..s.clone()
+            ..*s
         };
         assert_eq!(keep(&back), keep(&settings));
     }
