@@ -108,8 +108,12 @@ fn scene_args(args: &SweepArgs) -> Vec<String> {
         files.sort();
         all.extend(files);
     }
-    all.retain(|a| reference_path(&args.references, &scene_name(a)).exists());
-    all.dedup_by_key(|a| scene_name(a));
+    // One scene per reference: the built-in `cornell` and assets/scenes/cornell.toml are one.
+    let mut seen = std::collections::HashSet::new();
+    all.retain(|a| {
+        let name = scene_name(a);
+        reference_path(&args.references, &name).exists() && seen.insert(name)
+    });
     all
 }
 
@@ -411,7 +415,7 @@ pub fn tune_command(args: &TuneArgs, out: &mut dyn Write) -> Result<(), CliError
         row.rel_mse,
         row.flip
     );
-    write!(out, "{table}").map_err(CliError::Stdout)?;
+    outln!(out, "{}", table.trim_end());
     Ok(())
 }
 
