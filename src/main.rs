@@ -8,6 +8,7 @@ use voxgi::cli::compare::CompareArgs;
 use voxgi::cli::export::ExportArgs;
 use voxgi::cli::profile::{GraphArgs, ProfileArgs};
 use voxgi::cli::render::RenderArgs;
+use voxgi::cli::sweep::{SweepArgs, TuneArgs};
 use voxgi::cli::view::ViewArgs;
 use voxgi::cli::Global;
 
@@ -53,6 +54,13 @@ enum Command {
     ExportMitsuba(ExportArgs),
     /// Compares two images (EXR or PNG): relMSE, PSNR, SSIM, FLIP, mean/max absolute error.
     Compare(CompareArgs),
+    /// Measures the speed/accuracy trade: every method over a grid of GI settings on each
+    /// scene with a reference (GPU ms, transient memory, relMSE, FLIP, PSNR, SSIM) to CSV,
+    /// JSON and an SVG plot of error vs time with the Pareto front, per scene.
+    Sweep(SweepArgs),
+    /// From a sweep's CSV, prints the most accurate configuration within a GPU-time budget
+    /// as a `[gi]` table to paste into the scene file.
+    Tune(TuneArgs),
 }
 
 fn main() {
@@ -87,6 +95,8 @@ fn run(cli: Cli) -> Result<()> {
         Command::Bench(command) => voxgi::cli::bench::bench(&global, &command, out)?,
         Command::ExportMitsuba(args) => voxgi::cli::export::export_mitsuba(&args, out)?,
         Command::Compare(args) => voxgi::cli::compare::compare(&args, out)?,
+        Command::Sweep(args) => voxgi::cli::sweep::sweep(&global, &args, out)?,
+        Command::Tune(args) => voxgi::cli::sweep::tune_command(&args, out)?,
     }
     Ok(())
 }

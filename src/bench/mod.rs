@@ -8,10 +8,13 @@
 //!   raster bit passes on one scene.
 //! - [`bench_flicker`] (`voxgi bench flicker`): temporal stability of the GI methods along a
 //!   moving light's path, against a converged path tracer.
+//! - [`sweep`]: the data of `voxgi sweep` and `voxgi tune` (grid, rows, CSV, Pareto front,
+//!   SVG plot, the tuner's choice).
 //! - [`bench_scenes`], [`dense_scene`], [`tessellated_cube`]: the generated scenes they run on.
 
 mod flicker;
 mod scenes;
+pub mod sweep;
 mod traverse;
 mod voxelize;
 

@@ -6,7 +6,7 @@
 //!   [`crate::render::RenderSettings`].
 //! - [`render`]: `render`; [`view`]: `view`; [`profile`]: `profile` and `graph`;
 //!   [`bench`]: `bench traverse|voxelize|voxelize-sweep`; [`compare`]: `compare`;
-//!   [`export`]: `export-mitsuba`; [`devices`]: `devices`.
+//!   [`export`]: `export-mitsuba`; [`devices`]: `devices`; [`sweep`]: `sweep` and `tune`.
 
 pub mod args;
 pub mod bench;
@@ -15,6 +15,7 @@ pub mod devices;
 pub mod export;
 pub mod profile;
 pub mod render;
+pub mod sweep;
 pub mod view;
 
 pub use args::{FrameArgs, GiArgs};
@@ -51,6 +52,8 @@ pub enum CliError {
     Mitsuba(#[from] crate::eval::mitsuba::MitsubaExportError),
     #[error(transparent)]
     Bench(#[from] crate::bench::BenchError),
+    #[error(transparent)]
+    Sweep(#[from] crate::bench::sweep::SweepError),
     #[error(transparent)]
     App(#[from] crate::app::AppError),
     #[error(transparent)]

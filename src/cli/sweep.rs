@@ -1,0 +1,458 @@
+//! `voxgi sweep` (every method over a grid of GI settings on each scene with a reference:
+//! GPU times, transient memory and error metrics, as CSV, JSON and an SVG plot of error
+//! against time per scene) and `voxgi tune` (from a sweep's CSV, the most accurate
+//! configuration within a time budget, as a `[gi]` table).
+
+use super::args::FrameArgs;
+use super::{check_validation, context, outln, CliError, Global};
+use crate::bench::sweep::{
+    configs, downsample, gi_inline, gi_table_text, method_name, pareto_svg, parse_grid,
+    parse_methods, read_csv, tune, Config, CsvAppender, SweepError, SweepRow,
+};
+use crate::eval::HdrImage;
+use crate::render::{profile_scene, render_image, RenderSettings};
+use crate::scene::{load_scene_arg, Scene};
+use crate::stats::median;
+use crate::vk::{Context, PassTiming};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Arguments of `voxgi sweep`.
+#[derive(clap::Args, Clone)]
+pub struct SweepArgs {
+    /// Built-in scenes or TOML scene files, each with a reference `<name>_gi.exr` in
+    /// --references (name: the built-in's name or the file's stem). Default: every built-in
+    /// and every assets/scenes/*.toml that has one.
+    pub scenes: Vec<String>,
+    /// Methods, comma-separated.
+    #[arg(long, default_value = "none,hemisphere,pathtrace,vpl")]
+    pub methods: String,
+    /// A GI flag of `voxgi render` (without `--`) and its values: `--grid gi-rays=4,16`.
+    /// Repeat for more keys; each method runs every combination of the keys that change it.
+    #[arg(long, value_name = "KEY=V1,V2,…")]
+    pub grid: Vec<String>,
+    /// Output folder: sweep.csv (a row per configuration, written as each finishes),
+    /// sweep.json and <scene>_pareto.svg.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Image width and height in pixels; must divide the references' size.
+    #[arg(long, default_value_t = 128)]
+    pub size: u32,
+    /// Frames profiled per configuration (after --warmup).
+    #[arg(long, default_value_t = 20)]
+    pub frames: usize,
+    /// Frames run before profiling.
+    #[arg(long, default_value_t = 3)]
+    pub warmup: usize,
+    /// Folder of the reference images.
+    #[arg(long, default_value = "assets/references")]
+    pub references: PathBuf,
+    /// Continue the sweep in --out: skip the rows its sweep.csv has.
+    #[arg(long)]
+    pub resume: bool,
+}
+
+/// Arguments of `voxgi tune`.
+#[derive(clap::Args, Clone)]
+pub struct TuneArgs {
+    /// The scene, as `voxgi sweep` named it (a built-in's name or a scene file).
+    pub scene: String,
+    /// The GPU time allowed to the image, in ms (the path tracer's accumulated frames count).
+    #[arg(long, value_name = "MS")]
+    pub budget_ms: f64,
+    /// The sweep's output folder (its sweep.csv).
+    #[arg(long, default_value = "sweep")]
+    pub from: PathBuf,
+}
+
+/// A scene of the sweep with its reference at the sweep's size.
+struct SweepScene {
+    name: String,
+    scene: Scene,
+    reference: HdrImage,
+}
+
+/// One configuration ready to run: its flags checked and turned into settings.
+struct Job {
+    config: Config,
+    settings: RenderSettings,
+}
+
+/// A scene's name: a built-in's name, else the file's stem.
+pub fn scene_name(arg: &str) -> String {
+    match crate::scene::builtin(arg) {
+        Some(_) => arg.to_owned(),
+        None => Path::new(arg)
+            .file_stem()
+            .map_or_else(|| arg.to_owned(), |s| s.to_string_lossy().into_owned()),
+    }
+}
+
+/// The scenes given, or every built-in and `assets/scenes/*.toml` with a reference.
+fn scene_args(args: &SweepArgs) -> Vec<String> {
+    if !args.scenes.is_empty() {
+        return args.scenes.clone();
+    }
+    let mut all: Vec<String> = crate::scene::builtin_names()
+        .iter()
+        .map(|s| (*s).to_owned())
+        .collect();
+    if let Ok(dir) = std::fs::read_dir("assets/scenes") {
+        let mut files: Vec<String> = dir
+            .filter_map(Result::ok)
+            .map(|e| e.path())
+            .filter(|p| p.extension().is_some_and(|e| e == "toml"))
+            .map(|p| p.to_string_lossy().into_owned())
+            .collect();
+        files.sort();
+        all.extend(files);
+    }
+    // One scene per reference: the built-in `cornell` and assets/scenes/cornell.toml are one.
+    let mut seen = std::collections::HashSet::new();
+    all.retain(|a| {
+        let name = scene_name(a);
+        reference_path(&args.references, &name).exists() && seen.insert(name)
+    });
+    all
+}
+
+fn reference_path(dir: &Path, name: &str) -> PathBuf {
+    dir.join(format!("{name}_gi.exr"))
+}
+
+/// Loads each scene and its reference, box-filtered to `size`.
+fn load_scenes(args: &SweepArgs) -> Result<Vec<SweepScene>, CliError> {
+    let list = scene_args(args);
+    if list.is_empty() {
+        return Err(SweepError::NoScenes {
+            dir: args.references.clone(),
+        }
+        .into());
+    }
+    list.iter()
+        .map(|arg| {
+            let name = scene_name(arg);
+            let path = reference_path(&args.references, &name);
+            if !path.exists() {
+                return Err(SweepError::NoReference { scene: name, path }.into());
+            }
+            let scene = load_scene_arg(Some(arg))?;
+            let full = HdrImage::load(&path)?;
+            let fits = args.size > 0
+                && full.width % args.size == 0
+                && full.height % args.size == 0
+                && full.width == full.height;
+            if !fits {
+                return Err(SweepError::Size {
+                    size: args.size,
+                    width: full.width,
+                    height: full.height,
+                    path,
+                }
+                .into());
+            }
+            let reference = downsample(&full, full.width / args.size);
+            Ok(SweepScene {
+                name,
+                scene,
+                reference,
+            })
+        })
+        .collect()
+}
+
+/// `voxgi render`'s frame flags alone, to check a configuration's flags as the command
+/// line would.
+#[derive(clap::Parser)]
+#[command(no_binary_name = true)]
+struct FrameFlags {
+    #[command(flatten)]
+    frame: FrameArgs,
+}
+
+/// A configuration's render settings on a scene, at `size`²: its flags parsed by clap and
+/// checked against their ranges, like `voxgi render`'s.
+fn job(config: &Config, scene: &Scene, size: u32) -> Result<Job, CliError> {
+    use clap::Parser as _;
+    let mut argv = vec![
+        "--width".to_owned(),
+        size.to_string(),
+        "--height".to_owned(),
+        size.to_string(),
+    ];
+    argv.extend(config.argv());
+    let flag_err = |message: String| SweepError::Flag {
+        config: config.label(),
+        message,
+    };
+    let frame = FrameFlags::try_parse_from(&argv)
+        .map_err(|e| flag_err(e.kind().to_string() + ": " + e.render().to_string().trim()))?
+        .frame;
+    let settings = frame.settings(scene).map_err(|e| flag_err(e.to_string()))?;
+    Ok(Job {
+        config: config.clone(),
+        settings,
+    })
+}
+
+/// Whether a pass is part of the GI's cost: voxelization, the atlases, the light maps and
+/// the `gi_*` passes (the VPL passes are `gi_vpl_*`).
+pub fn is_gi_pass(name: &str) -> bool {
+    ["gi_", "light_map", "voxel", "atlas"]
+        .iter()
+        .any(|p| name.starts_with(p))
+}
+
+/// Median, min and max of per-frame sums of the passes `keep` selects.
+fn frame_stats(frames: &[Vec<PassTiming>], keep: impl Fn(&str) -> bool) -> [f64; 3] {
+    let sums: Vec<f64> = frames
+        .iter()
+        .map(|f| {
+            // + 0.0: an empty float sum is -0.0, which would print as "-0".
+            f.iter()
+                .filter(|t| keep(&t.name))
+                .map(|t| t.gpu_ms)
+                .sum::<f64>()
+                + 0.0
+        })
+        .collect();
+    [
+        median(&sums),
+        sums.iter().copied().fold(f64::INFINITY, f64::min),
+        sums.iter().copied().fold(0.0, f64::max),
+    ]
+}
+
+/// Profiles and renders one configuration on one scene and scores it.
+fn measure(
+    ctx: &Context,
+    s: &SweepScene,
+    job: &Job,
+    args: &SweepArgs,
+) -> Result<SweepRow, CliError> {
+    let run = profile_scene(ctx, &s.scene, &job.settings, args.frames, args.warmup)?;
+    let image = render_image(ctx, &s.scene, &job.settings)?;
+    let m = crate::eval::compare(&s.reference, &image.hdr, None)?;
+    let gi = frame_stats(&run.frames, is_gi_pass);
+    let frame = frame_stats(&run.frames, |_| true);
+    let accumulate = match job.settings.gi.method {
+        crate::gi::GiMethod::Pathtrace => job.settings.gi.accumulate_frames.max(1),
+        _ => 1,
+    };
+    Ok(SweepRow {
+        scene: s.name.clone(),
+        config: job.config.label(),
+        method: method_name(job.config.method),
+        size: args.size,
+        frames: args.frames as u32,
+        gi_median_ms: gi[0],
+        gi_min_ms: gi[1],
+        gi_max_ms: gi[2],
+        frame_median_ms: frame[0],
+        frame_min_ms: frame[1],
+        frame_max_ms: frame[2],
+        accumulate_frames: accumulate,
+        image_ms: frame[0] * f64::from(accumulate),
+        transient_bytes: run.transient_memory.peak_aliased_bytes,
+        rel_mse: m.rel_mse,
+        flip: m.flip_mean,
+        psnr_db: m.psnr_db,
+        ssim: m.ssim,
+        device: ctx.info.name.clone(),
+        gi_toml: gi_inline(&job.settings.gi),
+    })
+}
+
+/// Writes sweep.json and each scene's plot from all rows so far.
+fn write_summaries(dir: &Path, rows: &[SweepRow]) -> Result<(), CliError> {
+    let io = |path: &Path| {
+        let path = path.to_owned();
+        move |source| SweepError::Io { path, source }
+    };
+    let json = dir.join("sweep.json");
+    std::fs::write(&json, serde_json::to_string_pretty(rows)?).map_err(io(&json))?;
+    let mut scenes: Vec<&str> = rows.iter().map(|r| r.scene.as_str()).collect();
+    scenes.sort_unstable();
+    scenes.dedup();
+    for scene in scenes {
+        let of: Vec<&SweepRow> = rows.iter().filter(|r| r.scene == scene).collect();
+        let svg = dir.join(format!("{scene}_pareto.svg"));
+        std::fs::write(&svg, pareto_svg(scene, &of)).map_err(io(&svg))?;
+    }
+    Ok(())
+}
+
+/// `m:ss` of a duration in seconds.
+fn clock(s: f64) -> String {
+    let s = s.max(0.0).round() as u64;
+    format!("{}:{:02}", s / 60, s % 60)
+}
+
+/// Runs the sweep; prints a line per row to `out` and the progress with an ETA to stderr.
+pub fn sweep(global: &Global, args: &SweepArgs, out: &mut dyn Write) -> Result<(), CliError> {
+    // Every input is checked before the device is up.
+    let methods = parse_methods(&args.methods)?;
+    let grid = args
+        .grid
+        .iter()
+        .map(|g| parse_grid(g))
+        .collect::<Result<Vec<_>, _>>()?;
+    let scenes = load_scenes(args)?;
+    let configs = configs(&methods, &grid);
+    let jobs = scenes
+        .iter()
+        .map(|s| {
+            configs
+                .iter()
+                .map(|c| job(c, &s.scene, args.size))
+                .collect::<Result<Vec<_>, _>>()
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    std::fs::create_dir_all(&args.out).map_err(|source| SweepError::Io {
+        path: args.out.clone(),
+        source,
+    })?;
+    let csv = args.out.join("sweep.csv");
+    let mut rows = match (csv.exists(), args.resume) {
+        (true, false) => return Err(SweepError::Exists { path: csv }.into()),
+        (true, true) => read_csv(&csv)?,
+        (false, _) => Vec::new(),
+    };
+    let done =
+        |rows: &[SweepRow], s: &str, c: &str| rows.iter().any(|r| r.scene == s && r.config == c);
+    let todo: Vec<(usize, &Job)> = scenes
+        .iter()
+        .enumerate()
+        .flat_map(|(i, _)| jobs[i].iter().map(move |j| (i, j)))
+        .filter(|(i, j)| !done(&rows, &scenes[*i].name, &j.config.label()))
+        .collect();
+    let skipped = scenes.len() * configs.len() - todo.len();
+    if skipped > 0 {
+        eprintln!("resuming: {skipped} row(s) already in {}", csv.display());
+    }
+    let mut appender = CsvAppender::open(&csv)?;
+    let ctx = context(global)?;
+    let start = Instant::now();
+    let result = (|| -> Result<(), CliError> {
+        for (k, (i, job)) in todo.iter().enumerate() {
+            let s = &scenes[*i];
+            let eta = match k {
+                0 => "?".to_owned(),
+                _ => clock(start.elapsed().as_secs_f64() / k as f64 * (todo.len() - k) as f64),
+            };
+            eprintln!(
+                "[{}/{}] {} {} (elapsed {}, ETA {eta})",
+                k + 1,
+                todo.len(),
+                s.name,
+                job.config.label(),
+                clock(start.elapsed().as_secs_f64())
+            );
+            let row = measure(&ctx, s, job, args)?;
+            appender.append(&row)?;
+            outln!(
+                out,
+                "{:<16} {:<40} {:>9.3} ms  relMSE {:.5}  FLIP {:.4}",
+                row.scene,
+                row.config,
+                row.image_ms,
+                row.rel_mse,
+                row.flip
+            );
+            rows.push(row);
+            write_summaries(&args.out, &rows)?;
+        }
+        if todo.is_empty() {
+            write_summaries(&args.out, &rows)?;
+        }
+        Ok(())
+    })();
+    let checked = check_validation(ctx);
+    result?;
+    checked?;
+    outln!(
+        out,
+        "wrote {} ({} rows), sweep.json and the plots in {}",
+        csv.display(),
+        rows.len(),
+        args.out.display()
+    );
+    Ok(())
+}
+
+/// Prints the most accurate configuration of the sweep within the budget as a `[gi]` table.
+pub fn tune_command(args: &TuneArgs, out: &mut dyn Write) -> Result<(), CliError> {
+    let csv = args.from.join("sweep.csv");
+    if !csv.exists() {
+        return Err(SweepError::Io {
+            path: csv,
+            source: std::io::Error::new(
+                std::io::ErrorKind::NotFound,
+                "no sweep here; run `voxgi sweep SCENE --out DIR` and pass --from DIR",
+            ),
+        }
+        .into());
+    }
+    let rows = read_csv(&csv)?;
+    let name = scene_name(&args.scene);
+    let row = tune(&rows, &name, args.budget_ms, &csv)?;
+    let table = gi_table_text(row).map_err(|reason| SweepError::Csv {
+        path: csv.clone(),
+        line: 0,
+        reason: format!("the gi_toml of `{}`: {reason}", row.config),
+    })?;
+    outln!(
+        out,
+        "# voxgi tune {name} --budget-ms {}: `{}` on {}, {:.3} ms to the image ({} frame(s) of \
+         {:.3} ms), relMSE {:.5}, FLIP {:.4}",
+        args.budget_ms,
+        row.config,
+        row.device,
+        row.image_ms,
+        row.accumulate_frames,
+        row.frame_median_ms,
+        row.rel_mse,
+        row.flip
+    );
+    outln!(out, "{}", table.trim_end());
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_configuration_flag_out_of_range_names_the_configuration() {
+        let scene = load_scene_arg(None).expect("cornell");
+        let grid = [parse_grid("gi-rays=0").expect("grid")];
+        let c = configs(&[crate::gi::GiMethod::Hemisphere], &grid);
+        let e = job(&c[0], &scene, 32).err().expect("0 rays").to_string();
+        assert!(e.contains("hemisphere gi-rays=0"), "{e}");
+        let grid = [parse_grid("vpl-pattern=4y4").expect("grid")];
+        let c = configs(&[crate::gi::GiMethod::Vpl], &grid);
+        let e = job(&c[0], &scene, 32)
+            .err()
+            .expect("bad pattern")
+            .to_string();
+        assert!(e.contains("vpl-pattern") && e.contains("4y4"), "{e}");
+        let ok = job(&configs(&[crate::gi::GiMethod::Vpl], &[])[0], &scene, 32).expect("ok");
+        assert_eq!(ok.settings.width, 32);
+    }
+
+    #[test]
+    fn gi_passes_are_told_from_the_rest() {
+        for p in [
+            "gi_hemisphere",
+            "gi_vpl_generate",
+            "light_map",
+            "voxelize_triangles",
+        ] {
+            assert!(is_gi_pass(p), "{p}");
+        }
+        for p in ["gbuffer", "deferred_direct", "tonemap", "shadow_depth"] {
+            assert!(!is_gi_pass(p), "{p}");
+        }
+    }
+}
