@@ -20,8 +20,7 @@ layout(push_constant) uniform Push {
 
 vec3 world_at(ivec2 px, vec2 size) {
     float depth = texelFetch(gb_depth, px, 0).r;
-    vec4 wp = frame.inv_view_proj * vec4((vec2(px) + 0.5) / size * 2.0 - 1.0, depth, 1.0);
-    return wp.xyz / wp.w;
+    return pixel_world_position(frame.inv_view_proj, px, size, depth);
 }
 
 void main() {

@@ -146,9 +146,7 @@ void main() {
         imageStore(history, px, vec4(0.0));
         return;
     }
-    vec2 uv = (vec2(px) + 0.5) / vec2(size);
-    vec4 wp = frame.inv_view_proj * vec4(uv * 2.0 - 1.0, depth, 1.0);
-    vec3 p = wp.xyz / wp.w;
+    vec3 p = pixel_world_position(frame.inv_view_proj, px, vec2(size), depth);
     vec4 ns = texelFetch(gb_normal, px, 0);
     vec3 n = normalize(ns.xyz);
     vec3 specular = HAS_PHONG ? gbuffer_phong_specular(gb_specular, px) : vec3(0.0);

@@ -123,19 +123,7 @@ impl Demo {
                     .clear_color_image(img.raw, vk::ClearColorValue { float32: [1.0; 4] }, 1, 1);
             });
 
-        g.add_pass("demo_readback")
-            .read(packed, Access::TransferRead)
-            .write(readback, Access::TransferWrite)
-            .record(move |ctx| {
-                let img = ctx.image(packed);
-                let extent = vk::Extent3D {
-                    width: img.desc.width,
-                    height: img.desc.height,
-                    depth: 1,
-                };
-                ctx.cmd
-                    .copy_image_to_buffer(img.raw, extent, 0, 1, ctx.buffer(readback).raw);
-            });
+        crate::graph::add_readback(&mut g, "demo_readback", packed, readback);
         g
     }
 

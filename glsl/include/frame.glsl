@@ -37,6 +37,14 @@ struct GpuFrame {
     GpuShadowView shadow_views[MAX_SHADOW_VIEWS];
 };
 
+// World position of pixel `px` of a `size` frame at depth-buffer value `depth` (the pixel's
+// center unprojected by the camera's inverse view-projection).
+vec3 pixel_world_position(mat4 inv_view_proj, ivec2 px, vec2 size, float depth) {
+    vec2 uv = (vec2(px) + 0.5) / size;
+    vec4 wp = inv_view_proj * vec4(uv * 2.0 - 1.0, depth, 1.0);
+    return wp.xyz / wp.w;
+}
+
 // Mitsuba 3 `spot` falloff: 1 inside the beam, linear in angle to 0 at the cutoff.
 // `cos_axis`: cosine between the spot axis and the direction from the light to the point.
 float spot_falloff(GpuLight l, float cos_axis) {

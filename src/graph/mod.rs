@@ -40,7 +40,7 @@ pub use compile::{
     MemoryStats, Placement, ResourceDeclView,
 };
 pub use execute::{GpuBuffer, GpuImage, GraphExecutor, PassContext};
-pub use oneshot::{readback_buffer, run_frames, run_once, OneShotError};
+pub use oneshot::{add_readback, readback_buffer, run_frames, run_once, OneShotError};
 
 use crate::vk::{vk, Bindable, Buffer, Image, ImageDesc, ShaderInterface};
 

@@ -3,7 +3,7 @@
 //! runs a graph a single time (one-time setup work: atlases, static voxelization; read-backs
 //! in tests).
 
-use super::{GraphError, GraphExecutor, RenderGraph};
+use super::{Access, BufferHandle, GraphError, GraphExecutor, ImageHandle, RenderGraph};
 use crate::vk::{vk, Buffer, BufferDesc, Context, FrameLoop, MemoryLocation, PassTiming, VkError};
 
 /// Errors of [`run_once`]: compiling the graph, or running it on the GPU.
@@ -89,4 +89,22 @@ pub fn readback_buffer(ctx: &Context, name: &str, size_bytes: u64) -> Result<Buf
         usage: vk::BufferUsageFlags::TRANSFER_DST,
         location: MemoryLocation::GpuToCpu,
     })
+}
+
+/// Declares pass `name` copying mip 0, layer 0 of `image` into `buffer` (tightly packed rows)
+/// for the host to read after the frame.
+pub fn add_readback(g: &mut RenderGraph, name: &str, image: ImageHandle, buffer: BufferHandle) {
+    g.add_pass(name)
+        .read(image, Access::TransferRead)
+        .write(buffer, Access::TransferWrite)
+        .record(move |ctx| {
+            let img = ctx.image(image);
+            let extent = vk::Extent3D {
+                width: img.desc.width,
+                height: img.desc.height,
+                depth: 1,
+            };
+            ctx.cmd
+                .copy_image_to_buffer(img.raw, extent, 0, 1, ctx.buffer(buffer).raw);
+        });
 }

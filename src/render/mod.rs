@@ -570,38 +570,10 @@ impl Renderer {
     pub fn graph(&self) -> RenderGraph {
         let mut g = RenderGraph::new();
         let FrameImages { radiance, ldr } = self.declare(&mut g);
-        let (w, h) = (self.settings.width, self.settings.height);
         let hdr_buf = g.import_buffer(&self.readback_hdr, Access::HostRead);
         let ldr_buf = g.import_buffer(&self.readback_ldr, Access::HostRead);
-        let extent = vk::Extent3D {
-            width: w,
-            height: h,
-            depth: 1,
-        };
-        g.add_pass("readback_hdr")
-            .read(radiance, Access::TransferRead)
-            .write(hdr_buf, Access::TransferWrite)
-            .record(move |ctx| {
-                ctx.cmd.copy_image_to_buffer(
-                    ctx.image(radiance).raw,
-                    extent,
-                    0,
-                    1,
-                    ctx.buffer(hdr_buf).raw,
-                )
-            });
-        g.add_pass("readback_ldr")
-            .read(ldr, Access::TransferRead)
-            .write(ldr_buf, Access::TransferWrite)
-            .record(move |ctx| {
-                ctx.cmd.copy_image_to_buffer(
-                    ctx.image(ldr).raw,
-                    extent,
-                    0,
-                    1,
-                    ctx.buffer(ldr_buf).raw,
-                )
-            });
+        crate::graph::add_readback(&mut g, "readback_hdr", radiance, hdr_buf);
+        crate::graph::add_readback(&mut g, "readback_ldr", ldr, ldr_buf);
         g
     }
 

@@ -125,23 +125,7 @@ pub fn pack(
         let r = g.import_image(&made[1], Access::Sampled(Shader::Compute));
         let packed = pass.declare(&mut g, (l, r), mode, eye_size);
         let buf = g.import_buffer(&readback, Access::HostRead);
-        let extent = vk::Extent3D {
-            width: pw,
-            height: ph,
-            depth: 1,
-        };
-        g.add_pass("readback_stereo")
-            .read(packed, Access::TransferRead)
-            .write(buf, Access::TransferWrite)
-            .record(move |ctx| {
-                ctx.cmd.copy_image_to_buffer(
-                    ctx.image(packed).raw,
-                    extent,
-                    0,
-                    1,
-                    ctx.buffer(buf).raw,
-                )
-            });
+        crate::graph::add_readback(&mut g, "readback_stereo", packed, buf);
         let timings = run_once(ctx, g).map_err(|e| match e {
             OneShotError::Graph(e) => RenderError::Graph(e),
             OneShotError::Vk(e) => RenderError::Vk(e),
