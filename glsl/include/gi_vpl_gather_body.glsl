@@ -22,6 +22,7 @@
 #include "gi_common.glsl"
 #include "brdf.glsl"
 #include "vpl.glsl"
+#include "gbuffer_lobe.glsl"
 
 layout(constant_id = 0) const bool HAS_PHONG = false;
 
@@ -98,7 +99,7 @@ void main() {
     vec3 p = pixel_world_position(frame.inv_view_proj, px, vec2(size), depth);
     vec4 ns = texelFetch(gb_normal, px, 0);
     vec3 n = normalize(ns.xyz);
-    vec3 specular = HAS_PHONG ? texelFetch(gb_specular, px, 0).rgb : vec3(0.0);
+    vec3 specular = HAS_PHONG ? gbuffer_phong_specular(gb_specular, px) : vec3(0.0);
     bool phong = HAS_PHONG && is_phong_pixel(specular);
     vec3 to_eye = normalize(frame.camera_position.xyz - p);
     uint row = pc.pattern.z;
