@@ -130,9 +130,7 @@ fn main() -> Result<()> {
                 tri_ms,
                 atlas_ms
             );
-            atlas.destroy(&ctx);
         }
-        buf.destroy(&ctx);
     }
 
     // Same surface, 1× and 16× the triangles, at 128².
@@ -177,10 +175,6 @@ fn main() -> Result<()> {
             tri_ms,
             atlas_ms
         );
-        points.destroy(&ctx);
-        buf.destroy(&ctx);
     }
-    pipes.destroy(&ctx);
-    tri_pipes.destroy(&ctx);
     Ok(())
 }

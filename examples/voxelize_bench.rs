@@ -82,10 +82,7 @@ fn main() -> Result<()> {
                     median(&store),
                     median(&mips)
                 );
-                voxels.destroy(&ctx);
             }
-            buf.destroy(&ctx);
-            pipes.destroy(&ctx);
         }
     }
     Ok(())

@@ -18,7 +18,7 @@ pub struct Demo {
     gradient: ComputePipeline,
     blit: GraphicsPipeline,
     pack: ComputePipeline,
-    sampler: vk::Sampler,
+    sampler: crate::vk::Sampler,
     readback: Buffer,
 }
 
@@ -82,7 +82,7 @@ impl Demo {
         let groups = (w.div_ceil(8), h.div_ceil(8));
 
         let c = Shader::Compute;
-        let pipe = self.gradient;
+        let pipe = *self.gradient;
         g.add_pass("demo_gradient")
             .pipeline(&pipe)
             .bind(0, pattern, Access::StorageWrite(c))
@@ -91,7 +91,7 @@ impl Demo {
                 ctx.cmd.dispatch(groups.0, groups.1, 1);
             });
 
-        let (pipe, sampler) = (self.blit, self.sampler);
+        let (pipe, sampler) = (*self.blit, self.sampler.raw);
         g.add_pass("demo_blit")
             .pipeline(&pipe)
             .bind_sampled(0, pattern, sampler, Shader::Fragment)
@@ -105,7 +105,7 @@ impl Demo {
                 ctx.cmd.end_rendering();
             });
 
-        let pipe = self.pack;
+        let pipe = *self.pack;
         g.add_pass("demo_pack")
             .pipeline(&pipe)
             .bind_sampled(0, color, sampler, c)
@@ -142,14 +142,6 @@ impl Demo {
             .mapped()
             .map(<[u8]>::to_vec)
             .unwrap_or_default()
-    }
-
-    pub fn destroy(self, ctx: &Context) {
-        ctx.destroy_compute_pipeline(self.gradient);
-        ctx.destroy_graphics_pipeline(self.blit);
-        ctx.destroy_compute_pipeline(self.pack);
-        ctx.destroy_sampler(self.sampler);
-        ctx.destroy_buffer(self.readback);
     }
 }
 

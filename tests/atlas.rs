@@ -103,9 +103,6 @@ fn atlas_bits_chunked(
     }
     let points = atlas.point_count();
     let chunks = atlas.lists().iter().map(|l| l.chunks.len()).sum();
-    ctx.destroy_buffer(readback);
-    atlas.destroy(ctx);
-    tri_pipes.destroy(ctx);
     (bits, points, chunks)
 }
 
@@ -157,12 +154,6 @@ fn atlas_volumes_chunked(
     let bytes = outs
         .each_ref()
         .map(|b| b.mapped().expect("host-visible")[..size as usize].to_vec());
-    for b in outs {
-        ctx.destroy_buffer(b);
-    }
-    volumes.destroy(ctx);
-    splat.destroy(ctx);
-    atlas.destroy(ctx);
     bytes
 }
 
@@ -416,8 +407,6 @@ fn voxel_frame_atlas_follows_a_moving_object() {
     // Nothing moves after t = 1: no re-voxelization.
     assert!(!frame.update(1.0, 0).expect("update"));
     assert!(!frame.update(2.0, 0).expect("update"));
-    ctx.destroy_buffer(readback);
-    frame.destroy(&ctx);
     common::assert_no_validation_messages(&ctx);
 }
 
@@ -578,10 +567,6 @@ fn run_volume_frame(
             .map(|t| t.map(|c| c as i8))
             .collect(),
     };
-    bits.destroy(ctx);
-    for b in outs {
-        ctx.destroy_buffer(b);
-    }
     (v, names)
 }
 
@@ -725,8 +710,6 @@ fn atlas_volumes_match_the_bits_and_the_red_wall() {
     }
     println!("red wall: {checked} voxels checked");
     assert!(checked > 0, "no red-wall voxel found");
-    volumes.destroy(&ctx);
-    frame.destroy(&ctx);
     common::assert_no_validation_messages(&ctx);
 }
 
@@ -760,8 +743,6 @@ fn atlas_volumes_follow_a_moving_object() {
     println!("voxels set per frame: {counts:?}");
     assert!(!frame.update(1.0, 0).expect("update"));
     assert!(!frame.attributes_moved());
-    volumes.destroy(&ctx);
-    frame.destroy(&ctx);
     common::assert_no_validation_messages(&ctx);
 }
 
@@ -881,8 +862,6 @@ fn voxel_frame_atlas_follows_an_obj_sequence() {
     // Same frame (not looping, past the end): nothing re-voxelizes; still one atlas.
     assert!(!frame.update(4.7, 0).expect("update"));
     assert_eq!(frame.atlases_packed(), 2);
-    bits.destroy(&ctx);
-    frame.destroy(&ctx);
     common::assert_no_validation_messages(&ctx);
 }
 
@@ -919,7 +898,5 @@ fn atlas_volumes_follow_an_obj_sequence() {
     println!("sequence voxels set per frame: {counts:?}");
     assert!(counts.windows(2).any(|w| w[0] != w[1]), "{counts:?}");
     assert_eq!(frame.atlases_packed(), 2);
-    volumes.destroy(&ctx);
-    frame.destroy(&ctx);
     common::assert_no_validation_messages(&ctx);
 }

@@ -72,9 +72,6 @@ fn demo_frame_reads_back_the_expected_pixels_without_validation_messages() {
             .all(|t| t.gpu_ms.is_finite() && t.gpu_ms >= 0.0 && t.gpu_ms < 10_000.0));
     }
 
-    exec.destroy(&ctx);
-    frames.destroy(&ctx);
-    demo.destroy(&ctx);
     common::assert_no_validation_messages(&ctx);
 }
 

@@ -569,10 +569,10 @@ fn keyframed_objects_follow_the_scene_time_after_prepare() {
     moved.settings.time_s = 0.5;
     moved.prepare(&s).expect("prepare");
     let after = common::run_frames(&ctx, &mut moved, 1);
-    moved.destroy(&ctx);
+    drop(moved);
     let mut fresh = Renderer::new(&ctx, &s, settings(0.5)).expect("renderer");
     let expected = common::run_frames(&ctx, &mut fresh, 1);
-    fresh.destroy(&ctx);
+    drop(fresh);
     assert_ne!(at_start.data, after.data, "the cube moved");
     assert_eq!(
         after.data, expected.data,
@@ -616,10 +616,10 @@ fn obj_sequence_frames_follow_the_scene_time_after_prepare() {
     moved.settings.time_s = 1.25;
     moved.prepare(&s).expect("prepare");
     let second = common::run_frames(&ctx, &mut moved, 1);
-    moved.destroy(&ctx);
+    drop(moved);
     let mut fresh = Renderer::new(&ctx, &s, settings(1.25)).expect("renderer");
     let expected = common::run_frames(&ctx, &mut fresh, 1);
-    fresh.destroy(&ctx);
+    drop(fresh);
     assert_ne!(first.data, second.data, "the sequence switched frames");
     assert_eq!(
         second.data, expected.data,

@@ -490,10 +490,10 @@ fn path_tracer_restarts_and_follows_moving_objects() {
             Some(3),
             "{voxelizer:?}: accumulation restarted when the cube moved"
         );
-        moved.destroy(&ctx);
+        drop(moved);
         let mut fresh = Renderer::new(&ctx, &scene, settings(0.5)).expect("renderer");
         let expected = common::run_frames(&ctx, &mut fresh, 3);
-        fresh.destroy(&ctx);
+        drop(fresh);
         assert_ne!(before.data, after.data, "{voxelizer:?}: the cube moved");
         assert_eq!(
             after.data, expected.data,
@@ -537,7 +537,7 @@ fn radiance_volume_is_kept_between_frames_and_recomputed_when_objects_move() {
     )
     .expect("renderer");
     let direct_only = common::run_frames(&ctx, &mut direct, 1);
-    direct.destroy(&ctx);
+    drop(direct);
     let mut moved = Renderer::new(&ctx, &scene, settings(0.0)).expect("renderer");
     let first = common::run_frames(&ctx, &mut moved, 1);
     let sum = |img: &voxgi::eval::HdrImage| img.data.iter().flatten().sum::<f32>();
@@ -555,10 +555,10 @@ fn radiance_volume_is_kept_between_frames_and_recomputed_when_objects_move() {
     moved.settings.time_s = 0.5;
     moved.prepare(&scene).expect("prepare");
     let after = common::run_frames(&ctx, &mut moved, 2);
-    moved.destroy(&ctx);
+    drop(moved);
     let mut fresh = Renderer::new(&ctx, &scene, settings(0.5)).expect("renderer");
     let expected = common::run_frames(&ctx, &mut fresh, 2);
-    fresh.destroy(&ctx);
+    drop(fresh);
     assert_ne!(first.data, after.data, "the cube moved");
     assert_eq!(
         after.data, expected.data,

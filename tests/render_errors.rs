@@ -67,8 +67,7 @@ fn more_shadow_views_than_fit_unless_paraboloid() {
     assert!(e.to_string().contains("--point-shadows paraboloid"), "{e}");
     let mut s = small();
     s.shadow.point_technique = PointShadow::DualParaboloid;
-    let r = Renderer::new(&ctx, &scene, s).expect("the advice works");
-    r.destroy(&ctx);
+    Renderer::new(&ctx, &scene, s).expect("the advice works");
 }
 
 #[test]

@@ -81,7 +81,7 @@ fn run_tonemap(tm: ToneMap) -> Vec<u8> {
     let sampler = ctx
         .create_sampler(vk::Filter::NEAREST, false)
         .expect("sampler");
-    let pass = TonemapPass::new(&ctx, sampler).expect("pipeline");
+    let pass = TonemapPass::new(&ctx, sampler.raw).expect("pipeline");
     let readback = voxgi::graph::readback_buffer(&ctx, "ldr", u64::from(W * H * 4)).unwrap();
     let mut g = RenderGraph::new();
     let hdr = g.import_image(&input, Access::Sampled(Shader::Compute));
@@ -103,10 +103,6 @@ fn run_tonemap(tm: ToneMap) -> Vec<u8> {
     run_once(&ctx, g).expect("runs");
     let pixels = readback.mapped().expect("host visible").to_vec();
     common::assert_no_validation_messages(&ctx);
-    pass.destroy(&ctx);
-    ctx.destroy_buffer(readback);
-    ctx.destroy_sampler(sampler);
-    ctx.destroy_image(input);
     pixels
 }
 

@@ -95,7 +95,6 @@ fn check(
             &[RayMethod::Hierarchical(params), RayMethod::Dda],
         )
         .expect("casts");
-    caster.destroy(ctx);
     let (gpu_h, gpu_dda) = (&batches[0].hits, &batches[1].hits);
     let mut ran_out = 0;
     let hits = gpu_h.iter().filter(|h| h.hit).count();
@@ -293,7 +292,6 @@ fn gpu_segment_visibility_matches_cpu_visible() {
     let batch = caster
         .cast(&ctx, &rays, &[RayMethod::Hierarchical(params)])
         .expect("casts");
-    caster.destroy(&ctx);
     let mut blocked = 0;
     for (i, &(a, b)) in segments.iter().enumerate() {
         let gpu_visible = !batch[0].hits[i].hit;
@@ -321,7 +319,6 @@ fn gpu_marching_baselines_match_cpu() {
     let batches = caster
         .cast(&ctx, &rays, &[RayMethod::March1(40), RayMethod::March3(40)])
         .expect("casts");
-    caster.destroy(&ctx);
     for (i, r) in rays.iter().enumerate() {
         let (o, d, t) = (
             Vec3::from_slice(&r.origin_tmax[..3]),

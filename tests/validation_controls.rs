@@ -1,7 +1,8 @@
 //! Negative controls of the validation check itself: a deliberate misuse must be reported,
 //! or a broken messenger (or a check that reads the messages too early) would let every
 //! other test pass. Each misuse runs on a context of its own, which the test destroys with
-//! `finish` to read what its whole life left behind.
+//! `finish` to read what its whole life left behind. GPU objects release themselves when
+//! dropped, so a leak takes `mem::forget` or an object kept past `finish`.
 
 mod common;
 
@@ -35,7 +36,7 @@ fn a_write_after_write_without_a_barrier_is_reported() {
             p.cmd.fill_buffer(raw, 2);
         });
     run_once(&ctx, g).expect("the graph runs");
-    ctx.destroy_buffer(target);
+    drop(target);
     let report = ctx.finish();
     assert!(report.leaked_allocations.is_empty(), "{report}");
     assert!(
@@ -74,11 +75,29 @@ fn objects_and_memory_never_freed_are_reported_at_teardown() {
     );
 }
 
+/// An object still alive when its context is finished is a leak, and dropping it afterwards
+/// touches nothing of the destroyed device (no crash, no further message).
+#[test]
+fn an_object_kept_past_finish_is_reported_and_its_late_drop_is_harmless() {
+    let ctx = common::raw_context();
+    let kept = transfer_buffer(&ctx, "kept past finish");
+    let report = ctx.finish();
+    assert_eq!(report.leaked_allocations, ["kept past finish"], "{report}");
+    assert!(
+        report
+            .validation_messages
+            .iter()
+            .any(|m| m.contains("VkBuffer")),
+        "the buffer alive at vkDestroyDevice went unreported: {report}"
+    );
+    drop(kept);
+}
+
 #[test]
 fn a_clean_context_reports_nothing_at_teardown() {
     let ctx = common::raw_context();
     let b = transfer_buffer(&ctx, "freed");
-    ctx.destroy_buffer(b);
+    drop(b);
     let report = ctx.finish();
     assert!(report.is_clean(), "{report}");
 }

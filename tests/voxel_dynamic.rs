@@ -82,10 +82,6 @@ fn animated_object_voxels_follow_the_cpu_reference_per_frame() {
         }
     }
     frames.finish(&ctx).expect("frames finish");
-    frames.destroy(&ctx);
-    exec.destroy(&ctx);
-    readback.destroy(&ctx);
-    frame.destroy(&ctx);
     common::assert_no_validation_messages(&ctx);
 }
 

@@ -152,7 +152,8 @@ pub fn run(scene: Scene, opts: &ViewerOptions) -> Result<ViewerReport, AppError>
             elwt.exit();
         }
     });
-    let report = viewer.destroy(&ctx);
+    // The viewer (its GPU objects, swapchain and surface) goes before the context and window.
+    let report = viewer.close(&ctx);
     outcome?;
     loop_result.map_err(|e| AppError::Window(e.to_string()))?;
     Ok(ViewerReport {
@@ -172,13 +173,6 @@ struct FrameGraph {
     extent: vk::Extent2D,
     /// The settings this graph bakes in (size, shadow resolution, tone map).
     settings: RenderSettings,
-}
-
-impl FrameGraph {
-    fn destroy(self, ctx: &Context) {
-        self.exec.destroy(ctx);
-        ctx.destroy_buffer(self.shot);
-    }
 }
 
 struct Viewer {
@@ -314,10 +308,7 @@ impl Viewer {
             MAX_FRAMES_IN_FLIGHT,
         )?;
         let mut viewer = Self::with_swapchain(window, scene, opts, swapchain);
-        if let Err(e) = viewer.init_gpu(ctx) {
-            viewer.destroy(ctx);
-            return Err(e);
-        }
+        viewer.init_gpu(ctx)?;
         Ok(viewer)
     }
 
@@ -756,11 +747,9 @@ impl Viewer {
             .handle_platform_output(window, out.platform_output);
         if let Some(overlay) = self.overlay.as_mut() {
             if overlay.update_textures(ctx, &out.textures_delta)? {
-                // The atlas image changed: the graph imports the old one.
-                if let Some(g) = self.graph.take() {
-                    ctx.wait_idle()?;
-                    g.destroy(ctx);
-                }
+                // The atlas image changed: the graph imports the old one. (Dropped graphs are
+                // released once the frames in flight that use them completed.)
+                self.graph = None;
             }
         }
         let ppp = out.pixels_per_point;
@@ -776,14 +765,10 @@ impl Viewer {
         settings: &mut RenderSettings,
     ) -> Result<(), AppError> {
         ctx.wait_idle()?;
-        if let Some(g) = self.graph.take() {
-            g.destroy(ctx);
-        }
+        self.graph = None;
         match Renderer::new(ctx, &self.scene, settings.clone()) {
             Ok(r) => {
-                if let Some(old) = self.renderer.replace(r) {
-                    old.destroy(ctx);
-                }
+                self.renderer = Some(r);
                 log::info!(
                     "new renderer {}x{}, indirect light: {}",
                     settings.width,
@@ -811,9 +796,7 @@ impl Viewer {
     /// Builds the frame graph for the current swapchain and renderer settings.
     fn rebuild(&mut self, ctx: &Context) -> Result<(), AppError> {
         ctx.wait_idle()?;
-        if let Some(g) = self.graph.take() {
-            g.destroy(ctx);
-        }
+        self.graph = None;
         self.stats.clear();
         let (Some(renderer), Some(overlay), Some(swapchain)) = (
             self.renderer.as_ref(),
@@ -879,13 +862,7 @@ impl Viewer {
                 }
             });
         overlay.declare(&mut g, present);
-        let exec = match GraphExecutor::new(ctx, g, MAX_FRAMES_IN_FLIGHT) {
-            Ok(e) => e,
-            Err(e) => {
-                ctx.destroy_buffer(shot);
-                return Err(e.into());
-            }
-        };
+        let exec = GraphExecutor::new(ctx, g, MAX_FRAMES_IN_FLIGHT)?;
         self.graph = Some(FrameGraph {
             exec,
             present,
@@ -922,24 +899,12 @@ impl Viewer {
         Ok(())
     }
 
-    /// Waits for the GPU and destroys everything in dependency order.
-    fn destroy(&mut self, ctx: &Context) -> ViewerReport {
-        let _ = ctx.wait_idle();
-        if let Some(mut fl) = self.frame_loop.take() {
+    /// Waits for the frames in flight and returns the report. Dropping the viewer then
+    /// releases its GPU objects; the swapchain's drop waits for the device and destroys the
+    /// swapchain and then the surface (the window outlives the viewer).
+    fn close(mut self, ctx: &Context) -> ViewerReport {
+        if let Some(fl) = self.frame_loop.as_mut() {
             let _ = fl.finish(ctx);
-            fl.destroy(ctx);
-        }
-        if let Some(g) = self.graph.take() {
-            g.destroy(ctx);
-        }
-        if let Some(o) = self.overlay.take() {
-            o.destroy(ctx);
-        }
-        if let Some(r) = self.renderer.take() {
-            r.destroy(ctx);
-        }
-        if let Some(s) = self.swapchain.take() {
-            s.destroy(ctx);
         }
         self.report.camera = Some(self.fly.apply(&self.lens));
         std::mem::take(&mut self.report)

@@ -60,7 +60,7 @@ struct Atlas {
 
 pub struct Overlay {
     pipeline: GraphicsPipeline,
-    sampler: vk::Sampler,
+    sampler: crate::vk::Sampler,
     vertices: Buffer,
     indices: Buffer,
     atlas: Option<Atlas>,
@@ -153,10 +153,7 @@ impl Overlay {
                         .as_ref()
                         .map_or(true, |a| (a.width, a.height) != (w, h))
                     {
-                        ctx.wait_idle()?;
-                        if let Some(old) = self.atlas.take() {
-                            ctx.destroy_image(old.image);
-                        }
+                        // The old atlas is released once the frames that sample it completed.
                         self.atlas = Some(create_atlas(ctx, w, h)?);
                         recreated = true;
                     }
@@ -263,7 +260,7 @@ impl Overlay {
         let image = g.import_image(&atlas.image, Access::Sampled(Shader::Fragment));
         let vertices = g.import_buffer(&self.vertices, Access::VertexBuffer);
         let indices = g.import_buffer(&self.indices, Access::IndexBuffer);
-        let (pipe, sampler, frames) = (self.pipeline, self.sampler, self.frames.clone());
+        let (pipe, sampler, frames) = (*self.pipeline, self.sampler.raw, self.frames.clone());
         g.add_pass("egui")
             .pipeline(&pipe)
             .bind_sampled(0, image, sampler, Shader::Fragment)
@@ -292,17 +289,6 @@ impl Overlay {
                 }
                 ctx.cmd.end_rendering();
             });
-    }
-
-    /// Destroys everything. The caller waited for the device.
-    pub fn destroy(self, ctx: &Context) {
-        ctx.destroy_graphics_pipeline(self.pipeline);
-        ctx.destroy_sampler(self.sampler);
-        ctx.destroy_buffer(self.vertices);
-        ctx.destroy_buffer(self.indices);
-        if let Some(a) = self.atlas {
-            ctx.destroy_image(a.image);
-        }
     }
 }
 

@@ -187,70 +187,65 @@ pub fn bench_traverse(
     let scene_size = aabb.extent().max_element();
     let caster = VoxelRayCaster::new(ctx, &h)?;
     let mut radii = Vec::new();
-    let result = (|| -> Result<(), BenchError> {
-        for &r in &desc.radii_box_units {
-            let radius_m = r / 6.0 * scene_size;
-            let mut rays = Vec::with_capacity(points.len() * desc.rays_per_point as usize);
-            for (pi, &(p, n)) in points.iter().enumerate() {
-                // Per-point Cranley–Patterson rotation of a Hammersley set.
-                let rot = (
-                    radical_inverse(pi as u32 * 7 + 1),
-                    radical_inverse(pi as u32 * 13 + 3),
-                );
-                for j in 0..desc.rays_per_point {
-                    let u1 = ((j as f32 + 0.5) / desc.rays_per_point as f32 + rot.0).fract();
-                    let u2 = (radical_inverse(j) + rot.1).fract();
-                    let d = cosine_dir(n, u1, u2);
-                    let o = grid.world_to_voxel(p + n * offset);
-                    rays.push(GpuRay::new(o, grid.dir_world_to_voxel(d), radius_m));
+    for &r in &desc.radii_box_units {
+        let radius_m = r / 6.0 * scene_size;
+        let mut rays = Vec::with_capacity(points.len() * desc.rays_per_point as usize);
+        for (pi, &(p, n)) in points.iter().enumerate() {
+            // Per-point Cranley–Patterson rotation of a Hammersley set.
+            let rot = (
+                radical_inverse(pi as u32 * 7 + 1),
+                radical_inverse(pi as u32 * 13 + 3),
+            );
+            for j in 0..desc.rays_per_point {
+                let u1 = ((j as f32 + 0.5) / desc.rays_per_point as f32 + rot.0).fract();
+                let u2 = (radical_inverse(j) + rot.1).fract();
+                let d = cosine_dir(n, u1, u2);
+                let o = grid.world_to_voxel(p + n * offset);
+                rays.push(GpuRay::new(o, grid.dir_world_to_voxel(d), radius_m));
+            }
+        }
+        let mut methods = vec![RayMethod::Hierarchical(desc.params)];
+        methods.extend(desc.march_steps.iter().map(|&s| RayMethod::March1(s)));
+        let batches = caster.cast(ctx, &rays, &methods)?;
+        let reference = &batches[0];
+        let hits = reference.hits.iter().filter(|h| h.hit).count();
+        let mut results = Vec::new();
+        let mut steps_99 = None;
+        let mut speedup = None;
+        for b in &batches {
+            let agree = b
+                .hits
+                .iter()
+                .zip(&reference.hits)
+                .filter(|(a, r)| a.hit == r.hit)
+                .count();
+            let agreement = agree as f64 / rays.len() as f64;
+            let mean_steps =
+                b.hits.iter().map(|h| f64::from(h.steps)).sum::<f64>() / rays.len() as f64;
+            if let RayMethod::March1(s) = b.method {
+                if agreement >= 0.99 && steps_99.is_none() {
+                    steps_99 = Some(s);
+                    speedup = Some(b.gpu_ms / reference.gpu_ms.max(1e-9));
                 }
             }
-            let mut methods = vec![RayMethod::Hierarchical(desc.params)];
-            methods.extend(desc.march_steps.iter().map(|&s| RayMethod::March1(s)));
-            let batches = caster.cast(ctx, &rays, &methods)?;
-            let reference = &batches[0];
-            let hits = reference.hits.iter().filter(|h| h.hit).count();
-            let mut results = Vec::new();
-            let mut steps_99 = None;
-            let mut speedup = None;
-            for b in &batches {
-                let agree = b
-                    .hits
-                    .iter()
-                    .zip(&reference.hits)
-                    .filter(|(a, r)| a.hit == r.hit)
-                    .count();
-                let agreement = agree as f64 / rays.len() as f64;
-                let mean_steps =
-                    b.hits.iter().map(|h| f64::from(h.steps)).sum::<f64>() / rays.len() as f64;
-                if let RayMethod::March1(s) = b.method {
-                    if agreement >= 0.99 && steps_99.is_none() {
-                        steps_99 = Some(s);
-                        speedup = Some(b.gpu_ms / reference.gpu_ms.max(1e-9));
-                    }
-                }
-                results.push(MethodResult {
-                    method: b.method.name(),
-                    gpu_ms: b.gpu_ms,
-                    rays_per_s: rays.len() as f64 / (b.gpu_ms.max(1e-9) * 1e-3),
-                    mean_steps,
-                    agreement,
-                });
-            }
-            radii.push(RadiusResult {
-                radius_box_units: r,
-                radius_m,
-                rays: rays.len(),
-                hit_fraction: hits as f64 / rays.len() as f64,
-                methods: results,
-                march_steps_for_99: steps_99,
-                speedup_at_99: speedup,
+            results.push(MethodResult {
+                method: b.method.name(),
+                gpu_ms: b.gpu_ms,
+                rays_per_s: rays.len() as f64 / (b.gpu_ms.max(1e-9) * 1e-3),
+                mean_steps,
+                agreement,
             });
         }
-        Ok(())
-    })();
-    caster.destroy(ctx);
-    result?;
+        radii.push(RadiusResult {
+            radius_box_units: r,
+            radius_m,
+            rays: rays.len(),
+            hit_fraction: hits as f64 / rays.len() as f64,
+            methods: results,
+            march_steps_for_99: steps_99,
+            speedup_at_99: speedup,
+        });
+    }
     let b = h.base();
     Ok(TraverseBenchReport {
         device: ctx.info.name.clone(),

@@ -100,92 +100,78 @@ pub fn bench_voxelize_atlas_chunked(
         &mut cache,
         chunk_bytes,
     )?;
-    let raster = match crate::voxel::gpu_atlas_raster::AtlasRasterBits::new(ctx) {
-        Ok(r) => r,
-        Err(e) => {
-            atlas.destroy(ctx);
-            return Err(e.into());
-        }
-    };
+    let raster = crate::voxel::gpu_atlas_raster::AtlasRasterBits::new(ctx)?;
     let size = column_bytes(&grid);
     let (w, h) = image_extent(&grid);
     let layers = grid.layers();
-    let mut buffers = Vec::new();
-    let result = (|| -> Result<VoxelizeBenchReport, BenchError> {
-        buffers.push(readback_buffer(ctx, "compute bits readback", size)?);
-        buffers.push(readback_buffer(ctx, "raster bits readback", size)?);
-        let instances = atlas.instances(true, true);
-        let (mut compute_ms, mut raster_ms) = (Vec::new(), Vec::new());
-        for _ in 0..desc.repeats.max(1) {
-            let mut g = RenderGraph::new();
-            let columns = g.create_buffer("voxel column buffer", size);
-            g.add_pass("voxel_clear")
-                .write(columns, Access::TransferWrite)
-                .record(move |ctx| ctx.cmd.fill_buffer(ctx.buffer(columns).raw, 0));
-            atlas.add_pass(&mut g, &grid, columns, true, true, None);
-            let out = g.import_buffer(&buffers[0], Access::HostRead);
-            g.add_pass("bits_readback")
-                .read(columns, Access::TransferRead)
-                .write(out, Access::TransferWrite)
-                .record(move |ctx| {
-                    ctx.cmd
-                        .copy_buffer(ctx.buffer(columns).raw, ctx.buffer(out).raw, size)
-                });
-            compute_ms.push(pass_ms(&run_once(ctx, g)?, "voxelize_atlas"));
+    let buffers = [
+        readback_buffer(ctx, "compute bits readback", size)?,
+        readback_buffer(ctx, "raster bits readback", size)?,
+    ];
+    let instances = atlas.instances(true, true);
+    let (mut compute_ms, mut raster_ms) = (Vec::new(), Vec::new());
+    for _ in 0..desc.repeats.max(1) {
+        let mut g = RenderGraph::new();
+        let columns = g.create_buffer("voxel column buffer", size);
+        g.add_pass("voxel_clear")
+            .write(columns, Access::TransferWrite)
+            .record(move |ctx| ctx.cmd.fill_buffer(ctx.buffer(columns).raw, 0));
+        atlas.add_pass(&mut g, &grid, columns, true, true, None);
+        let out = g.import_buffer(&buffers[0], Access::HostRead);
+        g.add_pass("bits_readback")
+            .read(columns, Access::TransferRead)
+            .write(out, Access::TransferWrite)
+            .record(move |ctx| {
+                ctx.cmd
+                    .copy_buffer(ctx.buffer(columns).raw, ctx.buffer(out).raw, size)
+            });
+        compute_ms.push(pass_ms(&run_once(ctx, g)?, "voxelize_atlas"));
 
-            let mut g = RenderGraph::new();
-            let image = g.create_image(
-                ImageDesc::new_2d("voxel columns (raster)", COLUMN_FORMAT, w, h)
-                    .with_layers(layers),
-            );
-            raster.add_pass(&mut g, &grid, image, &instances);
-            let out = g.import_buffer(&buffers[1], Access::HostRead);
-            g.add_pass("bits_readback")
-                .read(image, Access::TransferRead)
-                .write(out, Access::TransferWrite)
-                .record(move |ctx| {
-                    let extent = vk::Extent3D {
-                        width: w,
-                        height: h,
-                        depth: 1,
-                    };
-                    let raw = ctx.image(image).raw;
-                    ctx.cmd
-                        .copy_image_to_buffer(raw, extent, 0, layers, ctx.buffer(out).raw)
-                });
-            raster_ms.push(pass_ms(&run_once(ctx, g)?, "voxelize_atlas_bits"));
-        }
-        let words = |b: &crate::vk::Buffer| -> Vec<u32> {
-            b.mapped()
-                .unwrap_or(&[])
-                .chunks_exact(4)
-                .take(size as usize / 4)
-                .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
-                .collect()
-        };
-        let (a, b) = (words(&buffers[0]), words(&buffers[1]));
-        let differing_words =
-            a.iter().zip(&b).filter(|(x, y)| x != y).count() + a.len().abs_diff(b.len());
-        let (compute_ms, raster_ms) = (median(&compute_ms), median(&raster_ms));
-        let ext = grid.extent_voxels();
-        Ok(VoxelizeBenchReport {
-            device: ctx.info.name.clone(),
-            grid: [ext.x, ext.y, ext.z],
-            points: atlas.point_count(),
-            repeats: desc.repeats.max(1),
-            compute_ms,
-            raster_ms,
-            raster_over_compute: raster_ms / compute_ms.max(1e-9),
-            voxels: a.iter().map(|w| u64::from(w.count_ones())).sum(),
-            differing_words,
-        })
-    })();
-    for b in buffers {
-        ctx.destroy_buffer(b);
+        let mut g = RenderGraph::new();
+        let image = g.create_image(
+            ImageDesc::new_2d("voxel columns (raster)", COLUMN_FORMAT, w, h).with_layers(layers),
+        );
+        raster.add_pass(&mut g, &grid, image, &instances);
+        let out = g.import_buffer(&buffers[1], Access::HostRead);
+        g.add_pass("bits_readback")
+            .read(image, Access::TransferRead)
+            .write(out, Access::TransferWrite)
+            .record(move |ctx| {
+                let extent = vk::Extent3D {
+                    width: w,
+                    height: h,
+                    depth: 1,
+                };
+                let raw = ctx.image(image).raw;
+                ctx.cmd
+                    .copy_image_to_buffer(raw, extent, 0, layers, ctx.buffer(out).raw)
+            });
+        raster_ms.push(pass_ms(&run_once(ctx, g)?, "voxelize_atlas_bits"));
     }
-    raster.destroy(ctx);
-    atlas.destroy(ctx);
-    result
+    let words = |b: &crate::vk::Buffer| -> Vec<u32> {
+        b.mapped()
+            .unwrap_or(&[])
+            .chunks_exact(4)
+            .take(size as usize / 4)
+            .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+            .collect()
+    };
+    let (a, b) = (words(&buffers[0]), words(&buffers[1]));
+    let differing_words =
+        a.iter().zip(&b).filter(|(x, y)| x != y).count() + a.len().abs_diff(b.len());
+    let (compute_ms, raster_ms) = (median(&compute_ms), median(&raster_ms));
+    let ext = grid.extent_voxels();
+    Ok(VoxelizeBenchReport {
+        device: ctx.info.name.clone(),
+        grid: [ext.x, ext.y, ext.z],
+        points: atlas.point_count(),
+        repeats: desc.repeats.max(1),
+        compute_ms,
+        raster_ms,
+        raster_over_compute: raster_ms / compute_ms.max(1e-9),
+        voxels: a.iter().map(|w| u64::from(w.count_ones())).sum(),
+        differing_words,
+    })
 }
 
 impl VoxelizeBenchReport {
@@ -306,14 +292,12 @@ fn count_voxels(
     let h = g.import_buffer(&columns, Access::HostRead);
     add_voxelize_passes(&mut g, pipes, grid, h, ColumnBase::Clear, &[triangles]);
     g.mark_output(h);
-    let run = run_once(ctx, g);
+    run_once(ctx, g)?;
     let count = columns.mapped().map_or(0, |m| {
         m.chunks_exact(4)
             .map(|w| u64::from(u32::from_ne_bytes([w[0], w[1], w[2], w[3]]).count_ones()))
             .sum()
     });
-    ctx.destroy_buffer(columns);
-    run?;
     Ok(count)
 }
 
@@ -360,138 +344,103 @@ pub fn bench_voxelize_sweep(
     desc: &VoxelizeSweepDesc,
 ) -> Result<VoxelizeSweepReport, BenchError> {
     let pipes = VoxelPipelines::new(ctx)?;
-    let atlas_pipes = match AtlasPipelines::new(ctx) {
-        Ok(p) => p,
-        Err(e) => {
-            pipes.destroy(ctx);
-            return Err(e.into());
-        }
-    };
-    let rows = (|| -> Result<Vec<VoxelizeSweepRow>, BenchError> {
-        let mut rows = Vec::new();
-        for (name, scene) in bench_scenes()? {
-            let mut tris = scene_triangles(&scene, 0.0, false);
-            tris.extend(scene_triangles(&scene, 0.0, true));
-            let buf = TriangleBuffer::upload(ctx, "bench triangles", &tris)?;
-            let aabb = scene.aabb_at(0.0);
-            let pad = Vec3::splat(0.01 * aabb.extent().max_element());
-            let r = (|| -> Result<(), BenchError> {
-                for &res in &desc.resolutions {
-                    let grid =
-                        VoxelGrid::from_box(aabb.min - pad, aabb.max + pad, None, res, res, 1)?;
-                    let t0 = std::time::Instant::now();
-                    let mut cache = AtlasCache::default();
-                    let texel_m = texel_size_for_voxel(grid.voxel_size_m().min_element());
-                    let mut texels = 0u64;
-                    let mut seen = Vec::new();
-                    for o in &scene.objects {
-                        let Some(m) = scene.meshes.get(o.mesh) else {
-                            continue;
-                        };
-                        let scale = o.transform_components_at(0.0).scale;
-                        let a = cache.get(&m.name, &m.positions, &m.indices, scale, texel_m)?;
-                        if !seen.iter().any(|s| std::sync::Arc::ptr_eq(s, &a)) {
-                            texels += u64::from(a.width) * u64::from(a.height);
-                            seen.push(a);
-                        }
-                    }
-                    let pack_cpu_ms = t0.elapsed().as_secs_f64() * 1e3;
-                    let voxels = count_voxels(ctx, &pipes, &grid, &buf)?;
-                    let triangle_ms = time_triangles(ctx, desc.reps, &pipes, &grid, &buf)?;
-                    let (atlas, atlas_error) =
-                        match AtlasScene::new(ctx, &scene, 0.0, &grid, &mut cache) {
-                            Ok(a) => {
-                                let t = (|| {
-                                    Ok::<_, BenchError>(AtlasTimes {
-                                        points: a.point_count(),
-                                        setup_gpu_ms: a.setup_timings().map(|t| t.gpu_ms).sum(),
-                                        voxelize_ms: time_atlas(
-                                            ctx,
-                                            desc.reps,
-                                            &pipes,
-                                            &grid,
-                                            &|g, c| a.add_pass(g, &grid, c, true, true, None),
-                                        )?,
-                                    })
-                                })();
-                                a.destroy(ctx);
-                                (Some(t?), None)
-                            }
-                            Err(e @ GpuVoxelError::AtlasRowTooLarge { .. }) => {
-                                (None, Some(e.to_string()))
-                            }
-                            Err(e) => return Err(e.into()),
-                        };
-                    rows.push(VoxelizeSweepRow {
-                        scene: name.clone(),
-                        resolution: res,
-                        triangles: tris.len(),
-                        voxels,
-                        atlas_texels: texels,
-                        pack_cpu_ms,
-                        triangle_ms,
-                        atlas,
-                        atlas_error,
-                    });
-                }
-                Ok(())
-            })();
-            buf.destroy(ctx);
-            r?;
-        }
-        // Same surface, more triangles, at 128²×128.
-        let grid = VoxelGrid::from_box(Vec3::ZERO, Vec3::ONE, None, 128, 128, 1)?;
-        let texel_m = texel_size_for_voxel(grid.voxel_size_m().min_element());
-        for &n in &desc.tessellations {
-            let (pos, idx) = tessellated_cube(n);
-            let tris: Vec<[Vec3; 3]> = idx
-                .chunks_exact(3)
-                .map(|t| [0, 1, 2].map(|k| pos[t[k] as usize]))
-                .collect();
+    let atlas_pipes = AtlasPipelines::new(ctx)?;
+    let mut rows = Vec::new();
+    for (name, scene) in bench_scenes()? {
+        let mut tris = scene_triangles(&scene, 0.0, false);
+        tris.extend(scene_triangles(&scene, 0.0, true));
+        let buf = TriangleBuffer::upload(ctx, "bench triangles", &tris)?;
+        let aabb = scene.aabb_at(0.0);
+        let pad = Vec3::splat(0.01 * aabb.extent().max_element());
+        for &res in &desc.resolutions {
+            let grid = VoxelGrid::from_box(aabb.min - pad, aabb.max + pad, None, res, res, 1)?;
             let t0 = std::time::Instant::now();
-            let atlas = build_atlas("cube", &pos, &idx, Vec3::ONE, texel_m)?;
+            let mut cache = AtlasCache::default();
+            let texel_m = texel_size_for_voxel(grid.voxel_size_m().min_element());
+            let mut texels = 0u64;
+            let mut seen = Vec::new();
+            for o in &scene.objects {
+                let Some(m) = scene.meshes.get(o.mesh) else {
+                    continue;
+                };
+                let scale = o.transform_components_at(0.0).scale;
+                let a = cache.get(&m.name, &m.positions, &m.indices, scale, texel_m)?;
+                if !seen.iter().any(|s| std::sync::Arc::ptr_eq(s, &a)) {
+                    texels += u64::from(a.width) * u64::from(a.height);
+                    seen.push(a);
+                }
+            }
             let pack_cpu_ms = t0.elapsed().as_secs_f64() * 1e3;
-            let buf = TriangleBuffer::upload(ctx, "bench triangles", &tris)?;
-            let row = (|| {
-                let points = render_atlas_points(ctx, &atlas_pipes, &atlas, &pos, &idx)?;
-                let r = (|| {
-                    let voxels = count_voxels(ctx, &pipes, &grid, &buf)?;
-                    let instances = [AtlasInstance::rigid(&points, glam::Mat4::IDENTITY)];
-                    let triangle_ms = time_triangles(ctx, desc.reps, &pipes, &grid, &buf)?;
-                    let voxelize_ms = time_atlas(ctx, desc.reps, &pipes, &grid, &|g, c| {
-                        add_voxelize_atlas_pass(g, &atlas_pipes, &grid, c, &instances, None)
-                    })?;
-                    Ok::<_, BenchError>(VoxelizeSweepRow {
-                        scene: format!("cube {}x", n * n),
-                        resolution: 128,
-                        triangles: tris.len(),
-                        voxels,
-                        atlas_texels: u64::from(atlas.width) * u64::from(atlas.height),
-                        pack_cpu_ms,
-                        triangle_ms,
-                        atlas: Some(AtlasTimes {
-                            points: points.count,
-                            setup_gpu_ms: points.setup_timings.iter().map(|t| t.gpu_ms).sum(),
-                            voxelize_ms,
-                        }),
-                        atlas_error: None,
-                    })
-                })();
-                points.destroy(ctx);
-                r
-            })();
-            buf.destroy(ctx);
-            rows.push(row?);
+            let voxels = count_voxels(ctx, &pipes, &grid, &buf)?;
+            let triangle_ms = time_triangles(ctx, desc.reps, &pipes, &grid, &buf)?;
+            let (atlas, atlas_error) = match AtlasScene::new(ctx, &scene, 0.0, &grid, &mut cache) {
+                Ok(a) => {
+                    let t = AtlasTimes {
+                        points: a.point_count(),
+                        setup_gpu_ms: a.setup_timings().map(|t| t.gpu_ms).sum(),
+                        voxelize_ms: time_atlas(ctx, desc.reps, &pipes, &grid, &|g, c| {
+                            a.add_pass(g, &grid, c, true, true, None)
+                        })?,
+                    };
+                    (Some(t), None)
+                }
+                Err(e @ GpuVoxelError::AtlasRowTooLarge { .. }) => (None, Some(e.to_string())),
+                Err(e) => return Err(e.into()),
+            };
+            rows.push(VoxelizeSweepRow {
+                scene: name.clone(),
+                resolution: res,
+                triangles: tris.len(),
+                voxels,
+                atlas_texels: texels,
+                pack_cpu_ms,
+                triangle_ms,
+                atlas,
+                atlas_error,
+            });
         }
-        Ok(rows)
-    })();
-    atlas_pipes.destroy(ctx);
-    pipes.destroy(ctx);
+    }
+    // Same surface, more triangles, at 128²×128.
+    let grid = VoxelGrid::from_box(Vec3::ZERO, Vec3::ONE, None, 128, 128, 1)?;
+    let texel_m = texel_size_for_voxel(grid.voxel_size_m().min_element());
+    for &n in &desc.tessellations {
+        let (pos, idx) = tessellated_cube(n);
+        let tris: Vec<[Vec3; 3]> = idx
+            .chunks_exact(3)
+            .map(|t| [0, 1, 2].map(|k| pos[t[k] as usize]))
+            .collect();
+        let t0 = std::time::Instant::now();
+        let atlas = build_atlas("cube", &pos, &idx, Vec3::ONE, texel_m)?;
+        let pack_cpu_ms = t0.elapsed().as_secs_f64() * 1e3;
+        let buf = TriangleBuffer::upload(ctx, "bench triangles", &tris)?;
+        let points = render_atlas_points(ctx, &atlas_pipes, &atlas, &pos, &idx)?;
+        let voxels = count_voxels(ctx, &pipes, &grid, &buf)?;
+        let instances = [AtlasInstance::rigid(&points, glam::Mat4::IDENTITY)];
+        let triangle_ms = time_triangles(ctx, desc.reps, &pipes, &grid, &buf)?;
+        let voxelize_ms = time_atlas(ctx, desc.reps, &pipes, &grid, &|g, c| {
+            add_voxelize_atlas_pass(g, &atlas_pipes, &grid, c, &instances, None)
+        })?;
+        rows.push(VoxelizeSweepRow {
+            scene: format!("cube {}x", n * n),
+            resolution: 128,
+            triangles: tris.len(),
+            voxels,
+            atlas_texels: u64::from(atlas.width) * u64::from(atlas.height),
+            pack_cpu_ms,
+            triangle_ms,
+            atlas: Some(AtlasTimes {
+                points: points.count,
+                setup_gpu_ms: points.setup_timings.iter().map(|t| t.gpu_ms).sum(),
+                voxelize_ms,
+            }),
+            atlas_error: None,
+        });
+    }
     Ok(VoxelizeSweepReport {
         device: ctx.info.name.clone(),
         reps: desc.reps,
         group_size: VOXELIZE_GROUP_SIZE,
-        rows: rows?,
+        rows,
     })
 }
 

@@ -102,14 +102,7 @@ fn profile_demo(
     let demo = Demo::new(ctx, width, height)?;
     let exec = demo.executor(ctx, MAX_FRAMES_IN_FLIGHT)?;
     let measured = crate::graph::run_frames(ctx, &exec, warmup + frames, warmup, |_| {});
-    let measured = match measured {
-        Ok(m) => m,
-        Err(e) => {
-            exec.destroy(ctx);
-            demo.destroy(ctx);
-            return Err(e.into());
-        }
-    };
+    let measured = measured?;
     let c = exec.compiled();
     let mut report = ProfileReport::from_frames(&ctx.info.name, &measured, warmup);
     report
@@ -125,8 +118,6 @@ fn profile_demo(
     report
         .notes
         .push(("culled passes".into(), culled.join(", ")));
-    exec.destroy(ctx);
-    demo.destroy(ctx);
     Ok(report)
 }
 
@@ -151,30 +142,14 @@ pub fn graph(global: &Global, args: &GraphArgs, out: &mut dyn Write) -> Result<(
         }
         Ok(())
     };
-    // Whatever fails (compiling, or writing to a closed stdout), everything made is released.
+    // Whatever fails (compiling, or writing to a closed stdout), everything made is released
+    // as it goes out of scope, before the context's teardown check.
     if let Some((scene, settings)) = scene {
         let renderer = crate::render::Renderer::new(&ctx, &scene, settings)?;
-        let dumped = GraphExecutor::new(&ctx, renderer.graph(), 1)
-            .map_err(CliError::from)
-            .and_then(|exec| {
-                let dumped = dump(&exec);
-                exec.destroy(&ctx);
-                dumped
-            });
-        renderer.destroy(&ctx);
-        dumped?;
+        dump(&GraphExecutor::new(&ctx, renderer.graph(), 1)?)?;
     } else {
         let demo = Demo::new(&ctx, args.frame.width, args.frame.height)?;
-        let dumped = demo
-            .executor(&ctx, 1)
-            .map_err(CliError::from)
-            .and_then(|exec| {
-                let dumped = dump(&exec);
-                exec.destroy(&ctx);
-                dumped
-            });
-        demo.destroy(&ctx);
-        dumped?;
+        dump(&demo.executor(&ctx, 1)?)?;
     }
     check_validation(ctx)
 }

@@ -4,7 +4,7 @@
 use super::{GiInputs, GiSettings, GiTarget};
 use crate::graph::{Access, BufferHandle, ImageHandle, RenderGraph, Shader, SlotCondition};
 use crate::scene::Bounces;
-use crate::vk::{vk, ComputePipeline};
+use crate::vk::{vk, PipelineHandle};
 use bytemuck::{Pod, Zeroable};
 use std::sync::atomic::AtomicU32;
 use std::sync::Arc;
@@ -125,7 +125,7 @@ pub struct GiShared {
 pub fn add_ray_pass(
     g: &mut RenderGraph,
     name: &str,
-    pipe: ComputePipeline,
+    pipe: PipelineHandle,
     i: &GiInputs,
     shared: &GiShared,
     own: &[(u32, ImageHandle)],

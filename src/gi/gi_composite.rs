@@ -50,7 +50,7 @@ impl GiComposite {
             i.width,
             i.height,
         ));
-        let pipe = self.pipeline;
+        let pipe = *self.pipeline;
         let c = Shader::Compute;
         // Without Phong materials the shader never reads its specular binding; albedo fills it.
         let specular = i.specular.unwrap_or(i.albedo);
@@ -69,9 +69,5 @@ impl GiComposite {
                 ctx.cmd.dispatch(groups.0, groups.1, 1);
             });
         total
-    }
-
-    pub fn destroy(self, ctx: &Context) {
-        ctx.destroy_compute_pipeline(self.pipeline);
     }
 }

@@ -49,7 +49,7 @@ impl GiFilter {
         let groups = (w.div_ceil(8), h.div_ceil(8));
         let passes = if radius_px == 0 { 0 } else { passes };
         let c = Shader::Compute;
-        let pipe = self.pipeline;
+        let pipe = *self.pipeline;
         let mut current = irradiance;
         for p in 0..passes {
             for (axis, dir) in [("h", [1, 0]), ("v", [0, 1])] {
@@ -80,10 +80,6 @@ impl GiFilter {
             }
         }
         current
-    }
-
-    pub fn destroy(self, ctx: &Context) {
-        ctx.destroy_compute_pipeline(self.pipeline);
     }
 }
 

@@ -35,7 +35,7 @@ impl GiMethodPasses for GiHemisphere {
         add_ray_pass(
             g,
             "gi_hemisphere",
-            self.pipeline,
+            *self.pipeline,
             i,
             shared,
             &[(5, i.rlm_radiance), (6, i.rlm_position), (7, i.rlm_normal)],
@@ -44,9 +44,5 @@ impl GiMethodPasses for GiHemisphere {
             move || push,
         );
         irradiance.into()
-    }
-
-    fn destroy(self: Box<Self>, ctx: &Context) {
-        ctx.destroy_compute_pipeline(self.pipeline);
     }
 }

@@ -58,7 +58,7 @@ impl GiMethodPasses for GiPathtrace {
         add_ray_pass(
             g,
             "gi_pathtrace",
-            self.pipeline,
+            *self.pipeline,
             i,
             shared,
             &[
@@ -76,10 +76,5 @@ impl GiMethodPasses for GiPathtrace {
             },
         );
         history.into()
-    }
-
-    fn destroy(self: Box<Self>, ctx: &Context) {
-        ctx.destroy_compute_pipeline(self.pipeline);
-        ctx.destroy_image(self.history);
     }
 }

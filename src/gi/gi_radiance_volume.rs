@@ -67,7 +67,7 @@ impl GiMethodPasses for GiRadianceVolume {
         let (albedo, normal) = (v.albedo, v.normal);
         // Without emitters the shader never reads its emission binding; albedo fills it.
         let emission = v.emission.unwrap_or(albedo);
-        let pipe = self.volume_pipeline;
+        let pipe = *self.volume_pipeline;
         let push = shared.push;
         let dims = push.dims;
         let sampler = shared.sampler;
@@ -103,7 +103,7 @@ impl GiMethodPasses for GiRadianceVolume {
         add_ray_pass(
             g,
             "gi_hemisphere_volume",
-            self.hemisphere_pipeline,
+            *self.hemisphere_pipeline,
             i,
             shared,
             &[(5, volume), (6, normal)],
@@ -112,11 +112,5 @@ impl GiMethodPasses for GiRadianceVolume {
             move || push,
         );
         irradiance.into()
-    }
-
-    fn destroy(self: Box<Self>, ctx: &Context) {
-        ctx.destroy_compute_pipeline(self.volume_pipeline);
-        ctx.destroy_compute_pipeline(self.hemisphere_pipeline);
-        ctx.destroy_image(self.image);
     }
 }

@@ -81,7 +81,6 @@ trait GiMethodPasses {
     /// (irradiance at Lambert pixels, indirect radiance at Phong pixels), and what the method
     /// draws over the composite, if anything.
     fn add_passes(&self, g: &mut RenderGraph, inp: &GiInputs, shared: &GiShared) -> GiOutput;
-    fn destroy(self: Box<Self>, ctx: &Context);
 }
 
 /// What a GI method's passes produce.
@@ -117,7 +116,7 @@ pub struct GiPasses {
     composite: GiComposite,
     accumulation: Accumulation,
     lut: Buffer,
-    sampler: vk::Sampler,
+    sampler: crate::vk::Sampler,
     push: GpuGiPush,
 }
 
@@ -234,7 +233,7 @@ impl GiPasses {
         });
         let shared = GiShared {
             lut,
-            sampler: self.sampler,
+            sampler: self.sampler.raw,
             push: self.push,
             frames: self.accumulation.frames.clone(),
             first_frame: self.accumulation.first_frame.clone(),
@@ -245,33 +244,21 @@ impl GiPasses {
         let filtered = self.filter.add_passes(
             g,
             inp,
-            self.sampler,
+            self.sampler.raw,
             (s.filter_radius, s.filter_passes),
             indirect,
         );
         let ao = self
             .sao
             .as_ref()
-            .map(|s| s.add_passes(g, inp, self.sampler));
-        let total = self.composite.add_pass(g, inp, self.sampler, filtered, ao);
+            .map(|s| s.add_passes(g, inp, self.sampler.raw));
+        let total = self
+            .composite
+            .add_pass(g, inp, self.sampler.raw, filtered, ao);
         if let Some(overlay) = overlay {
             overlay(g, total);
         }
         total
-    }
-
-    pub fn destroy(self, ctx: &Context) {
-        self.method.destroy(ctx);
-        if let Some(a) = self.attributes {
-            a.destroy(ctx);
-        }
-        self.filter.destroy(ctx);
-        if let Some(s) = self.sao {
-            s.destroy(ctx);
-        }
-        self.composite.destroy(ctx);
-        ctx.destroy_buffer(self.lut);
-        ctx.destroy_sampler(self.sampler);
     }
 }
 

@@ -81,13 +81,7 @@ impl Sao {
     pub fn new(ctx: &Context, push: GpuSaoPush) -> Result<Self, VkError> {
         let sao = ctx.compute_pipeline("sao.comp", PushLayout::of::<GpuSaoPush>(), &[])?;
         let blur =
-            match ctx.compute_pipeline("sao_blur.comp", PushLayout::of::<GpuSaoBlurPush>(), &[]) {
-                Ok(b) => b,
-                Err(e) => {
-                    ctx.destroy_compute_pipeline(sao);
-                    return Err(e);
-                }
-            };
+            ctx.compute_pipeline("sao_blur.comp", PushLayout::of::<GpuSaoBlurPush>(), &[])?;
         Ok(Self { sao, blur, push })
     }
 
@@ -106,7 +100,7 @@ impl Sao {
             g.create_image(ImageDesc::new_2d(name, vk::Format::R32_SFLOAT, w, h))
         };
         let raw = ao_image(g, "sao");
-        let (pipe, push) = (self.sao, self.push);
+        let (pipe, push) = (*self.sao, self.push);
         g.add_pass("sao")
             .pipeline(&pipe)
             .bind(0, i.frame, Access::StorageRead(c))
@@ -125,7 +119,7 @@ impl Sao {
                 direction,
                 depth_sigma_rel: BLUR_DEPTH_SIGMA_REL,
             };
-            let pipe = self.blur;
+            let pipe = *self.blur;
             g.add_pass(&format!("sao_blur[{axis}]"))
                 .pipeline(&pipe)
                 .bind(0, i.frame, Access::StorageRead(c))
@@ -140,11 +134,6 @@ impl Sao {
             current = out;
         }
         current
-    }
-
-    pub fn destroy(self, ctx: &Context) {
-        ctx.destroy_compute_pipeline(self.sao);
-        ctx.destroy_compute_pipeline(self.blur);
     }
 }
 

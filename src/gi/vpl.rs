@@ -12,7 +12,7 @@ pub use crate::scene::vpl_settings::{
 use super::gi_common::GiShared;
 use super::{GiInputs, GiMethodPasses, GiOutput, GiSettings, GiTarget, Overlay};
 use crate::graph::{Access, BufferHandle, ImageHandle, RenderGraph, Shader};
-use crate::vk::{vk, ComputePipeline, Context, ImageDesc, PushLayout, VkError};
+use crate::vk::{vk, ComputePipeline, Context, ImageDesc, PipelineHandle, PushLayout, VkError};
 use bytemuck::{Pod, Zeroable};
 
 /// One VPL (`GpuVpl` in `glsl/include/vpl.glsl`).
@@ -253,7 +253,7 @@ impl VplPasses {
         let (lut, sampler) = (shared.lut, shared.sampler);
         let vpls = g.create_buffer("vpls", self.layout.size_bytes());
         self.add_generate(g, i, vpls, sampler);
-        if let (Some(pipe), Some(v)) = (self.bounce, shared.attributes) {
+        if let (Some(pipe), Some(v)) = (self.bounce.as_deref().copied(), shared.attributes) {
             let (albedo, normal) = (v.albedo, v.normal);
             for b in 1..self.layout.bounces {
                 self.add_bounce(g, (pipe, b), i, (lut, sampler), (albedo, normal), vpls);
@@ -268,7 +268,7 @@ impl VplPasses {
 
     fn add_generate(&self, g: &mut RenderGraph, i: &GiInputs, vpls: BufferHandle, s: vk::Sampler) {
         let c = Shader::Compute;
-        let pipe = self.generate;
+        let pipe = *self.generate;
         let push = self.generate_push;
         let groups = self.groups_1d();
         g.add_pass("gi_vpl_generate")
@@ -289,7 +289,7 @@ impl VplPasses {
     fn add_bounce(
         &self,
         g: &mut RenderGraph,
-        (pipe, bounce): (ComputePipeline, u32),
+        (pipe, bounce): (PipelineHandle, u32),
         i: &GiInputs,
         (lut, s): (BufferHandle, vk::Sampler),
         (albedo, normal): (ImageHandle, ImageHandle),
@@ -328,7 +328,7 @@ impl VplPasses {
             h,
         ));
         let c = Shader::Compute;
-        let pipe = self.gather;
+        let pipe = *self.gather;
         let push = self.gather_push;
         // The split frame: N×M blocks of ceil(W/N)×ceil(H/M) pixels (gi_vpl_gather.comp).
         let [n, m] = [push.pattern[0], push.pattern[1]];
@@ -383,7 +383,7 @@ impl GiMethodPasses for VplPasses {
     fn add_passes(&self, g: &mut RenderGraph, i: &GiInputs, shared: &GiShared) -> GiOutput {
         let (indirect, vpls) = self.add_vpl_passes(g, i, shared);
         // The debug view draws the VPLs over the lit image, after the filter and composite.
-        let overlay = self.points.map(|pipe| {
+        let overlay = self.points.as_deref().copied().map(|pipe| {
             let (layout, i, sampler) = (self.layout, *i, shared.sampler);
             Box::new(move |g: &mut RenderGraph, lit: ImageHandle| {
                 add_points(g, pipe, layout, &i, vpls, lit, sampler)
@@ -391,23 +391,12 @@ impl GiMethodPasses for VplPasses {
         });
         GiOutput { indirect, overlay }
     }
-
-    fn destroy(self: Box<Self>, ctx: &Context) {
-        ctx.destroy_compute_pipeline(self.generate);
-        ctx.destroy_compute_pipeline(self.gather);
-        if let Some(p) = self.points {
-            ctx.destroy_compute_pipeline(p);
-        }
-        if let Some(p) = self.bounce {
-            ctx.destroy_compute_pipeline(p);
-        }
-    }
 }
 
 /// The debug view (`gi_vpl_points`): draws every VPL as a dot into `radiance` (the lit image).
 fn add_points(
     g: &mut RenderGraph,
-    pipe: ComputePipeline,
+    pipe: PipelineHandle,
     layout: VplLayout,
     i: &GiInputs,
     vpls: BufferHandle,

@@ -9,8 +9,8 @@ use super::{
     ResourceKind,
 };
 use crate::vk::{
-    vk, Attachment, Bindable, Buffer, BufferDesc, Cmd, Context, Descriptor, Image, ImageDesc,
-    MemoryLocation, TimestampRecorder,
+    vk, Arena, Attachment, Bindable, Buffer, BufferDesc, Cmd, Context, Descriptor, Image,
+    ImageDesc, MemoryLocation, TimestampRecorder,
 };
 
 /// GPU handles of an image as a pass sees it.
@@ -304,14 +304,17 @@ pub(crate) fn bound_range(slot_window: Option<(u64, u64)>, slot: usize) -> (u64,
     }
 }
 
+/// The transients of one frame slot. Fields drop in declaration order: the images and
+/// buffers placed in the arenas are released before the arenas.
 struct Slot {
-    arenas: Vec<vk::DeviceMemory>,
     images: Vec<Image>,
     buffers: Vec<Buffer>,
     resources: Vec<Option<GpuResource>>,
+    arenas: Vec<Arena>,
 }
 
-/// A compiled graph with its GPU resources, recorded once per frame.
+/// A compiled graph with its GPU resources, recorded once per frame. Dropping it releases
+/// the transients once the frames that used them completed.
 pub struct GraphExecutor {
     graph: RenderGraph,
     compiled: CompiledGraph,
@@ -370,13 +373,10 @@ impl GraphExecutor {
             slots: Vec::new(),
         };
         for s in 0..frames_in_flight.max(1) {
-            match exec.create_slot(ctx, s) {
-                Ok(slot) => exec.slots.push(slot),
-                Err(e) => {
-                    exec.destroy(ctx);
-                    return Err(GraphError::Gpu(e.to_string()));
-                }
-            }
+            let slot = exec
+                .create_slot(ctx, s)
+                .map_err(|e| GraphError::Gpu(e.to_string()))?;
+            exec.slots.push(slot);
         }
         Ok(exec)
     }
@@ -389,17 +389,11 @@ impl GraphExecutor {
             resources: vec![None; self.graph.resources.len()],
         };
         for (i, a) in self.compiled.arenas.iter().enumerate() {
-            match ctx.allocate_arena(
+            slot.arenas.push(ctx.allocate_arena(
                 a.memory_type,
                 a.size_bytes,
                 &format!("graph arena {i} (slot {index})"),
-            ) {
-                Ok(m) => slot.arenas.push(m),
-                Err(e) => {
-                    Self::destroy_slot(ctx, slot);
-                    return Err(e);
-                }
-            }
+            )?);
         }
         for (i, r) in self.graph.resources.iter().enumerate() {
             let gpu = match (&r.origin, &r.kind) {
@@ -428,7 +422,7 @@ impl GraphExecutor {
                     let Some(place) = self.compiled.placements[i] else {
                         continue;
                     };
-                    let memory = slot.arenas[place.arena];
+                    let memory = &slot.arenas[place.arena];
                     let created = match kind {
                         ResourceKind::Image(desc) => {
                             let mut d = desc.clone();
@@ -462,13 +456,7 @@ impl GraphExecutor {
                             })
                         }
                     };
-                    match created {
-                        Ok(g) => Some(g),
-                        Err(e) => {
-                            Self::destroy_slot(ctx, slot);
-                            return Err(e);
-                        }
-                    }
+                    Some(created?)
                 }
                 // Imported by description only: compile-only graphs cannot execute.
                 _ => None,
@@ -608,25 +596,6 @@ impl GraphExecutor {
             }
         }
         cmd.barriers(&images, &buffers);
-    }
-
-    fn destroy_slot(ctx: &Context, slot: Slot) {
-        for img in slot.images {
-            ctx.destroy_image(img);
-        }
-        for b in slot.buffers {
-            ctx.destroy_buffer(b);
-        }
-        for m in slot.arenas {
-            ctx.free_arena(m);
-        }
-    }
-
-    /// Destroys the transients. The caller must have waited for the GPU.
-    pub fn destroy(mut self, ctx: &Context) {
-        for slot in self.slots.drain(..) {
-            Self::destroy_slot(ctx, slot);
-        }
     }
 }
 

@@ -26,12 +26,11 @@ pub fn run_once(ctx: &Context, graph: RenderGraph) -> Result<Vec<PassTiming>, On
             frames.submit(ctx, &[], &[])
         })();
         let finished = frames.finish(ctx);
-        frames.destroy(ctx);
         run?;
         Ok(finished?.into_iter().last().unwrap_or_default())
     })();
     let _ = ctx.wait_idle();
-    exec.destroy(ctx);
+    drop(exec);
     Ok(result?)
 }
 
@@ -65,7 +64,7 @@ pub fn run_frames(
         Ok(())
     })();
     let finished = frame_loop.finish(ctx);
-    frame_loop.destroy(ctx);
+    drop(frame_loop);
     let _ = ctx.wait_idle();
     run?;
     let finished = finished?;

@@ -177,7 +177,7 @@ impl StereoPackPass {
             w,
             h,
         ));
-        let pipe = self.pipeline;
+        let pipe = *self.pipeline;
         let push = GpuStereoPackPush::new(mode, eye_size);
         g.add_pass("stereo_pack")
             .pipeline(&pipe)
@@ -190,10 +190,6 @@ impl StereoPackPass {
                 ctx.cmd.dispatch(w.div_ceil(8), h.div_ceil(8), 1);
             });
         packed
-    }
-
-    pub fn destroy(self, ctx: &Context) {
-        ctx.destroy_compute_pipeline(self.pipeline);
     }
 }
 

@@ -59,7 +59,7 @@ impl TonemapPass {
         (w, h): (u32, u32),
     ) -> ImageHandle {
         let ldr = g.create_image(ImageDesc::new_2d("ldr", vk::Format::R8G8B8A8_UNORM, w, h));
-        let pipe = self.pipeline;
+        let pipe = *self.pipeline;
         let push = GpuTonemapPush::from(tone_map);
         g.add_pass("tonemap")
             .pipeline(&pipe)
@@ -71,9 +71,5 @@ impl TonemapPass {
                 ctx.cmd.dispatch(w.div_ceil(8), h.div_ceil(8), 1);
             });
         ldr
-    }
-
-    pub fn destroy(self, ctx: &Context) {
-        ctx.destroy_compute_pipeline(self.pipeline);
     }
 }

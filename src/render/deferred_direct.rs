@@ -43,7 +43,7 @@ impl DeferredDirectPass {
         (w, h): (u32, u32),
     ) -> ImageHandle {
         let radiance = g.create_image(ImageDesc::new_2d("radiance", HDR, w, h));
-        let pipe = self.pipeline;
+        let pipe = *self.pipeline;
         let (s, c) = (self.sampler, Shader::Compute);
         // Without Phong/GGX materials or emitters the shader never reads those bindings;
         // albedo fills them.
@@ -64,9 +64,5 @@ impl DeferredDirectPass {
                 ctx.cmd.dispatch(w.div_ceil(8), h.div_ceil(8), 1);
             });
         radiance
-    }
-
-    pub fn destroy(self, ctx: &Context) {
-        ctx.destroy_compute_pipeline(self.pipeline);
     }
 }

@@ -105,7 +105,7 @@ impl GbufferPass {
             }),
             depth: g.create_image(ImageDesc::new_2d("gbuffer depth", DEPTH, w, h)),
         };
-        let pipe = self.pipeline;
+        let pipe = *self.pipeline;
         let (vertices, indices) = (scene.vertices, scene.indices);
         let draws = scene.draws.clone();
         let textures = scene.textures.clone();
@@ -165,9 +165,5 @@ impl GbufferPass {
             ctx.cmd.end_rendering();
         });
         out
-    }
-
-    pub fn destroy(self, ctx: &Context) {
-        ctx.destroy_graphics_pipeline(self.pipeline);
     }
 }

@@ -95,7 +95,7 @@ impl GbufferViewPass {
             w,
             h,
         ));
-        let pipe = self.pipeline;
+        let pipe = *self.pipeline;
         let push = GpuGbufferViewPush {
             channel: self.channel.shader_id(),
             inv_distance_m: 1.0 / self.far_m.max(1e-6),
@@ -146,9 +146,5 @@ impl GbufferViewPass {
                 self.far_m
             ),
         }
-    }
-
-    pub fn destroy(self, ctx: &Context) {
-        ctx.destroy_compute_pipeline(self.pipeline);
     }
 }

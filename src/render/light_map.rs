@@ -72,7 +72,7 @@ impl LightMapPass {
             normal: layer("light map normal", LIGHT_MAP_NORMAL),
         };
         let depth = layer("light map depth", DEPTH);
-        let pipe = self.pipeline;
+        let pipe = *self.pipeline;
         let (vertices, indices) = (scene.vertices, scene.indices);
         let draws = scene.draws.clone();
         let clear = Load::Clear([0.0; 4]);
@@ -88,9 +88,5 @@ impl LightMapPass {
             .depth(depth, Load::ClearDepth(1.0))
             .record(move |ctx| record_shadow_views(ctx, &pipe, (vertices, indices), &draws));
         maps
-    }
-
-    pub fn destroy(self, ctx: &Context) {
-        ctx.destroy_graphics_pipeline(self.pipeline);
     }
 }

@@ -30,7 +30,9 @@ use crate::graph::{Access, GraphError, ImageHandle, RenderGraph};
 use crate::light::{shadow_views, PointShadow, ShadowSettings};
 use crate::post::{ToneMap, TonemapPass};
 use crate::scene::{Light, Scene};
-use crate::vk::{vk, Buffer, BufferDesc, Context, ImageDesc, MemoryLocation, PassTiming, VkError};
+use crate::vk::{
+    vk, Buffer, BufferDesc, Context, ImageDesc, MemoryLocation, PassTiming, Sampler, VkError,
+};
 use bytemuck::Zeroable;
 use deferred_direct::DeferredDirectPass;
 use gbuffer::{GbufferFeatures, GbufferPass};
@@ -151,8 +153,10 @@ pub struct Renderer {
     scene: SceneGpu,
     readback_hdr: Buffer,
     readback_ldr: Buffer,
-    /// Nearest-neighbour sampler of the G-buffer, shadow maps and radiance.
-    sampler: vk::Sampler,
+    /// Nearest-neighbour sampler of the G-buffer, shadow maps and radiance. Held to keep it
+    /// alive: the passes were given its raw handle.
+    #[allow(dead_code)]
+    sampler: Sampler,
     shadow_depth: ShadowDepthPass,
     gbuffer: GbufferPass,
     deferred: DeferredDirectPass,
@@ -166,129 +170,6 @@ pub struct Renderer {
     voxel_debug: Option<crate::voxel::debug_view::VoxelDebugPass>,
     atlas_view: Option<crate::voxel::atlas_view::AtlasViewPass>,
     gbuffer_view: Option<gbuffer_view::GbufferViewPass>,
-}
-
-/// The resources and passes of a [`Renderer`] while [`Renderer::new`] creates them: on an
-/// error, [`Parts::destroy`] releases whatever was made so far.
-#[derive(Default)]
-struct Parts {
-    readback_hdr: Option<Buffer>,
-    readback_ldr: Option<Buffer>,
-    scene: Option<SceneGpu>,
-    sampler: Option<vk::Sampler>,
-    shadow_depth: Option<ShadowDepthPass>,
-    gbuffer: Option<GbufferPass>,
-    deferred: Option<DeferredDirectPass>,
-    tonemap: Option<TonemapPass>,
-    has_phong: bool,
-    voxels: Option<crate::voxel::gpu::VoxelFrame>,
-    gi: Option<crate::gi::GiPasses>,
-    light_map: Option<LightMapPass>,
-    voxel_debug: Option<crate::voxel::debug_view::VoxelDebugPass>,
-    atlas_view: Option<crate::voxel::atlas_view::AtlasViewPass>,
-    gbuffer_view: Option<gbuffer_view::GbufferViewPass>,
-}
-
-impl Parts {
-    /// The renderer, once every part it always has was made; else `self` back, to destroy.
-    fn into_renderer(mut self, settings: RenderSettings) -> Result<Renderer, Box<Parts>> {
-        let always = (
-            self.readback_hdr.take(),
-            self.readback_ldr.take(),
-            self.scene.take(),
-            self.sampler.take(),
-            self.shadow_depth.take(),
-            self.gbuffer.take(),
-            self.deferred.take(),
-            self.tonemap.take(),
-        );
-        let (
-            Some(readback_hdr),
-            Some(readback_ldr),
-            Some(scene),
-            Some(sampler),
-            Some(shadow_depth),
-            Some(gbuffer),
-            Some(deferred),
-            Some(tonemap),
-        ) = always
-        else {
-            (
-                self.readback_hdr,
-                self.readback_ldr,
-                self.scene,
-                self.sampler,
-                self.shadow_depth,
-                self.gbuffer,
-                self.deferred,
-                self.tonemap,
-            ) = always;
-            return Err(Box::new(self));
-        };
-        Ok(Renderer {
-            settings,
-            scene,
-            readback_hdr,
-            readback_ldr,
-            sampler,
-            shadow_depth,
-            gbuffer,
-            deferred,
-            tonemap,
-            has_phong: self.has_phong,
-            shadow_view_count: 0,
-            frame_data: GpuFrame::zeroed(),
-            voxels: self.voxels,
-            gi: self.gi.zip(self.light_map),
-            voxel_debug: self.voxel_debug,
-            atlas_view: self.atlas_view,
-            gbuffer_view: self.gbuffer_view,
-        })
-    }
-
-    /// Destroys every part made (after an error in [`Renderer::new`]).
-    fn destroy(self, ctx: &Context) {
-        let _ = ctx.wait_idle();
-        if let Some(pass) = self.voxel_debug {
-            pass.destroy(ctx);
-        }
-        if let Some(pass) = self.atlas_view {
-            pass.destroy(ctx);
-        }
-        if let Some(pass) = self.gbuffer_view {
-            pass.destroy(ctx);
-        }
-        if let Some(v) = self.voxels {
-            v.destroy(ctx);
-        }
-        if let Some(gi) = self.gi {
-            gi.destroy(ctx);
-        }
-        if let Some(light_map) = self.light_map {
-            light_map.destroy(ctx);
-        }
-        if let Some(p) = self.shadow_depth {
-            p.destroy(ctx);
-        }
-        if let Some(p) = self.gbuffer {
-            p.destroy(ctx);
-        }
-        if let Some(p) = self.deferred {
-            p.destroy(ctx);
-        }
-        if let Some(p) = self.tonemap {
-            p.destroy(ctx);
-        }
-        if let Some(s) = self.sampler {
-            ctx.destroy_sampler(s);
-        }
-        if let Some(s) = self.scene {
-            s.destroy(ctx);
-        }
-        for b in [self.readback_hdr, self.readback_ldr].into_iter().flatten() {
-            ctx.destroy_buffer(b);
-        }
-    }
 }
 
 impl Renderer {
@@ -305,36 +186,19 @@ impl Renderer {
         if scene.objects.is_empty() {
             return Err(RenderError::EmptyScene);
         }
-        // Everything is created into `parts`, so that an error half-way (a voxel grid that
-        // does not fit, a debug level beyond the hierarchy, …) releases what was made.
-        let mut parts = Parts::default();
-        if let Err(e) = Self::create_parts(ctx, scene, &settings, &mut parts) {
-            parts.destroy(ctx);
-            return Err(e);
-        }
-        let mut r = match parts.into_renderer(settings) {
-            Ok(r) => r,
-            Err(parts) => {
-                parts.destroy(ctx);
-                return Err(RenderError::Vk(VkError::Invalid(
-                    "Renderer::new made an incomplete renderer; please report this bug".into(),
-                )));
-            }
-        };
-        if let Err(e) = r.prepare(scene) {
-            r.destroy(ctx);
-            return Err(e);
-        }
+        // An error half-way (a voxel grid that does not fit, a debug level beyond the
+        // hierarchy, …) drops what was made so far, which releases it.
+        let mut r = Self::create(ctx, scene, &settings)?;
+        r.prepare(scene)?;
         Ok(r)
     }
 
-    /// Creates the frame's resources and passes into `parts` (see [`Renderer::new`]).
-    fn create_parts(
+    /// Creates the frame's resources and passes (see [`Renderer::new`]).
+    fn create(
         ctx: &Context,
         scene: &Scene,
         settings: &RenderSettings,
-        parts: &mut Parts,
-    ) -> Result<(), RenderError> {
+    ) -> Result<Self, RenderError> {
         let has_phong = scene.has_phong();
         // A debug view replaces the lit image, so nothing would read the indirect light (and
         // the albedo view declares the attribute passes the GI methods would declare again).
@@ -357,19 +221,19 @@ impl Renderer {
             check_voxel_memory(ctx, scene, settings, v)?;
         }
         let pixels = u64::from(settings.width) * u64::from(settings.height);
-        parts.readback_hdr = Some(ctx.create_buffer(&BufferDesc {
+        let readback_hdr = ctx.create_buffer(&BufferDesc {
             name: "readback hdr".into(),
             size_bytes: pixels * 16,
             usage: vk::BufferUsageFlags::TRANSFER_DST,
             location: MemoryLocation::GpuToCpu,
-        })?);
-        parts.readback_ldr = Some(ctx.create_buffer(&BufferDesc {
+        })?;
+        let readback_ldr = ctx.create_buffer(&BufferDesc {
             name: "readback ldr".into(),
             size_bytes: pixels * 4,
             usage: vk::BufferUsageFlags::TRANSFER_DST,
             location: MemoryLocation::GpuToCpu,
-        })?);
-        parts.scene = Some(SceneGpu::new(ctx, scene, settings.time_s)?);
+        })?;
+        let scene_gpu = SceneGpu::new(ctx, scene, settings.time_s)?;
         // Paraboloid maps write their depth per fragment, which costs the other maps their
         // early depth test: only scenes that have them pay for it.
         let paraboloid = settings.shadow.point_technique == PointShadow::DualParaboloid
@@ -378,12 +242,7 @@ impl Renderer {
                 .iter()
                 .any(|l| matches!(l, Light::Point { .. }));
         let sampler = ctx.create_sampler(vk::Filter::NEAREST, false)?;
-        parts.sampler = Some(sampler);
-        parts.shadow_depth = Some(ShadowDepthPass::new(
-            ctx,
-            paraboloid,
-            scene.has_transparency(),
-        )?);
+        let shadow_depth = ShadowDepthPass::new(ctx, paraboloid, scene.has_transparency())?;
         let features = GbufferFeatures {
             phong: has_phong,
             ggx: scene.has_ggx(),
@@ -392,40 +251,46 @@ impl Renderer {
             bump: scene.has_bump_maps(),
             dissolve: scene.has_transparency(),
         };
-        parts.gbuffer = Some(GbufferPass::new(ctx, features)?);
-        parts.deferred = Some(DeferredDirectPass::new(
+        let gbuffer = GbufferPass::new(ctx, features)?;
+        let deferred = DeferredDirectPass::new(
             ctx,
             (features.phong, features.ggx, features.emission),
-            sampler,
-        )?);
-        parts.tonemap = Some(TonemapPass::new(ctx, sampler)?);
+            sampler.raw,
+        )?;
+        let tonemap = TonemapPass::new(ctx, sampler.raw)?;
         // The atlas view only needs the grid's voxel size, not a voxelization; the G-buffer
         // views not even that.
         let atlas_view_on = settings
             .debug
             .is_some_and(|d| d.view == crate::voxel::debug_view::DebugView::Atlas);
+        let mut gbuffer_view = None;
         if let Some(channel) = settings.debug.and_then(|d| gbuffer_view::channel(d.view)) {
             // The distance view draws the farthest point of the scene's box black.
             let b = scene.aabb_at(settings.time_s);
             let far_m = scene.camera.position.distance((b.min + b.max) * 0.5)
                 + 0.5 * (b.max - b.min).length();
-            parts.gbuffer_view = Some(gbuffer_view::GbufferViewPass::new(
-                ctx, sampler, channel, far_m,
+            gbuffer_view = Some(gbuffer_view::GbufferViewPass::new(
+                ctx,
+                sampler.raw,
+                channel,
+                far_m,
             )?);
         }
+        let mut voxels = None;
         if let Some(v) = &voxel_settings {
-            parts.voxels = Some(crate::voxel::gpu::VoxelFrame::new(
+            voxels = Some(crate::voxel::gpu::VoxelFrame::new(
                 ctx,
                 scene,
                 settings.time_s,
                 v,
             )?);
         }
-        if let (Some(v), true) = (&mut parts.voxels, gi_on) {
+        let mut gi = None;
+        if let (Some(v), true) = (&mut voxels, gi_on) {
             // With the atlas voxelizer its points write the volumes (Thiedemann 2010, §4.3.2).
             let atlas_attributes = crate::gi::GiPasses::needs_attribute_volumes(&settings.gi)
                 && v.enable_attribute_volumes(ctx, scene)?;
-            parts.gi = Some(crate::gi::GiPasses::new(
+            let passes = crate::gi::GiPasses::new(
                 ctx,
                 settings.gi,
                 &crate::gi::GiTarget {
@@ -437,16 +302,17 @@ impl Renderer {
                     has_phong,
                     atlas_attributes,
                 },
-            )?);
-            parts.light_map = Some(LightMapPass::new(ctx, scene.has_transparency())?);
+            )?;
+            gi = Some((passes, LightMapPass::new(ctx, scene.has_transparency())?));
         }
+        let mut atlas_view = None;
         if let Some(d) = settings.debug.filter(|_| atlas_view_on) {
             let grid = settings
                 .voxels
                 .unwrap_or_default()
                 .grid_for(scene, settings.time_s)
                 .map_err(crate::voxel::gpu::GpuVoxelError::from)?;
-            parts.atlas_view = Some(crate::voxel::atlas_view::AtlasViewPass::new(
+            atlas_view = Some(crate::voxel::atlas_view::AtlasViewPass::new(
                 ctx,
                 scene,
                 settings.time_s,
@@ -454,13 +320,14 @@ impl Renderer {
                 d.object,
             )?);
         }
-        if let (Some(d), Some(v)) = (&settings.debug, &mut parts.voxels) {
+        let mut voxel_debug = None;
+        if let (Some(d), Some(v)) = (&settings.debug, &mut voxels) {
             if voxel_view_on {
                 // With the atlas voxelizer its points write the albedo the view shows.
                 if d.view == crate::voxel::debug_view::DebugView::Albedo {
                     v.enable_attribute_volumes(ctx, scene)?;
                 }
-                parts.voxel_debug = Some(crate::voxel::debug_view::VoxelDebugPass::new(
+                voxel_debug = Some(crate::voxel::debug_view::VoxelDebugPass::new(
                     ctx,
                     scene,
                     settings.time_s,
@@ -470,8 +337,25 @@ impl Renderer {
                 )?);
             }
         }
-        parts.has_phong = has_phong;
-        Ok(())
+        Ok(Renderer {
+            settings: settings.clone(),
+            scene: scene_gpu,
+            readback_hdr,
+            readback_ldr,
+            sampler,
+            shadow_depth,
+            gbuffer,
+            deferred,
+            tonemap,
+            has_phong,
+            shadow_view_count: 0,
+            frame_data: GpuFrame::zeroed(),
+            voxels,
+            gi,
+            voxel_debug,
+            atlas_view,
+            gbuffer_view,
+        })
     }
 
     /// Computes frame constants, shadow views and culled draw lists for the scene's camera and
@@ -706,33 +590,6 @@ impl Renderer {
             (None, Some(d)) => Some(crate::voxel::debug_view::describe(d, value)),
             _ => None,
         }
-    }
-
-    pub fn destroy(self, ctx: &Context) {
-        if let Some(pass) = self.voxel_debug {
-            pass.destroy(ctx);
-        }
-        if let Some(pass) = self.atlas_view {
-            pass.destroy(ctx);
-        }
-        if let Some(pass) = self.gbuffer_view {
-            pass.destroy(ctx);
-        }
-        if let Some(v) = self.voxels {
-            v.destroy(ctx);
-        }
-        if let Some((gi, light_map)) = self.gi {
-            gi.destroy(ctx);
-            light_map.destroy(ctx);
-        }
-        self.shadow_depth.destroy(ctx);
-        self.gbuffer.destroy(ctx);
-        self.deferred.destroy(ctx);
-        self.tonemap.destroy(ctx);
-        ctx.destroy_sampler(self.sampler);
-        self.scene.destroy(ctx);
-        ctx.destroy_buffer(self.readback_hdr);
-        ctx.destroy_buffer(self.readback_ldr);
     }
 }
 

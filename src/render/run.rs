@@ -27,9 +27,7 @@ pub fn render_image(
     settings: &super::RenderSettings,
 ) -> Result<RenderOutput, RenderError> {
     let mut renderer = Renderer::new(ctx, scene, settings.clone())?;
-    let out = render_frames(ctx, &mut renderer);
-    renderer.destroy(ctx);
-    out
+    render_frames(ctx, &mut renderer)
 }
 
 /// Renders the frame `renderer` is prepared for: one frame, or the path tracer's
@@ -71,7 +69,6 @@ fn run_frames(
     let c = exec.compiled();
     let live = c.order.iter().map(|&p| c.pass_names[p].clone()).collect();
     let bytes = (c.memory.peak_aliased_bytes, c.memory.unaliased_bytes);
-    exec.destroy(ctx);
     let last = timings?.into_iter().last().unwrap_or_default();
     Ok((last, live, bytes))
 }
@@ -97,24 +94,16 @@ pub fn profile_scene(
     warmup: usize,
 ) -> Result<ProfileRun, RenderError> {
     let mut renderer = Renderer::new(ctx, scene, settings.clone())?;
-    let result = (|| {
-        let exec = GraphExecutor::new(ctx, renderer.graph(), MAX_FRAMES_IN_FLIGHT)?;
-        let frames = crate::graph::run_frames(ctx, &exec, warmup + frames, warmup, |slot| {
-            renderer.write_frame(slot)
-        });
-        let c = exec.compiled();
-        let live = c.order.iter().map(|&p| c.pass_names[p].clone()).collect();
-        let culled = c.culled.iter().map(|&p| c.pass_names[p].clone()).collect();
-        let memory = c.memory;
-        exec.destroy(ctx);
-        Ok(ProfileRun {
-            frames: frames?,
-            live_passes: live,
-            culled_passes: culled,
-            transient_memory: memory,
-            setup: renderer.setup_timings(),
-        })
-    })();
-    renderer.destroy(ctx);
-    result
+    let exec = GraphExecutor::new(ctx, renderer.graph(), MAX_FRAMES_IN_FLIGHT)?;
+    let frames = crate::graph::run_frames(ctx, &exec, warmup + frames, warmup, |slot| {
+        renderer.write_frame(slot)
+    })?;
+    let c = exec.compiled();
+    Ok(ProfileRun {
+        frames,
+        live_passes: c.order.iter().map(|&p| c.pass_names[p].clone()).collect(),
+        culled_passes: c.culled.iter().map(|&p| c.pass_names[p].clone()).collect(),
+        transient_memory: c.memory,
+        setup: renderer.setup_timings(),
+    })
 }

@@ -9,7 +9,7 @@ use super::{textures, RenderError};
 use crate::graph::{Access, BufferHandle, ImageHandle, PassContext, RenderGraph, Shader};
 use crate::scene::{Aabb, BumpKind, Scene};
 use crate::vk::{
-    vk, Buffer, BufferDesc, Context, GraphicsPipeline, Image, MemoryLocation, MAX_FRAMES_IN_FLIGHT,
+    vk, Buffer, BufferDesc, Context, Image, MemoryLocation, PipelineHandle, MAX_FRAMES_IN_FLIGHT,
 };
 use glam::{Mat4, Vec3};
 use std::sync::{Arc, RwLock};
@@ -59,7 +59,7 @@ pub struct SceneGpu {
     /// Textures of the scene (a placeholder where a texture is unused), then a 1x1 white
     /// placeholder (always last).
     textures: Vec<Image>,
-    texture_sampler: vk::Sampler,
+    texture_sampler: crate::vk::Sampler,
     pub draws: Arc<RwLock<DrawLists>>,
     pub all_draws: Vec<Draw>,
     /// Vertex and index offsets of every mesh in the shared buffers.
@@ -193,7 +193,7 @@ impl SceneGpu {
                 .iter()
                 .map(|t| g.import_image(t, Access::Sampled(Shader::Fragment)))
                 .collect(),
-            texture_sampler: self.texture_sampler,
+            texture_sampler: self.texture_sampler.raw,
             draws: self.draws.clone(),
         }
     }
@@ -257,22 +257,6 @@ impl SceneGpu {
             m[offset..offset + bytes.len()].copy_from_slice(bytes);
         }
     }
-
-    pub fn destroy(self, ctx: &Context) {
-        ctx.destroy_sampler(self.texture_sampler);
-        for t in self.textures {
-            ctx.destroy_image(t);
-        }
-        for b in [
-            self.vertices,
-            self.indices,
-            self.materials,
-            self.materials_pbr,
-            self.frame,
-        ] {
-            ctx.destroy_buffer(b);
-        }
-    }
 }
 
 /// Push constants of the passes that draw every shadow view's draw list (`shadow_depth.vert`,
@@ -298,7 +282,7 @@ crate::push_constants!(GpuShadowViewPush {
 /// attachments with `pipe`: the shadow-depth and light-map passes.
 pub fn record_shadow_views(
     ctx: &PassContext,
-    pipe: &GraphicsPipeline,
+    pipe: &PipelineHandle,
     scene: (BufferHandle, BufferHandle),
     draws: &RwLock<DrawLists>,
 ) {

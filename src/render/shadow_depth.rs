@@ -54,7 +54,7 @@ impl ShadowDepthPass {
         let maps = g.create_image(
             ImageDesc::new_2d("shadow maps", DEPTH, res, res).with_layers(views.max(1)),
         );
-        let pipe = self.pipeline;
+        let pipe = *self.pipeline;
         let (vertices, indices) = (scene.vertices, scene.indices);
         let draws = scene.draws.clone();
         g.add_pass("shadow_depth")
@@ -66,9 +66,5 @@ impl ShadowDepthPass {
             .depth(maps, Load::ClearDepth(1.0))
             .record(move |ctx| record_shadow_views(ctx, &pipe, (vertices, indices), &draws));
         maps
-    }
-
-    pub fn destroy(self, ctx: &Context) {
-        ctx.destroy_graphics_pipeline(self.pipeline);
     }
 }

@@ -17,7 +17,7 @@ use super::{RenderError, RenderOutput, RenderSettings, Renderer};
 use crate::graph::{run_once, Access, OneShotError, RenderGraph, Shader};
 use crate::post::{StereoMode, StereoPackPass};
 use crate::scene::{Eye, Scene, StereoRig};
-use crate::vk::{vk, Context, Image, ImageDesc, PassTiming};
+use crate::vk::{vk, Context, ImageDesc, PassTiming};
 
 /// A stereo frame's settings: the packing and the eyes' parallax.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -57,15 +57,12 @@ pub fn render_stereo(
     let left_scene = eye_scene(scene, stereo.rig, Eye::Left);
     let right_scene = eye_scene(scene, stereo.rig, Eye::Right);
     let mut renderer = Renderer::new(ctx, &left_scene, settings.clone())?;
-    let eyes = (|| {
-        let left = render_frames(ctx, &mut renderer)?;
-        // A new camera resets accumulated indirect light (`Renderer::prepare`).
-        renderer.prepare(&right_scene)?;
-        let right = render_frames(ctx, &mut renderer)?;
-        Ok::<_, RenderError>((left, right))
-    })();
-    renderer.destroy(ctx);
-    let (left, right) = eyes?;
+    let left = render_frames(ctx, &mut renderer)?;
+    // A new camera resets accumulated indirect light (`Renderer::prepare`).
+    renderer.prepare(&right_scene)?;
+    let right = render_frames(ctx, &mut renderer)?;
+    // The eyes' renderer goes before the packing pass allocates.
+    drop(renderer);
     let eye_size = (settings.width, settings.height);
     let (packed, pack_timings) = pack(ctx, (&left.ldr, &right.ldr), stereo.mode, eye_size)?;
     Ok(StereoOutput {
@@ -105,42 +102,25 @@ pub fn pack(
 ) -> Result<(Vec<u8>, Vec<PassTiming>), RenderError> {
     let (w, h) = eye_size;
     let eye_desc = |name: &str| ImageDesc::new_2d(name, vk::Format::R8G8B8A8_UNORM, w, h);
-    let mut made: Vec<Image> = Vec::new();
     let sampler = ctx.create_sampler(vk::Filter::NEAREST, false)?;
-    let pass = match StereoPackPass::new(ctx, sampler) {
-        Ok(pass) => pass,
-        Err(e) => {
-            ctx.destroy_sampler(sampler);
-            return Err(e.into());
-        }
-    };
+    let pass = StereoPackPass::new(ctx, sampler.raw)?;
     let (pw, ph) = mode.packed_size(eye_size);
-    let result = (|| -> Result<(Vec<u8>, Vec<PassTiming>), RenderError> {
-        made.push(ctx.upload_image(&eye_desc("left eye"), &[left.to_vec()])?);
-        made.push(ctx.upload_image(&eye_desc("right eye"), &[right.to_vec()])?);
-        let readback =
-            crate::graph::readback_buffer(ctx, "stereo read-back", u64::from(pw * ph * 4))?;
-        let mut g = RenderGraph::new();
-        let l = g.import_image(&made[0], Access::Sampled(Shader::Compute));
-        let r = g.import_image(&made[1], Access::Sampled(Shader::Compute));
-        let packed = pass.declare(&mut g, (l, r), mode, eye_size);
-        let buf = g.import_buffer(&readback, Access::HostRead);
-        crate::graph::add_readback(&mut g, "readback_stereo", packed, buf);
-        let timings = run_once(ctx, g).map_err(|e| match e {
-            OneShotError::Graph(e) => RenderError::Graph(e),
-            OneShotError::Vk(e) => RenderError::Vk(e),
-        });
-        let pixels = readback
-            .mapped()
-            .map(|m| m[..(pw * ph * 4) as usize].to_vec())
-            .unwrap_or_default();
-        ctx.destroy_buffer(readback);
-        Ok((pixels, timings?))
-    })();
-    for image in made {
-        ctx.destroy_image(image);
-    }
-    pass.destroy(ctx);
-    ctx.destroy_sampler(sampler);
-    result
+    let left = ctx.upload_image(&eye_desc("left eye"), &[left.to_vec()])?;
+    let right = ctx.upload_image(&eye_desc("right eye"), &[right.to_vec()])?;
+    let readback = crate::graph::readback_buffer(ctx, "stereo read-back", u64::from(pw * ph * 4))?;
+    let mut g = RenderGraph::new();
+    let l = g.import_image(&left, Access::Sampled(Shader::Compute));
+    let r = g.import_image(&right, Access::Sampled(Shader::Compute));
+    let packed = pass.declare(&mut g, (l, r), mode, eye_size);
+    let buf = g.import_buffer(&readback, Access::HostRead);
+    crate::graph::add_readback(&mut g, "readback_stereo", packed, buf);
+    let timings = run_once(ctx, g).map_err(|e| match e {
+        OneShotError::Graph(e) => RenderError::Graph(e),
+        OneShotError::Vk(e) => RenderError::Vk(e),
+    })?;
+    let pixels = readback
+        .mapped()
+        .map(|m| m[..(pw * ph * 4) as usize].to_vec())
+        .unwrap_or_default();
+    Ok((pixels, timings))
 }

@@ -1,15 +1,15 @@
 //! Instance, validation messenger, device choice and the persistent-memory allocator.
 //!
-//! Teardown order (docs/ARCHITECTURE.md, "Errors, ownership, tests"): wait idle → allocator →
-//! device → messenger → instance.
+//! Teardown order (docs/ARCHITECTURE.md, "Errors, ownership, tests"): wait idle → everything
+//! in the release queue → allocator → device → messenger → instance.
 
+use super::release::ReleaseQueue;
 use super::VkError;
 use ash::extensions::{ext, khr};
 use ash::vk;
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
 use std::collections::BTreeMap;
 use std::ffi::{c_void, CStr, CString};
-use std::mem::ManuallyDrop;
 use std::sync::atomic::{AtomicU32, Ordering};
 use std::sync::{Arc, Mutex};
 
@@ -68,7 +68,7 @@ impl ValidationLog {
 /// it was allocated under: what [`Context::finish`] reports as leaked. gpu-allocator only logs
 /// its leaks at shutdown; this table lets teardown fail on them instead.
 #[derive(Debug, Default)]
-pub(super) struct LiveAllocations(Mutex<BTreeMap<(u64, u64), String>>);
+pub struct LiveAllocations(Mutex<BTreeMap<(u64, u64), String>>);
 
 impl LiveAllocations {
     pub(super) fn insert(&self, key: (u64, u64), name: &str) {
@@ -82,7 +82,7 @@ impl LiveAllocations {
         }
     }
     /// The names of every allocation still alive, sorted.
-    fn names(&self) -> Vec<String> {
+    pub(super) fn names(&self) -> Vec<String> {
         let mut names: Vec<String> = self
             .0
             .lock()
@@ -159,9 +159,10 @@ pub struct Context {
     /// Present when the loader offers `VK_EXT_debug_utils` (labels for RenderDoc, messenger).
     pub debug_utils: Option<ext::DebugUtils>,
     pub validation: Arc<ValidationLog>,
-    pub(super) allocator: ManuallyDrop<Mutex<Allocator>>,
+    /// Where dropped GPU objects wait until the GPU is done with them; also owns the
+    /// allocator and the table of live allocations (see `release.rs`).
+    pub(super) release: Arc<ReleaseQueue>,
     pub(super) upload_pool: Mutex<vk::CommandPool>,
-    pub(super) live_allocations: LiveAllocations,
     messenger: vk::DebugUtilsMessengerEXT,
 }
 
@@ -381,6 +382,7 @@ impl Context {
         };
 
         let push_descriptor = khr::PushDescriptor::new(&instance, &device);
+        let release = ReleaseQueue::new(device.clone(), allocator);
         Ok(Self {
             entry,
             instance,
@@ -392,31 +394,43 @@ impl Context {
             push_descriptor,
             debug_utils,
             validation,
-            allocator: ManuallyDrop::new(Mutex::new(allocator)),
+            release,
             upload_pool: Mutex::new(upload_pool),
-            live_allocations: LiveAllocations::default(),
             messenger,
         })
     }
 
-    /// Blocks until the GPU is idle.
+    /// Blocks until the GPU is idle, then destroys the objects dropped while it was busy.
     pub fn wait_idle(&self) -> Result<(), VkError> {
+        let submitted = self.release.submitted();
         // SAFETY: the device is valid for the lifetime of self.
-        unsafe { self.device.device_wait_idle() }.map_err(VkError::vk("wait for the device"))
+        unsafe { self.device.device_wait_idle() }.map_err(VkError::vk("wait for the device"))?;
+        self.release.mark_completed(submitted);
+        Ok(())
     }
 
     /// Destroys the context and reports what its whole life left behind: every validation
     /// message, including those raised while destroying the device and instance (objects
     /// never destroyed, wrong destruction order), and the GPU memory never freed. Checking
     /// the messages before teardown misses those; tests and `--validate` check this instead.
+    ///
+    /// Objects dropped before this call are destroyed here (after the device went idle);
+    /// memory of an object still alive (kept past `finish`, or `mem::forget`) is a leak.
     pub fn finish(self) -> TeardownReport {
-        let leaked_allocations = self.live_allocations.names();
+        let _ = self.wait_idle();
+        let leaked_allocations = self.release.live_allocations.names();
         let log = Arc::clone(&self.validation);
         drop(self);
         TeardownReport {
             validation_messages: log.messages(),
             leaked_allocations,
         }
+    }
+
+    /// Dropped GPU objects (one batch per owner) still waiting for a submission that may use
+    /// them to complete; 0 when nothing was dropped while frames were in flight.
+    pub fn pending_releases(&self) -> usize {
+        self.release.pending()
     }
 
     /// Gives a Vulkan object a name visible in validation messages and RenderDoc.
@@ -457,14 +471,15 @@ impl Context {
 
 impl Drop for Context {
     fn drop(&mut self) {
-        // SAFETY: teardown in dependency order; every child object was destroyed by its owner
-        // (the validation layer reports any that were not as an error).
+        // SAFETY: teardown in dependency order. After the wait, the release queue destroys
+        // every object dropped so far and then the allocator, and refuses later releases (an
+        // object still alive leaks, and the validation layer reports it when the device goes).
         unsafe {
             let _ = self.device.device_wait_idle();
+            self.release.close();
             if let Ok(pool) = self.upload_pool.lock() {
                 self.device.destroy_command_pool(*pool, None);
             }
-            ManuallyDrop::drop(&mut self.allocator);
             self.device.destroy_device(None);
             if let Some(du) = &self.debug_utils {
                 if self.messenger != vk::DebugUtilsMessengerEXT::null() {

@@ -4,8 +4,10 @@
 //! signalled, so reading never stalls the GPU (docs/ARCHITECTURE.md, "The path of
 //! a frame").
 
+use super::release::{Garbage, ReleaseQueue};
 use super::{Cmd, Context, VkError};
 use ash::vk;
+use std::sync::Arc;
 
 pub const MAX_FRAMES_IN_FLIGHT: usize = 2;
 
@@ -40,14 +42,35 @@ pub struct FrameSlot {
     cmd: vk::CommandBuffer,
     fence: vk::Fence,
     pub timestamps: TimestampRecorder,
-    submitted: bool,
+    /// Serial (see `release.rs`) of the slot's submission not yet waited for, if any.
+    submitted: Option<u64>,
 }
 
-/// The ring of frames in flight.
+/// The ring of frames in flight. Waiting for a slot's fence tells the context's release queue
+/// that the slot's frame completed, which destroys the objects dropped while it was in flight.
+/// Dropping the loop releases its command pools, fences and query pools the same way.
 pub struct FrameLoop {
     slots: Vec<FrameSlot>,
     current: usize,
     frame_index: u64,
+    release: Arc<ReleaseQueue>,
+}
+
+impl Drop for FrameLoop {
+    fn drop(&mut self) {
+        let items = self
+            .slots
+            .iter()
+            .flat_map(|slot| {
+                [
+                    Garbage::QueryPool(slot.timestamps.pool),
+                    Garbage::Fence(slot.fence),
+                    Garbage::CommandPool(slot.pool),
+                ]
+            })
+            .collect();
+        self.release.release(items);
+    }
 }
 
 /// GPU milliseconds of one pass in one frame.
@@ -59,53 +82,77 @@ pub struct PassTiming {
 
 impl FrameLoop {
     pub fn new(ctx: &Context, frames_in_flight: usize, max_passes: u32) -> Result<Self, VkError> {
-        let mut slots = Vec::new();
-        for i in 0..frames_in_flight.clamp(1, MAX_FRAMES_IN_FLIGHT) {
-            let pool_info = vk::CommandPoolCreateInfo::builder()
-                .queue_family_index(ctx.queue_family)
-                .flags(vk::CommandPoolCreateFlags::TRANSIENT);
-            // SAFETY: valid device; all objects below are destroyed in `destroy`.
-            let pool = unsafe { ctx.device.create_command_pool(&pool_info, None) }
-                .map_err(VkError::vk("create a frame command pool"))?;
-            let alloc = vk::CommandBufferAllocateInfo::builder()
-                .command_pool(pool)
-                .level(vk::CommandBufferLevel::PRIMARY)
-                .command_buffer_count(1);
-            // SAFETY: pool is live.
-            let cmd = unsafe { ctx.device.allocate_command_buffers(&alloc) }
-                .map_err(VkError::vk("allocate a frame command buffer"))?[0];
-            let fence_info = vk::FenceCreateInfo::default();
-            // SAFETY: valid device.
-            let fence = unsafe { ctx.device.create_fence(&fence_info, None) }
-                .map_err(VkError::vk("create a frame fence"))?;
-            let query_info = vk::QueryPoolCreateInfo::builder()
-                .query_type(vk::QueryType::TIMESTAMP)
-                .query_count(2 * max_passes.max(1));
-            // SAFETY: valid device.
-            let query_pool = unsafe { ctx.device.create_query_pool(&query_info, None) }
-                .map_err(VkError::vk("create a timestamp query pool"))?;
-            // SAFETY: hostQueryReset is enabled; the pool is not in use.
-            unsafe {
-                ctx.device
-                    .reset_query_pool(query_pool, 0, 2 * max_passes.max(1))
-            };
-            ctx.set_name(cmd, &format!("frame slot {i}"));
-            slots.push(FrameSlot {
-                pool,
-                cmd,
-                fence,
-                timestamps: TimestampRecorder {
-                    pool: query_pool,
-                    capacity_pairs: max_passes.max(1),
-                    names: Vec::new(),
-                },
-                submitted: false,
-            });
-        }
-        Ok(Self {
-            slots,
+        let mut frames = Self {
+            slots: Vec::new(),
             current: 0,
             frame_index: 0,
+            release: Arc::clone(&ctx.release),
+        };
+        for i in 0..frames_in_flight.clamp(1, MAX_FRAMES_IN_FLIGHT) {
+            let slot = Self::new_slot(ctx, i, max_passes)?;
+            frames.slots.push(slot);
+        }
+        Ok(frames)
+    }
+
+    /// The objects of slot `i`; what was made before a failure is destroyed here.
+    fn new_slot(ctx: &Context, i: usize, max_passes: u32) -> Result<FrameSlot, VkError> {
+        let mut made = Vec::new();
+        let result = Self::make_slot(ctx, i, max_passes, &mut made);
+        if result.is_err() {
+            ctx.release.release(made);
+        }
+        result
+    }
+
+    fn make_slot(
+        ctx: &Context,
+        i: usize,
+        max_passes: u32,
+        made: &mut Vec<Garbage>,
+    ) -> Result<FrameSlot, VkError> {
+        let pool_info = vk::CommandPoolCreateInfo::builder()
+            .queue_family_index(ctx.queue_family)
+            .flags(vk::CommandPoolCreateFlags::TRANSIENT);
+        // SAFETY: valid device; the loop releases all objects below when it drops.
+        let pool = unsafe { ctx.device.create_command_pool(&pool_info, None) }
+            .map_err(VkError::vk("create a frame command pool"))?;
+        made.push(Garbage::CommandPool(pool));
+        let alloc = vk::CommandBufferAllocateInfo::builder()
+            .command_pool(pool)
+            .level(vk::CommandBufferLevel::PRIMARY)
+            .command_buffer_count(1);
+        // SAFETY: pool is live.
+        let cmd = unsafe { ctx.device.allocate_command_buffers(&alloc) }
+            .map_err(VkError::vk("allocate a frame command buffer"))?[0];
+        let fence_info = vk::FenceCreateInfo::default();
+        // SAFETY: valid device.
+        let fence = unsafe { ctx.device.create_fence(&fence_info, None) }
+            .map_err(VkError::vk("create a frame fence"))?;
+        made.push(Garbage::Fence(fence));
+        let query_info = vk::QueryPoolCreateInfo::builder()
+            .query_type(vk::QueryType::TIMESTAMP)
+            .query_count(2 * max_passes.max(1));
+        // SAFETY: valid device.
+        let query_pool = unsafe { ctx.device.create_query_pool(&query_info, None) }
+            .map_err(VkError::vk("create a timestamp query pool"))?;
+        made.push(Garbage::QueryPool(query_pool));
+        // SAFETY: hostQueryReset is enabled; the pool is not in use.
+        unsafe {
+            ctx.device
+                .reset_query_pool(query_pool, 0, 2 * max_passes.max(1))
+        };
+        ctx.set_name(cmd, &format!("frame slot {i}"));
+        Ok(FrameSlot {
+            pool,
+            cmd,
+            fence,
+            timestamps: TimestampRecorder {
+                pool: query_pool,
+                capacity_pairs: max_passes.max(1),
+                names: Vec::new(),
+            },
+            submitted: None,
         })
     }
 
@@ -128,17 +175,8 @@ impl FrameLoop {
         let slot_index = self.current;
         let slot = &mut self.slots[slot_index];
         let mut timings = Vec::new();
-        if slot.submitted {
-            // SAFETY: the fence belongs to this device and was submitted with the last frame.
-            unsafe {
-                ctx.device
-                    .wait_for_fences(&[slot.fence], true, u64::MAX)
-                    .map_err(VkError::vk("wait for a frame"))?;
-                ctx.device
-                    .reset_fences(&[slot.fence])
-                    .map_err(VkError::vk("reset a frame fence"))?;
-            }
-            slot.submitted = false;
+        if slot.submitted.is_some() {
+            wait_for_slot(ctx, slot)?;
             timings = read_timings(ctx, &slot.timestamps)?;
         }
         // SAFETY: the slot's previous submission has completed (fence waited above).
@@ -194,16 +232,14 @@ impl FrameLoop {
             .command_buffer_infos(&cmds)
             .signal_semaphore_infos(&signals)
             .build()];
-        // SAFETY: the command buffer is recording (begun in `begin`); the fence is unsignalled.
-        unsafe {
-            ctx.device
-                .end_command_buffer(slot.cmd)
-                .map_err(VkError::vk("end a frame command buffer"))?;
-            ctx.device
-                .queue_submit2(ctx.queue, &submit, slot.fence)
-                .map_err(VkError::vk("submit a frame"))?;
-        }
-        slot.submitted = true;
+        // SAFETY: the command buffer is recording (begun in `begin`).
+        unsafe { ctx.device.end_command_buffer(slot.cmd) }
+            .map_err(VkError::vk("end a frame command buffer"))?;
+        let serial = ctx.release.next_submission();
+        // SAFETY: the command buffer is executable; the fence is unsignalled.
+        unsafe { ctx.device.queue_submit2(ctx.queue, &submit, slot.fence) }
+            .map_err(VkError::vk("submit a frame"))?;
+        slot.submitted = Some(serial);
         self.current = (self.current + 1) % self.slots.len();
         self.frame_index += 1;
         Ok(())
@@ -215,34 +251,31 @@ impl FrameLoop {
         let n = self.slots.len();
         for k in 0..n {
             let slot = &mut self.slots[(self.current + k) % n];
-            if slot.submitted {
-                // SAFETY: the fence was submitted with the slot's last frame.
-                unsafe {
-                    ctx.device
-                        .wait_for_fences(&[slot.fence], true, u64::MAX)
-                        .map_err(VkError::vk("wait for a frame"))?;
-                    ctx.device
-                        .reset_fences(&[slot.fence])
-                        .map_err(VkError::vk("reset a frame fence"))?;
-                }
-                slot.submitted = false;
+            if slot.submitted.is_some() {
+                wait_for_slot(ctx, slot)?;
                 all.push(read_timings(ctx, &slot.timestamps)?);
             }
         }
         Ok(all)
     }
+}
 
-    /// Destroys every slot's objects. Call after `finish` (or `Context::wait_idle`).
-    pub fn destroy(self, ctx: &Context) {
-        for slot in self.slots {
-            // SAFETY: no submission of these objects is pending (caller waited).
-            unsafe {
-                ctx.device.destroy_query_pool(slot.timestamps.pool, None);
-                ctx.device.destroy_fence(slot.fence, None);
-                ctx.device.destroy_command_pool(slot.pool, None);
-            }
-        }
+/// Waits for the slot's submitted frame, resets its fence, and tells the release queue the
+/// frame (and every earlier submission) completed.
+fn wait_for_slot(ctx: &Context, slot: &mut FrameSlot) -> Result<(), VkError> {
+    // SAFETY: the fence belongs to this device and was submitted with the slot's last frame.
+    unsafe {
+        ctx.device
+            .wait_for_fences(&[slot.fence], true, u64::MAX)
+            .map_err(VkError::vk("wait for a frame"))?;
+        ctx.device
+            .reset_fences(&[slot.fence])
+            .map_err(VkError::vk("reset a frame fence"))?;
     }
+    if let Some(serial) = slot.submitted.take() {
+        ctx.release.mark_completed(serial);
+    }
+    Ok(())
 }
 
 fn read_timings(ctx: &Context, ts: &TimestampRecorder) -> Result<Vec<PassTiming>, VkError> {

@@ -6,6 +6,7 @@ mod context;
 mod frame;
 mod pipeline;
 pub mod reflect;
+mod release;
 mod resources;
 mod swapchain;
 
@@ -17,10 +18,12 @@ pub use context::{
 pub use frame::{FrameLoop, FrameSlot, PassTiming, TimestampRecorder, MAX_FRAMES_IN_FLIGHT};
 pub use pipeline::{
     check_push_against, check_struct_against, descriptor_type, interface_of, Bindable,
-    ComputePipeline, Descriptor, GraphicsPipeline, GraphicsPipelineDesc, PushLayout, ShaderModule,
+    ComputePipeline, Descriptor, GraphicsPipeline, GraphicsPipelineDesc, Pipeline, PipelineHandle,
+    PushLayout, Sampler, ShaderModule,
 };
 pub use reflect::{BindingKind, GpuStruct, PushConstants, ShaderInterface};
-pub use resources::{Buffer, BufferDesc, Image, ImageDesc, MemoryLocation};
+pub use release::ReleaseQueue;
+pub use resources::{Arena, Buffer, BufferDesc, Image, ImageDesc, MemoryLocation};
 pub use swapchain::{surface_extensions, Acquired, Swapchain};
 
 /// Errors of the Vulkan layer. Each message says what happened and what to do.

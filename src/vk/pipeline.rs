@@ -2,10 +2,11 @@
 //! is reflected from the shaders, samplers.
 
 use super::reflect::{self, BindingKind, PushConstants, ShaderInterface};
+use super::release::{Garbage, ReleaseQueue};
 use super::{shaders, Context, VkError};
 use ash::vk;
 use std::collections::HashMap;
-use std::sync::{Mutex, OnceLock};
+use std::sync::{Arc, Mutex, OnceLock};
 
 /// A descriptor pushed at bind time, addressed by its binding in set 0.
 #[derive(Clone, Copy, Debug)]
@@ -199,9 +200,17 @@ pub fn interface_of(files: &[&str]) -> Result<&'static ShaderInterface, VkError>
     Ok(interned)
 }
 
+/// A shader module; destroyed on drop (pipelines do not need it after creation).
 pub struct ShaderModule {
     pub raw: vk::ShaderModule,
     pub name: String,
+    release: Arc<ReleaseQueue>,
+}
+
+impl Drop for ShaderModule {
+    fn drop(&mut self) {
+        self.release.release(vec![Garbage::ShaderModule(self.raw)]);
+    }
 }
 
 impl Context {
@@ -223,20 +232,28 @@ impl Context {
         Ok(ShaderModule {
             raw,
             name: file_name.into(),
+            release: Arc::clone(&self.release),
         })
     }
 
-    pub fn destroy_shader_module(&self, m: ShaderModule) {
-        // SAFETY: no pipeline creation is in progress with this module.
-        unsafe { self.device.destroy_shader_module(m.raw, None) };
-    }
-
-    /// The push-descriptor set layout and pipeline layout of a reflected interface: every
-    /// binding the shaders declare, and a push-constant range covering their block.
-    fn push_layout(
+    /// A pipeline owner with the push-descriptor set layout and pipeline layout of a
+    /// reflected interface (every binding the shaders declare, and a push-constant range
+    /// covering their block) and no pipeline yet: what fails later is released with it.
+    fn pipeline_with_layout(
         &self,
-        interface: &ShaderInterface,
-    ) -> Result<(vk::DescriptorSetLayout, vk::PipelineLayout), VkError> {
+        bind_point: vk::PipelineBindPoint,
+        interface: &'static ShaderInterface,
+    ) -> Result<Pipeline, VkError> {
+        let mut owner = Pipeline {
+            handle: PipelineHandle {
+                bind_point,
+                raw: vk::Pipeline::null(),
+                layout: vk::PipelineLayout::null(),
+                set_layout: vk::DescriptorSetLayout::null(),
+                interface,
+            },
+            release: Arc::clone(&self.release),
+        };
         let b: Vec<vk::DescriptorSetLayoutBinding> = interface
             .bindings
             .values()
@@ -255,6 +272,7 @@ impl Context {
         // SAFETY: valid device and create info.
         let set_layout = unsafe { self.device.create_descriptor_set_layout(&info, None) }
             .map_err(VkError::vk("create a descriptor set layout"))?;
+        owner.handle.set_layout = set_layout;
         let push_constant_bytes = push_bytes(interface);
         let ranges = [vk::PushConstantRange {
             stage_flags: vk::ShaderStageFlags::ALL,
@@ -267,9 +285,9 @@ impl Context {
             layout_info = layout_info.push_constant_ranges(&ranges);
         }
         // SAFETY: valid device; set_layout is live.
-        let layout = unsafe { self.device.create_pipeline_layout(&layout_info, None) }
+        owner.handle.layout = unsafe { self.device.create_pipeline_layout(&layout_info, None) }
             .map_err(VkError::vk("create a pipeline layout"))?;
-        Ok((set_layout, layout))
+        Ok(owner)
     }
 
     /// A compute pipeline of `glsl/<file_name>`. Its set-0 bindings and push-constant range
@@ -285,7 +303,8 @@ impl Context {
         let interface = interface_of(&[file_name])?;
         check_push_layout(interface, push.as_ref())?;
         let module = self.shader_module(file_name)?;
-        let (set_layout, layout) = self.push_layout(interface)?;
+        let mut owner = self.pipeline_with_layout(vk::PipelineBindPoint::COMPUTE, interface)?;
+        let layout = owner.layout;
         let (entries, data) = spec_data(spec);
         let spec_info = vk::SpecializationInfo::builder()
             .map_entries(&entries)
@@ -304,18 +323,13 @@ impl Context {
             self.device
                 .create_compute_pipelines(vk::PipelineCache::null(), &info, None)
         };
-        self.destroy_shader_module(module);
-        let pipeline = result.map_err(|(_, e)| VkError::Call {
+        drop(module);
+        owner.handle.raw = result.map_err(|(_, e)| VkError::Call {
             what: "create a compute pipeline",
             result: e,
         })?[0];
-        self.set_name(pipeline, file_name);
-        Ok(ComputePipeline {
-            raw: pipeline,
-            layout,
-            set_layout,
-            interface,
-        })
+        self.set_name(owner.raw, file_name);
+        Ok(owner)
     }
 
     pub fn graphics_pipeline(
@@ -366,7 +380,8 @@ impl Context {
         if let Some(g) = &desc.geometry {
             modules.push((vk::ShaderStageFlags::GEOMETRY, self.shader_module(g)?));
         }
-        let (set_layout, layout) = self.push_layout(interface)?;
+        let mut owner = self.pipeline_with_layout(vk::PipelineBindPoint::GRAPHICS, interface)?;
+        let layout = owner.layout;
         let (entries, data) = spec_data(&desc.spec);
         let spec_info = vk::SpecializationInfo::builder()
             .map_entries(&entries)
@@ -484,48 +499,17 @@ impl Context {
             self.device
                 .create_graphics_pipelines(vk::PipelineCache::null(), &info, None)
         };
-        for (_, m) in modules {
-            self.destroy_shader_module(m);
-        }
-        let pipeline = result.map_err(|(_, e)| VkError::Call {
+        drop(modules);
+        owner.handle.raw = result.map_err(|(_, e)| VkError::Call {
             what: "create a graphics pipeline",
             result: e,
         })?[0];
-        self.set_name(pipeline, &desc.fragment);
-        Ok(GraphicsPipeline {
-            raw: pipeline,
-            layout,
-            set_layout,
-            interface,
-        })
-    }
-
-    pub fn destroy_compute_pipeline(&self, p: ComputePipeline) {
-        // SAFETY: the caller waited for all GPU work using the pipeline.
-        unsafe {
-            self.device.destroy_pipeline(p.raw, None);
-            self.device.destroy_pipeline_layout(p.layout, None);
-            self.device
-                .destroy_descriptor_set_layout(p.set_layout, None);
-        }
-    }
-
-    pub fn destroy_graphics_pipeline(&self, p: GraphicsPipeline) {
-        // SAFETY: the caller waited for all GPU work using the pipeline.
-        unsafe {
-            self.device.destroy_pipeline(p.raw, None);
-            self.device.destroy_pipeline_layout(p.layout, None);
-            self.device
-                .destroy_descriptor_set_layout(p.set_layout, None);
-        }
+        self.set_name(owner.raw, &desc.fragment);
+        Ok(owner)
     }
 
     /// A sampler with the given filter and clamp-to-edge addressing.
-    pub fn create_sampler(
-        &self,
-        filter: vk::Filter,
-        anisotropy: bool,
-    ) -> Result<vk::Sampler, VkError> {
+    pub fn create_sampler(&self, filter: vk::Filter, anisotropy: bool) -> Result<Sampler, VkError> {
         let mipmap_mode = if filter == vk::Filter::LINEAR {
             vk::SamplerMipmapMode::LINEAR
         } else {
@@ -546,12 +530,24 @@ impl Context {
             })
             .max_lod(vk::LOD_CLAMP_NONE);
         // SAFETY: valid device and create info.
-        unsafe { self.device.create_sampler(&info, None) }.map_err(VkError::vk("create a sampler"))
+        let raw = unsafe { self.device.create_sampler(&info, None) }
+            .map_err(VkError::vk("create a sampler"))?;
+        Ok(Sampler {
+            raw,
+            release: Arc::clone(&self.release),
+        })
     }
+}
 
-    pub fn destroy_sampler(&self, s: vk::Sampler) {
-        // SAFETY: the caller waited for all GPU work using the sampler.
-        unsafe { self.device.destroy_sampler(s, None) };
+/// A sampler; destroyed on drop once the GPU is done with it. Descriptors take `raw`.
+pub struct Sampler {
+    pub raw: vk::Sampler,
+    release: Arc<ReleaseQueue>,
+}
+
+impl Drop for Sampler {
+    fn drop(&mut self) {
+        self.release.release(vec![Garbage::Sampler(self.raw)]);
     }
 }
 
@@ -578,39 +574,63 @@ fn spec_data(spec: &[(u32, u32)]) -> (Vec<vk::SpecializationMapEntry>, Vec<u8>) 
     (entries, data)
 }
 
+/// The handles of a pipeline, copied into the closures that record it (`*pipeline`). Valid
+/// while the [`Pipeline`] they come from lives.
 #[derive(Clone, Copy, Debug)]
-pub struct ComputePipeline {
+pub struct PipelineHandle {
+    pub bind_point: vk::PipelineBindPoint,
     pub raw: vk::Pipeline,
     pub layout: vk::PipelineLayout,
     pub set_layout: vk::DescriptorSetLayout,
-    /// What the shader declares (interned for the program's life, so pipelines stay `Copy`).
+    /// What the shaders declare (interned for the program's life, so handles stay `Copy`).
     pub interface: &'static ShaderInterface,
 }
 
-impl Bindable for ComputePipeline {
+impl Bindable for PipelineHandle {
     fn bind_info(&self) -> (vk::PipelineBindPoint, vk::Pipeline, vk::PipelineLayout) {
-        (vk::PipelineBindPoint::COMPUTE, self.raw, self.layout)
+        (self.bind_point, self.raw, self.layout)
     }
     fn interface(&self) -> &'static ShaderInterface {
         self.interface
     }
 }
 
-#[derive(Clone, Copy, Debug)]
-pub struct GraphicsPipeline {
-    pub raw: vk::Pipeline,
-    pub layout: vk::PipelineLayout,
-    pub set_layout: vk::DescriptorSetLayout,
-    /// What the stages declare together (see [`ComputePipeline::interface`]).
-    pub interface: &'static ShaderInterface,
+/// A compute or graphics pipeline with its layouts: owns them and releases them on drop.
+/// Dereferences to its copyable [`PipelineHandle`].
+pub struct Pipeline {
+    handle: PipelineHandle,
+    release: Arc<ReleaseQueue>,
 }
 
-impl Bindable for GraphicsPipeline {
+/// A pipeline made by [`Context::compute_pipeline`].
+pub type ComputePipeline = Pipeline;
+/// A pipeline made by [`Context::graphics_pipeline`] and its blending variants.
+pub type GraphicsPipeline = Pipeline;
+
+impl std::ops::Deref for Pipeline {
+    type Target = PipelineHandle;
+    fn deref(&self) -> &PipelineHandle {
+        &self.handle
+    }
+}
+
+impl Bindable for Pipeline {
     fn bind_info(&self) -> (vk::PipelineBindPoint, vk::Pipeline, vk::PipelineLayout) {
-        (vk::PipelineBindPoint::GRAPHICS, self.raw, self.layout)
+        self.handle.bind_info()
     }
     fn interface(&self) -> &'static ShaderInterface {
-        self.interface
+        self.handle.interface
+    }
+}
+
+impl Drop for Pipeline {
+    fn drop(&mut self) {
+        let h = &self.handle;
+        self.release.release(vec![
+            Garbage::Pipeline(h.raw),
+            Garbage::PipelineLayout(h.layout),
+            Garbage::DescriptorSetLayout(h.set_layout),
+        ]);
     }
 }
 

@@ -1,10 +1,13 @@
 //! Persistent buffers and images, allocated with gpu-allocator; staging upload and read-back.
+//! Buffers, images and arenas release themselves when dropped (see `release.rs`).
 
+use super::release::{Garbage, ReleaseQueue};
 use super::{Context, VkError};
 use ash::vk;
 use ash::vk::Handle;
 use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
 pub use gpu_allocator::MemoryLocation;
+use std::sync::Arc;
 
 /// Plain creation data of a buffer.
 #[derive(Clone, Debug)]
@@ -15,10 +18,21 @@ pub struct BufferDesc {
     pub location: MemoryLocation,
 }
 
+/// A buffer with its memory (its own allocation, or a place in a graph arena). Dropping it
+/// releases both once the GPU is done with them.
 pub struct Buffer {
     pub raw: vk::Buffer,
     pub desc: BufferDesc,
     allocation: Option<Allocation>,
+    release: Arc<ReleaseQueue>,
+}
+
+impl Drop for Buffer {
+    fn drop(&mut self) {
+        let mut items = vec![Garbage::Buffer(self.raw)];
+        items.extend(self.allocation.take().map(Garbage::Allocation));
+        self.release.release(items);
+    }
 }
 
 impl Buffer {
@@ -129,18 +143,60 @@ pub fn aspect_of(format: vk::Format) -> vk::ImageAspectFlags {
     }
 }
 
-/// An image with a view of all its mips and layers, plus optional per-mip views.
+/// An image with a view of all its mips and layers, plus optional per-mip views. Dropping it
+/// releases the views, the image (unless a swapchain owns it) and its memory once the GPU is
+/// done with them.
 pub struct Image {
     pub raw: vk::Image,
     pub view: vk::ImageView,
     /// One view per mip level (all layers), for storage writes into a single level.
     pub mip_views: Vec<vk::ImageView>,
     pub desc: ImageDesc,
-    allocation: Option<Allocation>,
+    backing: Backing,
+    release: Arc<ReleaseQueue>,
+}
+
+/// Who owns an [`Image`]'s `raw` handle and memory.
+enum Backing {
+    /// The image and its allocation from the context's allocator.
+    Allocated(Option<Allocation>),
+    /// The image, bound at a place in memory someone else owns (a graph arena).
+    Placed,
+    /// Only the views: the image belongs to a swapchain.
+    ViewsOnly,
+}
+
+impl Drop for Image {
+    fn drop(&mut self) {
+        let mut items: Vec<Garbage> = self.mip_views.drain(..).map(Garbage::ImageView).collect();
+        items.push(Garbage::ImageView(self.view));
+        match &mut self.backing {
+            Backing::Allocated(allocation) => {
+                items.push(Garbage::Image(self.raw));
+                items.extend(allocation.take().map(Garbage::Allocation));
+            }
+            Backing::Placed => items.push(Garbage::Image(self.raw)),
+            Backing::ViewsOnly => {}
+        }
+        self.release.release(items);
+    }
+}
+
+/// A block of device memory that the render graph places transient resources in. Released
+/// on drop; drop the resources placed in it first (they are destroyed in drop order).
+pub struct Arena {
+    pub raw: vk::DeviceMemory,
+    release: Arc<ReleaseQueue>,
+}
+
+impl Drop for Arena {
+    fn drop(&mut self) {
+        self.release.release(vec![Garbage::Memory(self.raw)]);
+    }
 }
 
 /// The key of an allocation in the context's table of live allocations.
-fn allocation_key(allocation: &Allocation) -> (u64, u64) {
+pub(super) fn allocation_key(allocation: &Allocation) -> (u64, u64) {
     // SAFETY: only the handle's value is read, as a key; no memory is touched.
     let memory = unsafe { allocation.memory() };
     (memory.as_raw(), allocation.offset())
@@ -177,26 +233,16 @@ impl Context {
             self.device
                 .bind_buffer_memory(raw, allocation.memory(), allocation.offset())
         };
-        if let Err(e) = bound {
-            // SAFETY: raw is unused.
-            unsafe { self.device.destroy_buffer(raw, None) };
-            self.free(allocation);
-            return Err(VkError::vk("bind buffer memory")(e));
-        }
-        self.set_name(raw, &desc.name);
-        Ok(Buffer {
+        // From here on the buffer releases itself (also on the error below).
+        let buffer = Buffer {
             raw,
             desc: desc.clone(),
             allocation: Some(allocation),
-        })
-    }
-
-    pub fn destroy_buffer(&self, mut buffer: Buffer) {
-        // SAFETY: the caller no longer uses the buffer (GPU work was waited for).
-        unsafe { self.device.destroy_buffer(buffer.raw, None) };
-        if let Some(a) = buffer.allocation.take() {
-            self.free(a);
-        }
+            release: Arc::clone(&self.release),
+        };
+        bound.map_err(VkError::vk("bind buffer memory"))?;
+        self.set_name(raw, &desc.name);
+        Ok(buffer)
     }
 
     pub fn create_image(&self, desc: &ImageDesc) -> Result<Image, VkError> {
@@ -218,56 +264,50 @@ impl Context {
         let bound = unsafe {
             self.device
                 .bind_image_memory(raw, allocation.memory(), allocation.offset())
-        }
-        .map_err(VkError::vk("bind image memory"));
-        self.set_name(raw, &desc.name);
-        let views = bound.and_then(|()| self.create_views(raw, desc));
-        let (view, mip_views) = match views {
-            Ok(v) => v,
-            Err(e) => {
-                // SAFETY: raw is unused (a view that failed was never created).
-                unsafe { self.device.destroy_image(raw, None) };
-                self.free(allocation);
-                return Err(e);
-            }
         };
-        Ok(Image {
-            raw,
-            view,
-            mip_views,
-            desc: desc.clone(),
-            allocation: Some(allocation),
-        })
-    }
-
-    /// Wraps an image whose memory the caller bound (the graph's transient arenas).
-    pub fn wrap_image(&self, raw: vk::Image, desc: &ImageDesc) -> Result<Image, VkError> {
-        self.set_name(raw, &desc.name);
-        let (view, mip_views) = self.create_views(raw, desc)?;
-        Ok(Image {
-            raw,
-            view,
-            mip_views,
-            desc: desc.clone(),
-            allocation: None,
-        })
-    }
-
-    /// Wraps a buffer whose memory the caller bound (the graph's transient arenas).
-    pub fn wrap_buffer(&self, raw: vk::Buffer, desc: &BufferDesc) -> Buffer {
-        self.set_name(raw, &desc.name);
-        Buffer {
-            raw,
-            desc: desc.clone(),
-            allocation: None,
+        if let Err(e) = bound {
+            // SAFETY: raw is unused.
+            unsafe { self.device.destroy_image(raw, None) };
+            self.release.free(allocation);
+            return Err(VkError::vk("bind image memory")(e));
         }
+        self.image_with_views(raw, desc, Backing::Allocated(Some(allocation)))
     }
 
-    fn create_views(
+    /// Wraps an image owned by a swapchain: the [`Image`] owns only its views.
+    pub(super) fn wrap_swapchain_image(
         &self,
         raw: vk::Image,
         desc: &ImageDesc,
-    ) -> Result<(vk::ImageView, Vec<vk::ImageView>), VkError> {
+    ) -> Result<Image, VkError> {
+        self.image_with_views(raw, desc, Backing::ViewsOnly)
+    }
+
+    /// Names `raw`, creates its views, and makes the [`Image`] that releases them (and, per
+    /// `backing`, the image and its memory), also when creating a view fails.
+    fn image_with_views(
+        &self,
+        raw: vk::Image,
+        desc: &ImageDesc,
+        backing: Backing,
+    ) -> Result<Image, VkError> {
+        self.set_name(raw, &desc.name);
+        let mut image = Image {
+            raw,
+            view: vk::ImageView::null(),
+            mip_views: Vec::new(),
+            desc: desc.clone(),
+            backing,
+            release: Arc::clone(&self.release),
+        };
+        self.create_views(&mut image)?;
+        Ok(image)
+    }
+
+    /// Creates the views of `image`. When one fails, the views made so far are released with
+    /// `image` (destroying the null handle left in `view` is a no-op).
+    fn create_views(&self, image: &mut Image) -> Result<(), VkError> {
+        let (raw, desc) = (image.raw, image.desc.clone());
         let make = |base_mip: u32, mips: u32| {
             let info = vk::ImageViewCreateInfo::builder()
                 .image(raw)
@@ -284,29 +324,14 @@ impl Context {
             unsafe { self.device.create_image_view(&info, None) }
                 .map_err(VkError::vk("create an image view"))
         };
-        let view = make(0, desc.mip_levels)?;
-        let mut mip_views = Vec::new();
+        image.view = make(0, desc.mip_levels)?;
         if desc.mip_levels > 1 {
             for m in 0..desc.mip_levels {
-                mip_views.push(make(m, 1)?);
+                let view = make(m, 1)?;
+                image.mip_views.push(view);
             }
         }
-        Ok((view, mip_views))
-    }
-
-    pub fn destroy_image(&self, mut image: Image) {
-        // SAFETY: the caller no longer uses the image (GPU work was waited for).
-        unsafe {
-            for v in image.mip_views.drain(..) {
-                self.device.destroy_image_view(v, None);
-            }
-            self.device.destroy_image_view(image.view, None);
-        }
-        // SAFETY: as above.
-        unsafe { self.device.destroy_image(image.raw, None) };
-        if let Some(a) = image.allocation.take() {
-            self.free(a);
-        }
+        Ok(())
     }
 
     fn allocate(
@@ -317,9 +342,13 @@ impl Context {
         linear: bool,
     ) -> Result<Allocation, VkError> {
         let mut alloc = self
+            .release
             .allocator
             .lock()
             .map_err(|_| VkError::Allocation("allocator lock poisoned".into()))?;
+        let alloc = alloc
+            .as_mut()
+            .ok_or_else(|| VkError::Allocation("the context is being destroyed".into()))?;
         let allocation = alloc
             .allocate(&AllocationCreateDesc {
                 name,
@@ -329,18 +358,10 @@ impl Context {
                 allocation_scheme: AllocationScheme::GpuAllocatorManaged,
             })
             .map_err(|e| VkError::Allocation(format!("`{name}`: {e}")))?;
-        self.live_allocations
+        self.release
+            .live_allocations
             .insert(allocation_key(&allocation), name);
         Ok(allocation)
-    }
-
-    fn free(&self, allocation: Allocation) {
-        self.live_allocations.remove(allocation_key(&allocation));
-        if let Ok(mut alloc) = self.allocator.lock() {
-            if let Err(e) = alloc.free(allocation) {
-                log::error!("freeing GPU memory failed: {e}");
-            }
-        }
     }
 
     /// Creates a device-local buffer filled with `data` (staging copy, waits for completion).
@@ -374,7 +395,7 @@ impl Context {
             // SAFETY: both buffers are live and large enough; cmd is recording.
             unsafe { device.cmd_copy_buffer(cmd, staging.raw, dst.raw, &region) };
         });
-        self.destroy_buffer(staging);
+        drop(staging);
         result?;
         Ok(dst)
     }
@@ -548,7 +569,7 @@ impl Context {
                 );
             }
         });
-        self.destroy_buffer(staging);
+        drop(staging);
         result
     }
 
@@ -595,12 +616,16 @@ impl Context {
             .map_err(VkError::vk("create a fence"))?;
         let cmds = [cmd];
         let submit = [vk::SubmitInfo::builder().command_buffers(&cmds).build()];
+        let serial = self.release.next_submission();
         // SAFETY: queue access is serialized by holding the upload-pool lock; cmd is executable.
         let result = unsafe {
             self.device
                 .queue_submit(self.queue, &submit, fence)
                 .and_then(|_| self.device.wait_for_fences(&[fence], true, u64::MAX))
         };
+        if result.is_ok() {
+            self.release.mark_completed(serial);
+        }
         // SAFETY: the fence was waited for (or submission failed), so cmd is not pending.
         unsafe {
             self.device.destroy_fence(fence, None);
@@ -665,7 +690,7 @@ impl Context {
         memory_type: u32,
         size_bytes: u64,
         name: &str,
-    ) -> Result<vk::DeviceMemory, VkError> {
+    ) -> Result<Arena, VkError> {
         let info = vk::MemoryAllocateInfo::builder()
             .allocation_size(size_bytes.max(1))
             .memory_type_index(memory_type);
@@ -676,38 +701,39 @@ impl Context {
             ))
         })?;
         self.set_name(memory, name);
-        self.live_allocations
+        self.release
+            .live_allocations
             .insert((memory.as_raw(), u64::MAX), name);
-        Ok(memory)
-    }
-
-    pub fn free_arena(&self, memory: vk::DeviceMemory) {
-        self.live_allocations.remove((memory.as_raw(), u64::MAX));
-        // SAFETY: every resource bound to the arena was destroyed and no work is pending.
-        unsafe { self.device.free_memory(memory, None) };
+        Ok(Arena {
+            raw: memory,
+            release: Arc::clone(&self.release),
+        })
     }
 
     /// Creates an image bound at `offset` in `memory` (the graph checked size and alignment).
     pub fn create_image_in(
         &self,
         desc: &ImageDesc,
-        memory: vk::DeviceMemory,
+        memory: &Arena,
         offset: u64,
     ) -> Result<Image, VkError> {
         // SAFETY: valid create info.
         let raw = unsafe { self.device.create_image(&desc.create_info(), None) }
             .map_err(VkError::vk("create a transient image"))?;
         // SAFETY: the graph placed [offset, offset+size) inside memory with the required alignment.
-        unsafe { self.device.bind_image_memory(raw, memory, offset) }
-            .map_err(VkError::vk("bind a transient image"))?;
-        self.wrap_image(raw, desc)
+        if let Err(e) = unsafe { self.device.bind_image_memory(raw, memory.raw, offset) } {
+            // SAFETY: raw is unused.
+            unsafe { self.device.destroy_image(raw, None) };
+            return Err(VkError::vk("bind a transient image")(e));
+        }
+        self.image_with_views(raw, desc, Backing::Placed)
     }
 
     /// Creates a buffer bound at `offset` in `memory`.
     pub fn create_buffer_in(
         &self,
         desc: &BufferDesc,
-        memory: vk::DeviceMemory,
+        memory: &Arena,
         offset: u64,
     ) -> Result<Buffer, VkError> {
         let info = vk::BufferCreateInfo::builder()
@@ -717,10 +743,17 @@ impl Context {
         // SAFETY: valid create info.
         let raw = unsafe { self.device.create_buffer(&info, None) }
             .map_err(VkError::vk("create a transient buffer"))?;
+        let buffer = Buffer {
+            raw,
+            desc: desc.clone(),
+            allocation: None,
+            release: Arc::clone(&self.release),
+        };
         // SAFETY: as for create_image_in.
-        unsafe { self.device.bind_buffer_memory(raw, memory, offset) }
+        unsafe { self.device.bind_buffer_memory(raw, memory.raw, offset) }
             .map_err(VkError::vk("bind a transient buffer"))?;
-        Ok(self.wrap_buffer(raw, desc))
+        self.set_name(raw, &desc.name);
+        Ok(buffer)
     }
 }
 
@@ -734,12 +767,7 @@ impl Context {
         desc.usage |= vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST;
         let image = self.create_image(&desc)?;
         let slices: Vec<&[u8]> = levels.iter().map(Vec::as_slice).collect();
-        match self.write_image_levels(&image, &slices, vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL) {
-            Ok(()) => Ok(image),
-            Err(e) => {
-                self.destroy_image(image);
-                Err(e)
-            }
-        }
+        self.write_image_levels(&image, &slices, vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)?;
+        Ok(image)
     }
 }

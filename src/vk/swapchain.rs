@@ -4,11 +4,13 @@
 //! can import them with [`Access::Present`](crate::graph::Access::Present) and derive every
 //! transition; this module records no commands.
 
+use super::release::{Garbage, ReleaseQueue};
 use super::{Context, Image, ImageDesc, VkError};
 use ash::extensions::khr;
 use ash::vk;
 use raw_window_handle::{RawDisplayHandle, RawWindowHandle};
 use std::ffi::CStr;
+use std::sync::Arc;
 
 /// Instance extensions a surface on `display` needs (pass them in
 /// [`ContextDesc::instance_extensions`](super::ContextDesc)).
@@ -31,12 +33,15 @@ pub enum Acquired {
     OutOfDate,
 }
 
+/// Dropping it waits for the device and destroys the swapchain and then the surface: drop it
+/// before the window (declare it before the window in the owning struct).
 pub struct Swapchain {
+    release: Arc<ReleaseQueue>,
     surface_loader: khr::Surface,
     loader: khr::Swapchain,
     surface: vk::SurfaceKHR,
     raw: vk::SwapchainKHR,
-    /// The swapchain images, viewed as `format`. Owned by the swapchain: never destroy them.
+    /// The swapchain images, viewed as `format`. The [`Image`]s own only their views.
     pub images: Vec<Image>,
     pub format: vk::Format,
     pub extent: vk::Extent2D,
@@ -63,11 +68,12 @@ impl Swapchain {
     ) -> Result<Self, VkError> {
         let surface_loader = khr::Surface::new(&ctx.entry, &ctx.instance);
         // SAFETY: the handles come from a live window that outlives the swapchain (the caller
-        // destroys the swapchain before the window).
+        // drops the swapchain before the window).
         let surface =
             unsafe { ash_window::create_surface(&ctx.entry, &ctx.instance, display, window, None) }
                 .map_err(VkError::vk("create a window surface"))?;
         let mut s = Self {
+            release: Arc::clone(&ctx.release),
             surface_loader,
             loader: khr::Swapchain::new(&ctx.instance, &ctx.device),
             surface,
@@ -85,17 +91,11 @@ impl Swapchain {
             }
             s.recreate(ctx, extent)
         });
-        match result {
-            Ok(()) => Ok(s),
-            Err(e) => {
-                s.destroy(ctx);
-                Err(e)
-            }
-        }
+        result.map(|()| s)
     }
 
     fn semaphore(&self, ctx: &Context) -> Result<vk::Semaphore, VkError> {
-        // SAFETY: valid device; destroyed in `destroy` / `recreate`.
+        // SAFETY: valid device; released on drop / in `recreate`.
         unsafe {
             ctx.device
                 .create_semaphore(&vk::SemaphoreCreateInfo::default(), None)
@@ -209,14 +209,14 @@ impl Swapchain {
             .present_mode(vk::PresentModeKHR::FIFO)
             .clipped(true)
             .old_swapchain(self.raw);
-        // SAFETY: the surface is live; the old swapchain is retired by this call and destroyed
-        // below after the device went idle (waited above).
+        // SAFETY: the surface is live; the old swapchain is retired by this call and released
+        // below, after the device went idle (waited above), so it is destroyed at once.
         let raw = unsafe { self.loader.create_swapchain(&info, None) }
             .map_err(VkError::vk("create the swapchain"))?;
-        self.destroy_images(ctx);
-        // SAFETY: the old swapchain is retired and no work uses it (device idle).
-        unsafe { self.loader.destroy_swapchain(self.raw, None) };
-        self.raw = raw;
+        self.release_images();
+        let old = std::mem::replace(&mut self.raw, raw);
+        self.release
+            .release(vec![Garbage::Swapchain(self.loader.clone(), old)]);
         self.extent = extent;
         // SAFETY: raw is the live swapchain just created.
         let raws = unsafe { self.loader.get_swapchain_images(raw) }
@@ -229,7 +229,7 @@ impl Swapchain {
                 extent.height,
             )
             .with_usage(usage);
-            self.images.push(ctx.wrap_image(image, &desc)?);
+            self.images.push(ctx.wrap_swapchain_image(image, &desc)?);
             let sem = self.semaphore(ctx)?;
             self.render_semaphores.push(sem);
         }
@@ -281,29 +281,28 @@ impl Swapchain {
         }
     }
 
-    fn destroy_images(&mut self, ctx: &Context) {
-        for image in self.images.drain(..) {
-            // SAFETY: views were created by wrap_image; the images belong to the swapchain and
-            // are not destroyed here. The caller waited for the device.
-            unsafe { ctx.device.destroy_image_view(image.view, None) };
-        }
-        for s in self.render_semaphores.drain(..) {
-            // SAFETY: the device is idle, so no submission or presentation uses it.
-            unsafe { ctx.device.destroy_semaphore(s, None) };
-        }
+    /// Releases the views of the images and the semaphores that go with them.
+    fn release_images(&mut self) {
+        self.images.clear();
+        let semaphores = self.render_semaphores.drain(..).map(Garbage::Semaphore);
+        self.release.release(semaphores.collect());
     }
+}
 
-    /// Destroys the swapchain and the surface. Call before the window is dropped.
-    pub fn destroy(mut self, ctx: &Context) {
-        let _ = ctx.wait_idle();
-        self.destroy_images(ctx);
-        // SAFETY: the device is idle; nothing uses these objects any more.
-        unsafe {
-            for s in self.acquire_semaphores.drain(..) {
-                ctx.device.destroy_semaphore(s, None);
-            }
-            self.loader.destroy_swapchain(self.raw, None);
-            self.surface_loader.destroy_surface(self.surface, None);
-        }
+impl Drop for Swapchain {
+    fn drop(&mut self) {
+        // Presentation may still wait on the semaphores, and the surface must go before the
+        // window: wait for the device, so that everything below is destroyed now, in order
+        // (views and semaphores, the swapchain, then its surface).
+        self.release.wait_idle();
+        self.release_images();
+        let mut items: Vec<Garbage> = self
+            .acquire_semaphores
+            .drain(..)
+            .map(Garbage::Semaphore)
+            .collect();
+        items.push(Garbage::Swapchain(self.loader.clone(), self.raw));
+        items.push(Garbage::Surface(self.surface_loader.clone(), self.surface));
+        self.release.release(items);
     }
 }

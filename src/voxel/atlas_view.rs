@@ -88,7 +88,7 @@ pub fn object_atlas(
 pub struct AtlasViewPass {
     atlas_pipelines: AtlasPipelines,
     pipeline: ComputePipeline,
-    sampler: vk::Sampler,
+    sampler: crate::vk::Sampler,
     triangles: Buffer,
     triangle_count: u32,
     atlas: Arc<MeshAtlas>,
@@ -132,38 +132,20 @@ impl AtlasViewPass {
                 crate::vk::PushLayout::of::<GpuAtlasDebugPush>(),
                 &[],
             )?;
-            let sampler = match ctx.create_sampler(vk::Filter::NEAREST, false) {
-                Ok(s) => s,
-                Err(e) => {
-                    ctx.destroy_compute_pipeline(pipeline);
-                    return Err(e);
-                }
-            };
+            let sampler = ctx.create_sampler(vk::Filter::NEAREST, false)?;
             let bytes: &[u8] = if tris.is_empty() {
                 &[0; std::mem::size_of::<super::gpu_atlas::GpuAtlasTriangle>()]
             } else {
                 bytemuck::cast_slice(&tris)
             };
-            match ctx.upload_buffer(
+            let b = ctx.upload_buffer(
                 "atlas view triangles",
                 bytes,
                 vk::BufferUsageFlags::STORAGE_BUFFER,
-            ) {
-                Ok(b) => Ok((pipeline, sampler, b)),
-                Err(e) => {
-                    ctx.destroy_compute_pipeline(pipeline);
-                    ctx.destroy_sampler(sampler);
-                    Err(e)
-                }
-            }
+            )?;
+            Ok((pipeline, sampler, b))
         })();
-        let (pipeline, sampler, triangles) = match parts {
-            Ok(p) => p,
-            Err(e) => {
-                atlas_pipelines.destroy(ctx);
-                return Err(e.into());
-            }
-        };
+        let (pipeline, sampler, triangles) = parts?;
         Ok(Self {
             atlas_pipelines,
             pipeline,
@@ -202,7 +184,7 @@ impl AtlasViewPass {
             box_min: self.box_min.extend(0.0).to_array(),
             box_scale: self.box_scale.extend(0.0).to_array(),
         };
-        let (pipe, sampler) = (self.pipeline, self.sampler);
+        let (pipe, sampler) = (*self.pipeline, self.sampler.raw);
         let c = Shader::Compute;
         g.add_pass("atlas_debug")
             .pipeline(&pipe)
@@ -234,13 +216,6 @@ impl AtlasViewPass {
             cov.valid,
             100.0 * cov.valid as f64 / cov.shown.max(1) as f64,
         )
-    }
-
-    pub fn destroy(self, ctx: &Context) {
-        self.atlas_pipelines.destroy(ctx);
-        ctx.destroy_compute_pipeline(self.pipeline);
-        ctx.destroy_sampler(self.sampler);
-        ctx.destroy_buffer(self.triangles);
     }
 }
 

@@ -138,32 +138,17 @@ impl TriangleAttributeVolumes {
         }
         let scene = &tri_scene;
         let volumes = AttributeVolumes::new(ctx, grid)?;
-        let emission = match emits.then(|| emission_volume(ctx, grid)).transpose() {
-            Ok(e) => e,
-            Err(e) => {
-                volumes.destroy(ctx);
-                return Err(e);
-            }
-        };
+        let emission = emits.then(|| emission_volume(ctx, grid)).transpose()?;
         let writer = if scene.objects.is_empty() {
-            Ok(None)
+            None
         } else {
-            TriangleAttributes::new(ctx, scene, time_s, grid).map(Some)
+            Some(TriangleAttributes::new(ctx, scene, time_s, grid)?)
         };
-        match writer {
-            Ok(writer) => Ok(Self {
-                volumes,
-                emission,
-                writer,
-            }),
-            Err(e) => {
-                volumes.destroy(ctx);
-                if let Some(e) = emission {
-                    ctx.destroy_image(e);
-                }
-                Err(e)
-            }
-        }
+        Ok(Self {
+            volumes,
+            emission,
+            writer,
+        })
     }
 
     /// See [`TriangleAttributes::update`].
@@ -195,16 +180,6 @@ impl TriangleAttributeVolumes {
         }
         out
     }
-
-    pub fn destroy(self, ctx: &Context) {
-        if let Some(w) = self.writer {
-            w.destroy(ctx);
-        }
-        if let Some(e) = self.emission {
-            ctx.destroy_image(e);
-        }
-        self.volumes.destroy(ctx);
-    }
 }
 
 impl TriangleAttributes {
@@ -222,17 +197,7 @@ impl TriangleAttributes {
             &[(0, ATTRIBUTE_GROUP_SIZE)],
         )?;
         let resolve_pipeline =
-            match ctx.compute_pipeline("voxelize_attributes_resolve.comp", None, &[]) {
-                Ok(p) => p,
-                Err(e) => {
-                    ctx.destroy_compute_pipeline(pipeline);
-                    return Err(e);
-                }
-            };
-        let destroy_pipelines = || {
-            ctx.destroy_compute_pipeline(pipeline);
-            ctx.destroy_compute_pipeline(resolve_pipeline);
-        };
+            ctx.compute_pipeline("voxelize_attributes_resolve.comp", None, &[])?;
         let (tris, emissions) = attribute_triangles(scene, time_s);
         let bytes: &[u8] = if tris.is_empty() {
             &[0; 48]
@@ -276,13 +241,7 @@ impl TriangleAttributes {
             )
             .map(|buffer| (buffer, None))
         };
-        let (triangles, animated) = match made {
-            Ok(m) => m,
-            Err(e) => {
-                destroy_pipelines();
-                return Err(e);
-            }
-        };
+        let (triangles, animated) = made?;
         let ext = grid.extent_voxels();
         let desc = ImageDesc::new_2d("attribute owner volume", vk::Format::R32_UINT, ext.x, ext.y)
             .with_depth(ext.z)
@@ -290,37 +249,13 @@ impl TriangleAttributes {
         let none = vk::ClearColorValue {
             uint32: [NO_OWNER; 4],
         };
-        let owner = ctx.create_image(&desc).and_then(|owner| {
-            match ctx.clear_new_image(&owner, none, OWNER_STATE.info().layout) {
-                Ok(()) => Ok(owner),
-                Err(e) => {
-                    ctx.destroy_image(owner);
-                    Err(e)
-                }
-            }
-        });
-        let owner = match owner {
-            Ok(o) => o,
-            Err(e) => {
-                destroy_pipelines();
-                ctx.destroy_buffer(triangles);
-                return Err(e);
-            }
-        };
+        let owner = ctx.create_image(&desc)?;
+        ctx.clear_new_image(&owner, none, OWNER_STATE.info().layout)?;
         let capacity = animated.as_ref().map(|a| a.capacity);
-        let emission = match scene
+        let emission = scene
             .has_emission()
             .then(|| EmissionWriter::new(ctx, &emissions, capacity))
-            .transpose()
-        {
-            Ok(e) => e,
-            Err(e) => {
-                destroy_pipelines();
-                ctx.destroy_buffer(triangles);
-                ctx.destroy_image(owner);
-                return Err(e);
-            }
-        };
+            .transpose()?;
         Ok(Self {
             pipeline,
             resolve_pipeline,
@@ -403,7 +338,7 @@ impl TriangleAttributes {
             None => g.import_buffer(&self.triangles, read),
         };
         let (pipe, count, splits, vpush) =
-            (self.pipeline, self.triangle_count, self.splits, self.push);
+            (*self.pipeline, self.triangle_count, self.splits, self.push);
         let per_slot = self
             .animated
             .as_ref()
@@ -439,7 +374,7 @@ impl TriangleAttributes {
                 }
                 None => g.import_buffer(&w.emissions, read),
             };
-            let pipe = w.pipeline;
+            let pipe = *w.pipeline;
             g.add_pass("voxelize_emission")
                 .pipeline(&pipe)
                 .bind(0, emissions, read)
@@ -452,7 +387,7 @@ impl TriangleAttributes {
                         .dispatch(extent.0.div_ceil(8), extent.1.div_ceil(8), extent.2);
                 });
         }
-        let resolve = self.resolve_pipeline;
+        let resolve = *self.resolve_pipeline;
         g.add_pass("voxelize_attributes_resolve")
             .pipeline(&resolve)
             .bind(0, tris, read)
@@ -465,17 +400,6 @@ impl TriangleAttributes {
                 ctx.cmd
                     .dispatch(extent.0.div_ceil(8), extent.1.div_ceil(8), extent.2);
             });
-    }
-
-    pub fn destroy(self, ctx: &Context) {
-        ctx.destroy_compute_pipeline(self.pipeline);
-        ctx.destroy_compute_pipeline(self.resolve_pipeline);
-        ctx.destroy_buffer(self.triangles);
-        ctx.destroy_image(self.owner);
-        if let Some(w) = self.emission {
-            ctx.destroy_compute_pipeline(w.pipeline);
-            ctx.destroy_buffer(w.emissions);
-        }
     }
 }
 
@@ -493,7 +417,7 @@ impl EmissionWriter {
         } else {
             bytemuck::cast_slice(emissions)
         };
-        let made = match capacity {
+        match capacity {
             Some(capacity) => {
                 let region = (capacity * std::mem::size_of::<TriangleEmission>()) as u64;
                 ctx.create_buffer(&BufferDesc {
@@ -523,8 +447,7 @@ impl EmissionWriter {
                     pipeline,
                     emissions,
                 }),
-        };
-        made.inspect_err(|_| ctx.destroy_compute_pipeline(pipeline))
+        }
     }
 
     /// Writes frame slot `slot`'s region (of `capacity` triangles) of a per-slot buffer.
@@ -550,13 +473,8 @@ fn emission_volume(ctx: &Context, grid: &VoxelGrid) -> Result<Image, VkError> {
         );
     let image = ctx.create_image(&desc)?;
     let zero = vk::ClearColorValue { float32: [0.0; 4] };
-    match ctx.clear_new_image(&image, zero, ATTRIBUTE_VOLUME_STATE.info().layout) {
-        Ok(()) => Ok(image),
-        Err(e) => {
-            ctx.destroy_image(image);
-            Err(e)
-        }
-    }
+    ctx.clear_new_image(&image, zero, ATTRIBUTE_VOLUME_STATE.info().layout)?;
+    Ok(image)
 }
 
 /// Workgroups per attribute triangle: the triangle voxelizer's z splits (the shaders share

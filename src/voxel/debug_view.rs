@@ -164,7 +164,7 @@ impl GpuVoxelDebugPush {
 pub struct VoxelDebugPass {
     pipeline: ComputePipeline,
     lut: Buffer,
-    sampler: vk::Sampler,
+    sampler: crate::vk::Sampler,
     push: GpuVoxelDebugPush,
     albedo: AlbedoSource,
 }
@@ -207,19 +207,14 @@ impl VoxelDebugPass {
             settings,
         );
         let albedo = AlbedoSource::new(ctx, scene, time_s, settings.view, frame)?;
-        match Self::pipeline_parts(ctx) {
-            Ok((pipeline, lut, sampler)) => Ok(Self {
-                pipeline,
-                lut,
-                sampler,
-                push,
-                albedo,
-            }),
-            Err(e) => {
-                albedo.destroy(ctx);
-                Err(e.into())
-            }
-        }
+        let (pipeline, lut, sampler) = Self::pipeline_parts(ctx)?;
+        Ok(Self {
+            pipeline,
+            lut,
+            sampler,
+            push,
+            albedo,
+        })
     }
 
     /// For scenes with moving objects: rewrites the albedo volume of frame slot `slot` at
@@ -230,7 +225,9 @@ impl VoxelDebugPass {
         }
     }
 
-    fn pipeline_parts(ctx: &Context) -> Result<(ComputePipeline, Buffer, vk::Sampler), VkError> {
+    fn pipeline_parts(
+        ctx: &Context,
+    ) -> Result<(ComputePipeline, Buffer, crate::vk::Sampler), VkError> {
         let lut = ctx.upload_buffer(
             "ray mask lut",
             &RayMaskLut::new().to_gpu_bytes(),
@@ -241,21 +238,8 @@ impl VoxelDebugPass {
             crate::vk::PushLayout::of::<GpuVoxelDebugPush>(),
             &[],
         );
-        let pipeline = match pipeline {
-            Ok(p) => p,
-            Err(e) => {
-                ctx.destroy_buffer(lut);
-                return Err(e);
-            }
-        };
-        let sampler = match ctx.create_sampler(vk::Filter::NEAREST, false) {
-            Ok(s) => s,
-            Err(e) => {
-                ctx.destroy_buffer(lut);
-                ctx.destroy_compute_pipeline(pipeline);
-                return Err(e);
-            }
-        };
+        let pipeline = pipeline?;
+        let sampler = ctx.create_sampler(vk::Filter::NEAREST, false)?;
         Ok((pipeline, lut, sampler))
     }
 
@@ -275,8 +259,8 @@ impl VoxelDebugPass {
         debug_assert_eq!(push.dims[3] as u32 + 1, frame.voxels.mip_levels());
         let read = Access::StorageRead(Shader::Compute);
         let lut = g.import_buffer(&self.lut, read);
-        let pipe = self.pipeline;
-        let sampler = self.sampler;
+        let pipe = *self.pipeline;
+        let sampler = self.sampler.raw;
         let albedo = match &self.albedo {
             AlbedoSource::Volumes(v) => {
                 v.add_passes(g, |g, a, n| frame.add_attribute_passes(g, a, n))
@@ -298,13 +282,6 @@ impl VoxelDebugPass {
                 ctx.cmd
                     .dispatch(extent.0.div_ceil(8), extent.1.div_ceil(8), 1);
             });
-    }
-
-    pub fn destroy(self, ctx: &Context) {
-        ctx.destroy_compute_pipeline(self.pipeline);
-        ctx.destroy_buffer(self.lut);
-        ctx.destroy_sampler(self.sampler);
-        self.albedo.destroy(ctx);
     }
 }
 
@@ -333,18 +310,8 @@ impl AlbedoSource {
             .with_usage(vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST);
         let image = ctx.create_image(&desc)?;
         let zero = vk::ClearColorValue { float32: [0.0; 4] };
-        if let Err(e) = ctx.clear_new_image(&image, zero, ATTRIBUTE_VOLUME_STATE.info().layout) {
-            ctx.destroy_image(image);
-            return Err(e);
-        }
+        ctx.clear_new_image(&image, zero, ATTRIBUTE_VOLUME_STATE.info().layout)?;
         Ok(Self::Placeholder(image))
-    }
-
-    fn destroy(self, ctx: &Context) {
-        match self {
-            AlbedoSource::Volumes(v) => v.destroy(ctx),
-            AlbedoSource::Placeholder(image) => ctx.destroy_image(image),
-        }
     }
 }
 

@@ -204,7 +204,7 @@ pub struct VoxelPipelines {
     voxelize: ComputePipeline,
     group_size: u32,
     mip: ComputePipeline,
-    sampler: vk::Sampler,
+    sampler: crate::vk::Sampler,
 }
 
 /// Invocations per triangle of `voxelize_triangles` (see [`VoxelPipelines::with_group_size`]).
@@ -240,12 +240,6 @@ impl VoxelPipelines {
             sampler,
         })
     }
-
-    pub fn destroy(self, ctx: &Context) {
-        ctx.destroy_compute_pipeline(self.voxelize);
-        ctx.destroy_compute_pipeline(self.mip);
-        ctx.destroy_sampler(self.sampler);
-    }
 }
 
 /// State of the column image between frames: sampled by compute shaders (ray casting).
@@ -272,14 +266,11 @@ impl GpuVoxelGrid {
         debug_assert_eq!(desc.mip_levels, 1 + w.max(h).trailing_zeros());
         let image = ctx.create_image(&desc)?;
         // Imported images must be in their resting state before the first frame.
-        if let Err(e) = ctx.clear_new_image(
+        ctx.clear_new_image(
             &image,
             vk::ClearColorValue { uint32: [0; 4] },
             VOXEL_IMAGE_STATE.info().layout,
-        ) {
-            ctx.destroy_image(image);
-            return Err(e.into());
-        }
+        )?;
         Ok(Self { grid: *grid, image })
     }
 
@@ -290,10 +281,6 @@ impl GpuVoxelGrid {
     /// Imports the image into `g` in its resting state.
     pub fn import(&self, g: &mut RenderGraph) -> ImageHandle {
         g.import_image(&self.image, VOXEL_IMAGE_STATE)
-    }
-
-    pub fn destroy(self, ctx: &Context) {
-        ctx.destroy_image(self.image);
     }
 }
 
@@ -324,10 +311,6 @@ impl TriangleBuffer {
             count: triangles.len() as u32,
             bounds: triangles.iter().map(|&t| bounds(t)).collect(),
         })
-    }
-
-    pub fn destroy(self, ctx: &Context) {
-        ctx.destroy_buffer(self.buffer);
     }
 }
 
@@ -444,10 +427,6 @@ impl DynamicTriangles {
         }
         n as u32
     }
-
-    pub fn destroy(self, ctx: &Context) {
-        ctx.destroy_buffer(self.buffer);
-    }
 }
 
 /// A triangle set that the voxelizer reads.
@@ -551,7 +530,7 @@ pub fn add_voxelize_passes_gated(
     if sets.is_empty() {
         return;
     }
-    let pipe = pipelines.voxelize;
+    let pipe = *pipelines.voxelize;
     let group_size = pipelines.group_size;
     let grid = *grid;
     g.add_pass("voxelize_triangles")
@@ -656,8 +635,8 @@ fn mip_passes(
 ) {
     for level in 1..levels {
         let gate = gate.clone();
-        let pipe = pipelines.mip;
-        let sampler = pipelines.sampler;
+        let pipe = *pipelines.mip;
+        let sampler = pipelines.sampler.raw;
         let (w, h) = ((extent.0 >> level).max(1), (extent.1 >> level).max(1));
         let c = Shader::Compute;
         g.add_pass(&format!("voxel_mip_{level}"))
@@ -702,13 +681,8 @@ pub fn voxelize_static_timed(
     let mut g = RenderGraph::new();
     let h = g.import_buffer(&columns, Access::TransferRead);
     add_voxelize_passes(&mut g, pipelines, grid, h, ColumnBase::Clear, &[triangles]);
-    match run_once(ctx, g) {
-        Ok(timings) => Ok((columns, timings)),
-        Err(e) => {
-            ctx.destroy_buffer(columns);
-            Err(e.into())
-        }
-    }
+    let timings = run_once(ctx, g)?;
+    Ok((columns, timings))
 }
 
 /// What the renderer's frame voxelizes (absent: no voxel passes at all).
@@ -868,10 +842,7 @@ impl VoxelFrame {
             setup: Vec::new(),
             atlas_moved: false,
         };
-        if let Err(e) = frame.init(ctx, scene, t_s, atlas_mode) {
-            frame.destroy(ctx);
-            return Err(e);
-        }
+        frame.init(ctx, scene, t_s, atlas_mode)?;
         Ok(frame)
     }
 
@@ -1118,21 +1089,6 @@ impl VoxelFrame {
         }
         add_store_and_mip_passes_gated(g, &self.pipelines, &self.voxels, columns, image, gate);
         image
-    }
-
-    pub fn destroy(self, ctx: &Context) {
-        if let Some(b) = self.static_columns {
-            ctx.destroy_buffer(b);
-        }
-        if let Some(d) = self.dynamic {
-            d.triangles.destroy(ctx);
-        }
-        if let Some(a) = self.atlas {
-            a.destroy(ctx);
-        }
-        self.static_tris.destroy(ctx);
-        self.voxels.destroy(ctx);
-        self.pipelines.destroy(ctx);
     }
 }
 

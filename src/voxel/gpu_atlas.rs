@@ -124,7 +124,7 @@ pub struct AtlasPipelines {
     positions: GraphicsPipeline,
     points: ComputePipeline,
     voxelize: ComputePipeline,
-    sampler: vk::Sampler,
+    sampler: crate::vk::Sampler,
 }
 
 impl AtlasPipelines {
@@ -153,13 +153,6 @@ impl AtlasPipelines {
             voxelize,
             sampler,
         })
-    }
-
-    pub fn destroy(self, ctx: &Context) {
-        ctx.destroy_graphics_pipeline(self.positions);
-        ctx.destroy_compute_pipeline(self.points);
-        ctx.destroy_compute_pipeline(self.voxelize);
-        ctx.destroy_sampler(self.sampler);
     }
 }
 
@@ -192,13 +185,7 @@ pub struct AtlasPoints {
     pub setup_timings: Vec<PassTiming>,
 }
 
-impl AtlasPoints {
-    pub fn destroy(self, ctx: &Context) {
-        for c in self.chunks {
-            ctx.destroy_buffer(c.buffer);
-        }
-    }
-}
+impl AtlasPoints {}
 
 /// The bytes one point-list chunk may hold on `ctx`'s device: its storage-buffer range,
 /// whole points only.
@@ -266,7 +253,7 @@ pub fn add_atlas_positions_pass(
     (w, h): (u32, u32),
 ) -> ImageHandle {
     let image = g.create_image(ImageDesc::new_2d("position atlas", ATLAS_FORMAT, w, h));
-    let (pipe, size) = (pipes.positions, [w as f32, h as f32, 0.0, 0.0]);
+    let (pipe, size) = (*pipes.positions, [w as f32, h as f32, 0.0, 0.0]);
     g.add_pass("atlas_positions")
         .pipeline(&pipe)
         .bind(0, triangles, Access::StorageRead(Shader::Graphics))
@@ -334,116 +321,100 @@ pub fn render_atlas_points_chunked(
         vk::BufferUsageFlags::STORAGE_BUFFER,
     )?;
     let mut scratch = Vec::with_capacity(bands.len());
-    let result = (|| {
-        for (i, &(_, rows)) in bands.iter().enumerate() {
-            scratch.push(ctx.create_buffer(&BufferDesc {
-                name: format!("atlas points (scratch band {i})"),
-                size_bytes: SCRATCH_HEADER_BYTES + u64::from(w) * u64::from(rows) * POINT_BYTES,
-                usage: vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
-                location: MemoryLocation::GpuToCpu,
-            })?);
+    for (i, &(_, rows)) in bands.iter().enumerate() {
+        scratch.push(ctx.create_buffer(&BufferDesc {
+            name: format!("atlas points (scratch band {i})"),
+            size_bytes: SCRATCH_HEADER_BYTES + u64::from(w) * u64::from(rows) * POINT_BYTES,
+            usage: vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+            location: MemoryLocation::GpuToCpu,
+        })?);
+    }
+    let mut g = RenderGraph::new();
+    let tri_h = g.import_buffer(&tri_buffer, Access::StorageRead(Shader::Graphics));
+    let outs: Vec<(BufferHandle, u32, u32)> = scratch
+        .iter()
+        .zip(&bands)
+        .map(|(b, &(row0, rows))| (g.import_buffer(b, Access::HostRead), row0, rows))
+        .collect();
+    let image = add_atlas_positions_pass(&mut g, pipes, tri_h, tris.len() as u32, (w, h));
+    let mut clear = g.add_pass("atlas_points_clear");
+    for &(out, _, _) in &outs {
+        clear = clear.write(out, Access::TransferWrite);
+    }
+    let cleared = outs.clone();
+    clear.record(move |ctx| {
+        for &(out, _, _) in &cleared {
+            ctx.cmd.fill_buffer(ctx.buffer(out).raw, 0);
         }
-        let mut g = RenderGraph::new();
-        let tri_h = g.import_buffer(&tri_buffer, Access::StorageRead(Shader::Graphics));
-        let outs: Vec<(BufferHandle, u32, u32)> = scratch
-            .iter()
-            .zip(&bands)
-            .map(|(b, &(row0, rows))| (g.import_buffer(b, Access::HostRead), row0, rows))
-            .collect();
-        let image = add_atlas_positions_pass(&mut g, pipes, tri_h, tris.len() as u32, (w, h));
-        let mut clear = g.add_pass("atlas_points_clear");
-        for &(out, _, _) in &outs {
-            clear = clear.write(out, Access::TransferWrite);
-        }
-        let cleared = outs.clone();
-        clear.record(move |ctx| {
-            for &(out, _, _) in &cleared {
-                ctx.cmd.fill_buffer(ctx.buffer(out).raw, 0);
+    });
+    let (pipe, sampler) = (*pipes.points, pipes.sampler.raw);
+    let bands_h = outs.clone();
+    g.add_pass("atlas_points")
+        .pipeline(&pipe)
+        .bind_sampled(0, image, sampler, Shader::Compute)
+        .bind_one_of(
+            1,
+            outs.iter().map(|o| o.0),
+            Access::StorageReadWrite(Shader::Compute),
+        )
+        .record(move |ctx| {
+            for &(out, row0, rows) in &bands_h {
+                ctx.bind_with(&pipe, &[(1, out)]);
+                ctx.cmd.push_constants(
+                    &pipe,
+                    bytemuck::bytes_of(&GpuAtlasPointsPush {
+                        row0,
+                        rows,
+                        _pad: [0; 2],
+                    }),
+                );
+                ctx.cmd.dispatch(w.div_ceil(8), rows.div_ceil(8), 1);
             }
         });
-        let (pipe, sampler) = (pipes.points, pipes.sampler);
-        let bands_h = outs.clone();
-        g.add_pass("atlas_points")
-            .pipeline(&pipe)
-            .bind_sampled(0, image, sampler, Shader::Compute)
-            .bind_one_of(
-                1,
-                outs.iter().map(|o| o.0),
-                Access::StorageReadWrite(Shader::Compute),
-            )
-            .record(move |ctx| {
-                for &(out, row0, rows) in &bands_h {
-                    ctx.bind_with(&pipe, &[(1, out)]);
-                    ctx.cmd.push_constants(
-                        &pipe,
-                        bytemuck::bytes_of(&GpuAtlasPointsPush {
-                            row0,
-                            rows,
-                            _pad: [0; 2],
-                        }),
-                    );
-                    ctx.cmd.dispatch(w.div_ceil(8), rows.div_ceil(8), 1);
-                }
-            });
-        for &(out, _, _) in &outs {
-            g.mark_output(out);
-        }
-        let setup_timings = run_once(ctx, g)?;
-        let mut points: Vec<[u32; 4]> = Vec::new();
-        for (b, &(_, rows)) in scratch.iter().zip(&bands) {
-            let bytes = b.mapped().unwrap_or(&[]);
-            let count = bytes
-                .get(..4)
-                .map_or(0, |b| u32::from_ne_bytes([b[0], b[1], b[2], b[3]]))
-                .min(w.saturating_mul(rows));
-            let first = SCRATCH_HEADER_BYTES as usize;
-            let raw = bytes
-                .get(first..first + count as usize * POINT_BYTES as usize)
-                .unwrap_or(&[]);
-            points.extend(
-                raw.chunks_exact(POINT_BYTES as usize)
-                    .map(bytemuck::pod_read_unaligned::<[u32; 4]>),
-            );
-        }
-        // `atlas_points` appends in whatever order its atomics ran. Sorted, the list has one
-        // order per atlas (whatever the bands), so `voxelize_atlas_volumes`, whose additive
-        // blending sums in primitive order (across the chunks' draws too), gives the same
-        // f16 sums (hence volumes) every time it is built.
-        points.sort_unstable_by_key(|p| (p[3], p[0], p[1], p[2]));
-        let per_chunk = (chunk_bytes / POINT_BYTES).max(1) as usize;
-        let mut chunks = Vec::with_capacity(points.len().div_ceil(per_chunk));
-        let uploaded = (|| {
-            for (i, c) in points.chunks(per_chunk).enumerate() {
-                let buffer = ctx.upload_buffer(
-                    &format!("atlas points (chunk {i})"),
-                    bytemuck::cast_slice(c),
-                    vk::BufferUsageFlags::STORAGE_BUFFER,
-                )?;
-                chunks.push(PointChunk {
-                    buffer,
-                    count: c.len() as u32,
-                });
-            }
-            Ok::<_, VkError>(())
-        })();
-        if let Err(e) = uploaded {
-            for c in chunks {
-                ctx.destroy_buffer(c.buffer);
-            }
-            return Err(e.into());
-        }
-        Ok(AtlasPoints {
-            chunks,
-            count: points.len() as u64,
-            atlas_extent: (w, h),
-            setup_timings,
-        })
-    })();
-    for b in scratch {
-        ctx.destroy_buffer(b);
+    for &(out, _, _) in &outs {
+        g.mark_output(out);
     }
-    ctx.destroy_buffer(tri_buffer);
-    result
+    let setup_timings = run_once(ctx, g)?;
+    let mut points: Vec<[u32; 4]> = Vec::new();
+    for (b, &(_, rows)) in scratch.iter().zip(&bands) {
+        let bytes = b.mapped().unwrap_or(&[]);
+        let count = bytes
+            .get(..4)
+            .map_or(0, |b| u32::from_ne_bytes([b[0], b[1], b[2], b[3]]))
+            .min(w.saturating_mul(rows));
+        let first = SCRATCH_HEADER_BYTES as usize;
+        let raw = bytes
+            .get(first..first + count as usize * POINT_BYTES as usize)
+            .unwrap_or(&[]);
+        points.extend(
+            raw.chunks_exact(POINT_BYTES as usize)
+                .map(bytemuck::pod_read_unaligned::<[u32; 4]>),
+        );
+    }
+    // `atlas_points` appends in whatever order its atomics ran. Sorted, the list has one
+    // order per atlas (whatever the bands), so `voxelize_atlas_volumes`, whose additive
+    // blending sums in primitive order (across the chunks' draws too), gives the same
+    // f16 sums (hence volumes) every time it is built.
+    points.sort_unstable_by_key(|p| (p[3], p[0], p[1], p[2]));
+    let per_chunk = (chunk_bytes / POINT_BYTES).max(1) as usize;
+    let mut chunks = Vec::with_capacity(points.len().div_ceil(per_chunk));
+    for (i, c) in points.chunks(per_chunk).enumerate() {
+        let buffer = ctx.upload_buffer(
+            &format!("atlas points (chunk {i})"),
+            bytemuck::cast_slice(c),
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+        )?;
+        chunks.push(PointChunk {
+            buffer,
+            count: c.len() as u32,
+        });
+    }
+    Ok(AtlasPoints {
+        chunks,
+        count: points.len() as u64,
+        atlas_extent: (w, h),
+        setup_timings,
+    })
 }
 
 /// A model matrix per frame slot, written by the host after the slot's fence.
@@ -608,7 +579,7 @@ pub fn add_voxelize_atlas_pass(
     if sets.is_empty() {
         return;
     }
-    let (pipe, grid) = (pipes.voxelize, *grid);
+    let (pipe, grid) = (*pipes.voxelize, *grid);
     let (w, h) = image_extent(&grid);
     let chunks: Vec<BufferHandle> = sets.iter().flat_map(ImportedInstance::handles).collect();
     g.add_pass("voxelize_atlas")
@@ -812,10 +783,7 @@ impl AtlasScene {
             }
             Ok(())
         })();
-        if let Err(e) = r {
-            me.destroy(ctx);
-            return Err(e);
-        }
+        r?;
         Ok(me)
     }
 
@@ -917,16 +885,6 @@ impl AtlasScene {
         let inst = self.instances(statics, dynamics);
         add_voxelize_atlas_pass(g, &self.pipelines, grid, columns, &inst, gate);
     }
-
-    pub fn destroy(self, ctx: &Context) {
-        if let Some(v) = self.volumes {
-            v.destroy(ctx);
-        }
-        for p in self.points {
-            p.destroy(ctx);
-        }
-        self.pipelines.destroy(ctx);
-    }
 }
 
 /// Voxelizes the static atlas instances once into a persistent column buffer (resting state
@@ -958,13 +916,8 @@ pub fn voxelize_static_atlas(
         &[triangles],
     );
     atlas.add_pass(&mut g, grid, h, true, false, None);
-    match run_once(ctx, g) {
-        Ok(timings) => Ok((columns, timings)),
-        Err(e) => {
-            ctx.destroy_buffer(columns);
-            Err(e.into())
-        }
-    }
+    let timings = run_once(ctx, g)?;
+    Ok((columns, timings))
 }
 
 #[cfg(test)]

@@ -40,14 +40,8 @@ impl AtlasRasterBits {
             "single-bit lut",
             &ColumnLut1d::single_bit().to_gpu_bytes(),
             vk::BufferUsageFlags::STORAGE_BUFFER,
-        );
-        match lut {
-            Ok(lut) => Ok(Self { pipe, lut }),
-            Err(e) => {
-                ctx.destroy_graphics_pipeline(pipe);
-                Err(e)
-            }
-        }
+        )?;
+        Ok(Self { pipe, lut })
     }
 
     /// Declares `voxelize_atlas_bits`: clears `image` (a 2D array of [`COLUMN_FORMAT`] with
@@ -65,7 +59,7 @@ impl AtlasRasterBits {
         let sets: Vec<ImportedInstance> =
             instances.iter().filter_map(|i| i.import(g, read)).collect();
         let chunks: Vec<_> = sets.iter().flat_map(ImportedInstance::handles).collect();
-        let (pipe, grid) = (self.pipe, *grid);
+        let (pipe, grid) = (*self.pipe, *grid);
         let (w, h) = image_extent(&grid);
         // Cleared on load, so the logic op reads only what this pass wrote; the image is the
         // whole (padded) grid, so the viewport maps columns to texels 1:1.
@@ -90,10 +84,5 @@ impl AtlasRasterBits {
                 }
                 ctx.cmd.end_rendering();
             });
-    }
-
-    pub fn destroy(self, ctx: &Context) {
-        ctx.destroy_graphics_pipeline(self.pipe);
-        ctx.destroy_buffer(self.lut);
     }
 }

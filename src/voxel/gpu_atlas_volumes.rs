@@ -35,7 +35,7 @@ use crate::graph::{Access, BufferHandle, ImageHandle, Load, RenderGraph, Shader}
 use crate::scene::Scene;
 use crate::vk::{
     vk, Buffer, ComputePipeline, Context, GraphicsPipeline, GraphicsPipelineDesc, Image, ImageDesc,
-    VkError,
+    PipelineHandle, VkError,
 };
 use glam::Vec3;
 use std::sync::Arc;
@@ -83,21 +83,12 @@ impl AttributeVolumes {
         let resting = VOLUME_STATE.info().layout;
         let zero = vk::ClearColorValue { float32: [0.0; 4] };
         let albedo = ctx.create_image(&volume("albedo volume", ALBEDO_FORMAT))?;
-        let normal = match ctx.create_image(&volume("normal volume", NORMAL_FORMAT)) {
-            Ok(n) => n,
-            Err(e) => {
-                ctx.destroy_image(albedo);
-                return Err(e);
-            }
-        };
+        let normal = ctx.create_image(&volume("normal volume", NORMAL_FORMAT))?;
         let me = Self { albedo, normal };
         let cleared = ctx
             .clear_new_image(&me.albedo, zero, resting)
             .and_then(|()| ctx.clear_new_image(&me.normal, zero, resting));
-        if let Err(e) = cleared {
-            me.destroy(ctx);
-            return Err(e);
-        }
+        cleared?;
         Ok(me)
     }
 
@@ -108,18 +99,13 @@ impl AttributeVolumes {
             g.import_image(&self.normal, VOLUME_STATE),
         )
     }
-
-    pub fn destroy(self, ctx: &Context) {
-        ctx.destroy_image(self.albedo);
-        ctx.destroy_image(self.normal);
-    }
 }
 
 /// Pipelines, per-instance triangle attributes and the static objects' sums.
 pub struct AtlasVolumes {
     splat: GraphicsPipeline,
     resolve: ComputePipeline,
-    sampler: vk::Sampler,
+    sampler: crate::vk::Sampler,
     /// Per instance (static instances first, then dynamic, as in [`AtlasScene`]) and per
     /// sequence frame (one for rigid objects): the frame's triangles in model space with
     /// the object's material albedo in the vertices' w (the layout of
@@ -169,26 +155,16 @@ impl AtlasVolumes {
             crate::vk::PushLayout::of::<GpuAtlasResolvePush>(),
             &[],
         );
-        let resolve = match resolve {
-            Ok(r) => r,
-            Err(e) => {
-                ctx.destroy_graphics_pipeline(splat);
-                return Err(e.into());
-            }
-        };
         let mut me = Self {
             splat,
-            resolve,
-            sampler: vk::Sampler::null(),
+            resolve: resolve?,
+            sampler: ctx.create_sampler(vk::Filter::NEAREST, false)?,
             triangles: Vec::new(),
             static_sums: None,
             resolve_once: Arc::new(SlotGate::default()),
             resolved: false,
         };
-        if let Err(e) = me.init(ctx, atlas, scene, grid, statics_once) {
-            me.destroy(ctx);
-            return Err(e);
-        }
+        me.init(ctx, atlas, scene, grid, statics_once)?;
         Ok(me)
     }
 
@@ -200,7 +176,6 @@ impl AtlasVolumes {
         grid: &VoxelGrid,
         statics_once: bool,
     ) -> Result<(), GpuVoxelError> {
-        self.sampler = ctx.create_sampler(vk::Filter::NEAREST, false)?;
         let objects = atlas
             .static_instances
             .iter()
@@ -251,13 +226,7 @@ impl AtlasVolumes {
         let zero = vk::ClearColorValue { float32: [0.0; 4] };
         let resting = VOLUME_STATE.info().layout;
         let albedo = ctx.create_image(&sums("atlas static albedo sums"))?;
-        let normal = match ctx.create_image(&sums("atlas static normal sums")) {
-            Ok(n) => n,
-            Err(e) => {
-                ctx.destroy_image(albedo);
-                return Err(e.into());
-            }
-        };
+        let normal = ctx.create_image(&sums("atlas static normal sums"))?;
         self.static_sums = Some((albedo, normal));
         let Some((albedo, normal)) = &self.static_sums else {
             return Ok(());
@@ -270,7 +239,7 @@ impl AtlasVolumes {
             g.import_image(normal, VOLUME_STATE),
         );
         let splats = self.splats(&mut g, atlas, true, false);
-        add_splat_pass(&mut g, self.splat, grid, targets, splats, None);
+        add_splat_pass(&mut g, *self.splat, grid, targets, splats, None);
         run_once(ctx, g)?;
         Ok(())
     }
@@ -339,7 +308,7 @@ impl AtlasVolumes {
                 g.create_image(ImageDesc::new_2d(name, SUM_FORMAT, ext.x, ext.y).with_layers(ext.z))
             };
             let targets = (sums("atlas albedo sums"), sums("atlas normal sums"));
-            add_splat_pass(g, self.splat, grid, targets, splats, gate.clone());
+            add_splat_pass(g, *self.splat, grid, targets, splats, gate.clone());
             Some(targets)
         };
         let static_sums = self.static_sums.as_ref().map(|(a, n)| {
@@ -360,7 +329,7 @@ impl AtlasVolumes {
                 u32::from(static_sums.is_some()) | (u32::from(frame_sums.is_some()) << 1),
             ],
         };
-        let (pipe, sampler, c) = (self.resolve, self.sampler, Shader::Compute);
+        let (pipe, sampler, c) = (*self.resolve, self.sampler.raw, Shader::Compute);
         // Without a slot gate (nothing ever moves) the first frame resolves, once.
         let gate = gate.unwrap_or_else(|| self.resolve_once.clone());
         g.add_pass("voxelize_atlas_resolve")
@@ -379,28 +348,13 @@ impl AtlasVolumes {
                     .dispatch(ext.x.div_ceil(8), ext.y.div_ceil(8), ext.z);
             });
     }
-
-    pub fn destroy(self, ctx: &Context) {
-        if let Some((a, n)) = self.static_sums {
-            ctx.destroy_image(a);
-            ctx.destroy_image(n);
-        }
-        for b in self.triangles.into_iter().flatten() {
-            ctx.destroy_buffer(b);
-        }
-        if self.sampler != vk::Sampler::null() {
-            ctx.destroy_sampler(self.sampler);
-        }
-        ctx.destroy_graphics_pipeline(self.splat);
-        ctx.destroy_compute_pipeline(self.resolve);
-    }
 }
 
 /// Declares `voxelize_atlas_volumes`: clears the sum layers `(albedo, normal)` and draws
 /// every splat's points into them, one draw per point-list chunk. Records only in slots `gate` leaves open.
 fn add_splat_pass(
     g: &mut RenderGraph,
-    pipe: GraphicsPipeline,
+    pipe: PipelineHandle,
     grid: &VoxelGrid,
     (albedo, normal): (ImageHandle, ImageHandle),
     splats: Vec<Splat>,

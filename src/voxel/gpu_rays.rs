@@ -162,22 +162,15 @@ impl VoxelRayCaster {
         )?;
         let mut results = Vec::new();
         for m in methods {
-            match ctx.create_buffer(&BufferDesc {
+            results.push(ctx.create_buffer(&BufferDesc {
                 name: format!("ray results {}", m.name()),
                 size_bytes: (rays.len() * std::mem::size_of::<GpuRayResult>()) as u64,
                 usage: vk::BufferUsageFlags::STORAGE_BUFFER,
                 location: MemoryLocation::GpuToCpu,
-            }) {
-                Ok(b) => results.push(b),
-                Err(e) => {
-                    results.into_iter().for_each(|b| ctx.destroy_buffer(b));
-                    ctx.destroy_buffer(ray_buf);
-                    return Err(e.into());
-                }
-            }
+            })?);
         }
         let out = self.run(ctx, &ray_buf, &results, rays.len() as u32, methods);
-        let batches = out.map(|times| {
+        out.map(|times| {
             methods
                 .iter()
                 .zip(&results)
@@ -188,10 +181,7 @@ impl VoxelRayCaster {
                     gpu_ms,
                 })
                 .collect()
-        });
-        results.into_iter().for_each(|b| ctx.destroy_buffer(b));
-        ctx.destroy_buffer(ray_buf);
-        batches
+        })
     }
 
     fn run(
@@ -208,7 +198,7 @@ impl VoxelRayCaster {
         let levels = g.import_buffer(&self.levels, read);
         let lut = g.import_buffer(&self.lut, read);
         let ray_h = g.import_buffer(rays, read);
-        let pipe = self.pipeline;
+        let pipe = *self.pipeline;
         let dims = [
             self.dims.x as i32,
             self.dims.y as i32,
@@ -246,28 +236,12 @@ impl VoxelRayCaster {
                 });
         }
         let exec = GraphExecutor::new(ctx, g, 1)?;
-        let run = (|| -> Result<Vec<f64>, RayCastError> {
-            let mut frames = FrameLoop::new(ctx, 1, exec.compiled().order.len() as u32)?;
-            let r = (|| -> Result<Vec<f64>, RayCastError> {
-                let (slot, cmd, ts, _) = frames.begin(ctx)?;
-                exec.record(&cmd, slot, ts);
-                frames.submit(ctx, &[], &[])?;
-                let timings = frames.finish(ctx)?.pop().unwrap_or_default();
-                Ok(timings.iter().map(|t| t.gpu_ms).collect())
-            })();
-            let _ = ctx.wait_idle();
-            frames.destroy(ctx);
-            r
-        })();
-        exec.destroy(ctx);
-        run
-    }
-
-    pub fn destroy(self, ctx: &Context) {
-        ctx.destroy_compute_pipeline(self.pipeline);
-        ctx.destroy_buffer(self.columns);
-        ctx.destroy_buffer(self.levels);
-        ctx.destroy_buffer(self.lut);
+        let mut frames = FrameLoop::new(ctx, 1, exec.compiled().order.len() as u32)?;
+        let (slot, cmd, ts, _) = frames.begin(ctx)?;
+        exec.record(&cmd, slot, ts);
+        frames.submit(ctx, &[], &[])?;
+        let timings = frames.finish(ctx)?.pop().unwrap_or_default();
+        Ok(timings.iter().map(|t| t.gpu_ms).collect())
     }
 }
 

@@ -103,7 +103,6 @@ pub fn run_frames(
     let exec = GraphExecutor::new(ctx, renderer.graph(), MAX_FRAMES_IN_FLIGHT).expect("graph");
     voxgi::graph::run_frames(ctx, &exec, frames, 0, |slot| renderer.write_frame(slot))
         .expect("frames run");
-    exec.destroy(ctx);
     renderer.hdr_image()
 }
 
@@ -205,12 +204,6 @@ impl VoxelReadback {
             out.push(crop);
         }
         out
-    }
-
-    pub fn destroy(self, ctx: &Context) {
-        for b in self.buffers {
-            ctx.destroy_buffer(b);
-        }
     }
 }
 
