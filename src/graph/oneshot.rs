@@ -18,20 +18,13 @@ pub enum OneShotError {
 /// Runs a graph once, waits, and returns the timings of its passes.
 pub fn run_once(ctx: &Context, graph: RenderGraph) -> Result<Vec<PassTiming>, OneShotError> {
     let exec = GraphExecutor::new(ctx, graph, 1)?;
-    let result = (|| -> Result<Vec<PassTiming>, VkError> {
-        let mut frames = FrameLoop::new(ctx, 1, exec.compiled().order.len() as u32)?;
-        let run = (|| -> Result<(), VkError> {
-            let (slot, cmd, ts, _) = frames.begin(ctx)?;
-            exec.record(&cmd, slot, ts);
-            frames.submit(ctx, &[], &[])
-        })();
-        let finished = frames.finish(ctx);
-        run?;
-        Ok(finished?.into_iter().last().unwrap_or_default())
-    })();
-    let _ = ctx.wait_idle();
-    drop(exec);
-    Ok(result?)
+    let mut frames = FrameLoop::new(ctx, 1, exec.compiled().order.len() as u32)?;
+    let (slot, cmd, ts, _) = frames.begin(ctx)?;
+    exec.record(&cmd, slot, ts);
+    let submitted = frames.submit(ctx, &[], &[]);
+    let finished = frames.finish(ctx);
+    submitted?;
+    Ok(finished?.into_iter().last().unwrap_or_default())
 }
 
 /// Runs `frames` frames of `exec` with `MAX_FRAMES_IN_FLIGHT` slots. Before recording each
@@ -64,7 +57,6 @@ pub fn run_frames(
         Ok(())
     })();
     let finished = frame_loop.finish(ctx);
-    drop(frame_loop);
     let _ = ctx.wait_idle();
     run?;
     let finished = finished?;

@@ -8,9 +8,9 @@
 use super::bits::BitHierarchy;
 use super::ray_mask::RayMaskLut;
 use super::traverse::{HitResult, TraversalParams};
-use crate::graph::{Access, GraphError, GraphExecutor, RenderGraph, Shader};
+use crate::graph::{run_once, Access, GraphError, OneShotError, RenderGraph, Shader};
 use crate::vk::{
-    vk, Buffer, BufferDesc, ComputePipeline, Context, FrameLoop, MemoryLocation, VkError,
+    vk, Buffer, BufferDesc, ComputePipeline, Context, MemoryLocation, VkError,
 };
 use bytemuck::{Pod, Zeroable};
 use glam::{UVec3, Vec3};
@@ -235,12 +235,10 @@ impl VoxelRayCaster {
                     ctx.cmd.dispatch(count.div_ceil(64), 1, 1);
                 });
         }
-        let exec = GraphExecutor::new(ctx, g, 1)?;
-        let mut frames = FrameLoop::new(ctx, 1, exec.compiled().order.len() as u32)?;
-        let (slot, cmd, ts, _) = frames.begin(ctx)?;
-        exec.record(&cmd, slot, ts);
-        frames.submit(ctx, &[], &[])?;
-        let timings = frames.finish(ctx)?.pop().unwrap_or_default();
+        let timings = run_once(ctx, g).map_err(|e| match e {
+            OneShotError::Graph(e) => RayCastError::Graph(e),
+            OneShotError::Vk(e) => RayCastError::Vk(e),
+        })?;
         Ok(timings.iter().map(|t| t.gpu_ms).collect())
     }
 }
