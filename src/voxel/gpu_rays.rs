@@ -9,9 +9,7 @@ use super::bits::BitHierarchy;
 use super::ray_mask::RayMaskLut;
 use super::traverse::{HitResult, TraversalParams};
 use crate::graph::{run_once, Access, GraphError, OneShotError, RenderGraph, Shader};
-use crate::vk::{
-    vk, Buffer, BufferDesc, ComputePipeline, Context, MemoryLocation, VkError,
-};
+use crate::vk::{vk, Buffer, BufferDesc, ComputePipeline, Context, MemoryLocation, VkError};
 use bytemuck::{Pod, Zeroable};
 use glam::{UVec3, Vec3};
 
