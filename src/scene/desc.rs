@@ -65,6 +65,8 @@ pub(crate) struct GiDesc {
     pub vpl_bounces: Option<i64>,
     pub vpl_d_min_voxels: Option<f32>,
     pub vpl_visibility: Option<String>,
+    pub vpl_normalize: Option<String>,
+    pub vpl_spot_sampling: Option<String>,
 }
 
 #[derive(Clone, Debug, Deserialize)]
@@ -473,14 +475,14 @@ type CountCheck<'a> = dyn Fn(&Limit<u32>, Option<i64>) -> Result<Option<u32>, Sc
 type LengthCheck<'a> = dyn Fn(&Limit<f32>, Option<f32>) -> Result<Option<f32>, SceneError> + 'a;
 
 /// The `[gi]` table's VPL keys (`vpls`, `vpl_pattern`, `vpl_bounces`, `vpl_d_min_voxels`,
-/// `vpl_visibility`).
+/// `vpl_visibility`, `vpl_normalize`, `vpl_spot_sampling`).
 fn build_vpl(
     ck: &Check<'_>,
     g: &GiDesc,
     count: &CountCheck<'_>,
     length: &LengthCheck<'_>,
 ) -> Result<crate::scene::vpl_settings::VplOverrides, SceneError> {
-    use crate::scene::vpl_settings::VISIBILITY_NAMES;
+    use crate::scene::vpl_settings::{NORMALIZE_NAMES, SPOT_SAMPLING_NAMES, VISIBILITY_NAMES};
     let pattern = match g.vpl_pattern {
         None => None,
         Some([n, m]) => Some([
@@ -509,7 +511,35 @@ fn build_vpl(
         bounces: count(&limits::VPL_BOUNCES, g.vpl_bounces)?,
         d_min_voxels: length(&limits::VPL_D_MIN, g.vpl_d_min_voxels)?,
         visibility,
+        normalize: named(ck, "gi.vpl_normalize", &NORMALIZE_NAMES, &g.vpl_normalize)?,
+        spot_sampling: named(
+            ck,
+            "gi.vpl_spot_sampling",
+            &SPOT_SAMPLING_NAMES,
+            &g.vpl_spot_sampling,
+        )?,
     })
+}
+
+/// The value named `name` among `names` (a `[gi]` key's choices); an error listing them.
+fn named<T: Copy>(
+    ck: &Check<'_>,
+    key: &str,
+    names: &[(&str, T)],
+    name: &Option<String>,
+) -> Result<Option<T>, SceneError> {
+    let Some(name) = name else { return Ok(None) };
+    names
+        .iter()
+        .find(|(n, _)| *n == name.as_str())
+        .map(|&(_, v)| Some(v))
+        .ok_or_else(|| {
+            let all: Vec<String> = names.iter().map(|(n, _)| format!("\"{n}\"")).collect();
+            ck.invalid(
+                key,
+                format!("unknown value \"{name}\"; expected {}", all.join(" or ")),
+            )
+        })
 }
 
 /// A limit's message without the key, which the scene error puts in front itself.

@@ -92,6 +92,8 @@
 //! vpl_bounces = 2                   # VPL bounces, 1..=8 [2]
 //! vpl_d_min_voxels = 8.0            # d_min of the VPL falloff, voxel diagonals >= 0 [8]
 //! vpl_visibility = "voxel"          # "voxel" (segment test) | "none" ["voxel"]
+//! vpl_normalize = "all"             # VPL flux over "all" K samples | the "valid" ones ["all"]
+//! vpl_spot_sampling = "solid-angle" # spot VPLs "solid-angle" (cone) | "disk" (image plane)
 //! ```
 //!
 //! A missing texture (or MTL file) is not an error: it is logged with `log::warn!` and the
