@@ -107,6 +107,8 @@ pub(crate) struct ObjectDesc {
     pub name: Option<String>,
     pub mesh: Option<String>,
     pub builtin: Option<String>,
+    /// OBJ files without normals: faces meeting at more than this (degrees) stay sharp.
+    pub crease_deg: Option<f32>,
     pub translate: Option<[f32; 3]>,
     pub rotate_deg: Option<[f32; 3]>,
     pub scale: Option<ScalarOrVec3>,
@@ -542,6 +544,19 @@ fn named<T: Copy>(
         })
 }
 
+/// An object's `crease_deg`: in [0, 180], default 60.
+fn crease_angle(ck: &Check<'_>, field: &str, v: Option<f32>) -> Result<f32, SceneError> {
+    let deg = ck.scalar(field, v.unwrap_or(super::crease::DEFAULT_CREASE_DEG))?;
+    if (0.0..=180.0).contains(&deg) {
+        Ok(deg)
+    } else {
+        Err(ck.invalid(
+            field,
+            format!("{deg} is not an angle between faces; expected degrees in [0, 180]"),
+        ))
+    }
+}
+
 /// A limit's message without the key, which the scene error puts in front itself.
 fn limit_message(e: &limits::LimitError) -> String {
     format!("{}; expected {}", e.value, e.expected)
@@ -692,6 +707,12 @@ fn build_object(
         &Transform::default(),
     )?;
     let sequence = o.animation.as_ref().and_then(|a| a.obj_sequence.as_ref());
+    if o.crease_deg.is_some() && o.mesh.is_none() {
+        return Err(ck.invalid(
+            &f("crease_deg"),
+            "`crease_deg` sets the normals of an OBJ `mesh`; remove it here",
+        ));
+    }
     let (mesh, default_name) = match (&o.mesh, &o.builtin) {
         (Some(_), Some(_)) => {
             return Err(ck.invalid(
@@ -722,7 +743,9 @@ fn build_object(
                 .file_stem()
                 .map(|s| s.to_string_lossy().into_owned())
                 .unwrap_or_else(|| m.clone());
-            let idx = store.obj_mesh(&path, "OBJ mesh", &field_ref(ck.file, &f("mesh")))?;
+            let crease_deg = crease_angle(ck, &f("crease_deg"), o.crease_deg)?;
+            let referenced_by = field_ref(ck.file, &f("mesh"));
+            let idx = store.obj_mesh(&path, "OBJ mesh", &referenced_by, crease_deg)?;
             (Some(idx), name)
         }
         (None, Some(b)) => match store.builtin_mesh(b) {
@@ -1009,7 +1032,9 @@ fn build_animation(
                     )
                 })?;
                 let path = base_dir.join(&name);
-                let idx = store.obj_mesh(&path, "OBJ sequence frame", &referenced_by)?;
+                // Every frame smooth (crease 180°) so that no frame splits other vertices
+                // than the first: the frames must keep one topology.
+                let idx = store.obj_mesh(&path, "OBJ sequence frame", &referenced_by, 180.0)?;
                 if let Some(&m0) = meshes.first() {
                     check_same_topology(store, m0, idx, &path, &first_path, &referenced_by)?;
                 } else {

@@ -40,6 +40,8 @@
 //! [[objects]]                       # at least one
 //! name = "bunny"                    # optional, for the UI and logs
 //! mesh = "../meshes/bunny.obj"      # an OBJ file (its MTL and textures beside it), or:
+//! crease_deg = 60.0                 # OBJ without `vn` or `s` lines: faces meeting at more
+//!                                   #   than this stay sharp, vertices split [60]
 //! # builtin = "cube"                # "cube" (1 m, centered), "quad" (1 m², XZ plane, facing
 //!                                   #   +Y), "sphere" (diameter 1 m), "cornell_walls",
 //!                                   #   "cornell_short_block", "cornell_tall_block"
@@ -107,6 +109,7 @@
 
 mod builtin;
 mod camera;
+mod crease;
 mod cull;
 mod desc;
 mod error;
