@@ -276,3 +276,53 @@ fn a_1e6_a_1e_minus_6_and_a_zero_light_together_add_up() {
         }
     }
 }
+
+/// `scene` moved by `offset_m` (objects, camera and lights together).
+fn translated(scene: &Scene, offset_m: glam::Vec3) -> Scene {
+    let mut scene = scene.clone();
+    for o in &mut scene.objects {
+        assert!(o.animation.is_none(), "the test scene is static");
+        o.transform.translate += offset_m;
+    }
+    scene.camera.position += offset_m;
+    for light in &mut scene.lights {
+        match light {
+            Light::Point { position, .. } | Light::Spot { position, .. } => *position += offset_m,
+            Light::Directional { .. } => {}
+        }
+    }
+    scene
+}
+
+/// Mean absolute difference of `img` from `unit` relative to `unit`'s mean, and the number
+/// of channel values off by more than 1e-3 of `unit`'s peak.
+fn difference(unit: &[[f32; 3]], img: &[[f32; 3]]) -> (f64, usize) {
+    let diff: Vec<f32> = unit
+        .iter()
+        .zip(img)
+        .flat_map(|(a, b)| (0..3).map(move |c| (a[c] - b[c]).abs()))
+        .collect();
+    let mean = unit.iter().flatten().map(|&c| f64::from(c)).sum::<f64>() / diff.len() as f64;
+    let mean_rel = diff.iter().map(|&d| f64::from(d)).sum::<f64>() / diff.len() as f64 / mean;
+    let peak = unit.iter().flatten().copied().fold(0.0f32, f32::max);
+    (mean_rel, diff.iter().filter(|&&d| d > 1e-3 * peak).count())
+}
+
+#[test]
+fn a_cornell_box_far_from_the_origin_renders_like_the_one_at_it() {
+    let scene = load_scene_arg(None).expect("the built-in Cornell box");
+    let ctx = common::context();
+    for (name, gi) in every_gi_path() {
+        let unit = render_per_unit(&ctx, &scene, &gi, 1.0);
+        for distance_m in [1e3f32, 1e4] {
+            // Along x and z together, so that two coordinates are large.
+            let offset = glam::Vec3::new(0.6, 0.0, 0.8) * distance_m;
+            let img = render_per_unit(&ctx, &translated(&scene, offset), &gi, 1.0);
+            let (mean_rel, outliers) = difference(&unit, &img);
+            println!(
+                "{name}: {distance_m} m from the origin: mean difference {mean_rel:.2e} of the \
+                 mean, {outliers} of 12288 channel values off by more than 1e-3 of the peak"
+            );
+        }
+    }
+}
