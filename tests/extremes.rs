@@ -308,6 +308,18 @@ fn difference(unit: &[[f32; 3]], img: &[[f32; 3]]) -> (f64, usize) {
     (mean_rel, diff.iter().filter(|&&d| d > 1e-3 * peak).count())
 }
 
+/// The Cornell box 1 km from the origin, camera and lights with it, against the one at it.
+///
+/// The ideal bound: f32 keeps positions near 1 km to ulp(1000 m) = 2^-14 m ≈ 6.1e-5 m, 1.1e-4
+/// of the 0.55 m box; irradiance I cos / d² moves by about 3 times that, so a renderer whose
+/// only loss is the rounding of world positions stays within ~3e-4 of the mean, with outliers
+/// only at silhouettes and shadow edges. Pixels are unprojected relative to the camera
+/// (`pixel_world_position`), which brought the mean difference at 1 km from 13–18% to 1.0–1.6%
+/// (measured, every path); the rest is not yet that ideal (a smooth difference where the spot's
+/// falloff and grazing angles are, not traced down; shadow maps and voxel coordinates still
+/// use world positions), so this test keeps the measured state with a 2× margin as a
+/// regression bound. 10 km is measured and printed only: 19–27% off (ulp(10 km) ≈ 1 mm, a
+/// quarter of a 4 mm voxel in the voxel coordinates), not yet fixed.
 #[test]
 fn a_cornell_box_far_from_the_origin_renders_like_the_one_at_it() {
     let scene = load_scene_arg(None).expect("the built-in Cornell box");
@@ -323,6 +335,12 @@ fn a_cornell_box_far_from_the_origin_renders_like_the_one_at_it() {
                 "{name}: {distance_m} m from the origin: mean difference {mean_rel:.2e} of the \
                  mean, {outliers} of 12288 channel values off by more than 1e-3 of the peak"
             );
+            if distance_m <= 1e3 {
+                assert!(
+                    mean_rel < 0.035,
+                    "{name}: {distance_m} m from the origin: mean difference {mean_rel:.2e}"
+                );
+            }
         }
     }
 }
