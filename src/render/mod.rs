@@ -783,7 +783,7 @@ fn gpu_light(light: &Light, first_view: u32, views: u32) -> GpuLight {
 /// with it and adds the camera's position, so that a scene far from the world origin keeps
 /// f32 precision.
 fn camera_relative_inverse(camera: &crate::scene::Camera, aspect: f32) -> glam::Mat4 {
-    let mut relative = camera.clone();
+    let mut relative = *camera;
     relative.position = glam::Vec3::ZERO;
     relative.view_proj(aspect).inverse()
 }
