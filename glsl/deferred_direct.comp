@@ -31,7 +31,7 @@ void main() {
         imageStore(radiance, px, vec4(0.0));
         return;
     }
-    vec3 p = pixel_world_position(frame.inv_view_proj, px, vec2(size), depth);
+    vec3 p = pixel_world_position(frame.inv_view_proj, frame.camera_position.xyz, px, vec2(size), depth);
     vec3 albedo = texelFetch(gb_albedo, px, 0).rgb;
     vec4 ns = texelFetch(gb_normal, px, 0);
     vec3 n = normalize(ns.xyz);

@@ -47,7 +47,7 @@ void main() {
     } else {
         vec2 ndc = (vec2(px) + 0.5) / vec2(size) * 2.0 - 1.0;
         vec4 wp = frame.inv_view_proj * vec4(ndc, depth, 1.0);
-        float d = distance(wp.xyz / wp.w, frame.camera_position.xyz);
+        float d = length(wp.xyz / wp.w);  // camera-relative (pixel_world_position)
         v = vec3(d);
         c = vec3(clamp(1.0 - d * pc.inv_distance_m, 0.0, 1.0));
     }

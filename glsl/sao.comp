@@ -30,7 +30,7 @@ layout(push_constant) uniform Push {
 
 vec3 world_at(ivec2 px, vec2 size) {
     float depth = texelFetch(gb_depth, px, 0).r;
-    return pixel_world_position(frame.inv_view_proj, px, size, depth);
+    return pixel_world_position(frame.inv_view_proj, frame.camera_position.xyz, px, size, depth);
 }
 
 // The camera's unit view direction, from the clip-space z axis.

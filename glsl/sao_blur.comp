@@ -19,7 +19,7 @@ layout(push_constant) uniform Push {
 // Linear view distance from the depth buffer (distance to the camera, meters).
 float distance_at(ivec2 px, vec2 size) {
     float depth = texelFetch(gb_depth, px, 0).r;
-    return distance(pixel_world_position(frame.inv_view_proj, px, size, depth), frame.camera_position.xyz);
+    return distance(pixel_world_position(frame.inv_view_proj, frame.camera_position.xyz, px, size, depth), frame.camera_position.xyz);
 }
 
 // Gaussian weights exp(−k²/(2·1.5²)) of offsets 0..3, normalized over ±3 (the thesis's 7

@@ -276,3 +276,71 @@ fn a_1e6_a_1e_minus_6_and_a_zero_light_together_add_up() {
         }
     }
 }
+
+/// `scene` moved by `offset_m` (objects, camera and lights together).
+fn translated(scene: &Scene, offset_m: glam::Vec3) -> Scene {
+    let mut scene = scene.clone();
+    for o in &mut scene.objects {
+        assert!(o.animation.is_none(), "the test scene is static");
+        o.transform.translate += offset_m;
+    }
+    scene.camera.position += offset_m;
+    for light in &mut scene.lights {
+        match light {
+            Light::Point { position, .. } | Light::Spot { position, .. } => *position += offset_m,
+            Light::Directional { .. } => {}
+        }
+    }
+    scene
+}
+
+/// Mean absolute difference of `img` from `unit` relative to `unit`'s mean, and the number
+/// of channel values off by more than 1e-3 of `unit`'s peak.
+fn difference(unit: &[[f32; 3]], img: &[[f32; 3]]) -> (f64, usize) {
+    let diff: Vec<f32> = unit
+        .iter()
+        .zip(img)
+        .flat_map(|(a, b)| (0..3).map(move |c| (a[c] - b[c]).abs()))
+        .collect();
+    let mean = unit.iter().flatten().map(|&c| f64::from(c)).sum::<f64>() / diff.len() as f64;
+    let mean_rel = diff.iter().map(|&d| f64::from(d)).sum::<f64>() / diff.len() as f64 / mean;
+    let peak = unit.iter().flatten().copied().fold(0.0f32, f32::max);
+    (mean_rel, diff.iter().filter(|&&d| d > 1e-3 * peak).count())
+}
+
+/// The Cornell box 1 km from the origin, camera and lights with it, against the one at it.
+///
+/// The ideal bound: f32 keeps positions near 1 km to ulp(1000 m) = 2^-14 m ≈ 6.1e-5 m, 1.1e-4
+/// of the 0.55 m box; irradiance I cos / d² moves by about 3 times that, so a renderer whose
+/// only loss is the rounding of world positions stays within ~3e-4 of the mean, with outliers
+/// only at silhouettes and shadow edges. Pixels are unprojected relative to the camera
+/// (`pixel_world_position`), which brought the mean difference at 1 km from 13–18% to 1.0–1.6%
+/// (measured, every path); the rest is not yet that ideal (a smooth difference where the spot's
+/// falloff and grazing angles are, not traced down; shadow maps and voxel coordinates still
+/// use world positions), so this test keeps the measured state with a 2× margin as a
+/// regression bound. 10 km is measured and printed only: 19–27% off (ulp(10 km) ≈ 1 mm, a
+/// quarter of a 4 mm voxel in the voxel coordinates), not yet fixed.
+#[test]
+fn a_cornell_box_far_from_the_origin_renders_like_the_one_at_it() {
+    let scene = load_scene_arg(None).expect("the built-in Cornell box");
+    let ctx = common::context();
+    for (name, gi) in every_gi_path() {
+        let unit = render_per_unit(&ctx, &scene, &gi, 1.0);
+        for distance_m in [1e3f32, 1e4] {
+            // Along x and z together, so that two coordinates are large.
+            let offset = glam::Vec3::new(0.6, 0.0, 0.8) * distance_m;
+            let img = render_per_unit(&ctx, &translated(&scene, offset), &gi, 1.0);
+            let (mean_rel, outliers) = difference(&unit, &img);
+            println!(
+                "{name}: {distance_m} m from the origin: mean difference {mean_rel:.2e} of the \
+                 mean, {outliers} of 12288 channel values off by more than 1e-3 of the peak"
+            );
+            if distance_m <= 1e3 {
+                assert!(
+                    mean_rel < 0.035,
+                    "{name}: {distance_m} m from the origin: mean difference {mean_rel:.2e}"
+                );
+            }
+        }
+    }
+}

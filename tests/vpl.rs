@@ -1,14 +1,15 @@
 //! `--gi vpl` (Thiedemann 2010, Ch. 7): one VPL against its closed form, the Mitsuba full-GI
 //! references (better than direct light, two bounces better than one), samples that hit
-//! nothing keep their share of the flux, and the geometry-aware filter removes the
-//! interleaving pattern. Validation on.
+//! nothing keep their share of the flux (or, with `--vpl-normalize valid`, the valid samples
+//! share it all), spot VPLs sampled in the image-plane disk and on the cone agree, and the
+//! geometry-aware filter removes the interleaving pattern. Validation on.
 
 mod common;
 
 use glam::Vec3;
 use std::path::Path;
 use voxgi::eval::{compare, HdrImage, Metrics};
-use voxgi::gi::vpl::{VplSettings, VplVisibility};
+use voxgi::gi::vpl::{VplNormalize, VplSettings, VplSpotSampling, VplVisibility};
 use voxgi::gi::{GiMethod, GiSettings};
 use voxgi::render::{render_image, RenderSettings};
 use voxgi::scene::{load_scene_arg, Scene};
@@ -362,6 +363,240 @@ fn samples_that_hit_nothing_keep_their_share_of_the_flux() {
     assert!(
         (ratio - 1.0).abs() < 0.01,
         "open / closed indirect light {ratio}: invalid samples changed the flux"
+    );
+}
+
+/// Radical inverse of `i` in base `b`, as `halton` in glsl/include/vpl.glsl.
+fn halton(mut i: u32, b: u32) -> f32 {
+    let (mut f, mut r) = (1.0f32, 0.0f32);
+    let inv = 1.0 / b as f32;
+    while i > 0 {
+        f *= inv;
+        r += f * (i % b) as f32;
+        i /= b;
+    }
+    r
+}
+
+/// The direction of Halton point `j` of a spot with axis `axis` and cone half-angle
+/// `cutoff_deg`, and its weight over K samples times K (sr): on the cone uniform in solid
+/// angle (Ω) or uniform in the image-plane disk (π tan²α cos³θ), as gi_vpl_generate.comp.
+fn spot_sample(axis: Vec3, cutoff_deg: f32, j: u32, sampling: VplSpotSampling) -> (Vec3, f32) {
+    let (ux, uy) = (halton(j, 2), halton(j, 3));
+    let cos_a = cutoff_deg.to_radians().cos();
+    match sampling {
+        VplSpotSampling::SolidAngle => (
+            around_axis(axis, 1.0 - ux * (1.0 - cos_a), uy),
+            2.0 * std::f32::consts::PI * (1.0 - cos_a),
+        ),
+        VplSpotSampling::Disk => {
+            let tan2 = (1.0 - cos_a * cos_a) / (cos_a * cos_a);
+            let c = 1.0 / (1.0 + tan2 * ux).sqrt();
+            (
+                around_axis(axis, c, uy),
+                std::f32::consts::PI * tan2 * c * c * c,
+            )
+        }
+    }
+}
+
+/// A spot 1 m above a floor that spans x from -3 m to `edge_x_m`, aimed straight down with a
+/// 30° cone of uniform intensity, and a wall at z = 1 m facing the camera, out of the cone.
+fn spot_over_floor_edge(edge_x_m: f32) -> Scene {
+    let (width, center) = (edge_x_m + 3.0, (edge_x_m - 3.0) / 2.0);
+    scene_from(&format!(
+        r#"
+[camera]
+position = [0.0, 0.8, -2.0]
+target = [0.0, 0.5, 0.5]
+fov_y_deg = 45.0
+
+[[lights]]
+kind = "spot"
+position = [0.0, 1.0, 0.0]
+direction = [0.0, -1.0, 0.0]
+intensity_w_sr = 4.0
+cutoff_deg = 30.0
+beam_deg = 30.0
+
+[[objects]]
+name = "floor"
+builtin = "quad"
+translate = [{center}, 0.0, -0.25]
+scale = [{width}, 1.0, 2.5]
+material = {{ albedo = 0.8 }}
+
+[[objects]]
+name = "wall"
+builtin = "quad"
+rotate_deg = [-90.0, 0.0, 0.0]
+translate = [0.0, 0.75, 1.0]
+scale = [6.0, 1.0, 1.5]
+material = {{ albedo = 0.5 }}
+"#
+    ))
+}
+
+#[test]
+fn renormalizing_by_the_valid_samples_scales_the_indirect_light_by_k_over_their_count() {
+    // With `valid`, every VPL of a set and light carries K / V times its `all` flux (V the
+    // set's samples that hit geometry), and the indirect light (every bounce) is linear in the
+    // first-bounce fluxes: with one set, indirect(valid) = indirect(all) × K / V exactly, up
+    // to float rounding. V is counted here on the CPU from the same Halton points: the floor
+    // ends at x = 0 under the spot, so a sample is valid iff it meets y = 0 at x < 0; every
+    // sample lands at least 2 cm from the edge (checked), several light-map texels (the
+    // 256² map spans 2 tan 30° ≈ 1.15 m there), so the GPU's count cannot differ.
+    let ctx = common::context();
+    let k = 16u32;
+    let size = 64;
+    let gi = |normalize, spot_sampling| GiSettings {
+        filter_radius: 0,
+        ..vpl(VplSettings {
+            per_set: k,
+            pattern: [1, 1],
+            normalize,
+            spot_sampling,
+            ..Default::default()
+        })
+    };
+    let half = spot_over_floor_edge(0.0);
+    let direct = render(&ctx, &half, GiSettings::default(), size);
+    for sampling in [VplSpotSampling::SolidAngle, VplSpotSampling::Disk] {
+        let hits_x: Vec<f32> = (1..=k)
+            .map(|j| {
+                let (d, _) = spot_sample(Vec3::NEG_Y, 30.0, j, sampling);
+                d.x / -d.y
+            })
+            .collect();
+        assert!(
+            hits_x.iter().all(|x| x.abs() > 0.02),
+            "{sampling:?}: a sample within 2 cm of the floor's edge: {hits_x:?}"
+        );
+        let valid = hits_x.iter().filter(|&&x| x < 0.0).count() as f64;
+        assert!(
+            valid > 0.0 && valid < f64::from(k),
+            "some samples miss, not all"
+        );
+        let all = mean_difference(
+            &render(&ctx, &half, gi(VplNormalize::All, sampling), size),
+            &direct,
+        );
+        let renormalized = mean_difference(
+            &render(&ctx, &half, gi(VplNormalize::Valid, sampling), size),
+            &direct,
+        );
+        let expected = f64::from(k) / valid;
+        println!(
+            "{sampling:?}: {valid} of {k} valid; indirect all {all:.4e}, valid {renormalized:.4e}, \
+             ratio {:.5} (K / V = {expected:.5})",
+            renormalized / all
+        );
+        assert!(all > 0.0, "{sampling:?}: indirect light");
+        assert!(
+            (renormalized / all / expected - 1.0).abs() < 1e-3,
+            "{sampling:?}: valid / all = {} instead of K / V = {expected}",
+            renormalized / all
+        );
+        // Nothing misses when the floor spans the whole cone: V = K, the same image.
+        let full = spot_over_floor_edge(3.0);
+        let a = render(&ctx, &full, gi(VplNormalize::All, sampling), size);
+        let b = render(&ctx, &full, gi(VplNormalize::Valid, sampling), size);
+        assert!(
+            a.data == b.data,
+            "{sampling:?}: no sample misses, yet the images differ"
+        );
+    }
+}
+
+/// The mean indirect light (`lit - direct`, all channels) of each 4×4-interleaving set: over
+/// the pixels (x, y) with the same (x mod 4, y mod 4), which the unfiltered VPL image shades
+/// with one set each (§7.3.2).
+fn set_means(lit: &HdrImage, direct: &HdrImage) -> Vec<f64> {
+    let mut sums = vec![(0.0f64, 0usize); 16];
+    let w = lit.width as usize;
+    for (i, (p, q)) in lit.data.iter().zip(&direct.data).enumerate() {
+        let (x, y) = (i % w, i / w);
+        let s = &mut sums[(y % 4) * 4 + x % 4];
+        s.0 += (0..3).map(|c| f64::from(p[c] - q[c])).sum::<f64>();
+        s.1 += 3;
+    }
+    sums.iter().map(|&(s, n)| s / n as f64).collect()
+}
+
+/// Mean and standard error of the mean of `v`.
+fn mean_and_error(v: &[f64]) -> (f64, f64) {
+    let n = v.len() as f64;
+    let mean = v.iter().sum::<f64>() / n;
+    let var = v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0);
+    (mean, (var / n).sqrt())
+}
+
+#[test]
+fn spot_vpls_from_the_image_plane_disk_and_the_cone_agree() {
+    // Both samplings estimate the same one-bounce integral over the spot's cone (the disk's
+    // weight π tan²α cos³θ / K is the solid angle of its area element, gi_vpl_generate.comp),
+    // so their frame means differ only by their sampling errors. Each of the 16 interleaving
+    // sets is an estimator of its own (64 Halton points), and without the filter each shades
+    // one pixel of every 4×4 tile: the spread of the 16 per-set means gives each estimate's
+    // standard error (conservatively: the sets' pixels also differ slightly in place), and the
+    // two means must agree within 3 standard errors of their difference. The weights' sums
+    // are checked against the cone's solid angle Ω on the CPU for the same points (the
+    // estimators' error for a constant integrand).
+    let ctx = common::context();
+    let size = 64;
+    let (cutoff_deg, per_set, sets) = (50.0f32, 64u32, 16u32);
+    let axis = Vec3::new(0.0, -1.0, 0.3).normalize();
+    let scene = floor_and_wall(&format!(
+        "[[lights]]\nkind = \"spot\"\nposition = [0.3, 1.2, 0.2]\ndirection = [0.0, -1.0, 0.3]\n\
+         intensity_w_sr = 4.0\ncutoff_deg = {cutoff_deg}"
+    ));
+    let omega = 2.0 * std::f64::consts::PI * (1.0 - f64::from(cutoff_deg.to_radians().cos()));
+    for sampling in [VplSpotSampling::SolidAngle, VplSpotSampling::Disk] {
+        let n = per_set * sets;
+        let sum: f64 = (1..=n)
+            .map(|j| f64::from(spot_sample(axis, cutoff_deg, j, sampling).1))
+            .sum();
+        let error = sum / f64::from(n) / omega - 1.0;
+        println!("{sampling:?}: weights' sum / Ω - 1 = {error:.2e}");
+        // 1024 Halton points integrate the smooth cos³θ over the disk to well below 1%.
+        assert!(
+            error.abs() < 0.01,
+            "{sampling:?}: weights sum to Ω (1 {error:+})"
+        );
+    }
+    let direct = render(&ctx, &scene, GiSettings::default(), size);
+    let estimate = |spot_sampling| {
+        let lit = render(
+            &ctx,
+            &scene,
+            GiSettings {
+                filter_radius: 0,
+                ..vpl(VplSettings {
+                    per_set,
+                    bounces: 1,
+                    d_min_voxels: 0.0,
+                    spot_sampling,
+                    ..Default::default()
+                })
+            },
+            size,
+        );
+        mean_and_error(&set_means(&lit, &direct))
+    };
+    let ((cone, e_cone), (disk, e_disk)) = (
+        estimate(VplSpotSampling::SolidAngle),
+        estimate(VplSpotSampling::Disk),
+    );
+    let bound = 3.0 * (e_cone * e_cone + e_disk * e_disk).sqrt();
+    println!(
+        "mean indirect cone {cone:.4e} ± {e_cone:.1e}, disk {disk:.4e} ± {e_disk:.1e}; \
+         difference {:.2e}, bound {bound:.2e}",
+        disk - cone
+    );
+    assert!(cone > 0.0 && disk > 0.0, "indirect light");
+    assert!(
+        (disk - cone).abs() < bound,
+        "disk {disk} vs cone {cone}: more than 3 standard errors apart"
     );
 }
 

@@ -37,12 +37,16 @@ struct GpuFrame {
     GpuShadowView shadow_views[MAX_SHADOW_VIEWS];
 };
 
-// World position of pixel `px` of a `size` frame at depth-buffer value `depth` (the pixel's
-// center unprojected by the camera's inverse view-projection).
-vec3 pixel_world_position(mat4 inv_view_proj, ivec2 px, vec2 size, float depth) {
+// World position of pixel `px` of a `size` frame at depth-buffer value `depth`: the pixel's
+// center unprojected by `inv_view_proj`, the inverse of the camera-relative view-projection
+// (GpuFrame's, the camera moved to the origin), plus the camera's position `camera_m`. Far from
+// the world origin the unprojection then works with small numbers and only the final sum
+// rounds, at ulp(|camera|); the full inverse lost about |camera| times the projection's
+// condition number (1 km from the origin: shadow tests on points centimeters off).
+vec3 pixel_world_position(mat4 inv_view_proj, vec3 camera_m, ivec2 px, vec2 size, float depth) {
     vec2 uv = (vec2(px) + 0.5) / size;
     vec4 wp = inv_view_proj * vec4(uv * 2.0 - 1.0, depth, 1.0);
-    return wp.xyz / wp.w;
+    return camera_m + wp.xyz / wp.w;
 }
 
 // Mitsuba 3 `spot` falloff: 1 inside the beam, linear in angle to 0 at the cutoff.

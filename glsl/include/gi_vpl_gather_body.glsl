@@ -96,7 +96,7 @@ void main() {
         imageStore(irradiance, px, vec4(0.0));
         return;
     }
-    vec3 p = pixel_world_position(frame.inv_view_proj, px, vec2(size), depth);
+    vec3 p = pixel_world_position(frame.inv_view_proj, frame.camera_position.xyz, px, vec2(size), depth);
     vec4 ns = texelFetch(gb_normal, px, 0);
     vec3 n = normalize(ns.xyz);
     vec3 specular = HAS_PHONG ? gbuffer_phong_specular(gb_specular, px) : vec3(0.0);

@@ -665,9 +665,9 @@ fn gi_controls(ui: &mut egui::Ui, gi: &mut GiSettings, frames: Option<u32>) {
 }
 
 /// The VPL method's parameters (Thiedemann 2010, Ch. 7): VPLs per set, pattern, bounces,
-/// d_min, visibility.
+/// d_min, visibility, normalization, spot sampling.
 fn vpl_controls(ui: &mut egui::Ui, gi: &mut GiSettings) {
-    use crate::gi::vpl::{VplShading, VplVisibility};
+    use crate::gi::vpl::{VplNormalize, VplShading, VplSpotSampling, VplVisibility};
     let v = &mut gi.vpl;
     ui.add(
         egui::Slider::new(&mut v.per_set, limits::VPLS.slider(1, 64))
@@ -688,6 +688,20 @@ fn vpl_controls(ui: &mut egui::Ui, gi: &mut GiSettings) {
         VplVisibility::Voxel
     } else {
         VplVisibility::None
+    };
+    let mut valid = v.normalize == VplNormalize::Valid;
+    ui.checkbox(&mut valid, "renormalize by valid VPLs");
+    v.normalize = if valid {
+        VplNormalize::Valid
+    } else {
+        VplNormalize::All
+    };
+    let mut disk = v.spot_sampling == VplSpotSampling::Disk;
+    ui.checkbox(&mut disk, "spot VPLs in the image-plane disk");
+    v.spot_sampling = if disk {
+        VplSpotSampling::Disk
+    } else {
+        VplSpotSampling::SolidAngle
     };
     let mut splat = v.shading == VplShading::Splat;
     ui.checkbox(&mut splat, "splat (one pass per VPL)");

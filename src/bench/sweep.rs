@@ -86,6 +86,8 @@ pub const GRID_KEYS: &[(&str, &[GiMethod])] = &[
     ("vpl-d-min", VPL),
     ("vpl-bounces", VPL),
     ("vpl-visibility", VPL),
+    ("vpl-normalize", VPL),
+    ("vpl-spot-sampling", VPL),
     ("vpl-shading", VPL),
 ];
 
@@ -527,7 +529,17 @@ pub fn gi_table(s: &GiSettings) -> toml::Table {
         .to_possible_value()
         .map_or_else(String::new, |v| v.get_name().to_owned());
     t.insert("vpl_visibility".into(), Value::String(visibility));
+    t.insert("vpl_normalize".into(), value_name(s.vpl.normalize));
+    t.insert("vpl_spot_sampling".into(), value_name(s.vpl.spot_sampling));
     t
+}
+
+/// A value enum's name as its flag and scene key spell it, as a TOML string.
+fn value_name<T: clap::ValueEnum>(v: T) -> toml::Value {
+    toml::Value::String(
+        v.to_possible_value()
+            .map_or_else(String::new, |p| p.get_name().to_owned()),
+    )
 }
 
 /// [`gi_table`] as a one-line inline table, for the CSV.

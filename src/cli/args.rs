@@ -80,6 +80,16 @@ pub struct GiArgs {
     /// [default: the scene's `[gi] vpl_visibility`, else voxel].
     #[arg(long, value_enum)]
     pub vpl_visibility: Option<crate::gi::vpl::VplVisibility>,
+    /// `--gi vpl`: divide a light's flux among all K samples of its emission domain
+    /// (unbiased: light that hits nothing leaves the scene) or among the valid ones only (the
+    /// thesis's renormalization) [default: the scene's `[gi] vpl_normalize`, else all].
+    #[arg(long, value_enum)]
+    pub vpl_normalize: Option<crate::gi::vpl::VplNormalize>,
+    /// `--gi vpl`: spot VPL directions uniform in solid angle on the cone, or uniform in the
+    /// disk of the spot's image plane (thesis §7.2), weighted by their solid angle [default:
+    /// the scene's `[gi] vpl_spot_sampling`, else solid-angle].
+    #[arg(long, value_enum)]
+    pub vpl_spot_sampling: Option<crate::gi::vpl::VplSpotSampling>,
     /// `--gi vpl`: shade by one gather loop per pixel, or by one additive pass per VPL
     /// (the thesis's splatting).
     #[arg(long, value_enum, default_value_t = crate::gi::vpl::VplShading::Gather)]
@@ -129,6 +139,8 @@ impl GiArgs {
                 bounces: self.vpl_bounces,
                 d_min_voxels: self.vpl_d_min,
                 visibility: self.vpl_visibility,
+                normalize: self.vpl_normalize,
+                spot_sampling: self.vpl_spot_sampling,
             },
         }
     }
@@ -364,6 +376,10 @@ mod tests {
             "1.5",
             "--vpl-visibility",
             "none",
+            "--vpl-normalize",
+            "valid",
+            "--vpl-spot-sampling",
+            "disk",
         ]);
         assert_eq!(
             o,
@@ -384,6 +400,8 @@ mod tests {
                     bounces: Some(3),
                     d_min_voxels: Some(1.5),
                     visibility: Some(crate::gi::vpl::VplVisibility::None),
+                    normalize: Some(crate::gi::vpl::VplNormalize::Valid),
+                    spot_sampling: Some(crate::gi::vpl::VplSpotSampling::Disk),
                 },
             }
         );

@@ -6,7 +6,8 @@
 //! pair (`glsl/gi_vpl_gather.comp`); the geometry-aware filter then removes the pattern.
 
 pub use crate::scene::vpl_settings::{
-    parse_pattern, VplOverrides, VplSettings, VplShading, VplVisibility, VISIBILITY_NAMES,
+    parse_pattern, VplNormalize, VplOverrides, VplSettings, VplShading, VplSpotSampling,
+    VplVisibility, NORMALIZE_NAMES, SPOT_SAMPLING_NAMES, VISIBILITY_NAMES,
 };
 
 use super::gi_common::GiShared;
@@ -189,10 +190,16 @@ impl VplPasses {
             ],
             splat_vpl: 0,
         };
+        // The two generation options are specialization constants (NORMALIZE_VALID,
+        // SPOT_DISK): the push block has one spare float, and a change of either rebuilds the
+        // passes anyway.
         let generate = ctx.compute_pipeline(
             "gi_vpl_generate.comp",
             PushLayout::of::<GpuVplGeneratePush>(),
-            &[],
+            &[
+                (0, u32::from(v.normalize == VplNormalize::Valid)),
+                (1, u32::from(v.spot_sampling == VplSpotSampling::Disk)),
+            ],
         )?;
         let shader = match v.shading {
             VplShading::Gather => "gi_vpl_gather.comp",

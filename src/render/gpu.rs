@@ -53,6 +53,8 @@ crate::gpu_struct!(GpuShadowView {
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 pub struct GpuFrame {
     pub view_proj: [f32; 16],
+    /// Inverse of the camera-relative view-projection (the camera at the origin): NDC to the
+    /// position relative to `camera_position` (`pixel_world_position` in frame.glsl).
     pub inv_view_proj: [f32; 16],
     pub camera_position: [f32; 4],
     /// x lights, y shadow views, z width, w height.

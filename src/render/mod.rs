@@ -371,7 +371,7 @@ impl Renderer {
         let view_proj = scene.camera.view_proj(aspect);
         let mut f = GpuFrame::zeroed();
         f.view_proj = view_proj.to_cols_array();
-        f.inv_view_proj = view_proj.inverse().to_cols_array();
+        f.inv_view_proj = camera_relative_inverse(&scene.camera, aspect).to_cols_array();
         f.camera_position = scene.camera.position.extend(1.0).to_array();
         f.counts = [
             scene.lights.len() as u32,
@@ -633,4 +633,14 @@ fn gpu_light(light: &Light, first_view: u32, views: u32) -> GpuLight {
             ..Default::default()
         },
     }
+}
+
+/// The inverse of the camera's view-projection with the camera moved to the origin:
+/// `pixel_world_position` (glsl/include/frame.glsl) unprojects a pixel relative to the camera
+/// with it and adds the camera's position, so that a scene far from the world origin keeps
+/// f32 precision.
+fn camera_relative_inverse(camera: &crate::scene::Camera, aspect: f32) -> glam::Mat4 {
+    let mut relative = *camera;
+    relative.position = glam::Vec3::ZERO;
+    relative.view_proj(aspect).inverse()
 }

@@ -65,6 +65,8 @@ pub(crate) struct GiDesc {
     pub vpl_bounces: Option<i64>,
     pub vpl_d_min_voxels: Option<f32>,
     pub vpl_visibility: Option<String>,
+    pub vpl_normalize: Option<String>,
+    pub vpl_spot_sampling: Option<String>,
 }
 
 #[derive(Clone, Debug, Deserialize)]
@@ -105,6 +107,8 @@ pub(crate) struct ObjectDesc {
     pub name: Option<String>,
     pub mesh: Option<String>,
     pub builtin: Option<String>,
+    /// OBJ files without normals: faces meeting at more than this (degrees) stay sharp.
+    pub crease_deg: Option<f32>,
     pub translate: Option<[f32; 3]>,
     pub rotate_deg: Option<[f32; 3]>,
     pub scale: Option<ScalarOrVec3>,
@@ -473,14 +477,14 @@ type CountCheck<'a> = dyn Fn(&Limit<u32>, Option<i64>) -> Result<Option<u32>, Sc
 type LengthCheck<'a> = dyn Fn(&Limit<f32>, Option<f32>) -> Result<Option<f32>, SceneError> + 'a;
 
 /// The `[gi]` table's VPL keys (`vpls`, `vpl_pattern`, `vpl_bounces`, `vpl_d_min_voxels`,
-/// `vpl_visibility`).
+/// `vpl_visibility`, `vpl_normalize`, `vpl_spot_sampling`).
 fn build_vpl(
     ck: &Check<'_>,
     g: &GiDesc,
     count: &CountCheck<'_>,
     length: &LengthCheck<'_>,
 ) -> Result<crate::scene::vpl_settings::VplOverrides, SceneError> {
-    use crate::scene::vpl_settings::VISIBILITY_NAMES;
+    use crate::scene::vpl_settings::{NORMALIZE_NAMES, SPOT_SAMPLING_NAMES, VISIBILITY_NAMES};
     let pattern = match g.vpl_pattern {
         None => None,
         Some([n, m]) => Some([
@@ -509,7 +513,48 @@ fn build_vpl(
         bounces: count(&limits::VPL_BOUNCES, g.vpl_bounces)?,
         d_min_voxels: length(&limits::VPL_D_MIN, g.vpl_d_min_voxels)?,
         visibility,
+        normalize: named(ck, "gi.vpl_normalize", &NORMALIZE_NAMES, &g.vpl_normalize)?,
+        spot_sampling: named(
+            ck,
+            "gi.vpl_spot_sampling",
+            &SPOT_SAMPLING_NAMES,
+            &g.vpl_spot_sampling,
+        )?,
     })
+}
+
+/// The value named `name` among `names` (a `[gi]` key's choices); an error listing them.
+fn named<T: Copy>(
+    ck: &Check<'_>,
+    key: &str,
+    names: &[(&str, T)],
+    name: &Option<String>,
+) -> Result<Option<T>, SceneError> {
+    let Some(name) = name else { return Ok(None) };
+    names
+        .iter()
+        .find(|(n, _)| *n == name.as_str())
+        .map(|&(_, v)| Some(v))
+        .ok_or_else(|| {
+            let all: Vec<String> = names.iter().map(|(n, _)| format!("\"{n}\"")).collect();
+            ck.invalid(
+                key,
+                format!("unknown value \"{name}\"; expected {}", all.join(" or ")),
+            )
+        })
+}
+
+/// An object's `crease_deg`: in [0, 180], default 60.
+fn crease_angle(ck: &Check<'_>, field: &str, v: Option<f32>) -> Result<f32, SceneError> {
+    let deg = ck.scalar(field, v.unwrap_or(super::crease::DEFAULT_CREASE_DEG))?;
+    if (0.0..=180.0).contains(&deg) {
+        Ok(deg)
+    } else {
+        Err(ck.invalid(
+            field,
+            format!("{deg} is not an angle between faces; expected degrees in [0, 180]"),
+        ))
+    }
 }
 
 /// A limit's message without the key, which the scene error puts in front itself.
@@ -662,6 +707,12 @@ fn build_object(
         &Transform::default(),
     )?;
     let sequence = o.animation.as_ref().and_then(|a| a.obj_sequence.as_ref());
+    if o.crease_deg.is_some() && o.mesh.is_none() {
+        return Err(ck.invalid(
+            &f("crease_deg"),
+            "`crease_deg` sets the normals of an OBJ `mesh`; remove it here",
+        ));
+    }
     let (mesh, default_name) = match (&o.mesh, &o.builtin) {
         (Some(_), Some(_)) => {
             return Err(ck.invalid(
@@ -692,7 +743,9 @@ fn build_object(
                 .file_stem()
                 .map(|s| s.to_string_lossy().into_owned())
                 .unwrap_or_else(|| m.clone());
-            let idx = store.obj_mesh(&path, "OBJ mesh", &field_ref(ck.file, &f("mesh")))?;
+            let crease_deg = crease_angle(ck, &f("crease_deg"), o.crease_deg)?;
+            let referenced_by = field_ref(ck.file, &f("mesh"));
+            let idx = store.obj_mesh(&path, "OBJ mesh", &referenced_by, crease_deg)?;
             (Some(idx), name)
         }
         (None, Some(b)) => match store.builtin_mesh(b) {
@@ -979,7 +1032,9 @@ fn build_animation(
                     )
                 })?;
                 let path = base_dir.join(&name);
-                let idx = store.obj_mesh(&path, "OBJ sequence frame", &referenced_by)?;
+                // Every frame smooth (crease 180°) so that no frame splits other vertices
+                // than the first: the frames must keep one topology.
+                let idx = store.obj_mesh(&path, "OBJ sequence frame", &referenced_by, 180.0)?;
                 if let Some(&m0) = meshes.first() {
                     check_same_topology(store, m0, idx, &path, &first_path, &referenced_by)?;
                 } else {

@@ -174,6 +174,8 @@ mod tests {
                 bounces: Some(1),
                 d_min_voxels: Some(0.5),
                 visibility: Some(crate::scene::vpl_settings::VplVisibility::None),
+                normalize: Some(crate::scene::vpl_settings::VplNormalize::Valid),
+                spot_sampling: Some(crate::scene::vpl_settings::VplSpotSampling::Disk),
             },
         };
         assert!(!all.is_empty() && GiOverrides::default().is_empty());
@@ -197,6 +199,8 @@ mod tests {
                 bounces: Some(s.vpl.bounces),
                 d_min_voxels: Some(s.vpl.d_min_voxels),
                 visibility: Some(s.vpl.visibility),
+                normalize: Some(s.vpl.normalize),
+                spot_sampling: Some(s.vpl.spot_sampling),
             },
         };
         assert_eq!(back, all);

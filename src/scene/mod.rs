@@ -40,6 +40,8 @@
 //! [[objects]]                       # at least one
 //! name = "bunny"                    # optional, for the UI and logs
 //! mesh = "../meshes/bunny.obj"      # an OBJ file (its MTL and textures beside it), or:
+//! crease_deg = 60.0                 # OBJ without `vn` or `s` lines: faces meeting at more
+//!                                   #   than this stay sharp, vertices split [60]
 //! # builtin = "cube"                # "cube" (1 m, centered), "quad" (1 m², XZ plane, facing
 //!                                   #   +Y), "sphere" (diameter 1 m), "cornell_walls",
 //!                                   #   "cornell_short_block", "cornell_tall_block"
@@ -92,6 +94,8 @@
 //! vpl_bounces = 2                   # VPL bounces, 1..=8 [2]
 //! vpl_d_min_voxels = 8.0            # d_min of the VPL falloff, voxel diagonals >= 0 [8]
 //! vpl_visibility = "voxel"          # "voxel" (segment test) | "none" ["voxel"]
+//! vpl_normalize = "all"             # VPL flux over "all" K samples | the "valid" ones ["all"]
+//! vpl_spot_sampling = "solid-angle" # spot VPLs "solid-angle" (cone) | "disk" (image plane)
 //! ```
 //!
 //! A missing texture (or MTL file) is not an error: it is logged with `log::warn!` and the
@@ -105,6 +109,7 @@
 
 mod builtin;
 mod camera;
+mod crease;
 mod cull;
 mod desc;
 mod error;

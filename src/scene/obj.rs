@@ -8,6 +8,7 @@ use std::path::{Path, PathBuf};
 
 use glam::{Vec2, Vec3};
 
+use super::crease::{obj_smoothing_groups, split_normals, Smoothing};
 use super::error::SceneError;
 use super::material::{BumpKind, Ggx, Material, TextureData};
 use super::mesh::{area_weighted_normals, builtin_shape, BuiltinMaterial, Mesh, SubMesh};
@@ -19,7 +20,8 @@ pub(crate) struct AssetStore {
     pub materials: Vec<Material>,
     pub textures: Vec<TextureData>,
     /// OBJ path → mesh, so objects sharing a file share the mesh.
-    obj_meshes: HashMap<PathBuf, usize>,
+    /// Loaded OBJ meshes by path and crease angle (its bits).
+    obj_meshes: HashMap<(PathBuf, u32), usize>,
     builtin_meshes: HashMap<String, usize>,
     /// (OBJ directory, MTL material name) → material.
     mtl_materials: HashMap<(PathBuf, String), usize>,
@@ -74,19 +76,23 @@ impl AssetStore {
     }
 
     /// Loads (once) the OBJ at `path`; `referenced_by` names the scene field, for messages.
+    /// `crease_deg`: the crease angle for files without normals and smoothing groups
+    /// ([`super::crease`]).
     pub fn obj_mesh(
         &mut self,
         path: &Path,
         what: &'static str,
         referenced_by: &str,
+        crease_deg: f32,
     ) -> Result<usize, SceneError> {
-        if let Some(&i) = self.obj_meshes.get(path) {
+        let key = (path.to_path_buf(), crease_deg.to_bits());
+        if let Some(&i) = self.obj_meshes.get(&key) {
             return Ok(i);
         }
-        let mesh = self.load_obj(path, what, referenced_by)?;
+        let mesh = self.load_obj(path, what, referenced_by, crease_deg)?;
         let i = self.meshes.len();
         self.meshes.push(mesh);
-        self.obj_meshes.insert(path.to_path_buf(), i);
+        self.obj_meshes.insert(key, i);
         Ok(i)
     }
 
@@ -95,9 +101,11 @@ impl AssetStore {
         path: &Path,
         what: &'static str,
         referenced_by: &str,
+        crease_deg: f32,
     ) -> Result<Mesh, SceneError> {
         let text = read_text(path, what, Some(referenced_by))?;
         prescan_obj(path, &text)?;
+        let groups = obj_smoothing_groups(&text);
 
         let dir = path.parent().unwrap_or(Path::new(".")).to_path_buf();
         // MTL problems found by tobj's callback: (path, missing?, message).
@@ -186,13 +194,43 @@ impl AssetStore {
             aabb: super::mesh::Aabb::EMPTY,
         };
         let any_uvs = models.iter().any(|m| !m.mesh.texcoords.is_empty());
+        let triangles: usize = models.iter().map(|m| m.mesh.indices.len() / 3).sum();
+        let groups = groups.filter(|g| {
+            let ok = g.len() == triangles;
+            if !ok {
+                log::warn!(
+                    "{}: {} triangles in the `f` lines, {triangles} loaded; smoothing groups \
+                     ignored, normals by the {crease_deg}° crease angle",
+                    path.display(),
+                    g.len()
+                );
+            }
+            ok
+        });
+        let mut first_triangle = 0;
         let mut uvs = Vec::new();
         for model in &models {
             let m = &model.mesh;
-            let n = m.positions.len() / 3;
+            let model_groups = groups.as_ref().map(|g| {
+                let t = m.indices.len() / 3;
+                &g[first_triangle..first_triangle + t]
+            });
+            first_triangle += m.indices.len() / 3;
             if m.indices.is_empty() {
                 continue;
             }
+            let split;
+            let m = if m.normals.len() == m.positions.len() {
+                m
+            } else {
+                // No normals in the file: by smoothing group or crease angle, splitting
+                // vertices where their corners' normals differ.
+                let smoothing =
+                    model_groups.map_or(Smoothing::CreaseDeg(crease_deg), Smoothing::Groups);
+                split = split_model(m, smoothing);
+                &split
+            };
+            let n = m.positions.len() / 3;
             let base = mesh.positions.len();
             let positions: Vec<Vec3> = m
                 .positions
@@ -397,6 +435,33 @@ fn check_texture_size(path: &Path) -> Result<(), String> {
         ));
     }
     Ok(())
+}
+
+/// `m` with its vertices split and normals set by `smoothing` ([`split_normals`]).
+fn split_model(m: &tobj::Mesh, smoothing: Smoothing<'_>) -> tobj::Mesh {
+    let positions: Vec<Vec3> = m
+        .positions
+        .chunks_exact(3)
+        .map(|p| Vec3::new(p[0], p[1], p[2]))
+        .collect();
+    let s = split_normals(&positions, &m.indices, smoothing);
+    let gather = |data: &[f32], k: usize| -> Vec<f32> {
+        if data.len() != k * positions.len() {
+            return Vec::new();
+        }
+        s.source
+            .iter()
+            .flat_map(|&v| data[k * v as usize..k * (v as usize + 1)].iter().copied())
+            .collect()
+    };
+    tobj::Mesh {
+        positions: gather(&m.positions, 3),
+        texcoords: gather(&m.texcoords, 2),
+        normals: s.normals.iter().flat_map(|n| n.to_array()).collect(),
+        indices: s.indices,
+        material_id: m.material_id,
+        ..Default::default()
+    }
 }
 
 /// Runs a tobj call, turning a panic inside tobj (it unwraps in a few places on malformed

@@ -22,6 +22,30 @@ pub enum VplShading {
     Splat,
 }
 
+/// What the first-bounce flux of a light is divided among (Thiedemann 2010, §7.2).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+pub enum VplNormalize {
+    /// All K samples of the light's emission domain, valid or not: the flux of samples that
+    /// hit nothing leaves the scene, as it does in Mitsuba (unbiased).
+    #[default]
+    All,
+    /// Only the samples that hit geometry (the thesis's renormalization): each VPL's flux is
+    /// multiplied by K / valid count; equal to `all` where nothing misses, brighter where light
+    /// leaves the scene.
+    Valid,
+}
+
+/// How a spot light's first-bounce directions are sampled (Thiedemann 2010, §7.2).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+pub enum VplSpotSampling {
+    /// Uniform in solid angle on the cone: every sample carries the same weight Ω / K.
+    #[default]
+    SolidAngle,
+    /// Uniform in the disk the cone cuts from the spot's image plane, as the thesis does;
+    /// each sample weighted by the solid angle its area covers, π tan²α cos³θ / K.
+    Disk,
+}
+
 /// Parameters of the VPL method.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct VplSettings {
@@ -39,6 +63,8 @@ pub struct VplSettings {
     /// VPL (the thesis's maximum), up to [`VplSettings::MAX_BOUNCES`].
     pub bounces: u32,
     pub shading: VplShading,
+    pub normalize: VplNormalize,
+    pub spot_sampling: VplSpotSampling,
     /// Debug view: draw every VPL as a dot over the lit image (`gi_vpl_points`).
     pub show: bool,
 }
@@ -60,6 +86,8 @@ impl Default for VplSettings {
             visibility: VplVisibility::Voxel,
             bounces: 2,
             shading: VplShading::Gather,
+            normalize: VplNormalize::All,
+            spot_sampling: VplSpotSampling::SolidAngle,
             show: false,
         }
     }
@@ -74,6 +102,8 @@ pub struct VplOverrides {
     pub bounces: Option<u32>,
     pub d_min_voxels: Option<f32>,
     pub visibility: Option<VplVisibility>,
+    pub normalize: Option<VplNormalize>,
+    pub spot_sampling: Option<VplSpotSampling>,
 }
 
 impl VplOverrides {
@@ -85,6 +115,8 @@ impl VplOverrides {
             bounces: self.bounces.or(fallback.bounces),
             d_min_voxels: self.d_min_voxels.or(fallback.d_min_voxels),
             visibility: self.visibility.or(fallback.visibility),
+            normalize: self.normalize.or(fallback.normalize),
+            spot_sampling: self.spot_sampling.or(fallback.spot_sampling),
         }
     }
 
@@ -96,6 +128,8 @@ impl VplOverrides {
             bounces: self.bounces.unwrap_or(base.bounces),
             d_min_voxels: self.d_min_voxels.unwrap_or(base.d_min_voxels),
             visibility: self.visibility.unwrap_or(base.visibility),
+            normalize: self.normalize.unwrap_or(base.normalize),
+            spot_sampling: self.spot_sampling.unwrap_or(base.spot_sampling),
             shading: base.shading,
             show: base.show,
         }
@@ -106,6 +140,16 @@ impl VplOverrides {
 pub const VISIBILITY_NAMES: [(&str, VplVisibility); 2] = [
     ("voxel", VplVisibility::Voxel),
     ("none", VplVisibility::None),
+];
+
+/// The names of [`VplNormalize`] in scene files and on the command line.
+pub const NORMALIZE_NAMES: [(&str, VplNormalize); 2] =
+    [("all", VplNormalize::All), ("valid", VplNormalize::Valid)];
+
+/// The names of [`VplSpotSampling`] in scene files and on the command line.
+pub const SPOT_SAMPLING_NAMES: [(&str, VplSpotSampling); 2] = [
+    ("solid-angle", VplSpotSampling::SolidAngle),
+    ("disk", VplSpotSampling::Disk),
 ];
 
 /// Parses `--vpl-pattern NxM` (e.g. `4x4`).
