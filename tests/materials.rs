@@ -82,6 +82,66 @@ fn ggx_plane_under_a_point_light_matches_the_analytic_brdf() {
     }
 }
 
+/// The MTL PBR maps reach the G-buffer: a plane whose roughness, metalness and emission come
+/// from constant PNG maps (`map_Pr`, `map_Pm` linear, `map_Ke` sRGB times `Ke`) against the
+/// analytic BRDF with the maps' values (8-bit texel / 255; the sRGB decode of IEC 61966-2-1).
+/// The MTL's own `Pr`/`Pm` differ, so a G-buffer that ignored the maps would fail.
+#[test]
+fn mtl_pbr_maps_feed_the_gbuffer() {
+    let dir = std::env::temp_dir().join(format!("voxgi_pbr_maps_{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let texel = |name: &str, rgb: [u8; 3]| {
+        image::RgbImage::from_pixel(4, 4, image::Rgb(rgb))
+            .save(dir.join(name))
+            .unwrap();
+    };
+    let (rough8, metal8, glow8) = (102u8, 179u8, [200u8, 120, 60]);
+    texel("rough.png", [rough8; 3]);
+    texel("metal.png", [metal8; 3]);
+    texel("glow.png", glow8);
+    std::fs::write(
+        dir.join("m.mtl"),
+        format!(
+            "newmtl a\nKd {} {} {}\nPr 0.9\nPm 0.0\nKe 0.2 0.3 0.4\nmap_Pr rough.png\n\
+             map_Pm metal.png\nmap_Ke glow.png\n",
+            BASE.x, BASE.y, BASE.z
+        ),
+    )
+    .unwrap();
+    // The plane y = 0 of the other tests (the built-in quad scaled by 8), with uv.
+    std::fs::write(
+        dir.join("plane.obj"),
+        "mtllib m.mtl\nusemtl a\nv -4 0 -4\nv 4 0 -4\nv 4 0 4\nv -4 0 4\n\
+         vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nvn 0 1 0\nf 1/1/1 3/3/1 2/2/1\nf 1/1/1 4/4/1 3/3/1\n",
+    )
+    .unwrap();
+    let text = format!(
+        "{CAMERA}[[objects]]\nmesh = \"plane.obj\"\n\
+         [[lights]]\nkind = \"point\"\nposition = [{}, {}, {}]\nintensity_w_sr = [{}, {}, {}]\n",
+        LIGHT_POSITION.x,
+        LIGHT_POSITION.y,
+        LIGHT_POSITION.z,
+        LIGHT_W_SR.x,
+        LIGHT_W_SR.y,
+        LIGHT_W_SR.z,
+    );
+    let s = Scene::from_toml_str(&text, &dir.join("scene.toml"), &dir).expect("scene loads");
+    assert!(s.has_pbr_maps());
+    let srgb = |c: u8| {
+        let c = f32::from(c) / 255.0;
+        if c <= 0.04045 {
+            c / 12.92
+        } else {
+            ((c + 0.055) / 1.055).powf(2.4)
+        }
+    };
+    let emission = Vec3::new(0.2, 0.3, 0.4) * Vec3::from(glow8.map(srgb));
+    let (roughness, metallic) = (f32::from(rough8) / 255.0, f32::from(metal8) / 255.0);
+    check_ggx_pixels(&s, roughness, metallic, emission);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 #[test]
 fn ggx_emitter_next_to_phong_matches_the_analytic_brdf() {
     // All three G-buffer features at once: a Phong cube behind the camera (so the scene has
@@ -117,13 +177,19 @@ fn check_ggx_plane(roughness: f32, metallic: f32, emission: Vec3, extra: &str) {
         (s.has_phong(), s.has_ggx(), s.has_emission()),
         (!extra.is_empty(), true, emission != Vec3::ZERO)
     );
-    let img = render(&s);
+    check_ggx_pixels(&s, roughness, metallic, emission);
+}
+
+/// Renders `s` (a GGX plane y = 0 of base color [`BASE`] under the point light) and checks
+/// [`PIXELS`] against L = L_e + f(wi, wo) I cosθ_i / d² within 1%.
+fn check_ggx_pixels(s: &Scene, roughness: f32, metallic: f32, emission: Vec3) {
+    let img = render(s);
     let ggx = Ggx {
         roughness,
         metallic,
     };
     for (x, y) in PIXELS {
-        let p = plane_point(&s, x, y);
+        let p = plane_point(s, x, y);
         let d = LIGHT_POSITION - p;
         let wi = d.normalize();
         let wo = (s.camera.position - p).normalize();

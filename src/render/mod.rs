@@ -391,6 +391,7 @@ impl Renderer {
             textures: scene.has_albedo_textures(),
             bump: scene.has_bump_maps(),
             dissolve: scene.has_transparency(),
+            pbr_maps: scene.has_pbr_maps(),
         };
         parts.gbuffer = Some(GbufferPass::new(ctx, features)?);
         parts.deferred = Some(DeferredDirectPass::new(
