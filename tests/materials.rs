@@ -1,7 +1,9 @@
 //! GGX metal/roughness and emissive materials against closed forms: a GGX plane under a point
 //! light against the analytic BRDF (`scene::ggx_brdf`) at several roughness values, metalness
-//! values and angles, and emission seen by the camera. Each render runs with validation and
-//! synchronization validation on.
+//! values and angles, also with its parameters and emission from MTL maps, and emission seen
+//! by the camera; and the path tracer's lobes at every bounce (the material volume) against
+//! Lambert later bounces on the glossy Cornell box's Mitsuba reference. Each render runs with
+//! validation and synchronization validation on.
 
 mod common;
 
