@@ -284,7 +284,10 @@ const GLOSSY_FRAMES: u32 = 4;
 
 /// The path tracer with Phong/GGX lobes at every bounce (the material volume) beats the same
 /// tracer with Lambert later bounces on the glossy Cornell box (two GGX metal blocks), against
-/// the Mitsuba full-GI reference. Measured (128², 3 bounces, 16 rays, 4 frames): MEASURED.
+/// the Mitsuba full-GI reference. Measured on lavapipe (128², 3 bounces, 16 rays, 4 frames):
+/// relMSE 0.034 with lobes, 0.132 with Lambert later bounces (3.8×). The bounds: 0.05 (the
+/// measurement plus 45% for other devices' rounding and sample noise) and half the Lambert
+/// tracer's error.
 #[test]
 fn lobes_at_every_bounce_beat_lambert_later_bounces_on_a_glossy_box() {
     let (with_lobes, passes) = glossy_box_rel_mse(true);
@@ -296,9 +299,9 @@ fn lobes_at_every_bounce_beat_lambert_later_bounces_on_a_glossy_box() {
         "{passes:?}"
     );
     assert!(!lambert_passes.iter().any(|p| p == "voxelize_material"));
-    assert!(with_lobes < 1.0, "lobes relMSE {with_lobes}");
+    assert!(with_lobes < 0.05, "lobes relMSE {with_lobes}");
     assert!(
-        with_lobes < lambert * 0.9,
+        with_lobes < lambert / 2.0,
         "lobes {with_lobes} vs Lambert {lambert}"
     );
 }
