@@ -305,3 +305,56 @@ fn lobes_at_every_bounce_beat_lambert_later_bounces_on_a_glossy_box() {
         "lobes {with_lobes} vs Lambert {lambert}"
     );
 }
+
+/// A wall lit by a spot light beside a floor the camera does not see, with the hemisphere
+/// method (indirect light from the reflective light maps): returns the image.
+fn wall_beside_floor(floor_material: &str) -> HdrImage {
+    let s = scene(&format!(
+        "[camera]\nposition = [0.0, 1.0, -2.5]\ntarget = [0.0, 1.0, 0.0]\nfov_y_deg = 30.0\n\
+         near = 0.05\nfar = 20.0\n\
+         [[objects]]\nname = \"wall\"\nbuiltin = \"quad\"\ntranslate = [0.0, 1.0, 0.0]\n\
+         rotate_deg = [-90.0, 0.0, 0.0]\nscale = [2.0, 1.0, 2.0]\nmaterial = {{ albedo = 0.7 }}\n\
+         [[objects]]\nname = \"floor\"\nbuiltin = \"quad\"\ntranslate = [0.0, 0.0, -1.0]\n\
+         scale = [2.0, 1.0, 2.0]\nmaterial = {{ {floor_material} }}\n\
+         [[lights]]\nkind = \"spot\"\nposition = [0.0, 1.5, -1.0]\ndirection = [0.0, -1.0, 0.0]\n\
+         intensity_w_sr = 2.0\ncutoff_deg = 40.0\nbeam_deg = 35.0\n"
+    ));
+    let ctx = common::context();
+    let settings = RenderSettings {
+        width: 64,
+        height: 64,
+        gi: GiSettings {
+            method: GiMethod::Hemisphere,
+            filter_radius: 0,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let out = render_image(&ctx, &s, &settings).expect("renders");
+    common::assert_no_validation_messages(&ctx);
+    out.hdr
+}
+
+/// The light maps store a GGX sender's diffuse part only: the wall is outside the spot's cone
+/// (the visible part is more than 40° off its axis), so all its light is the floor's light-map
+/// light. A metal floor (m = 1: diffuse part exactly 0) leaves it black; a white Lambert floor
+/// (the positive control) lights it. Before, the light map sent a metal's base color as
+/// Lambert, which lit the wall like the white floor.
+#[test]
+fn light_maps_send_a_ggx_senders_diffuse_part_only() {
+    let metal = wall_beside_floor("albedo = 0.9, roughness = 0.5, metallic = 1.0");
+    let white = wall_beside_floor("albedo = 0.9");
+    let mean = |img: &HdrImage| {
+        img.data.iter().map(|p| p[0] + p[1] + p[2]).sum::<f32>() / img.data.len() as f32
+    };
+    let brightest = metal.data.iter().flatten().fold(0.0f32, |a, &b| a.max(b));
+    println!(
+        "wall: white floor mean {}, metal floor brightest {brightest}",
+        mean(&white)
+    );
+    assert!(
+        mean(&white) > 0.01,
+        "the white floor's light reaches the wall"
+    );
+    assert!(brightest <= 1e-3 * mean(&white), "metal floor: {brightest}");
+}

@@ -439,7 +439,11 @@ impl Renderer {
                     atlas_attributes,
                 },
             )?);
-            parts.light_map = Some(LightMapPass::new(ctx, scene.has_transparency())?);
+            parts.light_map = Some(LightMapPass::new(
+                ctx,
+                scene.has_transparency(),
+                scene.has_ggx(),
+            )?);
         }
         if let Some(d) = settings.debug.filter(|_| atlas_view_on) {
             let grid = settings
