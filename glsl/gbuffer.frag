@@ -13,6 +13,8 @@ layout(constant_id = 2) const bool HAS_BUMP = false;
 layout(constant_id = 3) const bool HAS_DISSOLVE = false;
 layout(constant_id = 4) const bool HAS_GGX = false;
 layout(constant_id = 5) const bool HAS_EMISSION = false;
+// Some material has an MTL PBR map (map_Pr, map_Pm, map_Ke).
+layout(constant_id = 6) const bool HAS_PBR_MAPS = false;
 const bool HAS_LOBE = HAS_PHONG || HAS_GGX;
 
 struct GpuMaterial {
@@ -34,8 +36,14 @@ layout(set = 0, binding = 3) uniform sampler2D bump_texture;
 struct GpuMaterialPbr {
     vec4 ggx;       // x roughness, y metallic, z 1 for a GGX material
     vec4 emission;  // rgb W/(m^2 sr)
+    uvec4 maps;     // 1 where the draw's map is used: x roughness, y metallic, z emission
 };
 layout(set = 0, binding = 4, std430) readonly buffer MaterialsPbr { GpuMaterialPbr pbr[]; };
+// The draw's MTL PBR maps (the placeholder when it has none): roughness and metallic (linear,
+// first channel) replace the constants; the emission map (sRGB) multiplies the constant.
+layout(set = 0, binding = 5) uniform sampler2D roughness_map;
+layout(set = 0, binding = 6) uniform sampler2D metallic_map;
+layout(set = 0, binding = 7) uniform sampler2D emission_map;
 
 layout(push_constant) uniform Push {
     mat4 model;
@@ -116,16 +124,22 @@ void main() {
     if (HAS_DISSOLVE && m.albedo.a < coverage_threshold) discard;
     vec4 lobe = vec4(m.specular.rgb, 1.0);
     float lobe_parameter = m.specular.a;
-    if (HAS_GGX && pbr[pc.material].ggx.z != 0.0) {
-        float metallic = pbr[pc.material].ggx.y;
+    GpuMaterialPbr mp = pbr[pc.material];
+    if (HAS_GGX && mp.ggx.z != 0.0) {
+        float metallic = mp.ggx.y;
+        float roughness = mp.ggx.x;
+        if (HAS_PBR_MAPS && mp.maps.y != 0u) metallic = clamp(texture(metallic_map, tex_uv).r, 0.0, 1.0);
+        if (HAS_PBR_MAPS && mp.maps.x != 0u) roughness = clamp(texture(roughness_map, tex_uv).r, 0.0, 1.0);
         lobe = vec4(mix(vec3(0.04), albedo, metallic), 2.0);
-        lobe_parameter = pbr[pc.material].ggx.x;
+        lobe_parameter = roughness;
         albedo *= 1.0 - metallic;
     }
     out_albedo = vec4(albedo, 1.0);
     out_normal = vec4(n, lobe_parameter);
     // Emission leaves the front side only, as Mitsuba's area emitter.
-    vec4 emission = vec4(front ? pbr[pc.material].emission.rgb : vec3(0.0), 1.0);
+    vec3 emitted = mp.emission.rgb;
+    if (HAS_PBR_MAPS && mp.maps.z != 0u) emitted *= texture(emission_map, tex_uv).rgb;
+    vec4 emission = vec4(front ? emitted : vec3(0.0), 1.0);
     if (HAS_LOBE) out_slot2 = lobe;
     if (HAS_EMISSION && HAS_LOBE) out_slot3 = emission;
     if (HAS_EMISSION && !HAS_LOBE) out_slot2 = emission;

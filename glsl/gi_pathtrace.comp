@@ -1,9 +1,15 @@
 #version 450
 // The voxel path tracer (Thiedemann 2010, §6.4.2): from each G-buffer point, `rays` paths of B bounces
-// (or unbounded, see below) through the binary voxel hierarchy; at every hit the albedo and
-// normal come from the volumes congruent with the bits and the direct light there from the
-// shadow maps (next event estimation), so each bounce adds throughput * rho/pi * E_direct. Cosine sampling of
-// Lambert bounces makes the throughput factor the albedo. Samples: Hammersley for the first
+// (or unbounded, see below) through the binary voxel hierarchy; at every hit the albedo, normal
+// and (with HAS_MATERIAL_VOLUME) the Phong or GGX lobe come from the volumes congruent with the
+// bits and the direct light there from the shadow maps (next event estimation), so each bounce
+// adds throughput * f * E_direct. Every bounce samples its surface's lobes with
+// material_lobe.glsl's sample_lobe: the first one splits the pixel's paths half diffuse, half
+// specular lobe (stratified); a later one picks the specular lobe with
+// lobe_specular_probability and divides by it. Cosine sampling of Lambert bounces makes the
+// throughput factor the albedo. Without the material volume later bounces are Lambert with the
+// albedo volume's color (GGX: the base color). Every ray starts k1 voxel diagonals off its
+// surface along the normal and k2 h / (d . n) (clamped) along the ray (Thiedemann 2010 §5.3.1). Samples: Hammersley for the first
 // bounce, Halton (2,3) and (5,7) for the next two, hashed random after, all rotated per pixel
 // and per accumulated frame. The irradiance estimate E = pi/N sum L is accumulated over frames
 // into a history image while camera and scene stay still.
@@ -24,6 +30,7 @@
 
 layout(constant_id = 0) const bool HAS_PHONG = false;  // the G-buffer has a lobe target (Phong or GGX)
 layout(constant_id = 1) const bool HAS_EMISSION = false;
+layout(constant_id = 2) const bool HAS_MATERIAL_VOLUME = false;  // lobes at later bounces
 
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(set = 0, binding = 0, std430) readonly buffer FrameBuf { GpuFrame frame; };
@@ -38,6 +45,7 @@ layout(set = 0, binding = 8, rgba32f) uniform image2D history;
 layout(set = 0, binding = 9) uniform sampler2D gb_specular;   // albedo when !HAS_PHONG
 layout(set = 0, binding = 10) uniform sampler2D gb_albedo;
 layout(set = 0, binding = 12) uniform sampler3D emission_volume;  // albedo when !HAS_EMISSION
+layout(set = 0, binding = 13) uniform sampler3D material_volume;  // albedo when !HAS_MATERIAL_VOLUME
 
 uvec4 vx_column(uint level, int x, int y, uint layer) {
     return texelFetch(voxels, ivec3(x, y, int(layer)), int(level));
@@ -53,32 +61,10 @@ bool vx_voxel(int x, int y, int k) {
 #include "shadow.glsl"
 #include "gbuffer_lobe.glsl"
 #include "brdf.glsl"
+#include "material_lobe.glsl"
 
-// A GGX microfacet normal seen from wo (n the z axis), distributed as the visible normals
-// D_wo(h) = G1(wo) max(0, wo.h) D(h) / (n.wo) (Heitz 2018, "Sampling the GGX Distribution of
-// Visible Normals", listing 1). Reflecting wo about h then gives wi with the exact weight
-// f_spec (n.wi) / pdf(wi) = F(wo.h) G1(wi) for the separable Smith G = G1(wi) G1(wo).
-vec3 ggx_visible_normal(vec3 n, vec3 wo, float alpha, vec2 u) {
-    vec3 t = abs(n.x) > 0.9 ? vec3(0.0, 1.0, 0.0) : vec3(1.0, 0.0, 0.0);
-    vec3 b1 = normalize(cross(n, t));
-    vec3 b2 = cross(n, b1);
-    vec3 v = vec3(dot(wo, b1), dot(wo, b2), dot(wo, n));
-    vec3 vh = normalize(vec3(alpha * v.x, alpha * v.y, v.z));
-    float len2 = vh.x * vh.x + vh.y * vh.y;
-    vec3 t1 = len2 > 0.0 ? vec3(-vh.y, vh.x, 0.0) * inversesqrt(len2) : vec3(1.0, 0.0, 0.0);
-    vec3 t2 = cross(vh, t1);
-    float r = sqrt(u.x);
-    float phi = 2.0 * PI * u.y;
-    float p1 = r * cos(phi);
-    float s = 0.5 * (1.0 + vh.z);
-    float p2 = (1.0 - s) * sqrt(max(1.0 - p1 * p1, 0.0)) + s * r * sin(phi);
-    vec3 nh = p1 * t1 + p2 * t2 + sqrt(max(1.0 - p1 * p1 - p2 * p2, 0.0)) * vh;
-    vec3 h = normalize(vec3(alpha * nh.x, alpha * nh.y, max(nh.z, 0.0)));
-    return normalize(b1 * h.x + b2 * h.y + n * h.z);
-}
-
-// Outgoing Lambert radiance at p (normal n, albedo a) from every light, shadowed.
-vec3 direct_at(vec3 p, vec3 n, vec3 a) {
+// Outgoing radiance toward wo at p (normal n, material m) from every light, shadowed.
+vec3 direct_at(vec3 p, vec3 n, vec3 wo, Lobe m) {
     vec3 lo = vec3(0.0);
     for (uint i = 0u; i < frame.counts.x; ++i) {
         GpuLight l = frame.lights[i];
@@ -95,7 +81,7 @@ vec3 direct_at(vec3 p, vec3 n, vec3 a) {
             e = l.intensity.rgb * (falloff * max(dot(n, wi), 0.0) / d2);
         }
         if (all(equal(e, vec3(0.0)))) continue;
-        lo += a / PI * e * shadow_visibility(shadow_maps, l, p, n, max(dot(n, wi), 0.0));
+        lo += lobe_brdf(m, n, wi, wo) * e * shadow_visibility(shadow_maps, l, p, n, max(dot(n, wi), 0.0));
     }
     return lo;
 }
@@ -136,6 +122,35 @@ vec2 bounce_sample(uint bounce, uint s, uint rays, uint frame_index, vec2 rot) {
     return fract(u + rot);
 }
 
+// The first hit of a ray from o (on a surface of normal n) along d, offset k2 h / (d . n)
+// along the ray, clamped (Thiedemann 2010 §5.3.1, as the hemisphere rays do), so grazing rays
+// leave their surface's own voxels too; returns the hit and in `start` the offset origin.
+VxHit trace_from(vec3 o, vec3 n, vec3 d, out vec3 start) {
+    float along = min(gi.ray_offset_voxels * gi.voxel_diagonal_m / max(dot(d, n), 1e-4),
+        gi.ray_offset_max_voxels * gi.voxel_diagonal_m);
+    start = o + d * along;
+    vec3 ov = (gi.world_to_voxel * vec4(start, 1.0)).xyz;
+    return voxel_first_hit(gi.dims, uint(gi.max_level), ov, mat3(gi.world_to_voxel) * d,
+        max(gi.radius_m - along, 0.0), gi.start_level, gi.max_iterations);
+}
+
+// The material at a voxel hit: the material volume's lobe, or Lambert with the albedo.
+Lobe hit_lobe(ivec3 v, vec3 albedo) {
+    return HAS_MATERIAL_VOLUME ? voxel_lobe(albedo, texelFetch(material_volume, v, 0)) : lambert_lobe(albedo);
+}
+
+// The G-buffer pixel's material (the diffuse color is applied after the paths, see main).
+// Lobe kinds of the lobe target: 1 Phong (rho_s, exponent in the normal's w), 2 GGX (F0,
+// roughness in the normal's w).
+Lobe pixel_lobe(ivec2 px, float normal_w) {
+    if (!HAS_PHONG) return lambert_lobe(vec3(1.0));
+    vec4 t = texelFetch(gb_specular, px, 0);
+    if (t.a > 1.5) return Lobe(LOBE_GGX, vec3(1.0), t.rgb, normal_w);
+    vec3 specular = gbuffer_phong_specular(gb_specular, px);
+    if (is_phong_pixel(specular)) return Lobe(LOBE_PHONG, vec3(1.0), specular, normal_w);
+    return lambert_lobe(vec3(1.0));
+}
+
 void main() {
     ivec2 px = ivec2(gl_GlobalInvocationID.xy);
     ivec2 size = ivec2(frame.counts.zw);
@@ -149,18 +164,11 @@ void main() {
     vec3 p = pixel_world_position(frame.inv_view_proj, frame.camera_position.xyz, px, vec2(size), depth);
     vec4 ns = texelFetch(gb_normal, px, 0);
     vec3 n = normalize(ns.xyz);
-    vec3 specular = HAS_PHONG ? gbuffer_phong_specular(gb_specular, px) : vec3(0.0);
-    bool phong = HAS_PHONG && is_phong_pixel(specular);
-    // GGX pixels (lobe kind 2): F0 in rgb, roughness in the normal's w.
-    vec4 lobe_px = HAS_PHONG ? texelFetch(gb_specular, px, 0) : vec4(0.0);
-    bool ggx = HAS_PHONG && lobe_px.a > 1.5;
-    float alpha = max(ns.w * ns.w, 1e-4);
+    Lobe pixel = pixel_lobe(px, ns.w);
     vec3 wo = normalize(frame.camera_position.xyz - p);
-    vec3 mirror = reflect(-wo, n);
     // Phong and GGX pixels spend half their paths on the specular lobe (first bounce).
-    uint lobe_rays = (phong || ggx) ? max(gi.rays, 1u) / 2u : 0u;
+    uint lobe_rays = pixel.kind != LOBE_LAMBERT ? max(gi.rays, 1u) / 2u : 0u;
     float offset = gi.normal_offset_voxels * gi.voxel_diagonal_m;
-    mat3 dir_to_voxel = mat3(gi.world_to_voxel);
     uint rays = max(gi.rays, 1u);
     uint bounce_param = gi.bounces;
     bool roulette = bounce_param == 0u;
@@ -175,37 +183,35 @@ void main() {
         uint count = lobe ? lobe_rays : diffuse_rays;
         vec3 o = p + n * offset;
         vec3 nn = n;
+        vec3 from = wo;
+        Lobe m = pixel;
         vec3 throughput = vec3(1.0);
         vec3 l = vec3(0.0);
-        float cos_first = 1.0;
         for (uint b = 0u; b < bounces; ++b) {
+            vec2 u = bounce_sample(b, j, count, frame_index, rot);
+            // The first bounce takes the stratified split; a later one picks a lobe at random,
+            // reusing u.x (rescaled) as the choice.
+            bool specular = lobe;
+            float pick = 1.0;
+            if (b > 0u) {
+                float ps = lobe_specular_probability(m);
+                specular = u.x < ps;
+                u.x = specular ? u.x / ps : (u.x - ps) / (1.0 - ps);
+                pick = specular ? ps : 1.0 - ps;
+            }
+            vec3 w;
+            vec3 d = sample_lobe(m, nn, from, specular, u, w);
+            if (dot(d, nn) <= 0.0) break;  // a lobe sample below the surface
+            // The diffuse color of the first bounce is applied after the paths.
+            if (b > 0u && !specular) w *= m.diffuse;
+            throughput *= w / pick;
             if (roulette && b >= ROULETTE_AFTER) {
                 float q = min(max(throughput.r, max(throughput.g, throughput.b)), 0.95);
                 if (roulette_sample(uvec2(px), frame_index * rays + s, b) >= q) break;
                 throughput /= q;
             }
-            vec2 u = bounce_sample(b, j, count, frame_index, rot);
-            vec3 d;
-            if (lobe && b == 0u && ggx) {
-                vec3 hm = ggx_visible_normal(n, wo, alpha, u);
-                d = reflect(-wo, hm);
-            } else {
-                d = (lobe && b == 0u) ? phong_direction(mirror, ns.w, u) : cosine_direction(nn, u);
-            }
-            if (b == 0u) {
-                cos_first = dot(d, n);
-                if (cos_first <= 0.0) break;  // a lobe sample below the surface
-                // The exact sample weights of GGX pixels: F(wo.h) G1(wi) for the lobe, the
-                // diffuse term's (1 - F_d(n.wi)) for cosine samples (its (1 - F_d(n.wo)) below).
-                if (ggx) {
-                    vec3 hm = normalize(d + wo);
-                    throughput = lobe
-                        ? fresnel_schlick(lobe_px.rgb, dot(wo, hm)) * ggx_g1(alpha, cos_first)
-                        : vec3(1.0 - fresnel_schlick(vec3(0.04), cos_first).x);
-                }
-            }
-            vec3 ov = (gi.world_to_voxel * vec4(o, 1.0)).xyz;
-            VxHit h = voxel_first_hit(gi.dims, uint(gi.max_level), ov, dir_to_voxel * d, gi.radius_m, gi.start_level, gi.max_iterations);
+            vec3 start;
+            VxHit h = trace_from(o, nn, d, start);
             if (!h.hit) break;
             ivec3 v = ivec3(h.voxel);
             vec3 a = texelFetch(albedo_volume, v, 0).rgb;
@@ -213,27 +219,25 @@ void main() {
             hn = dot(hn, hn) > 0.25 ? normalize(hn) : -d;
             bool back = dot(hn, d) > 0.0;
             if (back) hn = -hn;  // the side the ray arrives at
-            vec3 hp = o + d * h.t;
+            vec3 hp = start + d * h.t;
             // An emitter sends its radiance from the side its normal points to (Mitsuba's area
             // emitter); the camera's own view of emitters is deferred_direct's.
             if (HAS_EMISSION && !back) l += throughput * texelFetch(emission_volume, v, 0).rgb;
-            l += throughput * direct_at(hp, hn, a);
-            throughput *= a;
+            m = hit_lobe(v, a);
+            l += throughput * direct_at(hp, hn, -d, m);
             o = hp + hn * offset;
             nn = hn;
+            from = -d;
         }
-        if (lobe) lobe_sum += ggx ? l : l * max(cos_first, 0.0);
+        if (lobe) lobe_sum += l;
         else sum += l;
     }
+    // Lambert pixels: the irradiance E = pi mean(L). Phong and GGX pixels: their indirect
+    // radiance, diffuse/pi * E (E with the GGX diffuse weights) plus the lobe estimate.
     vec3 e = sum * (PI / float(max(diffuse_rays, 1u)));
-    if (ggx) {
-        // Indirect radiance: the diffuse term and the lobe estimate (mean of L F G1(wi)).
+    if (pixel.kind != LOBE_LAMBERT) {
         vec3 diffuse = texelFetch(gb_albedo, px, 0).rgb;
-        float fdo = 1.0 - fresnel_schlick(vec3(0.04), max(dot(n, wo), 0.0)).x;
-        e = diffuse / PI * fdo * e + lobe_sum / float(max(lobe_rays, 1u));
-    } else if (phong) {
-        vec3 albedo = texelFetch(gb_albedo, px, 0).rgb;
-        e = albedo / PI * e + specular * ((ns.w + 2.0) / (ns.w + 1.0)) * lobe_sum / float(max(lobe_rays, 1u));
+        e = diffuse / PI * e + lobe_sum / float(max(lobe_rays, 1u));
     }
     vec3 old = frame_index == 0u ? e : imageLoad(history, px).rgb;
     imageStore(history, px, vec4(mix(old, e, 1.0 / float(frame_index + 1u)), 1.0));

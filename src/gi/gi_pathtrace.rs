@@ -2,7 +2,9 @@
 //! volumes and direct light at every hit from the shadow maps, accumulated over frames into a
 //! history image (Thiedemann 2010 §6.4.2). In scenes with emitters, a hit on an emitter's front
 //! side adds its emitted radiance from the emission volume (a specialization constant: no
-//! emission reads otherwise).
+//! emission reads otherwise). With a material volume (Phong or GGX materials,
+//! `GiSettings::pathtrace_lobes`) every bounce samples its surface's lobe, not only the first
+//! (another specialization constant: later bounces are Lambert otherwise).
 
 use super::gi_common::{add_ray_pass, GiShared, GpuGiPush};
 use super::{GiInputs, GiMethodPasses, GiOutput, GiTarget};
@@ -17,7 +19,8 @@ pub struct GiPathtrace {
 }
 
 impl GiPathtrace {
-    pub fn new(ctx: &Context, target: &GiTarget<'_>) -> Result<Self, VkError> {
+    /// `lobes`: later bounces read the material volume (the assembly creates it then).
+    pub fn new(ctx: &Context, target: &GiTarget<'_>, lobes: bool) -> Result<Self, VkError> {
         let (w, h) = target.size;
         let pipeline = ctx.compute_pipeline(
             "gi_pathtrace.comp",
@@ -26,6 +29,7 @@ impl GiPathtrace {
                 // The lobe target exists with Phong or GGX materials; both sample it.
                 (0, u32::from(target.has_phong || target.scene.has_ggx())),
                 (1, u32::from(target.scene.has_emission())),
+                (2, u32::from(lobes && !target.scene.is_all_lambert())),
             ],
         )?;
         let usage = vk::ImageUsageFlags::STORAGE
@@ -53,6 +57,8 @@ impl GiMethodPasses for GiPathtrace {
         };
         // Without emitters the shader never reads its emission binding; albedo fills it.
         let emission = v.emission.unwrap_or(v.albedo);
+        // Without a material volume the shader never reads its binding either.
+        let material = v.material.unwrap_or(v.albedo);
         let push = shared.push;
         let frames = shared.frames.clone();
         add_ray_pass(
@@ -66,6 +72,7 @@ impl GiMethodPasses for GiPathtrace {
                 (6, v.normal),
                 (7, i.shadow_map),
                 (12, emission),
+                (13, material),
             ],
             (history, Access::StorageReadWrite(Shader::Compute)),
             None,

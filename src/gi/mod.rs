@@ -128,7 +128,9 @@ impl GiPasses {
         target: &GiTarget<'_>,
     ) -> Result<Self, VkError> {
         let method: Box<dyn GiMethodPasses> = match settings.method {
-            GiMethod::Pathtrace => Box::new(GiPathtrace::new(ctx, target)?),
+            GiMethod::Pathtrace => {
+                Box::new(GiPathtrace::new(ctx, target, settings.pathtrace_lobes)?)
+            }
             GiMethod::Vpl => Box::new(vpl::VplPasses::new(ctx, &settings, target)?),
             GiMethod::Hemisphere if settings.radiance_source == RadianceSource::Volume => {
                 Box::new(GiRadianceVolume::new(ctx, target)?)
@@ -141,7 +143,16 @@ impl GiPasses {
         let attributes = Self::needs_attribute_volumes(&settings)
             .then(|| {
                 let t = target;
-                TriangleAttributeVolumes::new(ctx, t.scene, t.time_s, t.grid, t.atlas_attributes)
+                // The path tracer's lobes at later bounces read the material volume.
+                let lobes = settings.method == GiMethod::Pathtrace && settings.pathtrace_lobes;
+                TriangleAttributeVolumes::new(
+                    ctx,
+                    t.scene,
+                    t.time_s,
+                    t.grid,
+                    t.atlas_attributes,
+                    lobes,
+                )
             })
             .transpose()?;
         Ok(Self {

@@ -1,6 +1,7 @@
 //! `gbuffer`: albedo, normal, (Phong or GGX scenes) specular lobe, (scenes with emitters)
-//! emission, and depth of the camera view (`glsl/gbuffer.{vert,frag}`). Textures and bump maps
-//! are chosen per draw among the declared ones (`.bind_one_of_sampled`).
+//! emission, and depth of the camera view (`glsl/gbuffer.{vert,frag}`). Textures, bump maps and
+//! the MTL PBR maps (roughness, metallic, emission) are chosen per draw among the declared ones
+//! (`.bind_one_of_sampled`).
 
 use super::scene_gpu::{vertex_attributes, SceneInputs};
 use super::{DEPTH, GBUFFER_COLOR};
@@ -51,6 +52,8 @@ pub struct GbufferFeatures {
     pub textures: bool,
     pub bump: bool,
     pub dissolve: bool,
+    /// MTL `map_Pr`, `map_Pm` or `map_Ke`.
+    pub pbr_maps: bool,
 }
 
 impl GbufferPass {
@@ -84,6 +87,7 @@ impl GbufferPass {
                 (3, u32::from(f.dissolve)),
                 (4, u32::from(f.ggx)),
                 (5, u32::from(f.emission)),
+                (6, u32::from(f.pbr_maps)),
             ],
         })?;
         Ok(Self {
@@ -120,12 +124,15 @@ impl GbufferPass {
             .bind(0, scene.frame, Access::StorageRead(Shader::Graphics))
             .bind(1, scene.materials, Access::StorageRead(Shader::Fragment))
             .bind_one_of_sampled(2, choices.clone(), sampler, Shader::Fragment)
-            .bind_one_of_sampled(3, choices, sampler, Shader::Fragment)
+            .bind_one_of_sampled(3, choices.clone(), sampler, Shader::Fragment)
             .bind(
                 4,
                 scene.materials_pbr,
                 Access::StorageRead(Shader::Fragment),
             )
+            .bind_one_of_sampled(5, choices.clone(), sampler, Shader::Fragment)
+            .bind_one_of_sampled(6, choices.clone(), sampler, Shader::Fragment)
+            .bind_one_of_sampled(7, choices, sampler, Shader::Fragment)
             .read(vertices, Access::VertexBuffer)
             .read(indices, Access::IndexBuffer)
             .color(out.albedo, clear)
@@ -142,15 +149,21 @@ impl GbufferPass {
                 t.and_then(|i| textures.get(i).copied())
                     .unwrap_or(placeholder)
             };
-            ctx.bind_with(&pipe, &[(2, texture(None)), (3, texture(None))]);
+            // Bindings 2 to 7: albedo, bump, roughness, metallic and emission maps.
+            let maps = |d: Option<&super::scene_gpu::Draw>| {
+                let [r, m, e] = d.map_or([None; 3], |d| d.pbr_maps);
+                let (t, b) = d.map_or((None, None), |d| (d.texture, d.bump));
+                [(2, t), (3, b), (5, r), (6, m), (7, e)].map(|(i, t)| (i, texture(t)))
+            };
+            ctx.bind_with(&pipe, &maps(None));
             ctx.bind_vertex_buffer(vertices);
             ctx.bind_index_buffer(indices);
             if let Ok(lists) = draws.read() {
-                let mut bound = (None, None);
+                let mut bound = (None, None, [None; 3]);
                 for d in &lists.camera {
-                    if (d.texture, d.bump) != bound {
-                        ctx.push_with(&pipe, &[(2, texture(d.texture)), (3, texture(d.bump))]);
-                        bound = (d.texture, d.bump);
+                    if (d.texture, d.bump, d.pbr_maps) != bound {
+                        ctx.push_with(&pipe, &maps(Some(d)));
+                        bound = (d.texture, d.bump, d.pbr_maps);
                     }
                     let push = GpuGbufferPush {
                         model: d.model.to_cols_array(),

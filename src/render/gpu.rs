@@ -101,9 +101,16 @@ pub struct GpuMaterialPbr {
     pub ggx: [f32; 4],
     /// rgb emitted radiance, W/(m²·sr).
     pub emission: [f32; 4],
+    /// 1 where the draw's map replaces the value: x roughness (`map_Pr`), y metallic
+    /// (`map_Pm`), z emission (`map_Ke`, multiplying the constant).
+    pub maps: [u32; 4],
 }
 
-crate::gpu_struct!(GpuMaterialPbr { ggx, emission });
+crate::gpu_struct!(GpuMaterialPbr {
+    ggx,
+    emission,
+    maps
+});
 
 /// Interleaved vertex of every mesh.
 #[repr(C)]

@@ -28,8 +28,9 @@ pub struct LightMapPass {
 
 impl LightMapPass {
     /// `has_dissolve`: some material has MTL d < 1, whose coverage the light map shares with
-    /// the shadow maps.
-    pub fn new(ctx: &Context, has_dissolve: bool) -> Result<Self, VkError> {
+    /// the shadow maps. `has_ggx`: some material is GGX, whose texels store only the diffuse
+    /// part (`glsl/light_map.frag`).
+    pub fn new(ctx: &Context, has_dissolve: bool, has_ggx: bool) -> Result<Self, VkError> {
         let pipeline = ctx.graphics_pipeline(&GraphicsPipelineDesc {
             vertex: "light_map.vert".into(),
             geometry: Some("light_map.geom".into()),
@@ -48,7 +49,7 @@ impl LightMapPass {
             depth_write: true,
             depth_bias: false,
             logic_op: None,
-            spec: vec![(0, u32::from(has_dissolve))],
+            spec: vec![(0, u32::from(has_dissolve)), (1, u32::from(has_ggx))],
         })?;
         Ok(Self { pipeline })
     }
@@ -80,6 +81,11 @@ impl LightMapPass {
             .pipeline(&pipe)
             .bind(0, scene.frame, Access::StorageRead(Shader::Graphics))
             .bind(1, scene.materials, Access::StorageRead(Shader::Fragment))
+            .bind(
+                2,
+                scene.materials_pbr,
+                Access::StorageRead(Shader::Fragment),
+            )
             .read(vertices, Access::VertexBuffer)
             .read(indices, Access::IndexBuffer)
             .color(maps.radiance, clear)

@@ -250,6 +250,7 @@ impl Renderer {
             textures: scene.has_albedo_textures(),
             bump: scene.has_bump_maps(),
             dissolve: scene.has_transparency(),
+            pbr_maps: scene.has_pbr_maps(),
         };
         let gbuffer = GbufferPass::new(ctx, features)?;
         let deferred = DeferredDirectPass::new(
@@ -303,7 +304,8 @@ impl Renderer {
                     atlas_attributes,
                 },
             )?;
-            gi = Some((passes, LightMapPass::new(ctx, scene.has_transparency())?));
+            let light_map = LightMapPass::new(ctx, scene.has_transparency(), scene.has_ggx())?;
+            gi = Some((passes, light_map));
         }
         let mut atlas_view = None;
         if let Some(d) = settings.debug.filter(|_| atlas_view_on) {

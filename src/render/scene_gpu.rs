@@ -29,6 +29,9 @@ pub struct Draw {
     pub texture: Option<usize>,
     /// Index into the scene's textures of the material's bump or normal map.
     pub bump: Option<usize>,
+    /// Indices into the scene's textures of the material's roughness, metallic and emission
+    /// maps ([`crate::scene::PbrMaps::as_array`]).
+    pub pbr_maps: [Option<usize>; 3],
     /// The object drawn (its transform and, for OBJ sequences, its frame follow the scene
     /// time), the submesh, and the mesh's local box.
     pub object: usize,
@@ -123,9 +126,11 @@ impl SceneGpu {
                     .ggx
                     .map_or([0.0; 4], |g| [g.roughness, g.metallic, 1.0, 0.0]);
                 let e = m.emission;
+                let [r, metal, em] = m.pbr_maps.as_array().map(|t| u32::from(t.is_some()));
                 GpuMaterialPbr {
                     ggx,
                     emission: [e.x, e.y, e.z, 0.0],
+                    maps: [r, metal, em, 0],
                 }
             })
             .collect();
@@ -143,10 +148,11 @@ impl SceneGpu {
         })?;
         let mut textures = Vec::new();
         for (i, t) in scene.textures.iter().enumerate() {
-            let used = scene
-                .materials
-                .iter()
-                .any(|m| m.albedo_texture == Some(i) || m.bump_texture == Some(i));
+            let used = scene.materials.iter().any(|m| {
+                m.albedo_texture == Some(i)
+                    || m.bump_texture == Some(i)
+                    || m.pbr_maps.as_array().contains(&Some(i))
+            });
             textures.push(if used {
                 textures::upload_texture(ctx, t, &format!("texture {}", t.path.display()))?
             } else {
@@ -385,6 +391,10 @@ fn upload_geometry(ctx: &Context, scene: &Scene, t_s: f32) -> Result<Geometry, R
             let material = object.materials.get(si).copied().unwrap_or(sub.material);
             let texture = scene.materials.get(material).and_then(|m| m.albedo_texture);
             let bump = scene.materials.get(material).and_then(|m| m.bump_texture);
+            let pbr_maps = scene
+                .materials
+                .get(material)
+                .map_or([None; 3], |m| m.pbr_maps.as_array());
             draws.push(Draw {
                 first_index: ibase + sub.first_index,
                 index_count: sub.index_count,
@@ -392,6 +402,7 @@ fn upload_geometry(ctx: &Context, scene: &Scene, t_s: f32) -> Result<Geometry, R
                 material: material as u32,
                 texture,
                 bump,
+                pbr_maps,
                 object: object_index,
                 submesh: si,
                 local_aabb: mesh.aabb,

@@ -923,8 +923,16 @@ fn apply_override(
                 metallic: metallic.unwrap_or(base.metallic),
             });
         }
+        // A constant override drops the MTL map it replaces, as `albedo` drops `map_Kd`.
+        if roughness.is_some() {
+            mat.pbr_maps.roughness = None;
+        }
+        if metallic.is_some() {
+            mat.pbr_maps.metallic = None;
+        }
         if let Some(e) = emission {
             mat.emission = e;
+            mat.pbr_maps.emission = None;
         }
         if mat.ggx.is_none() && (mat.albedo + mat.specular).max_element() > 1.0 {
             log::warn!(

@@ -47,6 +47,10 @@ pub struct GiSettings {
     pub seed: u32,
     /// Path-tracer bounces: a fixed count, or unbounded by Russian roulette.
     pub bounces: Bounces,
+    /// Path tracer: sample the Phong and GGX lobes at every bounce (a material volume, in
+    /// scenes with such materials); `false` makes later bounces Lambert with the base color,
+    /// the behaviour before the material volume, kept for comparisons.
+    pub pathtrace_lobes: bool,
     /// Frames a headless render accumulates (path tracer; the viewer accumulates while still).
     pub accumulate_frames: u32,
     /// Where the hemisphere method reads the radiance at ray hits.
@@ -181,6 +185,7 @@ impl Default for GiSettings {
             filter_passes: 2,
             seed: 0,
             bounces: Bounces::Fixed(2),
+            pathtrace_lobes: true,
             accumulate_frames: 1,
             radiance_source: RadianceSource::Maps,
             vpl: super::VplSettings::default(),

@@ -38,6 +38,28 @@ pub struct Material {
     /// Emitted radiance L_e (MTL `Ke`, TOML `emission_w_sr_m2`) in W/(m²·sr), linear RGB,
     /// leaving the front side (the side the normals point to, as Mitsuba's `area` emitter).
     pub emission: Vec3,
+    /// The MTL PBR maps (`map_Pr`, `map_Pm`, `map_Ke`), indices into
+    /// [`super::Scene::textures`].
+    pub pbr_maps: PbrMaps,
+}
+
+/// Texture maps of the GGX parameters and of the emission (MTL PBR extension), read by the
+/// G-buffer. `roughness` and `metallic` (`map_Pr`, `map_Pm`: linear, first channel) replace
+/// the constants where present, as `map_Kd` replaces `Kd`; `emission` (`map_Ke`, sRGB) is
+/// multiplied by `Ke` (1 when the MTL gives only the map), so that an 8-bit map can scale a
+/// radiance above 1 W/(m²·sr). The voxel volumes use the constants only.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct PbrMaps {
+    pub roughness: Option<usize>,
+    pub metallic: Option<usize>,
+    pub emission: Option<usize>,
+}
+
+impl PbrMaps {
+    /// The maps in the G-buffer's binding order (roughness, metallic, emission).
+    pub fn as_array(&self) -> [Option<usize>; 3] {
+        [self.roughness, self.metallic, self.emission]
+    }
 }
 
 /// Metal/roughness parameters of the GGX BRDF ([`ggx_brdf`]), each in [0, 1].
@@ -136,6 +158,7 @@ impl Material {
             opacity: 1.0,
             ggx: None,
             emission: Vec3::ZERO,
+            pbr_maps: PbrMaps::default(),
         }
     }
 

@@ -167,3 +167,68 @@ fn asset_cornell_emissive_is_lit_only_by_its_emitter() {
     let n = light.transform_at(0.0).transform_vector3(mesh.normals[0]);
     assert!(n.y < -0.999, "{n}");
 }
+
+/// A PNG of w×h texels all `rgb`, written to `path`.
+fn write_png(path: &Path, rgb: [u8; 3]) {
+    image::RgbImage::from_pixel(4, 4, image::Rgb(rgb))
+        .save(path)
+        .unwrap();
+}
+
+#[test]
+fn mtl_pbr_maps_are_read_and_overrides_drop_them() {
+    let path = obj_scene(
+        "maps",
+        "newmtl a\nKd 0.8 0.5 0.2\nmap_Pr rough.png\nmap_Pm -clamp on metal.png\nmap_Ke glow.png\n",
+    );
+    let dir = path.parent().unwrap();
+    write_png(&dir.join("rough.png"), [128; 3]);
+    write_png(&dir.join("metal.png"), [255; 3]);
+    write_png(&dir.join("glow.png"), [200, 100, 50]);
+    let s = Scene::load(&path).unwrap();
+    let m = the_material(&s);
+    let maps = m.pbr_maps.as_array().map(|t| t.expect("map loaded"));
+    // Roughness and metalness are linear data, emission a color (sRGB).
+    let srgb = maps.map(|i| s.textures[i].srgb);
+    assert_eq!(srgb, [false, false, true]);
+    // Maps alone make the material GGX (the constants' defaults: r 1, m 0); `map_Ke` scales
+    // `Ke`, 1 when absent.
+    assert_eq!(
+        m.ggx,
+        Some(Ggx {
+            roughness: 1.0,
+            metallic: 0.0
+        })
+    );
+    assert_eq!(m.emission, Vec3::ONE);
+    assert!(s.has_pbr_maps() && s.has_ggx() && s.has_emission());
+    // A TOML constant replaces its map, as `albedo` replaces `map_Kd`.
+    let over = dir.join("over.toml");
+    std::fs::write(
+        &over,
+        format!(
+            "{HEAD}[[objects]]\nmesh = \"m.obj\"\n\
+             material = {{ roughness = 0.3, emission_w_sr_m2 = 2 }}\n"
+        ),
+    )
+    .unwrap();
+    let s = Scene::load(&over).unwrap();
+    let m = the_material(&s);
+    assert_eq!(
+        m.pbr_maps.as_array().map(|t| t.is_some()),
+        [false, true, false]
+    );
+    let _ = std::fs::remove_dir_all(dir);
+}
+
+#[test]
+fn broken_pbr_maps_name_the_texture_and_key() {
+    for key in ["map_Pr", "map_Pm", "map_Ke"] {
+        let path = obj_scene(key, &format!("newmtl a\nKd 1 1 1\n{key} bad.png\n"));
+        let dir = path.parent().unwrap();
+        std::fs::write(dir.join("bad.png"), "not a png").unwrap();
+        let bad = dir.join("bad.png").display().to_string();
+        assert_err(Scene::load(&path), &[&bad, key, "m.obj"]);
+        let _ = std::fs::remove_dir_all(dir);
+    }
+}

@@ -134,7 +134,7 @@ pub use gi_settings::{Bounces, GiMethod, GiSettings, RadianceSource, SaoSettings
 pub use light::{spot_falloff, Light};
 pub use material::{
     fresnel_schlick, ggx_brdf, ggx_d, ggx_diffuse, ggx_g1, ggx_specular, BumpKind, Ggx, Material,
-    TextureData, DIELECTRIC_F0,
+    PbrMaps, TextureData, DIELECTRIC_F0,
 };
 pub use mesh::{area_weighted_normals, Aabb, Mesh, SubMesh, BUILTIN_MESH_NAMES};
 pub use object::{rotation_from_euler_xyz_deg, Animation, Keyframe, Object, Transform};
@@ -243,6 +243,12 @@ impl Scene {
     /// Some drawn material has a bump or normal map.
     pub fn has_bump_maps(&self) -> bool {
         self.used_materials().any(|m| m.bump_texture.is_some())
+    }
+
+    /// Some drawn material has an MTL PBR map (`map_Pr`, `map_Pm`, `map_Ke`).
+    pub fn has_pbr_maps(&self) -> bool {
+        self.used_materials()
+            .any(|m| m.pbr_maps != material::PbrMaps::default())
     }
 
     /// Some drawn material is not fully opaque.

@@ -10,7 +10,7 @@ use glam::{Vec2, Vec3};
 
 use super::crease::{obj_smoothing_groups, split_normals, Smoothing};
 use super::error::SceneError;
-use super::material::{BumpKind, Ggx, Material, TextureData};
+use super::material::{BumpKind, Ggx, Material, PbrMaps, TextureData};
 use super::mesh::{area_weighted_normals, builtin_shape, BuiltinMaterial, Mesh, SubMesh};
 
 /// Meshes, materials and textures of a scene under construction.
@@ -333,31 +333,42 @@ impl AssetStore {
                 finite_or(m.dissolve, 1.0)
             );
         }
-        for map in ["map_Pr", "map_Pm", "map_Ke"] {
-            if m.unknown_param.contains_key(map) {
-                log::warn!(
-                    "{}: {map} is not supported yet; the constant value is used (remove {map} \
-                     or bake it into the constant)",
-                    field(map)
-                );
-            }
-        }
+        // The PBR extension's maps: roughness and metalness linear, emission sRGB.
+        let mut pbr_map = |key: &str, srgb: bool| match texture_file(
+            m.unknown_param.get(key).map(String::as_str),
+        ) {
+            Some(t) => self.texture(&dir.join(t), srgb, &field(key)),
+            None => Ok(None),
+        };
+        let pbr_maps = PbrMaps {
+            roughness: pbr_map("map_Pr", false)?,
+            metallic: pbr_map("map_Pm", false)?,
+            emission: pbr_map("map_Ke", true)?,
+        };
         let pbr = |key: &str| {
             m.unknown_param
                 .get(key)
                 .and_then(|v| v.trim().parse::<f32>().ok())
         };
-        // prescan_mtl already rejected values outside [0, 1].
+        // prescan_mtl already rejected values outside [0, 1]. A map alone makes the material
+        // GGX too (the map replaces the constant).
         let ggx = match (pbr("Pr"), pbr("Pm")) {
-            (None, None) => None,
+            (None, None) if pbr_maps.roughness.is_none() && pbr_maps.metallic.is_none() => None,
             (r, metal) => Some(Ggx {
                 roughness: r.unwrap_or(1.0),
                 metallic: metal.unwrap_or(0.0),
             }),
         };
+        // `map_Ke` scales `Ke`, which is 1 when the MTL gives only the map.
+        let ke_default = if pbr_maps.emission.is_some() {
+            Vec3::ONE
+        } else {
+            Vec3::ZERO
+        };
         let material = Material {
             ggx,
-            emission: rgb(m.emissive, Vec3::ZERO),
+            pbr_maps,
+            emission: rgb(m.emissive, ke_default),
             name: m.name.clone(),
             albedo: rgb(m.diffuse, BuiltinMaterial::Default.albedo()),
             specular: rgb(m.specular, Vec3::ZERO),

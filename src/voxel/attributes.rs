@@ -20,12 +20,17 @@
 //! triangle writer writes every object's attributes, on top of the atlas's (its exact
 //! conservative test touches every voxel the atlas points set). Other scenes have no emission
 //! volume, buffer or pass.
+//!
+//! Scenes with Phong or GGX materials whose path tracer samples lobes at every bounce also get
+//! a material volume (`RGBA16F`, [`material_texel`]), written the same way by
+//! `voxelize_material` from the same owners; the atlas voxelizer has no material path either,
+//! so the triangle writer then writes every object too.
 
 use super::gpu::{voxelize_loads, voxelize_splits, GpuVoxelizePush};
 use super::gpu_atlas_volumes::AttributeVolumes;
 use super::VoxelGrid;
 use crate::graph::{Access, ImageHandle, RenderGraph, Shader, SlotCondition};
-use crate::scene::Scene;
+use crate::scene::{Material, Scene};
 use crate::vk::{
     vk, Buffer, BufferDesc, ComputePipeline, Context, Image, ImageDesc, MemoryLocation, VkError,
     MAX_FRAMES_IN_FLIGHT,
@@ -53,8 +58,25 @@ type AttributeTriangle = [[f32; 4]; 3];
 /// A triangle's emitted radiance as `voxelize_emission.comp` reads it (rgb W/(m²·sr), w unused).
 type TriangleEmission = [f32; 4];
 
-/// Format of the emission volume: radiance above 1 W/(m²·sr) must survive.
-const EMISSION_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
+/// A triangle's material lobe as `voxelize_material.comp` reads it ([`material_texel`]).
+type TriangleMaterial = [f32; 4];
+
+/// Format of the emission volume (radiance above 1 W/(m²·sr) must survive) and of the material
+/// volume (Phong exponents above 1 must survive; 16-bit floats hold every integer exponent up
+/// to 2048 exactly, roughness and metalness to 2⁻¹¹).
+const VALUE_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
+
+/// The material volume's texel of `m` (`glsl/include/material_lobe.glsl`'s `voxel_lobe` reads
+/// it with the albedo volume's color at the same voxel, the base color of GGX materials):
+/// Lambert `(0, 0, 0, 0)`; normalized Phong `(ρs, n + 1)` (w ≥ 1); GGX
+/// `(roughness, metallic, 0, −1)`.
+pub fn material_texel(m: &Material) -> [f32; 4] {
+    match m.ggx {
+        Some(g) => [g.roughness, g.metallic, 0.0, -1.0],
+        None if m.is_phong() => m.specular.extend(m.shininess + 1.0).to_array(),
+        None => [0.0; 4],
+    }
+}
 
 /// The triangles, pipelines and owner volume that write the albedo and normal volumes of a
 /// scene's objects.
@@ -77,14 +99,19 @@ pub struct TriangleAttributes {
     /// Scenes with moving objects: triangles per frame slot, rewritten when they change.
     animated: Option<AnimatedTriangles>,
     /// Scenes with emitters: the pass that writes the emission volume.
-    emission: Option<EmissionWriter>,
+    emission: Option<OwnerValueWriter>,
+    /// With a material volume: the pass that writes it.
+    material: Option<OwnerValueWriter>,
 }
 
-/// The `voxelize_emission` pipeline and the emitted radiance per attribute triangle (laid out
+/// The pipeline of a pass that writes one value per owner triangle into a volume
+/// (`voxelize_emission`, `voxelize_material`) and the values per attribute triangle (laid out
 /// like the triangle buffer: one region per frame slot for scenes with moving objects).
-struct EmissionWriter {
+struct OwnerValueWriter {
+    /// The pass's name, its shader's file stem.
+    name: &'static str,
     pipeline: ComputePipeline,
-    emissions: Buffer,
+    values: Buffer,
 }
 
 /// The attribute triangles of a scene with moving objects: one region of the host-visible
@@ -104,8 +131,10 @@ struct AnimatedTriangles {
 /// atlas writes them all.
 pub struct TriangleAttributeVolumes {
     pub volumes: AttributeVolumes,
-    /// Emitted radiance per voxel ([`EMISSION_FORMAT`]), only in scenes with emitters.
+    /// Emitted radiance per voxel ([`VALUE_FORMAT`]), only in scenes with emitters.
     pub emission: Option<Image>,
+    /// The material lobe per voxel ([`material_texel`]), only when asked for.
+    pub material: Option<Image>,
     pub writer: Option<TriangleAttributes>,
 }
 
@@ -116,37 +145,50 @@ pub struct AttributeHandles {
     pub normal: ImageHandle,
     /// Only in scenes with emitters.
     pub emission: Option<ImageHandle>,
+    /// Only with a material volume.
+    pub material: Option<ImageHandle>,
 }
 
 impl TriangleAttributeVolumes {
     /// `atlas_writes`: the atlas voxelizer writes the attributes of the objects it handles
-    /// ([`super::gpu::VoxelFrame::enable_attribute_volumes`]).
+    /// ([`super::gpu::VoxelFrame::enable_attribute_volumes`]). `material`: also a material
+    /// volume (for the path tracer's lobes at later bounces), if the scene has Phong or GGX
+    /// materials.
     pub fn new(
         ctx: &Context,
         scene: &Scene,
         time_s: f32,
         grid: &VoxelGrid,
         atlas_writes: bool,
+        material: bool,
     ) -> Result<Self, VkError> {
         let mut tri_scene = scene.clone();
-        // The atlas voxelizer writes no emission: with emitters, triangles write everything.
+        // The atlas voxelizer writes no emission and no material: with either volume,
+        // triangles write everything.
         let emits = scene.has_emission();
-        if atlas_writes && !emits {
+        let lobes = material && !scene.is_all_lambert();
+        if atlas_writes && !emits && !lobes {
             tri_scene
                 .objects
                 .retain(|o| !super::gpu_atlas::uses_atlas(scene, o));
         }
         let scene = &tri_scene;
         let volumes = AttributeVolumes::new(ctx, grid)?;
-        let emission = emits.then(|| emission_volume(ctx, grid)).transpose()?;
+        let emission = emits
+            .then(|| value_volume(ctx, grid, "emission volume"))
+            .transpose()?;
+        let material = lobes
+            .then(|| value_volume(ctx, grid, "material volume"))
+            .transpose()?;
         let writer = if scene.objects.is_empty() {
             None
         } else {
-            Some(TriangleAttributes::new(ctx, scene, time_s, grid)?)
+            Some(TriangleAttributes::new(ctx, scene, time_s, grid, lobes)?)
         };
         Ok(Self {
             volumes,
             emission,
+            material,
             writer,
         })
     }
@@ -165,15 +207,19 @@ impl TriangleAttributeVolumes {
         atlas: impl FnOnce(&mut RenderGraph, ImageHandle, ImageHandle),
     ) -> AttributeHandles {
         let (albedo, normal) = self.volumes.import(g);
-        let emission = self
-            .emission
-            .as_ref()
-            .map(|e| g.import_image(e, ATTRIBUTE_VOLUME_STATE));
+        let import = |g: &mut RenderGraph, image: &Option<Image>| {
+            image
+                .as_ref()
+                .map(|e| g.import_image(e, ATTRIBUTE_VOLUME_STATE))
+        };
+        let emission = import(g, &self.emission);
+        let material = import(g, &self.material);
         atlas(g, albedo, normal);
         let out = AttributeHandles {
             albedo,
             normal,
             emission,
+            material,
         };
         if let Some(w) = &self.writer {
             w.add_passes(g, &out);
@@ -184,12 +230,13 @@ impl TriangleAttributeVolumes {
 
 impl TriangleAttributes {
     /// The pipelines and triangles of `scene`'s objects at `time_s` that fill the volumes in
-    /// the first frame.
+    /// the first frame; `material`: also the material volume's writer.
     pub fn new(
         ctx: &Context,
         scene: &Scene,
         time_s: f32,
         grid: &VoxelGrid,
+        material: bool,
     ) -> Result<Self, VkError> {
         let pipeline = ctx.compute_pipeline(
             "voxelize_attributes.comp",
@@ -198,7 +245,7 @@ impl TriangleAttributes {
         )?;
         let resolve_pipeline =
             ctx.compute_pipeline("voxelize_attributes_resolve.comp", None, &[])?;
-        let (tris, emissions) = attribute_triangles(scene, time_s);
+        let (tris, emissions, materials) = attribute_triangles(scene, time_s);
         let bytes: &[u8] = if tris.is_empty() {
             &[0; 48]
         } else {
@@ -254,7 +301,10 @@ impl TriangleAttributes {
         let capacity = animated.as_ref().map(|a| a.capacity);
         let emission = scene
             .has_emission()
-            .then(|| EmissionWriter::new(ctx, &emissions, capacity))
+            .then(|| OwnerValueWriter::new(ctx, "voxelize_emission", &emissions, capacity))
+            .transpose()?;
+        let material = material
+            .then(|| OwnerValueWriter::new(ctx, "voxelize_material", &materials, capacity))
             .transpose()?;
         Ok(Self {
             pipeline,
@@ -268,6 +318,7 @@ impl TriangleAttributes {
             gate: Arc::new(SlotCondition::default()),
             animated,
             emission,
+            material,
         })
     }
 
@@ -291,7 +342,7 @@ impl TriangleAttributes {
         let Some(a) = &mut self.animated else {
             return false;
         };
-        let (tris, emissions) = attribute_triangles(&a.scene, t_s);
+        let (tris, emissions, materials) = attribute_triangles(&a.scene, t_s);
         if a.last.as_ref() == Some(&tris) {
             return false;
         }
@@ -311,14 +362,17 @@ impl TriangleAttributes {
         if let Some(w) = &mut self.emission {
             w.write_slot(slot, a.capacity, &emissions[..n]);
         }
+        if let Some(w) = &mut self.material {
+            w.write_slot(slot, a.capacity, &materials[..n]);
+        }
         a.counts[slot].store(n as u32, Ordering::SeqCst);
         a.splits[slot].store(attribute_splits(&a.grid, &tris[..n]), Ordering::SeqCst);
         a.last = Some(tris);
         true
     }
 
-    /// Declares `voxelize_attributes`, (with emitters) `voxelize_emission` and
-    /// `voxelize_attributes_resolve`, writing the voxels of this writer's triangles into the
+    /// Declares `voxelize_attributes`, (with emitters) `voxelize_emission`, (with a material
+    /// volume) `voxelize_material` and `voxelize_attributes_resolve`, writing the voxels of this writer's triangles into the
     /// volumes `v` (other voxels keep their values). The passes record in the slots
     /// [`Self::update`] opened: the first frame, and a frame whose moving objects moved;
     /// otherwise the volumes keep their contents.
@@ -366,26 +420,16 @@ impl TriangleAttributes {
             });
         let d = &self.owner.desc;
         let extent = (d.width, d.height, d.depth);
-        if let (Some(w), Some(volume)) = (&self.emission, v.emission) {
-            let emissions = match &self.animated {
-                Some(a) => {
-                    let region = (a.capacity * std::mem::size_of::<TriangleEmission>()) as u64;
-                    g.import_buffer_per_slot(&w.emissions, region, region, read)
-                }
-                None => g.import_buffer(&w.emissions, read),
-            };
-            let pipe = *w.pipeline;
-            g.add_pass("voxelize_emission")
-                .pipeline(&pipe)
-                .bind(0, emissions, read)
-                .bind(1, owner, read)
-                .bind(2, volume, rw)
-                .when(Some(self.gate.clone()))
-                .record(move |ctx| {
-                    ctx.bind(&pipe);
-                    ctx.cmd
-                        .dispatch(extent.0.div_ceil(8), extent.1.div_ceil(8), extent.2);
-                });
+        for (writer, volume) in [(&self.emission, v.emission), (&self.material, v.material)] {
+            if let (Some(w), Some(volume)) = (writer, volume) {
+                w.add_pass(
+                    g,
+                    (owner, volume),
+                    self.animated.as_ref(),
+                    &self.gate,
+                    extent,
+                );
+            }
         }
         let resolve = *self.resolve_pipeline;
         g.add_pass("voxelize_attributes_resolve")
@@ -403,68 +447,105 @@ impl TriangleAttributes {
     }
 }
 
-impl EmissionWriter {
-    /// The pipeline and the emissions buffer: one region of `capacity` triangles per frame
-    /// slot for scenes with moving objects (`capacity` Some), else just `emissions`.
+impl OwnerValueWriter {
+    /// Pass `name`'s pipeline (shader `name.comp`) and its values buffer: one region of
+    /// `capacity` triangles per frame slot for scenes with moving objects (`capacity` Some),
+    /// else just `values`.
     fn new(
         ctx: &Context,
-        emissions: &[TriangleEmission],
+        name: &'static str,
+        values: &[[f32; 4]],
         capacity: Option<usize>,
     ) -> Result<Self, VkError> {
-        let pipeline = ctx.compute_pipeline("voxelize_emission.comp", None, &[])?;
-        let bytes: &[u8] = if emissions.is_empty() {
+        let pipeline = ctx.compute_pipeline(&format!("{name}.comp"), None, &[])?;
+        let bytes: &[u8] = if values.is_empty() {
             &[0; 16]
         } else {
-            bytemuck::cast_slice(emissions)
+            bytemuck::cast_slice(values)
         };
         match capacity {
             Some(capacity) => {
-                let region = (capacity * std::mem::size_of::<TriangleEmission>()) as u64;
+                let region = (capacity * std::mem::size_of::<[f32; 4]>()) as u64;
                 ctx.create_buffer(&BufferDesc {
-                    name: "attribute emissions (per frame slot)".into(),
+                    name: format!("{name} values (per frame slot)"),
                     size_bytes: region * MAX_FRAMES_IN_FLIGHT as u64,
                     usage: vk::BufferUsageFlags::STORAGE_BUFFER,
                     location: MemoryLocation::CpuToGpu,
                 })
                 .map(|buffer| {
                     let mut me = Self {
+                        name,
                         pipeline,
-                        emissions: buffer,
+                        values: buffer,
                     };
                     for slot in 0..MAX_FRAMES_IN_FLIGHT {
-                        me.write_slot(slot, capacity, emissions);
+                        me.write_slot(slot, capacity, values);
                     }
                     me
                 })
             }
             None => ctx
                 .upload_buffer(
-                    "attribute emissions",
+                    &format!("{name} values"),
                     bytes,
                     vk::BufferUsageFlags::STORAGE_BUFFER,
                 )
-                .map(|emissions| Self {
+                .map(|values| Self {
+                    name,
                     pipeline,
-                    emissions,
+                    values,
                 }),
         }
     }
 
     /// Writes frame slot `slot`'s region (of `capacity` triangles) of a per-slot buffer.
-    fn write_slot(&mut self, slot: usize, capacity: usize, emissions: &[TriangleEmission]) {
-        let region = capacity * std::mem::size_of::<TriangleEmission>();
-        let n = emissions.len().min(capacity);
-        if let Some(m) = self.emissions.mapped_mut() {
-            let bytes: &[u8] = bytemuck::cast_slice(&emissions[..n]);
+    fn write_slot(&mut self, slot: usize, capacity: usize, values: &[[f32; 4]]) {
+        let region = capacity * std::mem::size_of::<[f32; 4]>();
+        let n = values.len().min(capacity);
+        if let Some(m) = self.values.mapped_mut() {
+            let bytes: &[u8] = bytemuck::cast_slice(&values[..n]);
             m[slot * region..slot * region + bytes.len()].copy_from_slice(bytes);
         }
     }
+
+    /// Declares the pass: every voxel of `extent` with an owner in `owner` takes the owner's
+    /// value in `volume`, in the slots `gate` opens (each slot reads its own region of the
+    /// values when `animated`).
+    fn add_pass(
+        &self,
+        g: &mut RenderGraph,
+        (owner, volume): (ImageHandle, ImageHandle),
+        animated: Option<&AnimatedTriangles>,
+        gate: &Arc<SlotCondition>,
+        extent: (u32, u32, u32),
+    ) {
+        let read = Access::StorageRead(Shader::Compute);
+        let values = match animated {
+            Some(a) => {
+                let region = (a.capacity * std::mem::size_of::<[f32; 4]>()) as u64;
+                g.import_buffer_per_slot(&self.values, region, region, read)
+            }
+            None => g.import_buffer(&self.values, read),
+        };
+        let pipe = *self.pipeline;
+        g.add_pass(self.name)
+            .pipeline(&pipe)
+            .bind(0, values, read)
+            .bind(1, owner, read)
+            .bind(2, volume, Access::StorageReadWrite(Shader::Compute))
+            .when(Some(gate.clone()))
+            .record(move |ctx| {
+                ctx.bind(&pipe);
+                ctx.cmd
+                    .dispatch(extent.0.div_ceil(8), extent.1.div_ceil(8), extent.2);
+            });
+    }
 }
 
-/// A cleared emission volume congruent with `grid`, in [`ATTRIBUTE_VOLUME_STATE`].
-fn emission_volume(ctx: &Context, grid: &VoxelGrid) -> Result<Image, VkError> {
+/// A cleared `RGBA16F` volume congruent with `grid`, in [`ATTRIBUTE_VOLUME_STATE`].
+fn value_volume(ctx: &Context, grid: &VoxelGrid, name: &str) -> Result<Image, VkError> {
     let ext = grid.extent_voxels();
-    let desc = ImageDesc::new_2d("emission volume", EMISSION_FORMAT, ext.x, ext.y)
+    let desc = ImageDesc::new_2d(name, VALUE_FORMAT, ext.x, ext.y)
         .with_depth(ext.z)
         .with_usage(
             vk::ImageUsageFlags::STORAGE
@@ -491,10 +572,19 @@ fn attribute_splits(grid: &VoxelGrid, tris: &[AttributeTriangle]) -> u32 {
     voxelize_splits(loads, ATTRIBUTE_GROUP_SIZE)
 }
 
-/// Every triangle of `scene` at `t_s` with its material's albedo, and its material's emission.
-fn attribute_triangles(scene: &Scene, t_s: f32) -> (Vec<AttributeTriangle>, Vec<TriangleEmission>) {
+/// Every triangle of `scene` at `t_s` with its material's albedo, its material's emission
+/// and its material's lobe ([`material_texel`]).
+fn attribute_triangles(
+    scene: &Scene,
+    t_s: f32,
+) -> (
+    Vec<AttributeTriangle>,
+    Vec<TriangleEmission>,
+    Vec<TriangleMaterial>,
+) {
     let mut out = Vec::new();
     let mut emissions = Vec::new();
+    let mut materials = Vec::new();
     for object in &scene.objects {
         let Some(mesh) = scene.meshes.get(object.mesh_at(t_s)) else {
             continue;
@@ -502,10 +592,12 @@ fn attribute_triangles(scene: &Scene, t_s: f32) -> (Vec<AttributeTriangle>, Vec<
         let m = object.transform_at(t_s);
         for (si, sub) in mesh.submeshes.iter().enumerate() {
             let material = object.materials.get(si).copied().unwrap_or(sub.material);
-            let (albedo, emission) = scene
+            let (albedo, emission, lobe) = scene
                 .materials
                 .get(material)
-                .map_or((Vec3::splat(0.5), Vec3::ZERO), |m| (m.albedo, m.emission));
+                .map_or((Vec3::splat(0.5), Vec3::ZERO, [0.0; 4]), |m| {
+                    (m.albedo, m.emission, material_texel(m))
+                });
             let range = sub.first_index as usize..(sub.first_index + sub.index_count) as usize;
             for t in mesh.indices[range].chunks_exact(3) {
                 out.push([0, 1, 2].map(|k| {
@@ -513,13 +605,27 @@ fn attribute_triangles(scene: &Scene, t_s: f32) -> (Vec<AttributeTriangle>, Vec<
                     [v.x, v.y, v.z, albedo[k]]
                 }));
                 emissions.push(emission.extend(0.0).to_array());
+                materials.push(lobe);
             }
         }
     }
     // Emitters own the voxels they share (smallest index wins): a light patch just under a
     // ceiling shares the ceiling's voxels, and must emit from them. A stable partition, so a
     // scene without emitters keeps its order.
-    let mut both: Vec<_> = out.into_iter().zip(emissions).collect();
-    both.sort_by_key(|(_, e)| e[..3] == [0.0; 3]);
-    both.into_iter().unzip()
+    let mut all: Vec<_> = out
+        .into_iter()
+        .zip(emissions)
+        .zip(materials)
+        .map(|((t, e), m)| (t, e, m))
+        .collect();
+    all.sort_by_key(|(_, e, _)| e[..3] == [0.0; 3]);
+    let mut tris = Vec::with_capacity(all.len());
+    let mut emissions = Vec::with_capacity(all.len());
+    let mut materials = Vec::with_capacity(all.len());
+    for (t, e, m) in all {
+        tris.push(t);
+        emissions.push(e);
+        materials.push(m);
+    }
+    (tris, emissions, materials)
 }

@@ -301,6 +301,7 @@ impl AlbedoSource {
                 time_s,
                 grid,
                 frame.has_attribute_volumes(),
+                false,
             )?)));
         }
         // Two texels deep: `ImageDesc` makes a 3D image (the shader's sampler3D) only for
