@@ -130,6 +130,17 @@ pub const EXPOSURE: Limit<f32> = Limit {
     min_exclusive: true,
     ..Limit::new("--exposure", None, "an exposure factor", 0.0, 1e6)
 };
+/// TAA history weight α in [0, 0.999]: 1 would never let the current frame in.
+pub const TAA_HISTORY_WEIGHT: Limit<f32> = Limit::new(
+    "--taa-history-weight",
+    None,
+    "a TAA history weight",
+    0.0,
+    0.999,
+);
+/// Frames of a headless TAA render.
+pub const TAA_FRAMES: Limit<u32> =
+    Limit::new("--taa-frames", None, "a number of TAA frames", 1, 4096);
 pub const SHADOW_RESOLUTION: Limit<u32> = Limit::new(
     "--shadow-resolution",
     None,

@@ -198,6 +198,8 @@ pub struct FrameArgs {
     pub voxelizer: crate::voxel::gpu::Voxelizer,
     #[command(flatten)]
     pub gi: GiArgs,
+    #[command(flatten)]
+    pub post: PostArgs,
     /// Show a debug view instead of the lit image: the voxel views (voxels, steps, level,
     /// albedo) voxelize at 128 unless --voxels; atlas shows an object's atlas; gbuffer-albedo,
     /// gbuffer-normal and gbuffer-distance show a G-buffer channel.
@@ -258,8 +260,36 @@ impl FrameArgs {
                 object,
                 ..Default::default()
             });
+        s.post = self.post.settings();
         crate::render::check_render_settings(&s)?;
         Ok(s)
+    }
+}
+
+/// Post-processing flags (all off by default).
+#[derive(clap::Args, Clone)]
+pub struct PostArgs {
+    /// Temporal anti-aliasing: Halton(2,3) sub-pixel jitter, reprojected and clipped history
+    /// (a headless render runs --taa-frames frames).
+    #[arg(long)]
+    pub taa: bool,
+    /// TAA history weight α: each frame keeps α of the reprojected history.
+    #[arg(long, default_value_t = crate::post::TaaSettings::default().history_weight)]
+    pub taa_history_weight: f32,
+    /// Frames a headless render with --taa runs.
+    #[arg(long, default_value_t = crate::post::TaaSettings::default().frames)]
+    pub taa_frames: u32,
+}
+
+impl PostArgs {
+    /// The post-processing settings (checked with the rest by `check_render_settings`).
+    pub fn settings(&self) -> crate::post::PostSettings {
+        crate::post::PostSettings {
+            taa: self.taa.then_some(crate::post::TaaSettings {
+                history_weight: self.taa_history_weight,
+                frames: self.taa_frames,
+            }),
+        }
     }
 }
 

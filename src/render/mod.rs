@@ -119,6 +119,8 @@ pub struct RenderSettings {
     /// Show a voxel debug view instead of the lit image (voxelizes with the default
     /// [`crate::voxel::gpu::VoxelSettings`] when `voxels` is `None`).
     pub debug: Option<crate::voxel::debug_view::DebugSettings>,
+    /// Post-processing around tone mapping (TAA, …); off by default.
+    pub post: crate::post::PostSettings,
 }
 
 impl Default for RenderSettings {
@@ -132,6 +134,7 @@ impl Default for RenderSettings {
             voxels: None,
             gi: crate::gi::GiSettings::default(),
             debug: None,
+            post: Default::default(),
         }
     }
 }
@@ -157,6 +160,7 @@ pub struct Renderer {
     gbuffer: GbufferPass,
     deferred: DeferredDirectPass,
     tonemap: TonemapPass,
+    post: crate::post::PostPasses,
     has_phong: bool,
     shadow_view_count: u32,
     frame_data: GpuFrame,
@@ -180,6 +184,7 @@ struct Parts {
     gbuffer: Option<GbufferPass>,
     deferred: Option<DeferredDirectPass>,
     tonemap: Option<TonemapPass>,
+    post: Option<crate::post::PostPasses>,
     has_phong: bool,
     voxels: Option<crate::voxel::gpu::VoxelFrame>,
     gi: Option<crate::gi::GiPasses>,
@@ -235,6 +240,7 @@ impl Parts {
             gbuffer,
             deferred,
             tonemap,
+            post: self.post.unwrap_or_default(),
             has_phong: self.has_phong,
             shadow_view_count: 0,
             frame_data: GpuFrame::zeroed(),
@@ -277,6 +283,9 @@ impl Parts {
             p.destroy(ctx);
         }
         if let Some(p) = self.tonemap {
+            p.destroy(ctx);
+        }
+        if let Some(p) = self.post {
             p.destroy(ctx);
         }
         if let Some(s) = self.sampler {
@@ -399,6 +408,12 @@ impl Renderer {
             sampler,
         )?);
         parts.tonemap = Some(TonemapPass::new(ctx, sampler)?);
+        parts.post = Some(crate::post::PostPasses::new(
+            ctx,
+            &settings.post,
+            (settings.width, settings.height),
+            sampler,
+        )?);
         // The atlas view only needs the grid's voxel size, not a voxelization; the G-buffer
         // views not even that.
         let atlas_view_on = settings
@@ -543,7 +558,17 @@ impl Renderer {
         if let Some(pass) = &mut self.voxel_debug {
             pass.update(self.settings.time_s, slot);
         }
-        self.scene.write_frame(slot, &self.frame_data);
+        // With TAA every frame renders with its own sub-pixel jitter; `frame_data` keeps the
+        // un-jittered camera (what `prepare` compares to restart accumulation).
+        let mut frame = self.frame_data;
+        if self.post.jitters() {
+            let vp = self
+                .post
+                .begin_frame(glam::Mat4::from_cols_array(&frame.view_proj));
+            frame.view_proj = vp.to_cols_array();
+            frame.inv_view_proj = vp.inverse().to_cols_array();
+        }
+        self.scene.write_frame(slot, &frame);
     }
 
     /// Frames the indirect light has accumulated since the last reset (`None`: GI off).
@@ -619,6 +644,7 @@ impl Renderer {
             }
             _ => direct,
         };
+        let radiance = self.post.declare_hdr(g, radiance, gbuffer.depth);
         let ldr = self.tonemap.declare(g, radiance, s.tonemap, (w, h));
 
         // A debug view replaces the lit image: the read-backs take its images, and the graph
@@ -729,6 +755,7 @@ impl Renderer {
         self.gbuffer.destroy(ctx);
         self.deferred.destroy(ctx);
         self.tonemap.destroy(ctx);
+        self.post.destroy(ctx);
         ctx.destroy_sampler(self.sampler);
         self.scene.destroy(ctx);
         ctx.destroy_buffer(self.readback_hdr);

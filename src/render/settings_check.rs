@@ -20,6 +20,10 @@ pub fn check_render_settings(s: &RenderSettings) -> Result<(), LimitError> {
         VOXEL_LAYERS.check_flag(v.layers)?;
     }
     check_gi(&s.gi)?;
+    if let Some(t) = &s.post.taa {
+        TAA_HISTORY_WEIGHT.check_flag(t.history_weight)?;
+        TAA_FRAMES.check_flag(t.frames)?;
+    }
     if let Some(d) = &s.debug {
         DEBUG_LEVEL.check_flag(d.level)?;
         DEBUG_STEPS_SCALE.check_flag(d.steps_scale)?;
