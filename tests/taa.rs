@@ -56,7 +56,10 @@ fn static_view_converges_towards_the_supersampled_image() {
         let settings = RenderSettings {
             width: s,
             height: s,
-            post: PostSettings { taa },
+            post: PostSettings {
+                taa,
+                ..Default::default()
+            },
             ..Default::default()
         };
         render_image(&ctx, &scene, &settings).expect("renders").hdr

@@ -261,6 +261,7 @@ impl FrameArgs {
                 ..Default::default()
             });
         s.post = self.post.settings();
+        s.tonemap.dither = self.post.dither;
         crate::render::check_render_settings(&s)?;
         Ok(s)
     }
@@ -279,6 +280,23 @@ pub struct PostArgs {
     /// Frames a headless render with --taa runs.
     #[arg(long, default_value_t = crate::post::TaaSettings::default().frames)]
     pub taa_frames: u32,
+    /// Auto exposure: exposure = KEY / log-average luminance (KEY 0.18 when left out), adapted
+    /// over frames; --exposure then multiplies it as a compensation.
+    #[arg(long, value_name = "KEY", num_args = 0..=1, default_missing_value = "0.18")]
+    pub auto_exposure: Option<f32>,
+    /// Auto exposure: fraction of the way (in log exposure) to the target per frame.
+    #[arg(long, default_value_t = crate::post::AutoExposure::default().adaptation)]
+    pub exposure_adaptation: f32,
+    /// Triangular dither of ±1/255 before the 8-bit quantization (no banding on gradients).
+    #[arg(long)]
+    pub dither: bool,
+    /// Bloom: moves the share STRENGTH of the radiance into a wide blur (energy-conserving,
+    /// no threshold).
+    #[arg(long, value_name = "STRENGTH")]
+    pub bloom: Option<f32>,
+    /// FXAA on the tone-mapped image.
+    #[arg(long)]
+    pub fxaa: bool,
 }
 
 impl PostArgs {
@@ -289,6 +307,12 @@ impl PostArgs {
                 history_weight: self.taa_history_weight,
                 frames: self.taa_frames,
             }),
+            auto_exposure: self.auto_exposure.map(|key| crate::post::AutoExposure {
+                key,
+                adaptation: self.exposure_adaptation,
+            }),
+            bloom: self.bloom,
+            fxaa: self.fxaa,
         }
     }
 }

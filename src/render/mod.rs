@@ -644,8 +644,11 @@ impl Renderer {
             }
             _ => direct,
         };
-        let radiance = self.post.declare_hdr(g, radiance, gbuffer.depth);
-        let ldr = self.tonemap.declare(g, radiance, s.tonemap, (w, h));
+        let (radiance, exposure) = self.post.declare_hdr(g, radiance, gbuffer.depth);
+        let ldr = self
+            .tonemap
+            .declare(g, radiance, exposure, s.tonemap, (w, h));
+        let ldr = self.post.declare_ldr(g, ldr);
 
         // A debug view replaces the lit image: the read-backs take its images, and the graph
         // culls deferred light, tone mapping, G-buffer and shadows, which nothing reads then.
