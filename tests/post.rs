@@ -345,7 +345,9 @@ fn fxaa_keeps_flat_regions_and_smooths_a_diagonal_edge() {
         })
         .collect();
     let desc = ImageDesc::new_2d("ldr", vk::Format::R8G8B8A8_UNORM, w, h);
-    let image = ctx.upload_image(&desc, std::slice::from_ref(&input)).expect("upload");
+    let image = ctx
+        .upload_image(&desc, std::slice::from_ref(&input))
+        .expect("upload");
     let pass = FxaaPass::new(&ctx).expect("pass");
     let out = run_graph(&ctx, &image, 1, 4, |g, i| pass.declare(g, i, (w, h)));
     common::assert_no_validation_messages(&ctx);
