@@ -408,12 +408,15 @@ impl Renderer {
             sampler,
         )?);
         parts.tonemap = Some(TonemapPass::new(ctx, sampler)?);
-        parts.post = Some(crate::post::PostPasses::new(
-            ctx,
-            &settings.post,
-            (settings.width, settings.height),
-            sampler,
-        )?);
+        // A debug view replaces the lit image: no post passes, and no TAA jitter.
+        if settings.debug.is_none() {
+            parts.post = Some(crate::post::PostPasses::new(
+                ctx,
+                &settings.post,
+                (settings.width, settings.height),
+                sampler,
+            )?);
+        }
         // The atlas view only needs the grid's voxel size, not a voxelization; the G-buffer
         // views not even that.
         let atlas_view_on = settings
