@@ -130,6 +130,47 @@ pub const EXPOSURE: Limit<f32> = Limit {
     min_exclusive: true,
     ..Limit::new("--exposure", None, "an exposure factor", 0.0, 1e6)
 };
+/// TAA history weight α in [0, 0.999]: 1 would never let the current frame in.
+pub const TAA_HISTORY_WEIGHT: Limit<f32> = Limit::new(
+    "--taa-history-weight",
+    None,
+    "a TAA history weight",
+    0.0,
+    0.999,
+);
+/// Frames of a headless TAA render.
+pub const TAA_FRAMES: Limit<u32> =
+    Limit::new("--taa-frames", None, "a number of TAA frames", 1, 4096);
+/// Auto exposure's key value (the display luminance of the log-average scene luminance).
+pub const AUTO_EXPOSURE_KEY: Limit<f32> = Limit {
+    min_exclusive: true,
+    ..Limit::new(
+        "--auto-exposure",
+        None,
+        "an auto exposure key value",
+        0.0,
+        1e3,
+    )
+};
+/// Auto exposure's adaptation per frame: 0 would never adapt, 1 jumps at once.
+pub const EXPOSURE_ADAPTATION: Limit<f32> = Limit {
+    min_exclusive: true,
+    ..Limit::new(
+        "--exposure-adaptation",
+        None,
+        "an adaptation fraction per frame",
+        0.0,
+        1.0,
+    )
+};
+/// Bloom strength: the share of the radiance moved into the blur.
+pub const BLOOM_STRENGTH: Limit<f32> = Limit::new(
+    "--bloom",
+    None,
+    "a bloom strength (share of the radiance)",
+    0.0,
+    1.0,
+);
 pub const SHADOW_RESOLUTION: Limit<u32> = Limit::new(
     "--shadow-resolution",
     None,

@@ -85,7 +85,7 @@ fn run_tonemap(tm: ToneMap) -> Vec<u8> {
     let readback = voxgi::graph::readback_buffer(&ctx, "ldr", u64::from(W * H * 4)).unwrap();
     let mut g = RenderGraph::new();
     let hdr = g.import_image(&input, Access::Sampled(Shader::Compute));
-    let ldr = pass.declare(&mut g, hdr, tm, (W, H));
+    let ldr = pass.declare(&mut g, hdr, None, tm, (W, H));
     let out = g.import_buffer(&readback, Access::HostRead);
     let extent = vk::Extent3D {
         width: W,
@@ -147,6 +147,7 @@ fn every_tone_operator_matches_its_closed_form() {
             exposure: 0.8,
             white: 4.0,
             drago_bias: 0.85,
+            dither: false,
         });
     }
 }
@@ -160,11 +161,13 @@ fn drago_bias_and_white_change_the_curve_as_the_closed_form_says() {
         exposure: 1.5,
         white: 20.0,
         drago_bias: 0.5,
+        dither: false,
     });
     check(ToneMap {
         operator: ToneOperator::Logarithmic,
         exposure: 1.5,
         white: 20.0,
         drago_bias: 0.5,
+        dither: false,
     });
 }

@@ -232,10 +232,16 @@ fn needs_new_graph(a: &RenderSettings, b: &RenderSettings) -> bool {
 }
 
 /// Settings the renderer bakes into its resources differ: the GI passes are made for one method
-/// and set of parameters, and the path tracer's history for one size. A new renderer then.
+/// and set of parameters, and the path tracer's and TAA's histories (and the post passes) for
+/// one size. A new renderer then.
 fn needs_new_renderer(a: &RenderSettings, b: &RenderSettings) -> bool {
-    let sized = a.gi.method != GiMethod::None || a.debug.is_some();
-    a.gi != b.gi || a.debug != b.debug || (sized && (a.width, a.height) != (b.width, b.height))
+    let sized = a.gi.method != GiMethod::None
+        || a.debug.is_some()
+        || a.post != crate::post::PostSettings::default();
+    a.gi != b.gi
+        || a.debug != b.debug
+        || a.post != b.post
+        || (sized && (a.width, a.height) != (b.width, b.height))
 }
 
 /// The debug view the panel asks for, keeping `current`'s other debug parameters (level,
@@ -343,6 +349,7 @@ impl Viewer {
             .collect();
         let controls = Controls {
             tonemap: opts.settings.tonemap,
+            post: opts.settings.post,
             shadow: opts.settings.shadow,
             gi: opts.settings.gi,
             light_scale: vec![1.0; scene.lights.len()],
@@ -600,6 +607,7 @@ impl Viewer {
         // Each GI edit costs a new renderer: apply them once no slider is being dragged.
         if !self.egui_ctx.input(|i| i.pointer.any_down()) {
             settings.gi = self.controls.gi;
+            settings.post = self.controls.post;
             settings.debug = debug_settings(&self.controls, settings.debug);
         }
         if needs_new_renderer(&current, &settings) {
@@ -929,6 +937,7 @@ mod tests {
         };
         let mut c = Controls {
             tonemap: current.tonemap,
+            post: current.post,
             shadow: current.shadow,
             gi: current.gi,
             light_scale: Vec::new(),

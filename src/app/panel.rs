@@ -63,6 +63,8 @@ impl TimingStats {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Controls {
     pub tonemap: ToneMap,
+    /// TAA, auto exposure, bloom, FXAA; a change needs a new renderer (applied like `gi`).
+    pub post: crate::post::PostSettings,
     pub shadow: ShadowSettings,
     /// Indirect light; a change needs a new renderer, which the viewer makes once no pointer
     /// button is down (not while a slider is being dragged).
@@ -296,6 +298,8 @@ pub fn draw(
                             .logarithmic(true)
                             .text("white"),
                     );
+                    ui.checkbox(&mut c.tonemap.dither, "dither");
+                    post_controls(ui, &mut c.post);
                 });
 
             egui::CollapsingHeader::new("Shadows")
@@ -368,6 +372,41 @@ pub fn draw(
     }
 }
 
+/// The post-processing switches and their main parameter (ranges from [`limits`]).
+fn post_controls(ui: &mut egui::Ui, p: &mut crate::post::PostSettings) {
+    let mut taa = p.taa.is_some();
+    ui.checkbox(&mut taa, "TAA");
+    p.taa = taa.then(|| p.taa.unwrap_or_default());
+    if let Some(t) = &mut p.taa {
+        ui.add(
+            egui::Slider::new(
+                &mut t.history_weight,
+                limits::TAA_HISTORY_WEIGHT.slider(0.0, 0.999),
+            )
+            .text("TAA history weight"),
+        );
+    }
+    let mut auto = p.auto_exposure.is_some();
+    ui.checkbox(&mut auto, "auto exposure");
+    p.auto_exposure = auto.then(|| p.auto_exposure.unwrap_or_default());
+    if let Some(a) = &mut p.auto_exposure {
+        ui.add(
+            egui::Slider::new(&mut a.key, limits::AUTO_EXPOSURE_KEY.slider(0.01, 1.0))
+                .logarithmic(true)
+                .text("key"),
+        );
+    }
+    let mut bloom = p.bloom.is_some();
+    ui.checkbox(&mut bloom, "bloom");
+    p.bloom = bloom.then(|| p.bloom.unwrap_or(0.1));
+    if let Some(s) = &mut p.bloom {
+        ui.add(
+            egui::Slider::new(s, limits::BLOOM_STRENGTH.slider(0.0, 1.0)).text("bloom strength"),
+        );
+    }
+    ui.checkbox(&mut p.fxaa, "FXAA");
+}
+
 #[cfg(test)]
 mod table_tests {
     use super::*;
@@ -408,6 +447,7 @@ mod table_tests {
         );
         let mut c = Controls {
             tonemap: ToneMap::default(),
+            post: Default::default(),
             shadow: ShadowSettings::default(),
             gi: GiSettings::default(),
             light_scale: vec![1.0],

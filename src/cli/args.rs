@@ -210,6 +210,8 @@ pub struct FrameArgs {
     pub voxelizer: crate::voxel::gpu::Voxelizer,
     #[command(flatten)]
     pub gi: GiArgs,
+    #[command(flatten)]
+    pub post: PostArgs,
     /// Show a debug view instead of the lit image: the voxel views (voxels, steps, level,
     /// albedo) voxelize at 128 unless --voxels; atlas shows an object's atlas; gbuffer-albedo,
     /// gbuffer-normal and gbuffer-distance show a G-buffer channel.
@@ -270,8 +272,60 @@ impl FrameArgs {
                 object,
                 ..Default::default()
             });
+        s.post = self.post.settings();
+        s.tonemap.dither = self.post.dither;
         crate::render::check_render_settings(&s)?;
         Ok(s)
+    }
+}
+
+/// Post-processing flags (all off by default).
+#[derive(clap::Args, Clone)]
+pub struct PostArgs {
+    /// Temporal anti-aliasing: Halton(2,3) sub-pixel jitter, reprojected and clipped history
+    /// (a headless render runs --taa-frames frames).
+    #[arg(long)]
+    pub taa: bool,
+    /// TAA history weight α: each frame keeps α of the reprojected history.
+    #[arg(long, default_value_t = crate::post::TaaSettings::default().history_weight)]
+    pub taa_history_weight: f32,
+    /// Frames a headless render with --taa runs.
+    #[arg(long, default_value_t = crate::post::TaaSettings::default().frames)]
+    pub taa_frames: u32,
+    /// Auto exposure: exposure = KEY / log-average luminance (KEY 0.18 when left out), adapted
+    /// over frames; --exposure then multiplies it as a compensation.
+    #[arg(long, value_name = "KEY", num_args = 0..=1, default_missing_value = "0.18")]
+    pub auto_exposure: Option<f32>,
+    /// Auto exposure: fraction of the way (in log exposure) to the target per frame.
+    #[arg(long, default_value_t = crate::post::AutoExposure::default().adaptation)]
+    pub exposure_adaptation: f32,
+    /// Triangular dither of ±1/255 before the 8-bit quantization (no banding on gradients).
+    #[arg(long)]
+    pub dither: bool,
+    /// Bloom: moves the share STRENGTH of the radiance into a wide blur (energy-conserving,
+    /// no threshold).
+    #[arg(long, value_name = "STRENGTH")]
+    pub bloom: Option<f32>,
+    /// FXAA on the tone-mapped image.
+    #[arg(long)]
+    pub fxaa: bool,
+}
+
+impl PostArgs {
+    /// The post-processing settings (checked with the rest by `check_render_settings`).
+    pub fn settings(&self) -> crate::post::PostSettings {
+        crate::post::PostSettings {
+            taa: self.taa.then_some(crate::post::TaaSettings {
+                history_weight: self.taa_history_weight,
+                frames: self.taa_frames,
+            }),
+            auto_exposure: self.auto_exposure.map(|key| crate::post::AutoExposure {
+                key,
+                adaptation: self.exposure_adaptation,
+            }),
+            bloom: self.bloom,
+            fxaa: self.fxaa,
+        }
     }
 }
 

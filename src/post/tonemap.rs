@@ -1,9 +1,11 @@
 //! `tonemap`: linear HDR radiance to sRGB-encoded RGBA8 with the chosen operator
-//! (`glsl/tonemap.comp`; the operators are in [`ToneOperator`](super::ToneOperator)).
+//! (`glsl/tonemap.comp`; the operators are in [`ToneOperator`](super::ToneOperator)), times an
+//! exposure from a buffer (auto exposure's, or a fixed 1), optionally dithered.
 
+use super::exposure::EXPOSURE_STATE;
 use super::ToneMap;
-use crate::graph::{Access, ImageHandle, RenderGraph, Shader};
-use crate::vk::{vk, ComputePipeline, Context, ImageDesc, VkError};
+use crate::graph::{Access, BufferHandle, ImageHandle, RenderGraph, Shader};
+use crate::vk::{vk, Buffer, ComputePipeline, Context, ImageDesc, VkError};
 
 /// Push constants of `tonemap.comp`.
 #[repr(C)]
@@ -14,13 +16,16 @@ pub struct GpuTonemapPush {
     pub op: u32,
     pub white: f32,
     pub drago_bias: f32,
+    /// 1: triangular dither of ±1/255 before 8-bit quantization.
+    pub dither: u32,
 }
 
 crate::push_constants!(GpuTonemapPush {
     exposure,
     op,
     white,
-    drago_bias
+    drago_bias,
+    dither
 });
 
 impl From<ToneMap> for GpuTonemapPush {
@@ -30,6 +35,7 @@ impl From<ToneMap> for GpuTonemapPush {
             op: tm.operator.shader_id(),
             white: tm.white,
             drago_bias: tm.drago_bias,
+            dither: u32::from(tm.dither),
         }
     }
 }
@@ -37,6 +43,8 @@ impl From<ToneMap> for GpuTonemapPush {
 pub struct TonemapPass {
     pipeline: ComputePipeline,
     sampler: vk::Sampler,
+    /// The exposure buffer without auto exposure: holds 1.
+    unit_exposure: Buffer,
 }
 
 impl TonemapPass {
@@ -47,24 +55,38 @@ impl TonemapPass {
             crate::vk::PushLayout::of::<GpuTonemapPush>(),
             &[],
         )?;
-        Ok(Self { pipeline, sampler })
+        let unit_exposure = ctx.upload_buffer(
+            "unit exposure",
+            bytemuck::bytes_of(&[1.0f32, 0.0]),
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+        )?;
+        Ok(Self {
+            pipeline,
+            sampler,
+            unit_exposure,
+        })
     }
 
     /// Declares the pass; returns the tone-mapped image (RGBA8 UNORM holding sRGB values).
+    /// `exposure`: auto exposure's buffer ([`super::ExposurePass::declare`]), else 1.
     pub fn declare(
         &self,
         g: &mut RenderGraph,
         radiance: ImageHandle,
+        exposure: Option<BufferHandle>,
         tone_map: ToneMap,
         (w, h): (u32, u32),
     ) -> ImageHandle {
         let ldr = g.create_image(ImageDesc::new_2d("ldr", vk::Format::R8G8B8A8_UNORM, w, h));
+        let exposure =
+            exposure.unwrap_or_else(|| g.import_buffer(&self.unit_exposure, EXPOSURE_STATE));
         let pipe = *self.pipeline;
         let push = GpuTonemapPush::from(tone_map);
         g.add_pass("tonemap")
             .pipeline(&pipe)
             .bind_sampled(0, radiance, self.sampler, Shader::Compute)
             .bind(1, ldr, Access::StorageWrite(Shader::Compute))
+            .bind(2, exposure, Access::StorageRead(Shader::Compute))
             .record(move |ctx| {
                 ctx.bind(&pipe);
                 ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));

@@ -121,6 +121,8 @@ pub struct RenderSettings {
     /// Show a voxel debug view instead of the lit image (voxelizes with the default
     /// [`crate::voxel::gpu::VoxelSettings`] when `voxels` is `None`).
     pub debug: Option<crate::voxel::debug_view::DebugSettings>,
+    /// Post-processing around tone mapping (TAA, …); off by default.
+    pub post: crate::post::PostSettings,
 }
 
 impl Default for RenderSettings {
@@ -134,6 +136,7 @@ impl Default for RenderSettings {
             voxels: None,
             gi: crate::gi::GiSettings::default(),
             debug: None,
+            post: Default::default(),
         }
     }
 }
@@ -161,6 +164,7 @@ pub struct Renderer {
     gbuffer: GbufferPass,
     deferred: DeferredDirectPass,
     tonemap: TonemapPass,
+    post: crate::post::PostPasses,
     has_phong: bool,
     shadow_view_count: u32,
     frame_data: GpuFrame,
@@ -259,6 +263,16 @@ impl Renderer {
             sampler.raw,
         )?;
         let tonemap = TonemapPass::new(ctx, sampler.raw)?;
+        // A debug view replaces the lit image: no post passes, and no TAA jitter.
+        let post = match settings.debug {
+            None => crate::post::PostPasses::new(
+                ctx,
+                &settings.post,
+                (settings.width, settings.height),
+                sampler.raw,
+            )?,
+            Some(_) => crate::post::PostPasses::default(),
+        };
         // The atlas view only needs the grid's voxel size, not a voxelization; the G-buffer
         // views not even that.
         let atlas_view_on = settings
@@ -349,6 +363,7 @@ impl Renderer {
             gbuffer,
             deferred,
             tonemap,
+            post,
             has_phong,
             shadow_view_count: 0,
             frame_data: GpuFrame::zeroed(),
@@ -429,7 +444,17 @@ impl Renderer {
         if let Some(pass) = &mut self.voxel_debug {
             pass.update(self.settings.time_s, slot);
         }
-        self.scene.write_frame(slot, &self.frame_data);
+        // With TAA every frame renders with its own sub-pixel jitter; `frame_data` keeps the
+        // un-jittered camera (what `prepare` compares to restart accumulation).
+        let mut frame = self.frame_data;
+        if self.post.jitters() {
+            let vp = self
+                .post
+                .begin_frame(glam::Mat4::from_cols_array(&frame.view_proj));
+            frame.view_proj = vp.to_cols_array();
+            frame.inv_view_proj = vp.inverse().to_cols_array();
+        }
+        self.scene.write_frame(slot, &frame);
     }
 
     /// Frames the indirect light has accumulated since the last reset (`None`: GI off).
@@ -505,7 +530,11 @@ impl Renderer {
             }
             _ => direct,
         };
-        let ldr = self.tonemap.declare(g, radiance, s.tonemap, (w, h));
+        let (radiance, exposure) = self.post.declare_hdr(g, radiance, gbuffer.depth);
+        let ldr = self
+            .tonemap
+            .declare(g, radiance, exposure, s.tonemap, (w, h));
+        let ldr = self.post.declare_ldr(g, ldr);
 
         // A debug view replaces the lit image: the read-backs take its images, and the graph
         // culls deferred light, tone mapping, G-buffer and shadows, which nothing reads then.

@@ -31,16 +31,23 @@ pub fn render_image(
 }
 
 /// Renders the frame `renderer` is prepared for: one frame, or the path tracer's
-/// accumulation; reads back its images.
+/// accumulation or TAA's frames (the longer); reads back its images.
 pub(super) fn render_frames(
     ctx: &Context,
     renderer: &mut Renderer,
 ) -> Result<RenderOutput, RenderError> {
     // The path tracer converges over frames; everything else is done in one.
-    let frames = match renderer.settings.gi.method {
+    let gi_frames = match renderer.settings.gi.method {
         crate::gi::GiMethod::Pathtrace => renderer.settings.gi.accumulate_frames.max(1) as usize,
         _ => 1,
     };
+    // TAA converges over jittered frames too.
+    let taa_frames = renderer
+        .settings
+        .post
+        .taa
+        .map_or(1, |t| t.frames.max(1) as usize);
+    let frames = gi_frames.max(taa_frames);
     let (timings, live_passes, transient_bytes) = run_frames(ctx, renderer, frames)?;
     let hdr = renderer.hdr_image();
     let ldr = renderer.ldr_pixels();

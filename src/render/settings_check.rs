@@ -20,6 +20,17 @@ pub fn check_render_settings(s: &RenderSettings) -> Result<(), LimitError> {
         VOXEL_LAYERS.check_flag(v.layers)?;
     }
     check_gi(&s.gi)?;
+    if let Some(t) = &s.post.taa {
+        TAA_HISTORY_WEIGHT.check_flag(t.history_weight)?;
+        TAA_FRAMES.check_flag(t.frames)?;
+    }
+    if let Some(a) = &s.post.auto_exposure {
+        AUTO_EXPOSURE_KEY.check_flag(a.key)?;
+        EXPOSURE_ADAPTATION.check_flag(a.adaptation)?;
+    }
+    if let Some(b) = s.post.bloom {
+        BLOOM_STRENGTH.check_flag(b)?;
+    }
     if let Some(d) = &s.debug {
         DEBUG_LEVEL.check_flag(d.level)?;
         DEBUG_STEPS_SCALE.check_flag(d.steps_scale)?;

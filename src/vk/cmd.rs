@@ -407,6 +407,36 @@ impl<'a> Cmd<'a> {
         };
     }
 
+    /// Copies mip 0, layer 0 of a color image (TRANSFER_SRC layout) into another of the same
+    /// format and extent (TRANSFER_DST layout).
+    pub fn copy_image(&self, src: vk::Image, dst: vk::Image, extent: vk::Extent3D) {
+        let layers = vk::ImageSubresourceLayers {
+            aspect_mask: vk::ImageAspectFlags::COLOR,
+            mip_level: 0,
+            base_array_layer: 0,
+            layer_count: 1,
+        };
+        let region = [vk::ImageCopy {
+            src_subresource: layers,
+            src_offset: vk::Offset3D::default(),
+            dst_subresource: layers,
+            dst_offset: vk::Offset3D::default(),
+            extent,
+        }];
+        // SAFETY: Cmd invariant; the graph put `src` in TRANSFER_SRC_OPTIMAL and `dst` in
+        // TRANSFER_DST_OPTIMAL; the caller passes images of one format holding `extent`.
+        unsafe {
+            self.ctx.device.cmd_copy_image(
+                self.raw,
+                src,
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                dst,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                &region,
+            )
+        };
+    }
+
     pub fn copy_buffer(&self, src: vk::Buffer, dst: vk::Buffer, size_bytes: u64) {
         let region = [vk::BufferCopy {
             src_offset: 0,

@@ -862,15 +862,17 @@ mod tests {
             .collect()
     }
 
-    /// `tonemap.comp` declares `sampler2D hdr` at 0, `writeonly image2D` at 1 and a block of
-    /// four 32-bit members: the layout std430 gives them is 0, 4, 8, 12 (16 bytes).
+    /// `tonemap.comp` declares `sampler2D hdr` at 0, `writeonly image2D` at 1, the exposure
+    /// buffer at 2 and a block of five 32-bit members: the layout std430 gives them is 0, 4,
+    /// 8, 12, 16 (20 bytes).
     #[test]
     fn tonemap_interface() {
         let i = reflect("tonemap.comp", &words("tonemap.comp")).unwrap();
-        assert_eq!(i.bindings.len(), 2);
+        assert_eq!(i.bindings.len(), 3);
         assert_eq!(i.bindings[&0].kind, BindingKind::CombinedImageSampler);
         assert_eq!(i.bindings[&1].kind, BindingKind::StorageImage);
         assert_eq!(i.bindings[&1].stages, Stages::COMPUTE);
+        assert_eq!(i.bindings[&2].kind, BindingKind::StorageBuffer);
         let push = i.push.unwrap();
         let names: Vec<(&str, u32)> = push
             .members
@@ -879,9 +881,15 @@ mod tests {
             .collect();
         assert_eq!(
             names,
-            [("exposure", 0), ("op", 4), ("white", 8), ("drago_bias", 12)]
+            [
+                ("exposure", 0),
+                ("op", 4),
+                ("white", 8),
+                ("drago_bias", 12),
+                ("dither", 16)
+            ]
         );
-        assert_eq!(push.size_bytes, 16);
+        assert_eq!(push.size_bytes, 20);
     }
 
     /// `gbuffer.vert`'s block is `mat4 model; uint material;`: 64 + 4 bytes.
@@ -1033,12 +1041,14 @@ mod tests {
         op: u32,
         white: f32,
         drago_bias: f32,
+        dither: u32,
     }
     crate::push_constants!(Tonemap {
         exposure,
         op,
         white,
-        drago_bias
+        drago_bias,
+        dither
     });
 
     #[repr(C)]
@@ -1048,22 +1058,24 @@ mod tests {
         exposure: f32,
         white: f32,
         drago_bias: f32,
+        dither: u32,
     }
     crate::push_constants!(Swapped {
         op,
         exposure,
         white,
-        drago_bias
+        drago_bias,
+        dither
     });
 
     #[test]
     fn push_structs_are_checked_by_name_and_offset() {
         let i = reflect("tonemap.comp", &words("tonemap.comp")).unwrap();
         assert_eq!(
-            check_push(i.push.as_ref(), "Tonemap", &Tonemap::fields(), 16),
+            check_push(i.push.as_ref(), "Tonemap", &Tonemap::fields(), 20),
             Ok(())
         );
-        let err = check_push(i.push.as_ref(), "Swapped", &Swapped::fields(), 16).unwrap_err();
+        let err = check_push(i.push.as_ref(), "Swapped", &Swapped::fields(), 20).unwrap_err();
         assert!(err.contains("`exposure` is at offset 4"), "{err}");
         let err = check_push(i.push.as_ref(), "Tonemap", &Tonemap::fields()[..3], 12).unwrap_err();
         assert!(
