@@ -16,7 +16,7 @@ float shadow_linear_depth(GpuShadowView sv, float d) {
 }
 
 // Which shadow view of light `l` covers world point p (the cube face or paraboloid hemisphere
-// for point lights).
+// for point lights; an area-light element's one hemisphere).
 uint shadow_view_index(GpuLight l, vec3 p) {
     uint first = l.info.y;
     if (l.info.z == 2u) {
@@ -137,6 +137,8 @@ float paraboloid_visibility(sampler2DArray maps, GpuLight l, vec3 p, vec3 n, flo
             vec2 tuv = (vec2(q) + 0.5) / vec2(size) * 2.0 - 1.0;
             float t2 = dot(tuv, tuv);
             if (t2 > 1.0) {
+                // An area-light element has one hemisphere and emits nothing behind it.
+                if (l.info.z < 2u) { lit += 1.0; total += 1.0; continue; }
                 tuv /= t2;
                 layer = int(other);
                 q = clamp(ivec2(floor((tuv * 0.5 + 0.5) * vec2(size))), ivec2(0), size - 1);

@@ -63,6 +63,8 @@ pub struct ShadowSettings {
     pub normal_offset_texels: f32,
     /// Cube or dual-paraboloid maps for point lights.
     pub point_technique: PointShadow,
+    /// Sub-lights per area light (`--area-samples`), instead of each light's own `samples`.
+    pub area_samples: Option<u32>,
 }
 
 impl Default for ShadowSettings {
@@ -74,6 +76,7 @@ impl Default for ShadowSettings {
             slope_bias_texels: 3.0,
             normal_offset_texels: 0.0,
             point_technique: PointShadow::Cube,
+            area_samples: None,
         }
     }
 }
@@ -155,7 +158,8 @@ fn depth_range(origin: Vec3, aabb: &Aabb) -> (f32, f32) {
     (far * 1e-4, far)
 }
 
-/// The shadow views of every light of `scene` at time `t_s`.
+/// The shadow views of every light of `scene` at time `t_s`, area lights sampled into
+/// elements (`super::area::sample_lights`): `per_light` indexes that sampled list.
 pub fn shadow_views(
     scene: &Scene,
     t_s: f32,
@@ -165,9 +169,38 @@ pub fn shadow_views(
     let res = settings.resolution.max(1) as f32;
     let mut views = Vec::new();
     let mut per_light = Vec::new();
-    for (li, light) in scene.lights.iter().enumerate() {
+    let lights = super::area::sample_lights(&scene.lights, settings.area_samples);
+    for (li, light) in lights.iter().enumerate() {
         let first = views.len() as u32;
         match *light {
+            Light::Element {
+                position, normal, ..
+            } => {
+                // One paraboloid hemisphere around the normal: the element emits nothing
+                // behind itself (glsl/include/shadow.glsl treats taps past its rim as lit).
+                let (near, far) = depth_range(position, &aabb);
+                let t = up_for(normal).cross(normal).normalize();
+                let b = normal.cross(t);
+                let rot = Mat4::from_cols(
+                    t.extend(0.0),
+                    b.extend(0.0),
+                    normal.extend(0.0),
+                    glam::Vec4::W,
+                )
+                .transpose();
+                views.push(ShadowView {
+                    view_proj: rot * Mat4::from_translation(-position),
+                    texel_footprint: 2.0 / res,
+                    projection: ShadowProjection::Paraboloid,
+                    axis: normal,
+                    near,
+                    far,
+                    light: li,
+                });
+            }
+            Light::Sphere { .. } | Light::Rectangle { .. } => {
+                unreachable!("sample_lights replaced area lights by elements")
+            }
             Light::Spot {
                 position,
                 direction,
