@@ -193,3 +193,38 @@ fn path_traced_gi_of_area_lights_approaches_the_mitsuba_reference() {
     assert!(rel_mse[1] < 0.0032, "path tracer relMSE {}", rel_mse[1]);
     assert!(rel_mse[1] < rel_mse[0] / 3.0, "{rel_mse:?}");
 }
+
+/// Every sample is a light with a shadow view: too many are refused before any GPU work with
+/// an error naming the way out, and so are GI methods that would read light maps the samples'
+/// paraboloid views do not have.
+#[test]
+fn too_many_samples_and_light_map_gi_are_clear_errors() {
+    use voxgi::gi::{GiMethod, GiSettings};
+    use voxgi::render::{RenderError, Renderer};
+    let scene = area_light_scene();
+    let ctx = common::context();
+    let mut settings = RenderSettings {
+        width: 64,
+        height: 64,
+        ..Default::default()
+    };
+    // Two area lights of 64 samples: 128 lights.
+    settings.shadow.area_samples = Some(64);
+    let e = Renderer::new(&ctx, &scene, settings.clone()).err().expect("128 lights");
+    assert!(matches!(e, RenderError::TooManyLights(128)), "{e}");
+    assert!(e.to_string().contains("--area-samples"), "{e}");
+    settings.shadow.area_samples = Some(65);
+    let e = Renderer::new(&ctx, &scene, settings.clone()).err().expect("65 samples");
+    assert!(e.to_string().contains("--area-samples"), "{e}");
+    settings.shadow.area_samples = Some(2);
+    for method in [GiMethod::Vpl, GiMethod::Hemisphere] {
+        settings.gi = GiSettings {
+            method,
+            ..Default::default()
+        };
+        let e = Renderer::new(&ctx, &scene, settings.clone()).err().expect("light maps");
+        assert!(matches!(e, RenderError::AreaLightsNeedNoLightMaps(_)), "{e}");
+        assert!(e.to_string().contains("--gi pathtrace"), "{e}");
+    }
+    common::assert_no_validation_messages(&ctx);
+}
