@@ -43,16 +43,15 @@ fn penumbra_scene() -> Scene {
 /// The floor's radiance along world x (z = 1) from `x0` to `x1` in 1 mm steps, read from the
 /// image by projecting each floor point and interpolating between the two nearest pixels.
 fn floor_profile(img: &HdrImage, scene: &Scene, x0: f32, x1: f32) -> Vec<(f32, f32)> {
-    let vp = scene
-        .camera
-        .view_proj(img.width as f32 / img.height as f32);
+    let vp = scene.camera.view_proj(img.width as f32 / img.height as f32);
     let steps = ((x1 - x0) / 1e-3).round() as usize;
     (0..=steps)
         .map(|i| {
             let x = x0 + i as f32 * 1e-3;
             let ndc = vp.project_point3(Vec3::new(x, 0.0, 1.0));
             let fx = (ndc.x * 0.5 + 0.5) * img.width as f32 - 0.5;
-            let row = (((ndc.y * 0.5 + 0.5) * img.height as f32) as usize).min(img.height as usize - 1);
+            let row =
+                (((ndc.y * 0.5 + 0.5) * img.height as f32) as usize).min(img.height as usize - 1);
             let c = (fx.floor() as usize).min(img.width as usize - 2);
             let t = (fx - c as f32).clamp(0.0, 1.0);
             let at = |col: usize| img.data[row * img.width as usize + col][1];
@@ -152,7 +151,11 @@ fn sampled_area_lights_converge_to_the_mitsuba_reference() {
         settings.shadow.area_samples = Some(s);
         let m = compare(&direct, &render(&scene, &settings), None).expect("same size");
         println!("{s} samples per area light: {m:?}");
-        assert!(m.rel_mse < last, "{s} samples: relMSE {} not below {last}", m.rel_mse);
+        assert!(
+            m.rel_mse < last,
+            "{s} samples: relMSE {} not below {last}",
+            m.rel_mse
+        );
         last = m.rel_mse;
     }
     // Measured (lavapipe, 256², 1024² shadow maps): relMSE 0.0132 (S = 1), 0.0018 (4),
@@ -186,7 +189,10 @@ fn path_traced_gi_of_area_lights_approaches_the_mitsuba_reference() {
         let m = compare(&gi, &render(&scene, &settings), None).expect("same size");
         rel_mse.push(m.rel_mse);
     }
-    println!("vs full GI: direct only {:.5}, path tracer {:.5}", rel_mse[0], rel_mse[1]);
+    println!(
+        "vs full GI: direct only {:.5}, path tracer {:.5}",
+        rel_mse[0], rel_mse[1]
+    );
     // Measured (lavapipe): direct only 0.0068 (the missing indirect light plus 4 samples'
     // penumbra steps), path tracer 0.00157 (0.00089 with 16 samples). Bounds: twice the
     // path tracer's value, and a third of the direct-only error.
@@ -210,11 +216,15 @@ fn too_many_samples_and_light_map_gi_are_clear_errors() {
     };
     // Two area lights of 64 samples: 128 lights.
     settings.shadow.area_samples = Some(64);
-    let e = Renderer::new(&ctx, &scene, settings.clone()).err().expect("128 lights");
+    let e = Renderer::new(&ctx, &scene, settings.clone())
+        .err()
+        .expect("128 lights");
     assert!(matches!(e, RenderError::TooManyLights(128)), "{e}");
     assert!(e.to_string().contains("--area-samples"), "{e}");
     settings.shadow.area_samples = Some(65);
-    let e = Renderer::new(&ctx, &scene, settings.clone()).err().expect("65 samples");
+    let e = Renderer::new(&ctx, &scene, settings.clone())
+        .err()
+        .expect("65 samples");
     assert!(e.to_string().contains("--area-samples"), "{e}");
     settings.shadow.area_samples = Some(2);
     for method in [GiMethod::Vpl, GiMethod::Hemisphere] {
@@ -222,8 +232,13 @@ fn too_many_samples_and_light_map_gi_are_clear_errors() {
             method,
             ..Default::default()
         };
-        let e = Renderer::new(&ctx, &scene, settings.clone()).err().expect("light maps");
-        assert!(matches!(e, RenderError::AreaLightsNeedNoLightMaps(_)), "{e}");
+        let e = Renderer::new(&ctx, &scene, settings.clone())
+            .err()
+            .expect("light maps");
+        assert!(
+            matches!(e, RenderError::AreaLightsNeedNoLightMaps(_)),
+            "{e}"
+        );
         assert!(e.to_string().contains("--gi pathtrace"), "{e}");
     }
     common::assert_no_validation_messages(&ctx);

@@ -281,7 +281,6 @@ fn describe_gi(gi: &GiSettings) -> String {
     }
 }
 
-
 impl Viewer {
     fn new(
         ctx: &Context,

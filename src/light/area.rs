@@ -147,7 +147,10 @@ mod tests {
             // A direction off the spiral's axis, the receiver facing the sphere.
             let dir = Vec3::new(0.3, -1.0, 0.1).normalize();
             let err = (irradiance(&lights, dir * d, -dir) - exact).abs() / exact;
-            assert!(err <= last.max(0.02), "{s} samples: error {err} after {last}");
+            assert!(
+                err <= last.max(0.02),
+                "{s} samples: error {err} after {last}"
+            );
             last = err;
         }
         assert!(last < 2e-3, "4096 samples: relative error {last}");

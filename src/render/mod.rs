@@ -504,12 +504,7 @@ impl Renderer {
         f.view_proj = view_proj.to_cols_array();
         f.inv_view_proj = view_proj.inverse().to_cols_array();
         f.camera_position = scene.camera.position.extend(1.0).to_array();
-        f.counts = [
-            lights.len() as u32,
-            views.len() as u32,
-            s.width,
-            s.height,
-        ];
+        f.counts = [lights.len() as u32, views.len() as u32, s.width, s.height];
         f.shadow = [
             s.shadow.bias_texels,
             s.shadow.slope_bias_texels,

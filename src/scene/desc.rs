@@ -724,10 +724,7 @@ fn build_area_light(ck: &Check<'_>, field: &str, l: &LightDesc) -> Result<Light,
         if v > 0.0 {
             Ok(v)
         } else {
-            Err(ck.invalid(
-                &f(name),
-                format!("{v} is not a size; expected meters > 0"),
-            ))
+            Err(ck.invalid(&f(name), format!("{v} is not a size; expected meters > 0")))
         }
     };
     let position = ck.vec3(&f("position"), l.position.unwrap_or_default())?;
@@ -753,7 +750,11 @@ fn build_area_light(ck: &Check<'_>, field: &str, l: &LightDesc) -> Result<Light,
     let axis = match l.width_axis {
         Some(a) => ck.direction(&f("width_axis"), a)?,
         None => {
-            let up = if normal.y.abs() > 0.99 { Vec3::Z } else { Vec3::Y };
+            let up = if normal.y.abs() > 0.99 {
+                Vec3::Z
+            } else {
+                Vec3::Y
+            };
             up.cross(normal)
         }
     };

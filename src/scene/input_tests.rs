@@ -383,18 +383,43 @@ fn area_lights_load_and_bad_values_name_the_file_and_key() {
     assert!(matches!(s.lights[0], Light::Sphere { radius_m, samples: 8, .. } if radius_m == 0.1));
     // (light lines, key the error must name, words it must say)
     let sphere = "kind = \"sphere\"\nposition = [0, 2, 0]\nradiance_w_sr_m2 = 1";
-    let rect = "kind = \"rectangle\"\nposition = [0, 2, 0]\nnormal = [0, -1, 0]\nradiance_w_sr_m2 = 1";
+    let rect =
+        "kind = \"rectangle\"\nposition = [0, 2, 0]\nnormal = [0, -1, 0]\nradiance_w_sr_m2 = 1";
     let cases = [
         (format!("{sphere}\nradius_m = 0"), "radius_m", "meters > 0"),
         (format!("{sphere}\nradius_m = -1"), "radius_m", "meters > 0"),
         (format!("{sphere}\nradius_m = nan"), "radius_m", "radius_m"),
         (format!("{sphere}"), "radius_m", "needs `radius_m`"),
-        (format!("{sphere}\nradius_m = 1\nwidth_m = 1"), "width_m", "does not apply"),
-        (format!("{sphere}\nradius_m = 1\nsamples = 0"), "samples", "[1, 64]"),
-        (format!("{sphere}\nradius_m = 1\nsamples = 65"), "samples", "[1, 64]"),
-        (format!("{rect}\nwidth_m = 1\nheight_m = 0"), "height_m", "meters > 0"),
-        (format!("{rect}\nwidth_m = inf\nheight_m = 1"), "width_m", "width_m"),
-        (format!("{rect}\nheight_m = 1"), "width_m", "needs `width_m`"),
+        (
+            format!("{sphere}\nradius_m = 1\nwidth_m = 1"),
+            "width_m",
+            "does not apply",
+        ),
+        (
+            format!("{sphere}\nradius_m = 1\nsamples = 0"),
+            "samples",
+            "[1, 64]",
+        ),
+        (
+            format!("{sphere}\nradius_m = 1\nsamples = 65"),
+            "samples",
+            "[1, 64]",
+        ),
+        (
+            format!("{rect}\nwidth_m = 1\nheight_m = 0"),
+            "height_m",
+            "meters > 0",
+        ),
+        (
+            format!("{rect}\nwidth_m = inf\nheight_m = 1"),
+            "width_m",
+            "width_m",
+        ),
+        (
+            format!("{rect}\nheight_m = 1"),
+            "width_m",
+            "needs `width_m`",
+        ),
         (
             format!("{rect}\nwidth_m = 1\nheight_m = 1\nwidth_axis = [0, 2, 0]"),
             "width_axis",
@@ -419,7 +444,11 @@ fn area_lights_load_and_bad_values_name_the_file_and_key() {
             "radiance_w_sr_m2",
             "radiance_w_sr_m2",
         ),
-        (format!("{sphere}\nradius_m = 1\nintensity_w_sr = 1"), "intensity_w_sr", "does not apply"),
+        (
+            format!("{sphere}\nradius_m = 1\nintensity_w_sr = 1"),
+            "intensity_w_sr",
+            "does not apply",
+        ),
         (
             "kind = \"point\"\nposition = [0, 2, 0]\nintensity_w_sr = 1\nradius_m = 1".to_owned(),
             "radius_m",
