@@ -7,9 +7,9 @@ mod common;
 use glam::Vec3;
 use std::path::Path;
 use voxgi::eval::{compare, HdrImage};
-use voxgi::light::area::grid_for;
+use voxgi::light::area::{grid_for, sample_lights};
 use voxgi::render::{render_image, RenderSettings};
-use voxgi::scene::Scene;
+use voxgi::scene::{Light, Scene};
 
 const ROOT: &str = env!("CARGO_MANIFEST_DIR");
 
@@ -20,20 +20,17 @@ fn render(scene: &Scene, settings: &RenderSettings) -> HdrImage {
     out.hdr
 }
 
-// The penumbra scene: a floor at y = 0, a plate over x < 0, 0 < z < 2 at height H_B (0.02 m
-// thick), and a rectangle light at height H above z = 1 facing down, S_M wide along x and thin
-// along z, so that the floor's profile across the edge (along x at z = 1) depends on the
-// light's width only. The camera is below the plate, so it sees the floor under it.
+// The penumbra scenes: a floor at y = 0, a plate over x < 0, 0 < z < 2 at height H_B (0.02 m
+// thick), and an area light centred at height H above (0, z = 1). The floor's profile across
+// the plate's edge (along x at z = 1) is read from the image; the camera is below the plate,
+// so it sees the floor under it.
 const H: f32 = 2.0;
 const H_B: f32 = 0.5;
-const S_M: f32 = 0.4;
 
-fn penumbra_scene() -> Scene {
+fn penumbra_scene(light: &str) -> Scene {
     let toml = format!(
         "[camera]\nposition = [0, 0.3, -0.5]\ntarget = [0, 0, 1]\nfov_y_deg = 30\n\
-         [[lights]]\nkind = \"rectangle\"\nposition = [0, {H}, 1]\nnormal = [0, -1, 0]\n\
-         width_axis = [1, 0, 0]\nwidth_m = {S_M}\nheight_m = 0.025\nradiance_w_sr_m2 = 100\n\
-         samples = 16\n\
+         [[lights]]\n{light}\n\
          [[objects]]\nbuiltin = \"quad\"\nscale = [4, 1, 4]\n\
          [[objects]]\nbuiltin = \"cube\"\ntranslate = [-1, {H_B}, 1]\nscale = [2, 0.02, 2]\n"
     );
@@ -60,6 +57,40 @@ fn floor_profile(img: &HdrImage, scene: &Scene, x0: f32, x1: f32) -> Vec<(f32, f
         .collect()
 }
 
+/// The same profile predicted from the light's samples by similar triangles: the sample at
+/// P casts the edge (x = 0, y = H_B) onto the floor at x_i = −P.x·H_B/(P.y − H_B) and lights
+/// the floor beyond it, with the weight I·cos θ_e·cos θ_r/d² it has at the penumbra's
+/// centre (0, 0, 1) (nearly constant across the few centimeters of penumbra).
+fn predicted_profile(lights: &[Light], x0: f32, x1: f32) -> Vec<(f32, f32)> {
+    let q = Vec3::new(0.0, 0.0, 1.0);
+    let edges: Vec<(f32, f32)> = lights
+        .iter()
+        .map(|l| {
+            let Light::Element {
+                position: p,
+                normal,
+                intensity_w_sr,
+            } = *l
+            else {
+                panic!("only samples")
+            };
+            let d = q - p;
+            let w = d.normalize();
+            let weight =
+                intensity_w_sr.y * normal.dot(w).max(0.0) * (-w.y).max(0.0) / d.length_squared();
+            (-p.x * H_B / (p.y - H_B), weight)
+        })
+        .collect();
+    let steps = ((x1 - x0) / 1e-4).round() as usize;
+    (0..=steps)
+        .map(|i| {
+            let x = x0 + i as f32 * 1e-4;
+            let lit: f32 = edges.iter().filter(|e| e.0 < x).map(|e| e.1).sum();
+            (x, lit)
+        })
+        .collect()
+}
+
 /// The first x where the (increasing) `profile`, scaled from `lo` to `hi`, reaches `level`.
 fn crossing(profile: &[(f32, f32)], lo: f32, hi: f32, level: f32) -> f32 {
     let v = |i: usize| (profile[i].1 - lo) / (hi - lo);
@@ -72,16 +103,8 @@ fn crossing(profile: &[(f32, f32)], lo: f32, hi: f32, level: f32) -> f32 {
     panic!("the profile never reaches {level}");
 }
 
-#[test]
-fn penumbra_width_behind_an_edge_matches_similar_triangles() {
-    let scene = penumbra_scene();
-    let settings = RenderSettings {
-        width: 256,
-        height: 128,
-        ..Default::default()
-    };
-    let img = render(&scene, &settings);
-    let profile = floor_profile(&img, &scene, -0.3, 0.3);
+/// The 10% and 90% crossings of a profile between its plateaus at |x| >= 0.15 m.
+fn ten_ninety(profile: &[(f32, f32)]) -> (f32, f32) {
     let mean = |a: f32, b: f32| {
         let v: Vec<f32> = profile
             .iter()
@@ -90,41 +113,86 @@ fn penumbra_width_behind_an_edge_matches_similar_triangles() {
             .collect();
         v.iter().sum::<f32>() / v.len() as f32
     };
-    // Umbra and fully lit plateaus, well outside the penumbra (|x| <= 0.067 m).
     let (lo, hi) = (mean(-0.3, -0.15), mean(0.15, 0.3));
     assert!(lo < 0.02 * hi, "umbra {lo} vs lit {hi}");
-    let (x10, x90) = (
-        crossing(&profile, lo, hi, 0.1),
-        crossing(&profile, lo, hi, 0.9),
+    (
+        crossing(profile, lo, hi, 0.1),
+        crossing(profile, lo, hi, 0.9),
+    )
+}
+
+/// Renders the penumbra scene with `light` and checks the 10%–90% width and centre of the
+/// penumbra against the similar-triangles prediction from the light's samples. Returns the
+/// measured width.
+fn check_penumbra(light: &str, samples: u32) -> f32 {
+    let scene = penumbra_scene(light);
+    let mut settings = RenderSettings {
+        width: 256,
+        height: 128,
+        ..Default::default()
+    };
+    settings.shadow.area_samples = Some(samples);
+    let img = render(&scene, &settings);
+    let (x10, x90) = ten_ninety(&floor_profile(&img, &scene, -0.3, 0.3));
+    let lights = sample_lights(&scene.lights, Some(samples));
+    let (p10, p90) = ten_ninety(&predicted_profile(&lights, -0.3, 0.3));
+    // Tolerance per crossing: a pixel (6.4 mm: 2 tan 15° per 128 rows at the 1.53 m from the
+    // camera to (0, 0, 1)), the 3×3 PCF kernel's half-width (1.5 texels of at most 4/1024 rad
+    // at the axis of a paraboloid map, at the blocker's 1.5 m, times H/(H − H_B) onto the
+    // floor: 11.7 mm) and the plate's thickness (±0.01 m of H_B: ±2% of every x_i, 1.3 mm at
+    // the 0.067 m edge of the penumbra).
+    let px_m = 2.0 * 0.3f32.hypot(1.5) * 15f32.to_radians().tan() / 128.0;
+    let pcf_m = 1.5 * 4.0 / 1024.0 * (H - H_B) * H / (H - H_B);
+    let tol = px_m + pcf_m + 0.0013;
+    println!(
+        "{light:?}: 10%-90% penumbra measured [{x10:.4}, {x90:.4}] m, predicted [{p10:.4}, \
+         {p90:.4}] m, +- {tol:.4} each"
     );
-    // Similar triangles: the light point at lateral offset a casts the edge (0, H_B) to the
-    // floor at x = -a k, k = H_B / (H - H_B) = (d_r - d_b) / d_b with d_r = H, d_b = H - H_B.
-    // The whole light (a in [-s/2, s/2]) gives the penumbra w = s k = 0.133 m, across which the
-    // visible fraction of a rectangle grows linearly: its 10%-90% part is 0.8 w = 0.107 m,
-    // centred on x = 0 (the edge seen from the light's centre).
-    let k = H_B / (H - H_B);
-    let w = S_M * k;
-    // The 16 samples along x (grid_for) make a staircase of 16 steps of w/16: the profile passes
-    // 10% at the 2nd step and 90% at the 15th, 13/16 w apart.
-    assert_eq!(grid_for(16, S_M / 0.025), (16, 1));
-    let expected = 13.0 / 16.0 * w;
-    let measured = x90 - x10;
-    // Tolerance: one step (w/16 = 8 mm, where the PCF blur moves a crossing to the
-    // neighbouring step), two pixels (one at each crossing; 6.4 mm each: 2 tan 15° per 128
-    // rows at the 1.53 m from the camera to (0, 0, 1)),
-    // the plate's thickness (0.02 m in d_b = 1.5 m: 1.3% of k) and the PCF kernel
-    // (3 texels of 2/1024 rad at 1.5 m, times H / d_b: 12 mm).
-    let px_m = 2.0 * (0.3f32.hypot(1.5)) * 15f32.to_radians().tan() / 128.0;
-    let tol = w / 16.0 + 2.0 * px_m + 0.013 * w + 0.012;
-    println!("10%-90% penumbra: measured {measured:.4} m, expected {expected:.4} m +- {tol:.4} (continuous light: {:.4}); centre {:.4} m", 0.8 * w, 0.5 * (x10 + x90));
     assert!(
-        (measured - expected).abs() <= tol,
-        "penumbra {measured} m, expected {expected} m +- {tol}"
+        (x10 - p10).abs() <= tol && (x90 - p90).abs() <= tol,
+        "penumbra [{x10}, {x90}] m, predicted [{p10}, {p90}] m +- {tol}"
     );
+    x90 - x10
+}
+
+#[test]
+fn rectangle_penumbra_behind_an_edge_matches_similar_triangles() {
+    // 0.4 m wide along x, 2.5 cm along z: 16 samples in a row (grid_for).
+    let s_m = 0.4;
+    let light = format!(
+        "kind = \"rectangle\"\nposition = [0, {H}, 1]\nnormal = [0, -1, 0]\n\
+         width_axis = [1, 0, 0]\nwidth_m = {s_m}\nheight_m = 0.025\nradiance_w_sr_m2 = 100"
+    );
+    assert_eq!(grid_for(16, s_m / 0.025), (16, 1));
+    let width = check_penumbra(&light, 16);
+    // The continuous light: the penumbra w = s (d_r − d_b)/d_b = s H_B/(H − H_B) = 0.133 m
+    // (d_r = H, d_b = H − H_B), across which the visible part of the rectangle grows
+    // linearly, so its 10%–90% part is 0.8 w = 0.107 m; 16 samples make 16 equal steps and
+    // cross 10% and 90% at the 2nd and 15th, 13/16 w = 0.108 m apart.
+    let w = s_m * H_B / (H - H_B);
     assert!(
-        (0.5 * (x10 + x90)).abs() <= px_m + w / 32.0,
-        "penumbra centred at {} m, expected 0",
-        0.5 * (x10 + x90)
+        (width - 0.8 * w).abs() < 0.1 * w,
+        "{width} m vs {}",
+        0.8 * w
+    );
+}
+
+#[test]
+fn sphere_penumbra_behind_an_edge_matches_similar_triangles() {
+    let r_m = 0.2;
+    let light = format!(
+        "kind = \"sphere\"\nposition = [0, {H}, 1]\nradius_m = {r_m}\nradiance_w_sr_m2 = 50"
+    );
+    let width = check_penumbra(&light, 48);
+    // The continuous sphere looks like a disk of radius R from the floor: behind the edge its
+    // visible fraction is the circular segment F(u) = (acos(−u) + u √(1 − u²))/π, u the
+    // edge's offset in radii, which crosses 0.1 and 0.9 at u = ∓0.687: the 10%–90% width is
+    // 1.374 R·H_B/(H − H_B) = 0.092 m (similar triangles, as for the rectangle). The 48
+    // elements facing every way approximate that disk's projection within 15%.
+    let continuous = 1.374 * r_m * H_B / (H - H_B);
+    assert!(
+        (width - continuous).abs() < 0.15 * continuous,
+        "{width} m vs {continuous} m"
     );
 }
 
