@@ -389,7 +389,7 @@ fn area_lights_load_and_bad_values_name_the_file_and_key() {
         (format!("{sphere}\nradius_m = 0"), "radius_m", "meters > 0"),
         (format!("{sphere}\nradius_m = -1"), "radius_m", "meters > 0"),
         (format!("{sphere}\nradius_m = nan"), "radius_m", "radius_m"),
-        (format!("{sphere}"), "radius_m", "needs `radius_m`"),
+        (sphere.to_string(), "radius_m", "needs `radius_m`"),
         (
             format!("{sphere}\nradius_m = 1\nwidth_m = 1"),
             "width_m",
