@@ -15,7 +15,7 @@ struct GpuLight {
     vec4 position;      // xyz world position (point, spot)
     vec4 direction;     // xyz unit direction light travels (spot, directional; element: normal)
     vec4 intensity;     // rgb: W/sr (point, spot) or W/m^2 (directional)
-    vec4 spot;          // x cos(cutoff), y cutoff rad, z beam rad
+    vec4 spot;          // x cos(cutoff), y cutoff rad, z beam rad; w PCSS light size, m (element)
     uvec4 info;         // x kind, y first shadow view, z shadow view count (0: no shadow)
 };
 

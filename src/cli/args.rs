@@ -186,6 +186,10 @@ pub struct FrameArgs {
     /// default: each light's `samples` key (16 without it).
     #[arg(long, value_name = "S")]
     pub area_samples: Option<u32>,
+    /// Soft shadows of area lights: S sampled sub-lights (converges) or PCSS for rectangles
+    /// (one shadow view each; spheres stay sampled).
+    #[arg(long, value_enum, default_value_t = crate::light::AreaShadow::Sampled)]
+    pub area_shadows: crate::light::AreaShadow,
     /// Voxelize the scene into a grid of at most N×N columns: static geometry once, dynamic
     /// objects in the frames they move (`profile` then shows those voxel passes).
     #[arg(long, value_name = "N")]
@@ -234,6 +238,7 @@ impl FrameArgs {
         s.shadow.resolution = self.shadow_resolution;
         s.shadow.pcf_radius = self.pcf_radius;
         s.shadow.point_technique = self.point_shadows;
+        s.shadow.area_technique = self.area_shadows;
         if let Some(n) = self.area_samples {
             s.shadow.area_samples = Some(crate::limits::AREA_SAMPLES.check_flag(n)?);
         }

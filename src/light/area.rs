@@ -20,8 +20,40 @@
 //!    the receiver would need one per receiver). Far away the sum is L·πR²/d², the sphere's
 //!    exact irradiance (∫ max(n·w, 0) dA = πR²).
 
+use super::shadow::{AreaShadow, ShadowSettings};
 use crate::scene::Light;
 use glam::Vec3;
+
+/// The lights a frame renders with `settings`: [`sample_lights`], except that with
+/// `--area-shadows pcss` a rectangle is one element at its centre carrying the whole
+/// L·w·h (exact far away) and its size √(w·h) for PCSS (Fernando 2005; Oetke 2017 §4.3;
+/// glsl/include/shadow.glsl). Spheres stay sampled: their emission faces every way, which one
+/// element cannot carry.
+pub fn frame_lights(lights: &[Light], settings: &ShadowSettings) -> Vec<Light> {
+    if settings.area_technique == AreaShadow::Sampled {
+        return sample_lights(lights, settings.area_samples);
+    }
+    let mut out = Vec::with_capacity(lights.len());
+    for light in lights {
+        match *light {
+            Light::Rectangle {
+                position,
+                normal,
+                width_m,
+                height_m,
+                radiance_w_sr_m2,
+                ..
+            } => out.push(Light::Element {
+                position,
+                normal,
+                intensity_w_sr: radiance_w_sr_m2 * (width_m * height_m),
+                pcss_size_m: (width_m * height_m).sqrt(),
+            }),
+            other => out.extend(sample_lights(&[other], settings.area_samples)),
+        }
+    }
+    out
+}
 
 /// The lights a frame renders: `lights` with every sphere and rectangle replaced by its
 /// samples (`samples` when given, else the light's own count). Other lights stay as they are,
@@ -42,6 +74,7 @@ pub fn sample_lights(lights: &[Light], samples: Option<u32>) -> Vec<Light> {
                     position: position + normal * radius_m,
                     normal,
                     intensity_w_sr: radiance_w_sr_m2 * area_m2,
+                    pcss_size_m: 0.0,
                 }));
             }
             Light::Rectangle {
@@ -67,6 +100,7 @@ pub fn sample_lights(lights: &[Light], samples: Option<u32>) -> Vec<Light> {
                                 + height_axis * (v * height_m),
                             normal,
                             intensity_w_sr: radiance_w_sr_m2 * area_m2,
+                            pcss_size_m: 0.0,
                         });
                     }
                 }
@@ -117,6 +151,7 @@ mod tests {
                     position,
                     normal,
                     intensity_w_sr,
+                    ..
                 } => {
                     let d = x - position;
                     let w = d.normalize();
@@ -176,6 +211,7 @@ mod tests {
                 position,
                 normal,
                 intensity_w_sr,
+                ..
             } = *l
             else {
                 unreachable!("only samples")

@@ -7,5 +7,6 @@ pub mod area;
 mod shadow;
 
 pub use shadow::{
-    shadow_views, LightShadows, PointShadow, ShadowProjection, ShadowSettings, ShadowView,
+    shadow_views, AreaShadow, LightShadows, PointShadow, ShadowProjection, ShadowSettings,
+    ShadowView,
 };

@@ -20,7 +20,7 @@ pub struct GpuLight {
     pub position: [f32; 4],
     pub direction: [f32; 4],
     pub intensity: [f32; 4],
-    /// x cos(cutoff), y cutoff rad, z beam rad.
+    /// x cos(cutoff), y cutoff rad, z beam rad; w an area light's PCSS size (m, 0: none).
     pub spot: [f32; 4],
     /// x kind, y first shadow view, z shadow view count.
     pub info: [u32; 4],

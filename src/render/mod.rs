@@ -27,7 +27,7 @@ pub use stereo::{eye_scene, pack as stereo_pack, render_stereo, StereoOutput, St
 
 use crate::eval::HdrImage;
 use crate::graph::{Access, GraphError, ImageHandle, RenderGraph};
-use crate::light::{area::sample_lights, shadow_views, PointShadow, ShadowSettings};
+use crate::light::{area::frame_lights, shadow_views, PointShadow, ShadowSettings};
 use crate::post::{ToneMap, TonemapPass};
 use crate::scene::{Light, Scene};
 use crate::vk::{vk, Buffer, BufferDesc, Context, ImageDesc, MemoryLocation, PassTiming, VkError};
@@ -301,7 +301,7 @@ impl Renderer {
     ) -> Result<Self, RenderError> {
         check_render_settings(&settings)?;
         check_device_limits(&settings, ctx.info.max_image_dimension_2d)?;
-        let lights = sample_lights(&scene.lights, settings.shadow.area_samples).len();
+        let lights = frame_lights(&scene.lights, &settings.shadow).len();
         if lights > MAX_LIGHTS {
             return Err(RenderError::TooManyLights(lights));
         }
@@ -494,7 +494,7 @@ impl Renderer {
     pub fn prepare(&mut self, scene: &Scene) -> Result<(), RenderError> {
         let s = self.settings.clone();
         let (views, per_light) = shadow_views(scene, s.time_s, &s.shadow);
-        let lights = sample_lights(&scene.lights, s.shadow.area_samples);
+        let lights = frame_lights(&scene.lights, &s.shadow);
         if views.len() > MAX_SHADOW_VIEWS {
             return Err(RenderError::TooManyShadowViews(views.len()));
         }
@@ -789,12 +789,13 @@ fn gpu_light(light: &Light, first_view: u32, views: u32) -> GpuLight {
             position,
             normal,
             intensity_w_sr,
+            pcss_size_m,
         } => GpuLight {
             position: v4(position),
             direction: v4(normal),
             intensity: v4(intensity_w_sr),
+            spot: [0.0, 0.0, 0.0, pcss_size_m],
             info: [LIGHT_ELEMENT, first_view, views, 0],
-            ..Default::default()
         },
         Light::Sphere { .. } | Light::Rectangle { .. } => {
             unreachable!("prepare renders area lights as their samples (sample_lights)")

@@ -63,6 +63,9 @@ pub enum Light {
         normal: Vec3,
         /// L·A, W/sr: the intensity along the normal.
         intensity_w_sr: Vec3,
+        /// 0 for a sample of `--area-shadows sampled`; with `pcss`, the element stands for
+        /// the whole light and this is the light's size s (m) that sizes the penumbra.
+        pcss_size_m: f32,
     },
 }
 
