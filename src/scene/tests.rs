@@ -150,7 +150,7 @@ fn doc_example_follows_the_schema() {
         .join("\n");
     let d = desc::parse(&toml, Path::new("doc")).unwrap_or_else(|e| panic!("{e}\n{toml}"));
     assert_eq!(d.objects.len(), 2);
-    assert_eq!(d.lights.len(), 2);
+    assert_eq!(d.lights.len(), 3);
     assert!(d
         .gi
         .is_some_and(|g| g.method.as_deref() == Some("pathtrace")));

@@ -906,7 +906,7 @@ mod tests {
     /// (GLSL 4.50 §7.6.2.2) aligns vec4, mat4 and structs of them to 16 bytes and gives an
     /// array of structs the struct's size as stride: GpuLight is five vec4 (80 bytes),
     /// GpuShadowView a mat4 and two vec4 (96); GpuFrame two mat4 (0, 64), three vec4 (128,
-    /// 144, 160), 16 lights at 176 (1280 bytes) and 64 shadow views at 1456 (6144 bytes).
+    /// 144, 160), 64 lights at 176 (5120 bytes) and 64 shadow views at 5296 (6144 bytes).
     #[test]
     fn buffer_structs_have_their_std430_layout() {
         let i = reflect("gi_filter.comp", &words("gi_filter.comp")).unwrap();
@@ -919,11 +919,11 @@ mod tests {
                 ("camera_position", 128, 16),
                 ("counts", 144, 16),
                 ("shadow", 160, 16),
-                ("lights", 176, 1280),
-                ("shadow_views", 1456, 6144),
+                ("lights", 176, 5120),
+                ("shadow_views", 5296, 6144),
             ]
         );
-        assert_eq!((frame.size_bytes, frame.array_stride), (7600, None));
+        assert_eq!((frame.size_bytes, frame.array_stride), (11440, None));
         let light = &i.structs["GpuLight"];
         assert_eq!(light.array_stride, Some(80));
         assert_eq!(
