@@ -52,7 +52,7 @@ void main() {
             vec3 d = l.position.xyz - p;
             float d2 = max(dot(d, d), 1e-30);
             wi = d * inversesqrt(d2);
-            float falloff = l.info.x == LIGHT_SPOT ? spot_falloff(l, dot(-wi, l.direction.xyz)) : 1.0;
+            float falloff = light_falloff(l, dot(-wi, l.direction.xyz));
             e = l.intensity.rgb * (falloff * max(dot(n, wi), 0.0) / d2);
         }
         if (all(equal(e, vec3(0.0)))) continue;

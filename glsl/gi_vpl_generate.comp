@@ -148,7 +148,7 @@ GpuVpl first_bounce(uint light, uint set_, uint j) {
         wl = to_light * inversesqrt(max(d2, 1e-30));
         float cos_l = dot(n, wl);
         flux = cos_l > 1e-6 ? radiance * (PI * d2 * weight / cos_l) : vec3(0.0);
-        float falloff = l.info.x == LIGHT_SPOT ? spot_falloff(l, dot(-wl, l.direction.xyz)) : 1.0;
+        float falloff = light_falloff(l, dot(-wl, l.direction.xyz));
         incident = cos_l > 1e-6 ? l.intensity.rgb * (falloff * weight) : vec3(0.0);
     }
     // Phong senders (§7.3): the glossy part leaves around the incident light's mirror

@@ -57,7 +57,7 @@ void main() {
         vec3 wi = d * inversesqrt(d2);
         // Two-sided: the side the light sees.
         if (dot(n, wi) < 0.0) n = -n;
-        float falloff = l.info.x == LIGHT_SPOT ? spot_falloff(l, dot(-wi, l.direction.xyz)) : 1.0;
+        float falloff = light_falloff(l, dot(-wi, l.direction.xyz));
         cos_i = max(dot(n, wi), 0.0);
         e = l.intensity.rgb * (falloff * cos_i / d2);
     }

@@ -274,6 +274,15 @@ pub const LIGHT_MAP_RESOLUTION: Limit<u32> = Limit::new(
     16,
     8192,
 );
+/// Sub-lights an area light is rendered with (`light::area`): each is a light with one shadow
+/// view, and a frame has at most 64 of each (`render::gpu::MAX_LIGHTS`, `MAX_SHADOW_VIEWS`).
+pub const AREA_SAMPLES: Limit<u32> = Limit::new(
+    "--area-samples",
+    Some("lights[].samples"),
+    "sub-lights per area light",
+    1,
+    64,
+);
 /// Traversal starts at most at the top of a 16384² hierarchy (log2 16384 = 14).
 pub const GI_START_LEVEL: Limit<u32> = Limit::new(
     "--gi-start-level",

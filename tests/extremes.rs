@@ -14,14 +14,7 @@ use voxgi::scene::{load_scene_arg, Light, Scene};
 fn scaled(scene: &Scene, s: f32) -> Scene {
     let mut scene = scene.clone();
     for light in &mut scene.lights {
-        match light {
-            Light::Point { intensity_w_sr, .. } | Light::Spot { intensity_w_sr, .. } => {
-                *intensity_w_sr *= s
-            }
-            Light::Directional {
-                irradiance_w_m2, ..
-            } => *irradiance_w_m2 *= s,
-        }
+        *light = voxgi::scene::scaled(light, s);
     }
     scene
 }
@@ -160,6 +153,7 @@ fn rescaled(scene: &Scene, k: f32) -> Scene {
                 *intensity_w_sr *= k * k;
             }
             Light::Directional { .. } => {}
+            other => panic!("the test scene has no area lights: {other:?}"),
         }
     }
     scene
@@ -287,7 +281,11 @@ fn translated(scene: &Scene, offset_m: glam::Vec3) -> Scene {
     scene.camera.position += offset_m;
     for light in &mut scene.lights {
         match light {
-            Light::Point { position, .. } | Light::Spot { position, .. } => *position += offset_m,
+            Light::Point { position, .. }
+            | Light::Spot { position, .. }
+            | Light::Sphere { position, .. }
+            | Light::Rectangle { position, .. }
+            | Light::Element { position, .. } => *position += offset_m,
             Light::Directional { .. } => {}
         }
     }

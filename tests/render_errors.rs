@@ -46,12 +46,12 @@ fn small() -> RenderSettings {
 #[test]
 fn more_lights_than_the_renderer_holds() {
     let ctx = common::context();
-    // MAX_LIGHTS = 16 (render::gpu).
-    let scene = cube_with_point_lights("lights", 17);
+    // MAX_LIGHTS = 64 (render::gpu).
+    let scene = cube_with_point_lights("lights", 65);
     let e = Renderer::new(&ctx, &scene, small())
         .err()
-        .expect("17 lights refused");
-    assert!(matches!(e, RenderError::TooManyLights(17)), "{e}");
+        .expect("65 lights refused");
+    assert!(matches!(e, RenderError::TooManyLights(65)), "{e}");
     assert!(e.to_string().contains("remove some"), "{e}");
 }
 

@@ -3,18 +3,19 @@
 #ifndef FRAME_GLSL
 #define FRAME_GLSL
 
-#define MAX_LIGHTS 16
+#define MAX_LIGHTS 64
 #define MAX_SHADOW_VIEWS 64
 
 #define LIGHT_POINT 0u
 #define LIGHT_SPOT 1u
 #define LIGHT_DIRECTIONAL 2u
+#define LIGHT_ELEMENT 3u    // a sample of an area light: I(theta) = intensity max(cos theta, 0)
 
 struct GpuLight {
     vec4 position;      // xyz world position (point, spot)
-    vec4 direction;     // xyz unit direction light travels (spot, directional)
+    vec4 direction;     // xyz unit direction light travels (spot, directional; element: normal)
     vec4 intensity;     // rgb: W/sr (point, spot) or W/m^2 (directional)
-    vec4 spot;          // x cos(cutoff), y cutoff rad, z beam rad
+    vec4 spot;          // x cos(cutoff), y cutoff rad, z beam rad; w PCSS light size, m (element)
     uvec4 info;         // x kind, y first shadow view, z shadow view count (0: no shadow)
 };
 
@@ -56,6 +57,15 @@ float spot_falloff(GpuLight l, float cos_axis) {
     float theta = acos(clamp(cos_axis, -1.0, 1.0));
     if (theta <= l.spot.z) return 1.0;
     return clamp((l.spot.y - theta) / max(l.spot.y - l.spot.z, 1e-6), 0.0, 1.0);
+}
+
+// Angular factor of a point-like light toward a point at cosine `cos_axis` from its axis:
+// Mitsuba's spot falloff, an area-light element's cosine (I = L A cos theta, one-sided), 1 for
+// a point light.
+float light_falloff(GpuLight l, float cos_axis) {
+    if (l.info.x == LIGHT_SPOT) return spot_falloff(l, cos_axis);
+    if (l.info.x == LIGHT_ELEMENT) return max(cos_axis, 0.0);
+    return 1.0;
 }
 
 #endif

@@ -94,7 +94,7 @@ vec3 light_map_radiance(vec3 hit, vec3 dir) {
                 e = l.intensity.rgb * cos_l;
             } else {
                 vec3 d = l.position.xyz - pos.xyz;
-                float falloff = l.info.x == LIGHT_SPOT ? spot_falloff(l, dot(-wl, l.direction.xyz)) : 1.0;
+                float falloff = light_falloff(l, dot(-wl, l.direction.xyz));
                 e = l.intensity.rgb * (falloff * cos_l / max(dot(d, d), 1e-30));
             }
             float ca = max(dot(reflect(-wl, n), -dir), 0.0);

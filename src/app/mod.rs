@@ -23,7 +23,7 @@ pub use panel::{Controls, TimingStats};
 use crate::gi::{GiMethod, GiSettings};
 use crate::graph::{Access, GraphError, GraphExecutor, ImageHandle, RenderGraph};
 use crate::render::{FrameImages, RenderError, RenderSettings, Renderer};
-use crate::scene::{Camera, Light, Scene};
+use crate::scene::{scaled, Camera, Light, Scene};
 use crate::vk::{
     surface_extensions, vk, Acquired, Buffer, BufferDesc, Context, ContextDesc, FrameLoop,
     MemoryLocation, Swapchain, VkError, MAX_FRAMES_IN_FLIGHT,
@@ -281,19 +281,6 @@ fn describe_gi(gi: &GiSettings) -> String {
     }
 }
 
-fn scaled(light: &Light, s: f32) -> Light {
-    let mut l = *light;
-    match &mut l {
-        Light::Point { intensity_w_sr, .. } | Light::Spot { intensity_w_sr, .. } => {
-            *intensity_w_sr *= s
-        }
-        Light::Directional {
-            irradiance_w_m2, ..
-        } => *irradiance_w_m2 *= s,
-    }
-    l
-}
-
 impl Viewer {
     fn new(
         ctx: &Context,
@@ -343,6 +330,9 @@ impl Viewer {
                     Light::Point { .. } => "point",
                     Light::Spot { .. } => "spot",
                     Light::Directional { .. } => "directional",
+                    Light::Sphere { .. } => "sphere",
+                    Light::Rectangle { .. } => "rectangle",
+                    Light::Element { .. } => "area sample",
                 };
                 format!("{kind} {i}")
             })

@@ -118,7 +118,11 @@ pub fn scene_at_step(scene: &Scene, k: u32, steps: u32, radius_m: f32) -> Scene 
     let offset = Vec3::new(angle.cos() - 1.0, 0.0, angle.sin()) * radius_m;
     if let Some(light) = s.lights.iter_mut().find(|l| l.position().is_some()) {
         match light {
-            Light::Point { position, .. } | Light::Spot { position, .. } => *position += offset,
+            Light::Point { position, .. }
+            | Light::Spot { position, .. }
+            | Light::Sphere { position, .. }
+            | Light::Rectangle { position, .. }
+            | Light::Element { position, .. } => *position += offset,
             Light::Directional { .. } => {}
         }
     }

@@ -194,6 +194,14 @@ pub struct FrameArgs {
     /// Shadow maps of point lights: six cube faces or two paraboloid hemispheres.
     #[arg(long, value_enum, default_value_t = PointShadow::Cube)]
     pub point_shadows: PointShadow,
+    /// Sub-lights (one shadow view each) per sphere or rectangle light, for every area light;
+    /// default: each light's `samples` key (16 without it).
+    #[arg(long, value_name = "S")]
+    pub area_samples: Option<u32>,
+    /// Soft shadows of area lights: S sampled sub-lights (converges) or PCSS for rectangles
+    /// (one shadow view each; spheres stay sampled).
+    #[arg(long, value_enum, default_value_t = crate::light::AreaShadow::Sampled)]
+    pub area_shadows: crate::light::AreaShadow,
     /// Voxelize the scene into a grid of at most N×N columns: static geometry once, dynamic
     /// objects in the frames they move (`profile` then shows those voxel passes).
     #[arg(long, value_name = "N")]
@@ -244,6 +252,10 @@ impl FrameArgs {
         s.shadow.resolution = self.shadow_resolution;
         s.shadow.pcf_radius = self.pcf_radius;
         s.shadow.point_technique = self.point_shadows;
+        s.shadow.area_technique = self.area_shadows;
+        if let Some(n) = self.area_samples {
+            s.shadow.area_samples = Some(crate::limits::AREA_SAMPLES.check_flag(n)?);
+        }
         let default_res = crate::voxel::gpu::VoxelSettings::default().max_res_xy;
         s.gi = self.gi.settings(scene);
         // GI and the voxel debug views voxelize without --voxels, honouring --voxelizer,

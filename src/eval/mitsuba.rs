@@ -268,8 +268,72 @@ fn write_lights(xml: &mut String, scene: &Scene, report: &mut ExportReport) {
                 );
                 xml.push_str("    </emitter>\n\n");
             }
+            Light::Sphere {
+                position,
+                radius_m,
+                radiance_w_sr_m2,
+                ..
+            } => {
+                xml.push_str("    <shape type=\"sphere\">\n");
+                let _ = writeln!(
+                    xml,
+                    "        <point name=\"center\" value=\"{}\"/>\n        <float \
+                     name=\"radius\" value=\"{radius_m}\"/>",
+                    vec3(position)
+                );
+                write_area_emitter(xml, radiance_w_sr_m2);
+            }
+            Light::Rectangle {
+                position,
+                normal,
+                width_axis,
+                width_m,
+                height_m,
+                radiance_w_sr_m2,
+                ..
+            } => {
+                // Mitsuba's rectangle spans [-1, 1]² in z = 0 and emits along +z: the columns
+                // of to_world are the half edges and the normal, then the centre.
+                let cols = [
+                    width_axis * (0.5 * width_m),
+                    normal.cross(width_axis) * (0.5 * height_m),
+                    normal,
+                    position,
+                ];
+                let rows: Vec<String> = (0..3)
+                    .map(|r| {
+                        let row: Vec<String> = cols.iter().map(|c| c[r].to_string()).collect();
+                        row.join(" ")
+                    })
+                    .collect();
+                xml.push_str("    <shape type=\"rectangle\">\n");
+                let _ = writeln!(
+                    xml,
+                    "        <transform name=\"to_world\">\n            <matrix value=\"{} \
+                     0 0 0 1\"/>\n        </transform>",
+                    rows.join(" ")
+                );
+                write_area_emitter(xml, radiance_w_sr_m2);
+            }
+            Light::Element { .. } => report.warnings.push(
+                "an area-light sample has no Mitsuba equivalent and was left out; export the \
+                 area light itself"
+                    .to_owned(),
+            ),
         }
     }
+}
+
+/// The end of an area light's shape: its emitter, and a black BSDF, since voxgi's lights are
+/// not surfaces that reflect light.
+fn write_area_emitter(xml: &mut String, radiance: Vec3) {
+    let _ = writeln!(
+        xml,
+        "        <emitter type=\"area\">\n            <rgb name=\"radiance\" value=\"{}\"/>\n        \
+         </emitter>\n        <bsdf type=\"diffuse\">\n            <rgb name=\"reflectance\" \
+         value=\"0, 0, 0\"/>\n        </bsdf>\n    </shape>\n",
+        vec3(radiance)
+    );
 }
 
 /// One world-space mesh piece: the vertices and triangles of one object submesh.

@@ -1,9 +1,12 @@
 //! Direct light: shadow-map views per light (spot: perspective map; point: six cube faces or
-//! two paraboloid hemispheres; directional: an orthographic map fitted to the scene), after
+//! two paraboloid hemispheres; directional: an orthographic map fitted to the scene; area
+//! lights: one paraboloid hemisphere per sample, `area`), after
 //! Dachsbacher 2014 (KIT lecture notes, "Echtzeit-Schattenverfahren", part 3).
 
+pub mod area;
 mod shadow;
 
 pub use shadow::{
-    shadow_views, LightShadows, PointShadow, ShadowProjection, ShadowSettings, ShadowView,
+    shadow_views, AreaShadow, LightShadows, PointShadow, ShadowProjection, ShadowSettings,
+    ShadowView,
 };

@@ -5,12 +5,14 @@
 
 use bytemuck::{Pod, Zeroable};
 
-pub const MAX_LIGHTS: usize = 16;
+pub const MAX_LIGHTS: usize = 64;
 pub const MAX_SHADOW_VIEWS: usize = 64;
 
 pub const LIGHT_POINT: u32 = 0;
 pub const LIGHT_SPOT: u32 = 1;
 pub const LIGHT_DIRECTIONAL: u32 = 2;
+/// A sample of an area light (`Light::Element`): I = intensity · max(cos θ, 0) from `direction`.
+pub const LIGHT_ELEMENT: u32 = 3;
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
@@ -18,7 +20,7 @@ pub struct GpuLight {
     pub position: [f32; 4],
     pub direction: [f32; 4],
     pub intensity: [f32; 4],
-    /// x cos(cutoff), y cutoff rad, z beam rad.
+    /// x cos(cutoff), y cutoff rad, z beam rad; w an area light's PCSS size (m, 0: none).
     pub spot: [f32; 4],
     /// x kind, y first shadow view, z shadow view count.
     pub info: [u32; 4],

@@ -27,7 +27,7 @@ pub use stereo::{eye_scene, pack as stereo_pack, render_stereo, StereoOutput, St
 
 use crate::eval::HdrImage;
 use crate::graph::{Access, GraphError, ImageHandle, RenderGraph};
-use crate::light::{shadow_views, PointShadow, ShadowSettings};
+use crate::light::{area::frame_lights, shadow_views, PointShadow, ShadowSettings};
 use crate::post::{ToneMap, TonemapPass};
 use crate::scene::{Light, Scene};
 use crate::vk::{
@@ -52,9 +52,9 @@ pub enum RenderError {
     Vk(#[from] VkError),
     #[error(transparent)]
     Graph(#[from] GraphError),
-    #[error("the scene has {0} lights; voxgi renders at most {MAX_LIGHTS}: remove some")]
+    #[error("the scene has {0} lights (each area light counts its samples); voxgi renders at most {MAX_LIGHTS}: remove some or lower --area-samples / the lights' `samples`")]
     TooManyLights(usize),
-    #[error("the scene's lights need {0} shadow-map views; at most {MAX_SHADOW_VIEWS} fit (a point light takes 6, or 2 with paraboloid shadows): remove some point lights or use --point-shadows paraboloid")]
+    #[error("the scene's lights need {0} shadow-map views; at most {MAX_SHADOW_VIEWS} fit (a point light takes 6, or 2 with paraboloid shadows, an area light 1 per sample): remove some point lights, use --point-shadows paraboloid or lower --area-samples / the lights' `samples`")]
     TooManyShadowViews(usize),
     /// A settings value out of its range ([`crate::limits`]), named by its flag.
     #[error(transparent)]
@@ -63,6 +63,8 @@ pub enum RenderError {
     EmptyScene,
     #[error("indirect light reads reflective light maps, which exist for cube shadow maps only: use --point-shadows cube with --gi")]
     GiNeedsCubeShadows,
+    #[error("area lights are shadowed by paraboloid views, which have no reflective light maps, so --gi {0} cannot see their light: use --gi pathtrace, or --gi hemisphere --gi-radiance volume")]
+    AreaLightsNeedNoLightMaps(&'static str),
     #[error("--sao darkens only indirect light, and --gi none has none: choose a --gi method (hemisphere, pathtrace, vpl) or leave out --sao")]
     SaoWithoutGi,
     #[error(transparent)]
@@ -184,8 +186,9 @@ impl Renderer {
     ) -> Result<Self, RenderError> {
         check_render_settings(&settings)?;
         check_device_limits(&settings, ctx.info.max_image_dimension_2d)?;
-        if scene.lights.len() > MAX_LIGHTS {
-            return Err(RenderError::TooManyLights(scene.lights.len()));
+        let lights = frame_lights(&scene.lights, &settings.shadow).len();
+        if lights > MAX_LIGHTS {
+            return Err(RenderError::TooManyLights(lights));
         }
         if scene.objects.is_empty() {
             return Err(RenderError::EmptyScene);
@@ -212,6 +215,16 @@ impl Renderer {
             && scene.has_point_lights()
         {
             return Err(RenderError::GiNeedsCubeShadows);
+        }
+        if gi_on && scene.lights.iter().any(Light::is_area) {
+            use crate::gi::{GiMethod, RadianceSource};
+            match (settings.gi.method, settings.gi.radiance_source) {
+                (GiMethod::Vpl, _) => return Err(RenderError::AreaLightsNeedNoLightMaps("vpl")),
+                (GiMethod::Hemisphere, RadianceSource::Maps) => {
+                    return Err(RenderError::AreaLightsNeedNoLightMaps("hemisphere"))
+                }
+                _ => {}
+            }
         }
         if !gi_on && settings.gi.sao.is_some() {
             return Err(RenderError::SaoWithoutGi);
@@ -240,11 +253,12 @@ impl Renderer {
         let scene_gpu = SceneGpu::new(ctx, scene, settings.time_s)?;
         // Paraboloid maps write their depth per fragment, which costs the other maps their
         // early depth test: only scenes that have them pay for it.
-        let paraboloid = settings.shadow.point_technique == PointShadow::DualParaboloid
+        let paraboloid = (settings.shadow.point_technique == PointShadow::DualParaboloid
             && scene
                 .lights
                 .iter()
-                .any(|l| matches!(l, Light::Point { .. }));
+                .any(|l| matches!(l, Light::Point { .. })))
+            || scene.lights.iter().any(Light::is_area);
         let sampler = ctx.create_sampler(vk::Filter::NEAREST, false)?;
         let shadow_depth = ShadowDepthPass::new(ctx, paraboloid, scene.has_transparency())?;
         let features = GbufferFeatures {
@@ -381,6 +395,7 @@ impl Renderer {
     pub fn prepare(&mut self, scene: &Scene) -> Result<(), RenderError> {
         let s = self.settings.clone();
         let (views, per_light) = shadow_views(scene, s.time_s, &s.shadow);
+        let lights = frame_lights(&scene.lights, &s.shadow);
         if views.len() > MAX_SHADOW_VIEWS {
             return Err(RenderError::TooManyShadowViews(views.len()));
         }
@@ -390,19 +405,14 @@ impl Renderer {
         f.view_proj = view_proj.to_cols_array();
         f.inv_view_proj = camera_relative_inverse(&scene.camera, aspect).to_cols_array();
         f.camera_position = scene.camera.position.extend(1.0).to_array();
-        f.counts = [
-            scene.lights.len() as u32,
-            views.len() as u32,
-            s.width,
-            s.height,
-        ];
+        f.counts = [lights.len() as u32, views.len() as u32, s.width, s.height];
         f.shadow = [
             s.shadow.bias_texels,
             s.shadow.slope_bias_texels,
             s.shadow.normal_offset_texels,
             s.shadow.pcf_radius as f32,
         ];
-        for (i, light) in scene.lights.iter().enumerate() {
+        for (i, light) in lights.iter().enumerate() {
             f.lights[i] = gpu_light(light, per_light[i].first, per_light[i].count);
         }
         for (i, v) in views.iter().enumerate() {
@@ -663,6 +673,21 @@ fn gpu_light(light: &Light, first_view: u32, views: u32) -> GpuLight {
             info: [LIGHT_DIRECTIONAL, first_view, views, 0],
             ..Default::default()
         },
+        Light::Element {
+            position,
+            normal,
+            intensity_w_sr,
+            pcss_size_m,
+        } => GpuLight {
+            position: v4(position),
+            direction: v4(normal),
+            intensity: v4(intensity_w_sr),
+            spot: [0.0, 0.0, 0.0, pcss_size_m],
+            info: [LIGHT_ELEMENT, first_view, views, 0],
+        },
+        Light::Sphere { .. } | Light::Rectangle { .. } => {
+            unreachable!("prepare renders area lights as their samples (sample_lights)")
+        }
     }
 }
 

@@ -15,6 +15,9 @@ pub fn check_render_settings(s: &RenderSettings) -> Result<(), LimitError> {
     EXPOSURE.check_flag(s.tonemap.exposure)?;
     SHADOW_RESOLUTION.check_flag(s.shadow.resolution)?;
     PCF_RADIUS.check_flag(s.shadow.pcf_radius)?;
+    if let Some(n) = s.shadow.area_samples {
+        AREA_SAMPLES.check_flag(n)?;
+    }
     if let Some(v) = &s.voxels {
         VOXELS.check_flag(v.max_res_xy)?;
         VOXEL_LAYERS.check_flag(v.layers)?;

@@ -63,11 +63,8 @@ fn try_builtin(name: &str) -> Option<Result<Scene, SceneError>> {
             d.lights = vec![LightDesc {
                 kind: LightKind::Point,
                 position: Some([0.278, 0.5, 0.2796]),
-                direction: None,
                 intensity_w_sr: Some(ScalarOrVec3::Vec3([1.0, 1.0, 1.0])),
-                irradiance_w_m2: None,
-                cutoff_deg: None,
-                beam_deg: None,
+                ..Default::default()
             }];
         },
         _ => return None,

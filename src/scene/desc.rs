@@ -81,15 +81,18 @@ pub(crate) struct CameraDesc {
     pub far: Option<f32>,
 }
 
-#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq, Eq)]
 #[serde(rename_all = "lowercase")]
 pub(crate) enum LightKind {
+    #[default]
     Point,
     Spot,
     Directional,
+    Sphere,
+    Rectangle,
 }
 
-#[derive(Clone, Debug, Deserialize)]
+#[derive(Clone, Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct LightDesc {
     pub kind: LightKind,
@@ -99,6 +102,16 @@ pub(crate) struct LightDesc {
     pub irradiance_w_m2: Option<ScalarOrVec3>,
     pub cutoff_deg: Option<f32>,
     pub beam_deg: Option<f32>,
+    /// Area lights (`sphere`, `rectangle`): emitted radiance, W/(m²·sr).
+    pub radiance_w_sr_m2: Option<ScalarOrVec3>,
+    pub radius_m: Option<f32>,
+    /// Rectangle: the emitting side, and the direction of its width edges.
+    pub normal: Option<[f32; 3]>,
+    pub width_axis: Option<[f32; 3]>,
+    pub width_m: Option<f32>,
+    pub height_m: Option<f32>,
+    /// Sub-lights an area light is rendered with (`limits::AREA_SAMPLES`).
+    pub samples: Option<i64>,
 }
 
 #[derive(Clone, Debug, Deserialize)]
@@ -568,6 +581,7 @@ fn build_light(ck: &Check<'_>, field: &str, l: &LightDesc) -> Result<Light, Scen
         LightKind::Point => "point",
         LightKind::Spot => "spot",
         LightKind::Directional => "directional",
+        LightKind::Sphere | LightKind::Rectangle => return build_area_light(ck, field, l),
     };
     let require = |name: &str, present: bool, example: &str| {
         if present {
@@ -601,6 +615,10 @@ fn build_light(ck: &Check<'_>, field: &str, l: &LightDesc) -> Result<Light, Scen
             forbid("position", l.position.is_some())?;
             forbid("intensity_w_sr", l.intensity_w_sr.is_some())?;
         }
+        LightKind::Sphere | LightKind::Rectangle => unreachable!("handled above"),
+    }
+    for (name, present) in area_keys(l) {
+        forbid(name, present)?;
     }
     if l.kind != LightKind::Spot {
         forbid("cutoff_deg", l.cutoff_deg.is_some())?;
@@ -663,6 +681,144 @@ fn build_light(ck: &Check<'_>, field: &str, l: &LightDesc) -> Result<Light, Scen
             direction: direction.ok_or_else(|| missing("direction"))?,
             irradiance_w_m2: irradiance.ok_or_else(|| missing("irradiance_w_m2"))?,
         },
+        LightKind::Sphere | LightKind::Rectangle => unreachable!("handled above"),
+    })
+}
+
+/// The keys only area lights take, and whether `l` has each.
+fn area_keys(l: &LightDesc) -> [(&'static str, bool); 7] {
+    [
+        ("radiance_w_sr_m2", l.radiance_w_sr_m2.is_some()),
+        ("radius_m", l.radius_m.is_some()),
+        ("normal", l.normal.is_some()),
+        ("width_axis", l.width_axis.is_some()),
+        ("width_m", l.width_m.is_some()),
+        ("height_m", l.height_m.is_some()),
+        ("samples", l.samples.is_some()),
+    ]
+}
+
+/// Sub-lights of an area light without a `samples` key.
+pub const DEFAULT_AREA_SAMPLES: u32 = 16;
+
+/// A `sphere` or `rectangle` light: position, radiance (finite, >= 0), sizes (finite, > 0)
+/// and, for rectangles, a normal and the width edges' direction (default: the world axis
+/// `cross(up, normal)` with up = +Y, or +Z when the normal is vertical).
+fn build_area_light(ck: &Check<'_>, field: &str, l: &LightDesc) -> Result<Light, SceneError> {
+    let f = |name: &str| format!("{field}.{name}");
+    let sphere = l.kind == LightKind::Sphere;
+    let kind_name = if sphere { "sphere" } else { "rectangle" };
+    let example = |name: &str| match name {
+        "position" => "[0, 1, 0]",
+        "radiance_w_sr_m2" => "[10, 10, 10]",
+        "normal" => "[0, -1, 0]",
+        _ => "0.25",
+    };
+    let needs = |name: &str, present: bool| {
+        if present {
+            Ok(())
+        } else {
+            Err(ck.invalid(
+                &f(name),
+                format!(
+                    "a {kind_name} light needs `{name}`; add e.g. `{name} = {}`",
+                    example(name)
+                ),
+            ))
+        }
+    };
+    let forbid = |name: &str, present: bool| {
+        if present {
+            Err(ck.invalid(
+                &f(name),
+                format!("`{name}` does not apply to a {kind_name} light; remove it"),
+            ))
+        } else {
+            Ok(())
+        }
+    };
+    forbid("direction", l.direction.is_some())?;
+    forbid("intensity_w_sr", l.intensity_w_sr.is_some())?;
+    forbid("irradiance_w_m2", l.irradiance_w_m2.is_some())?;
+    forbid("cutoff_deg", l.cutoff_deg.is_some())?;
+    forbid("beam_deg", l.beam_deg.is_some())?;
+    needs("position", l.position.is_some())?;
+    needs("radiance_w_sr_m2", l.radiance_w_sr_m2.is_some())?;
+    if sphere {
+        needs("radius_m", l.radius_m.is_some())?;
+        for (name, present) in [
+            ("normal", l.normal.is_some()),
+            ("width_axis", l.width_axis.is_some()),
+            ("width_m", l.width_m.is_some()),
+            ("height_m", l.height_m.is_some()),
+        ] {
+            forbid(name, present)?;
+        }
+    } else {
+        forbid("radius_m", l.radius_m.is_some())?;
+        for (name, present) in [
+            ("normal", l.normal.is_some()),
+            ("width_m", l.width_m.is_some()),
+            ("height_m", l.height_m.is_some()),
+        ] {
+            needs(name, present)?;
+        }
+    }
+    let length = |name: &str, v: Option<f32>| -> Result<f32, SceneError> {
+        let v = ck.scalar(&f(name), v.unwrap_or(0.0))?;
+        if v > 0.0 {
+            Ok(v)
+        } else {
+            Err(ck.invalid(&f(name), format!("{v} is not a size; expected meters > 0")))
+        }
+    };
+    let position = ck.vec3(&f("position"), l.position.unwrap_or_default())?;
+    let radiance = ck.emission(
+        &f("radiance_w_sr_m2"),
+        l.radiance_w_sr_m2.unwrap_or(ScalarOrVec3::Scalar(0.0)),
+    )?;
+    let samples = match l.samples {
+        Some(v) => limits::AREA_SAMPLES
+            .check_as(&f("samples"), v)
+            .map_err(|e| ck.invalid(&f("samples"), limit_message(&e)))?,
+        None => DEFAULT_AREA_SAMPLES,
+    };
+    if sphere {
+        return Ok(Light::Sphere {
+            position,
+            radius_m: length("radius_m", l.radius_m)?,
+            radiance_w_sr_m2: radiance,
+            samples,
+        });
+    }
+    let normal = ck.direction(&f("normal"), l.normal.unwrap_or_default())?;
+    let axis = match l.width_axis {
+        Some(a) => ck.direction(&f("width_axis"), a)?,
+        None => {
+            let up = if normal.y.abs() > 0.99 {
+                Vec3::Z
+            } else {
+                Vec3::Y
+            };
+            up.cross(normal)
+        }
+    };
+    // The part of the axis in the rectangle's plane.
+    let width_axis = (axis - normal * axis.dot(normal)).normalize_or_zero();
+    if width_axis.length_squared() < 0.5 || axis.dot(normal).abs() > 0.999 {
+        return Err(ck.invalid(
+            &f("width_axis"),
+            "is parallel to `normal`; give a direction in the rectangle's plane",
+        ));
+    }
+    Ok(Light::Rectangle {
+        position,
+        normal,
+        width_axis,
+        width_m: length("width_m", l.width_m)?,
+        height_m: length("height_m", l.height_m)?,
+        radiance_w_sr_m2: radiance,
+        samples,
     })
 }
 

@@ -348,3 +348,118 @@ fn arbitrary_bytes_as_obj_mtl_or_scene_never_panic() {
         assert!(r.is_ok(), "case {case} panicked on {bytes:?}");
     }
 }
+
+/// A scene with one area light given by `light` (TOML lines after `kind`).
+fn area_scene(light: &str) -> String {
+    format!(
+        "[camera]\nposition = [0, 1, -3]\ntarget = [0, 0, 0]\nfov_y_deg = 40\n\
+         [[lights]]\n{light}\n[[objects]]\nbuiltin = \"quad\"\n"
+    )
+}
+
+#[test]
+fn area_lights_load_and_bad_values_name_the_file_and_key() {
+    let dir = Dir::new("area");
+    let load = |light: &str| Scene::load(dir.write("area.toml", area_scene(light)));
+    let s = load(
+        "kind = \"rectangle\"\nposition = [0, 2, 0]\nnormal = [0, -2, 0]\nwidth_m = 0.5\n\
+         height_m = 0.25\nradiance_w_sr_m2 = [1, 2, 3]",
+    )
+    .expect("rectangle");
+    let Light::Rectangle {
+        normal,
+        width_axis,
+        samples,
+        ..
+    } = s.lights[0]
+    else {
+        panic!("not a rectangle: {:?}", s.lights[0]);
+    };
+    assert_eq!(normal, glam::Vec3::NEG_Y);
+    assert!(width_axis.dot(normal).abs() < 1e-6 && (width_axis.length() - 1.0).abs() < 1e-6);
+    assert_eq!(samples, desc::DEFAULT_AREA_SAMPLES);
+    let s = load("kind = \"sphere\"\nposition = [0, 2, 0]\nradius_m = 0.1\nradiance_w_sr_m2 = 4\nsamples = 8")
+        .expect("sphere");
+    assert!(matches!(s.lights[0], Light::Sphere { radius_m, samples: 8, .. } if radius_m == 0.1));
+    // (light lines, key the error must name, words it must say)
+    let sphere = "kind = \"sphere\"\nposition = [0, 2, 0]\nradiance_w_sr_m2 = 1";
+    let rect =
+        "kind = \"rectangle\"\nposition = [0, 2, 0]\nnormal = [0, -1, 0]\nradiance_w_sr_m2 = 1";
+    let cases = [
+        (format!("{sphere}\nradius_m = 0"), "radius_m", "meters > 0"),
+        (format!("{sphere}\nradius_m = -1"), "radius_m", "meters > 0"),
+        (format!("{sphere}\nradius_m = nan"), "radius_m", "radius_m"),
+        (sphere.to_string(), "radius_m", "needs `radius_m`"),
+        (
+            format!("{sphere}\nradius_m = 1\nwidth_m = 1"),
+            "width_m",
+            "does not apply",
+        ),
+        (
+            format!("{sphere}\nradius_m = 1\nsamples = 0"),
+            "samples",
+            "[1, 64]",
+        ),
+        (
+            format!("{sphere}\nradius_m = 1\nsamples = 65"),
+            "samples",
+            "[1, 64]",
+        ),
+        (
+            format!("{rect}\nwidth_m = 1\nheight_m = 0"),
+            "height_m",
+            "meters > 0",
+        ),
+        (
+            format!("{rect}\nwidth_m = inf\nheight_m = 1"),
+            "width_m",
+            "width_m",
+        ),
+        (
+            format!("{rect}\nheight_m = 1"),
+            "width_m",
+            "needs `width_m`",
+        ),
+        (
+            format!("{rect}\nwidth_m = 1\nheight_m = 1\nwidth_axis = [0, 2, 0]"),
+            "width_axis",
+            "parallel",
+        ),
+        (
+            "kind = \"rectangle\"\nposition = [0, 2, 0]\nnormal = [0, 0, 0]\nwidth_m = 1\n\
+             height_m = 1\nradiance_w_sr_m2 = 1"
+                .to_owned(),
+            "normal",
+            "normal",
+        ),
+        (
+            "kind = \"sphere\"\nposition = [0, 2, 0]\nradius_m = 1\nradiance_w_sr_m2 = -1"
+                .to_owned(),
+            "radiance_w_sr_m2",
+            "negative",
+        ),
+        (
+            "kind = \"sphere\"\nposition = [0, 2, 0]\nradius_m = 1\nradiance_w_sr_m2 = [1, nan, 1]"
+                .to_owned(),
+            "radiance_w_sr_m2",
+            "radiance_w_sr_m2",
+        ),
+        (
+            format!("{sphere}\nradius_m = 1\nintensity_w_sr = 1"),
+            "intensity_w_sr",
+            "does not apply",
+        ),
+        (
+            "kind = \"point\"\nposition = [0, 2, 0]\nintensity_w_sr = 1\nradius_m = 1".to_owned(),
+            "radius_m",
+            "does not apply",
+        ),
+    ];
+    for (light, key, words) in cases {
+        let e = load(&light).expect_err(&light).to_string();
+        assert!(
+            e.contains("area.toml") && e.contains(key) && e.contains(words),
+            "{light}\n-> {e}"
+        );
+    }
+}

@@ -1,5 +1,6 @@
-//! Punctual lights. Units and spot falloff follow Mitsuba 3 (`point`, `spot`, `directional`
-//! emitters), so a scene exported to Mitsuba renders the same image.
+//! Lights. Units and spot falloff follow Mitsuba 3 (`point`, `spot`, `directional` emitters;
+//! `sphere` and `rectangle` shapes with `area` emitters), so a scene exported to Mitsuba renders
+//! the same image.
 
 use glam::Vec3;
 
@@ -30,6 +31,42 @@ pub enum Light {
         direction: Vec3,
         irradiance_w_m2: Vec3,
     },
+    /// Spherical area light: every point of the sphere emits `radiance_w_sr_m2` outward
+    /// (Mitsuba `sphere` shape with an `area` emitter). Not drawn by the camera.
+    Sphere {
+        position: Vec3,
+        radius_m: f32,
+        /// Emitted radiance L, W/(m²·sr), linear RGB.
+        radiance_w_sr_m2: Vec3,
+        /// Sub-lights it is rendered with (`crate::light::area`), unless `--area-samples`.
+        samples: u32,
+    },
+    /// One-sided rectangular area light emitting `radiance_w_sr_m2` along `normal` (Mitsuba
+    /// `rectangle` shape with an `area` emitter). Not drawn by the camera.
+    Rectangle {
+        position: Vec3,
+        /// Unit normal: the side that emits.
+        normal: Vec3,
+        /// Unit direction of the `width_m` edges, perpendicular to `normal`; the `height_m`
+        /// edges run along `normal × width_axis`.
+        width_axis: Vec3,
+        width_m: f32,
+        height_m: f32,
+        radiance_w_sr_m2: Vec3,
+        samples: u32,
+    },
+    /// One sample of an area light (made by `crate::light::area::sample_lights`, never by a
+    /// scene file): a surface element of area A at `position` emitting radiance L along its
+    /// `normal`, i.e. the intensity I(θ) = L·A·max(cos θ, 0) with θ measured from the normal.
+    Element {
+        position: Vec3,
+        normal: Vec3,
+        /// L·A, W/sr: the intensity along the normal.
+        intensity_w_sr: Vec3,
+        /// 0 for a sample of `--area-shadows sampled`; with `pcss`, the element stands for
+        /// the whole light and this is the light's size s (m) that sizes the penumbra.
+        pcss_size_m: f32,
+    },
 }
 
 impl Light {
@@ -42,14 +79,42 @@ impl Light {
     pub fn is_directional(&self) -> bool {
         matches!(self, Light::Directional { .. })
     }
+    /// A sphere or rectangle light (rendered as [`Light::Element`] samples).
+    pub fn is_area(&self) -> bool {
+        matches!(self, Light::Sphere { .. } | Light::Rectangle { .. })
+    }
 
     /// Position for point and spot lights.
     pub fn position(&self) -> Option<Vec3> {
         match self {
-            Light::Point { position, .. } | Light::Spot { position, .. } => Some(*position),
+            Light::Point { position, .. }
+            | Light::Spot { position, .. }
+            | Light::Sphere { position, .. }
+            | Light::Rectangle { position, .. }
+            | Light::Element { position, .. } => Some(*position),
             Light::Directional { .. } => None,
         }
     }
+}
+
+/// Multiplies every emitted quantity of `light` by `s` (the viewer's light sliders).
+pub fn scaled(light: &Light, s: f32) -> Light {
+    let mut l = *light;
+    match &mut l {
+        Light::Point { intensity_w_sr, .. }
+        | Light::Spot { intensity_w_sr, .. }
+        | Light::Element { intensity_w_sr, .. } => *intensity_w_sr *= s,
+        Light::Directional {
+            irradiance_w_m2, ..
+        } => *irradiance_w_m2 *= s,
+        Light::Sphere {
+            radiance_w_sr_m2, ..
+        }
+        | Light::Rectangle {
+            radiance_w_sr_m2, ..
+        } => *radiance_w_sr_m2 *= s,
+    }
+    l
 }
 
 /// Spot falloff of Mitsuba 3 (`src/emitters/spot.cpp`, `falloff_curve`): 1 inside the beam,

@@ -37,6 +37,20 @@
 //! direction = [-0.3, -1.0, 0.2]
 //! irradiance_w_m2 = [2.0, 2.0, 2.0] # W/m² on a surface facing the light
 //!
+//! [[lights]]                        # area lights: Mitsuba `rectangle` / `sphere` shapes with
+//! kind = "rectangle"                #   an `area` emitter; "rectangle" | "sphere"
+//! position = [0.0, 1.8, 0.3]        # the center
+//! radiance_w_sr_m2 = 12.0           # emitted radiance, W/(m²·sr), >= 0
+//! normal = [0.0, -1.0, 0.0]         # rectangle: the one side that emits
+//! width_m = 0.8                     # rectangle: > 0, along width_axis
+//! height_m = 0.4                    # rectangle: > 0, along normal × width_axis
+//! width_axis = [1.0, 0.0, 0.0]      # rectangle, optional: default +Y × normal (+Z × normal
+//!                                   #   for a vertical normal), projected into the plane
+//! # radius_m = 0.12                 # sphere: > 0, emits outward everywhere
+//! samples = 16                      # optional, default 16, in [1, 64]: sub-lights (one
+//!                                   #   shadow view each) it is rendered with; --area-samples
+//!                                   #   overrides it for every area light
+//!
 //! [[objects]]                       # at least one
 //! name = "bunny"                    # optional, for the UI and logs
 //! mesh = "../meshes/bunny.obj"      # an OBJ file (its MTL and textures beside it), or:
@@ -131,7 +145,7 @@ pub use cull::aabb_visible;
 pub use error::SceneError;
 pub use gi::{resolve_gi, GiOverrides};
 pub use gi_settings::{Bounces, GiMethod, GiSettings, RadianceSource, SaoSettings};
-pub use light::{spot_falloff, Light};
+pub use light::{scaled, spot_falloff, Light};
 pub use material::{
     fresnel_schlick, ggx_brdf, ggx_d, ggx_diffuse, ggx_g1, ggx_specular, BumpKind, Ggx, Material,
     PbrMaps, TextureData, DIELECTRIC_F0,

@@ -150,7 +150,7 @@ fn doc_example_follows_the_schema() {
         .join("\n");
     let d = desc::parse(&toml, Path::new("doc")).unwrap_or_else(|e| panic!("{e}\n{toml}"));
     assert_eq!(d.objects.len(), 2);
-    assert_eq!(d.lights.len(), 2);
+    assert_eq!(d.lights.len(), 3);
     assert!(d
         .gi
         .is_some_and(|g| g.method.as_deref() == Some("pathtrace")));
@@ -937,6 +937,30 @@ fn check_invariants(s: &Scene) {
                 assert!(direction.is_normalized() && beam_deg <= cutoff_deg);
             }
             Light::Directional { direction, .. } => assert!(direction.is_normalized()),
+            Light::Sphere {
+                position,
+                radius_m,
+                radiance_w_sr_m2,
+                samples,
+            } => {
+                assert!(position.is_finite() && radius_m > 0.0 && radius_m.is_finite());
+                assert!(radiance_w_sr_m2.is_finite() && radiance_w_sr_m2.min_element() >= 0.0);
+                assert!((1..=64).contains(&samples));
+            }
+            Light::Rectangle {
+                normal,
+                width_axis,
+                width_m,
+                height_m,
+                radiance_w_sr_m2,
+                ..
+            } => {
+                assert!(normal.is_normalized() && width_axis.is_normalized());
+                assert!(normal.dot(width_axis).abs() < 1e-3);
+                assert!(width_m > 0.0 && height_m > 0.0 && width_m.is_finite());
+                assert!(radiance_w_sr_m2.is_finite() && radiance_w_sr_m2.min_element() >= 0.0);
+            }
+            Light::Element { .. } => panic!("scene files never make area-light samples"),
         }
     }
     for o in &s.objects {
@@ -957,8 +981,14 @@ const LIGHT_KEYS: &[&str] = &[
     "irradiance_w_m2 = {}",
     "cutoff_deg = {}",
     "beam_deg = {}",
+    "radiance_w_sr_m2 = [{}, {}, {}]",
+    "radius_m = {}",
+    "normal = [{}, {}, {}]",
+    "width_m = {}",
+    "height_m = {}",
+    "samples = {}",
 ];
-const LIGHT_KINDS: &[&str] = &["point", "spot", "directional"];
+const LIGHT_KINDS: &[&str] = &["point", "spot", "directional", "sphere", "rectangle"];
 const OBJECT_KEYS: &[&str] = &[
     "translate = [{}, {}, {}]",
     "rotate_deg = [{}, {}, {}]",
@@ -995,7 +1025,7 @@ type Entity = (usize, Vec<bool>, Vec<usize>);
 fn entity() -> impl Strategy<Value = Entity> {
     (
         0..8usize,
-        prop::collection::vec(any::<bool>(), 6),
+        prop::collection::vec(any::<bool>(), LIGHT_KEYS.len()),
         prop::collection::vec(
             prop_oneof![
                 20 => 0..GOOD_NUMBERS.len(),
@@ -1027,13 +1057,15 @@ fn structured_scene(cam: &[usize], lights: &[Entity], objects: &[Entity]) -> Str
         cam_value(4, "100"),
     );
     for (kind, mask, nums) in lights {
-        let kind = kind % 3;
+        let kind = kind % LIGHT_KINDS.len();
         t.push_str(&format!("[[lights]]\nkind = \"{}\"\n", LIGHT_KINDS[kind]));
         // The keys each kind needs, plus (rarely) one it must not have.
         let needed: &[usize] = match kind {
             0 => &[0, 2],
             1 => &[0, 1, 2],
-            _ => &[1, 3],
+            2 => &[1, 3],
+            3 => &[0, 6, 7],
+            _ => &[0, 6, 8, 9, 10],
         };
         for (i, key) in LIGHT_KEYS.iter().enumerate() {
             let optional = kind == 1 && i >= 4 && mask[i];
