@@ -278,6 +278,10 @@ fn describe_gi(gi: &GiSettings) -> String {
             gi.filter_radius,
             gi.filter_passes
         ),
+        GiMethod::Ssgi => format!(
+            "ssgi, 1/{} resolution, {} samples, filter {}×{}",
+            gi.ssgi.resolution_divisor, gi.ssgi.samples, gi.filter_radius, gi.filter_passes
+        ),
     }
 }
 

@@ -94,11 +94,12 @@ pub struct PanelInfo<'a> {
     pub gi_frames: Option<u32>,
 }
 
-const GI_METHODS: [(GiMethod, &str); 4] = [
+const GI_METHODS: [(GiMethod, &str); 5] = [
     (GiMethod::None, "none"),
     (GiMethod::Hemisphere, "hemisphere"),
     (GiMethod::Pathtrace, "pathtrace"),
     (GiMethod::Vpl, "vpl"),
+    (GiMethod::Ssgi, "ssgi"),
 ];
 
 fn gi_method_name(m: GiMethod) -> &'static str {

@@ -32,13 +32,14 @@ impl GiMethodPasses for GiHemisphere {
             i.height,
         ));
         let push = shared.push;
+        let maps = i.light_maps();
         add_ray_pass(
             g,
             "gi_hemisphere",
             self.pipeline,
             i,
             shared,
-            &[(5, i.rlm_radiance), (6, i.rlm_position), (7, i.rlm_normal)],
+            &[(5, maps.radiance), (6, maps.position), (7, maps.normal)],
             (irradiance, Access::StorageWrite(Shader::Compute)),
             Some(i.materials),
             move || push,

@@ -14,9 +14,10 @@ mod gi_hemisphere;
 mod gi_pathtrace;
 mod gi_radiance_volume;
 mod sao;
+pub mod ssgi;
 pub mod vpl;
 
-pub use crate::scene::{Bounces, GiMethod, GiSettings, RadianceSource, SaoSettings};
+pub use crate::scene::{Bounces, GiMethod, GiSettings, RadianceSource, SaoSettings, SsgiSettings};
 pub use gi_common::GpuGiPush;
 pub use sao::GpuSaoPush;
 
@@ -43,10 +44,11 @@ pub struct GiInputs {
     pub normal: ImageHandle,
     pub depth: ImageHandle,
     pub direct: ImageHandle,
-    pub voxels: ImageHandle,
-    pub rlm_radiance: ImageHandle,
-    pub rlm_position: ImageHandle,
-    pub rlm_normal: ImageHandle,
+    /// The voxel grid, for the methods that trace rays in it ([`GiMethod::needs_voxels`]).
+    pub voxels: Option<ImageHandle>,
+    /// The reflective light maps, for the methods that read them (those that
+    /// [`GiMethod::needs_voxels`]).
+    pub light_maps: Option<crate::render::LightMaps>,
     pub shadow_map: ImageHandle,
     /// The G-buffer's specular image, present when the scene has Phong materials.
     pub specular: Option<ImageHandle>,
@@ -54,6 +56,22 @@ pub struct GiInputs {
     pub materials: BufferHandle,
     pub width: u32,
     pub height: u32,
+}
+
+impl GiInputs {
+    /// The voxel grid's image. Only methods that [`GiMethod::needs_voxels`] call this, and
+    /// `Renderer` voxelizes for exactly those, so a missing grid is a bug in the assembly.
+    pub fn voxel_image(&self) -> ImageHandle {
+        self.voxels
+            .expect("the renderer voxelizes for every GI method that needs_voxels")
+    }
+
+    /// The reflective light maps (radiance, position, normal); like [`Self::voxel_image`],
+    /// only for methods that [`GiMethod::needs_voxels`].
+    pub fn light_maps(&self) -> crate::render::LightMaps {
+        self.light_maps
+            .expect("the renderer renders light maps for every GI method that needs_voxels")
+    }
 }
 
 /// What the GI passes are built for.
@@ -131,6 +149,7 @@ impl GiPasses {
         let method: Box<dyn GiMethodPasses> = match settings.method {
             GiMethod::Pathtrace => Box::new(GiPathtrace::new(ctx, target)?),
             GiMethod::Vpl => Box::new(vpl::VplPasses::new(ctx, &settings, target)?),
+            GiMethod::Ssgi => Box::new(ssgi::Ssgi::new(ctx, settings.ssgi, target)?),
             GiMethod::Hemisphere if settings.radiance_source == RadianceSource::Volume => {
                 Box::new(GiRadianceVolume::new(ctx, target)?)
             }
@@ -210,7 +229,7 @@ impl GiPasses {
             GiMethod::Hemisphere => settings.radiance_source == RadianceSource::Volume,
             // Bounces after the first read albedo and normal at their voxel hits.
             GiMethod::Vpl => settings.vpl.bounces > 1,
-            GiMethod::None => false,
+            GiMethod::None | GiMethod::Ssgi => false,
         }
     }
 

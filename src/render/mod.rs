@@ -161,8 +161,9 @@ pub struct Renderer {
     shadow_view_count: u32,
     frame_data: GpuFrame,
     voxels: Option<crate::voxel::gpu::VoxelFrame>,
-    /// Indirect-light passes and the light-map pass, when a GI method is on.
-    gi: Option<(crate::gi::GiPasses, LightMapPass)>,
+    /// Indirect-light passes and the light-map pass (for the voxel methods), when a GI method
+    /// is on.
+    gi: Option<(crate::gi::GiPasses, Option<LightMapPass>)>,
     voxel_debug: Option<crate::voxel::debug_view::VoxelDebugPass>,
     atlas_view: Option<crate::voxel::atlas_view::AtlasViewPass>,
     gbuffer_view: Option<gbuffer_view::GbufferViewPass>,
@@ -239,7 +240,7 @@ impl Parts {
             shadow_view_count: 0,
             frame_data: GpuFrame::zeroed(),
             voxels: self.voxels,
-            gi: self.gi.zip(self.light_map),
+            gi: self.gi.map(|gi| (gi, self.light_map)),
             voxel_debug: self.voxel_debug,
             atlas_view: self.atlas_view,
             gbuffer_view: self.gbuffer_view,
@@ -339,7 +340,9 @@ impl Renderer {
         // A debug view replaces the lit image, so nothing would read the indirect light (and
         // the albedo view declares the attribute passes the GI methods would declare again).
         let gi_on = settings.gi.method != crate::gi::GiMethod::None && settings.debug.is_none();
-        if gi_on
+        // Screen-space GI reads only the frame: no voxels, no light maps.
+        let gi_voxels = gi_on && settings.gi.method.needs_voxels();
+        if gi_voxels
             && settings.shadow.point_technique == PointShadow::DualParaboloid
             && scene.has_point_lights()
         {
@@ -351,7 +354,7 @@ impl Renderer {
         let voxel_view_on = settings.debug.is_some_and(|d| d.view.shows_voxels());
         let voxel_settings = settings
             .voxels
-            .or(gi_on.then(Default::default))
+            .or(gi_voxels.then(Default::default))
             .or(voxel_view_on.then(Default::default));
         if let Some(v) = &voxel_settings {
             check_voxel_memory(ctx, scene, settings, v)?;
@@ -421,24 +424,43 @@ impl Renderer {
                 v,
             )?);
         }
-        if let (Some(v), true) = (&mut parts.voxels, gi_on) {
+        if gi_on {
             // With the atlas voxelizer its points write the volumes (Thiedemann 2010, §4.3.2).
-            let atlas_attributes = crate::gi::GiPasses::needs_attribute_volumes(&settings.gi)
-                && v.enable_attribute_volumes(ctx, scene)?;
+            let atlas_attributes = match &mut parts.voxels {
+                Some(v) => {
+                    crate::gi::GiPasses::needs_attribute_volumes(&settings.gi)
+                        && v.enable_attribute_volumes(ctx, scene)?
+                }
+                None => false,
+            };
+            // Screen-space GI has no voxels; its push constants still describe the grid the
+            // voxel methods would use (computed on the CPU, nothing allocated).
+            let cpu_grid;
+            let grid = match &parts.voxels {
+                Some(v) => &v.voxels.grid,
+                None => {
+                    cpu_grid = crate::voxel::gpu::VoxelSettings::default()
+                        .grid_for(scene, settings.time_s)
+                        .map_err(crate::voxel::gpu::GpuVoxelError::from)?;
+                    &cpu_grid
+                }
+            };
             parts.gi = Some(crate::gi::GiPasses::new(
                 ctx,
                 settings.gi,
                 &crate::gi::GiTarget {
                     scene,
                     time_s: settings.time_s,
-                    grid: &v.voxels.grid,
+                    grid,
                     shadow_resolution: settings.shadow.resolution,
                     size: (settings.width, settings.height),
                     has_phong,
                     atlas_attributes,
                 },
             )?);
-            parts.light_map = Some(LightMapPass::new(ctx, scene.has_transparency())?);
+            if gi_voxels {
+                parts.light_map = Some(LightMapPass::new(ctx, scene.has_transparency())?);
+            }
         }
         if let Some(d) = settings.debug.filter(|_| atlas_view_on) {
             let grid = settings
@@ -593,9 +615,11 @@ impl Renderer {
         let direct = self
             .deferred
             .declare(g, &scene, &gbuffer, shadow_map, (w, h));
-        let radiance = match (&self.gi, voxel_image) {
-            (Some((gi, light_map)), Some(voxels)) => {
-                let maps = light_map.declare(g, &scene, views, gi.settings.light_map_resolution);
+        let radiance = match &self.gi {
+            Some((gi, light_map)) if voxel_image.is_some() || light_map.is_none() => {
+                let maps = light_map
+                    .as_ref()
+                    .map(|lm| lm.declare(g, &scene, views, gi.settings.light_map_resolution));
                 gi.add_passes(
                     g,
                     &crate::gi::GiInputs {
@@ -604,10 +628,8 @@ impl Renderer {
                         normal: gbuffer.normal,
                         depth: gbuffer.depth,
                         direct,
-                        voxels,
-                        rlm_radiance: maps.radiance,
-                        rlm_position: maps.position,
-                        rlm_normal: maps.normal,
+                        voxels: voxel_image,
+                        light_maps: maps,
                         shadow_map,
                         specular: gbuffer.specular,
                         materials: scene.materials,
@@ -723,7 +745,9 @@ impl Renderer {
         }
         if let Some((gi, light_map)) = self.gi {
             gi.destroy(ctx);
-            light_map.destroy(ctx);
+            if let Some(lm) = light_map {
+                lm.destroy(ctx);
+            }
         }
         self.shadow_depth.destroy(ctx);
         self.gbuffer.destroy(ctx);

@@ -90,11 +90,12 @@ pub(crate) fn bounces_from_toml(v: &toml::Value) -> Result<Bounces, String> {
 }
 
 /// The names a scene file may give `method`, and their methods.
-pub(crate) const GI_METHOD_NAMES: [(&str, GiMethod); 4] = [
+pub(crate) const GI_METHOD_NAMES: [(&str, GiMethod); 5] = [
     ("none", GiMethod::None),
     ("hemisphere", GiMethod::Hemisphere),
     ("pathtrace", GiMethod::Pathtrace),
     ("vpl", GiMethod::Vpl),
+    ("ssgi", GiMethod::Ssgi),
 ];
 
 #[cfg(test)]

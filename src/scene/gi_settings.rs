@@ -17,6 +17,17 @@ pub enum GiMethod {
     /// Virtual point lights from the reflective light maps, B bounces, interleaved sampling
     /// with voxel visibility and the geometry-aware filter (Thiedemann 2010 Ch. 7).
     Vpl,
+    /// Screen-space diffuse gathering over a depth/normal/colour pyramid, unlimited bounces by
+    /// feedback over frames; no voxels (Oetke 2017 §2.3, §5.1–5.3).
+    Ssgi,
+}
+
+impl GiMethod {
+    /// Whether the method traces rays in the voxel grid (all but screen-space GI; `None`
+    /// has no passes at all).
+    pub fn needs_voxels(self) -> bool {
+        !matches!(self, GiMethod::None | GiMethod::Ssgi)
+    }
 }
 
 /// Parameters of the indirect-light passes (all exposed on the command line).
@@ -55,6 +66,38 @@ pub struct GiSettings {
     pub vpl: super::VplSettings,
     /// Modified SAO multiplied into the indirect light (`None`: no SAO passes).
     pub sao: Option<SaoSettings>,
+    /// The screen-space GI's parameters (`GiMethod::Ssgi`).
+    pub ssgi: SsgiSettings,
+}
+
+/// Screen-space GI (Oetke 2017 §5.1–5.3): the internal resolution, samples and pyramid.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SsgiSettings {
+    /// The GI resolution is the frame's divided by this power of two (1, 2, 4, 8): the finest
+    /// level gathered (thesis: about 960×500 at any output size, i.e. 2 at 1080p).
+    pub resolution_divisor: u32,
+    /// Samples per texel and level (thesis: 128; visible noise below 32–64).
+    pub samples: u32,
+    /// Nearest-child depth and normal mips instead of the voting filter (the thesis's fast
+    /// option).
+    pub fast_mips: bool,
+    /// Feed the previous frame's indirect light back into the lit colour (one more bounce per
+    /// frame, Oetke 2017 §2.3).
+    pub feedback: bool,
+    /// The clamp of the fed-back irradiance, W/m² (Oetke 2017 §5.1 clamps at 20).
+    pub feedback_max_w_m2: f32,
+}
+
+impl Default for SsgiSettings {
+    fn default() -> Self {
+        Self {
+            resolution_divisor: 2,
+            samples: 64,
+            fast_mips: false,
+            feedback: true,
+            feedback_max_w_m2: 20.0,
+        }
+    }
 }
 
 /// Scalable Ambient Obscurance as modified by Oetke 2017 §2.5 (after McGuire et al. 2012):
@@ -185,6 +228,7 @@ impl Default for GiSettings {
             radiance_source: RadianceSource::Maps,
             vpl: super::VplSettings::default(),
             sao: None,
+            ssgi: SsgiSettings::default(),
         }
     }
 }

@@ -125,7 +125,7 @@ pub use camera::{Camera, Eye, StereoRig};
 pub use cull::aabb_visible;
 pub use error::SceneError;
 pub use gi::{resolve_gi, GiOverrides};
-pub use gi_settings::{Bounces, GiMethod, GiSettings, RadianceSource, SaoSettings};
+pub use gi_settings::{Bounces, GiMethod, GiSettings, RadianceSource, SaoSettings, SsgiSettings};
 pub use light::{spot_falloff, Light};
 pub use material::{
     fresnel_schlick, ggx_brdf, ggx_d, ggx_diffuse, ggx_g1, ggx_specular, BumpKind, Ggx, Material,
