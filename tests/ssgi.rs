@@ -9,7 +9,7 @@ mod common;
 use glam::Vec3;
 use std::path::Path;
 use voxgi::eval::{compare, HdrImage};
-use voxgi::gi::{GiMethod, GiSettings, SsgiSettings};
+use voxgi::gi::{GiMethod, GiSettings, SsgiResolution, SsgiSettings};
 use voxgi::render::{render_image, RenderSettings};
 use voxgi::scene::Scene;
 
@@ -141,9 +141,14 @@ fn one_frame_in_the_sphere_matches_eq_2_12_integrated_on_the_cpu() {
     let scene = furnace_scene();
     let direct = window_mean(&render(&scene, FURNACE_SIZE, GiSettings::default()));
     let predicted = predicted_one_bounce();
-    for divisor in [1, 2, 4] {
+    for resolution in [
+        SsgiResolution::Full,
+        SsgiResolution::Half,
+        SsgiResolution::Quarter,
+    ] {
+        let divisor = resolution.divisor();
         let settings = SsgiSettings {
-            resolution_divisor: divisor,
+            resolution,
             ..Default::default()
         };
         let lit = window_mean(&render(&scene, FURNACE_SIZE, ssgi(1, settings)));
@@ -196,7 +201,7 @@ fn feedback_in_the_sphere_stays_below_the_furnace_value_and_converges() {
 fn cornell_beats_direct_light_against_mitsuba() {
     let scene = voxgi::scene::load_scene_arg(Some("cornell")).expect("scene");
     let reference =
-        HdrImage::load(&Path::new(ROOT).join("assets/references/cornell_gi.exr")).expect("exr");
+        HdrImage::load(Path::new(ROOT).join("assets/references/cornell_gi.exr")).expect("exr");
     let none = compare(
         &reference,
         &render(&scene, 256, GiSettings::default()),

@@ -280,7 +280,10 @@ fn describe_gi(gi: &GiSettings) -> String {
         ),
         GiMethod::Ssgi => format!(
             "ssgi, 1/{} resolution, {} samples, filter {}×{}",
-            gi.ssgi.resolution_divisor, gi.ssgi.samples, gi.filter_radius, gi.filter_passes
+            gi.ssgi.resolution.divisor(),
+            gi.ssgi.samples,
+            gi.filter_radius,
+            gi.filter_passes
         ),
     }
 }

@@ -587,6 +587,8 @@ fn gi_controls(ui: &mut egui::Ui, gi: &mut GiSettings, frames: Option<u32>) {
     }
     if gi.method == GiMethod::Vpl {
         vpl_controls(ui, gi);
+    } else if gi.method == GiMethod::Ssgi {
+        ssgi_controls(ui, gi);
     } else {
         ui.add(
             egui::Slider::new(&mut gi.rays, limits::GI_RAYS.slider(1, 256))
@@ -663,6 +665,33 @@ fn gi_controls(ui: &mut egui::Ui, gi: &mut GiSettings, frames: Option<u32>) {
             None => ui.label("accumulated frames: –"),
         };
     }
+}
+
+/// The screen-space GI's parameters (Oetke 2017 §5.1–5.3): resolution, samples, mips,
+/// feedback.
+fn ssgi_controls(ui: &mut egui::Ui, gi: &mut GiSettings) {
+    use crate::gi::SsgiResolution;
+    let s = &mut gi.ssgi;
+    egui::ComboBox::from_label("GI resolution")
+        .selected_text(format!("1/{}", s.resolution.divisor()))
+        .show_ui(ui, |ui| {
+            for (_, r) in SsgiResolution::NAMES {
+                ui.selectable_value(&mut s.resolution, r, format!("1/{}", r.divisor()));
+            }
+        });
+    ui.add(
+        egui::Slider::new(&mut s.samples, limits::SSGI_SAMPLES.slider(8, 256))
+            .logarithmic(true)
+            .text("samples / texel / level"),
+    );
+    let mut fast = s.mips == crate::gi::SsgiMips::Fast;
+    ui.checkbox(&mut fast, "fast (nearest) mips");
+    s.mips = if fast {
+        crate::gi::SsgiMips::Fast
+    } else {
+        crate::gi::SsgiMips::Voting
+    };
+    ui.checkbox(&mut s.feedback, "feedback bounces");
 }
 
 /// The VPL method's parameters (Thiedemann 2010, Ch. 7): VPLs per set, pattern, bounces,

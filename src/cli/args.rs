@@ -88,6 +88,24 @@ pub struct GiArgs {
     /// later ones cyan).
     #[arg(long)]
     pub vpl_show: bool,
+    /// `--gi ssgi`: the internal GI resolution, the frame's divided by 1, 2, 4 or 8 [default:
+    /// the scene's `[gi] ssgi_resolution`, else half].
+    #[arg(long, value_enum)]
+    pub ssgi_resolution: Option<crate::gi::SsgiResolution>,
+    /// `--gi ssgi`: samples per texel and pyramid level [default: the scene's `[gi]
+    /// ssgi_samples`, else 64].
+    #[arg(long, value_name = "N")]
+    pub ssgi_samples: Option<u32>,
+    /// `--gi ssgi`: how depth and normal mips pick a texel: the voting filter or the nearest
+    /// child (fast).
+    #[arg(long, value_enum, default_value_t = crate::gi::SsgiMips::Voting)]
+    pub ssgi_mips: crate::gi::SsgiMips,
+    /// `--gi ssgi`: no feedback of the previous frame's indirect light (one bounce only).
+    #[arg(long)]
+    pub ssgi_no_feedback: bool,
+    /// `--gi ssgi`: clamp of the fed-back irradiance in W/m².
+    #[arg(long, value_name = "E", default_value_t = crate::gi::SsgiSettings::default().feedback_max_w_m2)]
+    pub ssgi_feedback_max: f32,
     /// Modified SAO (Oetke 2017 §2.5) at half resolution, multiplied into the indirect light
     /// (needs a --gi method: direct light is not darkened).
     #[arg(long)]
@@ -130,6 +148,10 @@ impl GiArgs {
                 d_min_voxels: self.vpl_d_min,
                 visibility: self.vpl_visibility,
             },
+            ssgi: crate::scene::SsgiOverrides {
+                resolution: self.ssgi_resolution,
+                samples: self.ssgi_samples,
+            },
         }
     }
 
@@ -146,6 +168,12 @@ impl GiArgs {
                 shading: self.vpl_shading,
                 show: self.vpl_show,
                 ..s.vpl
+            },
+            ssgi: crate::gi::SsgiSettings {
+                mips: self.ssgi_mips,
+                feedback: !self.ssgi_no_feedback,
+                feedback_max_w_m2: self.ssgi_feedback_max,
+                ..s.ssgi
             },
             sao: self.sao.then_some(crate::gi::SaoSettings {
                 radius_m: self.sao_radius,
@@ -364,6 +392,10 @@ mod tests {
             "1.5",
             "--vpl-visibility",
             "none",
+            "--ssgi-resolution",
+            "quarter",
+            "--ssgi-samples",
+            "17",
         ]);
         assert_eq!(
             o,
@@ -384,6 +416,10 @@ mod tests {
                     bounces: Some(3),
                     d_min_voxels: Some(1.5),
                     visibility: Some(crate::gi::vpl::VplVisibility::None),
+                },
+                ssgi: crate::scene::SsgiOverrides {
+                    resolution: Some(crate::gi::SsgiResolution::Quarter),
+                    samples: Some(17),
                 },
             }
         );

@@ -144,7 +144,7 @@ pub fn add_ray_pass(
         .bind(0, i.frame, Access::StorageRead(c))
         .bind_sampled(1, i.normal, sampler, c)
         .bind_sampled(2, i.depth, sampler, c)
-        .bind_sampled(3, i.voxel_image(), sampler, c)
+        .bind_sampled(3, i.voxels, sampler, c)
         .bind(4, shared.lut, Access::StorageRead(c))
         .bind(8, out, out_access)
         .bind_sampled(9, specular, sampler, c)

@@ -32,14 +32,13 @@ impl GiMethodPasses for GiHemisphere {
             i.height,
         ));
         let push = shared.push;
-        let maps = i.light_maps();
         add_ray_pass(
             g,
             "gi_hemisphere",
             self.pipeline,
             i,
             shared,
-            &[(5, maps.radiance), (6, maps.position), (7, maps.normal)],
+            &[(5, i.rlm_radiance), (6, i.rlm_position), (7, i.rlm_normal)],
             (irradiance, Access::StorageWrite(Shader::Compute)),
             Some(i.materials),
             move || push,

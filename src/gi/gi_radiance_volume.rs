@@ -78,7 +78,7 @@ impl GiMethodPasses for GiRadianceVolume {
         g.add_pass("gi_radiance_volume")
             .pipeline(&pipe)
             .bind(0, i.frame, Access::StorageRead(c))
-            .bind_sampled(1, i.voxel_image(), sampler, c)
+            .bind_sampled(1, i.voxels, sampler, c)
             .bind_sampled(2, albedo, sampler, c)
             .bind_sampled(3, normal, sampler, c)
             .bind_sampled(4, i.shadow_map, sampler, c)

@@ -17,7 +17,10 @@ mod sao;
 pub mod ssgi;
 pub mod vpl;
 
-pub use crate::scene::{Bounces, GiMethod, GiSettings, RadianceSource, SaoSettings, SsgiSettings};
+pub use crate::scene::{
+    Bounces, GiMethod, GiSettings, RadianceSource, SaoSettings, SsgiMips, SsgiResolution,
+    SsgiSettings,
+};
 pub use gi_common::GpuGiPush;
 pub use sao::GpuSaoPush;
 
@@ -44,11 +47,13 @@ pub struct GiInputs {
     pub normal: ImageHandle,
     pub depth: ImageHandle,
     pub direct: ImageHandle,
-    /// The voxel grid, for the methods that trace rays in it ([`GiMethod::needs_voxels`]).
-    pub voxels: Option<ImageHandle>,
-    /// The reflective light maps, for the methods that read them (those that
-    /// [`GiMethod::needs_voxels`]).
-    pub light_maps: Option<crate::render::LightMaps>,
+    /// The voxel grid and the reflective light maps. Screen-space GI has neither and never
+    /// reads them: the renderer fills them with the depth and direct images, as the passes
+    /// fill a shader's unread bindings ([`GiMethod::needs_voxels`]).
+    pub voxels: ImageHandle,
+    pub rlm_radiance: ImageHandle,
+    pub rlm_position: ImageHandle,
+    pub rlm_normal: ImageHandle,
     pub shadow_map: ImageHandle,
     /// The G-buffer's specular image, present when the scene has Phong materials.
     pub specular: Option<ImageHandle>,
@@ -56,22 +61,6 @@ pub struct GiInputs {
     pub materials: BufferHandle,
     pub width: u32,
     pub height: u32,
-}
-
-impl GiInputs {
-    /// The voxel grid's image. Only methods that [`GiMethod::needs_voxels`] call this, and
-    /// `Renderer` voxelizes for exactly those, so a missing grid is a bug in the assembly.
-    pub fn voxel_image(&self) -> ImageHandle {
-        self.voxels
-            .expect("the renderer voxelizes for every GI method that needs_voxels")
-    }
-
-    /// The reflective light maps (radiance, position, normal); like [`Self::voxel_image`],
-    /// only for methods that [`GiMethod::needs_voxels`].
-    pub fn light_maps(&self) -> crate::render::LightMaps {
-        self.light_maps
-            .expect("the renderer renders light maps for every GI method that needs_voxels")
-    }
 }
 
 /// What the GI passes are built for.

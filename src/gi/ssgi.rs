@@ -7,7 +7,7 @@
 //!   depth, normal, and the lit colour (direct light with emission, plus the previous frame's
 //!   indirect light reprojected with the previous camera when feedback is on);
 //! - `ssgi_mip[k]`: level k from k − 1, colour by box average, position and normal by the
-//!   voting filter (or the nearest child, `fast_mips`);
+//!   voting filter (or the first non-sky child, `--ssgi-mips fast`);
 //! - `ssgi_gather[k]`, from the coarsest level down to the GI resolution (level
 //!   log2(divisor)): Eq. 2.12 with the patch area of Eq. 2.10 over each level's ring, plus the
 //!   coarser result joint-bilaterally upsampled;
@@ -20,7 +20,7 @@
 //! specular light of Phong and GGX pixels (the thesis feeds the diffuse part only).
 
 use super::gi_common::GiShared;
-use super::{GiInputs, GiMethodPasses, GiOutput, GiTarget, SsgiSettings};
+use super::{GiInputs, GiMethodPasses, GiOutput, GiTarget, SsgiMips, SsgiSettings};
 use crate::graph::{Access, BufferHandle, ImageHandle, RenderGraph, Shader};
 use crate::vk::{vk, Buffer, ComputePipeline, Context, Image, ImageDesc, PushLayout, VkError};
 use bytemuck::{Pod, Zeroable};
@@ -144,7 +144,7 @@ impl Ssgi {
                 make(
                     "ssgi_mip.comp",
                     None,
-                    &[(0, u32::from(!settings.fast_mips))],
+                    &[(0, u32::from(settings.mips == SsgiMips::Voting))],
                 )?,
                 make(
                     "ssgi_gather.comp",
@@ -373,7 +373,7 @@ impl Ssgi {
 impl GiMethodPasses for Ssgi {
     fn add_passes(&self, g: &mut RenderGraph, i: &GiInputs, shared: &GiShared) -> GiOutput {
         let c = Shader::Compute;
-        let (base, coarsest) = levels(i.width, i.height, self.settings.resolution_divisor);
+        let (base, coarsest) = levels(i.width, i.height, self.settings.resolution.divisor());
         let history = g.import_image(&self.history, Access::Sampled(c));
         let prev_camera = g.import_buffer(&self.prev_camera, Access::StorageRead(c));
         let levels = self.add_pyramid(g, i, shared, (history, prev_camera), coarsest);

@@ -617,9 +617,15 @@ impl Renderer {
             .declare(g, &scene, &gbuffer, shadow_map, (w, h));
         let radiance = match &self.gi {
             Some((gi, light_map)) if voxel_image.is_some() || light_map.is_none() => {
-                let maps = light_map
-                    .as_ref()
-                    .map(|lm| lm.declare(g, &scene, views, gi.settings.light_map_resolution));
+                // Screen-space GI reads neither voxels nor light maps (GiInputs::voxels).
+                let maps = match light_map {
+                    Some(lm) => lm.declare(g, &scene, views, gi.settings.light_map_resolution),
+                    None => LightMaps {
+                        radiance: direct,
+                        position: direct,
+                        normal: direct,
+                    },
+                };
                 gi.add_passes(
                     g,
                     &crate::gi::GiInputs {
@@ -628,8 +634,10 @@ impl Renderer {
                         normal: gbuffer.normal,
                         depth: gbuffer.depth,
                         direct,
-                        voxels: voxel_image,
-                        light_maps: maps,
+                        voxels: voxel_image.unwrap_or(gbuffer.depth),
+                        rlm_radiance: maps.radiance,
+                        rlm_position: maps.position,
+                        rlm_normal: maps.normal,
                         shadow_map,
                         specular: gbuffer.specular,
                         materials: scene.materials,

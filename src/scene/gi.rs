@@ -23,6 +23,8 @@ pub struct GiOverrides {
     pub accumulate_frames: Option<u32>,
     /// The VPL method's parameters.
     pub vpl: crate::scene::vpl_settings::VplOverrides,
+    /// The screen-space GI's parameters.
+    pub ssgi: super::gi_settings::SsgiOverrides,
 }
 
 impl GiOverrides {
@@ -45,6 +47,7 @@ impl GiOverrides {
             light_map_resolution: self.light_map_resolution.or(fallback.light_map_resolution),
             accumulate_frames: self.accumulate_frames.or(fallback.accumulate_frames),
             vpl: self.vpl.or(fallback.vpl),
+            ssgi: self.ssgi.or(fallback.ssgi),
         }
     }
 
@@ -66,6 +69,7 @@ impl GiOverrides {
                 .unwrap_or(base.light_map_resolution),
             accumulate_frames: self.accumulate_frames.unwrap_or(base.accumulate_frames),
             vpl: self.vpl.apply(base.vpl),
+            ssgi: self.ssgi.apply(base.ssgi),
             ..base
         }
     }
@@ -176,6 +180,10 @@ mod tests {
                 d_min_voxels: Some(0.5),
                 visibility: Some(crate::scene::vpl_settings::VplVisibility::None),
             },
+            ssgi: crate::scene::SsgiOverrides {
+                resolution: Some(crate::scene::SsgiResolution::Eighth),
+                samples: Some(5),
+            },
         };
         assert!(!all.is_empty() && GiOverrides::default().is_empty());
         assert_eq!(GiOverrides::default().or(all), all);
@@ -198,6 +206,10 @@ mod tests {
                 bounces: Some(s.vpl.bounces),
                 d_min_voxels: Some(s.vpl.d_min_voxels),
                 visibility: Some(s.vpl.visibility),
+            },
+            ssgi: crate::scene::SsgiOverrides {
+                resolution: Some(s.ssgi.resolution),
+                samples: Some(s.ssgi.samples),
             },
         };
         assert_eq!(back, all);

@@ -73,14 +73,13 @@ pub struct GiSettings {
 /// Screen-space GI (Oetke 2017 §5.1–5.3): the internal resolution, samples and pyramid.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SsgiSettings {
-    /// The GI resolution is the frame's divided by this power of two (1, 2, 4, 8): the finest
-    /// level gathered (thesis: about 960×500 at any output size, i.e. 2 at 1080p).
-    pub resolution_divisor: u32,
+    /// The GI resolution, the finest level gathered (thesis: about 960×500 at any output
+    /// size, i.e. half at 1080p).
+    pub resolution: SsgiResolution,
     /// Samples per texel and level (thesis: 128; visible noise below 32–64).
     pub samples: u32,
-    /// Nearest-child depth and normal mips instead of the voting filter (the thesis's fast
-    /// option).
-    pub fast_mips: bool,
+    /// How the depth and normal mips choose their texel.
+    pub mips: SsgiMips,
     /// Feed the previous frame's indirect light back into the lit colour (one more bounce per
     /// frame, Oetke 2017 §2.3).
     pub feedback: bool,
@@ -91,9 +90,9 @@ pub struct SsgiSettings {
 impl Default for SsgiSettings {
     fn default() -> Self {
         Self {
-            resolution_divisor: 2,
+            resolution: SsgiResolution::Half,
             samples: 64,
-            fast_mips: false,
+            mips: SsgiMips::Voting,
             feedback: true,
             feedback_max_w_m2: 20.0,
         }
@@ -131,6 +130,73 @@ impl Default for SaoSettings {
             contrast: 2.0,
             epsilon_m2: 0.01,
             view: false,
+        }
+    }
+}
+
+/// The screen-space GI's internal resolution: the frame's divided by a power of two.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+pub enum SsgiResolution {
+    Full,
+    #[default]
+    Half,
+    Quarter,
+    Eighth,
+}
+
+impl SsgiResolution {
+    /// The names a scene file's `ssgi_resolution` takes (those of the flag).
+    pub const NAMES: [(&'static str, SsgiResolution); 4] = [
+        ("full", SsgiResolution::Full),
+        ("half", SsgiResolution::Half),
+        ("quarter", SsgiResolution::Quarter),
+        ("eighth", SsgiResolution::Eighth),
+    ];
+
+    /// The frame's size over the GI resolution's.
+    pub fn divisor(self) -> u32 {
+        match self {
+            SsgiResolution::Full => 1,
+            SsgiResolution::Half => 2,
+            SsgiResolution::Quarter => 4,
+            SsgiResolution::Eighth => 8,
+        }
+    }
+}
+
+/// How the screen-space GI's depth and normal mips pick the texel of each 2×2 block.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+pub enum SsgiMips {
+    /// SHR10's voting filter as Oetke 2017 §5.3 approximates it (temporally stable).
+    #[default]
+    Voting,
+    /// The first non-sky child (the thesis's fast nearest-neighbour blit).
+    Fast,
+}
+
+/// Screen-space GI settings given by a scene's `[gi]` table or by flags; `None`: not given
+/// there (see [`crate::scene::resolve_gi`] for the precedence).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SsgiOverrides {
+    pub resolution: Option<SsgiResolution>,
+    pub samples: Option<u32>,
+}
+
+impl SsgiOverrides {
+    /// Field by field: `self`'s value where given, else `fallback`'s.
+    pub fn or(self, fallback: SsgiOverrides) -> SsgiOverrides {
+        SsgiOverrides {
+            resolution: self.resolution.or(fallback.resolution),
+            samples: self.samples.or(fallback.samples),
+        }
+    }
+
+    /// `base` with the given values replaced.
+    pub fn apply(&self, base: SsgiSettings) -> SsgiSettings {
+        SsgiSettings {
+            resolution: self.resolution.unwrap_or(base.resolution),
+            samples: self.samples.unwrap_or(base.samples),
+            ..base
         }
     }
 }

@@ -92,6 +92,9 @@
 //! vpl_bounces = 2                   # VPL bounces, 1..=8 [2]
 //! vpl_d_min_voxels = 8.0            # d_min of the VPL falloff, voxel diagonals >= 0 [8]
 //! vpl_visibility = "voxel"          # "voxel" (segment test) | "none" ["voxel"]
+//! ssgi_resolution = "half"          # screen-space GI resolution: "full" | "half" | "quarter"
+//!                                   #   | "eighth" ["half"]
+//! ssgi_samples = 64                 # screen-space GI samples per texel and level, 1..=1024 [64]
 //! ```
 //!
 //! A missing texture (or MTL file) is not an error: it is logged with `log::warn!` and the
@@ -125,7 +128,10 @@ pub use camera::{Camera, Eye, StereoRig};
 pub use cull::aabb_visible;
 pub use error::SceneError;
 pub use gi::{resolve_gi, GiOverrides};
-pub use gi_settings::{Bounces, GiMethod, GiSettings, RadianceSource, SaoSettings, SsgiSettings};
+pub use gi_settings::{
+    Bounces, GiMethod, GiSettings, RadianceSource, SaoSettings, SsgiMips, SsgiOverrides,
+    SsgiResolution, SsgiSettings,
+};
 pub use light::{spot_falloff, Light};
 pub use material::{
     fresnel_schlick, ggx_brdf, ggx_d, ggx_diffuse, ggx_g1, ggx_specular, BumpKind, Ggx, Material,

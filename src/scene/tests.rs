@@ -660,7 +660,8 @@ fn gi_table_parses_every_key() {
          radius_m = 1.5\nnormal_offset_voxels = 0.5\nray_offset_voxels = 2\n\
          filter_radius = 0\nfilter_passes = 1\nlight_map_resolution = 128\n\
          accumulate_frames = 64\nvpls = 4\nvpl_pattern = [2, 3]\nvpl_bounces = 1\n\
-         vpl_d_min_voxels = 2.5\nvpl_visibility = \"none\"\n"
+         vpl_d_min_voxels = 2.5\nvpl_visibility = \"none\"\nssgi_resolution = \"quarter\"\n\
+         ssgi_samples = 12\n"
     );
     let s = load_ok(&text, &[]);
     assert_eq!(
@@ -682,6 +683,10 @@ fn gi_table_parses_every_key() {
                 bounces: Some(1),
                 d_min_voxels: Some(2.5),
                 visibility: Some(crate::scene::vpl_settings::VplVisibility::None),
+            },
+            ssgi: crate::scene::SsgiOverrides {
+                resolution: Some(crate::scene::SsgiResolution::Quarter),
+                samples: Some(12),
             },
         }
     );
