@@ -15,6 +15,7 @@ mod gi_pathtrace;
 mod gi_radiance_volume;
 mod sao;
 pub mod ssgi;
+pub mod ssgi_brdf_lut;
 pub mod vpl;
 
 pub use crate::scene::{
@@ -169,7 +170,8 @@ impl GiPasses {
                 ctx,
                 target.has_phong,
                 (settings.sao.is_some(), settings.sao.is_some_and(|s| s.view)),
-                settings.method == GiMethod::Pathtrace && target.scene.has_ggx(),
+                matches!(settings.method, GiMethod::Pathtrace | GiMethod::Ssgi)
+                    && target.scene.has_ggx(),
             )?,
             accumulation: Accumulation::default(),
             lut: ctx.upload_buffer(

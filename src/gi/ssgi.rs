@@ -20,6 +20,7 @@
 //! specular light of Phong and GGX pixels (the thesis feeds the diffuse part only).
 
 use super::gi_common::GiShared;
+use super::ssgi_brdf_lut::BrdfLut;
 use super::{GiInputs, GiMethodPasses, GiOutput, GiTarget, SsgiMips, SsgiSettings};
 use crate::graph::{Access, BufferHandle, ImageHandle, RenderGraph, Shader};
 use crate::vk::{vk, Buffer, ComputePipeline, Context, Image, ImageDesc, PushLayout, VkError};
@@ -110,6 +111,8 @@ pub struct Ssgi {
     history: Image,
     /// The camera (`view_proj`) the history was seen with.
     prev_camera: Buffer,
+    /// The split-sum table (scenes with GGX materials).
+    brdf_lut: Option<BrdfLut>,
     fov_y_deg: f32,
 }
 
@@ -159,7 +162,10 @@ impl Ssgi {
                 make(
                     "ssgi_upsample.comp",
                     PushLayout::of::<GpuSsgiUpsamplePush>(),
-                    &[(0, u32::from(target.has_phong))],
+                    &[
+                        (0, u32::from(target.has_phong)),
+                        (1, u32::from(target.scene.has_ggx())),
+                    ],
                 )?,
             ))
         })();
@@ -175,8 +181,23 @@ impl Ssgi {
                 return Err(e);
             }
         };
-        let persistent = Self::create_history(ctx, target.size);
-        let (history, prev_camera) = match persistent {
+        let persistent = Self::create_history(ctx, target.size).and_then(|(h, c)| {
+            // The split-sum table, for scenes with GGX materials only.
+            match target
+                .scene
+                .has_ggx()
+                .then(|| BrdfLut::new(ctx))
+                .transpose()
+            {
+                Ok(lut) => Ok((h, c, lut)),
+                Err(e) => {
+                    ctx.destroy_image(h);
+                    ctx.destroy_buffer(c);
+                    Err(e)
+                }
+            }
+        });
+        let (history, prev_camera, brdf_lut) = match persistent {
             Ok(h) => h,
             Err(e) => {
                 release(ctx, made);
@@ -192,6 +213,7 @@ impl Ssgi {
             upsample,
             history,
             prev_camera,
+            brdf_lut,
             fov_y_deg: target.scene.camera.fov_y_deg,
         })
     }
@@ -388,6 +410,11 @@ impl GiMethodPasses for Ssgi {
         let s = shared.sampler;
         // Without Phong materials the shader never reads its specular binding; albedo fills it.
         let specular = i.specular.unwrap_or(i.albedo);
+        // Without GGX materials the shader never reads the table; albedo fills it.
+        let lut = self
+            .brdf_lut
+            .as_ref()
+            .map_or(i.albedo, |l| g.import_image(&l.image, Access::Sampled(c)));
         let pipe = self.upsample;
         let push = GpuSsgiUpsamplePush {
             scale: (1u32 << base) as f32,
@@ -406,6 +433,8 @@ impl GiMethodPasses for Ssgi {
             .bind(8, indirect, Access::StorageWrite(c))
             .bind(9, history, Access::StorageWrite(c))
             .bind(10, prev_camera, Access::StorageWrite(c))
+            .bind_sampled(11, i.normal, s, c)
+            .bind_sampled(12, lut, s, c)
             .record(move |ctx| {
                 ctx.bind(&pipe);
                 ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
@@ -426,6 +455,9 @@ impl GiMethodPasses for Ssgi {
         }
         ctx.destroy_image(self.history);
         ctx.destroy_buffer(self.prev_camera);
+        if let Some(l) = self.brdf_lut {
+            l.destroy(ctx);
+        }
     }
 }
 
