@@ -4,7 +4,9 @@
 // geometry (level 0 of the pyramid). Writes the indirect image gi_filter and gi_composite
 // read (irradiance; at Phong pixels the diffuse radiance ρ_d/π·E, which the composite adds as
 // stored), the history the next frame's feedback reprojects (irradiance and the pixel's clip
-// w), and this frame's camera as the next frame's previous camera.
+// w), and this frame's camera as the next frame's previous camera. The irradiance is blended
+// with the reprojected history, E = mix(E_new, E_history, τ·w) (Oetke 2017 §5.1: history
+// weight τ, w the depth agreement), which averages the spiral's per-frame noise.
 // GGX pixels (HAS_GGX) get their indirect radiance by Eq. 2.19 with the split-sum table:
 //   L = C·E·(1 − F0·A)/π + L_spec·(F0·A + B),
 // C the G-buffer's diffuse colour, A and B at (n·v, roughness). L_spec, the specular incoming
@@ -32,8 +34,11 @@ layout(set = 0, binding = 11) uniform sampler2D gb_normal;    // w: GGX roughnes
 layout(set = 0, binding = 12) uniform sampler2D brdf_lut;     // A, B; albedo when !HAS_GGX
 #include "gbuffer_lobe.glsl"
 
+layout(set = 0, binding = 13) uniform sampler2D reprojected;  // rgb history, a weight
+
 layout(push_constant) uniform Push {
-    float scale;   // frame pixels per GI texel
+    float scale;            // frame pixels per GI texel
+    float history_weight;   // τ
 } pc;
 
 void main() {
@@ -49,6 +54,8 @@ void main() {
     }
     vec3 n = texelFetch(fine_nrm, p, 0).xyz;
     vec3 e = ssgi_joint_bilateral(coarse_value, coarse_pos, coarse_nrm, p, pc.scale, n, pz.w);
+    vec4 previous = texelFetch(reprojected, p, 0);
+    e = mix(e, previous.rgb, pc.history_weight * previous.a);
     vec4 clip = frame.view_proj * vec4(pz.xyz, 1.0);
     imageStore(history, p, vec4(e, clip.w));
     bool phong = HAS_PHONG && any(greaterThan(gbuffer_phong_specular(gb_specular, p), vec3(0.0)));

@@ -305,6 +305,10 @@ pub const SSGI_FEEDBACK_MAX: Limit<f32> = Limit {
     )
 };
 
+/// `--gi ssgi`: τ of the temporal blend (below 1: the history must fade).
+pub const SSGI_HISTORY_WEIGHT: Limit<f32> =
+    Limit::new("--ssgi-history-weight", None, "a history weight", 0.0, 0.99);
+
 /// Stereo eye separation: 0 gives two identical eyes (allowed, a mono check); 1e3 m is beyond
 /// any scene scale voxgi renders in f32.
 pub const STEREO_SEPARATION_M: Limit<f32> = Limit::new(

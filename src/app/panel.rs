@@ -692,6 +692,13 @@ fn ssgi_controls(ui: &mut egui::Ui, gi: &mut GiSettings) {
         crate::gi::SsgiMips::Voting
     };
     ui.checkbox(&mut s.feedback, "feedback bounces");
+    ui.add(
+        egui::Slider::new(
+            &mut s.history_weight,
+            limits::SSGI_HISTORY_WEIGHT.slider(0.0, 0.99),
+        )
+        .text("history weight τ"),
+    );
 }
 
 /// The VPL method's parameters (Thiedemann 2010, Ch. 7): VPLs per set, pattern, bounces,

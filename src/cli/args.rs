@@ -106,6 +106,9 @@ pub struct GiArgs {
     /// `--gi ssgi`: clamp of the fed-back irradiance in W/m².
     #[arg(long, value_name = "E", default_value_t = crate::gi::SsgiSettings::default().feedback_max_w_m2)]
     pub ssgi_feedback_max: f32,
+    /// `--gi ssgi`: τ of the temporal blend with the reprojected history, 0 (off) to 0.99.
+    #[arg(long, value_name = "TAU", default_value_t = crate::gi::SsgiSettings::default().history_weight)]
+    pub ssgi_history_weight: f32,
     /// Modified SAO (Oetke 2017 §2.5) at half resolution, multiplied into the indirect light
     /// (needs a --gi method: direct light is not darkened).
     #[arg(long)]
@@ -173,6 +176,7 @@ impl GiArgs {
                 mips: self.ssgi_mips,
                 feedback: !self.ssgi_no_feedback,
                 feedback_max_w_m2: self.ssgi_feedback_max,
+                history_weight: self.ssgi_history_weight,
                 ..s.ssgi
             },
             sao: self.sao.then_some(crate::gi::SaoSettings {

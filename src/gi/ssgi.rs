@@ -11,7 +11,8 @@
 //! - `ssgi_gather[k]`, from the coarsest level down to the GI resolution (level
 //!   log2(divisor)): Eq. 2.12 with the patch area of Eq. 2.10 over each level's ring, plus the
 //!   coarser result joint-bilaterally upsampled;
-//! - `ssgi_upsample`: joint bilateral upsampling to the frame, the history for the next
+//! - `ssgi_upsample`: joint bilateral upsampling to the frame, blended with the history
+//!   `ssgi_input` reprojected (τ = `history_weight`), the history for the next
 //!   frame's feedback, and the camera it was seen with.
 //!
 //! The output is the indirect irradiance the shared `gi_filter` and `gi_composite` read (SAO
@@ -68,8 +69,12 @@ crate::push_constants!(GpuSsgiGatherPush {
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 struct GpuSsgiUpsamplePush {
     scale: f32,
+    history_weight: f32,
 }
-crate::push_constants!(GpuSsgiUpsamplePush { scale });
+crate::push_constants!(GpuSsgiUpsamplePush {
+    scale,
+    history_weight
+});
 
 /// The pyramid levels of a `width`×`height` frame: the GI resolution's level (log2 of the
 /// divisor, at most the coarsest) and the coarsest level, whose ring of R·2^k pixels covers
@@ -249,7 +254,8 @@ impl Ssgi {
         }
     }
 
-    /// Declares `ssgi_input` and the `ssgi_mip` levels up to `coarsest`.
+    /// Declares `ssgi_input` and the `ssgi_mip` levels up to `coarsest`; returns the levels
+    /// and the reprojected history (irradiance, weight) at the frame's size.
     fn add_pyramid(
         &self,
         g: &mut RenderGraph,
@@ -257,7 +263,7 @@ impl Ssgi {
         shared: &GiShared,
         (history, prev_camera): (ImageHandle, BufferHandle),
         coarsest: u32,
-    ) -> Vec<Level> {
+    ) -> (Vec<Level>, ImageHandle) {
         let c = Shader::Compute;
         let s = shared.sampler;
         let level_images = |g: &mut RenderGraph, k: u32| {
@@ -278,6 +284,12 @@ impl Ssgi {
             }
         };
         let l0 = level_images(g, 0);
+        let reprojected = g.create_image(ImageDesc::new_2d(
+            "ssgi reprojected history",
+            vk::Format::R32G32B32A32_SFLOAT,
+            i.width,
+            i.height,
+        ));
         let pipe = self.input;
         let push = GpuSsgiInputPush {
             feedback_max_w_m2: self.settings.feedback_max_w_m2,
@@ -295,6 +307,7 @@ impl Ssgi {
             .bind(7, l0.pos, Access::StorageWrite(c))
             .bind(8, l0.nrm, Access::StorageWrite(c))
             .bind(9, l0.color, Access::StorageWrite(c))
+            .bind(10, reprojected, Access::StorageWrite(c))
             .record(move |ctx| {
                 ctx.bind(&pipe);
                 ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
@@ -319,7 +332,7 @@ impl Ssgi {
                 });
             levels.push(next);
         }
-        levels
+        (levels, reprojected)
     }
 
     /// Declares `ssgi_gather[k]` from `coarsest` down to `base`; returns level `base`'s
@@ -398,7 +411,8 @@ impl GiMethodPasses for Ssgi {
         let (base, coarsest) = levels(i.width, i.height, self.settings.resolution.divisor());
         let history = g.import_image(&self.history, Access::Sampled(c));
         let prev_camera = g.import_buffer(&self.prev_camera, Access::StorageRead(c));
-        let levels = self.add_pyramid(g, i, shared, (history, prev_camera), coarsest);
+        let (levels, reprojected) =
+            self.add_pyramid(g, i, shared, (history, prev_camera), coarsest);
         let coarse = self.add_gathers(g, i, shared, &levels, (base, coarsest));
         let (lb, l0) = (levels[base as usize], levels[0]);
         let indirect = g.create_image(ImageDesc::new_2d(
@@ -418,6 +432,7 @@ impl GiMethodPasses for Ssgi {
         let pipe = self.upsample;
         let push = GpuSsgiUpsamplePush {
             scale: (1u32 << base) as f32,
+            history_weight: self.settings.history_weight,
         };
         let groups = (i.width.div_ceil(8), i.height.div_ceil(8));
         g.add_pass("ssgi_upsample")
@@ -435,6 +450,7 @@ impl GiMethodPasses for Ssgi {
             .bind(10, prev_camera, Access::StorageWrite(c))
             .bind_sampled(11, i.normal, s, c)
             .bind_sampled(12, lut, s, c)
+            .bind_sampled(13, reprojected, s, c)
             .record(move |ctx| {
                 ctx.bind(&pipe);
                 ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));

@@ -85,6 +85,9 @@ pub struct SsgiSettings {
     pub feedback: bool,
     /// The clamp of the fed-back irradiance, W/m² (Oetke 2017 §5.1 clamps at 20).
     pub feedback_max_w_m2: f32,
+    /// τ of the temporal blend E = mix(E_new, E_history, τ·w) (Oetke 2017 §5.1: 0.1–0.98,
+    /// 0.85–0.98 at high frame rates); 0 turns the accumulation off.
+    pub history_weight: f32,
 }
 
 impl Default for SsgiSettings {
@@ -95,6 +98,7 @@ impl Default for SsgiSettings {
             mips: SsgiMips::Voting,
             feedback: true,
             feedback_max_w_m2: 20.0,
+            history_weight: 0.9,
         }
     }
 }
