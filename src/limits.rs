@@ -335,6 +335,30 @@ pub const VPL_D_MIN: Limit<f32> = Limit::new(
     1e6,
 );
 
+/// `--gi ssgi`: samples per texel and pyramid level (Oetke 2017 §5.2: 8–256 in the GUI).
+pub const SSGI_SAMPLES: Limit<u32> = Limit::new(
+    "--ssgi-samples",
+    Some("gi.ssgi_samples"),
+    "screen-space GI samples per texel and level",
+    1,
+    1024,
+);
+/// `--gi ssgi`: the clamp of the fed-back irradiance (Oetke 2017 §5.1: 20).
+pub const SSGI_FEEDBACK_MAX: Limit<f32> = Limit {
+    min_exclusive: true,
+    ..Limit::new(
+        "--ssgi-feedback-max",
+        None,
+        "a fed-back irradiance clamp in W/m²",
+        0.0,
+        1e9,
+    )
+};
+
+/// `--gi ssgi`: τ of the temporal blend (below 1: the history must fade).
+pub const SSGI_HISTORY_WEIGHT: Limit<f32> =
+    Limit::new("--ssgi-history-weight", None, "a history weight", 0.0, 0.99);
+
 /// Stereo eye separation: 0 gives two identical eyes (allowed, a mono check); 1e3 m is beyond
 /// any scene scale voxgi renders in f32.
 pub const STEREO_SEPARATION_M: Limit<f32> = Limit::new(

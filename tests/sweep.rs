@@ -151,7 +151,7 @@ fn bad_sweep_input_is_refused_before_any_row() {
             &["--methods", "hemisphere", "--grid", "gi-rays=0"],
             "gi-rays=0",
         ),
-        (&["--methods", "ssgi"], "--methods ssgi"),
+        (&["--methods", "segi"], "--methods segi"),
     ] {
         let out = sweep(&dir, extra);
         let stderr = text(&out.stderr);

@@ -161,7 +161,7 @@ fn moving_camera_reprojects_the_previous_frame() {
         taa.begin_frame(vp1);
     }
     // Frame 2: the jittered camera 2 rendered the depth.
-    let vp2_jittered = taa.begin_frame(vp2);
+    let vp2_jittered = voxgi::post::taa::jittered(vp2, taa.begin_frame(vp2));
     let depth: Vec<f32> = (0..n)
         .map(|i| plane_hit(vp2_jittered, pixel_ndc(i as u32 % W, i as u32 / W)).1)
         .collect();

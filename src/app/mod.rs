@@ -278,6 +278,13 @@ fn describe_gi(gi: &GiSettings) -> String {
             gi.filter_radius,
             gi.filter_passes
         ),
+        GiMethod::Ssgi => format!(
+            "ssgi, 1/{} resolution, {} samples, filter {}×{}",
+            gi.ssgi.resolution.divisor(),
+            gi.ssgi.samples,
+            gi.filter_radius,
+            gi.filter_passes
+        ),
     }
 }
 

@@ -96,11 +96,12 @@ pub struct PanelInfo<'a> {
     pub gi_frames: Option<u32>,
 }
 
-const GI_METHODS: [(GiMethod, &str); 4] = [
+const GI_METHODS: [(GiMethod, &str); 5] = [
     (GiMethod::None, "none"),
     (GiMethod::Hemisphere, "hemisphere"),
     (GiMethod::Pathtrace, "pathtrace"),
     (GiMethod::Vpl, "vpl"),
+    (GiMethod::Ssgi, "ssgi"),
 ];
 
 fn gi_method_name(m: GiMethod) -> &'static str {
@@ -626,6 +627,8 @@ fn gi_controls(ui: &mut egui::Ui, gi: &mut GiSettings, frames: Option<u32>) {
     }
     if gi.method == GiMethod::Vpl {
         vpl_controls(ui, gi);
+    } else if gi.method == GiMethod::Ssgi {
+        ssgi_controls(ui, gi);
     } else {
         ui.add(
             egui::Slider::new(&mut gi.rays, limits::GI_RAYS.slider(1, 256))
@@ -702,6 +705,40 @@ fn gi_controls(ui: &mut egui::Ui, gi: &mut GiSettings, frames: Option<u32>) {
             None => ui.label("accumulated frames: –"),
         };
     }
+}
+
+/// The screen-space GI's parameters (Oetke 2017 §5.1–5.3): resolution, samples, mips,
+/// feedback.
+fn ssgi_controls(ui: &mut egui::Ui, gi: &mut GiSettings) {
+    use crate::gi::SsgiResolution;
+    let s = &mut gi.ssgi;
+    egui::ComboBox::from_label("GI resolution")
+        .selected_text(format!("1/{}", s.resolution.divisor()))
+        .show_ui(ui, |ui| {
+            for (_, r) in SsgiResolution::NAMES {
+                ui.selectable_value(&mut s.resolution, r, format!("1/{}", r.divisor()));
+            }
+        });
+    ui.add(
+        egui::Slider::new(&mut s.samples, limits::SSGI_SAMPLES.slider(8, 256))
+            .logarithmic(true)
+            .text("samples / texel / level"),
+    );
+    let mut fast = s.mips == crate::gi::SsgiMips::Fast;
+    ui.checkbox(&mut fast, "fast (nearest) mips");
+    s.mips = if fast {
+        crate::gi::SsgiMips::Fast
+    } else {
+        crate::gi::SsgiMips::Voting
+    };
+    ui.checkbox(&mut s.feedback, "feedback bounces");
+    ui.add(
+        egui::Slider::new(
+            &mut s.history_weight,
+            limits::SSGI_HISTORY_WEIGHT.slider(0.0, 0.99),
+        )
+        .text("history weight τ"),
+    );
 }
 
 /// The VPL method's parameters (Thiedemann 2010, Ch. 7): VPLs per set, pattern, bounces,

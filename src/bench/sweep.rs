@@ -73,14 +73,14 @@ pub const GRID_KEYS: &[(&str, &[GiMethod])] = &[
     ("gi-radius", RAY_METHODS),
     ("gi-normal-offset", GI_METHODS),
     ("gi-ray-offset", GI_METHODS),
-    ("gi-filter-radius", GI_METHODS),
-    ("gi-filter-passes", GI_METHODS),
+    ("gi-filter-radius", FILTERED),
+    ("gi-filter-passes", FILTERED),
     ("gi-start-level", GI_METHODS),
     ("gi-max-iterations", GI_METHODS),
     ("light-map-resolution", GI_METHODS),
     ("gi-radiance", &[GiMethod::Hemisphere]),
     ("gi-bounces", &[GiMethod::Pathtrace]),
-    ("gi-frames", &[GiMethod::Pathtrace]),
+    ("gi-frames", &[GiMethod::Pathtrace, GiMethod::Ssgi]),
     ("vpls", VPL),
     ("vpl-pattern", VPL),
     ("vpl-d-min", VPL),
@@ -89,11 +89,22 @@ pub const GRID_KEYS: &[(&str, &[GiMethod])] = &[
     ("vpl-normalize", VPL),
     ("vpl-spot-sampling", VPL),
     ("vpl-shading", VPL),
+    ("ssgi-resolution", SSGI),
+    ("ssgi-samples", SSGI),
+    ("ssgi-mips", SSGI),
 ];
 
 const GI_METHODS: &[GiMethod] = &[GiMethod::Hemisphere, GiMethod::Pathtrace, GiMethod::Vpl];
 const RAY_METHODS: &[GiMethod] = &[GiMethod::Hemisphere, GiMethod::Pathtrace];
 const VPL: &[GiMethod] = &[GiMethod::Vpl];
+const SSGI: &[GiMethod] = &[GiMethod::Ssgi];
+/// The methods whose output the shared geometry-aware filter smooths.
+const FILTERED: &[GiMethod] = &[
+    GiMethod::Hemisphere,
+    GiMethod::Pathtrace,
+    GiMethod::Vpl,
+    GiMethod::Ssgi,
+];
 
 /// One `--grid KEY=V1,V2,…`: a GI flag and the values it takes.
 #[derive(Clone, Debug, PartialEq)]
@@ -531,6 +542,15 @@ pub fn gi_table(s: &GiSettings) -> toml::Table {
     t.insert("vpl_visibility".into(), Value::String(visibility));
     t.insert("vpl_normalize".into(), value_name(s.vpl.normalize));
     t.insert("vpl_spot_sampling".into(), value_name(s.vpl.spot_sampling));
+    let name = |r: crate::gi::SsgiResolution| {
+        r.to_possible_value()
+            .map_or_else(String::new, |v| v.get_name().to_owned())
+    };
+    t.insert(
+        "ssgi_resolution".into(),
+        Value::String(name(s.ssgi.resolution)),
+    );
+    t.insert("ssgi_samples".into(), int(s.ssgi.samples));
     t
 }
 
@@ -769,8 +789,8 @@ mod tests {
             assert!(e.contains(spec) && e.contains(says), "{spec}: {e}");
         }
         assert!(parse_methods("vpl,none,vpl").is_ok_and(|m| m.len() == 2));
-        let e = parse_methods("none,ssgi").expect_err("unknown").to_string();
-        assert!(e.contains("ssgi"), "{e}");
+        let e = parse_methods("none,segi").expect_err("unknown").to_string();
+        assert!(e.contains("segi"), "{e}");
     }
 
     #[test]

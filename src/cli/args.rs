@@ -98,6 +98,27 @@ pub struct GiArgs {
     /// later ones cyan).
     #[arg(long)]
     pub vpl_show: bool,
+    /// `--gi ssgi`: the internal GI resolution, the frame's divided by 1, 2, 4 or 8 [default:
+    /// the scene's `[gi] ssgi_resolution`, else half].
+    #[arg(long, value_enum)]
+    pub ssgi_resolution: Option<crate::gi::SsgiResolution>,
+    /// `--gi ssgi`: samples per texel and pyramid level [default: the scene's `[gi]
+    /// ssgi_samples`, else 64].
+    #[arg(long, value_name = "N")]
+    pub ssgi_samples: Option<u32>,
+    /// `--gi ssgi`: how depth and normal mips pick a texel: the voting filter or the nearest
+    /// child (fast).
+    #[arg(long, value_enum, default_value_t = crate::gi::SsgiMips::Voting)]
+    pub ssgi_mips: crate::gi::SsgiMips,
+    /// `--gi ssgi`: no feedback of the previous frame's indirect light (one bounce only).
+    #[arg(long)]
+    pub ssgi_no_feedback: bool,
+    /// `--gi ssgi`: clamp of the fed-back irradiance in W/m².
+    #[arg(long, value_name = "E", default_value_t = crate::gi::SsgiSettings::default().feedback_max_w_m2)]
+    pub ssgi_feedback_max: f32,
+    /// `--gi ssgi`: τ of the temporal blend with the reprojected history, 0 (off) to 0.99.
+    #[arg(long, value_name = "TAU", default_value_t = crate::gi::SsgiSettings::default().history_weight)]
+    pub ssgi_history_weight: f32,
     /// Modified SAO (Oetke 2017 §2.5) at half resolution, multiplied into the indirect light
     /// (needs a --gi method: direct light is not darkened).
     #[arg(long)]
@@ -142,6 +163,10 @@ impl GiArgs {
                 normalize: self.vpl_normalize,
                 spot_sampling: self.vpl_spot_sampling,
             },
+            ssgi: crate::scene::SsgiOverrides {
+                resolution: self.ssgi_resolution,
+                samples: self.ssgi_samples,
+            },
         }
     }
 
@@ -158,6 +183,13 @@ impl GiArgs {
                 shading: self.vpl_shading,
                 show: self.vpl_show,
                 ..s.vpl
+            },
+            ssgi: crate::gi::SsgiSettings {
+                mips: self.ssgi_mips,
+                feedback: !self.ssgi_no_feedback,
+                feedback_max_w_m2: self.ssgi_feedback_max,
+                history_weight: self.ssgi_history_weight,
+                ..s.ssgi
             },
             sao: self.sao.then_some(crate::gi::SaoSettings {
                 radius_m: self.sao_radius,
@@ -446,6 +478,10 @@ mod tests {
             "valid",
             "--vpl-spot-sampling",
             "disk",
+            "--ssgi-resolution",
+            "quarter",
+            "--ssgi-samples",
+            "17",
         ]);
         assert_eq!(
             o,
@@ -468,6 +504,10 @@ mod tests {
                     visibility: Some(crate::gi::vpl::VplVisibility::None),
                     normalize: Some(crate::gi::vpl::VplNormalize::Valid),
                     spot_sampling: Some(crate::gi::vpl::VplSpotSampling::Disk),
+                },
+                ssgi: crate::scene::SsgiOverrides {
+                    resolution: Some(crate::gi::SsgiResolution::Quarter),
+                    samples: Some(17),
                 },
             }
         );

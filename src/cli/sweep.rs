@@ -197,9 +197,9 @@ fn job(config: &Config, scene: &Scene, size: u32) -> Result<Job, CliError> {
 }
 
 /// Whether a pass is part of the GI's cost: voxelization, the atlases, the light maps and
-/// the `gi_*` passes (the VPL passes are `gi_vpl_*`).
+/// the `gi_*` passes (the VPL passes are `gi_vpl_*`) and the screen-space GI's `ssgi_*`.
 pub fn is_gi_pass(name: &str) -> bool {
-    ["gi_", "light_map", "voxel", "atlas"]
+    ["gi_", "ssgi_", "light_map", "voxel", "atlas"]
         .iter()
         .any(|p| name.starts_with(p))
 }
@@ -237,7 +237,9 @@ fn measure(
     let gi = frame_stats(&run.frames, is_gi_pass);
     let frame = frame_stats(&run.frames, |_| true);
     let accumulate = match job.settings.gi.method {
-        crate::gi::GiMethod::Pathtrace => job.settings.gi.accumulate_frames.max(1),
+        crate::gi::GiMethod::Pathtrace | crate::gi::GiMethod::Ssgi => {
+            job.settings.gi.accumulate_frames.max(1)
+        }
         _ => 1,
     };
     Ok(SweepRow {

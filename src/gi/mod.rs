@@ -14,9 +14,14 @@ mod gi_hemisphere;
 mod gi_pathtrace;
 mod gi_radiance_volume;
 mod sao;
+pub mod ssgi;
+pub mod ssgi_brdf_lut;
 pub mod vpl;
 
-pub use crate::scene::{Bounces, GiMethod, GiSettings, RadianceSource, SaoSettings};
+pub use crate::scene::{
+    Bounces, GiMethod, GiSettings, RadianceSource, SaoSettings, SsgiMips, SsgiResolution,
+    SsgiSettings,
+};
 pub use gi_common::GpuGiPush;
 pub use sao::GpuSaoPush;
 
@@ -43,6 +48,9 @@ pub struct GiInputs {
     pub normal: ImageHandle,
     pub depth: ImageHandle,
     pub direct: ImageHandle,
+    /// The voxel grid and the reflective light maps. Screen-space GI has neither and never
+    /// reads them: the renderer fills them with the depth and direct images, as the passes
+    /// fill a shader's unread bindings ([`GiMethod::needs_voxels`]).
     pub voxels: ImageHandle,
     pub rlm_radiance: ImageHandle,
     pub rlm_position: ImageHandle,
@@ -132,6 +140,7 @@ impl GiPasses {
                 Box::new(GiPathtrace::new(ctx, target, settings.pathtrace_lobes)?)
             }
             GiMethod::Vpl => Box::new(vpl::VplPasses::new(ctx, &settings, target)?),
+            GiMethod::Ssgi => Box::new(ssgi::Ssgi::new(ctx, settings.ssgi, target)?),
             GiMethod::Hemisphere if settings.radiance_source == RadianceSource::Volume => {
                 Box::new(GiRadianceVolume::new(ctx, target)?)
             }
@@ -171,7 +180,8 @@ impl GiPasses {
                 ctx,
                 target.has_phong,
                 (settings.sao.is_some(), settings.sao.is_some_and(|s| s.view)),
-                settings.method == GiMethod::Pathtrace && target.scene.has_ggx(),
+                matches!(settings.method, GiMethod::Pathtrace | GiMethod::Ssgi)
+                    && target.scene.has_ggx(),
             )?,
             accumulation: Accumulation::default(),
             lut: ctx.upload_buffer(
@@ -220,7 +230,7 @@ impl GiPasses {
             GiMethod::Hemisphere => settings.radiance_source == RadianceSource::Volume,
             // Bounces after the first read albedo and normal at their voxel hits.
             GiMethod::Vpl => settings.vpl.bounces > 1,
-            GiMethod::None => false,
+            GiMethod::None | GiMethod::Ssgi => false,
         }
     }
 

@@ -165,12 +165,12 @@ impl PostPasses {
         Ok(())
     }
 
-    /// Starts a frame rendered with the un-jittered `view_proj`; returns the view-projection
-    /// the frame renders with (jittered with TAA, else `view_proj` itself).
-    pub fn begin_frame(&self, view_proj: glam::Mat4) -> glam::Mat4 {
+    /// Starts a frame whose un-jittered view-projection is `view_proj`; returns the frame's
+    /// sub-pixel jitter in NDC units (zero without TAA; see [`taa::jitter_matrix`]).
+    pub fn begin_frame(&self, view_proj: glam::Mat4) -> glam::Vec2 {
         match &self.taa {
             Some(taa) => taa.begin_frame(view_proj),
-            None => view_proj,
+            None => glam::Vec2::ZERO,
         }
     }
 

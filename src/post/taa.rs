@@ -1,7 +1,8 @@
 //! `taa`: temporal anti-aliasing of the linear HDR radiance (`glsl/taa.comp`; Oetke 2017 §4.5,
 //! after Karis 2014). The renderer jitters the projection of every frame by a Halton(2,3)
-//! sub-pixel offset ([`TaaPass::begin_frame`] returns the jittered view-projection, used by
-//! every pass of the frame, so G-buffer, depth and every position reconstructed from them agree);
+//! sub-pixel offset ([`TaaPass::begin_frame`] returns it; [`jitter_matrix`] applied to the
+//! view-projection and its camera-relative inverse, used by every pass of the frame, so
+//! G-buffer, depth and every position reconstructed from them agree);
 //! this pass reprojects the history with the depth and the previous frame's un-jittered camera,
 //! clips it in YCoCg to the current 3×3 neighbourhood and blends it with the current frame.
 //! A copy (`taa_history`) keeps the result for the next frame.
@@ -54,7 +55,14 @@ pub fn jitter_px(frame: u32) -> Vec2 {
 /// `view_proj` moved by `jitter_ndc` in NDC: clip x, y gain jitter · w, so every point moves
 /// by exactly `jitter_ndc` on the screen and depth is unchanged.
 pub fn jittered(view_proj: Mat4, jitter_ndc: Vec2) -> Mat4 {
-    Mat4::from_translation(Vec3::new(jitter_ndc.x, jitter_ndc.y, 0.0)) * view_proj
+    jitter_matrix(jitter_ndc) * view_proj
+}
+
+/// The clip-space shift by `jitter_ndc`: x += j.x·w, y += j.y·w. Applied on the left of a
+/// view-projection (and its inverse on the right of an inverse), so that the renderer can
+/// jitter the camera-relative inverse exactly, without inverting a world-space matrix.
+pub fn jitter_matrix(jitter_ndc: Vec2) -> Mat4 {
+    Mat4::from_translation(Vec3::new(jitter_ndc.x, jitter_ndc.y, 0.0))
 }
 
 /// What the host knows between frames: frames blended so far and the last camera.
@@ -109,9 +117,9 @@ impl TaaPass {
     }
 
     /// Starts a frame whose un-jittered view-projection is `view_proj` (call before recording
-    /// it): sets the pass's push constants and returns the jittered view-projection the frame
-    /// must render with.
-    pub fn begin_frame(&self, view_proj: Mat4) -> Mat4 {
+    /// it): sets the pass's push constants and returns the frame's jitter in NDC units
+    /// (the frame renders with [`jittered`]`(view_proj, jitter)`).
+    pub fn begin_frame(&self, view_proj: Mat4) -> Vec2 {
         let (w, h) = self.size;
         let mut s = self.state.lock().unwrap_or_else(|e| e.into_inner());
         let jitter_ndc = jitter_px(s.frames) * Vec2::new(2.0 / w as f32, 2.0 / h as f32);
@@ -127,7 +135,7 @@ impl TaaPass {
         };
         s.frames = s.frames.saturating_add(1);
         s.prev_view_proj = view_proj;
-        jittered(view_proj, jitter_ndc)
+        jitter_ndc
     }
 
     /// Declares `taa` (current + depth + history → resolved) and `taa_history` (resolved →

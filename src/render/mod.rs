@@ -171,8 +171,9 @@ pub struct Renderer {
     shadow_view_count: u32,
     frame_data: GpuFrame,
     voxels: Option<crate::voxel::gpu::VoxelFrame>,
-    /// Indirect-light passes and the light-map pass, when a GI method is on.
-    gi: Option<(crate::gi::GiPasses, LightMapPass)>,
+    /// Indirect-light passes and the light-map pass (for the voxel methods), when a GI method
+    /// is on.
+    gi: Option<(crate::gi::GiPasses, Option<LightMapPass>)>,
     voxel_debug: Option<crate::voxel::debug_view::VoxelDebugPass>,
     atlas_view: Option<crate::voxel::atlas_view::AtlasViewPass>,
     gbuffer_view: Option<gbuffer_view::GbufferViewPass>,
@@ -210,7 +211,9 @@ impl Renderer {
         // A debug view replaces the lit image, so nothing would read the indirect light (and
         // the albedo view declares the attribute passes the GI methods would declare again).
         let gi_on = settings.gi.method != crate::gi::GiMethod::None && settings.debug.is_none();
-        if gi_on
+        // Screen-space GI reads only the frame: no voxels, no light maps.
+        let gi_voxels = gi_on && settings.gi.method.needs_voxels();
+        if gi_voxels
             && settings.shadow.point_technique == PointShadow::DualParaboloid
             && scene.has_point_lights()
         {
@@ -232,7 +235,7 @@ impl Renderer {
         let voxel_view_on = settings.debug.is_some_and(|d| d.view.shows_voxels());
         let voxel_settings = settings
             .voxels
-            .or(gi_on.then(Default::default))
+            .or(gi_voxels.then(Default::default))
             .or(voxel_view_on.then(Default::default));
         if let Some(v) = &voxel_settings {
             check_voxel_memory(ctx, scene, settings, v)?;
@@ -315,24 +318,43 @@ impl Renderer {
             )?);
         }
         let mut gi = None;
-        if let (Some(v), true) = (&mut voxels, gi_on) {
+        if gi_on {
             // With the atlas voxelizer its points write the volumes (Thiedemann 2010, §4.3.2).
-            let atlas_attributes = crate::gi::GiPasses::needs_attribute_volumes(&settings.gi)
-                && v.enable_attribute_volumes(ctx, scene)?;
+            let atlas_attributes = match &mut voxels {
+                Some(v) => {
+                    crate::gi::GiPasses::needs_attribute_volumes(&settings.gi)
+                        && v.enable_attribute_volumes(ctx, scene)?
+                }
+                None => false,
+            };
+            // Screen-space GI has no voxels; its push constants still describe the grid the
+            // voxel methods would use (computed on the CPU, nothing allocated).
+            let cpu_grid;
+            let grid = match &voxels {
+                Some(v) => &v.voxels.grid,
+                None => {
+                    cpu_grid = crate::voxel::gpu::VoxelSettings::default()
+                        .grid_for(scene, settings.time_s)
+                        .map_err(crate::voxel::gpu::GpuVoxelError::from)?;
+                    &cpu_grid
+                }
+            };
             let passes = crate::gi::GiPasses::new(
                 ctx,
                 settings.gi,
                 &crate::gi::GiTarget {
                     scene,
                     time_s: settings.time_s,
-                    grid: &v.voxels.grid,
+                    grid,
                     shadow_resolution: settings.shadow.resolution,
                     size: (settings.width, settings.height),
                     has_phong,
                     atlas_attributes,
                 },
             )?;
-            let light_map = LightMapPass::new(ctx, scene.has_transparency(), scene.has_ggx())?;
+            let light_map = gi_voxels
+                .then(|| LightMapPass::new(ctx, scene.has_transparency(), scene.has_ggx()))
+                .transpose()?;
             gi = Some((passes, light_map));
         }
         let mut atlas_view = None;
@@ -458,11 +480,12 @@ impl Renderer {
         // un-jittered camera (what `prepare` compares to restart accumulation).
         let mut frame = self.frame_data;
         if self.post.jitters() {
-            let vp = self
-                .post
-                .begin_frame(glam::Mat4::from_cols_array(&frame.view_proj));
-            frame.view_proj = vp.to_cols_array();
-            frame.inv_view_proj = vp.inverse().to_cols_array();
+            let view_proj = glam::Mat4::from_cols_array(&frame.view_proj);
+            let jitter = crate::post::taa::jitter_matrix(self.post.begin_frame(view_proj));
+            // The inverse stays camera-relative (see `camera_relative_inverse`).
+            let inv_relative = glam::Mat4::from_cols_array(&frame.inv_view_proj);
+            frame.view_proj = (jitter * view_proj).to_cols_array();
+            frame.inv_view_proj = (inv_relative * jitter.inverse()).to_cols_array();
         }
         self.scene.write_frame(slot, &frame);
     }
@@ -514,9 +537,17 @@ impl Renderer {
         let direct = self
             .deferred
             .declare(g, &scene, &gbuffer, shadow_map, (w, h));
-        let radiance = match (&self.gi, voxel_image) {
-            (Some((gi, light_map)), Some(voxels)) => {
-                let maps = light_map.declare(g, &scene, views, gi.settings.light_map_resolution);
+        let radiance = match &self.gi {
+            Some((gi, light_map)) if voxel_image.is_some() || light_map.is_none() => {
+                // Screen-space GI reads neither voxels nor light maps (GiInputs::voxels).
+                let maps = match light_map {
+                    Some(lm) => lm.declare(g, &scene, views, gi.settings.light_map_resolution),
+                    None => LightMaps {
+                        radiance: direct,
+                        position: direct,
+                        normal: direct,
+                    },
+                };
                 gi.add_passes(
                     g,
                     &crate::gi::GiInputs {
@@ -525,7 +556,7 @@ impl Renderer {
                         normal: gbuffer.normal,
                         depth: gbuffer.depth,
                         direct,
-                        voxels,
+                        voxels: voxel_image.unwrap_or(gbuffer.depth),
                         rlm_radiance: maps.radiance,
                         rlm_position: maps.position,
                         rlm_normal: maps.normal,

@@ -36,9 +36,12 @@ pub(super) fn render_frames(
     ctx: &Context,
     renderer: &mut Renderer,
 ) -> Result<RenderOutput, RenderError> {
-    // The path tracer converges over frames; everything else is done in one.
+    // The path tracer converges over frames, screen-space GI adds a bounce per frame by
+    // feedback; everything else is done in one.
     let gi_frames = match renderer.settings.gi.method {
-        crate::gi::GiMethod::Pathtrace => renderer.settings.gi.accumulate_frames.max(1) as usize,
+        crate::gi::GiMethod::Pathtrace | crate::gi::GiMethod::Ssgi => {
+            renderer.settings.gi.accumulate_frames.max(1) as usize
+        }
         _ => 1,
     };
     // TAA converges over jittered frames too.

@@ -88,6 +88,9 @@ pub fn check_gi(g: &crate::gi::GiSettings) -> Result<(), LimitError> {
     VPL_PATTERN_SIDE.check_flag(g.vpl.pattern[1])?;
     VPL_BOUNCES.check_flag(g.vpl.bounces)?;
     VPL_D_MIN.check_flag(g.vpl.d_min_voxels)?;
+    SSGI_SAMPLES.check_flag(g.ssgi.samples)?;
+    SSGI_FEEDBACK_MAX.check_flag(g.ssgi.feedback_max_w_m2)?;
+    SSGI_HISTORY_WEIGHT.check_flag(g.ssgi.history_weight)?;
     if let Some(sao) = &g.sao {
         SAO_RADIUS_M.check_flag(sao.radius_m)?;
         SAO_BIAS.check_flag(sao.bias)?;

@@ -67,6 +67,8 @@ pub(crate) struct GiDesc {
     pub vpl_visibility: Option<String>,
     pub vpl_normalize: Option<String>,
     pub vpl_spot_sampling: Option<String>,
+    pub ssgi_resolution: Option<String>,
+    pub ssgi_samples: Option<i64>,
 }
 
 #[derive(Clone, Debug, Deserialize)]
@@ -483,6 +485,37 @@ fn build_gi(ck: &Check<'_>, g: &GiDesc) -> Result<GiOverrides, SceneError> {
         light_map_resolution: count(&limits::LIGHT_MAP_RESOLUTION, g.light_map_resolution)?,
         accumulate_frames: count(&limits::GI_FRAMES, g.accumulate_frames)?,
         vpl: build_vpl(ck, g, &count, &length)?,
+        ssgi: build_ssgi(ck, g, &count)?,
+    })
+}
+
+/// The `[gi]` table's screen-space GI keys (`ssgi_resolution`, `ssgi_samples`).
+fn build_ssgi(
+    ck: &Check<'_>,
+    g: &GiDesc,
+    count: &CountCheck<'_>,
+) -> Result<crate::scene::SsgiOverrides, SceneError> {
+    use crate::scene::SsgiResolution;
+    let resolution = match &g.ssgi_resolution {
+        None => None,
+        Some(name) => Some(
+            SsgiResolution::NAMES
+                .iter()
+                .find(|(n, _)| *n == name.as_str())
+                .map(|&(_, r)| r)
+                .ok_or_else(|| {
+                    ck.invalid(
+                        "gi.ssgi_resolution",
+                        format!(
+                            "unknown resolution \"{name}\"; expected \"full\", \"half\", \"quarter\" or \"eighth\""
+                        ),
+                    )
+                })?,
+        ),
+    };
+    Ok(crate::scene::SsgiOverrides {
+        resolution,
+        samples: count(&limits::SSGI_SAMPLES, g.ssgi_samples)?,
     })
 }
 

@@ -23,6 +23,8 @@ pub struct GiOverrides {
     pub accumulate_frames: Option<u32>,
     /// The VPL method's parameters.
     pub vpl: crate::scene::vpl_settings::VplOverrides,
+    /// The screen-space GI's parameters.
+    pub ssgi: super::gi_settings::SsgiOverrides,
 }
 
 impl GiOverrides {
@@ -45,6 +47,7 @@ impl GiOverrides {
             light_map_resolution: self.light_map_resolution.or(fallback.light_map_resolution),
             accumulate_frames: self.accumulate_frames.or(fallback.accumulate_frames),
             vpl: self.vpl.or(fallback.vpl),
+            ssgi: self.ssgi.or(fallback.ssgi),
         }
     }
 
@@ -66,6 +69,7 @@ impl GiOverrides {
                 .unwrap_or(base.light_map_resolution),
             accumulate_frames: self.accumulate_frames.unwrap_or(base.accumulate_frames),
             vpl: self.vpl.apply(base.vpl),
+            ssgi: self.ssgi.apply(base.ssgi),
             ..base
         }
     }
@@ -90,11 +94,12 @@ pub(crate) fn bounces_from_toml(v: &toml::Value) -> Result<Bounces, String> {
 }
 
 /// The names a scene file may give `method`, and their methods.
-pub(crate) const GI_METHOD_NAMES: [(&str, GiMethod); 4] = [
+pub(crate) const GI_METHOD_NAMES: [(&str, GiMethod); 5] = [
     ("none", GiMethod::None),
     ("hemisphere", GiMethod::Hemisphere),
     ("pathtrace", GiMethod::Pathtrace),
     ("vpl", GiMethod::Vpl),
+    ("ssgi", GiMethod::Ssgi),
 ];
 
 #[cfg(test)]
@@ -177,6 +182,10 @@ mod tests {
                 normalize: Some(crate::scene::vpl_settings::VplNormalize::Valid),
                 spot_sampling: Some(crate::scene::vpl_settings::VplSpotSampling::Disk),
             },
+            ssgi: crate::scene::SsgiOverrides {
+                resolution: Some(crate::scene::SsgiResolution::Eighth),
+                samples: Some(5),
+            },
         };
         assert!(!all.is_empty() && GiOverrides::default().is_empty());
         assert_eq!(GiOverrides::default().or(all), all);
@@ -201,6 +210,10 @@ mod tests {
                 visibility: Some(s.vpl.visibility),
                 normalize: Some(s.vpl.normalize),
                 spot_sampling: Some(s.vpl.spot_sampling),
+            },
+            ssgi: crate::scene::SsgiOverrides {
+                resolution: Some(s.ssgi.resolution),
+                samples: Some(s.ssgi.samples),
             },
         };
         assert_eq!(back, all);

@@ -17,6 +17,17 @@ pub enum GiMethod {
     /// Virtual point lights from the reflective light maps, B bounces, interleaved sampling
     /// with voxel visibility and the geometry-aware filter (Thiedemann 2010 Ch. 7).
     Vpl,
+    /// Screen-space diffuse gathering over a depth/normal/colour pyramid, unlimited bounces by
+    /// feedback over frames; no voxels (Oetke 2017 §2.3, §5.1–5.3).
+    Ssgi,
+}
+
+impl GiMethod {
+    /// Whether the method traces rays in the voxel grid (all but screen-space GI; `None`
+    /// has no passes at all).
+    pub fn needs_voxels(self) -> bool {
+        !matches!(self, GiMethod::None | GiMethod::Ssgi)
+    }
 }
 
 /// Parameters of the indirect-light passes (all exposed on the command line).
@@ -59,6 +70,41 @@ pub struct GiSettings {
     pub vpl: super::VplSettings,
     /// Modified SAO multiplied into the indirect light (`None`: no SAO passes).
     pub sao: Option<SaoSettings>,
+    /// The screen-space GI's parameters (`GiMethod::Ssgi`).
+    pub ssgi: SsgiSettings,
+}
+
+/// Screen-space GI (Oetke 2017 §5.1–5.3): the internal resolution, samples and pyramid.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SsgiSettings {
+    /// The GI resolution, the finest level gathered (thesis: about 960×500 at any output
+    /// size, i.e. half at 1080p).
+    pub resolution: SsgiResolution,
+    /// Samples per texel and level (thesis: 128; visible noise below 32–64).
+    pub samples: u32,
+    /// How the depth and normal mips choose their texel.
+    pub mips: SsgiMips,
+    /// Feed the previous frame's indirect light back into the lit colour (one more bounce per
+    /// frame, Oetke 2017 §2.3).
+    pub feedback: bool,
+    /// The clamp of the fed-back irradiance, W/m² (Oetke 2017 §5.1 clamps at 20).
+    pub feedback_max_w_m2: f32,
+    /// τ of the temporal blend E = mix(E_new, E_history, τ·w) (Oetke 2017 §5.1: 0.1–0.98,
+    /// 0.85–0.98 at high frame rates); 0 turns the accumulation off.
+    pub history_weight: f32,
+}
+
+impl Default for SsgiSettings {
+    fn default() -> Self {
+        Self {
+            resolution: SsgiResolution::Half,
+            samples: 64,
+            mips: SsgiMips::Voting,
+            feedback: true,
+            feedback_max_w_m2: 20.0,
+            history_weight: 0.9,
+        }
+    }
 }
 
 /// Scalable Ambient Obscurance as modified by Oetke 2017 §2.5 (after McGuire et al. 2012):
@@ -92,6 +138,73 @@ impl Default for SaoSettings {
             contrast: 2.0,
             epsilon_m2: 0.01,
             view: false,
+        }
+    }
+}
+
+/// The screen-space GI's internal resolution: the frame's divided by a power of two.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+pub enum SsgiResolution {
+    Full,
+    #[default]
+    Half,
+    Quarter,
+    Eighth,
+}
+
+impl SsgiResolution {
+    /// The names a scene file's `ssgi_resolution` takes (those of the flag).
+    pub const NAMES: [(&'static str, SsgiResolution); 4] = [
+        ("full", SsgiResolution::Full),
+        ("half", SsgiResolution::Half),
+        ("quarter", SsgiResolution::Quarter),
+        ("eighth", SsgiResolution::Eighth),
+    ];
+
+    /// The frame's size over the GI resolution's.
+    pub fn divisor(self) -> u32 {
+        match self {
+            SsgiResolution::Full => 1,
+            SsgiResolution::Half => 2,
+            SsgiResolution::Quarter => 4,
+            SsgiResolution::Eighth => 8,
+        }
+    }
+}
+
+/// How the screen-space GI's depth and normal mips pick the texel of each 2×2 block.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+pub enum SsgiMips {
+    /// SHR10's voting filter as Oetke 2017 §5.3 approximates it (temporally stable).
+    #[default]
+    Voting,
+    /// The first non-sky child (the thesis's fast nearest-neighbour blit).
+    Fast,
+}
+
+/// Screen-space GI settings given by a scene's `[gi]` table or by flags; `None`: not given
+/// there (see [`crate::scene::resolve_gi`] for the precedence).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SsgiOverrides {
+    pub resolution: Option<SsgiResolution>,
+    pub samples: Option<u32>,
+}
+
+impl SsgiOverrides {
+    /// Field by field: `self`'s value where given, else `fallback`'s.
+    pub fn or(self, fallback: SsgiOverrides) -> SsgiOverrides {
+        SsgiOverrides {
+            resolution: self.resolution.or(fallback.resolution),
+            samples: self.samples.or(fallback.samples),
+        }
+    }
+
+    /// `base` with the given values replaced.
+    pub fn apply(&self, base: SsgiSettings) -> SsgiSettings {
+        SsgiSettings {
+            resolution: self.resolution.unwrap_or(base.resolution),
+            samples: self.samples.unwrap_or(base.samples),
+            ..base
         }
     }
 }
@@ -190,6 +303,7 @@ impl Default for GiSettings {
             radiance_source: RadianceSource::Maps,
             vpl: super::VplSettings::default(),
             sao: None,
+            ssgi: SsgiSettings::default(),
         }
     }
 }

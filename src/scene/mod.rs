@@ -110,6 +110,9 @@
 //! vpl_visibility = "voxel"          # "voxel" (segment test) | "none" ["voxel"]
 //! vpl_normalize = "all"             # VPL flux over "all" K samples | the "valid" ones ["all"]
 //! vpl_spot_sampling = "solid-angle" # spot VPLs "solid-angle" (cone) | "disk" (image plane)
+//! ssgi_resolution = "half"          # screen-space GI resolution: "full" | "half" | "quarter"
+//!                                   #   | "eighth" ["half"]
+//! ssgi_samples = 64                 # screen-space GI samples per texel and level, 1..=1024 [64]
 //! ```
 //!
 //! A missing texture (or MTL file) is not an error: it is logged with `log::warn!` and the
@@ -144,7 +147,10 @@ pub use camera::{Camera, Eye, StereoRig};
 pub use cull::aabb_visible;
 pub use error::SceneError;
 pub use gi::{resolve_gi, GiOverrides};
-pub use gi_settings::{Bounces, GiMethod, GiSettings, RadianceSource, SaoSettings};
+pub use gi_settings::{
+    Bounces, GiMethod, GiSettings, RadianceSource, SaoSettings, SsgiMips, SsgiOverrides,
+    SsgiResolution, SsgiSettings,
+};
 pub use light::{scaled, spot_falloff, Light};
 pub use material::{
     fresnel_schlick, ggx_brdf, ggx_d, ggx_diffuse, ggx_g1, ggx_specular, BumpKind, Ggx, Material,

@@ -661,7 +661,8 @@ fn gi_table_parses_every_key() {
          filter_radius = 0\nfilter_passes = 1\nlight_map_resolution = 128\n\
          accumulate_frames = 64\nvpls = 4\nvpl_pattern = [2, 3]\nvpl_bounces = 1\n\
          vpl_d_min_voxels = 2.5\nvpl_visibility = \"none\"\n\
-         vpl_normalize = \"valid\"\nvpl_spot_sampling = \"disk\"\n"
+         vpl_normalize = \"valid\"\nvpl_spot_sampling = \"disk\"\nssgi_resolution = \"quarter\"\n\
+         ssgi_samples = 12\n"
     );
     let s = load_ok(&text, &[]);
     assert_eq!(
@@ -685,6 +686,10 @@ fn gi_table_parses_every_key() {
                 visibility: Some(crate::scene::vpl_settings::VplVisibility::None),
                 normalize: Some(crate::scene::vpl_settings::VplNormalize::Valid),
                 spot_sampling: Some(crate::scene::vpl_settings::VplSpotSampling::Disk),
+            },
+            ssgi: crate::scene::SsgiOverrides {
+                resolution: Some(crate::scene::SsgiResolution::Quarter),
+                samples: Some(12),
             },
         }
     );
