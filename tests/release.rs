@@ -59,3 +59,69 @@ fn objects_dropped_after_their_frames_are_destroyed_by_finish() {
     let report = ctx.finish();
     assert!(report.is_clean(), "{report}");
 }
+
+/// `Context::allocated_bytes` counts what is handed out and not yet freed: a 256-byte buffer
+/// adds at least its 256 bytes (the allocation is the buffer's memory requirement, never less
+/// than its size) and dropping it with nothing in flight gives them back exactly.
+#[test]
+fn allocated_bytes_follow_a_buffer_from_creation_to_drop() {
+    let ctx = common::context();
+    let before = ctx.allocated_bytes();
+    let buffer = host_buffer(&ctx, "counted");
+    let with = ctx.allocated_bytes();
+    assert!(
+        with >= before + 256,
+        "{before} B before, {with} B with the buffer"
+    );
+    drop(buffer);
+    assert_eq!(ctx.allocated_bytes(), before);
+}
+
+/// The soak benchmark's path (`voxgi bench soak`) on a short run of the moving scene: one
+/// sample before the first frame, one every 10 frames and one after the last, each with an
+/// RSS (on Linux) and the GPU memory the renderer holds; slopes are finite and the renderer
+/// leaves no GPU memory behind once dropped. Not a memory assertion: 40 frames say nothing
+/// about leaks; the benchmark's long runs do (README).
+#[test]
+fn a_short_soak_run_reports_every_sample() {
+    use voxgi::bench::{bench_soak, SoakBenchDesc};
+    use voxgi::gi::GiMethod;
+    let ctx = common::context();
+    let scene = common::animated_scene();
+    let desc = SoakBenchDesc {
+        frames: 40,
+        every: 10,
+        methods: vec![GiMethod::None, GiMethod::Hemisphere],
+        ..Default::default()
+    };
+    let mut seen = 0;
+    let report = bench_soak(&ctx, &scene, "mover", &desc, &mut |_, _| seen += 1).expect("soak run");
+    assert_eq!(report.rows.len(), 2);
+    // Frames 0, 10, 20, 30 during the run and 40 after it, per method.
+    assert_eq!(seen, 2 * 5);
+    for row in &report.rows {
+        let frames: Vec<usize> = row.samples.iter().map(|s| s.frame).collect();
+        assert_eq!(frames, [0, 10, 20, 30, 40], "{:?}", row.method);
+        for s in &row.samples {
+            assert!(
+                s.gpu_bytes > 0,
+                "{:?}: the renderer holds GPU memory",
+                row.method
+            );
+            if cfg!(target_os = "linux") {
+                assert!(s.rss_bytes.is_some_and(|b| b > 0));
+            }
+        }
+        assert!(row
+            .gpu_slope_bytes_per_1000_frames
+            .is_some_and(f64::is_finite));
+        if cfg!(target_os = "linux") {
+            assert!(row
+                .rss_slope_bytes_per_1000_frames
+                .is_some_and(f64::is_finite));
+        }
+        assert_eq!(row.gpu_bytes_after_drop, 0, "{:?}", row.method);
+        assert!(row.wall_s.is_finite());
+    }
+    assert!(report.table().contains("hemisphere"));
+}

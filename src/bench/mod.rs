@@ -8,12 +8,15 @@
 //!   raster bit passes on one scene.
 //! - [`bench_flicker`] (`voxgi bench flicker`): temporal stability of the GI methods along a
 //!   moving light's path, against a converged path tracer.
+//! - [`bench_soak`] (`voxgi bench soak`): long runs of every method on a moving scene, with
+//!   process RSS and the context's GPU memory sampled along the way.
 //! - [`sweep`]: the data of `voxgi sweep` and `voxgi tune` (grid, rows, CSV, Pareto front,
 //!   SVG plot, the tuner's choice).
 //! - [`bench_scenes`], [`dense_scene`], [`tessellated_cube`]: the generated scenes they run on.
 
 mod flicker;
 mod scenes;
+mod soak;
 pub mod sweep;
 mod traverse;
 mod voxelize;
@@ -23,6 +26,10 @@ pub use flicker::{
     FlickerReport, FlickerRow,
 };
 pub use scenes::{bench_scenes, dense_scene, tessellated_cube, DENSE_BUNNIES_PER_AXIS};
+pub use soak::{
+    bench_soak, process_rss_bytes, slope_per_1000, soak_time_s, SoakBenchDesc, SoakReport, SoakRow,
+    SoakSample,
+};
 pub use traverse::{
     bench_traverse, gbuffer_points, MethodResult, RadiusResult, TraverseBenchDesc,
     TraverseBenchReport,

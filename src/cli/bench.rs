@@ -1,10 +1,11 @@
-//! `voxgi bench traverse|voxelize|voxelize-sweep|flicker`: the benchmarks of [`crate::bench`].
+//! `voxgi bench traverse|voxelize|voxelize-sweep|flicker|soak`: the benchmarks of [`crate::bench`].
 
 use super::{check_validation, context, out, outln, CliError, Global};
 use crate::bench::{
-    bench_flicker, bench_traverse, bench_voxelize_atlas, bench_voxelize_sweep, FlickerBenchDesc,
-    TraverseBenchDesc, VoxelizeBenchDesc, VoxelizeSweepDesc,
+    bench_flicker, bench_soak, bench_traverse, bench_voxelize_atlas, bench_voxelize_sweep,
+    FlickerBenchDesc, SoakBenchDesc, TraverseBenchDesc, VoxelizeBenchDesc, VoxelizeSweepDesc,
 };
+use crate::gi::GiMethod;
 use crate::scene::{load_scene_arg, DEFAULT_SCENE};
 use crate::voxel::TraversalParams;
 use serde::Serialize;
@@ -68,6 +69,33 @@ pub enum BenchCommand {
         #[arg(long, default_value_t = 32, value_parser = clap::value_parser!(u32).range(1..=4096))]
         reference_frames: u32,
         /// Print JSON instead of a table.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Long runs: each method renders many frames of a scene with moving objects; every
+    /// `--every` frames the process RSS, the GPU memory the context holds and the release
+    /// queue's backlog are printed, and at the end their growth in bytes per 1000 frames
+    /// (least squares over the samples after the first). Flat means no leak.
+    Soak {
+        /// A built-in scene or a TOML scene file; objects with keyframes move.
+        #[arg(default_value = "assets/scenes/cornell_mover.toml")]
+        scene: String,
+        /// Frames per method.
+        #[arg(long, default_value_t = 10_000, value_parser = clap::value_parser!(u64).range(1..=100_000_000))]
+        frames: u64,
+        /// Frames between samples.
+        #[arg(long, default_value_t = 500, value_parser = clap::value_parser!(u64).range(1..=100_000_000))]
+        every: u64,
+        /// Image width in pixels.
+        #[arg(long, default_value_t = 32, value_parser = clap::value_parser!(u32).range(8..=4096))]
+        width: u32,
+        /// Image height in pixels.
+        #[arg(long, default_value_t = 32, value_parser = clap::value_parser!(u32).range(8..=4096))]
+        height: u32,
+        /// The GI methods, run one after another.
+        #[arg(long, value_delimiter = ',', default_values = ["none", "hemisphere", "pathtrace", "vpl", "ssgi"])]
+        methods: Vec<GiMethod>,
+        /// Print JSON instead of the progress lines and the table.
         #[arg(long)]
         json: bool,
     },
@@ -155,6 +183,46 @@ pub fn bench(global: &Global, command: &BenchCommand, out: &mut dyn Write) -> Re
                 ..Default::default()
             };
             let report = bench_flicker(&ctx, &scene, &name, &desc)?;
+            print(out, *json, &report, || report.table())?;
+            check_validation(ctx)
+        }
+        BenchCommand::Soak {
+            scene,
+            frames,
+            every,
+            width,
+            height,
+            methods,
+            json,
+        } => {
+            let loaded = load_scene_arg(Some(scene))?;
+            let ctx = context(global)?;
+            let desc = SoakBenchDesc {
+                frames: *frames as usize,
+                every: *every as usize,
+                width: *width,
+                height: *height,
+                methods: methods.clone(),
+                ..Default::default()
+            };
+            let mut progress = |method: GiMethod, s: &crate::bench::SoakSample| {
+                if !*json {
+                    let rss = s
+                        .rss_bytes
+                        .map_or("unavailable".to_owned(), |b| b.to_string());
+                    let _ = writeln!(
+                        out,
+                        "{:<11} frame {:>8}  RSS {:>12} B  GPU {:>12} B  pending {}",
+                        format!("{method:?}").to_lowercase(),
+                        s.frame,
+                        rss,
+                        s.gpu_bytes,
+                        s.pending_releases
+                    );
+                    let _ = out.flush();
+                }
+            };
+            let report = bench_soak(&ctx, &loaded, scene, &desc, &mut progress)?;
             print(out, *json, &report, || report.table())?;
             check_validation(ctx)
         }

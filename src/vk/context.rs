@@ -65,15 +65,16 @@ impl ValidationLog {
 }
 
 /// GPU memory handed out and not yet freed, keyed by (memory handle, offset), with the name
-/// it was allocated under: what [`Context::finish`] reports as leaked. gpu-allocator only logs
-/// its leaks at shutdown; this table lets teardown fail on them instead.
+/// it was allocated under and its size: what [`Context::finish`] reports as leaked, and what
+/// [`Context::allocated_bytes`] sums. gpu-allocator only logs its leaks at shutdown; this
+/// table lets teardown fail on them instead.
 #[derive(Debug, Default)]
-pub struct LiveAllocations(Mutex<BTreeMap<(u64, u64), String>>);
+pub struct LiveAllocations(Mutex<BTreeMap<(u64, u64), (String, u64)>>);
 
 impl LiveAllocations {
-    pub(super) fn insert(&self, key: (u64, u64), name: &str) {
+    pub(super) fn insert(&self, key: (u64, u64), name: &str, size_bytes: u64) {
         if let Ok(mut m) = self.0.lock() {
-            m.insert(key, name.to_owned());
+            m.insert(key, (name.to_owned(), size_bytes));
         }
     }
     pub(super) fn remove(&self, key: (u64, u64)) {
@@ -86,10 +87,17 @@ impl LiveAllocations {
         let mut names: Vec<String> = self
             .0
             .lock()
-            .map(|m| m.values().cloned().collect())
+            .map(|m| m.values().map(|(name, _)| name.clone()).collect())
             .unwrap_or_default();
         names.sort();
         names
+    }
+    /// Bytes of every allocation still alive.
+    pub(super) fn total_bytes(&self) -> u64 {
+        self.0
+            .lock()
+            .map(|m| m.values().map(|(_, size)| size).sum())
+            .unwrap_or(0)
     }
 }
 
@@ -431,6 +439,13 @@ impl Context {
     /// them to complete; 0 when nothing was dropped while frames were in flight.
     pub fn pending_releases(&self) -> usize {
         self.release.pending()
+    }
+
+    /// GPU memory this context holds now: the sizes of the allocations handed out (buffers,
+    /// images, the graph's transient arenas) and not yet freed, objects waiting in the release
+    /// queue included. Not the allocator's block sizes: the memory the renderer asked for.
+    pub fn allocated_bytes(&self) -> u64 {
+        self.release.live_allocations.total_bytes()
     }
 
     /// Gives a Vulkan object a name visible in validation messages and RenderDoc.

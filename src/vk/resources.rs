@@ -360,7 +360,7 @@ impl Context {
             .map_err(|e| VkError::Allocation(format!("`{name}`: {e}")))?;
         self.release
             .live_allocations
-            .insert(allocation_key(&allocation), name);
+            .insert(allocation_key(&allocation), name, allocation.size());
         Ok(allocation)
     }
 
@@ -703,7 +703,7 @@ impl Context {
         self.set_name(memory, name);
         self.release
             .live_allocations
-            .insert((memory.as_raw(), u64::MAX), name);
+            .insert((memory.as_raw(), u64::MAX), name, size_bytes.max(1));
         Ok(Arena {
             raw: memory,
             release: Arc::clone(&self.release),
