@@ -77,9 +77,9 @@ pub enum BenchCommand {
     /// queue's backlog are printed, and at the end their growth in bytes per 1000 frames
     /// (least squares over the samples after the first). Flat means no leak.
     Soak {
-        /// A built-in scene or a TOML scene file; objects with keyframes move.
-        #[arg(default_value = "assets/scenes/cornell_mover.toml")]
-        scene: String,
+        /// A built-in scene or a TOML scene file; objects with keyframes move. Default:
+        /// `assets/scenes/cornell_mover.toml` (embedded: runs from any directory).
+        scene: Option<String>,
         /// Frames per method.
         #[arg(long, default_value_t = 10_000, value_parser = clap::value_parser!(u64).range(1..=100_000_000))]
         frames: u64,
@@ -195,7 +195,10 @@ pub fn bench(global: &Global, command: &BenchCommand, out: &mut dyn Write) -> Re
             methods,
             json,
         } => {
-            let loaded = load_scene_arg(Some(scene))?;
+            let (name, loaded) = match scene {
+                Some(arg) => (arg.clone(), load_scene_arg(Some(arg))?),
+                None => (SOAK_SCENE_NAME.to_owned(), soak_default_scene()?),
+            };
             let ctx = context(global)?;
             let desc = SoakBenchDesc {
                 frames: *frames as usize,
@@ -222,7 +225,7 @@ pub fn bench(global: &Global, command: &BenchCommand, out: &mut dyn Write) -> Re
                     let _ = out.flush();
                 }
             };
-            let report = bench_soak(&ctx, &loaded, scene, &desc, &mut progress)?;
+            let report = bench_soak(&ctx, &loaded, &name, &desc, &mut progress)?;
             print(out, *json, &report, || report.table())?;
             check_validation(ctx)
         }
@@ -242,6 +245,17 @@ pub fn bench(global: &Global, command: &BenchCommand, out: &mut dyn Write) -> Re
             check_validation(ctx)
         }
     }
+}
+
+/// The soak benchmark's default scene: Cornell walls and a keyframed cube that moves.
+const SOAK_SCENE_NAME: &str = "assets/scenes/cornell_mover.toml";
+const SOAK_SCENE_TOML: &str = include_str!("../../assets/scenes/cornell_mover.toml");
+
+/// [`SOAK_SCENE_TOML`], parsed like a scene file (it names only built-in meshes, so the base
+/// directory is unused).
+fn soak_default_scene() -> Result<crate::scene::Scene, crate::scene::SceneError> {
+    let origin = std::path::Path::new(SOAK_SCENE_NAME);
+    crate::scene::Scene::from_toml_str(SOAK_SCENE_TOML, origin, std::path::Path::new("."))
 }
 
 /// A report as pretty JSON or as its table.
