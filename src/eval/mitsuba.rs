@@ -652,12 +652,22 @@ fn write_ggx(
     out_dir: &Path,
     report: &mut ExportReport,
 ) -> Result<(), MitsubaExportError> {
-    if ggx.metallic < 1.0 {
+    // With a `map_Pm` the mean is below 1 exactly when some texel is not fully metal.
+    let metallic = material
+        .voxel_ggx(&scene.textures)
+        .map_or(ggx.metallic, |g| g.metallic);
+    if metallic < 1.0 {
         report.warnings.push(format!(
-            "material `{}` is a GGX dielectric (metallic {}): exported as Mitsuba's principled \
-             BSDF, whose diffuse lobe (Disney, with retro-reflection) and exact dielectric \
-             Fresnel match voxgi's Fresnel-weighted Lambert and Schlick only approximately",
-            material.name, ggx.metallic
+            "material `{}` is a GGX dielectric (metallic {metallic}{}): exported as Mitsuba's \
+             principled BSDF, whose diffuse lobe (Disney, with retro-reflection) and exact \
+             dielectric Fresnel match voxgi's Fresnel-weighted Lambert and Schlick only \
+             approximately",
+            material.name,
+            if material.pbr_maps.metallic.is_some() {
+                ", the mean of its map"
+            } else {
+                ""
+            }
         ));
     }
     let base = match texture {
@@ -1171,6 +1181,9 @@ mod tests {
         };
         let dir = TempDir::new("pbrmaps");
         let report = export_mitsuba(&scene, 0.0, 32, 32, &dir.0).unwrap();
+        // The metalness map (texels 1 and 0, mean 0.5) is partly dielectric: approximate.
+        assert_eq!(report.warnings.len(), 1, "{:?}", report.warnings);
+        assert!(report.warnings[0].contains("metallic 0.5, the mean of its map"));
         let xml = std::fs::read_to_string(&report.xml_path).unwrap();
         // The maps replace the constants.
         assert!(!xml.contains("<float name=\"roughness\""), "{xml}");
