@@ -410,9 +410,8 @@ fn write_materials_and_shapes(
             // Emission leaves the side the normals point to, as voxgi's G-buffer shows it.
             let emitter = if material.is_emissive() {
                 format!(
-                    "        <emitter type=\"area\">\n            <rgb name=\"radiance\" \
-                     value=\"{}\"/>\n        </emitter>\n",
-                    vec3(material.emission)
+                    "        <emitter type=\"area\">\n            {}\n        </emitter>\n",
+                    radiance_xml(scene, material, out_dir, report)?
                 )
             } else {
                 String::new()
@@ -555,10 +554,10 @@ fn write_material(
     let _ = writeln!(xml, "    <!-- {} -->", comment_text(&material.name));
     let _ = writeln!(xml, "    <bsdf type=\"twosided\" id=\"{id}\">");
     if let Some(ggx) = material.ggx {
-        write_ggx(xml, material, ggx, texture, out_dir, report)?;
+        write_ggx(xml, scene, material, ggx, texture, out_dir, report)?;
     } else if material.is_lambert() {
         let reflectance = match texture {
-            Some((t, data)) => texture_xml(data, t, 1.0, out_dir, report)?,
+            Some((t, data)) => texture_xml(data, t, "reflectance", Vec3::ONE, out_dir, report)?,
             None => format!(
                 "<rgb name=\"reflectance\" value=\"{}\"/>",
                 vec3(material.albedo)
@@ -588,7 +587,14 @@ fn write_material(
         let weight = specular_max / (diffuse_max + specular_max);
         let diffuse_scale = 1.0 / (1.0 - weight);
         let reflectance = match texture {
-            Some((t, data)) => texture_xml(data, t, diffuse_scale, out_dir, report)?,
+            Some((t, data)) => texture_xml(
+                data,
+                t,
+                "reflectance",
+                Vec3::splat(diffuse_scale),
+                out_dir,
+                report,
+            )?,
             None => format!(
                 "<rgb name=\"reflectance\" value=\"{}\"/>",
                 vec3(material.albedo * diffuse_scale)
@@ -639,26 +645,33 @@ fn write_material(
 /// dielectric Fresnel is exact rather than Schlick), which the report says.
 fn write_ggx(
     xml: &mut String,
+    scene: &Scene,
     material: &Material,
     ggx: crate::scene::Ggx,
     texture: Option<(usize, &crate::scene::TextureData)>,
     out_dir: &Path,
     report: &mut ExportReport,
 ) -> Result<(), MitsubaExportError> {
-    if ggx.metallic < 1.0 {
+    // With a `map_Pm` the mean is below 1 exactly when some texel is not fully metal.
+    let metallic = material
+        .voxel_ggx(&scene.textures)
+        .map_or(ggx.metallic, |g| g.metallic);
+    if metallic < 1.0 {
         report.warnings.push(format!(
-            "material `{}` is a GGX dielectric (metallic {}): exported as Mitsuba's principled \
-             BSDF, whose diffuse lobe (Disney, with retro-reflection) and exact dielectric \
-             Fresnel match voxgi's Fresnel-weighted Lambert and Schlick only approximately",
-            material.name, ggx.metallic
+            "material `{}` is a GGX dielectric (metallic {metallic}{}): exported as Mitsuba's \
+             principled BSDF, whose diffuse lobe (Disney, with retro-reflection) and exact \
+             dielectric Fresnel match voxgi's Fresnel-weighted Lambert and Schlick only \
+             approximately",
+            material.name,
+            if material.pbr_maps.metallic.is_some() {
+                ", the mean of its map"
+            } else {
+                ""
+            }
         ));
     }
     let base = match texture {
-        Some((t, data)) => texture_xml(data, t, 1.0, out_dir, report)?.replacen(
-            "name=\"reflectance\"",
-            "name=\"base_color\"",
-            1,
-        ),
+        Some((t, data)) => texture_xml(data, t, "base_color", Vec3::ONE, out_dir, report)?,
         None => format!(
             "<rgb name=\"base_color\" value=\"{}\"/>",
             vec3(material.albedo)
@@ -671,29 +684,91 @@ fn write_ggx(
     );
     let _ = writeln!(xml, "        <bsdf type=\"principled\">");
     let _ = writeln!(xml, "            {base}");
-    let _ = writeln!(
-        xml,
-        "            <float name=\"roughness\" value=\"{}\"/>",
-        ggx.roughness
-    );
-    let _ = writeln!(
-        xml,
-        "            <float name=\"metallic\" value=\"{}\"/>",
-        ggx.metallic
-    );
+    // `map_Pr` / `map_Pm` replace the constants per texel, as in the G-buffer.
+    for (name, map, constant) in [
+        ("roughness", material.pbr_maps.roughness, ggx.roughness),
+        ("metallic", material.pbr_maps.metallic, ggx.metallic),
+    ] {
+        let param = match map.and_then(|t| scene.textures.get(t).map(|data| (t, data))) {
+            Some((t, data)) => scalar_texture_xml(data, t, name, out_dir, report)?,
+            None => format!("<float name=\"{name}\" value=\"{constant}\"/>"),
+        };
+        let _ = writeln!(xml, "            {param}");
+    }
     // specular 0.5 is η = 1.5, F0 = 0.04, the dielectric F0 of voxgi's metal/roughness model.
     let _ = writeln!(xml, "            <float name=\"specular\" value=\"0.5\"/>");
     let _ = writeln!(xml, "        </bsdf>");
     Ok(())
 }
 
-/// Writes texture `index` and returns the `<texture>` element that reads it. Unscaled maps are
-/// copied as sRGB PNG (Mitsuba linearizes 8-bit files); scaled ones are linearized, scaled and
-/// written as float EXR, since a PNG cannot hold values above 1.
+/// An area emitter's `radiance`: `Ke`, or with `map_Ke` a bitmap of the map's linear color
+/// times `Ke` (Mitsuba's area emitter takes a texture for its radiance).
+fn radiance_xml(
+    scene: &Scene,
+    material: &Material,
+    out_dir: &Path,
+    report: &mut ExportReport,
+) -> Result<String, MitsubaExportError> {
+    let map = material.pbr_maps.emission;
+    Ok(
+        match map.and_then(|t| scene.textures.get(t).map(|data| (t, data))) {
+            Some((t, data)) => {
+                texture_xml(data, t, "radiance", material.emission, out_dir, report)?
+            }
+            None => format!(
+                "<rgb name=\"radiance\" value=\"{}\"/>",
+                vec3(material.emission)
+            ),
+        },
+    )
+}
+
+/// Writes the first channel of the linear (data) map `index` as an 8-bit grey PNG and returns
+/// the `<texture>` element named `name` that reads it raw (no sRGB decoding), so Mitsuba sees
+/// the same values in [0, 1] that the G-buffer samples.
+fn scalar_texture_xml(
+    data: &TextureData,
+    index: usize,
+    name: &str,
+    out_dir: &Path,
+    report: &mut ExportReport,
+) -> Result<String, MitsubaExportError> {
+    create_dir(&out_dir.join("textures"))?;
+    let pixels = (data.width as usize) * (data.height as usize);
+    let rgba = data.rgba8.get(..pixels * 4).unwrap_or(&[]);
+    let first: Vec<u8> = rgba.chunks_exact(4).map(|p| p[0]).collect();
+    let rel = format!("textures/tex{index}_r.png");
+    let path = out_dir.join(&rel);
+    match image::GrayImage::from_raw(data.width, data.height, first)
+        .map(|img| img.save_with_format(&path, image::ImageFormat::Png))
+    {
+        Some(Ok(())) => {}
+        Some(Err(source)) => return Err(MitsubaExportError::Texture { path, source }),
+        None => {
+            report.warnings.push(format!(
+                "texture {} has fewer bytes than its size says; {name} 1 is used instead",
+                data.path.display()
+            ));
+            return Ok(format!("<float name=\"{name}\" value=\"1\"/>"));
+        }
+    }
+    report.files.push(path);
+    Ok(format!(
+        "<texture type=\"bitmap\" name=\"{name}\">\n                <string \
+         name=\"filename\" value=\"{rel}\"/>\n                <boolean name=\"raw\" \
+         value=\"true\"/>\n            </texture>"
+    ))
+}
+
+/// Writes texture `index` and returns the `<texture>` element named `name` that reads it.
+/// Unscaled color maps are copied as sRGB PNG (Mitsuba linearizes 8-bit files); scaled or
+/// linear ones are linearized, scaled per channel and written as float EXR, since a PNG cannot
+/// hold values above 1.
 fn texture_xml(
     data: &TextureData,
     index: usize,
-    scale: f32,
+    name: &str,
+    scale: Vec3,
     out_dir: &Path,
     report: &mut ExportReport,
 ) -> Result<String, MitsubaExportError> {
@@ -709,16 +784,26 @@ fn texture_xml(
             v
         }
     };
-    let (rel, result) = if scale == 1.0 && data.srgb {
+    let (rel, result) = if scale == Vec3::ONE && data.srgb {
         let rel = format!("textures/tex{index}.png");
         let path = out_dir.join(&rel);
         let result = image::RgbImage::from_raw(data.width, data.height, rgb.collect())
             .map(|img| img.save_with_format(&path, image::ImageFormat::Png));
         (rel, result)
     } else {
-        let rel = format!("textures/tex{index}_x{scale}.exr");
+        let rel = if scale.x == scale.y && scale.y == scale.z {
+            format!("textures/tex{index}_x{}.exr", scale.x)
+        } else {
+            format!(
+                "textures/tex{index}_x{}_{}_{}.exr",
+                scale.x, scale.y, scale.z
+            )
+        };
         let path = out_dir.join(&rel);
-        let linear: Vec<f32> = rgb.map(|c| decode(c) * scale).collect();
+        let linear: Vec<f32> = rgb
+            .enumerate()
+            .map(|(i, c)| decode(c) * scale[i % 3])
+            .collect();
         let result = image::Rgb32FImage::from_raw(data.width, data.height, linear)
             .map(|img| img.save_with_format(&path, image::ImageFormat::OpenExr));
         (rel, result)
@@ -733,12 +818,12 @@ fn texture_xml(
                  used instead",
                 data.path.display()
             ));
-            return Ok("<rgb name=\"reflectance\" value=\"0.5, 0.5, 0.5\"/>".to_owned());
+            return Ok(format!("<rgb name=\"{name}\" value=\"0.5, 0.5, 0.5\"/>"));
         }
     }
     report.files.push(path);
     Ok(format!(
-        "<texture type=\"bitmap\" name=\"reflectance\">\n                <string \
+        "<texture type=\"bitmap\" name=\"{name}\">\n                <string \
          name=\"filename\" value=\"{rel}\"/>\n            </texture>"
     ))
 }
@@ -1055,6 +1140,82 @@ mod tests {
             &numbers(quad, "<rgb name=\"radiance\"", "value"),
             &[4.0, 3.0, 2.0]
         ));
+    }
+
+    /// The file name of the first `<string name="filename"` after `from` in `xml`.
+    fn filename_after<'a>(xml: &'a str, from: &str) -> &'a str {
+        let rest = &xml[xml.find(from).unwrap()..];
+        let key = "name=\"filename\" value=\"";
+        let rest = &rest[rest.find(key).unwrap() + key.len()..];
+        &rest[..rest.find('"').unwrap()]
+    }
+
+    #[test]
+    fn pbr_maps_are_exported_as_bitmaps() {
+        // A GGX emitter whose roughness, metalness and emission come from maps: roughness and
+        // metalness become raw (linear) grey bitmaps of the maps' first channel, the area
+        // radiance a float bitmap of the decoded map times Ke.
+        let text = format!(
+            "{CAMERA}[[objects]]\nbuiltin = \"quad\"\n\
+             material = {{ albedo = 0.5, roughness = 0.3, metallic = 1.0, \
+             emission_w_sr_m2 = [2, 4, 6] }}\n"
+        );
+        let mut scene = Scene::from_toml_str(&text, Path::new("<test>"), Path::new(".")).unwrap();
+        let texels = |a: [u8; 3], b: [u8; 3], srgb| {
+            let rgba8 = [a, b]
+                .iter()
+                .flat_map(|c| [c[0], c[1], c[2], 255])
+                .collect();
+            TextureData::new("two".into(), 2, 1, rgba8, srgb)
+        };
+        scene.textures = vec![
+            texels([10, 99, 99], [200, 0, 0], false),
+            texels([255, 1, 2], [0, 3, 4], false),
+            texels([255, 0, 128], [0, 255, 64], true),
+        ];
+        let m = scene.objects[0].materials[0];
+        scene.materials[m].pbr_maps = crate::scene::PbrMaps {
+            roughness: Some(0),
+            metallic: Some(1),
+            emission: Some(2),
+        };
+        let dir = TempDir::new("pbrmaps");
+        let report = export_mitsuba(&scene, 0.0, 32, 32, &dir.0).unwrap();
+        // The metalness map (texels 1 and 0, mean 0.5) is partly dielectric: approximate.
+        assert_eq!(report.warnings.len(), 1, "{:?}", report.warnings);
+        assert!(report.warnings[0].contains("metallic 0.5, the mean of its map"));
+        let xml = std::fs::read_to_string(&report.xml_path).unwrap();
+        // The maps replace the constants.
+        assert!(!xml.contains("<float name=\"roughness\""), "{xml}");
+        assert!(!xml.contains("<float name=\"metallic\""), "{xml}");
+        assert!(!xml.contains("<rgb name=\"radiance\""), "{xml}");
+        for (name, first_channel) in [("roughness", [10u8, 200]), ("metallic", [255, 0])] {
+            let element = format!("<texture type=\"bitmap\" name=\"{name}\">");
+            let at = xml
+                .find(&element)
+                .unwrap_or_else(|| panic!("no {name} bitmap: {xml}"));
+            let body = &xml[at..at + xml[at..].find("</texture>").unwrap()];
+            assert!(
+                body.contains("<boolean name=\"raw\" value=\"true\"/>"),
+                "{body}"
+            );
+            let file = dir.0.join(filename_after(&xml, &element));
+            let img = image::open(&file).unwrap().into_luma8();
+            assert_eq!(img.into_raw(), first_channel, "{name}");
+        }
+        // The radiance bitmap sits in the quad's emitter; its texels are the decoded sRGB map
+        // times Ke: srgb_decode(1) = 1, srgb_decode(0) = 0, srgb_decode(128/255) and
+        // srgb_decode(64/255) by the sRGB transfer function.
+        let shape = &xml[xml.find("<shape type=\"ply\"").unwrap()..];
+        let shape = &shape[..shape.find("</shape>").unwrap()];
+        let element = "<texture type=\"bitmap\" name=\"radiance\">";
+        assert!(shape.contains(element), "{shape}");
+        let file = dir.0.join(filename_after(shape, element));
+        let exr = image::open(&file).unwrap().into_rgb32f().into_raw();
+        let d = |c: f32| srgb_decode(c / 255.0);
+        let want = [2.0, 0.0, 6.0 * d(128.0), 0.0, 4.0, 6.0 * d(64.0)];
+        assert!(close(&exr, &want), "{exr:?}");
+        assert!(report.files.contains(&file));
     }
 
     #[test]

@@ -334,13 +334,7 @@ pub fn vertex_attributes() -> Vec<(vk::Format, u32)> {
 
 /// A 1x1 white texture bound where a draw has no albedo map.
 fn placeholder_texture() -> crate::scene::TextureData {
-    crate::scene::TextureData {
-        path: "placeholder".into(),
-        width: 1,
-        height: 1,
-        rgba8: vec![255; 4],
-        srgb: true,
-    }
+    crate::scene::TextureData::new("placeholder".into(), 1, 1, vec![255; 4], true)
 }
 
 /// The scene's meshes on the GPU: one vertex and one index buffer, a draw per submesh of each

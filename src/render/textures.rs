@@ -61,27 +61,21 @@ mod tests {
     #[test]
     fn mip_chain_halves_down_to_one_texel_and_averages_light() {
         // 2x2 black/white checker: its 1x1 mip is mid-grey in *light* (sRGB 188), not 128.
-        let tex = TextureData {
-            path: "checker".into(),
-            width: 2,
-            height: 2,
-            rgba8: vec![
+        let tex = TextureData::new(
+            "checker".into(),
+            2,
+            2,
+            vec![
                 0, 0, 0, 255, 255, 255, 255, 255, 255, 255, 255, 255, 0, 0, 0, 255,
             ],
-            srgb: true,
-        };
+            true,
+        );
         let levels = mip_chain(&tex);
         assert_eq!(levels.len(), 2);
         assert_eq!(levels[1].len(), 4);
         assert_eq!(levels[1][0], 188);
         assert_eq!(levels[1][3], 255);
-        let odd = TextureData {
-            path: "odd".into(),
-            width: 5,
-            height: 3,
-            rgba8: vec![255; 60],
-            srgb: false,
-        };
+        let odd = TextureData::new("odd".into(), 5, 3, vec![255; 60], false);
         let levels = mip_chain(&odd);
         assert_eq!(
             levels.iter().map(Vec::len).collect::<Vec<_>>(),

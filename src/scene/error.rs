@@ -189,6 +189,17 @@ pub enum SceneError {
         referenced_by: String,
     },
 
+    /// A texture that must exist (an MTL PBR map) is missing.
+    #[error(
+        "{}: texture not found (referenced by {referenced_by}); fix the path in the MTL file \
+         (relative to the OBJ's directory) or remove the key",
+        file.display()
+    )]
+    TextureMissing {
+        file: PathBuf,
+        referenced_by: String,
+    },
+
     /// A texture exists but cannot be decoded.
     #[error(
         "{}: cannot decode texture: {message}; convert it to PNG or EXR (referenced by \
@@ -306,6 +317,7 @@ impl SceneError {
             SceneError::FaceIndexOutOfRange { .. } => "face-index-out-of-range",
             SceneError::NonFiniteVertex { .. } => "non-finite-vertex",
             SceneError::SequenceTopology { .. } => "sequence-topology",
+            SceneError::TextureMissing { .. } => "texture-missing",
             SceneError::TextureDecode { .. } => "texture-decode",
         }
     }

@@ -47,7 +47,8 @@ pub struct Material {
 /// G-buffer. `roughness` and `metallic` (`map_Pr`, `map_Pm`: linear, first channel) replace
 /// the constants where present, as `map_Kd` replaces `Kd`; `emission` (`map_Ke`, sRGB) is
 /// multiplied by `Ke` (1 when the MTL gives only the map), so that an 8-bit map can scale a
-/// radiance above 1 W/(m²·sr). The voxel volumes use the constants only.
+/// radiance above 1 W/(m²·sr). The voxel volumes take each map's mean instead
+/// ([`Material::voxel_ggx`], [`Material::voxel_emission`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct PbrMaps {
     pub roughness: Option<usize>,
@@ -181,6 +182,28 @@ impl Material {
     pub fn is_opaque(&self) -> bool {
         self.opacity >= 1.0
     }
+
+    /// The GGX parameters the voxel volumes take: a `map_Pr` / `map_Pm` replaced by the mean
+    /// of its first channel (a voxel covers many texels; the G-buffer samples the map itself).
+    pub fn voxel_ggx(&self, textures: &[TextureData]) -> Option<Ggx> {
+        let mean = |map: Option<usize>, constant: f32| {
+            map.and_then(|t| textures.get(t))
+                .map_or(constant, |t| t.mean_linear.x)
+        };
+        self.ggx.map(|g| Ggx {
+            roughness: mean(self.pbr_maps.roughness, g.roughness),
+            metallic: mean(self.pbr_maps.metallic, g.metallic),
+        })
+    }
+
+    /// The emitted radiance the voxel volumes take, W/(m²·sr): `Ke` times the mean linear
+    /// color of `map_Ke` when there is one.
+    pub fn voxel_emission(&self, textures: &[TextureData]) -> Vec3 {
+        self.pbr_maps
+            .emission
+            .and_then(|t| textures.get(t))
+            .map_or(self.emission, |t| self.emission * t.mean_linear)
+    }
 }
 
 /// A decoded texture, 8 bits per channel, RGBA, rows top to bottom.
@@ -194,6 +217,47 @@ pub struct TextureData {
     pub rgba8: Vec<u8>,
     /// True for color (albedo) maps, stored sRGB-encoded; false for data (bump, normal) maps.
     pub srgb: bool,
+    /// The mean of the texels in linear RGB (sRGB maps decoded first), computed once by
+    /// [`TextureData::new`]; the voxel volumes take it in place of the map.
+    pub mean_linear: Vec3,
+}
+
+impl TextureData {
+    /// A texture of `width * height` RGBA texels, `rgba8` row by row, with its mean.
+    pub fn new(path: PathBuf, width: u32, height: u32, rgba8: Vec<u8>, srgb: bool) -> TextureData {
+        let mean_linear = mean_linear_rgb(&rgba8, srgb);
+        TextureData {
+            path,
+            width,
+            height,
+            rgba8,
+            srgb,
+            mean_linear,
+        }
+    }
+}
+
+/// The mean linear RGB of RGBA8 texels (alpha ignored); sRGB codes are decoded before
+/// averaging, as a filtered lookup of an sRGB texture averages light, not codes.
+fn mean_linear_rgb(rgba8: &[u8], srgb: bool) -> Vec3 {
+    let decode: Vec<f64> = (0..=255u8)
+        .map(|c| {
+            let v = f32::from(c) / 255.0;
+            f64::from(if srgb { crate::eval::srgb_decode(v) } else { v })
+        })
+        .collect();
+    let mut sum = [0.0f64; 3];
+    let mut n = 0usize;
+    for p in rgba8.chunks_exact(4) {
+        for (s, &c) in sum.iter_mut().zip(p) {
+            *s += decode[usize::from(c)];
+        }
+        n += 1;
+    }
+    if n == 0 {
+        return Vec3::ZERO;
+    }
+    Vec3::from_array(sum.map(|s| (s / n as f64) as f32))
 }
 
 impl std::fmt::Debug for TextureData {

@@ -103,6 +103,7 @@ fn mtl_pr_pm_ke_are_read() {
         "ok",
         "newmtl a\nKd 0.8 0.5 0.2\nPr 0.35\nPm 0.9\nKe 1 2 3\nmap_Pr rough.png\n",
     );
+    write_png(&path.parent().unwrap().join("rough.png"), [128; 3]);
     let s = Scene::load(&path).unwrap();
     let m = the_material(&s);
     assert_eq!(
@@ -231,4 +232,51 @@ fn broken_pbr_maps_name_the_texture_and_key() {
         assert_err(Scene::load(&path), &[&bad, key, "m.obj"]);
         let _ = std::fs::remove_dir_all(dir);
     }
+}
+
+#[test]
+fn missing_pbr_maps_are_errors_naming_mtl_material_key_and_path() {
+    for key in ["map_Pr", "map_Pm", "map_Ke"] {
+        let path = obj_scene(
+            &format!("missing_{key}"),
+            &format!("newmtl a\nKd 1 1 1\n{key} -clamp on gone.png\n"),
+        );
+        let dir = path.parent().unwrap();
+        let mtl = dir.join("m.mtl").display().to_string();
+        let gone = dir.join("gone.png").display().to_string();
+        let err = Scene::load(&path).expect_err("a missing PBR map must fail");
+        assert_eq!(err.kind(), "texture-missing");
+        let msg = err.to_string();
+        for part in [&mtl, "material `a`", key, &gone, "not found"] {
+            assert!(msg.contains(part), "message lacks `{part}`: {msg}");
+        }
+        let _ = std::fs::remove_dir_all(dir);
+    }
+}
+
+#[test]
+fn missing_albedo_map_stays_a_warning_but_not_for_a_pbr_map_of_the_same_file() {
+    // `map_Kd` keeps the compatibility fallback (the constant `Kd`): OBJ downloads often name
+    // textures by paths on their author's machine.
+    let path = obj_scene("missing_kd", "newmtl a\nKd 0.3 0.4 0.5\nmap_Kd gone.png\n");
+    let dir = path.parent().unwrap();
+    let s = Scene::load(&path).unwrap();
+    let m = the_material(&s);
+    assert_eq!(
+        (m.albedo_texture, m.albedo),
+        (None, Vec3::new(0.3, 0.4, 0.5))
+    );
+    // The same missing file as a PBR map after the warning (a cached miss) is still an error.
+    std::fs::write(
+        dir.join("m.mtl"),
+        "newmtl a\nmap_Kd gone.png\nnewmtl b\nmap_Ke gone.png\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("m.obj"),
+        "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\nusemtl b\nf 1 3 2\n",
+    )
+    .unwrap();
+    assert_err(Scene::load(&path), &["material `b`", "map_Ke", "gone.png"]);
+    let _ = std::fs::remove_dir_all(dir);
 }

@@ -110,6 +110,8 @@ impl AssetStore {
         let dir = path.parent().unwrap_or(Path::new(".")).to_path_buf();
         // MTL problems found by tobj's callback: (path, missing?, message).
         let mtl_problems: RefCell<Vec<(PathBuf, bool, String)>> = RefCell::new(Vec::new());
+        // Material name → the MTL file defining it, for messages naming the MTL file.
+        let mtl_files: RefCell<HashMap<String, PathBuf>> = RefCell::new(HashMap::new());
         let options = tobj::LoadOptions {
             single_index: true,
             triangulate: true,
@@ -128,6 +130,9 @@ impl AssetStore {
                                 format!("line {line}: {message}"),
                             ));
                             return Ok((Vec::new(), Default::default()));
+                        }
+                        for name in mtl_material_names(&mtl_text) {
+                            mtl_files.borrow_mut().insert(name, mtl_path.clone());
                         }
                         let r =
                             guarded(|| tobj::load_mtl_buf(&mut Cursor::new(mtl_text.as_bytes())))
@@ -179,9 +184,14 @@ impl AssetStore {
         // tobj reports MTL errors here too; ours were already handled above.
         let materials = materials.unwrap_or_default();
 
+        let mtl_files = mtl_files.into_inner();
         let material_ids = materials
             .iter()
-            .map(|m| self.register_mtl_material(&dir, m, path))
+            .map(|m| {
+                // tobj only reports materials of MTL files that were read.
+                let mtl = mtl_files.get(&m.name).map_or(path, PathBuf::as_path);
+                self.register_mtl_material(&dir, m, path, mtl)
+            })
             .collect::<Result<Vec<_>, _>>()?;
 
         let mut mesh = Mesh {
@@ -298,6 +308,7 @@ impl AssetStore {
         dir: &Path,
         m: &tobj::Material,
         obj: &Path,
+        mtl: &Path,
     ) -> Result<usize, SceneError> {
         let key = (dir.to_path_buf(), m.name.clone());
         if let Some(&i) = self.mtl_materials.get(&key) {
@@ -311,16 +322,16 @@ impl AssetStore {
                 .max(Vec3::ZERO)
         };
         let albedo_texture = match texture_file(m.diffuse_texture.as_deref()) {
-            Some(t) => self.texture(&dir.join(t), true, &field("map_Kd"))?,
+            Some(t) => self.texture(&dir.join(t), true, &field("map_Kd"), false)?,
             None => None,
         };
         let mut bump_kind = BumpKind::Height;
         let mut bump_texture = match texture_file(m.normal_texture.as_deref()) {
-            Some(t) => self.texture(&dir.join(t), false, &field("map_bump"))?,
+            Some(t) => self.texture(&dir.join(t), false, &field("map_bump"), false)?,
             None => None,
         };
         if let Some(t) = texture_file(m.unknown_param.get("norm").map(String::as_str)) {
-            if let Some(i) = self.texture(&dir.join(t), false, &field("norm"))? {
+            if let Some(i) = self.texture(&dir.join(t), false, &field("norm"), false)? {
                 bump_texture = Some(i);
                 bump_kind = BumpKind::TangentNormal;
             }
@@ -333,11 +344,21 @@ impl AssetStore {
                 finite_or(m.dissolve, 1.0)
             );
         }
-        // The PBR extension's maps: roughness and metalness linear, emission sRGB.
+        // The PBR extension's maps: roughness and metalness linear, emission sRGB. A missing
+        // one is an error naming the MTL file: these maps are new enough that a broken path is
+        // a mistake in the scene at hand, not an old download (unlike `map_Kd` above).
+        let pbr_field = |key: &str| {
+            format!(
+                "{}: material `{}` {key} (loaded by {})",
+                mtl.display(),
+                m.name,
+                obj.display()
+            )
+        };
         let mut pbr_map = |key: &str, srgb: bool| match texture_file(
             m.unknown_param.get(key).map(String::as_str),
         ) {
-            Some(t) => self.texture(&dir.join(t), srgb, &field(key)),
+            Some(t) => self.texture(&dir.join(t), srgb, &pbr_field(key), true),
             None => Ok(None),
         };
         let pbr_maps = PbrMaps {
@@ -385,17 +406,31 @@ impl AssetStore {
         Ok(i)
     }
 
-    /// Loads a texture once. A missing file is a warning and gives `None` (the material's
-    /// color is used instead); a file that exists but cannot be decoded is an error.
+    /// Loads a texture once. A missing file is an error when `required` (the MTL PBR maps),
+    /// else a warning that gives `None` (the material's color is used instead, as common OBJ
+    /// downloads name textures by paths on their author's machine); a file that exists but
+    /// cannot be decoded is always an error.
     pub fn texture(
         &mut self,
         path: &Path,
         srgb: bool,
         referenced_by: &str,
+        required: bool,
     ) -> Result<Option<usize>, SceneError> {
+        let missing = || SceneError::TextureMissing {
+            file: path.to_path_buf(),
+            referenced_by: referenced_by.to_string(),
+        };
         let key = (path.to_path_buf(), srgb);
         if let Some(&i) = self.textures_by_path.get(&key) {
-            return Ok(i);
+            return if i.is_none() && required {
+                Err(missing())
+            } else {
+                Ok(i)
+            };
+        }
+        if required && !path.is_file() {
+            return Err(missing());
         }
         if !path.is_file() {
             log::warn!(
@@ -415,13 +450,14 @@ impl AssetStore {
         let img = image::open(path).map_err(|e| decode_error(e.to_string()))?;
         let rgba = img.to_rgba8();
         let i = self.textures.len();
-        self.textures.push(TextureData {
-            path: path.to_path_buf(),
-            width: rgba.width(),
-            height: rgba.height(),
-            rgba8: rgba.into_raw(),
+        let (width, height) = rgba.dimensions();
+        self.textures.push(TextureData::new(
+            path.to_path_buf(),
+            width,
+            height,
+            rgba.into_raw(),
             srgb,
-        });
+        ));
         self.textures_by_path.insert(key, Some(i));
         Ok(Some(i))
     }
@@ -554,6 +590,14 @@ fn texture_file(s: Option<&str>) -> Option<String> {
         s
     };
     Some(name.replace('\\', "/"))
+}
+
+/// The names of the materials an MTL file defines (its `newmtl` lines, trimmed as tobj does).
+fn mtl_material_names(mtl_text: &str) -> impl Iterator<Item = String> + '_ {
+    mtl_text.lines().filter_map(|line| {
+        let rest = line.trim_start().strip_prefix("newmtl")?;
+        (rest.is_empty() || rest.starts_with(char::is_whitespace)).then(|| rest.trim().to_owned())
+    })
 }
 
 /// Reads a whole text file; a missing file becomes [`SceneError::NotFound`].

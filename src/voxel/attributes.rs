@@ -30,7 +30,7 @@ use super::gpu::{voxelize_loads, voxelize_splits, GpuVoxelizePush};
 use super::gpu_atlas_volumes::AttributeVolumes;
 use super::VoxelGrid;
 use crate::graph::{Access, ImageHandle, RenderGraph, Shader, SlotCondition};
-use crate::scene::{Material, Scene};
+use crate::scene::{Material, Scene, TextureData};
 use crate::vk::{
     vk, Buffer, BufferDesc, ComputePipeline, Context, Image, ImageDesc, MemoryLocation, VkError,
     MAX_FRAMES_IN_FLIGHT,
@@ -70,8 +70,10 @@ const VALUE_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
 /// it with the albedo volume's color at the same voxel, the base color of GGX materials):
 /// Lambert `(0, 0, 0, 0)`; normalized Phong `(ρs, n + 1)` (w ≥ 1); GGX
 /// `(roughness, metallic, 0, −1)`.
-pub fn material_texel(m: &Material) -> [f32; 4] {
-    match m.ggx {
+///
+/// GGX parameters are [`Material::voxel_ggx`]'s: a roughness or metalness map enters as its mean.
+pub fn material_texel(m: &Material, textures: &[TextureData]) -> [f32; 4] {
+    match m.voxel_ggx(textures) {
         Some(g) => [g.roughness, g.metallic, 0.0, -1.0],
         None if m.is_phong() => m.specular.extend(m.shininess + 1.0).to_array(),
         None => [0.0; 4],
@@ -573,7 +575,8 @@ fn attribute_splits(grid: &VoxelGrid, tris: &[AttributeTriangle]) -> u32 {
 }
 
 /// Every triangle of `scene` at `t_s` with its material's albedo, its material's emission
-/// and its material's lobe ([`material_texel`]).
+/// ([`Material::voxel_emission`]: `Ke` × the mean of `map_Ke`) and its material's lobe
+/// ([`material_texel`]).
 fn attribute_triangles(
     scene: &Scene,
     t_s: f32,
@@ -592,12 +595,16 @@ fn attribute_triangles(
         let m = object.transform_at(t_s);
         for (si, sub) in mesh.submeshes.iter().enumerate() {
             let material = object.materials.get(si).copied().unwrap_or(sub.material);
-            let (albedo, emission, lobe) = scene
-                .materials
-                .get(material)
-                .map_or((Vec3::splat(0.5), Vec3::ZERO, [0.0; 4]), |m| {
-                    (m.albedo, m.emission, material_texel(m))
-                });
+            let (albedo, emission, lobe) = scene.materials.get(material).map_or(
+                (Vec3::splat(0.5), Vec3::ZERO, [0.0; 4]),
+                |m| {
+                    (
+                        m.albedo,
+                        m.voxel_emission(&scene.textures),
+                        material_texel(m, &scene.textures),
+                    )
+                },
+            );
             let range = sub.first_index as usize..(sub.first_index + sub.index_count) as usize;
             for t in mesh.indices[range].chunks_exact(3) {
                 out.push([0, 1, 2].map(|k| {
@@ -628,4 +635,67 @@ fn attribute_triangles(
         materials.push(m);
     }
     (tris, emissions, materials)
+}
+
+#[cfg(test)]
+mod tests {
+    use std::path::Path;
+
+    use super::*;
+    use crate::scene::{Ggx, TextureData};
+
+    /// A 2×1 texture of two RGBA texels.
+    fn two_texels(a: [u8; 3], b: [u8; 3], srgb: bool) -> TextureData {
+        let rgba8 = [a, b]
+            .iter()
+            .flat_map(|c| [c[0], c[1], c[2], 255])
+            .collect();
+        TextureData::new("two".into(), 2, 1, rgba8, srgb)
+    }
+
+    #[test]
+    fn voxelizer_gets_the_pbr_maps_means_times_the_constants() {
+        let text = "[camera]\nposition = [0, 1, -3]\ntarget = [0, 0, 0]\nfov_y_deg = 40\n\
+                    [[objects]]\nbuiltin = \"cube\"\nmaterial = { roughness = 0.9, \
+                    emission_w_sr_m2 = [2, 4, 6] }\n";
+        let mut scene = Scene::from_toml_str(text, Path::new("t.toml"), Path::new(".")).unwrap();
+        let plain = attribute_triangles(&scene, 0.0);
+        // Without maps the voxelizer gets the constants.
+        assert!(plain.1.iter().all(|e| *e == [2.0, 4.0, 6.0, 0.0]));
+        assert!(plain.2.iter().all(|m| *m == [0.9, 0.0, 0.0, -1.0]));
+
+        // Roughness texels 0 and 255 (linear): mean 0.5. Metalness 51 and 51: 0.2. Emission
+        // sRGB texels 188 and 0: the mean of the decoded values, srgb_decode(188/255)/2 ≈
+        // 0.252 (averaging the codes first would give srgb_decode(94/255) ≈ 0.112).
+        scene.textures = vec![
+            two_texels([0; 3], [255; 3], false),
+            two_texels([51; 3], [51; 3], false),
+            two_texels([188; 3], [0; 3], true),
+        ];
+        let m = scene.objects[0].materials[0];
+        scene.materials[m].pbr_maps = crate::scene::PbrMaps {
+            roughness: Some(0),
+            metallic: Some(1),
+            emission: Some(2),
+        };
+        let (tris, emissions, materials) = attribute_triangles(&scene, 0.0);
+        assert_eq!(tris.len(), plain.0.len());
+        let glow = crate::eval::srgb_decode(188.0 / 255.0) / 2.0;
+        let want = Vec3::new(2.0, 4.0, 6.0) * glow;
+        for e in &emissions {
+            assert!(Vec3::from_slice(&e[..3]).abs_diff_eq(want, 1e-6), "{e:?}");
+        }
+        let ggx = scene.materials[m].voxel_ggx(&scene.textures).unwrap();
+        assert!((ggx.roughness - 0.5).abs() < 1e-6 && (ggx.metallic - 0.2).abs() < 1e-6);
+        let lobe = [ggx.roughness, ggx.metallic, 0.0, -1.0];
+        assert!(materials.iter().all(|l| *l == lobe));
+        // The G-buffer keeps the constants next to the maps (it samples the maps).
+        assert_eq!(
+            scene.materials[m].ggx,
+            Some(Ggx {
+                roughness: 0.9,
+                metallic: 0.0
+            })
+        );
+    }
 }
