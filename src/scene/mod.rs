@@ -126,6 +126,7 @@
 
 mod builtin;
 mod camera;
+mod camera_path;
 mod crease;
 mod cull;
 mod desc;
@@ -144,6 +145,7 @@ use std::path::{Path, PathBuf};
 
 pub use builtin::{builtin, builtin_names, load_scene_arg, DEFAULT_SCENE};
 pub use camera::{Camera, Eye, StereoRig};
+pub use camera_path::{CameraKey, CameraPath, CameraPathError};
 pub use cull::aabb_visible;
 pub use error::SceneError;
 pub use gi::{resolve_gi, GiOverrides};
@@ -165,6 +167,8 @@ pub use vpl_settings::{VplOverrides, VplSettings, VplShading, VplVisibility};
 #[derive(Clone, Debug)]
 pub struct Scene {
     pub camera: Camera,
+    /// The `[camera_path]` table: a flight `voxgi profile --camera-path` replays.
+    pub camera_path: Option<CameraPath>,
     pub lights: Vec<Light>,
     pub objects: Vec<Object>,
     /// Shared by objects; OBJ sequences contribute one mesh per frame.
