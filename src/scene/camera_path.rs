@@ -113,7 +113,9 @@ impl CameraPath {
                 if !(fov > 0.0 && fov < 180.0) {
                     return Err(err(
                         field("fov_y_deg"),
-                        format!("{fov} is not a vertical field of view; expected degrees in (0, 180)"),
+                        format!(
+                            "{fov} is not a vertical field of view; expected degrees in (0, 180)"
+                        ),
                     ));
                 }
             }
@@ -334,8 +336,12 @@ mod tests {
             Vec3::Y,
         )
         .unwrap();
-        assert!(p.position_at(3.0).abs_diff_eq(Vec3::new(1.0, 0.0, 0.0), 1e-6));
-        assert!(p.position_at(2.5).abs_diff_eq(Vec3::new(0.5, 0.0, 0.0), 1e-6));
+        assert!(p
+            .position_at(3.0)
+            .abs_diff_eq(Vec3::new(1.0, 0.0, 0.0), 1e-6));
+        assert!(p
+            .position_at(2.5)
+            .abs_diff_eq(Vec3::new(0.5, 0.0, 0.0), 1e-6));
     }
 
     #[test]
