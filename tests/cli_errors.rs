@@ -171,7 +171,14 @@ fn profile_flies_the_camera_path_or_says_the_scene_has_none() {
         "/assets/scenes/cornell_mover.toml"
     );
     let size = ["--width", "32", "--height", "32", "--warmup", "1"];
-    let mut args = vec!["profile", scene, "--camera-path", "--path-frames", "3"];
+    let mut args = vec![
+        "--validate",
+        "profile",
+        scene,
+        "--camera-path",
+        "--path-frames",
+        "3",
+    ];
     args.extend(size);
     let out = voxgi(&args);
     let stdout = String::from_utf8_lossy(&out.stdout);
