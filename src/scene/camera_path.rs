@@ -123,6 +123,25 @@ impl CameraPath {
         Ok(CameraPath { keys, up })
     }
 
+    /// A path through `cameras` (the viewer's recorded keyframes), `spacing_s` apart from
+    /// t = 0, each key with its camera's field of view; `up` is the first camera's.
+    pub fn through_cameras(
+        cameras: &[Camera],
+        spacing_s: f32,
+    ) -> Result<CameraPath, CameraPathError> {
+        let keys = cameras
+            .iter()
+            .enumerate()
+            .map(|(i, c)| CameraKey {
+                time_s: i as f32 * spacing_s,
+                position: c.position,
+                forward: c.forward,
+                fov_y_deg: Some(c.fov_y_deg),
+            })
+            .collect();
+        CameraPath::new(keys, cameras.first().map_or(Vec3::Y, |c| c.up))
+    }
+
     pub fn keys(&self) -> &[CameraKey] {
         &self.keys
     }
@@ -361,6 +380,25 @@ mod tests {
         assert_eq!(c.fov_y_deg, 50.0);
         assert!(c.position.abs_diff_eq(Vec3::new(1.0, 0.5, 0.0), 1e-6));
         assert!(c.view().is_finite());
+    }
+
+    #[test]
+    fn through_cameras_spaces_the_recorded_keys() {
+        let cam = |x: f32| Camera {
+            position: Vec3::new(x, 1.0, 0.0),
+            forward: Vec3::Z,
+            up: Vec3::Y,
+            fov_y_deg: 40.0 + x,
+            near: 0.01,
+            far: 10.0,
+            shift_x_tan: 0.0,
+        };
+        let p = CameraPath::through_cameras(&[cam(0.0), cam(1.0), cam(3.0)], 2.0).unwrap();
+        let times: Vec<f32> = p.keys().iter().map(|k| k.time_s).collect();
+        assert_eq!(times, vec![0.0, 2.0, 4.0]);
+        assert_eq!(p.camera_at(&cam(9.0), 4.0), cam(3.0));
+        // One recorded key is not a path.
+        assert!(CameraPath::through_cameras(&[cam(0.0)], 2.0).is_err());
     }
 
     #[test]
