@@ -92,9 +92,9 @@
 //! up = [0.0, 1.0, 0.0]              # optional, default the camera's `up`
 //! keyframes = [                     # at least 2; times finite and strictly increasing
 //!     { time_s = 0.0, position = [0.278, 0.273, -0.8], look_at = [0.278, 0.273, 0.0] },
-//!     { time_s = 2.0, position = [0.1, 0.35, -0.2], direction = [0.3, -0.4, 0.9],
-//!       fov_y_deg = 50.0 },         # `look_at` (a point) or `direction`, not both; optional
-//! ]                                 #   fov_y_deg in (0, 180), default the camera's
+//!     { time_s = 2.0, position = [0.1, 0.35, -0.2], direction = [0.3, -0.4, 0.9], fov_y_deg = 50.0 },
+//! ]                                 # `look_at` (a point) or `direction`, not both; optional
+//!                                   #   fov_y_deg in (0, 180), default the camera's
 //!                                   # position, direction and fov follow a Catmull-Rom spline
 //!                                   #   in time (C1, through every key; see [`CameraPath`]);
 //!                                   #   outside the keys' times the path holds its ends
