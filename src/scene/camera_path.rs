@@ -1,7 +1,6 @@
 //! A recorded camera flight: keyframes (time, position, viewing direction, optional field of
 //! view) joined by a C1 spline, evaluated at any time. `voxgi profile --camera-path` replays it
-//! so that timings are taken along the same flight every time, as the thesis's animated
-//! walk-throughs are (Thiedemann 2010 §7.3.2 measures its timings on such flights).
+//! so that timings are taken along the same flight every time.
 //!
 //! # The spline
 //! Position, viewing direction and field of view each follow a Catmull-Rom spline in *time*:
@@ -48,7 +47,7 @@ pub struct CameraPath {
 }
 
 /// How far (|forward · up|) a key's direction may lean toward `up` before the view is
-/// ill-defined (the same 1e-4 bound on |forward × up| as the `[camera]` table, squared-ish).
+/// ill-defined: 0.9999 = cos 0.81°, i.e. |forward × up| >= 0.014.
 const MAX_UP_ALIGNMENT: f32 = 0.9999;
 
 impl CameraPath {
