@@ -161,3 +161,53 @@ fn commands_failing_after_the_device_is_up_release_everything() {
         );
     }
 }
+
+/// `profile --camera-path` flies the scene's `[camera_path]`: the report says over which
+/// times it measured; a scene without the table is refused before the device is up.
+#[test]
+fn profile_flies_the_camera_path_or_says_the_scene_has_none() {
+    let scene = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/assets/scenes/cornell_mover.toml"
+    );
+    let size = ["--width", "32", "--height", "32", "--warmup", "1"];
+    let mut args = vec![
+        "--validate",
+        "profile",
+        scene,
+        "--camera-path",
+        "--path-frames",
+        "3",
+    ];
+    args.extend(size);
+    let out = voxgi(&args);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{stdout}\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    // cornell_mover's path runs from 0 to 5 s through 4 keys.
+    assert!(
+        stdout.contains("camera path: 3 frames evenly over 0..5 s (4 keyframes)"),
+        "{stdout}"
+    );
+    assert!(stdout.contains("(3 frames after 1 warm-up)"), "{stdout}");
+
+    let mut args = vec!["profile", "cornell", "--camera-path"];
+    args.extend(size);
+    let out = voxgi(&args);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("cornell: `--camera-path` needs a `[camera_path]` table"),
+        "{stderr}"
+    );
+    // `--path-frames` means nothing without the path.
+    let out = voxgi(&["profile", "cornell", "--path-frames", "3"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && stderr.contains("--camera-path"),
+        "{stderr}"
+    );
+}

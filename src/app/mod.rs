@@ -119,6 +119,8 @@ pub struct ViewerReport {
     pub teardown: crate::vk::TeardownReport,
     /// Where the fly camera was when the viewer closed.
     pub camera: Option<Camera>,
+    /// Cameras recorded with the panel's "Add camera keyframe", in order.
+    pub camera_keys: Vec<Camera>,
 }
 
 /// Scripted runs give up after this long.
@@ -356,6 +358,7 @@ impl Viewer {
             debug: opts.settings.debug.map(|d| d.view),
             atlas_object: opts.settings.debug.map_or(0, |d| d.object),
             screenshot: false,
+            add_keyframe: false,
         };
         Self {
             opts: opts.clone(),
@@ -517,6 +520,9 @@ impl Viewer {
 
         self.fly.advance(self.keys, dt_s);
         self.scene.camera = self.fly.apply(&self.lens);
+        if std::mem::take(&mut self.controls.add_keyframe) {
+            self.report.camera_keys.push(self.scene.camera);
+        }
 
         // Minimized (or zero-sized): nothing to present until the window is back. On X11 an
         // iconified window keeps its size (and the surface its extent), so ask the window
@@ -944,6 +950,7 @@ mod tests {
             debug: Some(DebugView::Atlas),
             atlas_object: 2,
             screenshot: false,
+            add_keyframe: false,
         };
         let d = debug_settings(&c, current.debug).expect("a debug view");
         assert_eq!((d.view, d.object, d.level), (DebugView::Atlas, 2, 3));

@@ -81,6 +81,8 @@ pub struct Controls {
     pub atlas_object: usize,
     /// Set by the button (or F12); the viewer clears it after saving.
     pub screenshot: bool,
+    /// Set by the "Add camera keyframe" button; the viewer records the camera and clears it.
+    pub add_keyframe: bool,
 }
 
 /// Read-only facts the panel shows.
@@ -363,6 +365,13 @@ pub fn draw(
             if ui.button("Screenshot (F12)").clicked() {
                 c.screenshot = true;
             }
+            if ui
+                .button("Add camera keyframe")
+                .on_hover_text("printed as a [camera_path] table on exit, keys 2 s apart")
+                .clicked()
+            {
+                c.add_keyframe = true;
+            }
             if !info.status.is_empty() {
                 ui.label(info.status);
             }
@@ -458,6 +467,7 @@ mod table_tests {
             debug: None,
             atlas_object: 0,
             screenshot: false,
+            add_keyframe: false,
         };
         let lights = ["point 0".to_string()];
         let info = PanelInfo {

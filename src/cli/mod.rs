@@ -63,6 +63,14 @@ pub enum CliError {
     Settings(#[from] crate::limits::LimitError),
     /// Writing the report failed, e.g. a closed pipe (`voxgi compare a b | head -1`); the
     /// `io::Error` stays the source so that `main` can end quietly on a broken pipe.
+    /// `profile --camera-path` on a scene without a `[camera_path]` table.
+    #[error(
+        "{scene}: `--camera-path` needs a `[camera_path]` table in the scene file, and this \
+         scene has none; add one (keyframes with time_s, position and look_at or direction; \
+         see the format in `voxgi::scene` docs or assets/scenes/cornell_mover.toml) or drop \
+         the flag"
+    )]
+    NoCameraPath { scene: String },
     #[error("cannot write to stdout")]
     Stdout(#[source] std::io::Error),
     #[error("writing {}", path.display())]

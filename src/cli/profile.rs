@@ -6,7 +6,7 @@ use super::{check_validation, context, out, outln, CliError, Global};
 use crate::demo::Demo;
 use crate::graph::GraphExecutor;
 use crate::profile::ProfileReport;
-use crate::render::profile_scene;
+use crate::render::{profile_camera_path, profile_scene};
 use crate::scene::load_scene_arg;
 use crate::vk::{Context, MAX_FRAMES_IN_FLIGHT};
 use std::io::Write;
@@ -30,6 +30,13 @@ pub struct ProfileArgs {
     /// Print JSON instead of a table.
     #[arg(long)]
     pub json: bool,
+    /// Fly the camera along the scene's `[camera_path]`: the measured frames are spread
+    /// evenly in time over it, so timings are taken along the same flight every time.
+    #[arg(long, conflicts_with = "demo")]
+    pub camera_path: bool,
+    /// Frames measured along the camera path (default: `--frames`).
+    #[arg(long, requires = "camera_path")]
+    pub path_frames: Option<usize>,
 }
 
 /// Arguments of `voxgi graph`.
@@ -59,16 +66,36 @@ pub fn profile(global: &Global, args: &ProfileArgs, out: &mut dyn Write) -> Resu
             Some((scene, settings))
         }
     };
+    let scene_name = args
+        .scene
+        .clone()
+        .unwrap_or_else(|| crate::scene::DEFAULT_SCENE.into());
+    let path = match (&scene, args.camera_path) {
+        (Some((s, _)), true) => Some(s.camera_path.clone().ok_or(CliError::NoCameraPath {
+            scene: scene_name.clone(),
+        })?),
+        _ => None,
+    };
+    let frames = args.path_frames.unwrap_or(args.frames);
     let ctx = context(global)?;
     let report = if let Some((scene, settings)) = &scene {
-        let scene_name = args
-            .scene
-            .clone()
-            .unwrap_or_else(|| crate::scene::DEFAULT_SCENE.into());
-        let run = profile_scene(&ctx, scene, settings, args.frames, args.warmup)?;
+        let run = match &path {
+            Some(p) => profile_camera_path(&ctx, scene, settings, p, frames, args.warmup)?,
+            None => profile_scene(&ctx, scene, settings, frames, args.warmup)?,
+        };
         let mut report = ProfileReport::from_frames(&ctx.info.name, &run.frames, args.warmup)
             .with_setup(&run.setup);
         report.notes.push(("scene".into(), scene_name));
+        if let Some(p) = &path {
+            let (t0, t1) = p.time_range_s();
+            report.notes.push((
+                "camera path".into(),
+                format!(
+                    "{frames} frames evenly over {t0}..{t1} s ({} keyframes)",
+                    p.keys().len()
+                ),
+            ));
+        }
         report.notes.push((
             "resolution".into(),
             format!("{}x{}", frame.width, frame.height),

@@ -9,6 +9,9 @@ use crate::voxel::debug_view::{DebugSettings, DebugView};
 use std::io::Write;
 use std::path::PathBuf;
 
+/// Seconds between the keyframes recorded in the viewer (edit `time_s` to retime the flight).
+const RECORDED_KEY_SPACING_S: f32 = 2.0;
+
 /// Arguments of `voxgi view`.
 #[derive(clap::Args, Clone)]
 pub struct ViewArgs {
@@ -104,6 +107,19 @@ pub fn view(global: &Global, args: ViewArgs, out: &mut dyn Write) -> Result<(), 
     if let Some(camera) = &report.camera {
         // Pasteable into a scene file, to start there next time.
         out!(out, "camera at exit:\n{}", camera.toml_table());
+    }
+    match crate::scene::CameraPath::through_cameras(&report.camera_keys, RECORDED_KEY_SPACING_S) {
+        // Pasteable into a scene file, for `voxgi profile --camera-path`.
+        Ok(path) => out!(out, "recorded camera path:\n{}", path.toml_table()),
+        Err(e) if !report.camera_keys.is_empty() => {
+            outln!(
+                out,
+                "recorded camera path not printed: `{}`: {}",
+                e.field,
+                e.problem
+            )
+        }
+        Err(_) => {}
     }
     for p in &report.screenshots {
         outln!(out, "wrote {}", p.display());

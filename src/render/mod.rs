@@ -20,7 +20,7 @@ mod textures;
 
 pub use gbuffer::Gbuffer;
 pub use light_map::LightMaps;
-pub use run::{profile_scene, render_image, ProfileRun, RenderOutput};
+pub use run::{profile_camera_path, profile_scene, render_image, ProfileRun, RenderOutput};
 pub use scene_gpu::{Draw, DrawLists, SceneGpu, SceneInputs};
 pub use settings_check::{check_device_limits, check_render_settings};
 pub use stereo::{eye_scene, pack as stereo_pack, render_stereo, StereoOutput, StereoSettings};

@@ -4,7 +4,7 @@
 use super::{RenderError, Renderer};
 use crate::eval::HdrImage;
 use crate::graph::GraphExecutor;
-use crate::scene::Scene;
+use crate::scene::{CameraPath, Scene};
 use crate::vk::{Context, PassTiming, MAX_FRAMES_IN_FLIGHT};
 
 /// The result of [`render_image`].
@@ -108,12 +108,61 @@ pub fn profile_scene(
     let frames = crate::graph::run_frames(ctx, &exec, warmup + frames, warmup, |slot| {
         renderer.write_frame(slot)
     })?;
+    Ok(profile_run(&exec, &renderer, frames))
+}
+
+/// Like [`profile_scene`], with the camera flown along `path` (for `voxgi profile
+/// --camera-path`): the warm-up frames look from the path's start, measured frame k from the
+/// k-th of `frames` times evenly spaced over it (first and last key included). The camera
+/// moves through [`Renderer::prepare`] before each frame, as the viewer's does; the scene's
+/// animation time stays `settings.time_s`.
+pub fn profile_camera_path(
+    ctx: &Context,
+    scene: &Scene,
+    settings: &super::RenderSettings,
+    path: &CameraPath,
+    frames: usize,
+    warmup: usize,
+) -> Result<ProfileRun, RenderError> {
+    let times_s = path.even_times_s(frames);
+    let start_s = path.time_range_s().0;
+    let mut flown = scene.clone();
+    let mut renderer = Renderer::new(ctx, scene, settings.clone())?;
+    let exec = GraphExecutor::new(ctx, renderer.graph(), MAX_FRAMES_IN_FLIGHT)?;
+    let mut frame = 0usize;
+    let mut failed = None;
+    let measured = crate::graph::run_frames(ctx, &exec, warmup + frames, warmup, |slot| {
+        let t_s = frame
+            .checked_sub(warmup)
+            .and_then(|k| times_s.get(k).copied())
+            .unwrap_or(start_s);
+        frame += 1;
+        flown.camera = path.camera_at(&scene.camera, t_s);
+        match renderer.prepare(&flown) {
+            Ok(()) => renderer.write_frame(slot),
+            Err(e) => {
+                failed.get_or_insert(e);
+            }
+        }
+    })?;
+    if let Some(e) = failed {
+        return Err(e);
+    }
+    Ok(profile_run(&exec, &renderer, measured))
+}
+
+/// The compiled graph's facts and the renderer's setup timings around measured `frames`.
+fn profile_run(
+    exec: &GraphExecutor,
+    renderer: &Renderer,
+    frames: Vec<Vec<PassTiming>>,
+) -> ProfileRun {
     let c = exec.compiled();
-    Ok(ProfileRun {
+    ProfileRun {
         frames,
         live_passes: c.order.iter().map(|&p| c.pass_names[p].clone()).collect(),
         culled_passes: c.culled.iter().map(|&p| c.pass_names[p].clone()).collect(),
         transient_memory: c.memory,
         setup: renderer.setup_timings(),
-    })
+    }
 }

@@ -6,6 +6,7 @@ use glam::Vec3;
 use serde::Deserialize;
 
 use super::camera::Camera;
+use super::camera_path::{CameraKey, CameraPath};
 use super::error::{field_ref, from_toml_error, SceneError};
 use super::gi::{bounces_from_toml, GiOverrides, GI_METHOD_NAMES};
 use super::light::Light;
@@ -42,6 +43,25 @@ pub(crate) struct SceneDesc {
     pub objects: Vec<ObjectDesc>,
     pub voxel: Option<toml::Table>,
     pub gi: Option<GiDesc>,
+    pub camera_path: Option<CameraPathDesc>,
+}
+
+/// The `[camera_path]` table, checked by [`build_camera_path`].
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct CameraPathDesc {
+    pub up: Option<[f32; 3]>,
+    pub keyframes: Vec<CameraKeyDesc>,
+}
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct CameraKeyDesc {
+    pub time_s: f32,
+    pub position: [f32; 3],
+    pub look_at: Option<[f32; 3]>,
+    pub direction: Option<[f32; 3]>,
+    pub fov_y_deg: Option<f32>,
 }
 
 /// The `[gi]` table. Integers are read signed so that a negative count is reported by
@@ -297,6 +317,11 @@ pub(crate) fn build(
 ) -> Result<Scene, SceneError> {
     let ck = Check { file };
     let camera = build_camera(&ck, &desc.camera)?;
+    let camera_path = desc
+        .camera_path
+        .as_ref()
+        .map(|p| build_camera_path(&ck, p, camera.up))
+        .transpose()?;
     let gi = desc
         .gi
         .as_ref()
@@ -327,6 +352,7 @@ pub(crate) fn build(
     }
     let scene = Scene {
         camera,
+        camera_path,
         lights,
         objects,
         meshes: store.meshes,
@@ -344,6 +370,61 @@ pub(crate) fn build(
         );
     }
     Ok(scene)
+}
+
+/// Turns each key's `look_at` or `direction` into a unit direction, then lets
+/// [`CameraPath::new`] check the path; every error names the file and the key.
+fn build_camera_path(
+    ck: &Check<'_>,
+    p: &CameraPathDesc,
+    camera_up: Vec3,
+) -> Result<CameraPath, SceneError> {
+    let up = match p.up {
+        Some(u) => ck.direction("camera_path.up", u)?,
+        None => camera_up,
+    };
+    let mut keys = Vec::with_capacity(p.keyframes.len());
+    for (i, k) in p.keyframes.iter().enumerate() {
+        let field = |f: &str| format!("camera_path.keyframes[{i}].{f}");
+        let time_s = ck.scalar(&field("time_s"), k.time_s)?;
+        let position = ck.vec3(&field("position"), k.position)?;
+        let forward = match (k.look_at, k.direction) {
+            (Some(_), Some(_)) => {
+                return Err(ck.camera(
+                    &field("look_at"),
+                    "both `look_at` and `direction` are given; keep one of them",
+                ))
+            }
+            (None, None) => {
+                return Err(ck.camera(
+                    &field("look_at"),
+                    "neither `look_at` nor `direction` is given; add `look_at = [x, y, z]` (a \
+                     point, meters) or `direction = [x, y, z]`",
+                ))
+            }
+            (Some(t), None) => {
+                let d = ck.vec3(&field("look_at"), t)? - position;
+                d.try_normalize().ok_or_else(|| {
+                    ck.camera(
+                        &field("look_at"),
+                        "the point equals the key's position; move it or use `direction`",
+                    )
+                })?
+            }
+            (None, Some(d)) => ck.direction(&field("direction"), d)?,
+        };
+        let fov_y_deg = k
+            .fov_y_deg
+            .map(|f| ck.scalar(&field("fov_y_deg"), f))
+            .transpose()?;
+        keys.push(CameraKey {
+            time_s,
+            position,
+            forward,
+            fov_y_deg,
+        });
+    }
+    CameraPath::new(keys, up).map_err(|e| ck.camera(&e.field, e.problem))
 }
 
 fn build_camera(ck: &Check<'_>, c: &CameraDesc) -> Result<Camera, SceneError> {

@@ -88,6 +88,17 @@
 //! fps = 24.0                            # optional, default 24
 //! first_frame = 1                       # optional, default 0
 //!
+//! [camera_path]                     # optional: a flight `voxgi profile --camera-path` replays
+//! up = [0.0, 1.0, 0.0]              # optional, default the camera's `up`
+//! keyframes = [                     # at least 2; times finite and strictly increasing
+//!     { time_s = 0.0, position = [0.278, 0.273, -0.8], look_at = [0.278, 0.273, 0.0] },
+//!     { time_s = 2.0, position = [0.1, 0.35, -0.2], direction = [0.3, -0.4, 0.9], fov_y_deg = 50.0 },
+//! ]                                 # `look_at` (a point) or `direction`, not both; optional
+//!                                   #   fov_y_deg in (0, 180), default the camera's
+//!                                   # position, direction and fov follow a Catmull-Rom spline
+//!                                   #   in time (C1, through every key; see [`CameraPath`]);
+//!                                   #   outside the keys' times the path holds its ends
+//!
 //! [voxel]    # optional, settings of the voxel grid (checked by `voxel`, not here)
 //!
 //! [gi]       # optional: the scene's indirect-light defaults; every key optional (default
@@ -126,6 +137,7 @@
 
 mod builtin;
 mod camera;
+mod camera_path;
 mod crease;
 mod cull;
 mod desc;
@@ -144,6 +156,7 @@ use std::path::{Path, PathBuf};
 
 pub use builtin::{builtin, builtin_names, load_scene_arg, DEFAULT_SCENE};
 pub use camera::{Camera, Eye, StereoRig};
+pub use camera_path::{CameraKey, CameraPath, CameraPathError};
 pub use cull::aabb_visible;
 pub use error::SceneError;
 pub use gi::{resolve_gi, GiOverrides};
@@ -165,6 +178,8 @@ pub use vpl_settings::{VplOverrides, VplSettings, VplShading, VplVisibility};
 #[derive(Clone, Debug)]
 pub struct Scene {
     pub camera: Camera,
+    /// The `[camera_path]` table: a flight `voxgi profile --camera-path` replays.
+    pub camera_path: Option<CameraPath>,
     pub lights: Vec<Light>,
     pub objects: Vec<Object>,
     /// Shared by objects; OBJ sequences contribute one mesh per frame.

@@ -1136,3 +1136,88 @@ proptest! {
         }
     }
 }
+
+// ---- [camera_path] --------------------------------------------------------------------------
+
+#[test]
+fn asset_cornell_mover_has_a_camera_path_starting_at_its_camera() {
+    let s = Scene::load(asset("scenes/cornell_mover.toml")).unwrap();
+    let p = s.camera_path.as_ref().expect("a [camera_path] table");
+    assert_eq!(p.keys().len(), 4);
+    // The first key repeats `[camera]`, so a replay starts from the usual view.
+    let c = p.camera_at(&s.camera, p.time_range_s().0);
+    assert!(c.position.abs_diff_eq(s.camera.position, 1e-6));
+    assert!(c.forward.abs_diff_eq(s.camera.forward, 1e-6));
+}
+
+#[test]
+fn camera_path_round_trips_through_its_toml_table() {
+    let text = format!(
+        "{CAMERA}{LIGHT}{CUBE}[camera_path]\nkeyframes = [\n\
+         {{ time_s = 0.5, position = [0, 1, -3], look_at = [0, 0, 0] }},\n\
+         {{ time_s = 1.5, position = [1, 1, -2], direction = [-0.1, -0.3, 1], fov_y_deg = 55 }},\n\
+         {{ time_s = 4, position = [2, 0.5, 0], look_at = [0, 0.2, 0] }},\n]\n"
+    );
+    let s = load_ok(&text, &[]);
+    let p = s.camera_path.clone().unwrap();
+    let again = load_ok(&format!("{CAMERA}{LIGHT}{CUBE}{}", p.toml_table()), &[]);
+    let q = again.camera_path.unwrap();
+    // Times, positions and fields of view print exactly; a written direction is normalized
+    // again on loading, which may move its last bit.
+    assert_eq!((q.up(), q.keys().len()), (p.up(), p.keys().len()));
+    for (a, b) in p.keys().iter().zip(q.keys()) {
+        assert_eq!(
+            (a.time_s, a.position, a.fov_y_deg),
+            (b.time_s, b.position, b.fov_y_deg)
+        );
+        assert!(a.forward.abs_diff_eq(b.forward, 1e-6), "{a:?} vs {b:?}");
+    }
+}
+
+#[test]
+fn camera_path_errors_name_the_file_and_key() {
+    let path = |keys: &str| format!("{CAMERA}{LIGHT}{CUBE}[camera_path]\nkeyframes = [{keys}]\n");
+    let key = |t: &str, extra: &str| format!("{{ time_s = {t}, position = [0, 1, -3]{extra} }},");
+    let look = ", look_at = [0, 0, 0]";
+    let cases: Vec<(String, &[&str])> = vec![
+        (
+            path(&key("0", look)),
+            &["camera_path.keyframes", "at least 2"],
+        ),
+        (
+            path(&(key("1", look) + &key("0.5", look))),
+            &["camera_path.keyframes[1].time_s", "strictly increasing"],
+        ),
+        (
+            path(&(key("nan", look) + &key("1", look))),
+            &["camera_path.keyframes[0].time_s"],
+        ),
+        (
+            path(&(key("0", look) + &key("1", ""))),
+            &["camera_path.keyframes[1].look_at", "neither"],
+        ),
+        (
+            path(&(key("0", look) + &key("1", ", look_at = [0, 1, -3]"))),
+            &[
+                "camera_path.keyframes[1].look_at",
+                "equals the key's position",
+            ],
+        ),
+        (
+            path(&(key("0", look) + &key("1", ", direction = [0, 0, 0]"))),
+            &["camera_path.keyframes[1].direction"],
+        ),
+        (
+            path(&(key("0", look) + &key("1", ", direction = [0, 1, 0]"))),
+            &["camera_path.keyframes[1].direction", "parallel to up"],
+        ),
+        (
+            path(&(key("0", look) + &key("1", &format!("{look}, fov_y_deg = 0")))),
+            &["camera_path.keyframes[1].fov_y_deg", "(0, 180)"],
+        ),
+    ];
+    for (text, parts) in cases {
+        let (e, file) = load_err(&text, &[]);
+        assert_msg(&e, &file, parts);
+    }
+}
