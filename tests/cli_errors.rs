@@ -211,3 +211,22 @@ fn profile_flies_the_camera_path_or_says_the_scene_has_none() {
         "{stderr}"
     );
 }
+
+#[test]
+fn render_output_must_be_a_png_and_says_how_to_get_hdr() {
+    // `-o x.exr` used to fail after rendering ("writing color type Rgba8 not yet supported")
+    // and leave an empty file; now it is refused before the device starts, naming --exr.
+    let path = std::env::temp_dir().join(format!("voxgi-cli-errors-{}.exr", std::process::id()));
+    let path = path.to_string_lossy().into_owned();
+    let out = voxgi(&["render", "-o", &path, "--width", "32", "--height", "32"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "-o {path} succeeded");
+    assert!(
+        stderr.contains(".png") && stderr.contains("--exr"),
+        "the error names the format and --exr: {stderr}"
+    );
+    assert!(
+        !std::path::Path::new(&path).exists(),
+        "no file was left behind"
+    );
+}

@@ -61,8 +61,6 @@ pub enum CliError {
     /// A flag's value out of its range.
     #[error(transparent)]
     Settings(#[from] crate::limits::LimitError),
-    /// Writing the report failed, e.g. a closed pipe (`voxgi compare a b | head -1`); the
-    /// `io::Error` stays the source so that `main` can end quietly on a broken pipe.
     /// `profile --camera-path` on a scene without a `[camera_path]` table.
     #[error(
         "{scene}: `--camera-path` needs a `[camera_path]` table in the scene file, and this \
@@ -71,8 +69,18 @@ pub enum CliError {
          the flag"
     )]
     NoCameraPath { scene: String },
+    /// Writing the report failed, e.g. a closed pipe (`voxgi compare a b | head -1`); the
+    /// `io::Error` stays the source so that `main` can end quietly on a broken pipe.
     #[error("cannot write to stdout")]
     Stdout(#[source] std::io::Error),
+    /// `render -o` names a file that is not a PNG (checked before the device starts).
+    #[error(
+        "-o {}: the output is the tone-mapped 8-bit image, written as PNG, so its name must end \
+         in .png; for the linear HDR radiance add --exr {}",
+        path.display(),
+        path.display()
+    )]
+    OutputNotPng { path: PathBuf },
     #[error("writing {}", path.display())]
     WriteImage {
         path: PathBuf,

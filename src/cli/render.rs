@@ -12,7 +12,7 @@ use std::path::PathBuf;
 pub struct RenderArgs {
     /// A built-in scene (cornell, cornell-point) or a TOML scene file. Default: cornell.
     pub scene: Option<String>,
-    /// Output PNG (tone-mapped, sRGB).
+    /// Output PNG (tone-mapped, sRGB; the name must end in .png — `--exr` writes the HDR).
     #[arg(short, long, default_value = "voxgi.png")]
     pub output: PathBuf,
     /// Also write the linear HDR radiance (W/(m² sr)) as OpenEXR.
@@ -102,6 +102,15 @@ impl StereoArgs {
 /// With `--stereo` the PNG is the packed pair and the EXR, metrics and debug description are
 /// the left eye's.
 pub fn render(global: &Global, args: &RenderArgs, out: &mut dyn Write) -> Result<(), CliError> {
+    let png = args
+        .output
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("png"));
+    if !png {
+        return Err(CliError::OutputNotPng {
+            path: args.output.clone(),
+        });
+    }
     let frame = &args.frame;
     let scene = load_scene_arg(args.scene.as_deref())?;
     let settings = frame.settings(&scene)?;
