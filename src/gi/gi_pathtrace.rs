@@ -32,16 +32,9 @@ impl GiPathtrace {
                 (2, u32::from(lobes && !target.scene.is_all_lambert())),
             ],
         )?;
-        let usage = vk::ImageUsageFlags::STORAGE
-            | vk::ImageUsageFlags::SAMPLED
-            | vk::ImageUsageFlags::TRANSFER_DST;
-        let history = ctx.create_image(
+        let history = ctx.create_zeroed_image(
             &ImageDesc::new_2d("path tracer history", vk::Format::R32G32B32A32_SFLOAT, w, h)
-                .with_usage(usage),
-        )?;
-        ctx.clear_new_image(
-            &history,
-            vk::ClearColorValue { float32: [0.0; 4] },
+                .with_usage(vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::SAMPLED),
             Access::Sampled(Shader::Compute).info().layout,
         )?;
         Ok(Self { pipeline, history })

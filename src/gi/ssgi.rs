@@ -188,16 +188,9 @@ impl Ssgi {
     /// The history image, cleared (clip w 0: no pixel has a history yet), and the previous
     /// camera's buffer.
     fn create_history(ctx: &Context, (w, h): (u32, u32)) -> Result<(Image, Buffer), VkError> {
-        let usage = vk::ImageUsageFlags::STORAGE
-            | vk::ImageUsageFlags::SAMPLED
-            | vk::ImageUsageFlags::TRANSFER_DST;
-        let history = ctx.create_image(
+        let history = ctx.create_zeroed_image(
             &ImageDesc::new_2d("ssgi history", vk::Format::R32G32B32A32_SFLOAT, w, h)
-                .with_usage(usage),
-        )?;
-        ctx.clear_new_image(
-            &history,
-            vk::ClearColorValue { float32: [0.0; 4] },
+                .with_usage(vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::SAMPLED),
             Access::Sampled(Shader::Compute).info().layout,
         )?;
         let camera = ctx.upload_buffer(

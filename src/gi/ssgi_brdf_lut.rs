@@ -30,9 +30,9 @@ impl BrdfLut {
     pub fn new(ctx: &Context) -> Result<Self, VkError> {
         let usage = vk::ImageUsageFlags::STORAGE
             | vk::ImageUsageFlags::SAMPLED
-            | vk::ImageUsageFlags::TRANSFER_SRC
-            | vk::ImageUsageFlags::TRANSFER_DST;
-        let image = ctx.create_image(
+            | vk::ImageUsageFlags::TRANSFER_SRC;
+        // The graph imports it in the sampled layout, which the clear puts it in.
+        let image = ctx.create_zeroed_image(
             &ImageDesc::new_2d(
                 "ssgi brdf lut",
                 vk::Format::R32G32B32A32_SFLOAT,
@@ -40,15 +40,10 @@ impl BrdfLut {
                 LUT_SIZE,
             )
             .with_usage(usage),
+            Access::Sampled(Shader::Compute).info().layout,
         )?;
         let lut = Self { image };
-        // The graph imports it in the sampled layout, which the clear puts it in.
-        let cleared = ctx.clear_new_image(
-            &lut.image,
-            vk::ClearColorValue { float32: [0.0; 4] },
-            Access::Sampled(Shader::Compute).info().layout,
-        );
-        cleared.and_then(|()| lut.compute(ctx))?;
+        lut.compute(ctx)?;
         Ok(lut)
     }
 

@@ -92,14 +92,9 @@ impl TaaPass {
         sampler: vk::Sampler,
     ) -> Result<Self, VkError> {
         let pipeline = ctx.compute_pipeline("taa.comp", PushLayout::of::<GpuTaaPush>(), &[])?;
-        let usage = vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST;
-        let history = ctx.create_image(
+        let history = ctx.create_zeroed_image(
             &ImageDesc::new_2d("taa history", vk::Format::R32G32B32A32_SFLOAT, w, h)
-                .with_usage(usage),
-        )?;
-        ctx.clear_new_image(
-            &history,
-            vk::ClearColorValue { float32: [0.0; 4] },
+                .with_usage(vk::ImageUsageFlags::SAMPLED),
             Access::Sampled(Shader::Compute).info().layout,
         )?;
         Ok(Self {

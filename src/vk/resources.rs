@@ -400,6 +400,21 @@ impl Context {
         Ok(dst)
     }
 
+    /// Creates an image (with `TRANSFER_DST` added to its usage) cleared to zero in `layout`:
+    /// a history or table a render graph imports in that resting state. Waits.
+    pub fn create_zeroed_image(
+        &self,
+        desc: &ImageDesc,
+        layout: vk::ImageLayout,
+    ) -> Result<Image, VkError> {
+        let desc = desc
+            .clone()
+            .with_usage(desc.usage | vk::ImageUsageFlags::TRANSFER_DST);
+        let image = self.create_image(&desc)?;
+        self.clear_new_image(&image, vk::ClearColorValue { float32: [0.0; 4] }, layout)?;
+        Ok(image)
+    }
+
     /// Clears every mip and layer of a freshly created color image and leaves it in `layout`,
     /// so a render graph can import it in a resting state with that layout (imported images
     /// are assumed to be in their resting state before the first frame). Waits.
