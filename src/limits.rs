@@ -283,6 +283,15 @@ pub const AREA_SAMPLES: Limit<u32> = Limit::new(
     1,
     64,
 );
+/// Node-buffer capacity of the transparency lists in nodes per pixel (`render::oit_gather`):
+/// 16 bytes a node, so 64 at 4K is 8 GiB, the most any device voxgi targets could hold.
+pub const OIT_NODES_PER_PIXEL: Limit<u32> = Limit::new(
+    "--oit-nodes-per-pixel",
+    None,
+    "transparent layers stored per pixel on average",
+    1,
+    64,
+);
 /// Traversal starts at most at the top of a 16384² hierarchy (log2 16384 = 14).
 pub const GI_START_LEVEL: Limit<u32> = Limit::new(
     "--gi-start-level",

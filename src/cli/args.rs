@@ -234,6 +234,15 @@ pub struct FrameArgs {
     /// (one shadow view each; spheres stay sampled).
     #[arg(long, value_enum, default_value_t = crate::light::AreaShadow::Sampled)]
     pub area_shadows: crate::light::AreaShadow,
+    /// Surfaces with MTL d < 1 in the camera view: per-pixel linked lists sorted and blended
+    /// (oit), or hashed alpha testing (hashed); default: the scene's `transparency` key, else
+    /// oit. Shadow and light maps always use hashed alpha.
+    #[arg(long, value_enum)]
+    pub transparency: Option<crate::scene::Transparency>,
+    /// Capacity of the transparency node buffer in layers per pixel on average (more
+    /// fragments are dropped and reported).
+    #[arg(long, value_name = "N", default_value_t = crate::render::OIT_DEFAULT_NODES_PER_PIXEL)]
+    pub oit_nodes_per_pixel: u32,
     /// Voxelize the scene into a grid of at most N×N columns: static geometry once, dynamic
     /// objects in the frames they move (`profile` then shows those voxel passes).
     #[arg(long, value_name = "N")]
@@ -285,6 +294,11 @@ impl FrameArgs {
         s.shadow.pcf_radius = self.pcf_radius;
         s.shadow.point_technique = self.point_shadows;
         s.shadow.area_technique = self.area_shadows;
+        s.transparency = self
+            .transparency
+            .or(scene.transparency)
+            .unwrap_or_default();
+        s.oit_nodes_per_pixel = crate::limits::OIT_NODES_PER_PIXEL.check_flag(self.oit_nodes_per_pixel)?;
         if let Some(n) = self.area_samples {
             s.shadow.area_samples = Some(crate::limits::AREA_SAMPLES.check_flag(n)?);
         }

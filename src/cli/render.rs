@@ -150,6 +150,9 @@ pub fn render(global: &Global, args: &RenderArgs, out: &mut dyn Write) -> Result
     if let Some(d) = &image.debug_description {
         outln!(out, "{d}");
     }
+    if let Some(warning) = image.oit.and_then(|s| s.overflow_warning()) {
+        log::warn!("transparency: {warning}");
+    }
     if let Some(reference) = &args.compare {
         let r = crate::eval::HdrImage::load(reference)?;
         let m = crate::eval::compare(&r, &image.hdr, None)?;

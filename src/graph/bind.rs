@@ -79,6 +79,8 @@ pub(crate) struct AttachmentDecl {
     pub image: ImageHandle,
     pub load: Load,
     pub depth: bool,
+    /// A depth attachment tested but not written (`PassBuilder::depth_read`).
+    pub read_only: bool,
 }
 
 /// The descriptor kind an access of a resource takes (`None`: not a descriptor access).

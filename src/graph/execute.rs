@@ -272,6 +272,7 @@ impl PassContext<'_> {
             let att = Attachment {
                 view: img.view,
                 clear,
+                read_only: a.read_only,
             };
             if a.depth {
                 depth = Some(att);

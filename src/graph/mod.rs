@@ -574,6 +574,7 @@ impl PassBuilder<'_> {
                 image,
                 load,
                 depth: false,
+                read_only: false,
             });
         self.add(image.into(), access, SubresourceSel::whole(), false)
     }
@@ -585,6 +586,7 @@ impl PassBuilder<'_> {
                 image,
                 load,
                 depth: true,
+                read_only: false,
             });
         self.add(
             image.into(),
@@ -592,6 +594,19 @@ impl PassBuilder<'_> {
             SubresourceSel::whole(),
             false,
         )
+    }
+    /// Declares the depth attachment tested against but not written (its contents kept):
+    /// surfaces drawn over a finished depth buffer, such as transparent layers.
+    pub fn depth_read(self, image: ImageHandle) -> Self {
+        self.graph.passes[self.index]
+            .attachments
+            .push(bind::AttachmentDecl {
+                image,
+                load: Load::Keep,
+                depth: true,
+                read_only: true,
+            });
+        self.add(image.into(), Access::DepthRead, SubresourceSel::whole(), false)
     }
     /// Records the pass only in the frame slots `condition` leaves open (`None`: always).
     pub fn when(self, condition: Option<std::sync::Arc<SlotCondition>>) -> Self {

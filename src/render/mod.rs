@@ -11,6 +11,10 @@ mod gbuffer;
 mod gbuffer_view;
 pub mod gpu;
 mod light_map;
+mod oit;
+mod oit_clear;
+mod oit_gather;
+mod oit_resolve;
 mod run;
 mod scene_gpu;
 mod settings_check;
@@ -20,6 +24,8 @@ mod textures;
 
 pub use gbuffer::Gbuffer;
 pub use light_map::LightMaps;
+pub use oit::{OitStats, DEFAULT_NODES_PER_PIXEL as OIT_DEFAULT_NODES_PER_PIXEL};
+pub use oit_resolve::MAX_LAYERS as OIT_MAX_LAYERS;
 pub use run::{profile_camera_path, profile_scene, render_image, ProfileRun, RenderOutput};
 pub use scene_gpu::{Draw, DrawLists, SceneGpu, SceneInputs};
 pub use settings_check::{check_device_limits, check_render_settings};
@@ -125,6 +131,11 @@ pub struct RenderSettings {
     pub debug: Option<crate::voxel::debug_view::DebugSettings>,
     /// Post-processing around tone mapping (TAA, …); off by default.
     pub post: crate::post::PostSettings,
+    /// How the camera view draws surfaces with d < 1 (only in scenes that have them).
+    pub transparency: crate::scene::Transparency,
+    /// Capacity of the transparency node buffer, in nodes per pixel on average
+    /// ([`crate::limits::OIT_NODES_PER_PIXEL`]).
+    pub oit_nodes_per_pixel: u32,
 }
 
 impl Default for RenderSettings {
@@ -139,6 +150,8 @@ impl Default for RenderSettings {
             gi: crate::gi::GiSettings::default(),
             debug: None,
             post: Default::default(),
+            transparency: Default::default(),
+            oit_nodes_per_pixel: oit::DEFAULT_NODES_PER_PIXEL,
         }
     }
 }
@@ -177,6 +190,8 @@ pub struct Renderer {
     voxel_debug: Option<crate::voxel::debug_view::VoxelDebugPass>,
     atlas_view: Option<crate::voxel::atlas_view::AtlasViewPass>,
     gbuffer_view: Option<gbuffer_view::GbufferViewPass>,
+    /// The transparency lists, in scenes with d < 1 materials and `--transparency oit`.
+    oit: Option<oit::OitPasses>,
 }
 
 impl Renderer {
@@ -253,7 +268,13 @@ impl Renderer {
             usage: vk::BufferUsageFlags::TRANSFER_DST,
             location: MemoryLocation::GpuToCpu,
         })?;
-        let scene_gpu = SceneGpu::new(ctx, scene, settings.time_s)?;
+        let mut scene_gpu = SceneGpu::new(ctx, scene, settings.time_s)?;
+        // Transparent surfaces go to the linked lists instead of the G-buffer (a debug view
+        // shows the G-buffer, so it keeps their hashed coverage).
+        let oit_on = settings.transparency == crate::scene::Transparency::Oit
+            && scene.has_transparency()
+            && settings.debug.is_none();
+        scene_gpu.split_transparent = oit_on;
         // Paraboloid maps write their depth per fragment, which costs the other maps their
         // early depth test: only scenes that have them pay for it.
         let paraboloid = (settings.shadow.point_technique == PointShadow::DualParaboloid
@@ -270,7 +291,7 @@ impl Renderer {
             emission: scene.has_emission(),
             textures: scene.has_albedo_textures(),
             bump: scene.has_bump_maps(),
-            dissolve: scene.has_transparency(),
+            dissolve: scene.has_transparency() && !oit_on,
             pbr_maps: scene.has_pbr_maps(),
         };
         let gbuffer = GbufferPass::new(ctx, features)?;
@@ -279,6 +300,12 @@ impl Renderer {
             (features.phong, features.ggx, features.emission),
             sampler.raw,
         )?;
+        let oit = oit_on
+            .then(|| {
+                let materials = (features.phong, features.ggx, features.textures);
+                oit::OitPasses::new(ctx, materials, settings.oit_nodes_per_pixel, sampler.raw)
+            })
+            .transpose()?;
         let tonemap = TonemapPass::new(ctx, sampler.raw)?;
         // A debug view replaces the lit image: no post passes, and no TAA jitter.
         let post = match settings.debug {
@@ -408,6 +435,7 @@ impl Renderer {
             voxel_debug,
             atlas_view,
             gbuffer_view,
+            oit,
         })
     }
 
@@ -501,6 +529,11 @@ impl Renderer {
         (visible, self.scene.all_draws.len())
     }
 
+    /// The transparency lists' counters of the last completed frame (`None`: no lists).
+    pub fn oit_stats(&self) -> Option<OitStats> {
+        self.oit.as_ref().map(oit::OitPasses::stats)
+    }
+
     pub fn shadow_view_count(&self) -> u32 {
         self.shadow_view_count
     }
@@ -570,6 +603,11 @@ impl Renderer {
                 )
             }
             _ => direct,
+        };
+        // Transparent layers over the lit opaque frame, before post-processing.
+        let radiance = match &self.oit {
+            Some(oit) => oit.declare(g, &scene, (gbuffer.depth, shadow_map), radiance, (w, h)),
+            None => radiance,
         };
         let (radiance, exposure) = self.post.declare_hdr(g, radiance, gbuffer.depth);
         let ldr = self

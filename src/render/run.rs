@@ -18,6 +18,8 @@ pub struct RenderOutput {
     pub transient_bytes: (u64, u64),
     /// A debug view's description ([`Renderer::debug_description`]).
     pub debug_description: Option<String>,
+    /// The transparency lists' counters (`None`: the frame had none).
+    pub oit: Option<super::OitStats>,
 }
 
 /// Renders one frame of `scene` headless.
@@ -62,6 +64,7 @@ pub(super) fn render_frames(
         live_passes,
         transient_bytes,
         debug_description,
+        oit: renderer.oit_stats(),
     })
 }
 

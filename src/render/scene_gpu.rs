@@ -39,12 +39,18 @@ pub struct Draw {
     pub local_aabb: Aabb,
     pub model: Mat4,
     pub aabb: Aabb,
+    /// The material's opacity (MTL `d`) is 1.
+    pub opaque: bool,
 }
 
 /// Draw lists after culling, read by the recording closures.
 #[derive(Clone, Debug, Default)]
 pub struct DrawLists {
+    /// What the G-buffer draws: every visible draw, or only the opaque ones when transparent
+    /// surfaces are drawn by the transparency lists ([`SceneGpu::split_transparent`]).
     pub camera: Vec<Draw>,
+    /// The visible draws of materials with d < 1 when they are split off (`oit_gather`).
+    pub transparent: Vec<Draw>,
     /// Per shadow view.
     pub shadow: Vec<Vec<Draw>>,
 }
@@ -65,6 +71,8 @@ pub struct SceneGpu {
     texture_sampler: crate::vk::Sampler,
     pub draws: Arc<RwLock<DrawLists>>,
     pub all_draws: Vec<Draw>,
+    /// Draws of materials with d < 1 leave the G-buffer's list for `transparent`.
+    pub split_transparent: bool,
     /// Vertex and index offsets of every mesh in the shared buffers.
     mesh_base: Vec<(i32, u32)>,
 }
@@ -176,6 +184,7 @@ impl SceneGpu {
             texture_sampler,
             draws: Arc::new(RwLock::new(DrawLists::default())),
             all_draws: geometry.draws,
+            split_transparent: false,
             mesh_base: geometry.mesh_base,
         })
     }
@@ -232,13 +241,17 @@ impl SceneGpu {
             d.model = o.transform_at(time_s);
             d.aabb = d.local_aabb.transformed(&d.model);
         }
+        let visible: Vec<Draw> = self
+            .all_draws
+            .iter()
+            .copied()
+            .filter(|d| crate::scene::aabb_visible(view_proj, &d.aabb))
+            .collect();
+        let split = self.split_transparent;
+        let (camera, transparent) = visible.into_iter().partition(|d| d.opaque || !split);
         let lists = DrawLists {
-            camera: self
-                .all_draws
-                .iter()
-                .copied()
-                .filter(|d| crate::scene::aabb_visible(view_proj, &d.aabb))
-                .collect(),
+            camera,
+            transparent,
             shadow: shadow_views
                 .iter()
                 .map(|v| {
@@ -402,6 +415,7 @@ fn upload_geometry(ctx: &Context, scene: &Scene, t_s: f32) -> Result<Geometry, R
                 local_aabb: mesh.aabb,
                 model,
                 aabb,
+                opaque: scene.materials.get(material).map_or(true, |m| m.is_opaque()),
             });
         }
     }

@@ -23,6 +23,7 @@ pub fn check_render_settings(s: &RenderSettings) -> Result<(), LimitError> {
         VOXEL_LAYERS.check_flag(v.layers)?;
     }
     check_gi(&s.gi)?;
+    OIT_NODES_PER_PIXEL.check_flag(s.oit_nodes_per_pixel)?;
     if let Some(t) = &s.post.taa {
         TAA_HISTORY_WEIGHT.check_flag(t.history_weight)?;
         TAA_FRAMES.check_flag(t.frames)?;

@@ -44,6 +44,8 @@ pub(crate) struct SceneDesc {
     pub voxel: Option<toml::Table>,
     pub gi: Option<GiDesc>,
     pub camera_path: Option<CameraPathDesc>,
+    /// "oit" or "hashed" ([`super::Transparency`]).
+    pub transparency: Option<String>,
 }
 
 /// The `[camera_path]` table, checked by [`build_camera_path`].
@@ -328,6 +330,11 @@ pub(crate) fn build(
         .map(|g| build_gi(&ck, g))
         .transpose()?
         .unwrap_or_default();
+    let transparency = desc
+        .transparency
+        .as_deref()
+        .map(|t| build_transparency(&ck, t))
+        .transpose()?;
     let lights = desc
         .lights
         .iter()
@@ -360,6 +367,7 @@ pub(crate) fn build(
         textures: store.textures,
         voxel: desc.voxel,
         gi,
+        transparency,
         source,
     };
     if scene.lights.is_empty() && !scene.has_emission() {
@@ -370,6 +378,20 @@ pub(crate) fn build(
         );
     }
     Ok(scene)
+}
+
+/// The `transparency` key: one of [`super::TRANSPARENCY_NAMES`].
+fn build_transparency(ck: &Check<'_>, word: &str) -> Result<super::Transparency, SceneError> {
+    super::TRANSPARENCY_NAMES
+        .iter()
+        .find(|(name, _)| *name == word)
+        .map(|&(_, t)| t)
+        .ok_or_else(|| {
+            ck.invalid(
+                "transparency",
+                format!("\"{word}\" is not a transparency mode; expected \"oit\" or \"hashed\""),
+            )
+        })
 }
 
 /// Turns each key's `look_at` or `direction` into a unit direction, then lets

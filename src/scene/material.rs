@@ -179,6 +179,7 @@ impl Material {
         self.emission.max_element() > 0.0
     }
 
+    /// True when MTL `d` (or `opacity`) is 1: the surface hides what is behind it.
     pub fn is_opaque(&self) -> bool {
         self.opacity >= 1.0
     }
@@ -432,3 +433,20 @@ mod tests {
         }
     }
 }
+
+/// How the camera view draws surfaces with MTL `d` < 1 (shadow and light maps always use
+/// hashed coverage).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+pub enum Transparency {
+    /// Per-pixel linked lists (Yang et al. 2010; Dachsbacher 2014): every layer shaded, sorted
+    /// by depth per pixel and blended back to front over the lit opaque frame.
+    #[default]
+    Oit,
+    /// Hashed alpha testing in the G-buffer (Wyman and McGuire 2017): a fragment survives with
+    /// probability d, so the image is noisy but needs no sort.
+    Hashed,
+}
+
+/// The words of [`Transparency`] in scene files and flags.
+pub const TRANSPARENCY_NAMES: [(&str, Transparency); 2] =
+    [("oit", Transparency::Oit), ("hashed", Transparency::Hashed)];

@@ -167,7 +167,7 @@ pub use gi_settings::{
 pub use light::{scaled, spot_falloff, Light};
 pub use material::{
     fresnel_schlick, ggx_brdf, ggx_d, ggx_diffuse, ggx_g1, ggx_specular, BumpKind, Ggx, Material,
-    PbrMaps, TextureData, DIELECTRIC_F0,
+    PbrMaps, TextureData, Transparency, DIELECTRIC_F0, TRANSPARENCY_NAMES,
 };
 pub use mesh::{area_weighted_normals, Aabb, Mesh, SubMesh, BUILTIN_MESH_NAMES};
 pub use object::{rotation_from_euler_xyz_deg, Animation, Keyframe, Object, Transform};
@@ -191,6 +191,9 @@ pub struct Scene {
     /// The `[gi]` table: the scene's defaults of the indirect-light settings (nothing given
     /// without the table); see [`resolve_gi`].
     pub gi: GiOverrides,
+    /// The top-level `transparency` key ("oit" or "hashed"): how the camera view draws
+    /// surfaces with d < 1 unless `--transparency` says otherwise; `None` without the key.
+    pub transparency: Option<Transparency>,
     /// The scene file; `None` for built-in scenes.
     pub source: Option<PathBuf>,
 }

@@ -14,6 +14,8 @@ pub struct Attachment {
     pub view: vk::ImageView,
     /// `Some` clears on load, `None` keeps the contents.
     pub clear: Option<vk::ClearValue>,
+    /// A depth attachment tested but never written: read-only layout, nothing stored.
+    pub read_only: bool,
 }
 
 /// A command buffer in the recording state, with the context it belongs to.
@@ -541,10 +543,17 @@ impl<'a> Cmd<'a> {
 }
 
 fn attachment_info(a: &Attachment, layout: vk::ImageLayout) -> vk::RenderingAttachmentInfo {
+    let (layout, store) = match a.read_only {
+        true => (
+            vk::ImageLayout::DEPTH_READ_ONLY_OPTIMAL,
+            vk::AttachmentStoreOp::NONE,
+        ),
+        false => (layout, vk::AttachmentStoreOp::STORE),
+    };
     let mut info = vk::RenderingAttachmentInfo::builder()
         .image_view(a.view)
         .image_layout(layout)
-        .store_op(vk::AttachmentStoreOp::STORE);
+        .store_op(store);
     info = match a.clear {
         Some(c) => info.load_op(vk::AttachmentLoadOp::CLEAR).clear_value(c),
         None => info.load_op(vk::AttachmentLoadOp::LOAD),
