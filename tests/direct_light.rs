@@ -24,9 +24,11 @@ fn render(scene: &Scene) -> HdrImage {
 
 fn render_with(scene: &Scene, point_technique: PointShadow) -> HdrImage {
     let ctx = common::context();
+    // The dissolve tests below check hashed coverage (a pixel is one layer or the other).
     let mut settings = RenderSettings {
         width: SIZE,
         height: SIZE,
+        transparency: voxgi::scene::Transparency::Hashed,
         ..Default::default()
     };
     settings.shadow.point_technique = point_technique;

@@ -294,11 +294,9 @@ impl FrameArgs {
         s.shadow.pcf_radius = self.pcf_radius;
         s.shadow.point_technique = self.point_shadows;
         s.shadow.area_technique = self.area_shadows;
-        s.transparency = self
-            .transparency
-            .or(scene.transparency)
-            .unwrap_or_default();
-        s.oit_nodes_per_pixel = crate::limits::OIT_NODES_PER_PIXEL.check_flag(self.oit_nodes_per_pixel)?;
+        s.transparency = self.transparency.or(scene.transparency).unwrap_or_default();
+        s.oit_nodes_per_pixel =
+            crate::limits::OIT_NODES_PER_PIXEL.check_flag(self.oit_nodes_per_pixel)?;
         if let Some(n) = self.area_samples {
             s.shadow.area_samples = Some(crate::limits::AREA_SAMPLES.check_flag(n)?);
         }
@@ -429,6 +427,24 @@ mod tests {
             .voxels
             .is_none());
         assert!(render_settings(&["--gi", "none"]).voxels.is_none());
+    }
+
+    #[test]
+    fn transparency_flag_overrides_the_scene_key_and_defaults_to_oit() {
+        use crate::scene::Transparency;
+        let mut scene = crate::scene::load_scene_arg(None).expect("the built-in scene");
+        let mode = |scene: &Scene, args: &[&str]| parse(args).settings(scene).expect("settings");
+        assert_eq!(mode(&scene, &[]).transparency, Transparency::Oit);
+        scene.transparency = Some(Transparency::Hashed);
+        assert_eq!(mode(&scene, &[]).transparency, Transparency::Hashed);
+        let flag = mode(
+            &scene,
+            &["--transparency", "oit", "--oit-nodes-per-pixel", "9"],
+        );
+        assert_eq!(flag.transparency, Transparency::Oit);
+        assert_eq!(flag.oit_nodes_per_pixel, 9);
+        let err = parse(&["--oit-nodes-per-pixel", "0"]).settings(&scene);
+        assert!(err.is_err_and(|e| e.to_string().contains("--oit-nodes-per-pixel")));
     }
 
     #[test]

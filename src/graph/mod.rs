@@ -606,7 +606,12 @@ impl PassBuilder<'_> {
                 depth: true,
                 read_only: true,
             });
-        self.add(image.into(), Access::DepthRead, SubresourceSel::whole(), false)
+        self.add(
+            image.into(),
+            Access::DepthRead,
+            SubresourceSel::whole(),
+            false,
+        )
     }
     /// Records the pass only in the frame slots `condition` leaves open (`None`: always).
     pub fn when(self, condition: Option<std::sync::Arc<SlotCondition>>) -> Self {

@@ -415,7 +415,10 @@ fn upload_geometry(ctx: &Context, scene: &Scene, t_s: f32) -> Result<Geometry, R
                 local_aabb: mesh.aabb,
                 model,
                 aabb,
-                opaque: scene.materials.get(material).map_or(true, |m| m.is_opaque()),
+                opaque: scene
+                    .materials
+                    .get(material)
+                    .map_or(true, |m| m.is_opaque()),
             });
         }
     }

@@ -13,6 +13,9 @@
 //! scene file's directory. Error messages name fields as `objects[2].scale` (0-based).
 //!
 //! ```toml
+//! transparency = "oit"              # optional: how the camera view draws materials with
+//!                                   #   d < 1, "oit" (linked lists, default) or "hashed";
+//!                                   #   `--transparency` overrides it
 //! [camera]
 //! position = [0.278, 0.273, -0.80]  # meters
 //! target = [0.278, 0.273, 0.0]      # a point to look at, or instead:

@@ -88,6 +88,28 @@ fn assert_msg(e: &SceneError, file: &Path, parts: &[&str]) {
 // ---- asset and built-in scenes -------------------------------------------------------------
 
 #[test]
+fn transparency_key_picks_the_mode_and_names_itself_when_wrong() {
+    let camera =
+        "[camera]\nposition = [0.0, 0.0, -1.0]\ntarget = [0.0, 0.0, 0.0]\nfov_y_deg = 40.0\n";
+    let object = "[[objects]]\nbuiltin = \"quad\"\n";
+    let with = |key: &str| format!("{key}\n{camera}{object}");
+    assert_eq!(load_ok(&with(""), &[]).transparency, None);
+    let hashed = load_ok(&with("transparency = \"hashed\""), &[]);
+    assert_eq!(
+        hashed.transparency,
+        Some(crate::scene::Transparency::Hashed)
+    );
+    let oit = load_ok(&with("transparency = \"oit\""), &[]);
+    assert_eq!(oit.transparency, Some(crate::scene::Transparency::Oit));
+    let (e, path) = load_err(&with("transparency = \"sorted\""), &[]);
+    assert_msg(
+        &e,
+        &path,
+        &["transparency", "sorted", "\"oit\" or \"hashed\""],
+    );
+}
+
+#[test]
 fn asset_cornell_loads() {
     let s = Scene::load(asset("scenes/cornell.toml")).unwrap();
     assert_eq!(s.objects.len(), 3);
