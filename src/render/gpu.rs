@@ -170,11 +170,14 @@ mod tests {
             "shadow_depth.frag",
             "shadow_depth_paraboloid.frag",
             "gi_hemisphere.comp",
+            "oit_gather.frag",
         ] {
             let i = crate::vk::interface_of(&[name]).unwrap();
             assert!(i.structs.contains_key("GpuMaterial"), "{name}");
         }
-        let i = crate::vk::interface_of(&["gbuffer.frag"]).unwrap();
-        assert!(i.structs.contains_key("GpuMaterialPbr"));
+        for name in ["gbuffer.frag", "oit_gather.frag"] {
+            let i = crate::vk::interface_of(&[name]).unwrap();
+            assert!(i.structs.contains_key("GpuMaterialPbr"), "{name}");
+        }
     }
 }
