@@ -79,7 +79,10 @@ ivec2 march(vec2 s0, vec2 s1, float k0, float k1) {
     for (int i = 0; i < pc.max_steps && t < t_end; ++i) {
         vec2 s = s0 + d * t;
         float cell = exp2(float(level));
-        ivec2 c = clamp(ivec2(floor(s / cell)), ivec2(0), textureSize(hiz, level) - 1);
+        // Level sizes as Vulkan's mips: halved, rounded down (textureSize with a varying lod
+        // is not relied on; lavapipe answered wrongly).
+        ivec2 level_size = max(textureSize(hiz, 0) >> level, ivec2(1));
+        ivec2 c = clamp(ivec2(floor(s / cell)), ivec2(0), level_size - 1);
         vec2 exits = ((vec2(c) + dir_step) * cell - s0) * inv_d;
         float t_exit = min(min(exits.x, exits.y), t_end);
         float k_in = mix(k0, k1, t), k_out = mix(k0, k1, t_exit);

@@ -27,15 +27,20 @@ void main() {
         imageStore(out_color, q, vec4(texelFetch(in_color, q, 0).rgb, 1.0));
         return;
     }
-    // Level sizes are halved rounding up, so children 2q and 2q + 1 (clamped) cover q.
+    // Mip sizes are halved rounding down: the last texel of an odd-sized level also covers
+    // the third child (2q + 2), so that no fine texel is left out of the Hi-Z.
     ivec2 fine = textureSize(in_depth, 0);
+    ivec2 last = imageSize(out_depth) - 1;
+    ivec2 span = ivec2(2) + ivec2(equal(q, last)) * (fine - 2 * last - 2);
     float nearest = 0.0;
     vec3 color = vec3(0.0);
-    for (int k = 0; k < 4; ++k) {
-        ivec2 c = min(2 * q + ivec2(k & 1, k >> 1), fine - 1);
-        nearest = max(nearest, texelFetch(in_depth, c, 0).r);
-        color += texelFetch(in_color, c, 0).rgb;
+    for (int y = 0; y < span.y; ++y) {
+        for (int x = 0; x < span.x; ++x) {
+            ivec2 c = min(2 * q + ivec2(x, y), fine - 1);
+            nearest = max(nearest, texelFetch(in_depth, c, 0).r);
+            color += texelFetch(in_color, c, 0).rgb;
+        }
     }
     imageStore(out_depth, q, vec4(nearest));
-    imageStore(out_color, q, vec4(0.25 * color, 1.0));
+    imageStore(out_color, q, vec4(color / float(span.x * span.y), 1.0));
 }
