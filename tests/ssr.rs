@@ -85,7 +85,9 @@ fn render(scene: &Scene, size: u32, gi: GiSettings) -> RenderOutput {
 }
 
 fn has_reflection_passes(out: &RenderOutput) -> bool {
-    out.live_passes.iter().any(|p| p.starts_with("ssgi_reflect"))
+    out.live_passes
+        .iter()
+        .any(|p| p.starts_with("ssgi_reflect"))
 }
 
 /// Where pixel (x, y)'s view ray meets the floor (y = 0), if it does in front of the box.
@@ -230,11 +232,12 @@ fn without_reflections_nothing_is_declared() {
     const SIZE: u32 = 32;
     let glossy = scene(0.05, &emissive_box());
     assert!(!has_reflection_passes(&render(&glossy, SIZE, gi(false))));
-    let lambert_text = "[camera]\nposition = [0.0, 1.0, -2.5]\ntarget = [0.0, 0.0, 0.5]\nfov_y_deg = 50.0\n\
+    let lambert_text =
+        "[camera]\nposition = [0.0, 1.0, -2.5]\ntarget = [0.0, 0.0, 0.5]\nfov_y_deg = 50.0\n\
         [[objects]]\nbuiltin = \"quad\"\nscale = [6.0, 1.0, 6.0]\n\
         material = { albedo = 0.5 }\n"
-        .to_owned()
-        + &emissive_box();
+            .to_owned()
+            + &emissive_box();
     let lambert =
         Scene::from_toml_str(&lambert_text, Path::new("<lambert>"), Path::new(ROOT)).unwrap();
     let on = render(&lambert, SIZE, gi(true));
@@ -243,8 +246,12 @@ fn without_reflections_nothing_is_declared() {
     assert_eq!(on.hdr.data, off.hdr.data);
 }
 
-/// Three emissive bars in front of the floor's far end: 0.3 m wide with 0.3 m gaps.
+/// Three emissive bars in front of the floor's far end, 0.3 m wide with 0.3 m gaps, before a
+/// black wall at z = 1.6 facing the camera (so that rays through the gaps hit something and
+/// read the colour pyramid too: a single mirror ray's hit-or-miss mask is never blurred).
 fn bars() -> String {
+    let wall = "[[objects]]\nbuiltin = \"quad\"\ntranslate = [0.0, 1.5, 1.6]\n\
+        rotate_deg = [-90.0, 0.0, 0.0]\nscale = [6.0, 1.0, 3.0]\nmaterial = { albedo = 0.0 }\n";
     [-0.6f32, 0.0, 0.6]
         .iter()
         .map(|x| {
@@ -254,14 +261,18 @@ fn bars() -> String {
                  material = {{ albedo = 0.0, emission_w_sr_m2 = 2.0 }}\n"
             )
         })
+        .chain(std::iter::once(wall.to_owned()))
         .collect()
 }
 
-/// The coefficient of variation (std / mean) of the red radiance over the floor pixels whose
-/// mirror rays cross the bars' plane (z = 0.85) at heights 0.3 to 0.7 and |x| < 0.9.
+/// The mean over image rows of the coefficient of variation (std / mean) of the red radiance
+/// across the row's floor pixels whose mirror rays cross the bars' plane (z = 0.85) at
+/// heights 0.3 to 0.7 and |x| < 0.9: the stripes' contrast, without the vertical gradient of
+/// the split-sum factor and the cone's level.
 fn reflection_contrast(scene: &Scene, img: &HdrImage) -> f32 {
-    let mut v = Vec::new();
+    let mut rows = Vec::new();
     for y in 0..img.height {
+        let mut v = Vec::new();
         for x in 0..img.width {
             let Some(p) = floor_point(scene, x, y, img.width) else {
                 continue;
@@ -271,22 +282,26 @@ fn reflection_contrast(scene: &Scene, img: &HdrImage) -> f32 {
                 v.push(pixel(img, x, y)[0]);
             }
         }
+        if v.len() >= 40 {
+            let mean = v.iter().sum::<f32>() / v.len() as f32;
+            let var = v.iter().map(|x| (x - mean).powi(2)).sum::<f32>() / v.len() as f32;
+            rows.push(var.sqrt() / mean);
+        }
     }
-    assert!(v.len() > 100, "{} pixels", v.len());
-    let mean = v.iter().sum::<f32>() / v.len() as f32;
-    let var = v.iter().map(|x| (x - mean).powi(2)).sum::<f32>() / v.len() as f32;
-    var.sqrt() / mean
+    assert!(rows.len() >= 5, "{} rows", rows.len());
+    rows.iter().sum::<f32>() / rows.len() as f32
 }
 
 /// (d) A rougher floor reads coarser levels of the colour pyramid, so the bars' reflection
-/// loses contrast. At 128², 50° and about 3.2 m to the bars a pixel spans 0.023 m, a bar and
-/// a gap 13 px each. Roughness 0.02 gives a cone of tan θ ≈ 7e-5 (level 0: the stripes stay
-/// sharp); roughness 0.35 (α = 0.1225, Phong-equivalent n ≈ 131, cos θ = 2^(−1/n), tan θ ≈
-/// 0.10) over the ≈ 2 m to the bars, a footprint of ≈ 2·2·0.10 / 0.023 ≈ 17 px: level 4, whose
-/// 16-px texels (box-filtered, then bilinear) average most of a 26-px period away: the
-/// fundamental's amplitude falls to sinc(16/26)·sinc²(16/26) ≈ 0.25 of the sharp one's. The
-/// diffuse fallback and the table's factor are smooth across the stripes in both; bound: the
-/// rough reflection's contrast is below half the smooth one's.
+/// loses contrast. At 128², 50° and about 3.2 m from the camera a bar and a gap are 13 px
+/// each, a 26-px square wave. Roughness 0.02 gives a cone of tan θ ≈ 7e-5: level 0, the
+/// stripes stay sharp. Roughness 0.35 (α = 0.1225, Phong-equivalent n ≈ 131, cos θ =
+/// 2^(−1/n), tan θ ≈ 0.10) over the 1.2–1.8 m to the bars gives footprints of 4–8 px:
+/// levels 2–3, whose box-filtered texels read bilinearly remove the square wave's harmonics
+/// (19% of its variance, 1 − 8/π²) and damp its fundamental at least by sinc(6/26)·sinc²(6/26)
+/// ≈ 0.77 in amplitude, so the standard deviation falls to at most √0.81·0.77 ≈ 0.70 of the
+/// sharp one's (the split-sum factor and the fallback are smooth across the stripes). Bound:
+/// the rough contrast is below 0.75 of the smooth one's.
 #[test]
 fn rough_floors_reflect_blurrier() {
     const SIZE: u32 = 128;
@@ -295,5 +310,5 @@ fn rough_floors_reflect_blurrier() {
     let smooth = reflection_contrast(&smooth_scene, &render(&smooth_scene, SIZE, gi(true)).hdr);
     let rough = reflection_contrast(&rough_scene, &render(&rough_scene, SIZE, gi(true)).hdr);
     println!("reflection contrast: roughness 0.02 {smooth:.3}, 0.35 {rough:.3}");
-    assert!(rough < 0.5 * smooth, "{rough} vs {smooth}");
+    assert!(rough < 0.75 * smooth, "{rough} vs {smooth}");
 }
