@@ -54,6 +54,11 @@ pub fn pyramid_levels(width: u32, height: u32) -> u32 {
     32 - width.max(height).max(1).leading_zeros()
 }
 
+/// The size of mip `k` of a `width`×`height` image: halved, rounded down (Vulkan's rule).
+pub fn mip_size(width: u32, height: u32, k: u32) -> (u32, u32) {
+    ((width >> k).max(1), (height >> k).max(1))
+}
+
 /// The GI pyramid's level 0 and the G-buffer images the reflections read, and the GI
 /// history (whose w holds last frame's clip w per pixel) with the previous camera.
 pub struct SsrInputs {
@@ -178,7 +183,7 @@ impl Ssr {
         let hiz = pyramid(g, "ssr hi-z", vk::Format::R32_SFLOAT);
         let color = pyramid(g, "ssr lit colour", vk::Format::R16G16B16A16_SFLOAT);
         for k in 0..levels {
-            let (w, h) = super::ssgi::level_size(i.width, i.height, k);
+            let (w, h) = mip_size(i.width, i.height, k);
             let groups = (w.div_ceil(8), h.div_ceil(8));
             let sampled = Access::Sampled(c);
             let write = Access::StorageWrite(c);
@@ -231,13 +236,14 @@ mod tests {
             .unwrap_or_else(|e| panic!("{e}"));
     }
 
-    /// A full chain ends at 1×1: 128 → 8 levels (128, 64, …, 1), 129 → 9 (the halving
-    /// rounds up: 129, 65, 33, 17, 9, 5, 3, 2, 1), 1 → 1.
+    /// A full chain ends at 1×1, halving rounded down: 128 → 8 levels (128, 64, …, 1);
+    /// 129×64 → 8 (129, 64, 32, 16, 8, 4, 2, 1 wide; 64, …, 1, 1 high); 1 → 1.
     #[test]
     fn the_pyramid_reaches_one_texel() {
         assert_eq!(pyramid_levels(128, 128), 8);
-        assert_eq!(pyramid_levels(129, 64), 9);
+        assert_eq!(pyramid_levels(129, 64), 8);
         assert_eq!(pyramid_levels(1, 1), 1);
-        assert_eq!(super::super::ssgi::level_size(129, 64, 8), (1, 1));
+        assert_eq!(mip_size(129, 64, 7), (1, 1));
+        assert_eq!(mip_size(129, 64, 1), (64, 32));
     }
 }
