@@ -103,8 +103,8 @@ ivec2 march(vec2 s0, vec2 s1, float k0, float k1) {
     return ivec2(-1);
 }
 
-// The traced (a·L, a) of pixel p at world point x with normal n and lobe (kind, w).
-vec4 trace(ivec2 p, vec3 x, vec3 n, float kind, float w) {
+// The traced (a·L, a) at world point x with normal n and lobe (kind, w).
+vec4 trace(vec3 x, vec3 n, float kind, float w) {
     vec3 cam = frame.camera_position.xyz;
     vec3 v = normalize(cam - x);
     vec3 r = reflect(-v, n);
@@ -148,7 +148,7 @@ void main() {
         return;
     }
     vec4 nw = texelFetch(gb_normal, p, 0);
-    vec4 value = trace(p, pz.xyz, normalize(nw.xyz), lobe.a, nw.w);
+    vec4 value = trace(pz.xyz, normalize(nw.xyz), lobe.a, nw.w);
     ivec2 texel;
     float weight;
     if (ssgi_reproject(prev_view_proj, gi_history, pz.xyz, texel, weight)) {
