@@ -32,15 +32,11 @@ layout(push_constant) uniform Push {
 // The previous frame's irradiance at world point p (rgb, clamped) and its weight (a): the
 // depth agreement (1 within 1%, 0 beyond 5%), zero outside the previous frame.
 vec4 reprojected_irradiance(vec3 p) {
-    vec4 clip = prev_view_proj * vec4(p, 1.0);
-    if (clip.w <= 1e-6) return vec4(0.0);
-    vec2 uv = clip.xy / clip.w * 0.5 + 0.5;
-    if (any(lessThan(uv, vec2(0.0))) || any(greaterThanEqual(uv, vec2(1.0)))) return vec4(0.0);
-    ivec2 size = textureSize(history, 0);
-    vec4 h = texelFetch(history, ivec2(uv * vec2(size)), 0);
-    float rel = abs(h.w - clip.w) / clip.w;
-    float w = 1.0 - smoothstep(0.01, 0.05, rel);
-    return vec4(clamp(h.rgb, vec3(0.0), vec3(pc.feedback_max_w_m2)), w);
+    ivec2 texel;
+    float w;
+    if (!ssgi_reproject(prev_view_proj, history, p, texel, w)) return vec4(0.0);
+    vec3 h = texelFetch(history, texel, 0).rgb;
+    return vec4(clamp(h, vec3(0.0), vec3(pc.feedback_max_w_m2)), w);
 }
 
 void main() {

@@ -1,6 +1,7 @@
-// What the screen-space GI passes share (ssgi_input, ssgi_mip, ssgi_gather, ssgi_upsample;
-// Oetke 2017 §2.3, §5.1–5.3). The geometry pyramid holds per texel the world position with
-// the view depth z (meters along the camera axis; 0 marks sky) and the world normal.
+// What the screen-space GI passes share (ssgi_input, ssgi_mip, ssgi_gather, ssgi_upsample,
+// ssgi_reflect; Oetke 2017 §2.3, §5.1–5.4). The geometry pyramid holds per texel the world
+// position with the view depth z (meters along the camera axis; 0 marks sky) and the world
+// normal.
 #ifndef SSGI_GLSL
 #define SSGI_GLSL
 
@@ -20,6 +21,24 @@ float ssgi_hash(uvec2 p, uint seed) {
     h = (h ^ (h >> 15)) * 0x846ca68bu;
     h ^= h >> 16;
     return float(h >> 8) * (1.0 / 16777216.0);
+}
+
+// Where world point p was in the previous frame: its texel of `history` (whose w holds each
+// texel's clip w then) and the depth agreement weight (1 within 1%, 0 beyond 5%); false
+// outside the previous frame. `prev_view_proj`: the previous camera.
+bool ssgi_reproject(mat4 prev_view_proj, sampler2D history, vec3 p, out ivec2 texel,
+                    out float weight) {
+    texel = ivec2(0);
+    weight = 0.0;
+    vec4 clip = prev_view_proj * vec4(p, 1.0);
+    if (clip.w <= 1e-6) return false;
+    vec2 uv = clip.xy / clip.w * 0.5 + 0.5;
+    if (any(lessThan(uv, vec2(0.0))) || any(greaterThanEqual(uv, vec2(1.0)))) return false;
+    ivec2 size = textureSize(history, 0);
+    texel = ivec2(uv * vec2(size));
+    float rel = abs(texelFetch(history, texel, 0).w - clip.w) / clip.w;
+    weight = 1.0 - smoothstep(0.01, 0.05, rel);
+    return true;
 }
 
 // Joint bilateral upsampling (Kopf et al. 2007, as modified by Oetke 2017 Eq. 3.3): the value

@@ -119,6 +119,10 @@ pub struct GiArgs {
     /// `--gi ssgi`: τ of the temporal blend with the reprojected history, 0 (off) to 0.99.
     #[arg(long, value_name = "TAU", default_value_t = crate::gi::SsgiSettings::default().history_weight)]
     pub ssgi_history_weight: f32,
+    /// `--gi ssgi`: screen-space reflection rays on Phong and GGX materials (on), or only the
+    /// diffuse fallback (off).
+    #[arg(long, value_enum, default_value_t = crate::gi::SsrMode::On)]
+    pub ssr: crate::gi::SsrMode,
     /// Modified SAO (Oetke 2017 §2.5) at half resolution, multiplied into the indirect light
     /// (needs a --gi method: direct light is not darkened).
     #[arg(long)]
@@ -189,6 +193,7 @@ impl GiArgs {
                 feedback: !self.ssgi_no_feedback,
                 feedback_max_w_m2: self.ssgi_feedback_max,
                 history_weight: self.ssgi_history_weight,
+                ssr: self.ssr == crate::gi::SsrMode::On,
                 ..s.ssgi
             },
             sao: self.sao.then_some(crate::gi::SaoSettings {

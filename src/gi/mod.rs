@@ -16,11 +16,12 @@ mod gi_radiance_volume;
 mod sao;
 pub mod ssgi;
 pub mod ssgi_brdf_lut;
+pub mod ssgi_reflect;
 pub mod vpl;
 
 pub use crate::scene::{
     Bounces, GiMethod, GiSettings, RadianceSource, SaoSettings, SsgiMips, SsgiResolution,
-    SsgiSettings,
+    SsgiSettings, SsrMode,
 };
 pub use gi_common::GpuGiPush;
 pub use sao::GpuSaoPush;

@@ -11,9 +11,12 @@
 //! - `ssgi_gather[k]`, from the coarsest level down to the GI resolution (level
 //!   log2(divisor)): Eq. 2.12 with the patch area of Eq. 2.10 over each level's ring, plus the
 //!   coarser result joint-bilaterally upsampled;
+//! - `ssgi_reflect*` (scenes with Phong or GGX materials, unless `--ssr off`): screen-space
+//!   reflection rays, see [`super::ssgi_reflect`];
 //! - `ssgi_upsample`: joint bilateral upsampling to the frame, blended with the history
 //!   `ssgi_input` reprojected (τ = `history_weight`), the history for the next
-//!   frame's feedback, and the camera it was seen with.
+//!   frame's feedback, and the camera it was seen with; Phong and GGX pixels add their
+//!   specular indirect light (Eq. 2.19).
 //!
 //! The output is the indirect irradiance the shared `gi_filter` and `gi_composite` read (SAO
 //! multiplies in when on). Limits the thesis names apply: no visibility (light leaks through
@@ -22,6 +25,7 @@
 
 use super::gi_common::GiShared;
 use super::ssgi_brdf_lut::BrdfLut;
+use super::ssgi_reflect::{Ssr, SsrInputs};
 use super::{GiInputs, GiMethodPasses, GiOutput, GiTarget, SsgiMips, SsgiSettings};
 use crate::graph::{Access, BufferHandle, ImageHandle, RenderGraph, Shader};
 use crate::vk::{vk, Buffer, ComputePipeline, Context, Image, ImageDesc, PushLayout, VkError};
@@ -118,6 +122,8 @@ pub struct Ssgi {
     prev_camera: Buffer,
     /// The split-sum table (scenes with GGX materials).
     brdf_lut: Option<BrdfLut>,
+    /// Screen-space reflections (scenes with Phong or GGX materials, `settings.ssr`).
+    ssr: Option<Ssr>,
     fov_y_deg: f32,
 }
 
@@ -156,12 +162,17 @@ impl Ssgi {
             PushLayout::of::<GpuSsgiGatherPush>(),
             &[(0, 0)],
         )?;
+        let glossy = target.has_phong || target.scene.has_ggx();
+        let ssr = (settings.ssr && glossy)
+            .then(|| Ssr::new(ctx, target, settings.history_weight))
+            .transpose()?;
         let upsample = ctx.compute_pipeline(
             "ssgi_upsample.comp",
             PushLayout::of::<GpuSsgiUpsamplePush>(),
             &[
                 (0, u32::from(target.has_phong)),
                 (1, u32::from(target.scene.has_ggx())),
+                (2, u32::from(ssr.is_some())),
             ],
         )?;
         let (history, prev_camera) = Self::create_history(ctx, target.size)?;
@@ -181,6 +192,7 @@ impl Ssgi {
             history,
             prev_camera,
             brdf_lut,
+            ssr,
             fov_y_deg: target.scene.camera.fov_y_deg,
         })
     }
@@ -376,6 +388,21 @@ impl GiMethodPasses for Ssgi {
             .brdf_lut
             .as_ref()
             .map_or(i.albedo, |l| g.import_image(&l.image, Access::Sampled(c)));
+        // Without reflections the shader never reads their binding; albedo fills it.
+        let ssr = match (&self.ssr, i.specular) {
+            (Some(ssr), Some(specular)) => {
+                let inputs = SsrInputs {
+                    fine_pos: l0.pos,
+                    fine_nrm: l0.nrm,
+                    lit_color: l0.color,
+                    specular,
+                    gi_history: history,
+                    prev_camera,
+                };
+                ssr.add_passes(g, i, s, &inputs)
+            }
+            _ => i.albedo,
+        };
         let pipe = *self.upsample;
         let push = GpuSsgiUpsamplePush {
             scale: (1u32 << base) as f32,
@@ -398,6 +425,7 @@ impl GiMethodPasses for Ssgi {
             .bind_sampled(11, i.normal, s, c)
             .bind_sampled(12, lut, s, c)
             .bind_sampled(13, reprojected, s, c)
+            .bind_sampled(14, ssr, s, c)
             .record(move |ctx| {
                 ctx.bind(&pipe);
                 ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));

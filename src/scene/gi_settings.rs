@@ -92,6 +92,9 @@ pub struct SsgiSettings {
     /// τ of the temporal blend E = mix(E_new, E_history, τ·w) (Oetke 2017 §5.1: 0.1–0.98,
     /// 0.85–0.98 at high frame rates); 0 turns the accumulation off.
     pub history_weight: f32,
+    /// Screen-space reflections (Oetke 2017 §5.4) where the scene has Phong or GGX
+    /// materials; without such materials nothing is allocated either way.
+    pub ssr: bool,
 }
 
 impl Default for SsgiSettings {
@@ -103,8 +106,19 @@ impl Default for SsgiSettings {
             feedback: true,
             feedback_max_w_m2: 20.0,
             history_weight: 0.9,
+            ssr: true,
         }
     }
+}
+
+/// `--ssr on|off`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum SsrMode {
+    /// Reflection rays where the scene has Phong or GGX materials.
+    #[default]
+    On,
+    /// The diffuse fallback only (the image before reflection rays).
+    Off,
 }
 
 /// Scalable Ambient Obscurance as modified by Oetke 2017 §2.5 (after McGuire et al. 2012):

@@ -165,7 +165,7 @@ pub use error::SceneError;
 pub use gi::{resolve_gi, GiOverrides};
 pub use gi_settings::{
     Bounces, GiMethod, GiSettings, RadianceSource, SaoSettings, SsgiMips, SsgiOverrides,
-    SsgiResolution, SsgiSettings,
+    SsgiResolution, SsgiSettings, SsrMode,
 };
 pub use light::{scaled, spot_falloff, Light};
 pub use material::{

@@ -1,0 +1,158 @@
+#version 450
+// Screen-space reflection rays (Oetke 2017 §5.4): per Phong or GGX pixel one ray along the
+// mirror direction r = reflect(−v, n) (deterministic: no per-frame lobe sampling, the lobe's
+// width enters through the cone footprint below), marched hierarchically on the Hi-Z pyramid
+// of inverse view depth (ssgi_reflect_hiz) to the first texel whose surface the ray reaches
+// within a thickness. The ray is marched in screen space, where its pixel position and its
+// inverse clip w are both linear in the parameter t of the projected segment:
+// - at level L the ray's segment inside its current cell is compared with the cell's nearest
+//   surface: entirely in front of it, the march skips to the cell's exit and goes up a level;
+//   otherwise it descends; at level 0 a segment reaching behind the surface hits it when its
+//   nearest point lies within `thickness` (relative to the surface's depth) behind it, else
+//   the ray passes behind and goes on at level 0.
+// At a hit the lit colour is read from the colour pyramid at the level whose texel matches
+// the lobe's cone footprint there: diameter 2·d·tan θ at hit distance d, θ the lobe's
+// half-maximum angle (Phong cos^n: cos θ = 2^(−1/n); GGX through its Phong equivalent
+// n = 2/α² − 2, Walter et al. 2007), over the pixel's width at the hit's depth.
+// The ray's confidence a fades at the screen's edge, near the maximum distance, for rays
+// toward the camera and at back faces; misses have a = 0. Output premultiplied, (a·L, a), so
+// the blur and the history blend linearly; ssgi_upsample completes a·L + (1 − a)·fallback.
+// The result is blended with this pixel's reprojected history (τ·w as ssgi_upsample), the
+// history's depth agreement read from the GI history's clip w.
+#include "frame.glsl"
+#include "ssgi.glsl"
+
+layout(local_size_x = 8, local_size_y = 8) in;
+layout(set = 0, binding = 0, std430) readonly buffer FrameBuf { GpuFrame frame; };
+layout(set = 0, binding = 1) uniform sampler2D fine_pos;     // GI level 0: position, z
+layout(set = 0, binding = 2) uniform sampler2D gb_normal;    // w: Phong n or GGX roughness
+layout(set = 0, binding = 3) uniform sampler2D gb_specular;  // rgb ρs or F0, a lobe kind
+layout(set = 0, binding = 4) uniform sampler2D hiz;          // all levels: nearest 1/z
+layout(set = 0, binding = 5) uniform sampler2D lit_color;    // all levels, linear sampler
+layout(set = 0, binding = 6) uniform sampler2D ssr_history;  // premultiplied (a·L, a)
+layout(set = 0, binding = 7) uniform sampler2D gi_history;   // w: clip w last frame
+layout(set = 0, binding = 8, std430) readonly buffer PrevCamera { mat4 prev_view_proj; };
+layout(set = 0, binding = 9, rgba32f) uniform writeonly image2D traced;
+
+layout(push_constant) uniform Push {
+    float max_distance_m;   // ray length in world space
+    float thickness;        // hit shell behind a surface, relative to its depth
+    float pixel_angle;      // 2 tan(fov_y/2) / height: a pixel's width per meter of depth
+    float history_weight;   // τ
+    int levels;             // of the Hi-Z and colour pyramids
+    int max_steps;
+} pc;
+
+// Fades: 1 inside, smoothly to 0 over the outer 5% of the screen.
+const float EDGE_FADE = 0.05;
+
+// The lobe's half-maximum angle's tangent: Phong cos^n falls to half at cos θ = 2^(−1/n).
+float lobe_tan(float kind, float w) {
+    float n = w;
+    if (kind > 1.5) {
+        float alpha = max(w * w, 1e-3);
+        n = 2.0 / (alpha * alpha) - 2.0;
+    }
+    float c = exp2(-1.0 / max(n, 1e-3));
+    return sqrt(max(1.0 - c * c, 0.0)) / max(c, 1e-4);
+}
+
+// Marches the screen-space segment from s0 (inverse clip w k0) to s1 (k1), t in [0, 1];
+// returns the hit texel, or ivec2(−1) for a miss.
+ivec2 march(vec2 s0, vec2 s1, float k0, float k1) {
+    vec2 d = s1 - s0;
+    vec2 size = vec2(textureSize(hiz, 0));
+    // The segment's end inside the screen (a ray leaving it is a miss past there).
+    float t_end = 1.0;
+    for (int i = 0; i < 2; ++i) {
+        if (d[i] > 0.0) t_end = min(t_end, (size[i] - s0[i]) / d[i]);
+        if (d[i] < 0.0) t_end = min(t_end, -s0[i] / d[i]);
+    }
+    vec2 inv_d = vec2(abs(d.x) > 1e-6 ? 1.0 / d.x : 1e12, abs(d.y) > 1e-6 ? 1.0 / d.y : 1e12);
+    vec2 dir_step = step(vec2(0.0), d);
+    // A nudge past a cell's boundary, 1/100 pixel along the ray.
+    float nudge = 0.01 / max(length(d), 1e-6);
+    // Start where the ray leaves its own pixel.
+    vec2 t_cells = ((floor(s0) + dir_step) - s0) * inv_d;
+    float t = max(min(t_cells.x, t_cells.y), 0.0) + nudge;
+    int level = 0;
+    for (int i = 0; i < pc.max_steps && t < t_end; ++i) {
+        vec2 s = s0 + d * t;
+        float cell = exp2(float(level));
+        // Level sizes as Vulkan's mips: halved, rounded down (textureSize with a varying lod
+        // is not relied on; lavapipe answered wrongly).
+        ivec2 level_size = max(textureSize(hiz, 0) >> level, ivec2(1));
+        ivec2 c = clamp(ivec2(floor(s / cell)), ivec2(0), level_size - 1);
+        vec2 exits = ((vec2(c) + dir_step) * cell - s0) * inv_d;
+        float t_exit = min(min(exits.x, exits.y), t_end);
+        float k_in = mix(k0, k1, t), k_out = mix(k0, k1, t_exit);
+        float surface = texelFetch(hiz, c, level).r;
+        if (min(k_in, k_out) > surface) {
+            // The whole segment is in front of the cell's nearest surface.
+            t = t_exit + nudge;
+            level = min(level + 1, pc.levels - 1);
+        } else if (level > 0) {
+            level -= 1;
+        } else {
+            // Level 0: the segment reaches this texel's surface or behind it.
+            float nearest_ray = max(k_in, k_out);
+            if (1.0 / nearest_ray <= (1.0 + pc.thickness) / surface) return c;
+            t = t_exit + nudge;
+        }
+    }
+    return ivec2(-1);
+}
+
+// The traced (a·L, a) at world point x with normal n and lobe (kind, w).
+vec4 trace(vec3 x, vec3 n, float kind, float w) {
+    vec3 cam = frame.camera_position.xyz;
+    vec3 v = normalize(cam - x);
+    vec3 r = reflect(-v, n);
+    vec3 forward = ssgi_camera_forward(frame.inv_view_proj);
+    // Rays toward the camera: full weight while r·forward ≥ 0, none from −0.5 on.
+    float toward = 1.0 - smoothstep(0.0, 0.5, -dot(r, forward));
+    if (toward <= 0.0) return vec4(0.0);
+    vec4 c0 = frame.view_proj * vec4(x, 1.0);
+    vec4 c1 = frame.view_proj * vec4(x + r * pc.max_distance_m, 1.0);
+    // Keep the segment in front of the camera (clip w above 1% of the start's).
+    float w_min = 0.01 * c0.w;
+    if (c1.w < w_min) c1 = mix(c0, c1, (c0.w - w_min) / (c0.w - c1.w));
+    vec2 size = vec2(textureSize(hiz, 0));
+    vec2 s0 = (c0.xy / c0.w * 0.5 + 0.5) * size;
+    vec2 s1 = (c1.xy / c1.w * 0.5 + 0.5) * size;
+    if (length(s1 - s0) < 1.0) return vec4(0.0);
+    ivec2 hit = march(s0, s1, 1.0 / c0.w, 1.0 / c1.w);
+    if (hit.x < 0) return vec4(0.0);
+    vec4 hit_pos = texelFetch(fine_pos, hit, 0);
+    vec3 hit_n = normalize(texelFetch(gb_normal, hit, 0).xyz);
+    float dist_m = length(hit_pos.xyz - x);
+    vec2 uv = (vec2(hit) + 0.5) / size;
+    vec2 border = min(uv, 1.0 - uv);
+    float edge = smoothstep(0.0, EDGE_FADE, min(border.x, border.y));
+    float far = 1.0 - smoothstep(0.8, 1.0, dist_m / pc.max_distance_m);
+    float front = clamp(-4.0 * dot(hit_n, r), 0.0, 1.0);
+    float a = toward * edge * far * front;
+    float footprint_px = 2.0 * dist_m * lobe_tan(kind, w) / (hit_pos.w * pc.pixel_angle);
+    float lod = clamp(log2(max(footprint_px, 1.0)), 0.0, float(pc.levels - 1));
+    vec3 color = textureLod(lit_color, uv, lod).rgb;
+    return vec4(a * color, a);
+}
+
+void main() {
+    ivec2 p = ivec2(gl_GlobalInvocationID.xy);
+    if (any(greaterThanEqual(p, imageSize(traced)))) return;
+    vec4 pz = texelFetch(fine_pos, p, 0);
+    vec4 lobe = texelFetch(gb_specular, p, 0);
+    if (pz.w <= 0.0 || lobe.a < 0.5) {
+        imageStore(traced, p, vec4(0.0));
+        return;
+    }
+    vec4 nw = texelFetch(gb_normal, p, 0);
+    vec4 value = trace(pz.xyz, normalize(nw.xyz), lobe.a, nw.w);
+    ivec2 texel;
+    float weight;
+    if (ssgi_reproject(prev_view_proj, gi_history, pz.xyz, texel, weight)) {
+        value = mix(value, texelFetch(ssr_history, texel, 0), pc.history_weight * weight);
+    }
+    imageStore(traced, p, value);
+}
