@@ -267,7 +267,7 @@ fn camera_toml_table_round_trips() {
     let mut cam = scene.camera;
     cam.position = Vec3::new(0.1, -2.5e-3, 1.0 / 3.0);
     cam.forward = Vec3::new(0.3, -0.2, 0.9).normalize();
-    let text = format!("{}{LIGHT}{CUBE}", cam.toml_table());
+    let text = format!("{}{LIGHT}{CUBE}", cam.toml_table(glam::DVec3::ZERO));
     assert_eq!(load_ok(&text, &[]).camera, cam, "{text}");
 }
 
@@ -1160,7 +1160,10 @@ fn camera_path_round_trips_through_its_toml_table() {
     );
     let s = load_ok(&text, &[]);
     let p = s.camera_path.clone().unwrap();
-    let again = load_ok(&format!("{CAMERA}{LIGHT}{CUBE}{}", p.toml_table()), &[]);
+    let again = load_ok(
+        &format!("{CAMERA}{LIGHT}{CUBE}{}", p.toml_table(glam::DVec3::ZERO)),
+        &[],
+    );
     let q = again.camera_path.unwrap();
     // Times, positions and fields of view print exactly; a written direction is normalized
     // again on loading, which may move its last bit.
