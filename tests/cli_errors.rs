@@ -147,6 +147,12 @@ fn commands_failing_after_the_device_is_up_release_everything() {
             &["--validate", "--voxels", "16384", "--voxel-layers", "64"],
             "lower --voxels or --voxel-layers",
         ),
+        // 16384² × 16 B of read-back alone exceeds what lavapipe (and most drivers)
+        // allocate at once: refused before the first frame-sized allocation.
+        (
+            &["--validate", "--width", "16384", "--height", "16384"],
+            "lower --width/--height",
+        ),
     ];
     for (extra, want) in cases {
         let stderr = render_fails(extra);

@@ -164,12 +164,107 @@ fn a_voxel_grid_larger_than_the_device_memory_is_refused_before_allocating() {
     };
     let e = Renderer::new(&ctx, &scene, s).err().expect("too large");
     assert!(
-        matches!(e, RenderError::VoxelGridTooLarge { layers: 64, need_bytes, heap_bytes, .. }
-            if need_bytes > heap_bytes),
+        matches!(&e, RenderError::OutOfDeviceMemory(m)
+            if m.need_bytes > m.available_bytes && m.subject.contains("64 layer")),
         "{e}"
     );
     assert!(
         e.to_string().contains("--voxels") && e.to_string().contains("GiB"),
+        "{e}"
+    );
+}
+
+/// Asserts that `e` is a memory error of `flags` needing more than is available.
+fn assert_out_of_memory(e: &RenderError, flags: &str) {
+    assert!(
+        matches!(e, RenderError::OutOfDeviceMemory(m)
+            if m.need_bytes > m.available_bytes && m.flags == flags),
+        "{e}"
+    );
+    let text = e.to_string();
+    assert!(text.contains(flags) && text.contains("GiB"), "{text}");
+}
+
+#[test]
+fn a_frame_larger_than_the_device_allows_is_refused_before_allocating() {
+    let ctx = common::context();
+    let scene = load_scene_arg(None).expect("built-in scene");
+    let max_one = ctx
+        .info
+        .max_memory_allocation_bytes
+        .min(ctx.info.max_buffer_bytes);
+    // 16384² RGBA32F read-back is 16384² × 16 B = 4 GiB in one buffer; any device that
+    // offers more would still be refused by the heap sum, so only the kind of limit varies.
+    let big = RenderSettings {
+        width: 16384,
+        height: 16384,
+        ..Default::default()
+    };
+    let e = Renderer::new(&ctx, &scene, big)
+        .err()
+        .expect("16384² refused");
+    assert_out_of_memory(&e, "--width/--height");
+    if max_one < 16384 * 16384 * 16 {
+        assert!(e.to_string().contains("`readback hdr`"), "{e}");
+    }
+    // A normal size still builds on the same context after the refusal.
+    Renderer::new(&ctx, &scene, small()).expect("32² renders");
+}
+
+#[test]
+fn transient_arenas_are_counted_before_the_executor_allocates() {
+    let ctx = common::context();
+    let scene = load_scene_arg(None).expect("built-in scene");
+    // The read-back buffer fits one allocation when w·h·16 ≤ max, but the G-buffer arena
+    // (albedo + normal RGBA16F, depth D32, direct radiance RGBA32F alive together: at least
+    // 8 + 8 + 4 + 16 = 36 B per pixel) does not when w·h·36 > max. The smallest square
+    // past max/36 keeps the read-back (the one allocation made before the check) small.
+    let max_one = ctx
+        .info
+        .max_memory_allocation_bytes
+        .min(ctx.info.max_buffer_bytes);
+    let side = ((max_one / 36) as f64).sqrt() as u32 + 1;
+    let pixels = u64::from(side) * u64::from(side);
+    if side > voxgi::limits::WIDTH.max || pixels * 16 > max_one {
+        eprintln!("skipped: this device allocates {max_one} B at once, more than a {side}² arena");
+        return;
+    }
+    let s = RenderSettings {
+        width: side,
+        height: side,
+        gi: voxgi::gi::GiSettings {
+            method: GiMethod::None,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let e = Renderer::new(&ctx, &scene, s).err().expect("refused");
+    assert_out_of_memory(&e, "--width/--height");
+    assert!(e.to_string().contains("graph arena"), "{e}");
+}
+
+#[test]
+fn resources_beyond_what_is_left_of_the_heap_are_refused() {
+    use voxgi::render::memory::{check_fits, MemoryLimit, MemoryNeed};
+    let ctx = common::context();
+    let need = |bytes| MemoryNeed {
+        name: "probe".into(),
+        bytes,
+        is_buffer: false,
+    };
+    let heap = ctx.info.device_local_heap_bytes;
+    // Exactly the one-allocation limit fits; one byte more does not.
+    let max_one = ctx.info.max_memory_allocation_bytes.min(heap);
+    check_fits(&ctx, "probe", "--width/--height", &[need(max_one)], 0).expect("at the limit");
+    let e = check_fits(&ctx, "probe", "--width/--height", &[need(max_one + 1)], 0)
+        .expect_err("over the limit");
+    assert_out_of_memory(&e, "--width/--height");
+    // With all but 1 KiB of the heap already taken, 2 KiB no longer fit.
+    let e =
+        check_fits(&ctx, "probe", "--voxels", &[need(2048)], heap - 1024).expect_err("heap full");
+    assert!(
+        matches!(&e, RenderError::OutOfDeviceMemory(m)
+            if m.limit == MemoryLimit::Heap && m.need_bytes == 2048 && m.available_bytes == 1024),
         "{e}"
     );
 }

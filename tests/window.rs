@@ -607,3 +607,131 @@ fn viewer_flies_with_real_keyboard_and_mouse_events() {
         "dragging right should turn right; forward is {forward}"
     );
 }
+
+/// Waits up to 60 s for `child` to exit after Escape, killing it past that.
+fn wait_for_exit(child: &mut Child, what: &str) {
+    let started = Instant::now();
+    while child.try_wait().expect("poll the viewer").is_none() {
+        if started.elapsed() > Duration::from_secs(60) {
+            let _ = child.kill();
+            let _ = child.wait();
+            panic!("{what}: the viewer did not close within 60 s of Escape");
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
+}
+
+/// A storm of window events a person could cause in seconds: resizes (down to 1×1 and 2×2,
+/// narrower than the panel), a minimize and restore, and GI switches with the `G` key (every
+/// method, each a new renderer), interleaved. The run must survive with no validation message
+/// (`--validate` fails the exit status on any, teardown included) and exit cleanly on Escape.
+/// Every external wait has a time limit (`xdotool` calls 60 s, the exit 60 s).
+#[test]
+fn viewer_survives_a_storm_of_resizes_minimizes_and_gi_switches() {
+    require_display();
+    let _display = lock_display();
+    let dir = scratch_dir("storm");
+    let _wm = start_window_manager(&dir);
+    let mut child = Command::new(env!("CARGO_BIN_EXE_voxgi"))
+        .args([
+            "--validate",
+            "view",
+            "--gi",
+            "none",
+            "--width",
+            "320",
+            "--height",
+            "240",
+        ])
+        .env_remove("WAYLAND_DISPLAY")
+        .env("RUST_LOG", "warn,voxgi::app=info")
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("run the voxgi binary");
+    // The viewer's log, line by line, so the storm can wait for each new renderer.
+    let stderr = child.stderr.take().expect("piped stderr");
+    let (tx, rx) = std::sync::mpsc::channel::<String>();
+    let reader = std::thread::spawn(move || {
+        use std::io::BufRead;
+        for line in std::io::BufReader::new(stderr)
+            .lines()
+            .map_while(Result::ok)
+        {
+            let _ = tx.send(line);
+        }
+    });
+    let mut log = String::new();
+    let mut wait_for = |want: &str| {
+        let started = Instant::now();
+        loop {
+            let left = Duration::from_secs(60).saturating_sub(started.elapsed());
+            match rx.recv_timeout(left) {
+                Ok(line) => {
+                    log += &line;
+                    log.push('\n');
+                    if line.contains(want) {
+                        return;
+                    }
+                }
+                Err(_) => panic!("no `{want}` in the viewer's log within 60 s:\n{log}"),
+            }
+        }
+    };
+    let window = xdotool(&["search", "--sync", "--onlyvisible", "--name", "^voxgi$"]);
+    let window = window.lines().next().expect("a window id").to_string();
+    let focus = || xdotool(&["windowactivate", "--sync", &window]);
+    focus();
+    let pause = || std::thread::sleep(Duration::from_millis(400));
+    // (width, height) of each resize, then whether to press G after it.
+    let steps: [(&str, &str, bool); 8] = [
+        ("200", "150", true),
+        ("1", "1", false),
+        ("64", "48", true),
+        ("2", "2", true),
+        ("500", "300", false),
+        ("40", "400", true),
+        ("300", "30", true),
+        ("320", "240", false),
+    ];
+    let mut methods = ["hemisphere", "pathtrace", "vpl", "ssgi", "none"].into_iter();
+    for (i, (w, h, switch)) in steps.into_iter().enumerate() {
+        // No --sync: the window manager may refuse a tiny size, and the viewer must cope
+        // with whatever size it gets.
+        xdotool(&["windowsize", &window, w, h]);
+        pause();
+        if i == 3 {
+            xdotool(&["windowminimize", "--sync", &window]);
+            pause();
+            focus();
+        }
+        if switch {
+            // Real key events go to the focused window (XTEST, as a keyboard's would).
+            focus();
+            xdotool(&["key", "g"]);
+            // Each press is a new renderer with the next method (none → hemisphere → … →
+            // ssgi → none): wait for it, at whatever size the window has now.
+            let method = methods.next().expect("five presses");
+            wait_for(&format!("indirect light: {method}"));
+        }
+    }
+    focus();
+    xdotool(&["key", "Escape"]);
+    wait_for_exit(&mut child, "the storm");
+    let out = child
+        .wait_with_output()
+        .expect("collect the viewer's output");
+    reader.join().expect("the log reader");
+    for line in rx.try_iter() {
+        log += &line;
+        log.push('\n');
+    }
+    assert!(
+        out.status.success(),
+        "voxgi --validate view under a storm of window events failed ({}):\n{log}",
+        out.status
+    );
+    assert!(!log.contains("Validation"), "{log}");
+    assert_eq!(methods.next(), None, "every method was switched to");
+    let _ = std::fs::remove_dir_all(&dir);
+}

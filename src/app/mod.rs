@@ -486,6 +486,9 @@ impl Viewer {
             KeyCode::KeyQ => k.down = down,
             KeyCode::ShiftLeft | KeyCode::ShiftRight => k.fast = down,
             KeyCode::F12 if down => self.controls.screenshot = true,
+            KeyCode::KeyG if down => {
+                self.controls.gi.method = panel::next_gi_method(self.controls.gi.method)
+            }
             KeyCode::Escape if down => elwt.exit(),
             _ => {}
         }

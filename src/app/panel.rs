@@ -106,6 +106,12 @@ const GI_METHODS: [(GiMethod, &str); 5] = [
     (GiMethod::Ssgi, "ssgi"),
 ];
 
+/// The method after `m` in the panel's list (wrapping): the `G` key steps through them.
+pub fn next_gi_method(m: GiMethod) -> GiMethod {
+    let i = GI_METHODS.iter().position(|(g, _)| *g == m).unwrap_or(0);
+    GI_METHODS[(i + 1) % GI_METHODS.len()].0
+}
+
 fn gi_method_name(m: GiMethod) -> &'static str {
     GI_METHODS
         .iter()
@@ -242,7 +248,10 @@ pub fn draw(
                 "{} · {}×{} · {:.1} ms/frame",
                 info.device, info.extent_px.0, info.extent_px.1, info.frame_ms
             ));
-            ui.label("WASD move · Q/E down/up · right mouse look · wheel speed · F12 screenshot");
+            ui.label(
+                "WASD move · Q/E down/up · right mouse look · wheel speed · G next GI method · \
+                 F12 screenshot",
+            );
             ui.separator();
 
             egui::CollapsingHeader::new("GPU time per pass (median)")

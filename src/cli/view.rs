@@ -103,14 +103,15 @@ pub fn view(global: &Global, args: ViewArgs, out: &mut dyn Write) -> Result<(), 
         restore_after: args.restore_after,
         screenshot: args.screenshot,
     };
+    let origin_m = scene.origin_m;
     let report = crate::app::run(scene, &opts)?;
     if let Some(camera) = &report.camera {
         // Pasteable into a scene file, to start there next time.
-        out!(out, "camera at exit:\n{}", camera.toml_table());
+        out!(out, "camera at exit:\n{}", camera.toml_table(origin_m));
     }
     match crate::scene::CameraPath::through_cameras(&report.camera_keys, RECORDED_KEY_SPACING_S) {
         // Pasteable into a scene file, for `voxgi profile --camera-path`.
-        Ok(path) => out!(out, "recorded camera path:\n{}", path.toml_table()),
+        Ok(path) => out!(out, "recorded camera path:\n{}", path.toml_table(origin_m)),
         Err(e) if !report.camera_keys.is_empty() => {
             outln!(
                 out,

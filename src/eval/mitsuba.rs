@@ -119,6 +119,17 @@ pub fn export_mitsuba(
         comment_text(&source)
     );
     xml.push_str("<scene version=\"3.0.0\">\n");
+    if scene.origin_m != glam::DVec3::ZERO {
+        // Mitsuba computes in f32 too: the export keeps voxgi's local coordinates, which
+        // stay precise, and says where they are.
+        let o = scene.origin_m;
+        let _ = writeln!(
+            xml,
+            "    <!-- Local coordinates: voxgi moved this scene's origin to world \
+             ({}, {}, {}) m (a floating origin); add it for world positions. -->",
+            o.x, o.y, o.z
+        );
+    }
     let _ = writeln!(xml, "    <default name=\"spp\" value=\"{DEFAULT_SPP}\"/>");
     let _ = writeln!(
         xml,

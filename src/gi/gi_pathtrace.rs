@@ -19,6 +19,12 @@ pub struct GiPathtrace {
 }
 
 impl GiPathtrace {
+    /// The accumulation history of a `w`×`h` frame.
+    pub fn history_desc((w, h): (u32, u32)) -> ImageDesc {
+        ImageDesc::new_2d("path tracer history", vk::Format::R32G32B32A32_SFLOAT, w, h)
+            .with_usage(vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::SAMPLED)
+    }
+
     /// `lobes`: later bounces read the material volume (the assembly creates it then).
     pub fn new(ctx: &Context, target: &GiTarget<'_>, lobes: bool) -> Result<Self, VkError> {
         let (w, h) = target.size;
@@ -33,8 +39,7 @@ impl GiPathtrace {
             ],
         )?;
         let history = ctx.create_zeroed_image(
-            &ImageDesc::new_2d("path tracer history", vk::Format::R32G32B32A32_SFLOAT, w, h)
-                .with_usage(vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::SAMPLED),
+            &Self::history_desc((w, h)),
             Access::Sampled(Shader::Compute).info().layout,
         )?;
         Ok(Self { pipeline, history })

@@ -28,7 +28,7 @@ pub use sao::GpuSaoPush;
 
 use crate::graph::{Access, BufferHandle, ImageHandle, RenderGraph, Shader, SlotCondition};
 use crate::scene::Scene;
-use crate::vk::{vk, Buffer, Context, VkError};
+use crate::vk::{vk, Buffer, Context, ImageDesc, VkError};
 use crate::voxel::attributes::TriangleAttributeVolumes;
 use crate::voxel::ray_mask::RayMaskLut;
 use crate::voxel::VoxelGrid;
@@ -130,6 +130,25 @@ pub struct GiPasses {
 }
 
 impl GiPasses {
+    /// The frame-sized images [`GiPasses::new`] creates for `settings` at `size` (the
+    /// method's history; with SSR on a `glossy` scene, the reflection history too), for the
+    /// renderer's memory check before anything is allocated.
+    pub fn frame_image_descs(
+        settings: &GiSettings,
+        size: (u32, u32),
+        glossy: bool,
+    ) -> Vec<ImageDesc> {
+        match settings.method {
+            GiMethod::Pathtrace => vec![GiPathtrace::history_desc(size)],
+            GiMethod::Ssgi if settings.ssgi.ssr && glossy => vec![
+                ssgi::Ssgi::history_desc(size),
+                ssgi_reflect::Ssr::history_desc(size),
+            ],
+            GiMethod::Ssgi => vec![ssgi::Ssgi::history_desc(size)],
+            GiMethod::Vpl | GiMethod::Hemisphere | GiMethod::None => Vec::new(),
+        }
+    }
+
     /// Creates the pipelines (and the method's volumes and history) for `target`.
     pub fn new(
         ctx: &Context,

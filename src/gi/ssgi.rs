@@ -197,12 +197,17 @@ impl Ssgi {
         })
     }
 
+    /// The history image of a `w`×`h` frame (also counted by the renderer's memory check).
+    pub fn history_desc((w, h): (u32, u32)) -> ImageDesc {
+        ImageDesc::new_2d("ssgi history", vk::Format::R32G32B32A32_SFLOAT, w, h)
+            .with_usage(vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::SAMPLED)
+    }
+
     /// The history image, cleared (clip w 0: no pixel has a history yet), and the previous
     /// camera's buffer.
     fn create_history(ctx: &Context, (w, h): (u32, u32)) -> Result<(Image, Buffer), VkError> {
         let history = ctx.create_zeroed_image(
-            &ImageDesc::new_2d("ssgi history", vk::Format::R32G32B32A32_SFLOAT, w, h)
-                .with_usage(vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::SAMPLED),
+            &Self::history_desc((w, h)),
             Access::Sampled(Shader::Compute).info().layout,
         )?;
         let camera = ctx.upload_buffer(

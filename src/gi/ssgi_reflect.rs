@@ -84,6 +84,13 @@ pub struct Ssr {
 }
 
 impl Ssr {
+    /// The persistent reflection history at the frame's `size` (also counted by the frame's
+    /// memory check before anything is allocated).
+    pub fn history_desc((w, h): (u32, u32)) -> ImageDesc {
+        ImageDesc::new_2d("ssr history", vk::Format::R32G32B32A32_SFLOAT, w, h)
+            .with_usage(vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::SAMPLED)
+    }
+
     pub fn new(ctx: &Context, target: &GiTarget<'_>, history_weight: f32) -> Result<Self, VkError> {
         let hiz_first = ctx.compute_pipeline("ssgi_reflect_hiz.comp", None, &[(0, 1)])?;
         let hiz = ctx.compute_pipeline("ssgi_reflect_hiz.comp", None, &[(0, 0)])?;
@@ -92,8 +99,7 @@ impl Ssr {
         let blur = ctx.compute_pipeline("ssgi_reflect_blur.comp", None, &[])?;
         let (w, h) = target.size;
         let history = ctx.create_zeroed_image(
-            &ImageDesc::new_2d("ssr history", vk::Format::R32G32B32A32_SFLOAT, w, h)
-                .with_usage(vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::SAMPLED),
+            &Self::history_desc(target.size),
             Access::Sampled(Shader::Compute).info().layout,
         )?;
         let camera = &target.scene.camera;

@@ -326,16 +326,26 @@ pub struct GraphExecutor {
 struct DeviceOracle<'a> {
     ctx: &'a Context,
     error: std::cell::RefCell<Option<String>>,
+    /// Never report less than the texels (buffers: the bytes) asked for: a driver may wrap
+    /// the size of an image beyond what it can create at 32 bits; memory checks use this.
+    at_least_texels: bool,
 }
 
 impl MemoryOracle for DeviceOracle<'_> {
     fn requirements(&self, _id: ResourceId, r: &ResourceDeclView) -> MemoryRequirements {
-        let req = match r.image {
+        let mut req = match r.image {
             Some(desc) => self.ctx.image_requirements(desc),
             None => self
                 .ctx
                 .buffer_requirements(r.buffer_size_bytes, r.buffer_usage),
         };
+        if self.at_least_texels {
+            let floor = match r.image {
+                Some(desc) => crate::render::memory::texel_bytes_of(desc),
+                None => r.buffer_size_bytes,
+            };
+            req.size = req.size.max(floor);
+        }
         let memory_type = self
             .ctx
             .device_local_type(req.memory_type_bits)
@@ -352,6 +362,24 @@ impl MemoryOracle for DeviceOracle<'_> {
     }
 }
 
+/// Compiles `graph` against the device without creating anything: the arenas its transients
+/// would take in each frame slot (what [`GraphExecutor::new`] allocates per slot).
+pub fn transient_arenas(
+    ctx: &Context,
+    graph: &RenderGraph,
+) -> Result<Vec<super::compile::Arena>, GraphError> {
+    let oracle = DeviceOracle {
+        ctx,
+        error: Default::default(),
+        at_least_texels: true,
+    };
+    let compiled = graph.compile(&oracle)?;
+    if let Some(e) = oracle.error.borrow_mut().take() {
+        return Err(GraphError::Gpu(e));
+    }
+    Ok(compiled.arenas)
+}
+
 impl GraphExecutor {
     /// Compiles `graph` against the device and creates its transients for `frames_in_flight`
     /// slots (each slot has its own arenas, so frames in flight never share transients).
@@ -363,6 +391,7 @@ impl GraphExecutor {
         let oracle = DeviceOracle {
             ctx,
             error: Default::default(),
+            at_least_texels: false,
         };
         let compiled = graph.compile(&oracle)?;
         if let Some(e) = oracle.error.borrow_mut().take() {

@@ -39,7 +39,7 @@ pub use compile::{
     texel_bytes, Arena, Barrier, CompiledGraph, EstimateOracle, MemoryOracle, MemoryRequirements,
     MemoryStats, Placement, ResourceDeclView,
 };
-pub use execute::{GpuBuffer, GpuImage, GraphExecutor, PassContext};
+pub use execute::{transient_arenas, GpuBuffer, GpuImage, GraphExecutor, PassContext};
 pub use oneshot::{add_readback, readback_buffer, run_frames, run_once, OneShotError};
 
 use crate::vk::{vk, Bindable, Buffer, Image, ImageDesc, ShaderInterface};

@@ -84,6 +84,12 @@ pub struct TaaPass {
 }
 
 impl TaaPass {
+    /// The history image of a `w`×`h` frame (also counted by the renderer's memory check).
+    pub fn history_desc((w, h): (u32, u32)) -> ImageDesc {
+        ImageDesc::new_2d("taa history", vk::Format::R32G32B32A32_SFLOAT, w, h)
+            .with_usage(vk::ImageUsageFlags::SAMPLED)
+    }
+
     /// `sampler`: nearest (the shader filters the history by hand).
     pub fn new(
         ctx: &Context,
@@ -93,8 +99,7 @@ impl TaaPass {
     ) -> Result<Self, VkError> {
         let pipeline = ctx.compute_pipeline("taa.comp", PushLayout::of::<GpuTaaPush>(), &[])?;
         let history = ctx.create_zeroed_image(
-            &ImageDesc::new_2d("taa history", vk::Format::R32G32B32A32_SFLOAT, w, h)
-                .with_usage(vk::ImageUsageFlags::SAMPLED),
+            &Self::history_desc((w, h)),
             Access::Sampled(Shader::Compute).info().layout,
         )?;
         Ok(Self {

@@ -11,6 +11,7 @@ mod gbuffer;
 mod gbuffer_view;
 pub mod gpu;
 mod light_map;
+pub mod memory;
 mod oit;
 mod oit_clear;
 mod oit_gather;
@@ -75,20 +76,13 @@ pub enum RenderError {
     SaoWithoutGi,
     #[error(transparent)]
     Voxel(#[from] crate::voxel::gpu::GpuVoxelError),
-    #[error("the voxel grid of {res_x}×{res_y} columns × {layers} layer(s) needs at least {:.1} GiB of device memory, more than the device's largest memory heap ({:.1} GiB): lower --voxels or --voxel-layers", *need_bytes as f64 / GIB, *heap_bytes as f64 / GIB)]
-    VoxelGridTooLarge {
-        res_x: u32,
-        res_y: u32,
-        layers: u32,
-        need_bytes: u64,
-        heap_bytes: u64,
-    },
+    /// A frame size or voxel grid that does not fit the device, found before allocating.
+    #[error(transparent)]
+    OutOfDeviceMemory(memory::MemoryError),
 }
 
-const GIB: f64 = (1u64 << 30) as f64;
-
 /// Refuses a voxel grid that cannot fit the device, before anything is allocated: its column
-/// image (mip 0) and the column buffer of the same size alone take `2 × column_bytes`.
+/// image (all mips) and the column buffer of its mip 0.
 fn check_voxel_memory(
     ctx: &Context,
     scene: &Scene,
@@ -98,18 +92,80 @@ fn check_voxel_memory(
     let grid = voxels
         .grid_for(scene, settings.time_s)
         .map_err(crate::voxel::gpu::GpuVoxelError::from)?;
-    let need_bytes = crate::voxel::gpu::column_bytes(&grid).saturating_mul(2);
-    let heap_bytes = ctx.largest_device_local_heap_bytes();
-    if need_bytes > heap_bytes {
-        return Err(RenderError::VoxelGridTooLarge {
-            res_x: grid.res_x(),
-            res_y: grid.res_y(),
-            layers: grid.layers(),
-            need_bytes,
-            heap_bytes,
-        });
+    let image = crate::voxel::gpu::column_image_desc(&grid);
+    let buffer = BufferDesc {
+        name: "voxel column buffer".into(),
+        size_bytes: crate::voxel::gpu::column_bytes(&grid),
+        usage: vk::BufferUsageFlags::STORAGE_BUFFER
+            | vk::BufferUsageFlags::TRANSFER_SRC
+            | vk::BufferUsageFlags::TRANSFER_DST,
+        location: MemoryLocation::GpuOnly,
+    };
+    memory::check_fits(
+        ctx,
+        &format!(
+            "the voxel grid of {}×{} columns × {} layer(s)",
+            grid.res_x(),
+            grid.res_y(),
+            grid.layers()
+        ),
+        "--voxels or --voxel-layers",
+        &[
+            memory::MemoryNeed::image(ctx, &image),
+            memory::MemoryNeed::buffer(ctx, &buffer),
+        ],
+        ctx.allocated_bytes(),
+    )
+}
+
+/// The read-back buffers of a `w`×`h` frame: linear RGBA32F radiance and RGBA8 LDR.
+fn readback_descs((w, h): (u32, u32)) -> [BufferDesc; 2] {
+    let pixels = u64::from(w) * u64::from(h);
+    let desc = |name: &str, bytes_per_pixel: u64| BufferDesc {
+        name: name.into(),
+        size_bytes: pixels * bytes_per_pixel,
+        usage: vk::BufferUsageFlags::TRANSFER_DST,
+        location: MemoryLocation::GpuToCpu,
+    };
+    [desc("readback hdr", 16), desc("readback ldr", 4)]
+}
+
+/// What sizes a frame, for memory errors.
+fn frame_subject(s: &RenderSettings) -> String {
+    format!("the {}×{} frame", s.width, s.height)
+}
+const FRAME_FLAGS: &str = "--width/--height";
+
+/// Refuses a frame whose persistent frame-sized resources (read-back buffers, the TAA, path
+/// tracer and SSGI histories) cannot fit the device, before anything is allocated. The
+/// transients are checked by [`check_transient_memory`] once the passes exist.
+fn check_frame_memory(
+    ctx: &Context,
+    scene: &Scene,
+    s: &RenderSettings,
+    gi_on: bool,
+) -> Result<(), RenderError> {
+    let size = (s.width, s.height);
+    let mut needs: Vec<_> = readback_descs(size)
+        .iter()
+        .map(|d| memory::MemoryNeed::buffer(ctx, d))
+        .collect();
+    let mut images = Vec::new();
+    if s.debug.is_none() && s.post.taa.is_some() {
+        images.push(crate::post::TaaPass::history_desc(size));
     }
-    Ok(())
+    if gi_on {
+        let glossy = scene.has_phong() || scene.has_ggx();
+        images.extend(crate::gi::GiPasses::frame_image_descs(&s.gi, size, glossy));
+    }
+    needs.extend(images.iter().map(|d| memory::MemoryNeed::image(ctx, d)));
+    memory::check_fits(
+        ctx,
+        &frame_subject(s),
+        FRAME_FLAGS,
+        &needs,
+        ctx.allocated_bytes(),
+    )
 }
 
 /// What a frame renders.
@@ -213,7 +269,35 @@ impl Renderer {
         // hierarchy, …) drops what was made so far, which releases it.
         let mut r = Self::create(ctx, scene, &settings)?;
         r.prepare(scene)?;
+        r.check_transient_memory(ctx)?;
         Ok(r)
+    }
+
+    /// Refuses a frame whose transients (G-buffer, radiance, indirect light, post chain:
+    /// the graph's arenas, one set per frame in flight) cannot fit beside what is allocated
+    /// now, before the executor allocates them.
+    fn check_transient_memory(&self, ctx: &Context) -> Result<(), RenderError> {
+        let arenas = crate::graph::transient_arenas(ctx, &self.graph())?;
+        let slots = crate::vk::MAX_FRAMES_IN_FLIGHT;
+        let needs: Vec<_> = (0..slots)
+            .flat_map(|s| {
+                arenas
+                    .iter()
+                    .enumerate()
+                    .map(move |(i, a)| memory::MemoryNeed {
+                        name: format!("graph arena {i} (slot {s})"),
+                        bytes: a.size_bytes,
+                        is_buffer: false,
+                    })
+            })
+            .collect();
+        memory::check_fits(
+            ctx,
+            &frame_subject(&self.settings),
+            FRAME_FLAGS,
+            &needs,
+            ctx.allocated_bytes(),
+        )
     }
 
     /// Creates the frame's resources and passes (see [`Renderer::new`]).
@@ -255,19 +339,10 @@ impl Renderer {
         if let Some(v) = &voxel_settings {
             check_voxel_memory(ctx, scene, settings, v)?;
         }
-        let pixels = u64::from(settings.width) * u64::from(settings.height);
-        let readback_hdr = ctx.create_buffer(&BufferDesc {
-            name: "readback hdr".into(),
-            size_bytes: pixels * 16,
-            usage: vk::BufferUsageFlags::TRANSFER_DST,
-            location: MemoryLocation::GpuToCpu,
-        })?;
-        let readback_ldr = ctx.create_buffer(&BufferDesc {
-            name: "readback ldr".into(),
-            size_bytes: pixels * 4,
-            usage: vk::BufferUsageFlags::TRANSFER_DST,
-            location: MemoryLocation::GpuToCpu,
-        })?;
+        check_frame_memory(ctx, scene, settings, gi_on)?;
+        let [hdr_desc, ldr_desc] = readback_descs((settings.width, settings.height));
+        let readback_hdr = ctx.create_buffer(&hdr_desc)?;
+        let readback_ldr = ctx.create_buffer(&ldr_desc)?;
         let mut scene_gpu = SceneGpu::new(ctx, scene, settings.time_s)?;
         // Transparent surfaces go to the linked lists instead of the G-buffer (a debug view
         // shows the G-buffer, so it keeps their hashed coverage).

@@ -104,11 +104,13 @@ impl Camera {
 
     /// The camera as a scene file's `[camera]` table, exact (floats print in their shortest
     /// round-trip form), so a pose found in the viewer can be pasted into a scene.
-    pub fn toml_table(&self) -> String {
+    /// `origin_m` is the scene's local origin ([`super::Scene::origin_m`]): the position is
+    /// written in world coordinates, like the scene file that gave it.
+    pub fn toml_table(&self, origin_m: glam::DVec3) -> String {
         let v = |v: Vec3| format!("[{:?}, {:?}, {:?}]", v.x, v.y, v.z);
         format!(
             "[camera]\nposition = {}\nforward = {}\nup = {}\nfov_y_deg = {:?}\nnear = {:?}\nfar = {:?}\n",
-            v(self.position),
+            world_toml(origin_m, self.position),
             v(self.forward),
             v(self.up),
             self.fov_y_deg,
@@ -116,6 +118,27 @@ impl Camera {
             self.far
         )
     }
+}
+
+/// A local position as a TOML array in world coordinates: each f32 component at its shortest
+/// round-trip value, plus the origin in f64 (unchanged text for a scene at the origin).
+pub fn world_toml(origin_m: glam::DVec3, local: Vec3) -> String {
+    let c = |o: f64, l: f32| {
+        if o == 0.0 {
+            format!("{l:?}")
+        } else {
+            format!(
+                "{:?}",
+                o + format!("{l:?}").parse::<f64>().unwrap_or(f64::from(l))
+            )
+        }
+    };
+    format!(
+        "[{}, {}, {}]",
+        c(origin_m.x, local.x),
+        c(origin_m.y, local.y),
+        c(origin_m.z, local.z)
+    )
 }
 
 /// Which eye of a stereo pair.

@@ -208,7 +208,8 @@ impl CameraPath {
 
     /// The path as a scene file's `[camera_path]` table (exact float round trip), for pasting
     /// a recorded flight into a scene.
-    pub fn toml_table(&self) -> String {
+    /// Positions in world coordinates (`origin_m`: the scene's local origin).
+    pub fn toml_table(&self, origin_m: glam::DVec3) -> String {
         let v = |v: Vec3| format!("[{:?}, {:?}, {:?}]", v.x, v.y, v.z);
         let mut s = format!("[camera_path]\nup = {}\nkeyframes = [\n", v(self.up));
         for k in &self.keys {
@@ -219,7 +220,7 @@ impl CameraPath {
             s += &format!(
                 "    {{ time_s = {:?}, position = {}, direction = {}{fov} }},\n",
                 k.time_s,
-                v(k.position),
+                super::camera::world_toml(origin_m, k.position),
                 v(k.forward)
             );
         }
@@ -450,7 +451,7 @@ mod tests {
     #[test]
     fn toml_table_lists_every_key() {
         let p = path();
-        let text = p.toml_table();
+        let text = p.toml_table(glam::DVec3::ZERO);
         assert!(text.starts_with("[camera_path]\n"), "{text}");
         assert!(text.contains("fov_y_deg = 50.0"), "{text}");
         assert_eq!(text.matches("time_s").count(), 4, "{text}");

@@ -2,7 +2,7 @@
 
 use std::path::{Path, PathBuf};
 
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 use serde::Deserialize;
 
 use super::camera::Camera;
@@ -60,8 +60,8 @@ pub(crate) struct CameraPathDesc {
 #[serde(deny_unknown_fields)]
 pub(crate) struct CameraKeyDesc {
     pub time_s: f32,
-    pub position: [f32; 3],
-    pub look_at: Option<[f32; 3]>,
+    pub position: [f64; 3],
+    pub look_at: Option<[f64; 3]>,
     pub direction: Option<[f32; 3]>,
     pub fov_y_deg: Option<f32>,
 }
@@ -96,8 +96,8 @@ pub(crate) struct GiDesc {
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct CameraDesc {
-    pub position: [f32; 3],
-    pub target: Option<[f32; 3]>,
+    pub position: [f64; 3],
+    pub target: Option<[f64; 3]>,
     pub forward: Option<[f32; 3]>,
     pub up: Option<[f32; 3]>,
     pub fov_y_deg: f32,
@@ -120,7 +120,7 @@ pub(crate) enum LightKind {
 #[serde(deny_unknown_fields)]
 pub(crate) struct LightDesc {
     pub kind: LightKind,
-    pub position: Option<[f32; 3]>,
+    pub position: Option<[f64; 3]>,
     pub direction: Option<[f32; 3]>,
     pub intensity_w_sr: Option<ScalarOrVec3>,
     pub irradiance_w_m2: Option<ScalarOrVec3>,
@@ -146,7 +146,7 @@ pub(crate) struct ObjectDesc {
     pub builtin: Option<String>,
     /// OBJ files without normals: faces meeting at more than this (degrees) stay sharp.
     pub crease_deg: Option<f32>,
-    pub translate: Option<[f32; 3]>,
+    pub translate: Option<[f64; 3]>,
     pub rotate_deg: Option<[f32; 3]>,
     pub scale: Option<ScalarOrVec3>,
     pub material: Option<MaterialDesc>,
@@ -185,7 +185,7 @@ pub(crate) struct AnimationDesc {
 #[serde(deny_unknown_fields)]
 pub(crate) struct KeyframeDesc {
     pub time_s: f32,
-    pub translate: Option<[f32; 3]>,
+    pub translate: Option<[f64; 3]>,
     pub rotate_deg: Option<[f32; 3]>,
     pub scale: Option<ScalarOrVec3>,
 }
@@ -199,9 +199,46 @@ pub(crate) fn parse(text: &str, file: &Path) -> Result<SceneDesc, SceneError> {
     toml::from_str::<SceneDesc>(text).map_err(|e| from_toml_error(file, text, &e, false))
 }
 
+/// Coordinates beyond this (meters) are refused: 1e9 m keeps f64 differences exact to 1e-7 m.
+const MAX_COORDINATE_M: f64 = 1e9;
+
+/// The local origin's grid, meters: scenes within half of it of the world origin keep the
+/// origin there (every such scene renders exactly as written); others are moved by a multiple
+/// of it, so their local coordinates stay within half of it plus their own extent.
+pub const ORIGIN_GRID_M: f64 = 256.0;
+
+/// The scene's local origin in world coordinates: the centre of the positions it gives
+/// (object translations, keyframes, camera, lights) rounded to [`ORIGIN_GRID_M`]. Everything
+/// GPU-side is relative to it (a floating origin): f32 coordinates 10 km out have an ulp of
+/// 1 mm, relative ones keep sub-micrometre precision. Values that fail their checks later are
+/// left out here.
+fn local_origin(desc: &SceneDesc) -> DVec3 {
+    let mut points: Vec<[f64; 3]> = vec![desc.camera.position];
+    points.extend(desc.lights.iter().filter_map(|l| l.position));
+    for o in &desc.objects {
+        points.push(o.translate.unwrap_or_default());
+        let keys = o.animation.as_ref().and_then(|a| a.keyframes.as_ref());
+        points.extend(keys.into_iter().flatten().filter_map(|k| k.translate));
+    }
+    let finite = points
+        .iter()
+        .map(|&p| DVec3::from_array(p))
+        .filter(|p| p.is_finite() && p.abs().max_element() <= MAX_COORDINATE_M);
+    let (min, max) = finite.fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), p| {
+        (lo.min(p), hi.max(p))
+    });
+    if !min.is_finite() {
+        return DVec3::ZERO;
+    }
+    ((min + max) * 0.5 / ORIGIN_GRID_M).round() * ORIGIN_GRID_M
+}
+
 /// Field-level checks, each error naming `file` and the field.
 struct Check<'a> {
     file: &'a Path,
+    /// The scene's local origin in world coordinates (see [`local_origin`]): subtracted in
+    /// f64 from every position the file gives, before it becomes f32.
+    origin: DVec3,
 }
 
 impl Check<'_> {
@@ -231,6 +268,24 @@ impl Check<'_> {
                 value: v,
             })
         }
+    }
+
+    /// A world-space position from the file, made local: `v − origin` in f64, then f32, so a
+    /// point 10 km out keeps the precision of one near the origin.
+    fn point3(&self, field: &str, v: [f64; 3]) -> Result<Vec3, SceneError> {
+        for (i, x) in v.iter().enumerate() {
+            self.scalar(&format!("{field}[{i}]"), *x as f32)?;
+            if x.abs() > MAX_COORDINATE_M {
+                return Err(self.invalid(
+                    &format!("{field}[{i}]"),
+                    format!(
+                        "{x} is not a coordinate voxgi can place; expected a finite number of \
+                         meters within ±{MAX_COORDINATE_M:e}"
+                    ),
+                ));
+            }
+        }
+        Ok((DVec3::from_array(v) - self.origin).as_vec3())
     }
 
     fn vec3(&self, field: &str, v: [f32; 3]) -> Result<Vec3, SceneError> {
@@ -317,7 +372,10 @@ pub(crate) fn build(
     base_dir: &Path,
     source: Option<PathBuf>,
 ) -> Result<Scene, SceneError> {
-    let ck = Check { file };
+    let ck = Check {
+        file,
+        origin: local_origin(&desc),
+    };
     let camera = build_camera(&ck, &desc.camera)?;
     let camera_path = desc
         .camera_path
@@ -358,6 +416,7 @@ pub(crate) fn build(
         )?);
     }
     let scene = Scene {
+        origin_m: ck.origin,
         camera,
         camera_path,
         lights,
@@ -409,7 +468,7 @@ fn build_camera_path(
     for (i, k) in p.keyframes.iter().enumerate() {
         let field = |f: &str| format!("camera_path.keyframes[{i}].{f}");
         let time_s = ck.scalar(&field("time_s"), k.time_s)?;
-        let position = ck.vec3(&field("position"), k.position)?;
+        let position = ck.point3(&field("position"), k.position)?;
         let forward = match (k.look_at, k.direction) {
             (Some(_), Some(_)) => {
                 return Err(ck.camera(
@@ -425,7 +484,7 @@ fn build_camera_path(
                 ))
             }
             (Some(t), None) => {
-                let d = ck.vec3(&field("look_at"), t)? - position;
+                let d = ck.point3(&field("look_at"), t)? - position;
                 d.try_normalize().ok_or_else(|| {
                     ck.camera(
                         &field("look_at"),
@@ -450,7 +509,7 @@ fn build_camera_path(
 }
 
 fn build_camera(ck: &Check<'_>, c: &CameraDesc) -> Result<Camera, SceneError> {
-    let position = ck.vec3("camera.position", c.position)?;
+    let position = ck.point3("camera.position", c.position)?;
     let forward =
         match (c.target, c.forward) {
             (Some(_), Some(_)) => {
@@ -465,7 +524,7 @@ fn build_camera(ck: &Check<'_>, c: &CameraDesc) -> Result<Camera, SceneError> {
                  look at, meters) or `forward = [x, y, z]` (a direction)",
             )),
             (Some(t), None) => {
-                let t = ck.vec3("camera.target", t)?;
+                let t = ck.point3("camera.target", t)?;
                 let d = t - position;
                 if d.length_squared() == 0.0 || d.normalize_or_zero() == Vec3::ZERO {
                     return Err(ck.camera(
@@ -766,7 +825,10 @@ fn build_light(ck: &Check<'_>, field: &str, l: &LightDesc) -> Result<Light, Scen
     if l.kind == LightKind::Spot {
         require("direction", l.direction.is_some(), "[0, -1, 0]")?;
     }
-    let position = l.position.map(|p| ck.vec3(&f("position"), p)).transpose()?;
+    let position = l
+        .position
+        .map(|p| ck.point3(&f("position"), p))
+        .transpose()?;
     let direction = l
         .direction
         .map(|d| ck.direction(&f("direction"), d))
@@ -908,7 +970,7 @@ fn build_area_light(ck: &Check<'_>, field: &str, l: &LightDesc) -> Result<Light,
             Err(ck.invalid(&f(name), format!("{v} is not a size; expected meters > 0")))
         }
     };
-    let position = ck.vec3(&f("position"), l.position.unwrap_or_default())?;
+    let position = ck.point3(&f("position"), l.position.unwrap_or_default())?;
     let radiance = ck.emission(
         &f("radiance_w_sr_m2"),
         l.radiance_w_sr_m2.unwrap_or(ScalarOrVec3::Scalar(0.0)),
@@ -961,14 +1023,14 @@ fn build_area_light(ck: &Check<'_>, field: &str, l: &LightDesc) -> Result<Light,
 fn build_transform(
     ck: &Check<'_>,
     field: &str,
-    translate: Option<[f32; 3]>,
+    translate: Option<[f64; 3]>,
     rotate_deg: Option<[f32; 3]>,
     scale: Option<ScalarOrVec3>,
     base: &Transform,
 ) -> Result<Transform, SceneError> {
     Ok(Transform {
         translate: match translate {
-            Some(t) => ck.vec3(&format!("{field}.translate"), t)?,
+            Some(t) => ck.point3(&format!("{field}.translate"), t)?,
             None => base.translate,
         },
         rotation: match rotate_deg {
@@ -996,7 +1058,11 @@ fn build_object(
         o.translate,
         o.rotate_deg,
         o.scale,
-        &Transform::default(),
+        // No `translate`: the object stays at the world origin, −origin locally.
+        &Transform {
+            translate: ck.point3(&f("translate"), [0.0; 3])?,
+            ..Transform::default()
+        },
     )?;
     let sequence = o.animation.as_ref().and_then(|a| a.obj_sequence.as_ref());
     if o.crease_deg.is_some() && o.mesh.is_none() {

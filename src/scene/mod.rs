@@ -180,6 +180,10 @@ pub use vpl_settings::{VplOverrides, VplSettings, VplShading, VplVisibility};
 /// A loaded, validated scene: everything finite, directions unit length, indices in range.
 #[derive(Clone, Debug)]
 pub struct Scene {
+    /// World position of the scene's local origin, meters (f64): everything below is
+    /// relative to it (a floating origin, chosen at load by `desc::local_origin`; zero for
+    /// scenes within 128 m of the world origin). Add it to report or save world positions.
+    pub origin_m: glam::DVec3,
     pub camera: Camera,
     /// The `[camera_path]` table: a flight `voxgi profile --camera-path` replays.
     pub camera_path: Option<CameraPath>,

@@ -289,7 +289,7 @@ fn camera_toml_table_round_trips() {
     let mut cam = scene.camera;
     cam.position = Vec3::new(0.1, -2.5e-3, 1.0 / 3.0);
     cam.forward = Vec3::new(0.3, -0.2, 0.9).normalize();
-    let text = format!("{}{LIGHT}{CUBE}", cam.toml_table());
+    let text = format!("{}{LIGHT}{CUBE}", cam.toml_table(glam::DVec3::ZERO));
     assert_eq!(load_ok(&text, &[]).camera, cam, "{text}");
 }
 
@@ -1182,7 +1182,10 @@ fn camera_path_round_trips_through_its_toml_table() {
     );
     let s = load_ok(&text, &[]);
     let p = s.camera_path.clone().unwrap();
-    let again = load_ok(&format!("{CAMERA}{LIGHT}{CUBE}{}", p.toml_table()), &[]);
+    let again = load_ok(
+        &format!("{CAMERA}{LIGHT}{CUBE}{}", p.toml_table(glam::DVec3::ZERO)),
+        &[],
+    );
     let q = again.camera_path.unwrap();
     // Times, positions and fields of view print exactly; a written direction is normalized
     // again on loading, which may move its last bit.
@@ -1242,4 +1245,35 @@ fn camera_path_errors_name_the_file_and_key() {
         let (e, file) = load_err(&text, &[]);
         assert_msg(&e, &file, parts);
     }
+}
+
+/// A scene 10 km out is rebased at load (a floating origin): positions are subtracted from
+/// the local origin in f64, so 10 000.3 m keeps its 0.3 m to f32 precision near 16 m
+/// (ulp 1.9e-6 m) instead of ulp(10 km) ≈ 1 mm; a scene near 0 is not moved at all.
+#[test]
+fn far_scenes_are_rebased_to_a_local_origin_in_f64() {
+    let text = |x: f64| {
+        format!(
+            "[camera]\nposition = [{x}, 1, -3]\ntarget = [{x}, 0, 0]\nfov_y_deg = 40\n\
+             [[lights]]\nkind = \"point\"\nposition = [{}, 2, 0]\nintensity_w_sr = 1.0\n\
+             [[objects]]\nbuiltin = \"cube\"\ntranslate = [{}, 0, 0]\n",
+            x + 0.3,
+            x + 0.3
+        )
+    };
+    let near = load_ok(&text(0.0), &[]);
+    assert_eq!(near.origin_m, glam::DVec3::ZERO);
+    assert_eq!(near.objects[0].transform.translate.x, 0.3f32);
+    let far = load_ok(&text(10_000.0), &[]);
+    // Centre of x ∈ [10 000, 10 000.3] rounded to 256 m: 39 × 256 = 9984 m.
+    assert_eq!(far.origin_m, glam::DVec3::new(9984.0, 0.0, 0.0));
+    assert_eq!(far.objects[0].transform.translate.x, 16.3f32);
+    assert_eq!(far.camera.position.x, 16.0f32);
+    let Light::Point { position, .. } = far.lights[0] else {
+        panic!("a point light")
+    };
+    assert_eq!(position.x, 16.3f32);
+    // World positions come back by adding the origin in f64.
+    let world = far.origin_m + far.objects[0].transform.translate.as_dvec3();
+    assert!((world.x - 10_000.3).abs() < 1e-6, "{world}");
 }

@@ -153,6 +153,14 @@ pub struct DeviceInfo {
     pub max_storage_buffer_range: u32,
     /// Largest side of a 2D image (16384 on lavapipe and desktop drivers).
     pub max_image_dimension_2d: u32,
+    /// Size of the largest device-local memory heap: what all resources together may take.
+    pub device_local_heap_bytes: u64,
+    /// `maxMemoryAllocationSize` (Vulkan 1.1, `VkPhysicalDeviceMaintenance3Properties`): the
+    /// largest single allocation the driver promises to make (2 GiB on lavapipe).
+    pub max_memory_allocation_bytes: u64,
+    /// `maxBufferSize` (Vulkan 1.3, `VkPhysicalDeviceMaintenance4Properties`): the largest
+    /// buffer the driver creates (4 GiB − 1 on lavapipe).
+    pub max_buffer_bytes: u64,
 }
 
 pub struct Context {
@@ -465,13 +473,7 @@ impl Context {
     /// Size of the device's largest device-local memory heap: an upper bound on any one
     /// resource set, checked before allocating large ones (voxel grids).
     pub fn largest_device_local_heap_bytes(&self) -> u64 {
-        let props = self.memory_properties();
-        props.memory_heaps[..props.memory_heap_count as usize]
-            .iter()
-            .filter(|h| h.flags.contains(vk::MemoryHeapFlags::DEVICE_LOCAL))
-            .map(|h| h.size)
-            .max()
-            .unwrap_or(0)
+        self.info.device_local_heap_bytes
     }
 
     /// Memory properties of the chosen device (for the graph's transient arenas).
@@ -680,6 +682,15 @@ fn pick_device(
     };
     // SAFETY: pd is valid.
     let families = unsafe { instance.get_physical_device_queue_family_properties(pd) };
+    let mut maintenance3 = vk::PhysicalDeviceMaintenance3Properties::default();
+    let mut maintenance4 = vk::PhysicalDeviceMaintenance4Properties::default();
+    let mut props2 = vk::PhysicalDeviceProperties2::builder()
+        .push_next(&mut maintenance3)
+        .push_next(&mut maintenance4);
+    // SAFETY: pd is valid; props2 chains a live output struct (Vulkan 1.1 core).
+    unsafe { instance.get_physical_device_properties2(pd, &mut props2) };
+    // SAFETY: pd is valid.
+    let memory = unsafe { instance.get_physical_device_memory_properties(pd) };
     let info = DeviceInfo {
         name: device_name(&props),
         device_type: props.device_type,
@@ -690,8 +701,21 @@ fn pick_device(
         non_coherent_atom_size: props.limits.non_coherent_atom_size,
         max_storage_buffer_range: props.limits.max_storage_buffer_range,
         max_image_dimension_2d: props.limits.max_image_dimension2_d,
+        device_local_heap_bytes: largest_device_local_heap(&memory),
+        max_memory_allocation_bytes: maintenance3.max_memory_allocation_size,
+        max_buffer_bytes: maintenance4.max_buffer_size,
     };
     Ok((pd, family, info))
+}
+
+/// Size of the largest device-local heap of `memory` (0 when none is device-local).
+fn largest_device_local_heap(memory: &vk::PhysicalDeviceMemoryProperties) -> u64 {
+    memory.memory_heaps[..memory.memory_heap_count as usize]
+        .iter()
+        .filter(|h| h.flags.contains(vk::MemoryHeapFlags::DEVICE_LOCAL))
+        .map(|h| h.size)
+        .max()
+        .unwrap_or(0)
 }
 
 /// One line per Vulkan device: index, name, type, and whether voxgi can use it (and why not).

@@ -341,6 +341,7 @@ impl Context {
         location: MemoryLocation,
         linear: bool,
     ) -> Result<Allocation, VkError> {
+        self.check_allocation_size(name, requirements.size)?;
         let mut alloc = self
             .release
             .allocator
@@ -700,12 +701,26 @@ impl Context {
             .or_else(|| pick(vk::MemoryPropertyFlags::empty()))
     }
 
+    /// Refuses one allocation larger than `maxMemoryAllocationSize` before the driver sees it
+    /// (the renderer checks its sizes earlier, naming the flags; this is the last guard).
+    fn check_allocation_size(&self, name: &str, size_bytes: u64) -> Result<(), VkError> {
+        let max = self.info.max_memory_allocation_bytes;
+        if size_bytes > max {
+            return Err(VkError::Allocation(format!(
+                "`{name}` needs {size_bytes} bytes in one allocation, more than this device \
+                 allocates at once (maxMemoryAllocationSize {max} bytes)"
+            )));
+        }
+        Ok(())
+    }
+
     pub fn allocate_arena(
         &self,
         memory_type: u32,
         size_bytes: u64,
         name: &str,
     ) -> Result<Arena, VkError> {
+        self.check_allocation_size(name, size_bytes)?;
         let info = vk::MemoryAllocateInfo::builder()
             .allocation_size(size_bytes.max(1))
             .memory_type_index(memory_type);

@@ -193,6 +193,23 @@ pub fn image_extent(grid: &VoxelGrid) -> (u32, u32) {
     )
 }
 
+/// The column image of `grid` with its mip hierarchy (also counted by the renderer's memory
+/// check before anything is allocated).
+pub fn column_image_desc(grid: &VoxelGrid) -> ImageDesc {
+    let (w, h) = image_extent(grid);
+    let desc = ImageDesc::new_2d("voxel columns", COLUMN_FORMAT, w, h)
+        .with_layers(grid.layers())
+        .with_mips(mip_count(grid.res_x(), grid.res_y()))
+        .with_usage(
+            vk::ImageUsageFlags::STORAGE
+                | vk::ImageUsageFlags::SAMPLED
+                | vk::ImageUsageFlags::TRANSFER_SRC
+                | vk::ImageUsageFlags::TRANSFER_DST,
+        );
+    debug_assert_eq!(desc.mip_levels, 1 + w.max(h).trailing_zeros());
+    desc
+}
+
 /// Bytes of the column buffer (= mip 0 of the image, tightly packed).
 pub fn column_bytes(grid: &VoxelGrid) -> u64 {
     let (w, h) = image_extent(grid);
@@ -253,17 +270,7 @@ pub struct GpuVoxelGrid {
 
 impl GpuVoxelGrid {
     pub fn new(ctx: &Context, grid: &VoxelGrid) -> Result<Self, GpuVoxelError> {
-        let (w, h) = image_extent(grid);
-        let desc = ImageDesc::new_2d("voxel columns", COLUMN_FORMAT, w, h)
-            .with_layers(grid.layers())
-            .with_mips(mip_count(grid.res_x(), grid.res_y()))
-            .with_usage(
-                vk::ImageUsageFlags::STORAGE
-                    | vk::ImageUsageFlags::SAMPLED
-                    | vk::ImageUsageFlags::TRANSFER_SRC
-                    | vk::ImageUsageFlags::TRANSFER_DST,
-            );
-        debug_assert_eq!(desc.mip_levels, 1 + w.max(h).trailing_zeros());
+        let desc = column_image_desc(grid);
         let image = ctx.create_image(&desc)?;
         // Imported images must be in their resting state before the first frame.
         ctx.clear_new_image(
