@@ -63,6 +63,8 @@ pub enum SweepError {
     },
     #[error("--budget-ms {0}: expected a positive number of milliseconds")]
     Budget(f64),
+    #[error(transparent)]
+    Reference(#[from] super::reference_cache::ReferenceError),
 }
 
 /// The GI flags a grid may vary (their names as `voxgi render` spells them, without `--`)
