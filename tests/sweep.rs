@@ -97,6 +97,8 @@ fn a_sweep_writes_its_rows_resumes_and_feeds_tune() {
             .expect("parses");
     assert_eq!(json.as_array().map(Vec::len), Some(2));
     let svg = std::fs::read_to_string(dir.join("cornell_pareto.svg")).expect("the plot");
+    let png = image::open(dir.join("cornell_pareto.png")).expect("the bitmap plot");
+    assert_eq!((png.width(), png.height()), (640, 420));
     assert!(svg.starts_with("<svg") && svg.matches("<circle").count() >= 2);
 
     // tune: a budget between the two rows' times picks the faster; an ample one the more

@@ -1,6 +1,6 @@
 //! `voxgi sweep` (every method over a grid of GI settings on each scene with a reference:
-//! GPU times, transient memory and error metrics, as CSV, JSON and an SVG plot of error
-//! against time per scene) and `voxgi tune` (from a sweep's CSV, the most accurate
+//! GPU times, transient memory and error metrics, as CSV, JSON and plots (SVG and PNG) of
+//! error against time per scene) and `voxgi tune` (from a sweep's CSV, the most accurate
 //! configuration within a time budget, as a `[gi]` table).
 
 use super::args::FrameArgs;
@@ -33,7 +33,7 @@ pub struct SweepArgs {
     #[arg(long, value_name = "KEY=V1,V2,…")]
     pub grid: Vec<String>,
     /// Output folder: sweep.csv (a row per configuration, written as each finishes),
-    /// sweep.json and <scene>_pareto.svg.
+    /// sweep.json and <scene>_pareto.svg and .png.
     #[arg(long)]
     pub out: PathBuf,
     /// Image width and height in pixels; must divide the references' size.
@@ -360,6 +360,13 @@ fn write_summaries(dir: &Path, rows: &[SweepRow]) -> Result<(), CliError> {
         let of: Vec<&SweepRow> = rows.iter().filter(|r| r.scene == scene).collect();
         let svg = dir.join(format!("{scene}_pareto.svg"));
         std::fs::write(&svg, pareto_svg(scene, &of)).map_err(io(&svg))?;
+        let png = dir.join(format!("{scene}_pareto.png"));
+        crate::bench::sweep::pareto_png(&of)
+            .save(&png)
+            .map_err(|e| SweepError::Io {
+                path: png.clone(),
+                source: std::io::Error::other(e),
+            })?;
     }
     Ok(())
 }
