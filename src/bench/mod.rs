@@ -10,11 +10,13 @@
 //!   moving light's path, against a converged path tracer.
 //! - [`bench_soak`] (`voxgi bench soak`): long runs of every method on a moving scene, with
 //!   process RSS and the context's GPU memory sampled along the way.
+//! - [`reference_cache`]: Mitsuba references made and cached for `voxgi sweep --make-references`.
 //! - [`sweep`]: the data of `voxgi sweep` and `voxgi tune` (grid, rows, CSV, Pareto front,
 //!   SVG plot, the tuner's choice).
 //! - [`bench_scenes`], [`dense_scene`], [`tessellated_cube`]: the generated scenes they run on.
 
 mod flicker;
+pub mod reference_cache;
 mod scenes;
 mod soak;
 pub mod sweep;

@@ -63,6 +63,8 @@ pub enum SweepError {
     },
     #[error("--budget-ms {0}: expected a positive number of milliseconds")]
     Budget(f64),
+    #[error(transparent)]
+    Reference(#[from] super::reference_cache::ReferenceError),
 }
 
 /// The GI flags a grid may vary (their names as `voxgi render` spells them, without `--`)
@@ -727,6 +729,102 @@ pub fn pareto_svg(scene: &str, rows: &[&SweepRow]) -> String {
     s
 }
 
+/// `#rrggbb` as RGB bytes (the plot's colours).
+fn rgb(hex: &str) -> image::Rgb<u8> {
+    let byte = |i: usize| u8::from_str_radix(hex.get(i..i + 2).unwrap_or("00"), 16).unwrap_or(0);
+    image::Rgb([byte(1), byte(3), byte(5)])
+}
+
+/// A line of 1-pixel steps from (x0, y0) to (x1, y1), clipped to the image.
+fn draw_line(img: &mut image::RgbImage, from: (f64, f64), to: (f64, f64), c: image::Rgb<u8>) {
+    let steps = (to.0 - from.0)
+        .abs()
+        .max((to.1 - from.1).abs())
+        .ceil()
+        .max(1.0) as u32;
+    for k in 0..=steps {
+        let t = f64::from(k) / f64::from(steps);
+        plot(
+            img,
+            from.0 + (to.0 - from.0) * t,
+            from.1 + (to.1 - from.1) * t,
+            c,
+        );
+    }
+}
+
+fn plot(img: &mut image::RgbImage, x: f64, y: f64, c: image::Rgb<u8>) {
+    let (x, y) = (x.round(), y.round());
+    if x >= 0.0 && y >= 0.0 && (x as u32) < img.width() && (y as u32) < img.height() {
+        img.put_pixel(x as u32, y as u32, c);
+    }
+}
+
+/// A filled disc of radius `r` pixels.
+fn draw_disc(img: &mut image::RgbImage, x: f64, y: f64, r: f64, c: image::Rgb<u8>) {
+    let ri = r.ceil() as i32;
+    for dy in -ri..=ri {
+        for dx in -ri..=ri {
+            if f64::from(dx * dx + dy * dy) <= r * r {
+                plot(img, x + f64::from(dx), y + f64::from(dy), c);
+            }
+        }
+    }
+}
+
+/// [`pareto_svg`]'s plot as a bitmap (the same axes, decade grid, front and dots; legend as
+/// coloured dots in the SVG's order; no text — the SVG carries the labels).
+pub fn pareto_png(rows: &[&SweepRow]) -> image::RgbImage {
+    let (w, h, left, right, top, bottom) = (640u32, 420u32, 70.0, 150.0, 40.0, 50.0);
+    let (pw, ph) = (f64::from(w) - left - right, f64::from(h) - top - bottom);
+    let (tx0, tx1) = decades(rows.iter().map(|r| r.image_ms));
+    let (ey0, ey1) = decades(rows.iter().map(|r| r.rel_mse));
+    let x = |ms: f64| left + (ms.max(1e-300).log10() - f64::from(tx0)) / f64::from(tx1 - tx0) * pw;
+    let y =
+        |e: f64| top + ph - (e.max(1e-300).log10() - f64::from(ey0)) / f64::from(ey1 - ey0) * ph;
+    let mut img = image::RgbImage::from_pixel(w, h, image::Rgb([255, 255, 255]));
+    let grid = rgb("#dddddd");
+    for d in tx0..=tx1 {
+        let px = x(10f64.powi(d));
+        draw_line(&mut img, (px, top), (px, top + ph), grid);
+    }
+    for d in ey0..=ey1 {
+        let py = y(10f64.powi(d));
+        draw_line(&mut img, (left, py), (left + pw, py), grid);
+    }
+    let black = image::Rgb([0, 0, 0]);
+    let corners = [
+        (left, top),
+        (left + pw, top),
+        (left + pw, top + ph),
+        (left, top + ph),
+    ];
+    for k in 0..4 {
+        draw_line(&mut img, corners[k], corners[(k + 1) % 4], black);
+    }
+    let points: Vec<(f64, f64)> = rows.iter().map(|r| (r.image_ms, r.rel_mse)).collect();
+    let front = pareto_front(&points);
+    for pair in front.windows(2) {
+        let (a, b) = (points[pair[0]], points[pair[1]]);
+        draw_line(&mut img, (x(a.0), y(a.1)), (x(b.0), y(b.1)), black);
+    }
+    for (i, r) in rows.iter().enumerate() {
+        let (px, py) = (x(r.image_ms), y(r.rel_mse));
+        if front.contains(&i) {
+            draw_disc(&mut img, px, py, 6.0, black);
+        }
+        draw_disc(&mut img, px, py, 4.0, rgb(method_colour(&r.method)));
+    }
+    let mut methods: Vec<&str> = rows.iter().map(|r| r.method.as_str()).collect();
+    methods.sort_unstable();
+    methods.dedup();
+    for (k, m) in methods.iter().enumerate() {
+        let ly = top + 10.0 + 18.0 * k as f64;
+        draw_disc(&mut img, left + pw + 16.0, ly, 4.0, rgb(method_colour(m)));
+    }
+    img
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -978,5 +1076,26 @@ mod tests {
         // Two front points (bigger, outlined) and one beaten point.
         assert_eq!(svg.matches("r=\"5\"").count(), 2, "{svg}");
         assert_eq!(svg.matches("<title>").count(), 3);
+    }
+
+    #[test]
+    fn the_bitmap_plot_draws_the_dots_where_the_svg_does() {
+        let rows = [
+            row("cornell", "none", 1.0, 0.5),
+            row("cornell", "hemisphere gi-rays=4", 4.0, 0.05),
+        ];
+        let refs: Vec<&SweepRow> = rows.iter().collect();
+        let img = pareto_png(&refs);
+        assert_eq!(img.dimensions(), (640, 420));
+        // Decades: ms 1e0..1e1, relMSE 1e-2..1e0 (decades()). The "none" dot at (1 ms, 0.5):
+        // x = 70 + 0/1 * 420 = 70, y = 40 + 330 - (log10 0.5 + 2)/2 * 330 = 89.7.
+        let none = img.get_pixel(70, 90);
+        assert_eq!(*none, rgb(method_colour("none")));
+        // The hemisphere dot at (4 ms, 0.05): x = 70 + log10 4 * 420 = 322.9,
+        // y = 370 - (log10 0.05 + 2)/2 * 330 = 255.3.
+        assert_eq!(*img.get_pixel(323, 255), rgb(method_colour("hemisphere")));
+        // Both are on the front: a black ring around each, and white far from everything.
+        assert_eq!(*img.get_pixel(323 + 5, 255), image::Rgb([0, 0, 0]));
+        assert_eq!(*img.get_pixel(200, 100), image::Rgb([255, 255, 255]));
     }
 }

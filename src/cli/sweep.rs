@@ -1,6 +1,6 @@
 //! `voxgi sweep` (every method over a grid of GI settings on each scene with a reference:
-//! GPU times, transient memory and error metrics, as CSV, JSON and an SVG plot of error
-//! against time per scene) and `voxgi tune` (from a sweep's CSV, the most accurate
+//! GPU times, transient memory and error metrics, as CSV, JSON and plots (SVG and PNG) of
+//! error against time per scene) and `voxgi tune` (from a sweep's CSV, the most accurate
 //! configuration within a time budget, as a `[gi]` table).
 
 use super::args::FrameArgs;
@@ -33,7 +33,7 @@ pub struct SweepArgs {
     #[arg(long, value_name = "KEY=V1,V2,…")]
     pub grid: Vec<String>,
     /// Output folder: sweep.csv (a row per configuration, written as each finishes),
-    /// sweep.json and <scene>_pareto.svg.
+    /// sweep.json and <scene>_pareto.svg and .png.
     #[arg(long)]
     pub out: PathBuf,
     /// Image width and height in pixels; must divide the references' size.
@@ -51,6 +51,21 @@ pub struct SweepArgs {
     /// Continue the sweep in --out: skip the rows its sweep.csv has.
     #[arg(long)]
     pub resume: bool,
+    /// A scene without a reference in --references gets one from Mitsuba 3 (export-mitsuba +
+    /// --reference-tool, minutes per scene), rendered at twice --size and cached in
+    /// --reference-cache under a hash of the export and the settings: an unchanged scene
+    /// reuses it, a changed one gets a new one.
+    #[arg(long)]
+    pub make_references: bool,
+    /// Samples per pixel of a made reference.
+    #[arg(long, default_value_t = 256)]
+    pub reference_spp: u32,
+    /// Folder of the made references. Default: ~/.cache/voxgi/references.
+    #[arg(long)]
+    pub reference_cache: Option<PathBuf>,
+    /// The Mitsuba reference script (its .venv is the one beside its folder).
+    #[arg(long, default_value = "tools/reference")]
+    pub reference_tool: PathBuf,
 }
 
 /// Arguments of `voxgi tune`.
@@ -133,11 +148,14 @@ fn load_scenes(args: &SweepArgs) -> Result<Vec<SweepScene>, CliError> {
     list.iter()
         .map(|arg| {
             let name = scene_name(arg);
-            let path = reference_path(&args.references, &name);
-            if !path.exists() {
-                return Err(SweepError::NoReference { scene: name, path }.into());
-            }
             let scene = load_scene_arg(Some(arg))?;
+            let mut path = reference_path(&args.references, &name);
+            if !path.exists() {
+                if !args.make_references {
+                    return Err(SweepError::NoReference { scene: name, path }.into());
+                }
+                path = made_reference(args, &name, &scene)?;
+            }
             let full = HdrImage::load(&path)?;
             let fits = args.size > 0
                 && full.width % args.size == 0
@@ -160,6 +178,67 @@ fn load_scenes(args: &SweepArgs) -> Result<Vec<SweepScene>, CliError> {
             })
         })
         .collect()
+}
+
+/// The made reference of a scene without one: the cached image when the scene's export and
+/// the settings hash to a key already rendered, else a new Mitsuba render (progress on
+/// stderr).
+fn made_reference(args: &SweepArgs, name: &str, scene: &Scene) -> Result<PathBuf, CliError> {
+    use crate::bench::reference_cache as rc;
+    let settings = rc::ReferenceSettings {
+        size: args.size.saturating_mul(2),
+        spp: args.reference_spp.max(1),
+        max_depth: crate::eval::mitsuba::DEFAULT_MAX_DEPTH,
+        seed: 0,
+    };
+    let cache = args
+        .reference_cache
+        .clone()
+        .unwrap_or_else(rc::default_cache_dir);
+    let tool = rc::tool_files(&args.reference_tool).map_err(SweepError::from)?;
+    // A fresh export folder: the export leaves unrelated files alone, which would be hashed.
+    let export = cache.join("export").join(name);
+    let io = |path: &Path| {
+        let path = path.to_owned();
+        move |source| SweepError::Io { path, source }
+    };
+    if export.exists() {
+        std::fs::remove_dir_all(&export).map_err(io(&export))?;
+    }
+    let report =
+        crate::eval::mitsuba::export_mitsuba(scene, 0.0, settings.size, settings.size, &export)?;
+    for w in &report.warnings {
+        eprintln!("warning: {name}: {w}");
+    }
+    let key = rc::export_key(&export, &settings, &tool).map_err(SweepError::from)?;
+    let path = rc::cached_path(&cache, name, &key);
+    if path.exists() {
+        eprintln!("reference of {name}: reusing {}", path.display());
+        return Ok(path);
+    }
+    rc::mitsuba_python(&args.reference_tool).map_err(SweepError::from)?;
+    eprintln!(
+        "reference of {name}: rendering with Mitsuba ({}) into {}; this takes minutes",
+        settings.text(),
+        path.display()
+    );
+    let start = Instant::now();
+    rc::render_reference(&args.reference_tool, name, &export, &settings, &path)
+        .map_err(SweepError::from)?;
+    std::fs::write(
+        path.with_extension("txt"),
+        format!(
+            "{name}: {} (from {})\n",
+            settings.text(),
+            report.xml_path.display()
+        ),
+    )
+    .map_err(io(&path))?;
+    eprintln!(
+        "reference of {name}: done in {}",
+        clock(start.elapsed().as_secs_f64())
+    );
+    Ok(path)
 }
 
 /// `voxgi render`'s frame flags alone, to check a configuration's flags as the command
@@ -281,6 +360,13 @@ fn write_summaries(dir: &Path, rows: &[SweepRow]) -> Result<(), CliError> {
         let of: Vec<&SweepRow> = rows.iter().filter(|r| r.scene == scene).collect();
         let svg = dir.join(format!("{scene}_pareto.svg"));
         std::fs::write(&svg, pareto_svg(scene, &of)).map_err(io(&svg))?;
+        let png = dir.join(format!("{scene}_pareto.png"));
+        crate::bench::sweep::pareto_png(&of)
+            .save(&png)
+            .map_err(|e| SweepError::Io {
+                path: png.clone(),
+                source: std::io::Error::other(e),
+            })?;
     }
     Ok(())
 }
