@@ -109,10 +109,10 @@ impl AtriumMaterial {
         }
     }
 
-    /// The texture's mean albedo (linear RGB) over a 64 x 64 grid of texel centers, written
+    /// The texture's mean albedo (linear RGB) over its texel centers, written
     /// as `Kd` so that a reader without textures sees about the surface's average color.
     pub fn mean_albedo(self) -> Vec3 {
-        let n = 64;
+        let n = TEXTURE_TEXELS;
         let sum: Vec3 = (0..n * n)
             .map(|i| {
                 let (x, y) = ((i % n) as f32 + 0.5, (i / n) as f32 + 0.5);
@@ -182,9 +182,11 @@ impl AtriumModel {
         self.tri(material, [a, c, d]);
     }
 
-    /// Reverses the winding of the faces of `solid` when they enclose a negative volume, so
-    /// that every closed solid is wound outward whatever the handedness of the frame it was
-    /// built in (the normals are set from the geometry and need no change).
+    /// Reverses the winding of the faces of `solid` when they enclose a negative volume: the
+    /// shapes wind their faces consistently in their own frame (along, up, across), which is
+    /// left-handed for some directions; the normals are set from the geometry and need no
+    /// change. (The tests check that every closed solid is consistently wound; a flip of a
+    /// whole solid cannot hide one inconsistent face.)
     fn orient_outward(&mut self, solid: u32) {
         if self.signed_volume_m3(solid) < 0.0 {
             for f in self.faces.iter_mut().filter(|f| f.solid == solid) {
@@ -219,8 +221,8 @@ impl AtriumModel {
             )
         };
         let p: Vec<u32> = (0..8).map(|i| self.pos(corner(i))).collect();
-        // Each face: its normal and its four corners (bit indices), in either winding; the
-        // solid is oriented afterwards.
+        // Each face: its normal and its four corners (bit indices: x 1, y 2, z 4),
+        // counter-clockwise seen from outside.
         let faces: [(Vec3, [usize; 4]); 6] = [
             (Vec3::NEG_X, [0, 4, 6, 2]),
             (Vec3::X, [1, 3, 7, 5]),
@@ -275,7 +277,9 @@ impl AtriumModel {
                     let u = jj as f32 / segs as f32 * circumference_m(r).max(0.5) / TILE_M;
                     m.uv(Vec2::new(u, y / TILE_M))
                 };
-                let corners = [(i, j, j), (i, j1, j + 1), (i + 1, j1, j + 1), (i + 1, j, j)]
+                // Counter-clockwise seen from outside: up first, then around (angle grows from
+                // +x toward +z).
+                let corners = [(i, j, j), (i + 1, j, j), (i + 1, j1, j + 1), (i, j1, j + 1)]
                     .map(|(ii, jj, ju)| [rings[ii][jj], uv(self, ii, ju), ring_normals[ii][jj]]);
                 self.quad(material, corners);
             }
@@ -293,14 +297,14 @@ impl AtriumModel {
                     m.uv(Vec2::new(0.5 + r * co / TILE_M, 0.5 + r * s / TILE_M))
                 };
                 let (ta, tb) = (rim(self, j), rim(self, j1));
-                self.tri(
-                    material,
-                    [
-                        [c, ct, ni],
-                        [rings[ring_i][j], ta, ni],
-                        [rings[ring_i][j1], tb, ni],
-                    ],
-                );
+                let (a, b) = ([rings[ring_i][j], ta, ni], [rings[ring_i][j1], tb, ni]);
+                // Seen from below (the bottom cap), the angle runs clockwise.
+                let tri = if n.y < 0.0 {
+                    [[c, ct, ni], a, b]
+                } else {
+                    [[c, ct, ni], b, a]
+                };
+                self.tri(material, tri);
             }
         }
         self.orient_outward(solid);
@@ -358,12 +362,16 @@ impl AtriumModel {
             // Front and back: the strip from the underside up to the top.
             for (side, n) in [(0usize, n_front), (1, n_back)] {
                 let uv = |m: &mut Self, s: f32, y: f32| m.uv(Vec2::new(s, world_y + y) / TILE_M);
-                let corners = [
+                let mut corners = [
                     [a[side], uv(self, p0.x, p0.y), n],
                     [b[side], uv(self, p1.x, p1.y), n],
                     [b[side + 2], uv(self, p1.x, top_m), n],
                     [a[side + 2], uv(self, p0.x, top_m), n],
                 ];
+                // Counter-clockwise seen from the front; the back is seen from behind.
+                if side == 1 {
+                    corners.reverse();
+                }
                 self.quad(mat, corners);
             }
             // Underside: its normal points down and toward the opening's center.
@@ -391,12 +399,16 @@ impl AtriumModel {
             let ni = self.nrm(n);
             let i = ids[k];
             let uv = |m: &mut Self, t: f32, y: f32| m.uv(Vec2::new(t, world_y + y) / TILE_M);
-            let corners = [
+            let mut corners = [
                 [i[0], uv(self, half_d, 0.0), ni],
                 [i[1], uv(self, -half_d, 0.0), ni],
                 [i[3], uv(self, -half_d, top_m), ni],
                 [i[2], uv(self, half_d, top_m), ni],
             ];
+            // Counter-clockwise seen from +along; the first end is seen from -along.
+            if k == 0 {
+                corners.reverse();
+            }
             self.quad(mat, corners);
         }
         self.orient_outward(solid);
