@@ -822,8 +822,8 @@ fn value_noise(u: f32, v: f32, period: i32, seed: u32) -> f32 {
 
 /// Four octaves of [`value_noise`], in [0, 1].
 fn fbm(u: f32, v: f32, seed: u32) -> f32 {
-    (0..4)
-        .map(|o| value_noise(u, v, 4 << o, seed + o as u32) * 0.5f32.powi(o as i32 + 1))
+    (0..4i32)
+        .map(|o| value_noise(u, v, 4 << o, seed + o as u32) * 0.5f32.powi(o + 1))
         .sum::<f32>()
         / (1.0 - 0.5f32.powi(4))
 }
