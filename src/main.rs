@@ -6,6 +6,7 @@ use clap::{Parser, Subcommand};
 use voxgi::cli::bench::BenchCommand;
 use voxgi::cli::compare::CompareArgs;
 use voxgi::cli::export::ExportArgs;
+use voxgi::cli::generate::GenerateArgs;
 use voxgi::cli::profile::{GraphArgs, ProfileArgs};
 use voxgi::cli::render::RenderArgs;
 use voxgi::cli::sweep::{SweepArgs, TuneArgs};
@@ -61,6 +62,9 @@ enum Command {
     /// From a sweep's CSV, prints the most accurate configuration within a GPU-time budget
     /// as a `[gi]` table to paste into the scene file.
     Tune(TuneArgs),
+    /// Writes a procedural scene (OBJ, MTL, PNG textures and a scene TOML), e.g. the
+    /// Sponza-scale atrium that assets/scenes/atrium.toml loads.
+    Generate(GenerateArgs),
 }
 
 fn main() {
@@ -97,6 +101,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Compare(args) => voxgi::cli::compare::compare(&args, out)?,
         Command::Sweep(args) => voxgi::cli::sweep::sweep(&global, &args, out)?,
         Command::Tune(args) => voxgi::cli::sweep::tune_command(&args, out)?,
+        Command::Generate(args) => voxgi::cli::generate::generate(&args, out)?,
     }
     Ok(())
 }

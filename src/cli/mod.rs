@@ -6,13 +6,14 @@
 //!   [`crate::render::RenderSettings`].
 //! - [`render`]: `render`; [`view`]: `view`; [`profile`]: `profile` and `graph`;
 //!   [`bench`]: `bench traverse|voxelize|voxelize-sweep`; [`compare`]: `compare`;
-//!   [`export`]: `export-mitsuba`; [`devices`]: `devices`; [`sweep`]: `sweep` and `tune`.
+//!   [`export`]: `export-mitsuba`; [`generate`]: `generate`; [`devices`]: `devices`; [`sweep`]: `sweep` and `tune`.
 
 pub mod args;
 pub mod bench;
 pub mod compare;
 pub mod devices;
 pub mod export;
+pub mod generate;
 pub mod profile;
 pub mod render;
 pub mod sweep;
@@ -56,6 +57,8 @@ pub enum CliError {
     Sweep(#[from] crate::bench::sweep::SweepError),
     #[error(transparent)]
     App(#[from] crate::app::AppError),
+    #[error(transparent)]
+    Generate(#[from] crate::scene::atrium::GenerateError),
     #[error(transparent)]
     Json(#[from] serde_json::Error),
     /// A flag's value out of its range.

@@ -172,7 +172,8 @@ impl SceneGpu {
             &placeholder_texture(),
             "texture placeholder",
         )?);
-        let texture_sampler = ctx.create_sampler(vk::Filter::LINEAR, true)?;
+        let texture_sampler =
+            ctx.create_sampler_with(vk::Filter::LINEAR, true, vk::SamplerAddressMode::REPEAT)?;
         Ok(Self {
             vertices: geometry.vertices,
             indices: geometry.indices,

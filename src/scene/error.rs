@@ -6,16 +6,36 @@
 
 use std::path::{Path, PathBuf};
 
+/// What to do about a missing file: a file under `generated/NAME/` is written by a
+/// generator (`tools/NAME`, e.g. `tools/atrium`) and is not committed, so run it; any other
+/// path is probably wrong.
+fn not_found_advice(file: &Path) -> String {
+    let parts: Vec<_> = file.components().map(|c| c.as_os_str()).collect();
+    let generator = parts
+        .windows(3)
+        .find(|w| w[0] == "generated")
+        .and_then(|w| w[1].to_str());
+    match generator {
+        Some(name) => format!(
+            "this file is generated, not committed: run `tools/{name}` (or `voxgi generate \
+             {name} --out DIR`) to write it"
+        ),
+        None => "check the path (paths in a scene file are relative to the scene file's \
+                 directory)"
+            .to_string(),
+    }
+}
+
 /// Something wrong with a scene the user gave us.
 #[derive(Debug, thiserror::Error)]
 pub enum SceneError {
     /// A file the scene needs (the scene itself, an OBJ mesh, a frame of an OBJ sequence)
     /// does not exist. Missing textures and MTL files are only warnings.
     #[error(
-        "{}: {what} not found{}; check the path (paths in a scene file are relative to the \
-         scene file's directory)",
+        "{}: {what} not found{}; {}",
         file.display(),
-        referenced_by.as_ref().map(|r| format!(" (referenced by {r})")).unwrap_or_default()
+        referenced_by.as_ref().map(|r| format!(" (referenced by {r})")).unwrap_or_default(),
+        not_found_advice(file)
     )]
     NotFound {
         file: PathBuf,

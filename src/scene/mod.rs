@@ -138,6 +138,7 @@
 //! `cornell-point` (the same box with a point light). They are parsed from the embedded
 //! `assets/scenes/cornell.toml` through the same code path as files.
 
+pub mod atrium;
 mod builtin;
 mod camera;
 mod camera_path;

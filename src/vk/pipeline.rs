@@ -510,6 +510,18 @@ impl Context {
 
     /// A sampler with the given filter and clamp-to-edge addressing.
     pub fn create_sampler(&self, filter: vk::Filter, anisotropy: bool) -> Result<Sampler, VkError> {
+        self.create_sampler_with(filter, anisotropy, vk::SamplerAddressMode::CLAMP_TO_EDGE)
+    }
+
+    /// A sampler with the given filter and addressing: `REPEAT` for material textures, whose
+    /// OBJ texture coordinates tile past [0, 1] (as in Mitsuba's `bitmap`, whose default
+    /// `wrap_mode` is `repeat`).
+    pub fn create_sampler_with(
+        &self,
+        filter: vk::Filter,
+        anisotropy: bool,
+        address: vk::SamplerAddressMode,
+    ) -> Result<Sampler, VkError> {
         let mipmap_mode = if filter == vk::Filter::LINEAR {
             vk::SamplerMipmapMode::LINEAR
         } else {
@@ -519,9 +531,9 @@ impl Context {
             .mag_filter(filter)
             .min_filter(filter)
             .mipmap_mode(mipmap_mode)
-            .address_mode_u(vk::SamplerAddressMode::CLAMP_TO_EDGE)
-            .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_EDGE)
-            .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+            .address_mode_u(address)
+            .address_mode_v(address)
+            .address_mode_w(address)
             .anisotropy_enable(anisotropy)
             .max_anisotropy(if anisotropy {
                 self.info.max_sampler_anisotropy.min(16.0)
