@@ -7,7 +7,7 @@ mod common;
 
 use glam::Vec3;
 use voxgi::bench::{
-    direct_images, leak_methods, leak_row, leak_scene, max_radiance, LeakScene,
+    direct_images, leak_methods, leak_row, leak_scene, max_radiance, LeakLight, LeakScene,
     DEFAULT_WALLS_VOXELS,
 };
 use voxgi::voxel::gpu::{scene_triangles, VoxelSettings};
@@ -67,7 +67,7 @@ fn assert_room_b_closed(s: &LeakScene) {
 fn walls_are_exact_in_voxels_and_the_rooms_closed() {
     let voxels = VoxelSettings::default();
     for &w in &DEFAULT_WALLS_VOXELS {
-        let s = leak_scene(w, &voxels).expect("the scene builds");
+        let s = leak_scene(w, LeakLight::Wall, &voxels).expect("the scene builds");
         assert!((s.wall_m - w * s.voxel_m).abs() <= 1e-6 * s.voxel_m);
         let [a, b] = s.face_phases(&voxels).expect("grid");
         // Faces inside their voxels, clear of the planes; a whole t voxels apart (phases
@@ -82,19 +82,24 @@ fn walls_are_exact_in_voxels_and_the_rooms_closed() {
         );
         assert_room_b_closed(&s);
     }
-    assert!(leak_scene(0.0, &voxels).is_err());
-    assert!(leak_scene(f32::NAN, &voxels).is_err());
+    assert!(leak_scene(0.0, LeakLight::Wall, &voxels).is_err());
+    assert!(leak_scene(f32::NAN, LeakLight::Wall, &voxels).is_err());
 }
 
-/// Room B's direct image is exactly zero at the thinnest and the thickest wall (the spot's
-/// cone reaches room B only through the wall's middle, 8 cm and more behind its occluder in
-/// the shadow map), while room A's is not.
+/// Room B's direct image is exactly zero at the thinnest and the thickest wall (the wall
+/// spot's cone reaches room B only through the wall's middle, 8 cm and more behind its
+/// occluder in the shadow map; the floor spot's cone holds no point of room B), while room
+/// A's is not.
 #[test]
 fn room_b_gets_no_direct_light() {
     let ctx = common::context();
     let voxels = VoxelSettings::default();
-    for w in [0.25, 4.0] {
-        let s = leak_scene(w, &voxels).expect("scene");
+    for (w, light) in [
+        (0.25, LeakLight::Wall),
+        (4.0, LeakLight::Wall),
+        (0.25, LeakLight::Floor),
+    ] {
+        let s = leak_scene(w, light, &voxels).expect("scene");
         let (b, a) = direct_images(&ctx, &s, 32, voxels).expect("room B is dark");
         assert_eq!(max_radiance(&b), 0.0);
         assert!(
@@ -120,7 +125,7 @@ fn room_b_gets_no_direct_light() {
 fn hemisphere_from_light_maps_leaks_nothing_through_the_thinnest_wall() {
     let ctx = common::context();
     let voxels = VoxelSettings::default();
-    let s = leak_scene(0.25, &voxels).expect("scene");
+    let s = leak_scene(0.25, LeakLight::Wall, &voxels).expect("scene");
     let (_, direct_a) = direct_images(&ctx, &s, 32, voxels).expect("room B dark");
     let (name, gi) = leak_methods()
         .into_iter()

@@ -40,6 +40,46 @@ pub const DEFAULT_WALLS_VOXELS: [f32; 5] = [0.25, 0.5, 1.0, 2.0, 4.0];
 /// The least distance of a wall face from a voxel plane, in voxels.
 const MIN_FACE_CLEARANCE_VOXELS: f32 = 0.2;
 
+/// Where room A's spot light shines. Either way no point of room B can be lit directly, and
+/// [`direct_images`] checks that B's direct image is exactly 0.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum LeakLight {
+    /// Faces the dividing wall from 0.35 m at mid height; its 30° cone lights a disk of
+    /// radius 0.35·tan 30° = 0.20 m < 0.25 m on the wall, clear of floor, ceiling and side
+    /// walls. Points of room B inside the cone lie behind that disk (the wall's B face faces
+    /// away from the light) or on B's floor and ceiling at least 0.25/tan 30° − 0.35 = 0.08 m
+    /// behind the wall: 8 cm deeper than the occluder in the shadow map, far beyond its bias.
+    Wall,
+    /// Hangs 2 cm before the wall at 0.9 of the height and points down and away from it, 45°
+    /// below the horizontal, with a 45° cone: it lights room A's floor up to 2 cm from the
+    /// wall, and every direction in its cone has x ≤ its own x, so no point of room B (x > 0)
+    /// is inside the cone, whatever the shadow maps do.
+    Floor,
+}
+
+impl LeakLight {
+    /// Position, direction and cone (cutoff, beam) in degrees, for room A's interior box
+    /// ending at `a_hi`.
+    fn spot(self, a_hi: Vec3) -> (Vec3, Vec3, f32, f32) {
+        let (h, d) = (ROOM_HEIGHT_M, ROOM_DEPTH_M);
+        match self {
+            LeakLight::Wall => (
+                Vec3::new(a_hi.x - 0.35, 0.5 * h, 0.5 * d),
+                Vec3::X,
+                30.0,
+                25.0,
+            ),
+            LeakLight::Floor => (
+                Vec3::new(a_hi.x - 0.02, 0.9 * h, 0.5 * d),
+                Vec3::new(-1.0, -1.0, 0.0).normalize(),
+                45.0,
+                40.0,
+            ),
+        }
+    }
+}
+
 /// One scene of the family and the facts its construction guarantees.
 #[derive(Clone, Debug)]
 pub struct LeakScene {
@@ -49,6 +89,7 @@ pub struct LeakScene {
     pub scene_a: Scene,
     /// Wall thickness in voxels and in meters.
     pub wall_voxels: f32,
+    pub light: LeakLight,
     pub wall_m: f32,
     /// The voxel edge of the GI grid, meters.
     pub voxel_m: f32,
@@ -124,26 +165,20 @@ fn room(name: &str, lo: Vec3, hi: Vec3) -> String {
 }
 
 /// The scene TOML: the spot light in room A, the camera at `eye` looking at `target`.
-fn leak_toml(half_wall_m: f32, width_m: f32, eye: Vec3, target: Vec3) -> String {
+fn leak_toml(half_wall_m: f32, width_m: f32, spot: LeakLight, eye: Vec3, target: Vec3) -> String {
     let (h, d) = (ROOM_HEIGHT_M, ROOM_DEPTH_M);
     let b_lo = Vec3::new(half_wall_m, 0.0, 0.0);
     let b_hi = Vec3::new(half_wall_m + width_m, h, d);
     let a_lo = Vec3::new(-half_wall_m - width_m, 0.0, 0.0);
     let a_hi = Vec3::new(-half_wall_m, h, d);
-    // The spot faces the dividing wall from 0.35 m in room A, at mid height; its 30° cone
-    // lights a disk of radius 0.35·tan 30° = 0.20 m < 0.25 m on the wall, clear of the
-    // floor, ceiling and side walls. Points of room B inside the cone lie behind that disk
-    // (the B face of the wall faces away from the light) or on B's floor and ceiling at least
-    // 0.25/tan 30° − 0.35 = 0.08 m behind the wall: 8 cm deeper than the occluder in the
-    // shadow map, far beyond its bias. (A light shining along the wall's foot would reach
-    // room B through the shadow maps' slope bias at walls thinner than a voxel.)
-    let light = Vec3::new(a_hi.x - 0.35, 0.5 * h, 0.5 * d);
-    let dir = Vec3::X;
+    // (A light shining along the wall's foot reaches room B through the shadow maps' slope
+    // bias at walls thinner than a voxel; neither placement does.)
+    let (light, dir, cutoff_deg, beam_deg) = spot.spot(a_hi);
     format!(
         "[camera]\nposition = [{}, {}, {}]\ntarget = [{}, {}, {}]\nfov_y_deg = 60.0\n\
          near = 0.01\nfar = 5.0\n\n\
          [[lights]]\nkind = \"spot\"\nposition = [{}, {}, {}]\ndirection = [{}, {}, {}]\n\
-         intensity_w_sr = [1.0, 1.0, 1.0]\ncutoff_deg = 30.0\nbeam_deg = 25.0\n{}{}",
+         intensity_w_sr = [1.0, 1.0, 1.0]\ncutoff_deg = {cutoff_deg}\nbeam_deg = {beam_deg}\n{}{}",
         eye.x,
         eye.y,
         eye.z,
@@ -180,14 +215,19 @@ fn mirror_x(p: Vec3) -> Vec3 {
     Vec3::new(-p.x, p.y, p.z)
 }
 
-fn build(half_wall_m: f32, width_m: f32, room_b: bool) -> Result<Scene, BenchError> {
+fn build(
+    half_wall_m: f32,
+    width_m: f32,
+    light: LeakLight,
+    room_b: bool,
+) -> Result<Scene, BenchError> {
     let (eye, target) = camera_b(half_wall_m, width_m);
     let (eye, target) = if room_b {
         (eye, target)
     } else {
         (mirror_x(eye), mirror_x(target))
     };
-    let toml = leak_toml(half_wall_m, width_m, eye, target);
+    let toml = leak_toml(half_wall_m, width_m, light, eye, target);
     let origin = std::path::Path::new("<leak generated scene>");
     Ok(Scene::from_toml_str(
         &toml,
@@ -198,7 +238,11 @@ fn build(half_wall_m: f32, width_m: f32, room_b: bool) -> Result<Scene, BenchErr
 
 /// The scene of a wall `wall_voxels` voxels thick for the grid `voxels` puts around it (see
 /// the module doc for how the thickness is made exact).
-pub fn leak_scene(wall_voxels: f32, voxels: &VoxelSettings) -> Result<LeakScene, BenchError> {
+pub fn leak_scene(
+    wall_voxels: f32,
+    light: LeakLight,
+    voxels: &VoxelSettings,
+) -> Result<LeakScene, BenchError> {
     if !(wall_voxels.is_finite() && wall_voxels > 0.0 && wall_voxels <= 16.0) {
         return Err(BenchError::LeakWall {
             wall_voxels,
@@ -206,7 +250,7 @@ pub fn leak_scene(wall_voxels: f32, voxels: &VoxelSettings) -> Result<LeakScene,
         });
     }
     // The voxel edge does not depend on the wall or the width (module doc).
-    let probe = build(0.0, ROOM_MIN_WIDTH_M, true)?;
+    let probe = build(0.0, ROOM_MIN_WIDTH_M, light, true)?;
     let voxel_m = voxels.grid_for(&probe, 0.0)?.voxel_size_m().x;
     let wall_m = wall_voxels * voxel_m;
     // Wanted phase of x = 0 in its voxel: faces at voxel centres for odd whole thicknesses,
@@ -215,7 +259,7 @@ pub fn leak_scene(wall_voxels: f32, voxels: &VoxelSettings) -> Result<LeakScene,
     let want_phase = if odd_whole { 0.0 } else { 0.5 };
     for step in 0..4 {
         let width_m = ROOM_MIN_WIDTH_M + 0.5 * voxel_m * step as f32;
-        let scene_b = build(0.5 * wall_m, width_m, true)?;
+        let scene_b = build(0.5 * wall_m, width_m, light, true)?;
         let grid = voxels.grid_for(&scene_b, 0.0)?;
         let axis = world_x_axis(&grid);
         let centre = grid.world_to_voxel(Vec3::new(0.0, 0.5 * ROOM_HEIGHT_M, 0.5 * ROOM_DEPTH_M));
@@ -227,9 +271,10 @@ pub fn leak_scene(wall_voxels: f32, voxels: &VoxelSettings) -> Result<LeakScene,
             continue;
         }
         let s = LeakScene {
-            scene_a: build(0.5 * wall_m, width_m, false)?,
+            scene_a: build(0.5 * wall_m, width_m, light, false)?,
             scene_b,
             wall_voxels,
+            light,
             wall_m,
             voxel_m,
             room_b_min: Vec3::new(0.5 * wall_m, 0.0, 0.0),
@@ -278,6 +323,7 @@ pub fn leak_methods() -> Vec<(String, GiSettings)> {
 #[derive(Clone, Debug)]
 pub struct LeakBenchDesc {
     pub walls_voxels: Vec<f32>,
+    pub lights: Vec<LeakLight>,
     /// Image width and height, pixels.
     pub size: u32,
     pub methods: Vec<(String, GiSettings)>,
@@ -288,6 +334,7 @@ impl Default for LeakBenchDesc {
     fn default() -> Self {
         Self {
             walls_voxels: DEFAULT_WALLS_VOXELS.to_vec(),
+            lights: vec![LeakLight::Wall, LeakLight::Floor],
             size: 64,
             methods: leak_methods(),
             voxels: VoxelSettings::default(),
@@ -298,6 +345,7 @@ impl Default for LeakBenchDesc {
 /// One method at one wall.
 #[derive(Clone, Debug, Serialize)]
 pub struct LeakRow {
+    pub light: LeakLight,
     pub method: String,
     pub wall_voxels: f32,
     /// Mean indirect radiance in room B's image, W/(m²·sr).
@@ -317,34 +365,34 @@ pub struct LeakReport {
 }
 
 impl LeakReport {
-    /// Leaked fraction per method (rows) and wall (columns).
+    /// Leaked fraction per light placement and method (rows) and wall (columns).
     pub fn table(&self) -> String {
         let walls = self.walls();
         let mut s = format!(
             "Light leak: mean indirect radiance in room B / in room A ({}², voxel {:.2} mm; \
-             truth 0)\n{:<20}",
+             truth 0)\n{:<26}",
             self.size,
             self.voxel_m * 1000.0,
-            "method \\ wall (vox)"
+            "light method \\ wall (vox)"
         );
         for w in &walls {
             s += &format!(" {w:>9}");
         }
         s.push('\n');
-        let mut methods: Vec<&str> = Vec::new();
+        let mut keys: Vec<(LeakLight, &str)> = Vec::new();
         for r in &self.rows {
-            if !methods.contains(&r.method.as_str()) {
-                methods.push(&r.method);
+            if !keys.contains(&(r.light, r.method.as_str())) {
+                keys.push((r.light, &r.method));
             }
         }
-        for m in methods {
-            s += &format!("{m:<20}");
+        for (light, m) in keys {
+            s += &format!("{:<6}{m:<20}", light_name(light));
             for w in &walls {
-                match self
+                let row = self
                     .rows
                     .iter()
-                    .find(|r| r.method == m && r.wall_voxels == *w)
-                {
+                    .find(|r| r.light == light && r.method == m && r.wall_voxels == *w);
+                match row {
                     Some(r) => s += &format!(" {:>9.2e}", r.leaked_fraction),
                     None => s += &format!(" {:>9}", "-"),
                 }
@@ -354,13 +402,18 @@ impl LeakReport {
         s
     }
 
-    /// `method,wall_voxels,mean_b,mean_a,leaked_fraction` lines with a header.
+    /// `light,method,wall_voxels,mean_b,mean_a,leaked_fraction` lines with a header.
     pub fn csv(&self) -> String {
-        let mut s = String::from("method,wall_voxels,mean_b,mean_a,leaked_fraction\n");
+        let mut s = String::from("light,method,wall_voxels,mean_b,mean_a,leaked_fraction\n");
         for r in &self.rows {
             s += &format!(
-                "{},{},{:e},{:e},{:e}\n",
-                r.method, r.wall_voxels, r.mean_b, r.mean_a, r.leaked_fraction
+                "{},{},{},{:e},{:e},{:e}\n",
+                light_name(r.light),
+                r.method,
+                r.wall_voxels,
+                r.mean_b,
+                r.mean_a,
+                r.leaked_fraction
             );
         }
         s
@@ -374,6 +427,14 @@ impl LeakReport {
             }
         }
         walls
+    }
+}
+
+/// A light placement's name as `--lights` spells it.
+fn light_name(l: LeakLight) -> &'static str {
+    match l {
+        LeakLight::Wall => "wall",
+        LeakLight::Floor => "floor",
     }
 }
 
@@ -448,6 +509,7 @@ pub fn leak_row(
     let mean_b = mean_radiance(&b);
     let mean_a = mean_radiance(&a) - mean_radiance(direct_a);
     Ok(LeakRow {
+        light: s.light,
         method: name.to_owned(),
         wall_voxels: s.wall_voxels,
         mean_b,
@@ -460,8 +522,12 @@ pub fn leak_row(
 pub fn bench_leak(ctx: &Context, desc: &LeakBenchDesc) -> Result<LeakReport, BenchError> {
     let mut rows = Vec::new();
     let mut voxel_m = 0.0;
-    for &w in &desc.walls_voxels {
-        let s = leak_scene(w, &desc.voxels)?;
+    for (&light, &w) in desc
+        .lights
+        .iter()
+        .flat_map(|l| desc.walls_voxels.iter().map(move |w| (l, w)))
+    {
+        let s = leak_scene(w, light, &desc.voxels)?;
         voxel_m = s.voxel_m;
         let (_, direct_a) = direct_images(ctx, &s, desc.size, desc.voxels)?;
         for (name, gi) in &desc.methods {

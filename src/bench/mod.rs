@@ -30,7 +30,8 @@ pub use flicker::{
 };
 pub use leak::{
     bench_leak, direct_images, leak_methods, leak_row, leak_scene, max_radiance, mean_radiance,
-    render_leak_view, LeakBenchDesc, LeakReport, LeakRow, LeakScene, DEFAULT_WALLS_VOXELS,
+    render_leak_view, LeakBenchDesc, LeakLight, LeakReport, LeakRow, LeakScene,
+    DEFAULT_WALLS_VOXELS,
 };
 pub use scenes::{bench_scenes, dense_scene, tessellated_cube, DENSE_BUNNIES_PER_AXIS};
 pub use soak::{

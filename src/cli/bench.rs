@@ -82,6 +82,10 @@ pub enum BenchCommand {
               value_parser = ["hemisphere", "hemisphere-volume", "pathtrace", "vpl", "ssgi"],
               default_values = ["hemisphere", "hemisphere-volume", "pathtrace", "vpl", "ssgi"])]
         methods: Vec<String>,
+        /// Where room A's spot shines: wall (a disk on the dividing wall), floor (room A's
+        /// floor, from beside the wall, pointing away from it).
+        #[arg(long, value_delimiter = ',', default_values = ["wall", "floor"])]
+        lights: Vec<crate::bench::LeakLight>,
         /// Wall thicknesses in voxels of the GI grid, in (0, 16].
         #[arg(long, value_delimiter = ',', default_values_t = crate::bench::DEFAULT_WALLS_VOXELS)]
         walls: Vec<f32>,
@@ -254,6 +258,7 @@ pub fn bench(global: &Global, command: &BenchCommand, out: &mut dyn Write) -> Re
         }
         BenchCommand::Leak {
             methods,
+            lights,
             walls,
             size,
             csv,
@@ -267,6 +272,7 @@ pub fn bench(global: &Global, command: &BenchCommand, out: &mut dyn Write) -> Re
             let ctx = context(global)?;
             let desc = LeakBenchDesc {
                 walls_voxels: walls.clone(),
+                lights: lights.clone(),
                 size: *size,
                 methods: chosen,
                 ..Default::default()
