@@ -225,7 +225,12 @@ void main() {
             if (HAS_EMISSION && !back) l += throughput * texelFetch(emission_volume, v, 0).rgb;
             m = hit_lobe(v, a);
             l += throughput * direct_at(hp, hn, -d, m);
-            o = hp + hn * offset;
+            // The next bounce starts a voxel diagonal (k1, at most the way it came) back along
+            // the ray, not off the hit voxel along its normal: hp is where the ray entered the
+            // hit voxel, and the voxel's normal may belong to a surface behind a wall thinner
+            // than a voxel, through which the normal offset would push the origin. Every
+            // point the ray passed through empty voxels is on its own side (`voxgi bench leak`).
+            o = hp - d * min(offset, h.t);
             nn = hn;
             from = -d;
         }

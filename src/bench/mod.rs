@@ -11,12 +11,15 @@
 //! - [`bench_soak`] (`voxgi bench soak`): long runs of every method on a moving scene, with
 //!   process RSS and the context's GPU memory sampled along the way.
 //! - [`reference_cache`]: Mitsuba references made and cached for `voxgi sweep --make-references`.
+//! - [`bench_leak`] (`voxgi bench leak`): light leaking through a wall 0.25–4 voxels thick
+//!   between two closed rooms, per method (the truth behind the wall is zero).
 //! - [`sweep`]: the data of `voxgi sweep` and `voxgi tune` (grid, rows, CSV, Pareto front,
 //!   SVG plot, the tuner's choice).
 //! - [`bench_scenes`], [`dense_scene`], [`tessellated_cube`]: the generated scenes they run on.
 
 mod flicker;
 pub mod reference_cache;
+mod leak;
 mod scenes;
 mod soak;
 pub mod sweep;
@@ -26,6 +29,11 @@ mod voxelize;
 pub use flicker::{
     bench_flicker, change_and_flicker, default_methods, scene_at_step, FlickerBenchDesc,
     FlickerReport, FlickerRow,
+};
+pub use leak::{
+    bench_leak, direct_images, leak_methods, leak_row, leak_scene, max_radiance, mean_radiance,
+    render_leak_view, LeakBenchDesc, LeakLight, LeakReport, LeakRow, LeakScene,
+    DEFAULT_WALLS_VOXELS,
 };
 pub use scenes::{bench_scenes, dense_scene, tessellated_cube, DENSE_BUNNIES_PER_AXIS};
 pub use soak::{
@@ -74,4 +82,11 @@ pub enum BenchError {
         "the scene has no point or spot light to move: the flicker benchmark moves the first          one along a circle; add one to the scene"
     )]
     NoMovableLight,
+    #[error("leak benchmark: a wall of {wall_voxels} voxels cannot be built: {why}")]
+    LeakWall { wall_voxels: f32, why: &'static str },
+    #[error(
+        "leak benchmark, wall of {wall_voxels} voxels: room B's direct light is {max}, not 0 \
+         (its shadow maps let light through the wall)"
+    )]
+    LeakDirect { wall_voxels: f32, max: f32 },
 }

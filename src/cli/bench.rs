@@ -1,9 +1,10 @@
-//! `voxgi bench traverse|voxelize|voxelize-sweep|flicker|soak`: the benchmarks of [`crate::bench`].
+//! `voxgi bench traverse|voxelize|voxelize-sweep|flicker|soak|leak`: the benchmarks of [`crate::bench`].
 
 use super::{check_validation, context, out, outln, CliError, Global};
 use crate::bench::{
-    bench_flicker, bench_soak, bench_traverse, bench_voxelize_atlas, bench_voxelize_sweep,
-    FlickerBenchDesc, SoakBenchDesc, TraverseBenchDesc, VoxelizeBenchDesc, VoxelizeSweepDesc,
+    bench_flicker, bench_leak, bench_soak, bench_traverse, bench_voxelize_atlas,
+    bench_voxelize_sweep, FlickerBenchDesc, LeakBenchDesc, SoakBenchDesc, TraverseBenchDesc,
+    VoxelizeBenchDesc, VoxelizeSweepDesc,
 };
 use crate::gi::GiMethod;
 use crate::scene::{load_scene_arg, DEFAULT_SCENE};
@@ -69,6 +70,32 @@ pub enum BenchCommand {
         #[arg(long, default_value_t = 32, value_parser = clap::value_parser!(u32).range(1..=4096))]
         reference_frames: u32,
         /// Print JSON instead of a table.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Light leaking: two closed rooms split by one solid wall of 0.25-4 GI voxels, a spot
+    /// light in room A only. Per method and wall: the leaked fraction = mean indirect radiance
+    /// of room B's image / that of the mirrored view in room A (truth: 0).
+    Leak {
+        /// Methods: hemisphere, hemisphere-volume (radiance volume), pathtrace, vpl, ssgi.
+        #[arg(long, value_delimiter = ',',
+              value_parser = ["hemisphere", "hemisphere-volume", "pathtrace", "vpl", "ssgi"],
+              default_values = ["hemisphere", "hemisphere-volume", "pathtrace", "vpl", "ssgi"])]
+        methods: Vec<String>,
+        /// Where room A's spot shines: wall (a disk on the dividing wall), floor (room A's
+        /// floor, from beside the wall, pointing away from it).
+        #[arg(long, value_delimiter = ',', default_values = ["wall", "floor"])]
+        lights: Vec<crate::bench::LeakLight>,
+        /// Wall thicknesses in voxels of the GI grid, in (0, 16].
+        #[arg(long, value_delimiter = ',', default_values_t = crate::bench::DEFAULT_WALLS_VOXELS)]
+        walls: Vec<f32>,
+        /// Image width and height in pixels.
+        #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(8..=4096))]
+        size: u32,
+        /// Print CSV instead of the table.
+        #[arg(long, conflicts_with = "json")]
+        csv: bool,
+        /// Print JSON instead of the table.
         #[arg(long)]
         json: bool,
     },
@@ -227,6 +254,35 @@ pub fn bench(global: &Global, command: &BenchCommand, out: &mut dyn Write) -> Re
             };
             let report = bench_soak(&ctx, &loaded, &name, &desc, &mut progress)?;
             print(out, *json, &report, || report.table())?;
+            check_validation(ctx)
+        }
+        BenchCommand::Leak {
+            methods,
+            lights,
+            walls,
+            size,
+            csv,
+            json,
+        } => {
+            // clap admits only the names `leak_methods` lists.
+            let chosen = crate::bench::leak_methods()
+                .into_iter()
+                .filter(|(name, _)| methods.contains(name))
+                .collect();
+            let ctx = context(global)?;
+            let desc = LeakBenchDesc {
+                walls_voxels: walls.clone(),
+                lights: lights.clone(),
+                size: *size,
+                methods: chosen,
+                ..Default::default()
+            };
+            let report = bench_leak(&ctx, &desc)?;
+            if *csv {
+                out!(out, "{}", report.csv());
+            } else {
+                print(out, *json, &report, || report.table())?;
+            }
             check_validation(ctx)
         }
         BenchCommand::VoxelizeSweep {
