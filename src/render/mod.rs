@@ -322,7 +322,7 @@ impl Renderer {
             // With the atlas voxelizer its points write the volumes (Thiedemann 2010, §4.3.2).
             let atlas_attributes = match &mut voxels {
                 Some(v) => {
-                    crate::gi::GiPasses::needs_attribute_volumes(&settings.gi)
+                    crate::gi::GiPasses::needs_attribute_volumes(&settings.gi, scene)
                         && v.enable_attribute_volumes(ctx, scene)?
                 }
                 None => false,
