@@ -13,6 +13,7 @@ mod gi_filter;
 mod gi_hemisphere;
 mod gi_pathtrace;
 mod gi_radiance_volume;
+mod gi_vpl_emit;
 mod sao;
 pub mod ssgi;
 pub mod ssgi_brdf_lut;
@@ -234,8 +235,13 @@ impl GiPasses {
             GiMethod::Hemisphere => {
                 settings.radiance_source == RadianceSource::Volume || scene.has_emission()
             }
-            // Bounces after the first read albedo and normal at their voxel hits.
-            GiMethod::Vpl => settings.vpl.bounces > 1,
+            // Bounces after the first, and the emitters' rays, read albedo and normal at their
+            // voxel hits.
+            GiMethod::Vpl => {
+                settings.vpl.bounces > 1
+                    || scene.has_emission()
+                    || scene.lights.iter().any(crate::scene::Light::is_area)
+            }
             GiMethod::None | GiMethod::Ssgi => false,
         }
     }
