@@ -118,9 +118,23 @@ uint valid_count(GpuLight l, uint set_, ivec2 size) {
     return valid;
 }
 
+// The `light`-th of the frame's lights that have a reflective map: area-light samples
+// (LIGHT_ELEMENT) have none and are skipped (their VPLs come from gi_vpl_emit.comp, which
+// writes the emitter slot after this pass). False past the last.
+bool map_light(uint light, out GpuLight l) {
+    uint seen = 0u;
+    for (uint i = 0u; i < frame.counts.x; ++i) {
+        l = frame.lights[i];
+        if (l.info.x == LIGHT_ELEMENT) continue;
+        if (seen == light) return true;
+        seen++;
+    }
+    return false;
+}
+
 GpuVpl first_bounce(uint light, uint set_, uint j) {
-    GpuLight l = frame.lights[light];
-    if (light >= frame.counts.x || l.info.z == 0u) return invalid_vpl();
+    GpuLight l;
+    if (!map_light(light, l) || l.info.z == 0u) return invalid_vpl();
     ivec2 size = textureSize(rlm_radiance, 0).xy;
     uint v;
     ivec2 q;

@@ -65,19 +65,22 @@ const SIZE: u32 = 64;
 const WINDOW: u32 = 4;
 
 /// The floor's outgoing radiance under the emitter: direct light is zero (no lights, the floor
-/// does not emit), so it is all the path tracer's one bounce: ρ/π E with E = π L F, i.e.
-/// ρ L F at a point on the emitter's axis (Lambert emitter of constant radiance L).
+/// does not emit), so it is all the GI method's one bounce: ρ/π E with E = π L F, i.e.
+/// ρ L F at a point on the emitter's axis (Lambert emitter of constant radiance L). The path
+/// tracer and the hemisphere method (light maps, which see no emitters, plus the emission
+/// volume at the hits) estimate it the same way.
 ///
-/// The voxels make the path tracer see a slightly larger, nearer emitter: the voxels the
+/// The voxels make the rays see a slightly larger, nearer emitter: the voxels the
 /// rectangle touches (exact conservative test) reach at most one voxel h beyond each edge and
-/// their lower faces at most h below it, and paths start k1 √3 h above the floor (the normal
+/// their lower faces at most h below it, and rays start k1 √3 h above the floor (the normal
 /// offset, k1 = 1). So the expected result lies between F(a, a, d) (the exact emitter) and
 /// F(a + 2h, a + 2h, d − h − √3 h). The 8 x 8 central pixels see floor points up to about
 /// 4 cm from the axis, where F is within 0.3% of its value on the axis (its maximum, with zero
 /// slope). Noise: each sample returns L or 0 (probability F), so the window's estimate has a
-/// relative sigma of at most √((1 − F)/(F n)) with n = 64 pixels x 32 rays x 4 frames = 8192
-/// independent-looking samples: 1.0% (stratified samples do better); the bound adds 4% (4σ)
-/// on each side.
+/// relative sigma of at most √((1 − F)/(F n)) with n = 64 pixels x 8192 / 64 samples = 8192
+/// independent-looking samples (path tracer: 32 rays x 4 frames; hemisphere: 128 rays in its
+/// one frame): 1.0% (stratified samples do better); the bound adds 4% (4σ) on each side.
+/// The VPLs' own estimate is described where they are configured.
 #[test]
 fn floor_under_an_emissive_rectangle_matches_the_form_factor() {
     let scene = emitter_scene(&format!("{{ albedo = {FLOOR_ALBEDO} }}"));
@@ -87,27 +90,36 @@ fn floor_under_an_emissive_rectangle_matches_the_form_factor() {
         .voxel_size_m()
         .max_element();
     let ctx = common::context();
-    let settings = RenderSettings {
-        width: SIZE,
-        height: SIZE,
-        gi: GiSettings {
+    let methods = [
+        GiSettings {
             method: GiMethod::Pathtrace,
             rays: 32,
             bounces: Bounces::Fixed(1),
             accumulate_frames: 4,
             ..Default::default()
         },
-        ..Default::default()
-    };
-    let img = render_image(&ctx, &scene, &settings).expect("renders").hdr;
-    common::assert_no_validation_messages(&ctx);
-    let mut sum = Vec3::ZERO;
-    for y in SIZE / 2 - WINDOW..SIZE / 2 + WINDOW {
-        for x in SIZE / 2 - WINDOW..SIZE / 2 + WINDOW {
-            sum += Vec3::from(img.data[(y * SIZE + x) as usize]);
-        }
-    }
-    let traced = sum.x / (4 * WINDOW * WINDOW) as f32;
+        GiSettings {
+            method: GiMethod::Hemisphere,
+            rays: 128,
+            ..Default::default()
+        },
+        // VPLs on the emitter itself (power-sampled source VPLs of gi_vpl_emit): 16 sets x 256,
+        // all 16 sets within the window, so 4096 points on the exact emitter. Their estimator
+        // cos_e cos_p / d² ranges over [0.44, 4] around its mean π F / A = 1.74, a relative
+        // sigma of at most 0.6 per point, 0.6 / √4096 = 0.9% over the window (Halton points
+        // do better); d_min = (1 voxel diagonal)² = 0.0008 m² against d² >= 0.25 m² lowers it
+        // by at most 0.3%. The emitter is exact, so the voxel bound above is only wider.
+        GiSettings {
+            method: GiMethod::Vpl,
+            vpl: voxgi::gi::vpl::VplSettings {
+                per_set: 256,
+                bounces: 1,
+                d_min_voxels: 1.0,
+                ..Default::default()
+            },
+            ..Default::default()
+        },
+    ];
     let (a, d) = (SIDE_M, HEIGHT_M);
     let expect = |f: f32| FLOOR_ALBEDO * EMISSION_W_SR_M2 * f;
     let exact = expect(form_factor(a, a, d));
@@ -116,17 +128,41 @@ fn floor_under_an_emissive_rectangle_matches_the_form_factor() {
         a + 2.0 * h,
         d - h - 3f32.sqrt() * h,
     ));
-    println!(
-        "voxel {h:.4} m: traced {traced:.4}, exact emitter {exact:.4}, voxel bound {largest:.4} \
-         (F = {:.4})",
-        form_factor(a, a, d)
-    );
-    assert!(
-        traced > 0.96 * exact && traced < 1.04 * largest,
-        "floor radiance {traced} outside [{}, {}]",
-        0.96 * exact,
-        1.04 * largest
-    );
+    for gi in methods {
+        let traced = central_floor_radiance(&ctx, &scene, gi);
+        println!(
+            "{:?}: voxel {h:.4} m: traced {traced:.4}, exact emitter {exact:.4}, voxel bound \
+             {largest:.4} (F = {:.4})",
+            gi.method,
+            form_factor(a, a, d)
+        );
+        assert!(
+            traced > 0.96 * exact && traced < 1.04 * largest,
+            "{:?}: floor radiance {traced} outside [{}, {}]",
+            gi.method,
+            0.96 * exact,
+            1.04 * largest
+        );
+    }
+    common::assert_no_validation_messages(&ctx);
+}
+
+/// The mean red radiance of the central 2·WINDOW x 2·WINDOW pixels of `scene` rendered with `gi`.
+fn central_floor_radiance(ctx: &common::TestContext, scene: &Scene, gi: GiSettings) -> f32 {
+    let settings = RenderSettings {
+        width: SIZE,
+        height: SIZE,
+        gi,
+        ..Default::default()
+    };
+    let img = render_image(ctx, scene, &settings).expect("renders").hdr;
+    let mut sum = Vec3::ZERO;
+    for y in SIZE / 2 - WINDOW..SIZE / 2 + WINDOW {
+        for x in SIZE / 2 - WINDOW..SIZE / 2 + WINDOW {
+            sum += Vec3::from(img.data[(y * SIZE + x) as usize]);
+        }
+    }
+    sum.x / (4 * WINDOW * WINDOW) as f32
 }
 
 /// The form factor's limits: an infinite plane covers the hemisphere (F = 1), and a small

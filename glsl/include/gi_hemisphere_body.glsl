@@ -1,5 +1,7 @@
-// Body of gi_hemisphere.comp (radiance at hits from the reflective light maps) and
-// gi_hemisphere_volume.comp (from the direct-radiance voxel volume, RADIANCE_FROM_VOLUME).
+// Body of gi_hemisphere.comp (radiance at hits from the reflective light maps),
+// gi_hemisphere_emission.comp (the same plus emitters from the emission volume,
+// EMISSION_FROM_VOLUME) and gi_hemisphere_volume.comp (from the direct-radiance voxel volume,
+// RADIANCE_FROM_VOLUME).
 // Indirect light by hemisphere sampling (Thiedemann 2010, §6.2, §6.4.1): from each G-buffer point, N
 // cosine-distributed rays (Hammersley points with a per-pixel Cranley-Patterson rotation)
 // are cast through the binary voxel hierarchy within a radius; at a hit, the radiance the
@@ -26,6 +28,10 @@ layout(set = 0, binding = 6) uniform sampler2DArray rlm_position;
 layout(set = 0, binding = 7) uniform sampler2DArray rlm_normal;
 struct GpuMaterial { vec4 albedo; vec4 specular; uvec4 flags; };
 layout(set = 0, binding = 11, std430) readonly buffer Materials { GpuMaterial materials[]; };
+#ifdef EMISSION_FROM_VOLUME
+layout(set = 0, binding = 12) uniform sampler3D emission_volume;
+layout(set = 0, binding = 13) uniform sampler3D normal_volume;
+#endif
 #endif
 layout(set = 0, binding = 8, rgba32f) uniform writeonly image2D irradiance;
 layout(set = 0, binding = 9) uniform sampler2D gb_specular;   // albedo when !HAS_PHONG
@@ -105,8 +111,24 @@ vec3 light_map_radiance(vec3 hit, vec3 dir) {
     return sum;
 }
 
+#ifdef EMISSION_FROM_VOLUME
+// Emitted radiance of the hit voxel's owner, if the ray arrives on its front side (the face
+// normal's side, Mitsuba's area emitter), as the path tracer adds it at a hit: the light maps
+// see only what the lights see, so emitters reach other surfaces only this way.
+vec3 emitted_radiance(VxHit h, vec3 dir) {
+    ivec3 v = ivec3(h.voxel);
+    vec3 n = texelFetch(normal_volume, v, 0).xyz;
+    if (dot(n, n) > 0.25 && dot(n, dir) > 0.0) return vec3(0.0);
+    return texelFetch(emission_volume, v, 0).rgb;
+}
+#endif
+
 vec3 hit_radiance(VxHit h, vec3 hit, vec3 dir) {
+#ifdef EMISSION_FROM_VOLUME
+    return light_map_radiance(hit, dir) + emitted_radiance(h, dir);
+#else
     return light_map_radiance(hit, dir);
+#endif
 }
 #endif
 

@@ -3,7 +3,10 @@
 //
 // The buffer holds one row per interleaving set (§7.3.2); row s holds bounces x lights x K
 // VPLs, K per light and set: index = s * R + (bounce * lights + light) * K + k, with
-// R = bounces * lights * K. Each row is a complete estimator of the indirect light on its own.
+// R = bounces * lights * K + S, then S source VPLs (K points on emissive surfaces in scenes
+// that have them, else none). The lights are those with reflective maps, then one slot for
+// the emitters (emissive surfaces and area lights) when the scene has any. Each row is a
+// complete estimator of the indirect light on its own.
 #ifndef VPL_GLSL
 #define VPL_GLSL
 
@@ -39,9 +42,19 @@ layout(push_constant) uniform VplGeneratePush {
     vec4 params;    // x normal offset (voxel diagonals), y voxel diagonal (m), z ray length (m), w unused
 } pc;
 
+// Emitter VPLs at the end of each row (gi_vpl_emit.comp): K in scenes with emissive surfaces,
+// 0 otherwise (a specialization constant of every pass that indexes the buffer this way).
+layout(constant_id = 2) const uint SOURCE_VPLS = 0u;
+
 uint vpl_index(uint set_, uint bounce, uint light, uint k) {
-    uint row = pc.counts.w * pc.counts.y * pc.counts.z;
+    uint row = pc.counts.w * pc.counts.y * pc.counts.z + SOURCE_VPLS;
     return set_ * row + (bounce * pc.counts.y + light) * pc.counts.z + k;
+}
+
+// Index of source VPL k of set `set_` (the emitter point itself, gi_vpl_emit.comp).
+uint source_vpl_index(uint set_, uint k) {
+    uint row = pc.counts.w * pc.counts.y * pc.counts.z + SOURCE_VPLS;
+    return set_ * row + pc.counts.w * pc.counts.y * pc.counts.z + k;
 }
 #endif
 

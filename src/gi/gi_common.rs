@@ -177,6 +177,7 @@ mod tests {
         );
         for shader in [
             "gi_hemisphere.comp",
+            "gi_hemisphere_emission.comp",
             "gi_hemisphere_volume.comp",
             "gi_pathtrace.comp",
             "gi_radiance_volume.comp",

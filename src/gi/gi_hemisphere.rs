@@ -1,25 +1,45 @@
-//! `gi_hemisphere`: one bounce by hemisphere sampling, radiance at the hits read from the
-//! reflective light maps (Thiedemann 2010 §6.4.1).
+//! `gi_hemisphere` and `gi_hemisphere_emission`: one bounce by hemisphere sampling, radiance at
+//! the hits read from the reflective light maps (Thiedemann 2010 §6.4.1). In scenes with
+//! emitters the second variant also adds, at a hit on an emitter's front side, its emitted
+//! radiance from the emission volume (the light maps see only what the lights see), as the
+//! path tracer does.
 
 use super::gi_common::{add_ray_pass, GiShared, GpuGiPush};
 use super::{GiInputs, GiMethodPasses, GiOutput};
 use crate::graph::{Access, RenderGraph, Shader};
 use crate::vk::{vk, ComputePipeline, Context, ImageDesc, PushLayout, VkError};
 
-/// The hemisphere pass reading the light maps.
+/// The hemisphere pass reading the light maps (and, with emitters, the emission volume).
 pub struct GiHemisphere {
     pipeline: ComputePipeline,
+    /// The pass reads the emission and normal volumes (`gi_hemisphere_emission`).
+    emission: bool,
 }
 
 impl GiHemisphere {
     /// `has_phong`: the G-buffer has a specular image (specialization constant 0).
-    pub fn new(ctx: &Context, has_phong: bool) -> Result<Self, VkError> {
+    /// `emission`: the scene has emitters; the assembly then writes the attribute volumes
+    /// ([`super::GiPasses::needs_attribute_volumes`]).
+    pub fn new(ctx: &Context, has_phong: bool, emission: bool) -> Result<Self, VkError> {
         let pipeline = ctx.compute_pipeline(
-            "gi_hemisphere.comp",
+            if emission {
+                "gi_hemisphere_emission.comp"
+            } else {
+                "gi_hemisphere.comp"
+            },
             PushLayout::of::<GpuGiPush>(),
             &[(0, u32::from(has_phong))],
         )?;
-        Ok(Self { pipeline })
+        Ok(Self { pipeline, emission })
+    }
+
+    /// The pass's (and its shader's) name.
+    fn name(emission: bool) -> &'static str {
+        if emission {
+            "gi_hemisphere_emission"
+        } else {
+            "gi_hemisphere"
+        }
     }
 }
 
@@ -32,13 +52,21 @@ impl GiMethodPasses for GiHemisphere {
             i.height,
         ));
         let push = shared.push;
+        let mut own = vec![(5, i.rlm_radiance), (6, i.rlm_position), (7, i.rlm_normal)];
+        if self.emission {
+            // The assembly writes the volumes (with an emission volume) in scenes with emitters.
+            if let Some(v) = shared.attributes {
+                own.push((12, v.emission.unwrap_or(v.albedo)));
+                own.push((13, v.normal));
+            }
+        }
         add_ray_pass(
             g,
-            "gi_hemisphere",
+            Self::name(self.emission),
             *self.pipeline,
             i,
             shared,
-            &[(5, i.rlm_radiance), (6, i.rlm_position), (7, i.rlm_normal)],
+            &own,
             (irradiance, Access::StorageWrite(Shader::Compute)),
             Some(i.materials),
             move || push,

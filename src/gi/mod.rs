@@ -13,6 +13,7 @@ mod gi_filter;
 mod gi_hemisphere;
 mod gi_pathtrace;
 mod gi_radiance_volume;
+mod gi_vpl_emit;
 mod sao;
 pub mod ssgi;
 pub mod ssgi_brdf_lut;
@@ -164,12 +165,14 @@ impl GiPasses {
             GiMethod::Hemisphere if settings.radiance_source == RadianceSource::Volume => {
                 Box::new(GiRadianceVolume::new(ctx, target)?)
             }
-            GiMethod::Hemisphere | GiMethod::None => {
-                Box::new(GiHemisphere::new(ctx, target.has_phong)?)
-            }
+            GiMethod::Hemisphere | GiMethod::None => Box::new(GiHemisphere::new(
+                ctx,
+                target.has_phong,
+                target.scene.has_emission(),
+            )?),
         };
         // Objects the atlas voxelizer handles get their attributes from its points.
-        let attributes = Self::needs_attribute_volumes(&settings)
+        let attributes = Self::needs_attribute_volumes(&settings, target.scene)
             .then(|| {
                 let t = target;
                 // The path tracer's lobes at later bounces read the material volume.
@@ -243,13 +246,22 @@ impl GiPasses {
         self.accumulation.frames.load(Ordering::SeqCst)
     }
 
-    /// Whether the chosen method reads the albedo and normal volumes.
-    pub fn needs_attribute_volumes(settings: &GiSettings) -> bool {
+    /// Whether the chosen method reads the albedo and normal volumes (and with them, in
+    /// scenes with emitters, the emission volume).
+    pub fn needs_attribute_volumes(settings: &GiSettings, scene: &Scene) -> bool {
         match settings.method {
             GiMethod::Pathtrace => true,
-            GiMethod::Hemisphere => settings.radiance_source == RadianceSource::Volume,
-            // Bounces after the first read albedo and normal at their voxel hits.
-            GiMethod::Vpl => settings.vpl.bounces > 1,
+            // The light maps do not see emitters: the hits read the emission volume.
+            GiMethod::Hemisphere => {
+                settings.radiance_source == RadianceSource::Volume || scene.has_emission()
+            }
+            // Bounces after the first, and the emitters' rays, read albedo and normal at their
+            // voxel hits.
+            GiMethod::Vpl => {
+                settings.vpl.bounces > 1
+                    || scene.has_emission()
+                    || scene.lights.iter().any(crate::scene::Light::is_area)
+            }
             GiMethod::None | GiMethod::Ssgi => false,
         }
     }

@@ -4,6 +4,8 @@
 //! (`glsl/gi_vpl_bounce.comp`), and the frame is shaded with interleaved sampling (§7.3.2): an
 //! N×M pattern of VPL sets, each pixel block with its own set, voxel visibility per VPL–pixel
 //! pair (`glsl/gi_vpl_gather.comp`); the geometry-aware filter then removes the pattern.
+//! Emissive surfaces and area lights, which the light maps do not see, send VPLs of their own
+//! (`gi_vpl_emit`, [`super::gi_vpl_emit`]).
 
 pub use crate::scene::vpl_settings::{
     parse_pattern, VplNormalize, VplOverrides, VplSettings, VplShading, VplSpotSampling,
@@ -11,6 +13,7 @@ pub use crate::scene::vpl_settings::{
 };
 
 use super::gi_common::GiShared;
+use super::gi_vpl_emit::GiVplEmit;
 use super::{GiInputs, GiMethodPasses, GiOutput, GiSettings, GiTarget, Overlay};
 use crate::graph::{Access, BufferHandle, ImageHandle, RenderGraph, Shader};
 use crate::vk::{vk, ComputePipeline, Context, ImageDesc, PipelineHandle, PushLayout, VkError};
@@ -94,19 +97,24 @@ pub struct GpuVplPointsPush {
 
 crate::push_constants!(GpuVplPointsPush { count, radiance_w });
 
-/// The sizes of the VPL buffer: `sets` rows of `bounces × lights × per_set` VPLs.
+/// The sizes of the VPL buffer: `sets` rows of `bounces × lights × per_set` VPLs, then
+/// `sources` source VPLs (`glsl/include/vpl.glsl`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct VplLayout {
     pub sets: u32,
+    /// The lights with reflective maps, plus one slot for the emitters when there are any.
     pub lights: u32,
     pub per_set: u32,
     pub bounces: u32,
+    /// Source VPLs on emissive surfaces per row: `per_set` when the scene has emissive
+    /// surfaces, else 0.
+    pub sources: u32,
 }
 
 impl VplLayout {
     /// VPLs in one row (one set).
     pub fn row(&self) -> u32 {
-        self.bounces * self.lights * self.per_set
+        self.bounces * self.lights * self.per_set + self.sources
     }
 
     /// VPLs generated per bounce (one invocation each).
@@ -125,6 +133,8 @@ pub struct VplPasses {
     generate: ComputePipeline,
     bounce: Option<ComputePipeline>,
     gather: ComputePipeline,
+    /// VPLs from emissive surfaces and area lights, in scenes that have them.
+    emit: Option<GiVplEmit>,
     /// The debug view's pipeline, when it is on.
     points: Option<ComputePipeline>,
     layout: VplLayout,
@@ -146,11 +156,20 @@ impl VplPasses {
         let dims = [ext.x as i32, ext.y as i32, ext.z as i32, levels as i32 - 1];
         let world_to_voxel = grid.world_to_voxel_matrix().to_cols_array();
         let bounces = v.bounces.clamp(1, VplSettings::MAX_BOUNCES);
+        let per_set = v.per_set.max(1);
+        let emit = GiVplEmit::new(ctx, target.scene, target.time_s, per_set)?;
+        // Area lights have no reflective maps: the emitter slot carries their VPLs.
+        let map_lights = target.scene.lights.iter().filter(|l| !l.is_area()).count() as u32;
         let layout = VplLayout {
             sets: v.pattern[0].max(1) * v.pattern[1].max(1),
-            lights: target.scene.lights.len() as u32,
-            per_set: v.per_set.max(1),
+            lights: map_lights + u32::from(emit.is_some()),
+            per_set,
             bounces,
+            sources: if emit.as_ref().is_some_and(|e| e.has_surfaces) {
+                per_set
+            } else {
+                0
+            },
         };
         let diagonal_m = grid.voxel_diagonal_m();
         let scene_diagonal_m = target.scene.aabb_at(target.time_s).extent().length();
@@ -199,6 +218,7 @@ impl VplPasses {
             &[
                 (0, u32::from(v.normalize == VplNormalize::Valid)),
                 (1, u32::from(v.spot_sampling == VplSpotSampling::Disk)),
+                (2, layout.sources),
             ],
         )?;
         let shader = match v.shading {
@@ -227,7 +247,7 @@ impl VplPasses {
                 ctx.compute_pipeline(
                     "gi_vpl_bounce.comp",
                     PushLayout::of::<GpuVplGeneratePush>(),
-                    &[],
+                    &[(2, layout.sources)],
                 )
             })
             .transpose()?;
@@ -235,6 +255,7 @@ impl VplPasses {
             generate,
             bounce,
             gather,
+            emit,
             points,
             layout,
             generate_push,
@@ -260,6 +281,21 @@ impl VplPasses {
         let (lut, sampler) = (shared.lut, shared.sampler);
         let vpls = g.create_buffer("vpls", self.layout.size_bytes());
         self.add_generate(g, i, vpls, sampler);
+        // The assembly writes the attribute volumes when the scene has emitters.
+        if let (Some(emit), Some(v)) = (&self.emit, shared.attributes) {
+            let invocations = self.layout.sets * self.layout.per_set;
+            let push = self.generate_push;
+            let volumes = (v.albedo, v.normal);
+            emit.add_pass(
+                g,
+                push,
+                invocations,
+                (i.voxels, lut),
+                volumes,
+                vpls,
+                sampler,
+            );
+        }
         if let (Some(pipe), Some(v)) = (self.bounce.as_deref().copied(), shared.attributes) {
             let (albedo, normal) = (v.albedo, v.normal);
             for b in 1..self.layout.bounces {
@@ -459,11 +495,16 @@ mod tests {
             lights: 2,
             per_set: 8,
             bounces: 2,
+            sources: 0,
         };
         assert_eq!(l.row(), 32);
         assert_eq!(l.per_bounce(), 256);
         assert_eq!(l.size_bytes(), 16 * 32 * 80);
         let none = VplLayout { lights: 0, ..l };
         assert_eq!(none.size_bytes(), 80, "never an empty buffer");
+        // Emissive surfaces: K source VPLs end each row.
+        let emissive = VplLayout { sources: 8, ..l };
+        assert_eq!(emissive.row(), 40);
+        assert_eq!(emissive.size_bytes(), 16 * 40 * 80);
     }
 }

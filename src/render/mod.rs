@@ -70,7 +70,7 @@ pub enum RenderError {
     EmptyScene,
     #[error("indirect light reads reflective light maps, which exist for cube shadow maps only: use --point-shadows cube with --gi")]
     GiNeedsCubeShadows,
-    #[error("area lights are shadowed by paraboloid views, which have no reflective light maps, so --gi {0} cannot see their light: use --gi pathtrace, or --gi hemisphere --gi-radiance volume")]
+    #[error("area lights are shadowed by paraboloid views, which have no reflective light maps, so --gi {0} cannot see their light: use --gi pathtrace, --gi vpl, or --gi hemisphere --gi-radiance volume")]
     AreaLightsNeedNoLightMaps(&'static str),
     #[error("--sao darkens only indirect light, and --gi none has none: choose a --gi method (hemisphere, pathtrace, vpl) or leave out --sao")]
     SaoWithoutGi,
@@ -320,12 +320,11 @@ impl Renderer {
         }
         if gi_on && scene.lights.iter().any(Light::is_area) {
             use crate::gi::{GiMethod, RadianceSource};
-            match (settings.gi.method, settings.gi.radiance_source) {
-                (GiMethod::Vpl, _) => return Err(RenderError::AreaLightsNeedNoLightMaps("vpl")),
-                (GiMethod::Hemisphere, RadianceSource::Maps) => {
-                    return Err(RenderError::AreaLightsNeedNoLightMaps("hemisphere"))
-                }
-                _ => {}
+            // The VPLs sample area lights themselves (`gi_vpl_emit`).
+            if (settings.gi.method, settings.gi.radiance_source)
+                == (GiMethod::Hemisphere, RadianceSource::Maps)
+            {
+                return Err(RenderError::AreaLightsNeedNoLightMaps("hemisphere"));
             }
         }
         if !gi_on && settings.gi.sao.is_some() {
@@ -424,7 +423,7 @@ impl Renderer {
             // With the atlas voxelizer its points write the volumes (Thiedemann 2010, §4.3.2).
             let atlas_attributes = match &mut voxels {
                 Some(v) => {
-                    crate::gi::GiPasses::needs_attribute_volumes(&settings.gi)
+                    crate::gi::GiPasses::needs_attribute_volumes(&settings.gi, scene)
                         && v.enable_attribute_volumes(ctx, scene)?
                 }
                 None => false,

@@ -1,0 +1,345 @@
+//! `gi_vpl_emit`: VPLs from emitters — emissive triangles and area lights (spheres,
+//! rectangles) — for `--gi vpl`. The reflective light maps see only what point, spot and
+//! directional lights see, so emitters need their own VPL paths: a point on an emitter
+//! sampled by emitted power, a source VPL there (emissive surfaces only: an area light's
+//! direct light is `deferred_direct`'s), and one cosine-distributed voxel ray to the first hit,
+//! whose VPL the bounce passes continue. The estimator and its flux are derived in
+//! `glsl/gi_vpl_emit.comp`; this file builds the emitter table it samples ([`emitter_table`]).
+//!
+//! The table is built once for the scene at the renderer's time: emitters that move or change
+//! after that keep their first place and radiance in the VPLs (the other methods read the
+//! emission volume, which follows them).
+
+use crate::graph::{Access, BufferHandle, ImageHandle, RenderGraph, Shader};
+use crate::scene::{Light, Scene};
+use crate::vk::{vk, Buffer, ComputePipeline, Context, PushLayout, VkError};
+use bytemuck::{Pod, Zeroable};
+use glam::Vec3;
+use std::f32::consts::PI;
+
+use super::vpl::GpuVplGeneratePush;
+
+/// `GpuEmitter::origin.w` of an emissive triangle (origin, edges; face normal e1 × e2).
+pub const EMITTER_TRIANGLE: f32 = 0.0;
+/// Of a rectangle light (origin a corner, edges; normal e1 × e2, one-sided).
+pub const EMITTER_RECTANGLE: f32 = 1.0;
+/// Of a sphere light (origin the centre, `edge1[0]` the radius; emits outward everywhere).
+pub const EMITTER_SPHERE: f32 = 2.0;
+
+/// One emitter of the table (`GpuEmitter` in `glsl/gi_vpl_emit.comp`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct GpuEmitter {
+    /// xyz (m); w the kind (`EMITTER_*`).
+    pub origin: [f32; 4],
+    /// xyz (m); a sphere's radius in x.
+    pub edge1: [f32; 4],
+    /// xyz (m).
+    pub edge2: [f32; 4],
+    /// rgb π·W·L/w (W): the flux one power-sampled point carries, times the samples per set;
+    /// w the CDF of the power up to and including this emitter (the last is 1).
+    pub flux: [f32; 4],
+}
+
+crate::gpu_struct!(GpuEmitter {
+    origin,
+    edge1,
+    edge2,
+    flux
+});
+
+/// An emitter before normalization: kind, origin, edges, radiance L (W/(m²·sr)), area (m²).
+struct Source {
+    kind: f32,
+    origin: Vec3,
+    edge1: Vec3,
+    edge2: Vec3,
+    radiance: Vec3,
+    area_m2: f32,
+}
+
+/// The weight w of a radiance in the power sampling: the mean of its channels (positive
+/// whenever any channel is, unlike a luminance of a pure colour that could round to 0).
+fn weight(radiance: Vec3) -> f32 {
+    (radiance.x + radiance.y + radiance.z) / 3.0
+}
+
+/// Every emitter of `scene` at time `t_s`: its emissive triangles (the emission the volume
+/// holds, `Material::voxel_emission`) and its sphere and rectangle lights, sampled by power
+/// w·A; empty without emitters. Degenerate and black emitters are left out.
+pub fn emitter_table(scene: &Scene, t_s: f32) -> Vec<GpuEmitter> {
+    let mut sources = emissive_triangles(scene, t_s);
+    sources.extend(scene.lights.iter().filter_map(area_light_source));
+    sources.retain(|s| s.area_m2 > 0.0 && weight(s.radiance) > 0.0);
+    let total: f64 = sources
+        .iter()
+        .map(|s| f64::from(weight(s.radiance) * s.area_m2))
+        .sum();
+    let mut cdf = 0.0f64;
+    let count = sources.len();
+    sources
+        .into_iter()
+        .enumerate()
+        .map(|(i, s)| {
+            cdf += f64::from(weight(s.radiance) * s.area_m2) / total;
+            // π·W·L/w: one sample's estimate of the whole emitted flux (the shader's step 2).
+            let flux = s.radiance * (PI * total as f32 / weight(s.radiance));
+            let cdf = if i + 1 == count { 1.0 } else { cdf as f32 };
+            GpuEmitter {
+                origin: s.origin.extend(s.kind).to_array(),
+                edge1: s.edge1.extend(0.0).to_array(),
+                edge2: s.edge2.extend(0.0).to_array(),
+                flux: flux.extend(cdf).to_array(),
+            }
+        })
+        .collect()
+}
+
+/// The scene's emissive triangles in world space at `t_s`.
+fn emissive_triangles(scene: &Scene, t_s: f32) -> Vec<Source> {
+    let mut out = Vec::new();
+    for object in &scene.objects {
+        let Some(mesh) = scene.meshes.get(object.mesh_at(t_s)) else {
+            continue;
+        };
+        let m = object.transform_at(t_s);
+        for (si, sub) in mesh.submeshes.iter().enumerate() {
+            let material = object.materials.get(si).copied().unwrap_or(sub.material);
+            let Some(radiance) = scene
+                .materials
+                .get(material)
+                .map(|m| m.voxel_emission(&scene.textures))
+                .filter(|e| *e != Vec3::ZERO)
+            else {
+                continue;
+            };
+            let range = sub.first_index as usize..(sub.first_index + sub.index_count) as usize;
+            for t in mesh.indices[range].chunks_exact(3) {
+                let [a, b, c] =
+                    [0, 1, 2].map(|k| m.transform_point3(mesh.positions[t[k] as usize]));
+                out.push(Source {
+                    kind: EMITTER_TRIANGLE,
+                    origin: a,
+                    edge1: b - a,
+                    edge2: c - a,
+                    radiance,
+                    area_m2: 0.5 * (b - a).cross(c - a).length(),
+                });
+            }
+        }
+    }
+    out
+}
+
+/// A sphere or rectangle light as an emitter; other lights have reflective maps instead.
+fn area_light_source(light: &Light) -> Option<Source> {
+    match *light {
+        Light::Sphere {
+            position,
+            radius_m,
+            radiance_w_sr_m2,
+            ..
+        } => Some(Source {
+            kind: EMITTER_SPHERE,
+            origin: position,
+            edge1: Vec3::new(radius_m, 0.0, 0.0),
+            edge2: Vec3::ZERO,
+            radiance: radiance_w_sr_m2,
+            area_m2: 4.0 * PI * radius_m * radius_m,
+        }),
+        Light::Rectangle {
+            position,
+            normal,
+            width_axis,
+            width_m,
+            height_m,
+            radiance_w_sr_m2,
+            ..
+        } => {
+            // normal × width_axis is the height axis, so width × height = the normal.
+            let (e1, e2) = (width_axis * width_m, normal.cross(width_axis) * height_m);
+            Some(Source {
+                kind: EMITTER_RECTANGLE,
+                origin: position - 0.5 * (e1 + e2),
+                edge1: e1,
+                edge2: e2,
+                radiance: radiance_w_sr_m2,
+                area_m2: width_m * height_m,
+            })
+        }
+        _ => None,
+    }
+}
+
+/// The pass and its table.
+pub struct GiVplEmit {
+    pipeline: ComputePipeline,
+    emitters: Buffer,
+    /// Emissive triangles are in the table: each row ends with K source VPLs.
+    pub has_surfaces: bool,
+}
+
+impl GiVplEmit {
+    /// `None` when `scene` has no emitters. `source_vpls`: the specialization constant of the
+    /// row layout (`SOURCE_VPLS` in `glsl/include/vpl.glsl`), K when the table has emissive
+    /// triangles.
+    pub fn new(
+        ctx: &Context,
+        scene: &Scene,
+        t_s: f32,
+        per_set: u32,
+    ) -> Result<Option<Self>, VkError> {
+        let table = emitter_table(scene, t_s);
+        if table.is_empty() {
+            return Ok(None);
+        }
+        let has_surfaces = table.iter().any(|e| e.origin[3] == EMITTER_TRIANGLE);
+        let pipeline = ctx.compute_pipeline(
+            "gi_vpl_emit.comp",
+            PushLayout::of::<GpuVplGeneratePush>(),
+            &[(2, if has_surfaces { per_set } else { 0 })],
+        )?;
+        let emitters = ctx.upload_buffer(
+            "vpl emitters",
+            bytemuck::cast_slice(&table),
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+        )?;
+        Ok(Some(Self {
+            pipeline,
+            emitters,
+            has_surfaces,
+        }))
+    }
+
+    /// Declares the pass: writes the emitter slot's bounce-0 VPLs and the source VPLs of
+    /// `vpls` (after `gi_vpl_generate`, before the bounces); `invocations` = sets × K.
+    #[allow(clippy::too_many_arguments)]
+    pub fn add_pass(
+        &self,
+        g: &mut RenderGraph,
+        push: GpuVplGeneratePush,
+        invocations: u32,
+        (voxels, lut): (ImageHandle, BufferHandle),
+        (albedo, normal): (ImageHandle, ImageHandle),
+        vpls: BufferHandle,
+        s: vk::Sampler,
+    ) {
+        let c = Shader::Compute;
+        let pipe = *self.pipeline;
+        let emitters = g.import_buffer(&self.emitters, Access::StorageRead(c));
+        g.add_pass("gi_vpl_emit")
+            .pipeline(&pipe)
+            .bind_sampled(0, voxels, s, c)
+            .bind(1, lut, Access::StorageRead(c))
+            .bind_sampled(2, albedo, s, c)
+            .bind_sampled(3, normal, s, c)
+            .bind(4, vpls, Access::StorageReadWrite(c))
+            .bind(5, emitters, Access::StorageRead(c))
+            .record(move |ctx| {
+                ctx.bind(&pipe);
+                ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
+                ctx.cmd.dispatch(invocations.div_ceil(64).max(1), 1, 1);
+            });
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::path::Path;
+
+    fn scene(toml: &str) -> Scene {
+        Scene::from_toml_str(
+            toml,
+            Path::new("<test>"),
+            Path::new(env!("CARGO_MANIFEST_DIR")),
+        )
+        .expect("parses")
+    }
+
+    #[test]
+    fn emitter_struct_matches_glsl() {
+        crate::vk::check_struct_against::<GpuEmitter>(&["gi_vpl_emit.comp"], "GpuEmitter")
+            .expect("GpuEmitter layout");
+    }
+
+    /// A 2 m × 0.5 m rectangle of L = 3 and a sphere of radius 0.5 and L = 1 (both grey):
+    /// powers w·A = 3 and π, so the CDF is 3 / (3 + π) then 1, and every sample carries the
+    /// whole flux π·(3 + π)·L/w = π (3 + π) (grey: L/w = 1), the sum of π L A over both.
+    #[test]
+    fn area_lights_are_sampled_by_power() {
+        let s = scene(
+            r#"
+[camera]
+position = [0.0, 0.0, 5.0]
+target = [0.0, 0.0, 0.0]
+fov_y_deg = 40.0
+[[objects]]
+builtin = "quad"
+[[lights]]
+kind = "rectangle"
+position = [0.0, 2.0, 0.0]
+normal = [0.0, -1.0, 0.0]
+width_axis = [1.0, 0.0, 0.0]
+width_m = 2.0
+height_m = 0.5
+radiance_w_sr_m2 = 3.0
+[[lights]]
+kind = "sphere"
+position = [1.0, 1.0, 1.0]
+radius_m = 0.5
+radiance_w_sr_m2 = 1.0
+"#,
+        );
+        let t = emitter_table(&s, 0.0);
+        assert_eq!(t.len(), 2);
+        let total = 3.0 + PI;
+        assert!((t[0].flux[3] - 3.0 / total).abs() < 1e-6, "{t:?}");
+        assert_eq!(t[1].flux[3], 1.0);
+        for e in &t {
+            assert!((e.flux[0] - PI * total).abs() < 1e-4, "{e:?}");
+        }
+        // The rectangle's corner and edges: the normal e1 × e2 is the light's.
+        let (e1, e2) = (Vec3::from_slice(&t[0].edge1), Vec3::from_slice(&t[0].edge2));
+        assert!((e1.cross(e2).normalize() - Vec3::NEG_Y).length() < 1e-6);
+        assert!((e1.cross(e2).length() - 1.0).abs() < 1e-6, "area 2 × 0.5");
+        let centre = Vec3::from_slice(&t[0].origin) + 0.5 * (e1 + e2);
+        assert!((centre - Vec3::new(0.0, 2.0, 0.0)).length() < 1e-6);
+        assert_eq!(t[0].origin[3], EMITTER_RECTANGLE);
+        assert_eq!(t[1].origin[3], EMITTER_SPHERE);
+    }
+
+    /// An emissive quad is two triangles of half its area each, facing where its normals do;
+    /// a scene without emitters has an empty table (no pass, no buffer).
+    #[test]
+    fn emissive_triangles_face_their_normals() {
+        let base = r#"
+[camera]
+position = [0.0, 0.0, 5.0]
+target = [0.0, 0.0, 0.0]
+fov_y_deg = 40.0
+[[objects]]
+builtin = "quad"
+"#;
+        assert!(emitter_table(&scene(base), 0.0).is_empty());
+        let s = scene(&format!(
+            "{base}material = {{ albedo = 0.0, emission_w_sr_m2 = [2.0, 1.0, 0.0] }}\n"
+        ));
+        let t = emitter_table(&s, 0.0);
+        assert_eq!(t.len(), 2);
+        for e in &t {
+            let (e1, e2) = (Vec3::from_slice(&e.edge1), Vec3::from_slice(&e.edge2));
+            // The built-in quad lies in y = 0 with normals +y, 1 m × 1 m.
+            assert!(
+                (e1.cross(e2).normalize() - Vec3::Y).length() < 1e-6,
+                "{e:?}"
+            );
+            assert!((0.5 * e1.cross(e2).length() - 0.5).abs() < 1e-6);
+            // w = 1, W = 1 (m²): π·W·L/w = π·(2, 1, 0).
+            assert!(
+                (Vec3::from_slice(&e.flux[..3]) - PI * Vec3::new(2.0, 1.0, 0.0)).length() < 1e-5
+            );
+        }
+        assert!((t[0].flux[3] - 0.5).abs() < 1e-6);
+    }
+}
