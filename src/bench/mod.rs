@@ -18,8 +18,8 @@
 //! - [`bench_scenes`], [`dense_scene`], [`tessellated_cube`]: the generated scenes they run on.
 
 mod flicker;
-pub mod reference_cache;
 mod leak;
+pub mod reference_cache;
 mod scenes;
 mod soak;
 pub mod sweep;
