@@ -145,10 +145,20 @@ fn load_scenes(args: &SweepArgs) -> Result<Vec<SweepScene>, CliError> {
         }
         .into());
     }
-    list.iter()
-        .map(|arg| {
-            let name = scene_name(arg);
-            let scene = load_scene_arg(Some(arg))?;
+    // The default list takes every scene it can: one whose files are not there (the
+    // generated atrium before `tools/atrium`) is left out with a note.
+    let defaults = args.scenes.is_empty();
+    let mut loaded = Vec::new();
+    for arg in &list {
+        match load_scene_arg(Some(arg)) {
+            Ok(scene) => loaded.push((scene_name(arg), scene)),
+            Err(e) if defaults => eprintln!("skipping {arg}: {e}"),
+            Err(e) => return Err(e.into()),
+        }
+    }
+    loaded
+        .into_iter()
+        .map(|(name, scene)| {
             let mut path = reference_path(&args.references, &name);
             if !path.exists() {
                 if !args.make_references {
@@ -275,6 +285,23 @@ fn job(config: &Config, scene: &Scene, size: u32) -> Result<Job, CliError> {
     })
 }
 
+/// The jobs a scene can be rendered with: a configuration the renderer refuses for this
+/// scene (e.g. the light-map hemisphere with area lights) is left out with a note on stderr,
+/// so that one such pair does not end the whole sweep.
+fn renderable(scene_name: &str, scene: &Scene, jobs: Vec<Job>) -> Vec<Job> {
+    jobs.into_iter()
+        .filter(
+            |j| match crate::render::check_scene_settings(scene, &j.settings) {
+                Ok(()) => true,
+                Err(e) => {
+                    eprintln!("skipping {scene_name} {}: {e}", j.config.label());
+                    false
+                }
+            },
+        )
+        .collect()
+}
+
 /// Whether a pass is part of the GI's cost: voxelization, the atlases, the light maps and
 /// the `gi_*` passes (the VPL passes are `gi_vpl_*`) and the screen-space GI's `ssgi_*`.
 pub fn is_gi_pass(name: &str) -> bool {
@@ -391,12 +418,13 @@ pub fn sweep(global: &Global, args: &SweepArgs, out: &mut dyn Write) -> Result<(
     let jobs = scenes
         .iter()
         .map(|s| {
-            configs
+            let jobs = configs
                 .iter()
                 .map(|c| job(c, &s.scene, args.size))
-                .collect::<Result<Vec<_>, _>>()
+                .collect::<Result<Vec<_>, _>>()?;
+            Ok(renderable(&s.name, &s.scene, jobs))
         })
-        .collect::<Result<Vec<_>, _>>()?;
+        .collect::<Result<Vec<_>, CliError>>()?;
     std::fs::create_dir_all(&args.out).map_err(|source| SweepError::Io {
         path: args.out.clone(),
         source,
@@ -415,7 +443,7 @@ pub fn sweep(global: &Global, args: &SweepArgs, out: &mut dyn Write) -> Result<(
         .flat_map(|(i, _)| jobs[i].iter().map(move |j| (i, j)))
         .filter(|(i, j)| !done(&rows, &scenes[*i].name, &j.config.label()))
         .collect();
-    let skipped = scenes.len() * configs.len() - todo.len();
+    let skipped = jobs.iter().map(Vec::len).sum::<usize>() - todo.len();
     if skipped > 0 {
         eprintln!("resuming: {skipped} row(s) already in {}", csv.display());
     }

@@ -168,6 +168,35 @@ fn check_frame_memory(
     )
 }
 
+/// Whether `scene` can be rendered with `settings` at all, independent of the device: the
+/// combinations a renderer refuses (GI with paraboloid point shadows, area lights with the
+/// light-map hemisphere, SAO without GI). [`Renderer::new`] runs it first; `voxgi sweep` asks
+/// it to leave such configurations out instead of failing on them.
+pub fn check_scene_settings(scene: &Scene, settings: &RenderSettings) -> Result<(), RenderError> {
+    use crate::gi::{GiMethod, RadianceSource};
+    let gi_on = settings.gi.method != GiMethod::None && settings.debug.is_none();
+    let gi_voxels = gi_on && settings.gi.method.needs_voxels();
+    if gi_voxels
+        && settings.shadow.point_technique == PointShadow::DualParaboloid
+        && scene.has_point_lights()
+    {
+        return Err(RenderError::GiNeedsCubeShadows);
+    }
+    // The VPLs sample area lights themselves (`gi_vpl_emit`); the light-map hemisphere has no
+    // reflective light maps of their paraboloid views.
+    if gi_on
+        && scene.lights.iter().any(Light::is_area)
+        && (settings.gi.method, settings.gi.radiance_source)
+            == (GiMethod::Hemisphere, RadianceSource::Maps)
+    {
+        return Err(RenderError::AreaLightsNeedNoLightMaps("hemisphere"));
+    }
+    if !gi_on && settings.gi.sao.is_some() {
+        return Err(RenderError::SaoWithoutGi);
+    }
+    Ok(())
+}
+
 /// What a frame renders.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RenderSettings {
@@ -312,24 +341,7 @@ impl Renderer {
         let gi_on = settings.gi.method != crate::gi::GiMethod::None && settings.debug.is_none();
         // Screen-space GI reads only the frame: no voxels, no light maps.
         let gi_voxels = gi_on && settings.gi.method.needs_voxels();
-        if gi_voxels
-            && settings.shadow.point_technique == PointShadow::DualParaboloid
-            && scene.has_point_lights()
-        {
-            return Err(RenderError::GiNeedsCubeShadows);
-        }
-        if gi_on && scene.lights.iter().any(Light::is_area) {
-            use crate::gi::{GiMethod, RadianceSource};
-            // The VPLs sample area lights themselves (`gi_vpl_emit`).
-            if (settings.gi.method, settings.gi.radiance_source)
-                == (GiMethod::Hemisphere, RadianceSource::Maps)
-            {
-                return Err(RenderError::AreaLightsNeedNoLightMaps("hemisphere"));
-            }
-        }
-        if !gi_on && settings.gi.sao.is_some() {
-            return Err(RenderError::SaoWithoutGi);
-        }
+        check_scene_settings(scene, settings)?;
         let voxel_view_on = settings.debug.is_some_and(|d| d.view.shows_voxels());
         let voxel_settings = settings
             .voxels
