@@ -168,7 +168,10 @@ pub struct Renderer {
     tonemap: TonemapPass,
     post: crate::post::PostPasses,
     has_phong: bool,
+    /// The lights' own shadow views (the light maps have one layer each).
     shadow_view_count: u32,
+    /// The directional lights' cascade views, in the shadow maps after the lights' own.
+    cascade_view_count: u32,
     frame_data: GpuFrame,
     voxels: Option<crate::voxel::gpu::VoxelFrame>,
     /// Indirect-light passes and the light-map pass (for the voxel methods), when a GI method
@@ -402,6 +405,7 @@ impl Renderer {
             post,
             has_phong,
             shadow_view_count: 0,
+            cascade_view_count: 0,
             frame_data: GpuFrame::zeroed(),
             voxels,
             gi,
@@ -416,12 +420,27 @@ impl Renderer {
     /// a new size, shadow resolution or tone map also needs a new graph.
     pub fn prepare(&mut self, scene: &Scene) -> Result<(), RenderError> {
         let s = self.settings.clone();
-        let (views, per_light) = shadow_views(scene, s.time_s, &s.shadow);
+        let (mut views, per_light) = shadow_views(scene, s.time_s, &s.shadow);
         let lights = frame_lights(&scene.lights, &s.shadow);
+        let aspect = s.width as f32 / s.height as f32;
+        // The directional lights' cascades follow every light's own views (the light maps
+        // draw only those): GpuLight::info.w = first cascade view | cascade count << 16.
+        let base_views = views.len();
+        let mut cascades_of = vec![0u32; lights.len()];
+        let cascade_sets = crate::light::cascade::cascade_views(
+            &lights,
+            &scene.camera,
+            aspect,
+            &scene.aabb_at(s.time_s),
+            &s.shadow,
+        );
+        for (li, set) in cascade_sets {
+            cascades_of[li] = views.len() as u32 | (set.len() as u32) << 16;
+            views.extend(set);
+        }
         if views.len() > MAX_SHADOW_VIEWS {
             return Err(RenderError::TooManyShadowViews(views.len()));
         }
-        let aspect = s.width as f32 / s.height as f32;
         let view_proj = scene.camera.view_proj(aspect);
         let mut f = GpuFrame::zeroed();
         f.view_proj = view_proj.to_cols_array();
@@ -436,12 +455,13 @@ impl Renderer {
         ];
         for (i, light) in lights.iter().enumerate() {
             f.lights[i] = gpu_light(light, per_light[i].first, per_light[i].count);
+            f.lights[i].info[3] = cascades_of[i];
         }
         for (i, v) in views.iter().enumerate() {
             f.shadow_views[i] = GpuShadowView {
                 view_proj: v.view_proj.to_cols_array(),
                 params: [v.texel_footprint, v.projection.gpu_code(), v.near, v.far],
-                axis: v.axis.extend(0.0).to_array(),
+                axis: v.axis.extend(v.split_far_m).to_array(),
             };
         }
         // Accumulated indirect light is valid only while camera, lights and settings stay.
@@ -451,8 +471,11 @@ impl Renderer {
             }
         }
         self.frame_data = f;
-        self.shadow_view_count = views.len() as u32;
-        self.scene.update_draws(scene, s.time_s, &view_proj, &views);
+        self.shadow_view_count = base_views as u32;
+        self.cascade_view_count = (views.len() - base_views) as u32;
+        let (own, cascades) = views.split_at(base_views);
+        self.scene
+            .update_draws(scene, s.time_s, &view_proj, (own, cascades));
         Ok(())
     }
 
@@ -530,9 +553,12 @@ impl Renderer {
         let scene = self.scene.import(g);
         let views = self.shadow_view_count;
         let voxel_image = self.voxels.as_ref().map(|v| v.add_passes(g));
-        let shadow_map = self
-            .shadow_depth
-            .declare(g, &scene, views, s.shadow.resolution);
+        let shadow_map = self.shadow_depth.declare(
+            g,
+            &scene,
+            views + self.cascade_view_count,
+            s.shadow.resolution,
+        );
         let gbuffer = self.gbuffer.declare(g, &scene, w, h);
         let direct = self
             .deferred

@@ -174,6 +174,16 @@ pub use object::{rotation_from_euler_xyz_deg, Animation, Keyframe, Object, Trans
 pub use query::NoSuchObject;
 pub use vpl_settings::{VplOverrides, VplSettings, VplShading, VplVisibility};
 
+/// The `[shadow]` table's values (nothing given without the table); the command line's flags
+/// override each.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ShadowOverrides {
+    /// Cascades per directional light (`light::cascade`).
+    pub cascades: Option<u32>,
+    /// Blend of logarithmic and uniform cascade splits.
+    pub cascade_lambda: Option<f32>,
+}
+
 /// A loaded, validated scene: everything finite, directions unit length, indices in range.
 #[derive(Clone, Debug)]
 pub struct Scene {
@@ -191,6 +201,8 @@ pub struct Scene {
     /// The `[gi]` table: the scene's defaults of the indirect-light settings (nothing given
     /// without the table); see [`resolve_gi`].
     pub gi: GiOverrides,
+    /// The `[shadow]` table: the scene's defaults of shadow settings (flags override them).
+    pub shadow: ShadowOverrides,
     /// The scene file; `None` for built-in scenes.
     pub source: Option<PathBuf>,
 }
