@@ -337,3 +337,59 @@ fn snapped_cascades_do_not_swim_under_a_moving_camera() {
         "without snapping the shadow should swim: {unsnapped:?} changed pixels, edge {edge}"
     );
 }
+
+#[test]
+fn shadow_texel_view_matches_the_closed_form() {
+    // A camera straight down at h = 4 m over the plane, the sun 45° off the vertical, one
+    // whole-scene orthographic map (its texel d_s is the view's footprint, meters). At the
+    // image's center the view ray is the plane's normal (cos α_i = 1, view depth h), so
+    // d_i = d_s · pixel_scale / (cos α_s · h), pixel_scale = H / (2 tan(fov_y/2)).
+    const SIZE: u32 = 64;
+    let (h, fov_deg) = (4.0f32, 40.0f32);
+    let rail = Box3 {
+        min: Vec3::new(-3.1, 0.0, -1.0),
+        max: Vec3::new(-3.0, 0.5, 1.0),
+    };
+    let camera = format!(
+        "[camera]\nposition = [0.0, {h}, 0.0]\ntarget = [0.0, 0.0, 0.0]\nup = [0.0, 0.0, 1.0]\n\
+         fov_y_deg = {fov_deg}\nnear = 0.1\nfar = 100.0\n"
+    );
+    let s = scene(&scene_toml(&camera, &rail, 20.0));
+    let shadow = ShadowSettings {
+        cascades: 1,
+        ..Default::default()
+    };
+    let (views, _) = voxgi::light::shadow_views(&s, 0.0, &shadow);
+    let d_s = views[0].texel_footprint;
+    let pixel_scale = SIZE as f32 / (2.0 * (0.5 * fov_deg.to_radians()).tan());
+    let want = d_s * pixel_scale / (-SUN.y * h);
+    let ctx = common::context();
+    let settings = RenderSettings {
+        width: SIZE,
+        height: SIZE,
+        shadow,
+        debug: Some(voxgi::voxel::debug_view::DebugSettings {
+            view: voxgi::voxel::debug_view::DebugView::ShadowTexels,
+            ..Default::default()
+        }),
+        ..Default::default()
+    };
+    let out = render_image(&ctx, &s, &settings).expect("renders");
+    common::assert_no_validation_messages(&ctx);
+    // The four pixels around the center: their rays are off the normal by half a pixel
+    // (tan = 0.5 / pixel_scale), which changes cos α_i and the depth by under 1e-4.
+    for (x, y) in [(31, 31), (32, 31), (31, 32), (32, 32)] {
+        let p = out.hdr.data[(y * SIZE + x) as usize];
+        assert!(
+            (p[0] - want).abs() <= 1e-3 * want,
+            "pixel ({x}, {y}): d_i {} px, closed form {want} px",
+            p[0]
+        );
+        assert!(
+            (p[1] - d_s).abs() <= 1e-6 * d_s,
+            "texel {} m vs {d_s} m",
+            p[1]
+        );
+    }
+    println!("{}", out.debug_description.unwrap_or_default());
+}

@@ -319,6 +319,20 @@ float cascade_view_visibility(sampler2DArray maps, uint v, vec3 p, vec3 n) {
     return view_pcf_visibility(maps, v, p + n * (tos.x * tos.y), tos, r);
 }
 
+// The view whose texels shade p for light l in the camera's direct light: its cascade (the
+// one direct_shadow_visibility starts from) or the light's own view.
+uint direct_shadow_view(GpuLight l, vec3 p) {
+    uint count = l.info.w >> 16u;
+    if (l.info.x == LIGHT_DIRECTIONAL && count > 0u) {
+        uint first = l.info.w & 0xffffu;
+        float depth = (frame.view_proj * vec4(p, 1.0)).w;
+        for (uint i = 0u; i < count; ++i) {
+            if (depth <= frame.shadow_views[first + i].axis.w) return first + i;
+        }
+    }
+    return shadow_view_index(l, p);
+}
+
 float direct_shadow_visibility(sampler2DArray maps, GpuLight l, vec3 p, vec3 n, float cos_theta) {
     uint count = l.info.w >> 16u;
     if (l.info.x != LIGHT_DIRECTIONAL || count == 0u) return shadow_visibility(maps, l, p, n, cos_theta);

@@ -595,7 +595,7 @@ mod table_tests {
 }
 
 /// The "View" combo's entries: the lit image, then every debug view.
-const VIEWS: [Option<DebugView>; 9] = [
+const VIEWS: [Option<DebugView>; 10] = [
     None,
     Some(DebugView::Voxels),
     Some(DebugView::Steps),
@@ -605,6 +605,7 @@ const VIEWS: [Option<DebugView>; 9] = [
     Some(DebugView::GbufferAlbedo),
     Some(DebugView::GbufferNormal),
     Some(DebugView::GbufferDistance),
+    Some(DebugView::ShadowTexels),
 ];
 
 /// Name of a debug view in the panel.
@@ -619,6 +620,7 @@ fn debug_name(v: Option<DebugView>) -> &'static str {
         Some(DebugView::GbufferAlbedo) => "G-buffer albedo",
         Some(DebugView::GbufferNormal) => "G-buffer normal",
         Some(DebugView::GbufferDistance) => "G-buffer distance",
+        Some(DebugView::ShadowTexels) => "shadow texels",
     }
 }
 

@@ -262,7 +262,8 @@ pub struct FrameArgs {
     pub post: PostArgs,
     /// Show a debug view instead of the lit image: the voxel views (voxels, steps, level,
     /// albedo) voxelize at 128 unless --voxels; atlas shows an object's atlas; gbuffer-albedo,
-    /// gbuffer-normal and gbuffer-distance show a G-buffer channel.
+    /// gbuffer-normal and gbuffer-distance show a G-buffer channel; shadow-texels the
+    /// predicted on-screen size of the shadow-map texels (shadow aliasing).
     #[arg(long, value_enum)]
     pub debug: Option<crate::voxel::debug_view::DebugView>,
     /// Hierarchy level shown by --debug level (0 = the voxels).

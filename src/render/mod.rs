@@ -15,6 +15,7 @@ mod run;
 mod scene_gpu;
 mod settings_check;
 mod shadow_depth;
+pub mod shadow_texels;
 mod stereo;
 mod textures;
 
@@ -180,6 +181,7 @@ pub struct Renderer {
     voxel_debug: Option<crate::voxel::debug_view::VoxelDebugPass>,
     atlas_view: Option<crate::voxel::atlas_view::AtlasViewPass>,
     gbuffer_view: Option<gbuffer_view::GbufferViewPass>,
+    shadow_texels: Option<shadow_texels::ShadowTexelsPass>,
 }
 
 impl Renderer {
@@ -311,6 +313,18 @@ impl Renderer {
                 far_m,
             )?);
         }
+        let shadow_texels = settings
+            .debug
+            .filter(|d| d.view == crate::voxel::debug_view::DebugView::ShadowTexels)
+            .map(|_| {
+                shadow_texels::ShadowTexelsPass::new(
+                    ctx,
+                    sampler.raw,
+                    &scene.camera,
+                    settings.height,
+                )
+            })
+            .transpose()?;
         let mut voxels = None;
         if let Some(v) = &voxel_settings {
             voxels = Some(crate::voxel::gpu::VoxelFrame::new(
@@ -412,6 +426,7 @@ impl Renderer {
             voxel_debug,
             atlas_view,
             gbuffer_view,
+            shadow_texels,
         })
     }
 
@@ -610,6 +625,10 @@ impl Renderer {
                 Some(pass) => pass.declare(g, &scene, &gbuffer, (w, h)),
                 None => (radiance, ldr),
             },
+            _ if self.shadow_texels.is_some() => match &self.shadow_texels {
+                Some(pass) => pass.declare(g, &scene, &gbuffer, (w, h)),
+                None => (radiance, ldr),
+            },
             _ if self.atlas_view.is_some() => {
                 let value = g.create_image(ImageDesc::new_2d("atlas debug value", HDR, w, h));
                 let color = g.create_image(ImageDesc::new_2d(
@@ -682,6 +701,9 @@ impl Renderer {
     pub fn debug_description(&self, value: &HdrImage) -> Option<String> {
         if let Some(pass) = &self.gbuffer_view {
             return Some(pass.describe(value));
+        }
+        if self.shadow_texels.is_some() {
+            return Some(shadow_texels::describe(value));
         }
         match (&self.atlas_view, &self.settings.debug) {
             (Some(pass), _) => Some(pass.describe(value)),
