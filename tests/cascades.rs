@@ -106,12 +106,13 @@ fn plane_point(
     let (a, b) = common::pixel_ray_points(scene, x, y, size);
     let d = (b - a).normalize();
     let t = -a.y / d.y;
-    if !(t > 0.0) || (a + d * t).x.abs().max((a + d * t).z.abs()) > plane_half_m {
+    let p = a + d * t;
+    if !t.is_finite() || t <= 0.0 || p.x.abs().max(p.z.abs()) > plane_half_m {
         return None;
     }
     match rail.hit(a, d) {
         Some(t_rail) if t_rail < t => None,
-        _ => Some(a + d * t),
+        _ => Some(p),
     }
 }
 

@@ -223,6 +223,15 @@ mod tests {
     }
 
     #[test]
+    fn the_shader_blends_over_the_same_band() {
+        let glsl = include_str!("../../glsl/include/shadow.glsl");
+        assert!(
+            glsl.contains(&format!("#define CASCADE_BLEND {CASCADE_BLEND:?}")),
+            "glsl/include/shadow.glsl must define CASCADE_BLEND {CASCADE_BLEND:?}"
+        );
+    }
+
+    #[test]
     fn the_slice_sphere_holds_the_slice_corners_and_is_tight() {
         for &(d0, d1, k) in &[(0.1f32, 1.0f32, 0.5f32), (1.0, 1.5, 1.2), (3.0, 40.0, 0.3)] {
             let (c, r) = slice_sphere(d0, d1, k);

@@ -124,6 +124,11 @@
 //! ssgi_resolution = "half"          # screen-space GI resolution: "full" | "half" | "quarter"
 //!                                   #   | "eighth" ["half"]
 //! ssgi_samples = 64                 # screen-space GI samples per texel and level, 1..=1024 [64]
+//!
+//! [shadow]   # optional: shadow defaults; `--shadow-cascades`, `--shadow-cascade-lambda` override
+//! cascades = 4                      # cascades per directional light (camera's direct light),
+//!                                   #   1..=8; 1: the single whole-scene map [4]
+//! cascade_lambda = 0.5              # splits: logarithmic (1) to uniform (0) blend, 0..=1 [0.5]
 //! ```
 //!
 //! A missing texture (or MTL file) is not an error: it is logged with `log::warn!` and the
