@@ -55,7 +55,7 @@ pub enum RenderError {
     Graph(#[from] GraphError),
     #[error("the scene has {0} lights (each area light counts its samples); voxgi renders at most {MAX_LIGHTS}: remove some or lower --area-samples / the lights' `samples`")]
     TooManyLights(usize),
-    #[error("the scene's lights need {0} shadow-map views; at most {MAX_SHADOW_VIEWS} fit (a point light takes 6, or 2 with paraboloid shadows, an area light 1 per sample): remove some point lights, use --point-shadows paraboloid or lower --area-samples / the lights' `samples`")]
+    #[error("the scene's lights need {0} shadow-map views; at most {MAX_SHADOW_VIEWS} fit (a point light takes 6, or 2 with paraboloid shadows, an area light 1 per sample, a directional light 1 plus its cascades): remove some point lights, use --point-shadows paraboloid, lower --area-samples / the lights' `samples` or --shadow-cascades")]
     TooManyShadowViews(usize),
     /// A settings value out of its range ([`crate::limits`]), named by its flag.
     #[error(transparent)]
