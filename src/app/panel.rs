@@ -323,6 +323,20 @@ pub fn draw(
                         .text("PCF radius"),
                     );
                     ui.add(
+                        egui::Slider::new(
+                            &mut c.shadow.cascades,
+                            limits::SHADOW_CASCADES.slider(1, 8),
+                        )
+                        .text("sun cascades"),
+                    );
+                    ui.add(
+                        egui::Slider::new(
+                            &mut c.shadow.cascade_lambda,
+                            limits::SHADOW_CASCADE_LAMBDA.slider(0.0, 1.0),
+                        )
+                        .text("cascade log/uniform λ"),
+                    );
+                    ui.add(
                         egui::Slider::new(&mut c.shadow.bias_texels, 0.0..=8.0).text("bias texels"),
                     );
                     ui.add(
