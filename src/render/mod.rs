@@ -432,7 +432,7 @@ impl Renderer {
 
     /// Computes frame constants, shadow views and culled draw lists for the scene's camera and
     /// lights and `settings`. Call again after changing them (the viewer does, every frame);
-    /// a new size, shadow resolution or tone map also needs a new graph.
+    /// a new size, shadow resolution, cascade count or tone map also needs a new graph.
     pub fn prepare(&mut self, scene: &Scene) -> Result<(), RenderError> {
         let s = self.settings.clone();
         let (mut views, per_light) = shadow_views(scene, s.time_s, &s.shadow);
