@@ -178,6 +178,23 @@ pub const SHADOW_RESOLUTION: Limit<u32> = Limit::new(
     16,
     8192,
 );
+/// Cascades per directional light (`light::cascade`; 1: the whole-scene map alone). Eight
+/// keeps a frame of several suns under the 64 shadow views.
+pub const SHADOW_CASCADES: Limit<u32> = Limit::new(
+    "--shadow-cascades",
+    Some("shadow.cascades"),
+    "a number of shadow cascades per directional light",
+    1,
+    8,
+);
+/// Zhang et al. 2006's blend of logarithmic (1) and uniform (0) cascade splits.
+pub const SHADOW_CASCADE_LAMBDA: Limit<f32> = Limit::new(
+    "--shadow-cascade-lambda",
+    Some("shadow.cascade_lambda"),
+    "a blend of logarithmic (1) and uniform (0) splits",
+    0.0,
+    1.0,
+);
 /// The deferred pass filters (2r+1)² shadow-map taps per view.
 pub const PCF_RADIUS: Limit<u32> = Limit::new("--pcf-radius", None, "a PCF radius in texels", 0, 8);
 /// The voxel grid's x/y resolution cap: one image texel per column, at most 16384 per side.

@@ -45,6 +45,12 @@ fn every_flag_out_of_range_is_refused_naming_the_flag() {
         (&["--exposure", "0"], "--exposure = 0"),
         (&["--shadow-resolution", "8"], "--shadow-resolution = 8"),
         (&["--pcf-radius", "9"], "--pcf-radius = 9"),
+        (&["--shadow-cascades", "0"], "--shadow-cascades = 0"),
+        (&["--shadow-cascades", "9"], "--shadow-cascades = 9"),
+        (
+            &["--shadow-cascade-lambda", "1.5"],
+            "--shadow-cascade-lambda = 1.5",
+        ),
         (&["--voxels", "0"], "--voxels = 0"),
         (&["--voxels", "100000"], "--voxels = 100000"),
         (&["--voxel-layers", "0"], "--voxel-layers = 0"),

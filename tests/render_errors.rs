@@ -56,6 +56,32 @@ fn more_lights_than_the_renderer_holds() {
 }
 
 #[test]
+fn cascades_count_towards_the_shadow_views() {
+    let ctx = common::context();
+    // 8 directional lights × (1 whole-scene map + 8 cascades) = 72 > MAX_SHADOW_VIEWS = 64;
+    // with 7 cascades 64 fit.
+    let mut text =
+        String::from("[camera]\nposition = [0, 1, -3]\ntarget = [0, 0, 0]\nfov_y_deg = 40\n");
+    for i in 0..8 {
+        text += &format!(
+            "[[lights]]\nkind = \"directional\"\ndirection = [{}, -1, 0.2]\nirradiance_w_m2 = 0.1\n",
+            i as f32 * 0.1
+        );
+    }
+    text += "[[objects]]\nbuiltin = \"cube\"\n";
+    let scene = scene_from("suns", &text);
+    let mut s = small();
+    s.shadow.cascades = 8;
+    let e = Renderer::new(&ctx, &scene, s.clone())
+        .err()
+        .expect("72 views refused");
+    assert!(matches!(e, RenderError::TooManyShadowViews(72)), "{e}");
+    assert!(e.to_string().contains("--shadow-cascades"), "{e}");
+    s.shadow.cascades = 7;
+    Renderer::new(&ctx, &scene, s).expect("64 views fit");
+}
+
+#[test]
 fn more_shadow_views_than_fit_unless_paraboloid() {
     let ctx = common::context();
     // 11 point lights × 6 cube faces = 66 > MAX_SHADOW_VIEWS = 64; as paraboloids 11 × 2 = 22.

@@ -30,7 +30,7 @@ vec3 direct_radiance(sampler2DArray shadow_maps, vec3 p, vec3 n, vec3 wo, vec3 a
             e = l.intensity.rgb * (falloff * max(dot(n, wi), 0.0) / d2);
         }
         if (all(equal(e, vec3(0.0)))) continue;
-        float vis = shadow_visibility(shadow_maps, l, p, n, max(dot(n, wi), 0.0));
+        float vis = direct_shadow_visibility(shadow_maps, l, p, n, max(dot(n, wi), 0.0));
         vec3 f;
         if (ggx) {
             f = brdf_ggx(albedo, specular, lobe_parameter, n, wi, wo);

@@ -248,29 +248,9 @@ float pcss_visibility(sampler2DArray maps, GpuLight l, vec3 p, vec3 n) {
     return lit / 16.0;
 }
 
-// Fraction of the PCF footprint around p that the light reaches. n: unit surface normal,
-// cos_theta: cosine between n and the direction to the light.
-float shadow_visibility(sampler2DArray maps, GpuLight l, vec3 p, vec3 n, float cos_theta) {
-    if (l.info.z == 0u) return 1.0;
-    if (frame.shadow_views[l.info.y].params.y > 1.5) {
-        if (l.info.x == LIGHT_ELEMENT && l.spot.w > 0.0) return pcss_visibility(maps, l, p, n);
-        return paraboloid_visibility(maps, l, p, n, cos_theta);
-    }
-    int r = int(frame.shadow.w);
-    uint v = shadow_view_index(l, p);
-    vec3 tos = shadow_texel_offset_slope(frame.shadow_views[v], p, n, r);
-    float offset_m = tos.x * tos.y;
-    // A cube face is wider than 90 degrees by r + 1 texels only, less than the offset can
-    // move the point: the face is picked for the moved point (where its kernel fits), and
-    // offset and bias are the larger of the two faces' when they differ.
-    uint v2 = shadow_view_index(l, p + n * offset_m);
-    if (v2 != v) {
-        vec3 tos2 = shadow_texel_offset_slope(frame.shadow_views[v2], p, n, r);
-        offset_m = max(offset_m, tos2.x * tos2.y);
-        tos = max(tos, tos2);
-        v = v2;
-    }
-    vec3 po = p + n * offset_m;
+// PCF over (2r+1)^2 texels of perspective or orthographic view v around the lookup point po
+// (the receiver moved off its surface), with tos from shadow_texel_offset_slope.
+float view_pcf_visibility(sampler2DArray maps, uint v, vec3 po, vec3 tos, int r) {
     GpuShadowView sv = frame.shadow_views[v];  // 96 bytes: one view, not the frame
     vec4 c = sv.view_proj * vec4(po, 1.0);
     if (c.w <= 0.0) return 1.0;
@@ -296,6 +276,83 @@ float shadow_visibility(sampler2DArray maps, GpuLight l, vec3 p, vec3 n, float c
         }
     }
     return lit / total;
+}
+
+
+// Fraction of the PCF footprint around p that the light reaches. n: unit surface normal,
+// cos_theta: cosine between n and the direction to the light.
+float shadow_visibility(sampler2DArray maps, GpuLight l, vec3 p, vec3 n, float cos_theta) {
+    if (l.info.z == 0u) return 1.0;
+    if (frame.shadow_views[l.info.y].params.y > 1.5) {
+        if (l.info.x == LIGHT_ELEMENT && l.spot.w > 0.0) return pcss_visibility(maps, l, p, n);
+        return paraboloid_visibility(maps, l, p, n, cos_theta);
+    }
+    int r = int(frame.shadow.w);
+    uint v = shadow_view_index(l, p);
+    vec3 tos = shadow_texel_offset_slope(frame.shadow_views[v], p, n, r);
+    float offset_m = tos.x * tos.y;
+    // A cube face is wider than 90 degrees by r + 1 texels only, less than the offset can
+    // move the point: the face is picked for the moved point (where its kernel fits), and
+    // offset and bias are the larger of the two faces' when they differ.
+    uint v2 = shadow_view_index(l, p + n * offset_m);
+    if (v2 != v) {
+        vec3 tos2 = shadow_texel_offset_slope(frame.shadow_views[v2], p, n, r);
+        offset_m = max(offset_m, tos2.x * tos2.y);
+        tos = max(tos, tos2);
+        v = v2;
+    }
+    return view_pcf_visibility(maps, v, p + n * offset_m, tos, r);
+}
+
+// Cascaded shadow maps of a directional light (src/light/cascade.rs): GpuLight::info.w holds
+// the first cascade view (low 16 bits) and the count (high 16 bits); each cascade view's
+// axis.w is its far split in meters of camera view depth (the camera's clip w). The first
+// cascade whose split lies beyond p's depth shades it; over the last CASCADE_BLEND of its
+// depth range (from the previous split, or from 0) it fades into the next cascade, the last
+// one into the light's whole-scene map, which also shades everything beyond the last split.
+// Only the camera's direct light calls this; the GI passes keep shadow_visibility.
+#define CASCADE_BLEND 0.1
+
+float cascade_view_visibility(sampler2DArray maps, uint v, vec3 p, vec3 n) {
+    int r = int(frame.shadow.w);
+    vec3 tos = shadow_texel_offset_slope(frame.shadow_views[v], p, n, r);
+    return view_pcf_visibility(maps, v, p + n * (tos.x * tos.y), tos, r);
+}
+
+// The view whose texels shade p for light l in the camera's direct light: its cascade (the
+// one direct_shadow_visibility starts from) or the light's own view.
+uint direct_shadow_view(GpuLight l, vec3 p) {
+    uint count = l.info.w >> 16u;
+    if (l.info.x == LIGHT_DIRECTIONAL && count > 0u) {
+        uint first = l.info.w & 0xffffu;
+        float depth = (frame.view_proj * vec4(p, 1.0)).w;
+        for (uint i = 0u; i < count; ++i) {
+            if (depth <= frame.shadow_views[first + i].axis.w) return first + i;
+        }
+    }
+    return shadow_view_index(l, p);
+}
+
+float direct_shadow_visibility(sampler2DArray maps, GpuLight l, vec3 p, vec3 n, float cos_theta) {
+    uint count = l.info.w >> 16u;
+    if (l.info.x != LIGHT_DIRECTIONAL || count == 0u) return shadow_visibility(maps, l, p, n, cos_theta);
+    uint first = l.info.w & 0xffffu;
+    float depth = (frame.view_proj * vec4(p, 1.0)).w;
+    float prev = 0.0;
+    for (uint i = 0u; i < count; ++i) {
+        float split = frame.shadow_views[first + i].axis.w;
+        if (depth <= split) {
+            float vis = cascade_view_visibility(maps, first + i, p, n);
+            float t = (split - depth) / max(CASCADE_BLEND * (split - prev), 1e-30);
+            if (t >= 1.0) return vis;
+            float next = i + 1u < count ? cascade_view_visibility(maps, first + i + 1u, p, n)
+                                        : shadow_visibility(maps, l, p, n, cos_theta);
+            // Equal values stay exact (a lit pixel is 1 in both, not 1 - 1 ulp).
+            return next == vis ? vis : mix(next, vis, t);
+        }
+        prev = split;
+    }
+    return shadow_visibility(maps, l, p, n, cos_theta);
 }
 
 #endif

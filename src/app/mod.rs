@@ -227,9 +227,11 @@ enum MinimizeScript {
     Done,
 }
 
-/// Graph-shaping settings differ (per-frame values such as PCF radius do not count).
+/// Graph-shaping settings differ (per-frame values such as PCF radius do not count; the
+/// cascade count sets the shadow maps' layers).
 fn needs_new_graph(a: &RenderSettings, b: &RenderSettings) -> bool {
     (a.width, a.height, a.shadow.resolution) != (b.width, b.height, b.shadow.resolution)
+        || a.shadow.cascades != b.shadow.cascades
         || a.tonemap != b.tonemap
 }
 
@@ -1003,6 +1005,11 @@ mod tests {
         b.shadow.pcf_radius += 1;
         b.shadow.bias_texels *= 2.0;
         assert!(!needs_new_graph(&a, &b));
+        b.shadow.cascade_lambda = 0.9;
+        assert!(!needs_new_graph(&a, &b));
+        let mut cascades = a.clone();
+        cascades.shadow.cascades = 2;
+        assert!(needs_new_graph(&a, &cascades));
         b.tonemap.exposure *= 2.0;
         assert!(needs_new_graph(&a, &b));
         let mut c = a.clone();

@@ -332,6 +332,20 @@ pub fn draw(
                         .text("PCF radius"),
                     );
                     ui.add(
+                        egui::Slider::new(
+                            &mut c.shadow.cascades,
+                            limits::SHADOW_CASCADES.slider(1, 8),
+                        )
+                        .text("sun cascades"),
+                    );
+                    ui.add(
+                        egui::Slider::new(
+                            &mut c.shadow.cascade_lambda,
+                            limits::SHADOW_CASCADE_LAMBDA.slider(0.0, 1.0),
+                        )
+                        .text("cascade log/uniform λ"),
+                    );
+                    ui.add(
                         egui::Slider::new(&mut c.shadow.bias_texels, 0.0..=8.0).text("bias texels"),
                     );
                     ui.add(
@@ -604,7 +618,7 @@ mod table_tests {
 }
 
 /// The "View" combo's entries: the lit image, then every debug view.
-const VIEWS: [Option<DebugView>; 9] = [
+const VIEWS: [Option<DebugView>; 10] = [
     None,
     Some(DebugView::Voxels),
     Some(DebugView::Steps),
@@ -614,6 +628,7 @@ const VIEWS: [Option<DebugView>; 9] = [
     Some(DebugView::GbufferAlbedo),
     Some(DebugView::GbufferNormal),
     Some(DebugView::GbufferDistance),
+    Some(DebugView::ShadowTexels),
 ];
 
 /// Name of a debug view in the panel.
@@ -628,6 +643,7 @@ fn debug_name(v: Option<DebugView>) -> &'static str {
         Some(DebugView::GbufferAlbedo) => "G-buffer albedo",
         Some(DebugView::GbufferNormal) => "G-buffer normal",
         Some(DebugView::GbufferDistance) => "G-buffer distance",
+        Some(DebugView::ShadowTexels) => "shadow texels",
     }
 }
 

@@ -228,6 +228,14 @@ pub struct FrameArgs {
     /// PCF radius in texels.
     #[arg(long, default_value_t = 1)]
     pub pcf_radius: u32,
+    /// Shadow cascades per directional light for the camera's direct light (1: one map for
+    /// the whole scene); default: the scene's `[shadow] cascades`, else 4.
+    #[arg(long, value_name = "N")]
+    pub shadow_cascades: Option<u32>,
+    /// Cascade splits: blend of logarithmic (1) and uniform (0) splits (Zhang et al. 2006);
+    /// default: the scene's `[shadow] cascade_lambda`, else 0.5.
+    #[arg(long, value_name = "LAMBDA")]
+    pub shadow_cascade_lambda: Option<f32>,
     /// Shadow maps of point lights: six cube faces or two paraboloid hemispheres.
     #[arg(long, value_enum, default_value_t = PointShadow::Cube)]
     pub point_shadows: PointShadow,
@@ -268,7 +276,8 @@ pub struct FrameArgs {
     pub post: PostArgs,
     /// Show a debug view instead of the lit image: the voxel views (voxels, steps, level,
     /// albedo) voxelize at 128 unless --voxels; atlas shows an object's atlas; gbuffer-albedo,
-    /// gbuffer-normal and gbuffer-distance show a G-buffer channel.
+    /// gbuffer-normal and gbuffer-distance show a G-buffer channel; shadow-texels the
+    /// predicted on-screen size of the shadow-map texels (shadow aliasing).
     #[arg(long, value_enum)]
     pub debug: Option<crate::voxel::debug_view::DebugView>,
     /// Hierarchy level shown by --debug level (0 = the voxels).
@@ -302,6 +311,12 @@ impl FrameArgs {
         s.transparency = self.transparency.or(scene.transparency).unwrap_or_default();
         s.oit_nodes_per_pixel =
             crate::limits::OIT_NODES_PER_PIXEL.check_flag(self.oit_nodes_per_pixel)?;
+        if let Some(n) = self.shadow_cascades.or(scene.shadow.cascades) {
+            s.shadow.cascades = crate::limits::SHADOW_CASCADES.check_flag(n)?;
+        }
+        if let Some(l) = self.shadow_cascade_lambda.or(scene.shadow.cascade_lambda) {
+            s.shadow.cascade_lambda = crate::limits::SHADOW_CASCADE_LAMBDA.check_flag(l)?;
+        }
         if let Some(n) = self.area_samples {
             s.shadow.area_samples = Some(crate::limits::AREA_SAMPLES.check_flag(n)?);
         }

@@ -3,6 +3,9 @@
 //! Every view is one layer of a single depth array. Only the views a scene needs exist: a
 //! point light adds six cube faces (or two paraboloid hemispheres), a spot light one
 //! perspective map, a directional light one orthographic map; no lights, no shadow views.
+//!
+//! Directional lights may add cascades for the camera's direct light ([`cascade_views`]):
+//! orthographic maps fitted to slices of the view frustum, after every light's own views.
 
 use crate::scene::aabb_visible;
 use crate::scene::{Aabb, Light, Scene};
@@ -80,6 +83,16 @@ pub struct ShadowSettings {
     pub area_samples: Option<u32>,
     /// Sampled sub-lights or PCSS for area lights (`--area-shadows`).
     pub area_technique: AreaShadow,
+    /// Cascades per directional light for the camera's direct light (`--shadow-cascades`,
+    /// scene key `shadow.cascades`): 1 is the single whole-scene map alone; N ≥ 2 adds N
+    /// orthographic maps fitted to slices of the view frustum (see [`cascade_views`]).
+    pub cascades: u32,
+    /// Blend λ of logarithmic (1) and uniform (0) splits (Zhang et al. 2006;
+    /// `--shadow-cascade-lambda`, scene key `shadow.cascade_lambda`).
+    pub cascade_lambda: f32,
+    /// Snap each cascade's window to whole texels of a grid fixed in light space, so that its
+    /// texels do not slide over the scene when the camera moves (off only to measure that).
+    pub cascade_snap: bool,
 }
 
 impl Default for ShadowSettings {
@@ -93,9 +106,15 @@ impl Default for ShadowSettings {
             point_technique: PointShadow::Cube,
             area_samples: None,
             area_technique: AreaShadow::Sampled,
+            cascades: DEFAULT_CASCADES,
+            cascade_lambda: 0.5,
+            cascade_snap: true,
         }
     }
 }
+
+/// Cascades per directional light by default.
+pub const DEFAULT_CASCADES: u32 = 4;
 
 /// One layer of the shadow array.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -111,6 +130,9 @@ pub struct ShadowView {
     pub far: f32,
     /// Index of the light in `scene.lights`.
     pub light: usize,
+    /// A cascade's far split, meters of camera view depth (`GpuShadowView::axis.w`); 0 for
+    /// other views.
+    pub split_far_m: f32,
 }
 
 impl ShadowView {
@@ -150,7 +172,7 @@ fn perspective_vk(fov_y: f32, near: f32, far: f32) -> Mat4 {
 }
 
 /// An up vector that is not parallel to `dir`.
-fn up_for(dir: Vec3) -> Vec3 {
+pub(super) fn up_for(dir: Vec3) -> Vec3 {
     if dir.y.abs() > 0.99 {
         Vec3::Z
     } else {
@@ -212,6 +234,7 @@ pub fn shadow_views(
                     near,
                     far,
                     light: li,
+                    split_far_m: 0.0,
                 });
             }
             Light::Sphere { .. } | Light::Rectangle { .. } => {
@@ -238,6 +261,7 @@ pub fn shadow_views(
                     near,
                     far,
                     light: li,
+                    split_far_m: 0.0,
                 });
             }
             Light::Point { position, .. }
@@ -264,6 +288,7 @@ pub fn shadow_views(
                         near,
                         far,
                         light: li,
+                        split_far_m: 0.0,
                     });
                 }
             }
@@ -289,6 +314,7 @@ pub fn shadow_views(
                         near,
                         far,
                         light: li,
+                        split_far_m: 0.0,
                     });
                 }
             }
@@ -329,6 +355,7 @@ pub fn shadow_views(
                     near,
                     far,
                     light: li,
+                    split_far_m: 0.0,
                 });
             }
         }

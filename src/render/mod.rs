@@ -20,6 +20,7 @@ mod run;
 mod scene_gpu;
 mod settings_check;
 mod shadow_depth;
+pub mod shadow_texels;
 mod stereo;
 mod textures;
 
@@ -61,7 +62,7 @@ pub enum RenderError {
     Graph(#[from] GraphError),
     #[error("the scene has {0} lights (each area light counts its samples); voxgi renders at most {MAX_LIGHTS}: remove some or lower --area-samples / the lights' `samples`")]
     TooManyLights(usize),
-    #[error("the scene's lights need {0} shadow-map views; at most {MAX_SHADOW_VIEWS} fit (a point light takes 6, or 2 with paraboloid shadows, an area light 1 per sample): remove some point lights, use --point-shadows paraboloid or lower --area-samples / the lights' `samples`")]
+    #[error("the scene's lights need {0} shadow-map views; at most {MAX_SHADOW_VIEWS} fit (a point light takes 6, or 2 with paraboloid shadows, an area light 1 per sample, a directional light 1 plus its cascades): remove some point lights, use --point-shadows paraboloid, lower --area-samples / the lights' `samples` or --shadow-cascades")]
     TooManyShadowViews(usize),
     /// A settings value out of its range ([`crate::limits`]), named by its flag.
     #[error(transparent)]
@@ -266,7 +267,10 @@ pub struct Renderer {
     tonemap: TonemapPass,
     post: crate::post::PostPasses,
     has_phong: bool,
+    /// The lights' own shadow views (the light maps have one layer each).
     shadow_view_count: u32,
+    /// The directional lights' cascade views, in the shadow maps after the lights' own.
+    cascade_view_count: u32,
     frame_data: GpuFrame,
     voxels: Option<crate::voxel::gpu::VoxelFrame>,
     /// Indirect-light passes and the light-map pass (for the voxel methods), when a GI method
@@ -277,6 +281,7 @@ pub struct Renderer {
     gbuffer_view: Option<gbuffer_view::GbufferViewPass>,
     /// The transparency lists, in scenes with d < 1 materials and `--transparency oit`.
     oit: Option<oit::OitPasses>,
+    shadow_texels: Option<shadow_texels::ShadowTexelsPass>,
 }
 
 impl Renderer {
@@ -421,6 +426,18 @@ impl Renderer {
                 far_m,
             )?);
         }
+        let shadow_texels = settings
+            .debug
+            .filter(|d| d.view == crate::voxel::debug_view::DebugView::ShadowTexels)
+            .map(|_| {
+                shadow_texels::ShadowTexelsPass::new(
+                    ctx,
+                    sampler.raw,
+                    &scene.camera,
+                    settings.height,
+                )
+            })
+            .transpose()?;
         let mut voxels = None;
         if let Some(v) = &voxel_settings {
             voxels = Some(crate::voxel::gpu::VoxelFrame::new(
@@ -515,6 +532,7 @@ impl Renderer {
             post,
             has_phong,
             shadow_view_count: 0,
+            cascade_view_count: 0,
             frame_data: GpuFrame::zeroed(),
             voxels,
             gi,
@@ -522,20 +540,36 @@ impl Renderer {
             atlas_view,
             gbuffer_view,
             oit,
+            shadow_texels,
         })
     }
 
     /// Computes frame constants, shadow views and culled draw lists for the scene's camera and
     /// lights and `settings`. Call again after changing them (the viewer does, every frame);
-    /// a new size, shadow resolution or tone map also needs a new graph.
+    /// a new size, shadow resolution, cascade count or tone map also needs a new graph.
     pub fn prepare(&mut self, scene: &Scene) -> Result<(), RenderError> {
         let s = self.settings.clone();
-        let (views, per_light) = shadow_views(scene, s.time_s, &s.shadow);
+        let (mut views, per_light) = shadow_views(scene, s.time_s, &s.shadow);
         let lights = frame_lights(&scene.lights, &s.shadow);
+        let aspect = s.width as f32 / s.height as f32;
+        // The directional lights' cascades follow every light's own views (the light maps
+        // draw only those): GpuLight::info.w = first cascade view | cascade count << 16.
+        let base_views = views.len();
+        let mut cascades_of = vec![0u32; lights.len()];
+        let cascade_sets = crate::light::cascade::cascade_views(
+            &lights,
+            &scene.camera,
+            aspect,
+            &scene.aabb_at(s.time_s),
+            &s.shadow,
+        );
+        for (li, set) in cascade_sets {
+            cascades_of[li] = views.len() as u32 | (set.len() as u32) << 16;
+            views.extend(set);
+        }
         if views.len() > MAX_SHADOW_VIEWS {
             return Err(RenderError::TooManyShadowViews(views.len()));
         }
-        let aspect = s.width as f32 / s.height as f32;
         let view_proj = scene.camera.view_proj(aspect);
         let mut f = GpuFrame::zeroed();
         f.view_proj = view_proj.to_cols_array();
@@ -550,12 +584,13 @@ impl Renderer {
         ];
         for (i, light) in lights.iter().enumerate() {
             f.lights[i] = gpu_light(light, per_light[i].first, per_light[i].count);
+            f.lights[i].info[3] = cascades_of[i];
         }
         for (i, v) in views.iter().enumerate() {
             f.shadow_views[i] = GpuShadowView {
                 view_proj: v.view_proj.to_cols_array(),
                 params: [v.texel_footprint, v.projection.gpu_code(), v.near, v.far],
-                axis: v.axis.extend(0.0).to_array(),
+                axis: v.axis.extend(v.split_far_m).to_array(),
             };
         }
         // Accumulated indirect light is valid only while camera, lights and settings stay.
@@ -565,8 +600,11 @@ impl Renderer {
             }
         }
         self.frame_data = f;
-        self.shadow_view_count = views.len() as u32;
-        self.scene.update_draws(scene, s.time_s, &view_proj, &views);
+        self.shadow_view_count = base_views as u32;
+        self.cascade_view_count = (views.len() - base_views) as u32;
+        let (own, cascades) = views.split_at(base_views);
+        self.scene
+            .update_draws(scene, s.time_s, &view_proj, (own, cascades));
         Ok(())
     }
 
@@ -649,9 +687,12 @@ impl Renderer {
         let scene = self.scene.import(g);
         let views = self.shadow_view_count;
         let voxel_image = self.voxels.as_ref().map(|v| v.add_passes(g));
-        let shadow_map = self
-            .shadow_depth
-            .declare(g, &scene, views, s.shadow.resolution);
+        let shadow_map = self.shadow_depth.declare(
+            g,
+            &scene,
+            views + self.cascade_view_count,
+            s.shadow.resolution,
+        );
         let gbuffer = self.gbuffer.declare(g, &scene, w, h);
         let direct = self
             .deferred
@@ -705,6 +746,10 @@ impl Renderer {
         // culls deferred light, tone mapping, G-buffer and shadows, which nothing reads then.
         let (radiance, ldr) = match (&self.voxel_debug, &self.voxels, voxel_image) {
             _ if self.gbuffer_view.is_some() => match &self.gbuffer_view {
+                Some(pass) => pass.declare(g, &scene, &gbuffer, (w, h)),
+                None => (radiance, ldr),
+            },
+            _ if self.shadow_texels.is_some() => match &self.shadow_texels {
                 Some(pass) => pass.declare(g, &scene, &gbuffer, (w, h)),
                 None => (radiance, ldr),
             },
@@ -780,6 +825,9 @@ impl Renderer {
     pub fn debug_description(&self, value: &HdrImage) -> Option<String> {
         if let Some(pass) = &self.gbuffer_view {
             return Some(pass.describe(value));
+        }
+        if self.shadow_texels.is_some() {
+            return Some(shadow_texels::describe(value));
         }
         match (&self.atlas_view, &self.settings.debug) {
             (Some(pass), _) => Some(pass.describe(value)),

@@ -51,8 +51,11 @@ pub struct DrawLists {
     pub camera: Vec<Draw>,
     /// The visible draws of materials with d < 1 when they are split off (`oit_gather`).
     pub transparent: Vec<Draw>,
-    /// Per shadow view.
+    /// Per shadow view (the lights' own views, which the light maps also draw).
     pub shadow: Vec<Vec<Draw>>,
+    /// Per cascade view (`light::cascade`), after the shadow views: only the shadow maps
+    /// draw them.
+    pub cascades: Vec<Vec<Draw>>,
 }
 
 /// The scene's GPU resources.
@@ -216,13 +219,13 @@ impl SceneGpu {
 
     /// Moves animated objects to the scene time `time_s` (keyframes move them, OBJ sequences
     /// switch to the frame's mesh; frames share topology, so only the buffer offsets change),
-    /// then culls the draw lists against the camera and each shadow view.
+    /// then culls the draw lists against the camera, each shadow view and each cascade view.
     pub fn update_draws(
         &mut self,
         scene: &Scene,
         time_s: f32,
         view_proj: &Mat4,
-        shadow_views: &[crate::light::ShadowView],
+        (shadow_views, cascade_views): (&[crate::light::ShadowView], &[crate::light::ShadowView]),
     ) {
         for d in &mut self.all_draws {
             let Some(o) = scene.objects.get(d.object).filter(|o| o.is_animated()) else {
@@ -242,6 +245,18 @@ impl SceneGpu {
             d.model = o.transform_at(time_s);
             d.aabb = d.local_aabb.transformed(&d.model);
         }
+        let culled = |views: &[crate::light::ShadowView]| -> Vec<Vec<Draw>> {
+            views
+                .iter()
+                .map(|v| {
+                    self.all_draws
+                        .iter()
+                        .copied()
+                        .filter(|d| v.may_see(&d.aabb))
+                        .collect()
+                })
+                .collect()
+        };
         let visible: Vec<Draw> = self
             .all_draws
             .iter()
@@ -253,16 +268,8 @@ impl SceneGpu {
         let lists = DrawLists {
             camera,
             transparent,
-            shadow: shadow_views
-                .iter()
-                .map(|v| {
-                    self.all_draws
-                        .iter()
-                        .copied()
-                        .filter(|d| v.may_see(&d.aabb))
-                        .collect()
-                })
-                .collect(),
+            shadow: culled(shadow_views),
+            cascades: culled(cascade_views),
         };
         if let Ok(mut d) = self.draws.write() {
             *d = lists;
@@ -299,19 +306,41 @@ crate::push_constants!(GpuShadowViewPush {
 });
 
 /// Records a pass that draws every shadow view's draw list into its declared (layered)
-/// attachments with `pipe`: the shadow-depth and light-map passes.
+/// attachments with `pipe`: the light-map pass (the shadow-depth pass also draws the cascades,
+/// [`record_shadow_and_cascade_views`]).
 pub fn record_shadow_views(
     ctx: &PassContext,
     pipe: &PipelineHandle,
     scene: (BufferHandle, BufferHandle),
     draws: &RwLock<DrawLists>,
 ) {
+    record_views(ctx, pipe, scene, draws, false);
+}
+
+/// [`record_shadow_views`], then the cascade views' lists into the layers after them.
+pub fn record_shadow_and_cascade_views(
+    ctx: &PassContext,
+    pipe: &PipelineHandle,
+    scene: (BufferHandle, BufferHandle),
+    draws: &RwLock<DrawLists>,
+) {
+    record_views(ctx, pipe, scene, draws, true);
+}
+
+fn record_views(
+    ctx: &PassContext,
+    pipe: &PipelineHandle,
+    scene: (BufferHandle, BufferHandle),
+    draws: &RwLock<DrawLists>,
+    cascades: bool,
+) {
     ctx.begin_rendering();
     ctx.bind(pipe);
     ctx.bind_vertex_buffer(scene.0);
     ctx.bind_index_buffer(scene.1);
     if let Ok(lists) = draws.read() {
-        for (v, list) in lists.shadow.iter().enumerate() {
+        let cascade_lists = if cascades { &lists.cascades[..] } else { &[] };
+        for (v, list) in lists.shadow.iter().chain(cascade_lists).enumerate() {
             for d in list {
                 let push = GpuShadowViewPush {
                     model: d.model.to_cols_array(),

@@ -15,6 +15,8 @@ pub fn check_render_settings(s: &RenderSettings) -> Result<(), LimitError> {
     EXPOSURE.check_flag(s.tonemap.exposure)?;
     SHADOW_RESOLUTION.check_flag(s.shadow.resolution)?;
     PCF_RADIUS.check_flag(s.shadow.pcf_radius)?;
+    SHADOW_CASCADES.check_flag(s.shadow.cascades)?;
+    SHADOW_CASCADE_LAMBDA.check_flag(s.shadow.cascade_lambda)?;
     if let Some(n) = s.shadow.area_samples {
         AREA_SAMPLES.check_flag(n)?;
     }

@@ -1,9 +1,9 @@
 //! `shadow_depth`: one depth layer per shadow view (spot perspective, cube face, paraboloid
-//! hemisphere, directional ortho), rendered in one layered pass whose geometry shader routes
-//! each draw to its view's layer (`glsl/shadow_depth.{vert,geom,frag}`,
+//! hemisphere, directional ortho, directional cascade), rendered in one layered pass whose
+//! geometry shader routes each draw to its view's layer (`glsl/shadow_depth.{vert,geom,frag}`,
 //! `glsl/shadow_depth_paraboloid.frag`).
 
-use super::scene_gpu::{record_shadow_views, GpuShadowViewPush, SceneInputs};
+use super::scene_gpu::{record_shadow_and_cascade_views, GpuShadowViewPush, SceneInputs};
 use super::DEPTH;
 use crate::graph::{Access, ImageHandle, Load, RenderGraph, Shader};
 use crate::vk::{vk, Context, GraphicsPipeline, GraphicsPipelineDesc, ImageDesc, VkError};
@@ -41,8 +41,9 @@ impl ShadowDepthPass {
         Ok(Self { pipeline })
     }
 
-    /// Declares the shadow maps of `views` views at `resolution`² (a 1x1 cleared layer when
-    /// there are none, so the shading pass always has a map to bind) and returns them.
+    /// Declares the shadow maps of `views` views at `resolution`² (the lights' own views, then
+    /// the directional lights' cascades; a 1x1 cleared layer when there are none, so the
+    /// shading pass always has a map to bind) and returns them.
     pub fn declare(
         &self,
         g: &mut RenderGraph,
@@ -64,7 +65,9 @@ impl ShadowDepthPass {
             .read(vertices, Access::VertexBuffer)
             .read(indices, Access::IndexBuffer)
             .depth(maps, Load::ClearDepth(1.0))
-            .record(move |ctx| record_shadow_views(ctx, &pipe, (vertices, indices), &draws));
+            .record(move |ctx| {
+                record_shadow_and_cascade_views(ctx, &pipe, (vertices, indices), &draws)
+            });
         maps
     }
 }

@@ -14,6 +14,7 @@ use super::mesh::{Aabb, BUILTIN_MESH_NAMES};
 use super::obj::AssetStore;
 use super::object::{rotation_from_euler_xyz_deg, Animation, Keyframe, Object, Transform};
 use super::Scene;
+use super::ShadowOverrides;
 use crate::limits::{self, Limit};
 
 /// A number or three numbers (`scale = 2` or `scale = [1, 2, 1]`; `albedo = 0.5`).
@@ -43,9 +44,18 @@ pub(crate) struct SceneDesc {
     pub objects: Vec<ObjectDesc>,
     pub voxel: Option<toml::Table>,
     pub gi: Option<GiDesc>,
+    pub shadow: Option<ShadowDesc>,
     pub camera_path: Option<CameraPathDesc>,
     /// "oit" or "hashed" ([`super::Transparency`]).
     pub transparency: Option<String>,
+}
+
+/// The `[shadow]` table (`cascades` signed so that a negative count names the key).
+#[derive(Clone, Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct ShadowDesc {
+    pub cascades: Option<i64>,
+    pub cascade_lambda: Option<f32>,
 }
 
 /// The `[camera_path]` table, checked by [`build_camera_path`].
@@ -393,6 +403,12 @@ pub(crate) fn build(
         .as_deref()
         .map(|t| build_transparency(&ck, t))
         .transpose()?;
+    let shadow = desc
+        .shadow
+        .as_ref()
+        .map(|t| build_shadow(&ck, t))
+        .transpose()?
+        .unwrap_or_default();
     let lights = desc
         .lights
         .iter()
@@ -427,6 +443,7 @@ pub(crate) fn build(
         voxel: desc.voxel,
         gi,
         transparency,
+        shadow,
         source,
     };
     if scene.lights.is_empty() && !scene.has_emission() {
@@ -648,6 +665,33 @@ fn build_gi(ck: &Check<'_>, g: &GiDesc) -> Result<GiOverrides, SceneError> {
         accumulate_frames: count(&limits::GI_FRAMES, g.accumulate_frames)?,
         vpl: build_vpl(ck, g, &count, &length)?,
         ssgi: build_ssgi(ck, g, &count)?,
+    })
+}
+
+/// Checks the `[shadow]` table against the flags' ranges (`crate::limits`).
+fn build_shadow(ck: &Check<'_>, t: &ShadowDesc) -> Result<ShadowOverrides, SceneError> {
+    let cascades = t
+        .cascades
+        .map(|v| {
+            let key = "shadow.cascades";
+            limits::SHADOW_CASCADES
+                .check_as(key, v)
+                .map_err(|e| ck.invalid(key, limit_message(&e)))
+        })
+        .transpose()?;
+    let cascade_lambda = t
+        .cascade_lambda
+        .map(|v| {
+            let key = "shadow.cascade_lambda";
+            let v = ck.scalar(key, v)?;
+            limits::SHADOW_CASCADE_LAMBDA
+                .check_as(key, v)
+                .map_err(|e| ck.invalid(key, limit_message(&e)))
+        })
+        .transpose()?;
+    Ok(ShadowOverrides {
+        cascades,
+        cascade_lambda,
     })
 }
 

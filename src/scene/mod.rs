@@ -127,6 +127,11 @@
 //! ssgi_resolution = "half"          # screen-space GI resolution: "full" | "half" | "quarter"
 //!                                   #   | "eighth" ["half"]
 //! ssgi_samples = 64                 # screen-space GI samples per texel and level, 1..=1024 [64]
+//!
+//! [shadow]   # optional: shadow defaults; `--shadow-cascades`, `--shadow-cascade-lambda` override
+//! cascades = 4                      # cascades per directional light (camera's direct light),
+//!                                   #   1..=8; 1: the single whole-scene map [4]
+//! cascade_lambda = 0.5              # splits: logarithmic (1) to uniform (0) blend, 0..=1 [0.5]
 //! ```
 //!
 //! A missing texture (or MTL file) is not an error: it is logged with `log::warn!` and the
@@ -178,6 +183,16 @@ pub use object::{rotation_from_euler_xyz_deg, Animation, Keyframe, Object, Trans
 pub use query::NoSuchObject;
 pub use vpl_settings::{VplOverrides, VplSettings, VplShading, VplVisibility};
 
+/// The `[shadow]` table's values (nothing given without the table); the command line's flags
+/// override each.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ShadowOverrides {
+    /// Cascades per directional light (`light::cascade`).
+    pub cascades: Option<u32>,
+    /// Blend of logarithmic and uniform cascade splits.
+    pub cascade_lambda: Option<f32>,
+}
+
 /// A loaded, validated scene: everything finite, directions unit length, indices in range.
 #[derive(Clone, Debug)]
 pub struct Scene {
@@ -202,6 +217,8 @@ pub struct Scene {
     /// The top-level `transparency` key ("oit" or "hashed"): how the camera view draws
     /// surfaces with d < 1 unless `--transparency` says otherwise; `None` without the key.
     pub transparency: Option<Transparency>,
+    /// The `[shadow]` table: the scene's defaults of shadow settings (flags override them).
+    pub shadow: ShadowOverrides,
     /// The scene file; `None` for built-in scenes.
     pub source: Option<PathBuf>,
 }

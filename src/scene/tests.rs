@@ -1277,3 +1277,29 @@ fn far_scenes_are_rebased_to_a_local_origin_in_f64() {
     let world = far.origin_m + far.objects[0].transform.translate.as_dvec3();
     assert!((world.x - 10_000.3).abs() < 1e-6, "{world}");
 }
+
+#[test]
+fn shadow_table_gives_cascades_and_names_bad_values() {
+    let s = load_ok(
+        &format!("{CAMERA}{LIGHT}{CUBE}[shadow]\ncascades = 3\ncascade_lambda = 0.75\n"),
+        &[],
+    );
+    assert_eq!(s.shadow.cascades, Some(3));
+    assert_eq!(s.shadow.cascade_lambda, Some(0.75));
+    let s = load_ok(&format!("{CAMERA}{LIGHT}{CUBE}"), &[]);
+    assert_eq!(s.shadow, crate::scene::ShadowOverrides::default());
+    for (line, field, expected) in [
+        ("cascades = 0", "shadow.cascades", "an integer in [1, 8]"),
+        ("cascades = -2", "shadow.cascades", "[1, 8]"),
+        ("cascades = 9", "shadow.cascades", "[1, 8]"),
+        ("cascade_lambda = 1.5", "shadow.cascade_lambda", "[0, 1]"),
+    ] {
+        let text = format!("{CAMERA}{LIGHT}{CUBE}[shadow]\n{line}\n");
+        let (e, scene) = load_err(&text, &[]);
+        assert!(
+            matches!(e, SceneError::InvalidValue { field: ref f, .. } if f == field),
+            "{line}: {e}"
+        );
+        assert_msg(&e, &scene, &[&format!("`{field}`"), expected]);
+    }
+}

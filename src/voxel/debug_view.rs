@@ -47,6 +47,9 @@ pub enum DebugView {
     GbufferNormal,
     /// The distance from the camera of the G-buffer's surface.
     GbufferDistance,
+    /// Shadow aliasing: the predicted on-screen size in pixels of the shadow-map texel that
+    /// shades each pixel (drawn by the renderer's `shadow_texels` pass).
+    ShadowTexels,
 }
 
 impl DebugView {
@@ -61,7 +64,8 @@ impl DebugView {
             DebugView::Atlas
             | DebugView::GbufferAlbedo
             | DebugView::GbufferNormal
-            | DebugView::GbufferDistance => 0,
+            | DebugView::GbufferDistance
+            | DebugView::ShadowTexels => 0,
         }
     }
 
@@ -397,8 +401,11 @@ pub fn describe(settings: &DebugSettings, value: &HdrImage) -> String {
             settings.level,
             n = 1u32 << settings.level.min(31)
         ),
-        // Described by the renderer's `gbuffer_view` pass, which knows its scale.
-        DebugView::GbufferAlbedo | DebugView::GbufferNormal | DebugView::GbufferDistance => {
+        // Described by the renderer's `gbuffer_view` / `shadow_texels` pass.
+        DebugView::GbufferAlbedo
+        | DebugView::GbufferNormal
+        | DebugView::GbufferDistance
+        | DebugView::ShadowTexels => {
             format!("{:?} view", settings.view)
         }
     }
