@@ -10,7 +10,6 @@ use glam::Vec3;
 use std::path::Path;
 use voxgi::eval::{compare, HdrImage};
 use voxgi::gi::{GiMethod, GiSettings, SsgiResolution, SsgiSettings};
-use voxgi::render::{render_image, RenderSettings};
 use voxgi::scene::Scene;
 
 const ROOT: &str = env!("CARGO_MANIFEST_DIR");
@@ -25,16 +24,7 @@ fn ssgi(frames: u32, ssgi: SsgiSettings) -> GiSettings {
 }
 
 fn render(scene: &Scene, size: u32, gi: GiSettings) -> HdrImage {
-    let ctx = common::context();
-    let settings = RenderSettings {
-        width: size,
-        height: size,
-        gi,
-        ..Default::default()
-    };
-    let out = render_image(&ctx, scene, &settings).expect("renders");
-    common::assert_no_validation_messages(&ctx);
-    out.hdr
+    common::render_with_gi(scene, size, gi).hdr
 }
 
 #[test]

@@ -11,7 +11,7 @@ use glam::Vec3;
 use std::path::Path;
 use voxgi::eval::HdrImage;
 use voxgi::gi::{GiMethod, GiSettings, SsgiSettings};
-use voxgi::render::{render_image, RenderOutput, RenderSettings};
+use voxgi::render::RenderOutput;
 use voxgi::scene::Scene;
 
 const ROOT: &str = env!("CARGO_MANIFEST_DIR");
@@ -72,16 +72,7 @@ fn gi(ssr: bool) -> GiSettings {
 }
 
 fn render(scene: &Scene, size: u32, gi: GiSettings) -> RenderOutput {
-    let ctx = common::context();
-    let settings = RenderSettings {
-        width: size,
-        height: size,
-        gi,
-        ..Default::default()
-    };
-    let out = render_image(&ctx, scene, &settings).expect("renders");
-    common::assert_no_validation_messages(&ctx);
-    out
+    common::render_with_gi(scene, size, gi)
 }
 
 fn has_reflection_passes(out: &RenderOutput) -> bool {

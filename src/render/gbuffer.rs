@@ -23,6 +23,18 @@ crate::push_constants!(GpuGbufferPush {
     _pad
 });
 
+impl GpuGbufferPush {
+    /// The push constants of one draw (its model matrix and material), shared by every pass
+    /// that draws through `gbuffer.vert` (the G-buffer and the transparency lists).
+    pub fn of(d: &super::scene_gpu::Draw) -> Self {
+        Self {
+            model: d.model.to_cols_array(),
+            material: d.material,
+            _pad: [0; 3],
+        }
+    }
+}
+
 /// The G-buffer images of a frame.
 #[derive(Clone, Copy, Debug)]
 pub struct Gbuffer {
@@ -165,11 +177,7 @@ impl GbufferPass {
                         ctx.push_with(&pipe, &maps(Some(d)));
                         bound = (d.texture, d.bump, d.pbr_maps);
                     }
-                    let push = GpuGbufferPush {
-                        model: d.model.to_cols_array(),
-                        material: d.material,
-                        _pad: [0; 3],
-                    };
+                    let push = GpuGbufferPush::of(d);
                     ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
                     ctx.cmd
                         .draw_indexed(d.index_count, d.first_index, d.vertex_offset);

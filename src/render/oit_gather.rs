@@ -96,11 +96,7 @@ impl OitGatherPass {
                             ctx.push_with(&pipe, &[(2, texture(d.texture))]);
                             bound = d.texture;
                         }
-                        let push = GpuGbufferPush {
-                            model: d.model.to_cols_array(),
-                            material: d.material,
-                            _pad: [0; 3],
-                        };
+                        let push = GpuGbufferPush::of(d);
                         ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
                         ctx.cmd
                             .draw_indexed(d.index_count, d.first_index, d.vertex_offset);

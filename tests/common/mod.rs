@@ -216,3 +216,22 @@ pub fn animated_scene() -> voxgi::scene::Scene {
     ))
     .expect("animated test scene loads")
 }
+
+/// Renders `scene` at `size`² with default settings but `gi`, on a fresh validating context,
+/// failing the test on any validation message.
+pub fn render_with_gi(
+    scene: &voxgi::scene::Scene,
+    size: u32,
+    gi: voxgi::gi::GiSettings,
+) -> voxgi::render::RenderOutput {
+    let ctx = context();
+    let settings = voxgi::render::RenderSettings {
+        width: size,
+        height: size,
+        gi,
+        ..Default::default()
+    };
+    let out = voxgi::render::render_image(&ctx, scene, &settings).expect("renders");
+    assert_no_validation_messages(&ctx);
+    out
+}
