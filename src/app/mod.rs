@@ -440,6 +440,7 @@ impl Viewer {
                             KeyEvent {
                                 physical_key: PhysicalKey::Code(code),
                                 state,
+                                repeat,
                                 ..
                             },
                         ..
@@ -447,7 +448,7 @@ impl Viewer {
                         // Releases always count, so no key sticks when egui takes focus.
                         let down = state == ElementState::Pressed;
                         if !down || !consumed {
-                            self.key(code, down, elwt);
+                            self.key(code, down, repeat, elwt);
                         }
                     }
                     WindowEvent::MouseInput {
@@ -477,7 +478,11 @@ impl Viewer {
         Ok(())
     }
 
-    fn key(&mut self, code: KeyCode, down: bool, elwt: &EventLoopWindowTarget<()>) {
+    /// Movement keys follow the key's state; actions (screenshot, next GI method, exit) fire
+    /// once per press, not again on the system's key repeat (a press held past the repeat
+    /// delay, or delivered late on a busy machine, would otherwise step two GI methods).
+    fn key(&mut self, code: KeyCode, down: bool, repeat: bool, elwt: &EventLoopWindowTarget<()>) {
+        let press = down && !repeat;
         let k = &mut self.keys;
         match code {
             KeyCode::KeyW => k.forward = down,
@@ -487,11 +492,11 @@ impl Viewer {
             KeyCode::KeyE => k.up = down,
             KeyCode::KeyQ => k.down = down,
             KeyCode::ShiftLeft | KeyCode::ShiftRight => k.fast = down,
-            KeyCode::F12 if down => self.controls.screenshot = true,
-            KeyCode::KeyG if down => {
+            KeyCode::F12 if press => self.controls.screenshot = true,
+            KeyCode::KeyG if press => {
                 self.controls.gi.method = panel::next_gi_method(self.controls.gi.method)
             }
-            KeyCode::Escape if down => elwt.exit(),
+            KeyCode::Escape if press => elwt.exit(),
             _ => {}
         }
     }
