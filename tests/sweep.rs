@@ -143,6 +143,53 @@ fn a_sweep_writes_its_rows_resumes_and_feeds_tune() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// The temporal columns. Direct light keeps nothing between frames, so the first frame after
+/// the light switches off is already the light-off image (ghost 0, lag 1). Screen-space GI
+/// blends its indirect light with the reprojected history at weight τ = 0.9 (and feeds the
+/// last frame's indirect light back in), so a part of the switch is missing on the next
+/// frames; the direct light, which changes at once, keeps that part at most τ: 0 < r_1 ≤ τ.
+#[test]
+fn the_sweep_measures_flicker_ghost_and_lag() {
+    let dir = out_dir("temporal");
+    let run = sweep(&dir, &["--methods", "none,ssgi", "--temporal-steps", "3"]);
+    assert!(run.status.success(), "{}", text(&run.stderr));
+    let r = rows(&dir);
+    assert_eq!(r.len(), 2);
+    for row in &r {
+        let flicker = row.flicker.expect("cornell's light can move");
+        assert!(flicker.is_finite() && flicker >= 0.0, "{row:?}");
+    }
+    let (direct, ssgi) = (&r[0], &r[1]);
+    assert_eq!(direct.method, "none");
+    assert!(direct.ghost.expect("measured") < 1e-6, "{direct:?}");
+    assert_eq!(direct.lag_frames, Some(1));
+    let tau = 0.9;
+    let ghost = ssgi.ghost.expect("measured");
+    assert!(ghost > 0.0 && ghost <= tau, "{ssgi:?}");
+    assert!(ssgi.lag_frames.is_none_or(|n| n > 1), "{ssgi:?}");
+    // Without a measure the columns stay empty.
+    let off = out_dir("temporal-off");
+    let run = sweep(
+        &off,
+        &[
+            "--methods",
+            "none",
+            "--temporal-steps",
+            "0",
+            "--lag-frames",
+            "0",
+        ],
+    );
+    assert!(run.status.success(), "{}", text(&run.stderr));
+    let r = rows(&off);
+    assert_eq!(
+        (r[0].flicker, r[0].ghost, r[0].lag_frames),
+        (None, None, None)
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+    let _ = std::fs::remove_dir_all(&off);
+}
+
 #[test]
 fn bad_sweep_input_is_refused_before_any_row() {
     let dir = out_dir("errors");

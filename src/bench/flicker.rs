@@ -9,13 +9,13 @@
 //! change cancels in the excess; what remains is the indirect light's error changing from frame
 //! to frame.
 
+use super::temporal::{light_path_scenes, reference_settings, render_path};
 use super::BenchError;
 use crate::eval::HdrImage;
 use crate::gi::{Bounces, GiMethod, GiSettings};
-use crate::render::{render_image, RenderSettings};
-use crate::scene::{Light, Scene};
+use crate::render::RenderSettings;
+use crate::scene::Scene;
 use crate::vk::Context;
-use glam::Vec3;
 use serde::Serialize;
 
 /// What [`bench_flicker`] runs.
@@ -110,25 +110,6 @@ impl FlickerReport {
     }
 }
 
-/// The first point or spot light moved to step `k` of `steps` on a horizontal circle of
-/// `radius_m` around its position; other lights stay.
-pub fn scene_at_step(scene: &Scene, k: u32, steps: u32, radius_m: f32) -> Scene {
-    let mut s = scene.clone();
-    let angle = std::f32::consts::TAU * k as f32 / steps.max(1) as f32;
-    let offset = Vec3::new(angle.cos() - 1.0, 0.0, angle.sin()) * radius_m;
-    if let Some(light) = s.lights.iter_mut().find(|l| l.position().is_some()) {
-        match light {
-            Light::Point { position, .. }
-            | Light::Spot { position, .. }
-            | Light::Sphere { position, .. }
-            | Light::Rectangle { position, .. }
-            | Light::Element { position, .. } => *position += offset,
-            Light::Directional { .. } => {}
-        }
-    }
-    s
-}
-
 /// Mean over pixels and channels of |a − b|, or of |(a − b) − (c − d)| with `refs`.
 fn mean_abs_change(a: &HdrImage, b: &HdrImage, refs: Option<(&HdrImage, &HdrImage)>) -> f64 {
     let n = a.data.len().max(1) as f64 * 3.0;
@@ -179,40 +160,22 @@ pub fn bench_flicker(
     scene_name: &str,
     desc: &FlickerBenchDesc,
 ) -> Result<FlickerReport, BenchError> {
-    if !scene.lights.iter().any(|l| l.position().is_some()) {
-        return Err(BenchError::NoMovableLight);
-    }
-    let radius_m = scene.aabb_at(0.0).extent().length() * desc.path_radius_fraction;
-    let steps: Vec<Scene> = (0..desc.steps.max(2))
-        .map(|k| scene_at_step(scene, k, desc.steps.max(2), radius_m))
-        .collect();
-    let settings = |gi: GiSettings| RenderSettings {
+    let steps = light_path_scenes(scene, desc.steps, desc.path_radius_fraction)
+        .ok_or(BenchError::NoMovableLight)?;
+    let base = RenderSettings {
         width: desc.size,
         height: desc.size,
-        gi,
         ..RenderSettings::default()
     };
-    let render_path = |gi: GiSettings| -> Result<(Vec<HdrImage>, f64), BenchError> {
-        let mut images = Vec::new();
-        let mut ms = Vec::new();
-        for s in &steps {
-            let out = render_image(ctx, s, &settings(gi))?;
-            ms.push(out.timings.iter().map(|t| t.gpu_ms).sum::<f64>());
-            images.push(out.hdr);
-        }
-        Ok((images, crate::stats::median(&ms)))
-    };
-    let reference_gi = GiSettings {
-        method: GiMethod::Pathtrace,
-        rays: 4,
-        bounces: Bounces::Unbounded,
-        accumulate_frames: desc.reference_frames.max(1),
-        ..GiSettings::default()
-    };
-    let (reference, _) = render_path(reference_gi)?;
+    let with_gi = |gi: GiSettings| RenderSettings { gi, ..base.clone() };
+    let (reference, _) = render_path(
+        ctx,
+        &steps,
+        &reference_settings(&base, desc.reference_frames),
+    )?;
     let mut rows = Vec::new();
     for (name, gi) in &desc.methods {
-        let (frames, frame_ms) = render_path(*gi)?;
+        let (frames, frame_ms) = render_path(ctx, &steps, &with_gi(*gi))?;
         let (change, flicker) = change_and_flicker(&frames, &reference);
         let mut rel_mse = 0.0;
         for (r, f) in reference.iter().zip(&frames) {
@@ -230,7 +193,7 @@ pub fn bench_flicker(
     let (reference_change, _) = change_and_flicker(&reference, &reference);
     Ok(FlickerReport {
         scene: scene_name.to_owned(),
-        steps: desc.steps.max(2),
+        steps: steps.len() as u32,
         size: desc.size,
         reference_frames: desc.reference_frames,
         reference_change,
@@ -272,25 +235,5 @@ mod tests {
         // Steps k = 1..3 with reference means 2, 3, 4: (2a/2 + 2a/3 + 2a/4) / 3.
         let expected = f64::from(2.0 * a) * (1.0 / 2.0 + 1.0 / 3.0 + 1.0 / 4.0) / 3.0;
         assert!((flicker - expected).abs() < 1e-6, "{flicker} vs {expected}");
-    }
-
-    #[test]
-    fn the_light_path_is_a_closed_circle_starting_at_the_light() {
-        let scene = crate::scene::builtin("cornell").expect("cornell is built in");
-        let p0 = scene.lights[0]
-            .position()
-            .expect("cornell's light has a position");
-        let at = |k| {
-            scene_at_step(&scene, k, 8, 0.2).lights[0]
-                .position()
-                .unwrap()
-        };
-        assert!((at(0) - p0).length() < 1e-6);
-        // The circle of radius r through p0 has its center at p0 − (r, 0, 0).
-        for k in 0..8 {
-            let center = p0 - Vec3::new(0.2, 0.0, 0.0);
-            assert!(((at(k) - center).length() - 0.2).abs() < 1e-5);
-            assert_eq!(at(k).y, p0.y);
-        }
     }
 }

@@ -23,12 +23,12 @@ pub mod reference_cache;
 mod scenes;
 mod soak;
 pub mod sweep;
+pub mod temporal;
 mod traverse;
 mod voxelize;
 
 pub use flicker::{
-    bench_flicker, change_and_flicker, default_methods, scene_at_step, FlickerBenchDesc,
-    FlickerReport, FlickerRow,
+    bench_flicker, change_and_flicker, default_methods, FlickerBenchDesc, FlickerReport, FlickerRow,
 };
 pub use leak::{
     bench_leak, direct_images, leak_methods, leak_row, leak_scene, max_radiance, mean_radiance,
@@ -40,6 +40,7 @@ pub use soak::{
     bench_soak, process_rss_bytes, slope_per_1000, soak_time_s, SoakBenchDesc, SoakReport, SoakRow,
     SoakSample,
 };
+pub use temporal::scene_at_step;
 pub use traverse::{
     bench_traverse, gbuffer_points, MethodResult, RadiusResult, TraverseBenchDesc,
     TraverseBenchReport,

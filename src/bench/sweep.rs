@@ -255,10 +255,19 @@ pub struct SweepRow {
     pub device: String,
     /// The resolved `[gi]` table as an inline TOML table (what `voxgi tune` prints).
     pub gi_toml: String,
+    /// Flicker along the light path ([`super::temporal`]); empty when not measured (no
+    /// light that can move, or `--temporal-steps 0`).
+    pub flicker: Option<f64>,
+    /// The fraction of a light's switch-off the first frame after it still misses
+    /// ([`super::temporal::Lag::ghost`]); empty when not measured.
+    pub ghost: Option<f64>,
+    /// Frames until the switch-off is 95% done; empty when not measured or not done within
+    /// `--lag-frames` (then `ghost` is set).
+    pub lag_frames: Option<u32>,
 }
 
 /// The CSV's columns, in [`SweepRow`]'s field order.
-pub const CSV_COLUMNS: [&str; 20] = [
+pub const CSV_COLUMNS: [&str; 23] = [
     "scene",
     "config",
     "method",
@@ -279,6 +288,9 @@ pub const CSV_COLUMNS: [&str; 20] = [
     "ssim",
     "device",
     "gi_toml",
+    "flicker",
+    "ghost",
+    "lag_frames",
 ];
 
 const TEXT_COLUMNS: [&str; 5] = ["scene", "config", "method", "device", "gi_toml"];
@@ -325,6 +337,7 @@ impl SweepRow {
             .iter()
             .map(|c| match &value[*c] {
                 serde_json::Value::String(s) => csv_field(s),
+                serde_json::Value::Null => String::new(),
                 v => v.to_string(),
             })
             .collect::<Vec<_>>()
@@ -345,6 +358,8 @@ impl SweepRow {
         for (c, f) in CSV_COLUMNS.iter().zip(fields) {
             let v = if TEXT_COLUMNS.contains(c) {
                 serde_json::Value::String(f)
+            } else if f.is_empty() {
+                serde_json::Value::Null
             } else {
                 serde_json::from_str(&f).map_err(|_| format!("{c} = `{f}` is not a number"))?
             };
@@ -373,7 +388,14 @@ pub fn read_csv(path: &Path) -> Result<Vec<SweepRow>, SweepError> {
     };
     match lines.next() {
         Some((_, h)) if h.trim_end() == csv_header() => {}
-        _ => return Err(csv_err(0, "the header is not the sweep's".into())),
+        _ => {
+            return Err(csv_err(
+                0,
+                "the header is not this version's sweep header (an older sweep lacks the \
+                 temporal columns: start a new --out)"
+                    .into(),
+            ))
+        }
     }
     lines
         .filter(|(_, l)| !l.trim().is_empty())
@@ -956,6 +978,10 @@ mod tests {
                 rays: (ms as u32).max(1),
                 ..GiSettings::default()
             }),
+            // One measured, one not settled, so the round trip sees numbers and empties.
+            flicker: Some(0.0125),
+            ghost: Some(0.5),
+            lag_frames: None,
         }
     }
 
@@ -970,7 +996,13 @@ mod tests {
         CsvAppender::open(&path)
             .and_then(|mut a| a.append(&r))
             .expect("writes");
-        let r2 = row("cornell", "none", 0.5, 0.2);
+        let r2 = SweepRow {
+            flicker: None,
+            ghost: None,
+            lag_frames: Some(3),
+            ..row("cornell", "none", 0.5, 0.2)
+        };
+        assert!(r2.csv_line().ends_with(",,,3"), "{}", r2.csv_line());
         CsvAppender::open(&path)
             .and_then(|mut a| a.append(&r2))
             .expect("appends without a second header");

@@ -9,6 +9,9 @@ use crate::bench::sweep::{
     configs, downsample, gi_inline, gi_table_text, method_name, pareto_svg, parse_grid,
     parse_methods, read_csv, tune, Config, CsvAppender, SweepError, SweepRow,
 };
+use crate::bench::temporal::{
+    lag_after_switch_off, light_path, path_flicker, LightPath, TemporalDesc,
+};
 use crate::eval::HdrImage;
 use crate::render::{profile_scene, render_image, RenderSettings};
 use crate::scene::{load_scene_arg, Scene};
@@ -66,6 +69,16 @@ pub struct SweepArgs {
     /// The Mitsuba reference script (its .venv is the one beside its folder).
     #[arg(long, default_value = "tools/reference")]
     pub reference_tool: PathBuf,
+    /// Flicker: positions of the scene's first point, spot or area light along a circle, each
+    /// rendered fresh by every configuration and compared with a converged path tracer's
+    /// change along the same path (the `flicker` column); 0 leaves the column empty.
+    #[arg(long, default_value_t = 4, value_name = "STEPS")]
+    pub temporal_steps: u32,
+    /// Lag: frames rendered after the scene's first light switches off, at most, until the
+    /// image is 95% of the way to the light-off image (the `ghost` and `lag_frames` columns);
+    /// 0 leaves them empty.
+    #[arg(long, default_value_t = 32, value_name = "FRAMES")]
+    pub lag_frames: u32,
 }
 
 /// Arguments of `voxgi tune`.
@@ -330,16 +343,22 @@ fn frame_stats(frames: &[Vec<PassTiming>], keep: impl Fn(&str) -> bool) -> [f64;
     ]
 }
 
-/// Profiles and renders one configuration on one scene and scores it.
+/// Profiles and renders one configuration on one scene and scores it; `path` is the scene's
+/// light path with its references, for the flicker column.
 fn measure(
     ctx: &Context,
     s: &SweepScene,
+    path: Option<&LightPath>,
     job: &Job,
     args: &SweepArgs,
 ) -> Result<SweepRow, CliError> {
     let run = profile_scene(ctx, &s.scene, &job.settings, args.frames, args.warmup)?;
     let image = render_image(ctx, &s.scene, &job.settings)?;
     let m = crate::eval::compare(&s.reference, &image.hdr, None)?;
+    let flicker = path
+        .map(|p| path_flicker(ctx, p, &job.settings))
+        .transpose()?;
+    let lag = lag_after_switch_off(ctx, &s.scene, &job.settings, args.lag_frames)?;
     let gi = frame_stats(&run.frames, is_gi_pass);
     let frame = frame_stats(&run.frames, |_| true);
     let accumulate = match job.settings.gi.method {
@@ -369,6 +388,9 @@ fn measure(
         ssim: m.ssim,
         device: ctx.info.name.clone(),
         gi_toml: gi_inline(&job.settings.gi),
+        flicker,
+        ghost: lag.map(|l| l.ghost),
+        lag_frames: lag.and_then(|l| l.frames),
     })
 }
 
@@ -396,6 +418,20 @@ fn write_summaries(dir: &Path, rows: &[SweepRow]) -> Result<(), CliError> {
             })?;
     }
     Ok(())
+}
+
+/// The temporal columns of a row for the console, as far as they were measured.
+fn temporal_text(row: &SweepRow) -> String {
+    let mut t = String::new();
+    if let Some(f) = row.flicker {
+        t += &format!("  flicker {f:.4}");
+    }
+    match (row.ghost, row.lag_frames) {
+        (Some(g), Some(n)) => t += &format!("  ghost {g:.3}, lag {n} frames"),
+        (Some(g), None) => t += &format!("  ghost {g:.3}, lag > --lag-frames"),
+        _ => {}
+    }
+    t
 }
 
 /// `m:ss` of a duration in seconds.
@@ -450,9 +486,20 @@ pub fn sweep(global: &Global, args: &SweepArgs, out: &mut dyn Write) -> Result<(
     let mut appender = CsvAppender::open(&csv)?;
     let ctx = context(global)?;
     let start = Instant::now();
+    let temporal = TemporalDesc {
+        steps: args.temporal_steps,
+        lag_max_frames: args.lag_frames,
+        ..TemporalDesc::default()
+    };
+    // Each scene's light path and its references, rendered when its first row is due.
+    let mut paths: Vec<Option<Option<LightPath>>> = scenes.iter().map(|_| None).collect();
     let result = (|| -> Result<(), CliError> {
         for (k, (i, job)) in todo.iter().enumerate() {
             let s = &scenes[*i];
+            if paths[*i].is_none() {
+                paths[*i] = Some(light_path(&ctx, &s.scene, &job.settings, &temporal)?);
+            }
+            let path = paths[*i].as_ref().and_then(Option::as_ref);
             let eta = match k {
                 0 => "?".to_owned(),
                 _ => clock(start.elapsed().as_secs_f64() / k as f64 * (todo.len() - k) as f64),
@@ -465,16 +512,17 @@ pub fn sweep(global: &Global, args: &SweepArgs, out: &mut dyn Write) -> Result<(
                 job.config.label(),
                 clock(start.elapsed().as_secs_f64())
             );
-            let row = measure(&ctx, s, job, args)?;
+            let row = measure(&ctx, s, path, job, args)?;
             appender.append(&row)?;
             outln!(
                 out,
-                "{:<16} {:<40} {:>9.3} ms  relMSE {:.5}  FLIP {:.4}",
+                "{:<16} {:<40} {:>9.3} ms  relMSE {:.5}  FLIP {:.4}{}",
                 row.scene,
                 row.config,
                 row.image_ms,
                 row.rel_mse,
-                row.flip
+                row.flip,
+                temporal_text(&row)
             );
             rows.push(row);
             write_summaries(&args.out, &rows)?;

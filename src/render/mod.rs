@@ -28,7 +28,10 @@ pub use gbuffer::Gbuffer;
 pub use light_map::LightMaps;
 pub use oit::{OitStats, DEFAULT_NODES_PER_PIXEL as OIT_DEFAULT_NODES_PER_PIXEL};
 pub use oit_resolve::MAX_LAYERS as OIT_MAX_LAYERS;
-pub use run::{profile_camera_path, profile_scene, render_image, ProfileRun, RenderOutput};
+pub use run::{
+    frames_to_image, profile_camera_path, profile_scene, render_image, render_sequence, ProfileRun,
+    RenderOutput, SequenceOutput,
+};
 pub use scene_gpu::{Draw, DrawLists, SceneGpu, SceneInputs};
 pub use settings_check::{check_device_limits, check_render_settings};
 pub use stereo::{eye_scene, pack as stereo_pack, render_stereo, StereoOutput, StereoSettings};

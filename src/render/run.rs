@@ -38,21 +38,7 @@ pub(super) fn render_frames(
     ctx: &Context,
     renderer: &mut Renderer,
 ) -> Result<RenderOutput, RenderError> {
-    // The path tracer converges over frames, screen-space GI adds a bounce per frame by
-    // feedback; everything else is done in one.
-    let gi_frames = match renderer.settings.gi.method {
-        crate::gi::GiMethod::Pathtrace | crate::gi::GiMethod::Ssgi => {
-            renderer.settings.gi.accumulate_frames.max(1) as usize
-        }
-        _ => 1,
-    };
-    // TAA converges over jittered frames too.
-    let taa_frames = renderer
-        .settings
-        .post
-        .taa
-        .map_or(1, |t| t.frames.max(1) as usize);
-    let frames = gi_frames.max(taa_frames);
+    let frames = frames_to_image(&renderer.settings);
     let (timings, live_passes, transient_bytes) = run_frames(ctx, renderer, frames)?;
     let hdr = renderer.hdr_image();
     let ldr = renderer.ldr_pixels();
@@ -66,6 +52,56 @@ pub(super) fn render_frames(
         debug_description,
         oit: renderer.oit_stats(),
     })
+}
+
+/// Frames a headless render runs for its image: the path tracer converges over frames,
+/// screen-space GI adds a bounce per frame by feedback, TAA converges over jittered frames;
+/// everything else is done in one.
+pub fn frames_to_image(settings: &super::RenderSettings) -> usize {
+    let gi_frames = match settings.gi.method {
+        crate::gi::GiMethod::Pathtrace | crate::gi::GiMethod::Ssgi => {
+            settings.gi.accumulate_frames.max(1) as usize
+        }
+        _ => 1,
+    };
+    let taa_frames = settings.post.taa.map_or(1, |t| t.frames.max(1) as usize);
+    gi_frames.max(taa_frames)
+}
+
+/// What [`render_sequence`] saw.
+pub struct SequenceOutput {
+    /// The image after the warm-up frames of the first scene.
+    pub warm: HdrImage,
+    /// The image of each following frame, one per scene of `then`.
+    pub frames: Vec<HdrImage>,
+}
+
+/// Renders `warm` frames of `scene`, then one frame of each scene of `then` with the same
+/// renderer, as the viewer does when something changes: what a method keeps from frame to
+/// frame (accumulation, feedback, TAA and SSGI histories) carries over, and
+/// [`Renderer::prepare`] decides what restarts. Only the camera and the lights of the later
+/// scenes are read (their objects must be those of `scene`).
+pub fn render_sequence(
+    ctx: &Context,
+    scene: &Scene,
+    settings: &super::RenderSettings,
+    warm: usize,
+    then: &[Scene],
+) -> Result<SequenceOutput, RenderError> {
+    let mut renderer = Renderer::new(ctx, scene, settings.clone())?;
+    let exec = GraphExecutor::new(ctx, renderer.graph(), MAX_FRAMES_IN_FLIGHT)?;
+    // Each run waits for its frames, so the read-back holds the last one.
+    crate::graph::run_frames(ctx, &exec, warm.max(1), 0, |slot| {
+        renderer.write_frame(slot)
+    })?;
+    let warm = renderer.hdr_image();
+    let mut frames = Vec::with_capacity(then.len());
+    for next in then {
+        renderer.prepare(next)?;
+        crate::graph::run_frames(ctx, &exec, 1, 0, |slot| renderer.write_frame(slot))?;
+        frames.push(renderer.hdr_image());
+    }
+    Ok(SequenceOutput { warm, frames })
 }
 
 type FrameFacts = (Vec<PassTiming>, Vec<String>, (u64, u64));
