@@ -394,3 +394,77 @@ fn shadow_texel_view_matches_the_closed_form() {
     }
     println!("{}", out.debug_description.unwrap_or_default());
 }
+
+/// A compact scene seen from inside (a 4 m plane, the camera 1.5 m over its edge looking
+/// across it): the cascades' range ends where the scene does, about 4 m away, and the far
+/// slices' bounding spheres are wider than the whole scene, so their texels are coarser than
+/// the whole-scene map's. Those cascades are dropped (`cascade_views`): every lit pixel is
+/// shaded by a texel no larger than the whole-scene map's, and four cascades never leave more
+/// pixels above one pixel's size than the single map does.
+#[test]
+fn cascades_coarser_than_the_whole_map_are_dropped() {
+    const SIZE: u32 = 64;
+    let rail = Box3 {
+        min: Vec3::new(-0.2, 0.0, 0.0),
+        max: Vec3::new(0.2, 0.3, 0.1),
+    };
+    let camera = "[camera]\nposition = [0.0, 1.5, -2.0]\ntarget = [0.0, 0.0, 0.5]\n\
+                  fov_y_deg = 60.0\nnear = 0.05\nfar = 100.0\n";
+    let s = scene(&scene_toml(camera, &rail, 4.0));
+    let shadow = |cascades| ShadowSettings {
+        cascades,
+        ..Default::default()
+    };
+    // The library's choice: the whole-scene map's texel against the cascades' texels.
+    let (views, _) = voxgi::light::shadow_views(&s, 0.0, &shadow(4));
+    let whole_m = views[0].texel_footprint;
+    let aabb = s.aabb_at(0.0);
+    let all =
+        voxgi::light::cascade::cascade_views(&s.lights, &s.camera, 1.0, &aabb, &shadow(4), |_| {
+            f32::INFINITY
+        });
+    let kept =
+        voxgi::light::cascade::cascade_views(&s.lights, &s.camera, 1.0, &aabb, &shadow(4), |_| {
+            whole_m
+        });
+    let count =
+        |sets: &[(usize, Vec<voxgi::light::ShadowView>)]| sets.first().map_or(0, |s| s.1.len());
+    assert_eq!(count(&all), 4);
+    assert!(
+        (1..4).contains(&count(&kept)),
+        "some cascades are coarser than the {whole_m} m whole-scene texel, some finer: kept {}",
+        count(&kept)
+    );
+
+    let ctx = common::context();
+    let texels = |cascades| {
+        let settings = RenderSettings {
+            width: SIZE,
+            height: SIZE,
+            shadow: shadow(cascades),
+            debug: Some(voxgi::voxel::debug_view::DebugSettings {
+                view: voxgi::voxel::debug_view::DebugView::ShadowTexels,
+                ..Default::default()
+            }),
+            ..Default::default()
+        };
+        let out = render_image(&ctx, &s, &settings).expect("renders");
+        common::assert_no_validation_messages(&ctx);
+        out.hdr
+    };
+    let (one, four) = (texels(1), texels(4));
+    for p in four.data.iter().filter(|p| p[0] > 0.0) {
+        assert!(
+            p[1] <= whole_m * (1.0 + 1e-6),
+            "a {} m texel, whole map {whole_m} m",
+            p[1]
+        );
+    }
+    let above_one_px = |img: &HdrImage| img.data.iter().filter(|p| p[0] > 1.0).count();
+    assert!(
+        above_one_px(&four) <= above_one_px(&one),
+        "4 cascades: {} pixels above 1 px, 1 map: {}",
+        above_one_px(&four),
+        above_one_px(&one)
+    );
+}

@@ -94,14 +94,21 @@ fn margin_texels(settings: &ShadowSettings) -> f32 {
 }
 
 /// The cascade views of every directional light among `lights` (the frame's light list, area
-/// lights already sampled) for `camera` at `aspect`: `(light index, N views)`, nothing when
+/// lights already sampled) for `camera` at `aspect`: `(light index, views)`, nothing when
 /// `settings.cascades` < 2. `scene_aabb` bounds the casters at the frame's time.
+///
+/// `whole_texel_m(i)` is the texel footprint of light i's whole-scene map. A cascade whose
+/// texel is not finer than that map's only costs (a camera whose far slices are wider than the
+/// scene, as in a large hall seen from inside): the cascades from the first such one on are
+/// dropped, so the last one kept fades into the whole-scene map, and a light whose first
+/// cascade is already no finer keeps none.
 pub fn cascade_views(
     lights: &[Light],
     camera: &Camera,
     aspect: f32,
     scene_aabb: &Aabb,
     settings: &ShadowSettings,
+    whole_texel_m: impl Fn(usize) -> f32,
 ) -> Vec<(usize, Vec<ShadowView>)> {
     if settings.cascades < 2 {
         return Vec::new();
@@ -122,7 +129,8 @@ pub fn cascade_views(
         let Light::Directional { direction, .. } = *light else {
             continue;
         };
-        let views = (0..splits.len())
+        let whole = whole_texel_m(li);
+        let views: Vec<ShadowView> = (0..splits.len())
             .map(|i| {
                 let (d0, d1) = cascade_slice(near, &splits, i);
                 let (c, radius) = slice_sphere(d0, d1, k);
@@ -132,8 +140,11 @@ pub fn cascade_views(
                 v.split_far_m = d1;
                 v
             })
+            .take_while(|v| v.texel_footprint < whole)
             .collect();
-        out.push((li, views));
+        if !views.is_empty() {
+            out.push((li, views));
+        }
     }
     out
 }
@@ -244,6 +255,42 @@ mod tests {
                 "{d0} {d1} {k}"
             );
         }
+    }
+
+    /// Slices grow with depth, and so do their texels; against a whole-scene map whose texel
+    /// lies between those of cascades 2 and 3, cascades 3 and 4 go, and against one finer than
+    /// the first cascade's, all of them.
+    #[test]
+    fn cascades_no_finer_than_the_whole_map_are_dropped() {
+        let settings = ShadowSettings::default();
+        let aabb = Aabb {
+            min: Vec3::splat(-50.0),
+            max: Vec3::splat(50.0),
+        };
+        let camera = Camera {
+            position: Vec3::ZERO,
+            forward: Vec3::Z,
+            up: Vec3::Y,
+            fov_y_deg: 60.0,
+            near: 0.1,
+            far: 200.0,
+            shift_x_tan: 0.0,
+        };
+        let sun = [Light::Directional {
+            direction: Vec3::new(0.2, -1.0, 0.1).normalize(),
+            irradiance_w_m2: Vec3::ONE,
+        }];
+        let all = cascade_views(&sun, &camera, 1.0, &aabb, &settings, |_| f32::INFINITY);
+        assert_eq!(all.len(), 1);
+        let texels: Vec<f32> = all[0].1.iter().map(|v| v.texel_footprint).collect();
+        assert_eq!(texels.len(), settings.cascades as usize);
+        assert!(texels.windows(2).all(|w| w[0] < w[1]), "{texels:?}");
+        let between = 0.5 * (texels[1] + texels[2]);
+        let capped = cascade_views(&sun, &camera, 1.0, &aabb, &settings, |_| between);
+        let kept: Vec<f32> = capped[0].1.iter().map(|v| v.texel_footprint).collect();
+        assert_eq!(kept, texels[..2]);
+        let none = cascade_views(&sun, &camera, 1.0, &aabb, &settings, |_| texels[0]);
+        assert!(none.is_empty());
     }
 
     #[test]

@@ -272,8 +272,9 @@ pub struct Renderer {
     has_phong: bool,
     /// The lights' own shadow views (the light maps have one layer each).
     shadow_view_count: u32,
-    /// The directional lights' cascade views, in the shadow maps after the lights' own.
-    cascade_view_count: u32,
+    /// Shadow-array layers kept for the directional lights' cascades, after the lights' own
+    /// views: the cascade count × the directional lights (a frame may use fewer).
+    cascade_view_capacity: u32,
     frame_data: GpuFrame,
     voxels: Option<crate::voxel::gpu::VoxelFrame>,
     /// Indirect-light passes and the light-map pass (for the voxel methods), when a GI method
@@ -535,7 +536,7 @@ impl Renderer {
             post,
             has_phong,
             shadow_view_count: 0,
-            cascade_view_count: 0,
+            cascade_view_capacity: 0,
             frame_data: GpuFrame::zeroed(),
             voxels,
             gi,
@@ -565,13 +566,21 @@ impl Renderer {
             aspect,
             &scene.aabb_at(s.time_s),
             &s.shadow,
+            |li| views[per_light[li].first as usize].texel_footprint,
         );
         for (li, set) in cascade_sets {
             cascades_of[li] = views.len() as u32 | (set.len() as u32) << 16;
             views.extend(set);
         }
-        if views.len() > MAX_SHADOW_VIEWS {
-            return Err(RenderError::TooManyShadowViews(views.len()));
+        // The graph's shadow array holds every cascade the settings allow, so that a camera
+        // whose far cascades are dropped (no finer than the whole-scene map) and later come
+        // back needs no new graph.
+        let capacity = match s.shadow.cascades {
+            n if n >= 2 => n as usize * lights.iter().filter(|l| l.is_directional()).count(),
+            _ => 0,
+        };
+        if base_views + capacity > MAX_SHADOW_VIEWS {
+            return Err(RenderError::TooManyShadowViews(base_views + capacity));
         }
         let view_proj = scene.camera.view_proj(aspect);
         let mut f = GpuFrame::zeroed();
@@ -604,7 +613,7 @@ impl Renderer {
         }
         self.frame_data = f;
         self.shadow_view_count = base_views as u32;
-        self.cascade_view_count = (views.len() - base_views) as u32;
+        self.cascade_view_capacity = capacity as u32;
         let (own, cascades) = views.split_at(base_views);
         self.scene
             .update_draws(scene, s.time_s, &view_proj, (own, cascades));
@@ -693,7 +702,7 @@ impl Renderer {
         let shadow_map = self.shadow_depth.declare(
             g,
             &scene,
-            views + self.cascade_view_count,
+            views + self.cascade_view_capacity,
             s.shadow.resolution,
         );
         let gbuffer = self.gbuffer.declare(g, &scene, w, h);
