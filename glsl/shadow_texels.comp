@@ -10,7 +10,9 @@
 // camera). Above 1 pixel the map is too coarse there (blocky edges), far below it wastes
 // resolution. Per pixel the largest d_i of the lights that reach it (the cascade that shades
 // it for a directional light). `value` holds (d_i px, texel m, view index), `color` a ramp of
-// log2 d_i: blue <= 1/4 px, green 1 px, red >= 4 px; grey where no light reaches.
+// log2 d_i: blue <= 1/4 px, green 1 px, red >= 4 px; grey where no light reaches. With
+// `projective` 0 (`--debug shadow-texels-perspective`) d_i leaves out cos a_i / cos a_s: the
+// perspective aliasing a finer map removes, not the projective one no resolution fixes.
 #include "frame.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
@@ -23,6 +25,7 @@ layout(set = 0, binding = 4, rgba8) uniform writeonly image2D color;
 
 layout(push_constant) uniform Push {
     float pixel_scale;  // height / (2 tan(fov_y / 2)): pixels per meter at 1 m view depth
+    uint projective;    // 1: with cos a_i / cos a_s; 0: the perspective part only
 } pc;
 
 // World size (m) across the light's ray at p of a texel of perspective, orthographic or
@@ -64,7 +67,8 @@ void main() {
         if (cos_s <= 0.0) continue;
         uint v = direct_shadow_view(l, p);
         float texel_m = texel_size_m(v, p);
-        float d_px = texel_m * pc.pixel_scale * cos_i / (max(cos_s, 1e-3) * view_depth);
+        float projective = pc.projective != 0u ? cos_i / max(cos_s, 1e-3) : 1.0;
+        float d_px = texel_m * pc.pixel_scale * projective / view_depth;
         if (d_px > worst) {
             worst = d_px;
             worst_texel = texel_m;

@@ -618,7 +618,7 @@ mod table_tests {
 }
 
 /// The "View" combo's entries: the lit image, then every debug view.
-const VIEWS: [Option<DebugView>; 10] = [
+const VIEWS: [Option<DebugView>; 11] = [
     None,
     Some(DebugView::Voxels),
     Some(DebugView::Steps),
@@ -629,6 +629,7 @@ const VIEWS: [Option<DebugView>; 10] = [
     Some(DebugView::GbufferNormal),
     Some(DebugView::GbufferDistance),
     Some(DebugView::ShadowTexels),
+    Some(DebugView::ShadowTexelsPerspective),
 ];
 
 /// Name of a debug view in the panel.
@@ -644,6 +645,7 @@ fn debug_name(v: Option<DebugView>) -> &'static str {
         Some(DebugView::GbufferNormal) => "G-buffer normal",
         Some(DebugView::GbufferDistance) => "G-buffer distance",
         Some(DebugView::ShadowTexels) => "shadow texels",
+        Some(DebugView::ShadowTexelsPerspective) => "shadow texels, perspective part",
     }
 }
 

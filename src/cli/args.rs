@@ -222,9 +222,11 @@ pub struct FrameArgs {
     pub tonemap: ToneOperator,
     #[arg(long, default_value_t = 1.0)]
     pub exposure: f32,
-    /// Shadow-map resolution (texels per side).
-    #[arg(long, default_value_t = 1024)]
-    pub shadow_resolution: u32,
+    /// Shadow-map resolution: texels per side, or `auto`: the smallest power of two that keeps
+    /// the shadow texel under a pixel on 95% of the lit pixels of the view (picked from one
+    /// probe frame of `--debug shadow-texels` when the renderer is made).
+    #[arg(long, default_value = "1024", value_name = "TEXELS|auto")]
+    pub shadow_resolution: ShadowResolutionArg,
     /// PCF radius in texels.
     #[arg(long, default_value_t = 1)]
     pub pcf_radius: u32,
@@ -277,7 +279,8 @@ pub struct FrameArgs {
     /// Show a debug view instead of the lit image: the voxel views (voxels, steps, level,
     /// albedo) voxelize at 128 unless --voxels; atlas shows an object's atlas; gbuffer-albedo,
     /// gbuffer-normal and gbuffer-distance show a G-buffer channel; shadow-texels the
-    /// predicted on-screen size of the shadow-map texels (shadow aliasing).
+    /// predicted on-screen size of the shadow-map texels (shadow aliasing),
+    /// shadow-texels-perspective its perspective part (without cos α_i / cos α_s).
     #[arg(long, value_enum)]
     pub debug: Option<crate::voxel::debug_view::DebugView>,
     /// Hierarchy level shown by --debug level (0 = the voxels).
@@ -304,7 +307,13 @@ impl FrameArgs {
         };
         s.tonemap.operator = self.tonemap;
         s.tonemap.exposure = self.exposure;
-        s.shadow.resolution = self.shadow_resolution;
+        match self.shadow_resolution {
+            ShadowResolutionArg::Texels(n) => s.shadow.resolution = n,
+            ShadowResolutionArg::Auto => {
+                s.shadow.resolution = crate::render::shadow_texels::AUTO_PROBE_RESOLUTION;
+                s.shadow.auto_resolution = true;
+            }
+        }
         s.shadow.pcf_radius = self.pcf_radius;
         s.shadow.point_technique = self.point_shadows;
         s.shadow.area_technique = self.area_shadows;
@@ -561,5 +570,34 @@ mod tests {
                 },
             }
         );
+    }
+}
+
+/// `--shadow-resolution`: texels per side, or `auto`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ShadowResolutionArg {
+    Texels(u32),
+    Auto,
+}
+
+impl std::str::FromStr for ShadowResolutionArg {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "auto" => Ok(Self::Auto),
+            n => n
+                .parse()
+                .map(Self::Texels)
+                .map_err(|_| format!("`{n}`: expected texels per side (e.g. 1024) or `auto`")),
+        }
+    }
+}
+
+impl std::fmt::Display for ShadowResolutionArg {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::Texels(n) => write!(f, "{n}"),
+            Self::Auto => f.write_str("auto"),
+        }
     }
 }

@@ -100,6 +100,18 @@ pub fn profile(global: &Global, args: &ProfileArgs, out: &mut dyn Write) -> Resu
             "resolution".into(),
             format!("{}x{}", frame.width, frame.height),
         ));
+        if let Some(a) = run.auto_shadow {
+            report.notes.push((
+                "shadow resolution".into(),
+                format!(
+                    "auto: {r}² (95th percentile of the lit pixels' shadow texels {q:.3} px at \
+                     the {p}² probe)",
+                    r = a.resolution,
+                    q = a.quantile_px_at_probe,
+                    p = a.probe_resolution
+                ),
+            ));
+        }
         report
             .notes
             .push(("transient memory".into(), run.transient_memory.summary()));

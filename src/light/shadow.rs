@@ -93,6 +93,9 @@ pub struct ShadowSettings {
     /// Snap each cascade's window to whole texels of a grid fixed in light space, so that its
     /// texels do not slide over the scene when the camera moves (off only to measure that).
     pub cascade_snap: bool,
+    /// `--shadow-resolution auto`: [`Self::resolution`] is picked when a renderer is created,
+    /// from a probe frame of the shadow-texel view (`render::shadow_texels`).
+    pub auto_resolution: bool,
 }
 
 impl Default for ShadowSettings {
@@ -109,6 +112,7 @@ impl Default for ShadowSettings {
             cascades: DEFAULT_CASCADES,
             cascade_lambda: 0.5,
             cascade_snap: true,
+            auto_resolution: false,
         }
     }
 }

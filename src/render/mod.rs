@@ -286,6 +286,8 @@ pub struct Renderer {
     /// The transparency lists, in scenes with d < 1 materials and `--transparency oit`.
     oit: Option<oit::OitPasses>,
     shadow_texels: Option<shadow_texels::ShadowTexelsPass>,
+    /// What `--shadow-resolution auto` picked, when it was asked for.
+    auto_shadow: Option<shadow_texels::AutoShadowResolution>,
 }
 
 impl Renderer {
@@ -294,6 +296,13 @@ impl Renderer {
         scene: &Scene,
         settings: RenderSettings,
     ) -> Result<Self, RenderError> {
+        let (settings, auto_shadow) = match settings.shadow.auto_resolution {
+            true => {
+                let (s, pick) = shadow_texels::resolve_auto_resolution(ctx, scene, &settings)?;
+                (s, Some(pick))
+            }
+            false => (settings, None),
+        };
         check_render_settings(&settings)?;
         check_device_limits(&settings, ctx.info.max_image_dimension_2d)?;
         let lights = frame_lights(&scene.lights, &settings.shadow).len();
@@ -306,6 +315,7 @@ impl Renderer {
         // An error half-way (a voxel grid that does not fit, a debug level beyond the
         // hierarchy, …) drops what was made so far, which releases it.
         let mut r = Self::create(ctx, scene, &settings)?;
+        r.auto_shadow = auto_shadow;
         r.prepare(scene)?;
         r.check_transient_memory(ctx)?;
         Ok(r)
@@ -432,13 +442,18 @@ impl Renderer {
         }
         let shadow_texels = settings
             .debug
-            .filter(|d| d.view == crate::voxel::debug_view::DebugView::ShadowTexels)
-            .map(|_| {
+            .and_then(|d| match d.view {
+                crate::voxel::debug_view::DebugView::ShadowTexels => Some(true),
+                crate::voxel::debug_view::DebugView::ShadowTexelsPerspective => Some(false),
+                _ => None,
+            })
+            .map(|projective| {
                 shadow_texels::ShadowTexelsPass::new(
                     ctx,
                     sampler.raw,
                     &scene.camera,
                     settings.height,
+                    projective,
                 )
             })
             .transpose()?;
@@ -545,7 +560,13 @@ impl Renderer {
             gbuffer_view,
             oit,
             shadow_texels,
+            auto_shadow: None,
         })
+    }
+
+    /// What `--shadow-resolution auto` picked for this renderer (`None`: a fixed resolution).
+    pub fn auto_shadow_resolution(&self) -> Option<shadow_texels::AutoShadowResolution> {
+        self.auto_shadow
     }
 
     /// Computes frame constants, shadow views and culled draw lists for the scene's camera and

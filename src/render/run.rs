@@ -20,6 +20,8 @@ pub struct RenderOutput {
     pub debug_description: Option<String>,
     /// The transparency lists' counters (`None`: the frame had none).
     pub oit: Option<super::OitStats>,
+    /// What `--shadow-resolution auto` picked (`None`: a fixed resolution).
+    pub auto_shadow: Option<super::shadow_texels::AutoShadowResolution>,
 }
 
 /// Renders one frame of `scene` headless.
@@ -51,6 +53,7 @@ pub(super) fn render_frames(
         transient_bytes,
         debug_description,
         oit: renderer.oit_stats(),
+        auto_shadow: renderer.auto_shadow_resolution(),
     })
 }
 
@@ -132,6 +135,8 @@ pub struct ProfileRun {
     pub transient_memory: crate::graph::MemoryStats,
     /// One-time passes submitted before the first frame, outside the frame graph.
     pub setup: Vec<PassTiming>,
+    /// What `--shadow-resolution auto` picked (`None`: a fixed resolution).
+    pub auto_shadow: Option<super::shadow_texels::AutoShadowResolution>,
 }
 
 /// Per-pass GPU timing over many frames of a scene (for `voxgi profile`).
@@ -203,5 +208,6 @@ fn profile_run(
         culled_passes: c.culled.iter().map(|&p| c.pass_names[p].clone()).collect(),
         transient_memory: c.memory,
         setup: renderer.setup_timings(),
+        auto_shadow: renderer.auto_shadow_resolution(),
     }
 }

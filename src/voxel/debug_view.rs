@@ -50,6 +50,10 @@ pub enum DebugView {
     /// Shadow aliasing: the predicted on-screen size in pixels of the shadow-map texel that
     /// shades each pixel (drawn by the renderer's `shadow_texels` pass).
     ShadowTexels,
+    /// Its perspective part only, d_s·r_s/r_i: the aliasing a finer map removes, without the
+    /// projective factor cos α_i / cos α_s, which is unbounded where light grazes a surface
+    /// and which no resolution fixes (what `--shadow-resolution auto` sizes for).
+    ShadowTexelsPerspective,
 }
 
 impl DebugView {
@@ -65,7 +69,8 @@ impl DebugView {
             | DebugView::GbufferAlbedo
             | DebugView::GbufferNormal
             | DebugView::GbufferDistance
-            | DebugView::ShadowTexels => 0,
+            | DebugView::ShadowTexels
+            | DebugView::ShadowTexelsPerspective => 0,
         }
     }
 
@@ -405,7 +410,8 @@ pub fn describe(settings: &DebugSettings, value: &HdrImage) -> String {
         DebugView::GbufferAlbedo
         | DebugView::GbufferNormal
         | DebugView::GbufferDistance
-        | DebugView::ShadowTexels => {
+        | DebugView::ShadowTexels
+        | DebugView::ShadowTexelsPerspective => {
             format!("{:?} view", settings.view)
         }
     }
