@@ -1,5 +1,6 @@
 #version 450
-// Reflective light maps: what the light sees is directly lit by it, so each texel stores the
+// Reflective light maps: what the light sees (through any view: spot, cube face, orthographic
+// or an area-light element's paraboloid, light_map.geom) is directly lit by it, so each texel stores the
 // radiance leaving that surface (Lambert: rho/pi * E, E = I cos / d^2 with Mitsuba's spot
 // falloff; the diffuse part), its world position and material and its normal, for lookups at
 // voxel ray hits (Thiedemann 2010, §6.3.3). A GGX sender's diffuse part is
@@ -8,6 +9,7 @@
 // specular lobe sends nothing here, so a metal (m = 1) sends no light-map light.
 #include "frame.glsl"
 #include "dissolve.glsl"
+#include "paraboloid.glsl"
 
 // Some material has MTL d < 1: its texels are covered as in the shadow maps (dissolve.glsl).
 layout(constant_id = 0) const bool HAS_DISSOLVE = false;
@@ -28,6 +30,18 @@ layout(push_constant) uniform Push {
 
 layout(location = 0) in vec3 in_normal;
 layout(location = 1) in vec3 in_world;
+// Paraboloid views (light_map.geom; w of in_v0 is 1 there).
+layout(location = 2) in vec2 in_uv;
+layout(location = 3) flat in vec4 in_v0;
+layout(location = 4) flat in vec3 in_v1;
+layout(location = 5) flat in vec3 in_v2;
+layout(location = 6) flat in vec3 in_w0;
+layout(location = 7) flat in vec3 in_w1;
+layout(location = 8) flat in vec3 in_w2;
+layout(location = 9) flat in vec3 in_n0;
+layout(location = 10) flat in vec3 in_n1;
+layout(location = 11) flat in vec3 in_n2;
+layout(location = 12) flat in vec2 in_range;
 
 layout(location = 0) out vec4 out_radiance;
 layout(location = 1) out vec4 out_position;
@@ -36,15 +50,30 @@ layout(location = 2) out vec4 out_normal;
 #define PI 3.14159265358979323846
 
 void main() {
+    vec3 world = in_world;
+    vec3 normal = in_normal;
+    bool covered = true;
+    gl_FragDepth = gl_FragCoord.z;
+    if (in_v0.w != 0.0) {
+        // A paraboloid view: the exact hit of this texel's ray (paraboloid.glsl), its world
+        // position and normal from the barycentric weights, its radial depth.
+        vec3 dir, bary;
+        float dist;
+        covered = paraboloid_ray(in_uv, in_v0.xyz, in_v1, in_v2, dir, dist, bary);
+        world = bary.x * in_w0 + bary.y * in_w1 + bary.z * in_w2;
+        normal = bary.x * in_n0 + bary.y * in_n1 + bary.z * in_n2;
+        gl_FragDepth = clamp((dist - in_range.x) / (in_range.y - in_range.x), 0.0, 1.0);
+    }
     // Before any discard: the threshold takes derivatives.
-    float coverage_threshold = HAS_DISSOLVE ? dissolve_threshold(in_world) : 0.0;
+    float coverage_threshold = HAS_DISSOLVE ? dissolve_threshold(world) : 0.0;
+    if (!covered) discard;
     // The shadow views index their light through the light table.
     GpuLight l;
     for (uint i = 0u; i < frame.counts.x; ++i) {
         GpuLight c = frame.lights[i];
         if (pc.view >= c.info.y && pc.view < c.info.y + c.info.z) l = c;
     }
-    vec3 n = normalize(in_normal);
+    vec3 n = normalize(normal);
     vec3 e;
     float cos_i;
     if (l.info.x == LIGHT_DIRECTIONAL) {
@@ -52,7 +81,7 @@ void main() {
         cos_i = max(dot(n, -l.direction.xyz), 0.0);
         e = l.intensity.rgb * cos_i;
     } else {
-        vec3 d = l.position.xyz - in_world;
+        vec3 d = l.position.xyz - world;
         float d2 = max(dot(d, d), 1e-30);
         vec3 wi = d * inversesqrt(d2);
         // Two-sided: the side the light sees.
@@ -72,6 +101,6 @@ void main() {
     out_radiance = vec4(diffuse / PI * e, 1.0);
     // w: material index + 1 (0 marks texels the light sees nothing in), so lookups can
     // evaluate a glossy sender's lobe toward the ray (§6.4.3).
-    out_position = vec4(in_world, float(pc.material + 1u));
+    out_position = vec4(world, float(pc.material + 1u));
     out_normal = vec4(n, 0.0);
 }

@@ -49,6 +49,7 @@ bool vx_voxel(int x, int y, int k) {
 
 #include "voxel_traverse.glsl"
 #include "shadow.glsl"
+#include "paraboloid.glsl"
 #include "gbuffer_lobe.glsl"
 
 #ifdef RADIANCE_FROM_VOLUME
@@ -70,10 +71,23 @@ vec3 light_map_radiance(vec3 hit, vec3 dir) {
         uint v = shadow_view_index(l, hit);
         GpuShadowView sv = frame.shadow_views[v];
         vec4 c = sv.view_proj * vec4(hit, 1.0);
-        if (c.w <= 0.0) continue;
-        vec3 ndc = c.xyz / c.w;
-        if (any(greaterThan(abs(ndc.xy), vec2(1.0))) || ndc.z < 0.0 || ndc.z > 1.0) continue;
-        ivec2 q = clamp(ivec2(floor((ndc.xy * 0.5 + 0.5) * vec2(size))), ivec2(0), size - 1);
+        vec2 map_xy;
+        float texel_m;
+        if (sv.params.y > 1.5) {
+            // A paraboloid view (an area-light element's hemisphere; paraboloid.glsl): the
+            // hit's direction from the light, within the hemisphere and its radial range.
+            float r = length(c.xyz);
+            if (c.z < 0.0 || r > sv.params.w) continue;
+            map_xy = paraboloid_uv(c.xyz);
+            texel_m = paraboloid_texel_m(sv, hit) * gi.light_map_scale;
+        } else {
+            if (c.w <= 0.0) continue;
+            vec3 ndc = c.xyz / c.w;
+            if (any(greaterThan(abs(ndc.xy), vec2(1.0))) || ndc.z < 0.0 || ndc.z > 1.0) continue;
+            map_xy = ndc.xy;
+            texel_m = sv.params.x * gi.light_map_scale * (sv.params.y > 0.5 ? 1.0 : c.w);
+        }
+        ivec2 q = clamp(ivec2(floor((map_xy * 0.5 + 0.5) * vec2(size))), ivec2(0), size - 1);
         vec4 pos = texelFetch(rlm_position, ivec3(q, int(v)), 0);
         if (pos.w == 0.0) continue;  // the light sees nothing there
         vec3 n = texelFetch(rlm_normal, ivec3(q, int(v)), 0).xyz;
@@ -83,8 +97,6 @@ vec3 light_map_radiance(vec3 hit, vec3 dir) {
         // Tolerance (§6.3.3): the hit lies on the boundary of the hit voxel (up to a diagonal
         // from the surface) plus the light-map texel's footprint on a surface at this slope,
         // clamped so grazing texels do not accept far points.
-        float dist = sv.params.y > 0.5 ? 1.0 : c.w;
-        float texel_m = sv.params.x * gi.light_map_scale * dist;
         float footprint = min(texel_m / max(cos_l, 0.05), 8.0 * gi.voxel_diagonal_m);
         float tol = gi.hit_tolerance_voxels * gi.voxel_diagonal_m + 2.0 * footprint;
         if (distance(pos.xyz, hit) > tol) continue;

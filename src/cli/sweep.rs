@@ -299,7 +299,7 @@ fn job(config: &Config, scene: &Scene, size: u32) -> Result<Job, CliError> {
 }
 
 /// The jobs a scene can be rendered with: a configuration the renderer refuses for this
-/// scene (e.g. the light-map hemisphere with area lights) is left out with a note on stderr,
+/// scene (e.g. the light-map GI methods with paraboloid point-light shadows) is left out with a note on stderr,
 /// so that one such pair does not end the whole sweep.
 fn renderable(scene_name: &str, scene: &Scene, jobs: Vec<Job>) -> Vec<Job> {
     jobs.into_iter()

@@ -74,8 +74,6 @@ pub enum RenderError {
     EmptyScene,
     #[error("indirect light reads reflective light maps, which exist for cube shadow maps only: use --point-shadows cube with --gi")]
     GiNeedsCubeShadows,
-    #[error("area lights are shadowed by paraboloid views, which have no reflective light maps, so --gi {0} cannot see their light: use --gi pathtrace, --gi vpl, or --gi hemisphere --gi-radiance volume")]
-    AreaLightsNeedNoLightMaps(&'static str),
     #[error("--sao darkens only indirect light, and --gi none has none: choose a --gi method (hemisphere, pathtrace, vpl) or leave out --sao")]
     SaoWithoutGi,
     #[error(transparent)]
@@ -177,7 +175,7 @@ fn check_frame_memory(
 /// light-map hemisphere, SAO without GI). [`Renderer::new`] runs it first; `voxgi sweep` asks
 /// it to leave such configurations out instead of failing on them.
 pub fn check_scene_settings(scene: &Scene, settings: &RenderSettings) -> Result<(), RenderError> {
-    use crate::gi::{GiMethod, RadianceSource};
+    use crate::gi::GiMethod;
     let gi_on = settings.gi.method != GiMethod::None && settings.debug.is_none();
     let gi_voxels = gi_on && settings.gi.method.needs_voxels();
     if gi_voxels
@@ -185,15 +183,6 @@ pub fn check_scene_settings(scene: &Scene, settings: &RenderSettings) -> Result<
         && scene.has_point_lights()
     {
         return Err(RenderError::GiNeedsCubeShadows);
-    }
-    // The VPLs sample area lights themselves (`gi_vpl_emit`); the light-map hemisphere has no
-    // reflective light maps of their paraboloid views.
-    if gi_on
-        && scene.lights.iter().any(Light::is_area)
-        && (settings.gi.method, settings.gi.radiance_source)
-            == (GiMethod::Hemisphere, RadianceSource::Maps)
-    {
-        return Err(RenderError::AreaLightsNeedNoLightMaps("hemisphere"));
     }
     if !gi_on && settings.gi.sao.is_some() {
         return Err(RenderError::SaoWithoutGi);
