@@ -38,6 +38,7 @@ struct GpuMaterial { vec4 albedo; vec4 specular; uvec4 flags; };
 layout(set = 0, binding = 5, std430) readonly buffer Materials { GpuMaterial materials[]; };
 
 #include "shadow.glsl"
+#include "paraboloid.glsl"
 
 GpuVpl invalid_vpl() {
     return GpuVpl(vec4(0.0), vec4(0.0, 0.0, 1.0, 0.0), vec4(0.0), vec4(0.0), vec4(0.0));
@@ -48,7 +49,9 @@ bool map_texel(uint v, vec3 p, ivec2 size, out ivec2 q) {
     vec4 c = frame.shadow_views[v].view_proj * vec4(p, 1.0);
     q = ivec2(0);
     if (c.w <= 0.0) return false;
-    vec2 ndc = c.xy / c.w;
+    // Paraboloid hemispheres (paraboloid.glsl): the direction's stereographic image.
+    if (frame.shadow_views[v].params.y > 1.5 && c.z < 0.0) return false;
+    vec2 ndc = frame.shadow_views[v].params.y > 1.5 ? paraboloid_uv(c.xyz) : c.xy / c.w;
     if (any(greaterThan(abs(ndc), vec2(1.0)))) return false;
     q = clamp(ivec2(floor((ndc * 0.5 + 0.5) * vec2(size))), ivec2(0), size - 1);
     return true;

@@ -109,17 +109,6 @@ fn a_scene_without_geometry() {
 }
 
 #[test]
-fn gi_with_paraboloid_point_shadows() {
-    let ctx = common::context();
-    let scene = load_scene_arg(Some("cornell-point")).expect("built-in scene");
-    let mut s = small();
-    s.gi.method = GiMethod::Hemisphere;
-    s.shadow.point_technique = PointShadow::DualParaboloid;
-    let e = Renderer::new(&ctx, &scene, s).err().expect("refused");
-    assert!(matches!(e, RenderError::GiNeedsCubeShadows), "{e}");
-}
-
-#[test]
 fn sao_without_indirect_light() {
     // SAO multiplies only the indirect light; with --gi none there is none to darken.
     let ctx = common::context();

@@ -298,13 +298,13 @@ fn job(config: &Config, scene: &Scene, size: u32) -> Result<Job, CliError> {
     })
 }
 
-/// The jobs a scene can be rendered with: a configuration the renderer refuses for this
-/// scene (e.g. the light-map GI methods with paraboloid point-light shadows) is left out with a note on stderr,
-/// so that one such pair does not end the whole sweep.
-fn renderable(scene_name: &str, scene: &Scene, jobs: Vec<Job>) -> Vec<Job> {
+/// The jobs a scene is rendered with: a configuration the renderer refuses (e.g. SAO
+/// without GI) is left out with a note on stderr, so that one such job does not end the whole
+/// sweep.
+fn renderable(scene_name: &str, jobs: Vec<Job>) -> Vec<Job> {
     jobs.into_iter()
         .filter(
-            |j| match crate::render::check_scene_settings(scene, &j.settings) {
+            |j| match crate::render::check_setting_combination(&j.settings) {
                 Ok(()) => true,
                 Err(e) => {
                     eprintln!("skipping {scene_name} {}: {e}", j.config.label());
@@ -458,7 +458,7 @@ pub fn sweep(global: &Global, args: &SweepArgs, out: &mut dyn Write) -> Result<(
                 .iter()
                 .map(|c| job(c, &s.scene, args.size))
                 .collect::<Result<Vec<_>, _>>()?;
-            Ok(renderable(&s.name, &s.scene, jobs))
+            Ok(renderable(&s.name, jobs))
         })
         .collect::<Result<Vec<_>, CliError>>()?;
     std::fs::create_dir_all(&args.out).map_err(|source| SweepError::Io {

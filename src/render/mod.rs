@@ -72,8 +72,6 @@ pub enum RenderError {
     Settings(#[from] crate::limits::LimitError),
     #[error("the scene has no geometry to render: add an object")]
     EmptyScene,
-    #[error("indirect light reads reflective light maps, which exist for cube shadow maps only: use --point-shadows cube with --gi")]
-    GiNeedsCubeShadows,
     #[error("--sao darkens only indirect light, and --gi none has none: choose a --gi method (hemisphere, pathtrace, vpl) or leave out --sao")]
     SaoWithoutGi,
     #[error(transparent)]
@@ -170,20 +168,13 @@ fn check_frame_memory(
     )
 }
 
-/// Whether `scene` can be rendered with `settings` at all, independent of the device: the
-/// combinations a renderer refuses (GI with paraboloid point shadows, area lights with the
-/// light-map hemisphere, SAO without GI). [`Renderer::new`] runs it first; `voxgi sweep` asks
-/// it to leave such configurations out instead of failing on them.
-pub fn check_scene_settings(scene: &Scene, settings: &RenderSettings) -> Result<(), RenderError> {
+/// Whether `settings` combine at all, independent of scene and device: the combination a
+/// renderer refuses (SAO without GI; every GI method now renders with paraboloid point
+/// shadows and with area lights). [`Renderer::new`] runs it first; `voxgi sweep` asks it to
+/// leave such configurations out instead of failing on them.
+pub fn check_setting_combination(settings: &RenderSettings) -> Result<(), RenderError> {
     use crate::gi::GiMethod;
     let gi_on = settings.gi.method != GiMethod::None && settings.debug.is_none();
-    let gi_voxels = gi_on && settings.gi.method.needs_voxels();
-    if gi_voxels
-        && settings.shadow.point_technique == PointShadow::DualParaboloid
-        && scene.has_point_lights()
-    {
-        return Err(RenderError::GiNeedsCubeShadows);
-    }
     if !gi_on && settings.gi.sao.is_some() {
         return Err(RenderError::SaoWithoutGi);
     }
@@ -349,7 +340,7 @@ impl Renderer {
         let gi_on = settings.gi.method != crate::gi::GiMethod::None && settings.debug.is_none();
         // Screen-space GI reads only the frame: no voxels, no light maps.
         let gi_voxels = gi_on && settings.gi.method.needs_voxels();
-        check_scene_settings(scene, settings)?;
+        check_setting_combination(settings)?;
         let voxel_view_on = settings.debug.is_some_and(|d| d.view.shows_voxels());
         let voxel_settings = settings
             .voxels
