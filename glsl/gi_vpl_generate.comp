@@ -128,7 +128,8 @@ bool map_light(uint light, out GpuLight l) {
     uint seen = 0u;
     for (uint i = 0u; i < frame.counts.x; ++i) {
         l = frame.lights[i];
-        if (l.info.x == LIGHT_ELEMENT) continue;
+        // Area lights (elements, and PCSS's whole spheres: spot.w > 0) are gi_vpl_emit's.
+        if (l.info.x == LIGHT_ELEMENT || (l.info.x == LIGHT_POINT && l.spot.w > 0.0)) continue;
         if (seen == light) return true;
         seen++;
     }

@@ -170,7 +170,9 @@ vec3 shadow_texel_offset_slope(GpuShadowView sv, vec3 p, vec3 n, int r) {
 }
 
 // Percentage-closer soft shadows (Fernando 2005; Oetke 2017 §4.3) of an area light drawn as
-// one element at its centre, with its size s = l.spot.w (m), in the element's paraboloid map.
+// one element at its centre (a rectangle) or as a point at its centre (a sphere, two
+// hemispheres), with its size s = l.spot.w (m: the rectangle's √area, the sphere's
+// diameter), in its paraboloid map.
 //  1. Blocker search: 16 rotated Poisson taps over the region where blockers down to a fifth
 //     of the receiver's distance can hide part of the light: a blocker at distance t from the
 //     light, hiding the light's rim (s/2 off its centre) from p at distance z, lies
@@ -212,7 +214,8 @@ vec2 pcss_tap(sampler2DArray maps, GpuShadowView sv, uint layer, vec3 p, vec3 n,
 }
 
 float pcss_visibility(sampler2DArray maps, GpuLight l, vec3 p, vec3 n) {
-    uint v = l.info.y;
+    // The element's one hemisphere, or the sphere's hemisphere that holds p.
+    uint v = shadow_view_index(l, p);
     GpuShadowView sv = frame.shadow_views[v];
     vec3 d = (sv.view_proj * vec4(p, 1.0)).xyz;
     float z = length(d);
@@ -284,7 +287,11 @@ float view_pcf_visibility(sampler2DArray maps, uint v, vec3 po, vec3 tos, int r)
 float shadow_visibility(sampler2DArray maps, GpuLight l, vec3 p, vec3 n, float cos_theta) {
     if (l.info.z == 0u) return 1.0;
     if (frame.shadow_views[l.info.y].params.y > 1.5) {
-        if (l.info.x == LIGHT_ELEMENT && l.spot.w > 0.0) return pcss_visibility(maps, l, p, n);
+        // PCSS: a rectangle drawn as one element, or a whole sphere (a point light of size
+        // spot.w; regular point lights have 0 there).
+        if ((l.info.x == LIGHT_ELEMENT || l.info.x == LIGHT_POINT) && l.spot.w > 0.0) {
+            return pcss_visibility(maps, l, p, n);
+        }
         return paraboloid_visibility(maps, l, p, n, cos_theta);
     }
     int r = int(frame.shadow.w);

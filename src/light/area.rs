@@ -49,6 +49,10 @@ pub fn frame_lights(lights: &[Light], settings: &ShadowSettings) -> Vec<Light> {
                 intensity_w_sr: radiance_w_sr_m2 * (width_m * height_m),
                 pcss_size_m: (width_m * height_m).sqrt(),
             }),
+            // A sphere stays whole: a uniform emitter at its centre, shadowed by two
+            // paraboloid hemispheres, its PCSS size the diameter (`super::shadow`,
+            // `render::gpu_light`).
+            Light::Sphere { .. } => out.push(*light),
             other => out.extend(sample_lights(&[other], settings.area_samples)),
         }
     }

@@ -200,6 +200,35 @@ fn depth_range(origin: Vec3, aabb: &Aabb) -> (f32, f32) {
     (far * 1e-4, far)
 }
 
+/// The two paraboloid hemispheres (+y and −y) of a light at `position`, light index `li`,
+/// appended to `views`.
+fn paraboloid_pair(position: Vec3, aabb: &Aabb, res: f32, li: usize, views: &mut Vec<ShadowView>) {
+    let (near, far) = depth_range(position, aabb);
+    // Hemisphere frames share x and y, so a PCF tap past one rim (|uv| > 1) is the other
+    // map's uv / |uv|^2 (glsl/include/shadow.glsl).
+    for axis in [Vec3::Y, Vec3::NEG_Y] {
+        let rot = Mat4::from_cols(
+            Vec3::X.extend(0.0),
+            Vec3::Z.extend(0.0),
+            axis.extend(0.0),
+            glam::Vec4::W,
+        )
+        .transpose();
+        views.push(ShadowView {
+            view_proj: rot * Mat4::from_translation(-position),
+            // uv = d.xy / (1 + d.z) is conformal (stereographic) with |duv/dangle| =
+            // 1 / (1 + d.z); a texel spans 2 / res in uv.
+            texel_footprint: 2.0 / res,
+            projection: ShadowProjection::Paraboloid,
+            axis,
+            near,
+            far,
+            light: li,
+            split_far_m: 0.0,
+        });
+    }
+}
+
 /// The shadow views of every light of `scene` at time `t_s`, area lights sampled into
 /// elements (`super::area::frame_lights`): `per_light` indexes that sampled list.
 pub fn shadow_views(
@@ -241,9 +270,12 @@ pub fn shadow_views(
                     split_far_m: 0.0,
                 });
             }
-            Light::Sphere { .. } | Light::Rectangle { .. } => {
-                unreachable!("sample_lights replaced area lights by elements")
+            Light::Rectangle { .. } => {
+                unreachable!("frame_lights replaced rectangles by elements")
             }
+            // Whole spheres (PCSS, `super::area::frame_lights`): two hemispheres from the
+            // centre, as a point light's paraboloid maps.
+            Light::Sphere { position, .. } => paraboloid_pair(position, &aabb, res, li, &mut views),
             Light::Spot {
                 position,
                 direction,
@@ -271,30 +303,7 @@ pub fn shadow_views(
             Light::Point { position, .. }
                 if settings.point_technique == PointShadow::DualParaboloid =>
             {
-                let (near, far) = depth_range(position, &aabb);
-                // Hemisphere frames share x and y, so a PCF tap past one rim (|uv| > 1) is the
-                // other map's uv / |uv|^2 (glsl/include/shadow.glsl).
-                for axis in [Vec3::Y, Vec3::NEG_Y] {
-                    let rot = Mat4::from_cols(
-                        Vec3::X.extend(0.0),
-                        Vec3::Z.extend(0.0),
-                        axis.extend(0.0),
-                        glam::Vec4::W,
-                    )
-                    .transpose();
-                    views.push(ShadowView {
-                        view_proj: rot * Mat4::from_translation(-position),
-                        // uv = d.xy / (1 + d.z) is conformal (stereographic) with
-                        // |duv/dangle| = 1 / (1 + d.z); a texel spans 2 / res in uv.
-                        texel_footprint: 2.0 / res,
-                        projection: ShadowProjection::Paraboloid,
-                        axis,
-                        near,
-                        far,
-                        light: li,
-                        split_far_m: 0.0,
-                    });
-                }
+                paraboloid_pair(position, &aabb, res, li, &mut views)
             }
             Light::Point { position, .. } => {
                 let (near, far) = depth_range(position, &aabb);

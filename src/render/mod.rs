@@ -901,8 +901,24 @@ fn gpu_light(light: &Light, first_view: u32, views: u32) -> GpuLight {
             spot: [0.0, 0.0, 0.0, pcss_size_m],
             info: [LIGHT_ELEMENT, first_view, views, 0],
         },
-        Light::Sphere { .. } | Light::Rectangle { .. } => {
-            unreachable!("prepare renders area lights as their samples (sample_lights)")
+        // A whole sphere (`--area-shadows pcss`): seen from any direction it is a disk of
+        // area πR² and radiance L, so a point light of intensity I = L·πR² at its centre gives
+        // exactly its irradiance E = π L (R/d)² cos θ wherever it is wholly above the
+        // receiver's horizon; spot.w, its diameter, asks for PCSS (glsl/include/shadow.glsl).
+        Light::Sphere {
+            position,
+            radius_m,
+            radiance_w_sr_m2,
+            ..
+        } => GpuLight {
+            position: v4(position),
+            intensity: v4(radiance_w_sr_m2 * (std::f32::consts::PI * radius_m * radius_m)),
+            spot: [0.0, 0.0, 0.0, 2.0 * radius_m],
+            info: [LIGHT_POINT, first_view, views, 0],
+            ..Default::default()
+        },
+        Light::Rectangle { .. } => {
+            unreachable!("prepare renders rectangles as elements (frame_lights)")
         }
     }
 }
