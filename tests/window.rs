@@ -735,3 +735,57 @@ fn viewer_survives_a_storm_of_resizes_minimizes_and_gi_switches() {
     assert_eq!(methods.next(), None, "every method was switched to");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `voxgi view --budget-ms` starts with `voxgi tune`'s choice from the sweep (the panel's "best
+/// within budget" button applies the same `bench::sweep::tune_from_dir`). On the committed
+/// lavapipe sweep of the Cornell box the most accurate row within 100 ms is the path tracer
+/// with 4 rays and 1 frame (75 ms, relMSE 0.045; docs/sweep/sweep.csv).
+#[test]
+fn viewer_starts_with_the_best_configuration_within_a_budget() {
+    require_display();
+    let _display = lock_display();
+    let sweep = Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/sweep");
+    let out = voxgi_with(
+        &[
+            "--validate",
+            "view",
+            "cornell",
+            "--sweep",
+            sweep.to_str().expect("utf-8 path"),
+            "--budget-ms",
+            "100",
+            "--width",
+            "320",
+            "--height",
+            "240",
+            "--frames",
+            "3",
+        ],
+        |cmd| {
+            cmd.env("RUST_LOG", "warn,voxgi::app=info");
+        },
+    );
+    assert_success(&out, "voxgi --validate view --budget-ms 100");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stdout.contains("best within 100 ms: pathtrace gi-rays=4 gi-frames=1"),
+        "{stdout}"
+    );
+    assert!(
+        stderr.contains("indirect light: pathtrace, 4 rays"),
+        "the viewer did not start with the tuned path tracer:\n{stderr}"
+    );
+    // No sweep there: a clear error naming the file, before any window.
+    let missing = voxgi(&[
+        "view",
+        "cornell",
+        "--sweep",
+        "/nonexistent",
+        "--budget-ms",
+        "100",
+    ]);
+    assert!(!missing.status.success());
+    let err = String::from_utf8_lossy(&missing.stderr);
+    assert!(err.contains("/nonexistent/sweep.csv"), "{err}");
+}

@@ -88,6 +88,12 @@ pub struct ViewerOptions {
     /// Screenshot path (PNG). A scripted run writes one of its last frame; otherwise F12 and
     /// the panel button write here (default `voxgi-shot-N.png`).
     pub screenshot: Option<PathBuf>,
+    /// The sweep (its folder, as `voxgi sweep --out` wrote it) and the scene's name in it,
+    /// for the panel's "best within budget" ([`crate::bench::sweep::tune_from_dir`]).
+    pub sweep_dir: PathBuf,
+    pub scene_name: String,
+    /// The panel's initial time budget, ms.
+    pub budget_ms: f32,
 }
 
 impl Default for ViewerOptions {
@@ -103,6 +109,9 @@ impl Default for ViewerOptions {
             minimize_at: None,
             restore_after: 10,
             screenshot: None,
+            sweep_dir: PathBuf::from("sweep"),
+            scene_name: "cornell".into(),
+            budget_ms: 100.0,
         }
     }
 }
@@ -361,6 +370,8 @@ impl Viewer {
             atlas_object: opts.settings.debug.map_or(0, |d| d.object),
             screenshot: false,
             add_keyframe: false,
+            budget_ms: opts.budget_ms,
+            tune: false,
         };
         Self {
             opts: opts.clone(),
@@ -532,6 +543,9 @@ impl Viewer {
         self.scene.camera = self.fly.apply(&self.lens);
         if std::mem::take(&mut self.controls.add_keyframe) {
             self.report.camera_keys.push(self.scene.camera);
+        }
+        if std::mem::take(&mut self.controls.tune) {
+            self.apply_best_within_budget();
         }
 
         // Minimized (or zero-sized): nothing to present until the window is back. On X11 an
@@ -814,6 +828,28 @@ impl Viewer {
         }
     }
 
+    /// The panel's "best within budget": the most accurate configuration of this scene in
+    /// the sweep that fits the budget (`voxgi tune`'s choice) becomes the GI settings, which
+    /// makes a new renderer; the status line says what was chosen, or why nothing was.
+    fn apply_best_within_budget(&mut self) {
+        let budget = f64::from(self.controls.budget_ms);
+        let dir = &self.opts.sweep_dir;
+        match crate::bench::sweep::tune_from_dir(dir, &self.opts.scene_name, budget) {
+            Ok((row, _, overrides)) => {
+                self.controls.gi = overrides.apply(self.controls.gi);
+                self.status = format!(
+                    "best within {budget} ms: {} ({:.1} ms to the image, relMSE {:.4}, on {})",
+                    row.config, row.image_ms, row.rel_mse, row.device
+                );
+                log::info!("{}", self.status);
+            }
+            Err(e) => {
+                self.status = format!("best within {budget} ms: {e}");
+                log::warn!("{}", self.status);
+            }
+        }
+    }
+
     /// Builds the frame graph for the current swapchain and renderer settings.
     fn rebuild(&mut self, ctx: &Context) -> Result<(), AppError> {
         ctx.wait_idle()?;
@@ -961,6 +997,8 @@ mod tests {
             atlas_object: 2,
             screenshot: false,
             add_keyframe: false,
+            budget_ms: 100.0,
+            tune: false,
         };
         let d = debug_settings(&c, current.debug).expect("a debug view");
         assert_eq!((d.view, d.object, d.level), (DebugView::Atlas, 2, 3));

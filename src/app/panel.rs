@@ -83,6 +83,11 @@ pub struct Controls {
     pub screenshot: bool,
     /// Set by the "Add camera keyframe" button; the viewer records the camera and clears it.
     pub add_keyframe: bool,
+    /// The time budget of "best within budget", ms (GPU time to the image, as the sweep
+    /// measured it on its device).
+    pub budget_ms: f32,
+    /// Set by the "Best within budget" button; the viewer applies the sweep's choice.
+    pub tune: bool,
 }
 
 /// Read-only facts the panel shows.
@@ -360,7 +365,10 @@ pub fn draw(
 
             egui::CollapsingHeader::new("Global illumination")
                 .default_open(true)
-                .show(ui, |ui| gi_controls(ui, &mut c.gi, info.gi_frames));
+                .show(ui, |ui| {
+                    gi_controls(ui, &mut c.gi, info.gi_frames);
+                    budget_controls(ui, c);
+                });
 
             egui::CollapsingHeader::new("View")
                 .default_open(false)
@@ -491,6 +499,8 @@ mod table_tests {
             atlas_object: 0,
             screenshot: false,
             add_keyframe: false,
+            budget_ms: 100.0,
+            tune: false,
         };
         let lights = ["point 0".to_string()];
         let info = PanelInfo {
@@ -647,6 +657,21 @@ fn debug_name(v: Option<DebugView>) -> &'static str {
         Some(DebugView::ShadowTexels) => "shadow texels",
         Some(DebugView::ShadowTexelsPerspective) => "shadow texels, perspective part",
     }
+}
+
+/// "Best within budget": the most accurate GI configuration of the scene's sweep whose GPU
+/// time to the image fits the budget (`voxgi tune`; the sweep folder is `voxgi view --sweep`).
+fn budget_controls(ui: &mut egui::Ui, c: &mut Controls) {
+    ui.horizontal(|ui| {
+        ui.add(
+            egui::DragValue::new(&mut c.budget_ms)
+                .clamp_range(0.1..=1.0e6)
+                .suffix(" ms"),
+        );
+        if ui.button("Best within budget").clicked() {
+            c.tune = true;
+        }
+    });
 }
 
 /// The GI method and its parameters; what does not apply to the method is hidden.

@@ -519,6 +519,37 @@ pub fn gi_table_text(row: &SweepRow) -> Result<String, String> {
     toml::to_string(&doc).map_err(|e| e.to_string())
 }
 
+/// What `voxgi tune` and the viewer's "best within budget" choose from the sweep in `dir`
+/// (its sweep.csv): the most accurate row of `scene` within `budget_ms` ([`tune`]), its
+/// `[gi]` table as text, and that table read back as a scene file's `[gi]` would be.
+pub fn tune_from_dir(
+    dir: &Path,
+    scene: &str,
+    budget_ms: f64,
+) -> Result<(SweepRow, String, crate::scene::GiOverrides), SweepError> {
+    let csv = dir.join("sweep.csv");
+    if !csv.exists() {
+        return Err(SweepError::Io {
+            path: csv,
+            source: std::io::Error::new(
+                std::io::ErrorKind::NotFound,
+                "no sweep here; run `voxgi sweep SCENE --out DIR` and pass DIR",
+            ),
+        });
+    }
+    let rows = read_csv(&csv)?;
+    let row = tune(&rows, scene, budget_ms, &csv)?.clone();
+    let bad = |reason: String| SweepError::Csv {
+        path: csv.clone(),
+        line: 0,
+        reason: format!("the gi_toml of `{}`: {reason}", row.config),
+    };
+    let table = gi_table_text(&row).map_err(bad)?;
+    let overrides =
+        crate::scene::gi_table_overrides(&table, &csv).map_err(|e| bad(e.to_string()))?;
+    Ok((row, table, overrides))
+}
+
 /// An `f32` as the TOML float that prints as the `f32` does (0.1, not 0.10000000149…).
 fn toml_f32(v: f32) -> toml::Value {
     toml::Value::Float(format!("{v}").parse::<f64>().unwrap_or(f64::from(v)))
@@ -1010,6 +1041,33 @@ mod tests {
         std::fs::write(&path, "a,b\n").expect("write");
         let e = read_csv(&path).expect_err("not a sweep").to_string();
         assert!(e.contains("header"), "{e}");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    /// What the viewer's "best within budget" and `voxgi tune` read: the row within the budget,
+    /// its `[gi]` table and that table as scene-file overrides; a folder without a sweep is an
+    /// error naming its sweep.csv.
+    #[test]
+    fn tune_from_dir_reads_the_sweep_and_its_gi_table() {
+        let dir = std::env::temp_dir().join(format!("voxgi-tune-dir-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).expect("temp dir");
+        let e = tune_from_dir(&dir, "cornell", 10.0).expect_err("no sweep yet");
+        assert!(e.to_string().contains("sweep.csv"), "{e}");
+        let mut csv = CsvAppender::open(&dir.join("sweep.csv")).expect("opens");
+        for r in [
+            row("cornell", "none", 1.0, 0.5),
+            row("cornell", "hemisphere gi-rays=4", 4.0, 0.05),
+            row("cornell", "hemisphere gi-rays=16", 16.0, 0.02),
+        ] {
+            csv.append(&r).expect("appends");
+        }
+        let (r, table, overrides) = tune_from_dir(&dir, "cornell", 5.0).expect("tunes");
+        assert_eq!(r.config, "hemisphere gi-rays=4");
+        assert!(table.starts_with("[gi]\n"), "{table}");
+        // `row` stores rays = its ms (4 here) in the resolved settings.
+        assert_eq!(overrides.method, Some(GiMethod::Hemisphere));
+        assert_eq!(overrides.rays, Some(4));
         let _ = std::fs::remove_dir_all(&dir);
     }
 

@@ -6,8 +6,8 @@
 use super::args::FrameArgs;
 use super::{check_validation, context, outln, CliError, Global};
 use crate::bench::sweep::{
-    configs, downsample, gi_inline, gi_table_text, method_name, pareto_svg, parse_grid,
-    parse_methods, read_csv, tune, Config, CsvAppender, SweepError, SweepRow,
+    configs, downsample, gi_inline, method_name, pareto_svg, parse_grid, parse_methods, read_csv,
+    tune_from_dir, Config, CsvAppender, SweepError, SweepRow,
 };
 use crate::bench::temporal::{
     lag_after_switch_off, light_path, path_flicker, LightPath, TemporalDesc,
@@ -547,25 +547,9 @@ pub fn sweep(global: &Global, args: &SweepArgs, out: &mut dyn Write) -> Result<(
 
 /// Prints the most accurate configuration of the sweep within the budget as a `[gi]` table.
 pub fn tune_command(args: &TuneArgs, out: &mut dyn Write) -> Result<(), CliError> {
-    let csv = args.from.join("sweep.csv");
-    if !csv.exists() {
-        return Err(SweepError::Io {
-            path: csv,
-            source: std::io::Error::new(
-                std::io::ErrorKind::NotFound,
-                "no sweep here; run `voxgi sweep SCENE --out DIR` and pass --from DIR",
-            ),
-        }
-        .into());
-    }
-    let rows = read_csv(&csv)?;
     let name = scene_name(&args.scene);
-    let row = tune(&rows, &name, args.budget_ms, &csv)?;
-    let table = gi_table_text(row).map_err(|reason| SweepError::Csv {
-        path: csv.clone(),
-        line: 0,
-        reason: format!("the gi_toml of `{}`: {reason}", row.config),
-    })?;
+    let (row, table, _) = tune_from_dir(&args.from, &name, args.budget_ms)?;
+    let row = &row;
     outln!(
         out,
         "# voxgi tune {name} --budget-ms {}: `{}` on {}, {:.3} ms to the image ({} frame(s) of \

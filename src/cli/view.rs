@@ -48,6 +48,14 @@ pub struct ViewArgs {
     /// Screenshot PNG path (F12 / the panel button; the end of a scripted run).
     #[arg(long)]
     pub screenshot: Option<PathBuf>,
+    /// The sweep the panel's "best within budget" chooses from (a `voxgi sweep --out` folder,
+    /// measured on this device).
+    #[arg(long, default_value = "sweep", value_name = "DIR")]
+    pub sweep: PathBuf,
+    /// Start with the most accurate configuration of --sweep that fits this GPU time to the
+    /// image (`voxgi tune`'s choice); the panel's budget starts here too.
+    #[arg(long, value_name = "MS")]
+    pub budget_ms: Option<f64>,
     // The initial indirect light; the panel changes it.
     #[command(flatten)]
     pub gi: GiArgs,
@@ -90,6 +98,19 @@ pub fn view(global: &Global, args: ViewArgs, out: &mut dyn Write) -> Result<(), 
     settings.tonemap.operator = args.tonemap;
     settings.tonemap.exposure = args.exposure;
     settings.gi = args.gi.settings(&scene);
+    let name = super::sweep::scene_name(args.scene.as_deref().unwrap_or("cornell"));
+    if let Some(budget) = args.budget_ms {
+        let (row, _, overrides) = crate::bench::sweep::tune_from_dir(&args.sweep, &name, budget)?;
+        settings.gi = overrides.apply(settings.gi);
+        outln!(
+            out,
+            "best within {budget} ms: {} ({:.1} ms to the image, relMSE {:.4}, on {})",
+            row.config,
+            row.image_ms,
+            row.rel_mse,
+            row.device
+        );
+    }
     crate::render::check_render_settings(&settings)?;
     let opts = crate::app::ViewerOptions {
         validation: global.validate,
@@ -102,6 +123,9 @@ pub fn view(global: &Global, args: ViewArgs, out: &mut dyn Write) -> Result<(), 
         minimize_at: args.minimize_at,
         restore_after: args.restore_after,
         screenshot: args.screenshot,
+        sweep_dir: args.sweep,
+        scene_name: name,
+        budget_ms: args.budget_ms.unwrap_or(100.0) as f32,
     };
     let origin_m = scene.origin_m;
     let report = crate::app::run(scene, &opts)?;

@@ -209,6 +209,29 @@ pub(crate) fn parse(text: &str, file: &Path) -> Result<SceneDesc, SceneError> {
     toml::from_str::<SceneDesc>(text).map_err(|e| from_toml_error(file, text, &e, false))
 }
 
+/// The `[gi]` table of a TOML document (what `voxgi tune` prints), checked as a scene file's
+/// `[gi]` table is: the same keys, ranges and messages; `file` names it in errors.
+pub fn gi_table_overrides(text: &str, file: &Path) -> Result<super::GiOverrides, SceneError> {
+    #[derive(Deserialize)]
+    #[serde(deny_unknown_fields)]
+    struct OnlyGi {
+        gi: Option<GiDesc>,
+    }
+    if let Err(e) = text.parse::<toml::Table>() {
+        return Err(from_toml_error(file, text, &e, true));
+    }
+    let desc =
+        toml::from_str::<OnlyGi>(text).map_err(|e| from_toml_error(file, text, &e, false))?;
+    let ck = Check {
+        file,
+        origin: DVec3::ZERO,
+    };
+    desc.gi
+        .map(|g| build_gi(&ck, &g))
+        .transpose()
+        .map(Option::unwrap_or_default)
+}
+
 /// Coordinates beyond this (meters) are refused: 1e9 m keeps f64 differences exact to 1e-7 m.
 const MAX_COORDINATE_M: f64 = 1e9;
 

@@ -167,6 +167,7 @@ pub use builtin::{builtin, builtin_names, load_scene_arg, DEFAULT_SCENE};
 pub use camera::{Camera, Eye, StereoRig};
 pub use camera_path::{CameraKey, CameraPath, CameraPathError};
 pub use cull::aabb_visible;
+pub use desc::gi_table_overrides;
 pub use error::SceneError;
 pub use gi::{resolve_gi, GiOverrides};
 pub use gi_settings::{
