@@ -7,6 +7,10 @@
 #include "frame.glsl"
 #include "paraboloid.glsl"
 
+// Whether the area lights' views get light maps: only the hemisphere method reads them (the
+// VPLs sample area lights in gi_vpl_emit), and they are the costly paraboloid kind.
+layout(constant_id = 2) const bool AREA_LIGHT_MAPS = true;
+
 layout(triangles) in;
 layout(triangle_strip, max_vertices = 4) out;
 
@@ -55,8 +59,21 @@ void emit_corner(vec2 uv, GpuShadowView sv, vec3 d[3]) {
     EmitVertex();
 }
 
+// Whether view v belongs to an area light: a sampled element, or a whole sphere under PCSS (a
+// point light with a size in spot.w).
+bool area_light_view(uint v) {
+    for (uint i = 0u; i < frame.counts.x; ++i) {
+        GpuLight l = frame.lights[i];
+        if (v >= l.info.y && v < l.info.y + l.info.z) {
+            return l.info.x == LIGHT_ELEMENT || (l.info.x == LIGHT_POINT && l.spot.w > 0.0);
+        }
+    }
+    return false;
+}
+
 void main() {
     GpuShadowView sv = frame.shadow_views[pc.view];
+    if (!AREA_LIGHT_MAPS && sv.params.y > 1.5 && area_light_view(pc.view)) return;
     if (sv.params.y < 1.5) {
         for (int i = 0; i < 3; ++i) {
             gl_Position = sv.view_proj * gl_in[i].gl_Position;

@@ -6,13 +6,17 @@
 //! whose VPL the bounce passes continue. The estimator and its flux are derived in
 //! `glsl/gi_vpl_emit.comp`; this file builds the emitter table it samples ([`emitter_table`]).
 //!
-//! The table is built once for the scene at the renderer's time: emitters that move or change
-//! after that keep their first place and radiance in the VPLs (the other methods read the
-//! emission volume, which follows them).
+//! The table is rebuilt when `Renderer::prepare` sees the emitters change (a light switched
+//! off or scaled, an emissive object moved) and written into the frame slots' windows of a
+//! host-visible buffer, one row per potential emitter: an emitter that is black for now keeps
+//! its row with zero weight, so the table's length, and the graph, never change.
 
 use crate::graph::{Access, BufferHandle, ImageHandle, RenderGraph, Shader};
 use crate::scene::{Light, Scene};
-use crate::vk::{vk, Buffer, ComputePipeline, Context, PushLayout, VkError};
+use crate::vk::{
+    vk, Buffer, BufferDesc, ComputePipeline, Context, MemoryLocation, PushLayout, VkError,
+    MAX_FRAMES_IN_FLIGHT,
+};
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 use std::f32::consts::PI;
@@ -66,24 +70,33 @@ fn weight(radiance: Vec3) -> f32 {
 
 /// Every emitter of `scene` at time `t_s`: its emissive triangles (the emission the volume
 /// holds, `Material::voxel_emission`) and its sphere and rectangle lights, sampled by power
-/// w·A; empty without emitters. Degenerate and black emitters are left out.
+/// w·A; empty without emitters. Degenerate and black emitters keep a row of zero weight
+/// (never picked: the CDF does not rise over it) and zero flux; when all are black, every
+/// row has zero flux.
 pub fn emitter_table(scene: &Scene, t_s: f32) -> Vec<GpuEmitter> {
     let mut sources = emissive_triangles(scene, t_s);
     sources.extend(scene.lights.iter().filter_map(area_light_source));
-    sources.retain(|s| s.area_m2 > 0.0 && weight(s.radiance) > 0.0);
-    let total: f64 = sources
-        .iter()
-        .map(|s| f64::from(weight(s.radiance) * s.area_m2))
-        .sum();
+    let power = |s: &Source| match s.area_m2 > 0.0 && weight(s.radiance) > 0.0 {
+        true => f64::from(weight(s.radiance) * s.area_m2),
+        false => 0.0,
+    };
+    let total: f64 = sources.iter().map(power).sum();
     let mut cdf = 0.0f64;
     let count = sources.len();
     sources
         .into_iter()
         .enumerate()
         .map(|(i, s)| {
-            cdf += f64::from(weight(s.radiance) * s.area_m2) / total;
+            let p = power(&s);
+            cdf += match total > 0.0 {
+                true => p / total,
+                false => 1.0 / count as f64,
+            };
             // π·W·L/w: one sample's estimate of the whole emitted flux (the shader's step 2).
-            let flux = s.radiance * (PI * total as f32 / weight(s.radiance));
+            let flux = match p > 0.0 {
+                true => s.radiance * (PI * total as f32 / weight(s.radiance)),
+                false => Vec3::ZERO,
+            };
             let cdf = if i + 1 == count { 1.0 } else { cdf as f32 };
             GpuEmitter {
                 origin: s.origin.extend(s.kind).to_array(),
@@ -174,7 +187,14 @@ fn area_light_source(light: &Light) -> Option<Source> {
 /// The pass and its table.
 pub struct GiVplEmit {
     pipeline: ComputePipeline,
+    /// `MAX_FRAMES_IN_FLIGHT` windows of `rows` emitters, `stride_bytes` apart.
     emitters: Buffer,
+    rows: usize,
+    stride_bytes: u64,
+    /// The current table, its generation, and the generation each slot's window holds.
+    table: Vec<GpuEmitter>,
+    generation: u64,
+    written: [u64; MAX_FRAMES_IN_FLIGHT],
     /// Emissive triangles are in the table: each row ends with K source VPLs.
     pub has_surfaces: bool,
 }
@@ -199,16 +219,59 @@ impl GiVplEmit {
             PushLayout::of::<GpuVplGeneratePush>(),
             &[(2, if has_surfaces { per_set } else { 0 })],
         )?;
-        let emitters = ctx.upload_buffer(
-            "vpl emitters",
-            bytemuck::cast_slice(&table),
-            vk::BufferUsageFlags::STORAGE_BUFFER,
-        )?;
-        Ok(Some(Self {
+        let bytes = std::mem::size_of_val(table.as_slice()) as u64;
+        let stride_bytes = bytes.next_multiple_of(256);
+        let emitters = ctx.create_buffer(&BufferDesc {
+            name: "vpl emitters".into(),
+            size_bytes: stride_bytes * MAX_FRAMES_IN_FLIGHT as u64,
+            usage: vk::BufferUsageFlags::STORAGE_BUFFER,
+            location: MemoryLocation::CpuToGpu,
+        })?;
+        let mut pass = Self {
             pipeline,
             emitters,
+            rows: table.len(),
+            stride_bytes,
+            table,
+            generation: 1,
+            written: [0; MAX_FRAMES_IN_FLIGHT],
             has_surfaces,
-        }))
+        };
+        for slot in 0..MAX_FRAMES_IN_FLIGHT {
+            pass.write_slot(slot);
+        }
+        Ok(Some(pass))
+    }
+
+    /// Rebuilds the table for `scene` at `t_s`; the frame slots get it as they are written.
+    /// A scene whose emitters are not those the pass was made for (another row count) keeps
+    /// the old table, with a warning.
+    pub fn update(&mut self, scene: &Scene, t_s: f32) {
+        let table = emitter_table(scene, t_s);
+        if table.len() != self.rows {
+            log::warn!(
+                "VPL emitters not updated: {} rows, the pass was made for {}",
+                table.len(),
+                self.rows
+            );
+        } else if table != self.table {
+            self.table = table;
+            self.generation += 1;
+        }
+    }
+
+    /// Writes the current table into frame slot `slot`'s window (after the slot's fence), if
+    /// that window holds an older one.
+    pub fn write_slot(&mut self, slot: usize) {
+        if self.written[slot] == self.generation {
+            return;
+        }
+        let offset = slot * self.stride_bytes as usize;
+        let bytes: &[u8] = bytemuck::cast_slice(&self.table);
+        if let Some(m) = self.emitters.mapped_mut() {
+            m[offset..offset + bytes.len()].copy_from_slice(bytes);
+            self.written[slot] = self.generation;
+        }
     }
 
     /// Declares the pass: writes the emitter slot's bounce-0 VPLs and the source VPLs of
@@ -226,7 +289,12 @@ impl GiVplEmit {
     ) {
         let c = Shader::Compute;
         let pipe = *self.pipeline;
-        let emitters = g.import_buffer(&self.emitters, Access::StorageRead(c));
+        let emitters = g.import_buffer_per_slot(
+            &self.emitters,
+            self.stride_bytes,
+            std::mem::size_of::<GpuEmitter>() as u64 * self.rows as u64,
+            Access::StorageRead(c),
+        );
         g.add_pass("gi_vpl_emit")
             .pipeline(&pipe)
             .bind_sampled(0, voxels, s, c)

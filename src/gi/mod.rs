@@ -91,6 +91,11 @@ trait GiMethodPasses {
     /// (irradiance at Lambert pixels, indirect radiance at Phong pixels), and what the method
     /// draws over the composite, if anything.
     fn add_passes(&self, g: &mut RenderGraph, inp: &GiInputs, shared: &GiShared) -> GiOutput;
+    /// The scene's lights or emitters may have changed (`Renderer::prepare`): a method that
+    /// keeps a table built from them on the CPU rebuilds it.
+    fn update_scene(&mut self, _scene: &crate::scene::Scene, _t_s: f32) {}
+    /// Writes frame slot `slot`'s copy of such a table (after the slot's fence).
+    fn write_slot(&mut self, _slot: usize) {}
 }
 
 /// What a GI method's passes produce.
@@ -220,6 +225,7 @@ impl GiPasses {
     /// Prepares frame slot `slot` for scene time `t_s` (after the slot's fence): rewrites the
     /// attribute volumes and restarts accumulation when moving objects moved.
     pub fn update_dynamic(&mut self, t_s: f32, slot: usize) {
+        self.method.write_slot(slot);
         if self
             .attributes
             .as_mut()
@@ -227,6 +233,12 @@ impl GiPasses {
         {
             self.reset();
         }
+    }
+
+    /// Follows the scene's lights and emitters at `t_s` (`Renderer::prepare`; see
+    /// [`GiMethodPasses::update_scene`]).
+    pub fn update_scene(&mut self, scene: &crate::scene::Scene, t_s: f32) {
+        self.method.update_scene(scene, t_s);
     }
 
     /// Counts a new frame, to be recorded in frame slot `slot` (call before recording it):

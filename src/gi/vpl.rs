@@ -423,6 +423,18 @@ impl VplPasses {
 }
 
 impl GiMethodPasses for VplPasses {
+    fn update_scene(&mut self, scene: &crate::scene::Scene, t_s: f32) {
+        if let Some(emit) = &mut self.emit {
+            emit.update(scene, t_s);
+        }
+    }
+
+    fn write_slot(&mut self, slot: usize) {
+        if let Some(emit) = &mut self.emit {
+            emit.write_slot(slot);
+        }
+    }
+
     fn add_passes(&self, g: &mut RenderGraph, i: &GiInputs, shared: &GiShared) -> GiOutput {
         let (indirect, vpls) = self.add_vpl_passes(g, i, shared);
         // The debug view draws the VPLs over the lit image, after the filter and composite.

@@ -29,8 +29,14 @@ pub struct LightMapPass {
 impl LightMapPass {
     /// `has_dissolve`: some material has MTL d < 1, whose coverage the light map shares with
     /// the shadow maps. `has_ggx`: some material is GGX, whose texels store only the diffuse
-    /// part (`glsl/light_map.frag`).
-    pub fn new(ctx: &Context, has_dissolve: bool, has_ggx: bool) -> Result<Self, VkError> {
+    /// part (`glsl/light_map.frag`). `area_lights`: the area lights' (paraboloid) views get
+    /// light maps too — only the hemisphere method reads them (`glsl/light_map.geom`).
+    pub fn new(
+        ctx: &Context,
+        has_dissolve: bool,
+        has_ggx: bool,
+        area_lights: bool,
+    ) -> Result<Self, VkError> {
         let pipeline = ctx.graphics_pipeline(&GraphicsPipelineDesc {
             vertex: "light_map.vert".into(),
             geometry: Some("light_map.geom".into()),
@@ -49,7 +55,11 @@ impl LightMapPass {
             depth_write: true,
             depth_bias: false,
             logic_op: None,
-            spec: vec![(0, u32::from(has_dissolve)), (1, u32::from(has_ggx))],
+            spec: vec![
+                (0, u32::from(has_dissolve)),
+                (1, u32::from(has_ggx)),
+                (2, u32::from(area_lights)),
+            ],
         })?;
         Ok(Self { pipeline })
     }

@@ -482,7 +482,14 @@ impl Renderer {
                 },
             )?;
             let light_map = gi_voxels
-                .then(|| LightMapPass::new(ctx, scene.has_transparency(), scene.has_ggx()))
+                .then(|| {
+                    LightMapPass::new(
+                        ctx,
+                        scene.has_transparency(),
+                        scene.has_ggx(),
+                        settings.gi.method == crate::gi::GiMethod::Hemisphere,
+                    )
+                })
                 .transpose()?;
             gi = Some((passes, light_map));
         }
@@ -607,7 +614,8 @@ impl Renderer {
             };
         }
         // Accumulated indirect light is valid only while camera, lights and settings stay.
-        if let Some((gi, _)) = &self.gi {
+        if let Some((gi, _)) = &mut self.gi {
+            gi.update_scene(scene, s.time_s);
             if bytemuck::bytes_of(&f) != bytemuck::bytes_of(&self.frame_data) {
                 gi.reset();
             }
