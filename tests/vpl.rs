@@ -916,8 +916,9 @@ fn emitter_vpls_follow_lights_that_switch_off_or_move() {
     assert!(lag.ghost <= 0.005, "{lag:?}");
 
     let moved = scene_at_step(&scene, 1, 4, 0.3);
-    let seq = voxgi::render::render_sequence(&ctx, &scene, &settings, 1, &[moved.clone()])
-        .expect("renders");
+    let seq =
+        voxgi::render::render_sequence(&ctx, &scene, &settings, 1, std::slice::from_ref(&moved))
+            .expect("renders");
     let fresh = render_image(&ctx, &moved, &settings).expect("renders").hdr;
     common::assert_no_validation_messages(&ctx);
     let after = compare(&fresh, &seq.frames[0], None)
