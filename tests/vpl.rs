@@ -931,3 +931,49 @@ fn emitter_vpls_follow_lights_that_switch_off_or_move() {
         "{after} vs {before}"
     );
 }
+
+/// The same for an emissive object that moves (its keyframes, scene time 0 → 1): one renderer
+/// re-voxelizes it and rebuilds the emitter table at the new time; the frame after the move
+/// must be a fresh renderer's at that time (relMSE ≤ 1e-4), while the frame before it is far
+/// from it.
+#[test]
+fn emitter_vpls_follow_a_moving_emissive_object() {
+    use voxgi::graph::{run_frames, GraphExecutor};
+    let mover = include_str!("../assets/scenes/cornell_mover.toml").replace(
+        "builtin = \"cube\"\nscale = 0.12",
+        "builtin = \"cube\"\nscale = 0.12\nmaterial = { albedo = 0.5, emission_w_sr_m2 = [20.0, 20.0, 20.0] }",
+    );
+    assert!(
+        mover.contains("emission_w_sr_m2"),
+        "the mover became emissive"
+    );
+    let scene = Scene::from_toml_str(&mover, Path::new("mover.toml"), Path::new(ROOT))
+        .expect("scene parses");
+    let ctx = common::context();
+    let at = |t_s| RenderSettings {
+        width: 64,
+        height: 64,
+        time_s: t_s,
+        gi: vpl(VplSettings::default()),
+        ..Default::default()
+    };
+    let mut r = voxgi::render::Renderer::new(&ctx, &scene, at(0.0)).expect("renderer");
+    let exec = GraphExecutor::new(&ctx, r.graph(), voxgi::vk::MAX_FRAMES_IN_FLIGHT).expect("graph");
+    run_frames(&ctx, &exec, 1, 0, |slot| r.write_frame(slot)).expect("frame at t = 0");
+    let before = r.hdr_image();
+    r.settings.time_s = 1.0;
+    r.prepare(&scene).expect("prepares");
+    run_frames(&ctx, &exec, 1, 0, |slot| r.write_frame(slot)).expect("frame at t = 1");
+    let after = r.hdr_image();
+    drop(exec);
+    drop(r);
+    let fresh = render_image(&ctx, &scene, &at(1.0)).expect("renders").hdr;
+    common::assert_no_validation_messages(&ctx);
+    let m_after = compare(&fresh, &after, None).expect("same size").rel_mse;
+    let m_before = compare(&fresh, &before, None).expect("same size").rel_mse;
+    println!("moving emitter: relMSE to the fresh image {m_after} after, {m_before} before");
+    assert!(
+        m_after <= 1e-4 && m_before >= 10.0 * m_after.max(1e-5),
+        "{m_after} vs {m_before}"
+    );
+}
