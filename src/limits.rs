@@ -374,7 +374,7 @@ pub const SSGI_FEEDBACK_MAX: Limit<f32> = Limit {
     min_exclusive: true,
     ..Limit::new(
         "--ssgi-feedback-max",
-        None,
+        Some("gi.ssgi_feedback_max_w_m2"),
         "a fed-back irradiance clamp in W/m²",
         0.0,
         1e9,
@@ -382,8 +382,13 @@ pub const SSGI_FEEDBACK_MAX: Limit<f32> = Limit {
 };
 
 /// `--gi ssgi`: τ of the temporal blend (below 1: the history must fade).
-pub const SSGI_HISTORY_WEIGHT: Limit<f32> =
-    Limit::new("--ssgi-history-weight", None, "a history weight", 0.0, 0.99);
+pub const SSGI_HISTORY_WEIGHT: Limit<f32> = Limit::new(
+    "--ssgi-history-weight",
+    Some("gi.ssgi_history_weight"),
+    "a history weight",
+    0.0,
+    0.99,
+);
 
 /// Stereo eye separation: 0 gives two identical eyes (allowed, a mono check); 1e3 m is beyond
 /// any scene scale voxgi renders in f32.

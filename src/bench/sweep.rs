@@ -606,6 +606,17 @@ pub fn gi_table(s: &GiSettings) -> toml::Table {
         Value::String(name(s.ssgi.resolution)),
     );
     t.insert("ssgi_samples".into(), int(s.ssgi.samples));
+    t.insert("ssgi_mips".into(), value_name(s.ssgi.mips));
+    t.insert("ssgi_feedback".into(), Value::Boolean(s.ssgi.feedback));
+    t.insert(
+        "ssgi_feedback_max_w_m2".into(),
+        toml_f32(s.ssgi.feedback_max_w_m2),
+    );
+    t.insert(
+        "ssgi_history_weight".into(),
+        toml_f32(s.ssgi.history_weight),
+    );
+    t.insert("ssr".into(), Value::Boolean(s.ssgi.ssr));
     t
 }
 

@@ -107,22 +107,25 @@ pub struct GiArgs {
     #[arg(long, value_name = "N")]
     pub ssgi_samples: Option<u32>,
     /// `--gi ssgi`: how depth and normal mips pick a texel: the voting filter or the nearest
-    /// child (fast).
-    #[arg(long, value_enum, default_value_t = crate::gi::SsgiMips::Voting)]
-    pub ssgi_mips: crate::gi::SsgiMips,
-    /// `--gi ssgi`: no feedback of the previous frame's indirect light (one bounce only).
+    /// child (fast) [default: the scene's `[gi] ssgi_mips`, else voting].
+    #[arg(long, value_enum)]
+    pub ssgi_mips: Option<crate::gi::SsgiMips>,
+    /// `--gi ssgi`: no feedback of the previous frame's indirect light (one bounce only)
+    /// [default: the scene's `[gi] ssgi_feedback`, else feedback on].
     #[arg(long)]
     pub ssgi_no_feedback: bool,
-    /// `--gi ssgi`: clamp of the fed-back irradiance in W/m².
-    #[arg(long, value_name = "E", default_value_t = crate::gi::SsgiSettings::default().feedback_max_w_m2)]
-    pub ssgi_feedback_max: f32,
-    /// `--gi ssgi`: τ of the temporal blend with the reprojected history, 0 (off) to 0.99.
-    #[arg(long, value_name = "TAU", default_value_t = crate::gi::SsgiSettings::default().history_weight)]
-    pub ssgi_history_weight: f32,
+    /// `--gi ssgi`: clamp of the fed-back irradiance in W/m² [default: the scene's `[gi]
+    /// ssgi_feedback_max_w_m2`, else 20].
+    #[arg(long, value_name = "E")]
+    pub ssgi_feedback_max: Option<f32>,
+    /// `--gi ssgi`: τ of the temporal blend with the reprojected history, 0 (off) to 0.99
+    /// [default: the scene's `[gi] ssgi_history_weight`, else 0.9].
+    #[arg(long, value_name = "TAU")]
+    pub ssgi_history_weight: Option<f32>,
     /// `--gi ssgi`: screen-space reflection rays on Phong and GGX materials (on), or only the
-    /// diffuse fallback (off).
-    #[arg(long, value_enum, default_value_t = crate::gi::SsrMode::On)]
-    pub ssr: crate::gi::SsrMode,
+    /// diffuse fallback (off) [default: the scene's `[gi] ssr`, else on].
+    #[arg(long, value_enum)]
+    pub ssr: Option<crate::gi::SsrMode>,
     /// Modified SAO (Oetke 2017 §2.5) at half resolution, multiplied into the indirect light
     /// (needs a --gi method: direct light is not darkened).
     #[arg(long)]
@@ -170,6 +173,11 @@ impl GiArgs {
             ssgi: crate::scene::SsgiOverrides {
                 resolution: self.ssgi_resolution,
                 samples: self.ssgi_samples,
+                mips: self.ssgi_mips,
+                feedback: self.ssgi_no_feedback.then_some(false),
+                feedback_max_w_m2: self.ssgi_feedback_max,
+                history_weight: self.ssgi_history_weight,
+                ssr: self.ssr.map(|m| m == crate::gi::SsrMode::On),
             },
         }
     }
@@ -187,14 +195,6 @@ impl GiArgs {
                 shading: self.vpl_shading,
                 show: self.vpl_show,
                 ..s.vpl
-            },
-            ssgi: crate::gi::SsgiSettings {
-                mips: self.ssgi_mips,
-                feedback: !self.ssgi_no_feedback,
-                feedback_max_w_m2: self.ssgi_feedback_max,
-                history_weight: self.ssgi_history_weight,
-                ssr: self.ssr == crate::gi::SsrMode::On,
-                ..s.ssgi
             },
             sao: self.sao.then_some(crate::gi::SaoSettings {
                 radius_m: self.sao_radius,
@@ -541,6 +541,15 @@ mod tests {
             "quarter",
             "--ssgi-samples",
             "17",
+            "--ssgi-mips",
+            "fast",
+            "--ssgi-no-feedback",
+            "--ssgi-feedback-max",
+            "4.5",
+            "--ssgi-history-weight",
+            "0.3",
+            "--ssr",
+            "off",
         ]);
         assert_eq!(
             o,
@@ -567,6 +576,11 @@ mod tests {
                 ssgi: crate::scene::SsgiOverrides {
                     resolution: Some(crate::gi::SsgiResolution::Quarter),
                     samples: Some(17),
+                    mips: Some(crate::gi::SsgiMips::Fast),
+                    feedback: Some(false),
+                    feedback_max_w_m2: Some(4.5),
+                    history_weight: Some(0.3),
+                    ssr: Some(false),
                 },
             }
         );

@@ -101,6 +101,11 @@ pub(crate) struct GiDesc {
     pub vpl_spot_sampling: Option<String>,
     pub ssgi_resolution: Option<String>,
     pub ssgi_samples: Option<i64>,
+    pub ssgi_mips: Option<String>,
+    pub ssgi_feedback: Option<bool>,
+    pub ssgi_feedback_max_w_m2: Option<f32>,
+    pub ssgi_history_weight: Option<f32>,
+    pub ssr: Option<bool>,
 }
 
 #[derive(Clone, Debug, Deserialize)]
@@ -687,7 +692,7 @@ fn build_gi(ck: &Check<'_>, g: &GiDesc) -> Result<GiOverrides, SceneError> {
         light_map_resolution: count(&limits::LIGHT_MAP_RESOLUTION, g.light_map_resolution)?,
         accumulate_frames: count(&limits::GI_FRAMES, g.accumulate_frames)?,
         vpl: build_vpl(ck, g, &count, &length)?,
-        ssgi: build_ssgi(ck, g, &count)?,
+        ssgi: build_ssgi(ck, g, &count, &length)?,
     })
 }
 
@@ -718,11 +723,13 @@ fn build_shadow(ck: &Check<'_>, t: &ShadowDesc) -> Result<ShadowOverrides, Scene
     })
 }
 
-/// The `[gi]` table's screen-space GI keys (`ssgi_resolution`, `ssgi_samples`).
+/// The `[gi]` table's screen-space GI keys (`ssgi_resolution`, `ssgi_samples`, `ssgi_mips`,
+/// `ssgi_feedback`, `ssgi_feedback_max_w_m2`, `ssgi_history_weight`, `ssr`).
 fn build_ssgi(
     ck: &Check<'_>,
     g: &GiDesc,
     count: &CountCheck<'_>,
+    length: &LengthCheck<'_>,
 ) -> Result<crate::scene::SsgiOverrides, SceneError> {
     use crate::scene::SsgiResolution;
     let resolution = match &g.ssgi_resolution {
@@ -742,9 +749,29 @@ fn build_ssgi(
                 })?,
         ),
     };
+    let mips = match &g.ssgi_mips {
+        None => None,
+        Some(name) => Some(
+            crate::scene::SsgiMips::NAMES
+                .iter()
+                .find(|(n, _)| *n == name.as_str())
+                .map(|&(_, m)| m)
+                .ok_or_else(|| {
+                    ck.invalid(
+                        "gi.ssgi_mips",
+                        format!("unknown mip filter \"{name}\"; expected \"voting\" or \"fast\""),
+                    )
+                })?,
+        ),
+    };
     Ok(crate::scene::SsgiOverrides {
         resolution,
         samples: count(&limits::SSGI_SAMPLES, g.ssgi_samples)?,
+        mips,
+        feedback: g.ssgi_feedback,
+        feedback_max_w_m2: length(&limits::SSGI_FEEDBACK_MAX, g.ssgi_feedback_max_w_m2)?,
+        history_weight: length(&limits::SSGI_HISTORY_WEIGHT, g.ssgi_history_weight)?,
+        ssr: g.ssr,
     })
 }
 

@@ -185,6 +185,11 @@ mod tests {
             ssgi: crate::scene::SsgiOverrides {
                 resolution: Some(crate::scene::SsgiResolution::Eighth),
                 samples: Some(5),
+                mips: Some(crate::scene::SsgiMips::Fast),
+                feedback: Some(false),
+                feedback_max_w_m2: Some(3.5),
+                history_weight: Some(0.25),
+                ssr: Some(false),
             },
         };
         assert!(!all.is_empty() && GiOverrides::default().is_empty());
@@ -214,6 +219,11 @@ mod tests {
             ssgi: crate::scene::SsgiOverrides {
                 resolution: Some(s.ssgi.resolution),
                 samples: Some(s.ssgi.samples),
+                mips: Some(s.ssgi.mips),
+                feedback: Some(s.ssgi.feedback),
+                feedback_max_w_m2: Some(s.ssgi.feedback_max_w_m2),
+                history_weight: Some(s.ssgi.history_weight),
+                ssr: Some(s.ssgi.ssr),
             },
         };
         assert_eq!(back, all);

@@ -196,12 +196,23 @@ pub enum SsgiMips {
     Fast,
 }
 
+impl SsgiMips {
+    /// The names the scene file's `ssgi_mips` (and `--ssgi-mips`) take.
+    pub const NAMES: [(&'static str, SsgiMips); 2] =
+        [("voting", SsgiMips::Voting), ("fast", SsgiMips::Fast)];
+}
+
 /// Screen-space GI settings given by a scene's `[gi]` table or by flags; `None`: not given
 /// there (see [`crate::scene::resolve_gi`] for the precedence).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct SsgiOverrides {
     pub resolution: Option<SsgiResolution>,
     pub samples: Option<u32>,
+    pub mips: Option<SsgiMips>,
+    pub feedback: Option<bool>,
+    pub feedback_max_w_m2: Option<f32>,
+    pub history_weight: Option<f32>,
+    pub ssr: Option<bool>,
 }
 
 impl SsgiOverrides {
@@ -210,6 +221,11 @@ impl SsgiOverrides {
         SsgiOverrides {
             resolution: self.resolution.or(fallback.resolution),
             samples: self.samples.or(fallback.samples),
+            mips: self.mips.or(fallback.mips),
+            feedback: self.feedback.or(fallback.feedback),
+            feedback_max_w_m2: self.feedback_max_w_m2.or(fallback.feedback_max_w_m2),
+            history_weight: self.history_weight.or(fallback.history_weight),
+            ssr: self.ssr.or(fallback.ssr),
         }
     }
 
@@ -218,7 +234,11 @@ impl SsgiOverrides {
         SsgiSettings {
             resolution: self.resolution.unwrap_or(base.resolution),
             samples: self.samples.unwrap_or(base.samples),
-            ..base
+            mips: self.mips.unwrap_or(base.mips),
+            feedback: self.feedback.unwrap_or(base.feedback),
+            feedback_max_w_m2: self.feedback_max_w_m2.unwrap_or(base.feedback_max_w_m2),
+            history_weight: self.history_weight.unwrap_or(base.history_weight),
+            ssr: self.ssr.unwrap_or(base.ssr),
         }
     }
 }

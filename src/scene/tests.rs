@@ -684,7 +684,8 @@ fn gi_table_parses_every_key() {
          accumulate_frames = 64\nvpls = 4\nvpl_pattern = [2, 3]\nvpl_bounces = 1\n\
          vpl_d_min_voxels = 2.5\nvpl_visibility = \"none\"\n\
          vpl_normalize = \"valid\"\nvpl_spot_sampling = \"disk\"\nssgi_resolution = \"quarter\"\n\
-         ssgi_samples = 12\n"
+         ssgi_samples = 12\nssgi_mips = \"fast\"\nssgi_feedback = false\n\
+         ssgi_feedback_max_w_m2 = 5.5\nssgi_history_weight = 0.5\nssr = false\n"
     );
     let s = load_ok(&text, &[]);
     assert_eq!(
@@ -712,6 +713,11 @@ fn gi_table_parses_every_key() {
             ssgi: crate::scene::SsgiOverrides {
                 resolution: Some(crate::scene::SsgiResolution::Quarter),
                 samples: Some(12),
+                mips: Some(crate::scene::SsgiMips::Fast),
+                feedback: Some(false),
+                feedback_max_w_m2: Some(5.5),
+                history_weight: Some(0.5),
+                ssr: Some(false),
             },
         }
     );
@@ -1301,5 +1307,39 @@ fn shadow_table_gives_cascades_and_names_bad_values() {
             "{line}: {e}"
         );
         assert_msg(&e, &scene, &[&format!("`{field}`"), expected]);
+    }
+}
+
+/// The screen-space keys refuse what their flags refuse, naming the file and the key.
+#[test]
+fn gi_screen_space_keys_refuse_bad_values() {
+    for (table, field, says) in [
+        (
+            "ssgi_mips = \"median\"",
+            "gi.ssgi_mips",
+            "\"voting\" or \"fast\"",
+        ),
+        (
+            "ssgi_history_weight = 1.0",
+            "gi.ssgi_history_weight",
+            "0.99",
+        ),
+        (
+            "ssgi_feedback_max_w_m2 = 0.0",
+            "gi.ssgi_feedback_max_w_m2",
+            "W/m²",
+        ),
+        (
+            "ssgi_feedback_max_w_m2 = nan",
+            "gi.ssgi_feedback_max_w_m2",
+            "",
+        ),
+        ("ssr = \"yes\"", "ssr", "bool"),
+    ] {
+        let text = format!("{CAMERA}{LIGHT}{CUBE}[gi]\n{table}\n");
+        let (e, _) = load_err(&text, &[]);
+        let msg = e.to_string();
+        assert!(msg.contains(field) && msg.contains(says), "{table}: {msg}");
+        assert!(msg.contains("scene.toml"), "{table}: {msg}");
     }
 }
