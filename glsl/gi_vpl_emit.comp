@@ -15,13 +15,18 @@
 //  3. traces one cosine-distributed ray from y (pdf cos / pi: the direction a Lambert
 //     emitter's flux leaves in) through the voxels, and at the first hit writes a VPL
 //     reflecting Phi_s rho_hit (albedo and normal from the attribute volumes, as
-//     gi_vpl_bounce.comp): the same estimator as a bounce from the source VPL. A ray that
-//     leaves the grid carries its flux out of the scene (an invalid VPL, no renormalization).
+//     gi_vpl_bounce.comp): the same estimator as a bounce from the source VPL. With Phong
+//     or GGX materials (HAS_LOBES) a glossy hit keeps Phi_s as its incident flux and its
+//     lobe (vpl.glsl's hit_vpl). A ray that leaves the grid carries its flux out of the scene
+//     (an invalid VPL, no renormalization).
 // The hit VPL is bounce 0 of the emitter slot (the last light of the row); gi_vpl_bounce.comp
 // continues it like every other slot.
 #define GI_OWN_PUSH
 #define VPL_GENERATE_PUSH
+#define VPL_HIT
 #include "gi_common.glsl"
+#include "brdf.glsl"
+#include "material_lobe.glsl"
 #include "vpl.glsl"
 
 #define EMITTER_TRIANGLE 0.0   // origin, edges e1, e2: an emissive triangle (face normal e1 x e2)
@@ -43,6 +48,9 @@ layout(set = 0, binding = 2) uniform sampler3D albedo_volume;
 layout(set = 0, binding = 3) uniform sampler3D normal_volume;
 layout(set = 0, binding = 4, std430) buffer Vpls { GpuVpl vpls[]; };
 layout(set = 0, binding = 5, std430) readonly buffer Emitters { GpuEmitter emitters[]; };
+// The material volume (src/voxel/attributes.rs, `material_texel`); read only when HAS_LOBES.
+layout(set = 0, binding = 6) uniform sampler3D material_volume;
+layout(constant_id = 3) const bool HAS_LOBES = false;
 
 uvec4 vx_column(uint level, int x, int y, uint layer) {
     return texelFetch(voxels, ivec3(x, y, int(layer)), int(level));
@@ -89,7 +97,7 @@ vec3 emitter_point(GpuEmitter e, vec2 u, out vec3 n) {
 }
 
 GpuVpl invalid_vpl(uint bounce) {
-    return GpuVpl(vec4(0.0), vec4(0.0, 0.0, 1.0, 0.0), vec4(0.0, 0.0, 0.0, float(bounce)), vec4(0.0), vec4(0.0));
+    return GpuVpl(vec4(0.0), vec4(0.0, 0.0, 1.0, 0.0), vec4(0.0, 0.0, 0.0, float(bounce)), vec4(0.0), vec4(0.0), vec4(0.0));
 }
 
 void main() {
@@ -107,7 +115,7 @@ void main() {
     vec3 flux = e.flux.rgb / float(k);
     if (SOURCE_VPLS > 0u) {
         bool surface = e.origin.w == EMITTER_TRIANGLE;
-        vpls[source_vpl_index(set_, kk)] = surface ? GpuVpl(vec4(y, 1.0), vec4(n, 0.0), vec4(flux, 0.0), vec4(0.0), vec4(0.0)) : invalid_vpl(0u);
+        vpls[source_vpl_index(set_, kk)] = surface ? GpuVpl(vec4(y, 1.0), vec4(n, 0.0), vec4(flux, 0.0), vec4(0.0), vec4(0.0), vec4(0.0)) : invalid_vpl(0u);
     }
     // Bases 11 and 13: gi_vpl_bounce.comp takes 5 and 7 for the next bounce from the hit, so
     // the two directions stay independent.
@@ -126,5 +134,6 @@ void main() {
     vec3 hn = texelFetch(normal_volume, v, 0).xyz;
     hn = dot(hn, hn) > 0.25 ? normalize(hn) : -d;
     if (dot(hn, d) > 0.0) hn = -hn;  // the side the ray arrives at
-    vpls[dst] = GpuVpl(vec4(o + d * h.t, 1.0), vec4(hn, 0.0), vec4(flux * albedo, 0.0), vec4(0.0), vec4(0.0));
+    Lobe hit = HAS_LOBES ? voxel_lobe(albedo, texelFetch(material_volume, v, 0)) : lambert_lobe(albedo);
+    vpls[dst] = hit_vpl(o + d * h.t, hn, d, flux, hit, 0.0);
 }

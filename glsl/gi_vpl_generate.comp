@@ -13,6 +13,11 @@
 // Phi_VPL = rho * I * w. The map stores L = rho / pi * I f cos / d^2 (f Mitsuba's spot
 // falloff, 1 for points), so rho * I f = L pi d^2 / cos: reading it from the map includes
 // textures and the falloff. Directional: Phi_VPL = rho E_perp A / K = L pi A / (K cos).
+// Glossy senders (vpl.glsl): the same read gives the diffuse part's Phi_VPL (a GGX texel
+// stores (1 - m) b / pi (1 - F_d(n.wi)) E, light_map.frag, so Phi_VPL = (1 - m) b (1 - F_d) I f w),
+// and the VPL also keeps the incident flux Phi_in = I f w (directional: E_perp A / K), the
+// direction to the light and the lobe, so that the gather evaluates f(wi, wo) Phi_in cos
+// toward each receiver.
 //
 // Samples that hit nothing stay in the set, flagged invalid with zero flux. NORMALIZE_VALID
 // off (the default): their flux leaves the scene, so K (all samples of the domain) normalizes
@@ -29,6 +34,8 @@
 layout(local_size_x = 64) in;
 layout(constant_id = 0) const bool NORMALIZE_VALID = false;
 layout(constant_id = 1) const bool SPOT_DISK = false;
+// The scene has GGX materials: their texels' senders get the GGX lobe.
+layout(constant_id = 3) const bool HAS_GGX = false;
 layout(set = 0, binding = 0, std430) readonly buffer FrameBuf { GpuFrame frame; };
 layout(set = 0, binding = 1) uniform sampler2DArray rlm_radiance;
 layout(set = 0, binding = 2) uniform sampler2DArray rlm_position;
@@ -36,12 +43,15 @@ layout(set = 0, binding = 3) uniform sampler2DArray rlm_normal;
 layout(set = 0, binding = 4, std430) writeonly buffer Vpls { GpuVpl vpls[]; };
 struct GpuMaterial { vec4 albedo; vec4 specular; uvec4 flags; };
 layout(set = 0, binding = 5, std430) readonly buffer Materials { GpuMaterial materials[]; };
+// GGX parameters per material (gbuffer.frag's table; read only when HAS_GGX).
+struct GpuMaterialPbr { vec4 ggx; vec4 emission; uvec4 maps; };
+layout(set = 0, binding = 6, std430) readonly buffer MaterialsPbr { GpuMaterialPbr pbr[]; };
 
 #include "shadow.glsl"
 #include "paraboloid.glsl"
 
 GpuVpl invalid_vpl() {
-    return GpuVpl(vec4(0.0), vec4(0.0, 0.0, 1.0, 0.0), vec4(0.0), vec4(0.0), vec4(0.0));
+    return GpuVpl(vec4(0.0), vec4(0.0, 0.0, 1.0, 0.0), vec4(0.0), vec4(0.0), vec4(0.0), vec4(0.0));
 }
 
 // Texel of the light map that shows world point `p` in view `v`; false if outside.
@@ -169,13 +179,24 @@ GpuVpl first_bounce(uint light, uint set_, uint j) {
         float falloff = light_falloff(l, dot(-wl, l.direction.xyz));
         incident = cos_l > 1e-6 ? l.intensity.rgb * (falloff * weight) : vec3(0.0);
     }
-    // Phong senders (§7.3): the glossy part leaves around the incident light's mirror
-    // direction; the map holds only the diffuse part.
-    GpuMaterial m = materials[max(uint(pos.w + 0.5), 1u) - 1u];
-    bool glossy = m.specular.a > 0.0 && any(greaterThan(m.specular.rgb, vec3(0.0)));
-    vec4 lobe = glossy ? vec4(reflect(-wl, n), m.specular.a) : vec4(0.0);
-    vec4 specular = glossy ? vec4(m.specular.rgb * incident, 0.0) : vec4(0.0);
-    return GpuVpl(vec4(pos.xyz, 1.0), vec4(n, 0.0), vec4(flux, 0.0), lobe, specular);
+    // Glossy senders (§7.3): the map holds only the diffuse part, Phi_VPL above. The VPL keeps
+    // the lobe (vpl.glsl): the direction to the light wi, the incident flux Phi_in and the
+    // material; a Phong sender's rho_s and exponent, a GGX sender's F0 = mix(0.04, b, m) and
+    // roughness (kept at r >= 0.01, where D stays finite; b the material's base color, which
+    // its albedo holds).
+    uint material = max(uint(pos.w + 0.5), 1u) - 1u;
+    GpuMaterial m = materials[material];
+    if (HAS_GGX && pbr[material].ggx.z != 0.0) {
+        vec4 ggx = pbr[material].ggx;
+        vec3 f0 = mix(vec3(0.04), m.albedo.rgb, ggx.y);
+        return GpuVpl(vec4(pos.xyz, 1.0), vec4(n, 0.0), vec4(flux, 0.0), vec4(wl, max(ggx.x, 0.01)),
+                      vec4(f0, VPL_LOBE_GGX), vec4(incident, 0.0));
+    }
+    if (m.specular.a > 0.0 && any(greaterThan(m.specular.rgb, vec3(0.0)))) {
+        return GpuVpl(vec4(pos.xyz, 1.0), vec4(n, 0.0), vec4(flux, 0.0), vec4(wl, m.specular.a),
+                      vec4(m.specular.rgb, VPL_LOBE_PHONG), vec4(incident, 0.0));
+    }
+    return GpuVpl(vec4(pos.xyz, 1.0), vec4(n, 0.0), vec4(flux, 0.0), vec4(0.0), vec4(0.0), vec4(0.0));
 }
 
 void main() {

@@ -5,8 +5,12 @@
 // falloff; the diffuse part), its world position and material and its normal, for lookups at
 // voxel ray hits (Thiedemann 2010, §6.3.3). A GGX sender's diffuse part is
 // (1 - m) b / pi (1 - F_d(n.wi)) E (brdf.glsl's brdf_ggx without the factor (1 - F_d(n.wo))
-// toward the receiver, which the map cannot know: 0.96 along the normal, 0 at grazing); its
-// specular lobe sends nothing here, so a metal (m = 1) sends no light-map light.
+// toward the receiver, which the map cannot know). What a lookup needs to evaluate a glossy
+// sender's whole BRDF toward its receiver is in the texel without further targets: the
+// position's w names the material (Phong rho_s and exponent, GGX base color, roughness and
+// metalness), the layer names the view and so the light (its position or direction, and E
+// recomputed as here), and the normal is stored; gi_hemisphere_body.glsl and
+// gi_vpl_generate.comp add the lobes.
 #include "frame.glsl"
 #include "dissolve.glsl"
 #include "paraboloid.glsl"

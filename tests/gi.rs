@@ -703,6 +703,180 @@ material = {{ albedo = [0.8, 0.8, 0.8] }}
     common::assert_no_validation_messages(&ctx);
 }
 
+/// A GGX floor lit by a directional light (irradiance E⊥ = π W/m² from 45°, toward +z)
+/// beside a white wall at z = 1 facing the camera; `floor` is the floor's material table.
+fn ggx_floor_scene(floor: &str) -> voxgi::scene::Scene {
+    let toml = format!(
+        r#"
+[camera]
+position = [0.0, 0.6, -1.0]
+target = [0.0, 0.8, 1.0]
+fov_y_deg = 30.0
+near = 0.01
+far = 20.0
+[[lights]]
+kind = "directional"
+direction = [0.0, -0.70710678, 0.70710678]
+irradiance_w_m2 = 3.14159265
+[[objects]]
+builtin = "quad"
+scale = [4.0, 1.0, 4.0]
+material = {{ {floor} }}
+[[objects]]
+builtin = "quad"
+rotate_deg = [-90.0, 0.0, 0.0]
+translate = [0.0, 1.5, 1.0]
+scale = [4.0, 1.0, 4.0]
+material = {{ albedo = [0.8, 0.8, 0.8] }}
+"#
+    );
+    voxgi::scene::Scene::from_toml_str(&toml, Path::new("<ggx floor>"), Path::new(ROOT))
+        .expect("parses")
+}
+
+/// The irradiance at wall point `p` (on z = 1, normal −z) from the floor y = 0 in front of the
+/// wall (x in [−2, 2], z in [−2, 1]), a GGX sender of base color `base` under the irradiance
+/// `e_floor` from direction `wi`: E(p) = ∫ f(wi, wo) E_floor cos θ_x cos θ_p / d² dA over the
+/// floor (each floor point sends the radiance f E_floor toward p, seen under the solid angle
+/// cos θ_x dA / d²), by the midpoint rule on 1 cm cells (the lobe spans tens of centimetres on
+/// the floor). An independent reference: `scene::ggx_brdf` is the CPU twin of `brdf_ggx`.
+fn ggx_floor_to_wall(
+    p: glam::Vec3,
+    base: glam::Vec3,
+    g: voxgi::scene::Ggx,
+    wi: glam::Vec3,
+    e_floor: f32,
+) -> glam::Vec3 {
+    let cell = 0.01f32;
+    let mut sum = glam::Vec3::ZERO;
+    for i in 0..400 {
+        for k in 0..300 {
+            let x = glam::Vec3::new(
+                -2.0 + (i as f32 + 0.5) * cell,
+                0.0,
+                -2.0 + (k as f32 + 0.5) * cell,
+            );
+            let to_p = p - x;
+            let d2 = to_p.length_squared();
+            let wo = to_p / d2.sqrt();
+            let (cos_x, cos_p) = (wo.y, wo.z);
+            if cos_x <= 0.0 || cos_p <= 0.0 {
+                continue;
+            }
+            sum += voxgi::scene::ggx_brdf(base, g, glam::Vec3::Y, wi, wo)
+                * (e_floor * cos_x * cos_p / d2);
+        }
+    }
+    sum * (cell * cell)
+}
+
+/// GGX senders in the reflective light maps and the VPLs: a metal floor (no diffuse part) lit
+/// by a directional light reflects its specular lobe onto a white wall; the wall's indirect
+/// radiance (the render minus direct light only) in two 8×8 windows against
+/// ρ_wall/π · [`ggx_floor_to_wall`], for the hemisphere method (cosine rays, radiance at the
+/// hits from the light maps plus the lobe toward the ray) and the VPLs (one bounce, no d_min,
+/// no visibility test: nothing stands between floor and wall). Before, the light maps and VPLs
+/// carried no lobe and the wall received nothing. Measured: hemisphere 0.1% off in both
+/// windows, VPLs 1.2% and 0.5% (16 × 256 VPLs on the lit floor and wall, each standing for
+/// about 5 cm² of it); the bound is 3%.
+#[test]
+fn ggx_senders_match_the_brdf_integral_for_hemisphere_and_vpls() {
+    let base = glam::Vec3::new(0.95, 0.64, 0.54);
+    let g = voxgi::scene::Ggx {
+        roughness: 0.4,
+        metallic: 1.0,
+    };
+    let scene = ggx_floor_scene(&format!(
+        "albedo = [{}, {}, {}], roughness = {}, metallic = {}",
+        base.x, base.y, base.z, g.roughness, g.metallic
+    ));
+    let wi = glam::Vec3::new(0.0, 1.0, -1.0).normalize();
+    let e_floor = std::f32::consts::PI * std::f32::consts::FRAC_1_SQRT_2;
+    let ctx = common::context();
+    let size = 64u32;
+    let render = |gi: GiSettings| {
+        let settings = RenderSettings {
+            width: size,
+            height: size,
+            gi,
+            ..Default::default()
+        };
+        let out = render_image(&ctx, &scene, &settings).expect("renders");
+        common::assert_no_validation_messages(&ctx);
+        out.hdr
+    };
+    let direct = render(GiSettings::default());
+    let methods = [
+        (
+            "hemisphere",
+            GiSettings {
+                method: GiMethod::Hemisphere,
+                rays: 256,
+                filter_radius: 0,
+                ..Default::default()
+            },
+        ),
+        (
+            "vpl",
+            GiSettings {
+                method: GiMethod::Vpl,
+                filter_radius: 0,
+                vpl: voxgi::scene::VplSettings {
+                    per_set: 256,
+                    bounces: 1,
+                    d_min_voxels: 0.0,
+                    visibility: voxgi::scene::VplVisibility::None,
+                    ..Default::default()
+                },
+                ..Default::default()
+            },
+        ),
+    ];
+    // The windows' pixels and their mean indirect radiance by the integral, L = ρ_wall/π E.
+    let windows: Vec<(Vec<usize>, glam::Vec3)> = [(32u32, 32u32), (32, 16)]
+        .iter()
+        .map(|&(cx, cy)| {
+            let mut pixels = Vec::new();
+            let mut expected = glam::Vec3::ZERO;
+            for y in cy - 4..cy + 4 {
+                for x in cx - 4..cx + 4 {
+                    let (near, far) = common::pixel_ray_points(&scene, x, y, size);
+                    let p = near + (far - near) * ((1.0 - near.z) / (far.z - near.z));
+                    assert!(
+                        p.y > 0.1 && p.x.abs() < 1.5,
+                        "pixel ({x}, {y}) sees the wall at {p}"
+                    );
+                    pixels.push((y * size + x) as usize);
+                    expected +=
+                        ggx_floor_to_wall(p, base, g, wi, e_floor) * (0.8 / std::f32::consts::PI);
+                }
+            }
+            (pixels, expected / 64.0)
+        })
+        .collect();
+    for (name, gi) in methods {
+        let img = render(gi);
+        for (w, (pixels, expected)) in windows.iter().enumerate() {
+            let got = pixels
+                .iter()
+                .map(|&i| glam::Vec3::from(img.data[i]) - glam::Vec3::from(direct.data[i]))
+                .sum::<glam::Vec3>()
+                / 64.0;
+            let (cx, cy) = [(32, 32), (32, 16)][w];
+            let rel = (got - *expected).abs() / *expected;
+            println!(
+                "{name}, window at ({cx}, {cy}): indirect {got:.4} vs integral {expected:.4} \
+                 ({:.1}% off)",
+                rel.max_element() * 100.0
+            );
+            assert!(
+                rel.max_element() < 0.03,
+                "{name}, window at ({cx}, {cy}): indirect {got} vs integral {expected}"
+            );
+        }
+    }
+}
+
 /// The path tracer on albedo and normal volumes written by the atlas points
 /// (`voxelize_atlas_volumes`, averaged per voxel) against the same on the triangle
 /// attribute volumes (`voxelize_attributes`, the smallest triangle index per voxel): both

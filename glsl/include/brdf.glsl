@@ -37,17 +37,29 @@ vec3 fresnel_schlick(vec3 f0, float c) {
     return f0 + (1.0 - f0) * pow(1.0 - clamp(c, 0.0, 1.0), 5.0);
 }
 
-vec3 brdf_ggx(vec3 diffuse, vec3 f0, float roughness, vec3 n, vec3 wi, vec3 wo) {
+// 1 - F_d(c): the weight of the GGX diffuse lobe on one side (Schlick with F0 = 0.04).
+float ggx_diffuse_weight(float c) {
+    return 1.0 - fresnel_schlick(vec3(0.04), c).x;
+}
+
+// The specular lobe of brdf_ggx, D(h) G1(wi) G1(wo) F(wo.h) / (4 (n.wi)(n.wo)); 0 below
+// either horizon.
+vec3 brdf_ggx_specular(vec3 f0, float roughness, vec3 n, vec3 wi, vec3 wo) {
     float ci = dot(n, wi);
     float co = dot(n, wo);
     if (ci <= 0.0 || co <= 0.0) return vec3(0.0);
     float alpha = roughness * roughness;
     vec3 h = normalize(wi + wo);
-    vec3 specular = fresnel_schlick(f0, dot(wo, h)) * (ggx_d(alpha, dot(n, h)) * ggx_g1(alpha, ci)
+    return fresnel_schlick(f0, dot(wo, h)) * (ggx_d(alpha, dot(n, h)) * ggx_g1(alpha, ci)
         * ggx_g1(alpha, co) / (4.0 * ci * co));
-    float fdi = 1.0 - fresnel_schlick(vec3(0.04), ci).x;
-    float fdo = 1.0 - fresnel_schlick(vec3(0.04), co).x;
-    return diffuse * (fdi * fdo / PI) + specular;
+}
+
+vec3 brdf_ggx(vec3 diffuse, vec3 f0, float roughness, vec3 n, vec3 wi, vec3 wo) {
+    float ci = dot(n, wi);
+    float co = dot(n, wo);
+    if (ci <= 0.0 || co <= 0.0) return vec3(0.0);
+    return diffuse * (ggx_diffuse_weight(ci) * ggx_diffuse_weight(co) / PI)
+        + brdf_ggx_specular(f0, roughness, n, wi, wo);
 }
 
 #endif

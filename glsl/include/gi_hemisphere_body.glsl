@@ -12,6 +12,8 @@
 #include "gi_common.glsl"
 
 layout(constant_id = 0) const bool HAS_PHONG = false;
+// Some material is GGX: light-map senders that are GGX send their whole BRDF toward the ray.
+layout(constant_id = 1) const bool HAS_GGX = false;
 
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(set = 0, binding = 0, std430) readonly buffer FrameBuf { GpuFrame frame; };
@@ -28,6 +30,9 @@ layout(set = 0, binding = 6) uniform sampler2DArray rlm_position;
 layout(set = 0, binding = 7) uniform sampler2DArray rlm_normal;
 struct GpuMaterial { vec4 albedo; vec4 specular; uvec4 flags; };
 layout(set = 0, binding = 11, std430) readonly buffer Materials { GpuMaterial materials[]; };
+// GGX parameters per material (gbuffer.frag's table; read only when HAS_GGX).
+struct GpuMaterialPbr { vec4 ggx; vec4 emission; uvec4 maps; };
+layout(set = 0, binding = 14, std430) readonly buffer MaterialsPbr { GpuMaterialPbr pbr[]; };
 #ifdef EMISSION_FROM_VOLUME
 layout(set = 0, binding = 12) uniform sampler3D emission_volume;
 layout(set = 0, binding = 13) uniform sampler3D normal_volume;
@@ -51,6 +56,7 @@ bool vx_voxel(int x, int y, int k) {
 #include "shadow.glsl"
 #include "paraboloid.glsl"
 #include "gbuffer_lobe.glsl"
+#include "brdf.glsl"
 
 #ifdef RADIANCE_FROM_VOLUME
 // Radiance of the hit voxel's lit side, if the ray arrives on that side (back-face test).
@@ -102,11 +108,14 @@ vec3 light_map_radiance(vec3 hit, vec3 dir) {
         if (distance(pos.xyz, hit) > tol) continue;
         if (dot(n, -dir) <= 0.0) continue;  // the ray reached the back of that surface
         vec3 radiance = texelFetch(rlm_radiance, ivec3(q, int(v)), 0).rgb;
-        // Glossy senders: their Phong lobe toward the ray, from the irradiance the light puts
-        // there (E = I cos / d^2 with the spot falloff, or E_perp cos), recomputed from the
-        // stored position and normal; the map itself holds only the diffuse part.
-        GpuMaterial m = materials[max(uint(pos.w + 0.5), 1u) - 1u];
-        if (m.specular.a > 0.0 && any(greaterThan(m.specular.rgb, vec3(0.0)))) {
+        // Glossy senders: their lobe toward the ray, f(wl, -dir) E, from the irradiance the
+        // light puts there (E = I cos / d^2 with the spot falloff, or E_perp cos), recomputed
+        // from the stored position and normal (the texel's view names the light, its position's
+        // w the material); the map itself holds only the diffuse part.
+        uint material = max(uint(pos.w + 0.5), 1u) - 1u;
+        GpuMaterial m = materials[material];
+        bool ggx = HAS_GGX && pbr[material].ggx.z != 0.0;
+        if (ggx || (m.specular.a > 0.0 && any(greaterThan(m.specular.rgb, vec3(0.0))))) {
             vec3 e;
             if (l.info.x == LIGHT_DIRECTIONAL) {
                 e = l.intensity.rgb * cos_l;
@@ -115,8 +124,20 @@ vec3 light_map_radiance(vec3 hit, vec3 dir) {
                 float falloff = light_falloff(l, dot(-wl, l.direction.xyz));
                 e = l.intensity.rgb * (falloff * cos_l / max(dot(d, d), 1e-30));
             }
-            float ca = max(dot(reflect(-wl, n), -dir), 0.0);
-            radiance += m.specular.rgb * (m.specular.a + 2.0) / (2.0 * PI) * pow(ca, m.specular.a) * e;
+            if (ggx) {
+                // GGX (brdf.glsl's brdf_ggx): the map's (1 - m) b / pi (1 - F_d(n.wl)) E times
+                // the factor (1 - F_d(n.wo)) toward the ray, plus the specular lobe with
+                // F0 = mix(0.04, b, m), b the base color (the material's albedo). Roughness is
+                // kept at r >= 0.01 (alpha >= 1e-4), where D stays finite.
+                vec3 nn = normalize(n);
+                vec4 g = pbr[material].ggx;
+                vec3 f0 = mix(vec3(0.04), m.albedo.rgb, g.y);
+                radiance = radiance * ggx_diffuse_weight(dot(nn, -dir))
+                    + brdf_ggx_specular(f0, max(g.x, 0.01), nn, wl, -dir) * e;
+            } else {
+                float ca = max(dot(reflect(-wl, n), -dir), 0.0);
+                radiance += m.specular.rgb * (m.specular.a + 2.0) / (2.0 * PI) * pow(ca, m.specular.a) * e;
+            }
         }
         sum += radiance;
     }

@@ -11,11 +11,15 @@
 // ceil(W / N) x ceil(H / M); invocations past the frame's edge (sizes that are not a multiple
 // of the pattern) do nothing. The geometry-aware filter then removes the pattern.
 //
-// Each valid VPL is a cosine emitter of I(w) = I_max cos theta_VPL, I_max = Phi_VPL / pi (Phong
-// senders add their lobe, vpl_intensity in vpl.glsl), and
-// gives a receiver point E = I_max cos theta_VPL cos theta_P / (d_min + d^2) (§7.3), times
+// Each valid VPL is a cosine emitter of I(w) = I_max cos theta_VPL, I_max = Phi_VPL / pi (glossy
+// senders, Phong or GGX: I(w) = f(wi, w) Phi_in cos theta_VPL, vpl_intensity in vpl.glsl), and
+// gives a receiver point E = I(w) cos theta_P / (d_min + d^2) (§7.3), times
 // the visibility of the segment from the voxel ray test (offsets at both ends, §5.3.1), or 1
-// without visibility. Lambert pixels store E; Phong pixels their indirect radiance,
+// without visibility. d_min (the thesis's clamp) bounds the 1/d^2 singularity of every VPL,
+// glossy ones included: E <= I_max / d_min. A glossy VPL's intensity is bounded as well, by its
+// lobe's peak (GGX: D <= 1 / (pi alpha^2) with alpha >= 1e-4; Phong: (n + 2) / (2 pi)), but
+// not clamped further: a sharp lobe's VPL lights a small spot brightly, as the lobe does.
+// Lambert pixels store E; Phong pixels their indirect radiance,
 // rho / pi E plus the Phong lobe rho_s (n+2)/(2 pi) cos^n(alpha) times I cos theta_P / (d_min + d^2).
 #define GI_OWN_PUSH
 #include "frame.glsl"

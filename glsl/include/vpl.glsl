@@ -10,24 +10,48 @@
 #ifndef VPL_GLSL
 #define VPL_GLSL
 
+#include "brdf.glsl"
+
 // Mirrors `GpuVpl` in src/gi/vpl.rs.
 struct GpuVpl {
     vec4 position;  // xyz world position (m); w 1 valid, 0 invalid (the sample hit nothing)
     vec4 normal;    // xyz unit normal of the sending surface, facing where it sends light
-    vec4 flux;      // rgb diffusely reflected flux Phi_VPL (W); w the bounce (0: first)
-    vec4 lobe;      // Phong senders: xyz the mirror direction of the incident light, w shininess
-    vec4 specular;  // Phong senders: rgb rho_s * Phi_in (W), Phi_in the incident flux; 0 else
+    vec4 flux;      // rgb the diffuse part's flux Phi_VPL (W); w the bounce (0: first)
+    vec4 lobe;      // glossy senders: xyz unit direction wi toward the incident light,
+                    // w the Phong exponent or the GGX roughness r
+    vec4 specular;  // glossy senders: rgb Phong rho_s or GGX F0; w the lobe kind
+                    // (LOBE_PHONG 1, LOBE_GGX 2; 0 for Lambert senders)
+    vec4 incident;  // glossy senders: rgb the incident flux Phi_in (W); 0 else
 };
 
-// Intensity of a VPL toward unit direction `w` leaving it (W/sr): the Lambert part
-// Phi / pi cos theta plus, for Phong senders, rho_s Phi_in (n + 2) / (2 pi) cos^n(alpha) cos theta
-// (normalized Phong, alpha the angle between w and the mirror direction; thesis §7.3).
+// A glossy VPL stands for a small surface element dA that receives the flux Phi_in = E dA
+// from direction wi (thesis §7.3, with a BRDF f instead of the Phong lobe alone): it reflects
+// the radiance L(w) = f(wi, w) E, so its intensity is I(w) = L(w) cos theta dA =
+// f(wi, w) Phi_in cos theta. Lambert senders keep Phi_VPL = rho Phi_in, I = Phi_VPL / pi cos.
+// The diffuse part of a Phong sender is Phi_VPL = rho_d Phi_in; of a GGX sender
+// Phi_VPL = (1 - m) b (1 - F_d(n.wi)) Phi_in, whose factor (1 - F_d(n.w)) toward w is
+// applied here (brdf.glsl's brdf_ggx split at its two lobes).
+const float VPL_LOBE_PHONG = 1.0;
+const float VPL_LOBE_GGX = 2.0;
+
+bool vpl_ggx(GpuVpl v) {
+    return v.specular.w > 1.5;
+}
+
+bool vpl_phong(GpuVpl v) {
+    return v.specular.w > 0.5 && v.specular.w < 1.5;
+}
+
+// Intensity of a VPL toward unit direction `w` leaving it (W/sr): Phi_VPL / pi cos theta for
+// Lambert senders, f(wi, w) Phi_in cos theta for glossy ones (above).
 vec3 vpl_intensity(GpuVpl v, vec3 w) {
     float c = max(dot(v.normal.xyz, w), 0.0);
     vec3 i = v.flux.rgb * (c / 3.14159265358979323846);
-    if (v.lobe.w > 0.0) {
-        float ca = max(dot(v.lobe.xyz, w), 0.0);
-        i += v.specular.rgb * ((v.lobe.w + 2.0) / (2.0 * 3.14159265358979323846) * pow(ca, v.lobe.w) * c);
+    if (vpl_phong(v)) {
+        i += brdf_phong(v.specular.rgb, v.lobe.w, v.normal.xyz, v.lobe.xyz, w) * v.incident.rgb * c;
+    } else if (vpl_ggx(v)) {
+        i = i * ggx_diffuse_weight(c)
+            + brdf_ggx_specular(v.specular.rgb, v.lobe.w, v.normal.xyz, v.lobe.xyz, w) * v.incident.rgb * c;
     }
     return i;
 }
@@ -55,6 +79,31 @@ uint vpl_index(uint set_, uint bounce, uint light, uint k) {
 uint source_vpl_index(uint set_, uint k) {
     uint row = pc.counts.w * pc.counts.y * pc.counts.z + SOURCE_VPLS;
     return set_ * row + pc.counts.w * pc.counts.y * pc.counts.z + k;
+}
+#endif
+
+#ifdef VPL_HIT
+// The passes that end a ray at a voxel hit (gi_vpl_emit.comp, gi_vpl_bounce.comp): with Phong
+// or GGX materials (HAS_LOBES) the hit's material comes from the material volume
+// (material_lobe.glsl's voxel_lobe); without, every hit is Lambert with the albedo volume's
+// color. Needs gi_common.glsl and material_lobe.glsl.
+
+// The VPL at voxel hit p (normal hn, facing the ray's origin) of a ray along d carrying the
+// flux phi (W): a Lambert surface reflects Phi_VPL = phi rho; a glossy one keeps phi as its
+// incident flux Phi_in from wi = -d and its diffuse part as Phi_VPL (above). The GGX roughness
+// is kept at r >= 0.01 (alpha >= 1e-4, material_lobe.glsl's lobe_alpha), where D stays finite.
+GpuVpl hit_vpl(vec3 p, vec3 hn, vec3 d, vec3 phi, Lobe m, float bounce) {
+    if (m.kind == LOBE_LAMBERT) {
+        return GpuVpl(vec4(p, 1.0), vec4(hn, 0.0), vec4(phi * m.diffuse, bounce), vec4(0.0), vec4(0.0), vec4(0.0));
+    }
+    vec3 wi = -d;
+    vec3 diffuse = phi * m.diffuse;
+    float param = m.param;
+    if (m.kind == LOBE_GGX) {
+        diffuse *= ggx_diffuse_weight(dot(hn, wi));
+        param = sqrt(lobe_alpha(m));
+    }
+    return GpuVpl(vec4(p, 1.0), vec4(hn, 0.0), vec4(diffuse, bounce), vec4(wi, param), vec4(m.specular, float(m.kind)), vec4(phi, 0.0));
 }
 #endif
 

@@ -119,8 +119,8 @@ pub struct GiShared {
 /// Declares one of the GI ray passes (`gi_hemisphere`, `gi_hemisphere_volume`,
 /// `gi_pathtrace`): they share the frame, G-buffer, voxel and ray-mask inputs (bindings 0-4)
 /// and the specular and albedo images (9, 10); `own` are the pass's further sampled images by
-/// binding, `out` its output image at binding 8, `materials` an optional buffer at binding 11,
-/// and `push` its push constants at record time.
+/// binding, `out` its output image at binding 8, `buffers` its storage buffers (read) by
+/// binding, and `push` its push constants at record time.
 #[allow(clippy::too_many_arguments)]
 pub fn add_ray_pass(
     g: &mut RenderGraph,
@@ -130,7 +130,7 @@ pub fn add_ray_pass(
     shared: &GiShared,
     own: &[(u32, ImageHandle)],
     (out, out_access): (ImageHandle, Access),
-    materials: Option<BufferHandle>,
+    buffers: &[(u32, BufferHandle)],
     push: impl Fn() -> GpuGiPush + 'static,
 ) {
     let c = Shader::Compute;
@@ -152,8 +152,8 @@ pub fn add_ray_pass(
     for &(b, h) in own {
         pass = pass.bind_sampled(b, h, sampler, c);
     }
-    if let Some(m) = materials {
-        pass = pass.bind(11, m, Access::StorageRead(c));
+    for &(b, buffer) in buffers {
+        pass = pass.bind(b, buffer, Access::StorageRead(c));
     }
     pass.record(move |ctx| {
         ctx.bind(&pipe);

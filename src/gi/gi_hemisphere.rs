@@ -18,9 +18,15 @@ pub struct GiHemisphere {
 
 impl GiHemisphere {
     /// `has_phong`: the G-buffer has a specular image (specialization constant 0).
-    /// `emission`: the scene has emitters; the assembly then writes the attribute volumes
-    /// ([`super::GiPasses::needs_attribute_volumes`]).
-    pub fn new(ctx: &Context, has_phong: bool, emission: bool) -> Result<Self, VkError> {
+    /// `has_ggx`: some material is GGX, whose light-map senders get their whole BRDF toward
+    /// the ray (specialization constant 1). `emission`: the scene has emitters; the assembly
+    /// then writes the attribute volumes ([`super::GiPasses::needs_attribute_volumes`]).
+    pub fn new(
+        ctx: &Context,
+        has_phong: bool,
+        has_ggx: bool,
+        emission: bool,
+    ) -> Result<Self, VkError> {
         let pipeline = ctx.compute_pipeline(
             if emission {
                 "gi_hemisphere_emission.comp"
@@ -28,7 +34,7 @@ impl GiHemisphere {
                 "gi_hemisphere.comp"
             },
             PushLayout::of::<GpuGiPush>(),
-            &[(0, u32::from(has_phong))],
+            &[(0, u32::from(has_phong)), (1, u32::from(has_ggx))],
         )?;
         Ok(Self { pipeline, emission })
     }
@@ -68,7 +74,7 @@ impl GiMethodPasses for GiHemisphere {
             shared,
             &own,
             (irradiance, Access::StorageWrite(Shader::Compute)),
-            Some(i.materials),
+            &[(11, i.materials), (14, i.materials_pbr)],
             move || push,
         );
         irradiance.into()

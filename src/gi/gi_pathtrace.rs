@@ -73,7 +73,7 @@ impl GiMethodPasses for GiPathtrace {
                 (13, material),
             ],
             (history, Access::StorageReadWrite(Shader::Compute)),
-            None,
+            &[],
             move || GpuGiPush {
                 // Frames accumulated before this one (`GiPasses::advance` ran before recording).
                 seed: frames.load(Ordering::SeqCst).saturating_sub(1),

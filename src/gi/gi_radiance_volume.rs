@@ -108,7 +108,7 @@ impl GiMethodPasses for GiRadianceVolume {
             shared,
             &[(5, volume), (6, normal)],
             (irradiance, Access::StorageWrite(c)),
-            None,
+            &[],
             move || push,
         );
         irradiance.into()

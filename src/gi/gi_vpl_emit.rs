@@ -202,12 +202,14 @@ pub struct GiVplEmit {
 impl GiVplEmit {
     /// `None` when `scene` has no emitters. `source_vpls`: the specialization constant of the
     /// row layout (`SOURCE_VPLS` in `glsl/include/vpl.glsl`), K when the table has emissive
-    /// triangles.
+    /// triangles. `lobes`: the scene has Phong or GGX materials, and the pass reads the
+    /// material volume at its rays' hits (specialization constant 3).
     pub fn new(
         ctx: &Context,
         scene: &Scene,
         t_s: f32,
         per_set: u32,
+        lobes: bool,
     ) -> Result<Option<Self>, VkError> {
         let table = emitter_table(scene, t_s);
         if table.is_empty() {
@@ -217,7 +219,10 @@ impl GiVplEmit {
         let pipeline = ctx.compute_pipeline(
             "gi_vpl_emit.comp",
             PushLayout::of::<GpuVplGeneratePush>(),
-            &[(2, if has_surfaces { per_set } else { 0 })],
+            &[
+                (2, if has_surfaces { per_set } else { 0 }),
+                (3, u32::from(lobes)),
+            ],
         )?;
         let bytes = std::mem::size_of_val(table.as_slice()) as u64;
         let stride_bytes = bytes.next_multiple_of(256);
@@ -283,7 +288,7 @@ impl GiVplEmit {
         push: GpuVplGeneratePush,
         invocations: u32,
         (voxels, lut): (ImageHandle, BufferHandle),
-        (albedo, normal): (ImageHandle, ImageHandle),
+        (albedo, normal, material): (ImageHandle, ImageHandle, ImageHandle),
         vpls: BufferHandle,
         s: vk::Sampler,
     ) {
@@ -303,6 +308,7 @@ impl GiVplEmit {
             .bind_sampled(3, normal, s, c)
             .bind(4, vpls, Access::StorageReadWrite(c))
             .bind(5, emitters, Access::StorageRead(c))
+            .bind_sampled(6, material, s, c)
             .record(move |ctx| {
                 ctx.bind(&pipe);
                 ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));

@@ -62,6 +62,8 @@ pub struct GiInputs {
     pub specular: Option<ImageHandle>,
     /// The scene's materials (`GpuMaterial`), for glossy senders in the light maps.
     pub materials: BufferHandle,
+    /// Their GGX parameters (`GpuMaterialPbr`), for GGX senders in the light maps.
+    pub materials_pbr: BufferHandle,
     pub width: u32,
     pub height: u32,
 }
@@ -173,6 +175,7 @@ impl GiPasses {
             GiMethod::Hemisphere | GiMethod::None => Box::new(GiHemisphere::new(
                 ctx,
                 target.has_phong,
+                target.scene.has_ggx(),
                 target.scene.has_emission(),
             )?),
         };
@@ -180,8 +183,10 @@ impl GiPasses {
         let attributes = Self::needs_attribute_volumes(&settings, target.scene)
             .then(|| {
                 let t = target;
-                // The path tracer's lobes at later bounces read the material volume.
-                let lobes = settings.method == GiMethod::Pathtrace && settings.pathtrace_lobes;
+                // The path tracer's lobes at later bounces, and the VPLs' glossy hits (bounces
+                // and emitter rays), read the material volume.
+                let lobes = (settings.method == GiMethod::Pathtrace && settings.pathtrace_lobes)
+                    || settings.method == GiMethod::Vpl;
                 TriangleAttributeVolumes::new(
                     ctx,
                     t.scene,

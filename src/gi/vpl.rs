@@ -27,13 +27,25 @@ pub struct GpuVpl {
     pub position: [f32; 4],
     /// xyz unit normal of the sender.
     pub normal: [f32; 4],
-    /// rgb diffusely reflected flux Φ_VPL (W); w the bounce.
+    /// rgb the diffuse part's flux Φ_VPL (W); w the bounce.
     pub flux: [f32; 4],
-    /// Phong senders: xyz the incident light's mirror direction, w the shininess.
+    /// Glossy senders: xyz the unit direction toward the incident light, w the Phong exponent
+    /// or the GGX roughness.
     pub lobe: [f32; 4],
-    /// Phong senders: rgb ρ_s Φ_in (W).
+    /// Glossy senders: rgb Phong ρ_s or GGX F0; w the lobe kind (1 Phong, 2 GGX, 0 Lambert).
     pub specular: [f32; 4],
+    /// Glossy senders: rgb the incident flux Φ_in (W).
+    pub incident: [f32; 4],
 }
+
+crate::gpu_struct!(GpuVpl {
+    position,
+    normal,
+    flux,
+    lobe,
+    specular,
+    incident
+});
 
 /// Push constants of `gi_vpl_generate` and `gi_vpl_bounce` (`glsl/include/vpl.glsl`).
 #[repr(C)]
@@ -157,7 +169,10 @@ impl VplPasses {
         let world_to_voxel = grid.world_to_voxel_matrix().to_cols_array();
         let bounces = v.bounces.clamp(1, VplSettings::MAX_BOUNCES);
         let per_set = v.per_set.max(1);
-        let emit = GiVplEmit::new(ctx, target.scene, target.time_s, per_set)?;
+        // Glossy hits of the bounces and emitter rays read the material volume, which the
+        // assembly creates for the VPLs in scenes with Phong or GGX materials.
+        let lobes = !target.scene.is_all_lambert();
+        let emit = GiVplEmit::new(ctx, target.scene, target.time_s, per_set, lobes)?;
         // Area lights have no reflective maps: the emitter slot carries their VPLs.
         let map_lights = target.scene.lights.iter().filter(|l| !l.is_area()).count() as u32;
         let layout = VplLayout {
@@ -219,6 +234,7 @@ impl VplPasses {
                 (0, u32::from(v.normalize == VplNormalize::Valid)),
                 (1, u32::from(v.spot_sampling == VplSpotSampling::Disk)),
                 (2, layout.sources),
+                (3, u32::from(target.scene.has_ggx())),
             ],
         )?;
         let shader = match v.shading {
@@ -247,7 +263,7 @@ impl VplPasses {
                 ctx.compute_pipeline(
                     "gi_vpl_bounce.comp",
                     PushLayout::of::<GpuVplGeneratePush>(),
-                    &[(2, layout.sources)],
+                    &[(2, layout.sources), (3, u32::from(lobes))],
                 )
             })
             .transpose()?;
@@ -285,7 +301,8 @@ impl VplPasses {
         if let (Some(emit), Some(v)) = (&self.emit, shared.attributes) {
             let invocations = self.layout.sets * self.layout.per_set;
             let push = self.generate_push;
-            let volumes = (v.albedo, v.normal);
+            // Without a material volume (all-Lambert scenes) the shader never reads it.
+            let volumes = (v.albedo, v.normal, v.material.unwrap_or(v.albedo));
             emit.add_pass(
                 g,
                 push,
@@ -297,9 +314,9 @@ impl VplPasses {
             );
         }
         if let (Some(pipe), Some(v)) = (self.bounce.as_deref().copied(), shared.attributes) {
-            let (albedo, normal) = (v.albedo, v.normal);
+            let volumes = (v.albedo, v.normal, v.material.unwrap_or(v.albedo));
             for b in 1..self.layout.bounces {
-                self.add_bounce(g, (pipe, b), i, (lut, sampler), (albedo, normal), vpls);
+                self.add_bounce(g, (pipe, b), i, (lut, sampler), volumes, vpls);
             }
         }
         (self.add_gather(g, i, (lut, sampler), vpls), vpls)
@@ -322,6 +339,7 @@ impl VplPasses {
             .bind_sampled(3, i.rlm_normal, s, c)
             .bind(4, vpls, Access::StorageWrite(c))
             .bind(5, i.materials, Access::StorageRead(c))
+            .bind(6, i.materials_pbr, Access::StorageRead(c))
             .record(move |ctx| {
                 ctx.bind(&pipe);
                 ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
@@ -335,7 +353,7 @@ impl VplPasses {
         (pipe, bounce): (PipelineHandle, u32),
         i: &GiInputs,
         (lut, s): (BufferHandle, vk::Sampler),
-        (albedo, normal): (ImageHandle, ImageHandle),
+        (albedo, normal, material): (ImageHandle, ImageHandle, ImageHandle),
         vpls: BufferHandle,
     ) {
         let c = Shader::Compute;
@@ -349,6 +367,7 @@ impl VplPasses {
             .bind_sampled(2, albedo, s, c)
             .bind_sampled(3, normal, s, c)
             .bind(4, vpls, Access::StorageReadWrite(c))
+            .bind_sampled(5, material, s, c)
             .record(move |ctx| {
                 ctx.bind(&pipe);
                 ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
@@ -487,7 +506,23 @@ mod tests {
         assert_eq!(std::mem::size_of::<GpuVplGeneratePush>(), 128);
         assert_eq!(std::mem::size_of::<GpuVplGatherPush>(), 128);
         assert_eq!(std::mem::offset_of!(GpuVplGatherPush, d_min_m2), 104);
-        assert_eq!(std::mem::size_of::<GpuVpl>(), 80);
+        assert_eq!(std::mem::size_of::<GpuVpl>(), 96);
+    }
+
+    /// Every pass that reads or writes the VPL buffer lays out `GpuVpl` as the Rust struct.
+    #[test]
+    fn vpl_struct_matches_every_shader() {
+        for shader in [
+            "gi_vpl_generate.comp",
+            "gi_vpl_bounce.comp",
+            "gi_vpl_emit.comp",
+            "gi_vpl_gather.comp",
+            "gi_vpl_splat.comp",
+            "gi_vpl_points.comp",
+        ] {
+            crate::vk::check_struct_against::<GpuVpl>(&[shader], "GpuVpl")
+                .unwrap_or_else(|e| panic!("{shader}: {e}"));
+        }
     }
 
     #[test]
@@ -511,12 +546,12 @@ mod tests {
         };
         assert_eq!(l.row(), 32);
         assert_eq!(l.per_bounce(), 256);
-        assert_eq!(l.size_bytes(), 16 * 32 * 80);
+        assert_eq!(l.size_bytes(), 16 * 32 * 96);
         let none = VplLayout { lights: 0, ..l };
-        assert_eq!(none.size_bytes(), 80, "never an empty buffer");
+        assert_eq!(none.size_bytes(), 96, "never an empty buffer");
         // Emissive surfaces: K source VPLs end each row.
         let emissive = VplLayout { sources: 8, ..l };
         assert_eq!(emissive.row(), 40);
-        assert_eq!(emissive.size_bytes(), 16 * 40 * 80);
+        assert_eq!(emissive.size_bytes(), 16 * 40 * 96);
     }
 }

@@ -744,6 +744,7 @@ impl Renderer {
                         shadow_map,
                         specular: gbuffer.specular,
                         materials: scene.materials,
+                        materials_pbr: scene.materials_pbr,
                         width: w,
                         height: h,
                     },
