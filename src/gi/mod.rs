@@ -70,7 +70,7 @@ pub struct GiInputs {
 #[derive(Clone, Copy)]
 pub struct GiTarget<'a> {
     pub scene: &'a Scene,
-    /// Views rendered per frame: 1, or 2 for a one-pass stereo frame (per-eye histories).
+    /// Views rendered per frame: 1, or 2 for a one-frame stereo frame (per-eye histories).
     pub eyes: u32,
     pub time_s: f32,
     /// The voxel grid the frame voxelizes.
@@ -90,7 +90,7 @@ pub struct GiTarget<'a> {
 /// One GI method's indirect-light passes: what a method module implements.
 trait GiMethodPasses {
     /// Declares the method's view-independent passes (the VPLs, the radiance volume), once
-    /// per frame, before [`GiMethodPasses::add_passes`]: a one-pass stereo frame shares their
+    /// per frame, before [`GiMethodPasses::add_passes`]: a one-frame stereo frame shares their
     /// results between the eyes ([`GiShared::world`]). Screen-space methods have none.
     fn add_world_passes(
         &self,
@@ -322,7 +322,7 @@ impl GiPasses {
         self.add_eye_passes(g, inp, voxels, 0, &mut None)
     }
 
-    /// [`GiPasses::add_passes`] for eye `eye` of a one-pass stereo frame: the first call
+    /// [`GiPasses::add_passes`] for eye `eye` of a one-frame stereo frame: the first call
     /// declares the view-independent passes (attribute volumes, the method's world passes)
     /// and leaves their handles in `world`; a later call with the same `world` reuses them
     /// and declares only the eye's screen-space passes.

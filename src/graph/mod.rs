@@ -458,7 +458,7 @@ impl RenderGraph {
     }
 
     /// Appends `suffix` to the names of the passes added from now on: a second copy of a
-    /// chain of passes in the same frame (a one-pass stereo frame's right eye, `[R]`) keeps
+    /// chain of passes in the same frame (a one-frame stereo frame's right eye, `[R]`) keeps
     /// pass names unique and recognizable in timings.
     pub fn set_pass_suffix(&mut self, suffix: &str) {
         self.pass_suffix = suffix.to_owned();

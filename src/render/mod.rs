@@ -82,7 +82,7 @@ pub enum RenderError {
     /// A frame size or voxel grid that does not fit the device, found before allocating.
     #[error(transparent)]
     OutOfDeviceMemory(memory::MemoryError),
-    /// A one-pass stereo renderer was asked for where it cannot run (the reason).
+    /// A one-frame stereo renderer was asked for where it cannot run (the reason).
     #[error("one-frame stereo cannot render this: {0}; use --stereo-path two-pass")]
     MultiviewUnavailable(String),
 }
@@ -639,7 +639,7 @@ impl Renderer {
     /// lights and `settings`. Call again after changing them (the viewer does, every frame);
     /// a new size, shadow resolution, cascade count or tone map also needs a new graph.
     ///
-    /// A one-pass stereo renderer takes `scene.camera` as the centre between its eyes.
+    /// A one-frame stereo renderer takes `scene.camera` as the centre between its eyes.
     pub fn prepare(&mut self, scene: &Scene) -> Result<(), RenderError> {
         let s = self.settings.clone();
         let eyes = self.stereo.as_ref().map(|st| {
@@ -798,18 +798,18 @@ impl Renderer {
     /// produces, for callers that add their own outputs (the viewer presents `ldr`). Nothing
     /// is an output yet: passes that feed nothing the caller adds are culled.
     ///
-    /// A one-pass stereo renderer's frame has two such pairs: this returns the left eye's
+    /// A one-frame stereo renderer's frame has two such pairs: this returns the left eye's
     /// (see [`Renderer::declare_eyes`]).
     pub fn declare(&self, g: &mut RenderGraph) -> FrameImages {
         let eyes = self.declare_eyes(g);
         eyes[0]
     }
 
-    /// Declares the frame: one [`FrameImages`], or, for a one-pass stereo renderer, the left
+    /// Declares the frame: one [`FrameImages`], or, for a one-frame stereo renderer, the left
     /// and the right eye's. The world-space passes (shadow maps, voxels, light maps, the GI
     /// methods' VPLs and radiance volume) are declared once; the G-buffer draws both eyes
-    /// in one multiview pass into two-layer images; every later pass runs per eye on its
-    /// layer, the right eye's named with the suffix [`stereo::RIGHT_EYE_SUFFIX`].
+    /// into two-layer images (per eye, or in one multiview pass); every later pass runs per
+    /// eye on its layer, the right eye's named with the suffix [`stereo::RIGHT_EYE_SUFFIX`].
     pub fn declare_eyes(&self, g: &mut RenderGraph) -> Vec<FrameImages> {
         let s = &self.settings;
         let (w, h) = (s.width, s.height);

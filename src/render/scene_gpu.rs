@@ -68,7 +68,7 @@ pub struct SceneGpu {
     /// `MAX_FRAMES_IN_FLIGHT` copies of `GpuFrame`, `frame_stride` bytes apart.
     frame: Buffer,
     frame_stride: u64,
-    /// The right eye's frame constants (same layout), only in a one-pass stereo renderer
+    /// The right eye's frame constants (same layout), only in a one-frame stereo renderer
     /// ([`SceneGpu::enable_right_eye`]); `frame` then holds the left eye's.
     frame_right: Option<Buffer>,
     /// Textures of the scene (a placeholder where a texture is unused), then a 1x1 white
@@ -88,7 +88,7 @@ pub struct SceneGpu {
 pub struct SceneInputs {
     /// Frame constants (`GpuFrame`), one window per frame slot.
     pub frame: BufferHandle,
-    /// The right eye's frame constants, in a one-pass stereo renderer.
+    /// The right eye's frame constants, in a one-frame stereo renderer.
     pub frame_right: Option<BufferHandle>,
     pub vertices: BufferHandle,
     pub indices: BufferHandle,
@@ -229,7 +229,8 @@ impl SceneGpu {
 
     /// Moves animated objects to the scene time `time_s` (keyframes move them, OBJ sequences
     /// switch to the frame's mesh; frames share topology, so only the buffer offsets change),
-    /// then culls the draw lists against the camera, each shadow view and each cascade view.
+    /// then culls the draw lists against the camera (the union of `view_projs`: both eyes of a
+    /// one-frame stereo renderer), each shadow view and each cascade view.
     pub fn update_draws(
         &mut self,
         scene: &Scene,

@@ -1,19 +1,21 @@
 //! Stereo rendering: both eyes of a [`StereoRig`] with parallel axes and off-axis frusta
-//! ([`Camera::eye`]), packed by the `stereo_pack` pass. Two paths give the same images:
+//! ([`Camera::eye`]), packed by the `stereo_pack` pass. Three paths give the same images:
 //!
-//! - **One pass** ([`StereoPath::Multiview`], the default where it can run): one
+//! - **One frame** ([`StereoPath::OneFrame`], the default where it can run): one
 //!   [`Renderer`] built with [`Renderer::new_stereo`] renders both eyes in one frame graph.
 //!   World-space passes run once (shadow maps, voxelization, attribute volumes, reflective
 //!   light maps, the VPLs and their bounces, the radiance volume); the G-buffer draws both
-//!   eyes in one multiview pass (`gbuffer_multiview`, Vulkan 1.1 multiview: view i into layer
-//!   i of two-layer images); every screen-space pass (direct light, the GI gathers, filter,
-//!   SAO, composite, TAA, exposure, bloom, tone mapping, FXAA) runs once per eye on its layer
-//!   ([`crate::graph::RenderGraph::layer`]), the right eye's named with [`RIGHT_EYE_SUFFIX`].
-//!   Per eye as well: the frame constants, TAA's history and jitter, the exposure state, the
-//!   path tracer's history.
+//!   eyes into two-layer images (one pass per eye); every screen-space pass (direct light, the
+//!   GI gathers, filter, SAO, composite, TAA, exposure, bloom, tone mapping, FXAA) runs once
+//!   per eye on its layer ([`crate::graph::RenderGraph::layer`]), the right eye's named with
+//!   [`RIGHT_EYE_SUFFIX`]. Per eye as well: the frame constants, TAA's history and jitter,
+//!   the exposure state, the path tracer's history.
+//! - **Multiview** ([`StereoPath::Multiview`]): the same frame with both eyes' G-buffer in one
+//!   Vulkan multiview pass (`gbuffer_multiview`: view i into layer i). Opt-in: lavapipe
+//!   (Mesa 22.3.6) loses some of view 1's triangles.
 //! - **Two passes** ([`StereoPath::TwoPass`]): one [`Renderer`] renders the whole frame graph
 //!   once per eye (`prepare` with each eye's camera), sharing only what [`Renderer::new`]
-//!   builds once (scene upload, static voxelization, atlases). The fallback where one pass
+//!   builds once (scene upload, static voxelization, atlases). The fallback where one frame
 //!   cannot run ([`multiview_blocker`]), and what `--stereo-path two-pass` asks for.
 //!
 //! [`Camera::eye`]: crate::scene::Camera::eye
@@ -25,7 +27,7 @@ use crate::post::{StereoMode, StereoPackPass};
 use crate::scene::{Eye, Scene, StereoRig};
 use crate::vk::{vk, Buffer, Context, ImageDesc, PassTiming};
 
-/// Appended to the names of the right eye's passes in a one-pass stereo frame.
+/// Appended to the names of the right eye's passes in a one-frame stereo frame.
 pub const RIGHT_EYE_SUFFIX: &str = "[R]";
 
 /// How a stereo pair is rendered (`--stereo-path`).
@@ -87,7 +89,7 @@ fn multiview_blocker_for(
     }
 }
 
-/// The right eye of a one-pass stereo renderer: its frame constants, post passes (TAA
+/// The right eye of a one-frame stereo renderer: its frame constants, post passes (TAA
 /// history and jitter, exposure state) and read-back buffers.
 pub(super) struct OnePass {
     pub rig: StereoRig,
@@ -123,7 +125,7 @@ impl OnePass {
 
 impl Renderer {
     /// The radiance and tone-mapped pixels of eye `eye` (0 left, 1 right) of the last
-    /// completed frame of a one-pass stereo renderer; a mono renderer's image for eye 0.
+    /// completed frame of a one-frame stereo renderer; a mono renderer's image for eye 0.
     pub fn eye_images(&self, eye: u32) -> (crate::eval::HdrImage, Vec<u8>) {
         match (eye, &self.stereo) {
             (1, Some(st)) => {
@@ -147,7 +149,7 @@ pub struct StereoSettings {
 
 /// The result of [`render_stereo`].
 pub struct StereoOutput {
-    /// Each eye's frame, as [`super::render_image`] returns it. On the one-pass path the
+    /// Each eye's frame, as [`super::render_image`] returns it. On a one-frame path the
     /// frame's timings (both eyes, every pass) are the left eye's; the right's are empty.
     pub left: RenderOutput,
     pub right: RenderOutput,
