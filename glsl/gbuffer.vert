@@ -1,26 +1,2 @@
 #version 450
-// G-buffer pass: world-space normals and material ids of every visible surface.
-#include "frame.glsl"
-
-layout(location = 0) in vec3 in_position;
-layout(location = 1) in vec3 in_normal;
-layout(location = 2) in vec2 in_uv;
-
-layout(set = 0, binding = 0, std430) readonly buffer FrameBuf { GpuFrame frame; };
-
-layout(push_constant) uniform Push {
-    mat4 model;
-    uint material;
-} pc;
-
-layout(location = 0) out vec3 out_normal;
-layout(location = 1) out vec2 out_uv;
-layout(location = 2) out vec3 out_world;
-
-void main() {
-    vec4 world = pc.model * vec4(in_position, 1.0);
-    out_normal = transpose(inverse(mat3(pc.model))) * in_normal;
-    out_uv = in_uv;
-    out_world = world.xyz;
-    gl_Position = frame.view_proj * world;
-}
+#include "gbuffer_vert.glsl"

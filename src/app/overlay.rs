@@ -90,6 +90,7 @@ impl Overlay {
             depth_write: false,
             depth_bias: false,
             logic_op: None,
+            view_mask: 0,
             spec: vec![],
         })?;
         let sampler = ctx.create_sampler(vk::Filter::LINEAR, false)?;

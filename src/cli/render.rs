@@ -34,16 +34,27 @@ fn print_stereo(
     out: &mut dyn Write,
 ) -> Result<(), CliError> {
     let total = |t: &[crate::vk::PassTiming]| t.iter().map(|t| t.gpu_ms).sum::<f64>();
+    let mode = clap::ValueEnum::to_possible_value(&stereo.mode)
+        .map(|v| v.get_name().to_owned())
+        .unwrap_or_default();
+    let path = match &s.fallback {
+        Some(why) => format!("two-pass ({} falls back: {why})", stereo.path.name()),
+        None => s.path.name().to_owned(),
+    };
+    let (e, c) = (stereo.rig.separation_m, stereo.rig.convergence_m);
+    let eyes = match s.path {
+        crate::render::StereoPath::OneFrame | crate::render::StereoPath::Multiview => {
+            format!("both eyes in one frame {:.3}", total(&s.left.timings))
+        }
+        crate::render::StereoPath::TwoPass => format!(
+            "left eye {:.3}, right eye {:.3}",
+            total(&s.left.timings),
+            total(&s.right.timings)
+        ),
+    };
     outln!(
         out,
-        "stereo {}: eye separation {} m, convergence {} m; GPU ms left eye {:.3}, right eye {:.3}, packing {:.3}",
-        clap::ValueEnum::to_possible_value(&stereo.mode)
-            .map(|v| v.get_name().to_owned())
-            .unwrap_or_default(),
-        stereo.rig.separation_m,
-        stereo.rig.convergence_m,
-        total(&s.left.timings),
-        total(&s.right.timings),
+        "stereo {mode}, path {path}: eye separation {e} m, convergence {c} m; GPU ms {eyes}, packing {:.3}",
         total(&s.pack_timings)
     );
     Ok(())
@@ -64,6 +75,13 @@ pub struct StereoArgs {
     /// default: the distance to the centre of the scene's bounding box.
     #[arg(long, value_name = "M")]
     pub convergence: Option<f32>,
+    /// How the eyes are rendered (with --stereo): one-frame renders both eyes in one frame
+    /// with world-space work (shadow maps, voxels, light maps, VPLs) once, the G-buffer drawn
+    /// per eye; multiview draws both eyes' G-buffer in one Vulkan multiview pass instead;
+    /// two-pass renders the whole frame per eye. One-frame and multiview fall back to
+    /// two-pass where they cannot run, and say why.
+    #[arg(long, value_enum, value_name = "PATH", default_value = "one-frame")]
+    pub stereo_path: crate::render::StereoPath,
 }
 
 impl StereoArgs {
@@ -94,7 +112,11 @@ impl StereoArgs {
             separation_m: crate::limits::STEREO_SEPARATION_M.check_flag(self.eye_separation)?,
             convergence_m: crate::limits::STEREO_CONVERGENCE_M.check_flag(convergence_m)?,
         };
-        Ok(Some(StereoSettings { mode, rig }))
+        Ok(Some(StereoSettings {
+            mode,
+            rig,
+            path: self.stereo_path,
+        }))
     }
 }
 

@@ -114,6 +114,12 @@ pub struct GiShared {
     /// The albedo, normal and (scenes with emitters) emission volumes, already written this
     /// frame, for the methods that read them ([`super::GiPasses::needs_attribute_volumes`]).
     pub attributes: Option<crate::voxel::attributes::AttributeHandles>,
+    /// The stereo eye whose passes are declared (0: left or mono, 1: right): selects the
+    /// method's per-eye history.
+    pub eye: u32,
+    /// What the method's view-independent passes produced this frame
+    /// ([`super::GiMethodPasses::add_world_passes`]), shared by both stereo eyes.
+    pub world: super::MethodWorld,
 }
 
 /// Declares one of the GI ray passes (`gi_hemisphere`, `gi_hemisphere_volume`,

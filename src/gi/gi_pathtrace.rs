@@ -12,10 +12,11 @@ use crate::graph::{Access, RenderGraph, Shader};
 use crate::vk::{vk, ComputePipeline, Context, Image, ImageDesc, PushLayout, VkError};
 use std::sync::atomic::Ordering;
 
-/// The path tracer's pipeline and its accumulation history (the frame's size, rgba32f).
+/// The path tracer's pipeline and its accumulation history (the frame's size, rgba32f), one
+/// per stereo eye of a one-pass stereo frame.
 pub struct GiPathtrace {
     pipeline: ComputePipeline,
-    history: Image,
+    histories: Vec<Image>,
 }
 
 impl GiPathtrace {
@@ -38,17 +39,26 @@ impl GiPathtrace {
                 (2, u32::from(lobes && !target.scene.is_all_lambert())),
             ],
         )?;
-        let history = ctx.create_zeroed_image(
-            &Self::history_desc((w, h)),
-            Access::Sampled(Shader::Compute).info().layout,
-        )?;
-        Ok(Self { pipeline, history })
+        let histories = (0..target.eyes.max(1))
+            .map(|_| {
+                ctx.create_zeroed_image(
+                    &Self::history_desc((w, h)),
+                    Access::Sampled(Shader::Compute).info().layout,
+                )
+            })
+            .collect::<Result<_, _>>()?;
+        Ok(Self {
+            pipeline,
+            histories,
+        })
     }
 }
 
 impl GiMethodPasses for GiPathtrace {
     fn add_passes(&self, g: &mut RenderGraph, i: &GiInputs, shared: &GiShared) -> GiOutput {
-        let history = g.import_image(&self.history, Access::Sampled(Shader::Compute));
+        // One history per eye; `GiTarget::eyes` made as many as the assembly declares.
+        let own = &self.histories[(shared.eye as usize).min(self.histories.len() - 1)];
+        let history = g.import_image(own, Access::Sampled(Shader::Compute));
         // The assembly writes the volumes for the methods that need them (this one does).
         let Some(v) = shared.attributes else {
             return history.into();

@@ -4,7 +4,7 @@
 //! maps, the second samples the hemisphere against it.
 
 use super::gi_common::{add_ray_pass, GiShared, GpuGiPush};
-use super::{GiInputs, GiMethodPasses, GiOutput, GiTarget};
+use super::{GiInputs, GiMethodPasses, GiOutput, GiTarget, MethodWorld};
 use crate::graph::{Access, RenderGraph, Shader};
 use crate::vk::{vk, ComputePipeline, Context, Image, ImageDesc, PushLayout, VkError};
 
@@ -57,12 +57,22 @@ impl GiRadianceVolume {
 }
 
 impl GiMethodPasses for GiRadianceVolume {
-    fn add_passes(&self, g: &mut RenderGraph, i: &GiInputs, shared: &GiShared) -> GiOutput {
+    /// The volume pass: view-independent, so a stereo frame's eyes share the volume.
+    fn add_world_passes(
+        &self,
+        g: &mut RenderGraph,
+        i: &GiInputs,
+        shared: &GiShared,
+    ) -> MethodWorld {
         let c = Shader::Compute;
         let volume = g.import_image(&self.image, Access::Sampled(c));
+        let world = MethodWorld {
+            image: Some(volume),
+            buffer: None,
+        };
         // The assembly writes the volumes for the methods that need them (this one does).
         let Some(v) = shared.attributes else {
-            return volume.into();
+            return world;
         };
         let (albedo, normal) = (v.albedo, v.normal);
         // Without emitters the shader never reads its emission binding; albedo fills it.
@@ -94,6 +104,21 @@ impl GiMethodPasses for GiRadianceVolume {
                     (dims[2] as u32).div_ceil(4),
                 );
             });
+        world
+    }
+
+    fn add_passes(&self, g: &mut RenderGraph, i: &GiInputs, shared: &GiShared) -> GiOutput {
+        let c = Shader::Compute;
+        // `add_world_passes` imported the volume (`GiPasses::add_eye_passes` runs it first).
+        let volume = match shared.world.image {
+            Some(volume) => volume,
+            None => g.import_image(&self.image, Access::Sampled(c)),
+        };
+        let Some(v) = shared.attributes else {
+            return volume.into();
+        };
+        let normal = v.normal;
+        let push = shared.push;
         let irradiance = g.create_image(ImageDesc::new_2d(
             "indirect irradiance",
             vk::Format::R32G32B32A32_SFLOAT,

@@ -72,6 +72,8 @@ pub struct GiInputs {
 #[derive(Clone, Copy)]
 pub struct GiTarget<'a> {
     pub scene: &'a Scene,
+    /// Views rendered per frame: 1, or 2 for a one-frame stereo frame (per-eye histories).
+    pub eyes: u32,
     pub time_s: f32,
     /// The voxel grid the frame voxelizes.
     pub grid: &'a VoxelGrid,
@@ -89,7 +91,18 @@ pub struct GiTarget<'a> {
 
 /// One GI method's indirect-light passes: what a method module implements.
 trait GiMethodPasses {
-    /// Declares the method's passes; returns the image the filter and the composite read
+    /// Declares the method's view-independent passes (the VPLs, the radiance volume), once
+    /// per frame, before [`GiMethodPasses::add_passes`]: a one-frame stereo frame shares their
+    /// results between the eyes ([`GiShared::world`]). Screen-space methods have none.
+    fn add_world_passes(
+        &self,
+        _g: &mut RenderGraph,
+        _inp: &GiInputs,
+        _shared: &GiShared,
+    ) -> MethodWorld {
+        MethodWorld::default()
+    }
+    /// Declares the method's passes of one eye (`shared.eye`); returns the image the filter and the composite read
     /// (irradiance at Lambert pixels, indirect radiance at Phong pixels), and what the method
     /// draws over the composite, if anything.
     fn add_passes(&self, g: &mut RenderGraph, inp: &GiInputs, shared: &GiShared) -> GiOutput;
@@ -98,6 +111,24 @@ trait GiMethodPasses {
     fn update_scene(&mut self, _scene: &crate::scene::Scene, _t_s: f32) {}
     /// Writes frame slot `slot`'s copy of such a table (after the slot's fence).
     fn write_slot(&mut self, _slot: usize) {}
+}
+
+/// What a method's view-independent passes produced in a frame.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct MethodWorld {
+    /// An image (the radiance volume).
+    pub image: Option<ImageHandle>,
+    /// A buffer (the VPLs).
+    pub buffer: Option<BufferHandle>,
+}
+
+/// The frame's view-independent GI resources, declared by the first eye's
+/// [`GiPasses::add_eye_passes`] and reused by the second.
+#[derive(Clone, Copy, Debug)]
+pub struct GiWorld {
+    lut: BufferHandle,
+    attributes: Option<crate::voxel::attributes::AttributeHandles>,
+    method: MethodWorld,
 }
 
 /// What a GI method's passes produce.
@@ -147,6 +178,7 @@ impl GiPasses {
         glossy: bool,
     ) -> Vec<ImageDesc> {
         match settings.method {
+            // Per stereo eye: see `GiTarget::eyes` (the renderer repeats this list per eye).
             GiMethod::Pathtrace => vec![GiPathtrace::history_desc(size)],
             GiMethod::Ssgi if settings.ssgi.ssr && glossy => vec![
                 ssgi::Ssgi::history_desc(size),
@@ -292,23 +324,56 @@ impl GiPasses {
         inp: &GiInputs,
         voxels: Option<&crate::voxel::gpu::VoxelFrame>,
     ) -> ImageHandle {
-        let lut = g.import_buffer(&self.lut, Access::StorageRead(Shader::Compute));
-        // The first frame writes the volumes; later frames keep them until something moves.
-        let attributes = self.attributes.as_ref().map(|a| {
-            a.add_passes(g, |g: &mut RenderGraph, albedo, normal| {
-                if let Some(v) = voxels {
-                    v.add_attribute_passes(g, albedo, normal);
-                }
-            })
-        });
-        let shared = GiShared {
-            lut,
+        self.add_eye_passes(g, inp, voxels, 0, &mut None)
+    }
+
+    /// [`GiPasses::add_passes`] for eye `eye` of a one-frame stereo frame: the first call
+    /// declares the view-independent passes (attribute volumes, the method's world passes)
+    /// and leaves their handles in `world`; a later call with the same `world` reuses them
+    /// and declares only the eye's screen-space passes.
+    pub fn add_eye_passes(
+        &self,
+        g: &mut RenderGraph,
+        inp: &GiInputs,
+        voxels: Option<&crate::voxel::gpu::VoxelFrame>,
+        eye: u32,
+        world: &mut Option<GiWorld>,
+    ) -> ImageHandle {
+        let mut shared = GiShared {
+            lut: BufferHandle(crate::graph::ResourceId(0)),
             sampler: self.sampler.raw,
             push: self.push,
             frames: self.accumulation.frames.clone(),
             first_frame: self.accumulation.first_frame.clone(),
-            attributes,
+            attributes: None,
+            eye,
+            world: MethodWorld::default(),
         };
+        let w = match *world {
+            Some(w) => w,
+            None => {
+                shared.lut = g.import_buffer(&self.lut, Access::StorageRead(Shader::Compute));
+                // The first frame writes the volumes; later frames keep them until something
+                // moves.
+                shared.attributes = self.attributes.as_ref().map(|a| {
+                    a.add_passes(g, |g: &mut RenderGraph, albedo, normal| {
+                        if let Some(v) = voxels {
+                            v.add_attribute_passes(g, albedo, normal);
+                        }
+                    })
+                });
+                let w = GiWorld {
+                    lut: shared.lut,
+                    attributes: shared.attributes,
+                    method: self.method.add_world_passes(g, inp, &shared),
+                };
+                *world = Some(w);
+                w
+            }
+        };
+        shared.lut = w.lut;
+        shared.attributes = w.attributes;
+        shared.world = w.method;
         let GiOutput { indirect, overlay } = self.method.add_passes(g, inp, &shared);
         let s = &self.settings;
         let filtered = self.filter.add_passes(

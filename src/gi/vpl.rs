@@ -295,6 +295,17 @@ impl VplPasses {
         shared: &GiShared,
     ) -> (ImageHandle, BufferHandle) {
         let (lut, sampler) = (shared.lut, shared.sampler);
+        // `GiPasses::add_eye_passes` declares the VPLs first, once for both stereo eyes.
+        let vpls = match shared.world.buffer {
+            Some(vpls) => vpls,
+            None => self.add_vpls(g, i, shared),
+        };
+        (self.add_gather(g, i, (lut, sampler), vpls), vpls)
+    }
+
+    /// Generates the VPLs (and their bounces): view-independent, shared by stereo eyes.
+    fn add_vpls(&self, g: &mut RenderGraph, i: &GiInputs, shared: &GiShared) -> BufferHandle {
+        let (lut, sampler) = (shared.lut, shared.sampler);
         let vpls = g.create_buffer("vpls", self.layout.size_bytes());
         self.add_generate(g, i, vpls, sampler);
         // The assembly writes the attribute volumes when the scene has emitters.
@@ -319,7 +330,7 @@ impl VplPasses {
                 self.add_bounce(g, (pipe, b), i, (lut, sampler), volumes, vpls);
             }
         }
-        (self.add_gather(g, i, (lut, sampler), vpls), vpls)
+        vpls
     }
 
     fn groups_1d(&self) -> u32 {
@@ -451,6 +462,18 @@ impl GiMethodPasses for VplPasses {
     fn write_slot(&mut self, slot: usize) {
         if let Some(emit) = &mut self.emit {
             emit.write_slot(slot);
+        }
+    }
+
+    fn add_world_passes(
+        &self,
+        g: &mut RenderGraph,
+        i: &GiInputs,
+        shared: &GiShared,
+    ) -> super::MethodWorld {
+        super::MethodWorld {
+            image: None,
+            buffer: Some(self.add_vpls(g, i, shared)),
         }
     }
 

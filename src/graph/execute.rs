@@ -20,6 +20,8 @@ pub struct GpuImage {
     pub view: vk::ImageView,
     /// One view per mip level when the image has several.
     pub mip_views: Vec<vk::ImageView>,
+    /// One 2D view per layer when the graph takes layers of it ([`RenderGraph::layer`]).
+    pub layer_views: Vec<vk::ImageView>,
     pub desc: ImageDesc,
 }
 
@@ -71,6 +73,12 @@ impl PassContext<'_> {
     /// declared in code, so this is a programming error, caught by the first frame any test
     /// records.
     fn declared(&self, id: ResourceId) {
+        // A layer view's accesses were declared on its image.
+        let id = self
+            .decls
+            .get(id.0 as usize)
+            .and_then(|d| d.layer_of)
+            .map_or(id, |(image, _)| image);
         if !self.pass.accesses.iter().any(|a| a.0 == id) {
             panic!(
                 "pass `{}` uses `{}`, which it did not declare: add a `.read()`, `.write()` or `.bind()` for it",
@@ -256,6 +264,9 @@ impl PassContext<'_> {
         for a in &self.pass.attachments {
             let img = self.image(a.image);
             extent = img.extent_2d();
+            // With multiview Vulkan ignores the layer count (each view draws into its layer);
+            // lavapipe clears only `layerCount` layers at the load op, so it stays the
+            // attachments' layer count.
             layers = img.desc.layers.max(1);
             let clear = match a.load {
                 Load::Clear(c) => Some(vk::ClearValue {
@@ -281,7 +292,7 @@ impl PassContext<'_> {
             }
         }
         self.cmd
-            .begin_rendering_layers(extent, layers, &colors, depth);
+            .begin_rendering_layers(extent, (layers, self.pass.view_mask), &colors, depth);
     }
 
     /// Binds a declared buffer as vertex buffer 0.
@@ -436,6 +447,7 @@ impl GraphExecutor {
                     raw: img.raw,
                     view: img.view,
                     mip_views: img.mip_views.clone(),
+                    layer_views: img.layer_views.clone(),
                     desc: desc.clone(),
                 })),
                 (
@@ -462,6 +474,7 @@ impl GraphExecutor {
                                     raw: img.raw,
                                     view: img.view,
                                     mip_views: img.mip_views.clone(),
+                                    layer_views: img.layer_views.clone(),
                                     desc: d,
                                 };
                                 slot.images.push(img);
@@ -492,6 +505,24 @@ impl GraphExecutor {
                 _ => None,
             };
             slot.resources[i] = gpu;
+        }
+        // Layer views: their image's view of that layer (images come before their views).
+        for (i, r) in self.graph.resources.iter().enumerate() {
+            let (Some((image, layer)), ResourceKind::Image(desc)) = (r.layer_of, &r.kind) else {
+                continue;
+            };
+            slot.resources[i] = match &slot.resources[image.0 as usize] {
+                Some(GpuResource::Image(img)) => img.layer_views.get(layer as usize).map(|&view| {
+                    GpuResource::Image(GpuImage {
+                        raw: img.raw,
+                        view,
+                        mip_views: Vec::new(),
+                        layer_views: Vec::new(),
+                        desc: desc.clone(),
+                    })
+                }),
+                _ => None,
+            };
         }
         Ok(slot)
     }
@@ -540,6 +571,7 @@ impl GraphExecutor {
         imported.raw = image.raw;
         imported.view = image.view;
         imported.mip_views = image.mip_views.clone();
+        imported.layer_views = image.layer_views.clone();
         for slot in &mut self.slots {
             if let Some(GpuResource::Image(g)) = &mut slot.resources[index] {
                 g.raw = image.raw;

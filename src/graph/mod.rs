@@ -184,6 +184,7 @@ pub(crate) struct ImportedImage {
     pub raw: vk::Image,
     pub view: vk::ImageView,
     pub mip_views: Vec<vk::ImageView>,
+    pub layer_views: Vec<vk::ImageView>,
 }
 
 #[derive(Clone, Debug)]
@@ -215,6 +216,9 @@ pub(crate) struct ResourceDecl {
     /// For a buffer holding one window per frame slot: (stride, size) in bytes. A pass that
     /// binds it sees the window of the slot it records.
     pub slot_window: Option<(u64, u64)>,
+    /// A view of one layer of another image ([`RenderGraph::layer`]): (image, layer). It owns
+    /// no memory; every access declared on it is an access of that layer of the image.
+    pub layer_of: Option<(ResourceId, u32)>,
 }
 
 impl ResourceDecl {
@@ -278,6 +282,8 @@ pub(crate) struct PassDecl {
     pub bindings: Vec<bind::BindingDecl>,
     /// Color attachments in location order, then at most one depth attachment.
     pub attachments: Vec<bind::AttachmentDecl>,
+    /// Multiview: the views one draw renders, one bit per attachment layer (0: one view).
+    pub view_mask: u32,
     /// Records only in the slots this leaves open (`None`: always).
     pub condition: Option<std::sync::Arc<SlotCondition>>,
 }
@@ -287,6 +293,8 @@ pub(crate) struct PassDecl {
 pub struct RenderGraph {
     pub(crate) resources: Vec<ResourceDecl>,
     pub(crate) passes: Vec<PassDecl>,
+    /// Appended to the name of every pass added ([`RenderGraph::set_pass_suffix`]).
+    pass_suffix: String,
 }
 
 impl RenderGraph {
@@ -301,8 +309,41 @@ impl RenderGraph {
             origin,
             output: false,
             slot_window: None,
+            layer_of: None,
         });
         ResourceId(self.resources.len() as u32 - 1)
+    }
+
+    /// Layer `layer` of the array image `image` as an image of its own (one layer, viewed as
+    /// 2D): passes declare and bind it like any image, and the graph turns each access into
+    /// an access of that layer of `image`, so barriers, lifetimes and culling follow the
+    /// layer. A stereo frame renders both eyes into two-layer images in one multiview pass,
+    /// then runs each eye's screen-space passes on its layer.
+    ///
+    /// # Panics
+    /// If `image` is not an image of this graph with more than `layer` layers (a programming
+    /// error: handles and layer counts come from code).
+    pub fn layer(&mut self, image: ImageHandle, layer: u32) -> ImageHandle {
+        let parent = &mut self.resources[image.0 .0 as usize];
+        let ResourceKind::Image(desc) = &mut parent.kind else {
+            panic!("layer of `{}`, which is not an image", parent.name);
+        };
+        assert!(
+            layer < desc.layers && desc.depth == 1,
+            "layer {layer} of `{}`, which has {} layer(s)",
+            parent.name,
+            desc.layers
+        );
+        desc.layer_views = true;
+        let mut view = desc.clone();
+        view.name = format!("{}[{layer}]", desc.name);
+        view.layers = 1;
+        view.array = false;
+        view.layer_views = false;
+        let origin = Origin::Transient;
+        let id = self.push(&view.name.clone(), ResourceKind::Image(view), origin);
+        self.resources[id.0 as usize].layer_of = Some((image.0, layer));
+        ImageHandle(id)
     }
 
     /// A transient image; its usage flags are derived from the declared accesses.
@@ -329,6 +370,7 @@ impl RenderGraph {
             raw: image.raw,
             view: image.view,
             mip_views: image.mip_views.clone(),
+            layer_views: image.layer_views.clone(),
         };
         ImageHandle(self.push(
             &image.desc.name,
@@ -415,15 +457,23 @@ impl RenderGraph {
         }
     }
 
+    /// Appends `suffix` to the names of the passes added from now on: a second copy of a
+    /// chain of passes in the same frame (a one-frame stereo frame's right eye, `[R]`) keeps
+    /// pass names unique and recognizable in timings.
+    pub fn set_pass_suffix(&mut self, suffix: &str) {
+        self.pass_suffix = suffix.to_owned();
+    }
+
     pub fn add_pass(&mut self, name: &str) -> PassBuilder<'_> {
         self.passes.push(PassDecl {
-            name: name.to_owned(),
+            name: format!("{name}{}", self.pass_suffix),
             accesses: Vec::new(),
             record: None,
             interface: None,
             bindings: Vec::new(),
             attachments: Vec::new(),
             condition: None,
+            view_mask: 0,
         });
         let index = self.passes.len() - 1;
         PassBuilder { graph: self, index }
@@ -449,6 +499,11 @@ pub struct PassBuilder<'g> {
 
 impl PassBuilder<'_> {
     fn add(self, id: ResourceId, access: Access, sel: SubresourceSel, declared_read: bool) -> Self {
+        // An access of a layer view is an access of that layer of its image.
+        let (id, sel) = match self.graph.resources[id.0 as usize].layer_of {
+            Some((image, layer)) => (image, sel.layers(layer, 1)),
+            None => (id, sel),
+        };
         self.graph.passes[self.index]
             .accesses
             .push((id, access, sel, declared_read));
@@ -612,6 +667,13 @@ impl PassBuilder<'_> {
             SubresourceSel::whole(),
             false,
         )
+    }
+    /// Renders with multiview: one draw renders view i into layer i of every attachment, for
+    /// each bit i of `mask` (`gl_ViewIndex`); the pipeline must have the same mask
+    /// (`GraphicsPipelineDesc::view_mask`).
+    pub fn view_mask(self, mask: u32) -> Self {
+        self.graph.passes[self.index].view_mask = mask;
+        self
     }
     /// Records the pass only in the frame slots `condition` leaves open (`None`: always).
     pub fn when(self, condition: Option<std::sync::Arc<SlotCondition>>) -> Self {

@@ -5,7 +5,7 @@
 
 use super::scene_gpu::{vertex_attributes, SceneInputs};
 use super::{DEPTH, GBUFFER_COLOR};
-use crate::graph::{Access, ImageHandle, Load, RenderGraph, Shader};
+use crate::graph::{Access, BufferHandle, ImageHandle, Load, RenderGraph, Shader};
 use crate::vk::{vk, Context, GraphicsPipeline, GraphicsPipelineDesc, ImageDesc, VkError};
 
 /// Push constants of `gbuffer.vert`.
@@ -48,11 +48,40 @@ pub struct Gbuffer {
     pub depth: ImageHandle,
 }
 
+impl Gbuffer {
+    /// One eye of a two-layer (multiview) G-buffer: each image's layer `eye`.
+    pub fn eye(&self, g: &mut RenderGraph, eye: u32) -> Gbuffer {
+        Gbuffer {
+            albedo: g.layer(self.albedo, eye),
+            normal: g.layer(self.normal, eye),
+            specular: self.specular.map(|i| g.layer(i, eye)),
+            emission: self.emission.map(|i| g.layer(i, eye)),
+            depth: g.layer(self.depth, eye),
+        }
+    }
+}
+
+/// Views of the multiview G-buffer: left eye (layer 0) and right eye (layer 1).
+const STEREO_VIEW_MASK: u32 = 0b11;
+
+/// Which views the G-buffer draws, and how.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GbufferViews {
+    /// One camera, one-layer images.
+    Mono,
+    /// Both stereo eyes into two-layer images: one `gbuffer` pass per eye into its layer.
+    PerEye,
+    /// Both stereo eyes into two-layer images in one Vulkan multiview pass
+    /// (`gbuffer_multiview`: view i into layer i).
+    Multiview,
+}
+
 pub struct GbufferPass {
     pipeline: GraphicsPipeline,
     /// The scene has Phong or GGX materials.
     has_lobe: bool,
     has_emission: bool,
+    views: GbufferViews,
 }
 
 /// The material models a scene's G-buffer carries (each gates an attachment or shader code).
@@ -71,16 +100,28 @@ pub struct GbufferFeatures {
 impl GbufferPass {
     /// The specular and emission targets, GGX shading, texture sampling, bump mapping and
     /// dissolve are compiled in only for scenes that have them (specialization constants).
-    pub fn new(ctx: &Context, features: GbufferFeatures) -> Result<Self, VkError> {
+    ///
+    /// With [`GbufferViews::Multiview`] the pipeline is `gbuffer_multiview.{vert,frag}`'s,
+    /// which draws both stereo eyes in one pass (the right eye's frame constants at binding 8).
+    pub fn new(
+        ctx: &Context,
+        features: GbufferFeatures,
+        views: GbufferViews,
+    ) -> Result<Self, VkError> {
+        let multiview = views == GbufferViews::Multiview;
         let f = features;
         let has_lobe = f.phong || f.ggx;
         let mut colors = vec![GBUFFER_COLOR, GBUFFER_COLOR];
         let extra = usize::from(has_lobe) + usize::from(f.emission);
         colors.resize(2 + extra, GBUFFER_COLOR);
+        let stem = match multiview {
+            true => "gbuffer_multiview",
+            false => "gbuffer",
+        };
         let pipeline = ctx.graphics_pipeline(&GraphicsPipelineDesc {
-            vertex: "gbuffer.vert".into(),
+            vertex: format!("{stem}.vert"),
             geometry: None,
-            fragment: "gbuffer.frag".into(),
+            fragment: format!("{stem}.frag"),
             push: crate::vk::PushLayout::of::<GpuGbufferPush>(),
             vertex_stride: std::mem::size_of::<super::gpu::GpuVertex>() as u32,
             vertex_attributes: vertex_attributes(),
@@ -92,6 +133,7 @@ impl GbufferPass {
             depth_write: true,
             depth_bias: false,
             logic_op: None,
+            view_mask: if multiview { STEREO_VIEW_MASK } else { 0 },
             spec: vec![
                 (0, u32::from(f.phong)),
                 (1, u32::from(f.textures)),
@@ -106,21 +148,57 @@ impl GbufferPass {
             pipeline,
             has_lobe,
             has_emission: f.emission,
+            views,
         })
     }
 
+    /// Declares the pass; for stereo every image has two layers, one per eye
+    /// ([`Gbuffer::eye`]), and `scene.frame_right` must be present.
     pub fn declare(&self, g: &mut RenderGraph, scene: &SceneInputs, w: u32, h: u32) -> Gbuffer {
-        let out = Gbuffer {
-            albedo: g.create_image(ImageDesc::new_2d("gbuffer albedo", GBUFFER_COLOR, w, h)),
-            normal: g.create_image(ImageDesc::new_2d("gbuffer normal", GBUFFER_COLOR, w, h)),
-            specular: self.has_lobe.then(|| {
-                g.create_image(ImageDesc::new_2d("gbuffer specular", GBUFFER_COLOR, w, h))
-            }),
-            emission: self.has_emission.then(|| {
-                g.create_image(ImageDesc::new_2d("gbuffer emission", GBUFFER_COLOR, w, h))
-            }),
-            depth: g.create_image(ImageDesc::new_2d("gbuffer depth", DEPTH, w, h)),
+        let stereo = self.views != GbufferViews::Mono;
+        let mut image = |name: &str, format| {
+            let desc = ImageDesc::new_2d(name, format, w, h);
+            g.create_image(if stereo { desc.with_layers(2) } else { desc })
         };
+        let out = Gbuffer {
+            albedo: image("gbuffer albedo", GBUFFER_COLOR),
+            normal: image("gbuffer normal", GBUFFER_COLOR),
+            specular: self
+                .has_lobe
+                .then(|| image("gbuffer specular", GBUFFER_COLOR)),
+            emission: self
+                .has_emission
+                .then(|| image("gbuffer emission", GBUFFER_COLOR)),
+            depth: image("gbuffer depth", DEPTH),
+        };
+        let right = scene.frame_right.unwrap_or(scene.frame);
+        match self.views {
+            GbufferViews::Mono => self.add_pass(g, scene, &out, (scene.frame, None)),
+            GbufferViews::Multiview => self.add_pass(g, scene, &out, (scene.frame, Some(right))),
+            GbufferViews::PerEye => {
+                for (eye, frame) in [(0, scene.frame), (1, right)] {
+                    let targets = out.eye(g, eye);
+                    if eye == 1 {
+                        g.set_pass_suffix(super::stereo::RIGHT_EYE_SUFFIX);
+                    }
+                    self.add_pass(g, scene, &targets, (frame, None));
+                    g.set_pass_suffix("");
+                }
+            }
+        }
+        out
+    }
+
+    /// Declares one pass drawing the camera's draw list into `out` with the frame constants
+    /// `frame`; with `right`, a multiview pass drawing the right eye too.
+    fn add_pass(
+        &self,
+        g: &mut RenderGraph,
+        scene: &SceneInputs,
+        out: &Gbuffer,
+        (frame, right): (BufferHandle, Option<BufferHandle>),
+    ) {
+        let multiview = right.is_some();
         let pipe = *self.pipeline;
         let (vertices, indices) = (scene.vertices, scene.indices);
         let draws = scene.draws.clone();
@@ -131,9 +209,13 @@ impl GbufferPass {
         // Every texture a draw may bind (the placeholder, for draws without one, among them).
         let choices = textures.clone();
         let mut pass = g
-            .add_pass("gbuffer")
+            .add_pass(if multiview {
+                "gbuffer_multiview"
+            } else {
+                "gbuffer"
+            })
             .pipeline(&pipe)
-            .bind(0, scene.frame, Access::StorageRead(Shader::Graphics))
+            .bind(0, frame, Access::StorageRead(Shader::Graphics))
             .bind(1, scene.materials, Access::StorageRead(Shader::Fragment))
             .bind_one_of_sampled(2, choices.clone(), sampler, Shader::Fragment)
             .bind_one_of_sampled(3, choices.clone(), sampler, Shader::Fragment)
@@ -154,6 +236,11 @@ impl GbufferPass {
             pass = pass.color(extra, clear);
         }
         pass = pass.depth(out.depth, Load::ClearDepth(1.0));
+        if let Some(right) = right {
+            pass = pass
+                .bind(8, right, Access::StorageRead(Shader::Graphics))
+                .view_mask(STEREO_VIEW_MASK);
+        }
         pass.record(move |ctx| {
             ctx.begin_rendering();
             // A material's texture (or bump map), or the placeholder when it has none.
@@ -185,6 +272,5 @@ impl GbufferPass {
             }
             ctx.cmd.end_rendering();
         });
-        out
     }
 }

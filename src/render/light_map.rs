@@ -55,6 +55,7 @@ impl LightMapPass {
             depth_write: true,
             depth_bias: false,
             logic_op: None,
+            view_mask: 0,
             spec: vec![
                 (0, u32::from(has_dissolve)),
                 (1, u32::from(has_ggx)),

@@ -34,7 +34,10 @@ pub use run::{
 };
 pub use scene_gpu::{Draw, DrawLists, SceneGpu, SceneInputs};
 pub use settings_check::{check_device_limits, check_render_settings};
-pub use stereo::{eye_scene, pack as stereo_pack, render_stereo, StereoOutput, StereoSettings};
+pub use stereo::{
+    eye_scene, multiview_blocker, pack as stereo_pack, render_stereo, StereoOutput, StereoPath,
+    StereoSettings,
+};
 
 use crate::eval::HdrImage;
 use crate::graph::{Access, GraphError, ImageHandle, RenderGraph};
@@ -79,6 +82,9 @@ pub enum RenderError {
     /// A frame size or voxel grid that does not fit the device, found before allocating.
     #[error(transparent)]
     OutOfDeviceMemory(memory::MemoryError),
+    /// A one-frame stereo renderer was asked for where it cannot run (the reason).
+    #[error("one-frame stereo cannot render this: {0}; use --stereo-path two-pass")]
+    MultiviewUnavailable(String),
 }
 
 /// Refuses a voxel grid that cannot fit the device, before anything is allocated: its column
@@ -144,6 +150,7 @@ fn check_frame_memory(
     scene: &Scene,
     s: &RenderSettings,
     gi_on: bool,
+    eyes: u32,
 ) -> Result<(), RenderError> {
     let size = (s.width, s.height);
     let mut needs: Vec<_> = readback_descs(size)
@@ -151,12 +158,11 @@ fn check_frame_memory(
         .map(|d| memory::MemoryNeed::buffer(ctx, d))
         .collect();
     let mut images = Vec::new();
-    if s.debug.is_none() && s.post.taa.is_some() {
-        images.push(crate::post::TaaPass::history_desc(size));
+    for _ in 0..eyes.max(1) {
+        per_eye_frame_images(scene, s, gi_on, &mut images);
     }
-    if gi_on {
-        let glossy = scene.has_phong() || scene.has_ggx();
-        images.extend(crate::gi::GiPasses::frame_image_descs(&s.gi, size, glossy));
+    if eyes > 1 {
+        needs.extend(needs.clone());
     }
     needs.extend(images.iter().map(|d| memory::MemoryNeed::image(ctx, d)));
     memory::check_fits(
@@ -166,6 +172,23 @@ fn check_frame_memory(
         &needs,
         ctx.allocated_bytes(),
     )
+}
+
+/// The persistent frame-sized images of one eye (TAA, path tracer and SSGI histories).
+fn per_eye_frame_images(
+    scene: &Scene,
+    s: &RenderSettings,
+    gi_on: bool,
+    images: &mut Vec<ImageDesc>,
+) {
+    let size = (s.width, s.height);
+    if s.debug.is_none() && s.post.taa.is_some() {
+        images.push(crate::post::TaaPass::history_desc(size));
+    }
+    if gi_on {
+        let glossy = scene.has_phong() || scene.has_ggx();
+        images.extend(crate::gi::GiPasses::frame_image_descs(&s.gi, size, glossy));
+    }
 }
 
 /// Whether `settings` combine at all, independent of scene and device: the combination a
@@ -268,6 +291,16 @@ pub struct Renderer {
     shadow_texels: Option<shadow_texels::ShadowTexelsPass>,
     /// What `--shadow-resolution auto` picked, when it was asked for.
     auto_shadow: Option<shadow_texels::AutoShadowResolution>,
+    /// One-pass stereo: both eyes in one frame (`render/stereo.rs`); `frame_data`,
+    /// `readback_*` and `post` are then the left eye's.
+    stereo: Option<stereo::OnePass>,
+}
+
+/// What a frame's eyes share: declared by the first eye's passes, reused by the second.
+#[derive(Default)]
+struct SharedByEyes {
+    light_maps: Option<LightMaps>,
+    gi: Option<crate::gi::GiWorld>,
 }
 
 impl Renderer {
@@ -275,6 +308,37 @@ impl Renderer {
         ctx: &Context,
         scene: &Scene,
         settings: RenderSettings,
+    ) -> Result<Self, RenderError> {
+        Self::new_with(ctx, scene, settings, None)
+    }
+
+    /// A renderer of both eyes of `rig` in one frame (`scene.camera` is the centre between
+    /// the eyes): world-space passes run once, the G-buffer draws both eyes into two-layer
+    /// images (one Vulkan multiview pass with `multiview`, else one pass per eye), and every
+    /// screen-space pass runs per eye on its layer ([`stereo::multiview_blocker`] says which
+    /// scenes and settings cannot; `multiview` needs the device feature).
+    pub fn new_stereo(
+        ctx: &Context,
+        scene: &Scene,
+        settings: RenderSettings,
+        rig: crate::scene::StereoRig,
+        multiview: bool,
+    ) -> Result<Self, RenderError> {
+        let path = match multiview {
+            true => StereoPath::Multiview,
+            false => StereoPath::OneFrame,
+        };
+        if let Some(why) = stereo::multiview_blocker(ctx, path, scene, &settings) {
+            return Err(RenderError::MultiviewUnavailable(why));
+        }
+        Self::new_with(ctx, scene, settings, Some((rig, multiview)))
+    }
+
+    fn new_with(
+        ctx: &Context,
+        scene: &Scene,
+        settings: RenderSettings,
+        rig: Option<(crate::scene::StereoRig, bool)>,
     ) -> Result<Self, RenderError> {
         let (settings, auto_shadow) = match settings.shadow.auto_resolution {
             true => {
@@ -294,7 +358,7 @@ impl Renderer {
         }
         // An error half-way (a voxel grid that does not fit, a debug level beyond the
         // hierarchy, …) drops what was made so far, which releases it.
-        let mut r = Self::create(ctx, scene, &settings)?;
+        let mut r = Self::create(ctx, scene, &settings, rig)?;
         r.auto_shadow = auto_shadow;
         r.prepare(scene)?;
         r.check_transient_memory(ctx)?;
@@ -333,7 +397,14 @@ impl Renderer {
         ctx: &Context,
         scene: &Scene,
         settings: &RenderSettings,
+        rig: Option<(crate::scene::StereoRig, bool)>,
     ) -> Result<Self, RenderError> {
+        let eyes = if rig.is_some() { 2 } else { 1 };
+        let views = match rig {
+            None => gbuffer::GbufferViews::Mono,
+            Some((_, false)) => gbuffer::GbufferViews::PerEye,
+            Some((_, true)) => gbuffer::GbufferViews::Multiview,
+        };
         let has_phong = scene.has_phong();
         // A debug view replaces the lit image, so nothing would read the indirect light (and
         // the albedo view declares the attribute passes the GI methods would declare again).
@@ -349,11 +420,14 @@ impl Renderer {
         if let Some(v) = &voxel_settings {
             check_voxel_memory(ctx, scene, settings, v)?;
         }
-        check_frame_memory(ctx, scene, settings, gi_on)?;
+        check_frame_memory(ctx, scene, settings, gi_on, eyes)?;
         let [hdr_desc, ldr_desc] = readback_descs((settings.width, settings.height));
         let readback_hdr = ctx.create_buffer(&hdr_desc)?;
         let readback_ldr = ctx.create_buffer(&ldr_desc)?;
         let mut scene_gpu = SceneGpu::new(ctx, scene, settings.time_s)?;
+        if rig.is_some() {
+            scene_gpu.enable_right_eye(ctx)?;
+        }
         // Transparent surfaces go to the linked lists instead of the G-buffer (a debug view
         // shows the G-buffer, so it keeps their hashed coverage).
         let oit_on = settings.transparency == crate::scene::Transparency::Oit
@@ -369,6 +443,7 @@ impl Renderer {
                 .any(|l| matches!(l, Light::Point { .. })))
             || scene.lights.iter().any(Light::is_area);
         let sampler = ctx.create_sampler(vk::Filter::NEAREST, false)?;
+        let sampler_raw = sampler.raw;
         let shadow_depth = ShadowDepthPass::new(ctx, paraboloid, scene.has_transparency())?;
         let features = GbufferFeatures {
             phong: has_phong,
@@ -379,7 +454,7 @@ impl Renderer {
             dissolve: scene.has_transparency() && !oit_on,
             pbr_maps: scene.has_pbr_maps(),
         };
-        let gbuffer = GbufferPass::new(ctx, features)?;
+        let gbuffer = GbufferPass::new(ctx, features, views)?;
         let deferred = DeferredDirectPass::new(
             ctx,
             (features.phong, features.ggx, features.emission),
@@ -473,6 +548,7 @@ impl Renderer {
                 settings.gi,
                 &crate::gi::GiTarget {
                     scene,
+                    eyes,
                     time_s: settings.time_s,
                     grid,
                     shadow_resolution: settings.shadow.resolution,
@@ -548,6 +624,9 @@ impl Renderer {
             oit,
             shadow_texels,
             auto_shadow: None,
+            stereo: rig
+                .map(|(rig, _)| stereo::OnePass::new(ctx, rig, settings, sampler_raw))
+                .transpose()?,
         })
     }
 
@@ -559,8 +638,16 @@ impl Renderer {
     /// Computes frame constants, shadow views and culled draw lists for the scene's camera and
     /// lights and `settings`. Call again after changing them (the viewer does, every frame);
     /// a new size, shadow resolution, cascade count or tone map also needs a new graph.
+    ///
+    /// A one-frame stereo renderer takes `scene.camera` as the centre between its eyes.
     pub fn prepare(&mut self, scene: &Scene) -> Result<(), RenderError> {
         let s = self.settings.clone();
+        let eyes = self.stereo.as_ref().map(|st| {
+            let eye = |e| scene.camera.eye(st.rig, e);
+            (eye(crate::scene::Eye::Left), eye(crate::scene::Eye::Right))
+        });
+        // The camera of `frame_data`: the left eye's in a stereo frame.
+        let camera = eyes.map_or(scene.camera, |(left, _)| left);
         let (mut views, per_light) = shadow_views(scene, s.time_s, &s.shadow);
         let lights = frame_lights(&scene.lights, &s.shadow);
         let aspect = s.width as f32 / s.height as f32;
@@ -570,7 +657,7 @@ impl Renderer {
         let mut cascades_of = vec![0u32; lights.len()];
         let cascade_sets = crate::light::cascade::cascade_views(
             &lights,
-            &scene.camera,
+            &camera,
             aspect,
             &scene.aabb_at(s.time_s),
             &s.shadow,
@@ -590,11 +677,9 @@ impl Renderer {
         if base_views + capacity > MAX_SHADOW_VIEWS {
             return Err(RenderError::TooManyShadowViews(base_views + capacity));
         }
-        let view_proj = scene.camera.view_proj(aspect);
+        let view_proj = camera.view_proj(aspect);
         let mut f = GpuFrame::zeroed();
-        f.view_proj = view_proj.to_cols_array();
-        f.inv_view_proj = camera_relative_inverse(&scene.camera, aspect).to_cols_array();
-        f.camera_position = scene.camera.position.extend(1.0).to_array();
+        set_frame_camera(&mut f, &camera, aspect);
         f.counts = [lights.len() as u32, views.len() as u32, s.width, s.height];
         f.shadow = [
             s.shadow.bias_texels,
@@ -613,10 +698,20 @@ impl Renderer {
                 axis: v.axis.extend(v.split_far_m).to_array(),
             };
         }
+        // The right eye: the same constants seen from its camera.
+        let mut right_changed = false;
+        let mut view_projs = vec![view_proj];
+        if let (Some(st), Some((_, right))) = (&mut self.stereo, eyes) {
+            let mut fr = f;
+            set_frame_camera(&mut fr, &right, aspect);
+            right_changed = bytemuck::bytes_of(&fr) != bytemuck::bytes_of(&st.frame_right);
+            st.frame_right = fr;
+            view_projs.push(right.view_proj(aspect));
+        }
         // Accumulated indirect light is valid only while camera, lights and settings stay.
         if let Some((gi, _)) = &mut self.gi {
             gi.update_scene(scene, s.time_s);
-            if bytemuck::bytes_of(&f) != bytemuck::bytes_of(&self.frame_data) {
+            if right_changed || bytemuck::bytes_of(&f) != bytemuck::bytes_of(&self.frame_data) {
                 gi.reset();
             }
         }
@@ -625,7 +720,7 @@ impl Renderer {
         self.cascade_view_capacity = capacity as u32;
         let (own, cascades) = views.split_at(base_views);
         self.scene
-            .update_draws(scene, s.time_s, &view_proj, (own, cascades));
+            .update_draws(scene, s.time_s, &view_projs, (own, cascades));
         Ok(())
     }
 
@@ -649,18 +744,13 @@ impl Renderer {
         if let Some(pass) = &mut self.voxel_debug {
             pass.update(self.settings.time_s, slot);
         }
-        // With TAA every frame renders with its own sub-pixel jitter; `frame_data` keeps the
-        // un-jittered camera (what `prepare` compares to restart accumulation).
-        let mut frame = self.frame_data;
-        if self.post.jitters() {
-            let view_proj = glam::Mat4::from_cols_array(&frame.view_proj);
-            let jitter = crate::post::taa::jitter_matrix(self.post.begin_frame(view_proj));
-            // The inverse stays camera-relative (see `camera_relative_inverse`).
-            let inv_relative = glam::Mat4::from_cols_array(&frame.inv_view_proj);
-            frame.view_proj = (jitter * view_proj).to_cols_array();
-            frame.inv_view_proj = (inv_relative * jitter.inverse()).to_cols_array();
-        }
+        let frame = jittered(self.frame_data, &mut self.post);
         self.scene.write_frame(slot, &frame);
+        if let Some(st) = &mut self.stereo {
+            // The right eye's own TAA history and jitter sequence.
+            let right = st.jittered_right_frame();
+            self.scene.write_frame_right(slot, &right);
+        }
     }
 
     /// Frames the indirect light has accumulated since the last reset (`None`: GI off).
@@ -691,18 +781,36 @@ impl Renderer {
     /// size given to [`Renderer::new`]).
     pub fn graph(&self) -> RenderGraph {
         let mut g = RenderGraph::new();
-        let FrameImages { radiance, ldr } = self.declare(&mut g);
-        let hdr_buf = g.import_buffer(&self.readback_hdr, Access::HostRead);
-        let ldr_buf = g.import_buffer(&self.readback_ldr, Access::HostRead);
-        crate::graph::add_readback(&mut g, "readback_hdr", radiance, hdr_buf);
-        crate::graph::add_readback(&mut g, "readback_ldr", ldr, ldr_buf);
+        let eyes = self.declare_eyes(&mut g);
+        let readbacks = std::iter::once([&self.readback_hdr, &self.readback_ldr])
+            .chain(self.stereo.as_ref().map(|st| st.readback_right.each_ref()));
+        for (i, (images, [hdr, ldr])) in eyes.into_iter().zip(readbacks).enumerate() {
+            g.set_pass_suffix(if i == 0 { "" } else { stereo::RIGHT_EYE_SUFFIX });
+            let hdr_buf = g.import_buffer(hdr, Access::HostRead);
+            let ldr_buf = g.import_buffer(ldr, Access::HostRead);
+            crate::graph::add_readback(&mut g, "readback_hdr", images.radiance, hdr_buf);
+            crate::graph::add_readback(&mut g, "readback_ldr", images.ldr, ldr_buf);
+        }
         g
     }
 
     /// Declares the frame's passes into `g` at `settings`' size and returns the images it
     /// produces, for callers that add their own outputs (the viewer presents `ldr`). Nothing
     /// is an output yet: passes that feed nothing the caller adds are culled.
+    ///
+    /// A one-frame stereo renderer's frame has two such pairs: this returns the left eye's
+    /// (see [`Renderer::declare_eyes`]).
     pub fn declare(&self, g: &mut RenderGraph) -> FrameImages {
+        let eyes = self.declare_eyes(g);
+        eyes[0]
+    }
+
+    /// Declares the frame: one [`FrameImages`], or, for a one-frame stereo renderer, the left
+    /// and the right eye's. The world-space passes (shadow maps, voxels, light maps, the GI
+    /// methods' VPLs and radiance volume) are declared once; the G-buffer draws both eyes
+    /// into two-layer images (per eye, or in one multiview pass); every later pass runs per
+    /// eye on its layer, the right eye's named with the suffix [`stereo::RIGHT_EYE_SUFFIX`].
+    pub fn declare_eyes(&self, g: &mut RenderGraph) -> Vec<FrameImages> {
         let s = &self.settings;
         let (w, h) = (s.width, s.height);
         let scene = self.scene.import(g);
@@ -715,21 +823,65 @@ impl Renderer {
             s.shadow.resolution,
         );
         let gbuffer = self.gbuffer.declare(g, &scene, w, h);
-        let direct = self
-            .deferred
-            .declare(g, &scene, &gbuffer, shadow_map, (w, h));
+        let mut shared = SharedByEyes::default();
+        let world = (shadow_map, voxel_image);
+        let Some(st) = &self.stereo else {
+            let images =
+                self.declare_view(g, &scene, &gbuffer, world, (&self.post, 0), &mut shared);
+            return vec![self.declare_debug_view(g, &scene, &gbuffer, voxel_image, images)];
+        };
+        let left = gbuffer.eye(g, 0);
+        let right = gbuffer.eye(g, 1);
+        let left = self.declare_view(g, &scene, &left, world, (&self.post, 0), &mut shared);
+        // The right eye's passes read its frame constants.
+        let mut scene_right = scene.clone();
+        scene_right.frame = scene.frame_right.unwrap_or(scene.frame);
+        g.set_pass_suffix(stereo::RIGHT_EYE_SUFFIX);
+        let right = self.declare_view(
+            g,
+            &scene_right,
+            &right,
+            world,
+            (&st.post_right, 1),
+            &mut shared,
+        );
+        g.set_pass_suffix("");
+        vec![left, right]
+    }
+
+    /// The passes of one view after the G-buffer: direct light, indirect light, transparency,
+    /// post-processing and tone mapping. What the eyes of a stereo frame share is declared
+    /// by the first and kept in `shared`.
+    fn declare_view(
+        &self,
+        g: &mut RenderGraph,
+        scene: &SceneInputs,
+        gbuffer: &Gbuffer,
+        (shadow_map, voxel_image): (ImageHandle, Option<ImageHandle>),
+        (post, eye): (&crate::post::PostPasses, u32),
+        shared: &mut SharedByEyes,
+    ) -> FrameImages {
+        let s = &self.settings;
+        let (w, h) = (s.width, s.height);
+        let views = self.shadow_view_count;
+        let direct = self.deferred.declare(g, scene, gbuffer, shadow_map, (w, h));
         let radiance = match &self.gi {
             Some((gi, light_map)) if voxel_image.is_some() || light_map.is_none() => {
                 // Screen-space GI reads neither voxels nor light maps (GiInputs::voxels).
-                let maps = match light_map {
-                    Some(lm) => lm.declare(g, &scene, views, gi.settings.light_map_resolution),
-                    None => LightMaps {
+                let maps = match (light_map, shared.light_maps) {
+                    (Some(_), Some(maps)) => maps,
+                    (Some(lm), None) => {
+                        let maps = lm.declare(g, scene, views, gi.settings.light_map_resolution);
+                        shared.light_maps = Some(maps);
+                        maps
+                    }
+                    (None, _) => LightMaps {
                         radiance: direct,
                         position: direct,
                         normal: direct,
                     },
                 };
-                gi.add_passes(
+                gi.add_eye_passes(
                     g,
                     &crate::gi::GiInputs {
                         frame: scene.frame,
@@ -749,30 +901,46 @@ impl Renderer {
                         height: h,
                     },
                     self.voxels.as_ref(),
+                    eye,
+                    &mut shared.gi,
                 )
             }
             _ => direct,
         };
         // Transparent layers over the lit opaque frame, before post-processing.
         let radiance = match &self.oit {
-            Some(oit) => oit.declare(g, &scene, (gbuffer.depth, shadow_map), radiance, (w, h)),
+            Some(oit) => oit.declare(g, scene, (gbuffer.depth, shadow_map), radiance, (w, h)),
             None => radiance,
         };
-        let (radiance, exposure) = self.post.declare_hdr(g, radiance, gbuffer.depth);
+        let (radiance, exposure) = post.declare_hdr(g, radiance, gbuffer.depth);
         let ldr = self
             .tonemap
             .declare(g, radiance, exposure, s.tonemap, (w, h));
-        let ldr = self.post.declare_ldr(g, ldr);
+        let ldr = post.declare_ldr(g, ldr);
+        FrameImages { radiance, ldr }
+    }
+
+    /// A debug view replaces the lit image `lit` (mono renderers only).
+    fn declare_debug_view(
+        &self,
+        g: &mut RenderGraph,
+        scene: &SceneInputs,
+        gbuffer: &Gbuffer,
+        voxel_image: Option<ImageHandle>,
+        lit: FrameImages,
+    ) -> FrameImages {
+        let (w, h) = (self.settings.width, self.settings.height);
+        let FrameImages { radiance, ldr } = lit;
 
         // A debug view replaces the lit image: the read-backs take its images, and the graph
         // culls deferred light, tone mapping, G-buffer and shadows, which nothing reads then.
         let (radiance, ldr) = match (&self.voxel_debug, &self.voxels, voxel_image) {
             _ if self.gbuffer_view.is_some() => match &self.gbuffer_view {
-                Some(pass) => pass.declare(g, &scene, &gbuffer, (w, h)),
+                Some(pass) => pass.declare(g, scene, gbuffer, (w, h)),
                 None => (radiance, ldr),
             },
             _ if self.shadow_texels.is_some() => match &self.shadow_texels {
-                Some(pass) => pass.declare(g, &scene, &gbuffer, (w, h)),
+                Some(pass) => pass.declare(g, scene, gbuffer, (w, h)),
                 None => (radiance, ldr),
             },
             _ if self.atlas_view.is_some() => {
@@ -807,31 +975,18 @@ impl Renderer {
 
     /// Linear radiance of the last completed frame.
     pub fn hdr_image(&self) -> HdrImage {
-        let (w, h) = (self.settings.width, self.settings.height);
-        let data: Vec<[f32; 3]> = self
-            .readback_hdr
-            .mapped()
-            .map(|m| {
-                bytemuck::cast_slice::<u8, [f32; 4]>(&m[..(w * h * 16) as usize])
-                    .iter()
-                    .map(|p| [p[0], p[1], p[2]])
-                    .collect()
-            })
-            .unwrap_or_else(|| vec![[0.0; 3]; (w * h) as usize]);
-        HdrImage {
-            width: w,
-            height: h,
-            data,
-        }
+        hdr_from(
+            &self.readback_hdr,
+            (self.settings.width, self.settings.height),
+        )
     }
 
     /// Tone-mapped sRGB RGBA8 pixels of the last completed frame.
     pub fn ldr_pixels(&self) -> Vec<u8> {
-        let n = (self.settings.width * self.settings.height * 4) as usize;
-        self.readback_ldr
-            .mapped()
-            .map(|m| m[..n].to_vec())
-            .unwrap_or_default()
+        ldr_from(
+            &self.readback_ldr,
+            (self.settings.width, self.settings.height),
+        )
     }
 
     /// GPU times of the one-time passes the renderer submitted outside its frame graph
@@ -930,6 +1085,52 @@ fn gpu_light(light: &Light, first_view: u32, views: u32) -> GpuLight {
             unreachable!("prepare renders rectangles as elements (frame_lights)")
         }
     }
+}
+
+/// The linear radiance in a read-back buffer of a `w`×`h` frame (black if unmapped).
+fn hdr_from(buffer: &Buffer, (w, h): (u32, u32)) -> HdrImage {
+    let data: Vec<[f32; 3]> = buffer
+        .mapped()
+        .map(|m| {
+            bytemuck::cast_slice::<u8, [f32; 4]>(&m[..(w * h * 16) as usize])
+                .iter()
+                .map(|p| [p[0], p[1], p[2]])
+                .collect()
+        })
+        .unwrap_or_else(|| vec![[0.0; 3]; (w * h) as usize]);
+    HdrImage {
+        width: w,
+        height: h,
+        data,
+    }
+}
+
+/// The tone-mapped sRGB RGBA8 pixels in a read-back buffer of a `w`×`h` frame.
+fn ldr_from(buffer: &Buffer, (w, h): (u32, u32)) -> Vec<u8> {
+    let n = (w * h * 4) as usize;
+    buffer.mapped().map(|m| m[..n].to_vec()).unwrap_or_default()
+}
+
+/// With TAA every frame renders with its own sub-pixel jitter: `frame` (un-jittered, what
+/// `prepare` compares to restart accumulation) moved by `post`'s next jitter.
+fn jittered(mut frame: GpuFrame, post: &mut crate::post::PostPasses) -> GpuFrame {
+    if post.jitters() {
+        let view_proj = glam::Mat4::from_cols_array(&frame.view_proj);
+        let jitter = crate::post::taa::jitter_matrix(post.begin_frame(view_proj));
+        // The inverse stays camera-relative (see `camera_relative_inverse`).
+        let inv_relative = glam::Mat4::from_cols_array(&frame.inv_view_proj);
+        frame.view_proj = (jitter * view_proj).to_cols_array();
+        frame.inv_view_proj = (inv_relative * jitter.inverse()).to_cols_array();
+    }
+    frame
+}
+
+/// Sets the frame constants that depend on the camera: view-projection, its camera-relative
+/// inverse and the camera position.
+fn set_frame_camera(f: &mut GpuFrame, camera: &crate::scene::Camera, aspect: f32) {
+    f.view_proj = camera.view_proj(aspect).to_cols_array();
+    f.inv_view_proj = camera_relative_inverse(camera, aspect).to_cols_array();
+    f.camera_position = camera.position.extend(1.0).to_array();
 }
 
 /// The inverse of the camera's view-projection with the camera moved to the origin:

@@ -41,6 +41,7 @@ impl OitGatherPass {
             depth_write: false,
             depth_bias: false,
             logic_op: None,
+            view_mask: 0,
             spec: vec![
                 (0, u32::from(phong)),
                 (1, u32::from(ggx)),

@@ -24,6 +24,26 @@ pub struct RenderOutput {
     pub auto_shadow: Option<super::shadow_texels::AutoShadowResolution>,
 }
 
+impl RenderOutput {
+    /// The graph facts and statistics of this output, with empty images and timings.
+    pub(super) fn clone_facts(&self) -> Self {
+        Self {
+            hdr: crate::eval::HdrImage {
+                width: 0,
+                height: 0,
+                data: Vec::new(),
+            },
+            ldr: Vec::new(),
+            timings: Vec::new(),
+            live_passes: self.live_passes.clone(),
+            transient_bytes: self.transient_bytes,
+            debug_description: self.debug_description.clone(),
+            oit: self.oit,
+            auto_shadow: self.auto_shadow,
+        }
+    }
+}
+
 /// Renders one frame of `scene` headless.
 pub fn render_image(
     ctx: &Context,

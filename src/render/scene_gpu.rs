@@ -68,6 +68,9 @@ pub struct SceneGpu {
     /// `MAX_FRAMES_IN_FLIGHT` copies of `GpuFrame`, `frame_stride` bytes apart.
     frame: Buffer,
     frame_stride: u64,
+    /// The right eye's frame constants (same layout), only in a one-frame stereo renderer
+    /// ([`SceneGpu::enable_right_eye`]); `frame` then holds the left eye's.
+    frame_right: Option<Buffer>,
     /// Textures of the scene (a placeholder where a texture is unused), then a 1x1 white
     /// placeholder (always last).
     textures: Vec<Image>,
@@ -85,6 +88,8 @@ pub struct SceneGpu {
 pub struct SceneInputs {
     /// Frame constants (`GpuFrame`), one window per frame slot.
     pub frame: BufferHandle,
+    /// The right eye's frame constants, in a one-frame stereo renderer.
+    pub frame_right: Option<BufferHandle>,
     pub vertices: BufferHandle,
     pub indices: BufferHandle,
     pub materials: BufferHandle,
@@ -184,6 +189,7 @@ impl SceneGpu {
             materials_pbr,
             frame,
             frame_stride,
+            frame_right: None,
             textures,
             texture_sampler,
             draws: Arc::new(RwLock::new(DrawLists::default())),
@@ -195,13 +201,17 @@ impl SceneGpu {
 
     /// Imports the scene's resources into `g`.
     pub fn import(&self, g: &mut RenderGraph) -> SceneInputs {
-        SceneInputs {
-            frame: g.import_buffer_per_slot(
-                &self.frame,
+        let per_slot = |g: &mut RenderGraph, b: &Buffer| {
+            g.import_buffer_per_slot(
+                b,
                 self.frame_stride,
                 std::mem::size_of::<GpuFrame>() as u64,
                 Access::StorageRead(Shader::Compute),
-            ),
+            )
+        };
+        SceneInputs {
+            frame: per_slot(g, &self.frame),
+            frame_right: self.frame_right.as_ref().map(|b| per_slot(g, b)),
             vertices: g.import_buffer(&self.vertices, Access::VertexBuffer),
             indices: g.import_buffer(&self.indices, Access::IndexBuffer),
             materials: g.import_buffer(&self.materials, Access::StorageRead(Shader::Compute)),
@@ -219,12 +229,13 @@ impl SceneGpu {
 
     /// Moves animated objects to the scene time `time_s` (keyframes move them, OBJ sequences
     /// switch to the frame's mesh; frames share topology, so only the buffer offsets change),
-    /// then culls the draw lists against the camera, each shadow view and each cascade view.
+    /// then culls the draw lists against the camera (the union of `view_projs`: both eyes of a
+    /// one-frame stereo renderer), each shadow view and each cascade view.
     pub fn update_draws(
         &mut self,
         scene: &Scene,
         time_s: f32,
-        view_proj: &Mat4,
+        view_projs: &[Mat4],
         (shadow_views, cascade_views): (&[crate::light::ShadowView], &[crate::light::ShadowView]),
     ) {
         for d in &mut self.all_draws {
@@ -261,7 +272,11 @@ impl SceneGpu {
             .all_draws
             .iter()
             .copied()
-            .filter(|d| crate::scene::aabb_visible(view_proj, &d.aabb))
+            .filter(|d| {
+                view_projs
+                    .iter()
+                    .any(|vp| crate::scene::aabb_visible(vp, &d.aabb))
+            })
             .collect();
         let split = self.split_transparent;
         let (camera, transparent) = visible.into_iter().partition(|d| d.opaque || !split);
@@ -278,11 +293,35 @@ impl SceneGpu {
 
     /// Writes the frame constants of frame slot `slot` (after the slot's fence).
     pub fn write_frame(&mut self, slot: usize, frame: &GpuFrame) {
-        let offset = (slot as u64 * self.frame_stride) as usize;
-        let bytes = bytemuck::bytes_of(frame);
-        if let Some(m) = self.frame.mapped_mut() {
-            m[offset..offset + bytes.len()].copy_from_slice(bytes);
+        write_slot(&mut self.frame, self.frame_stride, slot, frame);
+    }
+
+    /// Gives the scene a second set of frame constants, the right eye's, for a renderer that
+    /// draws both stereo eyes in one pass.
+    pub fn enable_right_eye(&mut self, ctx: &Context) -> Result<(), RenderError> {
+        self.frame_right = Some(ctx.create_buffer(&BufferDesc {
+            name: "frame constants (right eye)".into(),
+            size_bytes: self.frame_stride * MAX_FRAMES_IN_FLIGHT as u64,
+            usage: vk::BufferUsageFlags::STORAGE_BUFFER,
+            location: MemoryLocation::CpuToGpu,
+        })?);
+        Ok(())
+    }
+
+    /// Writes the right eye's frame constants of slot `slot` (see [`Self::enable_right_eye`]).
+    pub fn write_frame_right(&mut self, slot: usize, frame: &GpuFrame) {
+        if let Some(b) = &mut self.frame_right {
+            write_slot(b, self.frame_stride, slot, frame);
         }
+    }
+}
+
+/// Writes `frame` into slot `slot`'s window of a per-slot frame-constants buffer.
+fn write_slot(buffer: &mut Buffer, stride: u64, slot: usize, frame: &GpuFrame) {
+    let offset = (slot as u64 * stride) as usize;
+    let bytes = bytemuck::bytes_of(frame);
+    if let Some(m) = buffer.mapped_mut() {
+        m[offset..offset + bytes.len()].copy_from_slice(bytes);
     }
 }
 

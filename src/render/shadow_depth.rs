@@ -36,6 +36,7 @@ impl ShadowDepthPass {
             depth_write: true,
             depth_bias: false,
             logic_op: None,
+            view_mask: 0,
             spec: vec![(0, u32::from(has_dissolve))],
         })?;
         Ok(Self { pipeline })

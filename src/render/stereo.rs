@@ -1,34 +1,156 @@
-//! Stereo rendering, two-pass: one [`Renderer`] renders the frame once per eye, each eye
-//! through the whole frame graph with its own off-axis camera ([`Camera::eye`]), and the
-//! `stereo_pack` pass packs the two tone-mapped images.
+//! Stereo rendering: both eyes of a [`StereoRig`] with parallel axes and off-axis frusta
+//! ([`Camera::eye`]), packed by the `stereo_pack` pass. Three paths give the same images:
 //!
-//! What the eyes share: everything [`Renderer::new`] builds once — the scene on the GPU, the
-//! static voxelization and the texture atlases. Every per-frame pass runs again for the second
-//! eye. Of the GI methods, the world-space parts are view-independent and could be shared by a
-//! one-pass (multiview) renderer: the radiance volume of `--gi radiance-volume`, the shadow and
-//! reflective light maps, and the VPLs of `--gi vpl` (generated from the light maps); the
-//! screen-space gathers (hemisphere rays, path tracing, VPL gathering, the filter) are per eye.
-//! Vulkan multiview (both eyes in one pass over a two-layer image) is the follow-up.
+//! - **One frame** ([`StereoPath::OneFrame`], the default where it can run): one
+//!   [`Renderer`] built with [`Renderer::new_stereo`] renders both eyes in one frame graph.
+//!   World-space passes run once (shadow maps, voxelization, attribute volumes, reflective
+//!   light maps, the VPLs and their bounces, the radiance volume); the G-buffer draws both
+//!   eyes into two-layer images (one pass per eye); every screen-space pass (direct light, the
+//!   GI gathers, filter, SAO, composite, TAA, exposure, bloom, tone mapping, FXAA) runs once
+//!   per eye on its layer ([`crate::graph::RenderGraph::layer`]), the right eye's named with
+//!   [`RIGHT_EYE_SUFFIX`]. Per eye as well: the frame constants, TAA's history and jitter,
+//!   the exposure state, the path tracer's history.
+//! - **Multiview** ([`StereoPath::Multiview`]): the same frame with both eyes' G-buffer in one
+//!   Vulkan multiview pass (`gbuffer_multiview`: view i into layer i). Opt-in: lavapipe
+//!   (Mesa 22.3.6) loses some of view 1's triangles.
+//! - **Two passes** ([`StereoPath::TwoPass`]): one [`Renderer`] renders the whole frame graph
+//!   once per eye (`prepare` with each eye's camera), sharing only what [`Renderer::new`]
+//!   builds once (scene upload, static voxelization, atlases). The fallback where one frame
+//!   cannot run ([`multiview_blocker`]), and what `--stereo-path two-pass` asks for.
 //!
 //! [`Camera::eye`]: crate::scene::Camera::eye
 
-use super::run::render_frames;
-use super::{RenderError, RenderOutput, RenderSettings, Renderer};
+use super::run::{render_frames, RenderOutput};
+use super::{RenderError, RenderSettings, Renderer};
 use crate::graph::{run_once, Access, OneShotError, RenderGraph, Shader};
 use crate::post::{StereoMode, StereoPackPass};
 use crate::scene::{Eye, Scene, StereoRig};
-use crate::vk::{vk, Context, ImageDesc, PassTiming};
+use crate::vk::{vk, Buffer, Context, ImageDesc, PassTiming};
+
+/// Appended to the names of the right eye's passes in a one-frame stereo frame.
+pub const RIGHT_EYE_SUFFIX: &str = "[R]";
+
+/// How a stereo pair is rendered (`--stereo-path`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum StereoPath {
+    /// Both eyes in one frame, world-space work once, the G-buffer drawn once per eye into
+    /// its layer.
+    #[default]
+    OneFrame,
+    /// Both eyes in one frame, world-space work once, the G-buffer of both eyes in one
+    /// Vulkan multiview pass.
+    Multiview,
+    /// The whole frame once per eye.
+    TwoPass,
+}
+
+impl StereoPath {
+    pub fn name(self) -> &'static str {
+        match self {
+            StereoPath::OneFrame => "one-frame",
+            StereoPath::Multiview => "multiview",
+            StereoPath::TwoPass => "two-pass",
+        }
+    }
+}
+
+/// Why a one-frame stereo renderer (`path` [`StereoPath::OneFrame`] or
+/// [`StereoPath::Multiview`]) cannot render `scene` with `settings` on this device (`None`:
+/// it can). Each of these keeps state or views that belong to one camera.
+pub fn multiview_blocker(
+    ctx: &Context,
+    path: StereoPath,
+    scene: &Scene,
+    settings: &RenderSettings,
+) -> Option<String> {
+    let device = path != StereoPath::Multiview || ctx.info.multiview;
+    multiview_blocker_for(device, scene, settings)
+}
+
+fn multiview_blocker_for(
+    device_multiview: bool,
+    scene: &Scene,
+    settings: &RenderSettings,
+) -> Option<String> {
+    let directional = scene.lights.iter().any(crate::scene::Light::is_directional);
+    let oit = settings.transparency == crate::scene::Transparency::Oit && scene.has_transparency();
+    if !device_multiview {
+        Some("the device lacks the Vulkan 1.1 feature `multiview`".into())
+    } else if settings.debug.is_some() {
+        Some("--debug views render one view".into())
+    } else if settings.gi.method == crate::gi::GiMethod::Ssgi {
+        Some("--gi ssgi keeps one history and one previous camera".into())
+    } else if oit {
+        Some("the transparency lists (--transparency oit) are drawn for one view".into())
+    } else if directional && settings.shadow.cascades >= 2 {
+        Some("the cascaded shadow maps (--shadow-cascades) are fitted to one camera".into())
+    } else {
+        None
+    }
+}
+
+/// The right eye of a one-frame stereo renderer: its frame constants, post passes (TAA
+/// history and jitter, exposure state) and read-back buffers.
+pub(super) struct OnePass {
+    pub rig: StereoRig,
+    /// The right eye's frame constants, un-jittered (`Renderer::frame_data` is the left's).
+    pub frame_right: super::GpuFrame,
+    pub post_right: crate::post::PostPasses,
+    /// Read-back of the right eye's radiance and tone-mapped image.
+    pub readback_right: [Buffer; 2],
+}
+
+impl OnePass {
+    pub fn new(
+        ctx: &Context,
+        rig: StereoRig,
+        settings: &RenderSettings,
+        sampler: vk::Sampler,
+    ) -> Result<Self, RenderError> {
+        let size = (settings.width, settings.height);
+        let [hdr, ldr] = super::readback_descs(size);
+        Ok(Self {
+            rig,
+            frame_right: bytemuck::Zeroable::zeroed(),
+            post_right: crate::post::PostPasses::new(ctx, &settings.post, size, sampler)?,
+            readback_right: [ctx.create_buffer(&hdr)?, ctx.create_buffer(&ldr)?],
+        })
+    }
+
+    /// The right eye's frame constants for the next frame, with its TAA jitter.
+    pub fn jittered_right_frame(&mut self) -> super::GpuFrame {
+        super::jittered(self.frame_right, &mut self.post_right)
+    }
+}
+
+impl Renderer {
+    /// The radiance and tone-mapped pixels of eye `eye` (0 left, 1 right) of the last
+    /// completed frame of a one-frame stereo renderer; a mono renderer's image for eye 0.
+    pub fn eye_images(&self, eye: u32) -> (crate::eval::HdrImage, Vec<u8>) {
+        match (eye, &self.stereo) {
+            (1, Some(st)) => {
+                let [hdr, ldr] = &st.readback_right;
+                let (w, h) = (self.settings.width, self.settings.height);
+                (super::hdr_from(hdr, (w, h)), super::ldr_from(ldr, (w, h)))
+            }
+            _ => (self.hdr_image(), self.ldr_pixels()),
+        }
+    }
+}
 
 /// A stereo frame's settings: the packing and the eyes' parallax.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct StereoSettings {
     pub mode: StereoMode,
     pub rig: StereoRig,
+    /// The path asked for; one pass falls back to two where it cannot run.
+    pub path: StereoPath,
 }
 
 /// The result of [`render_stereo`].
 pub struct StereoOutput {
-    /// Each eye's frame, as [`super::render_image`] returns it.
+    /// Each eye's frame, as [`super::render_image`] returns it. On a one-frame path the
+    /// frame's timings (both eyes, every pass) are the left eye's; the right's are empty.
     pub left: RenderOutput,
     pub right: RenderOutput,
     /// The packed image, sRGB RGBA8, of `packed_size`.
@@ -36,6 +158,10 @@ pub struct StereoOutput {
     pub packed_size: (u32, u32),
     /// GPU time of the packing (`stereo_pack` and its read-back).
     pub pack_timings: Vec<PassTiming>,
+    /// The path that ran.
+    pub path: StereoPath,
+    /// Why one pass was asked for and two ran (`None`: the path asked for ran).
+    pub fallback: Option<String>,
 }
 
 /// The scene as seen by one eye of `rig`.
@@ -45,8 +171,9 @@ pub fn eye_scene(scene: &Scene, rig: StereoRig, eye: Eye) -> Scene {
     s
 }
 
-/// Renders `scene` once per eye (each eye `settings.width` × `settings.height`) and packs the
-/// pair with `stereo.mode`.
+/// Renders both eyes of `scene` (each `settings.width` × `settings.height`) on
+/// `stereo.path`, or on two passes where one cannot run ([`multiview_blocker`]), and packs
+/// the pair with `stereo.mode`.
 pub fn render_stereo(
     ctx: &Context,
     scene: &Scene,
@@ -54,15 +181,40 @@ pub fn render_stereo(
     stereo: StereoSettings,
 ) -> Result<StereoOutput, RenderError> {
     check_packed_width(stereo.mode, settings.width)?;
-    let left_scene = eye_scene(scene, stereo.rig, Eye::Left);
-    let right_scene = eye_scene(scene, stereo.rig, Eye::Right);
-    let mut renderer = Renderer::new(ctx, &left_scene, settings.clone())?;
-    let left = render_frames(ctx, &mut renderer)?;
-    // A new camera resets accumulated indirect light (`Renderer::prepare`).
-    renderer.prepare(&right_scene)?;
-    let right = render_frames(ctx, &mut renderer)?;
-    // The eyes' renderer goes before the packing pass allocates.
-    drop(renderer);
+    let fallback = match stereo.path {
+        StereoPath::TwoPass => None,
+        path => multiview_blocker(ctx, path, scene, settings),
+    };
+    let path = match fallback {
+        Some(_) => StereoPath::TwoPass,
+        None => stereo.path,
+    };
+    let (left, right) = match path {
+        StereoPath::OneFrame | StereoPath::Multiview => {
+            let (rig, multiview) = (stereo.rig, path == StereoPath::Multiview);
+            let mut renderer = Renderer::new_stereo(ctx, scene, settings.clone(), rig, multiview)?;
+            let left = render_frames(ctx, &mut renderer)?;
+            let (hdr, ldr) = renderer.eye_images(1);
+            let right = RenderOutput {
+                hdr,
+                ldr,
+                timings: Vec::new(),
+                ..left.clone_facts()
+            };
+            (left, right)
+        }
+        StereoPath::TwoPass => {
+            let left_scene = eye_scene(scene, stereo.rig, Eye::Left);
+            let right_scene = eye_scene(scene, stereo.rig, Eye::Right);
+            let mut renderer = Renderer::new(ctx, &left_scene, settings.clone())?;
+            let left = render_frames(ctx, &mut renderer)?;
+            // A new camera resets accumulated indirect light (`Renderer::prepare`).
+            renderer.prepare(&right_scene)?;
+            let right = render_frames(ctx, &mut renderer)?;
+            (left, right)
+        }
+    };
+    // The eyes' renderer is gone before the packing pass allocates.
     let eye_size = (settings.width, settings.height);
     let (packed, pack_timings) = pack(ctx, (&left.ldr, &right.ldr), stereo.mode, eye_size)?;
     Ok(StereoOutput {
@@ -71,6 +223,8 @@ pub fn render_stereo(
         packed,
         packed_size: stereo.mode.packed_size(eye_size),
         pack_timings,
+        path,
+        fallback,
     })
 }
 
@@ -123,4 +277,43 @@ pub fn pack(
         .map(|m| m[..(pw * ph * 4) as usize].to_vec())
         .unwrap_or_default();
     Ok((pixels, timings))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cornell() -> Scene {
+        crate::scene::builtin("cornell").expect("built-in scene")
+    }
+
+    /// Each configuration that keeps one camera's state falls back, with its reason naming
+    /// the flag; the plain frame does not.
+    #[test]
+    fn multiview_blockers_name_their_reason() {
+        let scene = cornell();
+        let s = RenderSettings::default();
+        assert_eq!(multiview_blocker_for(true, &scene, &s), None);
+        let no_device = multiview_blocker_for(false, &scene, &s).unwrap_or_default();
+        assert!(no_device.contains("multiview"), "{no_device}");
+        let mut ssgi = s.clone();
+        ssgi.gi.method = crate::gi::GiMethod::Ssgi;
+        let why = multiview_blocker_for(true, &scene, &ssgi).unwrap_or_default();
+        assert!(why.contains("--gi ssgi"), "{why}");
+        let mut debug = s.clone();
+        debug.debug = Some(Default::default());
+        let why = multiview_blocker_for(true, &scene, &debug).unwrap_or_default();
+        assert!(why.contains("--debug"), "{why}");
+        for gi in [
+            crate::gi::GiMethod::None,
+            crate::gi::GiMethod::Hemisphere,
+            crate::gi::GiMethod::Vpl,
+            crate::gi::GiMethod::Pathtrace,
+        ] {
+            let mut m = s.clone();
+            m.gi.method = gi;
+            m.post.taa = Some(Default::default());
+            assert_eq!(multiview_blocker_for(true, &scene, &m), None, "{gi:?}");
+        }
+    }
 }

@@ -107,14 +107,17 @@ impl<'a> Cmd<'a> {
         colors: &[Attachment],
         depth: Option<Attachment>,
     ) {
-        self.begin_rendering_layers(extent, 1, colors, depth);
+        self.begin_rendering_layers(extent, (1, 0), colors, depth);
     }
 
     /// Begins layered dynamic rendering (a geometry shader picks `gl_Layer`) into array views.
+    /// `view_mask` ≠ 0 renders with multiview: each set bit is a view drawn into the
+    /// attachments' layer of that index (`gl_ViewIndex` in the shaders), and `layers` is
+    /// ignored (Vulkan 1.1 multiview, core).
     pub fn begin_rendering_layers(
         &self,
         extent: vk::Extent2D,
-        layers: u32,
+        (layers, view_mask): (u32, u32),
         colors: &[Attachment],
         depth: Option<Attachment>,
     ) {
@@ -131,6 +134,7 @@ impl<'a> Cmd<'a> {
         let mut info = vk::RenderingInfo::builder()
             .render_area(area)
             .layer_count(layers.max(1))
+            .view_mask(view_mask)
             .color_attachments(&color_infos);
         if let Some(d) = depth_info.as_ref() {
             info = info.depth_attachment(d);

@@ -161,6 +161,10 @@ pub struct DeviceInfo {
     /// `maxBufferSize` (Vulkan 1.3, `VkPhysicalDeviceMaintenance4Properties`): the largest
     /// buffer the driver creates (4 GiB − 1 on lavapipe).
     pub max_buffer_bytes: u64,
+    /// The Vulkan 1.1 feature `multiview` (enabled when present): one draw renders several
+    /// views into the layers of its attachments (`gl_ViewIndex`); stereo uses it for a
+    /// one-pass G-buffer of both eyes, and falls back to two passes without it.
+    pub multiview: bool,
 }
 
 pub struct Context {
@@ -349,6 +353,9 @@ impl Context {
             .synchronization2(true)
             .maintenance4(true);
         let mut features12 = vk::PhysicalDeviceVulkan12Features::builder().host_query_reset(true);
+        // Optional: stereo renders both eyes' G-buffer in one pass with it.
+        let mut features11 =
+            vk::PhysicalDeviceVulkan11Features::builder().multiview(info.multiview);
         let mut device_ext: Vec<*const i8> = vec![khr::PushDescriptor::name().as_ptr()];
         if desc.swapchain {
             device_ext.push(khr::Swapchain::name().as_ptr());
@@ -358,7 +365,8 @@ impl Context {
             .enabled_features(&features)
             .enabled_extension_names(&device_ext)
             .push_next(&mut features13)
-            .push_next(&mut features12);
+            .push_next(&mut features12)
+            .push_next(&mut features11);
         // SAFETY: physical_device comes from this instance; all pointers refer to live locals.
         let device = unsafe { instance.create_device(physical_device, &device_info, None) }
             .map_err(|r| release_instance(VkError::vk("create the logical device")(r)))?;
@@ -704,8 +712,19 @@ fn pick_device(
         device_local_heap_bytes: largest_device_local_heap(&memory),
         max_memory_allocation_bytes: maintenance3.max_memory_allocation_size,
         max_buffer_bytes: maintenance4.max_buffer_size,
+        multiview: has_multiview(instance, pd),
     };
     Ok((pd, family, info))
+}
+
+/// Whether `pd` has the Vulkan 1.1 feature `multiview` (optional: stereo falls back to two
+/// passes without it).
+fn has_multiview(instance: &ash::Instance, pd: vk::PhysicalDevice) -> bool {
+    let mut f11 = vk::PhysicalDeviceVulkan11Features::default();
+    let mut f2 = vk::PhysicalDeviceFeatures2::builder().push_next(&mut f11);
+    // SAFETY: pd is a physical device of this instance; the chain points to a live local.
+    unsafe { instance.get_physical_device_features2(pd, &mut f2) };
+    f11.multiview == vk::TRUE
 }
 
 /// Size of the largest device-local heap of `memory` (0 when none is device-local).

@@ -480,7 +480,8 @@ impl Context {
         let dynamic = vk::PipelineDynamicStateCreateInfo::builder().dynamic_states(&dynamic_states);
         let mut rendering = vk::PipelineRenderingCreateInfo::builder()
             .color_attachment_formats(&desc.color_formats)
-            .depth_attachment_format(desc.depth_format.unwrap_or(vk::Format::UNDEFINED));
+            .depth_attachment_format(desc.depth_format.unwrap_or(vk::Format::UNDEFINED))
+            .view_mask(desc.view_mask);
         let info = [vk::GraphicsPipelineCreateInfo::builder()
             .stages(&stages)
             .vertex_input_state(&vertex_input)
@@ -670,6 +671,10 @@ pub struct GraphicsPipelineDesc {
     pub logic_op: Option<vk::LogicOp>,
     /// 32-bit specialization constants (constant id, value), applied to every stage.
     pub spec: Vec<(u32, u32)>,
+    /// Multiview (`VkPipelineRenderingCreateInfo::viewMask`): the views the pipeline renders
+    /// in one draw, one bit per attachment layer; 0 for an ordinary single-view pipeline. The
+    /// pass that binds it begins rendering with the same mask.
+    pub view_mask: u32,
 }
 
 impl GraphicsPipelineDesc {
@@ -690,6 +695,7 @@ impl GraphicsPipelineDesc {
             depth_write: false,
             depth_bias: false,
             logic_op: None,
+            view_mask: 0,
             spec: vec![],
         }
     }

@@ -58,6 +58,9 @@ pub struct ImageDesc {
     pub usage: vk::ImageUsageFlags,
     /// View as an array even with one layer (shaders declare `*Array` samplers).
     pub array: bool,
+    /// Also create one 2D view per layer ([`Image::layer_views`]): a pass can then read or
+    /// write one layer as a plain 2D image (a stereo eye of a two-layer multiview target).
+    pub layer_views: bool,
 }
 
 impl ImageDesc {
@@ -72,6 +75,7 @@ impl ImageDesc {
             mip_levels: 1,
             usage: vk::ImageUsageFlags::empty(),
             array: false,
+            layer_views: false,
         }
     }
     /// An array image of `layers` layers, viewed as an array even when `layers` is 1.
@@ -151,6 +155,8 @@ pub struct Image {
     pub view: vk::ImageView,
     /// One view per mip level (all layers), for storage writes into a single level.
     pub mip_views: Vec<vk::ImageView>,
+    /// One 2D view per layer (all mips), when `desc.layer_views` asks for them.
+    pub layer_views: Vec<vk::ImageView>,
     pub desc: ImageDesc,
     backing: Backing,
     release: Arc<ReleaseQueue>,
@@ -168,7 +174,12 @@ enum Backing {
 
 impl Drop for Image {
     fn drop(&mut self) {
-        let mut items: Vec<Garbage> = self.mip_views.drain(..).map(Garbage::ImageView).collect();
+        let mut items: Vec<Garbage> = self
+            .mip_views
+            .drain(..)
+            .chain(self.layer_views.drain(..))
+            .map(Garbage::ImageView)
+            .collect();
         items.push(Garbage::ImageView(self.view));
         match &mut self.backing {
             Backing::Allocated(allocation) => {
@@ -296,6 +307,7 @@ impl Context {
             raw,
             view: vk::ImageView::null(),
             mip_views: Vec::new(),
+            layer_views: Vec::new(),
             desc: desc.clone(),
             backing,
             release: Arc::clone(&self.release),
@@ -308,27 +320,37 @@ impl Context {
     /// `image` (destroying the null handle left in `view` is a no-op).
     fn create_views(&self, image: &mut Image) -> Result<(), VkError> {
         let (raw, desc) = (image.raw, image.desc.clone());
-        let make = |base_mip: u32, mips: u32| {
+        let make_view = |view_type, (base_mip, mips): (u32, u32), (base_layer, layers)| {
             let info = vk::ImageViewCreateInfo::builder()
                 .image(raw)
-                .view_type(desc.view_type())
+                .view_type(view_type)
                 .format(desc.format)
                 .subresource_range(vk::ImageSubresourceRange {
                     aspect_mask: desc.aspect(),
                     base_mip_level: base_mip,
                     level_count: mips,
-                    base_array_layer: 0,
-                    layer_count: desc.layers,
+                    base_array_layer: base_layer,
+                    layer_count: layers,
                 });
-            // SAFETY: raw is a live image of this device with a compatible format.
+            // SAFETY: raw is a live image of this device with a compatible format; the range
+            // lies within its mips and layers.
             unsafe { self.device.create_image_view(&info, None) }
                 .map_err(VkError::vk("create an image view"))
+        };
+        let make = |base_mip: u32, mips: u32| {
+            make_view(desc.view_type(), (base_mip, mips), (0, desc.layers))
         };
         image.view = make(0, desc.mip_levels)?;
         if desc.mip_levels > 1 {
             for m in 0..desc.mip_levels {
                 let view = make(m, 1)?;
                 image.mip_views.push(view);
+            }
+        }
+        if desc.layer_views && desc.depth == 1 {
+            for l in 0..desc.layers {
+                let view = make_view(vk::ImageViewType::TYPE_2D, (0, desc.mip_levels), (l, 1))?;
+                image.layer_views.push(view);
             }
         }
         Ok(())

@@ -1,0 +1,37 @@
+// G-buffer pass: world-space normals and material ids of every visible surface (the body of
+// gbuffer.vert and, with MULTIVIEW, gbuffer_multiview.vert).
+#include "frame.glsl"
+
+layout(location = 0) in vec3 in_position;
+layout(location = 1) in vec3 in_normal;
+layout(location = 2) in vec2 in_uv;
+
+layout(set = 0, binding = 0, std430) readonly buffer FrameBuf { GpuFrame frame; };
+#ifdef MULTIVIEW
+// Both eyes in one draw (gbuffer_multiview.vert): view 0 is the left eye (`frame`), view 1
+// the right eye; each view draws into its layer of the two-layer targets.
+layout(set = 0, binding = 8, std430) readonly buffer FrameRightBuf { GpuFrame frame_right; };
+// Both products, blended by the view index (exactly one of them: x·1 + y·0 = x), instead of
+// selecting a matrix by gl_ViewIndex: lavapipe (Mesa 22.3) loses vertices of view 1 with the
+// selection.
+#define EYE_CLIP(world) mix(frame.view_proj * (world), frame_right.view_proj * (world), float(gl_ViewIndex))
+#else
+#define EYE_CLIP(world) (frame.view_proj * (world))
+#endif
+
+layout(push_constant) uniform Push {
+    mat4 model;
+    uint material;
+} pc;
+
+layout(location = 0) out vec3 out_normal;
+layout(location = 1) out vec2 out_uv;
+layout(location = 2) out vec3 out_world;
+
+void main() {
+    vec4 world = pc.model * vec4(in_position, 1.0);
+    out_normal = transpose(inverse(mat3(pc.model))) * in_normal;
+    out_uv = in_uv;
+    out_world = world.xyz;
+    gl_Position = EYE_CLIP(world);
+}
