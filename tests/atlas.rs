@@ -119,7 +119,8 @@ fn atlas_volumes_chunked(
     let mut cache = AtlasCache::default();
     let atlas =
         AtlasScene::new_chunked(ctx, s, 0.0, grid, &mut cache, chunk_bytes).expect("atlas scene");
-    let splat = AtlasVolumes::new(ctx, &atlas, s, grid, false).expect("atlas volumes");
+    let splat =
+        AtlasVolumes::new(ctx, &atlas, s, grid, false, Default::default()).expect("atlas volumes");
     let volumes = AttributeVolumes::new(ctx, grid).expect("attribute volumes");
     let ext = grid.extent_voxels();
     let size = u64::from(ext.x * ext.y * ext.z) * 4;
@@ -129,7 +130,13 @@ fn atlas_volumes_chunked(
     ];
     let mut g = RenderGraph::new();
     let (albedo, normal) = volumes.import(&mut g);
-    splat.add_passes(&mut g, &atlas, grid, albedo, normal, true, None);
+    let handles = voxgi::voxel::attributes::AttributeHandles {
+        albedo,
+        normal,
+        emission: None,
+        material: None,
+    };
+    splat.add_passes(&mut g, (&atlas, grid), &handles, true, None);
     let out = outs
         .each_ref()
         .map(|b| g.import_buffer(b, Access::HostRead));

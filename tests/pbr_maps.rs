@@ -465,8 +465,11 @@ fn cornell_pbr_error(
 /// On `cornell_pbr` the walls are lit only through the emission volume, so where the panel's
 /// light comes from decides the image: per texel it comes from the stripe beside the red wall,
 /// with the means from the whole panel at a quarter of the radiance. The path tracer with
-/// per-texel volumes must beat the means against the Mitsuba reference by a clear margin.
-/// Measured on lavapipe (64², 3 bounces, 4 frames; printed): see the assertion's bounds.
+/// per-texel volumes must beat the means against the Mitsuba reference. Measured on lavapipe
+/// (64², 3 bounces, 16 rays, 4 frames): relMSE 0.202 per texel (0.206 with the atlas
+/// voxelizer) against 0.387 with the means, a ratio of 0.52. Asserted: below 0.75 × the
+/// means' error, which leaves the measured gap a third of the means' error for sampling noise
+/// (the three renders share the seed, so their noise is alike) and other devices' rounding.
 #[test]
 fn cornell_pbr_path_tracer_per_texel_beats_the_means() {
     let (texel, texel_flip, passes) =
@@ -487,10 +490,12 @@ fn cornell_pbr_path_tracer_per_texel_beats_the_means() {
     );
 }
 
-/// The hemisphere method (both radiance sources) on `cornell_pbr`, per texel and with the
-/// means: printed for the report (the method sees emitters only through the emission volume,
-/// its error is dominated by what it leaves out, so no margin is asserted), and every GI
-/// method renders the scene with both voxelizers under validation, lit (not black).
+/// Every GI method renders `cornell_pbr` with both voxelizers under validation, lit (not
+/// black); and the hemisphere method, which sees the emitters only through the emission volume
+/// at its rays' hits, beats its own per-material means against the reference too. Measured on
+/// lavapipe (64², defaults): relMSE 0.138 per texel against 0.244 with the means (both
+/// radiance sources alike: with no analytic light the light maps and the radiance volume are
+/// empty). Asserted: below 0.75 × the means' error, as for the path tracer.
 #[test]
 fn cornell_pbr_renders_under_every_method_and_voxelizer() {
     let scene = cornell_pbr();
@@ -533,6 +538,7 @@ fn cornell_pbr_renders_under_every_method_and_voxelizer() {
     let reference =
         HdrImage::load(root().join("assets/references/cornell_pbr_gi.exr")).expect("reference");
     let reference = downsample(&reference, 4);
+    let mut errors = Vec::new();
     for source in [RadianceSource::Maps, RadianceSource::Volume] {
         for per_texel in [true, false] {
             let settings = RenderSettings {
@@ -554,7 +560,13 @@ fn cornell_pbr_renders_under_every_method_and_voxelizer() {
                 m.rel_mse,
                 m.flip_mean
             );
+            errors.push(m.rel_mse);
         }
+        let [texel, mean] = [errors[errors.len() - 2], errors[errors.len() - 1]];
+        assert!(
+            texel < 0.75 * mean,
+            "{source:?}: per texel {texel} vs means {mean}"
+        );
     }
     common::assert_no_validation_messages(&ctx);
 }

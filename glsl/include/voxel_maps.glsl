@@ -1,8 +1,9 @@
 // The MTL PBR maps (map_Pr, map_Pm, map_Ke) as the voxelizers read them (src/voxel/maps.rs):
-// every map's mip chain as RGBA8 texels in one storage buffer, and a table row per scene texture
-// (x: index of its first texel, y: width, z: height, w: levels | srgb << 8), so one dispatch or
-// draw samples the maps of every material without a descriptor per texture. The includer
-// defines VOXEL_MAPS_TEXELS_BINDING and VOXEL_MAPS_TABLE_BINDING.
+// every map's mip chain in one storage buffer, each texel linear RGBA as two packHalf2x16
+// words (sRGB maps decoded on the CPU: no pow per lookup), and a table row per scene texture
+// (x: index of its first texel, y: width, z: height, w: levels), so one dispatch or draw
+// samples the maps of every material without a descriptor per texture. The includer defines
+// VOXEL_MAPS_TEXELS_BINDING and VOXEL_MAPS_TABLE_BINDING.
 //
 // Per triangle (GpuTriangleMaps): uv01 = (uv0, uv1), uv2_lod = (uv2, lod, 0) with lod the log2
 // of the sample spacing in texture-coordinate units (add log2 of the map's size for texels),
@@ -17,26 +18,20 @@ layout(set = 0, binding = VOXEL_MAPS_TABLE_BINDING, std430) readonly buffer Voxe
     uvec4 map_table[];
 };
 
-vec3 voxel_map_srgb_decode(vec3 c) {
-    return mix(c / 12.92, pow((c + 0.055) / 1.055, vec3(2.4)), greaterThan(c, vec3(0.04045)));
-}
-
 // Texel p >= 0 (wrapped: the G-buffer's sampler repeats) of the level starting at `base`.
-vec4 voxel_map_texel(uint base, ivec2 size, ivec2 p, bool srgb) {
+vec4 voxel_map_texel(uint base, ivec2 size, ivec2 p) {
     p = ivec2(uvec2(max(p, ivec2(0))) % uvec2(size));
-    vec4 c = unpackUnorm4x8(map_texels[base + uint(p.y * size.x + p.x)]);
-    if (srgb) c.rgb = voxel_map_srgb_decode(c.rgb);
-    return c;
+    uint i = 2u * (base + uint(p.y * size.x + p.x));
+    return vec4(unpackHalf2x16(map_texels[i]), unpackHalf2x16(map_texels[i + 1u]));
 }
 
 // Map `map` at texture coordinate uv (OBJ's v up, as the meshes store it) over a footprint of
 // 2^lod texels of level 0: bilinear in the level nearest that footprint (the box-filtered
-// chain of TextureData::mip_chain, the G-buffer's levels), sRGB maps decoded before blending,
-// as a sampler of an sRGB image does.
+// chain of TextureData::mip_chain, the G-buffer's levels), blending linear values as a
+// sampler of an sRGB image does.
 vec4 sample_voxel_map(int map, vec2 uv, float lod) {
     uvec4 m = map_table[map];
-    int levels = int(m.w & 0xffu);
-    bool srgb = (m.w >> 8u) != 0u;
+    int levels = int(m.w);
     ivec2 size = ivec2(m.yz);
     float l = lod + 0.5 * log2(float(size.x) * float(size.y));
     int level = clamp(int(floor(l + 0.5)), 0, max(levels - 1, 0));
@@ -51,8 +46,8 @@ vec4 sample_voxel_map(int map, vec2 uv, float lod) {
     st -= vec2(size) * floor(st / vec2(size));
     ivec2 p = ivec2(floor(st));
     vec2 f = st - floor(st);
-    vec4 a = mix(voxel_map_texel(base, size, p, srgb), voxel_map_texel(base, size, p + ivec2(1, 0), srgb), f.x);
-    vec4 b = mix(voxel_map_texel(base, size, p + ivec2(0, 1), srgb), voxel_map_texel(base, size, p + ivec2(1, 1), srgb), f.x);
+    vec4 a = mix(voxel_map_texel(base, size, p), voxel_map_texel(base, size, p + ivec2(1, 0)), f.x);
+    vec4 b = mix(voxel_map_texel(base, size, p + ivec2(0, 1)), voxel_map_texel(base, size, p + ivec2(1, 1)), f.x);
     return mix(a, b, f.y);
 }
 

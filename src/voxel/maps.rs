@@ -2,9 +2,10 @@
 //! emission volume, `map_Pr` / `map_Pm` in the material volume, sampled per texel at the
 //! surface points each voxelizer averages, instead of each map's mean.
 //!
-//! The maps a scene's volumes read go into one storage buffer of RGBA8 texels (every map's mip
-//! chain, [`TextureData::mip_chain`], the G-buffer's levels) with a table row per scene texture
-//! ([`VoxelMaps`]), so one dispatch or one draw samples the maps of every material
+//! The maps a scene's volumes read go into one storage buffer of linear half-float texels
+//! (sRGB decoded on the CPU; every map's mip chain, [`TextureData::mip_chain`], the G-buffer's
+//! levels) with a table row per scene texture ([`VoxelMaps`]), so one dispatch or one draw
+//! samples the maps of every material
 //! (`glsl/include/voxel_maps.glsl`; no descriptor per texture). Each triangle carries its
 //! texture coordinates, its maps and the level of detail of the voxelizer's sample spacing
 //! ([`GpuTriangleMaps`]). Scenes without such maps, methods that read no volume the maps feed,
@@ -139,9 +140,10 @@ impl VoxelMaps {
     }
 }
 
-/// The RGBA8 texels (one `u32` each, red in the low byte: GLSL's `unpackUnorm4x8`) of every
-/// level of every map `used` samples, and a table row per scene texture: first texel, width,
-/// height, levels | srgb << 8 (zero for textures no volume samples). Never empty.
+/// The texels of every level of every map `used` samples, each as linear RGBA in two
+/// `packHalf2x16` words (sRGB decoded here, so a lookup needs no `pow`), and a table row per
+/// scene texture: first texel, width, height, levels (zero for textures no volume samples).
+/// Never empty.
 pub fn map_texels(scene: &Scene, used: MapUse) -> (Vec<u32>, Vec<[u32; 4]>) {
     let mut sampled = vec![false; scene.textures.len()];
     for m in &scene.materials {
@@ -162,23 +164,57 @@ pub fn map_texels(scene: &Scene, used: MapUse) -> (Vec<u32>, Vec<[u32; 4]>) {
     {
         let levels = t.mip_chain();
         *row = [
-            texels.len() as u32,
+            (texels.len() / 2) as u32,
             t.width.max(1),
             t.height.max(1),
-            levels.len() as u32 | (u32::from(t.srgb) << 8),
+            levels.len() as u32,
         ];
         for level in &levels {
-            texels.extend(
-                level
-                    .chunks_exact(4)
-                    .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]])),
-            );
+            for c in level.chunks_exact(4) {
+                let v = linear_texel(c, t.srgb);
+                texels.push(pack_half2(v[0], v[1]));
+                texels.push(pack_half2(v[2], v[3]));
+            }
         }
     }
     if texels.is_empty() {
-        texels.push(0);
+        texels.extend([0, 0]);
     }
     (texels, table)
+}
+
+/// An RGBA8 texel as linear values (sRGB color channels decoded; alpha linear).
+fn linear_texel(c: &[u8], srgb: bool) -> [f32; 4] {
+    let mut v = [0, 1, 2, 3].map(|k| f32::from(c[k]) / 255.0);
+    if srgb {
+        for x in &mut v[..3] {
+            *x = crate::eval::srgb_decode(*x);
+        }
+    }
+    v
+}
+
+/// GLSL's `packHalf2x16`: `a` in the low 16 bits (round to nearest even; values here are in
+/// [0, 1], so no overflow or subnormal handling beyond flushing below 2⁻¹⁴ to zero).
+fn pack_half2(a: f32, b: f32) -> u32 {
+    u32::from(f32_to_f16(a)) | (u32::from(f32_to_f16(b)) << 16)
+}
+
+/// An f32 in [0, 1] as an IEEE half: exponent rebiased, mantissa rounded to nearest even;
+/// below the smallest normal half (6.1e-5, under a quarter of an 8-bit step) it is zero.
+fn f32_to_f16(x: f32) -> u16 {
+    let bits = x.max(0.0).to_bits();
+    let exp = ((bits >> 23) & 0xff) as i32 - 127 + 15;
+    if exp <= 0 {
+        return 0;
+    }
+    let mant = bits & 0x7f_ffff;
+    let mut h = ((exp as u32) << 10) | (mant >> 13);
+    let rest = mant & 0x1fff;
+    if rest > 0x1000 || (rest == 0x1000 && h & 1 == 1) {
+        h += 1;
+    }
+    h as u16
 }
 
 /// The sample spacing of the triangle voxelizer's value passes (`voxelize_owner_value.glsl`):
@@ -254,6 +290,8 @@ mod tests {
         assert_eq!(flat.uv2_lod[2], -64.0);
         let bits = row.to_vec4s()[2].map(f32::to_bits);
         assert_eq!(bits, [1, u32::MAX, 2, 0]);
+        // Three vec4s, as voxel_maps.glsl reads a row.
+        assert_eq!(std::mem::size_of::<GpuTriangleMaps>(), 48);
     }
 
     #[test]
@@ -281,12 +319,17 @@ mod tests {
             }
         );
         let (texels, table) = map_texels(&scene, used);
-        // 4×2 → 2×1 → 1×1 (11 texels), then 2×2 → 1×1 (5); texture 2 is sampled by no volume.
+        // 4×2 → 2×1 → 1×1 (11 texels), then 2×2 → 1×1 (5), two words each; texture 2 is
+        // sampled by no volume.
         assert_eq!(table[0], [0, 4, 2, 3]);
-        assert_eq!(table[1], [11, 2, 2, 2 | 1 << 8]);
+        assert_eq!(table[1], [11, 2, 2, 2]);
         assert_eq!(table[2], [0; 4]);
-        assert_eq!(texels.len(), 16);
-        assert_eq!(texels[1], u32::from_le_bytes([60, 60, 60, 255]));
+        assert_eq!(texels.len(), 32);
+        // Texel 1 of the linear map: 60/255 = 0.2353 → half 0x3388 (0.23535), alpha 1 = 0x3c00.
+        assert_eq!(texels[2], 0x3388 | 0x3388 << 16);
+        assert_eq!(texels[3], 0x3388 | 0x3c00 << 16);
+        // The sRGB map's code 9 is decoded first: 9/255/12.92 = 0.002732 → half 0x1998.
+        assert_eq!(texels[22] & 0xffff, 0x1998);
         // Only the emission volume: the roughness map is not uploaded.
         let used = MapUse::new(&scene, true, false, true);
         assert!(!used.lobe);
