@@ -160,11 +160,14 @@ struct Sums {
     material: Option<ImageHandle>,
 }
 
+/// One sequence frame of a [`Splat`]: its point chunks `(points, count)`, triangles and values.
+type SplatFrame = (Vec<(BufferHandle, u32)>, BufferHandle, BufferHandle);
+
 /// A draw of one instance: per sequence frame its point chunks `(points, count)`, its
 /// triangles and its values (the triangles without value volumes), and which frame and model
 /// matrix a slot uses.
 struct Splat {
-    frames: Vec<(Vec<(BufferHandle, u32)>, BufferHandle, BufferHandle)>,
+    frames: Vec<SplatFrame>,
     frame: FrameAt,
     model: ModelAt,
 }
