@@ -8,9 +8,13 @@ layout(points, max_vertices = 1) out;
 
 layout(location = 0) flat in int v_layer[];
 layout(location = 1) flat in vec3 v_albedo[];
-layout(location = 2) flat in vec3 v_normal[];
+layout(location = 2) flat in vec4 v_normal[];
+layout(location = 3) flat in vec4 v_emission[];
+layout(location = 4) flat in vec4 v_material[];
 layout(location = 0) flat out vec3 g_albedo;
-layout(location = 1) flat out vec3 g_normal;
+layout(location = 1) flat out vec4 g_normal;
+layout(location = 2) flat out vec4 g_emission;
+layout(location = 3) flat out vec4 g_material;
 
 void main() {
     if (v_layer[0] < 0) {
@@ -20,6 +24,8 @@ void main() {
     gl_Layer = v_layer[0];
     g_albedo = v_albedo[0];
     g_normal = v_normal[0];
+    g_emission = v_emission[0];
+    g_material = v_material[0];
     EmitVertex();
     EndPrimitive();
 }

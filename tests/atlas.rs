@@ -119,7 +119,8 @@ fn atlas_volumes_chunked(
     let mut cache = AtlasCache::default();
     let atlas =
         AtlasScene::new_chunked(ctx, s, 0.0, grid, &mut cache, chunk_bytes).expect("atlas scene");
-    let splat = AtlasVolumes::new(ctx, &atlas, s, grid, false).expect("atlas volumes");
+    let splat =
+        AtlasVolumes::new(ctx, &atlas, s, grid, false, Default::default()).expect("atlas volumes");
     let volumes = AttributeVolumes::new(ctx, grid).expect("attribute volumes");
     let ext = grid.extent_voxels();
     let size = u64::from(ext.x * ext.y * ext.z) * 4;
@@ -129,7 +130,13 @@ fn atlas_volumes_chunked(
     ];
     let mut g = RenderGraph::new();
     let (albedo, normal) = volumes.import(&mut g);
-    splat.add_passes(&mut g, &atlas, grid, albedo, normal, true, None);
+    let handles = voxgi::voxel::attributes::AttributeHandles {
+        albedo,
+        normal,
+        emission: None,
+        material: None,
+    };
+    splat.add_passes(&mut g, (&atlas, grid), &handles, true, None);
     let out = outs
         .each_ref()
         .map(|b| g.import_buffer(b, Access::HostRead));
@@ -530,7 +537,13 @@ fn run_volume_frame(
     let mut g = RenderGraph::new();
     let image = frame.add_passes(&mut g);
     let (albedo, normal) = volumes.import(&mut g);
-    frame.add_attribute_passes(&mut g, albedo, normal);
+    let handles = voxgi::voxel::attributes::AttributeHandles {
+        albedo,
+        normal,
+        emission: None,
+        material: None,
+    };
+    frame.add_attribute_passes(&mut g, &handles);
     bits.add_pass(&mut g, image);
     let out = outs
         .each_ref()
@@ -624,7 +637,9 @@ fn atlas_volumes_match_the_bits_and_the_red_wall() {
     };
     let mut frame = VoxelFrame::new(&ctx, &s, 0.0, &settings).expect("voxel frame");
     assert!(!frame.has_attribute_volumes(), "created only on request");
-    assert!(frame.enable_attribute_volumes(&ctx, &s).expect("volumes"));
+    assert!(frame
+        .enable_attribute_volumes(&ctx, &s, Default::default())
+        .expect("volumes"));
     let grid = frame.voxels.grid;
     let volumes = AttributeVolumes::new(&ctx, &grid).expect("volumes");
     let (v, names) = run_volume_frame(&ctx, &frame, &volumes);
@@ -726,7 +741,9 @@ fn atlas_volumes_follow_a_moving_object() {
         ..Default::default()
     };
     let mut frame = VoxelFrame::new(&ctx, &s, 0.0, &settings).expect("voxel frame");
-    assert!(frame.enable_attribute_volumes(&ctx, &s).expect("volumes"));
+    assert!(frame
+        .enable_attribute_volumes(&ctx, &s, Default::default())
+        .expect("volumes"));
     let grid = frame.voxels.grid;
     let volumes = AttributeVolumes::new(&ctx, &grid).expect("volumes");
     let mut counts = Vec::new();
@@ -878,7 +895,9 @@ fn atlas_volumes_follow_an_obj_sequence() {
         ..Default::default()
     };
     let mut frame = VoxelFrame::new(&ctx, &s, 0.0, &settings).expect("voxel frame");
-    assert!(frame.enable_attribute_volumes(&ctx, &s).expect("volumes"));
+    assert!(frame
+        .enable_attribute_volumes(&ctx, &s, Default::default())
+        .expect("volumes"));
     let grid = frame.voxels.grid;
     let volumes = AttributeVolumes::new(&ctx, &grid).expect("volumes");
     let mut counts = Vec::new();

@@ -30,7 +30,7 @@ pub use sao::GpuSaoPush;
 use crate::graph::{Access, BufferHandle, ImageHandle, RenderGraph, Shader, SlotCondition};
 use crate::scene::Scene;
 use crate::vk::{vk, Buffer, Context, ImageDesc, VkError};
-use crate::voxel::attributes::TriangleAttributeVolumes;
+use crate::voxel::attributes::{TriangleAttributeVolumes, ValueVolumes};
 use crate::voxel::ray_mask::RayMaskLut;
 use crate::voxel::VoxelGrid;
 use gi_common::GiShared;
@@ -215,17 +215,13 @@ impl GiPasses {
         let attributes = Self::needs_attribute_volumes(&settings, target.scene)
             .then(|| {
                 let t = target;
-                // The path tracer's lobes at later bounces, and the VPLs' glossy hits (bounces
-                // and emitter rays), read the material volume.
-                let lobes = (settings.method == GiMethod::Pathtrace && settings.pathtrace_lobes)
-                    || settings.method == GiMethod::Vpl;
                 TriangleAttributeVolumes::new(
                     ctx,
                     t.scene,
                     t.time_s,
                     t.grid,
                     t.atlas_attributes,
-                    lobes,
+                    Self::value_volumes(&settings, t.scene),
                 )
             })
             .transpose()?;
@@ -295,6 +291,15 @@ impl GiPasses {
         self.accumulation.frames.load(Ordering::SeqCst)
     }
 
+    /// The emission and material volumes the chosen method reads with the albedo and normal
+    /// volumes, and the PBR maps they sample: the path tracer's lobes at later bounces read
+    /// the material volume, and so do the VPLs' glossy hits (bounces and emitter rays).
+    pub fn value_volumes(settings: &GiSettings, scene: &Scene) -> ValueVolumes {
+        let lobes = (settings.method == GiMethod::Pathtrace && settings.pathtrace_lobes)
+            || settings.method == GiMethod::Vpl;
+        ValueVolumes::new(scene, lobes, settings.voxel_map_texels)
+    }
+
     /// Whether the chosen method reads the albedo and normal volumes (and with them, in
     /// scenes with emitters, the emission volume).
     pub fn needs_attribute_volumes(settings: &GiSettings, scene: &Scene) -> bool {
@@ -356,9 +361,9 @@ impl GiPasses {
                 // The first frame writes the volumes; later frames keep them until something
                 // moves.
                 shared.attributes = self.attributes.as_ref().map(|a| {
-                    a.add_passes(g, |g: &mut RenderGraph, albedo, normal| {
+                    a.add_passes(g, |g: &mut RenderGraph, volumes| {
                         if let Some(v) = voxels {
-                            v.add_attribute_passes(g, albedo, normal);
+                            v.add_attribute_passes(g, volumes);
                         }
                     })
                 });

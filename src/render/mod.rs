@@ -527,7 +527,11 @@ impl Renderer {
             let atlas_attributes = match &mut voxels {
                 Some(v) => {
                     crate::gi::GiPasses::needs_attribute_volumes(&settings.gi, scene)
-                        && v.enable_attribute_volumes(ctx, scene)?
+                        && v.enable_attribute_volumes(
+                            ctx,
+                            scene,
+                            crate::gi::GiPasses::value_volumes(&settings.gi, scene),
+                        )?
                 }
                 None => false,
             };
@@ -589,7 +593,7 @@ impl Renderer {
             if voxel_view_on {
                 // With the atlas voxelizer its points write the albedo the view shows.
                 if d.view == crate::voxel::debug_view::DebugView::Albedo {
-                    v.enable_attribute_volumes(ctx, scene)?;
+                    v.enable_attribute_volumes(ctx, scene, Default::default())?;
                 }
                 voxel_debug = Some(crate::voxel::debug_view::VoxelDebugPass::new(
                     ctx,

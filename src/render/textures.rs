@@ -1,46 +1,8 @@
-//! Albedo textures: mip chains built on the CPU (box filter in linear space for sRGB data)
-//! and uploaded once as sampled images.
+//! Textures uploaded once as sampled images with the mip chains of
+//! [`TextureData::mip_chain`] (box filter in linear space for sRGB data).
 
-use crate::eval::{srgb_decode, srgb_encode};
 use crate::scene::TextureData;
 use crate::vk::{vk, Context, Image, ImageDesc, VkError};
-
-/// RGBA8 mip chain of `tex` down to 1×1; level 0 is the texture itself.
-pub fn mip_chain(tex: &TextureData) -> Vec<Vec<u8>> {
-    let (mut w, mut h) = (tex.width.max(1), tex.height.max(1));
-    let mut levels = vec![tex.rgba8.clone()];
-    while w > 1 || h > 1 {
-        let (nw, nh) = ((w / 2).max(1), (h / 2).max(1));
-        let prev = &levels[levels.len() - 1];
-        let mut next = vec![0u8; (nw * nh * 4) as usize];
-        for y in 0..nh {
-            for x in 0..nw {
-                for c in 0..4 {
-                    let mut sum = 0.0f32;
-                    let mut n = 0.0f32;
-                    for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
-                        let (sx, sy) = ((2 * x + dx).min(w - 1), (2 * y + dy).min(h - 1));
-                        let v = f32::from(prev[((sy * w + sx) * 4 + c) as usize]) / 255.0;
-                        // Average light, not encoded values: decode sRGB color channels first.
-                        sum += if tex.srgb && c < 3 { srgb_decode(v) } else { v };
-                        n += 1.0;
-                    }
-                    let avg = sum / n;
-                    let enc = if tex.srgb && c < 3 {
-                        srgb_encode(avg)
-                    } else {
-                        avg
-                    };
-                    next[((y * nw + x) * 4 + c) as usize] =
-                        (enc.clamp(0.0, 1.0) * 255.0).round() as u8;
-                }
-            }
-        }
-        levels.push(next);
-        (w, h) = (nw, nh);
-    }
-    levels
-}
 
 /// Uploads `tex` with its mip chain; sRGB textures use an sRGB format so sampling returns
 /// linear values.
@@ -51,7 +13,7 @@ pub fn upload_texture(ctx: &Context, tex: &TextureData, name: &str) -> Result<Im
         vk::Format::R8G8B8A8_UNORM
     };
     let desc = ImageDesc::new_2d(name, format, tex.width.max(1), tex.height.max(1));
-    ctx.upload_image(&desc, &mip_chain(tex))
+    ctx.upload_image(&desc, &tex.mip_chain())
 }
 
 #[cfg(test)]
@@ -70,13 +32,13 @@ mod tests {
             ],
             true,
         );
-        let levels = mip_chain(&tex);
+        let levels = tex.mip_chain();
         assert_eq!(levels.len(), 2);
         assert_eq!(levels[1].len(), 4);
         assert_eq!(levels[1][0], 188);
         assert_eq!(levels[1][3], 255);
         let odd = TextureData::new("odd".into(), 5, 3, vec![255; 60], false);
-        let levels = mip_chain(&odd);
+        let levels = odd.mip_chain();
         assert_eq!(
             levels.iter().map(Vec::len).collect::<Vec<_>>(),
             vec![60, 8, 4]

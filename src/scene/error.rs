@@ -231,6 +231,21 @@ pub enum SceneError {
         message: String,
         referenced_by: String,
     },
+
+    /// A one-channel map (`map_Pr`, `map_Pm`) whose color channels differ: its first channel
+    /// would be read silently, which for a packed texture is the wrong quantity.
+    #[error(
+        "{}: {key} reads one value per texel from the first channel, but this map's red, green          and blue differ (texel ({x}, {y}) is {rgb:?}), as in a packed occlusion/roughness/         metalness texture; save the channel that holds the {key} values as a grey image          (referenced by {referenced_by})",
+        file.display()
+    )]
+    TextureChannels {
+        file: PathBuf,
+        key: String,
+        x: u32,
+        y: u32,
+        rgb: [u8; 3],
+        referenced_by: String,
+    },
 }
 
 fn show_source_line(line: &str) -> String {
@@ -339,6 +354,7 @@ impl SceneError {
             SceneError::SequenceTopology { .. } => "sequence-topology",
             SceneError::TextureMissing { .. } => "texture-missing",
             SceneError::TextureDecode { .. } => "texture-decode",
+            SceneError::TextureChannels { .. } => "texture-channels",
         }
     }
 }

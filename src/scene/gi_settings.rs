@@ -62,6 +62,11 @@ pub struct GiSettings {
     /// scenes with such materials); `false` makes later bounces Lambert with the base color,
     /// the behaviour before the material volume, kept for comparisons.
     pub pathtrace_lobes: bool,
+    /// The voxel volumes sample the MTL PBR maps (`map_Ke` in the emission volume, `map_Pr` /
+    /// `map_Pm` in the material volume) per texel at the surface in each voxel (`voxel::maps`);
+    /// `false` gives them each map's mean per material, the behaviour before, kept for
+    /// comparisons. Scenes without such maps are the same either way.
+    pub voxel_map_texels: bool,
     /// Frames a headless render accumulates (path tracer; the viewer accumulates while still).
     pub accumulate_frames: u32,
     /// Where the hemisphere method reads the radiance at ray hits.
@@ -333,6 +338,7 @@ impl Default for GiSettings {
             seed: 0,
             bounces: Bounces::Fixed(2),
             pathtrace_lobes: true,
+            voxel_map_texels: true,
             accumulate_frames: 1,
             radiance_source: RadianceSource::Maps,
             vpl: super::VplSettings::default(),

@@ -236,6 +236,49 @@ impl TextureData {
             mean_linear,
         }
     }
+
+    /// RGBA8 mip chain down to 1×1 (box filter, sRGB channels averaged as light); level 0 is
+    /// the texture itself. The G-buffer's textures and the voxelizers' maps
+    /// (`voxel::maps`) use the same levels.
+    pub fn mip_chain(&self) -> Vec<Vec<u8>> {
+        let (mut w, mut h) = (self.width.max(1), self.height.max(1));
+        let mut levels = vec![self.rgba8.clone()];
+        while w > 1 || h > 1 {
+            let (nw, nh) = ((w / 2).max(1), (h / 2).max(1));
+            let prev = &levels[levels.len() - 1];
+            let mut next = vec![0u8; (nw * nh * 4) as usize];
+            for y in 0..nh {
+                for x in 0..nw {
+                    for c in 0..4 {
+                        let mut sum = 0.0f32;
+                        let mut n = 0.0f32;
+                        for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+                            let (sx, sy) = ((2 * x + dx).min(w - 1), (2 * y + dy).min(h - 1));
+                            let v = f32::from(prev[((sy * w + sx) * 4 + c) as usize]) / 255.0;
+                            // Average light, not encoded values: decode sRGB color channels first.
+                            sum += if self.srgb && c < 3 {
+                                crate::eval::srgb_decode(v)
+                            } else {
+                                v
+                            };
+                            n += 1.0;
+                        }
+                        let avg = sum / n;
+                        let enc = if self.srgb && c < 3 {
+                            crate::eval::srgb_encode(avg)
+                        } else {
+                            avg
+                        };
+                        next[((y * nw + x) * 4 + c) as usize] =
+                            (enc.clamp(0.0, 1.0) * 255.0).round() as u8;
+                    }
+                }
+            }
+            levels.push(next);
+            (w, h) = (nw, nh);
+        }
+        levels
+    }
 }
 
 /// The mean linear RGB of RGBA8 texels (alpha ignored); sRGB codes are decoded before

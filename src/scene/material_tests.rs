@@ -255,6 +255,42 @@ fn missing_pbr_maps_are_errors_naming_mtl_material_key_and_path() {
 }
 
 #[test]
+fn packed_roughness_and_metalness_maps_are_errors_naming_mtl_key_and_path() {
+    // An occlusion/roughness/metalness texture packs three quantities into r, g, b: reading
+    // its first channel as roughness would silently take the occlusion.
+    for key in ["map_Pr", "map_Pm"] {
+        let path = obj_scene(
+            &format!("packed_{key}"),
+            &format!("newmtl a\nKd 1 1 1\n{key} orm.png\n"),
+        );
+        let dir = path.parent().unwrap();
+        write_png(&dir.join("orm.png"), [255, 128, 0]);
+        let err = Scene::load(&path).expect_err("a packed map must fail");
+        assert_eq!(err.kind(), "texture-channels");
+        let msg = err.to_string();
+        let mtl = dir.join("m.mtl").display().to_string();
+        let png = dir.join("orm.png").display().to_string();
+        for part in [
+            &mtl,
+            &png,
+            "material `a`",
+            key,
+            "[255, 128, 0]",
+            "grey image",
+        ] {
+            assert!(msg.contains(part), "message lacks `{part}`: {msg}");
+        }
+        let _ = std::fs::remove_dir_all(dir);
+    }
+    // A colored emission map is a color, not packed data.
+    let path = obj_scene("colored_ke", "newmtl a\nKd 1 1 1\nmap_Ke glow.png\n");
+    let dir = path.parent().unwrap();
+    write_png(&dir.join("glow.png"), [255, 128, 0]);
+    assert!(Scene::load(&path).is_ok());
+    let _ = std::fs::remove_dir_all(dir);
+}
+
+#[test]
 fn missing_albedo_map_stays_a_warning_but_not_for_a_pbr_map_of_the_same_file() {
     // `map_Kd` keeps the compatibility fallback (the constant `Kd`): OBJ downloads often name
     // textures by paths on their author's machine.

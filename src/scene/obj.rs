@@ -358,7 +358,40 @@ impl AssetStore {
         let mut pbr_map = |key: &str, srgb: bool| match texture_file(
             m.unknown_param.get(key).map(String::as_str),
         ) {
-            Some(t) => self.texture(&dir.join(t), srgb, &pbr_field(key), true),
+            Some(t) => {
+                let path = dir.join(t);
+                let i = self.texture(&path, srgb, &pbr_field(key), true)?;
+                // Roughness and metalness are one value per texel: a map whose channels
+                // differ is most likely packed, and its first channel the wrong quantity.
+                let grey = |t: &TextureData| {
+                    t.rgba8
+                        .chunks_exact(4)
+                        .position(|c| c[0] != c[1] || c[0] != c[2])
+                        .map(|p| {
+                            (
+                                p as u32 % t.width,
+                                p as u32 / t.width,
+                                [0, 1, 2].map(|k| t.rgba8[4 * p + k]),
+                            )
+                        })
+                };
+                let packed = if srgb {
+                    None
+                } else {
+                    i.and_then(|i| self.textures.get(i)).and_then(grey)
+                };
+                match packed {
+                    Some((x, y, rgb)) => Err(SceneError::TextureChannels {
+                        file: path,
+                        key: key.to_string(),
+                        x,
+                        y,
+                        rgb,
+                        referenced_by: pbr_field(key),
+                    }),
+                    None => Ok(i),
+                }
+            }
             None => Ok(None),
         };
         let pbr_maps = PbrMaps {

@@ -16,18 +16,21 @@
 //! Scenes with emitters also get an emission volume (`RGBA16F`, W/(m²·sr) leaving the side the
 //! face normal points to), written between the two passes by `voxelize_emission` from the same
 //! owners, so emissive surfaces send indirect light (the path tracer and the direct-radiance
-//! volume read it). The atlas voxelizer has no emission path: in scenes with emitters the
-//! triangle writer writes every object's attributes, on top of the atlas's (its exact
-//! conservative test touches every voxel the atlas points set). Other scenes have no emission
-//! volume, buffer or pass.
+//! volume read it). Other scenes have no emission volume, buffer or pass.
 //!
 //! Scenes with Phong or GGX materials whose path tracer samples lobes at every bounce also get
 //! a material volume (`RGBA16F`, [`material_texel`]), written the same way by
-//! `voxelize_material` from the same owners; the atlas voxelizer has no material path either,
-//! so the triangle writer then writes every object too.
+//! `voxelize_material` from the same owners.
+//!
+//! Both value passes sample the MTL PBR maps (`map_Ke`; `map_Pr`, `map_Pm`) per texel over the
+//! owner's part of each voxel ([`super::maps`], `glsl/include/voxelize_owner_value.glsl`)
+//! when the scene has them, or take each map's mean with `per_texel` off. With the atlas
+//! voxelizer its points write all four volumes of the objects it voxelizes
+//! ([`super::gpu_atlas_volumes`]), and this writer only the others.
 
 use super::gpu::{voxelize_loads, voxelize_splits, GpuVoxelizePush};
 use super::gpu_atlas_volumes::AttributeVolumes;
+use super::maps::{owner_sample_spacing_m, GpuTriangleMaps, MapUse, VoxelMaps};
 use super::VoxelGrid;
 use crate::graph::{Access, ImageHandle, RenderGraph, Shader, SlotCondition};
 use crate::scene::{Material, Scene, TextureData};
@@ -35,7 +38,7 @@ use crate::vk::{
     vk, Buffer, BufferDesc, ComputePipeline, Context, Image, ImageDesc, MemoryLocation, VkError,
     MAX_FRAMES_IN_FLIGHT,
 };
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use std::sync::atomic::{AtomicU32, Ordering};
 use std::sync::Arc;
 
@@ -55,11 +58,32 @@ const OWNER_STATE: Access = Access::StorageReadWrite(Shader::Compute);
 /// i = the material albedo's channel i.
 type AttributeTriangle = [[f32; 4]; 3];
 
-/// A triangle's emitted radiance as `voxelize_emission.comp` reads it (rgb W/(m²·sr), w unused).
-type TriangleEmission = [f32; 4];
+/// Which value volumes exist besides albedo and normal, and whether they sample the PBR maps
+/// per texel; what both voxelizers' value passes are built for.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ValueVolumes {
+    /// An emission volume (scenes with emitters).
+    pub emission: bool,
+    /// A material volume (the path tracer's lobes, scenes with Phong or GGX materials).
+    pub material: bool,
+    /// The maps the volumes sample per texel ([`MapUse`]; none: each map's mean).
+    pub maps: MapUse,
+}
 
-/// A triangle's material lobe as `voxelize_material.comp` reads it ([`material_texel`]).
-type TriangleMaterial = [f32; 4];
+impl ValueVolumes {
+    /// The value volumes of `scene`: emission when it emits, material when asked for
+    /// (`material`) and it has lobes; `per_texel` maps where it has them
+    /// (`GiSettings::voxel_map_texels`).
+    pub fn new(scene: &Scene, material: bool, per_texel: bool) -> Self {
+        let emission = scene.has_emission();
+        let material = material && !scene.is_all_lambert();
+        Self {
+            emission,
+            material,
+            maps: MapUse::new(scene, emission, material, per_texel),
+        }
+    }
+}
 
 /// Format of the emission volume (radiance above 1 W/(m²·sr) must survive) and of the material
 /// volume (Phong exponents above 1 must survive; 16-bit floats hold every integer exponent up
@@ -104,6 +128,11 @@ pub struct TriangleAttributes {
     emission: Option<OwnerValueWriter>,
     /// With a material volume: the pass that writes it.
     material: Option<OwnerValueWriter>,
+    /// The PBR maps the value passes sample per texel, if any.
+    maps: Option<VoxelMaps>,
+    maps_used: MapUse,
+    /// The value passes' sample spacing ([`owner_sample_spacing_m`]).
+    spacing_m: f32,
 }
 
 /// The pipeline of a pass that writes one value per owner triangle into a volume
@@ -114,6 +143,43 @@ struct OwnerValueWriter {
     name: &'static str,
     pipeline: ComputePipeline,
     values: Buffer,
+    /// Each triangle's row holds its [`GpuTriangleMaps`] after the value (`HAS_MAPS`).
+    with_maps: bool,
+}
+
+/// The rows of an owner-value buffer: per triangle its value, then (with maps) its
+/// [`GpuTriangleMaps`], flattened to `vec4`s.
+struct OwnerRows {
+    vec4s: Vec<[f32; 4]>,
+    /// `vec4`s per triangle: 1, or 4 with maps.
+    stride: usize,
+}
+
+impl OwnerRows {
+    fn new(values: &[([f32; 4], GpuTriangleMaps)], with_maps: bool) -> Self {
+        let stride = if with_maps { 4 } else { 1 };
+        let mut vec4s = Vec::with_capacity(values.len() * stride);
+        for (value, maps) in values {
+            vec4s.push(*value);
+            if with_maps {
+                vec4s.extend(maps.to_vec4s());
+            }
+        }
+        Self { vec4s, stride }
+    }
+}
+
+/// What an owner-value pass reads and writes besides its values.
+#[derive(Clone, Copy)]
+struct OwnerInputs {
+    owner: ImageHandle,
+    volume: ImageHandle,
+    /// The attribute triangles (their positions, for the map samples).
+    tris: crate::graph::BufferHandle,
+    /// The maps' texels and table, when the scene's volumes sample maps.
+    maps: Option<(crate::graph::BufferHandle, crate::graph::BufferHandle)>,
+    /// The grid (the voxel → world map of the samples).
+    push: GpuVoxelizePush,
 }
 
 /// The attribute triangles of a scene with moving objects: one region of the host-visible
@@ -152,40 +218,38 @@ pub struct AttributeHandles {
 }
 
 impl TriangleAttributeVolumes {
-    /// `atlas_writes`: the atlas voxelizer writes the attributes of the objects it handles
-    /// ([`super::gpu::VoxelFrame::enable_attribute_volumes`]). `material`: also a material
-    /// volume (for the path tracer's lobes at later bounces), if the scene has Phong or GGX
-    /// materials.
+    /// `atlas_writes`: the atlas voxelizer writes the attributes (and the value volumes) of
+    /// the objects it handles ([`super::gpu::VoxelFrame::enable_attribute_volumes`]).
+    /// `values`: the emission and material volumes and their maps ([`ValueVolumes::new`]).
     pub fn new(
         ctx: &Context,
         scene: &Scene,
         time_s: f32,
         grid: &VoxelGrid,
         atlas_writes: bool,
-        material: bool,
+        values: ValueVolumes,
     ) -> Result<Self, VkError> {
         let mut tri_scene = scene.clone();
-        // The atlas voxelizer writes no emission and no material: with either volume,
-        // triangles write everything.
-        let emits = scene.has_emission();
-        let lobes = material && !scene.is_all_lambert();
-        if atlas_writes && !emits && !lobes {
+        if atlas_writes {
             tri_scene
                 .objects
                 .retain(|o| !super::gpu_atlas::uses_atlas(scene, o));
         }
-        let scene = &tri_scene;
         let volumes = AttributeVolumes::new(ctx, grid)?;
-        let emission = emits
+        let emission = values
+            .emission
             .then(|| value_volume(ctx, grid, "emission volume"))
             .transpose()?;
-        let material = lobes
+        let material = values
+            .material
             .then(|| value_volume(ctx, grid, "material volume"))
             .transpose()?;
-        let writer = if scene.objects.is_empty() {
+        let writer = if tri_scene.objects.is_empty() {
             None
         } else {
-            Some(TriangleAttributes::new(ctx, scene, time_s, grid, lobes)?)
+            Some(TriangleAttributes::new(
+                ctx, &tri_scene, time_s, grid, values,
+            )?)
         };
         Ok(Self {
             volumes,
@@ -201,12 +265,12 @@ impl TriangleAttributeVolumes {
     }
 
     /// Declares the passes that write the volumes and returns them: `atlas` declares the atlas
-    /// voxelizer's part (its resolve writes every voxel), then the triangle objects write
+    /// voxelizer's part (its resolves write every voxel), then the triangle objects write
     /// theirs on top.
     pub fn add_passes(
         &self,
         g: &mut RenderGraph,
-        atlas: impl FnOnce(&mut RenderGraph, ImageHandle, ImageHandle),
+        atlas: impl FnOnce(&mut RenderGraph, &AttributeHandles),
     ) -> AttributeHandles {
         let (albedo, normal) = self.volumes.import(g);
         let import = |g: &mut RenderGraph, image: &Option<Image>| {
@@ -216,13 +280,13 @@ impl TriangleAttributeVolumes {
         };
         let emission = import(g, &self.emission);
         let material = import(g, &self.material);
-        atlas(g, albedo, normal);
         let out = AttributeHandles {
             albedo,
             normal,
             emission,
             material,
         };
+        atlas(g, &out);
         if let Some(w) = &self.writer {
             w.add_passes(g, &out);
         }
@@ -232,13 +296,14 @@ impl TriangleAttributeVolumes {
 
 impl TriangleAttributes {
     /// The pipelines and triangles of `scene`'s objects at `time_s` that fill the volumes in
-    /// the first frame; `material`: also the material volume's writer.
+    /// the first frame; `values`: the writers of the emission and material volumes, and the
+    /// maps they sample.
     pub fn new(
         ctx: &Context,
         scene: &Scene,
         time_s: f32,
         grid: &VoxelGrid,
-        material: bool,
+        values: ValueVolumes,
     ) -> Result<Self, VkError> {
         let pipeline = ctx.compute_pipeline(
             "voxelize_attributes.comp",
@@ -247,7 +312,9 @@ impl TriangleAttributes {
         )?;
         let resolve_pipeline =
             ctx.compute_pipeline("voxelize_attributes_resolve.comp", None, &[])?;
-        let (tris, emissions, materials) = attribute_triangles(scene, time_s);
+        let spacing_m = owner_sample_spacing_m(grid.voxel_size_m());
+        let maps_used = values.maps;
+        let (tris, emissions, materials) = attribute_triangles(scene, time_s, maps_used, spacing_m);
         let bytes: &[u8] = if tris.is_empty() {
             &[0; 48]
         } else {
@@ -301,13 +368,21 @@ impl TriangleAttributes {
         let owner = ctx.create_image(&desc)?;
         ctx.clear_new_image(&owner, none, OWNER_STATE.info().layout)?;
         let capacity = animated.as_ref().map(|a| a.capacity);
-        let emission = scene
-            .has_emission()
-            .then(|| OwnerValueWriter::new(ctx, "voxelize_emission", &emissions, capacity))
+        let emission = values
+            .emission
+            .then(|| {
+                let rows = OwnerRows::new(&emissions, maps_used.emission);
+                OwnerValueWriter::new(ctx, "voxelize_emission", rows, capacity)
+            })
             .transpose()?;
-        let material = material
-            .then(|| OwnerValueWriter::new(ctx, "voxelize_material", &materials, capacity))
+        let material = values
+            .material
+            .then(|| {
+                let rows = OwnerRows::new(&materials, maps_used.lobe);
+                OwnerValueWriter::new(ctx, "voxelize_material", rows, capacity)
+            })
             .transpose()?;
+        let maps = VoxelMaps::new(ctx, scene, maps_used)?;
         Ok(Self {
             pipeline,
             resolve_pipeline,
@@ -321,6 +396,9 @@ impl TriangleAttributes {
             animated,
             emission,
             material,
+            maps,
+            maps_used,
+            spacing_m,
         })
     }
 
@@ -344,7 +422,8 @@ impl TriangleAttributes {
         let Some(a) = &mut self.animated else {
             return false;
         };
-        let (tris, emissions, materials) = attribute_triangles(&a.scene, t_s);
+        let (tris, emissions, materials) =
+            attribute_triangles(&a.scene, t_s, self.maps_used, self.spacing_m);
         if a.last.as_ref() == Some(&tris) {
             return false;
         }
@@ -362,10 +441,12 @@ impl TriangleAttributes {
             m[slot * region..slot * region + bytes.len()].copy_from_slice(bytes);
         }
         if let Some(w) = &mut self.emission {
-            w.write_slot(slot, a.capacity, &emissions[..n]);
+            let rows = OwnerRows::new(&emissions[..n], w.with_maps);
+            w.write_slot(slot, a.capacity, &rows);
         }
         if let Some(w) = &mut self.material {
-            w.write_slot(slot, a.capacity, &materials[..n]);
+            let rows = OwnerRows::new(&materials[..n], w.with_maps);
+            w.write_slot(slot, a.capacity, &rows);
         }
         a.counts[slot].store(n as u32, Ordering::SeqCst);
         a.splits[slot].store(attribute_splits(&a.grid, &tris[..n]), Ordering::SeqCst);
@@ -422,11 +503,18 @@ impl TriangleAttributes {
             });
         let d = &self.owner.desc;
         let extent = (d.width, d.height, d.depth);
+        let maps = self.maps.as_ref().map(|m| m.import(g, read));
         for (writer, volume) in [(&self.emission, v.emission), (&self.material, v.material)] {
             if let (Some(w), Some(volume)) = (writer, volume) {
                 w.add_pass(
                     g,
-                    (owner, volume),
+                    OwnerInputs {
+                        owner,
+                        volume,
+                        tris,
+                        maps,
+                        push: self.push,
+                    },
                     self.animated.as_ref(),
                     &self.gate,
                     extent,
@@ -456,18 +544,23 @@ impl OwnerValueWriter {
     fn new(
         ctx: &Context,
         name: &'static str,
-        values: &[[f32; 4]],
+        rows: OwnerRows,
         capacity: Option<usize>,
     ) -> Result<Self, VkError> {
-        let pipeline = ctx.compute_pipeline(&format!("{name}.comp"), None, &[])?;
-        let bytes: &[u8] = if values.is_empty() {
+        let with_maps = rows.stride > 1;
+        let pipeline = ctx.compute_pipeline(
+            &format!("{name}.comp"),
+            crate::vk::PushLayout::of::<GpuVoxelizePush>(),
+            &[(0, u32::from(with_maps))],
+        )?;
+        let bytes: &[u8] = if rows.vec4s.is_empty() {
             &[0; 16]
         } else {
-            bytemuck::cast_slice(values)
+            bytemuck::cast_slice(&rows.vec4s)
         };
         match capacity {
             Some(capacity) => {
-                let region = (capacity * std::mem::size_of::<[f32; 4]>()) as u64;
+                let region = (capacity * rows.stride * std::mem::size_of::<[f32; 4]>()) as u64;
                 ctx.create_buffer(&BufferDesc {
                     name: format!("{name} values (per frame slot)"),
                     size_bytes: region * MAX_FRAMES_IN_FLIGHT as u64,
@@ -479,9 +572,10 @@ impl OwnerValueWriter {
                         name,
                         pipeline,
                         values: buffer,
+                        with_maps,
                     };
                     for slot in 0..MAX_FRAMES_IN_FLIGHT {
-                        me.write_slot(slot, capacity, values);
+                        me.write_slot(slot, capacity, &rows);
                     }
                     me
                 })
@@ -496,27 +590,37 @@ impl OwnerValueWriter {
                     name,
                     pipeline,
                     values,
+                    with_maps,
                 }),
         }
     }
 
+    /// `vec4`s per triangle in [`Self::values`].
+    fn stride(&self) -> usize {
+        if self.with_maps {
+            4
+        } else {
+            1
+        }
+    }
+
     /// Writes frame slot `slot`'s region (of `capacity` triangles) of a per-slot buffer.
-    fn write_slot(&mut self, slot: usize, capacity: usize, values: &[[f32; 4]]) {
-        let region = capacity * std::mem::size_of::<[f32; 4]>();
-        let n = values.len().min(capacity);
+    fn write_slot(&mut self, slot: usize, capacity: usize, rows: &OwnerRows) {
+        let region = capacity * rows.stride * std::mem::size_of::<[f32; 4]>();
+        let n = rows.vec4s.len().min(capacity * rows.stride);
         if let Some(m) = self.values.mapped_mut() {
-            let bytes: &[u8] = bytemuck::cast_slice(&values[..n]);
+            let bytes: &[u8] = bytemuck::cast_slice(&rows.vec4s[..n]);
             m[slot * region..slot * region + bytes.len()].copy_from_slice(bytes);
         }
     }
 
-    /// Declares the pass: every voxel of `extent` with an owner in `owner` takes the owner's
-    /// value in `volume`, in the slots `gate` opens (each slot reads its own region of the
-    /// values when `animated`).
+    /// Declares the pass: every voxel of `extent` with an owner in `inp.owner` takes the
+    /// owner's value in `inp.volume` (with maps: sampled over its part of the voxel), in the
+    /// slots `gate` opens (each slot reads its own region of the values when `animated`).
     fn add_pass(
         &self,
         g: &mut RenderGraph,
-        (owner, volume): (ImageHandle, ImageHandle),
+        inp: OwnerInputs,
         animated: Option<&AnimatedTriangles>,
         gate: &Arc<SlotCondition>,
         extent: (u32, u32, u32),
@@ -524,20 +628,30 @@ impl OwnerValueWriter {
         let read = Access::StorageRead(Shader::Compute);
         let values = match animated {
             Some(a) => {
-                let region = (a.capacity * std::mem::size_of::<[f32; 4]>()) as u64;
+                let region = (a.capacity * self.stride() * std::mem::size_of::<[f32; 4]>()) as u64;
                 g.import_buffer_per_slot(&self.values, region, region, read)
             }
             None => g.import_buffer(&self.values, read),
         };
-        let pipe = *self.pipeline;
+        // Without maps the shader reads neither the maps nor the triangles (a specialization
+        // constant); the values stand in for the maps' bindings.
+        let (texels, table) = match inp.maps {
+            Some(m) if self.with_maps => m,
+            _ => (values, values),
+        };
+        let (pipe, push) = (*self.pipeline, inp.push);
         g.add_pass(self.name)
             .pipeline(&pipe)
             .bind(0, values, read)
-            .bind(1, owner, read)
-            .bind(2, volume, Access::StorageReadWrite(Shader::Compute))
+            .bind(1, inp.owner, read)
+            .bind(2, inp.volume, Access::StorageReadWrite(Shader::Compute))
+            .bind(3, inp.tris, read)
+            .bind(4, texels, read)
+            .bind(5, table, read)
             .when(Some(gate.clone()))
             .record(move |ctx| {
                 ctx.bind(&pipe);
+                ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
                 ctx.cmd
                     .dispatch(extent.0.div_ceil(8), extent.1.div_ceil(8), extent.2);
             });
@@ -552,6 +666,7 @@ fn value_volume(ctx: &Context, grid: &VoxelGrid, name: &str) -> Result<Image, Vk
         .with_usage(
             vk::ImageUsageFlags::STORAGE
                 | vk::ImageUsageFlags::SAMPLED
+                | vk::ImageUsageFlags::TRANSFER_SRC
                 | vk::ImageUsageFlags::TRANSFER_DST,
         );
     let image = ctx.create_image(&desc)?;
@@ -574,17 +689,20 @@ fn attribute_splits(grid: &VoxelGrid, tris: &[AttributeTriangle]) -> u32 {
     voxelize_splits(loads, ATTRIBUTE_GROUP_SIZE)
 }
 
-/// Every triangle of `scene` at `t_s` with its material's albedo, its material's emission
-/// ([`Material::voxel_emission`]: `Ke` × the mean of `map_Ke`) and its material's lobe
-/// ([`material_texel`]).
+/// A triangle's value for one owner-value pass and the maps that replace it per texel.
+type OwnerValue = ([f32; 4], GpuTriangleMaps);
+
+/// Every triangle of `scene` at `t_s` with its material's albedo, its material's emission and
+/// its material's lobe ([`material_texel`]), each with the triangle's [`GpuTriangleMaps`] for
+/// the maps `maps` samples (spaced `spacing_m`). The emission is `Ke` where `map_Ke` is
+/// sampled per texel (the pass multiplies), else [`Material::voxel_emission`] (`Ke` × the
+/// map's mean); the lobe holds the constants or means, which sampled maps replace.
 fn attribute_triangles(
     scene: &Scene,
     t_s: f32,
-) -> (
-    Vec<AttributeTriangle>,
-    Vec<TriangleEmission>,
-    Vec<TriangleMaterial>,
-) {
+    maps: MapUse,
+    spacing_m: f32,
+) -> (Vec<AttributeTriangle>, Vec<OwnerValue>, Vec<OwnerValue>) {
     let mut out = Vec::new();
     let mut emissions = Vec::new();
     let mut materials = Vec::new();
@@ -595,24 +713,35 @@ fn attribute_triangles(
         let m = object.transform_at(t_s);
         for (si, sub) in mesh.submeshes.iter().enumerate() {
             let material = object.materials.get(si).copied().unwrap_or(sub.material);
-            let (albedo, emission, lobe) = scene.materials.get(material).map_or(
-                (Vec3::splat(0.5), Vec3::ZERO, [0.0; 4]),
+            let (albedo, emission, lobe, map_ids) = scene.materials.get(material).map_or(
+                (Vec3::splat(0.5), Vec3::ZERO, [0.0; 4], [-1; 3]),
                 |m| {
-                    (
-                        m.albedo,
-                        m.voxel_emission(&scene.textures),
-                        material_texel(m, &scene.textures),
-                    )
+                    let ids = maps.maps_of(m);
+                    let emission = if ids[2] >= 0 {
+                        m.emission
+                    } else {
+                        m.voxel_emission(&scene.textures)
+                    };
+                    (m.albedo, emission, material_texel(m, &scene.textures), ids)
                 },
             );
             let range = sub.first_index as usize..(sub.first_index + sub.index_count) as usize;
             for t in mesh.indices[range].chunks_exact(3) {
-                out.push([0, 1, 2].map(|k| {
-                    let v = m.transform_point3(mesh.positions[t[k] as usize]);
-                    [v.x, v.y, v.z, albedo[k]]
-                }));
-                emissions.push(emission.extend(0.0).to_array());
-                materials.push(lobe);
+                let p = [0, 1, 2].map(|k| m.transform_point3(mesh.positions[t[k] as usize]));
+                out.push([0, 1, 2].map(|k| [p[k].x, p[k].y, p[k].z, albedo[k]]));
+                let row = if map_ids == [-1; 3] {
+                    GpuTriangleMaps::NONE
+                } else {
+                    let uv = [0, 1, 2].map(|k| {
+                        mesh.uvs
+                            .as_ref()
+                            .and_then(|uvs| uvs.get(t[k] as usize).copied())
+                            .unwrap_or(Vec2::ZERO)
+                    });
+                    GpuTriangleMaps::new(map_ids, p, uv, spacing_m)
+                };
+                emissions.push((emission.extend(0.0).to_array(), row));
+                materials.push((lobe, row));
             }
         }
     }
@@ -625,7 +754,7 @@ fn attribute_triangles(
         .zip(materials)
         .map(|((t, e), m)| (t, e, m))
         .collect();
-    all.sort_by_key(|(_, e, _)| e[..3] == [0.0; 3]);
+    all.sort_by_key(|(_, e, _)| e.0[..3] == [0.0; 3]);
     let mut tris = Vec::with_capacity(all.len());
     let mut emissions = Vec::with_capacity(all.len());
     let mut materials = Vec::with_capacity(all.len());
@@ -659,10 +788,12 @@ mod tests {
                     [[objects]]\nbuiltin = \"cube\"\nmaterial = { roughness = 0.9, \
                     emission_w_sr_m2 = [2, 4, 6] }\n";
         let mut scene = Scene::from_toml_str(text, Path::new("t.toml"), Path::new(".")).unwrap();
-        let plain = attribute_triangles(&scene, 0.0);
+        let none = MapUse::default();
+        let plain = attribute_triangles(&scene, 0.0, none, 0.01);
         // Without maps the voxelizer gets the constants.
-        assert!(plain.1.iter().all(|e| *e == [2.0, 4.0, 6.0, 0.0]));
-        assert!(plain.2.iter().all(|m| *m == [0.9, 0.0, 0.0, -1.0]));
+        assert!(plain.1.iter().all(|e| e.0 == [2.0, 4.0, 6.0, 0.0]));
+        assert!(plain.2.iter().all(|m| m.0 == [0.9, 0.0, 0.0, -1.0]));
+        assert!(plain.1.iter().all(|e| e.1 == GpuTriangleMaps::NONE));
 
         // Roughness texels 0 and 255 (linear): mean 0.5. Metalness 51 and 51: 0.2. Emission
         // sRGB texels 188 and 0: the mean of the decoded values, srgb_decode(188/255)/2 ≈
@@ -678,17 +809,30 @@ mod tests {
             metallic: Some(1),
             emission: Some(2),
         };
-        let (tris, emissions, materials) = attribute_triangles(&scene, 0.0);
+        let (tris, emissions, materials) = attribute_triangles(&scene, 0.0, none, 0.01);
         assert_eq!(tris.len(), plain.0.len());
         let glow = crate::eval::srgb_decode(188.0 / 255.0) / 2.0;
         let want = Vec3::new(2.0, 4.0, 6.0) * glow;
-        for e in &emissions {
+        for (e, _) in &emissions {
             assert!(Vec3::from_slice(&e[..3]).abs_diff_eq(want, 1e-6), "{e:?}");
         }
         let ggx = scene.materials[m].voxel_ggx(&scene.textures).unwrap();
         assert!((ggx.roughness - 0.5).abs() < 1e-6 && (ggx.metallic - 0.2).abs() < 1e-6);
         let lobe = [ggx.roughness, ggx.metallic, 0.0, -1.0];
-        assert!(materials.iter().all(|l| *l == lobe));
+        assert!(materials.iter().all(|l| l.0 == lobe));
+        // Per texel: the emission pass gets Ke (it multiplies by the sampled map) and every
+        // triangle its maps; the lobe keeps the means, which the samples replace.
+        let texel = MapUse {
+            emission: true,
+            lobe: true,
+        };
+        let (_, emissions, materials) = attribute_triangles(&scene, 0.0, texel, 0.01);
+        assert!(emissions
+            .iter()
+            .all(|(e, r)| *e == [2.0, 4.0, 6.0, 0.0] && r.maps == [0, 1, 2, 0]));
+        assert!(materials
+            .iter()
+            .all(|(l, r)| *l == lobe && r.maps == [0, 1, 2, 0]));
         // The G-buffer keeps the constants next to the maps (it samples the maps).
         assert_eq!(
             scene.materials[m].ggx,

@@ -272,7 +272,7 @@ impl VoxelDebugPass {
         let sampler = self.sampler.raw;
         let albedo = match &self.albedo {
             AlbedoSource::Volumes(v) => {
-                v.add_passes(g, |g, a, n| frame.add_attribute_passes(g, a, n))
+                v.add_passes(g, |g, volumes| frame.add_attribute_passes(g, volumes))
                     .albedo
             }
             AlbedoSource::Placeholder(image) => g.import_image(image, ATTRIBUTE_VOLUME_STATE),
@@ -310,7 +310,7 @@ impl AlbedoSource {
                 time_s,
                 grid,
                 frame.has_attribute_volumes(),
-                false,
+                super::attributes::ValueVolumes::default(),
             )?)));
         }
         // Two texels deep: `ImageDesc` makes a 3D image (the shader's sampler3D) only for

@@ -995,15 +995,17 @@ impl VoxelFrame {
     }
 
     /// Creates the albedo and normal volumes' atlas passes (Thiedemann 2010, §4.3.2) when the atlas
-    /// voxelizer is active, for a GI method that reads them; static objects are splatted now,
-    /// once. Returns whether the atlas writes the volumes (then
-    /// [`Self::add_attribute_passes`] declares the per-frame part). Objects that keep the
-    /// triangle voxelizer (OBJ sequences whose frames differ in topology) are left to the
-    /// caller's triangle attributes.
+    /// voxelizer is active, for a GI method that reads them, with the value volumes `values`
+    /// (emission, material and their maps); static objects are splatted now, once. Returns
+    /// whether the atlas writes the volumes (then [`Self::add_attribute_passes`] declares the
+    /// per-frame part). Objects that keep the triangle voxelizer (OBJ sequences whose frames
+    /// differ in topology) are left to the caller's triangle attributes. The first call
+    /// decides: later calls keep the passes it made (the GI method's, before a debug view's).
     pub fn enable_attribute_volumes(
         &mut self,
         ctx: &Context,
         scene: &Scene,
+        values: super::attributes::ValueVolumes,
     ) -> Result<bool, GpuVoxelError> {
         let grid = self.voxels.grid;
         let statics_once = !self.revoxelize_static;
@@ -1017,6 +1019,7 @@ impl VoxelFrame {
                 scene,
                 &grid,
                 statics_once,
+                values,
             )?;
             atlas.volumes = Some(v);
         }
@@ -1034,27 +1037,24 @@ impl VoxelFrame {
         self.atlas_moved && self.has_attribute_volumes()
     }
 
-    /// Declares `voxelize_atlas_volumes` and `voxelize_atlas_resolve` writing the imported
-    /// attribute volumes (see [`super::gpu_atlas_volumes`]); nothing without
+    /// Declares `voxelize_atlas_volumes` and the atlas resolves writing the imported attribute
+    /// volumes `v` (see [`super::gpu_atlas_volumes`]); nothing without
     /// [`Self::enable_attribute_volumes`]. Record in the same frames as [`Self::add_passes`].
     pub fn add_attribute_passes(
         &self,
         g: &mut RenderGraph,
-        albedo: ImageHandle,
-        normal: ImageHandle,
+        v: &super::attributes::AttributeHandles,
     ) {
         let Some(atlas) = &self.atlas else {
             return;
         };
-        let Some(v) = &atlas.volumes else {
+        let Some(volumes) = &atlas.volumes else {
             return;
         };
-        v.add_passes(
+        volumes.add_passes(
             g,
-            atlas,
-            &self.voxels.grid,
-            albedo,
-            normal,
+            (atlas, &self.voxels.grid),
+            v,
             self.revoxelize_static,
             self.gate.clone(),
         );

@@ -14,6 +14,14 @@
 //! - `voxelize_atlas_resolve` (compute): static sums + this frame's sums → the `RGBA8` albedo
 //!   and `RGBA8_SNORM` normal 3D volumes the path tracer samples; alpha = 1 exactly where a
 //!   point landed.
+//! - With value volumes ([`ValueVolumes`]: emitters, the path tracer's material volume) the
+//!   splat also sums (radiance, 1) of emitters' points and the material texels of Phong and
+//!   GGX points (the normal sums' w counting them) into one more target each, the PBR maps
+//!   sampled at each point ([`super::maps`]); `voxelize_atlas_emission` resolves the mean
+//!   radiance of the emitters' points (emitters own the voxels they share, as in the triangle
+//!   voxelizer), `voxelize_atlas_material` the mean texel of the lobe points where they are at
+//!   least half of the voxel's points (else Lambert). The triangle voxelizer takes the owner
+//!   triangle's value instead; both agree wherever one surface and one map value fill a voxel.
 //!
 //! # Why averaging, not the thesis's last writer
 //! The thesis keeps the last point drawn into a voxel (§4.3.2), which depends on the order of
@@ -27,8 +35,10 @@
 //! frame that re-voxelizes splats only the dynamic objects into transient layers, and the
 //! resolve adds both. Nothing records while nothing moves (the voxel frame's [`SlotGate`]).
 
+use super::attributes::{material_texel, AttributeHandles, ValueVolumes};
 use super::gpu::{GpuVoxelError, SlotGate};
 use super::gpu_atlas::{import_chunks, AtlasScene, FrameAt, GpuAtlasVoxelizePush, ModelAt};
+use super::maps::{GpuTriangleMaps, VoxelMaps};
 use super::VoxelGrid;
 use crate::graph::run_once;
 use crate::graph::{Access, BufferHandle, ImageHandle, Load, RenderGraph, Shader};
@@ -37,7 +47,7 @@ use crate::vk::{
     vk, Buffer, ComputePipeline, Context, GraphicsPipeline, GraphicsPipelineDesc, Image, ImageDesc,
     PipelineHandle, VkError,
 };
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use std::sync::Arc;
 
 /// Format of the per-voxel sums: f16 counts are exact up to 2048 points per voxel, far more
@@ -105,6 +115,10 @@ impl AttributeVolumes {
 pub struct AtlasVolumes {
     splat: GraphicsPipeline,
     resolve: ComputePipeline,
+    /// With an emission volume: `voxelize_atlas_emission`.
+    emission_resolve: Option<ComputePipeline>,
+    /// With a material volume: `voxelize_atlas_material`.
+    material_resolve: Option<ComputePipeline>,
     sampler: crate::vk::Sampler,
     /// Per instance (static instances first, then dynamic, as in [`AtlasScene`]) and per
     /// sequence frame (one for rigid objects): the frame's triangles in model space with
@@ -112,9 +126,16 @@ pub struct AtlasVolumes {
     /// `voxelize_attributes.comp`), indexed by the points' triangle index. Per frame because
     /// a deforming frame turns its faces (the normals follow).
     triangles: Vec<Vec<Buffer>>,
-    /// `(albedo sums, normal sums)` of the static instances, splatted once; absent when the
-    /// statics are splatted every frame (`revoxelize_static`) or there are none.
-    static_sums: Option<(Image, Image)>,
+    /// With value volumes, laid out like `triangles`: per triangle its emission, material
+    /// texel and [`GpuTriangleMaps`] ([`model_values`]).
+    values: Vec<Vec<Buffer>>,
+    /// The value volumes the splat sums and the maps it samples.
+    value_volumes: ValueVolumes,
+    /// The PBR maps the splat samples per texel, if any.
+    maps: Option<VoxelMaps>,
+    /// The static instances' sums, splatted once; absent when the statics are splatted every
+    /// frame (`revoxelize_static`) or there are none.
+    static_sums: Option<SumImages>,
     /// Without a slot gate (nothing ever moves) the volumes are resolved by the first frame:
     /// open in the slot of the first [`Self::prepare`], closed after.
     resolve_once: Arc<SlotGate>,
@@ -122,23 +143,46 @@ pub struct AtlasVolumes {
     resolved: bool,
 }
 
-/// A draw of one instance: per sequence frame its point chunks `(points, count)` and its
-/// triangles, and which frame and model matrix a slot uses.
+/// The persistent sum layers of the static instances (value sums only with their volume).
+struct SumImages {
+    albedo: Image,
+    normal: Image,
+    emission: Option<Image>,
+    material: Option<Image>,
+}
+
+/// Sum layers in one graph: the splat's color targets, in attachment order.
+#[derive(Clone, Copy)]
+struct Sums {
+    albedo: ImageHandle,
+    normal: ImageHandle,
+    emission: Option<ImageHandle>,
+    material: Option<ImageHandle>,
+}
+
+/// One sequence frame of a [`Splat`]: its point chunks `(points, count)`, triangles and values.
+type SplatFrame = (Vec<(BufferHandle, u32)>, BufferHandle, BufferHandle);
+
+/// A draw of one instance: per sequence frame its point chunks `(points, count)`, its
+/// triangles and its values (the triangles without value volumes), and which frame and model
+/// matrix a slot uses.
 struct Splat {
-    frames: Vec<(Vec<(BufferHandle, u32)>, BufferHandle)>,
+    frames: Vec<SplatFrame>,
     frame: FrameAt,
     model: ModelAt,
 }
 
 impl AtlasVolumes {
     /// Builds the pipelines and triangle attributes of `atlas`'s instances and, when
-    /// `statics_once`, splats the static instances once.
+    /// `statics_once`, splats the static instances once; `values`: also the emission and
+    /// material sums and their maps.
     pub fn new(
         ctx: &Context,
         atlas: &AtlasScene,
         scene: &Scene,
         grid: &VoxelGrid,
         statics_once: bool,
+        values: ValueVolumes,
     ) -> Result<Self, GpuVoxelError> {
         let mut desc = GraphicsPipelineDesc::fullscreen(
             "voxelize_atlas_volumes.vert",
@@ -147,25 +191,51 @@ impl AtlasVolumes {
         );
         desc.geometry = Some("voxelize_atlas_volumes.geom".into());
         desc.topology = vk::PrimitiveTopology::POINT_LIST;
-        desc.color_formats = vec![SUM_FORMAT, SUM_FORMAT];
+        let targets = 2 + usize::from(values.emission) + usize::from(values.material);
+        desc.color_formats = vec![SUM_FORMAT; targets];
         desc.push = crate::vk::PushLayout::of::<GpuAtlasVoxelizePush>();
+        desc.spec = vec![
+            (0, u32::from(values.emission)),
+            (1, u32::from(values.material)),
+            (2, u32::from(values.maps.any())),
+        ];
         let splat = ctx.graphics_pipeline_additive(&desc)?;
-        let resolve = ctx.compute_pipeline(
-            "voxelize_atlas_resolve.comp",
-            crate::vk::PushLayout::of::<GpuAtlasResolvePush>(),
-            &[],
-        );
+        let push = crate::vk::PushLayout::of::<GpuAtlasResolvePush>;
+        let resolve = ctx.compute_pipeline("voxelize_atlas_resolve.comp", push(), &[])?;
+        let emission_resolve = values
+            .emission
+            .then(|| ctx.compute_pipeline("voxelize_atlas_emission.comp", push(), &[]))
+            .transpose()?;
+        let material_resolve = values
+            .material
+            .then(|| ctx.compute_pipeline("voxelize_atlas_material.comp", push(), &[]))
+            .transpose()?;
         let mut me = Self {
             splat,
-            resolve: resolve?,
+            resolve,
+            emission_resolve,
+            material_resolve,
             sampler: ctx.create_sampler(vk::Filter::NEAREST, false)?,
             triangles: Vec::new(),
+            values: Vec::new(),
+            value_volumes: values,
+            maps: VoxelMaps::new(ctx, scene, values.maps)?,
             static_sums: None,
             resolve_once: Arc::new(SlotGate::default()),
             resolved: false,
         };
         me.init(ctx, atlas, scene, grid, statics_once)?;
         Ok(me)
+    }
+
+    /// Whether the splat sums the emission volume's values.
+    pub fn has_emission(&self) -> bool {
+        self.value_volumes.emission
+    }
+
+    /// Whether the splat sums the material volume's values.
+    pub fn has_material(&self) -> bool {
+        self.value_volumes.material
     }
 
     fn init(
@@ -186,62 +256,77 @@ impl AtlasVolumes {
                     Some(d.frames.iter().map(|&(m, _)| m).collect()),
                 )
             }));
+        let vv = self.value_volumes;
+        let with_values = vv.emission || vv.material;
+        // The atlas's texel size (`AtlasScene::new_chunked`): the points' spacing.
+        let texel_m = super::atlas::texel_size_for_voxel(grid.voxel_size_m().min_element());
+        let upload = |name: &str, bytes: &[u8]| {
+            let bytes: &[u8] = if bytes.is_empty() { &[0; 80] } else { bytes };
+            ctx.upload_buffer(name, bytes, vk::BufferUsageFlags::STORAGE_BUFFER)
+        };
         for (o, meshes) in objects {
-            let mut per_frame = Vec::new();
+            self.triangles.push(Vec::new());
+            self.values.push(Vec::new());
             for mesh in meshes.unwrap_or_default() {
                 let tris = model_triangles(scene, o, mesh);
-                let bytes: &[u8] = if tris.is_empty() {
-                    &[0; 48]
-                } else {
-                    bytemuck::cast_slice(&tris)
-                };
-                let b = ctx.upload_buffer(
-                    "atlas triangle attributes",
-                    bytes,
-                    vk::BufferUsageFlags::STORAGE_BUFFER,
-                );
-                match b {
-                    Ok(b) => per_frame.push(b),
-                    Err(e) => {
-                        self.triangles.push(per_frame);
-                        return Err(e.into());
+                let b = upload("atlas triangle attributes", bytemuck::cast_slice(&tris))?;
+                if let Some(per_frame) = self.triangles.last_mut() {
+                    per_frame.push(b);
+                }
+                if with_values {
+                    let rows = model_values(scene, o, mesh, vv, texel_m);
+                    let b = upload("atlas triangle values", bytemuck::cast_slice(&rows))?;
+                    if let Some(per_frame) = self.values.last_mut() {
+                        per_frame.push(b);
                     }
                 }
             }
-            self.triangles.push(per_frame);
         }
         if !(statics_once && atlas.has_static()) {
             return Ok(());
         }
         let ext = grid.extent_voxels();
-        let sums = |name: &str| {
-            ImageDesc::new_2d(name, SUM_FORMAT, ext.x, ext.y)
+        let zero = vk::ClearColorValue { float32: [0.0; 4] };
+        let resting = VOLUME_STATE.info().layout;
+        let sums = |name: &str| -> Result<Image, VkError> {
+            let desc = ImageDesc::new_2d(name, SUM_FORMAT, ext.x, ext.y)
                 .with_layers(ext.z)
                 .with_usage(
                     vk::ImageUsageFlags::COLOR_ATTACHMENT
                         | vk::ImageUsageFlags::SAMPLED
                         | vk::ImageUsageFlags::TRANSFER_DST,
-                )
+                );
+            let image = ctx.create_image(&desc)?;
+            ctx.clear_new_image(&image, zero, resting)?;
+            Ok(image)
         };
-        let zero = vk::ClearColorValue { float32: [0.0; 4] };
-        let resting = VOLUME_STATE.info().layout;
-        let albedo = ctx.create_image(&sums("atlas static albedo sums"))?;
-        let normal = ctx.create_image(&sums("atlas static normal sums"))?;
-        self.static_sums = Some((albedo, normal));
-        let Some((albedo, normal)) = &self.static_sums else {
-            return Ok(());
+        let images = SumImages {
+            albedo: sums("atlas static albedo sums")?,
+            normal: sums("atlas static normal sums")?,
+            emission: vv
+                .emission
+                .then(|| sums("atlas static emission sums"))
+                .transpose()?,
+            material: vv
+                .material
+                .then(|| sums("atlas static material sums"))
+                .transpose()?,
         };
-        ctx.clear_new_image(albedo, zero, resting)?;
-        ctx.clear_new_image(normal, zero, resting)?;
         let mut g = RenderGraph::new();
-        let targets = (
-            g.import_image(albedo, VOLUME_STATE),
-            g.import_image(normal, VOLUME_STATE),
-        );
+        let targets = import_sums(&mut g, &images);
+        self.static_sums = Some(images);
         let splats = self.splats(&mut g, atlas, true, false);
-        add_splat_pass(&mut g, *self.splat, grid, targets, splats, None);
+        let maps = self.import_maps(&mut g);
+        add_splat_pass(&mut g, *self.splat, grid, targets, (splats, maps), None);
         run_once(ctx, g)?;
         Ok(())
+    }
+
+    /// Imports the maps' texels and table for the splat's vertex shader.
+    fn import_maps(&self, g: &mut RenderGraph) -> Option<(BufferHandle, BufferHandle)> {
+        self.maps
+            .as_ref()
+            .map(|m| m.import(g, Access::StorageRead(Shader::Graphics)))
     }
 
     /// Imports the point and triangle buffers of the static and/or dynamic instances.
@@ -263,13 +348,19 @@ impl AtlasVolumes {
             .instances(statics, dynamics)
             .into_iter()
             .zip(self.triangles.iter().skip(first))
-            .filter(|(inst, _)| inst.frames.iter().any(|p| p.count > 0))
-            .map(|(inst, tris)| Splat {
+            .zip(self.values.iter().skip(first))
+            .filter(|((inst, _), _)| inst.frames.iter().any(|p| p.count > 0))
+            .map(|((inst, tris), values)| Splat {
                 frames: inst
                     .frames
                     .iter()
+                    .enumerate()
                     .zip(tris)
-                    .map(|(p, t)| (import_chunks(g, p, read), g.import_buffer(t, read)))
+                    .map(|((f, p), t)| {
+                        let t = g.import_buffer(t, read);
+                        let v = values.get(f).map_or(t, |v| g.import_buffer(v, read));
+                        (import_chunks(g, p, read), t, v)
+                    })
                     .collect(),
                 frame: inst.frame,
                 model: inst.model,
@@ -285,21 +376,21 @@ impl AtlasVolumes {
     }
 
     /// Declares this frame's `voxelize_atlas_volumes` (the dynamic instances, and the static
-    /// ones when `statics_per_frame`) and `voxelize_atlas_resolve` into `albedo` and `normal`
-    /// (imported [`AttributeVolumes`]). With a `gate`, both record only in the slots that
-    /// re-voxelize the bits; without one (nothing moves) the first frame resolves, once.
-    #[allow(clippy::too_many_arguments)]
+    /// ones when `statics_per_frame`), `voxelize_atlas_resolve` into the volumes `v`'s albedo
+    /// and normal (imported [`AttributeVolumes`]) and, with value volumes,
+    /// `voxelize_atlas_emission` / `voxelize_atlas_material` into theirs. With a `gate`, all
+    /// record only in the slots that re-voxelize the bits; without one (nothing moves) the
+    /// first frame resolves, once.
     pub fn add_passes(
         &self,
         g: &mut RenderGraph,
-        atlas: &AtlasScene,
-        grid: &VoxelGrid,
-        albedo: ImageHandle,
-        normal: ImageHandle,
+        (atlas, grid): (&AtlasScene, &VoxelGrid),
+        v: &AttributeHandles,
         statics_per_frame: bool,
         gate: Option<Arc<SlotGate>>,
     ) {
         let ext = grid.extent_voxels();
+        let vv = self.value_volumes;
         let splats = self.splats(g, atlas, statics_per_frame, true);
         let frame_sums = if splats.is_empty() {
             None
@@ -307,16 +398,17 @@ impl AtlasVolumes {
             let mut sums = |name: &str| {
                 g.create_image(ImageDesc::new_2d(name, SUM_FORMAT, ext.x, ext.y).with_layers(ext.z))
             };
-            let targets = (sums("atlas albedo sums"), sums("atlas normal sums"));
-            add_splat_pass(g, *self.splat, grid, targets, splats, gate.clone());
+            let targets = Sums {
+                albedo: sums("atlas albedo sums"),
+                normal: sums("atlas normal sums"),
+                emission: vv.emission.then(|| sums("atlas emission sums")),
+                material: vv.material.then(|| sums("atlas material sums")),
+            };
+            let maps = self.import_maps(g);
+            add_splat_pass(g, *self.splat, grid, targets, (splats, maps), gate.clone());
             Some(targets)
         };
-        let static_sums = self.static_sums.as_ref().map(|(a, n)| {
-            (
-                g.import_image(a, VOLUME_STATE),
-                g.import_image(n, VOLUME_STATE),
-            )
-        });
+        let static_sums = self.static_sums.as_ref().map(|s| import_sums(g, s));
         let Some(first) = static_sums.or(frame_sums) else {
             return;
         };
@@ -332,73 +424,168 @@ impl AtlasVolumes {
         let (pipe, sampler, c) = (*self.resolve, self.sampler.raw, Shader::Compute);
         // Without a slot gate (nothing ever moves) the first frame resolves, once.
         let gate = gate.unwrap_or_else(|| self.resolve_once.clone());
+        let dispatch = move |ctx: &crate::graph::PassContext<'_>, pipe| {
+            ctx.bind(&pipe);
+            ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
+            ctx.cmd
+                .dispatch(ext.x.div_ceil(8), ext.y.div_ceil(8), ext.z);
+        };
         g.add_pass("voxelize_atlas_resolve")
             .pipeline(&pipe)
-            .bind_sampled(0, first.0, sampler, c)
-            .bind_sampled(1, first.1, sampler, c)
-            .bind_sampled(2, second.0, sampler, c)
-            .bind_sampled(3, second.1, sampler, c)
-            .bind(4, albedo, Access::StorageWrite(c))
-            .bind(5, normal, Access::StorageWrite(c))
-            .when(Some(gate))
-            .record(move |ctx| {
-                ctx.bind(&pipe);
-                ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
-                ctx.cmd
-                    .dispatch(ext.x.div_ceil(8), ext.y.div_ceil(8), ext.z);
-            });
+            .bind_sampled(0, first.albedo, sampler, c)
+            .bind_sampled(1, first.normal, sampler, c)
+            .bind_sampled(2, second.albedo, sampler, c)
+            .bind_sampled(3, second.normal, sampler, c)
+            .bind(4, v.albedo, Access::StorageWrite(c))
+            .bind(5, v.normal, Access::StorageWrite(c))
+            .when(Some(gate.clone()))
+            .record(move |ctx| dispatch(ctx, pipe));
+        if let (Some(resolve), Some(a), Some(b), Some(out)) = (
+            &self.emission_resolve,
+            first.emission,
+            second.emission,
+            v.emission,
+        ) {
+            let pipe = **resolve;
+            g.add_pass("voxelize_atlas_emission")
+                .pipeline(&pipe)
+                .bind_sampled(0, a, sampler, c)
+                .bind_sampled(1, b, sampler, c)
+                .bind(2, out, Access::StorageWrite(c))
+                .when(Some(gate.clone()))
+                .record(move |ctx| dispatch(ctx, pipe));
+        }
+        if let (Some(resolve), Some(a), Some(b), Some(out)) = (
+            &self.material_resolve,
+            first.material,
+            second.material,
+            v.material,
+        ) {
+            let pipe = **resolve;
+            g.add_pass("voxelize_atlas_material")
+                .pipeline(&pipe)
+                .bind_sampled(0, first.albedo, sampler, c)
+                .bind_sampled(1, first.normal, sampler, c)
+                .bind_sampled(2, a, sampler, c)
+                .bind_sampled(3, second.albedo, sampler, c)
+                .bind_sampled(4, second.normal, sampler, c)
+                .bind_sampled(5, b, sampler, c)
+                .bind(6, out, Access::StorageWrite(c))
+                .when(Some(gate))
+                .record(move |ctx| dispatch(ctx, pipe));
+        }
     }
 }
 
-/// Declares `voxelize_atlas_volumes`: clears the sum layers `(albedo, normal)` and draws
-/// every splat's points into them, one draw per point-list chunk. Records only in slots `gate` leaves open.
+/// Imports persistent sum layers in their resting state.
+fn import_sums(g: &mut RenderGraph, s: &SumImages) -> Sums {
+    let mut import = |i: &Image| g.import_image(i, VOLUME_STATE);
+    Sums {
+        albedo: import(&s.albedo),
+        normal: import(&s.normal),
+        emission: s.emission.as_ref().map(&mut import),
+        material: s.material.as_ref().map(&mut import),
+    }
+}
+
+/// Declares `voxelize_atlas_volumes`: clears the sum layers `sums` and draws every splat's
+/// points into them, one draw per point-list chunk, sampling the maps' `(texels, table)` when
+/// given. Records only in slots `gate` leaves open.
 fn add_splat_pass(
     g: &mut RenderGraph,
     pipe: PipelineHandle,
     grid: &VoxelGrid,
-    (albedo, normal): (ImageHandle, ImageHandle),
-    splats: Vec<Splat>,
+    sums: Sums,
+    (splats, maps): (Vec<Splat>, Option<(BufferHandle, BufferHandle)>),
     gate: Option<Arc<SlotGate>>,
 ) {
     let read = Access::StorageRead(Shader::Graphics);
-    let (points, tris): (Vec<BufferHandle>, Vec<BufferHandle>) = splats
-        .iter()
-        .flat_map(|s| &s.frames)
-        .flat_map(|(chunks, t)| chunks.iter().map(move |&(p, _)| (p, *t)))
-        .unzip();
+    let mut points = Vec::new();
+    let mut tris = Vec::new();
+    let mut values = Vec::new();
+    for (chunks, t, v) in splats.iter().flat_map(|s| &s.frames) {
+        for &(p, _) in chunks {
+            points.push(p);
+            tris.push(*t);
+            values.push(*v);
+        }
+    }
     let grid = *grid;
     // Plain attachment writes: the pass clears on load, so blending reads only what the pass
     // itself wrote, never the contents of an earlier pass. The viewport is the grid's x,y
     // resolution (the sums' extent): a point's raster position is its column.
-    g.add_pass("voxelize_atlas_volumes")
+    let mut pass = g
+        .add_pass("voxelize_atlas_volumes")
         .pipeline(&pipe)
         .bind_one_of(0, points, read)
-        .bind_one_of(1, tris, read)
-        .color(albedo, Load::Clear([0.0; 4]))
-        .color(normal, Load::Clear([0.0; 4]))
-        .when(gate)
-        .record(move |ctx| {
-            ctx.begin_rendering();
-            for splat in &splats {
-                let f = splat.frame.at(ctx.slot);
-                let Some((chunks, tris)) = splat.frames.get(f).or(splat.frames.first()) else {
+        .bind_one_of(1, tris.clone(), read)
+        .bind_one_of(2, values, read);
+    // Without maps the shader never reads bindings 3 and 4: the triangles stand in.
+    pass = match maps {
+        Some((texels, table)) => pass.bind(3, texels, read).bind(4, table, read),
+        None => pass
+            .bind_one_of(3, tris.clone(), read)
+            .bind_one_of(4, tris, read),
+    };
+    pass = pass
+        .color(sums.albedo, Load::Clear([0.0; 4]))
+        .color(sums.normal, Load::Clear([0.0; 4]));
+    for s in [sums.emission, sums.material].into_iter().flatten() {
+        pass = pass.color(s, Load::Clear([0.0; 4]));
+    }
+    let with_maps = maps.is_some();
+    pass.when(gate).record(move |ctx| {
+        ctx.begin_rendering();
+        for splat in &splats {
+            let f = splat.frame.at(ctx.slot);
+            let Some((chunks, tris, values)) = splat.frames.get(f).or(splat.frames.first()) else {
+                continue;
+            };
+            let model = splat.model.at(ctx.slot);
+            // The chunks in list order: blending sums in primitive order across draws
+            // too, so the sums equal one draw of the whole list.
+            for &(points, count) in chunks {
+                if count == 0 {
                     continue;
-                };
-                let model = splat.model.at(ctx.slot);
-                // The chunks in list order: blending sums in primitive order across draws
-                // too, so the sums equal one draw of the whole list.
-                for &(points, count) in chunks {
-                    if count == 0 {
-                        continue;
-                    }
-                    let push = GpuAtlasVoxelizePush::new(&grid, model, (0, 0), count);
-                    ctx.bind_with(&pipe, &[(0, points), (1, *tris)]);
-                    ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
-                    ctx.cmd.draw(count, 1);
                 }
+                let push = GpuAtlasVoxelizePush::new(&grid, model, (0, 0), count);
+                let chosen = [
+                    (0, points),
+                    (1, *tris),
+                    (2, *values),
+                    (3, *tris),
+                    (4, *tris),
+                ];
+                let n = if with_maps { 3 } else { 5 };
+                ctx.bind_with(&pipe, &chosen[..n]);
+                ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
+                ctx.cmd.draw(count, 1);
             }
-            ctx.cmd.end_rendering();
-        });
+        }
+        ctx.cmd.end_rendering();
+    });
+}
+
+/// The material index of every triangle of `mesh` as object `object` draws it (its material
+/// overrides first, as the renderer and the triangle voxelizer resolve them).
+fn triangle_materials(
+    scene: &Scene,
+    object: usize,
+    mesh: &crate::scene::Mesh,
+) -> Vec<Option<usize>> {
+    let mut out = vec![None; mesh.indices.len() / 3];
+    let Some(o) = scene.objects.get(object) else {
+        return out;
+    };
+    for (si, sub) in mesh.submeshes.iter().enumerate() {
+        let material = o.materials.get(si).copied().unwrap_or(sub.material);
+        let first = sub.first_index as usize / 3;
+        let end = (first + sub.index_count as usize / 3).min(out.len());
+        for slot in out.get_mut(first..end).into_iter().flatten() {
+            *slot = Some(material);
+        }
+    }
+    out
 }
 
 /// Object `object`'s triangles of mesh `mesh` (its mesh, or one of its sequence frames) in
@@ -406,25 +593,15 @@ fn add_splat_pass(
 /// object's material overrides first, as the renderer and `gi::attribute_triangles` resolve
 /// them). Triangle i is the atlas's triangle i.
 fn model_triangles(scene: &Scene, object: usize, mesh: usize) -> Vec<[[f32; 4]; 3]> {
-    let Some(o) = scene.objects.get(object) else {
-        return Vec::new();
-    };
     let Some(mesh) = scene.meshes.get(mesh) else {
         return Vec::new();
     };
-    let mut albedo = vec![Vec3::splat(0.5); mesh.indices.len() / 3];
-    for (si, sub) in mesh.submeshes.iter().enumerate() {
-        let material = o.materials.get(si).copied().unwrap_or(sub.material);
-        let a = scene
-            .materials
-            .get(material)
-            .map_or(Vec3::splat(0.5), |m| m.albedo);
-        let first = sub.first_index as usize / 3;
-        let end = (first + sub.index_count as usize / 3).min(albedo.len());
-        for slot in albedo.get_mut(first..end).into_iter().flatten() {
-            *slot = a;
-        }
-    }
+    let albedo = triangle_materials(scene, object, mesh)
+        .into_iter()
+        .map(|m| {
+            m.and_then(|m| scene.materials.get(m))
+                .map_or(Vec3::splat(0.5), |m| m.albedo)
+        });
     mesh.indices
         .chunks_exact(3)
         .zip(albedo)
@@ -437,6 +614,72 @@ fn model_triangles(scene: &Scene, object: usize, mesh: usize) -> Vec<[[f32; 4]; 
                     .unwrap_or(Vec3::ZERO);
                 [p.x, p.y, p.z, a[k]]
             })
+        })
+        .collect()
+}
+
+/// The values of [`model_triangles`]'s triangles for the value volumes `vv`, five `vec4`s
+/// each (`voxelize_atlas_volumes.vert`): emission (`Ke` where `map_Ke` is sampled, else `Ke` ×
+/// the map's mean; w 1 for an emissive material), the material texel ([`material_texel`]),
+/// then the triangle's [`GpuTriangleMaps`] for points `texel_m` apart (the level of detail
+/// comes from the triangle's size in the world: the object's transform at time 0).
+fn model_values(
+    scene: &Scene,
+    object: usize,
+    mesh: usize,
+    vv: ValueVolumes,
+    texel_m: f32,
+) -> Vec<[[f32; 4]; 5]> {
+    let (Some(o), Some(mesh)) = (scene.objects.get(object), scene.meshes.get(mesh)) else {
+        return Vec::new();
+    };
+    let model = o.transform_at(0.0);
+    let materials = triangle_materials(scene, object, mesh);
+    mesh.indices
+        .chunks_exact(3)
+        .zip(materials)
+        .map(|(t, m)| {
+            let Some(m) = m.and_then(|m| scene.materials.get(m)) else {
+                return [
+                    [0.0; 4],
+                    [0.0; 4],
+                    [0.0; 4],
+                    [0.0; 4],
+                    GpuTriangleMaps::NONE.to_vec4s()[2],
+                ];
+            };
+            let ids = vv.maps.maps_of(m);
+            let emission = if ids[2] >= 0 {
+                m.emission
+            } else {
+                m.voxel_emission(&scene.textures)
+            };
+            let flag = if m.is_emissive() { 1.0 } else { 0.0 };
+            let row = if ids == [-1; 3] {
+                GpuTriangleMaps::NONE
+            } else {
+                let vertex = |k: usize| t[k] as usize;
+                let p = [0, 1, 2].map(|k| {
+                    model.transform_point3(
+                        mesh.positions.get(vertex(k)).copied().unwrap_or(Vec3::ZERO),
+                    )
+                });
+                let uv = [0, 1, 2].map(|k| {
+                    mesh.uvs
+                        .as_ref()
+                        .and_then(|uvs| uvs.get(vertex(k)).copied())
+                        .unwrap_or(Vec2::ZERO)
+                });
+                GpuTriangleMaps::new(ids, p, uv, texel_m)
+            };
+            let [uv01, uv2_lod, maps] = row.to_vec4s();
+            [
+                emission.extend(flag).to_array(),
+                material_texel(m, &scene.textures),
+                uv01,
+                uv2_lod,
+                maps,
+            ]
         })
         .collect()
 }

@@ -34,7 +34,10 @@
 //!   `voxelize_atlas`), selected by [`gpu::Voxelizer::Atlas`].
 //! - [`gpu_atlas_volumes`]: albedo and normal volumes from the same atlas points by layered
 //!   rendering (`voxelize_atlas_volumes`, `voxelize_atlas_resolve`), for the GI methods that
-//!   read more than occupancy.
+//!   read more than occupancy; with emitters or a material volume also the emission and
+//!   material volumes (`voxelize_atlas_emission`, `voxelize_atlas_material`).
+//! - [`maps`]: the MTL PBR maps (`map_Pr`, `map_Pm`, `map_Ke`) sampled per texel by both
+//!   voxelizers' emission and material volumes.
 //! - [`gpu_atlas_raster`]: the thesis's raster bit pass (`voxelize_atlas_bits`, logicOp OR),
 //!   measured against the compute pass by `voxgi bench voxelize`.
 //! - [`ray_mask`]: the 128×128 ray-mask LUT (thesis §5.3.2, Fig. 16) and single-bit LUT (§4.3.1, Fig. 12).
@@ -52,6 +55,7 @@ pub mod gpu_atlas_raster;
 pub mod gpu_atlas_volumes;
 pub mod gpu_rays;
 pub mod grid;
+pub mod maps;
 pub mod ray_mask;
 pub mod traverse;
 pub mod voxelize;
