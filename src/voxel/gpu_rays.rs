@@ -90,7 +90,10 @@ impl RayMethod {
 pub struct RayBatch {
     pub method: RayMethod,
     pub hits: Vec<HitResult>,
+    /// Median of `gpu_ms_runs`.
     pub gpu_ms: f64,
+    /// The pass's GPU time in each timed run.
+    pub gpu_ms_runs: Vec<f64>,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -150,6 +153,19 @@ impl VoxelRayCaster {
         rays: &[GpuRay],
         methods: &[RayMethod],
     ) -> Result<Vec<RayBatch>, RayCastError> {
+        self.cast_timed(ctx, rays, methods, 1)
+    }
+
+    /// [`Self::cast`] timed over `runs` runs of the whole frame (all methods interleaved, so
+    /// a load that comes and goes on the machine touches each alike), after one untimed
+    /// warm-up run when `runs > 1`. Every batch reports the median and each run's GPU time.
+    pub fn cast_timed(
+        &self,
+        ctx: &Context,
+        rays: &[GpuRay],
+        methods: &[RayMethod],
+        runs: u32,
+    ) -> Result<Vec<RayBatch>, RayCastError> {
         if rays.is_empty() {
             return Err(RayCastError::NoRays);
         }
@@ -167,19 +183,28 @@ impl VoxelRayCaster {
                 location: MemoryLocation::GpuToCpu,
             })?);
         }
-        let out = self.run(ctx, &ray_buf, &results, rays.len() as u32, methods);
-        out.map(|times| {
-            methods
-                .iter()
-                .zip(&results)
-                .zip(times)
-                .map(|((m, buf), gpu_ms)| RayBatch {
-                    method: *m,
-                    hits: read_hits(buf, rays.len()),
-                    gpu_ms,
-                })
-                .collect()
-        })
+        let count = rays.len() as u32;
+        if runs > 1 {
+            self.run(ctx, &ray_buf, &results, count, methods)?;
+        }
+        let mut times = vec![Vec::new(); methods.len()];
+        for _ in 0..runs.max(1) {
+            let t = self.run(ctx, &ray_buf, &results, count, methods)?;
+            for (all, ms) in times.iter_mut().zip(t) {
+                all.push(ms);
+            }
+        }
+        Ok(methods
+            .iter()
+            .zip(&results)
+            .zip(times)
+            .map(|((m, buf), gpu_ms_runs)| RayBatch {
+                method: *m,
+                hits: read_hits(buf, rays.len()),
+                gpu_ms: crate::stats::median(&gpu_ms_runs),
+                gpu_ms_runs,
+            })
+            .collect())
     }
 
     fn run(
@@ -203,7 +228,7 @@ impl VoxelRayCaster {
             self.dims.z as i32,
             self.max_level as i32,
         ];
-        for (m, buf) in methods.iter().zip(results) {
+        for (i, (m, buf)) in methods.iter().zip(results).enumerate() {
             let out = g.import_buffer(buf, Access::HostRead);
             let (mode, start_level, max_iterations, marching_samples) = match *m {
                 RayMethod::Hierarchical(p) => (0, p.start_level, p.max_iterations, 0),
@@ -220,7 +245,8 @@ impl VoxelRayCaster {
                 marching_samples,
                 _pad: [0; 3],
             };
-            g.add_pass(&format!("voxel_rays[{}]", m.name()))
+            // The index keeps names unique when a method repeats with other settings.
+            g.add_pass(&format!("voxel_rays[{i}: {}]", m.name()))
                 .pipeline(&pipe)
                 .bind(0, columns, read)
                 .bind(1, levels, read)
