@@ -239,12 +239,17 @@ VxHit voxel_first_hit(ivec3 dims, uint max_level, vec3 origin, vec3 dir, float t
         }
         if (ends_here) return vx_miss(origin, steps, false);
         t = max(t, t_exit);
-        if (tx == t_exit) cx = r.d.x > 0.0 ? hx : lx - 1;
-        else cx = clamp(vx_cell_at(r, 0, t, false), lx, hx - 1);
-        if (ty == t_exit) cy = r.d.y > 0.0 ? hy : ly - 1;
-        else cy = clamp(vx_cell_at(r, 1, t, false), ly, hy - 1);
-        if (cx < 0 || cy < 0 || cx >= r.dims.x || cy >= r.dims.y) return vx_miss(origin, steps, false);
-        level = min(level + 1u, max_level);
+        int nx, ny;
+        if (tx == t_exit) nx = r.d.x > 0.0 ? hx : lx - 1;
+        else nx = clamp(vx_cell_at(r, 0, t, false), lx, hx - 1);
+        if (ty == t_exit) ny = r.d.y > 0.0 ? hy : ly - 1;
+        else ny = clamp(vx_cell_at(r, 1, t, false), ly, hy - 1);
+        if (nx < 0 || ny < 0 || nx >= r.dims.x || ny >= r.dims.y) return vx_miss(origin, steps, false);
+        // One level coarser only if the step left the parent box (see the CPU twin).
+        uint up = level + 1u;
+        if (up <= max_level && ((nx >> up) != (cx >> up) || (ny >> up) != (cy >> up))) level = up;
+        cx = nx;
+        cy = ny;
     }
     return vx_miss(origin, steps, true);
 }

@@ -368,7 +368,8 @@ fn point_query(bits: &BitGrid, origin: Vec3, v: IVec3, t: f32, p: Vec3) -> HitRe
 /// First hit along `origin + t·dir`, `t ∈ [0, t_max]`, by hierarchical traversal of the OR
 /// mip hierarchy (thesis §5.3.2, Fig. 17): at the current level take the column box the ray is
 /// in, AND the ray mask of the segment inside it with the column; empty → step into the next
-/// column and go one level coarser; non-empty → one level finer; non-empty at level 0 → hit.
+/// column, one level coarser if that column lies in another parent box; non-empty → one level
+/// finer; non-empty at level 0 → hit.
 pub fn first_hit_hierarchical(
     h: &BitHierarchy,
     origin: Vec3,
@@ -421,7 +422,7 @@ pub fn first_hit_hierarchical(
             return HitResult::miss(origin, steps, false);
         }
         t = t.max(t_exit);
-        cx = if tx == t_exit {
+        let nx = if tx == t_exit {
             if ray.d.x > 0.0 {
                 hx
             } else {
@@ -430,7 +431,7 @@ pub fn first_hit_hierarchical(
         } else {
             ray.cell_at(0, t, false).clamp(lx, hx - 1)
         };
-        cy = if ty == t_exit {
+        let ny = if ty == t_exit {
             if ray.d.y > 0.0 {
                 hy
             } else {
@@ -439,10 +440,18 @@ pub fn first_hit_hierarchical(
         } else {
             ray.cell_at(1, t, false).clamp(ly, hy - 1)
         };
-        if cx < 0 || cy < 0 || cx >= ray.dims.x || cy >= ray.dims.y {
+        if nx < 0 || ny < 0 || nx >= ray.dims.x || ny >= ray.dims.y {
             return HitResult::miss(origin, steps, false);
         }
-        level = (level + 1).min(max_level);
+        // One level coarser only if the step left the parent box. Inside it, the parent is
+        // the box the traversal came down from (it holds set bits ahead, so testing it again
+        // mostly hits and costs one more descent) or one whose earlier part was just cleared
+        // at this level; either way the next sibling is the cheaper test.
+        let up = level + 1;
+        if up <= max_level && ((nx >> up) != (cx >> up) || (ny >> up) != (cy >> up)) {
+            level = up;
+        }
+        (cx, cy) = (nx, ny);
     }
     HitResult::miss(origin, steps, true)
 }
