@@ -240,6 +240,60 @@ impl Ray {
         c
     }
 
+    /// [`Self::cell_at`] at `t` both ways, `(non-strict, strict)`, from one estimate and one
+    /// pair of boundary parameters: the depth cell a segment ends in (strict at a column
+    /// exit) and the one the next segment starts in (non-strict) share them.
+    #[inline]
+    fn cells_at(&self, i: usize, t: f32) -> (i32, i32) {
+        let d = self.d[i];
+        if d == 0.0 {
+            let c = self.o[i].floor() as i32;
+            return (c, c);
+        }
+        let step = if d > 0.0 { 1 } else { -1 };
+        let c = (self.o[i] + t * d).floor() as i32;
+        let e = self.enter_t(i, c);
+        let e_next = self.enter_t(i, c + step);
+        let loose = if e > t {
+            c - step
+        } else if e_next <= t {
+            c + step
+        } else {
+            c
+        };
+        let strict = if e >= t {
+            c - step
+        } else if e_next < t {
+            c + step
+        } else {
+            c
+        };
+        (loose, strict)
+    }
+
+    /// The half of the box `[lo, hi)` along axis `i` (halves `half` wide) that holds the ray
+    /// at `t`: `lo + half` or `lo`. The same decision as `cell_at(i, t, false) ≥ lo + half`
+    /// (the cell entered at or before `t` lies beyond the middle plane iff the ray has crossed
+    /// it by `t`), from one boundary parameter; an upper half outside the grid (odd sizes)
+    /// is never chosen, as clamping the cell into the box would not.
+    #[inline]
+    fn half_at(&self, i: usize, t: f32, lo: i32, hi: i32, half: i32) -> i32 {
+        let mid = lo + half;
+        let upper = if self.d[i] > 0.0 {
+            boundary_t(mid as f32, self.o[i], self.inv[i]) <= t
+        } else if self.d[i] < 0.0 {
+            // Going down, the ray enters cell mid − 1 through plane `mid`.
+            !(boundary_t(mid as f32, self.o[i], self.inv[i]) <= t)
+        } else {
+            self.o[i].floor() as i32 >= mid
+        };
+        if upper && mid < hi {
+            mid
+        } else {
+            lo
+        }
+    }
+
     /// Parameter where the ray leaves `[lo, hi)` along axis `i`; `+inf` if parallel.
     #[inline]
     fn exit_t(&self, i: usize, lo: i32, hi: i32) -> f32 {
@@ -295,14 +349,14 @@ fn first_in_range(level: &BitGrid, x: u32, y: u32, k_in: u32, k_out: u32) -> Opt
     None
 }
 
-/// Depth range `(k_in, k_out)` in ray order of the segment `[t_in, t_out]` within a column,
-/// clamped to the grid; `None` if the segment covers no depth cell (possible only for a
-/// zero-length segment). `end_inclusive`: `t_out` is the ray's end (the cell at `t_out` is
-/// visited) rather than a column exit (that cell belongs to the next column).
+/// Depth range `(k_in, k_out)` in ray order of a segment within a column, clamped to the grid,
+/// from the depth cells at its ends: `k_in` the cell at its start (non-strict), `k_out` the
+/// cell at its end (strict at a column exit, whose cell belongs to the next column;
+/// non-strict at the ray's end, which is visited). `None` if the segment covers no depth cell
+/// (possible only for a zero-length segment).
 #[inline]
-fn depth_range(ray: &Ray, t_in: f32, t_out: f32, end_inclusive: bool) -> Option<(u32, u32)> {
+fn depth_range(ray: &Ray, k_in: i32, k_out: i32) -> Option<(u32, u32)> {
     let last = ray.dims.z - 1;
-    let k_in = ray.cell_at(2, t_in, false);
     // Past the far depth face already: the segment is the single point where the ray leaves
     // the grid through it (its end), outside the half-open grid.
     if (ray.d.z > 0.0 && k_in > last) || (ray.d.z < 0.0 && k_in < 0) {
@@ -310,7 +364,7 @@ fn depth_range(ray: &Ray, t_in: f32, t_out: f32, end_inclusive: bool) -> Option<
     }
     // Otherwise clamping only undoes rounding of the entry point / the end on the far face.
     let k_in = k_in.clamp(0, last);
-    let k_out = ray.cell_at(2, t_out, !end_inclusive).clamp(0, last);
+    let k_out = k_out.clamp(0, last);
     let empty = if ray.d.z >= 0.0 {
         k_out < k_in
     } else {
@@ -385,9 +439,11 @@ pub fn first_hit_hierarchical(
     };
     let max_level = h.max_level();
     let mut level = params.start_level.min(max_level);
-    // Level-0 column containing the ray at parameter `t`.
+    // The column containing the ray at parameter `t`, exact to the current level (its lower
+    // bits are refined on the way down), and the depth cell at `t`.
     let start = start_cell(&ray);
     let (mut cx, mut cy) = (start.x, start.y);
+    let mut k_t = ray.cell_at(2, 0.0, false);
     let mut t = 0.0f32;
     let mut steps = 0u32;
     while steps < params.max_iterations {
@@ -403,7 +459,9 @@ pub fn first_hit_hierarchical(
         let t_exit = tx.min(ty);
         let ends_here = t_exit > ray.t_end;
         let t_out = if ends_here { ray.t_end } else { t_exit };
-        if let Some((k_in, k_out)) = depth_range(&ray, t, t_out, ends_here) {
+        let (k_next, k_before) = ray.cells_at(2, t_out);
+        let k_out = if ends_here { k_next } else { k_before };
+        if let Some((k_in, k_out)) = depth_range(&ray, k_t, k_out) {
             let lvl = h.level(level);
             let (x, y) = ((cx >> level) as u32, (cy >> level) as u32);
             if let Some(k) = first_in_range(lvl, x, y, k_in, k_out) {
@@ -411,8 +469,12 @@ pub fn first_hit_hierarchical(
                     let v = IVec3::new(cx, cy, k as i32);
                     return ray.hit(v, hit_t(&ray, t, k_in, k), steps);
                 }
-                // Possible hit somewhere in this box: refine, same position.
+                // Possible hit somewhere in this box: refine to the quarter holding the ray
+                // at `t`, same position.
                 level -= 1;
+                let half = 1i32 << level;
+                cx = ray.half_at(0, t, lx, hx, half);
+                cy = ray.half_at(1, t, ly, hy, half);
                 continue;
             }
         }
@@ -421,7 +483,11 @@ pub fn first_hit_hierarchical(
         if ends_here {
             return HitResult::miss(origin, steps, false);
         }
-        t = t.max(t_exit);
+        if t_exit >= t {
+            t = t_exit;
+            k_t = k_next;
+        }
+        // The axis not crossed stays in this box's range: exact to this level, as needed.
         let nx = if tx == t_exit {
             if ray.d.x > 0.0 {
                 hx
@@ -429,7 +495,7 @@ pub fn first_hit_hierarchical(
                 lx - 1
             }
         } else {
-            ray.cell_at(0, t, false).clamp(lx, hx - 1)
+            cx
         };
         let ny = if ty == t_exit {
             if ray.d.y > 0.0 {
@@ -438,7 +504,7 @@ pub fn first_hit_hierarchical(
                 ly - 1
             }
         } else {
-            ray.cell_at(1, t, false).clamp(ly, hy - 1)
+            cy
         };
         if nx < 0 || ny < 0 || nx >= ray.dims.x || ny >= ray.dims.y {
             return HitResult::miss(origin, steps, false);
