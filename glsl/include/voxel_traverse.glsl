@@ -92,9 +92,8 @@ int vx_half_at(VxRay r, int i, float t, int lo, int hi, int half_) {
 }
 
 float vx_exit_t(VxRay r, int i, int lo, int hi) {
-    if (r.d[i] > 0.0) return vx_boundary_t(float(hi), r.o[i], r.inv[i]);
-    if (r.d[i] < 0.0) return vx_boundary_t(float(lo), r.o[i], r.inv[i]);
-    return VX_INF;
+    if (r.d[i] == 0.0) return VX_INF;
+    return vx_boundary_t(r.d[i] > 0.0 ? float(hi) : float(lo), r.o[i], r.inv[i]);
 }
 
 VxHit vx_make_hit(VxRay r, ivec3 v, float t, uint steps) {
@@ -242,6 +241,10 @@ VxHit voxel_first_hit(ivec3 dims, uint max_level, vec3 origin, vec3 dir, float t
     int k_t = vx_cell_at(r, 2, 0.0, false);
     float t = 0.0;
     uint steps = 0u;
+    // The loop only decides; the hit or miss is built once after it (on a SIMD device every
+    // lane would otherwise pay for building it on every iteration).
+    bool done = false, hit = false;
+    uint hit_k = 0u, hit_k_in = 0u;
     while (steps < max_iterations) {
         steps += 1u;
         int size = 1 << level;
@@ -257,7 +260,12 @@ VxHit voxel_first_hit(ivec3 dims, uint max_level, vec3 origin, vec3 dir, float t
         if (vx_depth_range(r, k_t, ends_here ? kk.x : kk.y, k_in, k_out)) {
             uint k;
             if (vx_first_in_range(level, cx >> level, cy >> level, k_in, k_out, k)) {
-                if (level == 0u) return vx_make_hit(r, ivec3(cx, cy, int(k)), vx_hit_t(r, t, k_in, k), steps);
+                if (level == 0u) {
+                    done = hit = true;
+                    hit_k = k;
+                    hit_k_in = k_in;
+                    break;
+                }
                 level -= 1u;
                 int half_ = 1 << level;
                 cx = vx_half_at(r, 0, t, lx, hx, half_);
@@ -265,21 +273,28 @@ VxHit voxel_first_hit(ivec3 dims, uint max_level, vec3 origin, vec3 dir, float t
                 continue;
             }
         }
-        if (ends_here) return vx_miss(origin, steps, false);
+        if (ends_here) {
+            done = true;
+            break;
+        }
         if (t_exit >= t) {
             t = t_exit;
             k_t = kk.x;
         }
         int nx = tx == t_exit ? (r.d.x > 0.0 ? hx : lx - 1) : cx;
         int ny = ty == t_exit ? (r.d.y > 0.0 ? hy : ly - 1) : cy;
-        if (nx < 0 || ny < 0 || nx >= r.dims.x || ny >= r.dims.y) return vx_miss(origin, steps, false);
+        if (nx < 0 || ny < 0 || nx >= r.dims.x || ny >= r.dims.y) {
+            done = true;
+            break;
+        }
         // One level coarser only if the step left the parent box (see the CPU twin).
         uint up = level + 1u;
         if (up <= max_level && ((nx >> up) != (cx >> up) || (ny >> up) != (cy >> up))) level = up;
         cx = nx;
         cy = ny;
     }
-    return vx_miss(origin, steps, true);
+    if (hit) return vx_make_hit(r, ivec3(cx, cy, int(hit_k)), vx_hit_t(r, t, hit_k_in, hit_k), steps);
+    return vx_miss(origin, steps, !done);
 }
 
 // Whether the segment a -> b (voxel space) is free of set voxels (both end voxels count:

@@ -60,6 +60,9 @@ pub struct MethodResult {
     pub gpu_ms: f64,
     pub gpu_ms_min: f64,
     pub gpu_ms_max: f64,
+    /// Median CPU time of the process over the runs (lavapipe: the work itself, less
+    /// disturbed by other load than the wall-clock GPU time); `None` where not measured.
+    pub cpu_ms: Option<f64>,
     pub rays_per_s: f64,
     pub mean_steps: f64,
     /// Share of rays whose hit/miss agrees with the hierarchical test.
@@ -292,6 +295,7 @@ pub fn bench_traverse(
                 gpu_ms: b.gpu_ms,
                 gpu_ms_min: runs.iter().copied().fold(f64::INFINITY, f64::min),
                 gpu_ms_max: runs.iter().copied().fold(0.0, f64::max),
+                cpu_ms: (!b.cpu_ms_runs.is_empty()).then(|| crate::stats::median(&b.cpu_ms_runs)),
                 rays_per_s: rays.len() as f64 / (b.gpu_ms.max(1e-9) * 1e-3),
                 mean_steps,
                 agreement,
@@ -334,15 +338,16 @@ impl TraverseBenchReport {
                 100.0 * r.hit_fraction
             );
             s += &format!(
-                "  {:<16} {:>10} {:>17} {:>10} {:>10} {:>10} {:>10}\n",
-                "method", "GPU ms", "min-max", "Mrays/s", "steps/ray", "agree %", "exact %"
+                "  {:<16} {:>10} {:>17} {:>10} {:>10} {:>10} {:>10} {:>10}\n",
+                "method", "GPU ms", "min-max", "CPU ms", "Mrays/s", "steps/ray", "agree %", "exact %"
             );
             for m in &r.methods {
                 s += &format!(
-                    "  {:<16} {:>10.3} {:>17} {:>10.2} {:>10.2} {:>10.2} {:>10.2}\n",
+                    "  {:<16} {:>10.3} {:>17} {:>10} {:>10.2} {:>10.2} {:>10.2} {:>10.2}\n",
                     m.method,
                     m.gpu_ms,
                     format!("{:.2}-{:.2}", m.gpu_ms_min, m.gpu_ms_max),
+                    m.cpu_ms.map_or("-".into(), |c| format!("{c:.1}")),
                     m.rays_per_s * 1e-6,
                     m.mean_steps,
                     100.0 * m.agreement,

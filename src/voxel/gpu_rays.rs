@@ -94,6 +94,24 @@ pub struct RayBatch {
     pub gpu_ms: f64,
     /// The pass's GPU time in each timed run.
     pub gpu_ms_runs: Vec<f64>,
+    /// CPU time this process spent on each timed run of the method (its own submission),
+    /// in ms, where the platform reports it (`/proc/self/task/*/schedstat`): on a CPU
+    /// implementation of Vulkan (lavapipe) the work itself, and unlike wall-clock GPU time
+    /// not stretched by other processes on a shared machine. Empty elsewhere.
+    pub cpu_ms_runs: Vec<f64>,
+}
+
+/// CPU time of all threads of this process so far, in ns (`None` where `/proc` lacks it).
+/// Threads that ended earlier are not counted, so only differences across a stretch in
+/// which no thread ends mean anything.
+pub fn process_cpu_ns() -> Option<u64> {
+    let mut total = 0u64;
+    for task in std::fs::read_dir("/proc/self/task").ok()? {
+        let path = task.ok()?.path().join("schedstat");
+        let text = std::fs::read_to_string(path).ok()?;
+        total += text.split_whitespace().next()?.parse::<u64>().ok()?;
+    }
+    Some(total)
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -156,9 +174,10 @@ impl VoxelRayCaster {
         self.cast_timed(ctx, rays, methods, 1)
     }
 
-    /// [`Self::cast`] timed over `runs` runs of the whole frame (all methods interleaved, so
-    /// a load that comes and goes on the machine touches each alike), after one untimed
-    /// warm-up run when `runs > 1`. Every batch reports the median and each run's GPU time.
+    /// [`Self::cast`] timed over `runs` runs (one submission per method, the methods
+    /// interleaved within each run, so a load that comes and goes on the machine touches
+    /// each alike), after one untimed warm-up run when `runs > 1`. Every batch reports the
+    /// median and each run's GPU time, and the CPU time of each run.
     pub fn cast_timed(
         &self,
         ctx: &Context,
@@ -187,22 +206,28 @@ impl VoxelRayCaster {
         if runs > 1 {
             self.run(ctx, &ray_buf, &results, count, methods)?;
         }
-        let mut times = vec![Vec::new(); methods.len()];
+        let mut gpu = vec![Vec::new(); methods.len()];
+        let mut cpu = vec![Vec::new(); methods.len()];
         for _ in 0..runs.max(1) {
-            let t = self.run(ctx, &ray_buf, &results, count, methods)?;
-            for (all, ms) in times.iter_mut().zip(t) {
-                all.push(ms);
+            for i in 0..methods.len() {
+                let before = process_cpu_ns();
+                let t = self.run(ctx, &ray_buf, &results[i..=i], count, &methods[i..=i])?;
+                if let (Some(a), Some(b)) = (before, process_cpu_ns()) {
+                    cpu[i].push(b.saturating_sub(a) as f64 * 1e-6);
+                }
+                gpu[i].extend(t);
             }
         }
         Ok(methods
             .iter()
             .zip(&results)
-            .zip(times)
-            .map(|((m, buf), gpu_ms_runs)| RayBatch {
+            .zip(gpu.into_iter().zip(cpu))
+            .map(|((m, buf), (gpu_ms_runs, cpu_ms_runs))| RayBatch {
                 method: *m,
                 hits: read_hits(buf, rays.len()),
                 gpu_ms: crate::stats::median(&gpu_ms_runs),
                 gpu_ms_runs,
+                cpu_ms_runs,
             })
             .collect())
     }

@@ -297,13 +297,11 @@ impl Ray {
     /// Parameter where the ray leaves `[lo, hi)` along axis `i`; `+inf` if parallel.
     #[inline]
     fn exit_t(&self, i: usize, lo: i32, hi: i32) -> f32 {
-        if self.d[i] > 0.0 {
-            boundary_t(hi as f32, self.o[i], self.inv[i])
-        } else if self.d[i] < 0.0 {
-            boundary_t(lo as f32, self.o[i], self.inv[i])
-        } else {
-            f32::INFINITY
+        if self.d[i] == 0.0 {
+            return f32::INFINITY;
         }
+        let b = if self.d[i] > 0.0 { hi } else { lo };
+        boundary_t(b as f32, self.o[i], self.inv[i])
     }
 
     /// Builds the caller-facing hit for voxel `v` entered at rebased parameter `t`.
@@ -446,6 +444,10 @@ pub fn first_hit_hierarchical(
     let mut k_t = ray.cell_at(2, 0.0, false);
     let mut t = 0.0f32;
     let mut steps = 0u32;
+    // The loop only decides; the hit or miss is built once after it (the GPU twin does so
+    // because every SIMD lane would otherwise pay for building it on every iteration).
+    let mut done = false;
+    let mut hit = None;
     while steps < params.max_iterations {
         steps += 1;
         // Column box at `level`, in level-0 texel units, clipped to the grid (odd sizes).
@@ -466,8 +468,8 @@ pub fn first_hit_hierarchical(
             let (x, y) = ((cx >> level) as u32, (cy >> level) as u32);
             if let Some(k) = first_in_range(lvl, x, y, k_in, k_out) {
                 if level == 0 {
-                    let v = IVec3::new(cx, cy, k as i32);
-                    return ray.hit(v, hit_t(&ray, t, k_in, k), steps);
+                    (done, hit) = (true, Some((k, k_in)));
+                    break;
                 }
                 // Possible hit somewhere in this box: refine to the quarter holding the ray
                 // at `t`, same position.
@@ -481,7 +483,8 @@ pub fn first_hit_hierarchical(
         // Empty: the whole segment inside this box is free. Step into the neighbouring
         // column across the exit face(s) — both on an exact edge crossing.
         if ends_here {
-            return HitResult::miss(origin, steps, false);
+            done = true;
+            break;
         }
         if t_exit >= t {
             t = t_exit;
@@ -507,7 +510,8 @@ pub fn first_hit_hierarchical(
             cy
         };
         if nx < 0 || ny < 0 || nx >= ray.dims.x || ny >= ray.dims.y {
-            return HitResult::miss(origin, steps, false);
+            done = true;
+            break;
         }
         // One level coarser only if the step left the parent box. Inside it, the parent is
         // the box the traversal came down from (it holds set bits ahead, so testing it again
@@ -519,7 +523,13 @@ pub fn first_hit_hierarchical(
         }
         (cx, cy) = (nx, ny);
     }
-    HitResult::miss(origin, steps, true)
+    match hit {
+        Some((k, k_in)) => {
+            let v = IVec3::new(cx, cy, k as i32);
+            ray.hit(v, hit_t(&ray, t, k_in, k), steps)
+        }
+        None => HitResult::miss(origin, steps, !done),
+    }
 }
 
 /// Whether the segment `a → b` (voxel space) is free of set voxels, by
