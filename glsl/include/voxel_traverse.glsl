@@ -86,7 +86,7 @@ int vx_half_at(VxRay r, int i, float t, int lo, int hi, int half_) {
     int mid = lo + half_;
     bool upper;
     if (r.d[i] > 0.0) upper = vx_boundary_t(float(mid), r.o[i], r.inv[i]) <= t;
-    else if (r.d[i] < 0.0) upper = !(vx_boundary_t(float(mid), r.o[i], r.inv[i]) <= t);
+    else if (r.d[i] < 0.0) upper = t < vx_boundary_t(float(mid), r.o[i], r.inv[i]);
     else upper = int(floor(r.o[i])) >= mid;
     return upper && mid < hi ? mid : lo;
 }

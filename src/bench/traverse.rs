@@ -339,7 +339,14 @@ impl TraverseBenchReport {
             );
             s += &format!(
                 "  {:<16} {:>10} {:>17} {:>10} {:>10} {:>10} {:>10} {:>10}\n",
-                "method", "GPU ms", "min-max", "CPU ms", "Mrays/s", "steps/ray", "agree %", "exact %"
+                "method",
+                "GPU ms",
+                "min-max",
+                "CPU ms",
+                "Mrays/s",
+                "steps/ray",
+                "agree %",
+                "exact %"
             );
             for m in &r.methods {
                 s += &format!(

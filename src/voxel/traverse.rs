@@ -282,8 +282,9 @@ impl Ray {
         let upper = if self.d[i] > 0.0 {
             boundary_t(mid as f32, self.o[i], self.inv[i]) <= t
         } else if self.d[i] < 0.0 {
-            // Going down, the ray enters cell mid − 1 through plane `mid`.
-            !(boundary_t(mid as f32, self.o[i], self.inv[i]) <= t)
+            // Going down, the ray enters cell mid − 1 through plane `mid` (never NaN: the
+            // origin and 1/d are finite).
+            t < boundary_t(mid as f32, self.o[i], self.inv[i])
         } else {
             self.o[i].floor() as i32 >= mid
         };
@@ -635,4 +636,96 @@ pub fn march_1bit(bits: &BitGrid, origin: Vec3, dir: Vec3, t_max: f32, steps: u3
 /// 1-bit version but can report false hits near surfaces (thesis Fig. 26).
 pub fn march_3bit(bits: &BitGrid, origin: Vec3, dir: Vec3, t_max: f32, steps: u32) -> HitResult {
     march(bits, origin, dir, t_max, steps, true)
+}
+
+#[cfg(test)]
+mod helper_tests {
+    use super::*;
+
+    /// Rays through a 40×24×200 grid from a fixed xorshift stream: random interior origins,
+    /// directions with some components exactly 0, ±1 or tiny, as `setup_ray` builds them.
+    fn rays() -> Vec<Ray> {
+        let mut s = 0x9E37_79B9_7F4A_7C15u64;
+        let mut f = move || {
+            s ^= s >> 12;
+            s ^= s << 25;
+            s ^= s >> 27;
+            (s.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 40) as f32 / (1u64 << 24) as f32
+        };
+        let dims = UVec3::new(40, 24, 200);
+        let mut out = Vec::new();
+        while out.len() < 400 {
+            let o = Vec3::new(f() * 40.0, f() * 24.0, f() * 200.0);
+            let mut d = Vec3::new(f() - 0.5, f() - 0.5, f() - 0.5);
+            for i in 0..3 {
+                match (f() * 8.0) as u32 {
+                    0 => d[i] = 0.0,
+                    1 => d[i] = 1.0,
+                    _ => {}
+                }
+            }
+            if let Setup::Ray(r) = setup_ray(dims, o, d, 300.0) {
+                out.push(r);
+            }
+        }
+        out
+    }
+
+    /// The parameters worth testing along a ray: random ones and every boundary parameter
+    /// of the first cells on each axis, where strict and non-strict differ.
+    fn params(r: &Ray) -> Vec<f32> {
+        let mut t: Vec<f32> = (0..16).map(|k| r.t_end * k as f32 / 15.0).collect();
+        for i in 0..3 {
+            if r.d[i] != 0.0 {
+                let c0 = r.cell_at(i, 0.0, false);
+                let step = if r.d[i] > 0.0 { 1 } else { -1 };
+                for k in 0..12 {
+                    let e = r.enter_t(i, c0 + k * step);
+                    if (0.0..=r.t_end).contains(&e) {
+                        t.push(e);
+                    }
+                }
+            }
+        }
+        t
+    }
+
+    #[test]
+    fn cells_at_is_cell_at_both_ways() {
+        for r in rays() {
+            for t in params(&r) {
+                for i in 0..3 {
+                    let want = (r.cell_at(i, t, false), r.cell_at(i, t, true));
+                    assert_eq!(r.cells_at(i, t), want, "axis {i} at t = {t}: {r:?}");
+                }
+            }
+        }
+    }
+
+    /// `half_at` picks the half that clamping the non-strict cell into the box picks, for
+    /// every aligned box on the ray's path at each level.
+    #[test]
+    fn half_at_is_the_clamped_cell_half() {
+        for r in rays() {
+            for t in params(&r) {
+                for i in 0..2 {
+                    let dim = r.dims[i];
+                    let c = r.cell_at(i, t, false).clamp(0, dim - 1);
+                    for level in 1..7 {
+                        let size = 1i32 << level;
+                        let lo = (c >> level) << level;
+                        let hi = (lo + size).min(dim);
+                        let half = size / 2;
+                        let cell = r.cell_at(i, t, false).clamp(lo, hi - 1);
+                        let want = if cell >= lo + half { lo + half } else { lo };
+                        assert_eq!(
+                            r.half_at(i, t, lo, hi, half),
+                            want,
+                            "axis {i} level {level} t {t}"
+                        );
+                    }
+                }
+            }
+        }
+    }
 }
