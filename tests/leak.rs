@@ -1,7 +1,8 @@
 //! The light-leak benchmark's scenes (`voxgi bench leak`): both rooms are closed, the wall is
 //! exactly its thickness in voxels, room B gets no direct light, and one exact statement:
 //! hemisphere sampling from the light maps shows exactly no light in room B at any wall, the
-//! thinnest included; and the path tracer's bounces no longer leak through a half-voxel wall.
+//! thinnest included; the path tracer's bounces no longer leak through a half-voxel wall; and
+//! neither does the radiance volume, at the thinnest or the thickest wall.
 //! Validation on.
 
 mod common;
@@ -158,4 +159,35 @@ fn path_tracer_bounces_do_not_leak_through_a_half_voxel_wall() {
     let row = leak_row(&ctx, &s, &name, gi, 32, voxels, &direct_a).expect("renders");
     assert!(row.mean_a > 1e-3, "room A gathers light: {row:?}");
     assert_eq!(row.mean_b, 0.0, "{row:?}");
+}
+
+/// The radiance volume (`--gi-radiance volume`) leaks exactly nothing through the thinnest
+/// and the thickest wall. Before shadow-map taps past the map's edge took the edge texel
+/// (they counted as lit) it leaked 1.5e-4 (quarter-voxel wall) and 7.3e-5 (4 voxels): the
+/// lit voxels were room B's far wall at the rim of the spot's 30° cone, where the volume's
+/// lookup point (a voxel diagonal off the voxel's centre toward the light) and the PCF kernel
+/// reach past the edge of the spot's map. Why 0 is exact now: the map's square frustum
+/// (±30° on both axes) meets the wall plane 0.35 m ahead within 0.35·tan 30° = 0.202 m of the
+/// spot's axis (y = 0.25, z = 0.5 m) in y and z, inside the wall's A face (0.5 × 1 m), so every
+/// texel, hence every clamped tap, holds that face. Each voxel of room B in the cone is looked
+/// up from a point in room B or inside the wall: at the thick wall ≥ 4 − 1 − √3 > 1 voxel
+/// (8 mm) behind the A face, against a depth bias of a few texels of about 1 mm (1024² map,
+/// ≤ 0.8 m away). At the quarter-voxel wall the one voxel holding both faces is lit on its A
+/// side only, which a ray from room B (arriving from +x) sees from behind and rejects. Room A's
+/// mirrored view gathers light (> 0).
+#[test]
+fn radiance_volume_leaks_nothing_through_thin_or_thick_walls() {
+    let ctx = common::context();
+    let voxels = VoxelSettings::default();
+    let (name, gi) = leak_methods()
+        .into_iter()
+        .find(|(n, _)| n == "hemisphere-volume")
+        .expect("listed");
+    for w in [0.25, 4.0] {
+        let s = leak_scene(w, LeakLight::Wall, &voxels).expect("scene");
+        let (_, direct_a) = direct_images(&ctx, &s, 32, voxels).expect("room B dark");
+        let row = leak_row(&ctx, &s, &name, gi, 32, voxels, &direct_a).expect("renders");
+        assert!(row.mean_a > 1e-4, "room A gathers light: {row:?}");
+        assert_eq!(row.mean_b, 0.0, "wall {w}: {row:?}");
+    }
 }

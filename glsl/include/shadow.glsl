@@ -266,14 +266,20 @@ float view_pcf_visibility(sampler2DArray maps, uint v, vec3 po, vec3 tos, int r)
     // through the stored depth's nonlinear encoding, which would round it like a stored value.
     float ref = sv.params.y > 0.5 ? shadow_linear_depth(sv, clamp(ndc.z, 0.0, 1.0)) : c.w;
     float bias_m = shadow_depth_bias(sv, tos.x, ref, tos.z);
+    // Taps past the edge of a perspective map (a spot's, or a cube face's, which its kernel
+    // always fits) take the edge texel: the map holds the spot's whole cone, so only a kernel
+    // or a lookup point's offsets at the cone's rim reach past it, and the edge texel holds the
+    // occluder that shades them there. (Counting them as lit let a spot's light through the
+    // leak benchmark's wall into the radiance volume's voxels at the rim.) Past an
+    // orthographic map's edge lies what its fitted frustum leaves out, which is lit.
+    bool clamp_to_edge = sv.params.y < 0.5;
     float lit = 0.0, total = 0.0;
     for (int y = -r; y <= r; ++y) {
         for (int x = -r; x <= r; ++x) {
             ivec2 q = center + ivec2(x, y);
             total += 1.0;
-            // Outside the map: not covered by this view, treated as lit (the spot cone or the
-            // fitted directional frustum decides what is lit there).
-            if (any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, size))) { lit += 1.0; continue; }
+            if (clamp_to_edge) q = clamp(q, ivec2(0), size - 1);
+            else if (any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, size))) { lit += 1.0; continue; }
             float stored = shadow_linear_depth(sv, texelFetch(maps, ivec3(q, int(v)), 0).r);
             lit += (ref - bias_m <= stored) ? 1.0 : 0.0;
         }

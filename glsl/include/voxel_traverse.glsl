@@ -67,10 +67,33 @@ int vx_cell_at(VxRay r, int i, float t, bool strict) {
     return c;
 }
 
+// vx_cell_at at t both ways: x non-strict, y strict (one estimate, one boundary pair).
+ivec2 vx_cells_at(VxRay r, int i, float t) {
+    float d = r.d[i];
+    if (d == 0.0) return ivec2(int(floor(r.o[i])));
+    int step_ = d > 0.0 ? 1 : -1;
+    precise float p = r.o[i] + t * d;
+    int c = int(floor(p));
+    float e = vx_enter_t(r, i, c);
+    float en = vx_enter_t(r, i, c + step_);
+    int loose = e > t ? c - step_ : (en <= t ? c + step_ : c);
+    int strict_ = e >= t ? c - step_ : (en < t ? c + step_ : c);
+    return ivec2(loose, strict_);
+}
+
+// The half (lo + half or lo) of the box [lo, hi) along axis i holding the ray at t.
+int vx_half_at(VxRay r, int i, float t, int lo, int hi, int half_) {
+    int mid = lo + half_;
+    bool upper;
+    if (r.d[i] > 0.0) upper = vx_boundary_t(float(mid), r.o[i], r.inv[i]) <= t;
+    else if (r.d[i] < 0.0) upper = t < vx_boundary_t(float(mid), r.o[i], r.inv[i]);
+    else upper = int(floor(r.o[i])) >= mid;
+    return upper && mid < hi ? mid : lo;
+}
+
 float vx_exit_t(VxRay r, int i, int lo, int hi) {
-    if (r.d[i] > 0.0) return vx_boundary_t(float(hi), r.o[i], r.inv[i]);
-    if (r.d[i] < 0.0) return vx_boundary_t(float(lo), r.o[i], r.inv[i]);
-    return VX_INF;
+    if (r.d[i] == 0.0) return VX_INF;
+    return vx_boundary_t(r.d[i] > 0.0 ? float(hi) : float(lo), r.o[i], r.inv[i]);
 }
 
 VxHit vx_make_hit(VxRay r, ivec3 v, float t, uint steps) {
@@ -174,14 +197,13 @@ bool vx_first_in_range(uint level, int x, int y, uint k_in, uint k_out, out uint
     return false;
 }
 
-bool vx_depth_range(VxRay r, float t_in, float t_out, bool end_inclusive, out uint k_in_out, out uint k_out_out) {
+bool vx_depth_range(VxRay r, int k_in, int k_out, out uint k_in_out, out uint k_out_out) {
     int last = r.dims.z - 1;
-    int k_in = vx_cell_at(r, 2, t_in, false);
     k_in_out = 0u;
     k_out_out = 0u;
     if ((r.d.z > 0.0 && k_in > last) || (r.d.z < 0.0 && k_in < 0)) return false;
     k_in = clamp(k_in, 0, last);
-    int k_out = clamp(vx_cell_at(r, 2, t_out, !end_inclusive), 0, last);
+    k_out = clamp(k_out, 0, last);
     bool empty = r.d.z >= 0.0 ? k_out < k_in : k_out > k_in;
     k_in_out = uint(k_in);
     k_out_out = uint(k_out);
@@ -215,9 +237,14 @@ VxHit voxel_first_hit(ivec3 dims, uint max_level, vec3 origin, vec3 dir, float t
     if (s == VX_SETUP_POINT) return vx_point_query(origin, pv, pt, pp);
     uint level = min(start_level, max_level);
     ivec3 start = vx_start_cell(r);
-    int cx = start.x, cy = start.y;
+    int cx = start.x, cy = start.y;  // exact to the current level
+    int k_t = vx_cell_at(r, 2, 0.0, false);
     float t = 0.0;
     uint steps = 0u;
+    // The loop only decides; the hit or miss is built once after it (on a SIMD device every
+    // lane would otherwise pay for building it on every iteration).
+    bool done = false, hit = false;
+    uint hit_k = 0u, hit_k_in = 0u;
     while (steps < max_iterations) {
         steps += 1u;
         int size = 1 << level;
@@ -228,25 +255,46 @@ VxHit voxel_first_hit(ivec3 dims, uint max_level, vec3 origin, vec3 dir, float t
         float t_exit = min(tx, ty);
         bool ends_here = t_exit > r.t_end;
         float t_out = ends_here ? r.t_end : t_exit;
+        ivec2 kk = vx_cells_at(r, 2, t_out);
         uint k_in, k_out;
-        if (vx_depth_range(r, t, t_out, ends_here, k_in, k_out)) {
+        if (vx_depth_range(r, k_t, ends_here ? kk.x : kk.y, k_in, k_out)) {
             uint k;
             if (vx_first_in_range(level, cx >> level, cy >> level, k_in, k_out, k)) {
-                if (level == 0u) return vx_make_hit(r, ivec3(cx, cy, int(k)), vx_hit_t(r, t, k_in, k), steps);
+                if (level == 0u) {
+                    done = hit = true;
+                    hit_k = k;
+                    hit_k_in = k_in;
+                    break;
+                }
                 level -= 1u;
+                int half_ = 1 << level;
+                cx = vx_half_at(r, 0, t, lx, hx, half_);
+                cy = vx_half_at(r, 1, t, ly, hy, half_);
                 continue;
             }
         }
-        if (ends_here) return vx_miss(origin, steps, false);
-        t = max(t, t_exit);
-        if (tx == t_exit) cx = r.d.x > 0.0 ? hx : lx - 1;
-        else cx = clamp(vx_cell_at(r, 0, t, false), lx, hx - 1);
-        if (ty == t_exit) cy = r.d.y > 0.0 ? hy : ly - 1;
-        else cy = clamp(vx_cell_at(r, 1, t, false), ly, hy - 1);
-        if (cx < 0 || cy < 0 || cx >= r.dims.x || cy >= r.dims.y) return vx_miss(origin, steps, false);
-        level = min(level + 1u, max_level);
+        if (ends_here) {
+            done = true;
+            break;
+        }
+        if (t_exit >= t) {
+            t = t_exit;
+            k_t = kk.x;
+        }
+        int nx = tx == t_exit ? (r.d.x > 0.0 ? hx : lx - 1) : cx;
+        int ny = ty == t_exit ? (r.d.y > 0.0 ? hy : ly - 1) : cy;
+        if (nx < 0 || ny < 0 || nx >= r.dims.x || ny >= r.dims.y) {
+            done = true;
+            break;
+        }
+        // One level coarser only if the step left the parent box (see the CPU twin).
+        uint up = level + 1u;
+        if (up <= max_level && ((nx >> up) != (cx >> up) || (ny >> up) != (cy >> up))) level = up;
+        cx = nx;
+        cy = ny;
     }
-    return vx_miss(origin, steps, true);
+    if (hit) return vx_make_hit(r, ivec3(cx, cy, int(hit_k)), vx_hit_t(r, t, hit_k_in, hit_k), steps);
+    return vx_miss(origin, steps, !done);
 }
 
 // Whether the segment a -> b (voxel space) is free of set voxels (both end voxels count:

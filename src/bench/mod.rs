@@ -42,8 +42,8 @@ pub use soak::{
 };
 pub use temporal::scene_at_step;
 pub use traverse::{
-    bench_traverse, gbuffer_points, MethodResult, RadiusResult, TraverseBenchDesc,
-    TraverseBenchReport,
+    bench_traverse, gbuffer_points, traverse_rays, MethodResult, RadiusResult, TraverseBenchDesc,
+    TraverseBenchReport, TraverseRays,
 };
 pub use voxelize::{
     bench_voxelize_atlas, bench_voxelize_atlas_chunked, bench_voxelize_sweep, AtlasTimes,
@@ -71,6 +71,13 @@ pub enum BenchError {
     GpuVoxel(#[from] GpuVoxelError),
     #[error("the camera sees no geometry: nothing to cast rays from")]
     NoSurface,
+    #[error("the traversal benchmark needs at least one hierarchical setting (a start level)")]
+    NoHierarchicalParams,
+    #[error(
+        "traversal benchmark: --radii {radius} is not a ray length; give positive finite \
+         lengths in box units (2,4,8 by default)"
+    )]
+    TraverseRadius { radius: f32 },
     #[error(transparent)]
     Atlas(#[from] AtlasError),
     #[error(transparent)]

@@ -25,11 +25,16 @@ pub struct TraverseBenchDesc {
     /// Radii in units of the thesis's test box (≈ 6 units wide), scaled to the scene:
     /// radius_m = r / 6 × the scene's largest extent.
     pub radii_box_units: Vec<f32>,
-    /// Marching sample counts to try.
+    /// Marching sample counts to try (1-bit and 3-bit each); empty: no marching rows.
     pub march_steps: Vec<u32>,
     /// Normal offset, in voxel diagonals (thesis §5.3.1, k₁).
     pub normal_offset_voxels: f32,
-    pub params: TraversalParams,
+    /// The hierarchical traversal's settings; the first is the reference of the agreement
+    /// columns, the others are rows of their own (start levels side by side).
+    pub params: Vec<TraversalParams>,
+    /// Timed runs of every method (the median and the spread are reported), after one
+    /// untimed warm-up run when more than 1.
+    pub repeats: u32,
 }
 
 impl Default for TraverseBenchDesc {
@@ -41,10 +46,8 @@ impl Default for TraverseBenchDesc {
             radii_box_units: vec![2.0, 4.0, 8.0],
             march_steps: vec![8, 16, 32, 64, 128, 256, 512],
             normal_offset_voxels: 1.0,
-            params: TraversalParams {
-                start_level: 1,
-                max_iterations: 1024,
-            },
+            params: vec![TraversalParams::default()],
+            repeats: 1,
         }
     }
 }
@@ -53,7 +56,13 @@ impl Default for TraverseBenchDesc {
 #[derive(Clone, Debug, Serialize)]
 pub struct MethodResult {
     pub method: String,
+    /// Median GPU time over the runs, and the fastest and slowest run.
     pub gpu_ms: f64,
+    pub gpu_ms_min: f64,
+    pub gpu_ms_max: f64,
+    /// Median CPU time of the process over the runs (lavapipe: the work itself, less
+    /// disturbed by other load than the wall-clock GPU time); `None` where not measured.
+    pub cpu_ms: Option<f64>,
     pub rays_per_s: f64,
     pub mean_steps: f64,
     /// Share of rays whose hit/miss agrees with the hierarchical test.
@@ -168,12 +177,25 @@ fn radical_inverse(mut i: u32) -> f32 {
     i as f32 * (1.0 / 4_294_967_296.0)
 }
 
-/// Runs the benchmark on `scene`.
-pub fn bench_traverse(
-    ctx: &Context,
-    scene: &Scene,
-    desc: &TraverseBenchDesc,
-) -> Result<TraverseBenchReport, BenchError> {
+/// The benchmark's rays on `scene`: the hierarchy of the scene's voxelization and, per radius
+/// of `desc`, the voxel-space rays from the camera-visible surface points.
+pub struct TraverseRays {
+    pub hierarchy: BitHierarchy,
+    /// Camera-visible surface points the rays start from.
+    pub points: usize,
+    /// `(radius in box units, radius in meters, rays)` per radius of the description.
+    pub radii: Vec<(f32, f32, Vec<GpuRay>)>,
+}
+
+/// Voxelizes `scene` and casts the benchmark's rays (no GPU work).
+pub fn traverse_rays(scene: &Scene, desc: &TraverseBenchDesc) -> Result<TraverseRays, BenchError> {
+    if let Some(&radius) = desc
+        .radii_box_units
+        .iter()
+        .find(|r| !(r.is_finite() && **r > 0.0))
+    {
+        return Err(BenchError::TraverseRadius { radius });
+    }
     let aabb = scene.aabb_at(0.0);
     let grid = VoxelGrid::around(
         aabb.min,
@@ -185,14 +207,13 @@ pub fn bench_traverse(
     )?;
     let mut bits = BitGrid::for_grid(&grid);
     voxelize_scene(&grid, &mut bits, scene, 0.0)?;
-    let h = BitHierarchy::build(bits);
+    let hierarchy = BitHierarchy::build(bits);
     let points = gbuffer_points(scene, desc.gbuffer_size);
     if points.is_empty() {
         return Err(BenchError::NoSurface);
     }
     let offset = desc.normal_offset_voxels * grid.voxel_diagonal_m();
     let scene_size = aabb.extent().max_element();
-    let caster = VoxelRayCaster::new(ctx, &h)?;
     let mut radii = Vec::new();
     for &r in &desc.radii_box_units {
         let radius_m = r / 6.0 * scene_size;
@@ -211,10 +232,36 @@ pub fn bench_traverse(
                 rays.push(GpuRay::new(o, grid.dir_world_to_voxel(d), radius_m));
             }
         }
-        let mut methods = vec![RayMethod::Hierarchical(desc.params), RayMethod::Dda];
+        radii.push((r, radius_m, rays));
+    }
+    Ok(TraverseRays {
+        hierarchy,
+        points: points.len(),
+        radii,
+    })
+}
+
+/// Runs the benchmark on `scene`.
+pub fn bench_traverse(
+    ctx: &Context,
+    scene: &Scene,
+    desc: &TraverseBenchDesc,
+) -> Result<TraverseBenchReport, BenchError> {
+    let setup = traverse_rays(scene, desc)?;
+    let h = &setup.hierarchy;
+    let caster = VoxelRayCaster::new(ctx, h)?;
+    let mut radii = Vec::new();
+    for (r, radius_m, rays) in &setup.radii {
+        let (r, radius_m) = (*r, *radius_m);
+        let Some(&first) = desc.params.first() else {
+            return Err(BenchError::NoHierarchicalParams);
+        };
+        let mut methods = vec![RayMethod::Hierarchical(first), RayMethod::Dda];
+        methods.extend(desc.params[1..].iter().map(|&p| RayMethod::Hierarchical(p)));
         methods.extend(desc.march_steps.iter().map(|&s| RayMethod::March1(s)));
         methods.extend(desc.march_steps.iter().map(|&s| RayMethod::March3(s)));
-        let batches = caster.cast(ctx, &rays, &methods)?;
+        let batches = caster.cast_timed(ctx, rays, &methods, desc.repeats)?;
+        let several = desc.params.len() > 1;
         let (reference, exact) = (&batches[0], &batches[1]);
         let hits = reference.hits.iter().filter(|h| h.hit).count();
         let share = |a: &[HitResult], b: &[HitResult]| {
@@ -236,9 +283,19 @@ pub fn bench_traverse(
                     *slot = Some((s, b.gpu_ms / reference.gpu_ms.max(1e-9)));
                 }
             }
+            let method = match b.method {
+                RayMethod::Hierarchical(p) if several => {
+                    format!("hierarchical/{}", p.start_level)
+                }
+                m => m.name(),
+            };
+            let runs = &b.gpu_ms_runs;
             results.push(MethodResult {
-                method: b.method.name(),
+                method,
                 gpu_ms: b.gpu_ms,
+                gpu_ms_min: runs.iter().copied().fold(f64::INFINITY, f64::min),
+                gpu_ms_max: runs.iter().copied().fold(0.0, f64::max),
+                cpu_ms: (!b.cpu_ms_runs.is_empty()).then(|| crate::stats::median(&b.cpu_ms_runs)),
                 rays_per_s: rays.len() as f64 / (b.gpu_ms.max(1e-9) * 1e-3),
                 mean_steps,
                 agreement,
@@ -261,7 +318,7 @@ pub fn bench_traverse(
     Ok(TraverseBenchReport {
         device: ctx.info.name.clone(),
         grid: [b.res_x(), b.res_y(), b.depth()],
-        points: points.len(),
+        points: setup.points,
         radii,
     })
 }
@@ -281,25 +338,36 @@ impl TraverseBenchReport {
                 100.0 * r.hit_fraction
             );
             s += &format!(
-                "  {:<14} {:>10} {:>12} {:>10} {:>10} {:>10}\n",
-                "method", "GPU ms", "Mrays/s", "steps/ray", "agree %", "exact %"
+                "  {:<16} {:>10} {:>17} {:>10} {:>10} {:>10} {:>10} {:>10}\n",
+                "method",
+                "GPU ms",
+                "min-max",
+                "CPU ms",
+                "Mrays/s",
+                "steps/ray",
+                "agree %",
+                "exact %"
             );
             for m in &r.methods {
                 s += &format!(
-                    "  {:<14} {:>10.3} {:>12.2} {:>10.2} {:>10.2} {:>10.2}\n",
+                    "  {:<16} {:>10.3} {:>17} {:>10} {:>10.2} {:>10.2} {:>10.2} {:>10.2}\n",
                     m.method,
                     m.gpu_ms,
+                    format!("{:.2}-{:.2}", m.gpu_ms_min, m.gpu_ms_max),
+                    m.cpu_ms.map_or("-".into(), |c| format!("{c:.1}")),
                     m.rays_per_s * 1e-6,
                     m.mean_steps,
                     100.0 * m.agreement,
                     100.0 * m.exact_agreement
                 );
             }
+            let marching = r.methods.iter().any(|m| m.method.starts_with("march"));
             for (bits, steps, speedup) in [
                 (1, r.march_steps_for_99, r.speedup_at_99),
                 (3, r.march3_steps_for_99, r.march3_speedup_at_99),
             ] {
                 match (steps, speedup) {
+                    _ if !marching => {}
                     (Some(n), Some(x)) => {
                         s += &format!("  {bits}-bit marching needs {n} samples to agree on >= 99% of rays; hierarchical is {x:.2}x faster than that\n")
                     }

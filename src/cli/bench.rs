@@ -44,12 +44,29 @@ pub enum BenchCommand {
         /// Rays per surface point.
         #[arg(long, default_value_t = 16)]
         rays: u32,
-        /// Hierarchy level the traversal starts at (thesis §5.3.2).
-        #[arg(long, default_value_t = 1)]
-        start_level: u32,
+        /// Hierarchy levels the traversal starts at (thesis §5.3.2); the first is the
+        /// reference of the agreement columns, each further one a row of its own.
+        #[arg(long, value_delimiter = ',', default_values_t = [1],
+              value_parser = clap::value_parser!(u32).range(0..=14))]
+        start_level: Vec<u32>,
         /// Iteration cap of the hierarchical traversal.
         #[arg(long, default_value_t = 1024)]
         max_iterations: u32,
+        /// Ray lengths in units of the thesis's test box (radius_m = r / 6 × the scene's
+        /// largest extent).
+        #[arg(long, value_delimiter = ',', default_values_t = [2.0, 4.0, 8.0])]
+        radii: Vec<f32>,
+        /// Marching sample counts (1-bit and 3-bit rows each).
+        #[arg(long, value_delimiter = ',', default_values_t = [8, 16, 32, 64, 128, 256, 512],
+              value_parser = clap::value_parser!(u32).range(1..=65536))]
+        march_steps: Vec<u32>,
+        /// Leave out the marching rows (only the hierarchical test and the exact walk).
+        #[arg(long)]
+        no_march: bool,
+        /// Timed runs of every method, interleaved, after one untimed warm-up run: the
+        /// median and the fastest and slowest run are printed.
+        #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=1000))]
+        repeats: u32,
         /// Print JSON instead of tables.
         #[arg(long)]
         json: bool,
@@ -157,6 +174,10 @@ pub fn bench(global: &Global, command: &BenchCommand, out: &mut dyn Write) -> Re
             rays,
             start_level,
             max_iterations,
+            radii,
+            march_steps,
+            no_march,
+            repeats,
             json,
         } => {
             let scene = load_scene_arg(scene.as_deref())?;
@@ -165,10 +186,20 @@ pub fn bench(global: &Global, command: &BenchCommand, out: &mut dyn Write) -> Re
                 resolution: *resolution,
                 gbuffer_size: *gbuffer,
                 rays_per_point: *rays,
-                params: TraversalParams {
-                    start_level: *start_level,
-                    max_iterations: *max_iterations,
+                radii_box_units: radii.clone(),
+                march_steps: if *no_march {
+                    Vec::new()
+                } else {
+                    march_steps.clone()
                 },
+                params: start_level
+                    .iter()
+                    .map(|&start_level| TraversalParams {
+                        start_level,
+                        max_iterations: *max_iterations,
+                    })
+                    .collect(),
+                repeats: *repeats,
                 ..Default::default()
             };
             let report = bench_traverse(&ctx, &scene, &desc)?;

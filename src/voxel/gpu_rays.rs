@@ -90,7 +90,28 @@ impl RayMethod {
 pub struct RayBatch {
     pub method: RayMethod,
     pub hits: Vec<HitResult>,
+    /// Median of `gpu_ms_runs`.
     pub gpu_ms: f64,
+    /// The pass's GPU time in each timed run.
+    pub gpu_ms_runs: Vec<f64>,
+    /// CPU time this process spent on each timed run of the method (its own submission),
+    /// in ms, where the platform reports it (`/proc/self/task/*/schedstat`): on a CPU
+    /// implementation of Vulkan (lavapipe) the work itself, and unlike wall-clock GPU time
+    /// not stretched by other processes on a shared machine. Empty elsewhere.
+    pub cpu_ms_runs: Vec<f64>,
+}
+
+/// CPU time of all threads of this process so far, in ns (`None` where `/proc` lacks it).
+/// Threads that ended earlier are not counted, so only differences across a stretch in
+/// which no thread ends mean anything.
+pub fn process_cpu_ns() -> Option<u64> {
+    let mut total = 0u64;
+    for task in std::fs::read_dir("/proc/self/task").ok()? {
+        let path = task.ok()?.path().join("schedstat");
+        let text = std::fs::read_to_string(path).ok()?;
+        total += text.split_whitespace().next()?.parse::<u64>().ok()?;
+    }
+    Some(total)
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -150,6 +171,20 @@ impl VoxelRayCaster {
         rays: &[GpuRay],
         methods: &[RayMethod],
     ) -> Result<Vec<RayBatch>, RayCastError> {
+        self.cast_timed(ctx, rays, methods, 1)
+    }
+
+    /// [`Self::cast`] timed over `runs` runs (one submission per method, the methods
+    /// interleaved within each run, so a load that comes and goes on the machine touches
+    /// each alike), after one untimed warm-up run when `runs > 1`. Every batch reports the
+    /// median and each run's GPU time, and the CPU time of each run.
+    pub fn cast_timed(
+        &self,
+        ctx: &Context,
+        rays: &[GpuRay],
+        methods: &[RayMethod],
+        runs: u32,
+    ) -> Result<Vec<RayBatch>, RayCastError> {
         if rays.is_empty() {
             return Err(RayCastError::NoRays);
         }
@@ -167,19 +202,34 @@ impl VoxelRayCaster {
                 location: MemoryLocation::GpuToCpu,
             })?);
         }
-        let out = self.run(ctx, &ray_buf, &results, rays.len() as u32, methods);
-        out.map(|times| {
-            methods
-                .iter()
-                .zip(&results)
-                .zip(times)
-                .map(|((m, buf), gpu_ms)| RayBatch {
-                    method: *m,
-                    hits: read_hits(buf, rays.len()),
-                    gpu_ms,
-                })
-                .collect()
-        })
+        let count = rays.len() as u32;
+        if runs > 1 {
+            self.run(ctx, &ray_buf, &results, count, methods)?;
+        }
+        let mut gpu = vec![Vec::new(); methods.len()];
+        let mut cpu = vec![Vec::new(); methods.len()];
+        for _ in 0..runs.max(1) {
+            for i in 0..methods.len() {
+                let before = process_cpu_ns();
+                let t = self.run(ctx, &ray_buf, &results[i..=i], count, &methods[i..=i])?;
+                if let (Some(a), Some(b)) = (before, process_cpu_ns()) {
+                    cpu[i].push(b.saturating_sub(a) as f64 * 1e-6);
+                }
+                gpu[i].extend(t);
+            }
+        }
+        Ok(methods
+            .iter()
+            .zip(&results)
+            .zip(gpu.into_iter().zip(cpu))
+            .map(|((m, buf), (gpu_ms_runs, cpu_ms_runs))| RayBatch {
+                method: *m,
+                hits: read_hits(buf, rays.len()),
+                gpu_ms: crate::stats::median(&gpu_ms_runs),
+                gpu_ms_runs,
+                cpu_ms_runs,
+            })
+            .collect())
     }
 
     fn run(
@@ -203,7 +253,7 @@ impl VoxelRayCaster {
             self.dims.z as i32,
             self.max_level as i32,
         ];
-        for (m, buf) in methods.iter().zip(results) {
+        for (i, (m, buf)) in methods.iter().zip(results).enumerate() {
             let out = g.import_buffer(buf, Access::HostRead);
             let (mode, start_level, max_iterations, marching_samples) = match *m {
                 RayMethod::Hierarchical(p) => (0, p.start_level, p.max_iterations, 0),
@@ -220,7 +270,8 @@ impl VoxelRayCaster {
                 marching_samples,
                 _pad: [0; 3],
             };
-            g.add_pass(&format!("voxel_rays[{}]", m.name()))
+            // The index keeps names unique when a method repeats with other settings.
+            g.add_pass(&format!("voxel_rays[{i}: {}]", m.name()))
                 .pipeline(&pipe)
                 .bind(0, columns, read)
                 .bind(1, levels, read)

@@ -240,16 +240,69 @@ impl Ray {
         c
     }
 
+    /// [`Self::cell_at`] at `t` both ways, `(non-strict, strict)`, from one estimate and one
+    /// pair of boundary parameters: the depth cell a segment ends in (strict at a column
+    /// exit) and the one the next segment starts in (non-strict) share them.
+    #[inline]
+    fn cells_at(&self, i: usize, t: f32) -> (i32, i32) {
+        let d = self.d[i];
+        if d == 0.0 {
+            let c = self.o[i].floor() as i32;
+            return (c, c);
+        }
+        let step = if d > 0.0 { 1 } else { -1 };
+        let c = (self.o[i] + t * d).floor() as i32;
+        let e = self.enter_t(i, c);
+        let e_next = self.enter_t(i, c + step);
+        let loose = if e > t {
+            c - step
+        } else if e_next <= t {
+            c + step
+        } else {
+            c
+        };
+        let strict = if e >= t {
+            c - step
+        } else if e_next < t {
+            c + step
+        } else {
+            c
+        };
+        (loose, strict)
+    }
+
+    /// The half of the box `[lo, hi)` along axis `i` (halves `half` wide) that holds the ray
+    /// at `t`: `lo + half` or `lo`. The same decision as `cell_at(i, t, false) ≥ lo + half`
+    /// (the cell entered at or before `t` lies beyond the middle plane iff the ray has crossed
+    /// it by `t`), from one boundary parameter; an upper half outside the grid (odd sizes)
+    /// is never chosen, as clamping the cell into the box would not.
+    #[inline]
+    fn half_at(&self, i: usize, t: f32, lo: i32, hi: i32, half: i32) -> i32 {
+        let mid = lo + half;
+        let upper = if self.d[i] > 0.0 {
+            boundary_t(mid as f32, self.o[i], self.inv[i]) <= t
+        } else if self.d[i] < 0.0 {
+            // Going down, the ray enters cell mid − 1 through plane `mid` (never NaN: the
+            // origin and 1/d are finite).
+            t < boundary_t(mid as f32, self.o[i], self.inv[i])
+        } else {
+            self.o[i].floor() as i32 >= mid
+        };
+        if upper && mid < hi {
+            mid
+        } else {
+            lo
+        }
+    }
+
     /// Parameter where the ray leaves `[lo, hi)` along axis `i`; `+inf` if parallel.
     #[inline]
     fn exit_t(&self, i: usize, lo: i32, hi: i32) -> f32 {
-        if self.d[i] > 0.0 {
-            boundary_t(hi as f32, self.o[i], self.inv[i])
-        } else if self.d[i] < 0.0 {
-            boundary_t(lo as f32, self.o[i], self.inv[i])
-        } else {
-            f32::INFINITY
+        if self.d[i] == 0.0 {
+            return f32::INFINITY;
         }
+        let b = if self.d[i] > 0.0 { hi } else { lo };
+        boundary_t(b as f32, self.o[i], self.inv[i])
     }
 
     /// Builds the caller-facing hit for voxel `v` entered at rebased parameter `t`.
@@ -295,14 +348,14 @@ fn first_in_range(level: &BitGrid, x: u32, y: u32, k_in: u32, k_out: u32) -> Opt
     None
 }
 
-/// Depth range `(k_in, k_out)` in ray order of the segment `[t_in, t_out]` within a column,
-/// clamped to the grid; `None` if the segment covers no depth cell (possible only for a
-/// zero-length segment). `end_inclusive`: `t_out` is the ray's end (the cell at `t_out` is
-/// visited) rather than a column exit (that cell belongs to the next column).
+/// Depth range `(k_in, k_out)` in ray order of a segment within a column, clamped to the grid,
+/// from the depth cells at its ends: `k_in` the cell at its start (non-strict), `k_out` the
+/// cell at its end (strict at a column exit, whose cell belongs to the next column;
+/// non-strict at the ray's end, which is visited). `None` if the segment covers no depth cell
+/// (possible only for a zero-length segment).
 #[inline]
-fn depth_range(ray: &Ray, t_in: f32, t_out: f32, end_inclusive: bool) -> Option<(u32, u32)> {
+fn depth_range(ray: &Ray, k_in: i32, k_out: i32) -> Option<(u32, u32)> {
     let last = ray.dims.z - 1;
-    let k_in = ray.cell_at(2, t_in, false);
     // Past the far depth face already: the segment is the single point where the ray leaves
     // the grid through it (its end), outside the half-open grid.
     if (ray.d.z > 0.0 && k_in > last) || (ray.d.z < 0.0 && k_in < 0) {
@@ -310,7 +363,7 @@ fn depth_range(ray: &Ray, t_in: f32, t_out: f32, end_inclusive: bool) -> Option<
     }
     // Otherwise clamping only undoes rounding of the entry point / the end on the far face.
     let k_in = k_in.clamp(0, last);
-    let k_out = ray.cell_at(2, t_out, !end_inclusive).clamp(0, last);
+    let k_out = k_out.clamp(0, last);
     let empty = if ray.d.z >= 0.0 {
         k_out < k_in
     } else {
@@ -368,7 +421,8 @@ fn point_query(bits: &BitGrid, origin: Vec3, v: IVec3, t: f32, p: Vec3) -> HitRe
 /// First hit along `origin + t·dir`, `t ∈ [0, t_max]`, by hierarchical traversal of the OR
 /// mip hierarchy (thesis §5.3.2, Fig. 17): at the current level take the column box the ray is
 /// in, AND the ray mask of the segment inside it with the column; empty → step into the next
-/// column and go one level coarser; non-empty → one level finer; non-empty at level 0 → hit.
+/// column, one level coarser if that column lies in another parent box; non-empty → one level
+/// finer; non-empty at level 0 → hit.
 pub fn first_hit_hierarchical(
     h: &BitHierarchy,
     origin: Vec3,
@@ -384,11 +438,17 @@ pub fn first_hit_hierarchical(
     };
     let max_level = h.max_level();
     let mut level = params.start_level.min(max_level);
-    // Level-0 column containing the ray at parameter `t`.
+    // The column containing the ray at parameter `t`, exact to the current level (its lower
+    // bits are refined on the way down), and the depth cell at `t`.
     let start = start_cell(&ray);
     let (mut cx, mut cy) = (start.x, start.y);
+    let mut k_t = ray.cell_at(2, 0.0, false);
     let mut t = 0.0f32;
     let mut steps = 0u32;
+    // The loop only decides; the hit or miss is built once after it (the GPU twin does so
+    // because every SIMD lane would otherwise pay for building it on every iteration).
+    let mut done = false;
+    let mut hit = None;
     while steps < params.max_iterations {
         steps += 1;
         // Column box at `level`, in level-0 texel units, clipped to the grid (odd sizes).
@@ -402,49 +462,75 @@ pub fn first_hit_hierarchical(
         let t_exit = tx.min(ty);
         let ends_here = t_exit > ray.t_end;
         let t_out = if ends_here { ray.t_end } else { t_exit };
-        if let Some((k_in, k_out)) = depth_range(&ray, t, t_out, ends_here) {
+        let (k_next, k_before) = ray.cells_at(2, t_out);
+        let k_out = if ends_here { k_next } else { k_before };
+        if let Some((k_in, k_out)) = depth_range(&ray, k_t, k_out) {
             let lvl = h.level(level);
             let (x, y) = ((cx >> level) as u32, (cy >> level) as u32);
             if let Some(k) = first_in_range(lvl, x, y, k_in, k_out) {
                 if level == 0 {
-                    let v = IVec3::new(cx, cy, k as i32);
-                    return ray.hit(v, hit_t(&ray, t, k_in, k), steps);
+                    (done, hit) = (true, Some((k, k_in)));
+                    break;
                 }
-                // Possible hit somewhere in this box: refine, same position.
+                // Possible hit somewhere in this box: refine to the quarter holding the ray
+                // at `t`, same position.
                 level -= 1;
+                let half = 1i32 << level;
+                cx = ray.half_at(0, t, lx, hx, half);
+                cy = ray.half_at(1, t, ly, hy, half);
                 continue;
             }
         }
         // Empty: the whole segment inside this box is free. Step into the neighbouring
         // column across the exit face(s) — both on an exact edge crossing.
         if ends_here {
-            return HitResult::miss(origin, steps, false);
+            done = true;
+            break;
         }
-        t = t.max(t_exit);
-        cx = if tx == t_exit {
+        if t_exit >= t {
+            t = t_exit;
+            k_t = k_next;
+        }
+        // The axis not crossed stays in this box's range: exact to this level, as needed.
+        let nx = if tx == t_exit {
             if ray.d.x > 0.0 {
                 hx
             } else {
                 lx - 1
             }
         } else {
-            ray.cell_at(0, t, false).clamp(lx, hx - 1)
+            cx
         };
-        cy = if ty == t_exit {
+        let ny = if ty == t_exit {
             if ray.d.y > 0.0 {
                 hy
             } else {
                 ly - 1
             }
         } else {
-            ray.cell_at(1, t, false).clamp(ly, hy - 1)
+            cy
         };
-        if cx < 0 || cy < 0 || cx >= ray.dims.x || cy >= ray.dims.y {
-            return HitResult::miss(origin, steps, false);
+        if nx < 0 || ny < 0 || nx >= ray.dims.x || ny >= ray.dims.y {
+            done = true;
+            break;
         }
-        level = (level + 1).min(max_level);
+        // One level coarser only if the step left the parent box. Inside it, the parent is
+        // the box the traversal came down from (it holds set bits ahead, so testing it again
+        // mostly hits and costs one more descent) or one whose earlier part was just cleared
+        // at this level; either way the next sibling is the cheaper test.
+        let up = level + 1;
+        if up <= max_level && ((nx >> up) != (cx >> up) || (ny >> up) != (cy >> up)) {
+            level = up;
+        }
+        (cx, cy) = (nx, ny);
     }
-    HitResult::miss(origin, steps, true)
+    match hit {
+        Some((k, k_in)) => {
+            let v = IVec3::new(cx, cy, k as i32);
+            ray.hit(v, hit_t(&ray, t, k_in, k), steps)
+        }
+        None => HitResult::miss(origin, steps, !done),
+    }
 }
 
 /// Whether the segment `a → b` (voxel space) is free of set voxels, by
@@ -550,4 +636,96 @@ pub fn march_1bit(bits: &BitGrid, origin: Vec3, dir: Vec3, t_max: f32, steps: u3
 /// 1-bit version but can report false hits near surfaces (thesis Fig. 26).
 pub fn march_3bit(bits: &BitGrid, origin: Vec3, dir: Vec3, t_max: f32, steps: u32) -> HitResult {
     march(bits, origin, dir, t_max, steps, true)
+}
+
+#[cfg(test)]
+mod helper_tests {
+    use super::*;
+
+    /// Rays through a 40×24×200 grid from a fixed xorshift stream: random interior origins,
+    /// directions with some components exactly 0, ±1 or tiny, as `setup_ray` builds them.
+    fn rays() -> Vec<Ray> {
+        let mut s = 0x9E37_79B9_7F4A_7C15u64;
+        let mut f = move || {
+            s ^= s >> 12;
+            s ^= s << 25;
+            s ^= s >> 27;
+            (s.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 40) as f32 / (1u64 << 24) as f32
+        };
+        let dims = UVec3::new(40, 24, 200);
+        let mut out = Vec::new();
+        while out.len() < 400 {
+            let o = Vec3::new(f() * 40.0, f() * 24.0, f() * 200.0);
+            let mut d = Vec3::new(f() - 0.5, f() - 0.5, f() - 0.5);
+            for i in 0..3 {
+                match (f() * 8.0) as u32 {
+                    0 => d[i] = 0.0,
+                    1 => d[i] = 1.0,
+                    _ => {}
+                }
+            }
+            if let Setup::Ray(r) = setup_ray(dims, o, d, 300.0) {
+                out.push(r);
+            }
+        }
+        out
+    }
+
+    /// The parameters worth testing along a ray: random ones and every boundary parameter
+    /// of the first cells on each axis, where strict and non-strict differ.
+    fn params(r: &Ray) -> Vec<f32> {
+        let mut t: Vec<f32> = (0..16).map(|k| r.t_end * k as f32 / 15.0).collect();
+        for i in 0..3 {
+            if r.d[i] != 0.0 {
+                let c0 = r.cell_at(i, 0.0, false);
+                let step = if r.d[i] > 0.0 { 1 } else { -1 };
+                for k in 0..12 {
+                    let e = r.enter_t(i, c0 + k * step);
+                    if (0.0..=r.t_end).contains(&e) {
+                        t.push(e);
+                    }
+                }
+            }
+        }
+        t
+    }
+
+    #[test]
+    fn cells_at_is_cell_at_both_ways() {
+        for r in rays() {
+            for t in params(&r) {
+                for i in 0..3 {
+                    let want = (r.cell_at(i, t, false), r.cell_at(i, t, true));
+                    assert_eq!(r.cells_at(i, t), want, "axis {i} at t = {t}: {r:?}");
+                }
+            }
+        }
+    }
+
+    /// `half_at` picks the half that clamping the non-strict cell into the box picks, for
+    /// every aligned box on the ray's path at each level.
+    #[test]
+    fn half_at_is_the_clamped_cell_half() {
+        for r in rays() {
+            for t in params(&r) {
+                for i in 0..2 {
+                    let dim = r.dims[i];
+                    let c = r.cell_at(i, t, false).clamp(0, dim - 1);
+                    for level in 1..7 {
+                        let size = 1i32 << level;
+                        let lo = (c >> level) << level;
+                        let hi = (lo + size).min(dim);
+                        let half = size / 2;
+                        let cell = r.cell_at(i, t, false).clamp(lo, hi - 1);
+                        let want = if cell >= lo + half { lo + half } else { lo };
+                        assert_eq!(
+                            r.half_at(i, t, lo, hi, half),
+                            want,
+                            "axis {i} level {level} t {t}"
+                        );
+                    }
+                }
+            }
+        }
+    }
 }
