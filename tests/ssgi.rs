@@ -262,3 +262,62 @@ fn split_sum_table_matches_a_cpu_integration() {
         );
     }
 }
+
+/// `voxgi bench ssgi` end to end on a tiny grid (2 mip filters × 2 resolutions × 1 sample
+/// count at 32²): every configuration gets a row with its stages, times and errors. Speed is
+/// not asserted; what must hold whatever the device: every stage's per-frame sum is part of
+/// the ssgi sum, which is part of the frame's, so their medians are ordered the same way
+/// (order statistics are monotone), and the images are scored against the reference.
+#[test]
+fn bench_ssgi_runs_end_to_end_on_a_tiny_grid() {
+    use voxgi::bench::{bench_ssgi, load_reference, SsgiBenchDesc};
+    use voxgi::gi::SsgiMips;
+    let scene = voxgi::scene::load_scene_arg(Some("cornell")).expect("scene");
+    let reference =
+        load_reference(&Path::new(ROOT).join("assets/references"), "cornell", 32).expect("exr");
+    let desc = SsgiBenchDesc {
+        mips: vec![SsgiMips::Fast, SsgiMips::Voting],
+        resolutions: vec![SsgiResolution::Full, SsgiResolution::Quarter],
+        samples: vec![8],
+        size: 32,
+        frames: 3,
+        warmup: 1,
+        gi_frames: 2,
+    };
+    let ctx = common::context();
+    let report = bench_ssgi(&ctx, &scene, "cornell", &reference, &desc).expect("runs");
+    common::assert_no_validation_messages(&ctx);
+    println!("{}", report.table());
+    assert_eq!(report.rows.len(), 4);
+    for r in &report.rows {
+        let stages: Vec<&str> = r.stages.iter().map(|s| s.stage.as_str()).collect();
+        assert_eq!(
+            stages,
+            ["ssgi_input", "ssgi_mip", "ssgi_gather", "ssgi_upsample"],
+            "row {}",
+            r.number
+        );
+        for s in &r.stages {
+            let t = s.time;
+            assert!(t.min_ms <= t.median_ms && t.median_ms <= t.max_ms, "{s:?}");
+            assert!(
+                t.median_ms <= r.ssgi.median_ms,
+                "{s:?} vs ssgi {:?}",
+                r.ssgi
+            );
+        }
+        assert!(r.ssgi.median_ms <= r.frame.median_ms, "{r:?}");
+        assert!(
+            r.rel_mse.is_finite() && r.rel_mse > 0.0 && r.flip > 0.0,
+            "{r:?}"
+        );
+    }
+    assert_eq!(
+        (report.rows[0].mips.as_str(), report.rows[3].mips.as_str()),
+        ("fast", "voting")
+    );
+    assert_eq!(report.csv().lines().count(), 5);
+    // Indirect light brings the full-resolution image closer to the reference than direct
+    // light alone (the Cornell test above, at this size).
+    assert!(report.rows[0].rel_mse < report.direct_rel_mse, "{report:?}");
+}
