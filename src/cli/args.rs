@@ -629,6 +629,12 @@ mod tests {
             .expect("settings");
         assert_eq!(s.post.taa.map(|t| t.frames), Some(2));
         assert_eq!(s.post.auto_exposure, None);
+        // `--auto-exposure` alone switches on and keeps the scene's key.
+        scene.post.auto_exposure = Some(Stage::On(Some(0.3)));
+        let s = parse(&["--auto-exposure"])
+            .settings(&scene)
+            .expect("settings");
+        assert_eq!(s.post.auto_exposure.map(|a| a.key), Some(0.3));
         // Out-of-range flags name the flag.
         let e = parse(&["--bloom", "2"])
             .settings(&scene)

@@ -78,13 +78,22 @@ impl PostOverrides {
             taa: self.taa.or(fallback.taa),
             taa_history_weight: self.taa_history_weight.or(fallback.taa_history_weight),
             taa_frames: self.taa_frames.or(fallback.taa_frames),
-            auto_exposure: self.auto_exposure.or(fallback.auto_exposure),
+            auto_exposure: stage_or(self.auto_exposure, fallback.auto_exposure),
             exposure_adaptation: self.exposure_adaptation.or(fallback.exposure_adaptation),
-            bloom: self.bloom.or(fallback.bloom),
+            bloom: stage_or(self.bloom, fallback.bloom),
             fxaa: self.fxaa.or(fallback.fxaa),
             dither: self.dither.or(fallback.dither),
             tonemap: self.tonemap.or(fallback.tonemap),
             exposure: self.exposure.or(fallback.exposure),
         }
+    }
+}
+
+/// `a` where given, else `b`; a stage switched on without its value (`--auto-exposure` alone)
+/// keeps `b`'s value when `b` has one.
+fn stage_or(a: Option<Stage>, b: Option<Stage>) -> Option<Stage> {
+    match (a, b) {
+        (Some(Stage::On(None)), Some(Stage::On(Some(v)))) => Some(Stage::On(Some(v))),
+        (a, b) => a.or(b),
     }
 }
