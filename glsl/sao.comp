@@ -42,9 +42,10 @@ layout(push_constant) uniform Push {
 #define TWO_PI 6.28318530717958647692
 
 // Level m of the pyramid at texel q (m < pc.depth_levels). Each level is its own binding (a
-// one-level view), read at level 0: llvmpipe (lavapipe) reads a single level for a whole SIMD
-// vector when texelFetch's level varies between invocations, which put taps at far pixels'
-// depths (measured: v·n up to 0.07 m on a flat floor, where it is 0).
+// one-level view), read at level 0: with one binding and texelFetch's level varying between
+// neighbouring invocations, llvmpipe (lavapipe) returned texels of the wrong level, which put
+// taps at far pixels' depths (measured: v·n up to 0.07 m on a flat floor, where it is 0; a
+// switch over constant levels of the one binding did the same).
 vec4 pyramid_texel(ivec2 q, int m) {
     switch (m) {
         case 0: return texelFetch(level0, min(q, textureSize(level0, 0) - 1), 0);
