@@ -338,7 +338,7 @@ pub fn bench(global: &Global, command: &BenchCommand, out: &mut dyn Write) -> Re
             json,
         } => {
             for &n in samples {
-                crate::limits::SSGI_SAMPLES.check_flag(n)?;
+                crate::limits::SSGI_SAMPLES.check_as("--samples", i64::from(n))?;
             }
             crate::limits::GI_FRAMES.check_flag(*gi_frames)?;
             let arg = scene.as_deref().unwrap_or(DEFAULT_SCENE);
