@@ -1,8 +1,9 @@
 #version 450
 // Direct plus indirect light: L = L_direct + rho/pi * E_indirect for Lambert receivers; Phong
 // receivers' indirect radiance is stored as is (see gi_common.glsl).
-// With SAO (Oetke 2017 §2.5) the indirect term is multiplied by the half-resolution AO term
-// (nearest texel); SAO_VIEW writes the AO term itself as grey radiance (`--debug sao`).
+// With SAO (Oetke 2017 §2.5) the indirect term is multiplied by the AO term (computed at half
+// resolution, joint-bilaterally upsampled to the frame by sao_upsample); SAO_VIEW writes the AO
+// term itself as grey radiance (`--sao-show`).
 layout(constant_id = 0) const bool HAS_PHONG = false;
 layout(constant_id = 1) const bool HAS_SAO = false;
 layout(constant_id = 2) const bool SAO_VIEW = false;
@@ -30,7 +31,7 @@ void main() {
     // Phong pixels already hold their indirect radiance (see gi_common.glsl).
     bool phong = HAS_PHONG && any(greaterThan(gbuffer_phong_specular(gb_specular, p), vec3(0.0)));
     phong = phong || (GGX_RADIANCE && texelFetch(gb_specular, p, 0).a > 1.5);
-    float ao = HAS_SAO ? texelFetch(sao, p / 2, 0).r : 1.0;
+    float ao = HAS_SAO ? texelFetch(sao, p, 0).r : 1.0;
     if (SAO_VIEW) {
         imageStore(radiance, p, vec4(vec3(ao), d.a));
         return;

@@ -4,16 +4,28 @@
 //   A = max(0, 1 − 5/(r⁶N) Σ max(r² − v·v, 0)³ · max((v·n − β)/(v·v + ε), 0) · σ)^k
 // with v = tap − centre (world space, meters), n the centre's G-buffer normal and σ the
 // normal-similarity weight of the tap (Oetke 2017, Eq. 2.22). Runs at half resolution: the
-// output texel (x, y) is the AO of full-resolution pixel (2x, 2y). Depth and normals are read
-// at full resolution (level 0; the thesis's per-tap depth mips are not built). 1 = unoccluded;
-// the background is 1.
+// output texel (x, y) is the AO of full-resolution pixel (2x, 2y). Depth and normals come from
+// the sao_depth pyramid: a tap at screen offset d pixels reads level
+// m = clamp(⌊log2 d⌋ − LOG_Q, 0, levels − 1) (Oetke 2017 §2.5: q' = 2⁴; McGuire et al. 2012
+// §3.1), the texel over its pixel there, and its position is the point at that texel's view
+// depth on the tap pixel's own camera ray. Taps within 2^(LOG_Q+1) pixels read level 0, the
+// full-resolution depth. 1 = unoccluded; the background is 1.
 #include "frame.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(set = 0, binding = 0, std430) readonly buffer FrameBuf { GpuFrame frame; };
-layout(set = 0, binding = 1) uniform sampler2D gb_normal;
-layout(set = 0, binding = 2) uniform sampler2D gb_depth;
-layout(set = 0, binding = 3, r32f) uniform writeonly image2D ao;
+// The sao_depth pyramid, one binding per level: world normal (xyz) and view depth z (w; 0:
+// sky). Levels beyond pc.depth_levels − 1 are bound to the coarsest and never read.
+layout(set = 0, binding = 1) uniform sampler2D level0;
+layout(set = 0, binding = 2) uniform sampler2D level1;
+layout(set = 0, binding = 3) uniform sampler2D level2;
+layout(set = 0, binding = 4) uniform sampler2D level3;
+layout(set = 0, binding = 5) uniform sampler2D level4;
+layout(set = 0, binding = 6) uniform sampler2D level5;
+layout(set = 0, binding = 7, r32f) uniform writeonly image2D ao;
+
+// log2 of the screen offset (pixels) up to which a tap reads level 0, minus one.
+const int LOG_Q = 4;
 
 layout(push_constant) uniform Push {
     float radius_m;         // r: world-space sample radius
@@ -24,13 +36,31 @@ layout(push_constant) uniform Push {
     uint taps;              // N
     float spiral_turns;     // τ
     uint seed;              // varies the per-pixel rotation φ
+    uint depth_levels;      // levels of the sao_depth pyramid (at most 6)
 } pc;
 
 #define TWO_PI 6.28318530717958647692
 
-vec3 world_at(ivec2 px, vec2 size) {
-    float depth = texelFetch(gb_depth, px, 0).r;
-    return pixel_world_position(frame.inv_view_proj, frame.camera_position.xyz, px, size, depth);
+// Level m of the pyramid at texel q (m < pc.depth_levels). Each level is its own binding (a
+// one-level view), read at level 0: with one binding and texelFetch's level varying between
+// neighbouring invocations, llvmpipe (lavapipe) returned texels of the wrong level, which put
+// taps at far pixels' depths (measured: v·n up to 0.07 m on a flat floor, where it is 0; a
+// switch over constant levels of the one binding did the same).
+vec4 pyramid_texel(ivec2 q, int m) {
+    switch (m) {
+        case 0: return texelFetch(level0, min(q, textureSize(level0, 0) - 1), 0);
+        case 1: return texelFetch(level1, min(q, textureSize(level1, 0) - 1), 0);
+        case 2: return texelFetch(level2, min(q, textureSize(level2, 0) - 1), 0);
+        case 3: return texelFetch(level3, min(q, textureSize(level3, 0) - 1), 0);
+        case 4: return texelFetch(level4, min(q, textureSize(level4, 0) - 1), 0);
+        default: return texelFetch(level5, min(q, textureSize(level5, 0) - 1), 0);
+    }
+}
+
+// The point at view depth z on the camera ray through pixel px's centre.
+vec3 world_at(ivec2 px, vec2 size, float z, vec3 forward) {
+    vec3 d = pixel_world_position(frame.inv_view_proj, vec3(0.0), px, size, 0.5);
+    return frame.camera_position.xyz + d * (z / dot(d, forward));
 }
 
 // The camera's unit view direction, from the clip-space z axis.
@@ -60,13 +90,16 @@ void main() {
     if (any(greaterThanEqual(hp, imageSize(ao)))) return;
     ivec2 size = ivec2(frame.counts.zw);
     ivec2 c = min(hp * 2, size - 1);
-    if (texelFetch(gb_depth, c, 0).r >= 1.0) {
+    vec4 centre = texelFetch(level0, c, 0);
+    if (centre.w <= 0.0) {
         imageStore(ao, hp, vec4(1.0));
         return;
     }
-    vec3 p = world_at(c, vec2(size));
-    vec3 n = normalize(texelFetch(gb_normal, c, 0).xyz);
-    float z_m = max(dot(p - frame.camera_position.xyz, camera_forward()), 1e-4);
+    vec3 forward = camera_forward();
+    vec3 p = world_at(c, vec2(size), centre.w, forward);
+    vec3 n = centre.xyz;
+    float z_m = max(centre.w, 1e-4);
+    int top = int(pc.depth_levels) - 1;
     float r = pc.radius_m;
     float r2 = r * r;
     // r' = r·S'/z: the radius in pixels (Eq. 2.20).
@@ -76,13 +109,16 @@ void main() {
     for (uint i = 0u; i < pc.taps; ++i) {
         float alpha = (float(i) + 0.5) / float(pc.taps);
         float theta = TWO_PI * alpha * pc.spiral_turns + phi;
-        ivec2 s = ivec2(floor(vec2(c) + 0.5 + radius_px * alpha * vec2(cos(theta), sin(theta))));
+        float offset_px = radius_px * alpha;
+        ivec2 s = ivec2(floor(vec2(c) + 0.5 + offset_px * vec2(cos(theta), sin(theta))));
         if (any(lessThan(s, ivec2(0))) || any(greaterThanEqual(s, size))) continue;
-        if (texelFetch(gb_depth, s, 0).r >= 1.0) continue;
-        vec3 v = world_at(s, vec2(size)) - p;
+        int m = clamp(findMSB(int(min(offset_px, 1e9))) - LOG_Q, 0, top);
+        vec4 tap = pyramid_texel(s >> m, m);
+        if (tap.w <= 0.0) continue;
+        vec3 v = world_at(s, vec2(size), tap.w, forward) - p;
         float vv = dot(v, v);
         float f = max(r2 - vv, 0.0);
-        vec3 ns = normalize(texelFetch(gb_normal, s, 0).xyz);
+        vec3 ns = tap.xyz;
         float sigma = normal_similarity(abs(dot(n, ns)));
         sum += f * f * f * max((dot(v, n) - pc.bias) / (vv + pc.epsilon_m2), 0.0) * sigma;
     }

@@ -128,25 +128,36 @@ pub const TIME_S: Limit<f32> = Limit::new("--time", None, "a scene time in secon
 /// Exposure multiplies the radiance before tone mapping; 0 would be black, NaN garbage.
 pub const EXPOSURE: Limit<f32> = Limit {
     min_exclusive: true,
-    ..Limit::new("--exposure", None, "an exposure factor", 0.0, 1e6)
+    ..Limit::new(
+        "--exposure",
+        Some("post.exposure"),
+        "an exposure factor",
+        0.0,
+        1e6,
+    )
 };
 /// TAA history weight α in [0, 0.999]: 1 would never let the current frame in.
 pub const TAA_HISTORY_WEIGHT: Limit<f32> = Limit::new(
     "--taa-history-weight",
-    None,
+    Some("post.taa_history_weight"),
     "a TAA history weight",
     0.0,
     0.999,
 );
 /// Frames of a headless TAA render.
-pub const TAA_FRAMES: Limit<u32> =
-    Limit::new("--taa-frames", None, "a number of TAA frames", 1, 4096);
+pub const TAA_FRAMES: Limit<u32> = Limit::new(
+    "--taa-frames",
+    Some("post.taa_frames"),
+    "a number of TAA frames",
+    1,
+    4096,
+);
 /// Auto exposure's key value (the display luminance of the log-average scene luminance).
 pub const AUTO_EXPOSURE_KEY: Limit<f32> = Limit {
     min_exclusive: true,
     ..Limit::new(
         "--auto-exposure",
-        None,
+        Some("post.auto_exposure"),
         "an auto exposure key value",
         0.0,
         1e3,
@@ -157,7 +168,7 @@ pub const EXPOSURE_ADAPTATION: Limit<f32> = Limit {
     min_exclusive: true,
     ..Limit::new(
         "--exposure-adaptation",
-        None,
+        Some("post.exposure_adaptation"),
         "an adaptation fraction per frame",
         0.0,
         1.0,
@@ -166,7 +177,7 @@ pub const EXPOSURE_ADAPTATION: Limit<f32> = Limit {
 /// Bloom strength: the share of the radiance moved into the blur.
 pub const BLOOM_STRENGTH: Limit<f32> = Limit::new(
     "--bloom",
-    None,
+    Some("post.bloom"),
     "a bloom strength (share of the radiance)",
     0.0,
     1.0,
@@ -216,14 +227,26 @@ pub const GI_RAYS: Limit<u32> = Limit::new("--gi-rays", Some("gi.rays"), "rays p
 /// SAO (Oetke 2017 §2.5): the world-space sample radius r.
 pub const SAO_RADIUS_M: Limit<f32> = Limit {
     min_exclusive: true,
-    ..Limit::new("--sao-radius", None, "an SAO radius in meters", 0.0, 1e6)
+    ..Limit::new(
+        "--sao-radius",
+        Some("gi.sao_radius_m"),
+        "an SAO radius in meters",
+        0.0,
+        1e6,
+    )
 };
 /// SAO bias β, in meters of v·n (v the tap offset, n the normal).
-pub const SAO_BIAS: Limit<f32> = Limit::new("--sao-bias", None, "an SAO bias in meters", 0.0, 1e6);
+pub const SAO_BIAS: Limit<f32> = Limit::new(
+    "--sao-bias",
+    Some("gi.sao_bias"),
+    "an SAO bias in meters",
+    0.0,
+    1e6,
+);
 /// SAO contrast k, the exponent of the AO term.
 pub const SAO_CONTRAST: Limit<f32> = Limit::new(
     "--sao-contrast",
-    None,
+    Some("gi.sao_contrast"),
     "an SAO contrast exponent",
     0.0,
     64.0,
@@ -233,7 +256,7 @@ pub const SAO_EPSILON: Limit<f32> = Limit {
     min_exclusive: true,
     ..Limit::new(
         "--sao-epsilon",
-        None,
+        Some("gi.sao_epsilon_m2"),
         "an SAO epsilon in square meters",
         0.0,
         1e6,

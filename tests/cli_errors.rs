@@ -233,3 +233,21 @@ fn render_output_must_be_a_png_and_says_how_to_get_hdr() {
         "no file was left behind"
     );
 }
+
+/// `voxgi bench ssgi` refuses its bad inputs before the device is up, naming the flag or the
+/// file and what to do.
+#[test]
+fn bench_ssgi_names_its_bad_inputs() {
+    for (args, want) in [
+        (&["--samples", "16,0"][..], "--samples = 0"),
+        (&["--gi-frames", "0"], "--gi-frames = 0"),
+        (&["--size", "100"], "--size must divide it"),
+        (&["assets/scenes/sun.toml"], "no reference image"),
+        (&["--mips", "median"], "possible values: voting, fast"),
+    ] {
+        let out = voxgi(&[&["bench", "ssgi"][..], args].concat());
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{args:?} succeeded");
+        assert!(stderr.contains(want), "{args:?}: {stderr}");
+    }
+}

@@ -1,6 +1,7 @@
 //! Modified SAO (Oetke 2017 §2.5): a flat floor has no obscurance (exactly 1, and the lit
-//! image equals the one without SAO), and a 90° corner matches the same estimator and blur
-//! evaluated on the CPU against the analytic geometry. Validation on.
+//! image equals the one without SAO), a 90° corner matches the same estimator, depth pyramid
+//! and blur evaluated on the CPU against the analytic geometry, and the joint bilateral
+//! upsampling keeps a far surface's AO off a near one across a silhouette. Validation on.
 
 mod common;
 
@@ -68,10 +69,15 @@ fn sao_of_a_flat_floor_is_exactly_one_and_leaves_the_image_unchanged() {
         false,
     );
     let ao = render(&s, view(1.8));
+    let (i, min) = ao
+        .iter()
+        .enumerate()
+        .fold((0, 1.0f32), |m, (i, &a)| if a < m.1 { (i, a) } else { m });
     assert!(
         ao.iter().all(|&a| a == 1.0),
-        "AO of a flat floor: {:?}",
-        &ao[..8]
+        "AO of a flat floor: {min} at pixel {i} (x {}, y {})",
+        i as u32 % SIZE,
+        i as u32 / SIZE
     );
     // And A = 1 multiplies the indirect light by exactly 1.
     let lit_sao = render(&s, Some(SaoSettings::default()));
@@ -101,6 +107,28 @@ fn surface(cam: &Camera, px: [i32; 2]) -> Option<(Vec3, Vec3)> {
     best.map(|(_, p, n)| (p, n))
 }
 
+/// The sizes of level `k` of the depth pyramid (Vulkan mips: halved, rounded down, ≥ 1).
+fn level_size(k: u32) -> [i32; 2] {
+    [(SIZE >> k).max(1) as i32; 2]
+}
+
+/// Levels of the depth pyramid at `SIZE`² (`sao::depth_levels`: six from 32² up).
+const LEVELS: u32 = 6;
+
+/// The full-resolution pixel whose depth and normal texel `q` of level `k` holds:
+/// `glsl/sao_depth.comp`'s rotated-grid subsample, child 2q + ((q.y & 1) ^ 1, (q.x & 1) ^ 1)
+/// clamped to the finer level, followed down to level 0.
+fn source_pixel(mut q: [i32; 2], k: u32) -> [i32; 2] {
+    for j in (1..=k).rev() {
+        let s = level_size(j - 1);
+        q = [
+            (2 * q[0] + ((q[1] & 1) ^ 1)).min(s[0] - 1),
+            (2 * q[1] + ((q[0] & 1) ^ 1)).min(s[1] - 1),
+        ];
+    }
+    q
+}
+
 /// The per-pixel rotation φ of `glsl/sao.comp` (the same integer hash).
 fn rotation(c: [i32; 2], seed: u32) -> f32 {
     let mut h = (c[0] as u32)
@@ -118,7 +146,9 @@ fn smoothstep(l: f32, r: f32, x: f32) -> f32 {
     t * t * (3.0 - 2.0 * t)
 }
 
-/// Oetke 2017 Eq. 2.20–2.22 at the full-resolution pixel `c`, as `glsl/sao.comp` evaluates it.
+/// Oetke 2017 Eq. 2.20–2.22 at the full-resolution pixel `c`, as `glsl/sao.comp` evaluates it:
+/// a tap at offset d pixels reads level m = clamp(⌊log2 d⌋ − 4, 0, 5) of the depth pyramid,
+/// i.e. the view depth and normal of [`source_pixel`], placed on the tap pixel's own ray.
 fn sao_cpu(cam: &Camera, s: &SaoSettings, c: [i32; 2]) -> f32 {
     let Some((p, n)) = surface(cam, c) else {
         return 1.0;
@@ -141,9 +171,20 @@ fn sao_cpu(cam: &Camera, s: &SaoSettings, c: [i32; 2]) -> f32 {
         if q.iter().any(|&v| v < 0 || v >= SIZE as i32) {
             continue;
         }
-        let Some((ps, ns)) = surface(cam, q) else {
+        let msb = (off as i32).checked_ilog2().map_or(-1, |l| l as i32);
+        let m = (msb - 4).clamp(0, LEVELS as i32 - 1) as u32;
+        let size_m = level_size(m);
+        let qm = [
+            (q[0] >> m).min(size_m[0] - 1),
+            (q[1] >> m).min(size_m[1] - 1),
+        ];
+        let Some((source, ns)) = surface(cam, source_pixel(qm, m)) else {
             continue;
         };
+        let z = (source - cam.position).dot(cam.forward);
+        let (near, far) = cam.pixel_ray_points(q[0] as u32, q[1] as u32, SIZE, SIZE);
+        let d = far - near;
+        let ps = cam.position + d * (z / d.dot(cam.forward));
         let v = ps - p;
         let vv = v.dot(v);
         let f = (r2 - vv).max(0.0);
@@ -211,10 +252,12 @@ fn sao_of_a_corner_matches_the_estimator_on_the_analytic_geometry() {
         .map(|i| sao_cpu(&cam, &sao, [(i % half) * 2, (i / half) * 2]))
         .collect();
     let cpu = blur_cpu(&cam, &blur_cpu(&cam, &raw, [1, 0]), [0, 1]);
-    let mut errs: Vec<f32> = (0..SIZE * SIZE)
+    // Pixel (2x, 2y) coincides with half-resolution texel (x, y): the upsampling gives it
+    // that texel's value alone (bilinear weight 1, its own depth).
+    let mut errs: Vec<f32> = (0..half * half)
         .map(|i| {
-            let (x, y) = ((i % SIZE) as i32, (i / SIZE) as i32);
-            (gpu[i as usize] - cpu[((y / 2) * half + x / 2) as usize]).abs()
+            let (x, y) = (i % half, i / half);
+            (gpu[(2 * y * SIZE as i32 + 2 * x) as usize] - cpu[i as usize]).abs()
         })
         .collect();
     let min_ao = cpu.iter().cloned().fold(1.0, f32::min);
@@ -224,7 +267,8 @@ fn sao_of_a_corner_matches_the_estimator_on_the_analytic_geometry() {
     // z²/near · 2⁻²⁴ ≈ 1.5²/0.01 · 6e-8 ≈ 1.3e-5 m at z = 1.5 m; the rasterized normals are
     // exact for these axis-aligned faces. With (r² − v·v)³/r⁶ ≤ 1, σ ≤ 3 and
     // |d/dv (v·n − β)/(v·v + ε)| ≤ 3/(v·v + ε), tap i (at |v| ≈ αᵢ r, r = 0.6 m) moves the
-    // sum 5/(r⁶N)·Σ by at most 5/16 · 3 · 3/(αᵢ² r² + ε) per meter of position error; over
+    // sum 5/(r⁶N)·Σ by at most 5/16 · 3 · 3/(αᵢ² r² + ε) per meter of position error (the
+    // pyramid's coarser levels put a tap at another pixel's depth, the same on both sides); over
     // the 16 taps that is 2.8 · Σᵢ 1/(αᵢ² r² + ε) ≈ 2.8 · 370 ≈ 1040 per meter, so A = (1 − …)^k
     // (k = 2, the base ≤ 1) moves by at most 2 · 1040 · 1.3e-5 ≈ 0.03 if all errors had one
     // sign; the blur averages, never amplifies. Bound: 0.03 (measured: 1.1e-4). A tap rounded
@@ -237,4 +281,128 @@ fn sao_of_a_corner_matches_the_estimator_on_the_analytic_geometry() {
     );
     // The corner is actually obscured (the test is not comparing ones with ones).
     assert!(min_ao < 0.5, "the corner is obscured: min A = {min_ao}");
+}
+
+/// The edge scene: the floor and box face of [`scene`] (floor cut to z ≥ −1.4) seen
+/// head-on from z = −3, and a 6 m square facing the camera at z = −1.5, turned 20° about the
+/// view axis, whose slanted right edge crosses the floor–face crease behind it in the middle
+/// of the image (at the crease's row the square's plane is at y = 0.25 m, where its edge is
+/// at x = 0).
+const EDGE_SCENE: &str = "[camera]\nposition = [0.0, 0.5, -3.0]\nforward = [0.0, 0.0, 1.0]\n\
+    fov_y_deg = 50.0\n\
+    [[lights]]\nkind = \"directional\"\ndirection = [0.3, -1.0, 0.4]\nirradiance_w_m2 = 2.0\n\
+    [[objects]]\nbuiltin = \"quad\"\nscale = [4.0, 1.0, 3.4]\ntranslate = [0.0, 0.0, 0.3]\n\
+    [[objects]]\nbuiltin = \"cube\"\nscale = [4.0, 2.0, 1.0]\ntranslate = [0.0, 1.0, 0.5]\n\
+    [[objects]]\nbuiltin = \"quad\"\nscale = [6.0, 1.0, 6.0]\nrotate_deg = [-90.0, 0.0, 20.0]\n\
+    translate = [-3.54, 1.2, -1.5]\n";
+
+/// Whether the camera ray through pixel `px` meets the front square (z = −1.5) first: it is
+/// the nearest surface wherever it is hit (everything else lies at z ≥ −1.4).
+fn on_front_square(cam: &Camera, px: [i32; 2]) -> bool {
+    let (near, far) = cam.pixel_ray_points(px[0] as u32, px[1] as u32, SIZE, SIZE);
+    let d = far - near;
+    let p = near + d * ((-1.5 - near.z) / d.z);
+    // The square's frame: centre (−3.54, 1.2), axes turned 20° about z, half side 3 m.
+    let (s, c) = 20f32.to_radians().sin_cos();
+    let (dx, dy) = (p.x + 3.54, p.y - 1.2);
+    let (u, v) = (c * dx + s * dy, -s * dx + c * dy);
+    u.abs() <= 3.0 && v.abs() <= 3.0
+}
+
+#[test]
+fn upsampled_sao_does_not_bleed_across_a_depth_edge() {
+    // The square has nothing in front of it within r = 1 m (the floor starts 0.1 m behind
+    // its plane, the box face 1.5 m), so every tap either lies in its plane (v·n ≈ 0 < β) or
+    // behind it (v·n < 0): its AO is exactly 1 at every half-resolution texel, and the blur,
+    // whose depth weights across the 1.3 m step are exp(−1.3²/(2·(0.02·1.5)²)) = 0 in f32,
+    // keeps it 1. Behind the edge the crease is obscured (A well below 1).
+    //
+    // Joint bilateral upsampling weighs each of a pixel's (up to) four texels by
+    // exp(−Δz²/(2σ²)), σ = 2% of its depth: across the step that weight is 0 in f32, so a
+    // pixel's value is a convex combination of its own surface's texels. Bounds, exact up to
+    // the f32 rounding of a weighted mean of at most four terms (values ≤ 1, ulp 6e-8: the four
+    // products, three sums and the division, which lavapipe computes through a reciprocal,
+    // stay within 4e-6; measured 1.1e-6): every pixel of the square is 1, every pixel
+    // behind lies within [min, max] of its own surface's texels. The texels are read back at
+    // the even pixels, where the upsampling returns the texel itself. Nearest upsampling (the
+    // texel of pixel (2⌊x/2⌋, 2⌊y/2⌋)) breaks both where that pixel is across the edge.
+    let scene = Scene::from_toml_str(EDGE_SCENE, Path::new("sao edge scene"), Path::new("."))
+        .expect("scene");
+    let cam = scene.camera;
+    let sao = SaoSettings {
+        radius_m: 1.0,
+        view: true,
+        ..Default::default()
+    };
+    let ao = render(&scene, Some(sao));
+    let n = SIZE as i32;
+    let front = |p: [i32; 2]| on_front_square(&cam, p);
+    let texel = |q: [i32; 2]| {
+        let p = [(2 * q[0]).min(n - 1), (2 * q[1]).min(n - 1)];
+        (ao[(p[1] * n + p[0]) as usize], front(p))
+    };
+    let (mut checked, mut front_pixels, mut worst) = (0, 0, 0.0f32);
+    let (mut nearest_bleeds, mut min_behind) = (0, 1.0f32);
+    for y in 0..n {
+        for x in 0..n {
+            let p = [x, y];
+            let a = ao[(y * n + x) as usize];
+            let here = front(p);
+            // The texels with a bilinear weight at p: ⌊p/2⌋ + {0, 1} along each odd axis.
+            let mut own = Vec::new();
+            for oy in 0..=(y & 1) {
+                for ox in 0..=(x & 1) {
+                    let (v, f) = texel([x / 2 + ox, y / 2 + oy]);
+                    if f == here {
+                        own.push(v);
+                    }
+                }
+            }
+            if !here {
+                min_behind = min_behind.min(a);
+            }
+            // A sliver without a texel of its own surface takes the nearest depth's; none
+            // should occur along a straight edge (of two texels symmetric about p, one lies on
+            // p's side), and the count is asserted below.
+            if own.is_empty() {
+                continue;
+            }
+            checked += 1;
+            let lo = own.iter().cloned().fold(f32::INFINITY, f32::min);
+            let hi = own.iter().cloned().fold(f32::NEG_INFINITY, f32::max);
+            let err = (lo - a).max(a - hi).max(0.0);
+            worst = worst.max(err);
+            if here {
+                front_pixels += 1;
+                worst = worst.max((a - 1.0).abs());
+            }
+            // What nearest upsampling would have read here.
+            let (nearest, nf) = texel([x / 2, y / 2]);
+            if nf != here && (nearest - a).abs() > 0.05 {
+                nearest_bleeds += 1;
+            }
+        }
+    }
+    println!(
+        "edge: {checked} of {} pixels checked ({front_pixels} on the square), worst excursion \
+         {worst:e}, min AO behind {min_behind}, pixels nearest upsampling would bleed: \
+         {nearest_bleeds}",
+        n * n
+    );
+    assert!(worst <= 4e-6, "AO bleeds across the edge by {worst}");
+    assert!(
+        checked >= n * n - 4,
+        "{checked} pixels had a texel of their own surface"
+    );
+    assert!(front_pixels > n * n / 8 && front_pixels < n * n / 2 + n * n / 4);
+    // The test has something to bleed: obscured texels behind the edge, and nearest
+    // upsampling would carry them across it (or carry the square's 1 onto them).
+    assert!(
+        min_behind < 0.8,
+        "the crease behind the edge is obscured: {min_behind}"
+    );
+    assert!(
+        nearest_bleeds > 0,
+        "nearest upsampling would bleed somewhere"
+    );
 }

@@ -262,3 +262,262 @@ fn split_sum_table_matches_a_cpu_integration() {
         );
     }
 }
+
+/// `voxgi bench ssgi` end to end on a tiny grid (2 mip filters × 2 resolutions × 1 sample
+/// count at 32²): every configuration gets a row with its stages, times and errors. Speed is
+/// not asserted; what must hold whatever the device: every stage's per-frame sum is part of
+/// the ssgi sum, which is part of the frame's, so their medians are ordered the same way
+/// (order statistics are monotone), and the images are scored against the reference.
+#[test]
+fn bench_ssgi_runs_end_to_end_on_a_tiny_grid() {
+    use voxgi::bench::{bench_ssgi, load_reference, SsgiBenchDesc};
+    use voxgi::gi::SsgiMips;
+    let scene = voxgi::scene::load_scene_arg(Some("cornell")).expect("scene");
+    let reference =
+        load_reference(&Path::new(ROOT).join("assets/references"), "cornell", 32).expect("exr");
+    let desc = SsgiBenchDesc {
+        mips: vec![SsgiMips::Fast, SsgiMips::Voting],
+        resolutions: vec![SsgiResolution::Full, SsgiResolution::Quarter],
+        samples: vec![8],
+        size: 32,
+        frames: 3,
+        warmup: 1,
+        gi_frames: 2,
+    };
+    let ctx = common::context();
+    let report = bench_ssgi(&ctx, &scene, "cornell", &reference, &desc).expect("runs");
+    common::assert_no_validation_messages(&ctx);
+    println!("{}", report.table());
+    assert_eq!(report.rows.len(), 4);
+    for r in &report.rows {
+        let stages: Vec<&str> = r.stages.iter().map(|s| s.stage.as_str()).collect();
+        assert_eq!(
+            stages,
+            ["ssgi_input", "ssgi_mip", "ssgi_gather", "ssgi_upsample"],
+            "row {}",
+            r.number
+        );
+        for s in &r.stages {
+            let t = s.time;
+            assert!(t.min_ms <= t.median_ms && t.median_ms <= t.max_ms, "{s:?}");
+            assert!(
+                t.median_ms <= r.ssgi.median_ms,
+                "{s:?} vs ssgi {:?}",
+                r.ssgi
+            );
+        }
+        assert!(r.ssgi.median_ms <= r.frame.median_ms, "{r:?}");
+        assert!(
+            r.rel_mse.is_finite() && r.rel_mse > 0.0 && r.flip > 0.0,
+            "{r:?}"
+        );
+    }
+    assert_eq!(
+        (report.rows[0].mips.as_str(), report.rows[3].mips.as_str()),
+        ("fast", "voting")
+    );
+    assert_eq!(report.csv().lines().count(), 5);
+    // Indirect light brings the full-resolution image closer to the reference than direct
+    // light alone (the Cornell test above, at this size).
+    assert!(report.rows[0].rel_mse < report.direct_rel_mse, "{report:?}");
+}
+
+/// The reprojection scene: a grey back wall facing the camera at z = 2 (x ∈ [−1, 1.5],
+/// y ∈ [−1.5, 1.5]), a red left wall at x = −1 (z ∈ [0, 2]) that bounces light onto it (so
+/// its indirect light varies across the image), a grey cube at z ∈ [0, 0.4] in front of it
+/// (1–1.4 m from the camera: its image moves 3 − 1 = 2 pixels more than the wall's per
+/// wall-pixel step of the camera, uncovering wall), and a point light; the camera looks along
+/// +z from z = −1 (the back wall 3 m away).
+const REPROJECT_SCENE: &str = r#"
+[camera]
+position = [0.0, 0.0, -1.0]
+forward = [0.0, 0.0, 1.0]
+fov_y_deg = 60.0
+[[lights]]
+kind = "point"
+position = [0.0, 0.5, 0.5]
+intensity_w_sr = [2.0, 2.0, 2.0]
+[[objects]]
+builtin = "quad"
+scale = [2.5, 1.0, 3.0]
+rotate_deg = [-90.0, 0.0, 0.0]
+translate = [0.25, 0.0, 2.0]
+material = { albedo = [0.7, 0.7, 0.7] }
+[[objects]]
+builtin = "quad"
+scale = [3.0, 1.0, 2.0]
+rotate_deg = [0.0, 0.0, -90.0]
+translate = [-1.0, 0.0, 1.0]
+material = { albedo = [0.9, 0.1, 0.1] }
+[[objects]]
+builtin = "cube"
+scale = 0.4
+translate = [0.3, -0.3, 0.2]
+material = { albedo = [0.5, 0.5, 0.5] }
+"#;
+
+const REPROJECT_SIZE: u32 = 64;
+
+/// Where the ray through pixel `px` of `cam` first meets the scene: `Some(true)` on the back
+/// wall, `Some(false)` on the cube or the left wall, `None` on nothing (the cube by a slab
+/// test, the walls as planes within their bounds).
+fn back_wall_seen(cam: &voxgi::scene::Camera, px: [u32; 2]) -> Option<(bool, Vec3)> {
+    let n = REPROJECT_SIZE;
+    let (near, far) = cam.pixel_ray_points(px[0], px[1], n, n);
+    let d = far - near;
+    let mut best: Option<(f32, bool, Vec3)> = None;
+    let mut consider = |t: f32, back: bool| {
+        if t > 0.0 && best.map_or(true, |b| t < b.0) {
+            best = Some((t, back, near + d * t));
+        }
+    };
+    let t = (2.0 - near.z) / d.z;
+    let p = near + d * t;
+    if (-1.0..=1.5).contains(&p.x) && p.y.abs() <= 1.5 {
+        consider(t, true);
+    }
+    let t = (-1.0 - near.x) / d.x;
+    let p = near + d * t;
+    if (0.0..=2.0).contains(&p.z) && p.y.abs() <= 1.5 {
+        consider(t, false);
+    }
+    let (lo, hi) = (Vec3::new(0.1, -0.5, 0.0), Vec3::new(0.5, -0.1, 0.4));
+    let (t0, t1) = ((lo - near) / d, (hi - near) / d);
+    let (tmin, tmax) = (t0.min(t1).max_element(), t0.max(t1).min_element());
+    if tmin <= tmax {
+        consider(tmin, false);
+    }
+    best.map(|(_, back, p)| (back, p))
+}
+
+/// The ssgi history's reprojection under a moving camera (Oetke 2017 §5.1), tested where its
+/// nearest-texel lookup must be exact: the camera steps sideways by exactly one pixel's
+/// footprint on the back wall (3 m · 2 tan 30° / 64), so every back-wall point seen at pixel
+/// p after the step was at the centre of a pixel q (q = p ± 1) before it. Frame k renders 3
+/// frames at C_k; frame k + 1 renders once at C_{k+1} with the same renderer. Without feedback
+/// its gather equals a fresh render's first frame at C_{k+1} (same inputs, same seed after the
+/// restart), and its irradiance is mix(E_fresh, E_k(q), τ·w) with w = 1 where the depths agree:
+/// in indirect radiance (the image minus the direct-only image of the same camera; ρ is that
+/// of the same wall point), I_{k+1}(p) = (1 − τ)·I_fresh(p) + τ·I_k(q), exactly up to f32
+/// rounding: the mix, the composite's d + ρ/π·E and the subtraction of d (|d| ≤ 1, a few ulps
+/// of 6e-8 each) stay within 1e-5. Back-wall pixels that the cube hid at C_k (q sees the cube,
+/// 1–1.4 m away: its clip w differs from the wall's by over 50%, far beyond the 5% where the
+/// shader's depth test gives w = 0) must take the fresh value alone. Reading the history
+/// unreprojected (q = p) is off by far more: the red wall's bounce varies across the image.
+#[test]
+fn moving_camera_reprojects_the_ssgi_history_exactly_by_a_whole_texel() {
+    let scene = Scene::from_toml_str(REPROJECT_SCENE, Path::new("reproject"), Path::new(ROOT))
+        .expect("scene");
+    let n = REPROJECT_SIZE;
+    let footprint = 3.0 * 2.0 * 30f32.to_radians().tan() / n as f32;
+    let mut moved = scene.clone();
+    moved.camera.position.x += footprint;
+    let tau = SsgiSettings::default().history_weight;
+    let gi = |method| GiSettings {
+        method,
+        filter_radius: 0,
+        ssgi: SsgiSettings {
+            feedback: false,
+            resolution: SsgiResolution::Full,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let settings = |method| voxgi::render::RenderSettings {
+        width: n,
+        height: n,
+        gi: gi(method),
+        ..Default::default()
+    };
+    let ctx = common::context();
+    let seq = voxgi::render::render_sequence(
+        &ctx,
+        &scene,
+        &settings(GiMethod::Ssgi),
+        3,
+        std::slice::from_ref(&moved),
+    )
+    .expect("renders");
+    let render = |s: &Scene, method| {
+        voxgi::render::render_image(&ctx, s, &settings(method))
+            .expect("renders")
+            .hdr
+    };
+    let fresh = render(&moved, GiMethod::Ssgi);
+    let direct_k = render(&scene, GiMethod::None);
+    let direct_k1 = render(&moved, GiMethod::None);
+    common::assert_no_validation_messages(&ctx);
+    let indirect = |img: &HdrImage, direct: &HdrImage, i: usize| {
+        let (a, d) = (img.data[i], direct.data[i]);
+        [a[0] - d[0], a[1] - d[1], a[2] - d[2]]
+    };
+    let vp_k = scene.camera.view_proj(1.0);
+    let (mut exact, mut disoccluded) = (0, 0);
+    let (mut worst, mut worst_unprojected, mut worst_disoccluded) = (0.0f32, 0.0f32, 0.0f32);
+    let mut largest = 0.0f32;
+    for y in 0..n {
+        for x in 0..n {
+            let Some((true, p)) = back_wall_seen(&moved.camera, [x, y]) else {
+                continue;
+            };
+            // Where the wall point was at C_k: a pixel centre, by construction.
+            let ndc = vp_k.project_point3(p);
+            let qf = [
+                (ndc.x * 0.5 + 0.5) * n as f32 - 0.5,
+                (ndc.y * 0.5 + 0.5) * n as f32 - 0.5,
+            ];
+            let q = [qf[0].round(), qf[1].round()];
+            assert!(
+                (qf[0] - q[0]).abs() < 1e-3 && (qf[1] - q[1]).abs() < 1e-3,
+                "pixel ({x}, {y}) was not at a pixel centre: {qf:?}"
+            );
+            if q.iter().any(|&v| v < 0.0 || v >= n as f32) {
+                continue;
+            }
+            let (qx, qy) = (q[0] as u32, q[1] as u32);
+            assert_eq!(qy, y, "a sideways step moves pixels sideways");
+            let i = (y * n + x) as usize;
+            let j = (qy * n + qx) as usize;
+            let next = indirect(&seq.frames[0], &direct_k1, i);
+            let new = indirect(&fresh, &direct_k1, i);
+            let before = indirect(&seq.warm, &direct_k, j);
+            let unmoved = indirect(&seq.warm, &direct_k, i);
+            let visible_before = matches!(back_wall_seen(&scene.camera, [qx, qy]), Some((true, _)));
+            for c in 0..3 {
+                largest = largest.max(before[c].abs());
+                if visible_before {
+                    let want = (1.0 - tau) * new[c] + tau * before[c];
+                    worst = worst.max((next[c] - want).abs());
+                    let naive = (1.0 - tau) * new[c] + tau * unmoved[c];
+                    worst_unprojected = worst_unprojected.max((next[c] - naive).abs());
+                } else {
+                    worst_disoccluded = worst_disoccluded.max((next[c] - new[c]).abs());
+                }
+            }
+            if visible_before {
+                exact += 1;
+            } else {
+                disoccluded += 1;
+            }
+        }
+    }
+    println!(
+        "ssgi reprojection by one texel: {exact} pixels, worst {worst:e} (unreprojected \
+         {worst_unprojected:e}); {disoccluded} disoccluded, worst {worst_disoccluded:e}; largest \
+         indirect radiance {largest}"
+    );
+    assert!(
+        exact > (n * n / 3) as usize,
+        "{exact} back-wall pixels compared"
+    );
+    assert!(worst < 1e-5, "reprojected history off by {worst}");
+    assert!(disoccluded > 0, "the step uncovers wall the cube hid");
+    assert!(
+        worst_disoccluded < 1e-5,
+        "a disoccluded pixel kept history: {worst_disoccluded}"
+    );
+    assert!(
+        worst_unprojected > 100.0 * 1e-5,
+        "the history varies across the image: {worst_unprojected}"
+    );
+}

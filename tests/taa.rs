@@ -235,3 +235,101 @@ fn run_taa(
     let px = bytemuck::cast_slice::<u8, [f32; 4]>(readback.mapped().expect("mapped")).to_vec();
     px
 }
+
+/// The reprojection where its bilinear fetch must be exact: the plane z = 0 seen head-on from
+/// 6 m, the camera stepped sideways by exactly one pixel's footprint there
+/// (6 · 2 tan 25° / H), so the reprojected position of every pixel (its jitter taken out and
+/// put back) is the centre of a texel of the previous frame one column over: the bilinear
+/// weights are 1 and 0, and the history part of the blend is that texel's value. Bound: f32
+/// rounding only. The reprojection multiplies by previous VP × inverse(current VP), both in
+/// world space: inverting a view-projection with near 0.1 m for a point 6 m away loses about
+/// (6/0.1)² · 2⁻²⁴ ≈ 2e-4 of an NDC unit, i.e. 2e-4 · W/2 ≈ 5e-3 px at most, which moves the
+/// value by 5e-3 of one pixel's difference of the paint (0.5 per meter × 0.175 m per pixel =
+/// 0.087): 4.4e-4; the YCoCg round trip adds a few ulps of 3. Bound 5e-4 (measured 8e-6).
+/// Unreprojected, the history is a whole pixel's difference off (0.087).
+#[test]
+fn a_camera_step_of_one_texel_reprojects_the_history_exactly() {
+    let ctx = common::context();
+    let sampler = ctx
+        .create_sampler(vk::Filter::NEAREST, false)
+        .expect("sampler");
+    let settings = TaaSettings {
+        history_weight: 0.99,
+        frames: 1,
+    };
+    let taa = TaaPass::new(&ctx, settings, (W, H), sampler.raw).expect("pass");
+    let head_on = |x: f32| {
+        let mut proj = Mat4::perspective_rh(50f32.to_radians(), W as f32 / H as f32, 0.1, 100.0);
+        proj.y_axis.y = -proj.y_axis.y;
+        proj * Mat4::look_at_rh(Vec3::new(x, 0.0, 6.0), Vec3::new(x, 0.0, 0.0), Vec3::Y)
+    };
+    let step = 6.0 * 2.0 * 25f32.to_radians().tan() / H as f32;
+    let (vp1, vp2) = (head_on(0.0), head_on(step));
+    let n = (W * H) as usize;
+    let rgba = |c: [f32; 3]| [c[0], c[1], c[2], 1.0];
+    let pixel = |i: usize| (i as u32 % W, i as u32 / W);
+    let history: Vec<[f32; 4]> = (0..n)
+        .map(|i| {
+            let (x, y) = pixel(i);
+            rgba(paint(plane_hit(vp1, pixel_ndc(x, y)).0))
+        })
+        .collect();
+    // Saturated primaries: every 3×3 box holds the history, which clipping then keeps.
+    let primaries = [
+        [20.0, 0.0, 0.0],
+        [0.0, 20.0, 0.0],
+        [0.0, 0.0, 20.0],
+        [0.0; 3],
+    ];
+    let current: Vec<[f32; 4]> = (0..n)
+        .map(|i| rgba(primaries[(i % 2) + 2 * ((i / W as usize) % 2)]))
+        .collect();
+    taa.begin_frame(vp1);
+    run_taa(&ctx, &taa, &history, &vec![0.5; n]);
+    for _ in 0..120 {
+        taa.begin_frame(vp1);
+    }
+    let vp2_jittered = voxgi::post::taa::jittered(vp2, taa.begin_frame(vp2));
+    let depth: Vec<f32> = (0..n)
+        .map(|i| {
+            let (x, y) = pixel(i);
+            plane_hit(vp2_jittered, pixel_ndc(x, y)).1
+        })
+        .collect();
+    let out = run_taa(&ctx, &taa, &current, &depth);
+    common::assert_no_validation_messages(&ctx);
+    let w_cur = 0.01f32;
+    let (mut worst, mut worst_unprojected, mut compared) = (0.0f32, 0.0f32, 0);
+    for y in 0..H {
+        for x in 0..W {
+            // Camera 1's pixel under camera 2's pixel (x, y): a pixel centre one column over.
+            let (hx, hy) = plane_hit_px(vp1, vp2, x, y);
+            let (qx, qy) = ((hx - 0.5).round(), (hy - 0.5).round());
+            assert!(
+                (hx - 0.5 - qx).abs() < 1e-3 && (hy - 0.5 - qy).abs() < 1e-3,
+                "({x}, {y}) came from ({hx}, {hy}), not a pixel centre"
+            );
+            assert_eq!((qy as u32, (qx - x as f32).abs()), (y, 1.0));
+            if qx < 0.0 || qx >= W as f32 {
+                continue;
+            }
+            compared += 1;
+            let (i, j) = ((y * W + x) as usize, (qy as u32 * W + qx as u32) as usize);
+            for c in 0..3 {
+                let want = (1.0 - w_cur) * history[j][c] + w_cur * current[i][c];
+                worst = worst.max((out[i][c] - want).abs());
+                let unprojected = (1.0 - w_cur) * history[i][c] + w_cur * current[i][c];
+                worst_unprojected = worst_unprojected.max((out[i][c] - unprojected).abs());
+            }
+        }
+    }
+    println!(
+        "one-texel step: {compared} pixels, worst {worst:e}; unreprojected {worst_unprojected:e}"
+    );
+    assert_eq!(compared, ((W - 1) * H) as usize);
+    assert!(worst < 1e-5, "reprojected history off by {worst}");
+    assert!(
+        worst_unprojected > 0.03,
+        "the step moves the image: {worst_unprojected}"
+    );
+}

@@ -221,14 +221,17 @@ fn viewer_renders_a_scene_with_gi_table_and_gi_flags_without_validation_messages
     require_display();
     let _display = lock_display();
     let dir = scratch_dir("window-gi");
-    // The built-in Cornell box with the path tracer chosen by the scene file; a flag
-    // overrides the scene's bounces. The resize makes the viewer replace its renderer (the
+    // The built-in Cornell box with the path tracer and SAO chosen by the scene file, and its
+    // `[post]` table; flags override the scene's bounces and exposure. The resize makes the viewer replace its renderer (the
     // path tracer's history has the frame's size).
     let cornell = include_str!("../assets/scenes/cornell.toml");
     let scene = dir.join("cornell_gi.toml");
     std::fs::write(
         &scene,
-        format!("{cornell}\n[gi]\nmethod = \"pathtrace\"\nrays = 2\nbounces = 3\n"),
+        format!(
+            "{cornell}\n[gi]\nmethod = \"pathtrace\"\nrays = 2\nbounces = 3\nsao = true\n\
+             sao_radius_m = 0.6\n[post]\nfxaa = true\ntonemap = \"drago\"\nexposure = 2.0\n"
+        ),
     )
     .expect("write the scene");
     let shot = dir.join("shot.png");
@@ -239,6 +242,8 @@ fn viewer_renders_a_scene_with_gi_table_and_gi_flags_without_validation_messages
             scene.to_str().expect("utf-8 path"),
             "--gi-bounces",
             "1",
+            "--exposure",
+            "3",
             "--width",
             "320",
             "--height",
@@ -259,6 +264,12 @@ fn viewer_renders_a_scene_with_gi_table_and_gi_flags_without_validation_messages
     assert!(
         stderr.contains("indirect light: pathtrace, 2 rays, 1 bounces"),
         "the viewer did not start with the scene's path tracer and the flag's bounces:\n{stderr}"
+    );
+    // The scene's SAO keys and `[post]` table, the latter's exposure overridden by the flag.
+    assert!(
+        stderr.contains("SAO r 0.6 m")
+            && stderr.contains("post-processing: fxaa, tonemap Drago × 3"),
+        "the viewer did not start with the scene's SAO and [post] table:\n{stderr}"
     );
     assert!(
         stderr.contains("new renderer") && stderr.contains("x300, indirect light: pathtrace"),

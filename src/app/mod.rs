@@ -272,6 +272,36 @@ fn debug_settings(
 
 /// One line about the indirect light, for the log.
 fn describe_gi(gi: &GiSettings) -> String {
+    let method = describe_gi_method(gi);
+    match gi.sao {
+        Some(s) => format!("{method}, SAO r {} m", s.radius_m),
+        None => method,
+    }
+}
+
+/// The post chain and tone mapping for the log: the stages on, then operator and exposure.
+fn describe_post(post: &crate::post::PostSettings, tone: &crate::post::ToneMap) -> String {
+    let mut parts = Vec::new();
+    if let Some(t) = post.taa {
+        parts.push(format!("taa α {}", t.history_weight));
+    }
+    if let Some(a) = post.auto_exposure {
+        parts.push(format!("auto exposure key {}", a.key));
+    }
+    if let Some(b) = post.bloom {
+        parts.push(format!("bloom {b}"));
+    }
+    if post.fxaa {
+        parts.push("fxaa".into());
+    }
+    if tone.dither {
+        parts.push("dither".into());
+    }
+    parts.push(format!("tonemap {:?} × {}", tone.operator, tone.exposure));
+    parts.join(", ")
+}
+
+fn describe_gi_method(gi: &GiSettings) -> String {
     match gi.method {
         GiMethod::None => "none".into(),
         GiMethod::Hemisphere => format!(
@@ -420,6 +450,10 @@ impl Viewer {
         settings.width = extent.width.max(1);
         settings.height = extent.height.max(1);
         log::info!("indirect light: {}", describe_gi(&settings.gi));
+        log::info!(
+            "post-processing: {}",
+            describe_post(&settings.post, &settings.tonemap)
+        );
         self.renderer = Some(Renderer::new(ctx, &self.scene, settings)?);
         self.overlay = Some(Overlay::new(ctx, format)?);
         self.frame_loop = Some(FrameLoop::new(ctx, MAX_FRAMES_IN_FLIGHT, MAX_PASSES)?);

@@ -15,6 +15,8 @@
 //!   between two closed rooms, per method (the truth behind the wall is zero).
 //! - [`sweep`]: the data of `voxgi sweep` and `voxgi tune` (grid, rows, CSV, Pareto front,
 //!   SVG plot, the tuner's choice).
+//! - [`bench_ssgi`] (`voxgi bench ssgi`): the screen-space GI's scalability table (Oetke
+//!   2017 Fig. 4.8): mip filter × GI resolution × samples, per-stage GPU times and errors.
 //! - [`bench_scenes`], [`dense_scene`], [`tessellated_cube`]: the generated scenes they run on.
 
 mod flicker;
@@ -22,6 +24,7 @@ mod leak;
 pub mod reference_cache;
 mod scenes;
 mod soak;
+mod ssgi;
 pub mod sweep;
 pub mod temporal;
 mod traverse;
@@ -39,6 +42,9 @@ pub use scenes::{bench_scenes, dense_scene, tessellated_cube, DENSE_BUNNIES_PER_
 pub use soak::{
     bench_soak, process_rss_bytes, slope_per_1000, soak_time_s, SoakBenchDesc, SoakReport, SoakRow,
     SoakSample,
+};
+pub use ssgi::{
+    bench_ssgi, load_reference, Span, SsgiBenchDesc, SsgiBenchReport, SsgiBenchRow, StageTime,
 };
 pub use temporal::scene_at_step;
 pub use traverse::{
@@ -86,10 +92,21 @@ pub enum BenchError {
     Render(#[from] crate::render::RenderError),
     #[error(transparent)]
     Eval(#[from] crate::eval::EvalError),
+    #[error(transparent)]
+    Settings(#[from] crate::limits::LimitError),
     #[error(
         "the scene has no point or spot light to move: the flicker benchmark moves the first          one along a circle; add one to the scene"
     )]
     NoMovableLight,
+    #[error("no reference image {}: render one with tools/reference (see assets/references/README.md) or choose a scene that has one", path.display())]
+    NoReference { path: std::path::PathBuf },
+    #[error("--size {size}: the reference {} is {width}x{height}; --size must divide it and the reference must be square (e.g. 32, 64, 128, 256)", path.display())]
+    ReferenceSize {
+        size: u32,
+        width: u32,
+        height: u32,
+        path: std::path::PathBuf,
+    },
     #[error("leak benchmark: a wall of {wall_voxels} voxels cannot be built: {why}")]
     LeakWall { wall_voxels: f32, why: &'static str },
     #[error(

@@ -617,6 +617,13 @@ pub fn gi_table(s: &GiSettings) -> toml::Table {
         toml_f32(s.ssgi.history_weight),
     );
     t.insert("ssr".into(), Value::Boolean(s.ssgi.ssr));
+    t.insert("sao".into(), Value::Boolean(s.sao.is_some()));
+    if let Some(a) = s.sao {
+        t.insert("sao_radius_m".into(), toml_f32(a.radius_m));
+        t.insert("sao_bias".into(), toml_f32(a.bias));
+        t.insert("sao_contrast".into(), toml_f32(a.contrast));
+        t.insert("sao_epsilon_m2".into(), toml_f32(a.epsilon_m2));
+    }
     t
 }
 
@@ -1120,6 +1127,11 @@ mod tests {
                 visibility: crate::gi::vpl::VplVisibility::None,
                 ..Default::default()
             },
+            sao: Some(crate::gi::SaoSettings {
+                radius_m: 0.6,
+                contrast: 1.5,
+                ..Default::default()
+            }),
             ..GiSettings::default()
         };
         let r = SweepRow {
@@ -1129,6 +1141,7 @@ mod tests {
         let text = gi_table_text(&r).expect("prints");
         assert!(text.starts_with("[gi]\n"), "{text}");
         assert!(text.contains("radius_m = 0.1\n"), "{text}");
+        assert!(text.contains("sao = true\nsao_bias = 0.04\n"), "{text}");
         // Pasted into a scene without `[gi]`, the table gives back every setting it holds.
         let base = include_str!("../../assets/scenes/cornell.toml");
         assert!(!base.contains("[gi]"));

@@ -127,23 +127,26 @@ pub struct GiArgs {
     #[arg(long, value_enum)]
     pub ssr: Option<crate::gi::SsrMode>,
     /// Modified SAO (Oetke 2017 §2.5) at half resolution, multiplied into the indirect light
-    /// (needs a --gi method: direct light is not darkened).
+    /// (needs a --gi method: direct light is not darkened); `--sao off` turns off the scene's
+    /// [default: the scene's `[gi] sao`, else off].
+    #[arg(long, value_enum, value_name = "on|off", num_args = 0..=1, default_missing_value = "on")]
+    pub sao: Option<Toggle>,
+    /// SAO: sample radius r in meters [default: the scene's `[gi] sao_radius_m`, else 1.8].
+    #[arg(long, value_name = "M")]
+    pub sao_radius: Option<f32>,
+    /// SAO: bias β in meters of v·n [default: the scene's `[gi] sao_bias`, else 0.04].
+    #[arg(long, value_name = "M")]
+    pub sao_bias: Option<f32>,
+    /// SAO: contrast k, the AO term's exponent [default: the scene's `[gi] sao_contrast`,
+    /// else 2].
+    #[arg(long, value_name = "K")]
+    pub sao_contrast: Option<f32>,
+    /// SAO: ε of v·v + ε in m² [default: the scene's `[gi] sao_epsilon_m2`, else 0.01].
+    #[arg(long, value_name = "M2")]
+    pub sao_epsilon: Option<f32>,
+    /// SAO debug view: the AO term as grey (1 white = unoccluded) instead of the image (needs
+    /// SAO on, by --sao or the scene).
     #[arg(long)]
-    pub sao: bool,
-    /// `--sao`: sample radius r in meters.
-    #[arg(long, requires = "sao", default_value_t = crate::gi::SaoSettings::default().radius_m)]
-    pub sao_radius: f32,
-    /// `--sao`: bias β in meters of v·n.
-    #[arg(long, requires = "sao", default_value_t = crate::gi::SaoSettings::default().bias)]
-    pub sao_bias: f32,
-    /// `--sao`: contrast k, the AO term's exponent.
-    #[arg(long, requires = "sao", default_value_t = crate::gi::SaoSettings::default().contrast)]
-    pub sao_contrast: f32,
-    /// `--sao`: ε of v·v + ε in m².
-    #[arg(long, requires = "sao", default_value_t = crate::gi::SaoSettings::default().epsilon_m2)]
-    pub sao_epsilon: f32,
-    /// `--sao`: debug view, the AO term as grey (1 white = unoccluded) instead of the image.
-    #[arg(long, requires = "sao")]
     pub sao_show: bool,
 }
 
@@ -179,7 +182,24 @@ impl GiArgs {
                 history_weight: self.ssgi_history_weight,
                 ssr: self.ssr.map(|m| m == crate::gi::SsrMode::On),
             },
+            sao: crate::scene::SaoOverrides {
+                enabled: self.sao.map(Toggle::on),
+                radius_m: self.sao_radius,
+                bias: self.sao_bias,
+                contrast: self.sao_contrast,
+                epsilon_m2: self.sao_epsilon,
+            },
         }
+    }
+
+    /// SAO's value flags and `--sao-show` need SAO on (by `--sao` or the scene's `[gi] sao`):
+    /// given while it is off they would do nothing, which is an error naming them.
+    pub fn check_sao(&self, s: &crate::gi::GiSettings) -> Result<(), super::CliError> {
+        let o = self.overrides().sao;
+        if s.sao.is_none() && (o.has_values() || self.sao_show) {
+            return Err(super::CliError::SaoOff);
+        }
+        Ok(())
     }
 
     /// The scene's `[gi]` values, overridden by the flags given.
@@ -196,12 +216,9 @@ impl GiArgs {
                 show: self.vpl_show,
                 ..s.vpl
             },
-            sao: self.sao.then_some(crate::gi::SaoSettings {
-                radius_m: self.sao_radius,
-                bias: self.sao_bias,
-                contrast: self.sao_contrast,
-                epsilon_m2: self.sao_epsilon,
+            sao: s.sao.map(|a| crate::gi::SaoSettings {
                 view: self.sao_show,
+                ..a
             }),
             ..s
         }
@@ -218,10 +235,12 @@ pub struct FrameArgs {
     /// Scene time in seconds (animations).
     #[arg(long, default_value_t = 0.0)]
     pub time: f32,
-    #[arg(long, value_enum, default_value_t = ToneOperator::Filmic)]
-    pub tonemap: ToneOperator,
-    #[arg(long, default_value_t = 1.0)]
-    pub exposure: f32,
+    /// Tone-mapping operator [default: the scene's `[post] tonemap`, else filmic].
+    #[arg(long, value_enum)]
+    pub tonemap: Option<ToneOperator>,
+    /// Exposure factor before tone mapping [default: the scene's `[post] exposure`, else 1].
+    #[arg(long, value_name = "E")]
+    pub exposure: Option<f32>,
     /// Shadow-map resolution: texels per side, or `auto`: the smallest power of two that keeps
     /// the shadow texel under a pixel on 95% of the lit pixels of the view (picked from one
     /// probe frame of `--debug shadow-texels` when the renderer is made).
@@ -305,8 +324,12 @@ impl FrameArgs {
             time_s: self.time,
             ..Default::default()
         };
-        s.tonemap.operator = self.tonemap;
-        s.tonemap.exposure = self.exposure;
+        let post = crate::scene::PostOverrides {
+            tonemap: self.tonemap,
+            exposure: self.exposure,
+            ..self.post.overrides()
+        };
+        (s.post, s.tonemap) = crate::post::apply_overrides(&post.or(scene.post), s.post, s.tonemap);
         match self.shadow_resolution {
             ShadowResolutionArg::Texels(n) => s.shadow.resolution = n,
             ShadowResolutionArg::Auto => {
@@ -357,59 +380,107 @@ impl FrameArgs {
                 object,
                 ..Default::default()
             });
-        s.post = self.post.settings();
-        s.tonemap.dither = self.post.dither;
+        self.gi.check_sao(&s.gi)?;
         crate::render::check_render_settings(&s)?;
         Ok(s)
     }
 }
 
-/// Post-processing flags (all off by default).
+/// `--taa`, `--fxaa`, `--dither`, `--sao`: given alone the stage is on; `off` turns off what
+/// the scene file's table turns on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Toggle {
+    On,
+    Off,
+}
+
+impl Toggle {
+    fn on(self) -> bool {
+        self == Toggle::On
+    }
+}
+
+/// `--auto-exposure [KEY|off]`: on (with the scene's or the default key), on with KEY, or off.
+fn parse_key_or_off(s: &str) -> Result<crate::scene::Stage, String> {
+    use crate::scene::Stage;
+    match s {
+        "on" => Ok(Stage::On(None)),
+        "off" => Ok(Stage::Off),
+        v => v
+            .parse::<f32>()
+            .map(|k| Stage::On(Some(k)))
+            .map_err(|_| format!("`{v}`: expected a key value (e.g. 0.18) or `off`")),
+    }
+}
+
+/// `--bloom STRENGTH|off`.
+fn parse_strength_or_off(s: &str) -> Result<crate::scene::Stage, String> {
+    use crate::scene::Stage;
+    match s {
+        "off" => Ok(Stage::Off),
+        v => v
+            .parse::<f32>()
+            .map(|k| Stage::On(Some(k)))
+            .map_err(|_| format!("`{v}`: expected a strength in [0, 1] (e.g. 0.05) or `off`")),
+    }
+}
+
+/// Post-processing flags (all off by default). Each one given overrides the scene file's
+/// `[post]` value, which overrides the default.
 #[derive(clap::Args, Clone)]
 pub struct PostArgs {
     /// Temporal anti-aliasing: Halton(2,3) sub-pixel jitter, reprojected and clipped history
-    /// (a headless render runs --taa-frames frames).
-    #[arg(long)]
-    pub taa: bool,
-    /// TAA history weight α: each frame keeps α of the reprojected history.
-    #[arg(long, default_value_t = crate::post::TaaSettings::default().history_weight)]
-    pub taa_history_weight: f32,
-    /// Frames a headless render with --taa runs.
-    #[arg(long, default_value_t = crate::post::TaaSettings::default().frames)]
-    pub taa_frames: u32,
+    /// (a headless render runs --taa-frames frames); `--taa off` turns off the scene's
+    /// [default: the scene's `[post] taa`, else off].
+    #[arg(long, value_enum, value_name = "on|off", num_args = 0..=1, default_missing_value = "on")]
+    pub taa: Option<Toggle>,
+    /// TAA history weight α: each frame keeps α of the reprojected history [default: the
+    /// scene's `[post] taa_history_weight`, else 0.9].
+    #[arg(long, value_name = "ALPHA")]
+    pub taa_history_weight: Option<f32>,
+    /// Frames a headless render with TAA runs [default: the scene's `[post] taa_frames`,
+    /// else 16].
+    #[arg(long, value_name = "N")]
+    pub taa_frames: Option<u32>,
     /// Auto exposure: exposure = KEY / log-average luminance (KEY 0.18 when left out), adapted
-    /// over frames; --exposure then multiplies it as a compensation.
-    #[arg(long, value_name = "KEY", num_args = 0..=1, default_missing_value = "0.18")]
-    pub auto_exposure: Option<f32>,
-    /// Auto exposure: fraction of the way (in log exposure) to the target per frame.
-    #[arg(long, default_value_t = crate::post::AutoExposure::default().adaptation)]
-    pub exposure_adaptation: f32,
-    /// Triangular dither of ±1/255 before the 8-bit quantization (no banding on gradients).
-    #[arg(long)]
-    pub dither: bool,
+    /// over frames; --exposure then multiplies it as a compensation; `off` turns off the
+    /// scene's [default: the scene's `[post] auto_exposure`, else off].
+    #[arg(long, value_name = "KEY|off", num_args = 0..=1, default_missing_value = "on",
+          value_parser = parse_key_or_off)]
+    pub auto_exposure: Option<crate::scene::Stage>,
+    /// Auto exposure: fraction of the way (in log exposure) to the target per frame [default:
+    /// the scene's `[post] exposure_adaptation`, else 0.05].
+    #[arg(long, value_name = "F")]
+    pub exposure_adaptation: Option<f32>,
+    /// Triangular dither of ±1/255 before the 8-bit quantization (no banding on gradients)
+    /// [default: the scene's `[post] dither`, else off].
+    #[arg(long, value_enum, value_name = "on|off", num_args = 0..=1, default_missing_value = "on")]
+    pub dither: Option<Toggle>,
     /// Bloom: moves the share STRENGTH of the radiance into a wide blur (energy-conserving,
-    /// no threshold).
-    #[arg(long, value_name = "STRENGTH")]
-    pub bloom: Option<f32>,
-    /// FXAA on the tone-mapped image.
-    #[arg(long)]
-    pub fxaa: bool,
+    /// no threshold); `off` turns off the scene's [default: the scene's `[post] bloom`, else
+    /// off].
+    #[arg(long, value_name = "STRENGTH|off", value_parser = parse_strength_or_off)]
+    pub bloom: Option<crate::scene::Stage>,
+    /// FXAA on the tone-mapped image [default: the scene's `[post] fxaa`, else off].
+    #[arg(long, value_enum, value_name = "on|off", num_args = 0..=1, default_missing_value = "on")]
+    pub fxaa: Option<Toggle>,
 }
 
 impl PostArgs {
-    /// The post-processing settings (checked with the rest by `check_render_settings`).
-    pub fn settings(&self) -> crate::post::PostSettings {
-        crate::post::PostSettings {
-            taa: self.taa.then_some(crate::post::TaaSettings {
-                history_weight: self.taa_history_weight,
-                frames: self.taa_frames,
-            }),
-            auto_exposure: self.auto_exposure.map(|key| crate::post::AutoExposure {
-                key,
-                adaptation: self.exposure_adaptation,
-            }),
+    /// The flags given (`--tonemap` and `--exposure` are the frame's, filled in by
+    /// [`FrameArgs::settings`]).
+    pub fn overrides(&self) -> crate::scene::PostOverrides {
+        crate::scene::PostOverrides {
+            taa: self.taa.map(Toggle::on),
+            taa_history_weight: self.taa_history_weight,
+            taa_frames: self.taa_frames,
+            auto_exposure: self.auto_exposure,
+            exposure_adaptation: self.exposure_adaptation,
             bloom: self.bloom,
-            fxaa: self.fxaa,
+            fxaa: self.fxaa.map(Toggle::on),
+            dither: self.dither.map(Toggle::on),
+            tonemap: None,
+            exposure: None,
         }
     }
 }
@@ -474,6 +545,128 @@ mod tests {
         assert_eq!(flag.oit_nodes_per_pixel, 9);
         let err = parse(&["--oit-nodes-per-pixel", "0"]).settings(&scene);
         assert!(err.is_err_and(|e| e.to_string().contains("--oit-nodes-per-pixel")));
+    }
+
+    #[test]
+    fn post_flags_override_the_scene_post_table() {
+        use crate::post::{PostSettings, TaaSettings, ToneMap};
+        use crate::scene::{PostOverrides, Stage};
+        let plain = crate::scene::load_scene_arg(None).expect("the built-in scene");
+        // No table, no flags: everything off, the default tone map.
+        let s = parse(&[]).settings(&plain).expect("settings");
+        assert_eq!(
+            (s.post, s.tonemap),
+            (PostSettings::default(), ToneMap::default())
+        );
+        let s = parse(&["--taa", "--dither", "--auto-exposure", "--bloom", "0.1"])
+            .settings(&plain)
+            .expect("settings");
+        assert_eq!(s.post.taa, Some(TaaSettings::default()));
+        assert_eq!(
+            s.post.auto_exposure,
+            Some(crate::post::AutoExposure::default())
+        );
+        assert_eq!(s.post.bloom, Some(0.1));
+        assert!(s.tonemap.dither && !s.post.fxaa);
+        let mut scene = plain.clone();
+        scene.post = PostOverrides {
+            taa: Some(true),
+            taa_frames: Some(4),
+            auto_exposure: Some(Stage::On(None)),
+            exposure_adaptation: Some(0.5),
+            bloom: Some(Stage::On(Some(0.2))),
+            fxaa: Some(true),
+            dither: Some(true),
+            tonemap: Some(ToneOperator::Drago),
+            exposure: Some(2.0),
+            ..Default::default()
+        };
+        // The table alone.
+        let s = parse(&[]).settings(&scene).expect("settings");
+        let taa = s.post.taa.expect("the scene's TAA");
+        assert_eq!(
+            (taa.frames, taa.history_weight),
+            (4, TaaSettings::default().history_weight)
+        );
+        let ae = s.post.auto_exposure.expect("the scene's auto exposure");
+        assert_eq!(
+            (ae.key, ae.adaptation),
+            (crate::post::AutoExposure::default().key, 0.5)
+        );
+        assert_eq!((s.post.bloom, s.post.fxaa), (Some(0.2), true));
+        assert_eq!(
+            (s.tonemap.operator, s.tonemap.exposure, s.tonemap.dither),
+            (ToneOperator::Drago, 2.0, true)
+        );
+        // Flags win, `off` included; the table fills in what they leave out.
+        let s = parse(&[
+            "--taa",
+            "off",
+            "--bloom",
+            "off",
+            "--fxaa",
+            "off",
+            "--dither",
+            "off",
+            "--tonemap",
+            "linear",
+            "--exposure",
+            "3",
+            "--auto-exposure",
+            "0.5",
+        ])
+        .settings(&scene)
+        .expect("settings");
+        assert_eq!((s.post.taa, s.post.bloom, s.post.fxaa), (None, None, false));
+        let ae = s.post.auto_exposure.expect("on");
+        assert_eq!((ae.key, ae.adaptation), (0.5, 0.5));
+        assert_eq!(
+            (s.tonemap.operator, s.tonemap.exposure, s.tonemap.dither),
+            (ToneOperator::Linear, 3.0, false)
+        );
+        let s = parse(&["--taa-frames", "2", "--auto-exposure", "off"])
+            .settings(&scene)
+            .expect("settings");
+        assert_eq!(s.post.taa.map(|t| t.frames), Some(2));
+        assert_eq!(s.post.auto_exposure, None);
+        // `--auto-exposure` alone switches on and keeps the scene's key.
+        scene.post.auto_exposure = Some(Stage::On(Some(0.3)));
+        let s = parse(&["--auto-exposure"])
+            .settings(&scene)
+            .expect("settings");
+        assert_eq!(s.post.auto_exposure.map(|a| a.key), Some(0.3));
+        // Out-of-range flags name the flag.
+        let e = parse(&["--bloom", "2"])
+            .settings(&scene)
+            .expect_err("out of range");
+        assert!(e.to_string().contains("--bloom = 2"), "{e}");
+    }
+
+    #[test]
+    fn sao_flags_override_the_scene_keys() {
+        let plain = crate::scene::load_scene_arg(None).expect("the built-in scene");
+        assert_eq!(parse(&[]).settings(&plain).expect("settings").gi.sao, None);
+        let mut scene = plain.clone();
+        scene.gi.sao = crate::scene::SaoOverrides {
+            enabled: Some(true),
+            radius_m: Some(0.5),
+            ..Default::default()
+        };
+        let sao = |args: &[&str]| parse(args).settings(&scene).expect("settings").gi.sao;
+        let d = crate::gi::SaoSettings::default();
+        assert_eq!(sao(&[]).map(|s| (s.radius_m, s.bias)), Some((0.5, d.bias)));
+        assert_eq!(sao(&["--sao", "off"]), None);
+        assert_eq!(sao(&["--sao-radius", "0.7"]).map(|s| s.radius_m), Some(0.7));
+        assert_eq!(sao(&["--sao-show"]).map(|s| s.view), Some(true));
+        // SAO's values without SAO on would do nothing: an error naming the way out.
+        for args in [
+            &["--sao-radius", "1"][..],
+            &["--sao-show"],
+            &["--sao", "off", "--sao-bias", "0.1"],
+        ] {
+            let e = parse(args).settings(&plain).expect_err("SAO is off");
+            assert!(e.to_string().contains("add --sao"), "{args:?}: {e}");
+        }
     }
 
     #[test]
@@ -550,6 +743,15 @@ mod tests {
             "0.3",
             "--ssr",
             "off",
+            "--sao",
+            "--sao-radius",
+            "0.6",
+            "--sao-bias",
+            "0.03",
+            "--sao-contrast",
+            "1.5",
+            "--sao-epsilon",
+            "0.02",
         ]);
         assert_eq!(
             o,
@@ -581,6 +783,13 @@ mod tests {
                     feedback_max_w_m2: Some(4.5),
                     history_weight: Some(0.3),
                     ssr: Some(false),
+                },
+                sao: crate::scene::SaoOverrides {
+                    enabled: Some(true),
+                    radius_m: Some(0.6),
+                    bias: Some(0.03),
+                    contrast: Some(1.5),
+                    epsilon_m2: Some(0.02),
                 },
             }
         );

@@ -1,4 +1,4 @@
-//! `voxgi bench traverse|voxelize|voxelize-sweep|flicker|soak|leak`: the benchmarks of [`crate::bench`].
+//! `voxgi bench traverse|voxelize|voxelize-sweep|flicker|soak|leak|ssgi`: the benchmarks of [`crate::bench`].
 
 use super::{check_validation, context, out, outln, CliError, Global};
 use crate::bench::{
@@ -109,6 +109,45 @@ pub enum BenchCommand {
         /// Image width and height in pixels.
         #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(8..=4096))]
         size: u32,
+        /// Print CSV instead of the table.
+        #[arg(long, conflicts_with = "json")]
+        csv: bool,
+        /// Print JSON instead of the table.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Screen-space GI scalability (Oetke 2017 Fig. 4.8): every mip filter × GI resolution ×
+    /// samples per texel and level, with the GPU ms of each ssgi stage and of the frame
+    /// (median [min, max]) and the image's relMSE and FLIP against the scene's reference.
+    Ssgi {
+        /// A built-in scene or a TOML scene file with a reference `<name>_gi.exr` in
+        /// --references. Default: cornell.
+        scene: Option<String>,
+        /// Depth/normal mip filters.
+        #[arg(long, value_enum, value_delimiter = ',', default_values = ["fast", "voting"])]
+        mips: Vec<crate::gi::SsgiMips>,
+        /// GI resolutions.
+        #[arg(long, value_enum, value_delimiter = ',',
+              default_values = ["full", "half", "quarter", "eighth"])]
+        resolutions: Vec<crate::gi::SsgiResolution>,
+        /// Samples per texel and pyramid level.
+        #[arg(long, value_delimiter = ',', default_values_t = [16, 32, 64, 128, 256])]
+        samples: Vec<u32>,
+        /// Image width and height in pixels; must divide the reference's size.
+        #[arg(long, default_value_t = 128, value_parser = clap::value_parser!(u32).range(8..=4096))]
+        size: u32,
+        /// Frames profiled per configuration (after --warmup).
+        #[arg(long, default_value_t = 20, value_parser = clap::value_parser!(u64).range(1..=100_000))]
+        frames: u64,
+        /// Frames run before profiling.
+        #[arg(long, default_value_t = 3)]
+        warmup: usize,
+        /// Frames of the scored image (feedback bounces and the temporal blend).
+        #[arg(long, default_value_t = 8)]
+        gi_frames: u32,
+        /// Folder of the reference images.
+        #[arg(long, default_value = "assets/references")]
+        references: std::path::PathBuf,
         /// Print CSV instead of the table.
         #[arg(long, conflicts_with = "json")]
         csv: bool,
@@ -309,6 +348,45 @@ pub fn bench(global: &Global, command: &BenchCommand, out: &mut dyn Write) -> Re
                 ..Default::default()
             };
             let report = bench_leak(&ctx, &desc)?;
+            if *csv {
+                out!(out, "{}", report.csv());
+            } else {
+                print(out, *json, &report, || report.table())?;
+            }
+            check_validation(ctx)
+        }
+        BenchCommand::Ssgi {
+            scene,
+            mips,
+            resolutions,
+            samples,
+            size,
+            frames,
+            warmup,
+            gi_frames,
+            references,
+            csv,
+            json,
+        } => {
+            for &n in samples {
+                crate::limits::SSGI_SAMPLES.check_as("--samples", i64::from(n))?;
+            }
+            crate::limits::GI_FRAMES.check_flag(*gi_frames)?;
+            let arg = scene.as_deref().unwrap_or(DEFAULT_SCENE);
+            let name = super::sweep::scene_name(arg);
+            let loaded = load_scene_arg(Some(arg))?;
+            let reference = crate::bench::load_reference(references, &name, *size)?;
+            let ctx = context(global)?;
+            let desc = crate::bench::SsgiBenchDesc {
+                mips: mips.clone(),
+                resolutions: resolutions.clone(),
+                samples: samples.clone(),
+                size: *size,
+                frames: *frames as usize,
+                warmup: *warmup,
+                gi_frames: *gi_frames,
+            };
+            let report = crate::bench::bench_ssgi(&ctx, &loaded, &name, &reference, &desc)?;
             if *csv {
                 out!(out, "{}", report.csv());
             } else {

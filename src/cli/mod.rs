@@ -64,6 +64,12 @@ pub enum CliError {
     /// A flag's value out of its range.
     #[error(transparent)]
     Settings(#[from] crate::limits::LimitError),
+    /// SAO's value flags or its view while SAO is off.
+    #[error(
+        "--sao-radius, --sao-bias, --sao-contrast, --sao-epsilon and --sao-show need SAO on, and \
+         it is off: add --sao (or `sao = true` in the scene's [gi] table), or leave them out"
+    )]
+    SaoOff,
     /// `profile --camera-path` on a scene without a `[camera_path]` table.
     #[error(
         "{scene}: `--camera-path` needs a `[camera_path]` table in the scene file, and this \

@@ -22,10 +22,12 @@ pub struct ViewArgs {
     pub width: u32,
     #[arg(long, default_value_t = 720)]
     pub height: u32,
-    #[arg(long, value_enum, default_value_t = ToneOperator::Filmic)]
-    pub tonemap: ToneOperator,
-    #[arg(long, default_value_t = 1.0)]
-    pub exposure: f32,
+    /// Tone-mapping operator [default: the scene's `[post] tonemap`, else filmic].
+    #[arg(long, value_enum)]
+    pub tonemap: Option<ToneOperator>,
+    /// Exposure factor before tone mapping [default: the scene's `[post] exposure`, else 1].
+    #[arg(long, value_name = "E")]
+    pub exposure: Option<f32>,
     /// Start with a voxel debug view instead of the lit image (the panel switches views).
     #[arg(long, value_enum)]
     pub debug: Option<DebugView>,
@@ -95,9 +97,17 @@ pub fn view(global: &Global, args: ViewArgs, out: &mut dyn Write) -> Result<(), 
         }),
         ..Default::default()
     };
-    settings.tonemap.operator = args.tonemap;
-    settings.tonemap.exposure = args.exposure;
+    // The scene's `[post]` table starts the panel's post-processing; the flags override its
+    // operator and exposure.
+    let post = crate::scene::PostOverrides {
+        tonemap: args.tonemap,
+        exposure: args.exposure,
+        ..Default::default()
+    };
+    (settings.post, settings.tonemap) =
+        crate::post::apply_overrides(&post.or(scene.post), settings.post, settings.tonemap);
     settings.gi = args.gi.settings(&scene);
+    args.gi.check_sao(&settings.gi)?;
     let name = super::sweep::scene_name(args.scene.as_deref().unwrap_or("cornell"));
     if let Some(budget) = args.budget_ms {
         let (row, _, overrides) = crate::bench::sweep::tune_from_dir(&args.sweep, &name, budget)?;

@@ -33,8 +33,8 @@ impl GiComposite {
         Ok(Self { pipeline })
     }
 
-    /// Declares the composite of `i.direct` and `indirect` (times `ao`, the half-resolution
-    /// SAO term, when given); returns the total radiance.
+    /// Declares the composite of `i.direct` and `indirect` (times `ao`, the SAO term at the
+    /// frame's size, when given); returns the total radiance.
     pub fn add_pass(
         &self,
         g: &mut RenderGraph,

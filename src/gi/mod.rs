@@ -234,7 +234,7 @@ impl GiPasses {
                 .sao
                 .map(|s| {
                     let fov = target.scene.camera.fov_y_deg;
-                    sao::Sao::new(ctx, GpuSaoPush::new(&s, fov, target.size.1, settings.seed))
+                    sao::Sao::new(ctx, GpuSaoPush::new(&s, fov, target.size, settings.seed))
                 })
                 .transpose()?,
             composite: GiComposite::new(

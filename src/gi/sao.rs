@@ -1,5 +1,9 @@
-//! `sao` and `sao_blur`: Scalable Ambient Obscurance as modified by Oetke 2017 §2.5 (after
-//! McGuire, Mara and Luebke 2012) at half resolution, then a depth-aware separable blur; the
+//! `sao_depth`, `sao`, `sao_blur` and `sao_upsample`: Scalable Ambient Obscurance as modified
+//! by Oetke 2017 §2.5 (after McGuire, Mara and Luebke 2012). `sao_depth[k]` builds a pyramid
+//! of view depth and normal (level 0 the frame's, each coarser level a rotated-grid subsample
+//! of the finer), `sao` evaluates the estimator at half resolution with far taps reading
+//! coarser levels, `sao_blur[h|v]` is a depth-aware separable blur, and `sao_upsample` brings
+//! the term to the frame by joint bilateral upsampling against the full-resolution depth; the
 //! composite multiplies the indirect light by it (`glsl/gi_composite.comp`). The AO term only
 //! darkens indirect light: the voxel methods' indirect light has visibility, but the filter and
 //! the coarse grid blur away small-scale occlusion, which SAO puts back.
@@ -22,6 +26,8 @@ pub struct GpuSaoPush {
     pub taps: u32,
     pub spiral_turns: f32,
     pub seed: u32,
+    /// Levels of the depth pyramid ([`depth_levels`]).
+    pub depth_levels: u32,
 }
 
 crate::push_constants!(GpuSaoPush {
@@ -32,13 +38,19 @@ crate::push_constants!(GpuSaoPush {
     px_per_m_at_1m,
     taps,
     spiral_turns,
-    seed
+    seed,
+    depth_levels
 });
 
 impl GpuSaoPush {
-    /// The push of `s` for a camera of vertical field of view `fov_y_deg` and a frame
-    /// `height_px` pixels high.
-    pub fn new(s: &SaoSettings, fov_y_deg: f32, height_px: u32, seed: u32) -> Self {
+    /// The push of `s` for a camera of vertical field of view `fov_y_deg` and a frame of
+    /// `(width, height)` pixels.
+    pub fn new(
+        s: &SaoSettings,
+        fov_y_deg: f32,
+        (width_px, height_px): (u32, u32),
+        seed: u32,
+    ) -> Self {
         Self {
             radius_m: s.radius_m,
             bias: s.bias,
@@ -48,6 +60,7 @@ impl GpuSaoPush {
             taps: SaoSettings::TAPS,
             spiral_turns: SaoSettings::SPIRAL_TURNS,
             seed,
+            depth_levels: depth_levels(width_px, height_px),
         }
     }
 }
@@ -70,29 +83,118 @@ crate::push_constants!(GpuSaoBlurPush {
 /// wall at a few meters (Oetke 2017 §2.5 uses σ = mix(0.01, 0.25, d)/far in normalized depth).
 const BLUR_DEPTH_SIGMA_REL: f32 = 0.02;
 
-/// The SAO and blur pipelines.
+/// Push constants of `glsl/sao_upsample.comp`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct GpuSaoUpsamplePush {
+    depth_sigma_rel: f32,
+}
+
+crate::push_constants!(GpuSaoUpsamplePush { depth_sigma_rel });
+
+/// The most levels of the depth pyramid: taps up to 2^(LOG_Q + 1 + 5) = 1024 pixels away
+/// step down five levels (McGuire et al. 2012 use 5 as the coarsest level too).
+pub const DEPTH_LEVELS: u32 = 6;
+
+/// The depth pyramid's levels for a `width`×`height` frame: [`DEPTH_LEVELS`], or fewer where
+/// the frame halves to one texel first (Vulkan mip sizes: halved, rounded down, at least 1).
+pub fn depth_levels(width: u32, height: u32) -> u32 {
+    (width.max(height).max(1).ilog2() + 1).min(DEPTH_LEVELS)
+}
+
+/// The SAO, blur and upsampling pipelines.
 pub struct Sao {
+    depth_first: ComputePipeline,
+    depth: ComputePipeline,
     sao: ComputePipeline,
     blur: ComputePipeline,
+    upsample: ComputePipeline,
     push: GpuSaoPush,
 }
 
 impl Sao {
     pub fn new(ctx: &Context, push: GpuSaoPush) -> Result<Self, VkError> {
+        let depth_first = ctx.compute_pipeline("sao_depth.comp", None, &[(0, 1)])?;
+        let depth = ctx.compute_pipeline("sao_depth.comp", None, &[(0, 0)])?;
         let sao = ctx.compute_pipeline("sao.comp", PushLayout::of::<GpuSaoPush>(), &[])?;
         let blur =
             ctx.compute_pipeline("sao_blur.comp", PushLayout::of::<GpuSaoBlurPush>(), &[])?;
-        Ok(Self { sao, blur, push })
+        let upsample = ctx.compute_pipeline(
+            "sao_upsample.comp",
+            PushLayout::of::<GpuSaoUpsamplePush>(),
+            &[],
+        )?;
+        Ok(Self {
+            depth_first,
+            depth,
+            sao,
+            blur,
+            upsample,
+            push,
+        })
     }
 
-    /// Declares `sao` and the horizontal and vertical `sao_blur`; returns the blurred AO term
-    /// (R32F, half the frame's size rounded up; texel (x, y) is pixel (2x, 2y)'s).
+    /// Declares `sao_depth[k]` for each level; returns the pyramid (RGBA32F, the frame's size
+    /// with [`depth_levels`] mips: normal in xyz, view depth in w).
+    fn add_depth_pyramid(
+        &self,
+        g: &mut RenderGraph,
+        i: &GiInputs,
+        sampler: vk::Sampler,
+    ) -> ImageHandle {
+        let c = Shader::Compute;
+        let levels = depth_levels(i.width, i.height);
+        let pyramid = g.create_image(
+            ImageDesc::new_2d(
+                "sao depth pyramid",
+                vk::Format::R32G32B32A32_SFLOAT,
+                i.width,
+                i.height,
+            )
+            .with_mips(levels),
+        );
+        for k in 0..levels {
+            let (w, h) = ((i.width >> k).max(1), (i.height >> k).max(1));
+            let groups = (w.div_ceil(8), h.div_ceil(8));
+            let pass = g
+                .add_pass(&format!("sao_depth[{k}]"))
+                .bind(0, i.frame, Access::StorageRead(c))
+                .bind_sampled(1, i.depth, sampler, c)
+                .bind_sampled(2, i.normal, sampler, c);
+            // Level 0 never reads the finer binding; the depth buffer fills it.
+            let (pass, pipe) = if k == 0 {
+                let pipe = *self.depth_first;
+                (
+                    pass.pipeline(&pipe).bind_sampled(3, i.depth, sampler, c),
+                    pipe,
+                )
+            } else {
+                let pipe = *self.depth;
+                let finer = Access::Sampled(c);
+                (
+                    pass.pipeline(&pipe)
+                        .bind_mip(3, pyramid, k - 1, finer, Some(sampler)),
+                    pipe,
+                )
+            };
+            pass.bind_mip(4, pyramid, k, Access::StorageWrite(c), None)
+                .record(move |ctx| {
+                    ctx.bind(&pipe);
+                    ctx.cmd.dispatch(groups.0, groups.1, 1);
+                });
+        }
+        pyramid
+    }
+
+    /// Declares `sao_depth[k]`, `sao`, the horizontal and vertical `sao_blur` and
+    /// `sao_upsample`; returns the AO term at the frame's size (R32F).
     pub fn add_passes(
         &self,
         g: &mut RenderGraph,
         i: &GiInputs,
         sampler: vk::Sampler,
     ) -> ImageHandle {
+        let pyramid = self.add_depth_pyramid(g, i, sampler);
         let (w, h) = (i.width.div_ceil(2), i.height.div_ceil(2));
         let groups = (w.div_ceil(8), h.div_ceil(8));
         let c = Shader::Compute;
@@ -100,13 +202,22 @@ impl Sao {
             g.create_image(ImageDesc::new_2d(name, vk::Format::R32_SFLOAT, w, h))
         };
         let raw = ao_image(g, "sao");
-        let (pipe, push) = (*self.sao, self.push);
-        g.add_pass("sao")
+        let pipe = *self.sao;
+        let push = GpuSaoPush {
+            depth_levels: depth_levels(i.width, i.height),
+            ..self.push
+        };
+        let mut pass = g
+            .add_pass("sao")
             .pipeline(&pipe)
-            .bind(0, i.frame, Access::StorageRead(c))
-            .bind_sampled(1, i.normal, sampler, c)
-            .bind_sampled(2, i.depth, sampler, c)
-            .bind(3, raw, Access::StorageWrite(c))
+            .bind(0, i.frame, Access::StorageRead(c));
+        // One binding per level (see `pyramid_texel` in the shader); the bindings past the
+        // pyramid's levels take its coarsest and are never read.
+        for k in 0..DEPTH_LEVELS {
+            let level = k.min(push.depth_levels - 1);
+            pass = pass.bind_mip(1 + k, pyramid, level, Access::Sampled(c), Some(sampler));
+        }
+        pass.bind(7, raw, Access::StorageWrite(c))
             .record(move |ctx| {
                 ctx.bind(&pipe);
                 ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
@@ -133,7 +244,28 @@ impl Sao {
                 });
             current = out;
         }
-        current
+        let full = g.create_image(ImageDesc::new_2d(
+            "sao upsampled",
+            vk::Format::R32_SFLOAT,
+            i.width,
+            i.height,
+        ));
+        let pipe = *self.upsample;
+        let push = GpuSaoUpsamplePush {
+            depth_sigma_rel: BLUR_DEPTH_SIGMA_REL,
+        };
+        let groups = (i.width.div_ceil(8), i.height.div_ceil(8));
+        g.add_pass("sao_upsample")
+            .pipeline(&pipe)
+            .bind_mip(0, pyramid, 0, Access::Sampled(c), Some(sampler))
+            .bind_sampled(1, current, sampler, c)
+            .bind(2, full, Access::StorageWrite(c))
+            .record(move |ctx| {
+                ctx.bind(&pipe);
+                ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
+                ctx.cmd.dispatch(groups.0, groups.1, 1);
+            });
+        full
     }
 }
 
@@ -146,5 +278,20 @@ mod tests {
         crate::vk::check_push_against(&["sao.comp"], PushLayout::of::<GpuSaoPush>()).unwrap();
         crate::vk::check_push_against(&["sao_blur.comp"], PushLayout::of::<GpuSaoBlurPush>())
             .unwrap();
+        crate::vk::check_push_against(
+            &["sao_upsample.comp"],
+            PushLayout::of::<GpuSaoUpsamplePush>(),
+        )
+        .unwrap();
+    }
+
+    /// Six levels at any frame of 32 pixels or more a side; a 16×8 frame halves to one texel
+    /// after five (16, 8, 4, 2, 1), a single pixel has one.
+    #[test]
+    fn the_depth_pyramid_stops_at_one_texel() {
+        assert_eq!(depth_levels(1920, 1080), 6);
+        assert_eq!(depth_levels(64, 64), 6);
+        assert_eq!(depth_levels(16, 8), 5);
+        assert_eq!(depth_levels(1, 1), 1);
     }
 }

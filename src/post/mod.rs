@@ -15,33 +15,7 @@ pub use stereo_pack::{GpuStereoPackPush, Rows3, StereoMode, StereoPackPass};
 pub use taa::{GpuTaaPush, TaaPass};
 pub use tonemap::{GpuTonemapPush, TonemapPass};
 
-use serde::{Deserialize, Serialize};
-
-/// Tone-mapping operator of `glsl/tonemap.comp`.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
-#[serde(rename_all = "lowercase")]
-pub enum ToneOperator {
-    /// Exposure, then clamp.
-    Linear,
-    /// log(1 + L) / log(1 + white).
-    Logarithmic,
-    /// Drago et al. 2003, adaptive logarithmic.
-    Drago,
-    /// ACES filmic fit (Narkowicz 2015).
-    #[default]
-    Filmic,
-}
-
-impl ToneOperator {
-    pub fn shader_id(self) -> u32 {
-        match self {
-            ToneOperator::Linear => 0,
-            ToneOperator::Logarithmic => 1,
-            ToneOperator::Drago => 2,
-            ToneOperator::Filmic => 3,
-        }
-    }
-}
+pub use crate::scene::ToneOperator;
 
 /// Tone-mapping parameters.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -116,6 +90,62 @@ pub struct PostSettings {
     pub bloom: Option<f32>,
     /// FXAA after tone mapping (`--fxaa`).
     pub fxaa: bool,
+}
+
+/// `post` and `tone` with the given values of `o` replaced (a scene's `[post]` table merged
+/// with the flags: `flags.or(scene)`): a stage switched on keeps its parameters from `post` (the
+/// defaults when `post` has it off), then takes the values given.
+pub fn apply_overrides(
+    o: &crate::scene::PostOverrides,
+    post: PostSettings,
+    tone: ToneMap,
+) -> (PostSettings, ToneMap) {
+    use crate::scene::Stage;
+    let taa = match o.taa.unwrap_or(post.taa.is_some()) {
+        false => None,
+        true => {
+            let b = post.taa.unwrap_or_default();
+            Some(TaaSettings {
+                history_weight: o.taa_history_weight.unwrap_or(b.history_weight),
+                frames: o.taa_frames.unwrap_or(b.frames),
+            })
+        }
+    };
+    let auto_exposure = match o.auto_exposure {
+        Some(Stage::Off) => None,
+        given => {
+            let on = matches!(given, Some(Stage::On(_))) || post.auto_exposure.is_some();
+            on.then(|| {
+                let b = post.auto_exposure.unwrap_or_default();
+                let key = match given {
+                    Some(Stage::On(Some(k))) => k,
+                    _ => b.key,
+                };
+                AutoExposure {
+                    key,
+                    adaptation: o.exposure_adaptation.unwrap_or(b.adaptation),
+                }
+            })
+        }
+    };
+    let bloom = match o.bloom {
+        Some(Stage::Off) => None,
+        Some(Stage::On(Some(s))) => Some(s),
+        Some(Stage::On(None)) | None => post.bloom,
+    };
+    let post = PostSettings {
+        taa,
+        auto_exposure,
+        bloom,
+        fxaa: o.fxaa.unwrap_or(post.fxaa),
+    };
+    let tone = ToneMap {
+        operator: o.tonemap.unwrap_or(tone.operator),
+        exposure: o.exposure.unwrap_or(tone.exposure),
+        dither: o.dither.unwrap_or(tone.dither),
+        ..tone
+    };
+    (post, tone)
 }
 
 /// The post-processing passes the settings ask for (none by default), around `tonemap`.

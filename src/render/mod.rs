@@ -75,7 +75,7 @@ pub enum RenderError {
     Settings(#[from] crate::limits::LimitError),
     #[error("the scene has no geometry to render: add an object")]
     EmptyScene,
-    #[error("--sao darkens only indirect light, and --gi none has none: choose a --gi method (hemisphere, pathtrace, vpl) or leave out --sao")]
+    #[error("SAO (--sao, or `sao = true` in the scene's [gi] table) darkens only indirect light, and --gi none has none: choose a --gi method (hemisphere, pathtrace, vpl, ssgi) or leave out --sao (--sao off turns the scene's off)")]
     SaoWithoutGi,
     #[error(transparent)]
     Voxel(#[from] crate::voxel::gpu::GpuVoxelError),

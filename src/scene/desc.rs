@@ -45,6 +45,7 @@ pub(crate) struct SceneDesc {
     pub voxel: Option<toml::Table>,
     pub gi: Option<GiDesc>,
     pub shadow: Option<ShadowDesc>,
+    pub post: Option<PostDesc>,
     pub camera_path: Option<CameraPathDesc>,
     /// "oit" or "hashed" ([`super::Transparency`]).
     pub transparency: Option<String>,
@@ -56,6 +57,23 @@ pub(crate) struct SceneDesc {
 pub(crate) struct ShadowDesc {
     pub cascades: Option<i64>,
     pub cascade_lambda: Option<f32>,
+}
+
+/// The `[post]` table (`taa_frames` signed so that a negative count names the key;
+/// `auto_exposure` and `bloom` a number or a boolean, checked by [`build_post`]).
+#[derive(Clone, Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct PostDesc {
+    pub taa: Option<bool>,
+    pub taa_history_weight: Option<f32>,
+    pub taa_frames: Option<i64>,
+    pub auto_exposure: Option<toml::Value>,
+    pub exposure_adaptation: Option<f32>,
+    pub bloom: Option<toml::Value>,
+    pub fxaa: Option<bool>,
+    pub dither: Option<bool>,
+    pub tonemap: Option<String>,
+    pub exposure: Option<f32>,
 }
 
 /// The `[camera_path]` table, checked by [`build_camera_path`].
@@ -106,6 +124,11 @@ pub(crate) struct GiDesc {
     pub ssgi_feedback_max_w_m2: Option<f32>,
     pub ssgi_history_weight: Option<f32>,
     pub ssr: Option<bool>,
+    pub sao: Option<bool>,
+    pub sao_radius_m: Option<f32>,
+    pub sao_bias: Option<f32>,
+    pub sao_contrast: Option<f32>,
+    pub sao_epsilon_m2: Option<f32>,
 }
 
 #[derive(Clone, Debug, Deserialize)]
@@ -437,6 +460,12 @@ pub(crate) fn build(
         .map(|t| build_shadow(&ck, t))
         .transpose()?
         .unwrap_or_default();
+    let post = desc
+        .post
+        .as_ref()
+        .map(|t| build_post(&ck, t))
+        .transpose()?
+        .unwrap_or_default();
     let lights = desc
         .lights
         .iter()
@@ -472,6 +501,7 @@ pub(crate) fn build(
         gi,
         transparency,
         shadow,
+        post,
         source,
     };
     if scene.lights.is_empty() && !scene.has_emission() {
@@ -693,6 +723,13 @@ fn build_gi(ck: &Check<'_>, g: &GiDesc) -> Result<GiOverrides, SceneError> {
         accumulate_frames: count(&limits::GI_FRAMES, g.accumulate_frames)?,
         vpl: build_vpl(ck, g, &count, &length)?,
         ssgi: build_ssgi(ck, g, &count, &length)?,
+        sao: crate::scene::SaoOverrides {
+            enabled: g.sao,
+            radius_m: length(&limits::SAO_RADIUS_M, g.sao_radius_m)?,
+            bias: length(&limits::SAO_BIAS, g.sao_bias)?,
+            contrast: length(&limits::SAO_CONTRAST, g.sao_contrast)?,
+            epsilon_m2: length(&limits::SAO_EPSILON, g.sao_epsilon_m2)?,
+        },
     })
 }
 
@@ -720,6 +757,82 @@ fn build_shadow(ck: &Check<'_>, t: &ShadowDesc) -> Result<ShadowOverrides, Scene
     Ok(ShadowOverrides {
         cascades,
         cascade_lambda,
+    })
+}
+
+/// Checks the `[post]` table against the flags' ranges (`crate::limits`).
+fn build_post(ck: &Check<'_>, t: &PostDesc) -> Result<super::PostOverrides, SceneError> {
+    use super::Stage;
+    let number = |limit: &Limit<f32>, v: Option<f32>| {
+        v.map(|v| {
+            let key = limit.key.unwrap_or(limit.flag);
+            let v = ck.scalar(key, v)?;
+            limit
+                .check_as(key, v)
+                .map_err(|e| ck.invalid(key, limit_message(&e)))
+        })
+        .transpose()
+    };
+    // A number (the stage on with that value) or a boolean (on with the default; off).
+    let stage = |limit: &Limit<f32>, v: &Option<toml::Value>, bool_on: bool| {
+        let key = limit.key.unwrap_or(limit.flag);
+        let v = match v {
+            None => return Ok(None),
+            Some(v) => v,
+        };
+        let value = match v {
+            toml::Value::Float(f) => Some(*f as f32),
+            toml::Value::Integer(i) => Some(*i as f32),
+            toml::Value::Boolean(false) => return Ok(Some(Stage::Off)),
+            toml::Value::Boolean(true) if bool_on => return Ok(Some(Stage::On(None))),
+            _ => None,
+        };
+        let words = if bool_on {
+            "a number, true (the default) or false (off)"
+        } else {
+            "a number or false (off)"
+        };
+        let value = value
+            .ok_or_else(|| ck.invalid(key, format!("{v}; expected {}: {words}", limit.what)))?;
+        Ok(Some(Stage::On(number(limit, Some(value))?)))
+    };
+    let tonemap = match &t.tonemap {
+        None => None,
+        Some(name) => Some(
+            super::ToneOperator::NAMES
+                .iter()
+                .find(|(n, _)| *n == name.as_str())
+                .map(|&(_, op)| op)
+                .ok_or_else(|| {
+                    ck.invalid(
+                        "post.tonemap",
+                        format!(
+                            "unknown operator \"{name}\"; expected \"linear\", \"logarithmic\", \"drago\" or \"filmic\""
+                        ),
+                    )
+                })?,
+        ),
+    };
+    let taa_frames = t
+        .taa_frames
+        .map(|v| {
+            let key = "post.taa_frames";
+            limits::TAA_FRAMES
+                .check_as(key, v)
+                .map_err(|e| ck.invalid(key, limit_message(&e)))
+        })
+        .transpose()?;
+    Ok(super::PostOverrides {
+        taa: t.taa,
+        taa_history_weight: number(&limits::TAA_HISTORY_WEIGHT, t.taa_history_weight)?,
+        taa_frames,
+        auto_exposure: stage(&limits::AUTO_EXPOSURE_KEY, &t.auto_exposure, true)?,
+        exposure_adaptation: number(&limits::EXPOSURE_ADAPTATION, t.exposure_adaptation)?,
+        bloom: stage(&limits::BLOOM_STRENGTH, &t.bloom, false)?,
+        fxaa: t.fxaa,
+        dither: t.dither,
+        tonemap,
+        exposure: number(&limits::EXPOSURE, t.exposure)?,
     })
 }
 

@@ -161,6 +161,56 @@ impl Default for SaoSettings {
     }
 }
 
+/// SAO settings given by a scene's `[gi]` table (`sao`, `sao_radius_m`, `sao_bias`,
+/// `sao_contrast`, `sao_epsilon_m2`) or by the `--sao*` flags; `None`: not given there.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SaoOverrides {
+    /// SAO on or off (`sao = true`, `--sao [on|off]`).
+    pub enabled: Option<bool>,
+    pub radius_m: Option<f32>,
+    pub bias: Option<f32>,
+    pub contrast: Option<f32>,
+    pub epsilon_m2: Option<f32>,
+}
+
+impl SaoOverrides {
+    /// Field by field: `self`'s value where given, else `fallback`'s.
+    pub fn or(self, fallback: SaoOverrides) -> SaoOverrides {
+        SaoOverrides {
+            enabled: self.enabled.or(fallback.enabled),
+            radius_m: self.radius_m.or(fallback.radius_m),
+            bias: self.bias.or(fallback.bias),
+            contrast: self.contrast.or(fallback.contrast),
+            epsilon_m2: self.epsilon_m2.or(fallback.epsilon_m2),
+        }
+    }
+
+    /// Whether a value of the estimator (not the switch) is given.
+    pub fn has_values(&self) -> bool {
+        SaoOverrides {
+            enabled: None,
+            ..*self
+        } != SaoOverrides::default()
+    }
+
+    /// `base` with the given values replaced: off when `enabled` says so (or when it is not
+    /// given and `base` is off), else `base`'s values (the defaults when `base` is off) with
+    /// the given ones replaced.
+    pub fn apply(&self, base: Option<SaoSettings>) -> Option<SaoSettings> {
+        if !self.enabled.unwrap_or(base.is_some()) {
+            return None;
+        }
+        let b = base.unwrap_or_default();
+        Some(SaoSettings {
+            radius_m: self.radius_m.unwrap_or(b.radius_m),
+            bias: self.bias.unwrap_or(b.bias),
+            contrast: self.contrast.unwrap_or(b.contrast),
+            epsilon_m2: self.epsilon_m2.unwrap_or(b.epsilon_m2),
+            view: b.view,
+        })
+    }
+}
+
 /// The screen-space GI's internal resolution: the frame's divided by a power of two.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
 pub enum SsgiResolution {

@@ -127,11 +127,32 @@
 //! ssgi_resolution = "half"          # screen-space GI resolution: "full" | "half" | "quarter"
 //!                                   #   | "eighth" ["half"]
 //! ssgi_samples = 64                 # screen-space GI samples per texel and level, 1..=1024 [64]
+//! sao = true                        # modified SAO (Oetke 2017 §2.5) multiplied into the
+//!                                   #   indirect light; needs a method [false]; --sao [on|off]
+//! sao_radius_m = 1.8                # SAO sample radius r, meters > 0 [1.8]; --sao-radius
+//! sao_bias = 0.04                   # SAO bias β, meters of v·n >= 0 [0.04]; --sao-bias
+//! sao_contrast = 2.0                # SAO contrast exponent k, 0..=64 [2]; --sao-contrast
+//! sao_epsilon_m2 = 0.01             # SAO ε of v·v + ε, m² > 0 [0.01]; --sao-epsilon
 //!
 //! [shadow]   # optional: shadow defaults; `--shadow-cascades`, `--shadow-cascade-lambda` override
 //! cascades = 4                      # cascades per directional light (camera's direct light),
 //!                                   #   1..=8; 1: the single whole-scene map [4]
 //! cascade_lambda = 0.5              # splits: logarithmic (1) to uniform (0) blend, 0..=1 [0.5]
+//!
+//! [post]     # optional: post-processing defaults; each flag of the same name overrides its
+//!            #   key (`--taa off`, `--bloom off`, `--auto-exposure off` turn a stage off)
+//! taa = true                        # temporal anti-aliasing [false]
+//! taa_history_weight = 0.9          # TAA history weight α, 0..=0.999 [0.9]
+//! taa_frames = 16                   # frames a headless TAA render runs, 1..=4096 [16]
+//! auto_exposure = 0.18              # auto exposure's key value (> 0, <= 1000), true (key
+//!                                   #   0.18) or false [false]
+//! exposure_adaptation = 0.05        # auto exposure's adaptation per frame, (0, 1] [0.05]
+//! bloom = 0.05                      # bloom strength in [0, 1], or false [false]
+//! fxaa = true                       # FXAA after tone mapping [false]
+//! dither = true                     # ±1/255 triangular dither before 8 bits [false]
+//! tonemap = "filmic"                # "linear" | "logarithmic" | "drago" | "filmic" ["filmic"]
+//! exposure = 1.0                    # exposure factor (a compensation with auto exposure),
+//!                                   #   > 0 [1]
 //! ```
 //!
 //! A missing texture (or MTL file) is not an error: it is logged with `log::warn!` and the
@@ -158,6 +179,7 @@ mod material;
 mod mesh;
 mod obj;
 mod object;
+mod post_settings;
 mod query;
 pub mod vpl_settings;
 
@@ -171,8 +193,8 @@ pub use desc::gi_table_overrides;
 pub use error::SceneError;
 pub use gi::{resolve_gi, GiOverrides};
 pub use gi_settings::{
-    Bounces, GiMethod, GiSettings, RadianceSource, SaoSettings, SsgiMips, SsgiOverrides,
-    SsgiResolution, SsgiSettings, SsrMode,
+    Bounces, GiMethod, GiSettings, RadianceSource, SaoOverrides, SaoSettings, SsgiMips,
+    SsgiOverrides, SsgiResolution, SsgiSettings, SsrMode,
 };
 pub use light::{scaled, spot_falloff, Light};
 pub use material::{
@@ -181,6 +203,7 @@ pub use material::{
 };
 pub use mesh::{area_weighted_normals, Aabb, Mesh, SubMesh, BUILTIN_MESH_NAMES};
 pub use object::{rotation_from_euler_xyz_deg, Animation, Keyframe, Object, Transform};
+pub use post_settings::{PostOverrides, Stage, ToneOperator};
 pub use query::NoSuchObject;
 pub use vpl_settings::{VplOverrides, VplSettings, VplShading, VplVisibility};
 
@@ -220,6 +243,9 @@ pub struct Scene {
     pub transparency: Option<Transparency>,
     /// The `[shadow]` table: the scene's defaults of shadow settings (flags override them).
     pub shadow: ShadowOverrides,
+    /// The `[post]` table: the scene's defaults of the post-processing settings (flags
+    /// override them; `crate::post::apply_overrides`).
+    pub post: PostOverrides,
     /// The scene file; `None` for built-in scenes.
     pub source: Option<PathBuf>,
 }

@@ -685,7 +685,8 @@ fn gi_table_parses_every_key() {
          vpl_d_min_voxels = 2.5\nvpl_visibility = \"none\"\n\
          vpl_normalize = \"valid\"\nvpl_spot_sampling = \"disk\"\nssgi_resolution = \"quarter\"\n\
          ssgi_samples = 12\nssgi_mips = \"fast\"\nssgi_feedback = false\n\
-         ssgi_feedback_max_w_m2 = 5.5\nssgi_history_weight = 0.5\nssr = false\n"
+         ssgi_feedback_max_w_m2 = 5.5\nssgi_history_weight = 0.5\nssr = false\n\
+         sao = true\nsao_radius_m = 0.6\nsao_bias = 0.02\nsao_contrast = 3\nsao_epsilon_m2 = 0.5\n"
     );
     let s = load_ok(&text, &[]);
     assert_eq!(
@@ -718,6 +719,13 @@ fn gi_table_parses_every_key() {
                 feedback_max_w_m2: Some(5.5),
                 history_weight: Some(0.5),
                 ssr: Some(false),
+            },
+            sao: crate::scene::SaoOverrides {
+                enabled: Some(true),
+                radius_m: Some(0.6),
+                bias: Some(0.02),
+                contrast: Some(3.0),
+                epsilon_m2: Some(0.5),
             },
         }
     );
@@ -1335,11 +1343,116 @@ fn gi_screen_space_keys_refuse_bad_values() {
             "",
         ),
         ("ssr = \"yes\"", "ssr", "bool"),
+        ("sao_radius_m = 0", "gi.sao_radius_m", "(0, 1000000]"),
+        ("sao_bias = -0.5", "gi.sao_bias", "an SAO bias in meters"),
+        ("sao_contrast = 65", "gi.sao_contrast", "[0, 64]"),
+        ("sao_epsilon_m2 = inf", "gi.sao_epsilon_m2", ""),
+        ("sao = 1", "sao", "bool"),
     ] {
         let text = format!("{CAMERA}{LIGHT}{CUBE}[gi]\n{table}\n");
         let (e, _) = load_err(&text, &[]);
         let msg = e.to_string();
         assert!(msg.contains(field) && msg.contains(says), "{table}: {msg}");
         assert!(msg.contains("scene.toml"), "{table}: {msg}");
+    }
+}
+
+// ---- the [post] table ----------------------------------------------------------------------
+
+#[test]
+fn post_table_parses_every_key() {
+    use crate::scene::{PostOverrides, Stage, ToneOperator};
+    let text = format!(
+        "{CAMERA}{LIGHT}{CUBE}[post]\ntaa = true\ntaa_history_weight = 0.8\ntaa_frames = 8\n\
+         auto_exposure = 0.25\nexposure_adaptation = 0.5\nbloom = 0.05\nfxaa = true\n\
+         dither = false\ntonemap = \"drago\"\nexposure = 2\n"
+    );
+    assert_eq!(
+        load_ok(&text, &[]).post,
+        PostOverrides {
+            taa: Some(true),
+            taa_history_weight: Some(0.8),
+            taa_frames: Some(8),
+            auto_exposure: Some(Stage::On(Some(0.25))),
+            exposure_adaptation: Some(0.5),
+            bloom: Some(Stage::On(Some(0.05))),
+            fxaa: Some(true),
+            dither: Some(false),
+            tonemap: Some(ToneOperator::Drago),
+            exposure: Some(2.0),
+        }
+    );
+    // `true` turns auto exposure on with its default key; `false` turns a stage off.
+    let s = load_ok(
+        &format!("{CAMERA}{LIGHT}{CUBE}[post]\nauto_exposure = true\nbloom = false\n"),
+        &[],
+    );
+    assert_eq!(s.post.auto_exposure, Some(Stage::On(None)));
+    assert_eq!(s.post.bloom, Some(Stage::Off));
+    assert!(load_ok(&format!("{CAMERA}{LIGHT}{CUBE}"), &[])
+        .post
+        .is_empty());
+    for (name, op) in ToneOperator::NAMES {
+        let s = load_ok(
+            &format!("{CAMERA}{LIGHT}{CUBE}[post]\ntonemap = \"{name}\"\n"),
+            &[],
+        );
+        assert_eq!(s.post.tonemap, Some(op), "{name}");
+        // The names are the flag's.
+        use clap::ValueEnum as _;
+        assert_eq!(
+            op.to_possible_value().map(|v| v.get_name().to_owned()),
+            Some(name.to_owned())
+        );
+    }
+}
+
+/// The `[post]` keys refuse what their flags refuse, naming the file and the key.
+#[test]
+fn post_keys_refuse_bad_values() {
+    for (line, field, says) in [
+        (
+            "taa_history_weight = 1.0",
+            "post.taa_history_weight",
+            "[0, 0.999]",
+        ),
+        ("taa_frames = 0", "post.taa_frames", "[1, 4096]"),
+        ("taa_frames = -3", "post.taa_frames", "[1, 4096]"),
+        ("auto_exposure = 0", "post.auto_exposure", "(0, 1000]"),
+        (
+            "auto_exposure = \"bright\"",
+            "post.auto_exposure",
+            "true (the default) or false",
+        ),
+        (
+            "exposure_adaptation = 0",
+            "post.exposure_adaptation",
+            "(0, 1]",
+        ),
+        ("bloom = 1.5", "post.bloom", "[0, 1]"),
+        ("bloom = true", "post.bloom", "a number or false (off)"),
+        ("tonemap = \"reinhard\"", "post.tonemap", "\"filmic\""),
+        ("exposure = 0", "post.exposure", "(0, 1000000]"),
+    ] {
+        let text = format!("{CAMERA}{LIGHT}{CUBE}[post]\n{line}\n");
+        let (e, scene) = load_err(&text, &[]);
+        assert!(
+            matches!(e, SceneError::InvalidValue { field: ref f, .. } if f == field),
+            "{line}: {e}"
+        );
+        assert_msg(&e, &scene, &[&format!("`{field}`"), says]);
+    }
+    for (line, says) in [
+        ("fxaa = \"yes\"", "bool"),
+        ("taa_jitter = 2", "taa_jitter"),
+        ("exposure = nan", "`post.exposure` is NaN"),
+    ] {
+        let text = format!("{CAMERA}{LIGHT}{CUBE}[post]\n{line}\n");
+        let (e, scene) = load_err(&text, &[]);
+        let msg = e.to_string();
+        assert!(
+            msg.contains(says) && msg.contains(&scene.display().to_string()),
+            "{line}: {msg}"
+        );
     }
 }
