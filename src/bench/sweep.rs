@@ -617,6 +617,7 @@ pub fn gi_table(s: &GiSettings) -> toml::Table {
         toml_f32(s.ssgi.history_weight),
     );
     t.insert("ssr".into(), Value::Boolean(s.ssgi.ssr));
+    t.insert("ssr_rays".into(), value_name(s.ssgi.ssr_rays));
     t
 }
 

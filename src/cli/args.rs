@@ -126,6 +126,11 @@ pub struct GiArgs {
     /// diffuse fallback (off) [default: the scene's `[gi] ssr`, else on].
     #[arg(long, value_enum)]
     pub ssr: Option<crate::gi::SsrMode>,
+    /// `--gi ssgi`: reflection rays along the mirror direction, the lobe's width read as a
+    /// coarser colour mip (mirror), or one lobe sample per pixel and frame averaged by the
+    /// history (lobe) [default: the scene's `[gi] ssr_rays`, else mirror].
+    #[arg(long, value_enum)]
+    pub ssr_rays: Option<crate::gi::SsrRays>,
     /// Modified SAO (Oetke 2017 §2.5) at half resolution, multiplied into the indirect light
     /// (needs a --gi method: direct light is not darkened).
     #[arg(long)]
@@ -178,6 +183,7 @@ impl GiArgs {
                 feedback_max_w_m2: self.ssgi_feedback_max,
                 history_weight: self.ssgi_history_weight,
                 ssr: self.ssr.map(|m| m == crate::gi::SsrMode::On),
+                ssr_rays: self.ssr_rays,
             },
         }
     }
@@ -403,6 +409,7 @@ impl PostArgs {
             taa: self.taa.then_some(crate::post::TaaSettings {
                 history_weight: self.taa_history_weight,
                 frames: self.taa_frames,
+                ..Default::default()
             }),
             auto_exposure: self.auto_exposure.map(|key| crate::post::AutoExposure {
                 key,
@@ -550,6 +557,8 @@ mod tests {
             "0.3",
             "--ssr",
             "off",
+            "--ssr-rays",
+            "lobe",
         ]);
         assert_eq!(
             o,
@@ -581,6 +590,7 @@ mod tests {
                     feedback_max_w_m2: Some(4.5),
                     history_weight: Some(0.3),
                     ssr: Some(false),
+                    ssr_rays: Some(crate::gi::SsrRays::Lobe),
                 },
             }
         );

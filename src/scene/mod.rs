@@ -172,7 +172,7 @@ pub use error::SceneError;
 pub use gi::{resolve_gi, GiOverrides};
 pub use gi_settings::{
     Bounces, GiMethod, GiSettings, RadianceSource, SaoSettings, SsgiMips, SsgiOverrides,
-    SsgiResolution, SsgiSettings, SsrMode,
+    SsgiResolution, SsgiSettings, SsrMode, SsrRays,
 };
 pub use light::{scaled, spot_falloff, Light};
 pub use material::{

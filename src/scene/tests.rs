@@ -685,7 +685,8 @@ fn gi_table_parses_every_key() {
          vpl_d_min_voxels = 2.5\nvpl_visibility = \"none\"\n\
          vpl_normalize = \"valid\"\nvpl_spot_sampling = \"disk\"\nssgi_resolution = \"quarter\"\n\
          ssgi_samples = 12\nssgi_mips = \"fast\"\nssgi_feedback = false\n\
-         ssgi_feedback_max_w_m2 = 5.5\nssgi_history_weight = 0.5\nssr = false\n"
+         ssgi_feedback_max_w_m2 = 5.5\nssgi_history_weight = 0.5\nssr = false\n\
+         ssr_rays = \"lobe\"\n"
     );
     let s = load_ok(&text, &[]);
     assert_eq!(
@@ -718,6 +719,7 @@ fn gi_table_parses_every_key() {
                 feedback_max_w_m2: Some(5.5),
                 history_weight: Some(0.5),
                 ssr: Some(false),
+                ssr_rays: Some(crate::scene::SsrRays::Lobe),
             },
         }
     );
@@ -1318,6 +1320,11 @@ fn gi_screen_space_keys_refuse_bad_values() {
             "ssgi_mips = \"median\"",
             "gi.ssgi_mips",
             "\"voting\" or \"fast\"",
+        ),
+        (
+            "ssr_rays = \"cone\"",
+            "gi.ssr_rays",
+            "\"mirror\" or \"lobe\"",
         ),
         (
             "ssgi_history_weight = 1.0",
