@@ -8,29 +8,45 @@ use super::{DEPTH, GBUFFER_COLOR};
 use crate::graph::{Access, ImageHandle, Load, RenderGraph, Shader};
 use crate::vk::{vk, Context, GraphicsPipeline, GraphicsPipelineDesc, ImageDesc, VkError};
 
-/// Push constants of `gbuffer.vert`.
+/// Push constants of `gbuffer.vert` (128 bytes, the least every device offers).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct GpuGbufferPush {
     pub model: [f32; 16],
     pub material: u32,
     pub _pad: [u32; 3],
+    /// The first three rows of prev_model · model⁻¹: the draw's motion in world space since
+    /// the previous frame (identity for a draw that did not move), for the motion vectors.
+    pub motion: [f32; 12],
 }
 
 crate::push_constants!(GpuGbufferPush {
     model,
     material,
-    _pad
+    _pad,
+    motion
 });
 
 impl GpuGbufferPush {
-    /// The push constants of one draw (its model matrix and material), shared by every pass
-    /// that draws through `gbuffer.vert` (the G-buffer and the transparency lists).
+    /// The push constants of one draw (its model matrix, material and motion), shared by
+    /// every pass that draws through `gbuffer.vert` (the G-buffer and the transparency lists).
     pub fn of(d: &super::scene_gpu::Draw) -> Self {
+        // Exactly the identity for a draw that did not move (not model · model⁻¹ rounded).
+        let motion = if d.prev_model == d.model {
+            glam::Mat4::IDENTITY
+        } else {
+            d.prev_model * d.model.inverse()
+        };
+        let rows = [motion.row(0), motion.row(1), motion.row(2)];
+        let mut m = [0.0f32; 12];
+        for (i, r) in rows.iter().enumerate() {
+            m[4 * i..4 * i + 4].copy_from_slice(&r.to_array());
+        }
         Self {
             model: d.model.to_cols_array(),
             material: d.material,
             _pad: [0; 3],
+            motion: m,
         }
     }
 }
@@ -45,14 +61,21 @@ pub struct Gbuffer {
     pub specular: Option<ImageHandle>,
     /// Emitted radiance (rgb, W/(m²·sr)), only in scenes with emissive materials.
     pub emission: Option<ImageHandle>,
+    /// Motion vectors, only in scenes with moving objects under TAA: per pixel the surface
+    /// point's un-jittered NDC in the previous frame minus its un-jittered NDC now (rg).
+    pub motion: Option<ImageHandle>,
     pub depth: ImageHandle,
 }
+
+/// The motion vectors' format: NDC offsets, 2⁻¹¹ relative (a 0.1 NDC motion to 5e-5 NDC).
+pub const MOTION_FORMAT: vk::Format = vk::Format::R16G16_SFLOAT;
 
 pub struct GbufferPass {
     pipeline: GraphicsPipeline,
     /// The scene has Phong or GGX materials.
     has_lobe: bool,
     has_emission: bool,
+    has_motion: bool,
 }
 
 /// The material models a scene's G-buffer carries (each gates an attachment or shader code).
@@ -66,6 +89,8 @@ pub struct GbufferFeatures {
     pub dissolve: bool,
     /// MTL `map_Pr`, `map_Pm` or `map_Ke`.
     pub pbr_maps: bool,
+    /// Motion vectors (moving objects under TAA).
+    pub motion: bool,
 }
 
 impl GbufferPass {
@@ -77,6 +102,9 @@ impl GbufferPass {
         let mut colors = vec![GBUFFER_COLOR, GBUFFER_COLOR];
         let extra = usize::from(has_lobe) + usize::from(f.emission);
         colors.resize(2 + extra, GBUFFER_COLOR);
+        if f.motion {
+            colors.push(MOTION_FORMAT);
+        }
         let pipeline = ctx.graphics_pipeline(&GraphicsPipelineDesc {
             vertex: "gbuffer.vert".into(),
             geometry: None,
@@ -100,12 +128,14 @@ impl GbufferPass {
                 (4, u32::from(f.ggx)),
                 (5, u32::from(f.emission)),
                 (6, u32::from(f.pbr_maps)),
+                (7, u32::from(f.motion)),
             ],
         })?;
         Ok(Self {
             pipeline,
             has_lobe,
             has_emission: f.emission,
+            has_motion: f.motion,
         })
     }
 
@@ -119,6 +149,9 @@ impl GbufferPass {
             emission: self.has_emission.then(|| {
                 g.create_image(ImageDesc::new_2d("gbuffer emission", GBUFFER_COLOR, w, h))
             }),
+            motion: self
+                .has_motion
+                .then(|| g.create_image(ImageDesc::new_2d("gbuffer motion", MOTION_FORMAT, w, h))),
             depth: g.create_image(ImageDesc::new_2d("gbuffer depth", DEPTH, w, h)),
         };
         let pipe = *self.pipeline;
@@ -149,8 +182,11 @@ impl GbufferPass {
             .read(indices, Access::IndexBuffer)
             .color(out.albedo, clear)
             .color(out.normal, clear);
-        // In location order: the lobe, then the emission (gbuffer.frag).
-        for extra in [out.specular, out.emission].into_iter().flatten() {
+        // In location order: the lobe, the emission, the motion (gbuffer.frag).
+        for extra in [out.specular, out.emission, out.motion]
+            .into_iter()
+            .flatten()
+        {
             pass = pass.color(extra, clear);
         }
         pass = pass.depth(out.depth, Load::ClearDepth(1.0));
