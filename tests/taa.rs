@@ -382,7 +382,7 @@ fn moving_objects_leave_no_ghost() {
     let (mut worst_excess, mut worst_ghost) = (f32::MIN, 0.0f32);
     for &i in &left {
         let (x, y) = (i as i32 % s, i as i32 / s);
-        for c in 0..3 {
+        for (c, (&got, &want)) in with[i].iter().zip(&fresh.data[i]).enumerate() {
             let (mut lo, mut hi) = (f32::MAX, f32::MIN);
             for q in 0..25 {
                 let (qx, qy) = (x + q % 5 - 2, y + q / 5 - 2);
@@ -391,7 +391,7 @@ fn moving_objects_leave_no_ghost() {
                     (lo, hi) = (lo.min(v), hi.max(v));
                 }
             }
-            let ghost = (with[i][c] - fresh.data[i][c]).abs();
+            let ghost = (got - want).abs();
             worst_ghost = worst_ghost.max(ghost);
             worst_excess = worst_excess.max(ghost - (3.0 * (hi - lo) + 2e-3));
         }

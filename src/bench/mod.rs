@@ -22,6 +22,7 @@ mod leak;
 pub mod reference_cache;
 mod scenes;
 mod soak;
+pub mod ssgi_limits;
 pub mod sweep;
 pub mod temporal;
 mod traverse;
@@ -83,6 +84,15 @@ pub enum BenchError {
         "the scene has no point or spot light to move: the flicker benchmark moves the first          one along a circle; add one to the scene"
     )]
     NoMovableLight,
+    #[error(
+        "ssgi-limits: no Mitsuba reference of {scene} at {}; add --make-references to render \
+         it with Mitsuba 3 (tools/reference installs it into .venv; minutes per image)",
+        path.display()
+    )]
+    NoLimitReference {
+        scene: String,
+        path: std::path::PathBuf,
+    },
     #[error("leak benchmark: a wall of {wall_voxels} voxels cannot be built: {why}")]
     LeakWall { wall_voxels: f32, why: &'static str },
     #[error(
