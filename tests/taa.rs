@@ -456,3 +456,97 @@ fn only_moving_scenes_have_motion_vectors() {
     assert_eq!(on.hdr.data, off.hdr.data);
     assert_eq!(on.transient_bytes, off.transient_bytes);
 }
+
+/// Six bars, 5 cm wide and 40 cm tall, 5 cm apart, alternately emissive (2 W/(m² sr)) and
+/// black, before a black wall; no lights. All move 0.6 m along +x in 1 s (keyframes), so
+/// the group is a striped ("textured") moving object: every 3×3 neighbourhood on it holds
+/// both colours, and TAA's clip box keeps whatever history it is given there.
+fn striped_mover() -> voxgi::scene::Scene {
+    let mut text = String::from(
+        "[camera]\nposition = [0.0, 0.0, -1.0]\ntarget = [0.0, 0.0, 0.0]\nfov_y_deg = 50.0\n\
+         [[objects]]\nbuiltin = \"quad\"\ntranslate = [0.0, 0.0, 0.3]\n\
+         rotate_deg = [-90.0, 0.0, 0.0]\nscale = [3.0, 1.0, 3.0]\nmaterial = { albedo = 0.0 }\n",
+    );
+    for k in 0..6 {
+        let x = -0.55 + 0.1 * k as f32;
+        let emission = if k % 2 == 0 { 2.0 } else { 0.0 };
+        text += &format!(
+            "[[objects]]\nbuiltin = \"cube\"\nscale = [0.05, 0.4, 0.05]\n\
+             material = {{ albedo = 0.0, emission_w_sr_m2 = {emission:.1} }}\n\
+             [objects.animation]\nloop = false\n\
+             [[objects.animation.keyframes]]\ntime_s = 0.0\ntranslate = [{x}, 0.0, 0.0]\n\
+             [[objects.animation.keyframes]]\ntime_s = 1.0\ntranslate = [{}, 0.0, 0.0]\n",
+            x + 0.6
+        );
+    }
+    voxgi::scene::Scene::from_toml_str(
+        &text,
+        std::path::Path::new("<striped mover>"),
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")),
+    )
+    .expect("parses")
+}
+
+/// Motion vectors on a striped moving object ([`striped_mover`], 24 TAA frames 0.035 s
+/// apart: about 1.4 px per frame at 64²): over the pixels the bars cover at the last frame,
+/// the TAA image with motion vectors stays much closer to a fresh render than the one
+/// reprojected with the camera only, whose history there is the stripes a frame or more ago
+/// (the stripes' period is 7 px, so the clip box, spanning both colours, keeps it), and as
+/// close as a still frame's TAA image (whose difference from the fresh render is its
+/// anti-aliasing). Measured 0.032 with, 0.222 without, 0.031 still (mean |ΔL| over 530 px);
+/// bounds: below half the camera-only error and 1.25× the still frame's.
+#[test]
+fn striped_moving_objects_keep_their_stripes() {
+    use voxgi::render::render_animation;
+    const SIZE: u32 = 64;
+    let scene = striped_mover();
+    let times: Vec<f32> = (0..24).map(|k| 0.1 + 0.035 * k as f32).collect();
+    let t_end = *times.last().expect("times");
+    let ctx = common::context();
+    let settings = |taa: Option<TaaSettings>, time_s: f32| RenderSettings {
+        width: SIZE,
+        height: SIZE,
+        time_s,
+        post: PostSettings {
+            taa,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let taa = |motion_vectors: bool| TaaSettings {
+        motion_vectors,
+        ..Default::default()
+    };
+    let fresh = render_image(&ctx, &scene, &settings(None, t_end))
+        .expect("renders")
+        .hdr;
+    let still = render_image(&ctx, &scene, &settings(Some(taa(true)), t_end))
+        .expect("renders")
+        .hdr;
+    let with =
+        render_animation(&ctx, &scene, &settings(Some(taa(true)), 0.0), &times).expect("renders");
+    let without =
+        render_animation(&ctx, &scene, &settings(Some(taa(false)), 0.0), &times).expect("renders");
+    common::assert_no_validation_messages(&ctx);
+    let last = times.len() - 1;
+    let bars: Vec<Vec<bool>> = scene.objects[1..]
+        .iter()
+        .map(|o| cube_coverage(&scene, o.transform_at(t_end), SIZE))
+        .collect();
+    let covered: Vec<bool> = (0..(SIZE * SIZE) as usize)
+        .map(|i| bars.iter().any(|m| m[i]))
+        .collect();
+    let e_with = masked_error(&with[last].data, &fresh.data, &covered);
+    let e_without = masked_error(&without[last].data, &fresh.data, &covered);
+    let e_still = masked_error(&still.data, &fresh.data, &covered);
+    println!(
+        "striped mover ({} px): mean |TAA − fresh| with motion vectors {e_with:.4}, camera only \
+         {e_without:.4}, a still frame's TAA {e_still:.4}",
+        covered.iter().filter(|&&m| m).count()
+    );
+    assert!(e_with < 0.5 * e_without, "{e_with} vs {e_without}");
+    assert!(
+        e_with < 1.25 * e_still,
+        "{e_with} vs a still frame's {e_still}"
+    );
+}

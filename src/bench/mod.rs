@@ -86,7 +86,7 @@ pub enum BenchError {
     NoMovableLight,
     #[error(
         "ssgi-limits: no Mitsuba reference of {scene} at {}; add --make-references to render \
-         it with Mitsuba 3 (tools/reference installs it into .venv; minutes per image)",
+         it with Mitsuba 3 (tools/reference installs it into .venv; seconds to minutes per image)",
         path.display()
     )]
     NoLimitReference {
