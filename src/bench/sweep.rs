@@ -94,6 +94,7 @@ pub const GRID_KEYS: &[(&str, &[GiMethod])] = &[
     ("ssgi-resolution", SSGI),
     ("ssgi-samples", SSGI),
     ("ssgi-mips", SSGI),
+    ("ssr-rays", SSGI),
 ];
 
 const GI_METHODS: &[GiMethod] = &[GiMethod::Hemisphere, GiMethod::Pathtrace, GiMethod::Vpl];
