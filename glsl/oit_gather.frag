@@ -45,6 +45,10 @@ layout(set = 0, binding = 7, std430) coherent buffer Counters { uvec4 counters; 
 layout(push_constant) uniform Push {
     mat4 model;
     uint material;
+    // Rows of prev_model · model⁻¹ (the draw's world motion since the previous frame; a
+    // row vector times it gives the point's previous world position): gbuffer.frag's motion
+    // vectors only.
+    mat3x4 motion;
 } pc;
 
 layout(location = 0) in vec3 in_normal;

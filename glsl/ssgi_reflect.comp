@@ -1,26 +1,45 @@
 #version 450
-// Screen-space reflection rays (Oetke 2017 §5.4): per Phong or GGX pixel one ray along the
-// mirror direction r = reflect(−v, n) (deterministic: no per-frame lobe sampling, the lobe's
-// width enters through the cone footprint below), marched hierarchically on the Hi-Z pyramid
-// of inverse view depth (ssgi_reflect_hiz) to the first texel whose surface the ray reaches
-// within a thickness. The ray is marched in screen space, where its pixel position and its
+// Screen-space reflection rays (Oetke 2017 §5.4): per Phong or GGX pixel one ray, marched
+// hierarchically on the Hi-Z pyramid of inverse view depth (ssgi_reflect_hiz) to the first
+// texel whose surface the ray reaches within a thickness. Its direction (LOBE, `--ssr-rays`):
+// - mirror (the thesis's): r = reflect(−v, n), deterministic; the lobe's width enters through
+//   the cone footprint at the hit (below);
+// - lobe: a direction importance-sampled from the pixel's lobe, a new one every frame (an R2
+//   sequence in the frame index, Cranley-Patterson rotated per pixel), read at the colour's
+//   finest level; the history averages the samples. GGX: reflection about a visible normal
+//   (Heitz 2018), whose f·cos/pdf is F(v·h)·G1(l); Phong: cosⁿ about the mirror direction, f·cos/pdf
+//   = ρs (n+2)/(n+1) (n·l). The split sum (Eq. 2.15–2.19) multiplies L_spec by the lobe's
+//   directional albedo afterwards (ssgi_upsample), so a sample carries its weight divided by
+//   the weight's mean, w = G1(l)/(A + B) (A + B = E[G1(l)] is the split-sum table with F0 = 1),
+//   or (n+2)/(n+1)·(n·l)/(n·v) for Phong (its mean n·v, see ssgi_upsample), and E[w·L] is the
+//   lobe-weighted mean radiance the split sum asks for. Lobes whose half-maximum angle is
+//   below half a pixel's keep the mirror ray (then both choices give the same image).
+// The ray is marched in screen space, where its pixel position and its
 // inverse clip w are both linear in the parameter t of the projected segment:
 // - at level L the ray's segment inside its current cell is compared with the cell's nearest
 //   surface: entirely in front of it, the march skips to the cell's exit and goes up a level;
 //   otherwise it descends; at level 0 a segment reaching behind the surface hits it when its
 //   nearest point lies within `thickness` (relative to the surface's depth) behind it, else
 //   the ray passes behind and goes on at level 0.
-// At a hit the lit colour is read from the colour pyramid at the level whose texel matches
-// the lobe's cone footprint there: diameter 2·d·tan θ at hit distance d, θ the lobe's
+// At a mirror ray's hit the lit colour is read from the colour pyramid at the level whose texel
+// matches the lobe's cone footprint there: diameter 2·d·tan θ at hit distance d, θ the lobe's
 // half-maximum angle (Phong cos^n: cos θ = 2^(−1/n); GGX through its Phong equivalent
 // n = 2/α² − 2, Walter et al. 2007), over the pixel's width at the hit's depth.
 // The ray's confidence a fades at the screen's edge, near the maximum distance, for rays
-// toward the camera and at back faces; misses have a = 0. Output premultiplied, (a·L, a), so
-// the blur and the history blend linearly; ssgi_upsample completes a·L + (1 − a)·fallback.
-// The result is blended with this pixel's reprojected history (τ·w as ssgi_upsample), the
-// history's depth agreement read from the GI history's clip w.
+// toward the camera and at back faces; misses have a = 0. Output premultiplied, (a·L, a) (lobe
+// samples: (w·a·L, w·a)), so the blur and the history blend linearly; ssgi_upsample completes
+// a·L + (1 − a)·fallback. The result is blended with this pixel's reprojected history (τ·w as
+// ssgi_upsample; lobe samples: while fewer than 1/(1 − τ) frames were traced, τ = n/(n+1), the
+// plain mean of the n + 1 samples), the history's depth agreement read from the GI history's
+// clip w.
 #include "frame.glsl"
 #include "ssgi.glsl"
+#include "brdf.glsl"
+#define GI_OWN_PUSH
+#include "gi_common.glsl"
+#include "material_lobe.glsl"
+
+layout(constant_id = 0) const bool LOBE = false;
 
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(set = 0, binding = 0, std430) readonly buffer FrameBuf { GpuFrame frame; };
@@ -33,6 +52,7 @@ layout(set = 0, binding = 6) uniform sampler2D ssr_history;  // premultiplied (a
 layout(set = 0, binding = 7) uniform sampler2D gi_history;   // w: clip w last frame
 layout(set = 0, binding = 8, std430) readonly buffer PrevCamera { mat4 prev_view_proj; };
 layout(set = 0, binding = 9, rgba32f) uniform writeonly image2D traced;
+layout(set = 0, binding = 10) uniform sampler2D brdf_lut;    // A, B (LOBE in GGX scenes)
 
 layout(push_constant) uniform Push {
     float max_distance_m;   // ray length in world space
@@ -41,7 +61,12 @@ layout(push_constant) uniform Push {
     float history_weight;   // τ
     int levels;             // of the Hi-Z and colour pyramids
     int max_steps;
+    uint frame;             // frames traced before this one (the lobe samples' index)
 } pc;
+
+// The R2 sequence's steps (Roberts 2018): the fractional parts of k/φ₂ and k/φ₂², φ₂ the
+// plastic number, a low-discrepancy sequence in the frame index.
+const vec2 R2 = vec2(0.7548776662466927, 0.5698402909980532);
 
 // Fades: 1 inside, smoothly to 0 over the outer 5% of the screen.
 const float EDGE_FADE = 0.05;
@@ -103,11 +128,9 @@ ivec2 march(vec2 s0, vec2 s1, float k0, float k1) {
     return ivec2(-1);
 }
 
-// The traced (a·L, a) at world point x with normal n and lobe (kind, w).
-vec4 trace(vec3 x, vec3 n, float kind, float w) {
-    vec3 cam = frame.camera_position.xyz;
-    vec3 v = normalize(cam - x);
-    vec3 r = reflect(-v, n);
+// The traced (a·L, a) of the ray from world point x along r, read at the colour level of a
+// cone of half-angle tangent `cone_tan` (0: the finest level).
+vec4 trace(vec3 x, vec3 r, float cone_tan) {
     vec3 forward = ssgi_camera_forward(frame.inv_view_proj);
     // Rays toward the camera: full weight while r·forward ≥ 0, none from −0.5 on.
     float toward = 1.0 - smoothstep(0.0, 0.5, -dot(r, forward));
@@ -132,10 +155,18 @@ vec4 trace(vec3 x, vec3 n, float kind, float w) {
     float far = 1.0 - smoothstep(0.8, 1.0, dist_m / pc.max_distance_m);
     float front = clamp(-4.0 * dot(hit_n, r), 0.0, 1.0);
     float a = toward * edge * far * front;
-    float footprint_px = 2.0 * dist_m * lobe_tan(kind, w) / (hit_pos.w * pc.pixel_angle);
+    float footprint_px = 2.0 * dist_m * cone_tan / (hit_pos.w * pc.pixel_angle);
     float lod = clamp(log2(max(footprint_px, 1.0)), 0.0, float(pc.levels - 1));
     vec3 color = textureLod(lit_color, uv, lod).rgb;
     return vec4(a * color, a);
+}
+
+// The split-sum table's A + B at (n·v, roughness): E[G1(l)] over the visible normals.
+float lut_mean_g1(float n_dot_v, float roughness) {
+    ivec2 size = textureSize(brdf_lut, 0);
+    ivec2 t = min(ivec2(vec2(n_dot_v, roughness) * vec2(size)), size - 1);
+    vec2 ab = texelFetch(brdf_lut, t, 0).rg;
+    return ab.x + ab.y;
 }
 
 void main() {
@@ -148,11 +179,36 @@ void main() {
         return;
     }
     vec4 nw = texelFetch(gb_normal, p, 0);
-    vec4 value = trace(pz.xyz, normalize(nw.xyz), lobe.a, nw.w);
+    vec3 n = normalize(nw.xyz);
+    vec3 v = normalize(frame.camera_position.xyz - pz.xyz);
+    vec3 r = reflect(-v, n);
+    float cone_tan = lobe_tan(lobe.a, nw.w);
+    // A lobe narrower than the pixel itself: the mirror ray is its sample.
+    bool sampled = LOBE && cone_tan > 0.5 * pc.pixel_angle;
+    float w = 1.0;
+    if (sampled) {
+        vec2 u = fract(pixel_rotation(uvec2(p), 0u) + float(pc.frame) * R2);
+        float n_dot_v = clamp(dot(n, v), 0.0, 1.0);
+        if (lobe.a > 1.5) {
+            float roughness = clamp(nw.w, 0.0, 1.0);
+            float alpha = max(roughness * roughness, 1e-4);
+            r = reflect(-v, ggx_visible_normal(n, v, alpha, u));
+            float c = dot(n, r);
+            w = c > 0.0 ? ggx_g1(alpha, c) / max(lut_mean_g1(n_dot_v, roughness), 1e-4) : 0.0;
+        } else {
+            r = phong_direction(r, nw.w, u);
+            float c = dot(n, r);
+            w = c > 0.0 ? (nw.w + 2.0) / (nw.w + 1.0) * c / max(n_dot_v, 1e-4) : 0.0;
+        }
+        cone_tan = 0.0;
+    }
+    vec4 value = w > 0.0 ? w * trace(pz.xyz, r, cone_tan) : vec4(0.0);
+    float tau = pc.history_weight;
+    if (sampled) tau = min(tau, float(pc.frame) / float(pc.frame + 1u));
     ivec2 texel;
     float weight;
     if (ssgi_reproject(prev_view_proj, gi_history, pz.xyz, texel, weight)) {
-        value = mix(value, texelFetch(ssr_history, texel, 0), pc.history_weight * weight);
+        value = mix(value, texelFetch(ssr_history, texel, 0), tau * weight);
     }
     imageStore(traced, p, value);
 }

@@ -4,11 +4,17 @@
 // reprojected with this pixel's depth and the previous frame's camera, clipped in YCoCg
 // towards the 3×3 neighbourhood's AABB of the current frame, and blended:
 // out = mix(history, current, current_weight). Runs on linear HDR radiance before tone mapping.
+// MOTION (scenes with moving objects): a surface pixel's previous position is its motion
+// vector from the G-buffer (the point's previous un-jittered NDC minus its current one, from
+// the previous model matrix and camera) instead of the camera-only reprojection of its depth;
+// the sky keeps the camera's.
+layout(constant_id = 0) const bool MOTION = false;
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(set = 0, binding = 0) uniform sampler2D current;
 layout(set = 0, binding = 1) uniform sampler2D gb_depth;
 layout(set = 0, binding = 2) uniform sampler2D history;
 layout(set = 0, binding = 3, rgba32f) uniform writeonly image2D dst;
+layout(set = 0, binding = 4) uniform sampler2D gb_motion;  // MOTION; the depth otherwise
 
 layout(push_constant) uniform Push {
     // Previous un-jittered view-projection times the inverse of this frame's un-jittered one:
@@ -81,8 +87,14 @@ void main() {
     float depth = texelFetch(gb_depth, p, 0).r;
     vec4 prev = pc.reproject * vec4(ndc - pc.jitter_ndc, depth, 1.0);
     vec2 prev_ndc = prev.xy / prev.w + pc.jitter_ndc;
+    bool in_front = prev.w > 0.0;
+    if (MOTION && depth < 1.0) {
+        // (ndc − jitter) + motion is the previous un-jittered position; the jitter added back.
+        prev_ndc = ndc + texelFetch(gb_motion, p, 0).xy;
+        in_front = true;
+    }
     vec2 prev_px = (prev_ndc * 0.5 + 0.5) * vec2(size);
-    bool inside = prev.w > 0.0 && all(greaterThanEqual(prev_px, vec2(0.0))) && all(lessThanEqual(prev_px, vec2(size)));
+    bool inside = in_front && all(greaterThanEqual(prev_px, vec2(0.0))) && all(lessThanEqual(prev_px, vec2(size)));
     if (!inside) {
         imageStore(dst, p, vec4(cur, 1.0));
         return;

@@ -36,6 +36,8 @@ struct GpuFrame {
     vec4 shadow;        // x constant bias (depth units), y slope bias, z normal offset (texels), w PCF radius (texels)
     GpuLight lights[MAX_LIGHTS];
     GpuShadowView shadow_views[MAX_SHADOW_VIEWS];
+    mat4 prev_view_proj;  // the previous frame's un-jittered view_proj (motion vectors)
+    vec4 jitter_ndc;      // xy: this frame's TAA jitter in NDC, included in view_proj
 };
 
 // World position of pixel `px` of a `size` frame at depth-buffer value `depth`: the pixel's

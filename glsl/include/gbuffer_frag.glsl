@@ -4,7 +4,8 @@
 // a the lobe kind (1 Phong, 2 GGX); normal.w is the Phong exponent or the GGX roughness, and a
 // GGX pixel's albedo is its diffuse color (1 - metallic) base (brdf.glsl, brdf_ggx).
 // Color locations: 2 holds the specular lobe, or the emission when the scene has no lobe;
-// 3 the emission when both exist (attachments exist only for what the scene has).
+// 3 the emission when both exist; the motion vectors (scenes with moving objects under TAA)
+// the next one after those (attachments exist only for what the scene has).
 layout(constant_id = 0) const bool HAS_PHONG = false;
 layout(constant_id = 1) const bool HAS_TEXTURES = false;
 layout(constant_id = 2) const bool HAS_BUMP = false;
@@ -14,6 +15,8 @@ layout(constant_id = 4) const bool HAS_GGX = false;
 layout(constant_id = 5) const bool HAS_EMISSION = false;
 // Some material has an MTL PBR map (map_Pr, map_Pm, map_Ke).
 layout(constant_id = 6) const bool HAS_PBR_MAPS = false;
+// Moving objects under TAA: write the motion vector.
+layout(constant_id = 7) const bool HAS_MOTION = false;
 const bool HAS_LOBE = HAS_PHONG || HAS_GGX;
 
 struct GpuMaterial {
@@ -30,8 +33,10 @@ layout(set = 0, binding = 0, std430) readonly buffer FrameBuf { GpuFrame frame; 
 // The right eye's frame (view 1 of gbuffer_multiview.frag; view 0 is `frame`).
 layout(set = 0, binding = 8, std430) readonly buffer FrameRightBuf { GpuFrame frame_right; };
 #define EYE_CAMERA_POSITION mix(frame.camera_position, frame_right.camera_position, float(gl_ViewIndex))
+#define EYE_FRAME(member) (gl_ViewIndex == 0 ? frame.member : frame_right.member)
 #else
 #define EYE_CAMERA_POSITION frame.camera_position
+#define EYE_FRAME(member) frame.member
 #endif
 layout(set = 0, binding = 1, std430) readonly buffer Materials { GpuMaterial materials[]; };
 // The draw's albedo texture (a 1x1 placeholder when the material has none).
@@ -54,6 +59,10 @@ layout(set = 0, binding = 7) uniform sampler2D emission_map;
 layout(push_constant) uniform Push {
     mat4 model;
     uint material;
+    // Rows of prev_model · model⁻¹ (the draw's world motion since the previous frame; a
+    // row vector times it gives the point's previous world position): gbuffer.frag's motion
+    // vectors only.
+    mat3x4 motion;
 } pc;
 
 layout(location = 0) in vec3 in_normal;
@@ -64,6 +73,7 @@ layout(location = 0) out vec4 out_albedo;
 layout(location = 1) out vec4 out_normal;
 layout(location = 2) out vec4 out_slot2;
 layout(location = 3) out vec4 out_slot3;
+layout(location = 4) out vec4 out_slot4;
 
 // Tangent frame from screen-space derivatives (Schüler 2013, "Followup: normal mapping
 // without precomputed tangents"): no per-vertex tangents needed. uv has v up, as in OBJ.
@@ -149,4 +159,19 @@ void main() {
     if (HAS_LOBE) out_slot2 = lobe;
     if (HAS_EMISSION && HAS_LOBE) out_slot3 = emission;
     if (HAS_EMISSION && !HAS_LOBE) out_slot2 = emission;
+    if (HAS_MOTION) {
+        // The motion vector: where this surface point was on the previous frame's screen
+        // (its world position moved back by the draw's motion, seen by the previous
+        // un-jittered camera) minus where it is now without this frame's jitter, in NDC. A
+        // point behind the previous camera gets an offset far off the screen (no history).
+        vec4 now = EYE_FRAME(view_proj) * vec4(in_world, 1.0);
+        vec3 prev_world = vec4(in_world, 1.0) * pc.motion;
+        vec4 then = EYE_FRAME(prev_view_proj) * vec4(prev_world, 1.0);
+        vec2 moved = then.w > 1e-6 ? then.xy / then.w - (now.xy / now.w - EYE_FRAME(jitter_ndc).xy) : vec2(4.0);
+        vec4 motion = vec4(moved, 0.0, 0.0);
+        int slot = 2 + int(HAS_LOBE) + int(HAS_EMISSION);
+        if (slot == 2) out_slot2 = motion;
+        if (slot == 3) out_slot3 = motion;
+        if (slot == 4) out_slot4 = motion;
+    }
 }

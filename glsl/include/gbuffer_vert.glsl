@@ -22,6 +22,10 @@ layout(set = 0, binding = 8, std430) readonly buffer FrameRightBuf { GpuFrame fr
 layout(push_constant) uniform Push {
     mat4 model;
     uint material;
+    // Rows of prev_model · model⁻¹ (the draw's world motion since the previous frame; a
+    // row vector times it gives the point's previous world position): gbuffer.frag's motion
+    // vectors only.
+    mat3x4 motion;
 } pc;
 
 layout(location = 0) out vec3 out_normal;

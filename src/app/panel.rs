@@ -794,6 +794,13 @@ fn ssgi_controls(ui: &mut egui::Ui, gi: &mut GiSettings) {
         crate::gi::SsgiMips::Voting
     };
     ui.checkbox(&mut s.feedback, "feedback bounces");
+    let mut lobe = s.ssr_rays == crate::gi::SsrRays::Lobe;
+    ui.checkbox(&mut lobe, "reflection rays sample the lobe");
+    s.ssr_rays = if lobe {
+        crate::gi::SsrRays::Lobe
+    } else {
+        crate::gi::SsrRays::Mirror
+    };
     ui.add(
         egui::Slider::new(
             &mut s.history_weight,

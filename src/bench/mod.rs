@@ -25,6 +25,7 @@ pub mod reference_cache;
 mod scenes;
 mod soak;
 mod ssgi;
+pub mod ssgi_limits;
 pub mod sweep;
 pub mod temporal;
 mod traverse;
@@ -105,6 +106,15 @@ pub enum BenchError {
         size: u32,
         width: u32,
         height: u32,
+        path: std::path::PathBuf,
+    },
+    #[error(
+        "ssgi-limits: no Mitsuba reference of {scene} at {}; add --make-references to render \
+         it with Mitsuba 3 (tools/reference installs it into .venv; seconds to minutes per image)",
+        path.display()
+    )]
+    NoLimitReference {
+        scene: String,
         path: std::path::PathBuf,
     },
     #[error("leak benchmark: a wall of {wall_voxels} voxels cannot be built: {why}")]

@@ -94,6 +94,7 @@ pub const GRID_KEYS: &[(&str, &[GiMethod])] = &[
     ("ssgi-resolution", SSGI),
     ("ssgi-samples", SSGI),
     ("ssgi-mips", SSGI),
+    ("ssr-rays", SSGI),
 ];
 
 const GI_METHODS: &[GiMethod] = &[GiMethod::Hemisphere, GiMethod::Pathtrace, GiMethod::Vpl];
@@ -617,6 +618,7 @@ pub fn gi_table(s: &GiSettings) -> toml::Table {
         toml_f32(s.ssgi.history_weight),
     );
     t.insert("ssr".into(), Value::Boolean(s.ssgi.ssr));
+    t.insert("ssr_rays".into(), value_name(s.ssgi.ssr_rays));
     t.insert("sao".into(), Value::Boolean(s.sao.is_some()));
     if let Some(a) = s.sao {
         t.insert("sao_radius_m".into(), toml_f32(a.radius_m));

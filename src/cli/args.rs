@@ -126,6 +126,11 @@ pub struct GiArgs {
     /// diffuse fallback (off) [default: the scene's `[gi] ssr`, else on].
     #[arg(long, value_enum)]
     pub ssr: Option<crate::gi::SsrMode>,
+    /// `--gi ssgi`: reflection rays along the mirror direction, the lobe's width read as a
+    /// coarser colour mip (mirror), or one lobe sample per pixel and frame averaged by the
+    /// history (lobe) [default: the scene's `[gi] ssr_rays`, else mirror].
+    #[arg(long, value_enum)]
+    pub ssr_rays: Option<crate::gi::SsrRays>,
     /// Modified SAO (Oetke 2017 §2.5) at half resolution, multiplied into the indirect light
     /// (needs a --gi method: direct light is not darkened); `--sao off` turns off the scene's
     /// [default: the scene's `[gi] sao`, else off].
@@ -181,6 +186,7 @@ impl GiArgs {
                 feedback_max_w_m2: self.ssgi_feedback_max,
                 history_weight: self.ssgi_history_weight,
                 ssr: self.ssr.map(|m| m == crate::gi::SsrMode::On),
+                ssr_rays: self.ssr_rays,
             },
             sao: crate::scene::SaoOverrides {
                 enabled: self.sao.map(Toggle::on),
@@ -743,6 +749,8 @@ mod tests {
             "0.3",
             "--ssr",
             "off",
+            "--ssr-rays",
+            "lobe",
             "--sao",
             "--sao-radius",
             "0.6",
@@ -783,6 +791,7 @@ mod tests {
                     feedback_max_w_m2: Some(4.5),
                     history_weight: Some(0.3),
                     ssr: Some(false),
+                    ssr_rays: Some(crate::gi::SsrRays::Lobe),
                 },
                 sao: crate::scene::SaoOverrides {
                     enabled: Some(true),

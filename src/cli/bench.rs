@@ -1,4 +1,4 @@
-//! `voxgi bench traverse|voxelize|voxelize-sweep|flicker|soak|leak|ssgi`: the benchmarks of [`crate::bench`].
+//! `voxgi bench traverse|voxelize|voxelize-sweep|flicker|soak|leak|ssgi|ssgi-limits`: the benchmarks of [`crate::bench`].
 
 use super::{check_validation, context, out, outln, CliError, Global};
 use crate::bench::{
@@ -151,6 +151,34 @@ pub enum BenchCommand {
         /// Print CSV instead of the table.
         #[arg(long, conflicts_with = "json")]
         csv: bool,
+        /// Print JSON instead of the table.
+        #[arg(long)]
+        json: bool,
+    },
+    /// The screen-space method's limitations (Oetke 2017 §7) on purpose-made scenes: light
+    /// from off-screen (the camera turns away from a lit wall) and missing indirect shadows
+    /// (a panel seen edge-on): the indirect light in view of `ssgi` and of the voxel path
+    /// tracer as a fraction of Mitsuba's (references made once and cached; leaking through
+    /// thin walls: `voxgi bench leak`).
+    SsgiLimits {
+        /// Image width and height in pixels (references at the same size).
+        #[arg(long, default_value_t = 128, value_parser = clap::value_parser!(u32).range(8..=1024))]
+        size: u32,
+        /// Frames each method accumulates (ssgi: feedback bounces and history).
+        #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..=4096))]
+        frames: u32,
+        /// Samples per pixel of the Mitsuba references.
+        #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..=65536))]
+        reference_spp: u32,
+        /// Render missing references with Mitsuba 3 (`tools/reference`; minutes each).
+        #[arg(long)]
+        make_references: bool,
+        /// The reference cache [default: ~/.cache/voxgi/references].
+        #[arg(long, value_name = "DIR")]
+        reference_cache: Option<std::path::PathBuf>,
+        /// The reference script.
+        #[arg(long, value_name = "PATH", default_value = "tools/reference")]
+        reference_tool: std::path::PathBuf,
         /// Print JSON instead of the table.
         #[arg(long)]
         json: bool,
@@ -394,6 +422,28 @@ pub fn bench(global: &Global, command: &BenchCommand, out: &mut dyn Write) -> Re
             }
             check_validation(ctx)
         }
+        BenchCommand::SsgiLimits {
+            size,
+            frames,
+            reference_spp,
+            make_references,
+            reference_cache,
+            reference_tool,
+            json,
+        } => {
+            let ctx = context(global)?;
+            let refs = References {
+                spp: *reference_spp,
+                make: *make_references,
+                cache: reference_cache
+                    .clone()
+                    .unwrap_or_else(crate::bench::reference_cache::default_cache_dir),
+                tool: reference_tool.clone(),
+            };
+            let report = ssgi_limits(&ctx, *size, *frames, &refs)?;
+            print(out, *json, &report, || report.table())?;
+            check_validation(ctx)
+        }
         BenchCommand::VoxelizeSweep {
             resolutions,
             reps,
@@ -436,4 +486,103 @@ fn print(
         out!(out, "{}", table());
     }
     Ok(())
+}
+
+/// Where `voxgi bench ssgi-limits` finds or makes its Mitsuba references.
+struct References {
+    spp: u32,
+    make: bool,
+    cache: std::path::PathBuf,
+    tool: std::path::PathBuf,
+}
+
+/// The Mitsuba image of `scene` at `size`² with `max_depth` (64 full GI, 2 direct light):
+/// the cached one when the export hashes to a key already rendered, else a new render when
+/// `refs.make`, else an error naming `--make-references`.
+fn limit_reference(
+    refs: &References,
+    name: &str,
+    scene: &crate::scene::Scene,
+    size: u32,
+    max_depth: u32,
+) -> Result<crate::eval::HdrImage, CliError> {
+    use crate::bench::reference_cache as rc;
+    use crate::bench::sweep::SweepError;
+    let settings = rc::ReferenceSettings {
+        size,
+        spp: refs.spp,
+        max_depth,
+        seed: 0,
+    };
+    let tool = rc::tool_files(&refs.tool).map_err(SweepError::from)?;
+    let export = refs.cache.join("export").join(name);
+    let io = |path: &std::path::Path| {
+        let path = path.to_owned();
+        move |source| SweepError::Io { path, source }
+    };
+    if export.exists() {
+        std::fs::remove_dir_all(&export).map_err(io(&export))?;
+    }
+    crate::eval::mitsuba::export_mitsuba(scene, 0.0, size, size, &export)?;
+    let key = rc::export_key(&export, &settings, &tool).map_err(SweepError::from)?;
+    let path = rc::cached_path(&refs.cache, name, &key);
+    if !path.exists() {
+        if !refs.make {
+            return Err(crate::bench::BenchError::NoLimitReference {
+                scene: name.to_owned(),
+                path,
+            }
+            .into());
+        }
+        rc::mitsuba_python(&refs.tool).map_err(SweepError::from)?;
+        eprintln!(
+            "reference of {name}: rendering with Mitsuba ({})",
+            settings.text()
+        );
+        rc::render_reference(&refs.tool, name, &export, &settings, &path)
+            .map_err(SweepError::from)?;
+    }
+    Ok(crate::eval::HdrImage::load(&path)?)
+}
+
+/// Runs the cases of [`crate::bench::ssgi_limits`]: per view the direct-only image, `ssgi`
+/// and the voxel path tracer after `frames` frames, and Mitsuba's full-GI and direct images.
+fn ssgi_limits(
+    ctx: &crate::vk::Context,
+    size: u32,
+    frames: u32,
+    refs: &References,
+) -> Result<crate::bench::ssgi_limits::LimitReport, CliError> {
+    use crate::bench::ssgi_limits as sl;
+    let methods = [("ssgi", GiMethod::Ssgi), ("pathtrace", GiMethod::Pathtrace)];
+    let mut rows = Vec::new();
+    for case in sl::limit_cases(size)? {
+        for (k, (view, scene)) in case.views.iter().enumerate() {
+            let name = format!("ssgi-limits-{}-{k}", case.case);
+            let gi = limit_reference(refs, &name, scene, size, 64)?;
+            let direct = limit_reference(refs, &format!("{name}-direct"), scene, size, 2)?;
+            let mask = case.mask.as_deref();
+            let reference = sl::indirect_mean(&gi, &direct, mask);
+            let own_direct = sl::render(ctx, scene, size, sl::method_settings(GiMethod::None, 1))?;
+            let mut measured = Vec::new();
+            for (m, method) in methods {
+                let img = sl::render(ctx, scene, size, sl::method_settings(method, frames))?;
+                let v = sl::indirect_mean(&img, &own_direct, mask);
+                measured.push((m.to_owned(), v, v / reference));
+            }
+            eprintln!("{} {view}: done", case.case);
+            rows.push(sl::LimitRow {
+                case: case.case.into(),
+                view: view.clone(),
+                reference,
+                methods: measured,
+            });
+        }
+    }
+    Ok(sl::LimitReport {
+        size,
+        frames,
+        reference_spp: refs.spp,
+        rows,
+    })
 }

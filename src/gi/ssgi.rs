@@ -164,7 +164,7 @@ impl Ssgi {
         )?;
         let glossy = target.has_phong || target.scene.has_ggx();
         let ssr = (settings.ssr && glossy)
-            .then(|| Ssr::new(ctx, target, settings.history_weight))
+            .then(|| Ssr::new(ctx, target, settings.history_weight, settings.ssr_rays))
             .transpose()?;
         let upsample = ctx.compute_pipeline(
             "ssgi_upsample.comp",
@@ -388,11 +388,10 @@ impl GiMethodPasses for Ssgi {
         let s = shared.sampler;
         // Without Phong materials the shader never reads its specular binding; albedo fills it.
         let specular = i.specular.unwrap_or(i.albedo);
-        // Without GGX materials the shader never reads the table; albedo fills it.
         let lut = self
             .brdf_lut
             .as_ref()
-            .map_or(i.albedo, |l| g.import_image(&l.image, Access::Sampled(c)));
+            .map(|l| g.import_image(&l.image, Access::Sampled(c)));
         // Without reflections the shader never reads their binding; albedo fills it.
         let ssr = match (&self.ssr, i.specular) {
             (Some(ssr), Some(specular)) => {
@@ -403,11 +402,14 @@ impl GiMethodPasses for Ssgi {
                     specular,
                     gi_history: history,
                     prev_camera,
+                    brdf_lut: lut,
                 };
                 ssr.add_passes(g, i, s, &inputs)
             }
             _ => i.albedo,
         };
+        // Without GGX materials the shader never reads the table; albedo fills it.
+        let lut = lut.unwrap_or(i.albedo);
         let pipe = *self.upsample;
         let push = GpuSsgiUpsamplePush {
             scale: (1u32 << base) as f32,

@@ -6,10 +6,12 @@
 //!   the nearest inverse view depth 1/z (the conservative Hi-Z the march needs; the GI
 //!   pyramid's voting or fast depth keeps one child, so a thin near surface could vanish from
 //!   a coarse level) and the lit colour by 2×2 box average;
-//! - `ssgi_reflect`: one mirror-direction ray per Phong or GGX pixel, marched on the Hi-Z
-//!   pyramid; at a hit the colour pyramid's level matching the lobe's cone footprint; fades at
-//!   the screen's edge, near the maximum distance, toward the camera, at back faces and for
-//!   misses; blended with the reprojected history. Output (a·L, a);
+//! - `ssgi_reflect`: one ray per Phong or GGX pixel, marched on the Hi-Z pyramid: along the
+//!   mirror direction, read at the colour pyramid's level matching the lobe's cone footprint
+//!   (`--ssr-rays mirror`), or sampled from the lobe anew every frame and read at the finest
+//!   level, weighted for the split sum (`--ssr-rays lobe`); fades at the screen's edge, near
+//!   the maximum distance, toward the camera, at back faces and for misses; blended with the
+//!   reprojected history. Output (a·L, a);
 //! - `ssgi_reflect_blur`: a 3×3 geometry-aware blur, and the unblurred value into the history.
 //!
 //! `ssgi_upsample` completes L_spec = a·L + (1 − a)·E/π (the diffuse fallback) and combines
@@ -19,10 +21,12 @@
 //! and specular) with emission, plus last frame's diffuse indirect light (the feedback);
 //! last frame's specular indirect light (reflections seen in reflections) is not in it.
 
-use super::{GiInputs, GiTarget};
+use super::{GiInputs, GiTarget, SsrRays};
 use crate::graph::{Access, BufferHandle, ImageHandle, RenderGraph, Shader};
 use crate::vk::{vk, ComputePipeline, Context, Image, ImageDesc, PushLayout, Sampler, VkError};
 use bytemuck::{Pod, Zeroable};
+use std::sync::atomic::{AtomicU32, Ordering};
+use std::sync::Arc;
 
 /// The hit shell behind a surface, relative to its view depth.
 pub const THICKNESS: f32 = 0.05;
@@ -39,6 +43,7 @@ struct GpuSsrPush {
     history_weight: f32,
     levels: i32,
     max_steps: i32,
+    frame: u32,
 }
 crate::push_constants!(GpuSsrPush {
     max_distance_m,
@@ -46,7 +51,8 @@ crate::push_constants!(GpuSsrPush {
     pixel_angle,
     history_weight,
     levels,
-    max_steps
+    max_steps,
+    frame
 });
 
 /// Mip levels of a full chain over a `width`×`height` frame (down to 1×1).
@@ -59,8 +65,9 @@ pub fn mip_size(width: u32, height: u32, k: u32) -> (u32, u32) {
     ((width >> k).max(1), (height >> k).max(1))
 }
 
-/// The GI pyramid's level 0 and the G-buffer images the reflections read, and the GI
-/// history (whose w holds last frame's clip w per pixel) with the previous camera.
+/// The GI pyramid's level 0 and the G-buffer images the reflections read, the GI history
+/// (whose w holds last frame's clip w per pixel) with the previous camera, and the split-sum
+/// table (GGX scenes; lobe samples divide by its A + B).
 pub struct SsrInputs {
     pub fine_pos: ImageHandle,
     pub fine_nrm: ImageHandle,
@@ -68,6 +75,7 @@ pub struct SsrInputs {
     pub specular: ImageHandle,
     pub gi_history: ImageHandle,
     pub prev_camera: BufferHandle,
+    pub brdf_lut: Option<ImageHandle>,
 }
 
 /// The reflections' pipelines, sampler and persistent history.
@@ -81,6 +89,9 @@ pub struct Ssr {
     /// Last frame's traced (a·L, a) per pixel, before the blur.
     history: Image,
     push: GpuSsrPush,
+    /// Frames traced so far: the lobe samples' index (not reset with the GI accumulation, so
+    /// a moving camera keeps blending the reprojected history with τ).
+    frames: Arc<AtomicU32>,
 }
 
 impl Ssr {
@@ -91,11 +102,19 @@ impl Ssr {
             .with_usage(vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::SAMPLED)
     }
 
-    pub fn new(ctx: &Context, target: &GiTarget<'_>, history_weight: f32) -> Result<Self, VkError> {
+    pub fn new(
+        ctx: &Context,
+        target: &GiTarget<'_>,
+        history_weight: f32,
+        rays: SsrRays,
+    ) -> Result<Self, VkError> {
         let hiz_first = ctx.compute_pipeline("ssgi_reflect_hiz.comp", None, &[(0, 1)])?;
         let hiz = ctx.compute_pipeline("ssgi_reflect_hiz.comp", None, &[(0, 0)])?;
-        let reflect =
-            ctx.compute_pipeline("ssgi_reflect.comp", PushLayout::of::<GpuSsrPush>(), &[])?;
+        let reflect = ctx.compute_pipeline(
+            "ssgi_reflect.comp",
+            PushLayout::of::<GpuSsrPush>(),
+            &[(0, u32::from(rays == SsrRays::Lobe))],
+        )?;
         let blur = ctx.compute_pipeline("ssgi_reflect_blur.comp", None, &[])?;
         let (w, h) = target.size;
         let history = ctx.create_zeroed_image(
@@ -110,6 +129,7 @@ impl Ssr {
             history_weight,
             levels: pyramid_levels(w, h) as i32,
             max_steps: MAX_STEPS,
+            frame: 0,
         };
         Ok(Self {
             hiz_first,
@@ -119,6 +139,7 @@ impl Ssr {
             linear: ctx.create_sampler(vk::Filter::LINEAR, false)?,
             history,
             push,
+            frames: Arc::new(AtomicU32::new(0)),
         })
     }
 
@@ -140,6 +161,9 @@ impl Ssr {
         let blurred = g.create_image(desc("ssr blurred"));
         let groups = (i.width.div_ceil(8), i.height.div_ceil(8));
         let (pipe, push) = (*self.reflect, self.push);
+        let frames = self.frames.clone();
+        // Without the table (no GGX materials) the shader never reads it; positions fill it.
+        let lut = r.brdf_lut.unwrap_or(r.fine_pos);
         g.add_pass("ssgi_reflect")
             .pipeline(&pipe)
             .bind(0, i.frame, Access::StorageRead(c))
@@ -152,7 +176,12 @@ impl Ssr {
             .bind_sampled(7, r.gi_history, sampler, c)
             .bind(8, r.prev_camera, Access::StorageRead(c))
             .bind(9, traced, Access::StorageWrite(c))
+            .bind_sampled(10, lut, sampler, c)
             .record(move |ctx| {
+                let push = GpuSsrPush {
+                    frame: frames.fetch_add(1, Ordering::SeqCst),
+                    ..push
+                };
                 ctx.bind(&pipe);
                 ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
                 ctx.cmd.dispatch(groups.0, groups.1, 1);

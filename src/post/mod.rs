@@ -51,6 +51,10 @@ pub struct TaaSettings {
     pub history_weight: f32,
     /// Frames a headless render runs (jittered), so a still image is anti-aliased.
     pub frames: u32,
+    /// Reproject moving objects' pixels with their motion vectors (scenes with moving objects
+    /// only; false reprojects them with the camera alone, as before motion vectors, for
+    /// comparisons).
+    pub motion_vectors: bool,
 }
 
 impl Default for TaaSettings {
@@ -58,6 +62,7 @@ impl Default for TaaSettings {
         Self {
             history_weight: 0.9,
             frames: 16,
+            motion_vectors: true,
         }
     }
 }
@@ -108,6 +113,7 @@ pub fn apply_overrides(
             Some(TaaSettings {
                 history_weight: o.taa_history_weight.unwrap_or(b.history_weight),
                 frames: o.taa_frames.unwrap_or(b.frames),
+                ..b
             })
         }
     };
@@ -148,6 +154,14 @@ pub fn apply_overrides(
     (post, tone)
 }
 
+impl PostSettings {
+    /// Whether the G-buffer draws motion vectors: only for a scene with moving objects
+    /// (`moving`) under TAA that asks for them.
+    pub fn motion_vectors(&self, moving: bool) -> bool {
+        moving && self.taa.is_some_and(|t| t.motion_vectors)
+    }
+}
+
 /// The post-processing passes the settings ask for (none by default), around `tonemap`.
 #[derive(Default)]
 pub struct PostPasses {
@@ -159,15 +173,18 @@ pub struct PostPasses {
 }
 
 impl PostPasses {
-    /// Creates the passes `settings` turn on for a `size` frame; `sampler` is nearest.
+    /// Creates the passes `settings` turn on for a `size` frame; `sampler` is nearest;
+    /// `moving`: the scene has moving objects (TAA then reads motion vectors, when its
+    /// settings ask for them: [`PostSettings::motion_vectors`]).
     pub fn new(
         ctx: &crate::vk::Context,
         settings: &PostSettings,
         size: (u32, u32),
         sampler: crate::vk::vk::Sampler,
+        moving: bool,
     ) -> Result<Self, crate::vk::VkError> {
         let mut passes = Self::default();
-        passes.create(ctx, settings, size, sampler)?;
+        passes.create(ctx, settings, size, sampler, moving)?;
         Ok(passes)
     }
 
@@ -177,10 +194,12 @@ impl PostPasses {
         settings: &PostSettings,
         size: (u32, u32),
         sampler: crate::vk::vk::Sampler,
+        moving: bool,
     ) -> Result<(), crate::vk::VkError> {
+        let motion = settings.motion_vectors(moving);
         self.taa = settings
             .taa
-            .map(|t| TaaPass::new(ctx, t, size, sampler))
+            .map(|t| TaaPass::new(ctx, t, size, sampler, motion))
             .transpose()?;
         self.exposure = settings
             .auto_exposure
@@ -209,19 +228,21 @@ impl PostPasses {
         self.taa.is_some()
     }
 
-    /// Declares the stages on linear radiance (TAA, then auto exposure and bloom); returns the
+    /// Declares the stages on linear radiance (TAA, then auto exposure and bloom; `motion`: the
+    /// G-buffer's motion vectors, where it has them); returns the
     /// radiance to tone-map and the exposure buffer `tonemap` reads (`None`: a fixed 1).
     pub fn declare_hdr(
         &self,
         g: &mut crate::graph::RenderGraph,
         radiance: crate::graph::ImageHandle,
         depth: crate::graph::ImageHandle,
+        motion: Option<crate::graph::ImageHandle>,
     ) -> (
         crate::graph::ImageHandle,
         Option<crate::graph::BufferHandle>,
     ) {
         let radiance = match &self.taa {
-            Some(taa) => taa.declare(g, radiance, depth),
+            Some(taa) => taa.declare(g, radiance, depth, motion),
             None => radiance,
         };
         // The exposure is measured before bloom, which only moves light around.

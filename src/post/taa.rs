@@ -5,7 +5,8 @@
 //! G-buffer, depth and every position reconstructed from them agree);
 //! this pass reprojects the history with the depth and the previous frame's un-jittered camera,
 //! clips it in YCoCg to the current 3×3 neighbourhood and blends it with the current frame.
-//! A copy (`taa_history`) keeps the result for the next frame.
+//! A copy (`taa_history`) keeps the result for the next frame. In scenes with moving objects
+//! the G-buffer's motion vectors replace the camera-only reprojection at surface pixels.
 
 use super::TaaSettings;
 use crate::graph::{Access, ImageHandle, RenderGraph, Shader};
@@ -90,14 +91,20 @@ impl TaaPass {
             .with_usage(vk::ImageUsageFlags::SAMPLED)
     }
 
-    /// `sampler`: nearest (the shader filters the history by hand).
+    /// `sampler`: nearest (the shader filters the history by hand). `motion`: the G-buffer
+    /// has motion vectors, [`TaaPass::declare`] gets them.
     pub fn new(
         ctx: &Context,
         settings: TaaSettings,
         (w, h): (u32, u32),
         sampler: vk::Sampler,
+        motion: bool,
     ) -> Result<Self, VkError> {
-        let pipeline = ctx.compute_pipeline("taa.comp", PushLayout::of::<GpuTaaPush>(), &[])?;
+        let pipeline = ctx.compute_pipeline(
+            "taa.comp",
+            PushLayout::of::<GpuTaaPush>(),
+            &[(0, u32::from(motion))],
+        )?;
         let history = ctx.create_zeroed_image(
             &Self::history_desc((w, h)),
             Access::Sampled(Shader::Compute).info().layout,
@@ -138,13 +145,15 @@ impl TaaPass {
         jitter_ndc
     }
 
-    /// Declares `taa` (current + depth + history → resolved) and `taa_history` (resolved →
-    /// history); returns the resolved radiance.
+    /// Declares `taa` (current + depth [+ motion vectors] + history → resolved) and
+    /// `taa_history` (resolved → history); returns the resolved radiance. `motion` must be
+    /// given exactly when the pass was made with motion vectors.
     pub fn declare(
         &self,
         g: &mut RenderGraph,
         radiance: ImageHandle,
         depth: ImageHandle,
+        motion: Option<ImageHandle>,
     ) -> ImageHandle {
         let (w, h) = self.size;
         let c = Shader::Compute;
@@ -163,6 +172,8 @@ impl TaaPass {
             .bind_sampled(1, depth, self.sampler, c)
             .bind_sampled(2, history, self.sampler, c)
             .bind(3, resolved, Access::StorageWrite(c))
+            // Without motion vectors the shader never reads binding 4; the depth fills it.
+            .bind_sampled(4, motion.unwrap_or(depth), self.sampler, c)
             .record(move |ctx| {
                 let push = state.lock().unwrap_or_else(|e| e.into_inner()).push;
                 ctx.bind(&pipe);

@@ -8,29 +8,45 @@ use super::{DEPTH, GBUFFER_COLOR};
 use crate::graph::{Access, BufferHandle, ImageHandle, Load, RenderGraph, Shader};
 use crate::vk::{vk, Context, GraphicsPipeline, GraphicsPipelineDesc, ImageDesc, VkError};
 
-/// Push constants of `gbuffer.vert`.
+/// Push constants of `gbuffer.vert` (128 bytes, the least every device offers).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct GpuGbufferPush {
     pub model: [f32; 16],
     pub material: u32,
     pub _pad: [u32; 3],
+    /// The first three rows of prev_model · model⁻¹: the draw's motion in world space since
+    /// the previous frame (identity for a draw that did not move), for the motion vectors.
+    pub motion: [f32; 12],
 }
 
 crate::push_constants!(GpuGbufferPush {
     model,
     material,
-    _pad
+    _pad,
+    motion
 });
 
 impl GpuGbufferPush {
-    /// The push constants of one draw (its model matrix and material), shared by every pass
-    /// that draws through `gbuffer.vert` (the G-buffer and the transparency lists).
+    /// The push constants of one draw (its model matrix, material and motion), shared by
+    /// every pass that draws through `gbuffer.vert` (the G-buffer and the transparency lists).
     pub fn of(d: &super::scene_gpu::Draw) -> Self {
+        // Exactly the identity for a draw that did not move (not model · model⁻¹ rounded).
+        let motion = if d.prev_model == d.model {
+            glam::Mat4::IDENTITY
+        } else {
+            d.prev_model * d.model.inverse()
+        };
+        let rows = [motion.row(0), motion.row(1), motion.row(2)];
+        let mut m = [0.0f32; 12];
+        for (i, r) in rows.iter().enumerate() {
+            m[4 * i..4 * i + 4].copy_from_slice(&r.to_array());
+        }
         Self {
             model: d.model.to_cols_array(),
             material: d.material,
             _pad: [0; 3],
+            motion: m,
         }
     }
 }
@@ -45,8 +61,14 @@ pub struct Gbuffer {
     pub specular: Option<ImageHandle>,
     /// Emitted radiance (rgb, W/(m²·sr)), only in scenes with emissive materials.
     pub emission: Option<ImageHandle>,
+    /// Motion vectors, only in scenes with moving objects under TAA: per pixel the surface
+    /// point's un-jittered NDC in the previous frame minus its un-jittered NDC now (rg).
+    pub motion: Option<ImageHandle>,
     pub depth: ImageHandle,
 }
+
+/// The motion vectors' format: NDC offsets, 2⁻¹¹ relative (a 0.1 NDC motion to 5e-5 NDC).
+pub const MOTION_FORMAT: vk::Format = vk::Format::R16G16_SFLOAT;
 
 impl Gbuffer {
     /// One eye of a two-layer (multiview) G-buffer: each image's layer `eye`.
@@ -56,6 +78,7 @@ impl Gbuffer {
             normal: g.layer(self.normal, eye),
             specular: self.specular.map(|i| g.layer(i, eye)),
             emission: self.emission.map(|i| g.layer(i, eye)),
+            motion: self.motion.map(|i| g.layer(i, eye)),
             depth: g.layer(self.depth, eye),
         }
     }
@@ -82,6 +105,7 @@ pub struct GbufferPass {
     has_lobe: bool,
     has_emission: bool,
     views: GbufferViews,
+    has_motion: bool,
 }
 
 /// The material models a scene's G-buffer carries (each gates an attachment or shader code).
@@ -95,6 +119,8 @@ pub struct GbufferFeatures {
     pub dissolve: bool,
     /// MTL `map_Pr`, `map_Pm` or `map_Ke`.
     pub pbr_maps: bool,
+    /// Motion vectors (moving objects under TAA).
+    pub motion: bool,
 }
 
 impl GbufferPass {
@@ -114,6 +140,9 @@ impl GbufferPass {
         let mut colors = vec![GBUFFER_COLOR, GBUFFER_COLOR];
         let extra = usize::from(has_lobe) + usize::from(f.emission);
         colors.resize(2 + extra, GBUFFER_COLOR);
+        if f.motion {
+            colors.push(MOTION_FORMAT);
+        }
         let stem = match multiview {
             true => "gbuffer_multiview",
             false => "gbuffer",
@@ -142,6 +171,7 @@ impl GbufferPass {
                 (4, u32::from(f.ggx)),
                 (5, u32::from(f.emission)),
                 (6, u32::from(f.pbr_maps)),
+                (7, u32::from(f.motion)),
             ],
         })?;
         Ok(Self {
@@ -149,6 +179,7 @@ impl GbufferPass {
             has_lobe,
             has_emission: f.emission,
             views,
+            has_motion: f.motion,
         })
     }
 
@@ -169,6 +200,9 @@ impl GbufferPass {
             emission: self
                 .has_emission
                 .then(|| image("gbuffer emission", GBUFFER_COLOR)),
+            motion: self
+                .has_motion
+                .then(|| image("gbuffer motion", MOTION_FORMAT)),
             depth: image("gbuffer depth", DEPTH),
         };
         let right = scene.frame_right.unwrap_or(scene.frame);
@@ -231,8 +265,11 @@ impl GbufferPass {
             .read(indices, Access::IndexBuffer)
             .color(out.albedo, clear)
             .color(out.normal, clear);
-        // In location order: the lobe, then the emission (gbuffer.frag).
-        for extra in [out.specular, out.emission].into_iter().flatten() {
+        // In location order: the lobe, the emission, the motion (gbuffer.frag).
+        for extra in [out.specular, out.emission, out.motion]
+            .into_iter()
+            .flatten()
+        {
             pass = pass.color(extra, clear);
         }
         pass = pass.depth(out.depth, Load::ClearDepth(1.0));

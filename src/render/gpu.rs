@@ -65,6 +65,11 @@ pub struct GpuFrame {
     pub shadow: [f32; 4],
     pub lights: [GpuLight; MAX_LIGHTS],
     pub shadow_views: [GpuShadowView; MAX_SHADOW_VIEWS],
+    /// The previous frame's un-jittered view-projection (this frame's in the first frame):
+    /// read only by the G-buffer's motion vectors (scenes with moving objects under TAA).
+    pub prev_view_proj: [f32; 16],
+    /// xy: this frame's TAA jitter in NDC (0 without TAA), added to `view_proj`'s x and y.
+    pub jitter_ndc: [f32; 4],
 }
 
 crate::gpu_struct!(GpuFrame {
@@ -74,7 +79,9 @@ crate::gpu_struct!(GpuFrame {
     counts,
     shadow,
     lights,
-    shadow_views
+    shadow_views,
+    prev_view_proj,
+    jitter_ndc
 });
 
 #[repr(C)]

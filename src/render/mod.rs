@@ -29,8 +29,8 @@ pub use light_map::LightMaps;
 pub use oit::{OitStats, DEFAULT_NODES_PER_PIXEL as OIT_DEFAULT_NODES_PER_PIXEL};
 pub use oit_resolve::MAX_LAYERS as OIT_MAX_LAYERS;
 pub use run::{
-    frames_to_image, profile_camera_path, profile_scene, render_image, render_sequence, ProfileRun,
-    RenderOutput, SequenceOutput,
+    frames_to_image, profile_camera_path, profile_scene, render_animation, render_image,
+    render_sequence, ProfileRun, RenderOutput, SequenceOutput,
 };
 pub use scene_gpu::{Draw, DrawLists, SceneGpu, SceneInputs};
 pub use settings_check::{check_device_limits, check_render_settings};
@@ -279,6 +279,8 @@ pub struct Renderer {
     /// views: the cascade count × the directional lights (a frame may use fewer).
     cascade_view_capacity: u32,
     frame_data: GpuFrame,
+    /// The un-jittered view-projection of the last frame written (motion vectors only).
+    prev_view_proj: Option<glam::Mat4>,
     voxels: Option<crate::voxel::gpu::VoxelFrame>,
     /// Indirect-light passes and the light-map pass (for the voxel methods), when a GI method
     /// is on.
@@ -453,7 +455,10 @@ impl Renderer {
             bump: scene.has_bump_maps(),
             dissolve: scene.has_transparency() && !oit_on,
             pbr_maps: scene.has_pbr_maps(),
+            // Moving objects under TAA (a debug view has no TAA).
+            motion: settings.debug.is_none() && settings.post.motion_vectors(scene.has_animation()),
         };
+        scene_gpu.motion = features.motion;
         let gbuffer = GbufferPass::new(ctx, features, views)?;
         let deferred = DeferredDirectPass::new(
             ctx,
@@ -474,6 +479,7 @@ impl Renderer {
                 &settings.post,
                 (settings.width, settings.height),
                 sampler.raw,
+                scene.has_animation(),
             )?,
             Some(_) => crate::post::PostPasses::default(),
         };
@@ -620,6 +626,7 @@ impl Renderer {
             shadow_view_count: 0,
             cascade_view_capacity: 0,
             frame_data: GpuFrame::zeroed(),
+            prev_view_proj: None,
             voxels,
             gi,
             voxel_debug,
@@ -629,7 +636,9 @@ impl Renderer {
             shadow_texels,
             auto_shadow: None,
             stereo: rig
-                .map(|(rig, _)| stereo::OnePass::new(ctx, rig, settings, sampler_raw))
+                .map(|(rig, _)| {
+                    stereo::OnePass::new(ctx, rig, settings, sampler_raw, scene.has_animation())
+                })
                 .transpose()?,
         })
     }
@@ -748,11 +757,22 @@ impl Renderer {
         if let Some(pass) = &mut self.voxel_debug {
             pass.update(self.settings.time_s, slot);
         }
-        let frame = jittered(self.frame_data, &mut self.post);
+        // With TAA every frame renders with its own sub-pixel jitter; `frame_data` keeps the
+        // un-jittered camera (what `prepare` compares to restart accumulation).
+        let view_proj = glam::Mat4::from_cols_array(&self.frame_data.view_proj);
+        let mut frame = jittered(self.frame_data, &mut self.post);
+        let motion = self.scene.motion;
+        if motion {
+            // The previous frame written is the motion vectors' "before", camera and models.
+            let prev = self.prev_view_proj.unwrap_or(view_proj);
+            frame.prev_view_proj = prev.to_cols_array();
+            self.prev_view_proj = Some(view_proj);
+            self.scene.advance_motion();
+        }
         self.scene.write_frame(slot, &frame);
         if let Some(st) = &mut self.stereo {
             // The right eye's own TAA history and jitter sequence.
-            let right = st.jittered_right_frame();
+            let right = st.jittered_right_frame(motion);
             self.scene.write_frame_right(slot, &right);
         }
     }
@@ -916,7 +936,7 @@ impl Renderer {
             Some(oit) => oit.declare(g, scene, (gbuffer.depth, shadow_map), radiance, (w, h)),
             None => radiance,
         };
-        let (radiance, exposure) = post.declare_hdr(g, radiance, gbuffer.depth);
+        let (radiance, exposure) = post.declare_hdr(g, radiance, gbuffer.depth, gbuffer.motion);
         let ldr = self
             .tonemap
             .declare(g, radiance, exposure, s.tonemap, (w, h));
@@ -1120,11 +1140,13 @@ fn ldr_from(buffer: &Buffer, (w, h): (u32, u32)) -> Vec<u8> {
 fn jittered(mut frame: GpuFrame, post: &mut crate::post::PostPasses) -> GpuFrame {
     if post.jitters() {
         let view_proj = glam::Mat4::from_cols_array(&frame.view_proj);
-        let jitter = crate::post::taa::jitter_matrix(post.begin_frame(view_proj));
+        let jitter_ndc = post.begin_frame(view_proj);
+        let jitter = crate::post::taa::jitter_matrix(jitter_ndc);
         // The inverse stays camera-relative (see `camera_relative_inverse`).
         let inv_relative = glam::Mat4::from_cols_array(&frame.inv_view_proj);
         frame.view_proj = (jitter * view_proj).to_cols_array();
         frame.inv_view_proj = (inv_relative * jitter.inverse()).to_cols_array();
+        frame.jitter_ndc = [jitter_ndc.x, jitter_ndc.y, 0.0, 0.0];
     }
     frame
 }

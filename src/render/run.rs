@@ -127,6 +127,31 @@ pub fn render_sequence(
     Ok(SequenceOutput { warm, frames })
 }
 
+/// Renders one frame of `scene` at each animation time of `times_s` with one renderer, as
+/// the viewer does while the scene plays: moving objects follow the times (through
+/// [`Renderer::prepare`]) while TAA, GI accumulation and histories carry over. Returns the
+/// image of every frame.
+pub fn render_animation(
+    ctx: &Context,
+    scene: &Scene,
+    settings: &super::RenderSettings,
+    times_s: &[f32],
+) -> Result<Vec<HdrImage>, RenderError> {
+    let mut settings = settings.clone();
+    settings.time_s = times_s.first().copied().unwrap_or(settings.time_s);
+    let mut renderer = Renderer::new(ctx, scene, settings)?;
+    let exec = GraphExecutor::new(ctx, renderer.graph(), MAX_FRAMES_IN_FLIGHT)?;
+    let mut images = Vec::with_capacity(times_s.len());
+    for &t_s in times_s {
+        renderer.settings.time_s = t_s;
+        renderer.prepare(scene)?;
+        // Each run waits for its frame, so the read-back holds it.
+        crate::graph::run_frames(ctx, &exec, 1, 0, |slot| renderer.write_frame(slot))?;
+        images.push(renderer.hdr_image());
+    }
+    Ok(images)
+}
+
 type FrameFacts = (Vec<PassTiming>, Vec<String>, (u64, u64));
 
 /// Runs `frames` frames; returns the last frame's timings and graph facts.

@@ -38,6 +38,9 @@ pub struct Draw {
     pub submesh: usize,
     pub local_aabb: Aabb,
     pub model: Mat4,
+    /// The model matrix of the previous frame written (motion vectors; `model` while they
+    /// are off, in the first frame, and for objects that do not move).
+    pub prev_model: Mat4,
     pub aabb: Aabb,
     /// The material's opacity (MTL `d`) is 1.
     pub opaque: bool,
@@ -81,6 +84,11 @@ pub struct SceneGpu {
     pub split_transparent: bool,
     /// Vertex and index offsets of every mesh in the shared buffers.
     mesh_base: Vec<(i32, u32)>,
+    /// Motion vectors are drawn: [`SceneGpu::advance_motion`] keeps each draw's previous
+    /// model matrix.
+    pub motion: bool,
+    /// Per object, its model matrix in the last frame written (`None`: none yet).
+    written_models: Vec<Option<Mat4>>,
 }
 
 /// The scene's resources imported into one graph.
@@ -196,6 +204,8 @@ impl SceneGpu {
             all_draws: geometry.draws,
             split_transparent: false,
             mesh_base: geometry.mesh_base,
+            motion: false,
+            written_models: Vec::new(),
         })
     }
 
@@ -288,6 +298,30 @@ impl SceneGpu {
         };
         if let Ok(mut d) = self.draws.write() {
             *d = lists;
+        }
+    }
+
+    /// Starts a frame for the motion vectors: every listed draw's `prev_model` becomes its
+    /// object's model in the last frame written (its own model in the first frame), then the
+    /// current models are remembered for the next frame. Per frame written, not per
+    /// [`SceneGpu::update_draws`], so a frame rendered without moving anything has no motion.
+    pub fn advance_motion(&mut self) {
+        let written = &mut self.written_models;
+        if let Ok(mut lists) = self.draws.write() {
+            let DrawLists {
+                camera,
+                transparent,
+                ..
+            } = &mut *lists;
+            for d in camera.iter_mut().chain(transparent.iter_mut()) {
+                d.prev_model = written.get(d.object).copied().flatten().unwrap_or(d.model);
+            }
+        }
+        for d in &self.all_draws {
+            if written.len() <= d.object {
+                written.resize(d.object + 1, None);
+            }
+            written[d.object] = Some(d.model);
         }
     }
 
@@ -483,6 +517,7 @@ fn upload_geometry(ctx: &Context, scene: &Scene, t_s: f32) -> Result<Geometry, R
                 submesh: si,
                 local_aabb: mesh.aabb,
                 model,
+                prev_model: model,
                 aabb,
                 opaque: scene
                     .materials

@@ -96,6 +96,9 @@ pub(super) struct OnePass {
     /// The right eye's frame constants, un-jittered (`Renderer::frame_data` is the left's).
     pub frame_right: super::GpuFrame,
     pub post_right: crate::post::PostPasses,
+    /// The right eye's un-jittered view-projection of the last frame written (the motion
+    /// vectors' previous camera; scenes with moving objects under TAA).
+    pub prev_view_proj_right: Option<glam::Mat4>,
     /// Read-back of the right eye's radiance and tone-mapped image.
     pub readback_right: [Buffer; 2],
 }
@@ -106,20 +109,30 @@ impl OnePass {
         rig: StereoRig,
         settings: &RenderSettings,
         sampler: vk::Sampler,
+        moving: bool,
     ) -> Result<Self, RenderError> {
         let size = (settings.width, settings.height);
         let [hdr, ldr] = super::readback_descs(size);
         Ok(Self {
             rig,
             frame_right: bytemuck::Zeroable::zeroed(),
-            post_right: crate::post::PostPasses::new(ctx, &settings.post, size, sampler)?,
+            post_right: crate::post::PostPasses::new(ctx, &settings.post, size, sampler, moving)?,
+            prev_view_proj_right: None,
             readback_right: [ctx.create_buffer(&hdr)?, ctx.create_buffer(&ldr)?],
         })
     }
 
-    /// The right eye's frame constants for the next frame, with its TAA jitter.
-    pub fn jittered_right_frame(&mut self) -> super::GpuFrame {
-        super::jittered(self.frame_right, &mut self.post_right)
+    /// The right eye's frame constants for the next frame, with its TAA jitter and, with
+    /// `motion`, its previous camera.
+    pub fn jittered_right_frame(&mut self, motion: bool) -> super::GpuFrame {
+        let view_proj = glam::Mat4::from_cols_array(&self.frame_right.view_proj);
+        let mut frame = super::jittered(self.frame_right, &mut self.post_right);
+        if motion {
+            let prev = self.prev_view_proj_right.unwrap_or(view_proj);
+            frame.prev_view_proj = prev.to_cols_array();
+            self.prev_view_proj_right = Some(view_proj);
+        }
+        frame
     }
 }
 

@@ -129,6 +129,7 @@ pub(crate) struct GiDesc {
     pub sao_bias: Option<f32>,
     pub sao_contrast: Option<f32>,
     pub sao_epsilon_m2: Option<f32>,
+    pub ssr_rays: Option<String>,
 }
 
 #[derive(Clone, Debug, Deserialize)]
@@ -837,7 +838,7 @@ fn build_post(ck: &Check<'_>, t: &PostDesc) -> Result<super::PostOverrides, Scen
 }
 
 /// The `[gi]` table's screen-space GI keys (`ssgi_resolution`, `ssgi_samples`, `ssgi_mips`,
-/// `ssgi_feedback`, `ssgi_feedback_max_w_m2`, `ssgi_history_weight`, `ssr`).
+/// `ssgi_feedback`, `ssgi_feedback_max_w_m2`, `ssgi_history_weight`, `ssr`, `ssr_rays`).
 fn build_ssgi(
     ck: &Check<'_>,
     g: &GiDesc,
@@ -877,6 +878,21 @@ fn build_ssgi(
                 })?,
         ),
     };
+    let ssr_rays = match &g.ssr_rays {
+        None => None,
+        Some(name) => Some(
+            crate::scene::SsrRays::NAMES
+                .iter()
+                .find(|(n, _)| *n == name.as_str())
+                .map(|&(_, r)| r)
+                .ok_or_else(|| {
+                    ck.invalid(
+                        "gi.ssr_rays",
+                        format!("unknown ray choice \"{name}\"; expected \"mirror\" or \"lobe\""),
+                    )
+                })?,
+        ),
+    };
     Ok(crate::scene::SsgiOverrides {
         resolution,
         samples: count(&limits::SSGI_SAMPLES, g.ssgi_samples)?,
@@ -885,6 +901,7 @@ fn build_ssgi(
         feedback_max_w_m2: length(&limits::SSGI_FEEDBACK_MAX, g.ssgi_feedback_max_w_m2)?,
         history_weight: length(&limits::SSGI_HISTORY_WEIGHT, g.ssgi_history_weight)?,
         ssr: g.ssr,
+        ssr_rays,
     })
 }
 

@@ -245,6 +245,7 @@ mod tests {
                 feedback_max_w_m2: Some(3.5),
                 history_weight: Some(0.25),
                 ssr: Some(false),
+                ssr_rays: Some(crate::scene::SsrRays::Lobe),
             },
             sao: crate::scene::SaoOverrides {
                 enabled: Some(true),
@@ -286,6 +287,7 @@ mod tests {
                 feedback_max_w_m2: Some(s.ssgi.feedback_max_w_m2),
                 history_weight: Some(s.ssgi.history_weight),
                 ssr: Some(s.ssgi.ssr),
+                ssr_rays: Some(s.ssgi.ssr_rays),
             },
             sao: s.sao.map_or_else(
                 || crate::scene::SaoOverrides {

@@ -100,6 +100,9 @@ pub struct SsgiSettings {
     /// Screen-space reflections (Oetke 2017 §5.4) where the scene has Phong or GGX
     /// materials; without such materials nothing is allocated either way.
     pub ssr: bool,
+    /// The reflection rays' directions: the mirror direction with the lobe's width read as a
+    /// coarser colour mip, or one lobe sample per pixel and frame (`--ssr-rays`).
+    pub ssr_rays: SsrRays,
 }
 
 impl Default for SsgiSettings {
@@ -112,8 +115,30 @@ impl Default for SsgiSettings {
             feedback_max_w_m2: 20.0,
             history_weight: 0.9,
             ssr: true,
+            ssr_rays: SsrRays::Mirror,
         }
     }
+}
+
+/// `--ssr-rays`: how screen-space reflection rays choose their direction.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SsrRays {
+    /// One ray along the mirror direction; the lobe's width picks the colour pyramid's level
+    /// at the hit (Oetke 2017 §5.4): deterministic, blurs only where the ray hits.
+    #[default]
+    Mirror,
+    /// One ray per pixel and frame importance-sampled from the pixel's lobe (GGX visible
+    /// normals, Heitz 2018; Phong cosⁿ), read at the colour's finest level and averaged by
+    /// the history: converges to the lobe's reflection over frames. Lobes narrower than a
+    /// pixel keep the mirror ray.
+    Lobe,
+}
+
+impl SsrRays {
+    /// The names the scene file's `ssr_rays` (and `--ssr-rays`) take.
+    pub const NAMES: [(&'static str, SsrRays); 2] =
+        [("mirror", SsrRays::Mirror), ("lobe", SsrRays::Lobe)];
 }
 
 /// `--ssr on|off`.
@@ -268,6 +293,7 @@ pub struct SsgiOverrides {
     pub feedback_max_w_m2: Option<f32>,
     pub history_weight: Option<f32>,
     pub ssr: Option<bool>,
+    pub ssr_rays: Option<SsrRays>,
 }
 
 impl SsgiOverrides {
@@ -281,6 +307,7 @@ impl SsgiOverrides {
             feedback_max_w_m2: self.feedback_max_w_m2.or(fallback.feedback_max_w_m2),
             history_weight: self.history_weight.or(fallback.history_weight),
             ssr: self.ssr.or(fallback.ssr),
+            ssr_rays: self.ssr_rays.or(fallback.ssr_rays),
         }
     }
 
@@ -294,6 +321,7 @@ impl SsgiOverrides {
             feedback_max_w_m2: self.feedback_max_w_m2.unwrap_or(base.feedback_max_w_m2),
             history_weight: self.history_weight.unwrap_or(base.history_weight),
             ssr: self.ssr.unwrap_or(base.ssr),
+            ssr_rays: self.ssr_rays.unwrap_or(base.ssr_rays),
         }
     }
 }

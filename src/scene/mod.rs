@@ -194,7 +194,7 @@ pub use error::SceneError;
 pub use gi::{resolve_gi, GiOverrides};
 pub use gi_settings::{
     Bounces, GiMethod, GiSettings, RadianceSource, SaoOverrides, SaoSettings, SsgiMips,
-    SsgiOverrides, SsgiResolution, SsgiSettings, SsrMode,
+    SsgiOverrides, SsgiResolution, SsgiSettings, SsrMode, SsrRays,
 };
 pub use light::{scaled, spot_falloff, Light};
 pub use material::{

@@ -686,6 +686,7 @@ fn gi_table_parses_every_key() {
          vpl_normalize = \"valid\"\nvpl_spot_sampling = \"disk\"\nssgi_resolution = \"quarter\"\n\
          ssgi_samples = 12\nssgi_mips = \"fast\"\nssgi_feedback = false\n\
          ssgi_feedback_max_w_m2 = 5.5\nssgi_history_weight = 0.5\nssr = false\n\
+         ssr_rays = \"lobe\"\n\
          sao = true\nsao_radius_m = 0.6\nsao_bias = 0.02\nsao_contrast = 3\nsao_epsilon_m2 = 0.5\n"
     );
     let s = load_ok(&text, &[]);
@@ -719,6 +720,7 @@ fn gi_table_parses_every_key() {
                 feedback_max_w_m2: Some(5.5),
                 history_weight: Some(0.5),
                 ssr: Some(false),
+                ssr_rays: Some(crate::scene::SsrRays::Lobe),
             },
             sao: crate::scene::SaoOverrides {
                 enabled: Some(true),
@@ -1326,6 +1328,11 @@ fn gi_screen_space_keys_refuse_bad_values() {
             "ssgi_mips = \"median\"",
             "gi.ssgi_mips",
             "\"voting\" or \"fast\"",
+        ),
+        (
+            "ssr_rays = \"cone\"",
+            "gi.ssr_rays",
+            "\"mirror\" or \"lobe\"",
         ),
         (
             "ssgi_history_weight = 1.0",
