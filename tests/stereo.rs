@@ -276,6 +276,70 @@ fn multiview_pair_equals_one_frame_pair_where_nothing_is_clipped() {
     }
 }
 
+/// Stereo with `--taa`: each eye keeps its own history and its own jitter sequence (a second
+/// `PostPasses`, its jitter written into the right eye's frame constants), so the one-frame
+/// pair after N jittered frames is each eye's mono `--taa` render after N frames, bit for bit
+/// (same sequence, same history, same shaders; a history or jitter shared between the eyes
+/// would mix the left eye into the right). The multiview pair equals the one-frame pair on
+/// the scene lavapipe rasterizes correctly (nothing crosses a viewport edge). TAA must also
+/// have changed the image (jittered frames blended), or the comparison would prove nothing.
+#[test]
+fn stereo_taa_pair_equals_each_eyes_mono_taa_render() {
+    let ctx = common::context();
+    let mut settings = RenderSettings {
+        width: SIZE,
+        height: SIZE,
+        ..Default::default()
+    };
+    settings.post.taa = Some(voxgi::post::TaaSettings {
+        history_weight: 0.9,
+        frames: 6,
+    });
+    let mode = StereoMode::SideBySideFull;
+    let cornell = voxgi::scene::builtin("cornell").expect("cornell");
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes");
+    let inside = Scene::from_toml_str(INSIDE, Path::new("<multiview test scene>"), &dir)
+        .expect("scene parses");
+    let rig = StereoRig {
+        separation_m: 0.1,
+        convergence_m: 1.0,
+    };
+    let render = |scene: &Scene, settings: &RenderSettings, path| {
+        let stereo = StereoSettings { mode, rig, path };
+        let out = render_stereo(&ctx, scene, settings, stereo).expect("stereo renders");
+        assert_eq!((out.path, &out.fallback), (path, &None));
+        out
+    };
+    let one = render(&cornell, &settings, StereoPath::OneFrame);
+    for (eye, got) in [(Eye::Left, &one.left), (Eye::Right, &one.right)] {
+        let mono = render_image(&ctx, &eye_scene(&cornell, rig, eye), &settings)
+            .expect("mono eye renders");
+        assert_eq!(max_difference(got, &mono), (0, 0.0), "{eye:?} eye with TAA");
+    }
+    let plain = RenderSettings {
+        post: Default::default(),
+        ..settings.clone()
+    };
+    let still = render(&cornell, &plain, StereoPath::OneFrame);
+    assert_ne!(
+        still.right.ldr, one.right.ldr,
+        "TAA left the right eye unchanged"
+    );
+    let one = render(&inside, &settings, StereoPath::OneFrame);
+    let multiview = render(&inside, &settings, StereoPath::Multiview);
+    assert_eq!(
+        max_difference(&multiview.left, &one.left),
+        (0, 0.0),
+        "multiview left"
+    );
+    assert_eq!(
+        max_difference(&multiview.right, &one.right),
+        (0, 0.0),
+        "multiview right"
+    );
+    common::assert_no_validation_messages(&ctx);
+}
+
 /// Two distinct eye images of `w`×`h`: every texel a different colour, the eyes different
 /// everywhere (so a swapped eye or texel cannot go unnoticed).
 fn eyes(w: u32, h: u32) -> (Vec<u8>, Vec<u8>) {
