@@ -246,6 +246,7 @@ fn profile_stereo_lists_both_eyes_and_the_mono_frame() {
             "resolution: 32x32 per eye",
             "mono frame: ",
             "stereo vs mono: ",
+            "stereo vs mono, minima: ",
             "right eye's passes [R]: ",
         ] {
             assert!(stdout.contains(want), "{gi}: no `{want}` in\n{stdout}");

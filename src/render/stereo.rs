@@ -391,10 +391,14 @@ pub struct StereoProfile {
     pub fallback: Option<String>,
 }
 
+/// Frames of each graph per round of [`profile_stereo`].
+pub const PROFILE_ROUND_FRAMES: usize = 5;
+
 /// Per-pass GPU timing over many frames of `scene`'s stereo pair (for `voxgi profile
 /// --stereo`): the frame graph of [`StereoRenderers`] (one-frame, multiview, or two-pass as
-/// two renderers in one graph) with the packing and its read-back, then the mono frame of the
-/// same settings, each `warmup` + `frames` frames.
+/// two renderers in one graph) with the packing and its read-back, and the mono frame of the
+/// same settings. After `warmup` frames of each, the two graphs take turns in rounds of a few
+/// frames until each has `frames`, so both see the same load of a shared machine.
 pub fn profile_stereo(
     ctx: &Context,
     scene: &Scene,
@@ -404,37 +408,51 @@ pub fn profile_stereo(
     warmup: usize,
 ) -> Result<StereoProfile, RenderError> {
     check_packed_width(stereo.mode, settings.width)?;
-    let (run, path, fallback) = {
-        let mut pair = StereoRenderers::new(ctx, scene, settings, stereo.rig, stereo.path)?;
-        pair.prepare(scene)?;
-        let sampler = ctx.create_sampler(vk::Filter::NEAREST, false)?;
-        let pack = StereoPackPass::new(ctx, sampler.raw)?;
-        let eye = (settings.width, settings.height);
-        let (pw, ph) = stereo.mode.packed_size(eye);
-        let readback =
-            crate::graph::readback_buffer(ctx, "stereo read-back", u64::from(pw * ph * 4))?;
-        let mut g = RenderGraph::new();
-        let [left, right] = pair.declare_eyes(&mut g);
-        let packed = pack.declare(&mut g, (left.ldr, right.ldr), stereo.mode, eye);
-        let buf = g.import_buffer(&readback, Access::HostRead);
-        crate::graph::add_readback(&mut g, "readback_stereo", packed, buf);
-        let exec = crate::graph::GraphExecutor::new(ctx, g, crate::vk::MAX_FRAMES_IN_FLIGHT)?;
-        let measured = crate::graph::run_frames(ctx, &exec, warmup + frames, warmup, |slot| {
-            pair.write_frame(slot)
-        })?;
-        let mut run = super::run::profile_run(&exec, &pair.primary, measured);
-        if let Some(right) = &pair.right {
-            run.setup.extend(right.setup_timings());
-        }
-        (run, pair.path, pair.fallback)
-    };
-    // The stereo renderers are gone before the mono one allocates.
-    let mono = super::profile_scene(ctx, scene, settings, frames, warmup)?;
+    let mut pair = StereoRenderers::new(ctx, scene, settings, stereo.rig, stereo.path)?;
+    pair.prepare(scene)?;
+    let mut mono = Renderer::new(ctx, scene, settings.clone())?;
+    let sampler = ctx.create_sampler(vk::Filter::NEAREST, false)?;
+    let pack = StereoPackPass::new(ctx, sampler.raw)?;
+    let eye = (settings.width, settings.height);
+    let (pw, ph) = stereo.mode.packed_size(eye);
+    let readback = crate::graph::readback_buffer(ctx, "stereo read-back", u64::from(pw * ph * 4))?;
+    let mut g = RenderGraph::new();
+    let [left, right] = pair.declare_eyes(&mut g);
+    let packed = pack.declare(&mut g, (left.ldr, right.ldr), stereo.mode, eye);
+    let buf = g.import_buffer(&readback, Access::HostRead);
+    crate::graph::add_readback(&mut g, "readback_stereo", packed, buf);
+    let in_flight = crate::vk::MAX_FRAMES_IN_FLIGHT;
+    let exec_stereo = crate::graph::GraphExecutor::new(ctx, g, in_flight)?;
+    let exec_mono = crate::graph::GraphExecutor::new(ctx, mono.graph(), in_flight)?;
+    use crate::graph::run_frames as run;
+    run(ctx, &exec_stereo, warmup, warmup, |slot| {
+        pair.write_frame(slot)
+    })?;
+    run(ctx, &exec_mono, warmup, warmup, |slot| {
+        mono.write_frame(slot)
+    })?;
+    let (mut stereo_frames, mut mono_frames) = (Vec::new(), Vec::new());
+    while stereo_frames.len() < frames || mono_frames.len() < frames {
+        let n = PROFILE_ROUND_FRAMES
+            .min(frames - stereo_frames.len().min(frames))
+            .max(1);
+        stereo_frames.extend(run(ctx, &exec_stereo, n, 0, |slot| pair.write_frame(slot))?);
+        let n = PROFILE_ROUND_FRAMES
+            .min(frames - mono_frames.len().min(frames))
+            .max(1);
+        mono_frames.extend(run(ctx, &exec_mono, n, 0, |slot| mono.write_frame(slot))?);
+    }
+    stereo_frames.truncate(frames);
+    mono_frames.truncate(frames);
+    let mut stereo_run = super::run::profile_run(&exec_stereo, &pair.primary, stereo_frames);
+    if let Some(right) = &pair.right {
+        stereo_run.setup.extend(right.setup_timings());
+    }
     Ok(StereoProfile {
-        stereo: run,
-        mono,
-        path,
-        fallback,
+        stereo: stereo_run,
+        mono: super::run::profile_run(&exec_mono, &mono, mono_frames),
+        path: pair.path,
+        fallback: pair.fallback,
     })
 }
 
