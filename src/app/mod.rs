@@ -855,8 +855,9 @@ impl Viewer {
                 // The old renderer stays; the GI settings and the stereo controls it was made
                 // for come back.
                 let old_gi = self.renderer.as_ref().map(|r| r.settings.gi);
-                let old_mode = self.stereo.as_ref().and(self.controls.stereo.mode);
-                let old_path = self.stereo.as_ref().map(|st| st.built_for.path);
+                let old_stereo = self.stereo.as_ref().map(|st| st.built_for);
+                let old_mode = old_stereo.and_then(|c| c.mode);
+                let old_path = old_stereo.map(|c| c.path);
                 let gi_changed = old_gi.is_some_and(|old| old != settings.gi);
                 let stereo_changed = old_mode != self.controls.stereo.mode
                     || old_path.is_some_and(|p| p != self.controls.stereo.path);
@@ -886,6 +887,9 @@ impl Viewer {
     ) -> Result<(Renderer, Option<stereo::ViewerStereo>), RenderError> {
         let c = self.controls.stereo;
         if c.mode.is_none() {
+            if self.status.starts_with("stereo: ") {
+                self.status.clear();
+            }
             return Ok((Renderer::new(ctx, &self.scene, settings.clone())?, None));
         }
         let (r, st) = stereo::ViewerStereo::build(ctx, &self.scene, settings, c)?;
