@@ -275,7 +275,8 @@ fn viewer_renders_a_scene_with_gi_table_and_gi_flags_without_validation_messages
 /// fills the scene area pixel for pixel: the screenshot equals `voxgi render --stereo MODE`
 /// of the same eye size and parallax (±1 step of 8 bits, as for the mono view). An anaglyph on
 /// the one-frame path (one renderer of both eyes) and side-by-side-full on the two-pass path
-/// (a renderer per eye in the viewer's graph; `render` reuses one renderer per eye).
+/// (a renderer per eye in the viewer's graph; `render` reuses one renderer per eye); then the
+/// fallback to two passes where one frame cannot run, with its reason.
 #[test]
 fn viewer_presents_stereo_packings_as_render_writes_them() {
     require_display();
@@ -329,6 +330,32 @@ fn viewer_presents_stereo_packings_as_render_writes_them() {
              {max_diff}/255"
         );
     }
+    // Where one frame cannot render the pair (screen-space GI keeps one history), the viewer
+    // renders two passes and says why, as `voxgi render --stereo` does.
+    let shot = dir.join("fallback.png");
+    let mut args = vec!["--validate", "view", "--gi", "ssgi", "--width", "400"];
+    args.extend([
+        "--height",
+        "128",
+        "--frames",
+        "4",
+        "--stereo",
+        "row-interleaved",
+    ]);
+    args.extend(["--screenshot", shot.to_str().expect("utf-8 path")]);
+    let out = voxgi_with(&args, |cmd| {
+        cmd.env("RUST_LOG", "warn,voxgi::app=info");
+    });
+    assert_success(
+        &out,
+        "voxgi --validate view --gi ssgi --stereo row-interleaved",
+    );
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("stereo: two-pass (one-frame falls back: --gi ssgi"),
+        "the viewer did not say why it renders two passes:\n{stderr}"
+    );
+    assert_not_blank(&load(&shot));
     let _ = std::fs::remove_dir_all(&dir);
 }
 
