@@ -207,12 +207,6 @@ impl StereoRenderers {
         })
     }
 
-    /// A new eye separation or convergence, taken by the next [`StereoRenderers::prepare`].
-    pub fn set_rig(&mut self, rig: StereoRig) {
-        self.rig = rig;
-        self.primary.set_stereo_rig(rig);
-    }
-
     /// Prepares the next frame of `scene` (its camera is the centre between the eyes).
     pub fn prepare(&mut self, scene: &Scene) -> Result<(), RenderError> {
         prepare_pair(&mut self.primary, self.right.as_mut(), self.rig, scene)
