@@ -215,6 +215,51 @@ fn profile_flies_the_camera_path_or_says_the_scene_has_none() {
     );
 }
 
+/// `profile --stereo` lists both eyes' passes (the right eye's with `[R]`), the packing, and
+/// the mono frame of the same run; where one frame cannot render the pair (`--gi ssgi` keeps
+/// one history) it profiles two passes and says why; with `--demo` it is refused.
+#[test]
+fn profile_stereo_lists_both_eyes_and_the_mono_frame() {
+    let size = [
+        "--width", "32", "--height", "32", "--frames", "3", "--warmup", "1",
+    ];
+    for (gi, path) in [
+        ("none", "path one-frame"),
+        ("ssgi", "path two-pass (one-frame falls back: --gi ssgi"),
+    ] {
+        let mut args = vec!["--validate", "profile", "cornell", "--gi", gi];
+        args.extend(["--stereo", "anaglyph-gray"]);
+        args.extend(size);
+        let out = voxgi(&args);
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        assert!(
+            out.status.success(),
+            "{stdout}\n{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        for want in [
+            "\ngbuffer ",
+            "\ngbuffer[R] ",
+            "\ntonemap[R] ",
+            "\nstereo_pack ",
+            path,
+            "resolution: 32x32 per eye",
+            "mono frame: ",
+            "stereo vs mono: ",
+            "stereo vs mono, minima: ",
+            "right eye's passes [R]: ",
+        ] {
+            assert!(stdout.contains(want), "{gi}: no `{want}` in\n{stdout}");
+        }
+    }
+    let out = voxgi(&["profile", "--demo", "--stereo", "anaglyph-gray"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && stderr.contains("does not combine with --demo"),
+        "{stderr}"
+    );
+}
+
 #[test]
 fn render_output_must_be_a_png_and_says_how_to_get_hdr() {
     // `-o x.exr` used to fail after rendering ("writing color type Rgba8 not yet supported")

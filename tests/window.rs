@@ -282,6 +282,94 @@ fn viewer_renders_a_scene_with_gi_table_and_gi_flags_without_validation_messages
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// `voxgi view --stereo MODE` presents the packed pair, each eye fitted so that the packing
+/// fills the scene area pixel for pixel: the screenshot equals `voxgi render --stereo MODE`
+/// of the same eye size and parallax (±1 step of 8 bits, as for the mono view). An anaglyph on
+/// the one-frame path (one renderer of both eyes) and side-by-side-full on the two-pass path
+/// (a renderer per eye in the viewer's graph; `render` reuses one renderer per eye); then the
+/// fallback to two passes where one frame cannot run, with its reason.
+#[test]
+fn viewer_presents_stereo_packings_as_render_writes_them() {
+    require_display();
+    let _display = lock_display();
+    let dir = scratch_dir("window-stereo");
+    for (mode, path, full) in [
+        ("anaglyph-dubois", "one-frame", false),
+        ("side-by-side-full", "two-pass", true),
+    ] {
+        let shot = dir.join(format!("{mode}.png"));
+        let parallax = ["--eye-separation", "0.1", "--convergence", "1.0"];
+        let mut args = vec!["--validate", "view", "--gi", "none", "--width", "400"];
+        args.extend(["--height", "128", "--frames", "5", "--stereo", mode]);
+        args.extend(["--stereo-path", path, "--screenshot"]);
+        args.push(shot.to_str().expect("utf-8 path"));
+        args.extend(parallax);
+        let out = voxgi_with(&args, |cmd| {
+            cmd.env("RUST_LOG", "warn,voxgi::app=info");
+        });
+        assert_success(&out, &format!("voxgi --validate view --stereo {mode}"));
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            stderr.contains(&format!("stereo: {path}")),
+            "the viewer did not say it renders {path}:\n{stderr}"
+        );
+        let img = load(&shot);
+        let (w, h) = img.dimensions();
+        assert_eq!(h, 128, "{mode}: the screenshot is {w}x{h}");
+        assert!((64..400).contains(&w), "{mode}: the screenshot is {w}x{h}");
+        assert_not_blank(&img);
+        let eye_w = if full { w / 2 } else { w };
+        let reference = dir.join(format!("{mode}-render.png"));
+        let mut args = vec!["--validate", "render", "--gi", "none", "--stereo", mode];
+        let eye_w = eye_w.to_string();
+        args.extend(["--width", &eye_w, "--height", "128", "-o"]);
+        args.push(reference.to_str().expect("utf-8 path"));
+        args.extend(parallax);
+        let out = voxgi(&args);
+        assert_success(&out, &format!("voxgi --validate render --stereo {mode}"));
+        let reference = load(&reference);
+        assert_eq!(reference.dimensions(), (w, h), "{mode}");
+        let max_diff = img
+            .pixels()
+            .zip(reference.pixels())
+            .flat_map(|(a, b)| (0..3).map(move |c| a.0[c].abs_diff(b.0[c])))
+            .max()
+            .unwrap_or(0);
+        assert!(
+            max_diff <= 1,
+            "{mode}: the viewer's packing differs from `voxgi render --stereo` by up to \
+             {max_diff}/255"
+        );
+    }
+    // Where one frame cannot render the pair (screen-space GI keeps one history), the viewer
+    // renders two passes and says why, as `voxgi render --stereo` does.
+    let shot = dir.join("fallback.png");
+    let mut args = vec!["--validate", "view", "--gi", "ssgi", "--width", "400"];
+    args.extend([
+        "--height",
+        "128",
+        "--frames",
+        "4",
+        "--stereo",
+        "row-interleaved",
+    ]);
+    args.extend(["--screenshot", shot.to_str().expect("utf-8 path")]);
+    let out = voxgi_with(&args, |cmd| {
+        cmd.env("RUST_LOG", "warn,voxgi::app=info");
+    });
+    assert_success(
+        &out,
+        "voxgi --validate view --gi ssgi --stereo row-interleaved",
+    );
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("stereo: two-pass (one-frame falls back: --gi ssgi"),
+        "the viewer did not say why it renders two passes:\n{stderr}"
+    );
+    assert_not_blank(&load(&shot));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 #[test]
 fn viewer_shows_voxel_debug_views_without_validation_messages() {
     require_display();

@@ -32,8 +32,8 @@ layout(set = 0, binding = 0, std430) readonly buffer FrameBuf { GpuFrame frame; 
 #ifdef MULTIVIEW
 // The right eye's frame (view 1 of gbuffer_multiview.frag; view 0 is `frame`).
 layout(set = 0, binding = 8, std430) readonly buffer FrameRightBuf { GpuFrame frame_right; };
-#define EYE_CAMERA_POSITION mix(frame.camera_position, frame_right.camera_position, float(gl_ViewIndex))
 #define EYE_FRAME(member) (gl_ViewIndex == 0 ? frame.member : frame_right.member)
+#define EYE_CAMERA_POSITION EYE_FRAME(camera_position)
 #else
 #define EYE_CAMERA_POSITION frame.camera_position
 #define EYE_FRAME(member) frame.member

@@ -11,10 +11,9 @@ layout(set = 0, binding = 0, std430) readonly buffer FrameBuf { GpuFrame frame; 
 // Both eyes in one draw (gbuffer_multiview.vert): view 0 is the left eye (`frame`), view 1
 // the right eye; each view draws into its layer of the two-layer targets.
 layout(set = 0, binding = 8, std430) readonly buffer FrameRightBuf { GpuFrame frame_right; };
-// Both products, blended by the view index (exactly one of them: x·1 + y·0 = x), instead of
-// selecting a matrix by gl_ViewIndex: lavapipe (Mesa 22.3) loses vertices of view 1 with the
-// selection.
-#define EYE_CLIP(world) mix(frame.view_proj * (world), frame_right.view_proj * (world), float(gl_ViewIndex))
+// (On lavapipe 22.3.6 view 1's triangles that the driver clips land in layer 0, whichever
+// way the matrix is chosen: README, "The multiview path on lavapipe".)
+#define EYE_CLIP(world) ((gl_ViewIndex == 0 ? frame.view_proj : frame_right.view_proj) * (world))
 #else
 #define EYE_CLIP(world) (frame.view_proj * (world))
 #endif

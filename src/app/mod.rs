@@ -16,9 +16,11 @@
 mod camera;
 mod overlay;
 mod panel;
+mod stereo;
 
 pub use camera::{FlyCamera, MoveKeys};
 pub use panel::{Controls, TimingStats};
+pub use stereo::StereoControls;
 
 use crate::gi::{GiMethod, GiSettings};
 use crate::graph::{Access, GraphError, GraphExecutor, ImageHandle, RenderGraph};
@@ -94,6 +96,9 @@ pub struct ViewerOptions {
     pub scene_name: String,
     /// The panel's initial time budget, ms.
     pub budget_ms: f32,
+    /// Start in stereo (`--stereo`): packing, parallax and path. `None`: mono, the panel's
+    /// parallax starting at [`StereoControls::off`].
+    pub stereo: Option<StereoControls>,
 }
 
 impl Default for ViewerOptions {
@@ -112,6 +117,7 @@ impl Default for ViewerOptions {
             sweep_dir: PathBuf::from("sweep"),
             scene_name: "cornell".into(),
             budget_ms: 100.0,
+            stereo: None,
         }
     }
 }
@@ -138,8 +144,9 @@ const SCRIPT_TIMEOUT: Duration = Duration::from_secs(120);
 const MINIMIZE_TIMEOUT: Duration = Duration::from_secs(10);
 /// While minimized nothing throttles the loop (no presentation): poll at about 60 Hz.
 const MINIMIZED_POLL: Duration = Duration::from_millis(16);
-/// Enough timestamp pairs for any frame graph.
-const MAX_PASSES: u32 = 64;
+/// Enough timestamp pairs for any frame graph (a stereo frame's included: the screen-space
+/// passes twice).
+const MAX_PASSES: u32 = 128;
 
 /// Opens the window and runs until it is closed (or the scripted frames are done).
 pub fn run(scene: Scene, opts: &ViewerOptions) -> Result<ViewerReport, AppError> {
@@ -184,6 +191,10 @@ struct FrameGraph {
     extent: vk::Extent2D,
     /// The settings this graph bakes in (size, shadow resolution, tone map).
     settings: RenderSettings,
+    /// The stereo packing it presents (`None`: mono).
+    stereo_mode: Option<crate::post::StereoMode>,
+    /// Size of the presented (and screenshot) image: the packing's in stereo.
+    shot_size: (u32, u32),
 }
 
 struct Viewer {
@@ -198,6 +209,9 @@ struct Viewer {
     looking: bool,
     cursor: Option<(f64, f64)>,
     renderer: Option<Renderer>,
+    /// Stereo on: the right eye's renderer (two-pass), the packing, the path that runs
+    /// (`app/stereo.rs`); `renderer` then renders both eyes, or the left one.
+    stereo: Option<stereo::ViewerStereo>,
     swapchain: Option<Swapchain>,
     swapchain_dirty: bool,
     overlay: Option<Overlay>,
@@ -402,6 +416,9 @@ impl Viewer {
             add_keyframe: false,
             budget_ms: opts.budget_ms,
             tune: false,
+            stereo: opts
+                .stereo
+                .unwrap_or_else(|| StereoControls::off(&scene, opts.settings.time_s)),
         };
         Self {
             opts: opts.clone(),
@@ -415,6 +432,7 @@ impl Viewer {
             looking: false,
             cursor: None,
             renderer: None,
+            stereo: None,
             swapchain: Some(swapchain),
             swapchain_dirty: false,
             overlay: None,
@@ -447,14 +465,16 @@ impl Viewer {
             None => return Ok(()),
         };
         let mut settings = self.opts.settings.clone();
-        settings.width = extent.width.max(1);
-        settings.height = extent.height.max(1);
+        (settings.width, settings.height) =
+            stereo::eye_size(self.controls.stereo.mode, (extent.width, extent.height));
         log::info!("indirect light: {}", describe_gi(&settings.gi));
         log::info!(
             "post-processing: {}",
             describe_post(&settings.post, &settings.tonemap)
         );
-        self.renderer = Some(Renderer::new(ctx, &self.scene, settings)?);
+        let (renderer, stereo) = self.new_renderer(ctx, &settings)?;
+        self.renderer = Some(renderer);
+        self.stereo = stereo;
         self.overlay = Some(Overlay::new(ctx, format)?);
         self.frame_loop = Some(FrameLoop::new(ctx, MAX_FRAMES_IN_FLIGHT, MAX_PASSES)?);
         Ok(())
@@ -661,8 +681,9 @@ impl Viewer {
         };
         let mut settings = current.clone();
         settings.time_s = self.controls.time_s;
-        settings.width = extent.width - panel_px;
-        settings.height = extent.height;
+        // Stereo: each eye's size whose packing fills the area (`app/stereo.rs`).
+        let area = (extent.width - panel_px, extent.height);
+        (settings.width, settings.height) = stereo::eye_size(self.controls.stereo.mode, area);
         settings.tonemap = self.controls.tonemap;
         settings.shadow = self.controls.shadow;
         // Each GI edit costs a new renderer: apply them once no slider is being dragged.
@@ -671,16 +692,26 @@ impl Viewer {
             settings.post = self.controls.post;
             settings.debug = debug_settings(&self.controls, settings.debug);
         }
-        if needs_new_renderer(&current, &settings) {
-            self.replace_renderer(ctx, &mut settings)?;
+        let stereo_changed = match (&self.stereo, self.controls.stereo.mode) {
+            (Some(st), _) => st.outdated(&self.controls.stereo),
+            (None, mode) => mode.is_some(),
+        };
+        if needs_new_renderer(&current, &settings) || stereo_changed {
+            self.replace_renderer(ctx, &mut settings, area)?;
         }
         let Some(renderer) = self.renderer.as_mut() else {
             return Ok(false);
         };
         renderer.settings = settings.clone();
-        renderer.prepare(&self.scene)?;
+        match &mut self.stereo {
+            Some(st) => st.prepare(renderer, &self.scene, &settings, &self.controls.stereo)?,
+            None => renderer.prepare(&self.scene)?,
+        }
+        let stereo_mode = self.stereo.as_ref().and(self.controls.stereo.mode);
         if self.graph.as_ref().map_or(true, |g| {
-            g.extent != extent || needs_new_graph(&g.settings, &settings)
+            g.extent != extent
+                || needs_new_graph(&g.settings, &settings)
+                || g.stereo_mode != stereo_mode
         }) {
             self.rebuild(ctx)?;
         }
@@ -710,6 +741,9 @@ impl Viewer {
             .exec
             .rebind_image(graph.present, &swapchain.images[index as usize])?;
         renderer.write_frame(slot);
+        if let Some(st) = &mut self.stereo {
+            st.write_frame(slot);
+        }
         overlay.write_frame(slot, &prims, ppp, extent);
         let shot = self.controls.screenshot || last_scripted;
         graph.shot_wanted.set(shot);
@@ -789,6 +823,7 @@ impl Viewer {
         self.controls.speed_m_s = self.fly.speed_m_s;
         let raw = self.egui_state.take_egui_input(window);
         let egui_ctx = self.egui_ctx.clone();
+        let stereo_status = self.stereo.as_ref().map(stereo::ViewerStereo::describe);
         let info = panel::PanelInfo {
             device: &ctx.info.name,
             extent_px: (extent.width, extent.height),
@@ -800,6 +835,7 @@ impl Viewer {
                 .renderer
                 .as_ref()
                 .and_then(Renderer::gi_accumulated_frames),
+            stereo: stereo_status.as_deref(),
         };
         let (controls, stats) = (&mut self.controls, &self.stats);
         let mut layout = panel::PanelLayout::default();
@@ -825,19 +861,22 @@ impl Viewer {
         Ok((egui_ctx.tessellate(out.shapes, ppp), ppp))
     }
 
-    /// Replaces the renderer by one made for `settings` (and drops the graph, which imports the
-    /// old one's resources). When that fails for new GI settings, the old renderer stays, the
-    /// GI settings revert and the panel says why.
+    /// Replaces the renderer by one made for `settings` and the panel's stereo controls (and
+    /// drops the graph, which imports the old one's resources). When that fails for new GI
+    /// or stereo settings, the old renderer stays, those settings revert (each eye's size
+    /// fitted to `area` again) and the panel says why.
     fn replace_renderer(
         &mut self,
         ctx: &Context,
         settings: &mut RenderSettings,
+        area: (u32, u32),
     ) -> Result<(), AppError> {
         ctx.wait_idle()?;
         self.graph = None;
-        match Renderer::new(ctx, &self.scene, settings.clone()) {
-            Ok(r) => {
+        match self.new_renderer(ctx, settings) {
+            Ok((r, st)) => {
                 self.renderer = Some(r);
+                self.stereo = st;
                 log::info!(
                     "new renderer {}x{}, indirect light: {}",
                     settings.width,
@@ -847,19 +886,50 @@ impl Viewer {
                 Ok(())
             }
             Err(e) => {
-                let old = self.renderer.as_ref().map(|r| r.settings.gi);
-                match old {
-                    Some(old) if old != settings.gi => {
-                        settings.gi = old;
-                        self.controls.gi = old;
-                        self.status = format!("GI settings not applied: {e}");
-                        log::warn!("{}", self.status);
-                        Ok(())
-                    }
-                    _ => Err(e.into()),
+                // The old renderer stays; the GI settings and the stereo controls it was made
+                // for come back.
+                let old_gi = self.renderer.as_ref().map(|r| r.settings.gi);
+                let old_stereo = self.stereo.as_ref().map(|st| st.built_for);
+                let old_mode = old_stereo.and_then(|c| c.mode);
+                let old_path = old_stereo.map(|c| c.path);
+                let gi_changed = old_gi.is_some_and(|old| old != settings.gi);
+                let stereo_changed = old_mode != self.controls.stereo.mode
+                    || old_path.is_some_and(|p| p != self.controls.stereo.path);
+                let Some(old_gi) = old_gi.filter(|_| gi_changed || stereo_changed) else {
+                    return Err(e.into());
+                };
+                settings.gi = old_gi;
+                self.controls.gi = old_gi;
+                self.controls.stereo.mode = old_mode;
+                if let Some(p) = old_path {
+                    self.controls.stereo.path = p;
                 }
+                (settings.width, settings.height) = stereo::eye_size(old_mode, area);
+                self.status = format!("settings not applied: {e}");
+                log::warn!("{}", self.status);
+                Ok(())
             }
         }
+    }
+
+    /// A renderer for `settings` and the panel's stereo controls: mono, or both eyes (with
+    /// the stereo state; the status line says which path runs and why it fell back).
+    fn new_renderer(
+        &mut self,
+        ctx: &Context,
+        settings: &RenderSettings,
+    ) -> Result<(Renderer, Option<stereo::ViewerStereo>), RenderError> {
+        let c = self.controls.stereo;
+        if c.mode.is_none() {
+            if self.status.starts_with("stereo: ") {
+                self.status.clear();
+            }
+            return Ok((Renderer::new(ctx, &self.scene, settings.clone())?, None));
+        }
+        let (r, st) = stereo::ViewerStereo::build(ctx, &self.scene, settings, c)?;
+        self.status = st.describe();
+        log::info!("{}", self.status);
+        Ok((r, Some(st)))
     }
 
     /// The panel's "best within budget": the most accurate configuration of this scene in
@@ -900,16 +970,27 @@ impl Viewer {
             return Ok(());
         }
         let extent = swapchain.extent;
-        let (w, h) = (renderer.settings.width, renderer.settings.height);
-        // The scene's place in the window: right-aligned, left of it is the panel.
+        let mut g = RenderGraph::new();
+        // The presented image: the tone-mapped frame, or in stereo both eyes' packing.
+        let stereo_mode = self.stereo.as_ref().and(self.controls.stereo.mode);
+        let (ldr, (w, h)) = match (&self.stereo, stereo_mode) {
+            (Some(st), Some(mode)) => st.declare(renderer, &mut g, mode),
+            _ => {
+                let FrameImages { ldr, .. } = renderer.declare(&mut g);
+                (ldr, (renderer.settings.width, renderer.settings.height))
+            }
+        };
+        // The scene's place in the window: right-aligned, left of it is the panel. (Only a
+        // side-by-side packing of 1-pixel eyes is wider than the window: squeezed into it.)
+        let (dst_w, dst_h) = (w.min(extent.width), h.min(extent.height));
         let scene_rect = vk::Rect2D {
             offset: vk::Offset2D {
-                x: extent.width.saturating_sub(w) as i32,
+                x: (extent.width - dst_w) as i32,
                 y: 0,
             },
             extent: vk::Extent2D {
-                width: w,
-                height: h,
+                width: dst_w,
+                height: dst_h,
             },
         };
         let shot = ctx.create_buffer(&BufferDesc {
@@ -918,8 +999,6 @@ impl Viewer {
             usage: vk::BufferUsageFlags::TRANSFER_DST,
             location: MemoryLocation::GpuToCpu,
         })?;
-        let mut g = RenderGraph::new();
-        let FrameImages { ldr, .. } = renderer.declare(&mut g);
         let present = g.import_image(&swapchain.images[0], Access::Present);
         let shot_handle = g.import_buffer(&shot, Access::HostRead);
         let shot_wanted = Rc::new(Cell::new(false));
@@ -961,6 +1040,8 @@ impl Viewer {
             shot_wanted,
             extent,
             settings: renderer.settings.clone(),
+            stereo_mode,
+            shot_size: (w, h),
         });
         Ok(())
     }
@@ -975,7 +1056,7 @@ impl Viewer {
                 self.report.screenshots.len() + 1
             )),
         };
-        let (w, h) = (g.settings.width, g.settings.height);
+        let (w, h) = g.shot_size;
         let n = (w * h * 4) as usize;
         let pixels = g.shot.mapped().map(|m| m[..n].to_vec()).unwrap_or_default();
         image::save_buffer(&path, &pixels, w, h, image::ColorType::Rgba8).map_err(|e| {
@@ -1033,6 +1114,7 @@ mod tests {
             add_keyframe: false,
             budget_ms: 100.0,
             tune: false,
+            stereo: StereoControls::off(&crate::scene::builtin("cornell").expect("cornell"), 0.0),
         };
         let d = debug_settings(&c, current.debug).expect("a debug view");
         assert_eq!((d.view, d.object, d.level), (DebugView::Atlas, 2, 3));

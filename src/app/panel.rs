@@ -88,6 +88,9 @@ pub struct Controls {
     pub budget_ms: f32,
     /// Set by the "Best within budget" button; the viewer applies the sweep's choice.
     pub tune: bool,
+    /// Stereo packing and parallax (`app/stereo.rs`); turning it on or off, or another
+    /// path, needs a new renderer (applied like `gi`).
+    pub stereo: super::stereo::StereoControls,
 }
 
 /// Read-only facts the panel shows.
@@ -101,6 +104,8 @@ pub struct PanelInfo<'a> {
     pub status: &'a str,
     /// Frames the indirect light has accumulated (`None`: GI off).
     pub gi_frames: Option<u32>,
+    /// The stereo path that runs, or why it fell back (`None`: mono).
+    pub stereo: Option<&'a str>,
 }
 
 const GI_METHODS: [(GiMethod, &str); 5] = [
@@ -370,6 +375,12 @@ pub fn draw(
                     budget_controls(ui, c);
                 });
 
+            egui::CollapsingHeader::new("Stereo")
+                .default_open(c.stereo.mode.is_some())
+                .show(ui, |ui| {
+                    super::stereo::panel_section(ui, &mut c.stereo, info.stereo)
+                });
+
             egui::CollapsingHeader::new("View")
                 .default_open(false)
                 .show(ui, |ui| {
@@ -501,6 +512,11 @@ mod table_tests {
             add_keyframe: false,
             budget_ms: 100.0,
             tune: false,
+            stereo: super::super::stereo::StereoControls {
+                mode: None,
+                rig: Default::default(),
+                path: Default::default(),
+            },
         };
         let lights = ["point 0".to_string()];
         let info = PanelInfo {
@@ -511,6 +527,7 @@ mod table_tests {
             object_names: &[],
             status: "",
             gi_frames: None,
+            stereo: None,
         };
         let mut layout = PanelLayout::default();
         let mut texts = Vec::new();

@@ -78,6 +78,12 @@ pub enum CliError {
          the flag"
     )]
     NoCameraPath { scene: String },
+    /// `profile --stereo` with `--demo` or `--camera-path`.
+    #[error(
+        "`voxgi profile --stereo` profiles a scene's stereo frame from the scene's camera; it \
+         does not combine with --demo or --camera-path: drop one of them"
+    )]
+    StereoProfile,
     /// Writing the report failed, e.g. a closed pipe (`voxgi compare a b | head -1`); the
     /// `io::Error` stays the source so that `main` can end quietly on a broken pipe.
     #[error("cannot write to stdout")]

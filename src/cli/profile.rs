@@ -37,6 +37,10 @@ pub struct ProfileArgs {
     /// Frames measured along the camera path (default: `--frames`).
     #[arg(long, requires = "camera_path")]
     pub path_frames: Option<usize>,
+    /// `--stereo MODE`: profile the stereo pair's frame (both eyes, the right eye's passes
+    /// marked `[R]`, and the packing), then the mono frame of the same flags in the same run.
+    #[command(flatten)]
+    pub stereo: super::render::StereoArgs,
 }
 
 /// Arguments of `voxgi graph`.
@@ -77,8 +81,25 @@ pub fn profile(global: &Global, args: &ProfileArgs, out: &mut dyn Write) -> Resu
         _ => None,
     };
     let frames = args.path_frames.unwrap_or(args.frames);
+    let stereo = match (&scene, args.stereo.stereo) {
+        (Some((s, settings)), Some(_)) if !args.camera_path => {
+            args.stereo.settings(s, settings.time_s)?
+        }
+        (_, Some(_)) => return Err(CliError::StereoProfile),
+        _ => None,
+    };
     let ctx = context(global)?;
-    let report = if let Some((scene, settings)) = &scene {
+    let report = if let (Some((scene, settings)), Some(stereo)) = (&scene, stereo) {
+        let p = crate::render::profile_stereo(&ctx, scene, settings, stereo, frames, args.warmup)?;
+        stereo_report(
+            &ctx.info.name,
+            &p,
+            &scene_name,
+            settings,
+            stereo,
+            args.warmup,
+        )
+    } else if let Some((scene, settings)) = &scene {
         let run = match &path {
             Some(p) => profile_camera_path(&ctx, scene, settings, p, frames, args.warmup)?,
             None => profile_scene(&ctx, scene, settings, frames, args.warmup)?,
@@ -128,6 +149,81 @@ pub fn profile(global: &Global, args: &ProfileArgs, out: &mut dyn Write) -> Resu
         out!(out, "{}", report.table());
     }
     check_validation(ctx)
+}
+
+/// The stereo frame's statistics (both eyes' passes, the right eye's marked `[R]`), with the
+/// mono frame of the same run and their ratio in the notes.
+fn stereo_report(
+    device: &str,
+    p: &crate::render::StereoProfile,
+    scene_name: &str,
+    settings: &crate::render::RenderSettings,
+    stereo: crate::render::StereoSettings,
+    warmup: usize,
+) -> ProfileReport {
+    let mut report =
+        ProfileReport::from_frames(device, &p.stereo.frames, warmup).with_setup(&p.stereo.setup);
+    let mono = ProfileReport::from_frames(device, &p.mono.frames, warmup);
+    let mode = stereo.mode.name();
+    let path = match &p.fallback {
+        Some(why) => format!("two-pass ({} falls back: {why})", stereo.path.name()),
+        None => p.path.name().to_owned(),
+    };
+    let right: f64 = report
+        .passes
+        .iter()
+        .filter(|s| s.name.ends_with(crate::render::RIGHT_EYE_SUFFIX))
+        .map(|s| s.median_ms)
+        .sum();
+    let (s_ms, m_ms) = (report.frame_median_ms, mono.frame_median_ms);
+    // On a shared machine a pass's minimum is the least disturbed measure of it.
+    let minima = |r: &ProfileReport| r.passes.iter().map(|p| p.min_ms).sum::<f64>();
+    let (s_min, m_min) = (minima(&report), minima(&mono));
+    let (e, c) = (stereo.rig.separation_m, stereo.rig.convergence_m);
+    let notes = [
+        ("scene", scene_name.to_owned()),
+        (
+            "resolution",
+            format!("{}x{} per eye", settings.width, settings.height),
+        ),
+        (
+            "stereo",
+            format!("{mode}, path {path}, eye separation {e} m, convergence {c} m"),
+        ),
+        (
+            "mono frame",
+            format!(
+                "{m_ms:.4} ms median (the same flags without --stereo, its frames taking turns \
+                 with the stereo frames, {} at a time)",
+                crate::render::PROFILE_ROUND_FRAMES
+            ),
+        ),
+        (
+            "stereo vs mono",
+            format!(
+                "{:.3}× ({:+.4} ms for the second eye and the packing)",
+                s_ms / m_ms.max(1e-9),
+                s_ms - m_ms
+            ),
+        ),
+        (
+            "stereo vs mono, minima",
+            format!(
+                "{:.3}× (sums of the passes' minimum ms: {s_min:.4} stereo, {m_min:.4} mono)",
+                s_min / m_min.max(1e-9)
+            ),
+        ),
+        (
+            "right eye's passes [R]",
+            format!("{right:.4} ms (sum of their medians)"),
+        ),
+        ("transient memory", p.stereo.transient_memory.summary()),
+        ("culled passes", p.stereo.culled_passes.join(", ")),
+    ];
+    report
+        .notes
+        .extend(notes.into_iter().map(|(k, v)| (k.to_owned(), v)));
+    report
 }
 
 /// The demo frame's statistics, measured like a scene's.

@@ -34,9 +34,7 @@ fn print_stereo(
     out: &mut dyn Write,
 ) -> Result<(), CliError> {
     let total = |t: &[crate::vk::PassTiming]| t.iter().map(|t| t.gpu_ms).sum::<f64>();
-    let mode = clap::ValueEnum::to_possible_value(&stereo.mode)
-        .map(|v| v.get_name().to_owned())
-        .unwrap_or_default();
+    let mode = stereo.mode.name();
     let path = match &s.fallback {
         Some(why) => format!("two-pass ({} falls back: {why})", stereo.path.name()),
         None => s.path.name().to_owned(),
@@ -63,9 +61,9 @@ fn print_stereo(
 /// Stereo flags of `voxgi render`.
 #[derive(clap::Args, Clone)]
 pub struct StereoArgs {
-    /// Render both eyes (off-axis parallel frusta) and pack them into --output: an anaglyph
-    /// (left eye red) or a spatial packing; side-by-side-full is twice --width wide. --exr and
-    /// --compare then take the left eye.
+    /// Render both eyes (off-axis parallel frusta) and pack them into one image: an anaglyph
+    /// (left eye red) or a spatial packing. `render`: into --output, side-by-side-full twice
+    /// --width wide, --exr and --compare then take the left eye; `view`: into the window.
     #[arg(long, value_enum, value_name = "MODE")]
     pub stereo: Option<crate::post::StereoMode>,
     /// Distance between the eyes in meters (with --stereo).
@@ -95,28 +93,27 @@ impl StereoArgs {
         let Some(mode) = self.stereo else {
             return Ok(None);
         };
-        let convergence_m = match self.convergence {
-            Some(c) => c,
-            None => {
-                let b = scene.aabb_at(time_s);
-                let to_centre = (b.min + b.max) * 0.5 - scene.camera.position;
-                let along = to_centre.dot(scene.camera.forward);
-                if along > 0.0 {
-                    along
-                } else {
-                    2.0
-                }
-            }
-        };
-        let rig = crate::scene::StereoRig {
-            separation_m: crate::limits::STEREO_SEPARATION_M.check_flag(self.eye_separation)?,
-            convergence_m: crate::limits::STEREO_CONVERGENCE_M.check_flag(convergence_m)?,
-        };
         Ok(Some(StereoSettings {
             mode,
-            rig,
+            rig: self.rig(scene, time_s)?,
             path: self.stereo_path,
         }))
+    }
+
+    /// The eyes' parallax: --eye-separation and --convergence (default: the depth of the
+    /// scene box's centre), each checked against its limit.
+    pub fn rig(
+        &self,
+        scene: &crate::scene::Scene,
+        time_s: f32,
+    ) -> Result<crate::scene::StereoRig, CliError> {
+        let convergence_m = self
+            .convergence
+            .unwrap_or_else(|| crate::render::default_convergence_m(scene, time_s));
+        Ok(crate::scene::StereoRig {
+            separation_m: crate::limits::STEREO_SEPARATION_M.check_flag(self.eye_separation)?,
+            convergence_m: crate::limits::STEREO_CONVERGENCE_M.check_flag(convergence_m)?,
+        })
     }
 }
 

@@ -61,6 +61,9 @@ pub struct ViewArgs {
     // The initial indirect light; the panel changes it.
     #[command(flatten)]
     pub gi: GiArgs,
+    // The initial stereo packing and parallax; the panel's "Stereo" section changes them.
+    #[command(flatten)]
+    pub stereo: super::render::StereoArgs,
 }
 
 /// `WxH` → (W, H), both positive.
@@ -122,6 +125,12 @@ pub fn view(global: &Global, args: ViewArgs, out: &mut dyn Write) -> Result<(), 
         );
     }
     crate::render::check_render_settings(&settings)?;
+    // The panel's parallax starts at the flags' even without --stereo.
+    let stereo = crate::app::StereoControls {
+        mode: args.stereo.stereo,
+        rig: args.stereo.rig(&scene, settings.time_s)?,
+        path: args.stereo.stereo_path,
+    };
     let opts = crate::app::ViewerOptions {
         validation: global.validate,
         device: global.device.clone(),
@@ -136,6 +145,7 @@ pub fn view(global: &Global, args: ViewArgs, out: &mut dyn Write) -> Result<(), 
         sweep_dir: args.sweep,
         scene_name: name,
         budget_ms: args.budget_ms.unwrap_or(100.0) as f32,
+        stereo: Some(stereo),
     };
     let origin_m = scene.origin_m;
     let report = crate::app::run(scene, &opts)?;

@@ -101,6 +101,13 @@ impl StereoMode {
         }
     }
 
+    /// The mode's name on the command line (`anaglyph-dubois`, `side-by-side-full`, …).
+    pub fn name(self) -> String {
+        clap::ValueEnum::to_possible_value(&self)
+            .map(|v| v.get_name().to_owned())
+            .unwrap_or_default()
+    }
+
     /// The packed image's size for eyes of `(w, h)`: twice as wide for side-by-side-full, the
     /// eyes' size otherwise.
     pub fn packed_size(self, (w, h): (u32, u32)) -> (u32, u32) {

@@ -241,7 +241,7 @@ pub fn profile_camera_path(
 }
 
 /// The compiled graph's facts and the renderer's setup timings around measured `frames`.
-fn profile_run(
+pub(super) fn profile_run(
     exec: &GraphExecutor,
     renderer: &Renderer,
     frames: Vec<Vec<PassTiming>>,

@@ -21,7 +21,7 @@
 //! [`Camera::eye`]: crate::scene::Camera::eye
 
 use super::run::{render_frames, RenderOutput};
-use super::{RenderError, RenderSettings, Renderer};
+use super::{FrameImages, RenderError, RenderSettings, Renderer};
 use crate::graph::{run_once, Access, OneShotError, RenderGraph, Shader};
 use crate::post::{StereoMode, StereoPackPass};
 use crate::scene::{Eye, Scene, StereoRig};
@@ -137,6 +137,14 @@ impl OnePass {
 }
 
 impl Renderer {
+    /// A one-frame stereo renderer's new eye separation or convergence, taken by the next
+    /// [`Renderer::prepare`] (nothing for a mono renderer).
+    pub fn set_stereo_rig(&mut self, rig: StereoRig) {
+        if let Some(st) = &mut self.stereo {
+            st.rig = rig;
+        }
+    }
+
     /// The radiance and tone-mapped pixels of eye `eye` (0 left, 1 right) of the last
     /// completed frame of a one-frame stereo renderer; a mono renderer's image for eye 0.
     pub fn eye_images(&self, eye: u32) -> (crate::eval::HdrImage, Vec<u8>) {
@@ -148,6 +156,145 @@ impl Renderer {
             }
             _ => (self.hdr_image(), self.ldr_pixels()),
         }
+    }
+}
+
+/// The renderers of a stereo pair drawn in one frame graph (the viewer's frame, `voxgi profile
+/// --stereo`): one renderer of both eyes ([`Renderer::new_stereo`], one-frame or multiview), or
+/// on the two-pass path one mono renderer per eye, both declared into the same graph (the
+/// right eye's passes with [`RIGHT_EYE_SUFFIX`]). Like [`render_stereo`], a one-frame path
+/// that cannot run ([`multiview_blocker`]) falls back to two passes and keeps the reason.
+pub struct StereoRenderers {
+    /// The renderer of both eyes, or on the two-pass path the left eye's.
+    pub primary: Renderer,
+    /// The right eye's renderer on the two-pass path.
+    pub right: Option<Renderer>,
+    pub rig: StereoRig,
+    /// The path that runs.
+    pub path: StereoPath,
+    /// Why the path asked for could not run (`None`: it runs).
+    pub fallback: Option<String>,
+}
+
+impl StereoRenderers {
+    /// Renderers of `scene`'s stereo pair (`scene.camera` is the centre between the eyes),
+    /// each eye `settings.width` × `settings.height`, on `path` or on two passes where it
+    /// cannot run.
+    pub fn new(
+        ctx: &Context,
+        scene: &Scene,
+        settings: &RenderSettings,
+        rig: StereoRig,
+        path: StereoPath,
+    ) -> Result<Self, RenderError> {
+        let fallback = match path {
+            StereoPath::TwoPass => None,
+            p => multiview_blocker(ctx, p, scene, settings),
+        };
+        let path = if fallback.is_some() {
+            StereoPath::TwoPass
+        } else {
+            path
+        };
+        let (primary, right) = match path {
+            StereoPath::TwoPass => {
+                let left = eye_scene(scene, rig, Eye::Left);
+                let right = eye_scene(scene, rig, Eye::Right);
+                (
+                    Renderer::new(ctx, &left, settings.clone())?,
+                    Some(Renderer::new(ctx, &right, settings.clone())?),
+                )
+            }
+            p => {
+                let multiview = p == StereoPath::Multiview;
+                let r = Renderer::new_stereo(ctx, scene, settings.clone(), rig, multiview)?;
+                (r, None)
+            }
+        };
+        Ok(Self {
+            primary,
+            right,
+            rig,
+            path,
+            fallback,
+        })
+    }
+
+    /// Prepares the next frame of `scene` (its camera is the centre between the eyes).
+    pub fn prepare(&mut self, scene: &Scene) -> Result<(), RenderError> {
+        prepare_pair(&mut self.primary, self.right.as_mut(), self.rig, scene)
+    }
+
+    /// Writes frame slot `slot`'s constants of every renderer ([`Renderer::write_frame`]).
+    pub fn write_frame(&mut self, slot: usize) {
+        self.primary.write_frame(slot);
+        if let Some(right) = &mut self.right {
+            right.write_frame(slot);
+        }
+    }
+
+    /// Declares both eyes' frames into `g`: (left, right).
+    pub fn declare_eyes(&self, g: &mut RenderGraph) -> [FrameImages; 2] {
+        declare_pair(&self.primary, self.right.as_ref(), g)
+    }
+}
+
+/// Prepares the next frame of a stereo pair of `scene` (its camera is the centre between the
+/// eyes): a one-frame `primary` takes the centre camera, a two-pass pair (`right` given) each
+/// eye's camera of `rig`.
+pub fn prepare_pair(
+    primary: &mut Renderer,
+    right: Option<&mut Renderer>,
+    rig: StereoRig,
+    scene: &Scene,
+) -> Result<(), RenderError> {
+    match right {
+        Some(right) => {
+            primary.prepare(&eye_scene(scene, rig, Eye::Left))?;
+            right.prepare(&eye_scene(scene, rig, Eye::Right))
+        }
+        None => {
+            primary.set_stereo_rig(rig);
+            primary.prepare(scene)
+        }
+    }
+}
+
+/// Declares the eyes of a stereo pair into `g`: both from a one-frame renderer, or (`right`
+/// given, the two-pass path) the left eye from `primary` and the right eye from `right`, its
+/// passes named with [`RIGHT_EYE_SUFFIX`].
+pub fn declare_pair(
+    primary: &Renderer,
+    right: Option<&Renderer>,
+    g: &mut RenderGraph,
+) -> [FrameImages; 2] {
+    match right {
+        Some(right) => {
+            let left = primary.declare(g);
+            g.set_pass_suffix(RIGHT_EYE_SUFFIX);
+            let right = right.declare(g);
+            g.set_pass_suffix("");
+            [left, right]
+        }
+        None => {
+            let eyes = primary.declare_eyes(g);
+            // A one-frame renderer declares both eyes; a mono one (never built as a pair's
+            // primary without `right`) would show its one eye twice.
+            [eyes[0], *eyes.last().unwrap_or(&eyes[0])]
+        }
+    }
+}
+
+/// The convergence distance `voxgi render --stereo` and the viewer take without
+/// `--convergence`: the depth of the centre of the scene's bounding box at `time_s` along the
+/// view direction, or 2 m when that centre is not in front of the camera.
+pub fn default_convergence_m(scene: &Scene, time_s: f32) -> f32 {
+    let b = scene.aabb_at(time_s);
+    let along = ((b.min + b.max) * 0.5 - scene.camera.position).dot(scene.camera.forward);
+    if along > 0.0 {
+        along
+    } else {
+        2.0
     }
 }
 
@@ -238,6 +385,81 @@ pub fn render_stereo(
         pack_timings,
         path,
         fallback,
+    })
+}
+
+/// What [`profile_stereo`] measured: the stereo frame (both eyes and their packing) and, in
+/// the same run, the mono frame of the same settings (the centre camera).
+pub struct StereoProfile {
+    pub stereo: super::ProfileRun,
+    pub mono: super::ProfileRun,
+    /// The path that ran, and why it is not the one asked for.
+    pub path: StereoPath,
+    pub fallback: Option<String>,
+}
+
+/// Frames of each graph per round of [`profile_stereo`].
+pub const PROFILE_ROUND_FRAMES: usize = 5;
+
+/// Per-pass GPU timing over many frames of `scene`'s stereo pair (for `voxgi profile
+/// --stereo`): the frame graph of [`StereoRenderers`] (one-frame, multiview, or two-pass as
+/// two renderers in one graph) with the packing and its read-back, and the mono frame of the
+/// same settings. After `warmup` frames of each, the two graphs take turns in rounds of a few
+/// frames until each has `frames`, so both see the same load of a shared machine.
+pub fn profile_stereo(
+    ctx: &Context,
+    scene: &Scene,
+    settings: &RenderSettings,
+    stereo: StereoSettings,
+    frames: usize,
+    warmup: usize,
+) -> Result<StereoProfile, RenderError> {
+    check_packed_width(stereo.mode, settings.width)?;
+    let mut pair = StereoRenderers::new(ctx, scene, settings, stereo.rig, stereo.path)?;
+    pair.prepare(scene)?;
+    let mut mono = Renderer::new(ctx, scene, settings.clone())?;
+    let sampler = ctx.create_sampler(vk::Filter::NEAREST, false)?;
+    let pack = StereoPackPass::new(ctx, sampler.raw)?;
+    let eye = (settings.width, settings.height);
+    let (pw, ph) = stereo.mode.packed_size(eye);
+    let readback = crate::graph::readback_buffer(ctx, "stereo read-back", u64::from(pw * ph * 4))?;
+    let mut g = RenderGraph::new();
+    let [left, right] = pair.declare_eyes(&mut g);
+    let packed = pack.declare(&mut g, (left.ldr, right.ldr), stereo.mode, eye);
+    let buf = g.import_buffer(&readback, Access::HostRead);
+    crate::graph::add_readback(&mut g, "readback_stereo", packed, buf);
+    let in_flight = crate::vk::MAX_FRAMES_IN_FLIGHT;
+    let exec_stereo = crate::graph::GraphExecutor::new(ctx, g, in_flight)?;
+    let exec_mono = crate::graph::GraphExecutor::new(ctx, mono.graph(), in_flight)?;
+    use crate::graph::run_frames as run;
+    run(ctx, &exec_stereo, warmup, warmup, |slot| {
+        pair.write_frame(slot)
+    })?;
+    run(ctx, &exec_mono, warmup, warmup, |slot| {
+        mono.write_frame(slot)
+    })?;
+    let (mut stereo_frames, mut mono_frames) = (Vec::new(), Vec::new());
+    while stereo_frames.len() < frames || mono_frames.len() < frames {
+        let n = PROFILE_ROUND_FRAMES
+            .min(frames - stereo_frames.len().min(frames))
+            .max(1);
+        stereo_frames.extend(run(ctx, &exec_stereo, n, 0, |slot| pair.write_frame(slot))?);
+        let n = PROFILE_ROUND_FRAMES
+            .min(frames - mono_frames.len().min(frames))
+            .max(1);
+        mono_frames.extend(run(ctx, &exec_mono, n, 0, |slot| mono.write_frame(slot))?);
+    }
+    stereo_frames.truncate(frames);
+    mono_frames.truncate(frames);
+    let mut stereo_run = super::run::profile_run(&exec_stereo, &pair.primary, stereo_frames);
+    if let Some(right) = &pair.right {
+        stereo_run.setup.extend(right.setup_timings());
+    }
+    Ok(StereoProfile {
+        stereo: stereo_run,
+        mono: super::run::profile_run(&exec_mono, &mono, mono_frames),
+        path: pair.path,
+        fallback: pair.fallback,
     })
 }
 
