@@ -294,6 +294,7 @@ fn stereo_taa_pair_equals_each_eyes_mono_taa_render() {
     settings.post.taa = Some(voxgi::post::TaaSettings {
         history_weight: 0.9,
         frames: 6,
+        ..Default::default()
     });
     let mode = StereoMode::SideBySideFull;
     let cornell = voxgi::scene::builtin("cornell").expect("cornell");
