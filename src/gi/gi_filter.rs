@@ -1,7 +1,9 @@
 //! `gi_filter`: the geometry-aware filter of the indirect irradiance (Herzog et al. 2010, as
 //! Thiedemann 2010 uses it in ch. 7): a separable joint bilateral blur weighted by distance,
 //! normal similarity and distance from the centre pixel's tangent plane, horizontal then
-//! vertical, repeated.
+//! vertical, repeated. In scenes with Phong or GGX materials a pixel also averages only pixels
+//! of its lobe kind, and a glossy one only those whose mirror directions lie within its lobe
+//! (the shader's header).
 
 use super::GiInputs;
 use crate::graph::{Access, ImageHandle, RenderGraph, Shader};
@@ -29,9 +31,14 @@ pub struct GiFilter {
 }
 
 impl GiFilter {
-    pub fn new(ctx: &Context) -> Result<Self, VkError> {
-        let pipeline =
-            ctx.compute_pipeline("gi_filter.comp", PushLayout::of::<GpuFilterPush>(), &[])?;
+    /// `glossy`: the G-buffer has a lobe target (Phong or GGX materials; specialization
+    /// constant 0), which the filter then reads.
+    pub fn new(ctx: &Context, glossy: bool) -> Result<Self, VkError> {
+        let pipeline = ctx.compute_pipeline(
+            "gi_filter.comp",
+            PushLayout::of::<GpuFilterPush>(),
+            &[(0, u32::from(glossy))],
+        )?;
         Ok(Self { pipeline })
     }
 
@@ -50,6 +57,8 @@ impl GiFilter {
         let passes = if radius_px == 0 { 0 } else { passes };
         let c = Shader::Compute;
         let pipe = *self.pipeline;
+        // Without a lobe target the shader never reads its binding 5; the normals fill it.
+        let lobes = i.specular.unwrap_or(i.normal);
         let mut current = irradiance;
         for p in 0..passes {
             for (axis, dir) in [("h", [1, 0]), ("v", [0, 1])] {
@@ -71,6 +80,7 @@ impl GiFilter {
                     .bind_sampled(2, i.depth, sampler, c)
                     .bind_sampled(3, current, sampler, c)
                     .bind(4, out, Access::StorageWrite(c))
+                    .bind_sampled(5, lobes, sampler, c)
                     .record(move |ctx| {
                         ctx.bind(&pipe);
                         ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&fp));

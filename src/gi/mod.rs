@@ -90,7 +90,7 @@ pub struct GiTarget<'a> {
 /// One GI method's indirect-light passes: what a method module implements.
 trait GiMethodPasses {
     /// Declares the method's passes; returns the image the filter and the composite read
-    /// (irradiance at Lambert pixels, indirect radiance at Phong pixels), and what the method
+    /// (irradiance at Lambert pixels, indirect radiance at Phong and GGX pixels), and what the method
     /// draws over the composite, if anything.
     fn add_passes(&self, g: &mut RenderGraph, inp: &GiInputs, shared: &GiShared) -> GiOutput;
     /// The scene's lights or emitters may have changed (`Renderer::prepare`): a method that
@@ -201,7 +201,7 @@ impl GiPasses {
             settings,
             method,
             attributes,
-            filter: GiFilter::new(ctx)?,
+            filter: GiFilter::new(ctx, target.has_phong || target.scene.has_ggx())?,
             sao: settings
                 .sao
                 .map(|s| {
@@ -213,8 +213,7 @@ impl GiPasses {
                 ctx,
                 target.has_phong,
                 (settings.sao.is_some(), settings.sao.is_some_and(|s| s.view)),
-                matches!(settings.method, GiMethod::Pathtrace | GiMethod::Ssgi)
-                    && target.scene.has_ggx(),
+                target.scene.has_ggx(),
             )?,
             accumulation: Accumulation::default(),
             lut: ctx.upload_buffer(

@@ -91,6 +91,7 @@ pub fn check_gi(g: &crate::gi::GiSettings) -> Result<(), LimitError> {
     VPL_PATTERN_SIDE.check_flag(g.vpl.pattern[1])?;
     VPL_BOUNCES.check_flag(g.vpl.bounces)?;
     VPL_D_MIN.check_flag(g.vpl.d_min_voxels)?;
+    VPL_MIN_ROUGHNESS.check_flag(g.vpl.min_roughness)?;
     SSGI_SAMPLES.check_flag(g.ssgi.samples)?;
     SSGI_FEEDBACK_MAX.check_flag(g.ssgi.feedback_max_w_m2)?;
     SSGI_HISTORY_WEIGHT.check_flag(g.ssgi.history_weight)?;
