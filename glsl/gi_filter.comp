@@ -13,6 +13,9 @@
 // (Phong cos^n: cos theta = 2^(-1/n); GGX through the exponent n = 2 / alpha^2 - 2 of the same
 // width, as ssgi_reflect.comp's cone). A rough lobe is blurred as before; a sharp one (a
 // mirror's reflection, a curved metal whose mirror direction turns fast) keeps its detail.
+// Except within the VPLs' interleaving tile (|k| < tile_px, the pattern's side along this
+// pass): there the pixels hold different VPL sets of one estimate, which the filter has to
+// merge (Thiedemann 2010 §7.3.2) whatever the lobe; elsewhere tile_px = 1.
 #include "frame.glsl"
 
 layout(constant_id = 0) const bool GLOSSY = false;
@@ -29,6 +32,7 @@ layout(push_constant) uniform Push {
     ivec2 direction;
     int radius;
     float plane_tolerance;  // relative to the distance to the camera
+    int tile_px;            // glossy pixels: taps with |k| < tile_px skip the mirror weight
 } pc;
 
 vec3 world_at(ivec2 px, vec2 size) {
@@ -86,7 +90,7 @@ void main() {
         float w = exp(-0.5 * float(k * k) / (sigma * sigma)) * wn * exp(-plane * plane);
         if (GLOSSY) {
             if (lobe_kind(texelFetch(gb_specular, q, 0)) != kind0) continue;
-            if (kind0 != 0) {
+            if (kind0 != 0 && abs(k) >= pc.tile_px) {
                 vec3 mirror1 = reflect(normalize(p1 - frame.camera_position.xyz), n1);
                 float delta = acos(clamp(dot(mirror0, mirror1), -1.0, 1.0)) / theta0;
                 w *= exp(-0.5 * delta * delta);

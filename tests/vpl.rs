@@ -1017,11 +1017,11 @@ fn emitters_and_area_lights_send_vpls() {
         assert!(gained > 0.0, "{name}: VPLs add no light");
         if emissive_only {
             // Direct light is the patch alone (a few percent of the frame); VPLs light
-            // everything else but the copper sphere (a metal: no diffuse part, and the VPL
-            // gather shades GGX receivers through their diffuse color only; about a tenth of
-            // the frame; measured 89% lit).
+            // everything else, the copper sphere too since the gather shades GGX receivers
+            // with their whole BRDF (measured 94% lit: 3822 of 4074; 89% before, when the
+            // metal got only its black diffuse color).
             assert!(dark > 64 * 64 / 2, "{name}: {dark} unlit pixels");
-            assert!(lit_dark * 4 > dark * 3, "{name}: {lit_dark} of {dark} lit");
+            assert!(lit_dark * 10 > dark * 9, "{name}: {lit_dark} of {dark} lit");
         }
     }
 }

@@ -75,7 +75,7 @@ pub struct GiArgs {
     /// `--gi vpl`: the roughness floor of glossy receivers, in [0, 1]: GGX pixels are shaded
     /// with roughness max(r, R) toward the VPLs, Phong exponents capped at 2/R⁴ − 2; bounds a
     /// sharp lobe's highlights of single VPLs, blurs smoother receivers [default: the scene's
-    /// `[gi] vpl_min_roughness`, else 0.2].
+    /// `[gi] vpl_min_roughness`, else 0.4].
     #[arg(long, value_name = "R")]
     pub vpl_min_roughness: Option<f32>,
     /// `--gi vpl`: VPL bounces: 1 reflects the lights' direct light once, 2 adds one voxel

@@ -17,12 +17,16 @@ struct GpuFilterPush {
     direction: [i32; 2],
     radius: i32,
     plane_tolerance: f32,
+    /// Glossy pixels: taps closer than this skip the mirror-direction weight (the VPLs'
+    /// interleaving pattern side along the pass; 1 otherwise).
+    tile_px: i32,
 }
 
 crate::push_constants!(GpuFilterPush {
     direction,
     radius,
-    plane_tolerance
+    plane_tolerance,
+    tile_px
 });
 
 /// The filter's pipeline.
@@ -43,13 +47,15 @@ impl GiFilter {
     }
 
     /// Declares `passes` horizontal + vertical pass pairs of radius `radius_px` over
-    /// `irradiance` (none when either is 0); returns the filtered image.
+    /// `irradiance` (none when either is 0); returns the filtered image. `tile` is the VPLs'
+    /// interleaving pattern N×M (`[1, 1]` for the other methods): within it glossy pixels are
+    /// averaged like Lambert ones, since each holds only one of the tile's VPL sets.
     pub fn add_passes(
         &self,
         g: &mut RenderGraph,
         i: &GiInputs,
         sampler: vk::Sampler,
-        (radius_px, passes): (u32, u32),
+        (radius_px, passes, tile): (u32, u32, [u32; 2]),
         irradiance: ImageHandle,
     ) -> ImageHandle {
         let (w, h) = (i.width, i.height);
@@ -61,7 +67,7 @@ impl GiFilter {
         let lobes = i.specular.unwrap_or(i.normal);
         let mut current = irradiance;
         for p in 0..passes {
-            for (axis, dir) in [("h", [1, 0]), ("v", [0, 1])] {
+            for (axis, dir, tile_px) in [("h", [1, 0], tile[0]), ("v", [0, 1], tile[1])] {
                 let out = g.create_image(ImageDesc::new_2d(
                     &format!("filtered irradiance {p}{axis}"),
                     vk::Format::R32G32B32A32_SFLOAT,
@@ -72,6 +78,7 @@ impl GiFilter {
                     direction: dir,
                     radius: radius_px as i32,
                     plane_tolerance: 0.02,
+                    tile_px: tile_px.max(1) as i32,
                 };
                 g.add_pass(&format!("gi_filter[{p}{axis}]"))
                     .pipeline(&pipe)

@@ -310,11 +310,16 @@ impl GiPasses {
         };
         let GiOutput { indirect, overlay } = self.method.add_passes(g, inp, &shared);
         let s = &self.settings;
+        let tile = if s.method == GiMethod::Vpl {
+            s.vpl.pattern
+        } else {
+            [1, 1]
+        };
         let filtered = self.filter.add_passes(
             g,
             inp,
             self.sampler.raw,
-            (s.filter_radius, s.filter_passes),
+            (s.filter_radius, s.filter_passes, tile),
             indirect,
         );
         let ao = self

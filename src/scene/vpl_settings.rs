@@ -88,7 +88,7 @@ impl Default for VplSettings {
             per_set: 16,
             pattern: [4, 4],
             d_min_voxels: 8.0,
-            min_roughness: 0.2,
+            min_roughness: 0.4,
             visibility: VplVisibility::Voxel,
             bounces: 2,
             shading: VplShading::Gather,
