@@ -1,14 +1,15 @@
 #version 450
 // Direct plus indirect light: L = L_direct + rho/pi * E_indirect for Lambert receivers; Phong
-// receivers' indirect radiance is stored as is (see gi_common.glsl).
+// and GGX receivers' indirect radiance is stored as is (see gi_common.glsl).
 // With SAO (Oetke 2017 §2.5) the indirect term is multiplied by the AO term (computed at half
 // resolution, joint-bilaterally upsampled to the frame by sao_upsample); SAO_VIEW writes the AO
 // term itself as grey radiance (`--sao-show`).
 layout(constant_id = 0) const bool HAS_PHONG = false;
 layout(constant_id = 1) const bool HAS_SAO = false;
 layout(constant_id = 2) const bool SAO_VIEW = false;
-// The path tracer stores GGX pixels' indirect radiance too (their lobe sampled at the first
-// bounce); the other methods store their irradiance.
+// Every method stores GGX pixels' indirect radiance too (their whole BRDF: the lobe sampled by
+// the hemisphere rays and the path tracer's first bounce, evaluated toward each VPL, Eq. 2.19's
+// split sum in screen space); set in every scene with GGX materials.
 layout(constant_id = 3) const bool GGX_RADIANCE = false;
 
 layout(local_size_x = 8, local_size_y = 8) in;

@@ -3,7 +3,22 @@
 // bilateral blur of the indirect irradiance, weighted by a spatial Gaussian, normal
 // similarity and distance from the center pixel's tangent plane. Run horizontally, then
 // vertically, `passes` times.
+//
+// Glossy scenes (GLOSSY: the G-buffer has a lobe target): Phong and GGX pixels hold their
+// indirect radiance, which depends on the lobe and on the view, not irradiance. A pixel then
+// averages only pixels of its own lobe kind (Lambert irradiance never mixes with glossy
+// radiance), and a glossy pixel only neighbours whose mirror directions lie within its lobe:
+// the weight exp(-(delta / theta)^2 / 2), delta the angle between the two pixels' mirror
+// directions of the view ray, theta the lobe's half-maximum angle about the mirror direction
+// (Phong cos^n: cos theta = 2^(-1/n); GGX through the exponent n = 2 / alpha^2 - 2 of the same
+// width, as ssgi_reflect.comp's cone). A rough lobe is blurred as before; a sharp one (a
+// mirror's reflection, a curved metal whose mirror direction turns fast) keeps its detail.
+// Except within the VPLs' interleaving tile (|k| < tile_px, the pattern's side along this
+// pass): there the pixels hold different VPL sets of one estimate, which the filter has to
+// merge (Thiedemann 2010 §7.3.2) whatever the lobe; elsewhere tile_px = 1.
 #include "frame.glsl"
+
+layout(constant_id = 0) const bool GLOSSY = false;
 
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(set = 0, binding = 0, std430) readonly buffer FrameBuf { GpuFrame frame; };
@@ -11,16 +26,35 @@ layout(set = 0, binding = 1) uniform sampler2D gb_normal;
 layout(set = 0, binding = 2) uniform sampler2D gb_depth;
 layout(set = 0, binding = 3) uniform sampler2D src;
 layout(set = 0, binding = 4, rgba32f) uniform writeonly image2D dst;
+layout(set = 0, binding = 5) uniform sampler2D gb_specular;  // the normals when !GLOSSY
 
 layout(push_constant) uniform Push {
     ivec2 direction;
     int radius;
     float plane_tolerance;  // relative to the distance to the camera
+    int tile_px;            // glossy pixels: taps with |k| < tile_px skip the mirror weight
 } pc;
 
 vec3 world_at(ivec2 px, vec2 size) {
     float depth = texelFetch(gb_depth, px, 0).r;
-    return pixel_world_position(frame.inv_view_proj, frame.camera_position.xyz, px, size, depth);
+    return pixel_world_position(frame.inv_view_proj, frame.camera_position.xyz, px, vec2(size), depth);
+}
+
+// The lobe kind of the lobe target's texel: 0 Lambert, 1 Phong (rho_s > 0), 2 GGX.
+int lobe_kind(vec4 t) {
+    if (t.a > 1.5) return 2;
+    return any(greaterThan(t.rgb, vec3(0.0))) ? 1 : 0;
+}
+
+// The half-maximum angle of a lobe about its mirror direction (kind 1 or 2; w the normal
+// target's w: the Phong exponent or the GGX roughness).
+float lobe_half_angle(int kind, float w) {
+    float n = w;
+    if (kind == 2) {
+        float alpha = max(w * w, 1e-4);
+        n = 2.0 / (alpha * alpha) - 2.0;
+    }
+    return acos(exp2(-1.0 / max(n, 1e-3)));
 }
 
 void main() {
@@ -35,6 +69,14 @@ void main() {
     vec3 p0 = world_at(px, vec2(size));
     float scale = pc.plane_tolerance * max(distance(p0, frame.camera_position.xyz), 1e-6);
     float sigma = max(float(pc.radius) * 0.5, 0.5);
+    int kind0 = 0;
+    vec3 mirror0 = vec3(0.0);
+    float theta0 = 1.0;
+    if (GLOSSY) {
+        kind0 = lobe_kind(texelFetch(gb_specular, px, 0));
+        mirror0 = reflect(normalize(p0 - frame.camera_position.xyz), n0);
+        if (kind0 != 0) theta0 = lobe_half_angle(kind0, texelFetch(gb_normal, px, 0).w);
+    }
     vec3 sum = vec3(0.0);
     float wsum = 0.0;
     for (int k = -pc.radius; k <= pc.radius; ++k) {
@@ -43,8 +85,17 @@ void main() {
         if (texelFetch(gb_depth, q, 0).r >= 1.0) continue;
         vec3 n1 = normalize(texelFetch(gb_normal, q, 0).xyz);
         float wn = pow(max(dot(n0, n1), 0.0), 16.0);
-        float plane = abs(dot(n0, world_at(q, vec2(size)) - p0)) / scale;
+        vec3 p1 = world_at(q, vec2(size));
+        float plane = abs(dot(n0, p1 - p0)) / scale;
         float w = exp(-0.5 * float(k * k) / (sigma * sigma)) * wn * exp(-plane * plane);
+        if (GLOSSY) {
+            if (lobe_kind(texelFetch(gb_specular, q, 0)) != kind0) continue;
+            if (kind0 != 0 && abs(k) >= pc.tile_px) {
+                vec3 mirror1 = reflect(normalize(p1 - frame.camera_position.xyz), n1);
+                float delta = acos(clamp(dot(mirror0, mirror1), -1.0, 1.0)) / theta0;
+                w *= exp(-0.5 * delta * delta);
+            }
+        }
         sum += w * texelFetch(src, q, 0).rgb;
         wsum += w;
     }

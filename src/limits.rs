@@ -384,6 +384,17 @@ pub const VPL_D_MIN: Limit<f32> = Limit::new(
     1e6,
 );
 
+/// `--gi vpl`: the roughness floor of glossy receivers (perceptual GGX roughness; Phong
+/// exponents are capped at the matching 2/r⁴ − 2), which bounds the peak of a receiver's lobe
+/// toward a VPL as d_min bounds 1/d² (`glsl/include/gi_vpl_gather_body.glsl`).
+pub const VPL_MIN_ROUGHNESS: Limit<f32> = Limit::new(
+    "--vpl-min-roughness",
+    Some("gi.vpl_min_roughness"),
+    "a roughness",
+    0.0,
+    1.0,
+);
+
 /// `--gi ssgi`: samples per texel and pyramid level (Oetke 2017 §5.2: 8–256 in the GUI).
 pub const SSGI_SAMPLES: Limit<u32> = Limit::new(
     "--ssgi-samples",

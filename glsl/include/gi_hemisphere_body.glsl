@@ -7,7 +7,10 @@
 // are cast through the binary voxel hierarchy within a radius; at a hit, the radiance the
 // lights put there is read from the reflective light maps (§6.3.3), valid only if the map saw
 // the same surface (distance tolerance) from the side the ray hits (back-face test). With
-// cosine sampling the irradiance estimate is E = pi/N * sum L.
+// cosine sampling the irradiance estimate is E = pi/N * sum L. Glossy receivers sample their
+// lobe too (§5.7 for Phong): Phong and GGX pixels spend half their rays on the specular lobe
+// (GGX metals all of them) and store their indirect radiance, the diffuse part's estimate plus
+// the lobe's; a GGX pixel's rays are material_lobe.glsl's, as the path tracer's first bounce.
 #include "frame.glsl"
 #include "gi_common.glsl"
 
@@ -57,6 +60,7 @@ bool vx_voxel(int x, int y, int k) {
 #include "paraboloid.glsl"
 #include "gbuffer_lobe.glsl"
 #include "brdf.glsl"
+#include "material_lobe.glsl"
 
 #ifdef RADIANCE_FROM_VOLUME
 // Radiance of the hit voxel's lit side, if the ray arrives on that side (back-face test).
@@ -180,13 +184,22 @@ void main() {
     vec3 specular = HAS_PHONG ? gbuffer_phong_specular(gb_specular, px) : vec3(0.0);
     bool phong = HAS_PHONG && is_phong_pixel(specular);
     vec3 mirror = reflect(-normalize(frame.camera_position.xyz - p), n);
+    // GGX receivers (HAS_GGX): F0 in the lobe target, the roughness in the normal's w, the
+    // diffuse color (1 - m) b in the albedo (docs/ARCHITECTURE.md, "Materials").
+    vec4 lobe_texel = HAS_GGX ? texelFetch(gb_specular, px, 0) : vec4(0.0);
+    bool ggx = HAS_GGX && lobe_texel.a > 1.5;
+    vec3 diffuse = ggx ? texelFetch(gb_albedo, px, 0).rgb : vec3(0.0);
+    Lobe receiver = Lobe(LOBE_GGX, diffuse, lobe_texel.rgb, ns.w);
+    vec3 wo = normalize(frame.camera_position.xyz - p);
     // Self-intersection offset along the normal (Thiedemann 2010 §5.3.1).
     vec3 origin = p + n * (gi.normal_offset_voxels * gi.voxel_diagonal_m);
     vec3 ov = (gi.world_to_voxel * vec4(origin, 1.0)).xyz;
     mat3 dir_to_voxel = mat3(gi.world_to_voxel);
     uint rays = max(gi.rays, 1u);
-    // Phong pixels spend half their rays on the specular lobe.
+    // Phong and GGX pixels spend half their rays on the specular lobe, metals (a black
+    // diffuse part) all of them.
     uint lobe_rays = phong ? rays / 2u : 0u;
+    if (ggx) lobe_rays = lobe_specular_probability(receiver) == 1.0 ? rays : rays / 2u;
     uint diffuse_rays = rays - lobe_rays;
     vec2 rot = pixel_rotation(uvec2(px), gi.seed);
     vec3 sum = vec3(0.0);
@@ -196,7 +209,11 @@ void main() {
         uint j = lobe ? i - diffuse_rays : i;
         uint count = lobe ? lobe_rays : diffuse_rays;
         vec2 u = fract(vec2((float(j) + 0.5) / float(count), radical_inverse(j)) + rot);
-        vec3 d = lobe ? phong_direction(mirror, ns.w, u) : cosine_direction(n, u);
+        // GGX: visible-normal samples weighted F(wo.h) G1(wi), or cosine samples weighted
+        // (1 - F_d(n.wi)) (1 - F_d(n.wo)) (material_lobe.glsl's sample_lobe).
+        vec3 w = vec3(1.0);
+        vec3 d = ggx ? sample_lobe(receiver, n, wo, lobe, u, w)
+                     : (lobe ? phong_direction(mirror, ns.w, u) : cosine_direction(n, u));
         float cos_n = dot(d, n);
         if (cos_n <= 0.0) continue;  // a lobe sample below the surface contributes nothing
         // Offset along the ray (Thiedemann 2010 §5.3.1): k2 * h / (d . n), clamped, so grazing
@@ -206,11 +223,17 @@ void main() {
         VxHit h = voxel_first_hit(gi.dims, uint(gi.max_level), ov + dir_to_voxel * (d * along), dir_to_voxel * d, max(gi.radius_m - along, 0.0), gi.start_level, gi.max_iterations);
         if (!h.hit) continue;
         vec3 l = hit_radiance(h, o + d * h.t, d);
-        if (lobe) lobe_sum += l * cos_n;
+        if (ggx) l *= w;
+        else if (lobe) l *= cos_n;
+        if (lobe) lobe_sum += l;
         else sum += l;
     }
     vec3 e = sum * (PI / float(max(diffuse_rays, 1u)));
-    if (phong) {
+    if (ggx) {
+        // The indirect radiance (gi_composite's GGX_RADIANCE): (1 - m) b / pi E_weighted plus
+        // the lobe's mean of L F G1.
+        imageStore(irradiance, px, vec4(diffuse / PI * e + lobe_sum / float(max(lobe_rays, 1u)), 1.0));
+    } else if (phong) {
         vec3 albedo = texelFetch(gb_albedo, px, 0).rgb;
         vec3 s = specular * ((ns.w + 2.0) / (ns.w + 1.0)) * lobe_sum / float(max(lobe_rays, 1u));
         imageStore(irradiance, px, vec4(albedo / PI * e + s, 1.0));

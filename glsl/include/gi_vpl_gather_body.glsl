@@ -20,7 +20,18 @@
 // lobe's peak (GGX: D <= 1 / (pi alpha^2) with alpha >= 1e-4; Phong: (n + 2) / (2 pi)), but
 // not clamped further: a sharp lobe's VPL lights a small spot brightly, as the lobe does.
 // Lambert pixels store E; Phong pixels their indirect radiance,
-// rho / pi E plus the Phong lobe rho_s (n+2)/(2 pi) cos^n(alpha) times I cos theta_P / (d_min + d^2).
+// rho / pi E plus the Phong lobe rho_s (n+2)/(2 pi) cos^n(alpha) times I cos theta_P / (d_min + d^2);
+// GGX pixels their indirect radiance, the sum of f_r(wi, wo) I cos theta_P / (d_min + d^2) with
+// brdf.glsl's whole brdf_ggx (wi toward the VPL, wo toward the camera).
+//
+// Glossy receivers: a receiver's lobe turns each VPL into a highlight as sharp as the lobe, which
+// a finite VPL set cannot fill in (Thiedemann 2010 §7.3: "high exponents need very many VPLs";
+// the receiver-side twin of the sender's blotches). The receiver's lobe is therefore widened to
+// a roughness floor r >= MIN_ROUGHNESS (`--vpl-min-roughness`; Phong: n <= 2 / r^4 - 2, the
+// exponent of the GGX width alpha = r^2, Walter et al. 2007), which bounds its peak (GGX:
+// D <= 1 / (pi alpha^2)) and so every VPL's radiance to a glossy pixel, as d_min bounds 1/d^2.
+// It biases only receivers smoother than the floor: a mirror-like receiver shows the VPL-lit
+// scene blurred to the floor's lobe, not a sharp reflection (that is screen-space GI's SSR).
 #define GI_OWN_PUSH
 #include "frame.glsl"
 #include "gi_common.glsl"
@@ -29,6 +40,10 @@
 #include "gbuffer_lobe.glsl"
 
 layout(constant_id = 0) const bool HAS_PHONG = false;
+// Some material is GGX: GGX pixels are shaded with their whole BRDF.
+layout(constant_id = 1) const bool HAS_GGX = false;
+// The glossy receivers' roughness floor (above), perceptual roughness.
+layout(constant_id = 2) const float MIN_ROUGHNESS = 0.0;
 
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(set = 0, binding = 0, std430) readonly buffer FrameBuf { GpuFrame frame; };
@@ -106,6 +121,13 @@ void main() {
     vec3 specular = HAS_PHONG ? gbuffer_phong_specular(gb_specular, px) : vec3(0.0);
     bool phong = HAS_PHONG && is_phong_pixel(specular);
     vec3 to_eye = normalize(frame.camera_position.xyz - p);
+    // GGX receivers: F0 in the lobe target, the roughness in the normal's w, the diffuse
+    // color (1 - m) b in the albedo; r >= 0.01 keeps D finite (as for senders, vpl.glsl).
+    vec4 lobe_texel = HAS_GGX ? texelFetch(gb_specular, px, 0) : vec4(0.0);
+    bool ggx = HAS_GGX && lobe_texel.a > 1.5;
+    vec3 diffuse = ggx ? texelFetch(gb_albedo, px, 0).rgb : vec3(0.0);
+    float roughness = max(ns.w, max(MIN_ROUGHNESS, 0.01));
+    float shininess = MIN_ROUGHNESS > 0.0 ? min(ns.w, 2.0 / pow(MIN_ROUGHNESS, 4.0) - 2.0) : ns.w;
     uint row = pc.pattern.z;
     uint first = (cell.y * pattern.x + cell.x) * row;
     vec3 e = vec3(0.0);
@@ -131,10 +153,12 @@ void main() {
         // I cos theta_P / (d_min + d^2) with I = I_max cos theta_VPL (plus a Phong sender's lobe).
         vec3 arriving = vpl_intensity(vpl, -dir) * cos_p / (pc.d_min_m2 + d2);
         e += arriving;
-        if (phong) lobe += brdf_phong(specular, ns.w, n, dir, to_eye) * arriving;
+        if (ggx) lobe += brdf_ggx(diffuse, lobe_texel.rgb, roughness, n, dir, to_eye) * arriving;
+        else if (phong) lobe += brdf_phong(specular, shininess, n, dir, to_eye) * arriving;
     }
     vec3 result = e;
-    if (phong) result = texelFetch(gb_albedo, px, 0).rgb / PI * e + lobe;
+    if (ggx) result = lobe;
+    else if (phong) result = texelFetch(gb_albedo, px, 0).rgb / PI * e + lobe;
 #ifdef VPL_SPLAT
     if (pc.splat_vpl > 0u) result += imageLoad(irradiance, px).rgb;
 #endif

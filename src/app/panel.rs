@@ -828,7 +828,7 @@ fn ssgi_controls(ui: &mut egui::Ui, gi: &mut GiSettings) {
 }
 
 /// The VPL method's parameters (Thiedemann 2010, Ch. 7): VPLs per set, pattern, bounces,
-/// d_min, visibility, normalization, spot sampling.
+/// d_min, the glossy receivers' roughness floor, visibility, normalization, spot sampling.
 fn vpl_controls(ui: &mut egui::Ui, gi: &mut GiSettings) {
     use crate::gi::vpl::{VplNormalize, VplShading, VplSpotSampling, VplVisibility};
     let v = &mut gi.vpl;
@@ -844,6 +844,13 @@ fn vpl_controls(ui: &mut egui::Ui, gi: &mut GiSettings) {
     ui.add(
         egui::Slider::new(&mut v.d_min_voxels, limits::VPL_D_MIN.slider(0.0, 64.0))
             .text("d_min (voxel diagonals)"),
+    );
+    ui.add(
+        egui::Slider::new(
+            &mut v.min_roughness,
+            limits::VPL_MIN_ROUGHNESS.slider(0.0, 1.0),
+        )
+        .text("glossy receivers' min. roughness"),
     );
     let mut visible = v.visibility == VplVisibility::Voxel;
     ui.checkbox(&mut visible, "voxel visibility");

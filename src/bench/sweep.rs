@@ -590,6 +590,7 @@ pub fn gi_table(s: &GiSettings) -> toml::Table {
     );
     t.insert("vpl_bounces".into(), int(s.vpl.bounces));
     t.insert("vpl_d_min_voxels".into(), toml_f32(s.vpl.d_min_voxels));
+    t.insert("vpl_min_roughness".into(), toml_f32(s.vpl.min_roughness));
     let visibility = s
         .vpl
         .visibility

@@ -72,6 +72,12 @@ pub struct GiArgs {
     /// diagonals h: d_min = (D · h)² [default: the scene's `[gi] vpl_d_min_voxels`, else 8].
     #[arg(long, value_name = "D")]
     pub vpl_d_min: Option<f32>,
+    /// `--gi vpl`: the roughness floor of glossy receivers, in [0, 1]: GGX pixels are shaded
+    /// with roughness max(r, R) toward the VPLs, Phong exponents capped at 2/R⁴ − 2; bounds a
+    /// sharp lobe's highlights of single VPLs, blurs smoother receivers [default: the scene's
+    /// `[gi] vpl_min_roughness`, else 0.4].
+    #[arg(long, value_name = "R")]
+    pub vpl_min_roughness: Option<f32>,
     /// `--gi vpl`: VPL bounces: 1 reflects the lights' direct light once, 2 adds one voxel
     /// ray per VPL (thesis §7.2), up to 8 [default: the scene's `[gi] vpl_bounces`, else 2].
     #[arg(long, value_name = "B")]
@@ -174,6 +180,7 @@ impl GiArgs {
                 pattern: self.vpl_pattern,
                 bounces: self.vpl_bounces,
                 d_min_voxels: self.vpl_d_min,
+                min_roughness: self.vpl_min_roughness,
                 visibility: self.vpl_visibility,
                 normalize: self.vpl_normalize,
                 spot_sampling: self.vpl_spot_sampling,
@@ -730,6 +737,8 @@ mod tests {
             "3",
             "--vpl-d-min",
             "1.5",
+            "--vpl-min-roughness",
+            "0.35",
             "--vpl-visibility",
             "none",
             "--vpl-normalize",
@@ -779,6 +788,7 @@ mod tests {
                     pattern: Some([8, 2]),
                     bounces: Some(3),
                     d_min_voxels: Some(1.5),
+                    min_roughness: Some(0.35),
                     visibility: Some(crate::gi::vpl::VplVisibility::None),
                     normalize: Some(crate::gi::vpl::VplNormalize::Valid),
                     spot_sampling: Some(crate::gi::vpl::VplSpotSampling::Disk),

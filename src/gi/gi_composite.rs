@@ -1,5 +1,5 @@
 //! `gi_composite`: the frame's radiance, direct plus indirect (Lambert pixels: albedo / π
-//! times the filtered irradiance; Phong pixels: their indirect radiance as stored), the
+//! times the filtered irradiance; Phong and GGX pixels: their indirect radiance as stored), the
 //! indirect term multiplied by the SAO term when there is one (Oetke 2017 §2.5).
 
 use super::GiInputs;
@@ -15,8 +15,8 @@ impl GiComposite {
     /// `has_phong`: the G-buffer has a specular image (specialization constant 0); `sao`:
     /// an AO term multiplies the indirect light (constant 1), `sao_view`: the composite
     /// writes the AO term instead (constant 2); `ggx_radiance`: the indirect image holds GGX
-    /// pixels' radiance, not their irradiance (the path tracer in scenes with GGX materials;
-    /// constant 3).
+    /// pixels' radiance, not their irradiance (every method in scenes with GGX materials:
+    /// each shades GGX receivers with their whole BRDF; constant 3).
     pub fn new(
         ctx: &Context,
         has_phong: bool,

@@ -1,7 +1,9 @@
 //! `gi_filter`: the geometry-aware filter of the indirect irradiance (Herzog et al. 2010, as
 //! Thiedemann 2010 uses it in ch. 7): a separable joint bilateral blur weighted by distance,
 //! normal similarity and distance from the centre pixel's tangent plane, horizontal then
-//! vertical, repeated.
+//! vertical, repeated. In scenes with Phong or GGX materials a pixel also averages only pixels
+//! of its lobe kind, and a glossy one only those whose mirror directions lie within its lobe
+//! (the shader's header).
 
 use super::GiInputs;
 use crate::graph::{Access, ImageHandle, RenderGraph, Shader};
@@ -15,12 +17,16 @@ struct GpuFilterPush {
     direction: [i32; 2],
     radius: i32,
     plane_tolerance: f32,
+    /// Glossy pixels: taps closer than this skip the mirror-direction weight (the VPLs'
+    /// interleaving pattern side along the pass; 1 otherwise).
+    tile_px: i32,
 }
 
 crate::push_constants!(GpuFilterPush {
     direction,
     radius,
-    plane_tolerance
+    plane_tolerance,
+    tile_px
 });
 
 /// The filter's pipeline.
@@ -29,20 +35,27 @@ pub struct GiFilter {
 }
 
 impl GiFilter {
-    pub fn new(ctx: &Context) -> Result<Self, VkError> {
-        let pipeline =
-            ctx.compute_pipeline("gi_filter.comp", PushLayout::of::<GpuFilterPush>(), &[])?;
+    /// `glossy`: the G-buffer has a lobe target (Phong or GGX materials; specialization
+    /// constant 0), which the filter then reads.
+    pub fn new(ctx: &Context, glossy: bool) -> Result<Self, VkError> {
+        let pipeline = ctx.compute_pipeline(
+            "gi_filter.comp",
+            PushLayout::of::<GpuFilterPush>(),
+            &[(0, u32::from(glossy))],
+        )?;
         Ok(Self { pipeline })
     }
 
     /// Declares `passes` horizontal + vertical pass pairs of radius `radius_px` over
-    /// `irradiance` (none when either is 0); returns the filtered image.
+    /// `irradiance` (none when either is 0); returns the filtered image. `tile` is the VPLs'
+    /// interleaving pattern N×M (`[1, 1]` for the other methods): within it glossy pixels are
+    /// averaged like Lambert ones, since each holds only one of the tile's VPL sets.
     pub fn add_passes(
         &self,
         g: &mut RenderGraph,
         i: &GiInputs,
         sampler: vk::Sampler,
-        (radius_px, passes): (u32, u32),
+        (radius_px, passes, tile): (u32, u32, [u32; 2]),
         irradiance: ImageHandle,
     ) -> ImageHandle {
         let (w, h) = (i.width, i.height);
@@ -50,9 +63,11 @@ impl GiFilter {
         let passes = if radius_px == 0 { 0 } else { passes };
         let c = Shader::Compute;
         let pipe = *self.pipeline;
+        // Without a lobe target the shader never reads its binding 5; the normals fill it.
+        let lobes = i.specular.unwrap_or(i.normal);
         let mut current = irradiance;
         for p in 0..passes {
-            for (axis, dir) in [("h", [1, 0]), ("v", [0, 1])] {
+            for (axis, dir, tile_px) in [("h", [1, 0], tile[0]), ("v", [0, 1], tile[1])] {
                 let out = g.create_image(ImageDesc::new_2d(
                     &format!("filtered irradiance {p}{axis}"),
                     vk::Format::R32G32B32A32_SFLOAT,
@@ -63,6 +78,7 @@ impl GiFilter {
                     direction: dir,
                     radius: radius_px as i32,
                     plane_tolerance: 0.02,
+                    tile_px: tile_px.max(1) as i32,
                 };
                 g.add_pass(&format!("gi_filter[{p}{axis}]"))
                     .pipeline(&pipe)
@@ -71,6 +87,7 @@ impl GiFilter {
                     .bind_sampled(2, i.depth, sampler, c)
                     .bind_sampled(3, current, sampler, c)
                     .bind(4, out, Access::StorageWrite(c))
+                    .bind_sampled(5, lobes, sampler, c)
                     .record(move |ctx| {
                         ctx.bind(&pipe);
                         ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&fp));

@@ -27,7 +27,10 @@ impl GiRadianceVolume {
         let hemisphere_pipeline = ctx.compute_pipeline(
             "gi_hemisphere_volume.comp",
             PushLayout::of::<GpuGiPush>(),
-            &[(0, u32::from(target.has_phong))],
+            &[
+                (0, u32::from(target.has_phong)),
+                (1, u32::from(target.scene.has_ggx())),
+            ],
         )?;
         let ext = target.grid.extent_voxels();
         let usage = vk::ImageUsageFlags::STORAGE

@@ -103,7 +103,7 @@ trait GiMethodPasses {
         MethodWorld::default()
     }
     /// Declares the method's passes of one eye (`shared.eye`); returns the image the filter and the composite read
-    /// (irradiance at Lambert pixels, indirect radiance at Phong pixels), and what the method
+    /// (irradiance at Lambert pixels, indirect radiance at Phong and GGX pixels), and what the method
     /// draws over the composite, if anything.
     fn add_passes(&self, g: &mut RenderGraph, inp: &GiInputs, shared: &GiShared) -> GiOutput;
     /// The scene's lights or emitters may have changed (`Renderer::prepare`): a method that
@@ -229,7 +229,7 @@ impl GiPasses {
             settings,
             method,
             attributes,
-            filter: GiFilter::new(ctx)?,
+            filter: GiFilter::new(ctx, target.has_phong || target.scene.has_ggx())?,
             sao: settings
                 .sao
                 .map(|s| {
@@ -241,8 +241,7 @@ impl GiPasses {
                 ctx,
                 target.has_phong,
                 (settings.sao.is_some(), settings.sao.is_some_and(|s| s.view)),
-                matches!(settings.method, GiMethod::Pathtrace | GiMethod::Ssgi)
-                    && target.scene.has_ggx(),
+                target.scene.has_ggx(),
             )?,
             accumulation: Accumulation::default(),
             lut: ctx.upload_buffer(
@@ -381,11 +380,16 @@ impl GiPasses {
         shared.world = w.method;
         let GiOutput { indirect, overlay } = self.method.add_passes(g, inp, &shared);
         let s = &self.settings;
+        let tile = if s.method == GiMethod::Vpl {
+            s.vpl.pattern
+        } else {
+            [1, 1]
+        };
         let filtered = self.filter.add_passes(
             g,
             inp,
             self.sampler.raw,
-            (s.filter_radius, s.filter_passes),
+            (s.filter_radius, s.filter_passes, tile),
             indirect,
         );
         let ao = self

@@ -241,10 +241,16 @@ impl VplPasses {
             VplShading::Gather => "gi_vpl_gather.comp",
             VplShading::Splat => "gi_vpl_splat.comp",
         };
+        // Glossy receivers: GGX pixels' whole BRDF (HAS_GGX) and the roughness floor of
+        // Phong and GGX pixels (MIN_ROUGHNESS, a float; the push block is full at 128 bytes).
         let gather = ctx.compute_pipeline(
             shader,
             PushLayout::of::<GpuVplGatherPush>(),
-            &[(0, u32::from(target.has_phong))],
+            &[
+                (0, u32::from(target.has_phong)),
+                (1, u32::from(target.scene.has_ggx())),
+                (2, v.min_roughness.to_bits()),
+            ],
         )?;
         let points = v
             .show
@@ -286,7 +292,7 @@ impl VplPasses {
     }
 
     /// Declares generation, bounces and the interleaved gather; returns the indirect
-    /// irradiance (radiance for Phong pixels), unfiltered, and the VPL buffer (for
+    /// irradiance (radiance for Phong and GGX pixels), unfiltered, and the VPL buffer (for
     /// [`VplPasses::add_points`]).
     fn add_vpl_passes(
         &self,

@@ -91,6 +91,7 @@ pub fn check_gi(g: &crate::gi::GiSettings) -> Result<(), LimitError> {
     VPL_PATTERN_SIDE.check_flag(g.vpl.pattern[1])?;
     VPL_BOUNCES.check_flag(g.vpl.bounces)?;
     VPL_D_MIN.check_flag(g.vpl.d_min_voxels)?;
+    VPL_MIN_ROUGHNESS.check_flag(g.vpl.min_roughness)?;
     SSGI_SAMPLES.check_flag(g.ssgi.samples)?;
     SSGI_FEEDBACK_MAX.check_flag(g.ssgi.feedback_max_w_m2)?;
     SSGI_HISTORY_WEIGHT.check_flag(g.ssgi.history_weight)?;
@@ -145,7 +146,7 @@ mod tests {
     #[test]
     fn each_render_setting_out_of_range_names_its_flag() {
         type Edit = fn(&mut RenderSettings);
-        let cases: [(&str, Edit); 18] = [
+        let cases: [(&str, Edit); 19] = [
             ("--width", |s| s.width = 0),
             ("--height", |s| s.height = 20_000),
             ("--time", |s| s.time_s = f32::NAN),
@@ -176,6 +177,7 @@ mod tests {
             ("--light-map-resolution", |s| s.gi.light_map_resolution = 8),
             ("--gi-start-level", |s| s.gi.start_level = 15),
             ("--gi-max-iterations", |s| s.gi.max_iterations = 0),
+            ("--vpl-min-roughness", |s| s.gi.vpl.min_roughness = 1.5),
         ];
         for (flag, edit) in cases {
             let mut s = RenderSettings::default();

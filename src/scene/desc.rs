@@ -114,6 +114,7 @@ pub(crate) struct GiDesc {
     pub vpl_pattern: Option<[i64; 2]>,
     pub vpl_bounces: Option<i64>,
     pub vpl_d_min_voxels: Option<f32>,
+    pub vpl_min_roughness: Option<f32>,
     pub vpl_visibility: Option<String>,
     pub vpl_normalize: Option<String>,
     pub vpl_spot_sampling: Option<String>,
@@ -909,7 +910,7 @@ type CountCheck<'a> = dyn Fn(&Limit<u32>, Option<i64>) -> Result<Option<u32>, Sc
 type LengthCheck<'a> = dyn Fn(&Limit<f32>, Option<f32>) -> Result<Option<f32>, SceneError> + 'a;
 
 /// The `[gi]` table's VPL keys (`vpls`, `vpl_pattern`, `vpl_bounces`, `vpl_d_min_voxels`,
-/// `vpl_visibility`, `vpl_normalize`, `vpl_spot_sampling`).
+/// `vpl_min_roughness`, `vpl_visibility`, `vpl_normalize`, `vpl_spot_sampling`).
 fn build_vpl(
     ck: &Check<'_>,
     g: &GiDesc,
@@ -944,6 +945,7 @@ fn build_vpl(
         pattern,
         bounces: count(&limits::VPL_BOUNCES, g.vpl_bounces)?,
         d_min_voxels: length(&limits::VPL_D_MIN, g.vpl_d_min_voxels)?,
+        min_roughness: length(&limits::VPL_MIN_ROUGHNESS, g.vpl_min_roughness)?,
         visibility,
         normalize: named(ck, "gi.vpl_normalize", &NORMALIZE_NAMES, &g.vpl_normalize)?,
         spot_sampling: named(

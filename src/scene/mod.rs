@@ -121,6 +121,7 @@
 //! vpl_pattern = [4, 4]              # interleaving pattern N x M, each 1..=16 [[4, 4]]
 //! vpl_bounces = 2                   # VPL bounces, 1..=8 [2]
 //! vpl_d_min_voxels = 8.0            # d_min of the VPL falloff, voxel diagonals >= 0 [8]
+//! vpl_min_roughness = 0.4           # glossy receivers' roughness floor under VPLs, 0..=1 [0.4]
 //! vpl_visibility = "voxel"          # "voxel" (segment test) | "none" ["voxel"]
 //! vpl_normalize = "all"             # VPL flux over "all" K samples | the "valid" ones ["all"]
 //! vpl_spot_sampling = "solid-angle" # spot VPLs "solid-angle" (cone) | "disk" (image plane)

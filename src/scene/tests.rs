@@ -682,7 +682,7 @@ fn gi_table_parses_every_key() {
          radius_m = 1.5\nnormal_offset_voxels = 0.5\nray_offset_voxels = 2\n\
          filter_radius = 0\nfilter_passes = 1\nlight_map_resolution = 128\n\
          accumulate_frames = 64\nvpls = 4\nvpl_pattern = [2, 3]\nvpl_bounces = 1\n\
-         vpl_d_min_voxels = 2.5\nvpl_visibility = \"none\"\n\
+         vpl_d_min_voxels = 2.5\nvpl_min_roughness = 0.3\nvpl_visibility = \"none\"\n\
          vpl_normalize = \"valid\"\nvpl_spot_sampling = \"disk\"\nssgi_resolution = \"quarter\"\n\
          ssgi_samples = 12\nssgi_mips = \"fast\"\nssgi_feedback = false\n\
          ssgi_feedback_max_w_m2 = 5.5\nssgi_history_weight = 0.5\nssr = false\n\
@@ -708,6 +708,7 @@ fn gi_table_parses_every_key() {
                 pattern: Some([2, 3]),
                 bounces: Some(1),
                 d_min_voxels: Some(2.5),
+                min_roughness: Some(0.3),
                 visibility: Some(crate::scene::vpl_settings::VplVisibility::None),
                 normalize: Some(crate::scene::vpl_settings::VplNormalize::Valid),
                 spot_sampling: Some(crate::scene::vpl_settings::VplSpotSampling::Disk),
@@ -840,6 +841,11 @@ fn gi_out_of_range_values_name_the_field() {
         ("vpl_pattern = [4, 17]", "gi.vpl_pattern", "[1, 16]"),
         ("vpl_bounces = 9", "gi.vpl_bounces", "[1, 8]"),
         ("vpl_d_min_voxels = -1", "gi.vpl_d_min_voxels", "in [0, "),
+        (
+            "vpl_min_roughness = 1.5",
+            "gi.vpl_min_roughness",
+            "a roughness, a finite number in [0, 1]",
+        ),
         (
             "vpl_visibility = \"rays\"",
             "gi.vpl_visibility",

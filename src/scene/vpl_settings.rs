@@ -58,6 +58,11 @@ pub struct VplSettings {
     /// d_min = (d_min_voxels · h)² m². Relative to the grid, so that a scene renders the same
     /// in millimeters or kilometers (tests/extremes.rs).
     pub d_min_voxels: f32,
+    /// The roughness floor of glossy receivers: a GGX pixel's lobe is evaluated toward the
+    /// VPLs with roughness max(r, this), a Phong pixel's with its exponent capped at the
+    /// matching 2/r⁴ − 2. It bounds the peak of the receiver's lobe as d_min bounds 1/d²
+    /// (a finite VPL set cannot light a sharp lobe smoothly), biasing only smoother receivers.
+    pub min_roughness: f32,
     pub visibility: VplVisibility,
     /// VPL generations: 1 = the lights' direct light reflected once, 2 adds one voxel ray per
     /// VPL (the thesis's maximum), up to [`VplSettings::MAX_BOUNCES`].
@@ -83,6 +88,7 @@ impl Default for VplSettings {
             per_set: 16,
             pattern: [4, 4],
             d_min_voxels: 8.0,
+            min_roughness: 0.4,
             visibility: VplVisibility::Voxel,
             bounces: 2,
             shading: VplShading::Gather,
@@ -101,6 +107,7 @@ pub struct VplOverrides {
     pub pattern: Option<[u32; 2]>,
     pub bounces: Option<u32>,
     pub d_min_voxels: Option<f32>,
+    pub min_roughness: Option<f32>,
     pub visibility: Option<VplVisibility>,
     pub normalize: Option<VplNormalize>,
     pub spot_sampling: Option<VplSpotSampling>,
@@ -114,6 +121,7 @@ impl VplOverrides {
             pattern: self.pattern.or(fallback.pattern),
             bounces: self.bounces.or(fallback.bounces),
             d_min_voxels: self.d_min_voxels.or(fallback.d_min_voxels),
+            min_roughness: self.min_roughness.or(fallback.min_roughness),
             visibility: self.visibility.or(fallback.visibility),
             normalize: self.normalize.or(fallback.normalize),
             spot_sampling: self.spot_sampling.or(fallback.spot_sampling),
@@ -127,6 +135,7 @@ impl VplOverrides {
             pattern: self.pattern.unwrap_or(base.pattern),
             bounces: self.bounces.unwrap_or(base.bounces),
             d_min_voxels: self.d_min_voxels.unwrap_or(base.d_min_voxels),
+            min_roughness: self.min_roughness.unwrap_or(base.min_roughness),
             visibility: self.visibility.unwrap_or(base.visibility),
             normalize: self.normalize.unwrap_or(base.normalize),
             spot_sampling: self.spot_sampling.unwrap_or(base.spot_sampling),
