@@ -15,7 +15,7 @@ layout(set = 0, binding = 4, rgba32f) uniform writeonly image2D dst;
 layout(push_constant) uniform Push {
     ivec2 direction;
     int radius;
-    float plane_tolerance;  // relative to the distance to the camera
+    float plane_tolerance;  // relative to the distance to the camera (footprint_distance)
 } pc;
 
 vec3 world_at(ivec2 px, vec2 size) {
@@ -33,7 +33,7 @@ void main() {
     }
     vec3 n0 = normalize(texelFetch(gb_normal, px, 0).xyz);
     vec3 p0 = world_at(px, vec2(size));
-    float scale = pc.plane_tolerance * max(distance(p0, frame.camera_position.xyz), 1e-6);
+    float scale = pc.plane_tolerance * max(footprint_distance(frame.camera_position, frame.camera_forward, p0), 1e-6);
     float sigma = max(float(pc.radius) * 0.5, 0.5);
     vec3 sum = vec3(0.0);
     float wsum = 0.0;

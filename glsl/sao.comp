@@ -69,8 +69,11 @@ void main() {
     float z_m = max(dot(p - frame.camera_position.xyz, camera_forward()), 1e-4);
     float r = pc.radius_m;
     float r2 = r * r;
-    // r' = r·S'/z: the radius in pixels (Eq. 2.20).
-    float radius_px = r * pc.px_per_m_at_1m / z_m;
+    // r' = r·S'/z: the radius in pixels (Eq. 2.20); under orthographic projection a meter
+    // spans height / ortho height pixels at every depth.
+    float radius_px = frame_orthographic(frame.camera_forward)
+        ? r * float(size.y) / frame.camera_forward.w
+        : r * pc.px_per_m_at_1m / z_m;
     float phi = rotation(uvec2(c));
     float sum = 0.0;
     for (uint i = 0u; i < pc.taps; ++i) {

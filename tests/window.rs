@@ -407,6 +407,31 @@ fn panel_table_faults(stderr: &str, window_width: f32) -> Vec<String> {
             }
         }
     }
+    // The frame-time graph below the table: in the panel and the window, below the table,
+    // over the frames whose timings came back, each series a family of the table's passes
+    // (the name before `[`) or "other".
+    let graph = &table["graph"];
+    let g = rect(&graph["rect"]);
+    if !inside(g) || g[1] < above {
+        faults.push(format!(
+            "{window_width} px: graph {g:?} outside the panel {panel:?} or over the table"
+        ));
+    }
+    let frames = graph["frames"].as_u64().expect("frames");
+    let series = graph["series"].as_array().expect("series");
+    if frames == 0 || series.is_empty() {
+        faults.push(format!("{window_width} px: empty graph {graph}"));
+    }
+    for s in series {
+        let name = s["name"].as_str().expect("a name");
+        let ms = s["mean_ms"].as_f64().expect("a mean");
+        let family = names.iter().any(|n| n.split('[').next() == Some(name));
+        if !(family || name == "other") || !(ms.is_finite() && ms >= 0.0) {
+            faults.push(format!(
+                "{window_width} px: series {name} ({ms} ms) of {names:?}"
+            ));
+        }
+    }
     faults
 }
 

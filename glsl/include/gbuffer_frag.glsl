@@ -30,8 +30,10 @@ layout(set = 0, binding = 0, std430) readonly buffer FrameBuf { GpuFrame frame; 
 // The right eye's frame (view 1 of gbuffer_multiview.frag; view 0 is `frame`).
 layout(set = 0, binding = 8, std430) readonly buffer FrameRightBuf { GpuFrame frame_right; };
 #define EYE_CAMERA_POSITION mix(frame.camera_position, frame_right.camera_position, float(gl_ViewIndex))
+#define EYE_CAMERA_FORWARD mix(frame.camera_forward, frame_right.camera_forward, float(gl_ViewIndex))
 #else
 #define EYE_CAMERA_POSITION frame.camera_position
+#define EYE_CAMERA_FORWARD frame.camera_forward
 #endif
 layout(set = 0, binding = 1, std430) readonly buffer Materials { GpuMaterial materials[]; };
 // The draw's albedo texture (a 1x1 placeholder when the material has none).
@@ -111,7 +113,7 @@ void main() {
     vec3 n = normalize(in_normal);
     // Two-sided surfaces: shade the side the camera sees. Decided geometrically, not by
     // gl_FrontFacing, because the y-flipped projection inverts the winding.
-    bool front = dot(n, EYE_CAMERA_POSITION.xyz - in_world) >= 0.0;
+    bool front = dot(n, toward_camera(EYE_CAMERA_POSITION, EYE_CAMERA_FORWARD, in_world)) >= 0.0;
     if (!front) n = -n;
     vec3 albedo = m.albedo.rgb;
     // OBJ texture coordinates have v up; image rows start at the top.

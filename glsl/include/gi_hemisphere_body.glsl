@@ -179,7 +179,7 @@ void main() {
     vec3 n = normalize(ns.xyz);
     vec3 specular = HAS_PHONG ? gbuffer_phong_specular(gb_specular, px) : vec3(0.0);
     bool phong = HAS_PHONG && is_phong_pixel(specular);
-    vec3 mirror = reflect(-normalize(frame.camera_position.xyz - p), n);
+    vec3 mirror = reflect(-toward_camera(frame.camera_position, frame.camera_forward, p), n);
     // Self-intersection offset along the normal (Thiedemann 2010 §5.3.1).
     vec3 origin = p + n * (gi.normal_offset_voxels * gi.voxel_diagonal_m);
     vec3 ov = (gi.world_to_voxel * vec4(origin, 1.0)).xyz;

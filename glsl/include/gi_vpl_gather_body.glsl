@@ -105,7 +105,7 @@ void main() {
     vec3 n = normalize(ns.xyz);
     vec3 specular = HAS_PHONG ? gbuffer_phong_specular(gb_specular, px) : vec3(0.0);
     bool phong = HAS_PHONG && is_phong_pixel(specular);
-    vec3 to_eye = normalize(frame.camera_position.xyz - p);
+    vec3 to_eye = toward_camera(frame.camera_position, frame.camera_forward, p);
     uint row = pc.pattern.z;
     uint first = (cell.y * pattern.x + cell.x) * row;
     vec3 e = vec3(0.0);

@@ -14,6 +14,7 @@
 //! `egui`. The swapchain image is imported with [`Access::Present`] and rebound every frame.
 
 mod camera;
+mod frame_graph;
 mod overlay;
 mod panel;
 
@@ -23,7 +24,7 @@ pub use panel::{Controls, TimingStats};
 use crate::gi::{GiMethod, GiSettings};
 use crate::graph::{Access, GraphError, GraphExecutor, ImageHandle, RenderGraph};
 use crate::render::{FrameImages, RenderError, RenderSettings, Renderer};
-use crate::scene::{scaled, Camera, Light, Scene};
+use crate::scene::{scaled, Camera, Light, Projection, Scene};
 use crate::vk::{
     surface_extensions, vk, Acquired, Buffer, BufferDesc, Context, ContextDesc, FrameLoop,
     MemoryLocation, Swapchain, VkError, MAX_FRAMES_IN_FLIGHT,
@@ -207,6 +208,9 @@ struct Viewer {
     egui_state: egui_winit::State,
     controls: Controls,
     stats: TimingStats,
+    /// The frame-time graph's frames (kept across graph rebuilds: a GI switch shows as the
+    /// old passes leaving and the new ones arriving).
+    history: frame_graph::FrameHistory,
     last_frame: Instant,
     frame_ms: f32,
     started: Instant,
@@ -235,6 +239,9 @@ enum MinimizeScript {
     Restoring(Instant),
     Done,
 }
+
+/// The status line's prefix for a refused projection switch.
+const PROJECTION_STATUS: &str = "projection not switched";
 
 /// Graph-shaping settings differ (per-frame values such as PCF radius do not count; the
 /// cascade count sets the shadow maps' layers).
@@ -372,6 +379,8 @@ impl Viewer {
             add_keyframe: false,
             budget_ms: opts.budget_ms,
             tune: false,
+            projection: scene.camera.projection,
+            ortho_height_m: scene.camera.ortho_height_m,
         };
         Self {
             opts: opts.clone(),
@@ -394,6 +403,7 @@ impl Viewer {
             egui_state,
             controls,
             stats: TimingStats::new(120),
+            history: frame_graph::FrameHistory::new(frame_graph::HISTORY_FRAMES),
             last_frame: Instant::now(),
             frame_ms: 0.0,
             started: Instant::now(),
@@ -506,6 +516,12 @@ impl Viewer {
             KeyCode::F12 if press => self.controls.screenshot = true,
             KeyCode::KeyG if press => {
                 self.controls.gi.method = panel::next_gi_method(self.controls.gi.method)
+            }
+            KeyCode::KeyO if press => {
+                self.controls.projection = match self.controls.projection {
+                    Projection::Perspective => Projection::Orthographic,
+                    Projection::Orthographic => Projection::Perspective,
+                }
             }
             KeyCode::Escape if press => elwt.exit(),
             _ => {}
@@ -637,6 +653,7 @@ impl Viewer {
             settings.post = self.controls.post;
             settings.debug = debug_settings(&self.controls, settings.debug);
         }
+        self.apply_projection(&settings);
         if needs_new_renderer(&current, &settings) {
             self.replace_renderer(ctx, &mut settings)?;
         }
@@ -662,6 +679,7 @@ impl Viewer {
         };
         let slot = frame_loop.current_slot();
         let (_, cmd, timestamps, finished) = frame_loop.begin(ctx)?;
+        self.history.push(&finished);
         self.stats.push(finished);
         let (index, ready) = match swapchain.acquire(slot)? {
             Acquired::Image { index, ready } => (index, ready),
@@ -766,6 +784,7 @@ impl Viewer {
                 .renderer
                 .as_ref()
                 .and_then(Renderer::gi_accumulated_frames),
+            history: &self.history,
         };
         let (controls, stats) = (&mut self.controls, &self.stats);
         let mut layout = panel::PanelLayout::default();
@@ -824,6 +843,35 @@ impl Viewer {
                     }
                     _ => Err(e.into()),
                 }
+            }
+        }
+    }
+
+    /// The panel's projection and orthographic height, onto the camera, unless the frame (its
+    /// GI method) cannot render them: then the panel switches back and the status says why.
+    fn apply_projection(&mut self, settings: &RenderSettings) {
+        let c = &self.controls;
+        if (c.projection, c.ortho_height_m) == (self.lens.projection, self.lens.ortho_height_m) {
+            return;
+        }
+        let lens = Camera {
+            projection: c.projection,
+            ortho_height_m: c.ortho_height_m,
+            ..self.lens
+        };
+        match crate::render::check_projection(&lens, settings, false) {
+            Ok(()) => {
+                self.lens = lens;
+                self.scene.camera = self.fly.apply(&self.lens);
+                if self.status.starts_with(PROJECTION_STATUS) {
+                    self.status.clear();
+                }
+            }
+            Err(e) => {
+                self.controls.projection = self.lens.projection;
+                self.controls.ortho_height_m = self.lens.ortho_height_m;
+                self.status = format!("{PROJECTION_STATUS}: {e}");
+                log::warn!("{}", self.status);
             }
         }
     }
@@ -999,6 +1047,8 @@ mod tests {
             add_keyframe: false,
             budget_ms: 100.0,
             tune: false,
+            projection: crate::scene::Projection::Perspective,
+            ortho_height_m: 1.0,
         };
         let d = debug_settings(&c, current.debug).expect("a debug view");
         assert_eq!((d.view, d.object, d.level), (DebugView::Atlas, 2, 3));

@@ -65,6 +65,10 @@ pub struct GpuFrame {
     pub shadow: [f32; 4],
     pub lights: [GpuLight; MAX_LIGHTS],
     pub shadow_views: [GpuShadowView; MAX_SHADOW_VIEWS],
+    /// xyz the camera's unit viewing direction, w the orthographic view's height in meters
+    /// (0: perspective). Under orthographic projection every view ray runs along xyz
+    /// (`toward_camera` etc. in frame.glsl).
+    pub camera_forward: [f32; 4],
 }
 
 crate::gpu_struct!(GpuFrame {
@@ -74,7 +78,8 @@ crate::gpu_struct!(GpuFrame {
     counts,
     shadow,
     lights,
-    shadow_views
+    shadow_views,
+    camera_forward
 });
 
 #[repr(C)]

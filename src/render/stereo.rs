@@ -181,6 +181,7 @@ pub fn render_stereo(
     stereo: StereoSettings,
 ) -> Result<StereoOutput, RenderError> {
     check_packed_width(stereo.mode, settings.width)?;
+    super::check_projection(&scene.camera, settings, true)?;
     let fallback = match stereo.path {
         StereoPath::TwoPass => None,
         path => multiview_blocker(ctx, path, scene, settings),

@@ -914,7 +914,8 @@ mod tests {
     /// (GLSL 4.50 §7.6.2.2) aligns vec4, mat4 and structs of them to 16 bytes and gives an
     /// array of structs the struct's size as stride: GpuLight is five vec4 (80 bytes),
     /// GpuShadowView a mat4 and two vec4 (96); GpuFrame two mat4 (0, 64), three vec4 (128,
-    /// 144, 160), 64 lights at 176 (5120 bytes) and 64 shadow views at 5296 (6144 bytes).
+    /// 144, 160), 64 lights at 176 (5120 bytes), 64 shadow views at 5296 (6144 bytes) and a
+    /// vec4 at 11440.
     #[test]
     fn buffer_structs_have_their_std430_layout() {
         let i = reflect("gi_filter.comp", &words("gi_filter.comp")).unwrap();
@@ -929,9 +930,10 @@ mod tests {
                 ("shadow", 160, 16),
                 ("lights", 176, 5120),
                 ("shadow_views", 5296, 6144),
+                ("camera_forward", 11440, 16),
             ]
         );
-        assert_eq!((frame.size_bytes, frame.array_stride), (11440, None));
+        assert_eq!((frame.size_bytes, frame.array_stride), (11456, None));
         let light = &i.structs["GpuLight"];
         assert_eq!(light.array_stride, Some(80));
         assert_eq!(
@@ -945,7 +947,7 @@ mod tests {
         assert_eq!(i.structs["GpuShadowView"].array_stride, Some(96));
         assert_eq!(members(&i.structs["GpuShadowView"])[2], ("axis", 80, 16));
         // The block itself, by its type name: one member, the struct.
-        assert_eq!(members(&i.structs["FrameBuf"]), [("frame", 0, 11440)]);
+        assert_eq!(members(&i.structs["FrameBuf"]), [("frame", 0, 11456)]);
         // A runtime array of structs: `Ray { vec4 origin_tmax; vec4 dir; }`, stride 32.
         let rays = reflect("voxel_rays.comp", &words("voxel_rays.comp")).unwrap();
         let ray = &rays.structs["Ray"];
