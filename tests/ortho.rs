@@ -258,7 +258,9 @@ fn screen_space_gi_and_stereo_are_refused_by_name() {
     let s = scene(PATCHES);
     let mut settings = settings();
     settings.gi.method = GiMethod::Ssgi;
-    let e = render_image(&ctx, &s, &settings).err().expect("refused");
+    let Err(e) = render_image(&ctx, &s, &settings) else {
+        panic!("--gi ssgi rendered orthographic");
+    };
     assert!(
         matches!(
             e,
@@ -279,9 +281,9 @@ fn screen_space_gi_and_stereo_are_refused_by_name() {
         rig: Default::default(),
         path: voxgi::render::StereoPath::TwoPass,
     };
-    let e = voxgi::render::render_stereo(&ctx, &s, &self::settings(), stereo)
-        .err()
-        .expect("refused");
+    let Err(e) = voxgi::render::render_stereo(&ctx, &s, &self::settings(), stereo) else {
+        panic!("stereo rendered orthographic");
+    };
     assert!(
         matches!(
             e,

@@ -218,7 +218,7 @@ pub struct CameraArgs {
     /// Height of the orthographic view in meters (its width follows the image's aspect);
     /// default: the scene's `[camera] ortho_height_m`, else the perspective view's height at
     /// the depth of the scene's centre.
-    #[arg(long, value_name = "M")]
+    #[arg(long, value_name = "M", allow_negative_numbers = true)]
     pub ortho_height: Option<f32>,
 }
 
@@ -510,13 +510,15 @@ mod tests {
         let s = load(&["--projection", "orthographic"]).expect("loads");
         assert_eq!(s.camera.ortho_height_m, default.camera.ortho_height_m);
         for bad in ["0", "-1", "NaN", "inf"] {
-            let e = load(&["--ortho-height", bad]).err().expect("refused");
+            let Err(e) = load(&["--ortho-height", bad]) else {
+                panic!("--ortho-height {bad} accepted");
+            };
             assert!(e.to_string().contains("--ortho-height"), "{bad}: {e}");
         }
         use clap::Parser as _;
-        let e = Frame::try_parse_from(["voxgi", "--projection", "isometric"])
-            .err()
-            .expect("refused");
+        let Err(e) = Frame::try_parse_from(["voxgi", "--projection", "isometric"]) else {
+            panic!("--projection isometric accepted");
+        };
         assert!(e.to_string().contains("orthographic"), "{e}");
     }
 
