@@ -633,6 +633,58 @@ fn viewer_flies_with_real_keyboard_and_mouse_events() {
     );
 }
 
+/// The `O` key switches the camera to orthographic projection (the camera printed at exit says
+/// so), and under `--gi ssgi`, which cannot render it, the switch is refused with the reason
+/// and the camera stays perspective. X events through xdotool, as above.
+#[test]
+fn viewer_switches_to_orthographic_with_o_unless_the_gi_cannot() {
+    require_display();
+    let _display = lock_display();
+    for gi in ["none", "ssgi"] {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_voxgi"))
+            .args([
+                "--validate",
+                "view",
+                "--gi",
+                gi,
+                "--width",
+                "480",
+                "--height",
+                "320",
+            ])
+            .env_remove("WAYLAND_DISPLAY")
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("run the voxgi binary");
+        let window = xdotool(&["search", "--sync", "--onlyvisible", "--name", "^voxgi$"]);
+        let window = window.lines().next().expect("a window id").to_string();
+        xdotool(&["windowfocus", "--sync", &window]);
+        xdotool(&["key", "o"]);
+        // A few frames for the switch (or its refusal) to be applied.
+        std::thread::sleep(Duration::from_millis(2000));
+        xdotool(&["key", "Escape"]);
+        wait_for_exit(&mut child, "the viewer after O");
+        let out = child
+            .wait_with_output()
+            .expect("collect the viewer's output");
+        assert_success(&out, "voxgi --validate view with O");
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        let ortho = stdout.contains("projection = \"orthographic\"");
+        match gi {
+            "none" => assert!(ortho, "O did not switch to orthographic:\n{stdout}"),
+            _ => {
+                assert!(!ortho, "--gi ssgi switched to orthographic:\n{stdout}");
+                assert!(
+                    stderr.contains("projection not switched: --gi ssgi cannot render"),
+                    "no reason for the refused switch:\n{stderr}"
+                );
+            }
+        }
+    }
+}
+
 /// Waits up to 60 s for `child` to exit after Escape, killing it past that.
 fn wait_for_exit(child: &mut Child, what: &str) {
     let started = Instant::now();

@@ -303,8 +303,8 @@ fn job(config: &Config, scene: &Scene, size: u32) -> Result<Job, CliError> {
 /// stderr, so that one such job does not end the whole sweep.
 fn renderable(scene_name: &str, camera: &crate::scene::Camera, jobs: Vec<Job>) -> Vec<Job> {
     jobs.into_iter()
-        .filter(
-            |j| match crate::render::check_setting_combination(&j.settings)
+        .filter(|j| {
+            match crate::render::check_setting_combination(&j.settings)
                 .and_then(|()| crate::render::check_projection(camera, &j.settings, false))
             {
                 Ok(()) => true,
@@ -312,8 +312,8 @@ fn renderable(scene_name: &str, camera: &crate::scene::Camera, jobs: Vec<Job>) -
                     eprintln!("skipping {scene_name} {}: {e}", j.config.label());
                     false
                 }
-            },
-        )
+            }
+        })
         .collect()
 }
 

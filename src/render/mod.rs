@@ -96,8 +96,9 @@ pub enum RenderError {
 }
 
 /// Refuses what an orthographic camera cannot render: screen-space GI, whose patch areas
-/// (Eq. 2.10's z²), reflection marching (linear in 1/w) and history (clip w as depth) assume
-/// a pinhole camera, and stereo pairs, whose off-axis frusta are a perspective concept.
+/// (Oetke 2017, Eq. 2.10: z² times a pinhole's texel solid angle), reflection march (linear in
+/// 1/w) and history (clip w as depth) assume a pinhole camera, and stereo pairs, whose
+/// off-axis frusta are a perspective concept.
 /// `Renderer::new` and every `prepare` run it (the viewer switches projection per frame).
 pub fn check_projection(
     camera: &crate::scene::Camera,
