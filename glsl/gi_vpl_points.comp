@@ -30,6 +30,8 @@ void main() {
     if (v.position.w == 0.0) return;
     vec4 c = frame.view_proj * vec4(v.position.xyz, 1.0);
     if (c.w <= 0.0) return;
+    // Orthographic: w is 1 everywhere; a VPL behind the camera's plane (clip z < 0) is unseen.
+    if (frame_orthographic(frame.camera_forward) && c.z < 0.0) return;
     vec2 size = vec2(frame.counts.zw);
     ivec2 center = ivec2(floor((c.xy / c.w * 0.5 + 0.5) * size));
     float d_vpl = camera_distance(frame.camera_position, frame.camera_forward, v.position.xyz);

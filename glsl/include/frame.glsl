@@ -86,8 +86,8 @@ float view_depth(mat4 view_proj, vec4 camera_position, vec4 camera_forward, vec3
 // distance to the camera under perspective projection (a pixel covers distance × 2 tan(fov/2)
 // / height meters); under orthographic projection, where every pixel covers the same
 // height / H meters, the view's height: the distance at which a perspective camera with
-// 2 tan(fov_y/2) = 1 (53°) has that footprint. It does not change with where the camera's
-// plane lies along the view, which changes nothing else in an orthographic image.
+// 2 tan(fov_y/2) = 1 (53°) has that footprint. It does not change when the camera's plane
+// moves along the view, which (near clipping aside) leaves an orthographic image unchanged.
 float footprint_distance(vec4 camera_position, vec4 camera_forward, vec3 p) {
     if (frame_orthographic(camera_forward)) return camera_forward.w;
     return distance(p, camera_position.xyz);
