@@ -35,7 +35,7 @@ void main() {
     vec3 albedo = texelFetch(gb_albedo, px, 0).rgb;
     vec4 ns = texelFetch(gb_normal, px, 0);
     vec3 n = normalize(ns.xyz);
-    vec3 wo = normalize(frame.camera_position.xyz - p);
+    vec3 wo = toward_camera(frame.camera_position, frame.camera_forward, p);
     vec4 lobe = HAS_PHONG || HAS_GGX ? texelFetch(gb_specular, px, 0) : vec4(0.0);
     vec3 lo = direct_radiance(shadow_maps, p, n, wo, albedo, lobe, ns.w);
     if (HAS_EMISSION) lo += texelFetch(gb_emission, px, 0).rgb;

@@ -47,7 +47,10 @@ void main() {
     } else {
         vec2 ndc = (vec2(px) + 0.5) / vec2(size) * 2.0 - 1.0;
         vec4 wp = frame.inv_view_proj * vec4(ndc, depth, 1.0);
-        float d = length(wp.xyz / wp.w);  // camera-relative (pixel_world_position)
+        // Camera-relative (pixel_world_position): the distance, or the view depth under
+        // orthographic projection.
+        vec3 rel = wp.xyz / wp.w;
+        float d = frame_orthographic(frame.camera_forward) ? dot(rel, frame.camera_forward.xyz) : length(rel);
         v = vec3(d);
         c = vec3(clamp(1.0 - d * pc.inv_distance_m, 0.0, 1.0));
     }

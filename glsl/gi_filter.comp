@@ -31,7 +31,7 @@ layout(set = 0, binding = 5) uniform sampler2D gb_specular;  // the normals when
 layout(push_constant) uniform Push {
     ivec2 direction;
     int radius;
-    float plane_tolerance;  // relative to the distance to the camera
+    float plane_tolerance;  // relative to the distance to the camera (footprint_distance)
     int tile_px;            // glossy pixels: taps with |k| < tile_px skip the mirror weight
 } pc;
 
@@ -67,14 +67,14 @@ void main() {
     }
     vec3 n0 = normalize(texelFetch(gb_normal, px, 0).xyz);
     vec3 p0 = world_at(px, vec2(size));
-    float scale = pc.plane_tolerance * max(distance(p0, frame.camera_position.xyz), 1e-6);
+    float scale = pc.plane_tolerance * max(footprint_distance(frame.camera_position, frame.camera_forward, p0), 1e-6);
     float sigma = max(float(pc.radius) * 0.5, 0.5);
     int kind0 = 0;
     vec3 mirror0 = vec3(0.0);
     float theta0 = 1.0;
     if (GLOSSY) {
         kind0 = lobe_kind(texelFetch(gb_specular, px, 0));
-        mirror0 = reflect(normalize(p0 - frame.camera_position.xyz), n0);
+        mirror0 = reflect(-toward_camera(frame.camera_position, frame.camera_forward, p0), n0);
         if (kind0 != 0) theta0 = lobe_half_angle(kind0, texelFetch(gb_normal, px, 0).w);
     }
     vec3 sum = vec3(0.0);
@@ -91,7 +91,7 @@ void main() {
         if (GLOSSY) {
             if (lobe_kind(texelFetch(gb_specular, q, 0)) != kind0) continue;
             if (kind0 != 0 && abs(k) >= pc.tile_px) {
-                vec3 mirror1 = reflect(normalize(p1 - frame.camera_position.xyz), n1);
+                vec3 mirror1 = reflect(-toward_camera(frame.camera_position, frame.camera_forward, p1), n1);
                 float delta = acos(clamp(dot(mirror0, mirror1), -1.0, 1.0)) / theta0;
                 w *= exp(-0.5 * delta * delta);
             }

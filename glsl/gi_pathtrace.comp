@@ -165,7 +165,7 @@ void main() {
     vec4 ns = texelFetch(gb_normal, px, 0);
     vec3 n = normalize(ns.xyz);
     Lobe pixel = pixel_lobe(px, ns.w);
-    vec3 wo = normalize(frame.camera_position.xyz - p);
+    vec3 wo = toward_camera(frame.camera_position, frame.camera_forward, p);
     // Phong and GGX pixels spend half their paths on the specular lobe (first bounce).
     uint lobe_rays = pixel.kind != LOBE_LAMBERT ? max(gi.rays, 1u) / 2u : 0u;
     float offset = gi.normal_offset_voxels * gi.voxel_diagonal_m;

@@ -30,16 +30,18 @@ void main() {
     if (v.position.w == 0.0) return;
     vec4 c = frame.view_proj * vec4(v.position.xyz, 1.0);
     if (c.w <= 0.0) return;
+    // Orthographic: w is 1 everywhere; a VPL behind the camera's plane (clip z < 0) is unseen.
+    if (frame_orthographic(frame.camera_forward) && c.z < 0.0) return;
     vec2 size = vec2(frame.counts.zw);
     ivec2 center = ivec2(floor((c.xy / c.w * 0.5 + 0.5) * size));
-    float d_vpl = distance(v.position.xyz, frame.camera_position.xyz);
+    float d_vpl = camera_distance(frame.camera_position, frame.camera_forward, v.position.xyz);
     vec3 color = (v.flux.w == 0.0 ? vec3(1.0, 1.0, 0.0) : vec3(0.0, 1.0, 1.0)) * pc.radiance_w;
     for (int y = -1; y <= 1; ++y) {
         for (int x = -1; x <= 1; ++x) {
             ivec2 px = center + ivec2(x, y);
             if (any(lessThan(px, ivec2(0))) || any(greaterThanEqual(px, ivec2(size)))) continue;
             bool sky = texelFetch(gb_depth, px, 0).r >= 1.0;
-            float d_surface = sky ? 1e30 : distance(world_at(px, size), frame.camera_position.xyz);
+            float d_surface = sky ? 1e30 : camera_distance(frame.camera_position, frame.camera_forward, world_at(px, size));
             if (d_vpl <= d_surface * 1.01) imageStore(radiance, px, vec4(color, 1.0));
         }
     }

@@ -60,7 +60,7 @@ void main() {
     GpuMaterialPbr mp = pbr[pc.material];
     vec3 n = normalize(in_normal);
     // Two-sided, as in gbuffer.frag: shade the side the camera sees.
-    bool front = dot(n, frame.camera_position.xyz - in_world) >= 0.0;
+    bool front = dot(n, toward_camera(frame.camera_position, frame.camera_forward, in_world)) >= 0.0;
     if (!front) n = -n;
     vec3 albedo = m.albedo.rgb;
     if (HAS_TEXTURES && m.flags.x != 0u) albedo = texture(albedo_texture, vec2(in_uv.x, 1.0 - in_uv.y)).rgb;
@@ -71,7 +71,7 @@ void main() {
         lobe_parameter = mp.ggx.x;
         albedo *= 1.0 - mp.ggx.y;
     }
-    vec3 wo = normalize(frame.camera_position.xyz - in_world);
+    vec3 wo = toward_camera(frame.camera_position, frame.camera_forward, in_world);
     vec3 lo = direct_radiance(shadow_maps, in_world, n, wo, albedo, lobe, lobe_parameter);
     // Emission leaves the front side only, as Mitsuba's area emitter.
     if (front) lo += mp.emission.rgb;

@@ -57,8 +57,13 @@ vec4 pyramid_texel(ivec2 q, int m) {
     }
 }
 
-// The point at view depth z on the camera ray through pixel px's centre.
+// The point at view depth z on the camera ray through pixel px's centre (under orthographic
+// projection the rays are parallel to `forward`, each through its own pixel).
 vec3 world_at(ivec2 px, vec2 size, float z, vec3 forward) {
+    if (frame_orthographic(frame.camera_forward)) {
+        vec3 q = pixel_world_position(frame.inv_view_proj, frame.camera_position.xyz, px, size, 0.5);
+        return q + forward * (z - dot(q - frame.camera_position.xyz, forward));
+    }
     vec3 d = pixel_world_position(frame.inv_view_proj, vec3(0.0), px, size, 0.5);
     return frame.camera_position.xyz + d * (z / dot(d, forward));
 }
@@ -102,8 +107,11 @@ void main() {
     int top = int(pc.depth_levels) - 1;
     float r = pc.radius_m;
     float r2 = r * r;
-    // r' = r·S'/z: the radius in pixels (Eq. 2.20).
-    float radius_px = r * pc.px_per_m_at_1m / z_m;
+    // r' = r·S'/z: the radius in pixels (Eq. 2.20); under orthographic projection a meter
+    // spans height / ortho height pixels at every depth.
+    float radius_px = frame_orthographic(frame.camera_forward)
+        ? r * float(size.y) / frame.camera_forward.w
+        : r * pc.px_per_m_at_1m / z_m;
     float phi = rotation(uvec2(c));
     float sum = 0.0;
     for (uint i = 0u; i < pc.taps; ++i) {

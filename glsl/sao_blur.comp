@@ -16,10 +16,15 @@ layout(push_constant) uniform Push {
     float depth_sigma_rel;
 } pc;
 
-// Linear view distance from the depth buffer (distance to the camera, meters).
-float distance_at(ivec2 px, vec2 size) {
+vec3 world_at(ivec2 px, vec2 size) {
     float depth = texelFetch(gb_depth, px, 0).r;
-    return distance(pixel_world_position(frame.inv_view_proj, frame.camera_position.xyz, px, size, depth), frame.camera_position.xyz);
+    return pixel_world_position(frame.inv_view_proj, frame.camera_position.xyz, px, size, depth);
+}
+
+// Linear view distance from the depth buffer (distance to the camera, meters; the view depth
+// under orthographic projection).
+float distance_at(ivec2 px, vec2 size) {
+    return camera_distance(frame.camera_position, frame.camera_forward, world_at(px, size));
 }
 
 // Gaussian weights exp(−k²/(2·1.5²)) of offsets 0..3, normalized over ±3 (the thesis's 7
@@ -37,8 +42,10 @@ void main() {
         imageStore(dst, hp, vec4(centre));
         return;
     }
-    float z0 = distance_at(c, vec2(size));
-    float sigma = max(pc.depth_sigma_rel * z0, 1e-6);
+    vec3 p0 = world_at(c, vec2(size));
+    float z0 = camera_distance(frame.camera_position, frame.camera_forward, p0);
+    // σ_z scales with the pixel's footprint (footprint_distance: z0 under perspective).
+    float sigma = max(pc.depth_sigma_rel * footprint_distance(frame.camera_position, frame.camera_forward, p0), 1e-6);
     float sum = 0.0;
     float wsum = 0.0;
     for (int k = -3; k <= 3; ++k) {

@@ -4,7 +4,8 @@
 //     d_i = d_s (r_s / r_i) (cos a_i / cos a_s),
 // with d_s r_s the texel's world size across the light's ray at p (meters: the orthographic
 // and cascade maps' texel, a perspective map's texel per meter times the distance, the
-// paraboloid's texel at p), r_i / pixel_scale the world size of a pixel at p's view depth r_i,
+// paraboloid's texel at p), r_i / pixel_scale the world size of a pixel at p's view depth r_i
+// (ortho height / height under orthographic projection),
 // a_s the angle between the normal and the light, a_i between the normal and the view ray
 // (a texel stretches by 1 / cos a_s over the surface and shrinks by cos a_i seen from the
 // camera). Above 1 pixel the map is too coarse there (blocky edges), far below it wastes
@@ -55,9 +56,11 @@ void main() {
     }
     vec3 p = pixel_world_position(frame.inv_view_proj, frame.camera_position.xyz, px, vec2(size), depth);
     vec3 n = normalize(texelFetch(gb_normal, px, 0).xyz);
-    vec3 to_eye = frame.camera_position.xyz - p;
-    float cos_i = abs(dot(n, normalize(to_eye)));
-    float view_depth = max((frame.view_proj * vec4(p, 1.0)).w, 1e-30);
+    float cos_i = abs(dot(n, toward_camera(frame.camera_position, frame.camera_forward, p)));
+    // Pixels per meter at p: pixel_scale / view depth, or height / ortho height at any depth.
+    bool ortho = frame_orthographic(frame.camera_forward);
+    float pixel_scale = ortho ? float(size.y) / frame.camera_forward.w : pc.pixel_scale;
+    float view_depth = ortho ? 1.0 : max((frame.view_proj * vec4(p, 1.0)).w, 1e-30);
     float worst = -1.0, worst_texel = 0.0, worst_view = 0.0;
     for (uint i = 0u; i < frame.counts.x; ++i) {
         GpuLight l = frame.lights[i];
@@ -68,7 +71,7 @@ void main() {
         uint v = direct_shadow_view(l, p);
         float texel_m = texel_size_m(v, p);
         float projective = pc.projective != 0u ? cos_i / max(cos_s, 1e-3) : 1.0;
-        float d_px = texel_m * pc.pixel_scale * projective / view_depth;
+        float d_px = texel_m * pixel_scale * projective / view_depth;
         if (d_px > worst) {
             worst = d_px;
             worst_texel = texel_m;

@@ -444,6 +444,18 @@ pub const STEREO_CONVERGENCE_M: Limit<f32> = Limit {
         1e9,
     )
 };
+/// The orthographic camera's view height: positive (it divides the projection), at most the
+/// size a scene's coordinates may have.
+pub const ORTHO_HEIGHT_M: Limit<f32> = Limit {
+    min_exclusive: true,
+    ..Limit::new(
+        "--ortho-height",
+        Some("camera.ortho_height_m"),
+        "a view height in meters",
+        0.0,
+        1e7,
+    )
+};
 
 #[cfg(test)]
 mod tests {

@@ -506,6 +506,31 @@ fn panel_table_faults(stderr: &str, window_width: f32) -> Vec<String> {
             }
         }
     }
+    // The frame-time graph below the table: in the panel and the window, below the table,
+    // over the frames whose timings came back, each series a family of the table's passes
+    // (the name before `[`) or "other".
+    let graph = &table["graph"];
+    let g = rect(&graph["rect"]);
+    if !inside(g) || g[1] < above {
+        faults.push(format!(
+            "{window_width} px: graph {g:?} outside the panel {panel:?} or over the table"
+        ));
+    }
+    let frames = graph["frames"].as_u64().expect("frames");
+    let series = graph["series"].as_array().expect("series");
+    if frames == 0 || series.is_empty() {
+        faults.push(format!("{window_width} px: empty graph {graph}"));
+    }
+    for s in series {
+        let name = s["name"].as_str().expect("a name");
+        let ms = s["mean_ms"].as_f64().expect("a mean");
+        let family = names.iter().any(|n| n.split('[').next() == Some(name));
+        if !(family || name == "other") || !(ms.is_finite() && ms >= 0.0) {
+            faults.push(format!(
+                "{window_width} px: series {name} ({ms} ms) of {names:?}"
+            ));
+        }
+    }
     faults
 }
 
@@ -705,6 +730,58 @@ fn viewer_flies_with_real_keyboard_and_mouse_events() {
         forward.x < -0.05 && forward.y.abs() < 1e-3,
         "dragging right should turn right; forward is {forward}"
     );
+}
+
+/// The `O` key switches the camera to orthographic projection (the camera printed at exit says
+/// so), and under `--gi ssgi`, which cannot render it, the switch is refused with the reason
+/// and the camera stays perspective. X events through xdotool, as above.
+#[test]
+fn viewer_switches_to_orthographic_with_o_unless_the_gi_cannot() {
+    require_display();
+    let _display = lock_display();
+    for gi in ["none", "ssgi"] {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_voxgi"))
+            .args([
+                "--validate",
+                "view",
+                "--gi",
+                gi,
+                "--width",
+                "480",
+                "--height",
+                "320",
+            ])
+            .env_remove("WAYLAND_DISPLAY")
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("run the voxgi binary");
+        let window = xdotool(&["search", "--sync", "--onlyvisible", "--name", "^voxgi$"]);
+        let window = window.lines().next().expect("a window id").to_string();
+        xdotool(&["windowfocus", "--sync", &window]);
+        xdotool(&["key", "o"]);
+        // A few frames for the switch (or its refusal) to be applied.
+        std::thread::sleep(Duration::from_millis(2000));
+        xdotool(&["key", "Escape"]);
+        wait_for_exit(&mut child, "the viewer after O");
+        let out = child
+            .wait_with_output()
+            .expect("collect the viewer's output");
+        assert_success(&out, "voxgi --validate view with O");
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        let ortho = stdout.contains("projection = \"orthographic\"");
+        match gi {
+            "none" => assert!(ortho, "O did not switch to orthographic:\n{stdout}"),
+            _ => {
+                assert!(!ortho, "--gi ssgi switched to orthographic:\n{stdout}");
+                assert!(
+                    stderr.contains("projection not switched: --gi ssgi cannot render"),
+                    "no reason for the refused switch:\n{stderr}"
+                );
+            }
+        }
+    }
 }
 
 /// Waits up to 60 s for `child` to exit after Escape, killing it past that.

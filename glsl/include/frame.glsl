@@ -38,6 +38,7 @@ struct GpuFrame {
     GpuShadowView shadow_views[MAX_SHADOW_VIEWS];
     mat4 prev_view_proj;  // the previous frame's un-jittered view_proj (motion vectors)
     vec4 jitter_ndc;      // xy: this frame's TAA jitter in NDC, included in view_proj
+    vec4 camera_forward;  // xyz unit viewing direction, w orthographic view height m (0: perspective)
 };
 
 // World position of pixel `px` of a `size` frame at depth-buffer value `depth`: the pixel's
@@ -50,6 +51,48 @@ vec3 pixel_world_position(mat4 inv_view_proj, vec3 camera_m, ivec2 px, vec2 size
     vec2 uv = (vec2(px) + 0.5) / size;
     vec4 wp = inv_view_proj * vec4(uv * 2.0 - 1.0, depth, 1.0);
     return camera_m + wp.xyz / wp.w;
+}
+
+// The camera's projection: `camera_forward` is GpuFrame's (xyz the unit viewing direction, w
+// the orthographic view's height in meters, 0 under perspective projection). Under
+// orthographic projection every view ray runs along the viewing direction, so the direction
+// toward the camera is the same for every point, and the depth along the view (not the
+// distance to the camera's position) orders points on one pixel's ray.
+bool frame_orthographic(vec4 camera_forward) {
+    return camera_forward.w > 0.0;
+}
+
+// Unit direction from `p` toward the camera (the view vector of shading): toward the camera's
+// position under perspective projection, −forward under orthographic projection.
+vec3 toward_camera(vec4 camera_position, vec4 camera_forward, vec3 p) {
+    if (frame_orthographic(camera_forward)) return -camera_forward.xyz;
+    return normalize(camera_position.xyz - p);
+}
+
+// How far `p` lies from the camera along its pixel's ray: the distance to the camera's
+// position under perspective projection, the view depth (from the camera's plane) under
+// orthographic projection.
+float camera_distance(vec4 camera_position, vec4 camera_forward, vec3 p) {
+    if (frame_orthographic(camera_forward)) return dot(p - camera_position.xyz, camera_forward.xyz);
+    return distance(p, camera_position.xyz);
+}
+
+// View depth of `p` (meters along the viewing direction from the camera): clip w under
+// perspective projection; under orthographic projection w is 1, so the depth is measured.
+float view_depth(mat4 view_proj, vec4 camera_position, vec4 camera_forward, vec3 p) {
+    if (frame_orthographic(camera_forward)) return dot(p - camera_position.xyz, camera_forward.xyz);
+    return (view_proj * vec4(p, 1.0)).w;
+}
+
+// The length that scales screen-space filters' tolerances with a pixel's footprint: the
+// distance to the camera under perspective projection (a pixel covers distance × 2 tan(fov/2)
+// / height meters); under orthographic projection, where every pixel covers the same
+// height / H meters, the view's height: the distance at which a perspective camera with
+// 2 tan(fov_y/2) = 1 (53°) has that footprint. It does not change when the camera's plane
+// moves along the view, which (near clipping aside) leaves an orthographic image unchanged.
+float footprint_distance(vec4 camera_position, vec4 camera_forward, vec3 p) {
+    if (frame_orthographic(camera_forward)) return camera_forward.w;
+    return distance(p, camera_position.xyz);
 }
 
 // Mitsuba 3 `spot` falloff: 1 inside the beam, linear in angle to 0 at the cutoff.

@@ -34,8 +34,10 @@ layout(set = 0, binding = 0, std430) readonly buffer FrameBuf { GpuFrame frame; 
 layout(set = 0, binding = 8, std430) readonly buffer FrameRightBuf { GpuFrame frame_right; };
 #define EYE_FRAME(member) (gl_ViewIndex == 0 ? frame.member : frame_right.member)
 #define EYE_CAMERA_POSITION EYE_FRAME(camera_position)
+#define EYE_CAMERA_FORWARD EYE_FRAME(camera_forward)
 #else
 #define EYE_CAMERA_POSITION frame.camera_position
+#define EYE_CAMERA_FORWARD frame.camera_forward
 #define EYE_FRAME(member) frame.member
 #endif
 layout(set = 0, binding = 1, std430) readonly buffer Materials { GpuMaterial materials[]; };
@@ -121,7 +123,7 @@ void main() {
     vec3 n = normalize(in_normal);
     // Two-sided surfaces: shade the side the camera sees. Decided geometrically, not by
     // gl_FrontFacing, because the y-flipped projection inverts the winding.
-    bool front = dot(n, EYE_CAMERA_POSITION.xyz - in_world) >= 0.0;
+    bool front = dot(n, toward_camera(EYE_CAMERA_POSITION, EYE_CAMERA_FORWARD, in_world)) >= 0.0;
     if (!front) n = -n;
     vec3 albedo = m.albedo.rgb;
     // OBJ texture coordinates have v up; image rows start at the top.

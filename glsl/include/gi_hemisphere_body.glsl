@@ -183,14 +183,14 @@ void main() {
     vec3 n = normalize(ns.xyz);
     vec3 specular = HAS_PHONG ? gbuffer_phong_specular(gb_specular, px) : vec3(0.0);
     bool phong = HAS_PHONG && is_phong_pixel(specular);
-    vec3 mirror = reflect(-normalize(frame.camera_position.xyz - p), n);
+    vec3 wo = toward_camera(frame.camera_position, frame.camera_forward, p);
+    vec3 mirror = reflect(-wo, n);
     // GGX receivers (HAS_GGX): F0 in the lobe target, the roughness in the normal's w, the
     // diffuse color (1 - m) b in the albedo (docs/ARCHITECTURE.md, "Materials").
     vec4 lobe_texel = HAS_GGX ? texelFetch(gb_specular, px, 0) : vec4(0.0);
     bool ggx = HAS_GGX && lobe_texel.a > 1.5;
     vec3 diffuse = ggx ? texelFetch(gb_albedo, px, 0).rgb : vec3(0.0);
     Lobe receiver = Lobe(LOBE_GGX, diffuse, lobe_texel.rgb, ns.w);
-    vec3 wo = normalize(frame.camera_position.xyz - p);
     // Self-intersection offset along the normal (Thiedemann 2010 §5.3.1).
     vec3 origin = p + n * (gi.normal_offset_voxels * gi.voxel_diagonal_m);
     vec3 ov = (gi.world_to_voxel * vec4(origin, 1.0)).xyz;

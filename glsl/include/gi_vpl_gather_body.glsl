@@ -120,7 +120,7 @@ void main() {
     vec3 n = normalize(ns.xyz);
     vec3 specular = HAS_PHONG ? gbuffer_phong_specular(gb_specular, px) : vec3(0.0);
     bool phong = HAS_PHONG && is_phong_pixel(specular);
-    vec3 to_eye = normalize(frame.camera_position.xyz - p);
+    vec3 to_eye = toward_camera(frame.camera_position, frame.camera_forward, p);
     // GGX receivers: F0 in the lobe target, the roughness in the normal's w, the diffuse
     // color (1 - m) b in the albedo; r >= 0.01 keeps D finite (as for senders, vpl.glsl).
     vec4 lobe_texel = HAS_GGX ? texelFetch(gb_specular, px, 0) : vec4(0.0);

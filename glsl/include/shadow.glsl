@@ -338,7 +338,7 @@ uint direct_shadow_view(GpuLight l, vec3 p) {
     uint count = l.info.w >> 16u;
     if (l.info.x == LIGHT_DIRECTIONAL && count > 0u) {
         uint first = l.info.w & 0xffffu;
-        float depth = (frame.view_proj * vec4(p, 1.0)).w;
+        float depth = view_depth(frame.view_proj, frame.camera_position, frame.camera_forward, p);
         for (uint i = 0u; i < count; ++i) {
             if (depth <= frame.shadow_views[first + i].axis.w) return first + i;
         }
@@ -350,7 +350,7 @@ float direct_shadow_visibility(sampler2DArray maps, GpuLight l, vec3 p, vec3 n, 
     uint count = l.info.w >> 16u;
     if (l.info.x != LIGHT_DIRECTIONAL || count == 0u) return shadow_visibility(maps, l, p, n, cos_theta);
     uint first = l.info.w & 0xffffu;
-    float depth = (frame.view_proj * vec4(p, 1.0)).w;
+    float depth = view_depth(frame.view_proj, frame.camera_position, frame.camera_forward, p);
     float prev = 0.0;
     for (uint i = 0u; i < count; ++i) {
         float split = frame.shadow_views[first + i].axis.w;

@@ -124,6 +124,8 @@ mod tests {
             near: 0.01,
             far: 100.0,
             shift_x_tan: 0.0,
+            projection: crate::scene::Projection::Perspective,
+            ortho_height_m: 1.0,
         }
     }
 

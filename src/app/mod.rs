@@ -14,6 +14,7 @@
 //! `egui`. The swapchain image is imported with [`Access::Present`] and rebound every frame.
 
 mod camera;
+mod frame_graph;
 mod overlay;
 mod panel;
 mod stereo;
@@ -25,7 +26,7 @@ pub use stereo::StereoControls;
 use crate::gi::{GiMethod, GiSettings};
 use crate::graph::{Access, GraphError, GraphExecutor, ImageHandle, RenderGraph};
 use crate::render::{FrameImages, RenderError, RenderSettings, Renderer};
-use crate::scene::{scaled, Camera, Light, Scene};
+use crate::scene::{scaled, Camera, Light, Projection, Scene};
 use crate::vk::{
     surface_extensions, vk, Acquired, Buffer, BufferDesc, Context, ContextDesc, FrameLoop,
     MemoryLocation, Swapchain, VkError, MAX_FRAMES_IN_FLIGHT,
@@ -221,6 +222,9 @@ struct Viewer {
     egui_state: egui_winit::State,
     controls: Controls,
     stats: TimingStats,
+    /// The frame-time graph's frames (kept across graph rebuilds: a GI switch shows as the
+    /// old passes leaving and the new ones arriving).
+    history: frame_graph::FrameHistory,
     last_frame: Instant,
     frame_ms: f32,
     started: Instant,
@@ -249,6 +253,9 @@ enum MinimizeScript {
     Restoring(Instant),
     Done,
 }
+
+/// The status line's prefix for a refused projection switch.
+const PROJECTION_STATUS: &str = "projection not switched";
 
 /// Graph-shaping settings differ (per-frame values such as PCF radius do not count; the
 /// cascade count sets the shadow maps' layers).
@@ -419,6 +426,8 @@ impl Viewer {
             stereo: opts
                 .stereo
                 .unwrap_or_else(|| StereoControls::off(&scene, opts.settings.time_s)),
+            projection: scene.camera.projection,
+            ortho_height_m: scene.camera.ortho_height_m,
         };
         Self {
             opts: opts.clone(),
@@ -442,6 +451,7 @@ impl Viewer {
             egui_state,
             controls,
             stats: TimingStats::new(120),
+            history: frame_graph::FrameHistory::new(frame_graph::HISTORY_FRAMES),
             last_frame: Instant::now(),
             frame_ms: 0.0,
             started: Instant::now(),
@@ -560,6 +570,12 @@ impl Viewer {
             KeyCode::F12 if press => self.controls.screenshot = true,
             KeyCode::KeyG if press => {
                 self.controls.gi.method = panel::next_gi_method(self.controls.gi.method)
+            }
+            KeyCode::KeyO if press => {
+                self.controls.projection = match self.controls.projection {
+                    Projection::Perspective => Projection::Orthographic,
+                    Projection::Orthographic => Projection::Perspective,
+                }
             }
             KeyCode::Escape if press => elwt.exit(),
             _ => {}
@@ -692,6 +708,7 @@ impl Viewer {
             settings.post = self.controls.post;
             settings.debug = debug_settings(&self.controls, settings.debug);
         }
+        self.apply_projection(&settings);
         let stereo_changed = match (&self.stereo, self.controls.stereo.mode) {
             (Some(st), _) => st.outdated(&self.controls.stereo),
             (None, mode) => mode.is_some(),
@@ -727,6 +744,7 @@ impl Viewer {
         };
         let slot = frame_loop.current_slot();
         let (_, cmd, timestamps, finished) = frame_loop.begin(ctx)?;
+        self.history.push(&finished);
         self.stats.push(finished);
         let (index, ready) = match swapchain.acquire(slot)? {
             Acquired::Image { index, ready } => (index, ready),
@@ -836,6 +854,7 @@ impl Viewer {
                 .as_ref()
                 .and_then(Renderer::gi_accumulated_frames),
             stereo: stereo_status.as_deref(),
+            history: &self.history,
         };
         let (controls, stats) = (&mut self.controls, &self.stats);
         let mut layout = panel::PanelLayout::default();
@@ -930,6 +949,35 @@ impl Viewer {
         self.status = st.describe();
         log::info!("{}", self.status);
         Ok((r, Some(st)))
+    }
+
+    /// The panel's projection and orthographic height, onto the camera, unless the frame (its
+    /// GI method) cannot render them: then the panel switches back and the status says why.
+    fn apply_projection(&mut self, settings: &RenderSettings) {
+        let c = &self.controls;
+        if (c.projection, c.ortho_height_m) == (self.lens.projection, self.lens.ortho_height_m) {
+            return;
+        }
+        let lens = Camera {
+            projection: c.projection,
+            ortho_height_m: c.ortho_height_m,
+            ..self.lens
+        };
+        match crate::render::check_projection(&lens, settings, c.stereo.mode.is_some()) {
+            Ok(()) => {
+                self.lens = lens;
+                self.scene.camera = self.fly.apply(&self.lens);
+                if self.status.starts_with(PROJECTION_STATUS) {
+                    self.status.clear();
+                }
+            }
+            Err(e) => {
+                self.controls.projection = self.lens.projection;
+                self.controls.ortho_height_m = self.lens.ortho_height_m;
+                self.status = format!("{PROJECTION_STATUS}: {e}");
+                log::warn!("{}", self.status);
+            }
+        }
     }
 
     /// The panel's "best within budget": the most accurate configuration of this scene in
@@ -1115,6 +1163,8 @@ mod tests {
             budget_ms: 100.0,
             tune: false,
             stereo: StereoControls::off(&crate::scene::builtin("cornell").expect("cornell"), 0.0),
+            projection: crate::scene::Projection::Perspective,
+            ortho_height_m: 1.0,
         };
         let d = debug_settings(&c, current.debug).expect("a debug view");
         assert_eq!((d.view, d.object, d.level), (DebugView::Atlas, 2, 3));

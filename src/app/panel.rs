@@ -91,6 +91,10 @@ pub struct Controls {
     /// Stereo packing and parallax (`app/stereo.rs`); turning it on or off, or another
     /// path, needs a new renderer (applied like `gi`).
     pub stereo: super::stereo::StereoControls,
+    /// The camera's projection (checkbox, `O` key) and orthographic view height; the viewer
+    /// refuses a switch the frame cannot render and says why.
+    pub projection: crate::scene::Projection,
+    pub ortho_height_m: f32,
 }
 
 /// Read-only facts the panel shows.
@@ -106,6 +110,8 @@ pub struct PanelInfo<'a> {
     pub gi_frames: Option<u32>,
     /// The stereo path that runs, or why it fell back (`None`: mono).
     pub stereo: Option<&'a str>,
+    /// Per-pass GPU times of the last frames, for the frame-time graph.
+    pub history: &'a super::frame_graph::FrameHistory,
 }
 
 const GI_METHODS: [(GiMethod, &str); 5] = [
@@ -145,6 +151,8 @@ pub struct PanelLayout {
     pub panel: egui::Rect,
     /// Per pass, then the total.
     pub rows: Vec<TableRow>,
+    /// The frame-time graph.
+    pub graph: super::frame_graph::GraphLayout,
 }
 
 /// A row of the GPU-time table: the pass name, where its name and its time were drawn.
@@ -155,6 +163,7 @@ impl Default for PanelLayout {
         Self {
             panel: egui::Rect::NOTHING,
             rows: Vec::new(),
+            graph: Default::default(),
         }
     }
 }
@@ -168,7 +177,14 @@ impl PanelLayout {
             .iter()
             .map(|(name, n, t)| serde_json::json!({ "name": name, "name_rect": r(n), "time_rect": r(t) }))
             .collect();
-        serde_json::json!({ "panel": r(&self.panel), "rows": rows }).to_string()
+        let g = &self.graph;
+        let graph = serde_json::json!({
+            "rect": g.rect.as_ref().map(r),
+            "series": g.series.iter().map(|(name, ms)| serde_json::json!({ "name": name, "mean_ms": ms })).collect::<Vec<_>>(),
+            "frames": g.frames,
+            "scale_ms": g.scale_ms,
+        });
+        serde_json::json!({ "panel": r(&self.panel), "rows": rows, "graph": graph }).to_string()
     }
 }
 
@@ -245,6 +261,7 @@ pub fn draw(
     info: &PanelInfo,
 ) -> PanelLayout {
     let mut rows = Vec::new();
+    let mut graph = Default::default();
     let panel = egui::SidePanel::left("voxgi panel")
         .resizable(false)
         .default_width(240.0)
@@ -260,7 +277,7 @@ pub fn draw(
             ));
             ui.label(
                 "WASD move · Q/E down/up · right mouse look · wheel speed · G next GI method · \
-                 F12 screenshot",
+                 O orthographic · F12 screenshot",
             );
             ui.separator();
 
@@ -268,6 +285,13 @@ pub fn draw(
                 .default_open(true)
                 .show(ui, |ui| {
                     rows = timing_table(ui, &stats.medians(), right_x);
+                });
+
+            egui::CollapsingHeader::new("GPU time per frame (stacked by pass)")
+                .default_open(true)
+                .show(ui, |ui| {
+                    let width = ui.available_width().min(right_x - ui.cursor().min.x);
+                    graph = super::frame_graph::draw(ui, info.history, width);
                 });
 
             egui::CollapsingHeader::new("Camera")
@@ -282,6 +306,7 @@ pub fn draw(
                         ui.checkbox(&mut c.animate, "animate");
                         ui.label(format!("t = {:.2} s", c.time_s));
                     });
+                    projection_controls(ui, c);
                 });
 
             egui::CollapsingHeader::new("Lights")
@@ -421,6 +446,29 @@ pub fn draw(
     PanelLayout {
         panel: panel.response.rect,
         rows,
+        graph,
+    }
+}
+
+/// The projection switch (O) and the orthographic view's height (range from [`limits`]).
+fn projection_controls(ui: &mut egui::Ui, c: &mut Controls) {
+    use crate::scene::Projection;
+    let mut ortho = c.projection == Projection::Orthographic;
+    ui.checkbox(&mut ortho, "orthographic (O)")
+        .on_hover_text("parallel projection: sizes do not shrink with distance");
+    c.projection = match ortho {
+        true => Projection::Orthographic,
+        false => Projection::Perspective,
+    };
+    if ortho {
+        ui.add(
+            egui::Slider::new(
+                &mut c.ortho_height_m,
+                limits::ORTHO_HEIGHT_M.slider(0.01, 1000.0),
+            )
+            .logarithmic(true)
+            .text("view height m"),
+        );
     }
 }
 
@@ -488,15 +536,18 @@ mod table_tests {
         let ctx = egui::Context::default();
         ctx.set_visuals(egui::Visuals::dark());
         let mut stats = TimingStats::new(2);
-        stats.push(
-            PASSES
-                .iter()
-                .map(|&(n, ms)| PassTiming {
-                    name: n.into(),
-                    gpu_ms: ms,
-                })
-                .collect(),
-        );
+        let timings: Vec<PassTiming> = PASSES
+            .iter()
+            .map(|&(n, ms)| PassTiming {
+                name: n.into(),
+                gpu_ms: ms,
+            })
+            .collect();
+        let mut history = super::super::frame_graph::FrameHistory::new(8);
+        for _ in 0..5 {
+            history.push(&timings);
+        }
+        stats.push(timings);
         let mut c = Controls {
             tonemap: ToneMap::default(),
             post: Default::default(),
@@ -517,6 +568,8 @@ mod table_tests {
                 rig: Default::default(),
                 path: Default::default(),
             },
+            projection: crate::scene::Projection::Perspective,
+            ortho_height_m: 1.0,
         };
         let lights = ["point 0".to_string()];
         let info = PanelInfo {
@@ -528,6 +581,7 @@ mod table_tests {
             status: "",
             gi_frames: None,
             stereo: None,
+            history: &history,
         };
         let mut layout = PanelLayout::default();
         let mut texts = Vec::new();
@@ -585,6 +639,10 @@ mod table_tests {
         faults
     }
 
+    fn l_contains(panel: &egui::Rect, r: &egui::Rect) -> bool {
+        panel.expand(0.01).contains_rect(*r)
+    }
+
     #[test]
     fn timing_table_keeps_names_and_times_apart_at_any_window_size() {
         let mut faults = Vec::new();
@@ -604,6 +662,24 @@ mod table_tests {
                     .iter()
                     .map(|f| format!("{w}x{h}: {f}")),
             );
+            // The frame-time graph: inside the panel, all five frames, the heaviest family
+            // first and the two gi_filter passes as one.
+            let g = &layout.graph;
+            match g.rect {
+                Some(r) if l_contains(&layout.panel, &r) => {}
+                r => faults.push(format!("{w}x{h}: graph {r:?} outside {:?}", layout.panel)),
+            }
+            assert_eq!(g.frames, 5);
+            assert_eq!(
+                g.series.first().map(|(n, _)| n.as_str()),
+                Some("gi_radiance_volume")
+            );
+            assert!(g
+                .series
+                .iter()
+                .any(|(n, ms)| n == "gi_filter" && (ms - 4.625).abs() < 1e-4));
+            // The tallest frame is the sum of PASSES, 1525.046 ms: the scale's next 1-2-5 step.
+            assert_eq!(g.scale_ms, 2000.0);
             // A window narrower than the panel's widgets cuts the panel off: the table must
             // still be in view.
             for (name, n, t) in &layout.rows {

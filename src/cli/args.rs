@@ -238,6 +238,41 @@ impl GiArgs {
     }
 }
 
+/// The camera's projection, over the scene's `[camera]` table (`render`, `profile`, `graph`,
+/// `view`).
+#[derive(clap::Args, Clone, Default)]
+pub struct CameraArgs {
+    /// The camera's projection; default: the scene's `[camera] projection`, else perspective.
+    #[arg(long, value_enum)]
+    pub projection: Option<crate::scene::Projection>,
+    /// Height of the orthographic view in meters (its width follows the image's aspect);
+    /// default: the scene's `[camera] ortho_height_m`, else the perspective view's height at
+    /// the depth of the scene's centre.
+    #[arg(long, value_name = "M", allow_negative_numbers = true)]
+    pub ortho_height: Option<f32>,
+}
+
+impl CameraArgs {
+    /// Sets `scene`'s camera from the flags; a height out of range is an error naming
+    /// `--ortho-height`.
+    pub fn apply(&self, scene: &mut Scene) -> Result<(), super::CliError> {
+        if let Some(h) = self.ortho_height {
+            scene.camera.ortho_height_m = crate::limits::ORTHO_HEIGHT_M.check_flag(h)?;
+        }
+        if let Some(p) = self.projection {
+            scene.camera.projection = p;
+        }
+        Ok(())
+    }
+
+    /// The scene `arg` names (see [`crate::scene::load_scene_arg`]) with the flags applied.
+    pub fn load_scene(&self, arg: Option<&str>) -> Result<Scene, super::CliError> {
+        let mut scene = crate::scene::load_scene_arg(arg)?;
+        self.apply(&mut scene)?;
+        Ok(scene)
+    }
+}
+
 /// Frame settings shared by `render` and `profile`.
 #[derive(clap::Args, Clone)]
 pub struct FrameArgs {
@@ -304,6 +339,8 @@ pub struct FrameArgs {
     /// automatic atlases (applies to --voxels, GI and --debug voxel grids).
     #[arg(long, value_enum, default_value_t = crate::voxel::gpu::Voxelizer::Triangle)]
     pub voxelizer: crate::voxel::gpu::Voxelizer,
+    #[command(flatten)]
+    pub camera: CameraArgs,
     #[command(flatten)]
     pub gi: GiArgs,
     #[command(flatten)]
@@ -540,6 +577,33 @@ mod tests {
             .voxels
             .is_none());
         assert!(render_settings(&["--gi", "none"]).voxels.is_none());
+    }
+
+    #[test]
+    fn projection_flags_override_the_scene_camera_and_bad_values_name_the_flag() {
+        use crate::scene::Projection;
+        let load = |args: &[&str]| parse(args).camera.load_scene(None);
+        let default = load(&[]).expect("loads");
+        assert_eq!(default.camera.projection, Projection::Perspective);
+        let s = load(&["--projection", "orthographic", "--ortho-height", "0.75"]).expect("loads");
+        assert_eq!(
+            (s.camera.projection, s.camera.ortho_height_m),
+            (Projection::Orthographic, 0.75)
+        );
+        // Without --ortho-height the scene's (here its default) height stays.
+        let s = load(&["--projection", "orthographic"]).expect("loads");
+        assert_eq!(s.camera.ortho_height_m, default.camera.ortho_height_m);
+        for bad in ["0", "-1", "NaN", "inf"] {
+            let Err(e) = load(&["--ortho-height", bad]) else {
+                panic!("--ortho-height {bad} accepted");
+            };
+            assert!(e.to_string().contains("--ortho-height"), "{bad}: {e}");
+        }
+        use clap::Parser as _;
+        let Err(e) = Frame::try_parse_from(["voxgi", "--projection", "isometric"]) else {
+            panic!("--projection isometric accepted");
+        };
+        assert!(e.to_string().contains("orthographic"), "{e}");
     }
 
     #[test]

@@ -1,7 +1,6 @@
 //! `voxgi export-mitsuba`: the same scene for Mitsuba 3, for reference renders.
 
 use super::{outln, CliError};
-use crate::scene::load_scene_arg;
 use std::io::Write;
 use std::path::PathBuf;
 
@@ -20,11 +19,14 @@ pub struct ExportArgs {
     /// Scene time in seconds (animations).
     #[arg(long, default_value_t = 0.0)]
     pub time: f32,
+    /// The camera's projection (`--projection`, `--ortho-height`), as for `render`.
+    #[command(flatten)]
+    pub camera: super::args::CameraArgs,
 }
 
 /// Writes the XML and PLY files; warnings (what Mitsuba cannot show) go to stderr.
 pub fn export_mitsuba(args: &ExportArgs, out: &mut dyn Write) -> Result<(), CliError> {
-    let scene = load_scene_arg(args.scene.as_deref())?;
+    let scene = args.camera.load_scene(args.scene.as_deref())?;
     let report = crate::eval::mitsuba::export_mitsuba(
         &scene,
         args.time,

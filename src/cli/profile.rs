@@ -7,7 +7,6 @@ use crate::demo::Demo;
 use crate::graph::GraphExecutor;
 use crate::profile::ProfileReport;
 use crate::render::{profile_camera_path, profile_scene};
-use crate::scene::load_scene_arg;
 use crate::vk::{Context, MAX_FRAMES_IN_FLIGHT};
 use std::io::Write;
 
@@ -65,7 +64,7 @@ pub fn profile(global: &Global, args: &ProfileArgs, out: &mut dyn Write) -> Resu
     let scene = match args.demo {
         true => None,
         false => {
-            let scene = load_scene_arg(args.scene.as_deref())?;
+            let scene = frame.camera.load_scene(args.scene.as_deref())?;
             let settings = frame.settings(&scene)?;
             Some((scene, settings))
         }
@@ -262,7 +261,7 @@ pub fn graph(global: &Global, args: &GraphArgs, out: &mut dyn Write) -> Result<(
     let scene = match args.demo {
         true => None,
         false => {
-            let scene = load_scene_arg(args.scene.as_deref())?;
+            let scene = args.frame.camera.load_scene(args.scene.as_deref())?;
             let settings = args.frame.settings(&scene)?;
             Some((scene, settings))
         }

@@ -3,7 +3,6 @@
 use super::args::FrameArgs;
 use super::{check_validation, context, outln, CliError, Global};
 use crate::render::{render_image, render_stereo, StereoSettings};
-use crate::scene::load_scene_arg;
 use std::io::Write;
 use std::path::PathBuf;
 
@@ -131,7 +130,7 @@ pub fn render(global: &Global, args: &RenderArgs, out: &mut dyn Write) -> Result
         });
     }
     let frame = &args.frame;
-    let scene = load_scene_arg(args.scene.as_deref())?;
+    let scene = frame.camera.load_scene(args.scene.as_deref())?;
     let settings = frame.settings(&scene)?;
     let stereo = args.stereo.settings(&scene, settings.time_s)?;
     let ctx = context(global)?;

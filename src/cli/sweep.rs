@@ -299,19 +299,21 @@ fn job(config: &Config, scene: &Scene, size: u32) -> Result<Job, CliError> {
 }
 
 /// The jobs a scene is rendered with: a configuration the renderer refuses (e.g. SAO
-/// without GI) is left out with a note on stderr, so that one such job does not end the whole
-/// sweep.
-fn renderable(scene_name: &str, jobs: Vec<Job>) -> Vec<Job> {
+/// without GI, screen-space GI through an orthographic camera) is left out with a note on
+/// stderr, so that one such job does not end the whole sweep.
+fn renderable(scene_name: &str, camera: &crate::scene::Camera, jobs: Vec<Job>) -> Vec<Job> {
     jobs.into_iter()
-        .filter(
-            |j| match crate::render::check_setting_combination(&j.settings) {
+        .filter(|j| {
+            match crate::render::check_setting_combination(&j.settings)
+                .and_then(|()| crate::render::check_projection(camera, &j.settings, false))
+            {
                 Ok(()) => true,
                 Err(e) => {
                     eprintln!("skipping {scene_name} {}: {e}", j.config.label());
                     false
                 }
-            },
-        )
+            }
+        })
         .collect()
 }
 
@@ -458,7 +460,7 @@ pub fn sweep(global: &Global, args: &SweepArgs, out: &mut dyn Write) -> Result<(
                 .iter()
                 .map(|c| job(c, &s.scene, args.size))
                 .collect::<Result<Vec<_>, _>>()?;
-            Ok(renderable(&s.name, jobs))
+            Ok(renderable(&s.name, &s.scene.camera, jobs))
         })
         .collect::<Result<Vec<_>, CliError>>()?;
     std::fs::create_dir_all(&args.out).map_err(|source| SweepError::Io {

@@ -4,7 +4,6 @@ use super::args::GiArgs;
 use super::{out, outln, CliError, Global};
 use crate::post::ToneOperator;
 use crate::render::RenderSettings;
-use crate::scene::load_scene_arg;
 use crate::voxel::debug_view::{DebugSettings, DebugView};
 use std::io::Write;
 use std::path::PathBuf;
@@ -64,6 +63,9 @@ pub struct ViewArgs {
     // The initial stereo packing and parallax; the panel's "Stereo" section changes them.
     #[command(flatten)]
     pub stereo: super::render::StereoArgs,
+    // The initial projection; the panel switches it.
+    #[command(flatten)]
+    pub camera: super::args::CameraArgs,
 }
 
 /// `WxH` → (W, H), both positive.
@@ -84,7 +86,7 @@ fn parse_size(s: &str) -> Result<(u32, u32), String> {
 /// Runs the viewer until its window closes (or a scripted run ends), then prints the camera
 /// as a pasteable `[camera]` table and the screenshots written.
 pub fn view(global: &Global, args: ViewArgs, out: &mut dyn Write) -> Result<(), CliError> {
-    let scene = load_scene_arg(args.scene.as_deref())?;
+    let scene = args.camera.load_scene(args.scene.as_deref())?;
     // Checked when the viewer starts in the atlas view; the panel may switch to it
     // later, then showing this object if it exists, else the first.
     let object = match scene.find_object(&args.object) {

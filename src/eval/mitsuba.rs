@@ -18,6 +18,12 @@
 //!   `cross(up, forward)`, which its sensor maps to the image's *left*; voxgi's right-handed
 //!   view does the same, so images are not mirrored (the Cornell box's red wall at x = 0.55 m
 //!   is on the left in both).
+//! - Orthographic camera: `orthographic` (`src/sensors/orthographic.cpp`, its
+//!   `orthographic_projection` in `include/mitsuba/render/sensor.h`), whose local window is
+//!   x ∈ [−1, 1], y ∈ [−1/aspect, 1/aspect] (aspect = width / height) on the near plane, so
+//!   `to_world` scales x and y by s = ortho height × aspect / 2 (width 2s = height × aspect,
+//!   height 2s / aspect = ortho height) before the same look-at; z stays 1 so that the clip
+//!   distances stay meters.
 //! - Film: `hdrfilm` with a `box` reconstruction filter, so a pixel is the average radiance
 //!   over its area, like a supersampled rasterizer.
 //! - Lights: `point` `intensity` (W/sr), `spot` `intensity` (on-axis W/sr) with
@@ -155,13 +161,27 @@ pub fn export_mitsuba(
 fn write_sensor(xml: &mut String, scene: &Scene, width: u32, height: u32) {
     let cam = &scene.camera;
     let target = cam.position + cam.forward;
-    xml.push_str("    <sensor type=\"perspective\">\n");
-    xml.push_str("        <string name=\"fov_axis\" value=\"y\"/>\n");
-    let _ = writeln!(
-        xml,
-        "        <float name=\"fov\" value=\"{}\"/>",
-        cam.fov_y_deg
-    );
+    let scale = if cam.is_orthographic() {
+        // The window's half width (see the module's conventions).
+        let s = cam.ortho_height_m * width as f32 / height.max(1) as f32 * 0.5;
+        xml.push_str("    <sensor type=\"orthographic\">\n");
+        let _ = writeln!(
+            xml,
+            "        <!-- a view {} m high and {} m wide: Mitsuba's 2 × 2/aspect window scaled by {s} -->",
+            cam.ortho_height_m,
+            2.0 * s
+        );
+        format!("<scale x=\"{s}\" y=\"{s}\" z=\"1\"/>\n            ")
+    } else {
+        xml.push_str("    <sensor type=\"perspective\">\n");
+        xml.push_str("        <string name=\"fov_axis\" value=\"y\"/>\n");
+        let _ = writeln!(
+            xml,
+            "        <float name=\"fov\" value=\"{}\"/>",
+            cam.fov_y_deg
+        );
+        String::new()
+    };
     let _ = writeln!(
         xml,
         "        <float name=\"near_clip\" value=\"{}\"/>",
@@ -174,7 +194,7 @@ fn write_sensor(xml: &mut String, scene: &Scene, width: u32, height: u32) {
     );
     let _ = writeln!(
         xml,
-        "        <transform name=\"to_world\">\n            <lookat origin=\"{}\" \
+        "        <transform name=\"to_world\">\n            {scale}<lookat origin=\"{}\" \
          target=\"{}\" up=\"{}\"/>\n        </transform>",
         vec3(cam.position),
         vec3(target),
@@ -1035,6 +1055,56 @@ mod tests {
         assert!(xml.contains("value=\"0.63, 0.065, 0.05\""));
         assert!(xml.contains("value=\"0.14, 0.45, 0.091\""));
         assert_eq!(xml.matches("<bsdf type=\"diffuse\">").count(), 3);
+    }
+
+    /// The orthographic sensor: Mitsuba's mapping of a world point to the film, written out
+    /// from its sources (`lookat`: columns left = cross(up, d), up' = cross(d, left), d,
+    /// origin; `orthographic_projection`: sample = (0.5 − x/2, 0.5 − aspect·y/2) of the local
+    /// point after `to_world`'s scale), lands every point on the pixel voxgi's projection
+    /// puts it on, at any depth.
+    #[test]
+    fn orthographic_sensor_matches_voxgis_projection() {
+        let mut scene = builtin("cornell").unwrap();
+        scene.camera.projection = crate::scene::Projection::Orthographic;
+        scene.camera.ortho_height_m = 0.6;
+        let (w, h) = (256u32, 192u32);
+        let dir = TempDir::new("ortho");
+        let report = export_mitsuba(&scene, 0.0, w, h, &dir.0).unwrap();
+        let xml = std::fs::read_to_string(&report.xml_path).unwrap();
+        let cam = &xml[xml.find("<sensor").unwrap()..];
+        assert!(cam.starts_with("<sensor type=\"orthographic\">"), "{cam}");
+        assert!(!cam[..cam.find("</sensor>").unwrap()].contains("fov"));
+        let scale = numbers(cam, "<scale", "x");
+        assert_eq!(scale, numbers(cam, "<scale", "y"));
+        assert_eq!(numbers(cam, "<scale", "z"), [1.0]);
+        let s = scale[0];
+        let v = |a: &str| Vec3::from_slice(&numbers(cam, "<lookat", a));
+        let (origin, target, up) = (v("origin"), v("target"), v("up"));
+        let d = (target - origin).normalize();
+        let left = up.cross(d).normalize();
+        let up2 = d.cross(left);
+        let aspect = w as f32 / h as f32;
+        let vp = scene.camera.view_proj(aspect);
+        for p in [
+            Vec3::new(0.278, 0.273, 0.0),
+            Vec3::new(0.1, 0.5, 0.4),
+            Vec3::new(0.5, 0.05, 2.0),
+        ] {
+            let (xc, yc) = ((p - origin).dot(left) / s, (p - origin).dot(up2) / s);
+            let mitsuba = Vec2::new(
+                (0.5 - 0.5 * xc) * w as f32,
+                (0.5 - 0.5 * aspect * yc) * h as f32,
+            );
+            let ndc = vp.project_point3(p);
+            let voxgi = Vec2::new(
+                (ndc.x + 1.0) * 0.5 * w as f32,
+                (ndc.y + 1.0) * 0.5 * h as f32,
+            );
+            assert!(
+                (mitsuba - voxgi).length() < 1e-3,
+                "{p}: {mitsuba} vs {voxgi}"
+            );
+        }
     }
 
     #[test]

@@ -18,7 +18,7 @@
 //! maps, the VPLs and the path tracer keep the light's single whole-scene map.
 
 use super::shadow::{ShadowProjection, ShadowSettings, ShadowView};
-use crate::scene::{Aabb, Camera, Light};
+use crate::scene::{Aabb, Camera, Light, Projection};
 use glam::{Mat4, Vec3};
 
 /// Share of each cascade's depth range (from the previous split, or from 0 for the first) at
@@ -85,6 +85,18 @@ pub fn slice_sphere(d0: f32, d1: f32, k: f32) -> (f32, f32) {
     (c, radius)
 }
 
+/// Depth of the center and radius of the bounding sphere of the orthographic view's slice
+/// between view depths `d0` and `d1`: a box whose cross-section (the view, `half_diagonal`
+/// from its axis to a corner) does not change with depth, bounded by the sphere at its middle
+/// through its eight corners.
+pub fn ortho_slice_sphere(d0: f32, d1: f32, half_diagonal: f32) -> (f32, f32) {
+    let half_depth = 0.5 * (d1 - d0);
+    (
+        0.5 * (d0 + d1),
+        (half_depth * half_depth + half_diagonal * half_diagonal).sqrt(),
+    )
+}
+
 /// Texels kept free at each side of a cascade's window: the lookup's normal offset (at most
 /// (r + 1/2)√2 texels plus the extra offset, `glsl/include/shadow.glsl`), the PCF taps
 /// (r + 1) and the snapping's rounding (1/2, taken as 1).
@@ -123,6 +135,8 @@ pub fn cascade_views(
     };
     let tan_x = tan_y * aspect + camera.shift_x_tan.abs();
     let k = (tan_x * tan_x + tan_y * tan_y).sqrt();
+    // Orthographic: the slice is a box whose cross-section is the whole view at every depth.
+    let half_diagonal = 0.5 * camera.ortho_height_m * (aspect * aspect + 1.0).sqrt();
     let forward = camera.forward.normalize_or_zero();
     let mut out = Vec::new();
     for (li, light) in lights.iter().enumerate() {
@@ -133,7 +147,10 @@ pub fn cascade_views(
         let views: Vec<ShadowView> = (0..splits.len())
             .map(|i| {
                 let (d0, d1) = cascade_slice(near, &splits, i);
-                let (c, radius) = slice_sphere(d0, d1, k);
+                let (c, radius) = match camera.projection {
+                    Projection::Perspective => slice_sphere(d0, d1, k),
+                    Projection::Orthographic => ortho_slice_sphere(d0, d1, half_diagonal),
+                };
                 let center = camera.position + forward * c;
                 let mut v = fitted_view(direction, center, radius, scene_aabb, settings);
                 v.light = li;
@@ -200,8 +217,14 @@ pub fn fitted_view(
     // The view looks down -z; a few texels of depth margin as the whole-scene map has.
     let z_margin = texel * margin_texels(settings) + 1e-6 * (hi - lo).abs().max(1.0);
     let (near, far) = (-hi - z_margin, -lo + z_margin);
-    let mut proj = Mat4::orthographic_rh(cx - half, cx + half, cy - half, cy + half, near, far);
-    proj.y_axis.y = -proj.y_axis.y;
+    let proj = super::shadow::flip_y(Mat4::orthographic_rh(
+        cx - half,
+        cx + half,
+        cy - half,
+        cy + half,
+        near,
+        far,
+    ));
     ShadowView {
         view_proj: proj * view,
         texel_footprint: texel,
@@ -257,6 +280,63 @@ mod tests {
         }
     }
 
+    /// Under orthographic projection each cascade's map holds the whole box of its slice: the
+    /// view's rectangle (ortho height × aspect) at both ends of the slice's depth band, and
+    /// the texel stays the same size for slices of equal depth.
+    #[test]
+    fn orthographic_cascades_hold_their_slice_boxes() {
+        let settings = ShadowSettings {
+            cascade_lambda: 0.0,
+            ..ShadowSettings::default()
+        };
+        let aabb = Aabb {
+            min: Vec3::splat(-20.0),
+            max: Vec3::splat(20.0),
+        };
+        let (h, aspect) = (6.0, 1.5);
+        let camera = Camera {
+            position: Vec3::new(1.0, 2.0, -25.0),
+            forward: Vec3::Z,
+            up: Vec3::Y,
+            fov_y_deg: 60.0,
+            near: 0.1,
+            far: 200.0,
+            shift_x_tan: 0.0,
+            projection: Projection::Orthographic,
+            ortho_height_m: h,
+        };
+        let sun = [Light::Directional {
+            direction: Vec3::new(0.3, -1.0, 0.2).normalize(),
+            irradiance_w_m2: Vec3::ONE,
+        }];
+        let sets = cascade_views(&sun, &camera, aspect, &aabb, &settings, |_| f32::MAX);
+        let views = &sets[0].1;
+        assert_eq!(views.len(), settings.cascades as usize);
+        let (near, far) = cascade_range(&camera, &aabb);
+        let splits = cascade_splits(near, far, settings.cascades, 0.0);
+        let right = camera.right();
+        for (i, v) in views.iter().enumerate() {
+            let (d0, d1) = cascade_slice(near, &splits, i);
+            for corner in 0..8 {
+                let d = if corner & 1 == 0 { d0 } else { d1 };
+                let sx = if corner & 2 == 0 { -0.5 } else { 0.5 };
+                let sy = if corner & 4 == 0 { -0.5 } else { 0.5 };
+                let p = camera.position
+                    + camera.forward * d
+                    + right * (sx * h * aspect)
+                    + camera.up * (sy * h);
+                let ndc = v.view_proj.project_point3(p);
+                assert!(
+                    ndc.x.abs() < 1.0 && ndc.y.abs() < 1.0 && (0.0..=1.0).contains(&ndc.z),
+                    "cascade {i} misses {p}: {ndc}"
+                );
+            }
+        }
+        // Uniform splits of equal depth after the first: the same sphere, the same texel.
+        let t = |i: usize| views[i].texel_footprint;
+        assert!((t(2) - t(3)).abs() < 1e-5 * t(2), "{} {}", t(2), t(3));
+    }
+
     /// Slices grow with depth, and so do their texels; against a whole-scene map whose texel
     /// lies between those of cascades 2 and 3, cascades 3 and 4 go, and against one finer than
     /// the first cascade's, all of them.
@@ -275,6 +355,8 @@ mod tests {
             near: 0.1,
             far: 200.0,
             shift_x_tan: 0.0,
+            projection: crate::scene::Projection::Perspective,
+            ortho_height_m: 1.0,
         };
         let sun = [Light::Directional {
             direction: Vec3::new(0.2, -1.0, 0.1).normalize(),

@@ -176,6 +176,16 @@ fn perspective_vk(fov_y: f32, near: f32, far: f32) -> Mat4 {
 }
 
 /// An up vector that is not parallel to `dir`.
+/// `proj` with its output y negated (Vulkan's framebuffer y points down): the y row of the
+/// matrix, scale and translation.
+pub(super) fn flip_y(mut proj: Mat4) -> Mat4 {
+    proj.x_axis.y = -proj.x_axis.y;
+    proj.y_axis.y = -proj.y_axis.y;
+    proj.z_axis.y = -proj.z_axis.y;
+    proj.w_axis.y = -proj.w_axis.y;
+    proj
+}
+
 pub(super) fn up_for(dir: Vec3) -> Vec3 {
     if dir.y.abs() > 0.99 {
         Vec3::Z
@@ -359,7 +369,10 @@ pub fn shadow_views(
                     near,
                     far,
                 );
-                proj.y_axis.y = -proj.y_axis.y;
+                // Vulkan's y points down: negate the whole y row (scale and offset), so the
+                // window stays where it was fitted (negating the scale alone mirrors an
+                // off-centre window about y = 0).
+                proj = flip_y(proj);
                 views.push(ShadowView {
                     view_proj: proj * view,
                     texel_footprint: (size + 2.0 * margin) / res,
@@ -505,7 +518,13 @@ mod tests {
 
     #[test]
     fn directional_map_covers_the_scene_at_any_scale() {
-        for scale in [1e-3f32, 1.0, 1e3] {
+        // Off the world origin too: the map's window is then off the light space's origin.
+        for (scale, offset) in [
+            (1e-3f32, Vec3::ZERO),
+            (1.0, Vec3::ZERO),
+            (1e3, Vec3::ZERO),
+            (1.0, Vec3::new(5.0, 3.0, -4.0)),
+        ] {
             let mut scene = builtin("cornell").expect("cornell");
             scene.lights = vec![Light::Directional {
                 direction: Vec3::new(0.3, -1.0, 0.2).normalize(),
@@ -513,11 +532,18 @@ mod tests {
             }];
             for o in &mut scene.objects {
                 o.transform.scale *= scale;
-                o.transform.translate *= scale;
+                o.transform.translate = o.transform.translate * scale + offset;
             }
             let (views, _) = shadow_views(&scene, 0.0, &ShadowSettings::default());
             let aabb = scene.aabb_at(0.0);
-            for p in [aabb.min, aabb.max, aabb.center()] {
+            let corners = (0..8).map(|i| {
+                Vec3::select(
+                    glam::BVec3::new(i & 1 != 0, i & 2 != 0, i & 4 != 0),
+                    aabb.max,
+                    aabb.min,
+                )
+            });
+            for p in corners.chain([aabb.center()]) {
                 let q = ndc(views[0].view_proj, p);
                 assert!(
                     q.x.abs() <= 1.0 && q.y.abs() <= 1.0 && (0.0..=1.0).contains(&q.z),

@@ -70,6 +70,10 @@ pub struct GpuFrame {
     pub prev_view_proj: [f32; 16],
     /// xy: this frame's TAA jitter in NDC (0 without TAA), added to `view_proj`'s x and y.
     pub jitter_ndc: [f32; 4],
+    /// xyz the camera's unit viewing direction, w the orthographic view's height in meters
+    /// (0: perspective). Under orthographic projection every view ray runs along xyz
+    /// (`toward_camera` etc. in frame.glsl).
+    pub camera_forward: [f32; 4],
 }
 
 crate::gpu_struct!(GpuFrame {
@@ -81,7 +85,8 @@ crate::gpu_struct!(GpuFrame {
     lights,
     shadow_views,
     prev_view_proj,
-    jitter_ndc
+    jitter_ndc,
+    camera_forward
 });
 
 #[repr(C)]

@@ -87,6 +87,45 @@ pub enum RenderError {
     /// A one-frame stereo renderer was asked for where it cannot run (the reason).
     #[error("one-frame stereo cannot render this: {0}; use --stereo-path two-pass")]
     MultiviewUnavailable(String),
+    /// An orthographic camera (`--projection orthographic`, the scene's `[camera]
+    /// projection`, the viewer's toggle) with a feature built for a pinhole camera.
+    #[error("{what} cannot render with an orthographic camera: {why}. Use --projection perspective (or `projection = \"perspective\"` in the scene's [camera] table), or {instead}")]
+    Orthographic {
+        what: &'static str,
+        why: &'static str,
+        instead: &'static str,
+    },
+}
+
+/// Refuses what an orthographic camera cannot render: screen-space GI, whose patch areas
+/// (Oetke 2017, Eq. 2.10: z² times a pinhole's texel solid angle), reflection march (linear in
+/// 1/w) and history (clip w as depth) assume a pinhole camera, and stereo pairs, whose
+/// off-axis frusta are a perspective concept.
+/// `Renderer::new` and every `prepare` run it (the viewer switches projection per frame).
+pub fn check_projection(
+    camera: &crate::scene::Camera,
+    settings: &RenderSettings,
+    stereo: bool,
+) -> Result<(), RenderError> {
+    if !camera.is_orthographic() {
+        return Ok(());
+    }
+    if stereo {
+        return Err(RenderError::Orthographic {
+            what: "--stereo",
+            why: "a stereo pair's eyes are off-axis perspective frusta",
+            instead: "leave out --stereo",
+        });
+    }
+    if settings.gi.method == crate::gi::GiMethod::Ssgi && settings.debug.is_none() {
+        return Err(RenderError::Orthographic {
+            what: "--gi ssgi",
+            why: "screen-space GI's patch areas, reflection rays and history assume a pinhole \
+                  camera's depth",
+            instead: "choose another --gi method (hemisphere, pathtrace, vpl)",
+        });
+    }
+    Ok(())
 }
 
 /// Refuses a voxel grid that cannot fit the device, before anything is allocated: its column
@@ -416,6 +455,7 @@ impl Renderer {
         // Screen-space GI reads only the frame: no voxels, no light maps.
         let gi_voxels = gi_on && settings.gi.method.needs_voxels();
         check_setting_combination(settings)?;
+        check_projection(&scene.camera, settings, rig.is_some())?;
         let voxel_view_on = settings.debug.is_some_and(|d| d.view.shows_voxels());
         let voxel_settings = settings
             .voxels
@@ -656,6 +696,7 @@ impl Renderer {
     ///
     /// A one-frame stereo renderer takes `scene.camera` as the centre between its eyes.
     pub fn prepare(&mut self, scene: &Scene) -> Result<(), RenderError> {
+        check_projection(&scene.camera, &self.settings, self.stereo.is_some())?;
         let s = self.settings.clone();
         let eyes = self.stereo.as_ref().map(|st| {
             let eye = |e| scene.camera.eye(st.rig, e);
@@ -1154,11 +1195,17 @@ fn jittered(mut frame: GpuFrame, post: &mut crate::post::PostPasses) -> GpuFrame
 }
 
 /// Sets the frame constants that depend on the camera: view-projection, its camera-relative
-/// inverse and the camera position.
+/// inverse, the camera position and its viewing direction with the projection.
 fn set_frame_camera(f: &mut GpuFrame, camera: &crate::scene::Camera, aspect: f32) {
     f.view_proj = camera.view_proj(aspect).to_cols_array();
     f.inv_view_proj = camera_relative_inverse(camera, aspect).to_cols_array();
     f.camera_position = camera.position.extend(1.0).to_array();
+    let ortho_height_m = if camera.is_orthographic() {
+        camera.ortho_height_m
+    } else {
+        0.0
+    };
+    f.camera_forward = camera.forward.extend(ortho_height_m).to_array();
 }
 
 /// The inverse of the camera's view-projection with the camera moved to the origin:

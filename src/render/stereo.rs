@@ -187,6 +187,7 @@ impl StereoRenderers {
         rig: StereoRig,
         path: StereoPath,
     ) -> Result<Self, RenderError> {
+        super::check_projection(&scene.camera, settings, true)?;
         let fallback = match path {
             StereoPath::TwoPass => None,
             p => multiview_blocker(ctx, p, scene, settings),
@@ -341,6 +342,7 @@ pub fn render_stereo(
     stereo: StereoSettings,
 ) -> Result<StereoOutput, RenderError> {
     check_packed_width(stereo.mode, settings.width)?;
+    super::check_projection(&scene.camera, settings, true)?;
     let fallback = match stereo.path {
         StereoPath::TwoPass => None,
         path => multiview_blocker(ctx, path, scene, settings),

@@ -1,8 +1,31 @@
-//! The scene camera: a pinhole with a vertical field of view.
+//! The scene camera: a pinhole with a vertical field of view, or an orthographic view of a
+//! given height.
 
 use glam::{Mat4, Vec3};
 
-/// A validated pinhole camera. `forward` and `up` are unit length and not parallel.
+/// How the camera projects: through a pinhole (`fov_y_deg`) or along parallel rays
+/// (`ortho_height_m`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum Projection {
+    /// A pinhole: rays through the camera's position, the vertical field of view `fov_y_deg`.
+    #[default]
+    Perspective,
+    /// Parallel rays along `forward` from the plane through the camera's position, the view
+    /// `ortho_height_m` meters high: an object's size on screen does not depend on its distance.
+    Orthographic,
+}
+
+impl Projection {
+    /// The scene file's word (`[camera] projection`), also the flag's.
+    pub fn name(self) -> &'static str {
+        match self {
+            Projection::Perspective => "perspective",
+            Projection::Orthographic => "orthographic",
+        }
+    }
+}
+
+/// A validated camera. `forward` and `up` are unit length and not parallel.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Camera {
     /// Meters, world space.
@@ -20,7 +43,13 @@ pub struct Camera {
     /// Horizontal off-axis shift of the frustum: the tangent (x / distance, view space) of the
     /// direction the image center looks along. 0 for a symmetric frustum; a stereo eye's
     /// asymmetric frustum ([`Camera::eye`]) has ±e / (2c). Not stored in scene files.
+    /// Perspective only.
     pub shift_x_tan: f32,
+    pub projection: Projection,
+    /// Height in meters of the orthographic view (its width is height × aspect), > 0. Kept
+    /// under perspective projection too, for a switch to orthographic (the viewer's toggle,
+    /// `--projection`).
+    pub ortho_height_m: f32,
 }
 
 impl Camera {
@@ -38,12 +67,44 @@ impl Camera {
         } else {
             1.0
         };
+        if self.is_orthographic() {
+            // x, y scale by 2 / (width, height), depth linear from 0 at near to 1 at far, w = 1.
+            let (hw, hh) = (
+                0.5 * self.ortho_height_m * aspect,
+                0.5 * self.ortho_height_m,
+            );
+            let mut p = Mat4::orthographic_rh(-hw, hw, -hh, hh, self.near, self.far);
+            p.y_axis.y = -p.y_axis.y;
+            return p;
+        }
         let mut p = Mat4::perspective_rh(self.fov_y_deg.to_radians(), aspect, self.near, self.far);
         // glam's perspective_rh already maps depth to [0, 1]; Vulkan's y axis points down.
         p.y_axis.y = -p.y_axis.y;
         // Off-axis: x_ndc = P00 (x_v / d - shift) with d = -z_v, so clip x gains P00 shift z_v.
         p.z_axis.x += p.x_axis.x * self.shift_x_tan;
         p
+    }
+
+    pub fn is_orthographic(&self) -> bool {
+        self.projection == Projection::Orthographic
+    }
+
+    /// Pixels per meter of a surface facing the camera at view depth `depth_m`, in an image
+    /// `height_px` pixels high: height / (2 tan(fov_y/2) · depth) through a pinhole, height /
+    /// ortho height (any depth) under orthographic projection.
+    pub fn px_per_m(&self, height_px: u32, depth_m: f32) -> f32 {
+        match self.projection {
+            Projection::Perspective => {
+                height_px as f32 / (2.0 * (0.5 * self.fov_y_deg.to_radians()).tan() * depth_m)
+            }
+            Projection::Orthographic => height_px as f32 / self.ortho_height_m,
+        }
+    }
+
+    /// The height of the perspective view at view depth `depth_m`, 2·d·tan(fov_y/2): an
+    /// orthographic view of this height shows the plane at that depth as this camera does.
+    pub fn view_height_at(&self, depth_m: f32) -> f32 {
+        2.0 * depth_m * (0.5 * self.fov_y_deg.to_radians()).tan()
     }
 
     pub fn view_proj(&self, aspect: f32) -> Mat4 {
@@ -108,8 +169,13 @@ impl Camera {
     /// written in world coordinates, like the scene file that gave it.
     pub fn toml_table(&self, origin_m: glam::DVec3) -> String {
         let v = |v: Vec3| format!("[{:?}, {:?}, {:?}]", v.x, v.y, v.z);
+        let projection = match self.projection {
+            Projection::Perspective => "",
+            Projection::Orthographic => "projection = \"orthographic\"\n",
+        };
+        let ortho = format!("{projection}ortho_height_m = {:?}\n", self.ortho_height_m);
         format!(
-            "[camera]\nposition = {}\nforward = {}\nup = {}\nfov_y_deg = {:?}\nnear = {:?}\nfar = {:?}\n",
+            "[camera]\nposition = {}\nforward = {}\nup = {}\nfov_y_deg = {:?}\n{ortho}near = {:?}\nfar = {:?}\n",
             world_toml(origin_m, self.position),
             v(self.forward),
             v(self.up),
@@ -198,6 +264,8 @@ mod tests {
             near: 0.01,
             far: 100.0,
             shift_x_tan: 0.0,
+            projection: Projection::Perspective,
+            ortho_height_m: 1.0,
         }
     }
 
@@ -232,6 +300,72 @@ mod tests {
         for a in [0.0, -1.0, f32::NAN, f32::INFINITY] {
             assert!(c.proj(a).is_finite());
         }
+        let o = ortho_cam(0.8);
+        for a in [0.0, -1.0, f32::NAN, f32::INFINITY] {
+            assert!(o.proj(a).is_finite());
+        }
+    }
+
+    fn ortho_cam(height_m: f32) -> Camera {
+        Camera {
+            projection: Projection::Orthographic,
+            ortho_height_m: height_m,
+            ..cornell_cam()
+        }
+    }
+
+    #[test]
+    fn orthographic_sizes_do_not_depend_on_depth() {
+        // A view h meters high maps y_v = ±h/2 to the image's top and bottom edges and x_v =
+        // ±h·aspect/2 to its sides, at every depth; depth is linear, 0 at near and 1 at far.
+        let (h, aspect) = (0.8, 1.5);
+        let c = ortho_cam(h);
+        let vp = c.view_proj(aspect);
+        for z in [c.near, 0.5, 3.0, c.far] {
+            let centre = c.position + c.forward * z;
+            let top = vp.project_point3(centre + Vec3::Y * (0.5 * h));
+            // +x of the world is the image's left (see vulkan_clip_conventions).
+            let side = vp.project_point3(centre - Vec3::X * (0.5 * h * aspect));
+            assert!((top.y + 1.0).abs() < 1e-5, "{top}");
+            assert!((side.x - 1.0).abs() < 1e-5, "{side}");
+            let expected_depth = (z - c.near) / (c.far - c.near);
+            assert!((top.z - expected_depth).abs() < 1e-5, "{top} at {z}");
+        }
+        // The pixel scale is height / h at any depth.
+        assert_eq!(c.px_per_m(128, 0.3), c.px_per_m(128, 30.0));
+        assert!((c.px_per_m(128, 1.0) - 160.0).abs() < 1e-3);
+        // The perspective scale at depth d is that of the orthographic view of the
+        // perspective view's height there.
+        let p = cornell_cam();
+        let d = 2.5;
+        let matched = ortho_cam(p.view_height_at(d));
+        assert!((p.px_per_m(128, d) - matched.px_per_m(128, d)).abs() < 1e-3);
+    }
+
+    #[test]
+    fn orthographic_rays_are_parallel_to_forward() {
+        let c = ortho_cam(2.0);
+        for (x, y) in [(0, 0), (63, 10), (127, 127)] {
+            let (a, b) = c.pixel_ray_points(x, y, 128, 128);
+            assert!(((b - a).normalize() - c.forward).length() < 1e-4, "{a} {b}");
+            // The ray starts on the near plane.
+            assert!(((a - c.position).dot(c.forward) - c.near).abs() < 1e-4);
+        }
+    }
+
+    #[test]
+    fn the_camera_table_keeps_the_projection() {
+        let o = ortho_cam(0.75);
+        let t = o.toml_table(glam::DVec3::ZERO);
+        assert!(
+            t.contains("projection = \"orthographic\"\northo_height_m = 0.75\n"),
+            "{t}"
+        );
+        let p = cornell_cam().toml_table(glam::DVec3::ZERO);
+        assert!(
+            !p.contains("projection") && p.contains("ortho_height_m = 1.0\n"),
+            "{p}"
+        );
     }
 
     #[test]

@@ -374,6 +374,8 @@ mod tests {
             near: 0.05,
             far: 7.0,
             shift_x_tan: 0.0,
+            projection: crate::scene::Projection::Perspective,
+            ortho_height_m: 1.0,
         };
         let c = p.camera_at(&base, 1.0);
         assert_eq!((c.near, c.far), (0.05, 7.0));
@@ -392,6 +394,8 @@ mod tests {
             near: 0.01,
             far: 10.0,
             shift_x_tan: 0.0,
+            projection: crate::scene::Projection::Perspective,
+            ortho_height_m: 1.0,
         };
         let p = CameraPath::through_cameras(&[cam(0.0), cam(1.0), cam(3.0)], 2.0).unwrap();
         let times: Vec<f32> = p.keys().iter().map(|k| k.time_s).collect();

@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 use glam::{DVec3, Vec3};
 use serde::Deserialize;
 
-use super::camera::Camera;
+use super::camera::{Camera, Projection};
 use super::camera_path::{CameraKey, CameraPath};
 use super::error::{field_ref, from_toml_error, SceneError};
 use super::gi::{bounces_from_toml, GiOverrides, GI_METHOD_NAMES};
@@ -140,10 +140,20 @@ pub(crate) struct CameraDesc {
     pub target: Option<[f64; 3]>,
     pub forward: Option<[f32; 3]>,
     pub up: Option<[f32; 3]>,
-    pub fov_y_deg: f32,
+    /// Required under perspective projection; under orthographic projection the viewer's
+    /// switch back to perspective uses it (default [`DEFAULT_ORTHO_FOV_Y_DEG`]).
+    pub fov_y_deg: Option<f32>,
+    /// `"perspective"` (default) or `"orthographic"`.
+    pub projection: Option<String>,
+    /// The orthographic view's height in meters; required with `projection = "orthographic"`.
+    pub ortho_height_m: Option<f32>,
     pub near: Option<f32>,
     pub far: Option<f32>,
 }
+
+/// The field of view an orthographic camera without `fov_y_deg` switches to (the viewer's
+/// toggle, `--projection perspective`).
+pub(crate) const DEFAULT_ORTHO_FOV_Y_DEG: f32 = 40.0;
 
 #[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq, Eq)]
 #[serde(rename_all = "lowercase")]
@@ -490,7 +500,7 @@ pub(crate) fn build(
             &mut store,
         )?);
     }
-    let scene = Scene {
+    let mut scene = Scene {
         origin_m: ck.origin,
         camera,
         camera_path,
@@ -506,6 +516,9 @@ pub(crate) fn build(
         post,
         source,
     };
+    if scene.camera.ortho_height_m.is_nan() {
+        scene.camera.ortho_height_m = scene.default_ortho_height_m();
+    }
     if scene.lights.is_empty() && !scene.has_emission() {
         log::warn!(
             "{}: the scene has no lights and no emissive materials, so it will render black; \
@@ -626,7 +639,32 @@ fn build_camera(ck: &Check<'_>, c: &CameraDesc) -> Result<Camera, SceneError> {
             ),
         ));
     }
-    let fov = ck.scalar("camera.fov_y_deg", c.fov_y_deg)?;
+    let projection = match c.projection.as_deref() {
+        None => Projection::Perspective,
+        Some(word) => [Projection::Perspective, Projection::Orthographic]
+            .into_iter()
+            .find(|p| p.name() == word)
+            .ok_or_else(|| {
+                ck.camera(
+                    "camera.projection",
+                    format!(
+                        "\"{word}\" is not a projection; expected \"perspective\" or \
+                         \"orthographic\""
+                    ),
+                )
+            })?,
+    };
+    let fov = match (c.fov_y_deg, projection) {
+        (Some(f), _) => ck.scalar("camera.fov_y_deg", f)?,
+        (None, Projection::Orthographic) => DEFAULT_ORTHO_FOV_Y_DEG,
+        (None, Projection::Perspective) => {
+            return Err(ck.camera(
+                "camera.fov_y_deg",
+                "a perspective camera needs its vertical field of view; add e.g. \
+                 `fov_y_deg = 39.3` (or `projection = \"orthographic\"` with `ortho_height_m`)",
+            ))
+        }
+    };
     if !(fov > 0.0 && fov < 180.0) {
         return Err(ck.camera(
             "camera.fov_y_deg",
@@ -635,6 +673,22 @@ fn build_camera(ck: &Check<'_>, c: &CameraDesc) -> Result<Camera, SceneError> {
             ),
         ));
     }
+    let limit = &limits::ORTHO_HEIGHT_M;
+    let ortho_height_m = match c.ortho_height_m {
+        Some(h) => Some(
+            limit
+                .check_as("camera.ortho_height_m", h)
+                .map_err(|e| ck.camera("camera.ortho_height_m", limit_message(&e)))?,
+        ),
+        None if projection == Projection::Orthographic => {
+            return Err(ck.camera(
+                "camera.ortho_height_m",
+                "an orthographic camera needs the height of its view; add e.g. \
+                 `ortho_height_m = 1.2` (meters)",
+            ))
+        }
+        None => None,
+    };
     let near = ck.scalar("camera.near", c.near.unwrap_or(0.01))?;
     let far = ck.scalar("camera.far", c.far.unwrap_or(100.0))?;
     if near <= 0.0 {
@@ -664,6 +718,10 @@ fn build_camera(ck: &Check<'_>, c: &CameraDesc) -> Result<Camera, SceneError> {
         near,
         far,
         shift_x_tan: 0.0,
+        projection,
+        // Resolved by `build` once the scene's bounds are known (see
+        // `Scene::default_ortho_height_m`); NaN never survives it.
+        ortho_height_m: ortho_height_m.unwrap_or(f32::NAN),
     })
 }
 

@@ -21,7 +21,15 @@
 //! target = [0.278, 0.273, 0.0]      # a point to look at, or instead:
 //! # forward = [0.0, 0.0, 1.0]       # a viewing direction (not both)
 //! up = [0.0, 1.0, 0.0]              # optional, default +Y; must not be parallel to the view
-//! fov_y_deg = 39.3                  # vertical field of view, degrees in (0, 180)
+//! fov_y_deg = 39.3                  # vertical field of view, degrees in (0, 180); optional
+//!                                   #   with projection = "orthographic" (default 40)
+//! projection = "perspective"        # optional: "perspective" (default) or "orthographic";
+//!                                   #   `--projection` overrides it
+//! ortho_height_m = 0.6              # orthographic: the view's height in meters (required
+//!                                   #   there); its width is height × width / height of the
+//!                                   #   image. Optional under perspective (what `--projection
+//!                                   #   orthographic` and the viewer's toggle use; default the
+//!                                   #   view's height at the depth of the scene's centre)
 //! near = 0.01                       # optional, default 0.01 m
 //! far = 100.0                       # optional, default 100 m; near < far
 //!
@@ -187,7 +195,7 @@ pub mod vpl_settings;
 use std::path::{Path, PathBuf};
 
 pub use builtin::{builtin, builtin_names, load_scene_arg, DEFAULT_SCENE};
-pub use camera::{Camera, Eye, StereoRig};
+pub use camera::{Camera, Eye, Projection, StereoRig};
 pub use camera_path::{CameraKey, CameraPath, CameraPathError};
 pub use cull::aabb_visible;
 pub use desc::gi_table_overrides;
@@ -273,6 +281,23 @@ impl Scene {
         self.objects
             .iter()
             .fold(Aabb::EMPTY, |b, o| b.union(o.aabb_at(t_s)))
+    }
+
+    /// The orthographic view height a camera without `ortho_height_m` switches to: the
+    /// perspective view's height at the view depth of the scene's centre (at time 0), so the
+    /// switch keeps the size of what lies there; the view height at 1 m when the centre is not
+    /// in front of the camera.
+    pub fn default_ortho_height_m(&self) -> f32 {
+        let b = self.aabb_at(0.0);
+        let depth = ((b.min + b.max) * 0.5 - self.camera.position).dot(self.camera.forward);
+        let depth = if depth.is_finite() && depth > self.camera.near {
+            depth
+        } else {
+            1.0
+        };
+        self.camera
+            .view_height_at(depth)
+            .clamp(1e-6, crate::limits::ORTHO_HEIGHT_M.max)
     }
 
     /// Materials drawn by some object.

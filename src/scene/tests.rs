@@ -294,6 +294,35 @@ fn camera_toml_table_round_trips() {
 }
 
 #[test]
+fn orthographic_camera_loads_and_round_trips() {
+    let text = CAMERA.replace(
+        "fov_y_deg = 40",
+        "projection = \"orthographic\"\northo_height_m = 2.5",
+    ) + LIGHT
+        + CUBE;
+    let scene = load_ok(&text, &[]);
+    let mut cam = scene.camera;
+    assert_eq!(
+        (cam.projection, cam.ortho_height_m, cam.fov_y_deg),
+        (crate::scene::Projection::Orthographic, 2.5, 40.0)
+    );
+    // A direction that survives the file's normalization exactly (as in the test above).
+    cam.forward = Vec3::new(0.3, -0.2, 0.9).normalize();
+    let text = format!("{}{LIGHT}{CUBE}", cam.toml_table(glam::DVec3::ZERO));
+    assert_eq!(load_ok(&text, &[]).camera, cam, "{text}");
+    // A perspective camera without a height gets the view's height at the depth of the
+    // scene's centre: the unit cube at the origin, 3.16 m along the view from (0, 1, -3).
+    let scene = load_ok(&format!("{CAMERA}{LIGHT}{CUBE}"), &[]);
+    let depth = 10f32.sqrt();
+    let expected = 2.0 * depth * 20f32.to_radians().tan();
+    assert!(
+        (scene.camera.ortho_height_m - expected).abs() < 1e-4,
+        "{} vs {expected}",
+        scene.camera.ortho_height_m
+    );
+}
+
+#[test]
 fn bad_camera() {
     for (from, to, field) in [
         ("fov_y_deg = 40", "fov_y_deg = 0", "camera.fov_y_deg"),
@@ -313,6 +342,32 @@ fn bad_camera() {
         ("target = [0, 0, 0]", "target = [0, 1, -3]", "camera.target"),
         ("target = [0, 0, 0]", "forward = [0, 1, 0]", "camera.up"),
         ("target = [0, 0, 0]", "", "camera"),
+        (
+            "fov_y_deg = 40",
+            "fov_y_deg = 40\nprojection = \"isometric\"",
+            "camera.projection",
+        ),
+        (
+            "fov_y_deg = 40",
+            "projection = \"orthographic\"",
+            "camera.ortho_height_m",
+        ),
+        ("fov_y_deg = 40", "ortho_height_m = 1", "camera.fov_y_deg"),
+        (
+            "fov_y_deg = 40",
+            "fov_y_deg = 40\northo_height_m = 0",
+            "camera.ortho_height_m",
+        ),
+        (
+            "fov_y_deg = 40",
+            "projection = \"orthographic\"\northo_height_m = -2",
+            "camera.ortho_height_m",
+        ),
+        (
+            "fov_y_deg = 40",
+            "projection = \"orthographic\"\northo_height_m = nan",
+            "camera.ortho_height_m",
+        ),
     ] {
         let text = CAMERA.replace(from, to) + LIGHT + CUBE;
         let (e, scene) = load_err(&text, &[]);
