@@ -159,11 +159,12 @@ mod mesh;
 mod obj;
 mod object;
 mod query;
+pub mod save;
 pub mod vpl_settings;
 
 use std::path::{Path, PathBuf};
 
-pub use builtin::{builtin, builtin_names, load_scene_arg, DEFAULT_SCENE};
+pub use builtin::{builtin, builtin_names, builtin_toml, load_scene_arg, DEFAULT_SCENE};
 pub use camera::{Camera, Eye, StereoRig};
 pub use camera_path::{CameraKey, CameraPath, CameraPathError};
 pub use cull::aabb_visible;
@@ -180,7 +181,9 @@ pub use material::{
     PbrMaps, TextureData, Transparency, DIELECTRIC_F0, TRANSPARENCY_NAMES,
 };
 pub use mesh::{area_weighted_normals, Aabb, Mesh, SubMesh, BUILTIN_MESH_NAMES};
-pub use object::{rotation_from_euler_xyz_deg, Animation, Keyframe, Object, Transform};
+pub use object::{
+    euler_xyz_deg, rotation_from_euler_xyz_deg, Animation, Keyframe, Object, Transform,
+};
 pub use query::NoSuchObject;
 pub use vpl_settings::{VplOverrides, VplSettings, VplShading, VplVisibility};
 
