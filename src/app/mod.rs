@@ -14,8 +14,10 @@
 //! `egui`. The swapchain image is imported with [`Access::Present`] and rebound every frame.
 
 mod camera;
+mod edit;
 mod overlay;
 mod panel;
+mod pick;
 
 pub use camera::{FlyCamera, MoveKeys};
 pub use panel::{Controls, TimingStats};
@@ -39,6 +41,10 @@ use winit::event::{ElementState, Event, KeyEvent, MouseButton, MouseScrollDelta,
 use winit::event_loop::{EventLoop, EventLoopWindowTarget};
 use winit::keyboard::{KeyCode, PhysicalKey};
 use winit::window::{Window, WindowBuilder};
+
+/// Seconds between the camera keyframes recorded in the viewer (printed on exit, saved as
+/// `[camera_path]`; edit `time_s` to retime the flight).
+pub const RECORDED_KEY_SPACING_S: f32 = 2.0;
 
 /// Errors of the viewer. Each says what to do.
 #[derive(Debug, thiserror::Error)]
@@ -94,6 +100,10 @@ pub struct ViewerOptions {
     pub scene_name: String,
     /// The panel's initial time budget, ms.
     pub budget_ms: f32,
+    /// Where "Save scene" (Ctrl+S) writes; `None`: the scene's own file.
+    pub save_to: Option<PathBuf>,
+    /// The built-in scene shown (its TOML text is what a save edits), `None` for a file.
+    pub builtin: Option<String>,
 }
 
 impl Default for ViewerOptions {
@@ -112,6 +122,8 @@ impl Default for ViewerOptions {
             sweep_dir: PathBuf::from("sweep"),
             scene_name: "cornell".into(),
             budget_ms: 100.0,
+            save_to: None,
+            builtin: None,
         }
     }
 }
@@ -130,6 +142,8 @@ pub struct ViewerReport {
     pub camera: Option<Camera>,
     /// Cameras recorded with the panel's "Add camera keyframe", in order.
     pub camera_keys: Vec<Camera>,
+    /// Scene files written by "Save scene" (Ctrl+S).
+    pub saved: Vec<PathBuf>,
 }
 
 /// Scripted runs give up after this long.
@@ -220,6 +234,23 @@ struct Viewer {
     panel_px: u32,
     /// Where the panel's GPU-time table was drawn last frame (logged by scripted runs).
     panel_layout: panel::PanelLayout,
+    /// The scene editor (`edit.rs`) and the GPU pass that answers its clicks.
+    editor: edit::Editor,
+    pick: Option<pick::PickPass>,
+    /// The scene's part of the window in the last frame: left, top, width, height (pixels).
+    view_rect: [f32; 4],
+    /// A Ctrl key is held (Ctrl+S saves instead of moving back).
+    ctrl: bool,
+    /// What of the scene the current renderer was made for (lights, moving objects, bounds).
+    scene_shape: Option<edit::SceneShape>,
+    /// The lights before a change that needs a new renderer, until it is made.
+    light_backup: Option<edit::LightBackup>,
+}
+
+/// The view the editor's handles are drawn for.
+struct ViewGeomArgs {
+    geom: edit::ViewGeom,
+    time_s: f32,
 }
 
 /// Where a scripted minimize (`ViewerOptions::minimize_at`) stands.
@@ -345,18 +376,9 @@ impl Viewer {
             .lights
             .iter()
             .enumerate()
-            .map(|(i, l)| {
-                let kind = match l {
-                    Light::Point { .. } => "point",
-                    Light::Spot { .. } => "spot",
-                    Light::Directional { .. } => "directional",
-                    Light::Sphere { .. } => "sphere",
-                    Light::Rectangle { .. } => "rectangle",
-                    Light::Element { .. } => "area sample",
-                };
-                format!("{kind} {i}")
-            })
+            .map(|(i, l)| edit::light_name(i, l))
             .collect();
+        let editor = edit::Editor::new(&scene, &fly, opts.builtin.clone(), opts.save_to.clone());
         let controls = Controls {
             tonemap: opts.settings.tonemap,
             post: opts.settings.post,
@@ -408,6 +430,12 @@ impl Viewer {
             minimized: false,
             panel_px: 0,
             panel_layout: panel::PanelLayout::default(),
+            editor,
+            pick: None,
+            view_rect: [0.0, 0.0, 1.0, 1.0],
+            ctrl: false,
+            scene_shape: None,
+            light_backup: None,
         }
     }
 
@@ -421,7 +449,9 @@ impl Viewer {
         settings.height = extent.height.max(1);
         log::info!("indirect light: {}", describe_gi(&settings.gi));
         self.renderer = Some(Renderer::new(ctx, &self.scene, settings)?);
+        self.scene_shape = Some(edit::SceneShape::of(&self.scene));
         self.overlay = Some(Overlay::new(ctx, format)?);
+        self.pick = Some(pick::PickPass::new(ctx)?);
         self.frame_loop = Some(FrameLoop::new(ctx, MAX_FRAMES_IN_FLIGHT, MAX_PASSES)?);
         Ok(())
     }
@@ -467,12 +497,24 @@ impl Viewer {
                         button: MouseButton::Right,
                         ..
                     } => self.looking = state == ElementState::Pressed && !consumed,
+                    // The editor: a click selects, a press on a handle drags it.
+                    WindowEvent::MouseInput {
+                        state,
+                        button: MouseButton::Left,
+                        ..
+                    } => match state {
+                        ElementState::Pressed if !consumed => self.edit_press(),
+                        ElementState::Released => self.edit_release(),
+                        _ => {}
+                    },
+                    WindowEvent::ModifiersChanged(m) => self.ctrl = m.state().control_key(),
                     WindowEvent::CursorMoved { position, .. } => {
                         if let (true, Some((x, y))) = (self.looking, self.cursor) {
                             self.fly
                                 .look((position.x - x) as f32, (position.y - y) as f32);
                         }
                         self.cursor = Some((position.x, position.y));
+                        self.edit_drag();
                     }
                     WindowEvent::MouseWheel { delta, .. } if !consumed => {
                         let notches = match delta {
@@ -494,10 +536,30 @@ impl Viewer {
     /// delay, or delivered late on a busy machine, would otherwise step two GI methods).
     fn key(&mut self, code: KeyCode, down: bool, repeat: bool, elwt: &EventLoopWindowTarget<()>) {
         let press = down && !repeat;
+        // Ctrl+S saves the scene; S without Ctrl moves back.
+        if code == KeyCode::KeyS && self.ctrl && press {
+            self.save_scene();
+            return;
+        }
+        let edit = match code {
+            KeyCode::Digit1 => Some(edit::EditAction::Handle(edit::HandleMode::Move)),
+            KeyCode::Digit2 => Some(edit::EditAction::Handle(edit::HandleMode::Rotate)),
+            KeyCode::Digit3 => Some(edit::EditAction::Handle(edit::HandleMode::Scale)),
+            KeyCode::Insert => Some(edit::EditAction::AddLight(self.editor.new_light_kind)),
+            KeyCode::Delete => match self.editor.selection {
+                Some(edit::Selection::Light(i)) => Some(edit::EditAction::RemoveLight(i)),
+                _ => None,
+            },
+            _ => None,
+        };
+        if let Some(a) = edit.filter(|_| press) {
+            self.apply_edit(a);
+            return;
+        }
         let k = &mut self.keys;
         match code {
             KeyCode::KeyW => k.forward = down,
-            KeyCode::KeyS => k.back = down,
+            KeyCode::KeyS => k.back = down && !self.ctrl,
             KeyCode::KeyA => k.left = down,
             KeyCode::KeyD => k.right = down,
             KeyCode::KeyE => k.up = down,
@@ -637,8 +699,20 @@ impl Viewer {
             settings.post = self.controls.post;
             settings.debug = debug_settings(&self.controls, settings.debug);
         }
-        if needs_new_renderer(&current, &settings) {
-            self.replace_renderer(ctx, &mut settings)?;
+        let editing = self.editor.dragging() || self.egui_ctx.input(|i| i.pointer.any_down());
+        if needs_new_renderer(&current, &settings) || self.scene_needs_new_renderer(editing) {
+            let lights_before = self.scene_shape.clone();
+            match self.replace_renderer(ctx, &mut settings) {
+                Err(e) if self.light_backup.is_some() => {
+                    self.restore_lights();
+                    self.editor.status = format!("the lights were not changed: {e}");
+                    log::warn!("{}", self.editor.status);
+                }
+                r => r?,
+            }
+            if self.scene_shape != lights_before {
+                self.light_change_done();
+            }
         }
         let Some(renderer) = self.renderer.as_mut() else {
             return Ok(false);
@@ -663,6 +737,13 @@ impl Viewer {
         let slot = frame_loop.current_slot();
         let (_, cmd, timestamps, finished) = frame_loop.begin(ctx)?;
         self.stats.push(finished);
+        // The pick this slot recorded two frames ago has landed (the fence was waited).
+        let picked = self.pick.as_mut().and_then(|p| p.collect(slot));
+        let frame_size = (renderer.settings.width, renderer.settings.height);
+        let pick_request = self.editor.take_pick_request();
+        if let Some(p) = self.pick.as_mut() {
+            p.arm(slot, pick_request, frame_size);
+        }
         let (index, ready) = match swapchain.acquire(slot)? {
             Acquired::Image { index, ready } => (index, ready),
             Acquired::OutOfDate => {
@@ -687,6 +768,9 @@ impl Viewer {
         )?;
         if swapchain.present(ctx, index)? {
             self.swapchain_dirty = true;
+        }
+        if let Some(p) = picked {
+            self.edit_picked(p);
         }
         self.report.frames += 1;
         if shot {
@@ -769,9 +853,34 @@ impl Viewer {
         };
         let (controls, stats) = (&mut self.controls, &self.stats);
         let mut layout = panel::PanelLayout::default();
+        let edit_view = edit::EditView {
+            editor: &self.editor,
+            scene: &self.scene,
+            light_names: &self.light_names,
+        };
+        let view = ViewGeomArgs {
+            geom: edit::ViewGeom {
+                camera: self.scene.camera,
+                rect_px: self.view_rect,
+            },
+            time_s: controls.time_s,
+        };
+        let mut edits = Vec::new();
         let out = egui_ctx.run(raw, |c| {
-            layout = panel::draw(c, controls, stats, &info);
+            let mut edit_ui = |ui: &mut egui::Ui| edits = edit::panel(ui, &edit_view);
+            layout = panel::draw(c, controls, stats, &info, &mut edit_ui);
+            edit::paint(
+                c,
+                edit_view.editor,
+                edit_view.scene,
+                &view.geom,
+                view.time_s,
+                c.pixels_per_point(),
+            );
         });
+        for a in edits {
+            self.apply_edit(a);
+        }
         // Rounded down: the scene starts under the panel's edge rather than leaving a gap.
         self.panel_px = (layout.panel.width() * out.pixels_per_point)
             .max(0.0)
@@ -804,6 +913,7 @@ impl Viewer {
         match Renderer::new(ctx, &self.scene, settings.clone()) {
             Ok(r) => {
                 self.renderer = Some(r);
+                self.scene_shape = Some(edit::SceneShape::of(&self.scene));
                 log::info!(
                     "new renderer {}x{}, indirect light: {}",
                     settings.width,
@@ -885,7 +995,12 @@ impl Viewer {
             location: MemoryLocation::GpuToCpu,
         })?;
         let mut g = RenderGraph::new();
-        let FrameImages { ldr, .. } = renderer.declare(&mut g);
+        let (FrameImages { ldr, .. }, scene_inputs) = renderer.declare_with_scene(&mut g);
+        if let Some(p) = self.pick.as_mut() {
+            // Picks in flight belong to the old graph.
+            p.forget();
+            p.declare(&mut g, &scene_inputs);
+        }
         let present = g.import_image(&swapchain.images[0], Access::Present);
         let shot_handle = g.import_buffer(&shot, Access::HostRead);
         let shot_wanted = Rc::new(Cell::new(false));
@@ -920,6 +1035,11 @@ impl Viewer {
             });
         overlay.declare(&mut g, present);
         let exec = GraphExecutor::new(ctx, g, MAX_FRAMES_IN_FLIGHT)?;
+        self.view_rect = [scene_rect.offset.x as f32, 0.0, w as f32, h as f32];
+        log::info!(
+            "edit: scene viewport at [{}, 0] size [{w}, {h}] px",
+            scene_rect.offset.x
+        );
         self.graph = Some(FrameGraph {
             exec,
             present,

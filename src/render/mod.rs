@@ -181,6 +181,26 @@ pub fn check_setting_combination(settings: &RenderSettings) -> Result<(), Render
     Ok(())
 }
 
+/// Refuses lights a frame cannot hold: more than [`MAX_LIGHTS`] (an area light counts its
+/// samples) or more than [`MAX_SHADOW_VIEWS`] shadow views with the directional lights'
+/// cascades, the checks of [`Renderer::new`] and [`Renderer::prepare`]. The viewer's editor
+/// asks before it adds a light.
+pub fn check_lights(scene: &Scene, settings: &RenderSettings) -> Result<(), RenderError> {
+    let lights = frame_lights(&scene.lights, &settings.shadow);
+    if lights.len() > MAX_LIGHTS {
+        return Err(RenderError::TooManyLights(lights.len()));
+    }
+    let (views, _) = shadow_views(scene, settings.time_s, &settings.shadow);
+    let capacity = match settings.shadow.cascades {
+        n if n >= 2 => n as usize * lights.iter().filter(|l| l.is_directional()).count(),
+        _ => 0,
+    };
+    if views.len() + capacity > MAX_SHADOW_VIEWS {
+        return Err(RenderError::TooManyShadowViews(views.len() + capacity));
+    }
+    Ok(())
+}
+
 /// What a frame renders.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RenderSettings {
@@ -268,6 +288,9 @@ pub struct Renderer {
     shadow_texels: Option<shadow_texels::ShadowTexelsPass>,
     /// What `--shadow-resolution auto` picked, when it was asked for.
     auto_shadow: Option<shadow_texels::AutoShadowResolution>,
+    /// Per object, whether it was dynamic (or animated) when the renderer was made: only
+    /// those move in the voxels.
+    moving: Vec<bool>,
 }
 
 impl Renderer {
@@ -548,6 +571,11 @@ impl Renderer {
             oit,
             shadow_texels,
             auto_shadow: None,
+            moving: scene
+                .objects
+                .iter()
+                .map(|o| o.dynamic || o.is_animated())
+                .collect(),
         })
     }
 
@@ -556,11 +584,31 @@ impl Renderer {
         self.auto_shadow
     }
 
+    /// Whether moving object `object` (changing its transform in the scene given to
+    /// [`Self::prepare`]) is drawn and voxelized where it goes: it was dynamic when the
+    /// renderer was made, or nothing of the renderer depends on where static objects are
+    /// (no voxels). Otherwise the object must be marked dynamic and a new renderer made (the
+    /// static grid holds it where it was).
+    pub fn can_move(&self, object: usize) -> bool {
+        self.voxels.is_none() || self.moving.get(object).copied().unwrap_or(false)
+    }
+
     /// Computes frame constants, shadow views and culled draw lists for the scene's camera and
     /// lights and `settings`. Call again after changing them (the viewer does, every frame);
     /// a new size, shadow resolution, cascade count or tone map also needs a new graph.
+    /// Dynamic objects are drawn, and re-voxelized by [`Self::write_frame`], at their
+    /// transform in `scene` (the viewer's editor moves them).
     pub fn prepare(&mut self, scene: &Scene) -> Result<(), RenderError> {
         let s = self.settings.clone();
+        if let Some(v) = &mut self.voxels {
+            v.follow_objects(scene);
+        }
+        if let Some((gi, _)) = &mut self.gi {
+            gi.follow_objects(scene);
+        }
+        if let Some(pass) = &mut self.voxel_debug {
+            pass.follow_objects(scene);
+        }
         let (mut views, per_light) = shadow_views(scene, s.time_s, &s.shadow);
         let lights = frame_lights(&scene.lights, &s.shadow);
         let aspect = s.width as f32 / s.height as f32;
@@ -703,6 +751,12 @@ impl Renderer {
     /// produces, for callers that add their own outputs (the viewer presents `ldr`). Nothing
     /// is an output yet: passes that feed nothing the caller adds are culled.
     pub fn declare(&self, g: &mut RenderGraph) -> FrameImages {
+        self.declare_with_scene(g).0
+    }
+
+    /// [`Self::declare`], also returning the scene's resources as imported into `g`, for
+    /// passes the caller adds over the same scene (the viewer's `pick`).
+    pub fn declare_with_scene(&self, g: &mut RenderGraph) -> (FrameImages, SceneInputs) {
         let s = &self.settings;
         let (w, h) = (s.width, s.height);
         let scene = self.scene.import(g);
@@ -801,7 +855,7 @@ impl Renderer {
             _ => (radiance, ldr),
         };
 
-        FrameImages { radiance, ldr }
+        (FrameImages { radiance, ldr }, scene)
     }
 
     /// Linear radiance of the last completed frame.

@@ -19,7 +19,7 @@ use super::camera::Camera;
 use super::camera_path::CameraPath;
 use super::desc::{self, Check, LightDesc};
 use super::light::Light;
-use super::object::{euler_xyz_deg, Transform};
+use super::object::Transform;
 use super::SceneError;
 
 /// Why a scene could not be saved. Each says what to do.
@@ -60,8 +60,8 @@ pub enum LightEdit {
 pub struct SceneEdits {
     /// The scene's local origin ([`super::Scene::origin_m`]), added back to every position.
     pub origin_m: DVec3,
-    /// Per `[[objects]]` table: its new transform, `None` to leave it as written.
-    pub transforms: Vec<Option<Placement>>,
+    /// Per `[[objects]]` table: the transform keys to set (an empty placement leaves it).
+    pub transforms: Vec<Placement>,
     /// The lights in their new order, `None` to leave the `[[lights]]` tables as written.
     pub lights: Option<Vec<LightEdit>>,
     /// The camera to write into `[camera]` (position, `forward`, up; `target` goes), `None`
@@ -74,8 +74,9 @@ pub struct SceneEdits {
     pub relocate_from: Option<PathBuf>,
 }
 
-/// A float as the shortest decimal that reads back as the same f32.
+/// A float as the shortest decimal that reads back as the same f32 (-0 as 0).
 fn float(x: f32) -> f64 {
+    let x = if x == 0.0 { 0.0 } else { x };
     format!("{x:?}").parse().unwrap_or(f64::from(x))
 }
 
@@ -196,47 +197,52 @@ pub fn reload_light(
     desc::build_light(&Check { file, origin }, field, &d)
 }
 
-/// An object's transform as a scene file states it: the rotation as its `rotate_deg` Euler
-/// angles, which the editor's fields show and the file stores (a rotation's Euler angles,
-/// computed back, need not give the same quaternion to the last bit; stated angles do).
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// The transform keys of an `[[objects]]` table the editor changed; `None` keeps the key as
+/// the file has it (so an object only moved keeps its stated rotation to the last bit). The
+/// rotation is kept as its `rotate_deg` Euler angles, which the editor's fields show and the
+/// file stores: a rotation's Euler angles computed back need not give the same quaternion to
+/// the last bit, stated angles do.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Placement {
-    pub translate: Vec3,
+    pub translate: Option<Vec3>,
     /// About X first, then Y, then Z (world axes), degrees.
-    pub rotate_deg: Vec3,
-    pub scale: Vec3,
+    pub rotate_deg: Option<Vec3>,
+    pub scale: Option<Vec3>,
 }
 
 impl Placement {
-    /// The placement of `t` (its rotation's Euler angles, see [`euler_xyz_deg`]).
-    pub fn of(t: &Transform) -> Self {
-        Self {
-            translate: t.translate,
-            rotate_deg: euler_xyz_deg(t.rotation),
-            scale: t.scale,
+    /// Whether it changes nothing.
+    pub fn is_empty(&self) -> bool {
+        *self == Self::default()
+    }
+
+    /// The keys it sets.
+    pub fn keys(&self, origin: DVec3) -> Vec<(&'static str, Value)> {
+        let mut out = Vec::new();
+        if let Some(t) = self.translate {
+            out.push(("translate", point_value(origin, t)));
         }
+        if let Some(r) = self.rotate_deg {
+            out.push(("rotate_deg", vec3_value(r)));
+        }
+        if let Some(s) = self.scale {
+            let v = if s.x == s.y && s.y == s.z {
+                Value::from(float(s.x))
+            } else {
+                vec3_value(s)
+            };
+            out.push(("scale", v));
+        }
+        out
     }
 
-    /// The `translate`, `rotate_deg` and `scale` keys.
-    pub fn keys(&self, origin: DVec3) -> [(&'static str, Value); 3] {
-        let s = self.scale;
-        let scale = if s.x == s.y && s.y == s.z {
-            Value::from(float(s.x))
-        } else {
-            vec3_value(s)
-        };
-        [
-            ("translate", point_value(origin, self.translate)),
-            ("rotate_deg", vec3_value(self.rotate_deg)),
-            ("scale", scale),
-        ]
-    }
-
-    /// The transform the scene file gives for [`Self::keys`], through the loader's checks
-    /// (`file` and `field`, e.g. `objects[2]`, name a refused value): what the editor shows
-    /// is what the saved file renders.
+    /// The transform the scene file gives with [`Self::keys`] set over `base` (the object's
+    /// transform as loaded), through the loader's checks (`file` and `field`, e.g.
+    /// `objects[2]`, name a refused value): what the editor shows is what the saved file
+    /// renders.
     pub fn transform(
         &self,
+        base: &Transform,
         origin: DVec3,
         file: &Path,
         field: &str,
@@ -250,18 +256,26 @@ impl Placement {
             }
             out
         };
-        let [(_, translate), (_, rotate), (_, scale)] = self.keys(origin);
-        let scale = match scale.as_float() {
-            Some(s) => desc::ScalarOrVec3::Scalar(s as f32),
-            None => desc::ScalarOrVec3::Vec3(f3(&scale).map(|x| x as f32)),
-        };
+        let (mut translate, mut rotate, mut scale) = (None, None, None);
+        for (k, v) in self.keys(origin) {
+            match k {
+                "translate" => translate = Some(f3(&v)),
+                "rotate_deg" => rotate = Some(f3(&v).map(|x| x as f32)),
+                _ => {
+                    scale = Some(match v.as_float() {
+                        Some(s) => desc::ScalarOrVec3::Scalar(s as f32),
+                        None => desc::ScalarOrVec3::Vec3(f3(&v).map(|x| x as f32)),
+                    })
+                }
+            }
+        }
         desc::build_transform(
             &Check { file, origin },
             field,
-            Some(f3(&translate)),
-            Some(f3(&rotate).map(|x| x as f32)),
-            Some(scale),
-            &Transform::default(),
+            translate,
+            rotate,
+            scale,
+            base,
         )
     }
 }
@@ -337,10 +351,8 @@ pub fn apply_edits(text: &str, file: &Path, edits: &SceneEdits) -> Result<String
         });
     }
     for (t, edit) in objects.iter_mut().zip(&edits.transforms) {
-        if let Some(p) = edit {
-            for (k, v) in p.keys(origin) {
-                set(*t, k, v);
-            }
+        for (k, v) in edit.keys(origin) {
+            set(*t, k, v);
         }
         if let Some(dir) = &edits.relocate_from {
             if let Some(m) = t.get("mesh").and_then(Item::as_str).map(str::to_owned) {
@@ -454,7 +466,7 @@ mod tests {
     fn keep_all(s: &Scene) -> SceneEdits {
         SceneEdits {
             origin_m: s.origin_m,
-            transforms: vec![None; s.objects.len()],
+            transforms: vec![Placement::default(); s.objects.len()],
             ..Default::default()
         }
     }
@@ -474,15 +486,20 @@ mod tests {
     fn a_moved_rotated_scaled_object_loads_back_exactly_and_comments_stay() {
         let s = load(cornell_text());
         let p = Placement {
-            translate: s.objects[2].transform.translate + Vec3::new(0.05, 0.0, -0.03),
-            rotate_deg: Vec3::new(10.0, 33.3, -5.0),
-            scale: Vec3::new(1.0, 0.75, 1.0),
+            translate: Some(s.objects[2].transform.translate + Vec3::new(0.05, 0.0, -0.03)),
+            rotate_deg: Some(Vec3::new(10.0, 33.3, -5.0)),
+            scale: Some(Vec3::new(1.0, 0.75, 1.0)),
         };
         let t = p
-            .transform(s.origin_m, Path::new(FILE), "objects[2]")
+            .transform(
+                &s.objects[2].transform,
+                s.origin_m,
+                Path::new(FILE),
+                "objects[2]",
+            )
             .expect("valid");
         let mut e = keep_all(&s);
-        e.transforms[2] = Some(p);
+        e.transforms[2] = p;
         let text = apply_edits(cornell_text(), Path::new(FILE), &e).expect("saves");
         let back = load(&text);
         assert_eq!(back.objects[2].transform, t, "{text}");
@@ -497,28 +514,48 @@ mod tests {
     #[test]
     fn a_placement_loads_back_exactly_far_from_the_origin() {
         // Far out the loader subtracts the origin in f64: the local f32 values come back.
-        let origin = DVec3::new(512.0, 0.0, -256.0);
-        let t = Transform {
-            translate: Vec3::new(0.1, -3.25, 7.0),
-            rotation: crate::scene::rotation_from_euler_xyz_deg(Vec3::new(30.0, 45.0, 10.0)),
-            scale: Vec3::splat(0.02),
+        let text = "[camera]\nposition = [512, 1, -260]\ntarget = [512, 1, -256]\n\
+                    fov_y_deg = 40\n[[objects]]\nbuiltin = \"cube\"\n\
+                    translate = [512, 0, -256]\nrotate_deg = [0.0, 33.3, 0.0] # turned\n";
+        let s = load(text);
+        assert_eq!(s.origin_m, DVec3::new(512.0, 0.0, -256.0));
+        let base = s.objects[0].transform;
+        // Only moved: the stated rotation stays as written, and so does its comment.
+        let p = Placement {
+            translate: Some(Vec3::new(0.1, -3.25, 7.0)),
+            ..Default::default()
         };
-        let p = Placement::of(&t);
-        let back = p.transform(origin, Path::new(FILE), "o").expect("valid");
-        assert_eq!((back.translate, back.scale), (t.translate, t.scale));
-        // The Euler angles of R = Rz·Ry·Rx give R back to f32 rounding.
-        assert!(back.rotation.angle_between(t.rotation) < 1e-3);
-        let text = format!(
-            "[camera]\nposition = [512, 1, -260]\ntarget = [512, 1, -256]\nfov_y_deg = 40\n\
-             [[objects]]\nbuiltin = \"cube\"\ntranslate = [512, 0, -256]\n"
+        let t = p
+            .transform(&base, s.origin_m, Path::new(FILE), "o")
+            .expect("valid");
+        assert_eq!(
+            (t.translate, t.rotation),
+            (Vec3::new(0.1, -3.25, 7.0), base.rotation)
         );
-        let s = load(&text);
-        assert_eq!(s.origin_m, origin);
         let mut e = keep_all(&s);
-        e.transforms[0] = Some(p);
-        let out = apply_edits(&text, Path::new(FILE), &e).expect("saves");
-        assert_eq!(load(&out).objects[0].transform, back, "{out}");
+        e.transforms[0] = p;
+        let out = apply_edits(text, Path::new(FILE), &e).expect("saves");
+        assert_eq!(load(&out).objects[0].transform, t, "{out}");
         assert!(out.contains("translate = [512.1, -3.25, -249.0]"), "{out}");
+        assert!(
+            out.contains("rotate_deg = [0.0, 33.3, 0.0] # turned"),
+            "{out}"
+        );
+        // Stated Euler angles reload to the same rotation, and give R = Rz·Ry·Rx back.
+        let turned = Placement {
+            rotate_deg: Some(crate::scene::euler_xyz_deg(
+                crate::scene::rotation_from_euler_xyz_deg(Vec3::new(30.0, 45.0, 10.0)),
+            )),
+            ..p
+        };
+        let t = turned
+            .transform(&base, s.origin_m, Path::new(FILE), "o")
+            .expect("valid");
+        e.transforms[0] = turned;
+        let out = apply_edits(text, Path::new(FILE), &e).expect("saves");
+        assert_eq!(load(&out).objects[0].transform, t, "{out}");
+        let want = crate::scene::rotation_from_euler_xyz_deg(Vec3::new(30.0, 45.0, 10.0));
+        assert!(t.rotation.angle_between(want) < 1e-3);
     }
 
     #[test]
@@ -627,7 +664,7 @@ mod tests {
     fn a_file_that_changed_since_loading_is_not_overwritten() {
         let s = builtin("cornell").expect("cornell");
         let mut e = keep_all(&s);
-        e.transforms.push(None);
+        e.transforms.push(Placement::default());
         let err = apply_edits(cornell_text(), Path::new(FILE), &e).expect_err("4 vs 3");
         assert!(err.to_string().contains("3 `[[objects]]`"), "{err}");
         let err = apply_edits("[camera", Path::new(FILE), &e).expect_err("syntax");
@@ -639,7 +676,7 @@ mod tests {
         let text = "[camera]\nposition = [0, 0, -1]\ntarget = [0, 0, 0]\nfov_y_deg = 40\n\
                     [[objects]]\nmesh = \"meshes/a.obj\"\n";
         let e = SceneEdits {
-            transforms: vec![None],
+            transforms: vec![Placement::default()],
             relocate_from: Some(PathBuf::from("/data/scenes")),
             ..Default::default()
         };
