@@ -789,3 +789,390 @@ fn viewer_starts_with_the_best_configuration_within_a_budget() {
     let err = String::from_utf8_lossy(&missing.stderr);
     assert!(err.contains("/nonexistent/sweep.csv"), "{err}");
 }
+
+/// A viewer driven by real X events (XTEST through `xdotool`) whose log the test reads line by
+/// line: the editor logs what it selected, where the selection's handles are and what it
+/// saved, so the test can aim its clicks and wait for each step.
+struct EditSession {
+    child: Child,
+    window: String,
+    lines: std::sync::mpsc::Receiver<String>,
+    reader: Option<std::thread::JoinHandle<()>>,
+    log: String,
+}
+
+impl EditSession {
+    fn start(args: &[&str]) -> Self {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_voxgi"))
+            .args(args)
+            .env_remove("WAYLAND_DISPLAY")
+            .env("RUST_LOG", "warn,voxgi::app=info")
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("run the voxgi binary");
+        let stderr = child.stderr.take().expect("piped stderr");
+        let (tx, lines) = std::sync::mpsc::channel::<String>();
+        let reader = std::thread::spawn(move || {
+            use std::io::BufRead;
+            for line in std::io::BufReader::new(stderr)
+                .lines()
+                .map_while(Result::ok)
+            {
+                let _ = tx.send(line);
+            }
+        });
+        let window = xdotool(&["search", "--sync", "--onlyvisible", "--name", "^voxgi$"]);
+        let window = window.lines().next().expect("a window id").to_string();
+        xdotool(&["windowfocus", "--sync", &window]);
+        Self {
+            child,
+            window,
+            lines,
+            reader: Some(reader),
+            log: String::new(),
+        }
+    }
+
+    /// The next log line containing `want` (within 90 s: a new renderer on lavapipe).
+    fn wait_for(&mut self, want: &str) -> String {
+        let started = Instant::now();
+        loop {
+            let left = Duration::from_secs(90).saturating_sub(started.elapsed());
+            match self.lines.recv_timeout(left) {
+                Ok(line) => {
+                    self.log += &line;
+                    self.log.push('\n');
+                    if line.contains(want) {
+                        return line;
+                    }
+                }
+                Err(_) => {
+                    let _ = self.child.kill();
+                    panic!("no `{want}` in the viewer's log within 90 s:\n{}", self.log)
+                }
+            }
+        }
+    }
+
+    fn click(&self, [x, y]: [f32; 2]) {
+        let (x, y) = (format!("{}", x.round()), format!("{}", y.round()));
+        xdotool(&["mousemove", "--window", &self.window, &x, &y]);
+        std::thread::sleep(Duration::from_millis(300));
+        xdotool(&["click", "1"]);
+    }
+
+    /// Presses the left button at `from` and drags by `steps` × (`dx`, `dy`) pixels.
+    fn drag(&self, from: [f32; 2], (dx, dy): (i32, i32), steps: u32) {
+        let (x, y) = (
+            format!("{}", from[0].round()),
+            format!("{}", from[1].round()),
+        );
+        xdotool(&["mousemove", "--window", &self.window, &x, &y]);
+        std::thread::sleep(Duration::from_millis(300));
+        xdotool(&["mousedown", "1"]);
+        std::thread::sleep(Duration::from_millis(300));
+        for _ in 0..steps {
+            xdotool(&["mousemove_relative", "--", &dx.to_string(), &dy.to_string()]);
+            std::thread::sleep(Duration::from_millis(250));
+        }
+        xdotool(&["mouseup", "1"]);
+    }
+
+    fn key(&self, key: &str) {
+        xdotool(&["windowfocus", "--sync", &self.window]);
+        xdotool(&["key", key]);
+    }
+
+    /// Escape, then the exit status (0: no validation message, teardown included).
+    fn finish(mut self) -> String {
+        self.key("Escape");
+        wait_for_exit(&mut self.child, "the editing session");
+        let status = self.child.wait().expect("the viewer's status");
+        if let Some(r) = self.reader.take() {
+            r.join().expect("the log reader");
+        }
+        for line in self.lines.try_iter() {
+            self.log += &line;
+            self.log.push('\n');
+        }
+        assert!(
+            status.success(),
+            "voxgi --validate view (editing) failed ({status}):\n{}",
+            self.log
+        );
+        self.log
+    }
+}
+
+/// `[x, y]` after `key` in a log line (`… x [301.5, 150.0] …`).
+fn logged_point(line: &str, key: &str) -> [f32; 2] {
+    let rest = line
+        .split_once(&format!("{key} ["))
+        .unwrap_or_else(|| panic!("no `{key} [..]` in {line}"))
+        .1;
+    let nums: Vec<f32> = rest
+        .split(']')
+        .next()
+        .unwrap_or("")
+        .split(',')
+        .map(|x| x.trim().parse().expect("a number"))
+        .collect();
+    [nums[0], nums[1]]
+}
+
+/// Where the scene lies in the window (`edit: scene viewport at [x, 0] size [w, h] px`).
+fn viewport(line: &str) -> [f32; 4] {
+    let [x, y] = logged_point(line, "at");
+    let [w, h] = logged_point(line, "size");
+    [x, y, w, h]
+}
+
+/// Window pixel of world point `p` seen by `camera` in `viewport` (Vulkan clip space: y down).
+fn project(camera: &voxgi::scene::Camera, viewport: [f32; 4], p: glam::Vec3) -> [f32; 2] {
+    let clip = camera.view_proj(viewport[2] / viewport[3]) * p.extend(1.0);
+    [
+        viewport[0] + (clip.x / clip.w * 0.5 + 0.5) * viewport[2],
+        viewport[1] + (clip.y / clip.w * 0.5 + 0.5) * viewport[3],
+    ]
+}
+
+/// Renders `scene` headless at the screenshot's size with `extra` flags.
+fn render_headless(
+    dir: &Path,
+    scene: &Path,
+    extra: &[&str],
+    (w, h): (u32, u32),
+) -> image::RgbaImage {
+    let out_png = dir.join(format!(
+        "{}-render.png",
+        scene
+            .file_stem()
+            .map_or("scene".into(), |s| s.to_string_lossy())
+    ));
+    let (w, h) = (w.to_string(), h.to_string());
+    let mut args = vec![
+        "--validate",
+        "render",
+        scene.to_str().expect("utf-8 path"),
+        "--width",
+        &w,
+        "--height",
+        &h,
+        "-o",
+        out_png.to_str().expect("utf-8 path"),
+    ];
+    args.extend(extra);
+    let out = voxgi(&args);
+    assert_success(&out, &format!("voxgi render {}", scene.display()));
+    load(&out_png)
+}
+
+fn max_channel_diff(a: &image::RgbaImage, b: &image::RgbaImage) -> u8 {
+    a.pixels()
+        .zip(b.pixels())
+        .flat_map(|(p, q)| (0..3).map(move |c| p.0[c].abs_diff(q.0[c])))
+        .max()
+        .unwrap_or(0)
+}
+
+/// Click the tall block (the GPU pick selects it), drag its x handle with the mouse (it
+/// becomes dynamic and is re-voxelized where it goes), Ctrl+S, F12, Escape: the saved file
+/// holds the move and only the move, and the voxel view the viewer showed is what a headless
+/// render of the saved file shows. Against the scene before the edit, the voxels changed only
+/// where the block was or went.
+#[test]
+fn viewer_picks_drags_revoxelizes_and_saves_an_object_with_real_mouse_events() {
+    require_display();
+    let _display = lock_display();
+    let dir = scratch_dir("edit-object");
+    let scene = dir.join("scene.toml");
+    std::fs::write(&scene, include_str!("../assets/scenes/cornell.toml")).expect("write");
+    let (saved, shot) = (dir.join("saved.toml"), dir.join("shot.png"));
+    let mut s = EditSession::start(&[
+        "--validate",
+        "view",
+        scene.to_str().expect("utf-8 path"),
+        "--gi",
+        "none",
+        "--debug",
+        "voxels",
+        "--width",
+        "560",
+        "--height",
+        "320",
+        "--save",
+        saved.to_str().expect("utf-8 path"),
+        "--screenshot",
+        shot.to_str().expect("utf-8 path"),
+    ]);
+    let vp = viewport(&s.wait_for("edit: scene viewport at"));
+    let original = voxgi::scene::Scene::load(&scene).expect("the scene loads");
+    let block = original.objects[2].aabb_at(0.0);
+    s.click(project(&original.camera, vp, block.center()));
+    let selected = s.wait_for("edit: selected object");
+    assert!(
+        selected.contains("selected object 2 \"tall_block\""),
+        "the click on the tall block selected: {selected}"
+    );
+    // Screen-left is world +X for a camera looking along +Z: the x handle points left.
+    let tip = logged_point(&selected, "x");
+    s.drag(tip, (-4, 0), 5);
+    s.wait_for("edit: object 2 at translate");
+    s.key("ctrl+s");
+    s.wait_for("saved scene to");
+    s.key("F12");
+    s.wait_for("wrote");
+    let log = s.finish();
+    assert!(!log.contains("Validation"), "{log}");
+
+    let text = std::fs::read_to_string(&saved).expect("the saved scene");
+    let back = voxgi::scene::Scene::load(&saved).expect("the saved scene loads");
+    let moved = back.objects[2].transform.translate - original.objects[2].transform.translate;
+    // Dragging the x handle moves along x only, exactly (the other keys are not written).
+    assert!(
+        moved.x > 0.005 && moved.y == 0.0 && moved.z == 0.0,
+        "moved by {moved}:\n{text}"
+    );
+    assert_eq!(back.objects[..2], original.objects[..2]);
+    assert_eq!(back.lights, original.lights);
+    assert!(
+        text.contains("# Floor, ceiling and back wall white"),
+        "{text}"
+    );
+    assert!(
+        !text.contains("rotate_deg") && !text.contains("scale"),
+        "{text}"
+    );
+
+    let img = load(&shot);
+    let size = img.dimensions();
+    let debug = ["--gi", "none", "--debug", "voxels"];
+    let after = render_headless(&dir, &saved, &debug, size);
+    let diff = max_channel_diff(&img, &after);
+    assert!(
+        diff <= 1,
+        "the viewer's voxels differ from a render of the saved scene by {diff}/255"
+    );
+    // Against the voxels before the move: changes only where the block was or is now, i.e.
+    // inside the projection of the union of its old and new bounds, widened by 2 pixels (a
+    // voxel is 0.56 m / 128 = 4.4 mm, under a pixel here; conservative voxelization adds one
+    // voxel around each triangle; the debug view's rays enter a voxel up to a pixel aside).
+    let before = render_headless(&dir, &scene, &debug, size);
+    let union = block.union(back.objects[2].aabb_at(0.0));
+    let (mut lo, mut hi) = ([f32::MAX; 2], [f32::MIN; 2]);
+    for k in 0..8 {
+        let c = glam::Vec3::new(
+            if k & 1 == 0 { union.min.x } else { union.max.x },
+            if k & 2 == 0 { union.min.y } else { union.max.y },
+            if k & 4 == 0 { union.min.z } else { union.max.z },
+        );
+        // In the screenshot's pixels (the viewport's own, from 0).
+        let p = project(&original.camera, [0.0, 0.0, vp[2], vp[3]], c);
+        for i in 0..2 {
+            lo[i] = lo[i].min(p[i] - 2.0);
+            hi[i] = hi[i].max(p[i] + 2.0);
+        }
+    }
+    let mut changed = 0;
+    for (x, y, p) in img.enumerate_pixels() {
+        if max_channel_diff(
+            &image::RgbaImage::from_pixel(1, 1, *p),
+            &image::RgbaImage::from_pixel(1, 1, *before.get_pixel(x, y)),
+        ) > 1
+        {
+            changed += 1;
+            let (fx, fy) = (x as f32 + 0.5, y as f32 + 0.5);
+            assert!(
+                fx >= lo[0] && fx <= hi[0] && fy >= lo[1] && fy <= hi[1],
+                "pixel ({x}, {y}) changed outside the block's old and new bounds {lo:?}–{hi:?}"
+            );
+        }
+    }
+    assert!(
+        changed > 20,
+        "the move changed only {changed} pixels of the voxels"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Click the spot light's marker, drag it along x, add two point lights with Insert, remove
+/// the second with Delete (each a new renderer: the shadow views change), Ctrl+S, F12,
+/// Escape: the saved file has the moved spot (its comment kept) and one new point light, and
+/// its headless render is what the viewer showed.
+#[test]
+fn viewer_moves_adds_and_removes_lights_with_real_input_events() {
+    require_display();
+    let _display = lock_display();
+    let dir = scratch_dir("edit-lights");
+    let scene = dir.join("scene.toml");
+    std::fs::write(&scene, include_str!("../assets/scenes/cornell.toml")).expect("write");
+    let (saved, shot) = (dir.join("saved.toml"), dir.join("shot.png"));
+    let mut s = EditSession::start(&[
+        "--validate",
+        "view",
+        scene.to_str().expect("utf-8 path"),
+        "--gi",
+        "none",
+        "--width",
+        "560",
+        "--height",
+        "320",
+        "--save",
+        saved.to_str().expect("utf-8 path"),
+        "--screenshot",
+        shot.to_str().expect("utf-8 path"),
+    ]);
+    let vp = viewport(&s.wait_for("edit: scene viewport at"));
+    let original = voxgi::scene::Scene::load(&scene).expect("the scene loads");
+    let spot = original.lights[0].position().expect("a spot light");
+    s.click(project(&original.camera, vp, spot));
+    let selected = s.wait_for("edit: selected light");
+    assert!(selected.contains("selected light 0 (spot 0)"), "{selected}");
+    s.drag(logged_point(&selected, "x"), (-4, 0), 5);
+    s.wait_for("edit: light 0 now");
+    s.key("Insert");
+    s.wait_for("edit: added light 1");
+    s.wait_for("new renderer");
+    s.key("Insert");
+    s.wait_for("edit: added light 2");
+    s.wait_for("new renderer");
+    s.key("Delete");
+    s.wait_for("edit: removed light 2");
+    s.wait_for("new renderer");
+    s.key("ctrl+s");
+    s.wait_for("saved scene to");
+    s.key("F12");
+    s.wait_for("wrote");
+    s.finish();
+
+    let text = std::fs::read_to_string(&saved).expect("the saved scene");
+    let back = voxgi::scene::Scene::load(&saved).expect("the saved scene loads");
+    assert_eq!(back.lights.len(), 2, "{text}");
+    let moved = back.lights[0].position().expect("the spot") - spot;
+    assert!(
+        moved.x > 0.005 && moved.y == 0.0 && moved.z == 0.0,
+        "the spot moved by {moved}:\n{text}"
+    );
+    assert!(back.lights[1].is_point(), "{text}");
+    assert!(
+        text.contains("# A spot light just under the ceiling"),
+        "{text}"
+    );
+    assert_eq!(back.objects, original.objects);
+
+    let img = load(&shot);
+    let flags = ["--gi", "none"];
+    let after = render_headless(&dir, &saved, &flags, img.dimensions());
+    let diff = max_channel_diff(&img, &after);
+    assert!(
+        diff <= 1,
+        "the viewer's frame differs from a render of the saved scene by {diff}/255"
+    );
+    let before = render_headless(&dir, &scene, &flags, img.dimensions());
+    assert!(
+        max_channel_diff(&img, &before) > 16,
+        "the light edits did not change the image"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
