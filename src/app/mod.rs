@@ -739,11 +739,6 @@ impl Viewer {
         self.stats.push(finished);
         // The pick this slot recorded two frames ago has landed (the fence was waited).
         let picked = self.pick.as_mut().and_then(|p| p.collect(slot));
-        let frame_size = (renderer.settings.width, renderer.settings.height);
-        let pick_request = self.editor.take_pick_request();
-        if let Some(p) = self.pick.as_mut() {
-            p.arm(slot, pick_request, frame_size);
-        }
         let (index, ready) = match swapchain.acquire(slot)? {
             Acquired::Image { index, ready } => (index, ready),
             Acquired::OutOfDate => {
@@ -753,6 +748,12 @@ impl Viewer {
                 return Ok(false);
             }
         };
+        // A click waiting for the GPU is answered by this frame (recorded below).
+        let frame_size = (renderer.settings.width, renderer.settings.height);
+        let pick_request = self.editor.take_pick_request();
+        if let Some(p) = self.pick.as_mut() {
+            p.arm(slot, pick_request, frame_size);
+        }
         graph
             .exec
             .rebind_image(graph.present, &swapchain.images[index as usize])?;

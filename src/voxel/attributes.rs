@@ -171,9 +171,9 @@ impl TriangleAttributeVolumes {
         // triangles write everything.
         let emits = scene.has_emission();
         let lobes = material && !scene.is_all_lambert();
-        let written = |o: &crate::scene::Object| {
-            !(atlas_writes && !emits && !lobes && super::gpu_atlas::uses_atlas(scene, o))
-        };
+        let atlas_only = atlas_writes && !emits && !lobes;
+        let written =
+            |o: &crate::scene::Object| !atlas_only || !super::gpu_atlas::uses_atlas(scene, o);
         let indices = (0..scene.objects.len())
             .filter(|&i| written(&scene.objects[i]))
             .collect();
