@@ -977,10 +977,11 @@ fn max_channel_diff(a: &image::RgbaImage, b: &image::RgbaImage) -> u8 {
 }
 
 /// Click the tall block (the GPU pick selects it), drag its x handle with the mouse (it
-/// becomes dynamic and is re-voxelized where it goes), Ctrl+S, F12, Escape: the saved file
-/// holds the move and only the move, and the voxel view the viewer showed is what a headless
-/// render of the saved file shows. Against the scene before the edit, the voxels changed only
-/// where the block was or went.
+/// becomes dynamic and is re-voxelized where it goes), switch to rotation with `2` and turn it
+/// about Y with the mouse, Ctrl+S, F12, Escape: the saved file holds the move and the turn
+/// (no scale), and the voxel view the viewer showed is what a headless render of the saved
+/// file shows. Against the scene before the edit, the voxels changed only where the block was
+/// or went.
 #[test]
 fn viewer_picks_drags_revoxelizes_and_saves_an_object_with_real_mouse_events() {
     require_display();
@@ -1019,6 +1020,10 @@ fn viewer_picks_drags_revoxelizes_and_saves_an_object_with_real_mouse_events() {
     let tip = logged_point(&selected, "x");
     s.drag(tip, (-4, 0), 5);
     s.wait_for("edit: object 2 at translate");
+    s.key("2");
+    let rotate = s.wait_for("Rotate handles");
+    s.drag(logged_point(&rotate, "y"), (4, 0), 5);
+    s.wait_for("edit: object 2 at translate");
     s.key("ctrl+s");
     s.wait_for("saved scene to");
     s.key("F12");
@@ -1028,12 +1033,20 @@ fn viewer_picks_drags_revoxelizes_and_saves_an_object_with_real_mouse_events() {
 
     let text = std::fs::read_to_string(&saved).expect("the saved scene");
     let back = voxgi::scene::Scene::load(&saved).expect("the saved scene loads");
-    let moved = back.objects[2].transform.translate - original.objects[2].transform.translate;
-    // Dragging the x handle moves along x only, exactly (the other keys are not written).
+    // Turning about the block's centre: its centre moved by the drag along x only.
+    let centre = |o: &voxgi::scene::Object| o.aabb_at(0.0).center();
+    let moved = centre(&back.objects[2]) - block.center();
     assert!(
-        moved.x > 0.005 && moved.y == 0.0 && moved.z == 0.0,
-        "moved by {moved}:\n{text}"
+        moved.x > 0.005 && moved.y.abs() < 1e-5 && moved.z.abs() < 1e-5,
+        "the centre moved by {moved}:\n{text}"
     );
+    // A turn about world Y: rotate_deg = [0, θ, 0] up to rounding, θ ≠ 0.
+    let turned = voxgi::scene::euler_xyz_deg(back.objects[2].transform.rotation);
+    assert!(
+        turned.y.abs() > 1.0 && turned.x.abs() < 1e-3 && turned.z.abs() < 1e-3,
+        "turned by {turned} degrees:\n{text}"
+    );
+    assert_eq!(back.objects[2].transform.scale, glam::Vec3::ONE);
     assert_eq!(back.objects[..2], original.objects[..2]);
     assert_eq!(back.lights, original.lights);
     assert!(
@@ -1041,7 +1054,7 @@ fn viewer_picks_drags_revoxelizes_and_saves_an_object_with_real_mouse_events() {
         "{text}"
     );
     assert!(
-        !text.contains("rotate_deg") && !text.contains("scale"),
+        text.contains("rotate_deg") && !text.contains("scale"),
         "{text}"
     );
 
@@ -1097,9 +1110,9 @@ fn viewer_picks_drags_revoxelizes_and_saves_an_object_with_real_mouse_events() {
 }
 
 /// Click the spot light's marker, drag it along x, add two point lights with Insert, remove
-/// the second with Delete (each a new renderer: the shadow views change), Ctrl+S, F12,
-/// Escape: the saved file has the moved spot (its comment kept) and one new point light, and
-/// its headless render is what the viewer showed.
+/// the second with Delete (each a new renderer: the shadow views change), fly forward with W,
+/// Ctrl+S, F12, Escape: the saved file has the moved spot (its comment kept), one new point
+/// light and the camera where it flew, and its headless render is what the viewer showed.
 #[test]
 fn viewer_moves_adds_and_removes_lights_with_real_input_events() {
     require_display();
@@ -1140,6 +1153,12 @@ fn viewer_moves_adds_and_removes_lights_with_real_input_events() {
     s.key("Delete");
     s.wait_for("edit: removed light 2");
     s.wait_for("new renderer");
+    // Held over several frames (a frame can take a few hundred ms on lavapipe).
+    xdotool(&["windowfocus", "--sync", &s.window]);
+    xdotool(&["keydown", "w"]);
+    std::thread::sleep(Duration::from_millis(1500));
+    xdotool(&["keyup", "w"]);
+    std::thread::sleep(Duration::from_millis(500));
     s.key("ctrl+s");
     s.wait_for("saved scene to");
     s.key("F12");
@@ -1160,6 +1179,14 @@ fn viewer_moves_adds_and_removes_lights_with_real_input_events() {
         "{text}"
     );
     assert_eq!(back.objects, original.objects);
+    // W flies along the view (+Z): the saved camera stands further in, looking the same way.
+    let flew = back.camera.position - original.camera.position;
+    assert!(
+        flew.z > 0.01 && flew.x.abs() < 1e-6 && flew.y.abs() < 1e-6,
+        "the camera flew by {flew}:\n{text}"
+    );
+    assert!(back.camera.forward.distance(original.camera.forward) < 1e-6);
+    assert!(!text.contains("target ="), "{text}");
 
     let img = load(&shot);
     let flags = ["--gi", "none"];

@@ -245,6 +245,8 @@ struct Viewer {
     scene_shape: Option<edit::SceneShape>,
     /// The lights before a change that needs a new renderer, until it is made.
     light_backup: Option<edit::LightBackup>,
+    /// When the last pick was recorded, and the frame count then (for the log).
+    pick_started: Option<(Instant, u64)>,
 }
 
 /// The view the editor's handles are drawn for.
@@ -436,6 +438,7 @@ impl Viewer {
             ctrl: false,
             scene_shape: None,
             light_backup: None,
+            pick_started: None,
         }
     }
 
@@ -736,9 +739,16 @@ impl Viewer {
         };
         let slot = frame_loop.current_slot();
         let (_, cmd, timestamps, finished) = frame_loop.begin(ctx)?;
-        self.stats.push(finished);
         // The pick this slot recorded two frames ago has landed (the fence was waited).
-        let picked = self.pick.as_mut().and_then(|p| p.collect(slot));
+        let picked = self.pick.as_mut().and_then(|p| p.collect(slot)).map(|p| {
+            let gpu_ms: f64 = finished
+                .iter()
+                .filter(|t| t.name.starts_with("pick"))
+                .map(|t| t.gpu_ms)
+                .sum();
+            (p, gpu_ms)
+        });
+        self.stats.push(finished);
         let (index, ready) = match swapchain.acquire(slot)? {
             Acquired::Image { index, ready } => (index, ready),
             Acquired::OutOfDate => {
@@ -753,6 +763,9 @@ impl Viewer {
         let pick_request = self.editor.take_pick_request();
         if let Some(p) = self.pick.as_mut() {
             p.arm(slot, pick_request, frame_size);
+        }
+        if pick_request.is_some() {
+            self.pick_started = Some((Instant::now(), self.report.frames));
         }
         graph
             .exec
@@ -770,7 +783,15 @@ impl Viewer {
         if swapchain.present(ctx, index)? {
             self.swapchain_dirty = true;
         }
-        if let Some(p) = picked {
+        if let Some((p, gpu_ms)) = picked {
+            if let Some((t, frame)) = self.pick_started.take() {
+                log::info!(
+                    "edit: pick at {:?} answered {} ms and {} frames after it was recorded (GPU: pick + pick_readback {gpu_ms:.3} ms)",
+                    p.pixel,
+                    t.elapsed().as_millis(),
+                    self.report.frames - frame
+                );
+            }
             self.edit_picked(p);
         }
         self.report.frames += 1;
@@ -911,15 +932,17 @@ impl Viewer {
     ) -> Result<(), AppError> {
         ctx.wait_idle()?;
         self.graph = None;
+        let started = Instant::now();
         match Renderer::new(ctx, &self.scene, settings.clone()) {
             Ok(r) => {
                 self.renderer = Some(r);
                 self.scene_shape = Some(edit::SceneShape::of(&self.scene));
                 log::info!(
-                    "new renderer {}x{}, indirect light: {}",
+                    "new renderer {}x{}, indirect light: {} (made in {} ms)",
                     settings.width,
                     settings.height,
-                    describe_gi(&settings.gi)
+                    describe_gi(&settings.gi),
+                    started.elapsed().as_millis()
                 );
                 Ok(())
             }
