@@ -245,8 +245,8 @@ struct Viewer {
     scene_shape: Option<edit::SceneShape>,
     /// The lights before a change that needs a new renderer, until it is made.
     light_backup: Option<edit::LightBackup>,
-    /// When the last pick was recorded, and the frame count then (for the log).
-    pick_started: Option<(Instant, u64)>,
+    /// Per frame slot, when its pick was recorded and the frame count then (for the log).
+    pick_started: [Option<(Instant, u64)>; MAX_FRAMES_IN_FLIGHT],
 }
 
 /// The view the editor's handles are drawn for.
@@ -438,7 +438,7 @@ impl Viewer {
             ctrl: false,
             scene_shape: None,
             light_backup: None,
-            pick_started: None,
+            pick_started: [None; MAX_FRAMES_IN_FLIGHT],
         }
     }
 
@@ -746,7 +746,8 @@ impl Viewer {
                 .filter(|t| t.name.starts_with("pick"))
                 .map(|t| t.gpu_ms)
                 .sum();
-            (p, gpu_ms)
+            let started = self.pick_started.get_mut(slot).and_then(Option::take);
+            (p, gpu_ms, started)
         });
         self.stats.push(finished);
         let (index, ready) = match swapchain.acquire(slot)? {
@@ -764,8 +765,8 @@ impl Viewer {
         if let Some(p) = self.pick.as_mut() {
             p.arm(slot, pick_request, frame_size);
         }
-        if pick_request.is_some() {
-            self.pick_started = Some((Instant::now(), self.report.frames));
+        if let Some(s) = self.pick_started.get_mut(slot) {
+            *s = pick_request.map(|_| (Instant::now(), self.report.frames));
         }
         graph
             .exec
@@ -783,8 +784,8 @@ impl Viewer {
         if swapchain.present(ctx, index)? {
             self.swapchain_dirty = true;
         }
-        if let Some((p, gpu_ms)) = picked {
-            if let Some((t, frame)) = self.pick_started.take() {
+        if let Some((p, gpu_ms, started)) = picked {
+            if let Some((t, frame)) = started {
                 log::info!(
                     "edit: pick at {:?} answered {} ms and {} frames after it was recorded (GPU: pick + pick_readback {gpu_ms:.3} ms)",
                     p.pixel,
