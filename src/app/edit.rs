@@ -238,8 +238,6 @@ pub struct Editor {
     source: Option<PathBuf>,
     builtin: Option<String>,
     save_to: Option<PathBuf>,
-    /// A drag or field edit ended: the viewer checks the bounds.
-    pub edit_ended: bool,
     /// The last message for the panel.
     pub status: String,
 }
@@ -272,7 +270,6 @@ impl Editor {
             source: scene.source.clone(),
             builtin,
             save_to,
-            edit_ended: false,
             status: String::new(),
         }
     }
@@ -499,11 +496,7 @@ impl Editor {
 
     /// Ends a drag; returns whether one was in progress.
     pub fn release(&mut self) -> bool {
-        let was = self.drag.take().is_some();
-        if was {
-            self.edit_ended = true;
-        }
-        was
+        self.drag.take().is_some()
     }
 
     pub fn select(&mut self, s: Option<Selection>) {
@@ -1276,9 +1269,6 @@ impl super::Viewer {
                         }
                         self.editor.placed(i, p);
                         self.editor.status.clear();
-                        if !self.editor.dragging() {
-                            self.editor.edit_ended = true;
-                        }
                     }
                     Err(e) => self.editor.status = e,
                 }
@@ -1365,21 +1355,14 @@ impl super::Viewer {
 
     /// Whether the scene changed in a way the renderer was not made for (see [`SceneShape`]
     /// and `Renderer::can_move`): checked before each frame.
-    pub(super) fn scene_needs_new_renderer(&mut self, editing: bool) -> bool {
+    pub(super) fn scene_needs_new_renderer(&self, editing: bool) -> bool {
         let (Some(r), Some(built)) = (&self.renderer, &self.scene_shape) else {
             return false;
         };
         let now = SceneShape::of(&self.scene);
-        let bounds_changed = {
-            let ended = std::mem::take(&mut self.editor.edit_ended);
-            if editing {
-                // Checked once the drag or field edit ends.
-                self.editor.edit_ended |= ended;
-                false
-            } else {
-                !now.same_bounds(built)
-            }
-        };
+        // Bounds are checked once no drag or field edit is in progress (one new renderer per
+        // edit, not per frame of it).
+        let bounds_changed = !editing && !now.same_bounds(built);
         let moves = self
             .scene
             .objects
