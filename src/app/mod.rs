@@ -15,6 +15,7 @@
 
 mod camera;
 mod edit;
+mod edit_ui;
 mod overlay;
 mod panel;
 mod pick;
@@ -876,7 +877,7 @@ impl Viewer {
         };
         let (controls, stats) = (&mut self.controls, &self.stats);
         let mut layout = panel::PanelLayout::default();
-        let edit_view = edit::EditView {
+        let edit_view = edit_ui::EditView {
             editor: &self.editor,
             scene: &self.scene,
             light_names: &self.light_names,
@@ -890,9 +891,9 @@ impl Viewer {
         };
         let mut edits = Vec::new();
         let out = egui_ctx.run(raw, |c| {
-            let mut edit_ui = |ui: &mut egui::Ui| edits = edit::panel(ui, &edit_view);
+            let mut edit_ui = |ui: &mut egui::Ui| edits = edit_ui::panel(ui, &edit_view);
             layout = panel::draw(c, controls, stats, &info, &mut edit_ui);
-            edit::paint(
+            edit_ui::paint(
                 c,
                 edit_view.editor,
                 edit_view.scene,
