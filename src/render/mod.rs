@@ -994,3 +994,32 @@ fn camera_relative_inverse(camera: &crate::scene::Camera, aspect: f32) -> glam::
     relative.position = glam::Vec3::ZERO;
     relative.view_proj(aspect).inverse()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The lights a frame holds: 64 lights, 64 shadow views (a cube-shadowed point light takes
+    /// 6, so 10 fit and 11 do not; with paraboloid shadows 2 each, 32 fit).
+    #[test]
+    fn check_lights_counts_lights_and_shadow_views() {
+        let mut scene = crate::scene::builtin("cornell-point").expect("cornell-point");
+        let point = scene.lights[0];
+        let settings = RenderSettings::default();
+        scene.lights = vec![point; 10];
+        assert!(check_lights(&scene, &settings).is_ok());
+        scene.lights.push(point);
+        assert!(matches!(
+            check_lights(&scene, &settings),
+            Err(RenderError::TooManyShadowViews(66))
+        ));
+        let mut paraboloid = settings.clone();
+        paraboloid.shadow.point_technique = PointShadow::DualParaboloid;
+        assert!(check_lights(&scene, &paraboloid).is_ok());
+        scene.lights = vec![point; 65];
+        assert!(matches!(
+            check_lights(&scene, &paraboloid),
+            Err(RenderError::TooManyLights(65))
+        ));
+    }
+}
