@@ -855,6 +855,21 @@ impl EditSession {
         }
     }
 
+    /// `first` or the last line containing `want` logged since, once `settle` has passed
+    /// (the panel may lay out again in the frames after a change).
+    fn latest(&mut self, first: String, want: &str, settle: Duration) -> String {
+        std::thread::sleep(settle);
+        let mut last = first;
+        for line in self.lines.try_iter() {
+            self.log += &line;
+            self.log.push('\n');
+            if line.contains(want) {
+                last = line;
+            }
+        }
+        last
+    }
+
     fn click(&self, [x, y]: [f32; 2]) {
         let (x, y) = (format!("{}", x.round()), format!("{}", y.round()));
         xdotool(&["mousemove", "--window", &self.window, &x, &y]);
@@ -1110,11 +1125,14 @@ fn viewer_picks_drags_revoxelizes_and_saves_an_object_with_real_mouse_events() {
 }
 
 /// Click the spot light's marker, drag it along x, add two point lights with Insert, remove
-/// the second with Delete (each a new renderer: the shadow views change), fly forward with W,
-/// Ctrl+S, F12, Escape: the saved file has the moved spot (its comment kept), one new point
-/// light and the camera where it flew, and its headless render is what the viewer showed.
+/// the second with Delete (each a new renderer: the shadow views change), click the short
+/// block and drag its position x field in the panel, fly forward with W, Ctrl+S, F12, Escape:
+/// the saved file has the moved spot (its comment kept), one new point light, the block moved
+/// along x and the camera where it flew, and its headless render is what the viewer showed.
+/// (720 pixels high: the panel does not scroll, and the Edit section comes after the GPU-time
+/// table.)
 #[test]
-fn viewer_moves_adds_and_removes_lights_with_real_input_events() {
+fn viewer_edits_lights_and_a_field_and_saves_with_real_input_events() {
     require_display();
     let _display = lock_display();
     let dir = scratch_dir("edit-lights");
@@ -1130,7 +1148,7 @@ fn viewer_moves_adds_and_removes_lights_with_real_input_events() {
         "--width",
         "560",
         "--height",
-        "320",
+        "720",
         "--save",
         saved.to_str().expect("utf-8 path"),
         "--screenshot",
@@ -1153,6 +1171,19 @@ fn viewer_moves_adds_and_removes_lights_with_real_input_events() {
     s.key("Delete");
     s.wait_for("edit: removed light 2");
     s.wait_for("new renderer");
+    let short = original.objects[1].aabb_at(0.0).center();
+    s.click(project(&original.camera, vp, short));
+    let selected = s.wait_for("edit: selected object");
+    assert!(
+        selected.contains("selected object 1 \"short_block\""),
+        "{selected}"
+    );
+    let want = "edit: position field x at";
+    let first = s.wait_for(want);
+    let field = logged_point(&s.latest(first, want, Duration::from_millis(1500)), "at");
+    // egui's drag value: +5 × 6 points at 0.005 × the scene's diagonal per point.
+    s.drag(field, (6, 0), 5);
+    std::thread::sleep(Duration::from_millis(1000));
     // Held over several frames (a frame can take a few hundred ms on lavapipe).
     xdotool(&["windowfocus", "--sync", &s.window]);
     xdotool(&["keydown", "w"]);
@@ -1178,7 +1209,13 @@ fn viewer_moves_adds_and_removes_lights_with_real_input_events() {
         text.contains("# A spot light just under the ceiling"),
         "{text}"
     );
-    assert_eq!(back.objects, original.objects);
+    let field_moved = back.objects[1].transform.translate - original.objects[1].transform.translate;
+    assert!(
+        field_moved.x > 0.01 && field_moved.y == 0.0 && field_moved.z == 0.0,
+        "the position field moved the short block by {field_moved}:\n{text}"
+    );
+    assert_eq!(back.objects[0], original.objects[0]);
+    assert_eq!(back.objects[2], original.objects[2]);
     // W flies along the view (+Z): the saved camera stands further in, looking the same way.
     let flew = back.camera.position - original.camera.position;
     assert!(

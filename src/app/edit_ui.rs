@@ -82,10 +82,18 @@ pub fn paint(
     }
 }
 
+/// What the panel's section asks for and where its selected object's position field is.
+pub struct PanelOut {
+    pub actions: Vec<EditAction>,
+    /// The position's x field of the selected object, in points (scripted tests drag it).
+    pub position_field: Option<egui::Rect>,
+}
+
 /// The panel's "Edit scene" section: the selection's fields, the lights, add/remove, save.
 /// Returns the changes to apply.
-pub fn panel(ui: &mut egui::Ui, v: &EditView) -> Vec<EditAction> {
+pub fn panel(ui: &mut egui::Ui, v: &EditView) -> PanelOut {
     let mut out = Vec::new();
+    let mut position_field = None;
     let ed = v.editor;
     ui.label(
         "Click selects (lights: their circles); drag a handle to edit. 1/2/3 move/rotate/scale, \
@@ -155,7 +163,7 @@ pub fn panel(ui: &mut egui::Ui, v: &EditView) -> Vec<EditAction> {
                         o.transform.scale,
                     );
                     let before = (t, r, sc);
-                    vec3_row(ui, "position m", &mut t, speed, None);
+                    position_field = Some(vec3_row(ui, "position m", &mut t, speed, None));
                     vec3_row(ui, "rotate °", &mut r, 0.5, None);
                     vec3_row(ui, "scale", &mut sc, 0.01, Some(1e-4..=1e4));
                     if t != before.0 {
@@ -209,26 +217,36 @@ pub fn panel(ui: &mut egui::Ui, v: &EditView) -> Vec<EditAction> {
     if !ed.status.is_empty() {
         ui.label(&ed.status);
     }
-    out
+    PanelOut {
+        actions: out,
+        position_field,
+    }
 }
 
+/// Three drag values and a label; returns where the first (x) was drawn.
 fn vec3_row(
     ui: &mut egui::Ui,
     label: &str,
     v: &mut Vec3,
     speed: f32,
     range: Option<std::ops::RangeInclusive<f32>>,
-) {
+) -> egui::Rect {
     ui.horizontal(|ui| {
+        let mut first = egui::Rect::NOTHING;
         for k in 0..3 {
             let mut d = egui::DragValue::new(&mut v[k]).speed(speed).max_decimals(4);
             if let Some(r) = &range {
                 d = d.clamp_range(r.clone());
             }
-            ui.add(d);
+            let rect = ui.add(d).rect;
+            if k == 0 {
+                first = rect;
+            }
         }
         ui.label(label);
-    });
+        first
+    })
+    .inner
 }
 
 /// A unit direction as azimuth (about +Y from +Z) and elevation, degrees.

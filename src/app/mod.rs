@@ -246,6 +246,9 @@ struct Viewer {
     scene_shape: Option<edit::SceneShape>,
     /// The lights before a change that needs a new renderer, until it is made.
     light_backup: Option<edit::LightBackup>,
+    /// Where the selected object's position x field was drawn (window pixels; logged when it
+    /// moves, for scripted tests).
+    position_field: Option<[f32; 2]>,
     /// Per frame slot, when its pick was recorded and the frame count then (for the log).
     pick_started: [Option<(Instant, u64)>; MAX_FRAMES_IN_FLIGHT],
 }
@@ -439,6 +442,7 @@ impl Viewer {
             ctrl: false,
             scene_shape: None,
             light_backup: None,
+            position_field: None,
             pick_started: [None; MAX_FRAMES_IN_FLIGHT],
         }
     }
@@ -889,7 +893,10 @@ impl Viewer {
             },
             time_s: controls.time_s,
         };
-        let mut edits = Vec::new();
+        let mut edits = edit_ui::PanelOut {
+            actions: Vec::new(),
+            position_field: None,
+        };
         let out = egui_ctx.run(raw, |c| {
             let mut edit_ui = |ui: &mut egui::Ui| edits = edit_ui::panel(ui, &edit_view);
             layout = panel::draw(c, controls, stats, &info, &mut edit_ui);
@@ -902,8 +909,18 @@ impl Viewer {
                 c.pixels_per_point(),
             );
         });
-        for a in edits {
+        for a in edits.actions {
             self.apply_edit(a);
+        }
+        let field = edits.position_field.map(|r| {
+            let c = r.center() * out.pixels_per_point;
+            [c.x.round(), c.y.round()]
+        });
+        if field != self.position_field {
+            if let Some([x, y]) = field {
+                log::info!("edit: position field x at [{x}, {y}] (window px)");
+            }
+            self.position_field = field;
         }
         // Rounded down: the scene starts under the panel's edge rather than leaving a gap.
         self.panel_px = (layout.panel.width() * out.pixels_per_point)
