@@ -296,3 +296,27 @@ fn bench_ssgi_names_its_bad_inputs() {
         assert!(stderr.contains(want), "{args:?}: {stderr}");
     }
 }
+
+#[test]
+fn view_refuses_a_save_path_it_cannot_write_before_opening_a_window() {
+    // Checked before the window and the device: no display is needed to see the error.
+    let dir = std::env::temp_dir();
+    let missing = dir.join("voxgi-no-such-folder").join("edited.toml");
+    let missing = missing.to_string_lossy().into_owned();
+    let folder = dir.to_string_lossy().into_owned();
+    for (path, want) in [
+        (
+            missing.as_str(),
+            "does not exist; create it or save elsewhere",
+        ),
+        (folder.as_str(), "that is a folder; give a file name"),
+    ] {
+        let out = voxgi(&["view", "--save", path]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "--save {path} was accepted");
+        assert!(
+            err.contains(&format!("--save {path}")) && err.contains(want),
+            "{err}"
+        );
+    }
+}

@@ -965,3 +965,454 @@ fn viewer_starts_with_the_best_configuration_within_a_budget() {
     let err = String::from_utf8_lossy(&missing.stderr);
     assert!(err.contains("/nonexistent/sweep.csv"), "{err}");
 }
+
+/// A viewer driven by real X events (XTEST through `xdotool`) whose log the test reads line by
+/// line: the editor logs what it selected, where the selection's handles are and what it
+/// saved, so the test can aim its clicks and wait for each step.
+struct EditSession {
+    child: Child,
+    window: String,
+    lines: std::sync::mpsc::Receiver<String>,
+    reader: Option<std::thread::JoinHandle<()>>,
+    log: String,
+}
+
+impl EditSession {
+    fn start(args: &[&str]) -> Self {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_voxgi"))
+            .args(args)
+            .env_remove("WAYLAND_DISPLAY")
+            .env("RUST_LOG", "warn,voxgi::app=info")
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("run the voxgi binary");
+        let stderr = child.stderr.take().expect("piped stderr");
+        let (tx, lines) = std::sync::mpsc::channel::<String>();
+        let reader = std::thread::spawn(move || {
+            use std::io::BufRead;
+            for line in std::io::BufReader::new(stderr)
+                .lines()
+                .map_while(Result::ok)
+            {
+                let _ = tx.send(line);
+            }
+        });
+        let window = xdotool(&["search", "--sync", "--onlyvisible", "--name", "^voxgi$"]);
+        let window = window.lines().next().expect("a window id").to_string();
+        xdotool(&["windowfocus", "--sync", &window]);
+        Self {
+            child,
+            window,
+            lines,
+            reader: Some(reader),
+            log: String::new(),
+        }
+    }
+
+    /// The next log line containing `want` (within 90 s: a new renderer on lavapipe).
+    fn wait_for(&mut self, want: &str) -> String {
+        let started = Instant::now();
+        loop {
+            let left = Duration::from_secs(90).saturating_sub(started.elapsed());
+            match self.lines.recv_timeout(left) {
+                Ok(line) => {
+                    self.log += &line;
+                    self.log.push('\n');
+                    if line.contains(want) {
+                        return line;
+                    }
+                }
+                Err(_) => {
+                    let _ = self.child.kill();
+                    panic!("no `{want}` in the viewer's log within 90 s:\n{}", self.log)
+                }
+            }
+        }
+    }
+
+    /// `first` or the last line containing `want` logged since, once `settle` has passed
+    /// (the panel may lay out again in the frames after a change).
+    fn latest(&mut self, first: String, want: &str, settle: Duration) -> String {
+        std::thread::sleep(settle);
+        let mut last = first;
+        for line in self.lines.try_iter() {
+            self.log += &line;
+            self.log.push('\n');
+            if line.contains(want) {
+                last = line;
+            }
+        }
+        last
+    }
+
+    fn click(&self, [x, y]: [f32; 2]) {
+        let (x, y) = (format!("{}", x.round()), format!("{}", y.round()));
+        xdotool(&["mousemove", "--window", &self.window, &x, &y]);
+        std::thread::sleep(Duration::from_millis(300));
+        xdotool(&["click", "1"]);
+    }
+
+    /// Presses the left button at `from` and drags by `steps` × (`dx`, `dy`) pixels.
+    fn drag(&self, from: [f32; 2], (dx, dy): (i32, i32), steps: u32) {
+        let (x, y) = (
+            format!("{}", from[0].round()),
+            format!("{}", from[1].round()),
+        );
+        xdotool(&["mousemove", "--window", &self.window, &x, &y]);
+        std::thread::sleep(Duration::from_millis(300));
+        xdotool(&["mousedown", "1"]);
+        std::thread::sleep(Duration::from_millis(300));
+        for _ in 0..steps {
+            xdotool(&["mousemove_relative", "--", &dx.to_string(), &dy.to_string()]);
+            std::thread::sleep(Duration::from_millis(250));
+        }
+        xdotool(&["mouseup", "1"]);
+    }
+
+    fn key(&self, key: &str) {
+        xdotool(&["windowfocus", "--sync", &self.window]);
+        xdotool(&["key", key]);
+    }
+
+    /// Escape, then the exit status (0: no validation message, teardown included).
+    fn finish(mut self) -> String {
+        self.key("Escape");
+        wait_for_exit(&mut self.child, "the editing session");
+        let status = self.child.wait().expect("the viewer's status");
+        if let Some(r) = self.reader.take() {
+            r.join().expect("the log reader");
+        }
+        for line in self.lines.try_iter() {
+            self.log += &line;
+            self.log.push('\n');
+        }
+        assert!(
+            status.success(),
+            "voxgi --validate view (editing) failed ({status}):\n{}",
+            self.log
+        );
+        self.log
+    }
+}
+
+/// `[x, y]` after `key` in a log line (`… x [301.5, 150.0] …`).
+fn logged_point(line: &str, key: &str) -> [f32; 2] {
+    let rest = line
+        .split_once(&format!("{key} ["))
+        .unwrap_or_else(|| panic!("no `{key} [..]` in {line}"))
+        .1;
+    let nums: Vec<f32> = rest
+        .split(']')
+        .next()
+        .unwrap_or("")
+        .split(',')
+        .map(|x| x.trim().parse().expect("a number"))
+        .collect();
+    [nums[0], nums[1]]
+}
+
+/// Where the scene lies in the window (`edit: scene viewport at [x, 0] size [w, h] px`).
+fn viewport(line: &str) -> [f32; 4] {
+    let [x, y] = logged_point(line, "at");
+    let [w, h] = logged_point(line, "size");
+    [x, y, w, h]
+}
+
+/// Window pixel of world point `p` seen by `camera` in `viewport` (Vulkan clip space: y down).
+fn project(camera: &voxgi::scene::Camera, viewport: [f32; 4], p: glam::Vec3) -> [f32; 2] {
+    let clip = camera.view_proj(viewport[2] / viewport[3]) * p.extend(1.0);
+    [
+        viewport[0] + (clip.x / clip.w * 0.5 + 0.5) * viewport[2],
+        viewport[1] + (clip.y / clip.w * 0.5 + 0.5) * viewport[3],
+    ]
+}
+
+/// Renders `scene` headless at the screenshot's size with `extra` flags.
+fn render_headless(
+    dir: &Path,
+    scene: &Path,
+    extra: &[&str],
+    (w, h): (u32, u32),
+) -> image::RgbaImage {
+    let out_png = dir.join(format!(
+        "{}-render.png",
+        scene
+            .file_stem()
+            .map_or("scene".into(), |s| s.to_string_lossy())
+    ));
+    let (w, h) = (w.to_string(), h.to_string());
+    let mut args = vec![
+        "--validate",
+        "render",
+        scene.to_str().expect("utf-8 path"),
+        "--width",
+        &w,
+        "--height",
+        &h,
+        "-o",
+        out_png.to_str().expect("utf-8 path"),
+    ];
+    args.extend(extra);
+    let out = voxgi(&args);
+    assert_success(&out, &format!("voxgi render {}", scene.display()));
+    load(&out_png)
+}
+
+fn max_channel_diff(a: &image::RgbaImage, b: &image::RgbaImage) -> u8 {
+    a.pixels()
+        .zip(b.pixels())
+        .flat_map(|(p, q)| (0..3).map(move |c| p.0[c].abs_diff(q.0[c])))
+        .max()
+        .unwrap_or(0)
+}
+
+/// Click the tall block (the GPU pick selects it), drag its x handle with the mouse (it
+/// becomes dynamic and is re-voxelized where it goes), switch to rotation with `2` and turn it
+/// about Y with the mouse, Ctrl+S, F12, Escape: the saved file holds the move and the turn
+/// (no scale), and the voxel view the viewer showed is what a headless render of the saved
+/// file shows. Against the scene before the edit, the voxels changed only where the block was
+/// or went.
+#[test]
+fn viewer_picks_drags_revoxelizes_and_saves_an_object_with_real_mouse_events() {
+    require_display();
+    let _display = lock_display();
+    let dir = scratch_dir("edit-object");
+    let scene = dir.join("scene.toml");
+    std::fs::write(&scene, include_str!("../assets/scenes/cornell.toml")).expect("write");
+    let (saved, shot) = (dir.join("saved.toml"), dir.join("shot.png"));
+    let mut s = EditSession::start(&[
+        "--validate",
+        "view",
+        scene.to_str().expect("utf-8 path"),
+        "--gi",
+        "none",
+        "--debug",
+        "voxels",
+        "--width",
+        "560",
+        "--height",
+        "320",
+        "--save",
+        saved.to_str().expect("utf-8 path"),
+        "--screenshot",
+        shot.to_str().expect("utf-8 path"),
+    ]);
+    let vp = viewport(&s.wait_for("edit: scene viewport at"));
+    let original = voxgi::scene::Scene::load(&scene).expect("the scene loads");
+    let block = original.objects[2].aabb_at(0.0);
+    s.click(project(&original.camera, vp, block.center()));
+    let selected = s.wait_for("edit: selected object");
+    assert!(
+        selected.contains("selected object 2 \"tall_block\""),
+        "the click on the tall block selected: {selected}"
+    );
+    // Screen-left is world +X for a camera looking along +Z: the x handle points left.
+    let tip = logged_point(&selected, "x");
+    s.drag(tip, (-4, 0), 5);
+    s.wait_for("edit: object 2 at translate");
+    s.key("2");
+    let rotate = s.wait_for("Rotate handles");
+    s.drag(logged_point(&rotate, "y"), (4, 0), 5);
+    s.wait_for("edit: object 2 at translate");
+    s.key("ctrl+s");
+    s.wait_for("saved scene to");
+    s.key("F12");
+    s.wait_for("wrote");
+    let log = s.finish();
+    assert!(!log.contains("Validation"), "{log}");
+
+    let text = std::fs::read_to_string(&saved).expect("the saved scene");
+    let back = voxgi::scene::Scene::load(&saved).expect("the saved scene loads");
+    // Turning about the block's centre: its centre moved by the drag along x only.
+    let centre = |o: &voxgi::scene::Object| o.aabb_at(0.0).center();
+    let moved = centre(&back.objects[2]) - block.center();
+    assert!(
+        moved.x > 0.005 && moved.y.abs() < 1e-5 && moved.z.abs() < 1e-5,
+        "the centre moved by {moved}:\n{text}"
+    );
+    // A turn about world Y: rotate_deg = [0, θ, 0] up to rounding, θ ≠ 0.
+    let turned = voxgi::scene::euler_xyz_deg(back.objects[2].transform.rotation);
+    assert!(
+        turned.y.abs() > 1.0 && turned.x.abs() < 1e-3 && turned.z.abs() < 1e-3,
+        "turned by {turned} degrees:\n{text}"
+    );
+    assert_eq!(back.objects[2].transform.scale, glam::Vec3::ONE);
+    assert_eq!(back.objects[..2], original.objects[..2]);
+    assert_eq!(back.lights, original.lights);
+    assert!(
+        text.contains("# Floor, ceiling and back wall white"),
+        "{text}"
+    );
+    assert!(
+        text.contains("rotate_deg") && !text.contains("scale"),
+        "{text}"
+    );
+
+    let img = load(&shot);
+    let size = img.dimensions();
+    let debug = ["--gi", "none", "--debug", "voxels"];
+    let after = render_headless(&dir, &saved, &debug, size);
+    let diff = max_channel_diff(&img, &after);
+    assert!(
+        diff <= 1,
+        "the viewer's voxels differ from a render of the saved scene by {diff}/255"
+    );
+    // Against the voxels before the move: changes only where the block was or is now, i.e.
+    // inside the projection of the union of its old and new bounds, widened by 2 pixels (a
+    // voxel is 0.56 m / 128 = 4.4 mm, under a pixel here; conservative voxelization adds one
+    // voxel around each triangle; the debug view's rays enter a voxel up to a pixel aside).
+    let before = render_headless(&dir, &scene, &debug, size);
+    let union = block.union(back.objects[2].aabb_at(0.0));
+    let (mut lo, mut hi) = ([f32::MAX; 2], [f32::MIN; 2]);
+    for k in 0..8 {
+        let c = glam::Vec3::new(
+            if k & 1 == 0 { union.min.x } else { union.max.x },
+            if k & 2 == 0 { union.min.y } else { union.max.y },
+            if k & 4 == 0 { union.min.z } else { union.max.z },
+        );
+        // In the screenshot's pixels (the viewport's own, from 0).
+        let p = project(&original.camera, [0.0, 0.0, vp[2], vp[3]], c);
+        for i in 0..2 {
+            lo[i] = lo[i].min(p[i] - 2.0);
+            hi[i] = hi[i].max(p[i] + 2.0);
+        }
+    }
+    let mut changed = 0;
+    for (x, y, p) in img.enumerate_pixels() {
+        if max_channel_diff(
+            &image::RgbaImage::from_pixel(1, 1, *p),
+            &image::RgbaImage::from_pixel(1, 1, *before.get_pixel(x, y)),
+        ) > 1
+        {
+            changed += 1;
+            let (fx, fy) = (x as f32 + 0.5, y as f32 + 0.5);
+            assert!(
+                fx >= lo[0] && fx <= hi[0] && fy >= lo[1] && fy <= hi[1],
+                "pixel ({x}, {y}) changed outside the block's old and new bounds {lo:?}–{hi:?}"
+            );
+        }
+    }
+    assert!(
+        changed > 20,
+        "the move changed only {changed} pixels of the voxels"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Click the spot light's marker, drag it along x, add two point lights with Insert, remove
+/// the second with Delete (each a new renderer: the shadow views change), click the short
+/// block and drag its position x field in the panel, fly forward with W, Ctrl+S, F12, Escape:
+/// the saved file has the moved spot (its comment kept), one new point light, the block moved
+/// along x and the camera where it flew, and its headless render is what the viewer showed.
+/// (720 pixels high: the panel does not scroll, and the Edit section comes after the GPU-time
+/// table.)
+#[test]
+fn viewer_edits_lights_and_a_field_and_saves_with_real_input_events() {
+    require_display();
+    let _display = lock_display();
+    let dir = scratch_dir("edit-lights");
+    let scene = dir.join("scene.toml");
+    std::fs::write(&scene, include_str!("../assets/scenes/cornell.toml")).expect("write");
+    let (saved, shot) = (dir.join("saved.toml"), dir.join("shot.png"));
+    let mut s = EditSession::start(&[
+        "--validate",
+        "view",
+        scene.to_str().expect("utf-8 path"),
+        "--gi",
+        "none",
+        "--width",
+        "560",
+        "--height",
+        "720",
+        "--save",
+        saved.to_str().expect("utf-8 path"),
+        "--screenshot",
+        shot.to_str().expect("utf-8 path"),
+    ]);
+    let vp = viewport(&s.wait_for("edit: scene viewport at"));
+    let original = voxgi::scene::Scene::load(&scene).expect("the scene loads");
+    let spot = original.lights[0].position().expect("a spot light");
+    s.click(project(&original.camera, vp, spot));
+    let selected = s.wait_for("edit: selected light");
+    assert!(selected.contains("selected light 0 (spot 0)"), "{selected}");
+    s.drag(logged_point(&selected, "x"), (-4, 0), 5);
+    s.wait_for("edit: light 0 now");
+    s.key("Insert");
+    s.wait_for("edit: added light 1");
+    s.wait_for("new renderer");
+    s.key("Insert");
+    s.wait_for("edit: added light 2");
+    s.wait_for("new renderer");
+    s.key("Delete");
+    s.wait_for("edit: removed light 2");
+    s.wait_for("new renderer");
+    let short = original.objects[1].aabb_at(0.0).center();
+    s.click(project(&original.camera, vp, short));
+    let selected = s.wait_for("edit: selected object");
+    assert!(
+        selected.contains("selected object 1 \"short_block\""),
+        "{selected}"
+    );
+    let want = "edit: position field x at";
+    let first = s.wait_for(want);
+    let field = logged_point(&s.latest(first, want, Duration::from_millis(1500)), "at");
+    // egui's drag value: +5 × 6 points at 0.005 × the scene's diagonal per point.
+    s.drag(field, (6, 0), 5);
+    std::thread::sleep(Duration::from_millis(1000));
+    // Held over several frames (a frame can take a few hundred ms on lavapipe).
+    xdotool(&["windowfocus", "--sync", &s.window]);
+    xdotool(&["keydown", "w"]);
+    std::thread::sleep(Duration::from_millis(1500));
+    xdotool(&["keyup", "w"]);
+    std::thread::sleep(Duration::from_millis(500));
+    s.key("ctrl+s");
+    s.wait_for("saved scene to");
+    s.key("F12");
+    s.wait_for("wrote");
+    s.finish();
+
+    let text = std::fs::read_to_string(&saved).expect("the saved scene");
+    let back = voxgi::scene::Scene::load(&saved).expect("the saved scene loads");
+    assert_eq!(back.lights.len(), 2, "{text}");
+    let moved = back.lights[0].position().expect("the spot") - spot;
+    assert!(
+        moved.x > 0.005 && moved.y == 0.0 && moved.z == 0.0,
+        "the spot moved by {moved}:\n{text}"
+    );
+    assert!(back.lights[1].is_point(), "{text}");
+    assert!(
+        text.contains("# A spot light just under the ceiling"),
+        "{text}"
+    );
+    let field_moved = back.objects[1].transform.translate - original.objects[1].transform.translate;
+    assert!(
+        field_moved.x > 0.01 && field_moved.y == 0.0 && field_moved.z == 0.0,
+        "the position field moved the short block by {field_moved}:\n{text}"
+    );
+    assert_eq!(back.objects[0], original.objects[0]);
+    assert_eq!(back.objects[2], original.objects[2]);
+    // W flies along the view (+Z): the saved camera stands further in, looking the same way.
+    let flew = back.camera.position - original.camera.position;
+    assert!(
+        flew.z > 0.01 && flew.x.abs() < 1e-6 && flew.y.abs() < 1e-6,
+        "the camera flew by {flew}:\n{text}"
+    );
+    assert!(back.camera.forward.distance(original.camera.forward) < 1e-6);
+    assert!(!text.contains("target ="), "{text}");
+
+    let img = load(&shot);
+    let flags = ["--gi", "none"];
+    let after = render_headless(&dir, &saved, &flags, img.dimensions());
+    let diff = max_channel_diff(&img, &after);
+    assert!(
+        diff <= 1,
+        "the viewer's frame differs from a render of the saved scene by {diff}/255"
+    );
+    let before = render_headless(&dir, &scene, &flags, img.dimensions());
+    assert!(
+        max_channel_diff(&img, &before) > 16,
+        "the light edits did not change the image"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

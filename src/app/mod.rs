@@ -14,9 +14,12 @@
 //! `egui`. The swapchain image is imported with [`Access::Present`] and rebound every frame.
 
 mod camera;
+mod edit;
+mod edit_ui;
 mod frame_graph;
 mod overlay;
 mod panel;
+mod pick;
 mod stereo;
 
 pub use camera::{FlyCamera, MoveKeys};
@@ -42,6 +45,10 @@ use winit::event::{ElementState, Event, KeyEvent, MouseButton, MouseScrollDelta,
 use winit::event_loop::{EventLoop, EventLoopWindowTarget};
 use winit::keyboard::{KeyCode, PhysicalKey};
 use winit::window::{Window, WindowBuilder};
+
+/// Seconds between the camera keyframes recorded in the viewer (printed on exit, saved as
+/// `[camera_path]`; edit `time_s` to retime the flight).
+pub const RECORDED_KEY_SPACING_S: f32 = 2.0;
 
 /// Errors of the viewer. Each says what to do.
 #[derive(Debug, thiserror::Error)]
@@ -100,6 +107,10 @@ pub struct ViewerOptions {
     /// Start in stereo (`--stereo`): packing, parallax and path. `None`: mono, the panel's
     /// parallax starting at [`StereoControls::off`].
     pub stereo: Option<StereoControls>,
+    /// Where "Save scene" (Ctrl+S) writes; `None`: the scene's own file.
+    pub save_to: Option<PathBuf>,
+    /// The built-in scene shown (its TOML text is what a save edits), `None` for a file.
+    pub builtin: Option<String>,
 }
 
 impl Default for ViewerOptions {
@@ -119,6 +130,8 @@ impl Default for ViewerOptions {
             scene_name: "cornell".into(),
             budget_ms: 100.0,
             stereo: None,
+            save_to: None,
+            builtin: None,
         }
     }
 }
@@ -137,6 +150,8 @@ pub struct ViewerReport {
     pub camera: Option<Camera>,
     /// Cameras recorded with the panel's "Add camera keyframe", in order.
     pub camera_keys: Vec<Camera>,
+    /// Scene files written by "Save scene" (Ctrl+S).
+    pub saved: Vec<PathBuf>,
 }
 
 /// Scripted runs give up after this long.
@@ -238,6 +253,28 @@ struct Viewer {
     panel_px: u32,
     /// Where the panel's GPU-time table was drawn last frame (logged by scripted runs).
     panel_layout: panel::PanelLayout,
+    /// The scene editor (`edit.rs`) and the GPU pass that answers its clicks.
+    editor: edit::Editor,
+    pick: Option<pick::PickPass>,
+    /// The scene's part of the window in the last frame: left, top, width, height (pixels).
+    view_rect: [f32; 4],
+    /// A Ctrl key is held (Ctrl+S saves instead of moving back).
+    ctrl: bool,
+    /// What of the scene the current renderer was made for (lights, moving objects, bounds).
+    scene_shape: Option<edit::SceneShape>,
+    /// The lights before a change that needs a new renderer, until it is made.
+    light_backup: Option<edit::LightBackup>,
+    /// Where the selected object's position x field was drawn (window pixels; logged when it
+    /// moves, for scripted tests).
+    position_field: Option<[f32; 2]>,
+    /// Per frame slot, when its pick was recorded and the frame count then (for the log).
+    pick_started: [Option<(Instant, u64)>; MAX_FRAMES_IN_FLIGHT],
+}
+
+/// The view the editor's handles are drawn for.
+struct ViewGeomArgs {
+    geom: edit::ViewGeom,
+    time_s: f32,
 }
 
 /// Where a scripted minimize (`ViewerOptions::minimize_at`) stands.
@@ -396,18 +433,9 @@ impl Viewer {
             .lights
             .iter()
             .enumerate()
-            .map(|(i, l)| {
-                let kind = match l {
-                    Light::Point { .. } => "point",
-                    Light::Spot { .. } => "spot",
-                    Light::Directional { .. } => "directional",
-                    Light::Sphere { .. } => "sphere",
-                    Light::Rectangle { .. } => "rectangle",
-                    Light::Element { .. } => "area sample",
-                };
-                format!("{kind} {i}")
-            })
+            .map(|(i, l)| edit::light_name(i, l))
             .collect();
+        let editor = edit::Editor::new(&scene, &fly, opts.builtin.clone(), opts.save_to.clone());
         let controls = Controls {
             tonemap: opts.settings.tonemap,
             post: opts.settings.post,
@@ -466,6 +494,14 @@ impl Viewer {
             minimized: false,
             panel_px: 0,
             panel_layout: panel::PanelLayout::default(),
+            editor,
+            pick: None,
+            view_rect: [0.0, 0.0, 1.0, 1.0],
+            ctrl: false,
+            scene_shape: None,
+            light_backup: None,
+            position_field: None,
+            pick_started: [None; MAX_FRAMES_IN_FLIGHT],
         }
     }
 
@@ -485,7 +521,9 @@ impl Viewer {
         let (renderer, stereo) = self.new_renderer(ctx, &settings)?;
         self.renderer = Some(renderer);
         self.stereo = stereo;
+        self.scene_shape = Some(edit::SceneShape::of(&self.scene));
         self.overlay = Some(Overlay::new(ctx, format)?);
+        self.pick = Some(pick::PickPass::new(ctx)?);
         self.frame_loop = Some(FrameLoop::new(ctx, MAX_FRAMES_IN_FLIGHT, MAX_PASSES)?);
         Ok(())
     }
@@ -531,12 +569,24 @@ impl Viewer {
                         button: MouseButton::Right,
                         ..
                     } => self.looking = state == ElementState::Pressed && !consumed,
+                    // The editor: a click selects, a press on a handle drags it.
+                    WindowEvent::MouseInput {
+                        state,
+                        button: MouseButton::Left,
+                        ..
+                    } => match state {
+                        ElementState::Pressed if !consumed => self.edit_press(),
+                        ElementState::Released => self.edit_release(),
+                        _ => {}
+                    },
+                    WindowEvent::ModifiersChanged(m) => self.ctrl = m.state().control_key(),
                     WindowEvent::CursorMoved { position, .. } => {
                         if let (true, Some((x, y))) = (self.looking, self.cursor) {
                             self.fly
                                 .look((position.x - x) as f32, (position.y - y) as f32);
                         }
                         self.cursor = Some((position.x, position.y));
+                        self.edit_drag();
                     }
                     WindowEvent::MouseWheel { delta, .. } if !consumed => {
                         let notches = match delta {
@@ -558,10 +608,30 @@ impl Viewer {
     /// delay, or delivered late on a busy machine, would otherwise step two GI methods).
     fn key(&mut self, code: KeyCode, down: bool, repeat: bool, elwt: &EventLoopWindowTarget<()>) {
         let press = down && !repeat;
+        // Ctrl+S saves the scene; S without Ctrl moves back.
+        if code == KeyCode::KeyS && self.ctrl && press {
+            self.save_scene();
+            return;
+        }
+        let edit = match code {
+            KeyCode::Digit1 => Some(edit::EditAction::Handle(edit::HandleMode::Move)),
+            KeyCode::Digit2 => Some(edit::EditAction::Handle(edit::HandleMode::Rotate)),
+            KeyCode::Digit3 => Some(edit::EditAction::Handle(edit::HandleMode::Scale)),
+            KeyCode::Insert => Some(edit::EditAction::AddLight(self.editor.new_light_kind)),
+            KeyCode::Delete => match self.editor.selection {
+                Some(edit::Selection::Light(i)) => Some(edit::EditAction::RemoveLight(i)),
+                _ => None,
+            },
+            _ => None,
+        };
+        if let Some(a) = edit.filter(|_| press) {
+            self.apply_edit(a);
+            return;
+        }
         let k = &mut self.keys;
         match code {
             KeyCode::KeyW => k.forward = down,
-            KeyCode::KeyS => k.back = down,
+            KeyCode::KeyS => k.back = down && !self.ctrl,
             KeyCode::KeyA => k.left = down,
             KeyCode::KeyD => k.right = down,
             KeyCode::KeyE => k.up = down,
@@ -713,8 +783,23 @@ impl Viewer {
             (Some(st), _) => st.outdated(&self.controls.stereo),
             (None, mode) => mode.is_some(),
         };
-        if needs_new_renderer(&current, &settings) || stereo_changed {
-            self.replace_renderer(ctx, &mut settings, area)?;
+        let editing = self.editor.dragging() || self.egui_ctx.input(|i| i.pointer.any_down());
+        if needs_new_renderer(&current, &settings)
+            || stereo_changed
+            || self.scene_needs_new_renderer(editing)
+        {
+            let lights_before = self.scene_shape.clone();
+            match self.replace_renderer(ctx, &mut settings, area) {
+                Err(e) if self.light_backup.is_some() => {
+                    self.restore_lights();
+                    self.editor.status = format!("the lights were not changed: {e}");
+                    log::warn!("{}", self.editor.status);
+                }
+                r => r?,
+            }
+            if self.scene_shape != lights_before {
+                self.light_change_done();
+            }
         }
         let Some(renderer) = self.renderer.as_mut() else {
             return Ok(false);
@@ -745,6 +830,16 @@ impl Viewer {
         let slot = frame_loop.current_slot();
         let (_, cmd, timestamps, finished) = frame_loop.begin(ctx)?;
         self.history.push(&finished);
+        // The pick this slot recorded two frames ago has landed (the fence was waited).
+        let picked = self.pick.as_mut().and_then(|p| p.collect(slot)).map(|p| {
+            let gpu_ms: f64 = finished
+                .iter()
+                .filter(|t| t.name.starts_with("pick"))
+                .map(|t| t.gpu_ms)
+                .sum();
+            let started = self.pick_started.get_mut(slot).and_then(Option::take);
+            (p, gpu_ms, started)
+        });
         self.stats.push(finished);
         let (index, ready) = match swapchain.acquire(slot)? {
             Acquired::Image { index, ready } => (index, ready),
@@ -755,6 +850,19 @@ impl Viewer {
                 return Ok(false);
             }
         };
+        // A click waiting for the GPU is answered by this frame (recorded below).
+        let frame_size = (renderer.settings.width, renderer.settings.height);
+        // A stereo packing shows two eyes: clicks pick nothing there.
+        let pick_request = self
+            .editor
+            .take_pick_request()
+            .filter(|_| self.stereo.is_none());
+        if let Some(p) = self.pick.as_mut() {
+            p.arm(slot, pick_request, frame_size);
+        }
+        if let Some(s) = self.pick_started.get_mut(slot) {
+            *s = pick_request.map(|_| (Instant::now(), self.report.frames));
+        }
         graph
             .exec
             .rebind_image(graph.present, &swapchain.images[index as usize])?;
@@ -773,6 +881,17 @@ impl Viewer {
         )?;
         if swapchain.present(ctx, index)? {
             self.swapchain_dirty = true;
+        }
+        if let Some((p, gpu_ms, started)) = picked {
+            if let Some((t, frame)) = started {
+                log::info!(
+                    "edit: pick at {:?} answered {} ms and {} frames after it was recorded (GPU: pick + pick_readback {gpu_ms:.3} ms)",
+                    p.pixel,
+                    t.elapsed().as_millis(),
+                    self.report.frames - frame
+                );
+            }
+            self.edit_picked(p);
         }
         self.report.frames += 1;
         if shot {
@@ -858,9 +977,47 @@ impl Viewer {
         };
         let (controls, stats) = (&mut self.controls, &self.stats);
         let mut layout = panel::PanelLayout::default();
+        let edit_view = edit_ui::EditView {
+            editor: &self.editor,
+            scene: &self.scene,
+            light_names: &self.light_names,
+        };
+        let view = ViewGeomArgs {
+            geom: edit::ViewGeom {
+                camera: self.scene.camera,
+                rect_px: self.view_rect,
+            },
+            time_s: controls.time_s,
+        };
+        let mut edits = edit_ui::PanelOut {
+            actions: Vec::new(),
+            position_field: None,
+        };
         let out = egui_ctx.run(raw, |c| {
-            layout = panel::draw(c, controls, stats, &info);
+            let mut edit_ui = |ui: &mut egui::Ui| edits = edit_ui::panel(ui, &edit_view);
+            layout = panel::draw(c, controls, stats, &info, &mut edit_ui);
+            edit_ui::paint(
+                c,
+                edit_view.editor,
+                edit_view.scene,
+                &view.geom,
+                view.time_s,
+                c.pixels_per_point(),
+            );
         });
+        for a in edits.actions {
+            self.apply_edit(a);
+        }
+        let field = edits.position_field.map(|r| {
+            let c = r.center() * out.pixels_per_point;
+            [c.x.round(), c.y.round()]
+        });
+        if field != self.position_field {
+            if let Some([x, y]) = field {
+                log::info!("edit: position field x at [{x}, {y}] (window px)");
+            }
+            self.position_field = field;
+        }
         // Rounded down: the scene starts under the panel's edge rather than leaving a gap.
         self.panel_px = (layout.panel.width() * out.pixels_per_point)
             .max(0.0)
@@ -892,15 +1049,18 @@ impl Viewer {
     ) -> Result<(), AppError> {
         ctx.wait_idle()?;
         self.graph = None;
+        let started = Instant::now();
         match self.new_renderer(ctx, settings) {
             Ok((r, st)) => {
                 self.renderer = Some(r);
                 self.stereo = st;
+                self.scene_shape = Some(edit::SceneShape::of(&self.scene));
                 log::info!(
-                    "new renderer {}x{}, indirect light: {}",
+                    "new renderer {}x{}, indirect light: {} (made in {} ms)",
                     settings.width,
                     settings.height,
-                    describe_gi(&settings.gi)
+                    describe_gi(&settings.gi),
+                    started.elapsed().as_millis()
                 );
                 Ok(())
             }
@@ -1021,10 +1181,17 @@ impl Viewer {
         let mut g = RenderGraph::new();
         // The presented image: the tone-mapped frame, or in stereo both eyes' packing.
         let stereo_mode = self.stereo.as_ref().and(self.controls.stereo.mode);
+        // Picks in flight belong to the old graph; a stereo packing has no pick pass.
+        if let Some(p) = self.pick.as_mut() {
+            p.forget();
+        }
         let (ldr, (w, h)) = match (&self.stereo, stereo_mode) {
             (Some(st), Some(mode)) => st.declare(renderer, &mut g, mode),
             _ => {
-                let FrameImages { ldr, .. } = renderer.declare(&mut g);
+                let (FrameImages { ldr, .. }, scene_inputs) = renderer.declare_with_scene(&mut g);
+                if let Some(p) = self.pick.as_ref() {
+                    p.declare(&mut g, &scene_inputs);
+                }
                 (ldr, (renderer.settings.width, renderer.settings.height))
             }
         };
@@ -1081,6 +1248,11 @@ impl Viewer {
             });
         overlay.declare(&mut g, present);
         let exec = GraphExecutor::new(ctx, g, MAX_FRAMES_IN_FLIGHT)?;
+        self.view_rect = [scene_rect.offset.x as f32, 0.0, w as f32, h as f32];
+        log::info!(
+            "edit: scene viewport at [{}, 0] size [{w}, {h}] px",
+            scene_rect.offset.x
+        );
         self.graph = Some(FrameGraph {
             exec,
             present,

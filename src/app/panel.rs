@@ -253,12 +253,14 @@ fn timing_table(ui: &mut egui::Ui, medians: &[(String, f64)], right_x: f32) -> V
         .collect()
 }
 
-/// Draws the panel; returns where it and its GPU-time table landed.
+/// Draws the panel; returns where it and its GPU-time table landed. `edit_ui` draws the scene
+/// editor's section (`app::edit::panel`).
 pub fn draw(
     ctx: &egui::Context,
     c: &mut Controls,
     stats: &TimingStats,
     info: &PanelInfo,
+    edit_ui: &mut dyn FnMut(&mut egui::Ui),
 ) -> PanelLayout {
     let mut rows = Vec::new();
     let mut graph = Default::default();
@@ -321,6 +323,10 @@ pub fn draw(
                         );
                     }
                 });
+
+            egui::CollapsingHeader::new("Edit scene")
+                .default_open(true)
+                .show(ui, |ui| edit_ui(ui));
 
             egui::CollapsingHeader::new("Tone mapping")
                 .default_open(true)
@@ -596,7 +602,9 @@ mod table_tests {
             if let (Some(p), 3) = (hover, frame) {
                 raw.events.push(egui::Event::PointerMoved(p));
             }
-            let out = ctx.run(raw, |ctx| layout = draw(ctx, &mut c, &stats, &info));
+            let out = ctx.run(raw, |ctx| {
+                layout = draw(ctx, &mut c, &stats, &info, &mut |_| {})
+            });
             texts = out
                 .shapes
                 .iter()

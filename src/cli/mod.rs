@@ -96,6 +96,9 @@ pub enum CliError {
         path.display()
     )]
     OutputNotPng { path: PathBuf },
+    /// `view --save` names a path that cannot be written (checked before the window opens).
+    #[error("--save {}: {problem}", path.display())]
+    SavePath { path: PathBuf, problem: String },
     #[error("writing {}", path.display())]
     WriteImage {
         path: PathBuf,

@@ -8,8 +8,7 @@ use crate::voxel::debug_view::{DebugSettings, DebugView};
 use std::io::Write;
 use std::path::PathBuf;
 
-/// Seconds between the keyframes recorded in the viewer (edit `time_s` to retime the flight).
-const RECORDED_KEY_SPACING_S: f32 = 2.0;
+use crate::app::RECORDED_KEY_SPACING_S;
 
 /// Arguments of `voxgi view`.
 #[derive(clap::Args, Clone)]
@@ -57,6 +56,10 @@ pub struct ViewArgs {
     /// image (`voxgi tune`'s choice); the panel's budget starts here too.
     #[arg(long, value_name = "MS")]
     pub budget_ms: Option<f64>,
+    /// Where "Save scene" (Ctrl+S) writes the edited scene. Default: the scene's own file
+    /// (a built-in scene has none and needs this).
+    #[arg(long, value_name = "PATH")]
+    pub save: Option<PathBuf>,
     // The initial indirect light; the panel changes it.
     #[command(flatten)]
     pub gi: GiArgs,
@@ -66,6 +69,26 @@ pub struct ViewArgs {
     // The initial projection; the panel switches it.
     #[command(flatten)]
     pub camera: super::args::CameraArgs,
+}
+
+/// Refuses a `--save` path whose folder does not exist, before the window opens.
+fn check_save_path(path: &std::path::Path) -> Result<(), CliError> {
+    let dir = path.parent().filter(|d| !d.as_os_str().is_empty());
+    let problem = match dir {
+        Some(d) if !d.is_dir() => format!(
+            "the folder {} does not exist; create it or save elsewhere",
+            d.display()
+        ),
+        _ if path.is_dir() => format!(
+            "that is a folder; give a file name, e.g. {}",
+            path.join("edited.toml").display()
+        ),
+        _ => return Ok(()),
+    };
+    Err(CliError::SavePath {
+        path: path.to_path_buf(),
+        problem,
+    })
 }
 
 /// `WxH` → (W, H), both positive.
@@ -133,6 +156,9 @@ pub fn view(global: &Global, args: ViewArgs, out: &mut dyn Write) -> Result<(), 
         rig: args.stereo.rig(&scene, settings.time_s)?,
         path: args.stereo.stereo_path,
     };
+    if let Some(path) = &args.save {
+        check_save_path(path)?;
+    }
     let opts = crate::app::ViewerOptions {
         validation: global.validate,
         device: global.device.clone(),
@@ -148,6 +174,16 @@ pub fn view(global: &Global, args: ViewArgs, out: &mut dyn Write) -> Result<(), 
         scene_name: name,
         budget_ms: args.budget_ms.unwrap_or(100.0) as f32,
         stereo: Some(stereo),
+        save_to: args.save,
+        builtin: crate::scene::builtin_toml(
+            args.scene.as_deref().unwrap_or(crate::scene::DEFAULT_SCENE),
+        )
+        .is_some()
+        .then(|| {
+            args.scene
+                .clone()
+                .unwrap_or_else(|| crate::scene::DEFAULT_SCENE.into())
+        }),
     };
     let origin_m = scene.origin_m;
     let report = crate::app::run(scene, &opts)?;
@@ -170,6 +206,9 @@ pub fn view(global: &Global, args: ViewArgs, out: &mut dyn Write) -> Result<(), 
     }
     for p in &report.screenshots {
         outln!(out, "wrote {}", p.display());
+    }
+    for p in &report.saved {
+        outln!(out, "saved scene to {}", p.display());
     }
     if report.skipped_minimized > 0 {
         outln!(

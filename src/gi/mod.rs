@@ -267,6 +267,14 @@ impl GiPasses {
         }
     }
 
+    /// Takes the dynamic objects' transforms from `scene` for the attribute volumes (see
+    /// `TriangleAttributeVolumes::follow_objects`).
+    pub fn follow_objects(&mut self, scene: &crate::scene::Scene) {
+        if let Some(a) = &mut self.attributes {
+            a.follow_objects(scene);
+        }
+    }
+
     /// Follows the scene's lights and emitters at `t_s` (`Renderer::prepare`; see
     /// [`GiMethodPasses::update_scene`]).
     pub fn update_scene(&mut self, scene: &crate::scene::Scene, t_s: f32) {

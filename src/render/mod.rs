@@ -245,6 +245,26 @@ pub fn check_setting_combination(settings: &RenderSettings) -> Result<(), Render
     Ok(())
 }
 
+/// Refuses lights a frame cannot hold: more than [`MAX_LIGHTS`] (an area light counts its
+/// samples) or more than [`MAX_SHADOW_VIEWS`] shadow views with the directional lights'
+/// cascades, the checks of [`Renderer::new`] and [`Renderer::prepare`]. The viewer's editor
+/// asks before it adds a light.
+pub fn check_lights(scene: &Scene, settings: &RenderSettings) -> Result<(), RenderError> {
+    let lights = frame_lights(&scene.lights, &settings.shadow);
+    if lights.len() > MAX_LIGHTS {
+        return Err(RenderError::TooManyLights(lights.len()));
+    }
+    let (views, _) = shadow_views(scene, settings.time_s, &settings.shadow);
+    let capacity = match settings.shadow.cascades {
+        n if n >= 2 => n as usize * lights.iter().filter(|l| l.is_directional()).count(),
+        _ => 0,
+    };
+    if views.len() + capacity > MAX_SHADOW_VIEWS {
+        return Err(RenderError::TooManyShadowViews(views.len() + capacity));
+    }
+    Ok(())
+}
+
 /// What a frame renders.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RenderSettings {
@@ -337,6 +357,9 @@ pub struct Renderer {
     /// One-pass stereo: both eyes in one frame (`render/stereo.rs`); `frame_data`,
     /// `readback_*` and `post` are then the left eye's.
     stereo: Option<stereo::OnePass>,
+    /// Per object, whether it was dynamic (or animated) when the renderer was made: only
+    /// those move in the voxels.
+    moving: Vec<bool>,
 }
 
 /// What a frame's eyes share: declared by the first eye's passes, reused by the second.
@@ -682,6 +705,11 @@ impl Renderer {
                     stereo::OnePass::new(ctx, rig, settings, sampler_raw, scene.has_animation())
                 })
                 .transpose()?,
+            moving: scene
+                .objects
+                .iter()
+                .map(|o| o.dynamic || o.is_animated())
+                .collect(),
         })
     }
 
@@ -690,14 +718,34 @@ impl Renderer {
         self.auto_shadow
     }
 
+    /// Whether moving object `object` (changing its transform in the scene given to
+    /// [`Self::prepare`]) is drawn and voxelized where it goes: it was dynamic when the
+    /// renderer was made, or nothing of the renderer depends on where static objects are
+    /// (no voxels). Otherwise the object must be marked dynamic and a new renderer made (the
+    /// static grid holds it where it was).
+    pub fn can_move(&self, object: usize) -> bool {
+        self.voxels.is_none() || self.moving.get(object).copied().unwrap_or(false)
+    }
+
     /// Computes frame constants, shadow views and culled draw lists for the scene's camera and
     /// lights and `settings`. Call again after changing them (the viewer does, every frame);
     /// a new size, shadow resolution, cascade count or tone map also needs a new graph.
+    /// Dynamic objects are drawn, and re-voxelized by [`Self::write_frame`], at their
+    /// transform in `scene` (the viewer's editor moves them).
     ///
     /// A one-frame stereo renderer takes `scene.camera` as the centre between its eyes.
     pub fn prepare(&mut self, scene: &Scene) -> Result<(), RenderError> {
         check_projection(&scene.camera, &self.settings, self.stereo.is_some())?;
         let s = self.settings.clone();
+        if let Some(v) = &mut self.voxels {
+            v.follow_objects(scene);
+        }
+        if let Some((gi, _)) = &mut self.gi {
+            gi.follow_objects(scene);
+        }
+        if let Some(pass) = &mut self.voxel_debug {
+            pass.follow_objects(scene);
+        }
         let eyes = self.stereo.as_ref().map(|st| {
             let eye = |e| scene.camera.eye(st.rig, e);
             (eye(crate::scene::Eye::Left), eye(crate::scene::Eye::Right))
@@ -868,8 +916,14 @@ impl Renderer {
     /// A one-frame stereo renderer's frame has two such pairs: this returns the left eye's
     /// (see [`Renderer::declare_eyes`]).
     pub fn declare(&self, g: &mut RenderGraph) -> FrameImages {
-        let eyes = self.declare_eyes(g);
-        eyes[0]
+        self.declare_with_scene(g).0
+    }
+
+    /// [`Self::declare`], also returning the scene's resources as imported into `g`, for
+    /// passes the caller adds over the same scene (the viewer's `pick`).
+    pub fn declare_with_scene(&self, g: &mut RenderGraph) -> (FrameImages, SceneInputs) {
+        let (eyes, scene) = self.declare_eyes_with_scene(g);
+        (eyes[0], scene)
     }
 
     /// Declares the frame: one [`FrameImages`], or, for a one-frame stereo renderer, the left
@@ -878,6 +932,11 @@ impl Renderer {
     /// into two-layer images (per eye, or in one multiview pass); every later pass runs per
     /// eye on its layer, the right eye's named with the suffix [`stereo::RIGHT_EYE_SUFFIX`].
     pub fn declare_eyes(&self, g: &mut RenderGraph) -> Vec<FrameImages> {
+        self.declare_eyes_with_scene(g).0
+    }
+
+    /// [`Self::declare_eyes`], also returning the scene's resources as imported into `g`.
+    fn declare_eyes_with_scene(&self, g: &mut RenderGraph) -> (Vec<FrameImages>, SceneInputs) {
         let s = &self.settings;
         let (w, h) = (s.width, s.height);
         let scene = self.scene.import(g);
@@ -895,7 +954,8 @@ impl Renderer {
         let Some(st) = &self.stereo else {
             let images =
                 self.declare_view(g, &scene, &gbuffer, world, (&self.post, 0), &mut shared);
-            return vec![self.declare_debug_view(g, &scene, &gbuffer, voxel_image, images)];
+            let images = self.declare_debug_view(g, &scene, &gbuffer, voxel_image, images);
+            return (vec![images], scene);
         };
         let left = gbuffer.eye(g, 0);
         let right = gbuffer.eye(g, 1);
@@ -913,7 +973,7 @@ impl Renderer {
             &mut shared,
         );
         g.set_pass_suffix("");
-        vec![left, right]
+        (vec![left, right], scene)
     }
 
     /// The passes of one view after the G-buffer: direct light, indirect light, transparency,
@@ -1216,4 +1276,33 @@ fn camera_relative_inverse(camera: &crate::scene::Camera, aspect: f32) -> glam::
     let mut relative = *camera;
     relative.position = glam::Vec3::ZERO;
     relative.view_proj(aspect).inverse()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The lights a frame holds: 64 lights, 64 shadow views (a cube-shadowed point light takes
+    /// 6, so 10 fit and 11 do not; with paraboloid shadows 2 each, 32 fit).
+    #[test]
+    fn check_lights_counts_lights_and_shadow_views() {
+        let mut scene = crate::scene::builtin("cornell-point").expect("cornell-point");
+        let point = scene.lights[0];
+        let settings = RenderSettings::default();
+        scene.lights = vec![point; 10];
+        assert!(check_lights(&scene, &settings).is_ok());
+        scene.lights.push(point);
+        assert!(matches!(
+            check_lights(&scene, &settings),
+            Err(RenderError::TooManyShadowViews(66))
+        ));
+        let mut paraboloid = settings.clone();
+        paraboloid.shadow.point_technique = PointShadow::DualParaboloid;
+        assert!(check_lights(&scene, &paraboloid).is_ok());
+        scene.lights = vec![point; 65];
+        assert!(matches!(
+            check_lights(&scene, &paraboloid),
+            Err(RenderError::TooManyLights(65))
+        ));
+    }
 }

@@ -238,8 +238,9 @@ impl SceneGpu {
     }
 
     /// Moves animated objects to the scene time `time_s` (keyframes move them, OBJ sequences
-    /// switch to the frame's mesh; frames share topology, so only the buffer offsets change),
-    /// then culls the draw lists against the camera (the union of `view_projs`: both eyes of a
+    /// switch to the frame's mesh; frames share topology, so only the buffer offsets change)
+    /// and dynamic ones to their transform in `scene` (the viewer's editor moves them), then
+    /// culls the draw lists against the camera (the union of `view_projs`: both eyes of a
     /// one-frame stereo renderer), each shadow view and each cascade view.
     pub fn update_draws(
         &mut self,
@@ -249,7 +250,8 @@ impl SceneGpu {
         (shadow_views, cascade_views): (&[crate::light::ShadowView], &[crate::light::ShadowView]),
     ) {
         for d in &mut self.all_draws {
-            let Some(o) = scene.objects.get(d.object).filter(|o| o.is_animated()) else {
+            let moving = |o: &&crate::scene::Object| o.is_animated() || o.dynamic;
+            let Some(o) = scene.objects.get(d.object).filter(moving) else {
                 continue;
             };
             let mesh_index = o.mesh_at(time_s);

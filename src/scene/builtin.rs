@@ -2,12 +2,12 @@
 //!
 //! They are defined as TOML (`assets/scenes/cornell.toml`, embedded with `include_str!`) and
 //! go through the same parser and validation as scene files: one format, one code path, and
-//! the file doubles as an example users can copy. Variants are made by editing the parsed
-//! description before validation.
+//! the file doubles as an example users can copy. Variants are TOML text too (cornell.toml
+//! with a table added or replaced), so that the viewer can save an edited built-in scene.
 
 use std::path::Path;
 
-use super::desc::{self, GiDesc, LightDesc, LightKind, ScalarOrVec3, SceneDesc};
+use super::desc;
 use super::{Scene, SceneError};
 
 /// The scene used when none is given.
@@ -21,16 +21,39 @@ const CORNELL_TOML: &str = include_str!("../../assets/scenes/cornell.toml");
 /// 8 pixels, render 512² in about 9 s on lavapipe (2 cores; 1 s with `--gi none`). At 256²
 /// against the Mitsuba reference: relMSE 0.013, FLIP 0.112 (2 rays × 1 frame: 0.022, 0.169,
 /// with visible blotches; radius 4 instead of 8 at 2 rays: 0.032).
-fn cornell_gi() -> GiDesc {
-    GiDesc {
-        method: Some("pathtrace".into()),
-        rays: Some(4),
-        accumulate_frames: Some(2),
-        bounces: Some(toml::Value::String(
-            crate::scene::Bounces::UNBOUNDED_NAME.into(),
-        )),
-        filter_radius: Some(8),
-        ..Default::default()
+const CORNELL_GI_TOML: &str = "
+# The built-in scene's indirect light: the unbiased path tracer, 4 rays x 2 frames, filtered.
+[gi]
+method = \"pathtrace\"
+rays = 4
+accumulate_frames = 2
+bounces = \"unbounded\"
+filter_radius = 8
+";
+
+/// The light of `cornell-point`: 1 W/sr at 0.25 m below the ceiling, E = 1 / 0.5² = 4 W/m² at
+/// the floor's center.
+const CORNELL_POINT_LIGHT_TOML: &str = "
+# A point light 0.25 m below the ceiling: E = 1 / 0.5^2 = 4 W/m^2 at the floor's center.
+[[lights]]
+kind = \"point\"
+position = [0.278, 0.5, 0.2796]
+intensity_w_sr = [1.0, 1.0, 1.0]
+";
+
+/// The TOML text of a built-in scene (what `voxgi view --save` edits for a scene without a
+/// file), or `None` for an unknown name. [`builtin`] loads exactly this text.
+pub fn builtin_toml(name: &str) -> Option<String> {
+    match name {
+        "cornell" => Some(format!("{CORNELL_TOML}{CORNELL_GI_TOML}")),
+        "cornell-point" => {
+            // cornell.toml with its spot light replaced by the point light.
+            let mut doc: toml_edit::DocumentMut = CORNELL_TOML.parse().ok()?;
+            let light: toml_edit::DocumentMut = CORNELL_POINT_LIGHT_TOML.parse().ok()?;
+            doc.insert("lights", light.get("lights")?.clone());
+            Some(doc.to_string())
+        }
+        _ => None,
     }
 }
 
@@ -56,24 +79,9 @@ pub fn builtin(name: &str) -> Option<Scene> {
 fn try_builtin(name: &str) -> Option<Result<Scene, SceneError>> {
     let origin = format!("<built-in scene {name}>");
     let origin = Path::new(&origin);
-    let modify: fn(&mut SceneDesc) = match name {
-        "cornell" => |d| d.gi = Some(cornell_gi()),
-        "cornell-point" => |d| {
-            // 1 W/sr at 0.25 m below the ceiling: E = 1 / 0.5^2 = 4 W/m² at the floor center.
-            d.lights = vec![LightDesc {
-                kind: LightKind::Point,
-                position: Some([0.278, 0.5, 0.2796]),
-                intensity_w_sr: Some(ScalarOrVec3::Vec3([1.0, 1.0, 1.0])),
-                ..Default::default()
-            }];
-        },
-        _ => return None,
-    };
-    Some(desc::parse(CORNELL_TOML, origin).and_then(|mut d| {
-        modify(&mut d);
-        // Built-in scenes reference only built-in meshes, so the base directory is unused.
-        desc::build(d, origin, Path::new("."), None)
-    }))
+    let text = builtin_toml(name)?;
+    // Built-in scenes reference only built-in meshes, so the base directory is unused.
+    Some(desc::parse(&text, origin).and_then(|d| desc::build(d, origin, Path::new("."), None)))
 }
 
 /// A scene from a command-line argument: a built-in name (`cornell`, ...), a path to a TOML

@@ -307,11 +307,11 @@ fn local_origin(desc: &SceneDesc) -> DVec3 {
 }
 
 /// Field-level checks, each error naming `file` and the field.
-struct Check<'a> {
-    file: &'a Path,
+pub(crate) struct Check<'a> {
+    pub(crate) file: &'a Path,
     /// The scene's local origin in world coordinates (see [`local_origin`]): subtracted in
     /// f64 from every position the file gives, before it becomes f32.
-    origin: DVec3,
+    pub(crate) origin: DVec3,
 }
 
 impl Check<'_> {
@@ -1054,7 +1054,7 @@ fn limit_message(e: &limits::LimitError) -> String {
     format!("{}; expected {}", e.value, e.expected)
 }
 
-fn build_light(ck: &Check<'_>, field: &str, l: &LightDesc) -> Result<Light, SceneError> {
+pub(crate) fn build_light(ck: &Check<'_>, field: &str, l: &LightDesc) -> Result<Light, SceneError> {
     let f = |name: &str| format!("{field}.{name}");
     let kind_name = match l.kind {
         LightKind::Point => "point",
@@ -1304,7 +1304,7 @@ fn build_area_light(ck: &Check<'_>, field: &str, l: &LightDesc) -> Result<Light,
     })
 }
 
-fn build_transform(
+pub(crate) fn build_transform(
     ck: &Check<'_>,
     field: &str,
     translate: Option<[f64; 3]>,

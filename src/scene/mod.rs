@@ -190,11 +190,12 @@ mod obj;
 mod object;
 mod post_settings;
 mod query;
+pub mod save;
 pub mod vpl_settings;
 
 use std::path::{Path, PathBuf};
 
-pub use builtin::{builtin, builtin_names, load_scene_arg, DEFAULT_SCENE};
+pub use builtin::{builtin, builtin_names, builtin_toml, load_scene_arg, DEFAULT_SCENE};
 pub use camera::{Camera, Eye, Projection, StereoRig};
 pub use camera_path::{CameraKey, CameraPath, CameraPathError};
 pub use cull::aabb_visible;
@@ -211,7 +212,9 @@ pub use material::{
     PbrMaps, TextureData, Transparency, DIELECTRIC_F0, TRANSPARENCY_NAMES,
 };
 pub use mesh::{area_weighted_normals, Aabb, Mesh, SubMesh, BUILTIN_MESH_NAMES};
-pub use object::{rotation_from_euler_xyz_deg, Animation, Keyframe, Object, Transform};
+pub use object::{
+    euler_xyz_deg, rotation_from_euler_xyz_deg, Animation, Keyframe, Object, Transform,
+};
 pub use post_settings::{PostOverrides, Stage, ToneOperator};
 pub use query::NoSuchObject;
 pub use vpl_settings::{VplOverrides, VplSettings, VplShading, VplVisibility};

@@ -46,6 +46,14 @@ pub fn rotation_from_euler_xyz_deg(deg: Vec3) -> Quat {
         .normalize()
 }
 
+/// The `rotate_deg = [x, y, z]` of a rotation: the inverse of [`rotation_from_euler_xyz_deg`]
+/// (for R = Rz·Ry·Rx, glam's `EulerRot::ZYX` yields the angles z, y, x). Within ±90° of y
+/// the angles are unique; at y = ±90° (gimbal lock) one of the equivalent triples.
+pub fn euler_xyz_deg(q: Quat) -> Vec3 {
+    let (z, y, x) = q.normalize().to_euler(glam::EulerRot::ZYX);
+    Vec3::new(x, y, z) * (180.0 / std::f32::consts::PI)
+}
+
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Keyframe {
     pub time_s: f32,
@@ -259,6 +267,18 @@ mod tests {
             "{b:?}"
         );
         assert!((b.max - Vec3::new(5.5, 1.5, 1.5)).length() < 1e-4, "{b:?}");
+    }
+
+    #[test]
+    fn euler_angles_invert_the_rotation() {
+        for deg in [
+            Vec3::new(30.0, 45.0, 10.0),
+            Vec3::new(-120.0, -60.0, 170.0),
+            Vec3::new(0.0, 0.0, 90.0),
+        ] {
+            let back = euler_xyz_deg(rotation_from_euler_xyz_deg(deg));
+            assert!((back - deg).abs().max_element() < 1e-3, "{deg} -> {back}");
+        }
     }
 
     #[test]

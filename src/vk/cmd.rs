@@ -353,8 +353,22 @@ impl<'a> Cmd<'a> {
         layers: u32,
         buffer: vk::Buffer,
     ) {
+        self.copy_image_to_buffer_at(image, extent, mip, layers, buffer, 0);
+    }
+
+    /// [`Self::copy_image_to_buffer`] to `offset_bytes` into the buffer (a frame slot's window
+    /// of a buffer imported per slot; a multiple of the texel size).
+    pub fn copy_image_to_buffer_at(
+        &self,
+        image: vk::Image,
+        extent: vk::Extent3D,
+        mip: u32,
+        layers: u32,
+        buffer: vk::Buffer,
+        offset_bytes: u64,
+    ) {
         let region = [vk::BufferImageCopy {
-            buffer_offset: 0,
+            buffer_offset: offset_bytes,
             buffer_row_length: 0,
             buffer_image_height: 0,
             image_subresource: vk::ImageSubresourceLayers {
@@ -367,7 +381,7 @@ impl<'a> Cmd<'a> {
             image_extent: extent,
         }];
         // SAFETY: Cmd invariant; the graph put the image in TRANSFER_SRC_OPTIMAL; the buffer is
-        // large enough (checked by the caller's read-back size).
+        // large enough past the offset (checked by the caller's read-back size).
         unsafe {
             self.ctx.device.cmd_copy_image_to_buffer(
                 self.raw,

@@ -204,6 +204,8 @@ pub struct TriangleAttributeVolumes {
     /// The material lobe per voxel ([`material_texel`]), only when asked for.
     pub material: Option<Image>,
     pub writer: Option<TriangleAttributes>,
+    /// Per object the writer writes, its index in the whole scene.
+    indices: Vec<usize>,
 }
 
 /// The attribute volumes of one frame's graph.
@@ -230,11 +232,13 @@ impl TriangleAttributeVolumes {
         values: ValueVolumes,
     ) -> Result<Self, VkError> {
         let mut tri_scene = scene.clone();
-        if atlas_writes {
-            tri_scene
-                .objects
-                .retain(|o| !super::gpu_atlas::uses_atlas(scene, o));
-        }
+        // Objects the atlas voxelizer handles get every volume from its points.
+        let written =
+            |o: &crate::scene::Object| !atlas_writes || !super::gpu_atlas::uses_atlas(scene, o);
+        let indices = (0..scene.objects.len())
+            .filter(|&i| written(&scene.objects[i]))
+            .collect();
+        tri_scene.objects.retain(written);
         let volumes = AttributeVolumes::new(ctx, grid)?;
         let emission = values
             .emission
@@ -256,7 +260,21 @@ impl TriangleAttributeVolumes {
             emission,
             material,
             writer,
+            indices,
         })
+    }
+
+    /// Takes the dynamic objects' transforms from `scene` (the scene the volumes were made
+    /// for): the next [`Self::update`] writes moved objects' triangles where they now are.
+    pub fn follow_objects(&mut self, scene: &Scene) {
+        if let Some(a) = self.writer.as_mut().and_then(|w| w.animated.as_mut()) {
+            for (o, &i) in a.scene.objects.iter_mut().zip(&self.indices) {
+                match scene.objects.get(i) {
+                    Some(src) if o.dynamic => o.transform = src.transform,
+                    _ => {}
+                }
+            }
+        }
     }
 
     /// See [`TriangleAttributes::update`].
@@ -320,7 +338,8 @@ impl TriangleAttributes {
         } else {
             bytemuck::cast_slice(&tris)
         };
-        let made = if scene.has_animation() {
+        // Dynamic objects (the viewer's editor moves them) are rewritten like animated ones.
+        let made = if scene.has_animation() || scene.has_dynamic_objects() {
             // Headroom for OBJ sequences whose frames differ in triangle count.
             let capacity = (tris.len() * 2).max(1);
             let region = (capacity * std::mem::size_of::<AttributeTriangle>()) as u64;

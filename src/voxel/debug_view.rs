@@ -234,6 +234,13 @@ impl VoxelDebugPass {
         }
     }
 
+    /// Takes the dynamic objects' transforms from `scene` (albedo view only).
+    pub fn follow_objects(&mut self, scene: &crate::scene::Scene) {
+        if let AlbedoSource::Volumes(v) = &mut self.albedo {
+            v.follow_objects(scene);
+        }
+    }
+
     fn pipeline_parts(
         ctx: &Context,
     ) -> Result<(ComputePipeline, Buffer, crate::vk::Sampler), VkError> {

@@ -781,6 +781,8 @@ pub struct VoxelFrame {
 struct DynamicVoxels {
     /// The scene's dynamic objects with the scene's meshes (textures dropped).
     scene: Scene,
+    /// Per object of `scene`, its index in the whole scene.
+    indices: Vec<usize>,
     triangles: DynamicTriangles,
     /// The triangles in the grid (or about to be, once the last open slot's frame runs).
     voxelized: Option<Vec<GpuTriangle>>,
@@ -874,6 +876,9 @@ impl VoxelFrame {
         };
         if scene.objects.iter().any(tri_dynamic) {
             let mut dyn_scene = scene.clone();
+            let indices = (0..scene.objects.len())
+                .filter(|&i| tri_dynamic(&scene.objects[i]))
+                .collect();
             dyn_scene.objects.retain(tri_dynamic);
             dyn_scene.textures.clear();
             let tris = dynamic_triangles(&dyn_scene, t_s)?;
@@ -888,6 +893,7 @@ impl VoxelFrame {
             }
             self.dynamic = Some(DynamicVoxels {
                 scene: dyn_scene,
+                indices,
                 triangles,
                 voxelized: None,
             });
@@ -954,6 +960,22 @@ impl VoxelFrame {
         self.dynamic.is_some()
             || self.revoxelize_static
             || self.atlas.as_ref().is_some_and(|a| a.has_dynamic())
+    }
+
+    /// Takes the dynamic objects' transforms from `scene` (the scene this frame was made for,
+    /// its objects in the same order): an object the viewer's editor moves is re-voxelized
+    /// where it now is by the next [`Self::update`]. Animated objects follow their keyframes.
+    pub fn follow_objects(&mut self, scene: &Scene) {
+        if let Some(d) = &mut self.dynamic {
+            for (o, &i) in d.scene.objects.iter_mut().zip(&d.indices) {
+                if let Some(src) = scene.objects.get(i) {
+                    o.transform = src.transform;
+                }
+            }
+        }
+        if let Some(a) = &mut self.atlas {
+            a.follow_objects(scene);
+        }
     }
 
     /// Prepares frame slot `slot` for scene time `t_s` (call after the slot's fence): writes

@@ -821,6 +821,18 @@ impl AtlasScene {
         &self.points
     }
 
+    /// Takes the dynamic objects' transforms from `scene` (see `VoxelFrame::follow_objects`).
+    /// The atlas keeps the texel size of the scale it was built for: a scaled-up object's
+    /// points spread apart, so a caller that scales an object makes a new atlas (the viewer
+    /// uses the triangle voxelizer).
+    pub fn follow_objects(&mut self, scene: &Scene) {
+        for d in &mut self.dynamic_instances {
+            if let Some(src) = scene.objects.get(d.object_index) {
+                d.object.transform = src.transform;
+            }
+        }
+    }
+
     /// The dynamic objects' model matrices and sequence frames at `t_s`.
     pub fn pose_at(&self, t_s: f32) -> AtlasPose {
         AtlasPose {
