@@ -456,7 +456,8 @@ pub const TRAVERSE_SAMPLES: Limit<u32> = Limit::new(
     65536,
 );
 /// The side of the CPU-traced G-buffer the rays start from: its cost is side² × the scene's
-/// triangles (the atrium's 323k at 256² takes minutes), and the ray buffers grow with it.
+/// triangles (the atrium's voxels and 64² G-buffer took about 25 s on 2 shared cores, so 256²
+/// takes minutes), and the ray buffers grow with it.
 pub const TRAVERSE_GBUFFER: Limit<u32> = Limit::new(
     "--traverse-gbuffer",
     None,

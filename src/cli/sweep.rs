@@ -799,11 +799,13 @@ fn radius_text(scene: &str, r: &crate::bench::RadiusResult, rows: &[TraverseRow]
         r.rays,
         100.0 * r.hit_fraction
     );
+    let cpu = |ms: Option<f64>| ms.map_or_else(|| "-".to_owned(), |c| format!("{c:.1}"));
     for m in r.methods.iter().take(2) {
         t += &format!(
-            " {} {:.2} ms, {:.1} steps, {:.2}% exact;",
+            " {} {:.1} GPU / {} CPU ms, {:.1} steps, {:.2}% exact;",
             m.method,
             m.gpu_ms,
+            cpu(m.cpu_ms),
             m.mean_steps,
             100.0 * m.exact_agreement
         );
@@ -812,8 +814,12 @@ fn radius_text(scene: &str, r: &crate::bench::RadiusResult, rows: &[TraverseRow]
         let bits = a.bits;
         match (a.samples, a.speedup) {
             (Some(n), Some(x)) => {
+                let in_cpu = a
+                    .cpu_speedup
+                    .map_or_else(String::new, |c| format!(", {c:.2}x in CPU ms"));
                 t += &format!(
-                    " {bits}-bit marching at 99% from {n} samples, hierarchical {x:.2}x faster;"
+                    " {bits}-bit marching at 99% from {n} samples: hierarchical {x:.2}x \
+                     faster{in_cpu};"
                 )
             }
             _ if rows
