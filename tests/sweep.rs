@@ -259,6 +259,22 @@ fn the_sweep_compares_the_ray_tests_and_resumes_them() {
     let again = sweep(&dir, &args("1,9,81", true));
     assert!(again.status.success(), "{}", text(&again.stderr));
     assert_eq!(traverse_rows(&dir), t, "nothing left to measure");
+    // Rows of other rays are not mixed in: the flags they were measured with are named.
+    let mut other = args("1,9,81", true);
+    let at = other
+        .iter()
+        .position(|a| *a == "--traverse-rays")
+        .expect("flag")
+        + 1;
+    other[at] = "2";
+    let refused = sweep(&dir, &other);
+    assert!(!refused.status.success());
+    let says = text(&refused.stderr);
+    assert!(
+        says.contains("--traverse-rays 4") && says.contains("--traverse-rays 2"),
+        "{says}"
+    );
+    assert_eq!(traverse_rows(&dir), t);
 
     let of = |radius: f32, test: &str| {
         t.iter()
@@ -267,7 +283,7 @@ fn the_sweep_compares_the_ray_tests_and_resumes_them() {
     };
     for r in &t {
         assert_eq!(r.scene, "cornell");
-        assert_eq!(r.rays, r.points * 4, "{r:?}");
+        assert_eq!((r.rays, r.gbuffer), (r.points * 4, 16), "{r:?}");
         assert!(r.rays > 0 && r.repeats == 2, "{r:?}");
         assert!(r.gpu_min_ms <= r.gpu_median_ms && r.gpu_median_ms <= r.gpu_max_ms);
         assert!(r.steps_per_ray > 0.0 && (0.0..=1.0).contains(&r.hit_fraction));

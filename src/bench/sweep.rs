@@ -46,6 +46,12 @@ pub enum SweepError {
     },
     #[error("{} exists: pass --resume to skip the rows it has, or choose another --out", path.display())]
     Exists { path: PathBuf },
+    #[error("{}: its rows were measured with {measured}, and this sweep asks for {given}; pass the same flags to resume it, or choose another --out", path.display())]
+    TraverseSettings {
+        path: PathBuf,
+        measured: String,
+        given: String,
+    },
     #[error("no scene to sweep: none of the scenes has a reference in {}", dir.display())]
     NoScenes { dir: PathBuf },
     #[error("{}: no rows of scene {scene} (it has: {}); run `voxgi sweep {scene} --out DIR` first", path.display(), have.join(", "))]

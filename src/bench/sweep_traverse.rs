@@ -26,6 +26,8 @@ pub struct TraverseRow {
     pub samples: Option<u32>,
     /// The voxel grid, `XxYxD`.
     pub grid: String,
+    /// Side of the CPU-traced G-buffer the rays start from, in pixels.
+    pub gbuffer: u32,
     /// Camera-visible surface points the rays start from, and the rays (points × rays per
     /// point).
     pub points: u32,
@@ -57,13 +59,14 @@ pub struct TraverseRow {
 }
 
 /// The CSV's columns, in [`TraverseRow`]'s field order.
-pub const TRAVERSE_CSV_COLUMNS: [&str; 20] = [
+pub const TRAVERSE_CSV_COLUMNS: [&str; 21] = [
     "scene",
     "radius_box_units",
     "radius_m",
     "test",
     "samples",
     "grid",
+    "gbuffer",
     "points",
     "rays",
     "repeats",
@@ -108,6 +111,7 @@ pub fn traverse_tests(samples: &[u32]) -> Vec<String> {
 pub struct RadiusContext<'a> {
     pub scene: &'a str,
     pub grid: [u32; 3],
+    pub gbuffer: u32,
     pub points: usize,
     pub repeats: u32,
     pub device: &'a str,
@@ -132,6 +136,7 @@ pub fn traverse_rows(c: &RadiusContext<'_>, r: &RadiusResult) -> Vec<TraverseRow
             test: m.method.clone(),
             samples: m.samples,
             grid: format!("{}x{}x{}", c.grid[0], c.grid[1], c.grid[2]),
+            gbuffer: c.gbuffer,
             points: c.points as u32,
             rays: r.rays as u32,
             repeats: c.repeats,
@@ -222,6 +227,33 @@ pub fn missing_tests<'a>(
         .collect()
 }
 
+/// The settings the rays of a row were made with, as the flags that give them.
+pub fn settings_text(gbuffer: u32, rays_per_point: u32, repeats: u32) -> String {
+    format!(
+        "--traverse-gbuffer {gbuffer} --traverse-rays {rays_per_point} --traverse-repeats {repeats}"
+    )
+}
+
+/// The first row of `rows` measured with other settings than these, as its settings' text:
+/// a resumed sweep must not mix rows of different rays or run counts.
+pub fn other_settings(
+    rows: &[TraverseRow],
+    gbuffer: u32,
+    rays_per_point: u32,
+    repeats: u32,
+) -> Option<String> {
+    rows.iter()
+        .find(|r| {
+            r.gbuffer != gbuffer
+                || u64::from(r.rays) != u64::from(r.points) * u64::from(rays_per_point)
+                || r.repeats != repeats
+        })
+        .map(|r| {
+            let per_point = r.rays.checked_div(r.points).unwrap_or(0);
+            settings_text(r.gbuffer, per_point, r.repeats)
+        })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -269,6 +301,7 @@ mod tests {
         let c = RadiusContext {
             scene: "cornell",
             grid: [128, 128, 128],
+            gbuffer: 16,
             points: 250,
             repeats: 3,
             device: "llvmpipe, 256 bits",
@@ -299,5 +332,11 @@ mod tests {
         let missing = missing_tests(&rows, "cornell", 4.0, &wanted);
         assert_eq!(missing, [&wanted[3], &wanted[6]]);
         assert_eq!(missing_tests(&rows, "cornell", 2.0, &wanted).len(), 8);
+        // 1000 rays from 250 points: 4 per point.
+        assert_eq!(other_settings(&rows, 16, 4, 3), None);
+        let other = other_settings(&rows, 16, 8, 3);
+        assert_eq!(other.as_deref(), Some(settings_text(16, 4, 3).as_str()));
+        assert!(other_settings(&rows, 32, 4, 3).is_some());
+        assert!(other_settings(&rows, 16, 4, 1).is_some());
     }
 }

@@ -12,8 +12,8 @@ use crate::bench::sweep::{
     tune_from_dir, Config, CsvAppender, SweepError, SweepRow,
 };
 use crate::bench::sweep_traverse::{
-    march_at_99, march_test, missing_tests, traverse_rows, traverse_tests, RadiusContext,
-    TraverseRow,
+    march_at_99, march_test, missing_tests, other_settings, settings_text, traverse_rows,
+    traverse_tests, RadiusContext, TraverseRow,
 };
 use crate::bench::temporal::{
     lag_after_switch_off, light_path, path_flicker, LightPath, TemporalDesc,
@@ -526,6 +526,17 @@ pub fn sweep(global: &Global, args: &SweepArgs, out: &mut dyn Write) -> Result<(
         (true, true) => read_rows(&traverse_csv)?,
         _ => Vec::new(),
     };
+    if let Some(d) = &traverse {
+        let (gbuffer, rays, repeats) = (d.gbuffer_size, d.rays_per_point, d.repeats);
+        if let Some(measured) = other_settings(&traverse_done, gbuffer, rays, repeats) {
+            return Err(SweepError::TraverseSettings {
+                path: traverse_csv,
+                measured,
+                given: settings_text(gbuffer, rays, repeats),
+            }
+            .into());
+        }
+    }
     let traverse_todo = traverse
         .as_ref()
         .map(|desc| traverse_units(&scenes, desc, &traverse_done))
@@ -733,6 +744,7 @@ fn measure_traverse(
         let context = RadiusContext {
             scene: &s.name,
             grid: [base.res_x(), base.res_y(), base.depth()],
+            gbuffer: desc.gbuffer_size,
             points: setup.points,
             repeats: desc.repeats,
             device: &ctx.info.name,
