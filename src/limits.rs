@@ -457,6 +457,50 @@ pub const ORTHO_HEIGHT_M: Limit<f32> = Limit {
     )
 };
 
+/// `voxgi sweep`'s ray-test comparison (`bench traverse`): ray lengths in the thesis's
+/// test-box units, radius_m = r / 6 × the scene's largest extent. From r = 6√3 ≈ 10.4 on a ray
+/// is longer than the grid's diagonal, so the cap only stops typos.
+pub const TRAVERSE_RADIUS: Limit<f32> = Limit {
+    min_exclusive: true,
+    ..Limit::new(
+        "--traverse-radii",
+        None,
+        "a ray length in test-box units",
+        0.0,
+        64.0,
+    )
+};
+/// Marching samples per ray (1-bit and 3-bit rows each); 65536 is `bench traverse`'s cap.
+pub const TRAVERSE_SAMPLES: Limit<u32> = Limit::new(
+    "--traverse-samples",
+    None,
+    "marching samples per ray",
+    1,
+    65536,
+);
+/// The side of the CPU-traced G-buffer the rays start from: its cost is side² × the scene's
+/// triangles (the atrium's voxels and 64² G-buffer took about 25 s on 2 shared cores, so 256²
+/// takes minutes), and the ray buffers grow with it.
+pub const TRAVERSE_GBUFFER: Limit<u32> = Limit::new(
+    "--traverse-gbuffer",
+    None,
+    "a G-buffer side in pixels",
+    8,
+    256,
+);
+/// Rays per surface point: with the G-buffer's cap at most 256² × 64 = 4.2M rays, whose
+/// 32-byte rays and results per test stay within a few GiB.
+pub const TRAVERSE_RAYS: Limit<u32> =
+    Limit::new("--traverse-rays", None, "rays per surface point", 1, 64);
+/// Timed runs of every ray test.
+pub const TRAVERSE_REPEATS: Limit<u32> = Limit::new(
+    "--traverse-repeats",
+    None,
+    "timed runs per ray test",
+    1,
+    100,
+);
+
 #[cfg(test)]
 mod tests {
     use super::*;

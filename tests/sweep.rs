@@ -1,5 +1,6 @@
 //! `voxgi sweep` end to end at 32², and `voxgi tune` on what it wrote: the rows, their
-//! survival across runs (`--resume`), the files, and the errors that name the bad input.
+//! survival across runs (`--resume`), the ray-test rows (traverse.csv), the files, and the
+//! errors that name the bad input.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -49,16 +50,26 @@ fn rows(dir: &Path) -> Vec<voxgi::bench::sweep::SweepRow> {
     voxgi::bench::sweep::read_csv(&dir.join("sweep.csv")).expect("the CSV reads back")
 }
 
+fn traverse_rows(dir: &Path) -> Vec<voxgi::bench::sweep_traverse::TraverseRow> {
+    voxgi::bench::sweep::read_rows(&dir.join("traverse.csv")).expect("traverse.csv reads back")
+}
+
 #[test]
 fn a_sweep_writes_its_rows_resumes_and_feeds_tune() {
     let dir = out_dir("resume");
-    let first = sweep(&dir, &["--methods", "none"]);
+    let first = sweep(&dir, &["--methods", "none", "--no-traverse"]);
     assert!(first.status.success(), "{}", text(&first.stderr));
     assert_eq!(rows(&dir).len(), 1);
     // A second run into the same folder must say --resume, and then adds only the new row.
     let again = sweep(
         &dir,
-        &["--methods", "none,hemisphere", "--grid", "gi-rays=2"],
+        &[
+            "--methods",
+            "none,hemisphere",
+            "--grid",
+            "gi-rays=2",
+            "--no-traverse",
+        ],
     );
     assert!(!again.status.success());
     assert!(
@@ -74,6 +85,7 @@ fn a_sweep_writes_its_rows_resumes_and_feeds_tune() {
             "--grid",
             "gi-rays=2",
             "--resume",
+            "--no-traverse",
         ],
     );
     assert!(resumed.status.success(), "{}", text(&resumed.stderr));
@@ -95,7 +107,9 @@ fn a_sweep_writes_its_rows_resumes_and_feeds_tune() {
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("sweep.json")).expect("json"))
             .expect("parses");
-    assert_eq!(json.as_array().map(Vec::len), Some(2));
+    assert_eq!(json["rows"].as_array().map(Vec::len), Some(2));
+    assert_eq!(json["traverse"].as_array().map(Vec::len), Some(0));
+    assert!(!dir.join("traverse.csv").exists(), "--no-traverse");
     let svg = std::fs::read_to_string(dir.join("cornell_pareto.svg")).expect("the plot");
     let png = image::open(dir.join("cornell_pareto.png")).expect("the bitmap plot");
     assert_eq!((png.width(), png.height()), (640, 420));
@@ -151,7 +165,16 @@ fn a_sweep_writes_its_rows_resumes_and_feeds_tune() {
 #[test]
 fn the_sweep_measures_flicker_ghost_and_lag() {
     let dir = out_dir("temporal");
-    let run = sweep(&dir, &["--methods", "none,ssgi", "--temporal-steps", "3"]);
+    let run = sweep(
+        &dir,
+        &[
+            "--methods",
+            "none,ssgi",
+            "--temporal-steps",
+            "3",
+            "--no-traverse",
+        ],
+    );
     assert!(run.status.success(), "{}", text(&run.stderr));
     let r = rows(&dir);
     assert_eq!(r.len(), 2);
@@ -178,6 +201,7 @@ fn the_sweep_measures_flicker_ghost_and_lag() {
             "0",
             "--lag-frames",
             "0",
+            "--no-traverse",
         ],
     );
     assert!(run.status.success(), "{}", text(&run.stderr));
@@ -188,6 +212,129 @@ fn the_sweep_measures_flicker_ghost_and_lag() {
     );
     let _ = std::fs::remove_dir_all(&dir);
     let _ = std::fs::remove_dir_all(&off);
+}
+
+/// The ray-test comparison on Cornell (16² surface points, 4 rays each): one row per radius
+/// and test, the hierarchical test equal to the exact walk on every ray, marching's agreement
+/// at most 100% and, for 1-bit marching, rising with the sample count; `--resume` with one
+/// more sample count measures only its rows.
+#[test]
+fn the_sweep_compares_the_ray_tests_and_resumes_them() {
+    let dir = out_dir("traverse");
+    let args = |samples: &'static str, resume: bool| {
+        let mut a = vec![
+            "--methods",
+            "none",
+            "--temporal-steps",
+            "0",
+            "--lag-frames",
+            "0",
+            "--traverse-gbuffer",
+            "16",
+            "--traverse-rays",
+            "4",
+            "--traverse-radii",
+            "2,8",
+            "--traverse-repeats",
+            "2",
+            "--traverse-samples",
+            samples,
+        ];
+        if resume {
+            a.push("--resume");
+        }
+        a
+    };
+    let first = sweep(&dir, &args("9,1", false));
+    assert!(first.status.success(), "{}", text(&first.stderr));
+    // 2 radii × (hierarchical, exact walk, 1-bit and 3-bit × 2 sample counts).
+    assert_eq!(traverse_rows(&dir).len(), 2 * (2 + 2 * 2));
+    let more = sweep(&dir, &args("1,9,81", true));
+    assert!(more.status.success(), "{}", text(&more.stderr));
+    let t = traverse_rows(&dir);
+    assert_eq!(t.len(), 2 * (2 + 2 * 3), "only the x81 rows are new");
+    assert_eq!(rows(&dir).len(), 1, "the GI row is not measured again");
+    let added: Vec<&str> = t[12..].iter().map(|r| r.test.as_str()).collect();
+    assert_eq!(added, ["march1x81", "march3x81", "march1x81", "march3x81"]);
+    let again = sweep(&dir, &args("1,9,81", true));
+    assert!(again.status.success(), "{}", text(&again.stderr));
+    assert_eq!(traverse_rows(&dir), t, "nothing left to measure");
+    // Rows of other rays are not mixed in: the flags they were measured with are named.
+    let mut other = args("1,9,81", true);
+    let at = other
+        .iter()
+        .position(|a| *a == "--traverse-rays")
+        .expect("flag")
+        + 1;
+    other[at] = "2";
+    let refused = sweep(&dir, &other);
+    assert!(!refused.status.success());
+    let says = text(&refused.stderr);
+    assert!(
+        says.contains("--traverse-rays 4") && says.contains("--traverse-rays 2"),
+        "{says}"
+    );
+    assert_eq!(traverse_rows(&dir), t);
+
+    let of = |radius: f32, test: &str| {
+        t.iter()
+            .find(|r| r.radius_box_units == radius && r.test == test)
+            .unwrap_or_else(|| panic!("no {test} row at radius {radius}"))
+    };
+    for r in &t {
+        assert_eq!(r.scene, "cornell");
+        assert_eq!((r.rays, r.gbuffer), (r.points * 4, 16), "{r:?}");
+        assert!(r.rays > 0 && r.repeats == 2, "{r:?}");
+        assert!(r.gpu_min_ms <= r.gpu_median_ms && r.gpu_median_ms <= r.gpu_max_ms);
+        assert!(r.steps_per_ray > 0.0 && (0.0..=1.0).contains(&r.hit_fraction));
+        assert!((0.0..=1.0).contains(&r.exact_agreement), "{r:?}");
+        assert!(r.speedup > 0.0 && r.speedup.is_finite(), "{r:?}");
+        // The 3-bit mask tests a sample's column neighbours too, so it reports hits beside
+        // the ray (Thiedemann 2010, §6.4.1): more samples can lower its agreement; its rows
+        // are only bounded.
+    }
+    for radius in [2.0, 8.0] {
+        // The CPU twin of the hierarchical test equals the exact walk on every ray
+        // (tests/traverse.rs), and the GPU port follows it line by line.
+        let h = of(radius, "hierarchical");
+        assert_eq!(
+            (h.exact_agreement, h.hierarchical_agreement, h.speedup),
+            (1.0, 1.0, 1.0)
+        );
+        assert_eq!(of(radius, "dda").exact_agreement, 1.0);
+        // 1-bit sample i of N lies at t = (i + ½)·t_end/N, and for 3N samples sample 3i + 1
+        // lies at the same t: the 1-sample set is inside the 9-sample one, which is inside the
+        // 81-sample one. A 1-bit sample reports a hit only in a set voxel the segment passes,
+        // which the exact walk visits too, so marching's hits are a subset of the walk's, and
+        // a superset of samples can only find more of them: agreement never falls with N.
+        // Slack: one ray, for a sample within float rounding of a voxel face.
+        let one_ray = 1.0 / f64::from(h.rays);
+        let a: Vec<f64> = ["march1x1", "march1x9", "march1x81"]
+            .iter()
+            .map(|m| of(radius, m).exact_agreement)
+            .collect();
+        assert!(
+            a[0] <= a[1] + one_ray && a[1] <= a[2] + one_ray,
+            "{radius}: {a:?}"
+        );
+        // One sample, at the middle of the ray, finds a surface only where it lies there;
+        // 81 samples find most of them.
+        assert!(a[0] < a[2], "{radius}: {a:?}");
+        for m in ["march1x1", "march1x9", "march1x81"] {
+            let dda = of(radius, "dda").hit_fraction;
+            assert!(
+                of(radius, m).hit_fraction <= dda + one_ray,
+                "{m} at {radius}"
+            );
+        }
+    }
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("sweep.json")).expect("json"))
+            .expect("parses");
+    assert_eq!(json["traverse"].as_array().map(Vec::len), Some(t.len()));
+    // Per radius and bit depth the fewest samples at >= 99% agreement (or none).
+    assert_eq!(json["traverse_at_99"].as_array().map(Vec::len), Some(4));
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
@@ -201,6 +348,12 @@ fn bad_sweep_input_is_refused_before_any_row() {
             "gi-rays=0",
         ),
         (&["--methods", "segi"], "--methods segi"),
+        (&["--traverse-radii", "2,0"], "--traverse-radii = 0"),
+        (&["--traverse-radii", "nan"], "--traverse-radii = NaN"),
+        (&["--traverse-samples", "8,0"], "--traverse-samples = 0"),
+        (&["--traverse-gbuffer", "4"], "--traverse-gbuffer = 4"),
+        (&["--traverse-rays", "65"], "--traverse-rays = 65"),
+        (&["--traverse-repeats", "0"], "--traverse-repeats = 0"),
     ] {
         let out = sweep(&dir, extra);
         let stderr = text(&out.stderr);

@@ -14,7 +14,8 @@
 //! - [`bench_leak`] (`voxgi bench leak`): light leaking through a wall 0.25–4 voxels thick
 //!   between two closed rooms, per method (the truth behind the wall is zero).
 //! - [`sweep`]: the data of `voxgi sweep` and `voxgi tune` (grid, rows, CSV, Pareto front,
-//!   SVG plot, the tuner's choice).
+//!   SVG plot, the tuner's choice); [`sweep_traverse`] the rows of its ray-test comparison
+//!   (`bench traverse` per scene, radius and test).
 //! - [`bench_ssgi`] (`voxgi bench ssgi`): the screen-space GI's scalability table (Oetke
 //!   2017 Fig. 4.8): mip filter × GI resolution × samples, per-stage GPU times and errors.
 //! - [`bench_scenes`], [`dense_scene`], [`tessellated_cube`]: the generated scenes they run on.
@@ -27,6 +28,7 @@ mod soak;
 mod ssgi;
 pub mod ssgi_limits;
 pub mod sweep;
+pub mod sweep_traverse;
 pub mod temporal;
 mod traverse;
 mod voxelize;
@@ -49,8 +51,9 @@ pub use ssgi::{
 };
 pub use temporal::scene_at_step;
 pub use traverse::{
-    bench_traverse, gbuffer_points, traverse_rays, MethodResult, RadiusResult, TraverseBenchDesc,
-    TraverseBenchReport, TraverseRays,
+    bench_radius, bench_traverse, fewest_samples_at_99, gbuffer_points, traverse_rays,
+    MethodResult, RadiusResult, TraverseBenchDesc, TraverseBenchReport, TraverseRays,
+    DEFAULT_MARCH_STEPS, DEFAULT_RADII_BOX_UNITS,
 };
 pub use voxelize::{
     bench_voxelize_atlas, bench_voxelize_atlas_chunked, bench_voxelize_sweep, AtlasTimes,

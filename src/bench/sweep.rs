@@ -46,6 +46,12 @@ pub enum SweepError {
     },
     #[error("{} exists: pass --resume to skip the rows it has, or choose another --out", path.display())]
     Exists { path: PathBuf },
+    #[error("{}: its rows were measured with {measured}, and this sweep asks for {given}; pass the same flags to resume it, or choose another --out", path.display())]
+    TraverseSettings {
+        path: PathBuf,
+        measured: String,
+        given: String,
+    },
     #[error("no scene to sweep: none of the scenes has a reference in {}", dir.display())]
     NoScenes { dir: PathBuf },
     #[error("{}: no rows of scene {scene} (it has: {}); run `voxgi sweep {scene} --out DIR` first", path.display(), have.join(", "))]
@@ -330,11 +336,19 @@ fn split_csv_line(line: &str) -> Result<Vec<String>, String> {
     Ok(fields)
 }
 
-impl SweepRow {
+/// A row type of the sweep's CSV files: its columns, in the struct's field order and named
+/// as its serde fields, and which of them are text (the others are numbers, empty for
+/// `None`).
+pub trait CsvRow: Serialize + serde::de::DeserializeOwned {
+    const COLUMNS: &'static [&'static str];
+    const TEXT_COLUMNS: &'static [&'static str];
+    /// What a header of another version means, for the error.
+    const OTHER_HEADER: &'static str;
+
     /// The row as one CSV line (no line break).
-    pub fn csv_line(&self) -> String {
+    fn csv_line(&self) -> String {
         let value = serde_json::to_value(self).unwrap_or_default();
-        CSV_COLUMNS
+        Self::COLUMNS
             .iter()
             .map(|c| match &value[*c] {
                 serde_json::Value::String(s) => csv_field(s),
@@ -345,19 +359,19 @@ impl SweepRow {
             .join(",")
     }
 
-    /// Parses a line written by [`SweepRow::csv_line`].
-    pub fn from_csv_line(line: &str) -> Result<Self, String> {
+    /// Parses a line written by [`CsvRow::csv_line`].
+    fn from_csv_line(line: &str) -> Result<Self, String> {
         let fields = split_csv_line(line)?;
-        if fields.len() != CSV_COLUMNS.len() {
+        if fields.len() != Self::COLUMNS.len() {
             return Err(format!(
                 "{} fields, expected {}",
                 fields.len(),
-                CSV_COLUMNS.len()
+                Self::COLUMNS.len()
             ));
         }
         let mut map = serde_json::Map::new();
-        for (c, f) in CSV_COLUMNS.iter().zip(fields) {
-            let v = if TEXT_COLUMNS.contains(c) {
+        for (c, f) in Self::COLUMNS.iter().zip(fields) {
+            let v = if Self::TEXT_COLUMNS.contains(c) {
                 serde_json::Value::String(f)
             } else if f.is_empty() {
                 serde_json::Value::Null
@@ -368,15 +382,33 @@ impl SweepRow {
         }
         serde_json::from_value(serde_json::Value::Object(map)).map_err(|e| e.to_string())
     }
+
+    /// The CSV header line.
+    fn csv_header() -> String {
+        Self::COLUMNS.join(",")
+    }
 }
 
-/// The CSV header line.
+impl CsvRow for SweepRow {
+    const COLUMNS: &'static [&'static str] = &CSV_COLUMNS;
+    const TEXT_COLUMNS: &'static [&'static str] = &TEXT_COLUMNS;
+    const OTHER_HEADER: &'static str =
+        "the header is not this version's sweep header (an older sweep lacks the temporal \
+         columns: start a new --out)";
+}
+
+/// The CSV header line of [`SweepRow`]s.
 pub fn csv_header() -> String {
-    CSV_COLUMNS.join(",")
+    SweepRow::csv_header()
 }
 
 /// Reads a sweep's CSV (header and rows).
 pub fn read_csv(path: &Path) -> Result<Vec<SweepRow>, SweepError> {
+    read_rows(path)
+}
+
+/// Reads a CSV of `T` rows written by [`CsvAppender`] (header and rows).
+pub fn read_rows<T: CsvRow>(path: &Path) -> Result<Vec<T>, SweepError> {
     let text = std::fs::read_to_string(path).map_err(|source| SweepError::Io {
         path: path.to_owned(),
         source,
@@ -388,30 +420,24 @@ pub fn read_csv(path: &Path) -> Result<Vec<SweepRow>, SweepError> {
         reason,
     };
     match lines.next() {
-        Some((_, h)) if h.trim_end() == csv_header() => {}
-        _ => {
-            return Err(csv_err(
-                0,
-                "the header is not this version's sweep header (an older sweep lacks the \
-                 temporal columns: start a new --out)"
-                    .into(),
-            ))
-        }
+        Some((_, h)) if h.trim_end() == T::csv_header() => {}
+        _ => return Err(csv_err(0, T::OTHER_HEADER.into())),
     }
     lines
         .filter(|(_, l)| !l.trim().is_empty())
-        .map(|(i, l)| SweepRow::from_csv_line(l.trim_end()).map_err(|e| csv_err(i, e)))
+        .map(|(i, l)| T::from_csv_line(l.trim_end()).map_err(|e| csv_err(i, e)))
         .collect()
 }
 
-/// Appends rows to a CSV file, writing the header first when the file is new; each row is
-/// flushed as it is written, so an interrupted sweep keeps every finished row.
-pub struct CsvAppender {
+/// Appends `T` rows to a CSV file, writing the header first when the file is new; each row
+/// is flushed as it is written, so an interrupted sweep keeps every finished row.
+pub struct CsvAppender<T> {
     path: PathBuf,
     file: std::fs::File,
+    rows: std::marker::PhantomData<fn(&T)>,
 }
 
-impl CsvAppender {
+impl<T: CsvRow> CsvAppender<T> {
     pub fn open(path: &Path) -> Result<Self, SweepError> {
         let io = |source| SweepError::Io {
             path: path.to_owned(),
@@ -424,15 +450,16 @@ impl CsvAppender {
             .open(path)
             .map_err(io)?;
         if new {
-            writeln!(file, "{}", csv_header()).map_err(io)?;
+            writeln!(file, "{}", T::csv_header()).map_err(io)?;
         }
         Ok(Self {
             path: path.to_owned(),
             file,
+            rows: std::marker::PhantomData,
         })
     }
 
-    pub fn append(&mut self, row: &SweepRow) -> Result<(), SweepError> {
+    pub fn append(&mut self, row: &T) -> Result<(), SweepError> {
         writeln!(self.file, "{}", row.csv_line())
             .and_then(|()| self.file.sync_data())
             .map_err(|source| SweepError::Io {

@@ -37,14 +37,21 @@ pub struct TraverseBenchDesc {
     pub repeats: u32,
 }
 
+/// The default ray lengths, in the thesis's test-box units: a short, a middle and a long ray
+/// (radius 8 crosses most of the scene).
+pub const DEFAULT_RADII_BOX_UNITS: [f32; 3] = [2.0, 4.0, 8.0];
+
+/// The default marching sample counts, doubling from 8 to 512 (the thesis's Fig. 44/45 range).
+pub const DEFAULT_MARCH_STEPS: [u32; 7] = [8, 16, 32, 64, 128, 256, 512];
+
 impl Default for TraverseBenchDesc {
     fn default() -> Self {
         Self {
             resolution: 128,
             gbuffer_size: 128,
             rays_per_point: 16,
-            radii_box_units: vec![2.0, 4.0, 8.0],
-            march_steps: vec![8, 16, 32, 64, 128, 256, 512],
+            radii_box_units: DEFAULT_RADII_BOX_UNITS.to_vec(),
+            march_steps: DEFAULT_MARCH_STEPS.to_vec(),
             normal_offset_voxels: 1.0,
             params: vec![TraversalParams::default()],
             repeats: 1,
@@ -56,6 +63,8 @@ impl Default for TraverseBenchDesc {
 #[derive(Clone, Debug, Serialize)]
 pub struct MethodResult {
     pub method: String,
+    /// Marching samples per ray; `None` for the hierarchical test and the exact walk.
+    pub samples: Option<u32>,
     /// Median GPU time over the runs, and the fastest and slowest run.
     pub gpu_ms: f64,
     pub gpu_ms_min: f64,
@@ -65,6 +74,8 @@ pub struct MethodResult {
     pub cpu_ms: Option<f64>,
     pub rays_per_s: f64,
     pub mean_steps: f64,
+    /// Share of rays this test reports a hit on.
+    pub hit_fraction: f64,
     /// Share of rays whose hit/miss agrees with the hierarchical test.
     pub agreement: f64,
     /// Share of rays whose hit/miss agrees with the exact voxel walk (the ground truth).
@@ -79,7 +90,7 @@ pub struct RadiusResult {
     pub hit_fraction: f64,
     pub methods: Vec<MethodResult>,
     /// Fewest marching samples whose results agree with the hierarchical test on ≥ 99% of
-    /// rays, if any tried count does.
+    /// rays, if any tried count does ([`fewest_samples_at_99`]).
     pub march_steps_for_99: Option<u32>,
     /// GPU time of that marching run divided by the hierarchical test's.
     pub speedup_at_99: Option<f64>,
@@ -248,78 +259,107 @@ pub fn bench_traverse(
     desc: &TraverseBenchDesc,
 ) -> Result<TraverseBenchReport, BenchError> {
     let setup = traverse_rays(scene, desc)?;
-    let h = &setup.hierarchy;
-    let caster = VoxelRayCaster::new(ctx, h)?;
-    let mut radii = Vec::new();
-    for (r, radius_m, rays) in &setup.radii {
-        let (r, radius_m) = (*r, *radius_m);
-        let Some(&first) = desc.params.first() else {
-            return Err(BenchError::NoHierarchicalParams);
-        };
-        let mut methods = vec![RayMethod::Hierarchical(first), RayMethod::Dda];
-        methods.extend(desc.params[1..].iter().map(|&p| RayMethod::Hierarchical(p)));
-        methods.extend(desc.march_steps.iter().map(|&s| RayMethod::March1(s)));
-        methods.extend(desc.march_steps.iter().map(|&s| RayMethod::March3(s)));
-        let batches = caster.cast_timed(ctx, rays, &methods, desc.repeats)?;
-        let several = desc.params.len() > 1;
-        let (reference, exact) = (&batches[0], &batches[1]);
-        let hits = reference.hits.iter().filter(|h| h.hit).count();
-        let share = |a: &[HitResult], b: &[HitResult]| {
-            a.iter().zip(b).filter(|(x, y)| x.hit == y.hit).count() as f64 / rays.len() as f64
-        };
-        let mut results = Vec::new();
-        let (mut march1_99, mut march3_99) = (None, None);
-        for b in &batches {
-            let agreement = share(&b.hits, &reference.hits);
-            let mean_steps =
-                b.hits.iter().map(|h| f64::from(h.steps)).sum::<f64>() / rays.len() as f64;
-            let first_99 = match b.method {
-                RayMethod::March1(s) => Some((&mut march1_99, s)),
-                RayMethod::March3(s) => Some((&mut march3_99, s)),
-                _ => None,
-            };
-            if let Some((slot, s)) = first_99 {
-                if agreement >= 0.99 && slot.is_none() {
-                    *slot = Some((s, b.gpu_ms / reference.gpu_ms.max(1e-9)));
-                }
-            }
-            let method = match b.method {
-                RayMethod::Hierarchical(p) if several => {
-                    format!("hierarchical/{}", p.start_level)
-                }
-                m => m.name(),
-            };
-            let runs = &b.gpu_ms_runs;
-            results.push(MethodResult {
-                method,
-                gpu_ms: b.gpu_ms,
-                gpu_ms_min: runs.iter().copied().fold(f64::INFINITY, f64::min),
-                gpu_ms_max: runs.iter().copied().fold(0.0, f64::max),
-                cpu_ms: (!b.cpu_ms_runs.is_empty()).then(|| crate::stats::median(&b.cpu_ms_runs)),
-                rays_per_s: rays.len() as f64 / (b.gpu_ms.max(1e-9) * 1e-3),
-                mean_steps,
-                agreement,
-                exact_agreement: share(&b.hits, &exact.hits),
-            });
-        }
-        radii.push(RadiusResult {
-            radius_box_units: r,
-            radius_m,
-            rays: rays.len(),
-            hit_fraction: hits as f64 / rays.len() as f64,
-            methods: results,
-            march_steps_for_99: march1_99.map(|(s, _)| s),
-            speedup_at_99: march1_99.map(|(_, x)| x),
-            march3_steps_for_99: march3_99.map(|(s, _)| s),
-            march3_speedup_at_99: march3_99.map(|(_, x)| x),
-        });
-    }
-    let b = h.base();
+    let caster = VoxelRayCaster::new(ctx, &setup.hierarchy)?;
+    let radii = setup
+        .radii
+        .iter()
+        .map(|(r, radius_m, rays)| bench_radius(ctx, &caster, desc, *r, *radius_m, rays))
+        .collect::<Result<Vec<_>, _>>()?;
+    let b = setup.hierarchy.base();
     Ok(TraverseBenchReport {
         device: ctx.info.name.clone(),
         grid: [b.res_x(), b.res_y(), b.depth()],
         points: setup.points,
         radii,
+    })
+}
+
+/// The fewest marching samples whose hit/miss agrees with the reference on at least 99% of
+/// the rays, and how many times the hierarchical test is faster than that marching: of
+/// `(samples, agreement, ms)` per marching run and the hierarchical test's ms in the same run.
+/// `None` when no run reaches 99%.
+pub fn fewest_samples_at_99(
+    runs: impl IntoIterator<Item = (u32, f64, f64)>,
+    hierarchical_ms: f64,
+) -> Option<(u32, f64)> {
+    runs.into_iter()
+        .filter(|&(_, agreement, _)| agreement >= 0.99)
+        .min_by_key(|&(samples, _, _)| samples)
+        .map(|(samples, _, ms)| (samples, ms / hierarchical_ms.max(1e-9)))
+}
+
+/// One radius of the benchmark: the hierarchical test (each of `desc.params`), the exact walk
+/// and every marching sample count of `desc` cast on `rays`, interleaved over
+/// `desc.repeats` runs (`radius`: in box units and in meters, for the report).
+pub fn bench_radius(
+    ctx: &Context,
+    caster: &VoxelRayCaster,
+    desc: &TraverseBenchDesc,
+    radius_box_units: f32,
+    radius_m: f32,
+    rays: &[GpuRay],
+) -> Result<RadiusResult, BenchError> {
+    let Some(&first) = desc.params.first() else {
+        return Err(BenchError::NoHierarchicalParams);
+    };
+    let mut methods = vec![RayMethod::Hierarchical(first), RayMethod::Dda];
+    methods.extend(desc.params[1..].iter().map(|&p| RayMethod::Hierarchical(p)));
+    methods.extend(desc.march_steps.iter().map(|&s| RayMethod::March1(s)));
+    methods.extend(desc.march_steps.iter().map(|&s| RayMethod::March3(s)));
+    let batches = caster.cast_timed(ctx, rays, &methods, desc.repeats)?;
+    let several = desc.params.len() > 1;
+    let (reference, exact) = (&batches[0], &batches[1]);
+    let n = rays.len() as f64;
+    let hit_share = |a: &[HitResult]| a.iter().filter(|h| h.hit).count() as f64 / n;
+    let share = |a: &[HitResult], b: &[HitResult]| {
+        a.iter().zip(b).filter(|(x, y)| x.hit == y.hit).count() as f64 / n
+    };
+    let mut results = Vec::new();
+    for b in &batches {
+        let method = match b.method {
+            RayMethod::Hierarchical(p) if several => format!("hierarchical/{}", p.start_level),
+            m => m.name(),
+        };
+        let runs = &b.gpu_ms_runs;
+        results.push(MethodResult {
+            method,
+            samples: match b.method {
+                RayMethod::March1(s) | RayMethod::March3(s) => Some(s),
+                _ => None,
+            },
+            gpu_ms: b.gpu_ms,
+            gpu_ms_min: runs.iter().copied().fold(f64::INFINITY, f64::min),
+            gpu_ms_max: runs.iter().copied().fold(0.0, f64::max),
+            cpu_ms: (!b.cpu_ms_runs.is_empty()).then(|| crate::stats::median(&b.cpu_ms_runs)),
+            rays_per_s: n / (b.gpu_ms.max(1e-9) * 1e-3),
+            mean_steps: b.hits.iter().map(|h| f64::from(h.steps)).sum::<f64>() / n,
+            hit_fraction: hit_share(&b.hits),
+            agreement: share(&b.hits, &reference.hits),
+            exact_agreement: share(&b.hits, &exact.hits),
+        });
+    }
+    let at_99 = |bits: u32| {
+        let runs = batches
+            .iter()
+            .zip(&results)
+            .filter_map(|(b, m)| match b.method {
+                RayMethod::March1(s) if bits == 1 => Some((s, m.agreement, b.gpu_ms)),
+                RayMethod::March3(s) if bits == 3 => Some((s, m.agreement, b.gpu_ms)),
+                _ => None,
+            });
+        fewest_samples_at_99(runs, reference.gpu_ms)
+    };
+    let (march1_99, march3_99) = (at_99(1), at_99(3));
+    Ok(RadiusResult {
+        radius_box_units,
+        radius_m,
+        rays: rays.len(),
+        hit_fraction: hit_share(&reference.hits),
+        methods: results,
+        march_steps_for_99: march1_99.map(|(s, _)| s),
+        speedup_at_99: march1_99.map(|(_, x)| x),
+        march3_steps_for_99: march3_99.map(|(s, _)| s),
+        march3_speedup_at_99: march3_99.map(|(_, x)| x),
     })
 }
 
@@ -376,5 +416,25 @@ impl TraverseBenchReport {
             }
         }
         s
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_fewest_samples_at_99_percent_are_chosen_whatever_the_order() {
+        // (samples, agreement, ms); the hierarchical test took 2 ms.
+        let runs = [
+            (128, 0.999, 12.0),
+            (16, 0.95, 3.0),
+            (64, 0.99, 8.0),
+            (32, 0.989, 5.0),
+        ];
+        // 64 is the fewest at >= 99% (exactly 0.99 counts); 8 ms / 2 ms = 4x.
+        assert_eq!(fewest_samples_at_99(runs, 2.0), Some((64, 4.0)));
+        assert_eq!(fewest_samples_at_99(runs[1..2].iter().copied(), 2.0), None);
+        assert_eq!(fewest_samples_at_99([], 2.0), None);
     }
 }

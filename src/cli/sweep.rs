@@ -1,16 +1,25 @@
 //! `voxgi sweep` (every method over a grid of GI settings on each scene with a reference:
 //! GPU times, transient memory and error metrics, as CSV, JSON and plots (SVG and PNG) of
-//! error against time per scene) and `voxgi tune` (from a sweep's CSV, the most accurate
+//! error against time per scene; then the ray tests of `voxgi bench traverse` on each scene,
+//! as traverse.csv) and `voxgi tune` (from a sweep's CSV, the most accurate
 //! configuration within a time budget, as a `[gi]` table).
 
 use super::args::FrameArgs;
 use super::{check_validation, context, outln, CliError, Global};
+use crate::bench::sweep::read_rows;
 use crate::bench::sweep::{
     configs, downsample, gi_inline, method_name, pareto_svg, parse_grid, parse_methods, read_csv,
     tune_from_dir, Config, CsvAppender, SweepError, SweepRow,
 };
+use crate::bench::sweep_traverse::{
+    march_at_99, march_test, missing_tests, other_settings, settings_text, traverse_rows,
+    traverse_tests, RadiusContext, TraverseRow,
+};
 use crate::bench::temporal::{
     lag_after_switch_off, light_path, path_flicker, LightPath, TemporalDesc,
+};
+use crate::bench::{
+    bench_radius, traverse_rays, TraverseBenchDesc, DEFAULT_MARCH_STEPS, DEFAULT_RADII_BOX_UNITS,
 };
 use crate::eval::HdrImage;
 use crate::render::{profile_scene, render_image, RenderSettings};
@@ -36,7 +45,8 @@ pub struct SweepArgs {
     #[arg(long, value_name = "KEY=V1,V2,…")]
     pub grid: Vec<String>,
     /// Output folder: sweep.csv (a row per configuration, written as each finishes),
-    /// sweep.json and <scene>_pareto.svg and .png.
+    /// traverse.csv (a row per scene, ray radius and ray test, written a radius at a time),
+    /// sweep.json (both) and <scene>_pareto.svg and .png.
     #[arg(long)]
     pub out: PathBuf,
     /// Image width and height in pixels; must divide the references' size.
@@ -79,6 +89,31 @@ pub struct SweepArgs {
     /// 0 leaves them empty.
     #[arg(long, default_value_t = 32, value_name = "FRAMES")]
     pub lag_frames: u32,
+    /// Leave out the ray-test comparison (traverse.csv): after the GI rows the sweep casts
+    /// `voxgi bench traverse`'s rays on each scene with the hierarchical test, the exact
+    /// voxel walk and 1-bit and 3-bit marching at each --traverse-samples, per
+    /// --traverse-radii.
+    #[arg(long)]
+    pub no_traverse: bool,
+    /// Ray lengths of the ray-test comparison, in the thesis's test-box units (radius_m =
+    /// r / 6 × the scene's largest extent).
+    #[arg(long, value_delimiter = ',', default_values_t = DEFAULT_RADII_BOX_UNITS,
+          value_name = "R1,R2,…")]
+    pub traverse_radii: Vec<f32>,
+    /// Marching sample counts of the ray-test comparison (a 1-bit and a 3-bit row each).
+    #[arg(long, value_delimiter = ',', default_values_t = DEFAULT_MARCH_STEPS,
+          value_name = "N1,N2,…")]
+    pub traverse_samples: Vec<u32>,
+    /// Side of the CPU-traced G-buffer whose visible surface points the test rays start from.
+    #[arg(long, default_value_t = 64, value_name = "PIXELS")]
+    pub traverse_gbuffer: u32,
+    /// Test rays per surface point (cosine-distributed around its normal).
+    #[arg(long, default_value_t = 16, value_name = "N")]
+    pub traverse_rays: u32,
+    /// Timed runs of every ray test, interleaved, after one untimed warm-up run when more than
+    /// 1 (median, fastest and slowest run in the rows).
+    #[arg(long, default_value_t = 3, value_name = "N")]
+    pub traverse_repeats: u32,
 }
 
 /// Arguments of `voxgi tune`.
@@ -396,14 +431,25 @@ fn measure(
     })
 }
 
-/// Writes sweep.json and each scene's plot from all rows so far.
-fn write_summaries(dir: &Path, rows: &[SweepRow]) -> Result<(), CliError> {
+/// Writes sweep.json (the GI rows as `rows`, the ray-test rows as `traverse`, and per scene,
+/// radius and bit depth the cheapest marching at >= 99% agreement as `traverse_at_99`) and
+/// each scene's plot from all rows so far.
+fn write_summaries(
+    dir: &Path,
+    rows: &[SweepRow],
+    traverse: &[TraverseRow],
+) -> Result<(), CliError> {
     let io = |path: &Path| {
         let path = path.to_owned();
         move |source| SweepError::Io { path, source }
     };
     let json = dir.join("sweep.json");
-    std::fs::write(&json, serde_json::to_string_pretty(rows)?).map_err(io(&json))?;
+    let doc = serde_json::json!({
+        "rows": rows,
+        "traverse": traverse,
+        "traverse_at_99": march_at_99(traverse),
+    });
+    std::fs::write(&json, serde_json::to_string_pretty(&doc)?).map_err(io(&json))?;
     let mut scenes: Vec<&str> = rows.iter().map(|r| r.scene.as_str()).collect();
     scenes.sort_unstable();
     scenes.dedup();
@@ -451,6 +497,7 @@ pub fn sweep(global: &Global, args: &SweepArgs, out: &mut dyn Write) -> Result<(
         .iter()
         .map(|g| parse_grid(g))
         .collect::<Result<Vec<_>, _>>()?;
+    let traverse = traverse_desc(args)?;
     let scenes = load_scenes(args)?;
     let configs = configs(&methods, &grid);
     let jobs = scenes
@@ -473,6 +520,29 @@ pub fn sweep(global: &Global, args: &SweepArgs, out: &mut dyn Write) -> Result<(
         (true, true) => read_csv(&csv)?,
         (false, _) => Vec::new(),
     };
+    let traverse_csv = args.out.join("traverse.csv");
+    let mut traverse_done: Vec<TraverseRow> = match (traverse_csv.exists(), args.resume) {
+        (true, false) if traverse.is_some() => {
+            return Err(SweepError::Exists { path: traverse_csv }.into())
+        }
+        (true, true) => read_rows(&traverse_csv)?,
+        _ => Vec::new(),
+    };
+    if let Some(d) = &traverse {
+        let (gbuffer, rays, repeats) = (d.gbuffer_size, d.rays_per_point, d.repeats);
+        if let Some(measured) = other_settings(&traverse_done, gbuffer, rays, repeats) {
+            return Err(SweepError::TraverseSettings {
+                path: traverse_csv,
+                measured,
+                given: settings_text(gbuffer, rays, repeats),
+            }
+            .into());
+        }
+    }
+    let traverse_todo = traverse
+        .as_ref()
+        .map(|desc| traverse_units(&scenes, desc, &traverse_done))
+        .unwrap_or_default();
     let done =
         |rows: &[SweepRow], s: &str, c: &str| rows.iter().any(|r| r.scene == s && r.config == c);
     let todo: Vec<(usize, &Job)> = scenes
@@ -527,10 +597,20 @@ pub fn sweep(global: &Global, args: &SweepArgs, out: &mut dyn Write) -> Result<(
                 temporal_text(&row)
             );
             rows.push(row);
-            write_summaries(&args.out, &rows)?;
+            write_summaries(&args.out, &rows, &traverse_done)?;
         }
-        if todo.is_empty() {
-            write_summaries(&args.out, &rows)?;
+        if todo.is_empty() && traverse_todo.is_empty() {
+            write_summaries(&args.out, &rows, &traverse_done)?;
+        }
+        if let Some(desc) = &traverse {
+            let mut file = TraverseOutput {
+                csv: &traverse_csv,
+                appender: None,
+                rows: &mut traverse_done,
+                gi_rows: &rows,
+                dir: &args.out,
+            };
+            measure_traverse(&ctx, &scenes, desc, &traverse_todo, &mut file, out)?;
         }
         Ok(())
     })();
@@ -544,7 +624,228 @@ pub fn sweep(global: &Global, args: &SweepArgs, out: &mut dyn Write) -> Result<(
         rows.len(),
         args.out.display()
     );
+    if traverse.is_some() {
+        outln!(
+            out,
+            "wrote {} ({} rows)",
+            traverse_csv.display(),
+            traverse_done.len()
+        );
+    }
     Ok(())
+}
+
+/// The ray-test comparison's settings from the flags, checked against their limits (before
+/// the device is up); `None` with --no-traverse. Sample counts are sorted (the cheapest
+/// marching at 99% is the fewest samples) and repeated values dropped.
+fn traverse_desc(args: &SweepArgs) -> Result<Option<TraverseBenchDesc>, CliError> {
+    use crate::limits as l;
+    if args.no_traverse {
+        return Ok(None);
+    }
+    let mut radii = Vec::new();
+    for &r in &args.traverse_radii {
+        let r = l::TRAVERSE_RADIUS.check_flag(r)?;
+        if !radii.contains(&r) {
+            radii.push(r);
+        }
+    }
+    let mut samples = args
+        .traverse_samples
+        .iter()
+        .map(|&s| l::TRAVERSE_SAMPLES.check_flag(s))
+        .collect::<Result<Vec<_>, _>>()?;
+    samples.sort_unstable();
+    samples.dedup();
+    Ok(Some(TraverseBenchDesc {
+        gbuffer_size: l::TRAVERSE_GBUFFER.check_flag(args.traverse_gbuffer)?,
+        rays_per_point: l::TRAVERSE_RAYS.check_flag(args.traverse_rays)?,
+        radii_box_units: radii,
+        march_steps: samples,
+        repeats: l::TRAVERSE_REPEATS.check_flag(args.traverse_repeats)?,
+        ..TraverseBenchDesc::default()
+    }))
+}
+
+/// One radius of one scene still to measure, and the tests it lacks.
+struct TraverseUnit {
+    scene: usize,
+    radius: f32,
+    missing: Vec<String>,
+}
+
+/// The radii of each scene whose rows `done` lacks some test of `desc`: the whole radius
+/// when it has none, else only what it lacks (a resumed sweep with more sample counts).
+fn traverse_units(
+    scenes: &[SweepScene],
+    desc: &TraverseBenchDesc,
+    done: &[TraverseRow],
+) -> Vec<TraverseUnit> {
+    let wanted = traverse_tests(&desc.march_steps);
+    let mut units = Vec::new();
+    for (i, s) in scenes.iter().enumerate() {
+        for &radius in &desc.radii_box_units {
+            let missing = missing_tests(done, &s.name, radius, &wanted);
+            if !missing.is_empty() {
+                units.push(TraverseUnit {
+                    scene: i,
+                    radius,
+                    missing: missing.into_iter().cloned().collect(),
+                });
+            }
+        }
+    }
+    let skipped = scenes.len() * desc.radii_box_units.len() - units.len();
+    if skipped > 0 {
+        eprintln!("resuming: {skipped} ray-test radius(es) already in traverse.csv");
+    }
+    units
+}
+
+/// Where the ray-test rows go: traverse.csv (opened at the first row) and, with the GI rows,
+/// sweep.json.
+struct TraverseOutput<'a> {
+    csv: &'a Path,
+    appender: Option<CsvAppender<TraverseRow>>,
+    rows: &'a mut Vec<TraverseRow>,
+    gi_rows: &'a [SweepRow],
+    dir: &'a Path,
+}
+
+/// Measures each unit (`bench traverse`'s [`bench_radius`]: a scene's voxels and rays are
+/// made once, at its first unit), appends its missing rows and prints a line per radius,
+/// with the progress and an ETA on stderr.
+fn measure_traverse(
+    ctx: &Context,
+    scenes: &[SweepScene],
+    desc: &TraverseBenchDesc,
+    units: &[TraverseUnit],
+    file: &mut TraverseOutput<'_>,
+    out: &mut dyn Write,
+) -> Result<(), CliError> {
+    let start = Instant::now();
+    let mut k = 0;
+    for (i, s) in scenes.iter().enumerate() {
+        let of: Vec<&TraverseUnit> = units.iter().filter(|u| u.scene == i).collect();
+        if of.is_empty() {
+            continue;
+        }
+        eprintln!(
+            "{}: voxelizing and tracing a {}² G-buffer for the ray tests",
+            s.name, desc.gbuffer_size
+        );
+        let setup = traverse_rays(
+            &s.scene,
+            &TraverseBenchDesc {
+                radii_box_units: of.iter().map(|u| u.radius).collect(),
+                ..desc.clone()
+            },
+        )?;
+        let caster = crate::voxel::gpu_rays::VoxelRayCaster::new(ctx, &setup.hierarchy)?;
+        let base = setup.hierarchy.base();
+        let context = RadiusContext {
+            scene: &s.name,
+            grid: [base.res_x(), base.res_y(), base.depth()],
+            gbuffer: desc.gbuffer_size,
+            points: setup.points,
+            repeats: desc.repeats,
+            device: &ctx.info.name,
+        };
+        for (u, (radius, radius_m, rays)) in of.iter().zip(&setup.radii) {
+            let eta = match k {
+                0 => "?".to_owned(),
+                _ => clock(start.elapsed().as_secs_f64() / k as f64 * (units.len() - k) as f64),
+            };
+            eprintln!(
+                "[ray tests {}/{}] {} radius {radius} ({} tests, {} rays; elapsed {}, ETA {eta})",
+                k + 1,
+                units.len(),
+                s.name,
+                u.missing.len(),
+                rays.len(),
+                clock(start.elapsed().as_secs_f64())
+            );
+            // The hierarchical test and the exact walk always run: every row's agreement
+            // and speed-up are against them in the same run.
+            let samples: Vec<u32> = desc
+                .march_steps
+                .iter()
+                .copied()
+                .filter(|&n| {
+                    [1, 3]
+                        .iter()
+                        .any(|&b| u.missing.contains(&march_test(b, n)))
+                })
+                .collect();
+            let unit_desc = TraverseBenchDesc {
+                march_steps: samples,
+                ..desc.clone()
+            };
+            let result = bench_radius(ctx, &caster, &unit_desc, *radius, *radius_m, rays)?;
+            let new: Vec<TraverseRow> = traverse_rows(&context, &result)
+                .into_iter()
+                .filter(|r| u.missing.contains(&r.test))
+                .collect();
+            if file.appender.is_none() {
+                file.appender = Some(CsvAppender::open(file.csv)?);
+            }
+            if let Some(a) = file.appender.as_mut() {
+                for r in &new {
+                    a.append(r)?;
+                }
+            }
+            outln!(out, "{}", radius_text(&s.name, &result, &new));
+            file.rows.extend(new);
+            write_summaries(file.dir, file.gi_rows, file.rows)?;
+            k += 1;
+        }
+    }
+    Ok(())
+}
+
+/// One radius's measure for the console: the hierarchical test against the exact walk and
+/// the cheapest marching at >= 99% agreement.
+fn radius_text(scene: &str, r: &crate::bench::RadiusResult, rows: &[TraverseRow]) -> String {
+    let mut t = format!(
+        "{scene:<16} radius {} ({:.3} m), {} rays, {:.1}% hit:",
+        r.radius_box_units,
+        r.radius_m,
+        r.rays,
+        100.0 * r.hit_fraction
+    );
+    let cpu = |ms: Option<f64>| ms.map_or_else(|| "-".to_owned(), |c| format!("{c:.1}"));
+    for m in r.methods.iter().take(2) {
+        t += &format!(
+            " {} {:.1} GPU / {} CPU ms, {:.1} steps, {:.2}% exact;",
+            m.method,
+            m.gpu_ms,
+            cpu(m.cpu_ms),
+            m.mean_steps,
+            100.0 * m.exact_agreement
+        );
+    }
+    for a in march_at_99(rows) {
+        let bits = a.bits;
+        match (a.samples, a.speedup) {
+            (Some(n), Some(x)) => {
+                let in_cpu = a
+                    .cpu_speedup
+                    .map_or_else(String::new, |c| format!(", {c:.2}x in CPU ms"));
+                t += &format!(
+                    " {bits}-bit marching at 99% from {n} samples: hierarchical {x:.2}x \
+                     faster{in_cpu};"
+                )
+            }
+            _ if rows
+                .iter()
+                .any(|r| r.test.starts_with(&format!("march{bits}x"))) =>
+            {
+                t += &format!(" {bits}-bit marching short of 99%;")
+            }
+            _ => {}
+        }
+    }
+    t.trim_end_matches(';').to_owned()
 }
 
 /// Prints the most accurate configuration of the sweep within the budget as a `[gi]` table.
