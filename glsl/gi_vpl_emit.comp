@@ -6,6 +6,15 @@
 //     channels, A_e its area, W = sum of w A; u.x through the table's CDF, then rescaled into
 //     the emitter's interval as the point's first coordinate), a point y uniform on it (pdf
 //     1 / A_e) and its normal n there;
+//     With an emission map (HAS_MAPS: map_Ke, src/voxel/maps.rs) the radiance varies over the
+//     triangle, L_e(y) = Ke m(y) with m the map's texel at y (level 0, bilinear), and w_e is
+//     the mean of Ke times the map's mean (Material::voxel_emission). The selection keeps that
+//     table, and the point carries its own radiance: the joint pdf of (e, y) is
+//     p_e / A_e = w_e / W, so the estimate of the flux Phi = sum_e pi int_{A_e} L_e(y) dy is
+//     pi L_e(y) W / w_e = (pi W Ke / w_e) m(y) (the table's `flux` holds pi W Ke / w_e), and
+//     E[.] = sum_e int_{A_e} (w_e / W) pi L_e(y) W / w_e dy = Phi: unbiased for any weights
+//     that are positive wherever L_e is (w_e = 0 only for a black map, whose L_e is 0). The
+//     mean-weighted table costs variance within a triangle (the map's contrast), never bias;
 //  2. writes a source VPL at y for emissive surfaces: a Lambert emitter of radiance L sends the
 //     intensity L A cos theta = (pi L A) / pi cos theta, a VPL of flux pi L A. One sample
 //     estimates the emitter's whole flux Phi = sum_e pi L_e A_e as pi L_e A_e / p_e =
@@ -38,7 +47,10 @@ struct GpuEmitter {
     vec4 origin;  // xyz (m); w the kind (EMITTER_*)
     vec4 edge1;   // xyz (m); the sphere's radius in x
     vec4 edge2;   // xyz (m)
-    vec4 flux;    // rgb pi W L / w (W): one sample's flux times K; w the CDF up to this emitter
+    vec4 flux;    // rgb pi W L / w (W): one sample's flux times K (with a map L = Ke, times the
+                  // map's texel at the point); w the CDF up to this emitter
+    vec4 uv01;    // a triangle's texture coordinates at origin (xy), origin + edge1 (zw)
+    vec4 uv2_map; // at origin + edge2 (xy); w the emission map (int bits, -1 none)
 };
 
 layout(local_size_x = 64) in;
@@ -51,6 +63,11 @@ layout(set = 0, binding = 5, std430) readonly buffer Emitters { GpuEmitter emitt
 // The material volume (src/voxel/attributes.rs, `material_texel`); read only when HAS_LOBES.
 layout(set = 0, binding = 6) uniform sampler3D material_volume;
 layout(constant_id = 3) const bool HAS_LOBES = false;
+// Some emissive triangle has an emission map (read per texel; bound to the table otherwise).
+layout(constant_id = 4) const bool HAS_MAPS = false;
+#define VOXEL_MAPS_TEXELS_BINDING 7
+#define VOXEL_MAPS_TABLE_BINDING 8
+#include "voxel_maps.glsl"
 
 uvec4 vx_column(uint level, int x, int y, uint layer) {
     return texelFetch(voxels, ivec3(x, y, int(layer)), int(level));
@@ -80,8 +97,10 @@ uint pick_emitter(float u, out float u_in) {
     return lo;
 }
 
-// A point uniform on emitter e for u in [0, 1)^2, and the normal there.
-vec3 emitter_point(GpuEmitter e, vec2 u, out vec3 n) {
+// A point uniform on emitter e for u in [0, 1)^2, the normal there and (triangles) the
+// point's barycentric weights on (origin, origin + edge1, origin + edge2).
+vec3 emitter_point(GpuEmitter e, vec2 u, out vec3 n, out vec3 bary) {
+    bary = vec3(1.0, 0.0, 0.0);
     if (e.origin.w == EMITTER_SPHERE) {
         // Uniform on the sphere: z uniform in [-1, 1] (Archimedes), azimuth 2 pi u.y.
         float z = 1.0 - 2.0 * u.x;
@@ -93,6 +112,7 @@ vec3 emitter_point(GpuEmitter e, vec2 u, out vec3 n) {
     n = normalize(cross(e.edge1.xyz, e.edge2.xyz));
     // A triangle folds the parallelogram's far half back onto itself (uniform in area).
     if (e.origin.w == EMITTER_TRIANGLE && u.x + u.y > 1.0) u = 1.0 - u;
+    bary = vec3(1.0 - u.x - u.y, u.x, u.y);
     return e.origin.xyz + e.edge1.xyz * u.x + e.edge2.xyz * u.y;
 }
 
@@ -110,9 +130,15 @@ void main() {
     uint j = set_ * k + kk + 1u;
     float u_in;
     GpuEmitter e = emitters[pick_emitter(halton(j, 2u), u_in)];
-    vec3 n;
-    vec3 y = emitter_point(e, vec2(u_in, halton(j, 3u)), n);
+    vec3 n, bary;
+    vec3 y = emitter_point(e, vec2(u_in, halton(j, 3u)), n, bary);
     vec3 flux = e.flux.rgb / float(k);
+    int map = floatBitsToInt(e.uv2_map.w);
+    if (HAS_MAPS && e.origin.w == EMITTER_TRIANGLE && map >= 0) {
+        // The radiance at y (step 1): level 0, the map itself (a lod far below any texel).
+        vec2 uv = voxel_map_uv(e.uv01, vec4(e.uv2_map.xy, 0.0, 0.0), bary);
+        flux *= sample_voxel_map(map, uv, -64.0).rgb;
+    }
     if (SOURCE_VPLS > 0u) {
         bool surface = e.origin.w == EMITTER_TRIANGLE;
         vpls[source_vpl_index(set_, kk)] = surface ? GpuVpl(vec4(y, 1.0), vec4(n, 0.0), vec4(flux, 0.0), vec4(0.0), vec4(0.0), vec4(0.0)) : invalid_vpl(0u);
