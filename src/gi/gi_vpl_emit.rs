@@ -7,9 +7,10 @@
 //! `glsl/gi_vpl_emit.comp`; this file builds the emitter table it samples ([`emitter_table`]).
 //!
 //! An emissive triangle with an emission map (`map_Ke`) is picked by `Ke` × the map's mean (its
-//! row's weight) but emits the map's texel at the sampled point: the row carries the triangle's
-//! texture coordinates and map, and the pass reads the map from a buffer of linear half-float
-//! texels ([`crate::voxel::maps::VoxelMaps`], only in scenes with such maps and with
+//! row's weight) but emits the map's texel at the sampled point, a point resampled from 8
+//! uniform candidates in proportion to the map: the row carries the triangle's texture
+//! coordinates and map, and the pass reads the map from a buffer of linear half-float texels
+//! ([`crate::voxel::maps::VoxelMaps`], only in scenes with such maps and with
 //! `GiSettings::voxel_map_texels`; the estimator stays unbiased, see the shader).
 //!
 //! The table is rebuilt when `Renderer::prepare` sees the emitters change (a light switched
