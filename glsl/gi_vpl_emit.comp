@@ -6,6 +6,26 @@
 //     channels, A_e its area, W = sum of w A; u.x through the table's CDF, then rescaled into
 //     the emitter's interval as the point's first coordinate), a point y uniform on it (pdf
 //     1 / A_e) and its normal n there;
+//     With an emission map (HAS_MAPS: map_Ke, src/voxel/maps.rs) the radiance varies over the
+//     triangle, L_e(y) = Ke m(y) with m the map's texel at y (level 0, bilinear), and w_e is
+//     the mean of Ke times the map's mean (Material::voxel_emission). The selection keeps that
+//     table, and the point carries its own radiance: with y uniform, the joint pdf of (e, y)
+//     is p_e / A_e = w_e / W, so the estimate of the flux Phi = sum_e pi int_{A_e} L_e(y) dy
+//     is pi L_e(y) W / w_e = (pi W Ke / w_e) m(y) (the table's `flux` holds pi W Ke / w_e),
+//     and E[.] = sum_e int_{A_e} (w_e / W) pi L_e(y) W / w_e dy = Phi: unbiased for any
+//     weights that are positive wherever L_e is (w_e = 0 only for a black map, whose L_e is 0).
+//     A uniform y wastes the samples that land where the map is dark (a stripe lit on a
+//     quarter of its panel gets a quarter of them, each 4x brighter), so y is resampled
+//     (resampled importance sampling, Talbot et al. 2005): M = MAP_CANDIDATES candidate points
+//     x_1..x_M, each uniform on the triangle (pdf 1 / A_e; one Halton point shifted by an R2
+//     lattice, so they are correlated, which RIS allows), target p^(x) = mean of m(x)'s
+//     channels, one picked with probability p^(x_c) / sum_i p^(x_i); that point carries
+//     m(y) / p^(y) * (1/M) sum_i p^(x_i) in place of m(y). Unbiased: for the integral
+//     I = int_{A_e} m dy / A_e, E[m(y)/p^(y) (1/M) sum_i p^(x_i)]
+//     = E_x[sum_c p^(x_c) / sum_i p^(x_i) * m(x_c)/p^(x_c) * (1/M) sum_i p^(x_i)]
+//     = (1/M) sum_c E[m(x_c)] = I, each x_c being uniform by itself, given that p^ > 0
+//     wherever m > 0 (a texel is black only if all its channels are); all candidates black
+//     give a black point, as a uniform y there would. With M = 1 it is the uniform y above;
 //  2. writes a source VPL at y for emissive surfaces: a Lambert emitter of radiance L sends the
 //     intensity L A cos theta = (pi L A) / pi cos theta, a VPL of flux pi L A. One sample
 //     estimates the emitter's whole flux Phi = sum_e pi L_e A_e as pi L_e A_e / p_e =
@@ -38,7 +58,10 @@ struct GpuEmitter {
     vec4 origin;  // xyz (m); w the kind (EMITTER_*)
     vec4 edge1;   // xyz (m); the sphere's radius in x
     vec4 edge2;   // xyz (m)
-    vec4 flux;    // rgb pi W L / w (W): one sample's flux times K; w the CDF up to this emitter
+    vec4 flux;    // rgb pi W L / w (W): one sample's flux times K (with a map L = Ke, times the
+                  // map's texel at the point); w the CDF up to this emitter
+    vec4 uv01;    // a triangle's texture coordinates at origin (xy), origin + edge1 (zw)
+    vec4 uv2_map; // at origin + edge2 (xy); w the emission map (int bits, -1 none)
 };
 
 layout(local_size_x = 64) in;
@@ -51,6 +74,13 @@ layout(set = 0, binding = 5, std430) readonly buffer Emitters { GpuEmitter emitt
 // The material volume (src/voxel/attributes.rs, `material_texel`); read only when HAS_LOBES.
 layout(set = 0, binding = 6) uniform sampler3D material_volume;
 layout(constant_id = 3) const bool HAS_LOBES = false;
+// Some emissive triangle has an emission map (read per texel; bound to the table otherwise).
+layout(constant_id = 4) const bool HAS_MAPS = false;
+// Candidate points per emitter sample on a triangle with an emission map (step 1).
+const uint MAP_CANDIDATES = 8u;
+#define VOXEL_MAPS_TEXELS_BINDING 7
+#define VOXEL_MAPS_TABLE_BINDING 8
+#include "voxel_maps.glsl"
 
 uvec4 vx_column(uint level, int x, int y, uint layer) {
     return texelFetch(voxels, ivec3(x, y, int(layer)), int(level));
@@ -80,8 +110,10 @@ uint pick_emitter(float u, out float u_in) {
     return lo;
 }
 
-// A point uniform on emitter e for u in [0, 1)^2, and the normal there.
-vec3 emitter_point(GpuEmitter e, vec2 u, out vec3 n) {
+// A point uniform on emitter e for u in [0, 1)^2, the normal there and (triangles) the
+// point's barycentric weights on (origin, origin + edge1, origin + edge2).
+vec3 emitter_point(GpuEmitter e, vec2 u, out vec3 n, out vec3 bary) {
+    bary = vec3(1.0, 0.0, 0.0);
     if (e.origin.w == EMITTER_SPHERE) {
         // Uniform on the sphere: z uniform in [-1, 1] (Archimedes), azimuth 2 pi u.y.
         float z = 1.0 - 2.0 * u.x;
@@ -93,6 +125,7 @@ vec3 emitter_point(GpuEmitter e, vec2 u, out vec3 n) {
     n = normalize(cross(e.edge1.xyz, e.edge2.xyz));
     // A triangle folds the parallelogram's far half back onto itself (uniform in area).
     if (e.origin.w == EMITTER_TRIANGLE && u.x + u.y > 1.0) u = 1.0 - u;
+    bary = vec3(1.0 - u.x - u.y, u.x, u.y);
     return e.origin.xyz + e.edge1.xyz * u.x + e.edge2.xyz * u.y;
 }
 
@@ -110,9 +143,38 @@ void main() {
     uint j = set_ * k + kk + 1u;
     float u_in;
     GpuEmitter e = emitters[pick_emitter(halton(j, 2u), u_in)];
-    vec3 n;
-    vec3 y = emitter_point(e, vec2(u_in, halton(j, 3u)), n);
+    vec3 n, bary;
+    vec2 u = vec2(u_in, halton(j, 3u));
+    vec3 y = emitter_point(e, u, n, bary);
     vec3 flux = e.flux.rgb / float(k);
+    int map = floatBitsToInt(e.uv2_map.w);
+    if (HAS_MAPS && e.origin.w == EMITTER_TRIANGLE && map >= 0) {
+        // The map's radiance at resampled candidates (step 1): level 0, the map itself (a lod
+        // far below any texel); the R2 lattice's generator (1/g, 1/g^2), g^3 = g + 1.
+        const vec2 r2 = vec2(0.75487766624669276, 0.56984029099805327);
+        vec4 uv2 = vec4(e.uv2_map.xy, 0.0, 0.0);
+        vec3 m[MAP_CANDIDATES];
+        float w[MAP_CANDIDATES];
+        float sum = 0.0;
+        for (uint c = 0u; c < MAP_CANDIDATES; ++c) {
+            vec3 nc, bc;
+            emitter_point(e, fract(u + float(c) * r2), nc, bc);
+            m[c] = sample_voxel_map(map, voxel_map_uv(e.uv01, uv2, bc), -64.0).rgb;
+            w[c] = max((m[c].r + m[c].g + m[c].b) / 3.0, 0.0);
+            sum += w[c];
+        }
+        // Base 19: 17 picks gi_vpl_bounce.comp's lobes.
+        float pick = halton(j, 19u) * sum;
+        uint chosen = 0u;
+        float below = 0.0;
+        for (uint c = 0u; c < MAP_CANDIDATES; ++c) {
+            if (w[c] > 0.0 && pick >= below) chosen = c;
+            below += w[c];
+        }
+        vec3 b_chosen;
+        y = emitter_point(e, fract(u + float(chosen) * r2), n, b_chosen);
+        flux *= sum > 0.0 ? m[chosen] * (sum / (float(MAP_CANDIDATES) * w[chosen])) : vec3(0.0);
+    }
     if (SOURCE_VPLS > 0u) {
         bool surface = e.origin.w == EMITTER_TRIANGLE;
         vpls[source_vpl_index(set_, kk)] = surface ? GpuVpl(vec4(y, 1.0), vec4(n, 0.0), vec4(flux, 0.0), vec4(0.0), vec4(0.0), vec4(0.0)) : invalid_vpl(0u);

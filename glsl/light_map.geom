@@ -23,6 +23,7 @@ layout(push_constant) uniform Push {
 } pc;
 
 layout(location = 0) in vec3 in_normal[];
+layout(location = 1) in vec2 in_uv[];
 layout(location = 0) out vec3 out_normal;
 layout(location = 1) out vec3 out_world;
 // Paraboloid views only (w of out_v0 is 1 there, 0 for the other projections): the map point,
@@ -37,7 +38,12 @@ layout(location = 8) flat out vec3 out_w2;
 layout(location = 9) flat out vec3 out_n0;
 layout(location = 10) flat out vec3 out_n1;
 layout(location = 11) flat out vec3 out_n2;
-layout(location = 12) flat out vec2 out_range;
+// Near and far (xy), and the texture coordinates of vertex 2 (zw).
+layout(location = 12) flat out vec4 out_range_t2;
+// The texture coordinates: interpolated (other projections), or those of vertices 0 and 1
+// (paraboloid views, weighted by the hit's barycentric weights in light_map.frag).
+layout(location = 13) out vec2 out_tex_uv;
+layout(location = 14) flat out vec4 out_t01;
 
 void emit_corner(vec2 uv, GpuShadowView sv, vec3 d[3]) {
     // Depth comes from the fragment shader (gl_FragDepth); the box's own is irrelevant.
@@ -55,7 +61,9 @@ void emit_corner(vec2 uv, GpuShadowView sv, vec3 d[3]) {
     out_n0 = in_normal[0];
     out_n1 = in_normal[1];
     out_n2 = in_normal[2];
-    out_range = sv.params.zw;
+    out_range_t2 = vec4(sv.params.zw, in_uv[2]);
+    out_tex_uv = vec2(0.0);
+    out_t01 = vec4(in_uv[0], in_uv[1]);
     EmitVertex();
 }
 
@@ -90,7 +98,9 @@ void main() {
             out_n0 = vec3(0.0);
             out_n1 = vec3(0.0);
             out_n2 = vec3(0.0);
-            out_range = vec2(0.0);
+            out_range_t2 = vec4(0.0);
+            out_tex_uv = in_uv[i];
+            out_t01 = vec4(0.0);
             EmitVertex();
         }
         EndPrimitive();

@@ -3,6 +3,7 @@
 // shader projects into the light view's layer.
 layout(location = 0) in vec3 in_position;
 layout(location = 1) in vec3 in_normal;
+layout(location = 2) in vec2 in_uv;
 
 layout(push_constant) uniform Push {
     mat4 model;
@@ -11,8 +12,11 @@ layout(push_constant) uniform Push {
 } pc;
 
 layout(location = 0) out vec3 out_normal;
+// Texture coordinates (OBJ's v up), read by light_map.frag only in scenes with its maps.
+layout(location = 1) out vec2 out_uv;
 
 void main() {
     gl_Position = pc.model * vec4(in_position, 1.0);
     out_normal = transpose(inverse(mat3(pc.model))) * in_normal;
+    out_uv = in_uv;
 }

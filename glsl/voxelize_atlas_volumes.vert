@@ -6,8 +6,8 @@
 // of its depth index. It carries its triangle's material albedo and world-space face normal,
 // computed like voxelize_attributes.comp so both voxelizers feed the path tracer alike, and
 // with value volumes (src/voxel/gpu_atlas_volumes.rs) its emission and material lobe, the
-// PBR maps sampled at the point (HAS_MAPS, voxel_maps.glsl) as the triangle voxelizer's
-// voxelize_owner_value.glsl samples them.
+// maps sampled at the point (HAS_MAPS, voxel_maps.glsl: map_Kd replacing the albedo, map_Ke,
+// map_Pr, map_Pm) as the triangle voxelizer's voxel_owner_maps.glsl samples them.
 #include "atlas_voxel.glsl"
 
 layout(constant_id = 0) const bool HAS_EMISSION = false;
@@ -19,9 +19,9 @@ struct Triangle {
 };
 layout(set = 0, binding = 0, std430) readonly buffer Points { uvec4 points[]; };
 layout(set = 0, binding = 1, std430) readonly buffer Triangles { Triangle tris[]; };
-// With value volumes, per triangle five vec4s: emission (rgb W/(m^2 sr) = Ke, times map_Ke
-// with HAS_MAPS; w 1 for an emissive material), the material texel (material_texel), then its
-// GpuTriangleMaps (voxel_maps.glsl). Bound to the triangles otherwise (never read).
+// With value volumes or maps, per triangle five vec4s: emission (rgb W/(m^2 sr) = Ke, times
+// map_Ke with HAS_MAPS; w 1 for an emissive material), the material texel (material_texel),
+// then its GpuTriangleMaps (voxel_maps.glsl). Bound to the triangles otherwise (never read).
 layout(set = 0, binding = 2, std430) readonly buffer Values { vec4 values[]; };
 #define VOXEL_MAPS_TEXELS_BINDING 3
 #define VOXEL_MAPS_TABLE_BINDING 4
@@ -73,17 +73,19 @@ void main() {
     v_albedo = vec3(t.v[0].w, t.v[1].w, t.v[2].w);
     v_emission = vec4(0.0);
     v_material = vec4(0.0);
-    if (!HAS_EMISSION && !HAS_MATERIAL) return;
+    if (!HAS_EMISSION && !HAS_MATERIAL && !HAS_MAPS) return;
     uint row = 5u * pt.w;
     v_emission = values[row];
     v_material = values[row + 1u];
     if (HAS_MAPS) {
         vec4 uv01 = values[row + 2u];
         vec4 uv2_lod = values[row + 3u];
-        ivec3 maps = floatBitsToInt(values[row + 4u].xyz);
-        if (any(greaterThanEqual(maps, ivec3(0)))) {
+        ivec4 maps = floatBitsToInt(values[row + 4u]);
+        if (any(greaterThanEqual(maps, ivec4(0)))) {
             vec2 uv = voxel_map_uv(uv01, uv2_lod, barycentric(p, t));
             float lod = uv2_lod.z;
+            // map_Kd replaces Kd, as in the G-buffer.
+            if (maps.w >= 0) v_albedo = sample_voxel_map(maps.w, uv, lod).rgb;
             if (HAS_EMISSION && maps.z >= 0) v_emission.rgb *= sample_voxel_map(maps.z, uv, lod).rgb;
             if (HAS_MATERIAL && maps.x >= 0) v_material.r = clamp(sample_voxel_map(maps.x, uv, lod).r, 0.0, 1.0);
             if (HAS_MATERIAL && maps.y >= 0) v_material.g = clamp(sample_voxel_map(maps.y, uv, lod).r, 0.0, 1.0);

@@ -1,5 +1,5 @@
-//! The MTL PBR maps (`map_Pr`, `map_Pm`, `map_Ke`) in the voxel volumes, per texel, for both
-//! voxelizers (docs/ARCHITECTURE.md, "Materials"), and the committed PBR-map scene
+//! The MTL texture maps (`map_Kd`, `map_Pr`, `map_Pm`, `map_Ke`) in the voxel volumes, per
+//! texel, for both voxelizers (docs/ARCHITECTURE.md, "Materials"), and the committed PBR-map scene
 //! (`assets/scenes/cornell_pbr.toml`) against its Mitsuba reference. Validation is on; any
 //! message fails.
 
@@ -30,11 +30,15 @@ fn cornell_pbr() -> Scene {
     load_scene_arg(Some(&path.display().to_string())).expect("cornell_pbr loads")
 }
 
-/// A GGX floor (1 m², `map_Pr` a 2 × 2 checker of 0.2 / 0.8, `map_Pm` metal on its +x half),
-/// an emitting panel 0.6 m above it facing down (`map_Ke` glowing on its back half, black on
+/// A GGX floor (1 m², `map_Pr` a 2 × 2 checker of 0.2 / 0.8, `map_Pm` metal on its +x half,
+/// `map_Kd` four sRGB colours in its quadrants, [`ALBEDO_CELLS`]), an emitting panel 0.6 m above it facing down (`map_Ke` glowing on its back half, black on
 /// the front) and a white cube on the floor: every map kind next to edges where surfaces and
 /// materials meet. Each map is 8 × 8 texels of 4 × 4-texel cells, so bilinear lookups are
 /// constant over the middle three quarters of a cell.
+/// The floor's albedo texture's cells (sRGB codes), indexed by (x / 4) + 2 (y / 4) of its
+/// texel (x, y): the top-left quadrant of the image first.
+const ALBEDO_CELLS: [[u8; 3]; 4] = [[200, 40, 40], [40, 200, 40], [40, 40, 200], [230, 230, 60]];
+
 fn map_scene() -> (Scene, PathBuf) {
     let dir = std::env::temp_dir().join(format!("voxgi_pbr_scene_{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
@@ -48,6 +52,9 @@ fn map_scene() -> (Scene, PathBuf) {
         [if (x / 4 + y / 4) % 2 == 0 { 51 } else { 204 }; 3]
     });
     png("metal.png", &|x, _| [if x >= 4 { 255 } else { 0 }; 3]);
+    png("albedo.png", &|x, y| {
+        ALBEDO_CELLS[(x / 4 + 2 * (y / 4)) as usize]
+    });
     png("glow.png", &|_, y| {
         if y < 4 {
             [255, 200, 100]
@@ -58,6 +65,7 @@ fn map_scene() -> (Scene, PathBuf) {
     std::fs::write(
         dir.join("m.mtl"),
         "newmtl floor\nKd 0.8 0.6 0.4\nPr 0.5\nPm 0\nmap_Pr rough.png\nmap_Pm metal.png\n\
+         map_Kd albedo.png\n\
          newmtl lamp\nKd 0 0 0\nKe 10 10 10\nmap_Ke glow.png\n",
     )
     .unwrap();
@@ -94,6 +102,8 @@ fn map_scene() -> (Scene, PathBuf) {
 struct Volumes {
     /// Albedo alpha: 1 where the voxelizer wrote the voxel.
     written: Vec<bool>,
+    /// The albedo volume's colour (RGBA8 UNORM, linear) and alpha.
+    albedo: Vec<Vec4>,
     emission: Vec<Vec4>,
     material: Vec<Vec4>,
 }
@@ -177,8 +187,13 @@ fn voxelize(
         .chunks_exact(4)
         .map(|c| c[3] == 255)
         .collect();
+    let albedo = outs[0].mapped().expect("mapped")[..n * 4]
+        .chunks_exact(4)
+        .map(|c| Vec4::from_array([0, 1, 2, 3].map(|k| f32::from(c[k]) / 255.0)))
+        .collect();
     let out = Volumes {
         written,
+        albedo,
         emission: halves(&outs[1]),
         material: halves(&outs[2]),
     };
@@ -186,8 +201,8 @@ fn voxelize(
 }
 
 /// Per voxel, the range of what the surface inside it holds, from dense CPU samples of every
-/// triangle (spacing ≤ 1/8 voxel): the emitted radiance of emitters' points and the material
-/// texel of every point, each map read bilinearly at its level 0 (`sample_map_cpu`, the twin
+/// triangle (spacing ≤ 1/8 voxel): the emitted radiance of emitters' points, the material
+/// texel and the albedo (`map_Kd`, else `Kd`; alpha 1) of every point, each map read bilinearly at its level 0 (`sample_map_cpu`, the twin
 /// of `voxel_maps.glsl`; the GPU's levels of detail are 0 here, see the test).
 #[derive(Clone, Copy)]
 struct Range {
@@ -227,6 +242,7 @@ impl Range {
 struct VoxelTruth {
     emission: Option<Range>,
     material: Option<Range>,
+    albedo: Option<Range>,
 }
 
 fn cpu_truth(s: &Scene, grid: &VoxelGrid) -> HashMap<[u32; 3], VoxelTruth> {
@@ -273,7 +289,11 @@ fn cpu_truth(s: &Scene, grid: &VoxelGrid) -> HashMap<[u32; 3], VoxelTruth> {
                             let glow = map(m.pbr_maps.emission).map_or(Vec3::ONE, |c| c.truncate());
                             (m.emission * glow).extend(0.0)
                         });
+                        let albedo = map(m.albedo_texture)
+                            .map_or(m.albedo, |c| c.truncate())
+                            .extend(1.0);
                         let slot = out.entry(key).or_default();
+                        slot.albedo = Range::join(slot.albedo, Some(Range::new(albedo)));
                         slot.material = Range::join(slot.material, Some(Range::new(lobe)));
                         slot.emission = Range::join(slot.emission, e.map(Range::new));
                     }
@@ -298,6 +318,7 @@ fn neighbourhood(truth: &HashMap<[u32; 3], VoxelTruth>, v: [u32; 3], r: i64) -> 
                 if let Some(t) = truth.get(&q.map(|c| c as u32)) {
                     acc.emission = Range::join(acc.emission, t.emission);
                     acc.material = Range::join(acc.material, t.material);
+                    acc.albedo = Range::join(acc.albedo, t.albedo);
                 }
             }
         }
@@ -305,8 +326,8 @@ fn neighbourhood(truth: &HashMap<[u32; 3], VoxelTruth>, v: [u32; 3], r: i64) -> 
     acc
 }
 
-/// Both voxelizers' emission and material volumes against the CPU truth and each other on a
-/// scene with every map kind.
+/// Both voxelizers' albedo, emission and material volumes against the CPU truth and each other
+/// on a scene with every map kind.
 ///
 /// What each writes: the triangle voxelizer the owner triangle's maps averaged over 4 × 4
 /// points of its part of the voxel; the atlas voxelizer the mean over its points in the voxel
@@ -322,7 +343,13 @@ fn neighbourhood(truth: &HashMap<[u32; 3], VoxelTruth>, v: [u32; 3], r: i64) -> 
 /// (points half a voxel apart: at most 3 × 3 per surface crossing it, two surfaces) → 0.9%:
 /// - **Uniform voxels** (every CPU sample within 2 voxels holds one value, so every lookup
 ///   either voxelizer makes there reads it): both equal that value, to 1e-3 (triangle) and
-///   1e-2 (atlas) relative.
+///   1e-2 (atlas) relative. The albedo volume stores 8-bit UNORM, which rounds to the nearest
+///   of 255 steps: half a step, 0.002, added to its tolerance (which then holds the f16
+///   texels' 2⁻¹¹ relative too).
+/// - **The albedo texture is decoded before averaging** (as the G-buffer's sRGB sampler
+///   decodes before filtering): the uniform voxels of a cell hold `srgb_decode(code / 255)`,
+///   the CPU twin's value, e.g. 0.578 for code 200 where the code's linear reading would be
+///   0.784.
 /// - **Every voxel**: both lie in the range of the CPU samples within 2 voxels, widened by
 ///   the same tolerance (both are means of lookups at points of that surface; the emission
 ///   range includes 0 where the atlas has no emitter point, the material range 0 for the
@@ -342,6 +369,7 @@ fn atlas_and_triangle_voxelizers_agree_with_the_maps_per_texel() {
     let index = |v: [u32; 3]| ((v[2] * ext.y + v[1]) * ext.x + v[0]) as usize;
     let rel = |name: &str| if name == "atlas" { 1e-2 } else { 1e-3 };
     let (mut uniform_e, mut uniform_m, mut checked, mut differ) = (0, 0, 0, 0);
+    let mut uniform_a = 0;
     let mut failures = Vec::new();
     for (&v, t) in &truth {
         let i = index(v);
@@ -353,7 +381,22 @@ fn atlas_and_triangle_voxelizers_agree_with_the_maps_per_texel() {
                 continue;
             }
             checked += 1;
-            let (e, m) = (vol.emission[i], vol.material[i]);
+            let (e, m, a) = (vol.emission[i], vol.material[i], vol.albedo[i]);
+            let a_tol = |x: Vec4| tol(x) + Vec4::splat(0.5 / 255.0);
+            let a_range = near.albedo.expect("a sampled voxel has an albedo");
+            if a_range.is_uniform() {
+                uniform_a += 1;
+                if (a - a_range.lo).abs().cmpgt(a_tol(a_range.lo)).any() {
+                    failures.push(format!(
+                        "{name} {v:?}: albedo {a} != uniform {}",
+                        a_range.lo
+                    ));
+                }
+            } else if !a_range.holds(a, a_tol(a).max_element()) {
+                failures.push(format!(
+                    "{name} {v:?}: albedo {a} outside the samples' range"
+                ));
+            }
             let e_range = Range::join(near.emission, Some(Range::new(Vec4::ZERO)));
             let m_range = near.material.expect("a sampled voxel has a material");
             if let Some(r) = near
@@ -385,13 +428,15 @@ fn atlas_and_triangle_voxelizers_agree_with_the_maps_per_texel() {
         }
         if tri.written[i] && atl.written[i] {
             let d = (tri.emission[i] - atl.emission[i]).abs().max_element()
-                + (tri.material[i] - atl.material[i]).abs().max_element();
+                + (tri.material[i] - atl.material[i]).abs().max_element()
+                + (tri.albedo[i] - atl.albedo[i]).abs().max_element();
             differ += usize::from(d > 1e-2);
         }
     }
     println!(
         "{} sampled voxels, {checked} voxel writes checked: {uniform_e} uniform in emission, \
-         {uniform_m} in material; {differ} voxels where the voxelizers differ by > 0.01",
+         {uniform_m} in material, {uniform_a} in albedo; {differ} voxels where the voxelizers \
+         differ by > 0.01",
         truth.len()
     );
     assert!(
@@ -407,6 +452,10 @@ fn atlas_and_triangle_voxelizers_agree_with_the_maps_per_texel() {
         "only {uniform_m} uniform material checks"
     );
     assert!(uniform_e > 500, "only {uniform_e} uniform emission checks");
+    assert!(
+        uniform_a > truth.len(),
+        "only {uniform_a} uniform albedo checks"
+    );
     let (means, _) = voxelize(&ctx, &s, Voxelizer::Triangle, false);
     let rough = |vol: &Volumes| {
         let mut seen: Vec<f32> = vol
@@ -424,6 +473,30 @@ fn atlas_and_triangle_voxelizers_agree_with_the_maps_per_texel() {
         per_texel.contains(&0.2) && per_texel.contains(&0.8),
         "{per_texel:?}"
     );
+    // The albedo: the means keep the floor's `Kd` (0.8, 0.6, 0.4), per texel (both
+    // voxelizers) every cell's decoded colour is the value of some voxel (8-bit steps).
+    let holds = |vol: &Volumes, c: Vec3| {
+        vol.albedo
+            .iter()
+            .zip(&vol.written)
+            .any(|(a, &w)| w && (a.truncate() - c).abs().max_element() <= 1.0 / 255.0)
+    };
+    let kd = Vec3::new(0.8, 0.6, 0.4);
+    assert!(holds(&means, kd), "the means hold Kd");
+    for cell in ALBEDO_CELLS {
+        let linear = Vec3::from_array(cell.map(|c| voxgi::eval::srgb_decode(f32::from(c) / 255.0)));
+        assert!(
+            !holds(&means, linear),
+            "the means hold no cell colour {cell:?}"
+        );
+        for (name, vol) in [("triangle", &tri), ("atlas", &atl)] {
+            assert!(
+                holds(vol, linear),
+                "{name}: no voxel holds cell {cell:?} = {linear}"
+            );
+        }
+    }
+    assert!(!holds(&tri, kd), "per texel, Kd is gone");
     common::assert_no_validation_messages(&ctx);
     let _ = std::fs::remove_dir_all(dir);
 }

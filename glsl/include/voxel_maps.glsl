@@ -1,4 +1,5 @@
-// The MTL PBR maps (map_Pr, map_Pm, map_Ke) as the voxelizers read them (src/voxel/maps.rs):
+// The MTL texture maps (map_Kd, map_Pr, map_Pm, map_Ke) as the voxelizers and the VPL emitter
+// rays read them (src/voxel/maps.rs):
 // every map's mip chain in one storage buffer, each texel linear RGBA as two packHalf2x16
 // words (sRGB maps decoded on the CPU: no pow per lookup), and a table row per scene texture
 // (x: index of its first texel, y: width, z: height, w: levels), so one dispatch or draw
@@ -7,7 +8,8 @@
 //
 // Per triangle (GpuTriangleMaps): uv01 = (uv0, uv1), uv2_lod = (uv2, lod, 0) with lod the log2
 // of the sample spacing in texture-coordinate units (add log2 of the map's size for texels),
-// maps = (roughness, metallic, emission) texture indices, -1 where the triangle reads none.
+// maps = (roughness, metallic, emission, albedo) texture indices, -1 where the triangle reads
+// none.
 #ifndef VOXEL_MAPS_GLSL
 #define VOXEL_MAPS_GLSL
 

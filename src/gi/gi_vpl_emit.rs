@@ -6,6 +6,13 @@
 //! whose VPL the bounce passes continue. The estimator and its flux are derived in
 //! `glsl/gi_vpl_emit.comp`; this file builds the emitter table it samples ([`emitter_table`]).
 //!
+//! An emissive triangle with an emission map (`map_Ke`) is picked by `Ke` × the map's mean (its
+//! row's weight) but emits the map's texel at the sampled point, a point resampled from 8
+//! uniform candidates in proportion to the map: the row carries the triangle's texture
+//! coordinates and map, and the pass reads the map from a buffer of linear half-float texels
+//! ([`crate::voxel::maps::VoxelMaps`], only in scenes with such maps and with
+//! `GiSettings::voxel_map_texels`; the estimator stays unbiased, see the shader).
+//!
 //! The table is rebuilt when `Renderer::prepare` sees the emitters change (a light switched
 //! off or scaled, an emissive object moved) and written into the frame slots' windows of a
 //! host-visible buffer, one row per potential emitter: an emitter that is black for now keeps
@@ -17,8 +24,9 @@ use crate::vk::{
     vk, Buffer, BufferDesc, ComputePipeline, Context, MemoryLocation, PushLayout, VkError,
     MAX_FRAMES_IN_FLIGHT,
 };
+use crate::voxel::maps::{MapUse, VoxelMaps};
 use bytemuck::{Pod, Zeroable};
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use std::f32::consts::PI;
 
 use super::vpl::GpuVplGeneratePush;
@@ -40,19 +48,28 @@ pub struct GpuEmitter {
     pub edge1: [f32; 4],
     /// xyz (m).
     pub edge2: [f32; 4],
-    /// rgb π·W·L/w (W): the flux one power-sampled point carries, times the samples per set;
-    /// w the CDF of the power up to and including this emitter (the last is 1).
+    /// rgb π·W·L/w (W): the flux one power-sampled point carries, times the samples per set
+    /// (with an emission map L = `Ke`, which the shader multiplies by the map's texel at the
+    /// point); w the CDF of the power up to and including this emitter (the last is 1).
     pub flux: [f32; 4],
+    /// A triangle's texture coordinates at its origin (xy) and at origin + edge1 (zw).
+    pub uv01: [f32; 4],
+    /// At origin + edge2 (xy); z unused; w the emission map's texture index as `i32` bits (-1:
+    /// none).
+    pub uv2_map: [f32; 4],
 }
 
 crate::gpu_struct!(GpuEmitter {
     origin,
     edge1,
     edge2,
-    flux
+    flux,
+    uv01,
+    uv2_map
 });
 
-/// An emitter before normalization: kind, origin, edges, radiance L (W/(m²·sr)), area (m²).
+/// An emitter before normalization: kind, origin, edges, radiance L (W/(m²·sr); with an
+/// emission map its mean over the map, the weight of the power sampling), area (m²).
 struct Source {
     kind: f32,
     origin: Vec3,
@@ -60,6 +77,9 @@ struct Source {
     edge2: Vec3,
     radiance: Vec3,
     area_m2: f32,
+    /// An emission map sampled per texel: its texture index, `Ke` (what the map's texel
+    /// multiplies) and the texture coordinates at origin, origin + edge1, origin + edge2.
+    map: Option<(usize, Vec3, [Vec2; 3])>,
 }
 
 /// The weight w of a radiance in the power sampling: the mean of its channels (positive
@@ -68,13 +88,14 @@ fn weight(radiance: Vec3) -> f32 {
     (radiance.x + radiance.y + radiance.z) / 3.0
 }
 
-/// Every emitter of `scene` at time `t_s`: its emissive triangles (the emission the volume
-/// holds, `Material::voxel_emission`) and its sphere and rectangle lights, sampled by power
-/// w·A; empty without emitters. Degenerate and black emitters keep a row of zero weight
-/// (never picked: the CDF does not rise over it) and zero flux; when all are black, every
-/// row has zero flux.
-pub fn emitter_table(scene: &Scene, t_s: f32) -> Vec<GpuEmitter> {
-    let mut sources = emissive_triangles(scene, t_s);
+/// Every emitter of `scene` at time `t_s`: its emissive triangles (weighed by
+/// `Material::voxel_emission`, `Ke` × the mean of `map_Ke`; with `per_texel` a triangle with
+/// an emission map carries it, [`GpuEmitter::uv2_map`]) and its sphere and rectangle lights,
+/// sampled by power w·A; empty without emitters. Degenerate and black emitters keep a row of
+/// zero weight (never picked: the CDF does not rise over it) and zero flux; when all are
+/// black, every row has zero flux.
+pub fn emitter_table(scene: &Scene, t_s: f32, per_texel: bool) -> Vec<GpuEmitter> {
+    let mut sources = emissive_triangles(scene, t_s, per_texel);
     sources.extend(scene.lights.iter().filter_map(area_light_source));
     let power = |s: &Source| match s.area_m2 > 0.0 && weight(s.radiance) > 0.0 {
         true => f64::from(weight(s.radiance) * s.area_m2),
@@ -92,24 +113,32 @@ pub fn emitter_table(scene: &Scene, t_s: f32) -> Vec<GpuEmitter> {
                 true => p / total,
                 false => 1.0 / count as f64,
             };
-            // π·W·L/w: one sample's estimate of the whole emitted flux (the shader's step 2).
+            // π·W·L/w: one sample's estimate of the whole emitted flux (the shader's step 2);
+            // with a map the shader multiplies π·W·Ke/w by the texel at the point.
+            let emitted = s.map.map_or(s.radiance, |(_, ke, _)| ke);
             let flux = match p > 0.0 {
-                true => s.radiance * (PI * total as f32 / weight(s.radiance)),
+                true => emitted * (PI * total as f32 / weight(s.radiance)),
                 false => Vec3::ZERO,
             };
             let cdf = if i + 1 == count { 1.0 } else { cdf as f32 };
+            let (map, uv) = s.map.map_or((-1, [Vec2::ZERO; 3]), |(t, _, uv)| {
+                (i32::try_from(t).unwrap_or(-1), uv)
+            });
             GpuEmitter {
                 origin: s.origin.extend(s.kind).to_array(),
                 edge1: s.edge1.extend(0.0).to_array(),
                 edge2: s.edge2.extend(0.0).to_array(),
                 flux: flux.extend(cdf).to_array(),
+                uv01: [uv[0].x, uv[0].y, uv[1].x, uv[1].y],
+                uv2_map: [uv[2].x, uv[2].y, 0.0, f32::from_bits(map as u32)],
             }
         })
         .collect()
 }
 
-/// The scene's emissive triangles in world space at `t_s`.
-fn emissive_triangles(scene: &Scene, t_s: f32) -> Vec<Source> {
+/// The scene's emissive triangles in world space at `t_s` (with `per_texel`, their emission
+/// maps).
+fn emissive_triangles(scene: &Scene, t_s: f32, per_texel: bool) -> Vec<Source> {
     let mut out = Vec::new();
     for object in &scene.objects {
         let Some(mesh) = scene.meshes.get(object.mesh_at(t_s)) else {
@@ -118,18 +147,24 @@ fn emissive_triangles(scene: &Scene, t_s: f32) -> Vec<Source> {
         let m = object.transform_at(t_s);
         for (si, sub) in mesh.submeshes.iter().enumerate() {
             let material = object.materials.get(si).copied().unwrap_or(sub.material);
-            let Some(radiance) = scene
-                .materials
-                .get(material)
-                .map(|m| m.voxel_emission(&scene.textures))
-                .filter(|e| *e != Vec3::ZERO)
-            else {
+            let Some(mat) = scene.materials.get(material) else {
                 continue;
             };
+            let radiance = mat.voxel_emission(&scene.textures);
+            if radiance == Vec3::ZERO {
+                continue;
+            }
+            let map = mat.pbr_maps.emission.filter(|_| per_texel);
             let range = sub.first_index as usize..(sub.first_index + sub.index_count) as usize;
             for t in mesh.indices[range].chunks_exact(3) {
                 let [a, b, c] =
                     [0, 1, 2].map(|k| m.transform_point3(mesh.positions[t[k] as usize]));
+                let uv = [0, 1, 2].map(|k| {
+                    mesh.uvs
+                        .as_ref()
+                        .and_then(|uvs| uvs.get(t[k] as usize).copied())
+                        .unwrap_or(Vec2::ZERO)
+                });
                 out.push(Source {
                     kind: EMITTER_TRIANGLE,
                     origin: a,
@@ -137,6 +172,7 @@ fn emissive_triangles(scene: &Scene, t_s: f32) -> Vec<Source> {
                     edge2: c - a,
                     radiance,
                     area_m2: 0.5 * (b - a).cross(c - a).length(),
+                    map: map.map(|t| (t, mat.emission, uv)),
                 });
             }
         }
@@ -159,6 +195,7 @@ fn area_light_source(light: &Light) -> Option<Source> {
             edge2: Vec3::ZERO,
             radiance: radiance_w_sr_m2,
             area_m2: 4.0 * PI * radius_m * radius_m,
+            map: None,
         }),
         Light::Rectangle {
             position,
@@ -178,6 +215,7 @@ fn area_light_source(light: &Light) -> Option<Source> {
                 edge2: e2,
                 radiance: radiance_w_sr_m2,
                 area_m2: width_m * height_m,
+                map: None,
             })
         }
         _ => None,
@@ -197,31 +235,49 @@ pub struct GiVplEmit {
     written: [u64; MAX_FRAMES_IN_FLIGHT],
     /// Emissive triangles are in the table: each row ends with K source VPLs.
     pub has_surfaces: bool,
+    /// The rows carry their emission maps ([`emitter_table`]'s `per_texel`).
+    per_texel: bool,
+    /// The emission maps the pass samples, in scenes whose emitters have them (with
+    /// `per_texel`).
+    maps: Option<VoxelMaps>,
 }
 
 impl GiVplEmit {
     /// `None` when `scene` has no emitters. `source_vpls`: the specialization constant of the
     /// row layout (`SOURCE_VPLS` in `glsl/include/vpl.glsl`), K when the table has emissive
     /// triangles. `lobes`: the scene has Phong or GGX materials, and the pass reads the
-    /// material volume at its rays' hits (specialization constant 3).
+    /// material volume at its rays' hits (specialization constant 3). `per_texel`: emissive
+    /// triangles emit their emission map's texel at the sampled point
+    /// (`GiSettings::voxel_map_texels`; specialization constant 4 where one has a map).
     pub fn new(
         ctx: &Context,
         scene: &Scene,
         t_s: f32,
         per_set: u32,
         lobes: bool,
+        per_texel: bool,
     ) -> Result<Option<Self>, VkError> {
-        let table = emitter_table(scene, t_s);
+        let table = emitter_table(scene, t_s, per_texel);
         if table.is_empty() {
             return Ok(None);
         }
         let has_surfaces = table.iter().any(|e| e.origin[3] == EMITTER_TRIANGLE);
+        let used = MapUse::new(scene, true, false, per_texel);
+        let maps = VoxelMaps::new(
+            ctx,
+            scene,
+            MapUse {
+                emission: used.emission,
+                ..MapUse::default()
+            },
+        )?;
         let pipeline = ctx.compute_pipeline(
             "gi_vpl_emit.comp",
             PushLayout::of::<GpuVplGeneratePush>(),
             &[
                 (2, if has_surfaces { per_set } else { 0 }),
                 (3, u32::from(lobes)),
+                (4, u32::from(maps.is_some())),
             ],
         )?;
         let bytes = std::mem::size_of_val(table.as_slice()) as u64;
@@ -241,6 +297,8 @@ impl GiVplEmit {
             generation: 1,
             written: [0; MAX_FRAMES_IN_FLIGHT],
             has_surfaces,
+            per_texel,
+            maps,
         };
         for slot in 0..MAX_FRAMES_IN_FLIGHT {
             pass.write_slot(slot);
@@ -252,7 +310,7 @@ impl GiVplEmit {
     /// A scene whose emitters are not those the pass was made for (another row count) keeps
     /// the old table, with a warning.
     pub fn update(&mut self, scene: &Scene, t_s: f32) {
-        let table = emitter_table(scene, t_s);
+        let table = emitter_table(scene, t_s, self.per_texel);
         if table.len() != self.rows {
             log::warn!(
                 "VPL emitters not updated: {} rows, the pass was made for {}",
@@ -300,6 +358,10 @@ impl GiVplEmit {
             std::mem::size_of::<GpuEmitter>() as u64 * self.rows as u64,
             Access::StorageRead(c),
         );
+        // Without emission maps the shader never reads them: the table stands in.
+        let (texels, table) = self.maps.as_ref().map_or((emitters, emitters), |m| {
+            m.import(g, Access::StorageRead(c))
+        });
         g.add_pass("gi_vpl_emit")
             .pipeline(&pipe)
             .bind_sampled(0, voxels, s, c)
@@ -309,6 +371,8 @@ impl GiVplEmit {
             .bind(4, vpls, Access::StorageReadWrite(c))
             .bind(5, emitters, Access::StorageRead(c))
             .bind_sampled(6, material, s, c)
+            .bind(7, texels, Access::StorageRead(c))
+            .bind(8, table, Access::StorageRead(c))
             .record(move |ctx| {
                 ctx.bind(&pipe);
                 ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
@@ -365,7 +429,7 @@ radius_m = 0.5
 radiance_w_sr_m2 = 1.0
 "#,
         );
-        let t = emitter_table(&s, 0.0);
+        let t = emitter_table(&s, 0.0, true);
         assert_eq!(t.len(), 2);
         let total = 3.0 + PI;
         assert!((t[0].flux[3] - 3.0 / total).abs() < 1e-6, "{t:?}");
@@ -395,11 +459,11 @@ fov_y_deg = 40.0
 [[objects]]
 builtin = "quad"
 "#;
-        assert!(emitter_table(&scene(base), 0.0).is_empty());
+        assert!(emitter_table(&scene(base), 0.0, true).is_empty());
         let s = scene(&format!(
             "{base}material = {{ albedo = 0.0, emission_w_sr_m2 = [2.0, 1.0, 0.0] }}\n"
         ));
-        let t = emitter_table(&s, 0.0);
+        let t = emitter_table(&s, 0.0, true);
         assert_eq!(t.len(), 2);
         for e in &t {
             let (e1, e2) = (Vec3::from_slice(&e.edge1), Vec3::from_slice(&e.edge2));
@@ -415,5 +479,68 @@ builtin = "quad"
             );
         }
         assert!((t[0].flux[3] - 0.5).abs() < 1e-6);
+    }
+
+    /// An emission map: the rows keep the weight `Ke` × the map's mean but carry π·W·Ke/w, the
+    /// map and the triangle's texture coordinates, for the shader to multiply by the texel at
+    /// its point; without `per_texel` they carry the mean's flux and no map, as before.
+    #[test]
+    fn emission_map_rows_carry_ke_and_the_map() {
+        let mut s = scene(
+            r#"
+[camera]
+position = [0.0, 0.0, 5.0]
+target = [0.0, 0.0, 0.0]
+fov_y_deg = 40.0
+[[objects]]
+builtin = "quad"
+material = { albedo = 0.0, emission_w_sr_m2 = [4.0, 2.0, 0.0] }
+"#,
+        );
+        // Linear texels 1 and 0: the map's mean is 1/2, so L̄ = (2, 1, 0), w = 1, W = 1 m².
+        let rgba8 = [255, 255, 255, 255, 0, 0, 0, 255].to_vec();
+        s.textures = vec![crate::scene::TextureData::new(
+            "glow".into(),
+            2,
+            1,
+            rgba8,
+            false,
+        )];
+        let m = s.objects[0].materials[0];
+        s.materials[m].pbr_maps.emission = Some(0);
+        let texel = emitter_table(&s, 0.0, true);
+        let mean = emitter_table(&s, 0.0, false);
+        for (e, f) in texel.iter().zip(&mean) {
+            // The selection is the same table either way.
+            assert_eq!(e.flux[3], f.flux[3]);
+            // π·W·Ke/w = π·(4, 2, 0) with the map, π·W·L̄/w = π·(2, 1, 0) without.
+            let flux = |r: &GpuEmitter| Vec3::from_slice(&r.flux[..3]);
+            assert!(
+                (flux(e) - PI * Vec3::new(4.0, 2.0, 0.0)).length() < 1e-5,
+                "{e:?}"
+            );
+            assert!(
+                (flux(f) - PI * Vec3::new(2.0, 1.0, 0.0)).length() < 1e-5,
+                "{f:?}"
+            );
+            assert_eq!(e.uv2_map[3].to_bits(), 0);
+            assert_eq!(f.uv2_map[3].to_bits(), u32::MAX);
+        }
+        // The built-in quad's texture coordinates span [0, 1]².
+        let uvs: Vec<f32> = texel
+            .iter()
+            .flat_map(|e| {
+                [
+                    e.uv01[0],
+                    e.uv01[1],
+                    e.uv01[2],
+                    e.uv01[3],
+                    e.uv2_map[0],
+                    e.uv2_map[1],
+                ]
+            })
+            .collect();
+        assert!(uvs.iter().all(|u| (0.0..=1.0).contains(u)), "{uvs:?}");
+        assert!(uvs.contains(&1.0) && uvs.contains(&0.0), "{uvs:?}");
     }
 }

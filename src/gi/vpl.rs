@@ -172,7 +172,14 @@ impl VplPasses {
         // Glossy hits of the bounces and emitter rays read the material volume, which the
         // assembly creates for the VPLs in scenes with Phong or GGX materials.
         let lobes = !target.scene.is_all_lambert();
-        let emit = GiVplEmit::new(ctx, target.scene, target.time_s, per_set, lobes)?;
+        let emit = GiVplEmit::new(
+            ctx,
+            target.scene,
+            target.time_s,
+            per_set,
+            lobes,
+            settings.voxel_map_texels,
+        )?;
         // Area lights have no reflective maps: the emitter slot carries their VPLs.
         let map_lights = target.scene.lights.iter().filter(|l| !l.is_area()).count() as u32;
         let layout = VplLayout {

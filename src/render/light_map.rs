@@ -1,8 +1,16 @@
 //! `light_map`: reflective shadow maps (Dachsbacher and Stamminger 2005) over the shadow
 //! views — reflected radiance, world position and normal of the surfaces each light sees —
 //! which the GI methods read as the radiance at a ray's hit (`glsl/light_map.{vert,geom,frag}`).
+//!
+//! In scenes with albedo textures (`map_Kd`) or GGX metalness maps (`map_Pm`) a texel samples
+//! the draw's maps as the G-buffer does: the pass binds the scene's textures one of them per
+//! draw (`.bind_one_of_sampled`, as `gbuffer` does) rather than reading the voxel volumes'
+//! half-float map buffer (`voxel::maps`): the textures are on the device already in every
+//! scene that has maps, whereas that buffer exists only where a voxel volume samples them, and
+//! the sampler's mip selection from the texel's own footprint comes with them. Other scenes
+//! bind the placeholder and never sample (a specialization constant).
 
-use super::scene_gpu::{record_shadow_views, GpuShadowViewPush, SceneInputs};
+use super::scene_gpu::{record_shadow_views, Draw, GpuShadowViewPush, SceneInputs};
 use super::DEPTH;
 use crate::graph::{Access, ImageHandle, Load, RenderGraph, Shader};
 use crate::vk::{vk, Context, GraphicsPipeline, GraphicsPipelineDesc, ImageDesc, VkError};
@@ -24,6 +32,8 @@ pub struct LightMaps {
 
 pub struct LightMapPass {
     pipeline: GraphicsPipeline,
+    /// The texels sample the draws' albedo textures and metalness maps.
+    has_maps: bool,
 }
 
 impl LightMapPass {
@@ -31,11 +41,14 @@ impl LightMapPass {
     /// the shadow maps. `has_ggx`: some material is GGX, whose texels store only the diffuse
     /// part (`glsl/light_map.frag`). `area_lights`: the area lights' (paraboloid) views get
     /// light maps too — only the hemisphere method reads them (`glsl/light_map.geom`).
+    /// `has_maps`: some material has an albedo texture, or a GGX one a metalness map
+    /// ([`Self::scene_has_maps`]), which the texels sample.
     pub fn new(
         ctx: &Context,
         has_dissolve: bool,
         has_ggx: bool,
         area_lights: bool,
+        has_maps: bool,
     ) -> Result<Self, VkError> {
         let pipeline = ctx.graphics_pipeline(&GraphicsPipelineDesc {
             vertex: "light_map.vert".into(),
@@ -43,10 +56,7 @@ impl LightMapPass {
             fragment: "light_map.frag".into(),
             push: crate::vk::PushLayout::of::<GpuShadowViewPush>(),
             vertex_stride: std::mem::size_of::<super::gpu::GpuVertex>() as u32,
-            vertex_attributes: vec![
-                (vk::Format::R32G32B32_SFLOAT, 0),
-                (vk::Format::R32G32B32_SFLOAT, 12),
-            ],
+            vertex_attributes: super::scene_gpu::vertex_attributes(),
             topology: vk::PrimitiveTopology::TRIANGLE_LIST,
             cull_mode: vk::CullModeFlags::NONE,
             color_formats: vec![LIGHT_MAP_RADIANCE, LIGHT_MAP_POSITION, LIGHT_MAP_NORMAL],
@@ -60,9 +70,20 @@ impl LightMapPass {
                 (0, u32::from(has_dissolve)),
                 (1, u32::from(has_ggx)),
                 (2, u32::from(area_lights)),
+                (3, u32::from(has_maps)),
             ],
         })?;
-        Ok(Self { pipeline })
+        Ok(Self { pipeline, has_maps })
+    }
+
+    /// Whether the texels of `scene` sample maps: a drawn material has an albedo texture, or
+    /// is GGX with a metalness map (roughness and emission do not enter a light-map texel).
+    pub fn scene_has_maps(scene: &crate::scene::Scene) -> bool {
+        scene.has_albedo_textures()
+            || scene
+                .materials
+                .iter()
+                .any(|m| m.ggx.is_some() && m.pbr_maps.metallic.is_some())
     }
 
     /// Declares `views` layers of `resolution`² light maps.
@@ -88,7 +109,9 @@ impl LightMapPass {
         let (vertices, indices) = (scene.vertices, scene.indices);
         let draws = scene.draws.clone();
         let clear = Load::Clear([0.0; 4]);
-        g.add_pass("light_map")
+        let (sampler, placeholder) = (scene.texture_sampler, scene.placeholder());
+        let pass = g
+            .add_pass("light_map")
             .pipeline(&pipe)
             .bind(0, scene.frame, Access::StorageRead(Shader::Graphics))
             .bind(1, scene.materials, Access::StorageRead(Shader::Fragment))
@@ -96,14 +119,49 @@ impl LightMapPass {
                 2,
                 scene.materials_pbr,
                 Access::StorageRead(Shader::Fragment),
-            )
-            .read(vertices, Access::VertexBuffer)
+            );
+        // Without maps the shader never samples: the placeholder fills both bindings.
+        let f = Shader::Fragment;
+        let textures = self.has_maps.then(|| scene.textures.clone());
+        let pass = match &textures {
+            Some(t) => pass
+                .bind_one_of_sampled(3, t.clone(), sampler, f)
+                .bind_one_of_sampled(4, t.clone(), sampler, f),
+            None => pass.bind_sampled(3, placeholder, sampler, f).bind_sampled(
+                4,
+                placeholder,
+                sampler,
+                f,
+            ),
+        };
+        pass.read(vertices, Access::VertexBuffer)
             .read(indices, Access::IndexBuffer)
             .color(maps.radiance, clear)
             .color(maps.position, clear)
             .color(maps.normal, clear)
             .depth(depth, Load::ClearDepth(1.0))
-            .record(move |ctx| record_shadow_views(ctx, &pipe, (vertices, indices), &draws));
+            .record(move |ctx| {
+                // The draw's albedo texture and metalness map (the placeholder where it has
+                // none), pushed when they differ from the last draw's.
+                let mut bound = None;
+                let mut per_draw = |d: &Draw| {
+                    let Some(t) = &textures else { return };
+                    let choice = (d.texture, d.pbr_maps[1]);
+                    if bound != Some(choice) {
+                        let pick = |i: Option<usize>| i.and_then(|i| t.get(i).copied());
+                        let (albedo, metal) = (pick(choice.0), pick(choice.1));
+                        ctx.push_with(
+                            &pipe,
+                            &[
+                                (3, albedo.unwrap_or(placeholder)),
+                                (4, metal.unwrap_or(placeholder)),
+                            ],
+                        );
+                        bound = Some(choice);
+                    }
+                };
+                record_shadow_views(ctx, &pipe, (vertices, indices), &draws, &mut per_draw)
+            });
         maps
     }
 }

@@ -639,6 +639,7 @@ impl Renderer {
                         scene.has_transparency(),
                         scene.has_ggx(),
                         settings.gi.method == crate::gi::GiMethod::Hemisphere,
+                        LightMapPass::scene_has_maps(scene),
                     )
                 })
                 .transpose()?;
@@ -664,7 +665,11 @@ impl Renderer {
             if voxel_view_on {
                 // With the atlas voxelizer its points write the albedo the view shows.
                 if d.view == crate::voxel::debug_view::DebugView::Albedo {
-                    v.enable_attribute_volumes(ctx, scene, Default::default())?;
+                    v.enable_attribute_volumes(
+                        ctx,
+                        scene,
+                        crate::voxel::attributes::ValueVolumes::albedo_only(scene),
+                    )?;
                 }
                 voxel_debug = Some(crate::voxel::debug_view::VoxelDebugPass::new(
                     ctx,

@@ -381,15 +381,17 @@ crate::push_constants!(GpuShadowViewPush {
 });
 
 /// Records a pass that draws every shadow view's draw list into its declared (layered)
-/// attachments with `pipe`: the light-map pass (the shadow-depth pass also draws the cascades,
-/// [`record_shadow_and_cascade_views`]).
+/// attachments with `pipe`, calling `per_draw` before each draw (after the pipeline is bound;
+/// the light maps push the draw's textures there): the light-map pass (the shadow-depth pass
+/// also draws the cascades, [`record_shadow_and_cascade_views`]).
 pub fn record_shadow_views(
     ctx: &PassContext,
     pipe: &PipelineHandle,
     scene: (BufferHandle, BufferHandle),
     draws: &RwLock<DrawLists>,
+    per_draw: &mut dyn FnMut(&Draw),
 ) {
-    record_views(ctx, pipe, scene, draws, false);
+    record_views(ctx, pipe, scene, draws, false, per_draw);
 }
 
 /// [`record_shadow_views`], then the cascade views' lists into the layers after them.
@@ -399,7 +401,7 @@ pub fn record_shadow_and_cascade_views(
     scene: (BufferHandle, BufferHandle),
     draws: &RwLock<DrawLists>,
 ) {
-    record_views(ctx, pipe, scene, draws, true);
+    record_views(ctx, pipe, scene, draws, true, &mut |_| {});
 }
 
 fn record_views(
@@ -408,6 +410,7 @@ fn record_views(
     scene: (BufferHandle, BufferHandle),
     draws: &RwLock<DrawLists>,
     cascades: bool,
+    per_draw: &mut dyn FnMut(&Draw),
 ) {
     ctx.begin_rendering();
     ctx.bind(pipe);
@@ -417,6 +420,7 @@ fn record_views(
         let cascade_lists = if cascades { &lists.cascades[..] } else { &[] };
         for (v, list) in lists.shadow.iter().chain(cascade_lists).enumerate() {
             for d in list {
+                per_draw(d);
                 let push = GpuShadowViewPush {
                     model: d.model.to_cols_array(),
                     view: v as u32,

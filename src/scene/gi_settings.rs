@@ -62,10 +62,13 @@ pub struct GiSettings {
     /// scenes with such materials); `false` makes later bounces Lambert with the base color,
     /// the behaviour before the material volume, kept for comparisons.
     pub pathtrace_lobes: bool,
-    /// The voxel volumes sample the MTL PBR maps (`map_Ke` in the emission volume, `map_Pr` /
-    /// `map_Pm` in the material volume) per texel at the surface in each voxel (`voxel::maps`);
-    /// `false` gives them each map's mean per material, the behaviour before, kept for
-    /// comparisons. Scenes without such maps are the same either way.
+    /// The voxel volumes sample the MTL texture maps (`map_Kd` in the albedo volume, `map_Ke`
+    /// in the emission volume, `map_Pr` / `map_Pm` in the material volume) per texel at the
+    /// surface in each voxel (`voxel::maps`), and the VPL emitter rays take `map_Ke`'s texel at
+    /// their points; `false` gives the volumes `Kd` and each map's mean per material and the
+    /// emitter rays the mean, the behaviour before, kept for comparisons. Scenes without such
+    /// maps are the same either way. (The reflective light maps sample `map_Kd` / `map_Pm`
+    /// like the G-buffer either way.)
     pub voxel_map_texels: bool,
     /// Frames a headless render accumulates (path tracer; the viewer accumulates while still).
     pub accumulate_frames: u32,

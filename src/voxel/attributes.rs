@@ -23,8 +23,9 @@
 //! `voxelize_material` from the same owners.
 //!
 //! Both value passes sample the MTL PBR maps (`map_Ke`; `map_Pr`, `map_Pm`) per texel over the
-//! owner's part of each voxel ([`super::maps`], `glsl/include/voxelize_owner_value.glsl`)
-//! when the scene has them, or take each map's mean with `per_texel` off. With the atlas
+//! owner's part of each voxel ([`super::maps`], `glsl/include/voxel_owner_maps.glsl`)
+//! when the scene has them, or take each map's mean with `per_texel` off; so does the resolve
+//! with the albedo textures (`map_Kd`, else `Kd`). With the atlas
 //! voxelizer its points write all four volumes of the objects it voxelizes
 //! ([`super::gpu_atlas_volumes`]), and this writer only the others.
 
@@ -32,7 +33,7 @@ use super::gpu::{voxelize_loads, voxelize_splits, GpuVoxelizePush};
 use super::gpu_atlas_volumes::AttributeVolumes;
 use super::maps::{owner_sample_spacing_m, GpuTriangleMaps, MapUse, VoxelMaps};
 use super::VoxelGrid;
-use crate::graph::{Access, ImageHandle, RenderGraph, Shader, SlotCondition};
+use crate::graph::{Access, BufferHandle, ImageHandle, RenderGraph, Shader, SlotCondition};
 use crate::scene::{Material, Scene, TextureData};
 use crate::vk::{
     vk, Buffer, BufferDesc, ComputePipeline, Context, Image, ImageDesc, MemoryLocation, VkError,
@@ -83,6 +84,13 @@ impl ValueVolumes {
             maps: MapUse::new(scene, emission, material, per_texel),
         }
     }
+    /// No value volumes, only the albedo volume's `map_Kd` (the albedo debug view).
+    pub fn albedo_only(scene: &Scene) -> Self {
+        Self {
+            maps: MapUse::albedo_only(scene),
+            ..Self::default()
+        }
+    }
 }
 
 /// Format of the emission volume (radiance above 1 W/(m²·sr) must survive) and of the material
@@ -124,6 +132,9 @@ pub struct TriangleAttributes {
     gate: Arc<SlotCondition>,
     /// Scenes with moving objects: triangles per frame slot, rewritten when they change.
     animated: Option<AnimatedTriangles>,
+    /// Scenes whose albedo volume samples `map_Kd`: per triangle its [`GpuTriangleMaps`],
+    /// which the resolve pass reads.
+    albedo_maps: Option<TriangleRows>,
     /// Scenes with emitters: the pass that writes the emission volume.
     emission: Option<OwnerValueWriter>,
     /// With a material volume: the pass that writes it.
@@ -142,9 +153,17 @@ struct OwnerValueWriter {
     /// The pass's name, its shader's file stem.
     name: &'static str,
     pipeline: ComputePipeline,
-    values: Buffer,
+    values: TriangleRows,
     /// Each triangle's row holds its [`GpuTriangleMaps`] after the value (`HAS_MAPS`).
     with_maps: bool,
+}
+
+/// Per-triangle rows of `vec4`s in a storage buffer, laid out like the triangle buffer: one
+/// region of `capacity` triangles per frame slot for scenes with moving objects.
+struct TriangleRows {
+    buffer: Buffer,
+    /// `vec4`s per triangle.
+    stride: usize,
 }
 
 /// The rows of an owner-value buffer: per triangle its value, then (with maps) its
@@ -156,6 +175,14 @@ struct OwnerRows {
 }
 
 impl OwnerRows {
+    /// Only the maps of each triangle (the resolve pass's albedo maps).
+    fn maps(rows: &[GpuTriangleMaps]) -> Self {
+        Self {
+            vec4s: rows.iter().flat_map(|r| r.to_vec4s()).collect(),
+            stride: 3,
+        }
+    }
+
     fn new(values: &[([f32; 4], GpuTriangleMaps)], with_maps: bool) -> Self {
         let stride = if with_maps { 4 } else { 1 };
         let mut vec4s = Vec::with_capacity(values.len() * stride);
@@ -328,11 +355,19 @@ impl TriangleAttributes {
             crate::vk::PushLayout::of::<GpuVoxelizePush>(),
             &[(0, ATTRIBUTE_GROUP_SIZE)],
         )?;
-        let resolve_pipeline =
-            ctx.compute_pipeline("voxelize_attributes_resolve.comp", None, &[])?;
-        let spacing_m = owner_sample_spacing_m(grid.voxel_size_m());
         let maps_used = values.maps;
-        let (tris, emissions, materials) = attribute_triangles(scene, time_s, maps_used, spacing_m);
+        let resolve_pipeline = ctx.compute_pipeline(
+            "voxelize_attributes_resolve.comp",
+            crate::vk::PushLayout::of::<GpuVoxelizePush>(),
+            &[(0, u32::from(maps_used.albedo))],
+        )?;
+        let spacing_m = owner_sample_spacing_m(grid.voxel_size_m());
+        let TriangleValues {
+            tris,
+            emissions,
+            materials,
+            albedo_maps,
+        } = attribute_triangles(scene, time_s, maps_used, spacing_m);
         let bytes: &[u8] = if tris.is_empty() {
             &[0; 48]
         } else {
@@ -387,6 +422,13 @@ impl TriangleAttributes {
         let owner = ctx.create_image(&desc)?;
         ctx.clear_new_image(&owner, none, OWNER_STATE.info().layout)?;
         let capacity = animated.as_ref().map(|a| a.capacity);
+        let albedo_maps = maps_used
+            .albedo
+            .then(|| {
+                let rows = OwnerRows::maps(&albedo_maps);
+                TriangleRows::new(ctx, "attribute albedo maps", &rows, capacity)
+            })
+            .transpose()?;
         let emission = values
             .emission
             .then(|| {
@@ -413,6 +455,7 @@ impl TriangleAttributes {
             written: false,
             gate: Arc::new(SlotCondition::default()),
             animated,
+            albedo_maps,
             emission,
             material,
             maps,
@@ -441,8 +484,12 @@ impl TriangleAttributes {
         let Some(a) = &mut self.animated else {
             return false;
         };
-        let (tris, emissions, materials) =
-            attribute_triangles(&a.scene, t_s, self.maps_used, self.spacing_m);
+        let TriangleValues {
+            tris,
+            emissions,
+            materials,
+            albedo_maps,
+        } = attribute_triangles(&a.scene, t_s, self.maps_used, self.spacing_m);
         if a.last.as_ref() == Some(&tris) {
             return false;
         }
@@ -459,13 +506,16 @@ impl TriangleAttributes {
             let bytes: &[u8] = bytemuck::cast_slice(&tris[..n]);
             m[slot * region..slot * region + bytes.len()].copy_from_slice(bytes);
         }
+        if let Some(r) = &mut self.albedo_maps {
+            r.write_slot(slot, a.capacity, &OwnerRows::maps(&albedo_maps[..n]));
+        }
         if let Some(w) = &mut self.emission {
             let rows = OwnerRows::new(&emissions[..n], w.with_maps);
-            w.write_slot(slot, a.capacity, &rows);
+            w.values.write_slot(slot, a.capacity, &rows);
         }
         if let Some(w) = &mut self.material {
             let rows = OwnerRows::new(&materials[..n], w.with_maps);
-            w.write_slot(slot, a.capacity, &rows);
+            w.values.write_slot(slot, a.capacity, &rows);
         }
         a.counts[slot].store(n as u32, Ordering::SeqCst);
         a.splits[slot].store(attribute_splits(&a.grid, &tris[..n]), Ordering::SeqCst);
@@ -541,15 +591,30 @@ impl TriangleAttributes {
             }
         }
         let resolve = *self.resolve_pipeline;
+        // Without albedo maps the shader reads neither them nor the map buffers (a
+        // specialization constant): the triangles stand in.
+        let albedo_maps = self
+            .albedo_maps
+            .as_ref()
+            .map(|r| r.import(g, self.animated.as_ref()));
+        let (rows, texels, table) = match (albedo_maps, maps) {
+            (Some(rows), Some((texels, table))) => (rows, texels, table),
+            _ => (tris, tris, tris),
+        };
+        let rpush = self.push;
         g.add_pass("voxelize_attributes_resolve")
             .pipeline(&resolve)
             .bind(0, tris, read)
             .bind(1, owner, rw)
             .bind(2, albedo, rw)
             .bind(3, normal, rw)
+            .bind(4, rows, read)
+            .bind(5, texels, read)
+            .bind(6, table, read)
             .when(Some(self.gate.clone()))
             .record(move |ctx| {
                 ctx.bind(&resolve);
+                ctx.cmd.push_constants(&resolve, bytemuck::bytes_of(&rpush));
                 ctx.cmd
                     .dispatch(extent.0.div_ceil(8), extent.1.div_ceil(8), extent.2);
             });
@@ -572,65 +637,13 @@ impl OwnerValueWriter {
             crate::vk::PushLayout::of::<GpuVoxelizePush>(),
             &[(0, u32::from(with_maps))],
         )?;
-        let bytes: &[u8] = if rows.vec4s.is_empty() {
-            &[0; 16]
-        } else {
-            bytemuck::cast_slice(&rows.vec4s)
-        };
-        match capacity {
-            Some(capacity) => {
-                let region = (capacity * rows.stride * std::mem::size_of::<[f32; 4]>()) as u64;
-                ctx.create_buffer(&BufferDesc {
-                    name: format!("{name} values (per frame slot)"),
-                    size_bytes: region * MAX_FRAMES_IN_FLIGHT as u64,
-                    usage: vk::BufferUsageFlags::STORAGE_BUFFER,
-                    location: MemoryLocation::CpuToGpu,
-                })
-                .map(|buffer| {
-                    let mut me = Self {
-                        name,
-                        pipeline,
-                        values: buffer,
-                        with_maps,
-                    };
-                    for slot in 0..MAX_FRAMES_IN_FLIGHT {
-                        me.write_slot(slot, capacity, &rows);
-                    }
-                    me
-                })
-            }
-            None => ctx
-                .upload_buffer(
-                    &format!("{name} values"),
-                    bytes,
-                    vk::BufferUsageFlags::STORAGE_BUFFER,
-                )
-                .map(|values| Self {
-                    name,
-                    pipeline,
-                    values,
-                    with_maps,
-                }),
-        }
-    }
-
-    /// `vec4`s per triangle in [`Self::values`].
-    fn stride(&self) -> usize {
-        if self.with_maps {
-            4
-        } else {
-            1
-        }
-    }
-
-    /// Writes frame slot `slot`'s region (of `capacity` triangles) of a per-slot buffer.
-    fn write_slot(&mut self, slot: usize, capacity: usize, rows: &OwnerRows) {
-        let region = capacity * rows.stride * std::mem::size_of::<[f32; 4]>();
-        let n = rows.vec4s.len().min(capacity * rows.stride);
-        if let Some(m) = self.values.mapped_mut() {
-            let bytes: &[u8] = bytemuck::cast_slice(&rows.vec4s[..n]);
-            m[slot * region..slot * region + bytes.len()].copy_from_slice(bytes);
-        }
+        let values = TriangleRows::new(ctx, &format!("{name} values"), &rows, capacity)?;
+        Ok(Self {
+            name,
+            pipeline,
+            values,
+            with_maps,
+        })
     }
 
     /// Declares the pass: every voxel of `extent` with an owner in `inp.owner` takes the
@@ -645,13 +658,7 @@ impl OwnerValueWriter {
         extent: (u32, u32, u32),
     ) {
         let read = Access::StorageRead(Shader::Compute);
-        let values = match animated {
-            Some(a) => {
-                let region = (a.capacity * self.stride() * std::mem::size_of::<[f32; 4]>()) as u64;
-                g.import_buffer_per_slot(&self.values, region, region, read)
-            }
-            None => g.import_buffer(&self.values, read),
-        };
+        let values = self.values.import(g, animated);
         // Without maps the shader reads neither the maps nor the triangles (a specialization
         // constant); the values stand in for the maps' bindings.
         let (texels, table) = match inp.maps {
@@ -674,6 +681,67 @@ impl OwnerValueWriter {
                 ctx.cmd
                     .dispatch(extent.0.div_ceil(8), extent.1.div_ceil(8), extent.2);
             });
+    }
+}
+
+impl TriangleRows {
+    /// Uploads `rows`: once, or into each frame slot's region of `capacity` triangles for
+    /// scenes with moving objects (`capacity` Some).
+    fn new(
+        ctx: &Context,
+        name: &str,
+        rows: &OwnerRows,
+        capacity: Option<usize>,
+    ) -> Result<Self, VkError> {
+        let stride = rows.stride;
+        let Some(capacity) = capacity else {
+            let bytes: &[u8] = if rows.vec4s.is_empty() {
+                &[0; 16]
+            } else {
+                bytemuck::cast_slice(&rows.vec4s)
+            };
+            let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
+            let buffer = ctx.upload_buffer(name, bytes, usage)?;
+            return Ok(Self { buffer, stride });
+        };
+        let buffer = ctx.create_buffer(&BufferDesc {
+            name: format!("{name} (per frame slot)"),
+            size_bytes: Self::region(capacity, stride) * MAX_FRAMES_IN_FLIGHT as u64,
+            usage: vk::BufferUsageFlags::STORAGE_BUFFER,
+            location: MemoryLocation::CpuToGpu,
+        })?;
+        let mut me = Self { buffer, stride };
+        for slot in 0..MAX_FRAMES_IN_FLIGHT {
+            me.write_slot(slot, capacity, rows);
+        }
+        Ok(me)
+    }
+
+    /// Bytes of one frame slot's region of `capacity` triangles.
+    fn region(capacity: usize, stride: usize) -> u64 {
+        (capacity * stride * std::mem::size_of::<[f32; 4]>()) as u64
+    }
+
+    /// Writes frame slot `slot`'s region (of `capacity` triangles) of a per-slot buffer.
+    fn write_slot(&mut self, slot: usize, capacity: usize, rows: &OwnerRows) {
+        let region = Self::region(capacity, rows.stride) as usize;
+        let n = rows.vec4s.len().min(capacity * rows.stride);
+        if let Some(m) = self.buffer.mapped_mut() {
+            let bytes: &[u8] = bytemuck::cast_slice(&rows.vec4s[..n]);
+            m[slot * region..slot * region + bytes.len()].copy_from_slice(bytes);
+        }
+    }
+
+    /// Imports the rows for a shader read: each frame slot its own region when `animated`.
+    fn import(&self, g: &mut RenderGraph, animated: Option<&AnimatedTriangles>) -> BufferHandle {
+        let read = Access::StorageRead(Shader::Compute);
+        match animated {
+            Some(a) => {
+                let region = Self::region(a.capacity, self.stride);
+                g.import_buffer_per_slot(&self.buffer, region, region, read)
+            }
+            None => g.import_buffer(&self.buffer, read),
+        }
     }
 }
 
@@ -711,17 +779,22 @@ fn attribute_splits(grid: &VoxelGrid, tris: &[AttributeTriangle]) -> u32 {
 /// A triangle's value for one owner-value pass and the maps that replace it per texel.
 type OwnerValue = ([f32; 4], GpuTriangleMaps);
 
+/// What [`attribute_triangles`] gives per triangle, in the owner order.
+struct TriangleValues {
+    tris: Vec<AttributeTriangle>,
+    emissions: Vec<OwnerValue>,
+    materials: Vec<OwnerValue>,
+    /// The maps the resolve pass samples (`map_Kd` in `maps[3]`).
+    albedo_maps: Vec<GpuTriangleMaps>,
+}
+
 /// Every triangle of `scene` at `t_s` with its material's albedo, its material's emission and
 /// its material's lobe ([`material_texel`]), each with the triangle's [`GpuTriangleMaps`] for
 /// the maps `maps` samples (spaced `spacing_m`). The emission is `Ke` where `map_Ke` is
 /// sampled per texel (the pass multiplies), else [`Material::voxel_emission`] (`Ke` × the
-/// map's mean); the lobe holds the constants or means, which sampled maps replace.
-fn attribute_triangles(
-    scene: &Scene,
-    t_s: f32,
-    maps: MapUse,
-    spacing_m: f32,
-) -> (Vec<AttributeTriangle>, Vec<OwnerValue>, Vec<OwnerValue>) {
+/// map's mean); the lobe holds the constants or means, which sampled maps replace; the
+/// albedo is `Kd`, which a sampled `map_Kd` replaces.
+fn attribute_triangles(scene: &Scene, t_s: f32, maps: MapUse, spacing_m: f32) -> TriangleValues {
     let mut out = Vec::new();
     let mut emissions = Vec::new();
     let mut materials = Vec::new();
@@ -733,7 +806,7 @@ fn attribute_triangles(
         for (si, sub) in mesh.submeshes.iter().enumerate() {
             let material = object.materials.get(si).copied().unwrap_or(sub.material);
             let (albedo, emission, lobe, map_ids) = scene.materials.get(material).map_or(
-                (Vec3::splat(0.5), Vec3::ZERO, [0.0; 4], [-1; 3]),
+                (Vec3::splat(0.5), Vec3::ZERO, [0.0; 4], [-1; 4]),
                 |m| {
                     let ids = maps.maps_of(m);
                     let emission = if ids[2] >= 0 {
@@ -748,7 +821,7 @@ fn attribute_triangles(
             for t in mesh.indices[range].chunks_exact(3) {
                 let p = [0, 1, 2].map(|k| m.transform_point3(mesh.positions[t[k] as usize]));
                 out.push([0, 1, 2].map(|k| [p[k].x, p[k].y, p[k].z, albedo[k]]));
-                let row = if map_ids == [-1; 3] {
+                let row = if map_ids == [-1; 4] {
                     GpuTriangleMaps::NONE
                 } else {
                     let uv = [0, 1, 2].map(|k| {
@@ -774,15 +847,19 @@ fn attribute_triangles(
         .map(|((t, e), m)| (t, e, m))
         .collect();
     all.sort_by_key(|(_, e, _)| e.0[..3] == [0.0; 3]);
-    let mut tris = Vec::with_capacity(all.len());
-    let mut emissions = Vec::with_capacity(all.len());
-    let mut materials = Vec::with_capacity(all.len());
+    let mut v = TriangleValues {
+        tris: Vec::with_capacity(all.len()),
+        emissions: Vec::with_capacity(all.len()),
+        materials: Vec::with_capacity(all.len()),
+        albedo_maps: Vec::with_capacity(all.len()),
+    };
     for (t, e, m) in all {
-        tris.push(t);
-        emissions.push(e);
-        materials.push(m);
+        v.tris.push(t);
+        v.albedo_maps.push(e.1);
+        v.emissions.push(e);
+        v.materials.push(m);
     }
-    (tris, emissions, materials)
+    v
 }
 
 #[cfg(test)]
@@ -810,17 +887,19 @@ mod tests {
         let none = MapUse::default();
         let plain = attribute_triangles(&scene, 0.0, none, 0.01);
         // Without maps the voxelizer gets the constants.
-        assert!(plain.1.iter().all(|e| e.0 == [2.0, 4.0, 6.0, 0.0]));
-        assert!(plain.2.iter().all(|m| m.0 == [0.9, 0.0, 0.0, -1.0]));
-        assert!(plain.1.iter().all(|e| e.1 == GpuTriangleMaps::NONE));
+        assert!(plain.emissions.iter().all(|e| e.0 == [2.0, 4.0, 6.0, 0.0]));
+        assert!(plain.materials.iter().all(|m| m.0 == [0.9, 0.0, 0.0, -1.0]));
+        assert!(plain.emissions.iter().all(|e| e.1 == GpuTriangleMaps::NONE));
 
         // Roughness texels 0 and 255 (linear): mean 0.5. Metalness 51 and 51: 0.2. Emission
         // sRGB texels 188 and 0: the mean of the decoded values, srgb_decode(188/255)/2 ≈
-        // 0.252 (averaging the codes first would give srgb_decode(94/255) ≈ 0.112).
+        // 0.252 (averaging the codes first would give srgb_decode(94/255) ≈ 0.112). An albedo
+        // texture (sRGB) that only the per-texel volumes read: the means keep `Kd`.
         scene.textures = vec![
             two_texels([0; 3], [255; 3], false),
             two_texels([51; 3], [51; 3], false),
             two_texels([188; 3], [0; 3], true),
+            two_texels([255, 0, 0], [0, 255, 0], true),
         ];
         let m = scene.objects[0].materials[0];
         scene.materials[m].pbr_maps = crate::scene::PbrMaps {
@@ -828,8 +907,19 @@ mod tests {
             metallic: Some(1),
             emission: Some(2),
         };
-        let (tris, emissions, materials) = attribute_triangles(&scene, 0.0, none, 0.01);
-        assert_eq!(tris.len(), plain.0.len());
+        scene.materials[m].albedo_texture = Some(3);
+        let kd = scene.materials[m].albedo;
+        let TriangleValues {
+            tris,
+            emissions,
+            materials,
+            albedo_maps,
+        } = attribute_triangles(&scene, 0.0, none, 0.01);
+        assert_eq!(tris.len(), plain.tris.len());
+        assert!(tris
+            .iter()
+            .all(|t| [t[0][3], t[1][3], t[2][3]] == kd.to_array()));
+        assert!(albedo_maps.iter().all(|r| *r == GpuTriangleMaps::NONE));
         let glow = crate::eval::srgb_decode(188.0 / 255.0) / 2.0;
         let want = Vec3::new(2.0, 4.0, 6.0) * glow;
         for (e, _) in &emissions {
@@ -844,14 +934,20 @@ mod tests {
         let texel = MapUse {
             emission: true,
             lobe: true,
+            albedo: true,
         };
-        let (_, emissions, materials) = attribute_triangles(&scene, 0.0, texel, 0.01);
-        assert!(emissions
+        assert_eq!(MapUse::new(&scene, true, true, true), texel);
+        let v = attribute_triangles(&scene, 0.0, texel, 0.01);
+        assert!(v
+            .emissions
             .iter()
-            .all(|(e, r)| *e == [2.0, 4.0, 6.0, 0.0] && r.maps == [0, 1, 2, 0]));
-        assert!(materials
+            .all(|(e, r)| *e == [2.0, 4.0, 6.0, 0.0] && r.maps == [0, 1, 2, 3]));
+        assert!(v
+            .materials
             .iter()
-            .all(|(l, r)| *l == lobe && r.maps == [0, 1, 2, 0]));
+            .all(|(l, r)| *l == lobe && r.maps == [0, 1, 2, 3]));
+        // The resolve pass reads the albedo map (`Kd` stays in the triangles, unused there).
+        assert!(v.albedo_maps.iter().all(|r| r.maps[3] == 3));
         // The G-buffer keeps the constants next to the maps (it samples the maps).
         assert_eq!(
             scene.materials[m].ggx,

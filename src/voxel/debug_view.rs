@@ -317,7 +317,7 @@ impl AlbedoSource {
                 time_s,
                 grid,
                 frame.has_attribute_volumes(),
-                super::attributes::ValueVolumes::default(),
+                super::attributes::ValueVolumes::albedo_only(scene),
             )?)));
         }
         // Two texels deep: `ImageDesc` makes a 3D image (the shader's sampler3D) only for

@@ -14,6 +14,9 @@
 //! - `voxelize_atlas_resolve` (compute): static sums + this frame's sums → the `RGBA8` albedo
 //!   and `RGBA8_SNORM` normal 3D volumes the path tracer samples; alpha = 1 exactly where a
 //!   point landed.
+//! - With albedo textures (`map_Kd`, [`super::maps::MapUse::albedo`]) each point's albedo is
+//!   the texture sampled at the point instead of `Kd`, so the sums' mean is the texture's
+//!   area-weighted mean over the voxel's surface.
 //! - With value volumes ([`ValueVolumes`]: emitters, the path tracer's material volume) the
 //!   splat also sums (radiance, 1) of emitters' points and the material texels of Phong and
 //!   GGX points (the normal sums' w counting them) into one more target each, the PBR maps
@@ -257,7 +260,8 @@ impl AtlasVolumes {
                 )
             }));
         let vv = self.value_volumes;
-        let with_values = vv.emission || vv.material;
+        // Albedo textures need the rows' maps even without value volumes.
+        let with_values = vv.emission || vv.material || vv.maps.albedo;
         // The atlas's texel size (`AtlasScene::new_chunked`): the points' spacing.
         let texel_m = super::atlas::texel_size_for_voxel(grid.voxel_size_m().min_element());
         let upload = |name: &str, bytes: &[u8]| {
@@ -622,7 +626,8 @@ fn model_triangles(scene: &Scene, object: usize, mesh: usize) -> Vec<[[f32; 4]; 
 /// each (`voxelize_atlas_volumes.vert`): emission (`Ke` where `map_Ke` is sampled, else `Ke` ×
 /// the map's mean; w 1 for an emissive material), the material texel ([`material_texel`]),
 /// then the triangle's [`GpuTriangleMaps`] for points `texel_m` apart (the level of detail
-/// comes from the triangle's size in the world: the object's transform at time 0).
+/// comes from the triangle's size in the world: the object's transform at time 0), whose
+/// `map_Kd` replaces the triangles' albedo.
 fn model_values(
     scene: &Scene,
     object: usize,
@@ -655,7 +660,7 @@ fn model_values(
                 m.voxel_emission(&scene.textures)
             };
             let flag = if m.is_emissive() { 1.0 } else { 0.0 };
-            let row = if ids == [-1; 3] {
+            let row = if ids == [-1; 4] {
                 GpuTriangleMaps::NONE
             } else {
                 let vertex = |k: usize| t[k] as usize;

@@ -1,6 +1,7 @@
-//! The MTL PBR maps in the voxel volumes (docs/ARCHITECTURE.md, "Materials"): `map_Ke` in the
-//! emission volume, `map_Pr` / `map_Pm` in the material volume, sampled per texel at the
-//! surface points each voxelizer averages, instead of each map's mean.
+//! The MTL texture maps in the voxel volumes (docs/ARCHITECTURE.md, "Materials"): `map_Kd` in
+//! the albedo volume, `map_Ke` in the emission volume, `map_Pr` / `map_Pm` in the material
+//! volume, sampled per texel at the surface points each voxelizer averages, instead of `Kd`
+//! or each map's mean; and `map_Ke` at the points the VPL emitter rays start from.
 //!
 //! The maps a scene's volumes read go into one storage buffer of linear half-float texels
 //! (sRGB decoded on the CPU; every map's mip chain, [`TextureData::mip_chain`], the G-buffer's
@@ -24,12 +25,15 @@ pub struct MapUse {
     pub emission: bool,
     /// The material volume samples `map_Pr` and `map_Pm` (GGX materials).
     pub lobe: bool,
+    /// The albedo volume samples `map_Kd` (sRGB, decoded before averaging, as the
+    /// G-buffer's sampler decodes it).
+    pub albedo: bool,
 }
 
 impl MapUse {
-    /// The maps a scene's volumes sample: `emission` / `material` say which volumes exist,
-    /// `per_texel` whether maps are sampled at all (else each map's mean, as before). A volume
-    /// whose materials have no map samples none.
+    /// The maps a scene's volumes sample: `emission` / `material` say which volumes exist
+    /// (the albedo volume always does), `per_texel` whether maps are sampled at all (else each
+    /// map's mean and `Kd`, as before). A volume whose materials have no map samples none.
     pub fn new(scene: &Scene, emission: bool, material: bool, per_texel: bool) -> Self {
         let has = |f: &dyn Fn(&Material) -> bool| scene.materials.iter().any(f);
         Self {
@@ -40,17 +44,27 @@ impl MapUse {
                     m.ggx.is_some()
                         && (m.pbr_maps.roughness.is_some() || m.pbr_maps.metallic.is_some())
                 }),
+            albedo: per_texel && has(&|m| m.albedo_texture.is_some()),
+        }
+    }
+
+    /// Only the albedo volume's `map_Kd` (the albedo debug view, which has no value volumes),
+    /// where `scene` has albedo textures.
+    pub fn albedo_only(scene: &Scene) -> Self {
+        Self {
+            albedo: scene.materials.iter().any(|m| m.albedo_texture.is_some()),
+            ..Self::default()
         }
     }
 
     /// Some volume samples a map.
     pub fn any(self) -> bool {
-        self.emission || self.lobe
+        self.emission || self.lobe || self.albedo
     }
 
-    /// The maps of `m` that these volumes sample: (roughness, metallic, emission) texture
-    /// indices, -1 where none.
-    pub fn maps_of(self, m: &Material) -> [i32; 3] {
+    /// The maps of `m` that these volumes sample: (roughness, metallic, emission, albedo)
+    /// texture indices, -1 where none.
+    pub fn maps_of(self, m: &Material) -> [i32; 4] {
         let index = |on: bool, t: Option<usize>| match t {
             Some(t) if on => i32::try_from(t).unwrap_or(-1),
             _ => -1,
@@ -60,6 +74,7 @@ impl MapUse {
             index(lobe, m.pbr_maps.roughness),
             index(lobe, m.pbr_maps.metallic),
             index(self.emission, m.pbr_maps.emission),
+            index(self.albedo, m.albedo_texture),
         ]
     }
 }
@@ -72,7 +87,7 @@ pub struct GpuTriangleMaps {
     pub uv01: [f32; 4],
     /// uv2, the lod, 0.
     pub uv2_lod: [f32; 4],
-    /// Roughness, metallic and emission texture indices (-1: none), 0.
+    /// Roughness, metallic, emission and albedo texture indices (-1: none).
     pub maps: [i32; 4],
 }
 
@@ -82,7 +97,7 @@ impl GpuTriangleMaps {
     /// sampled every `spacing_m` meters: the level of detail makes one texel of the level read
     /// about one spacing wide, so the samples together cover every texel (a box filter, the
     /// albedo volume's area-weighted mean, not aliasing).
-    pub fn new(maps: [i32; 3], p: [Vec3; 3], uv: [Vec2; 3], spacing_m: f32) -> Self {
+    pub fn new(maps: [i32; 4], p: [Vec3; 3], uv: [Vec2; 3], spacing_m: f32) -> Self {
         let world_area = 0.5 * (p[1] - p[0]).cross(p[2] - p[0]).length();
         let uv_area = 0.5 * (uv[1] - uv[0]).perp_dot(uv[2] - uv[0]).abs();
         // Texture-coordinate units per meter along the surface (isotropic estimate).
@@ -91,7 +106,7 @@ impl GpuTriangleMaps {
         Self {
             uv01: [uv[0].x, uv[0].y, uv[1].x, uv[1].y],
             uv2_lod: [uv[2].x, uv[2].y, lod, 0.0],
-            maps: [maps[0], maps[1], maps[2], 0],
+            maps,
         }
     }
 
@@ -99,7 +114,7 @@ impl GpuTriangleMaps {
     pub const NONE: Self = Self {
         uv01: [0.0; 4],
         uv2_lod: [0.0; 4],
-        maps: [-1, -1, -1, 0],
+        maps: [-1; 4],
     };
 
     /// The row as three `vec4`s (the layouts that interleave it with values).
@@ -282,14 +297,14 @@ mod tests {
             Vec3::new(0.0, 2.0, 0.0),
         ];
         let uv = [Vec2::ZERO, Vec2::new(0.5, 0.0), Vec2::new(0.0, 0.5)];
-        let row = GpuTriangleMaps::new([1, -1, 2], p, uv, 0.01);
+        let row = GpuTriangleMaps::new([1, -1, 2, 3], p, uv, 0.01);
         assert!((row.uv2_lod[2] - 0.0025f32.log2()).abs() < 1e-5);
-        assert_eq!(row.maps, [1, -1, 2, 0]);
+        assert_eq!(row.maps, [1, -1, 2, 3]);
         // Degenerate texture coordinates read level 0, never NaN.
-        let flat = GpuTriangleMaps::new([0, -1, -1], p, [Vec2::ZERO; 3], 0.01);
+        let flat = GpuTriangleMaps::new([0, -1, -1, -1], p, [Vec2::ZERO; 3], 0.01);
         assert_eq!(flat.uv2_lod[2], -64.0);
         let bits = row.to_vec4s()[2].map(f32::to_bits);
-        assert_eq!(bits, [1, u32::MAX, 2, 0]);
+        assert_eq!(bits, [1, u32::MAX, 2, 3]);
         // Three vec4s, as voxel_maps.glsl reads a row.
         assert_eq!(std::mem::size_of::<GpuTriangleMaps>(), 48);
     }
@@ -315,7 +330,8 @@ mod tests {
             used,
             MapUse {
                 emission: true,
-                lobe: true
+                lobe: true,
+                albedo: false,
             }
         );
         let (texels, table) = map_texels(&scene, used);
