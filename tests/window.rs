@@ -1305,8 +1305,8 @@ fn viewer_picks_drags_revoxelizes_and_saves_an_object_with_real_mouse_events() {
 /// block and drag its position x field in the panel, fly forward with W, Ctrl+S, F12, Escape:
 /// the saved file has the moved spot (its comment kept), one new point light, the block moved
 /// along x and the camera where it flew, and its headless render is what the viewer showed.
-/// (720 pixels high: the panel does not scroll, and the Edit section comes after the GPU-time
-/// table.)
+/// (1000 pixels high: the panel does not scroll, and the Edit section comes after the GPU-time
+/// table, the stereo and projection controls and the frame-time graph.)
 #[test]
 fn viewer_edits_lights_and_a_field_and_saves_with_real_input_events() {
     require_display();
@@ -1322,9 +1322,9 @@ fn viewer_edits_lights_and_a_field_and_saves_with_real_input_events() {
         "--gi",
         "none",
         "--width",
-        "560",
+        "800",
         "--height",
-        "720",
+        "1000",
         "--save",
         saved.to_str().expect("utf-8 path"),
         "--screenshot",
