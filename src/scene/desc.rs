@@ -856,23 +856,7 @@ fn build_post(ck: &Check<'_>, t: &PostDesc) -> Result<super::PostOverrides, Scen
             .ok_or_else(|| ck.invalid(key, format!("{v}; expected {}: {words}", limit.what)))?;
         Ok(Some(Stage::On(number(limit, Some(value))?)))
     };
-    let tonemap = match &t.tonemap {
-        None => None,
-        Some(name) => Some(
-            super::ToneOperator::NAMES
-                .iter()
-                .find(|(n, _)| *n == name.as_str())
-                .map(|&(_, op)| op)
-                .ok_or_else(|| {
-                    ck.invalid(
-                        "post.tonemap",
-                        format!(
-                            "unknown operator \"{name}\"; expected \"linear\", \"logarithmic\", \"drago\" or \"filmic\""
-                        ),
-                    )
-                })?,
-        ),
-    };
+    let tonemap = named(ck, "post.tonemap", &super::ToneOperator::NAMES, &t.tonemap)?;
     let taa_frames = t
         .taa_frames
         .map(|v| {
@@ -905,53 +889,24 @@ fn build_ssgi(
     length: &LengthCheck<'_>,
 ) -> Result<crate::scene::SsgiOverrides, SceneError> {
     use crate::scene::SsgiResolution;
-    let resolution = match &g.ssgi_resolution {
-        None => None,
-        Some(name) => Some(
-            SsgiResolution::NAMES
-                .iter()
-                .find(|(n, _)| *n == name.as_str())
-                .map(|&(_, r)| r)
-                .ok_or_else(|| {
-                    ck.invalid(
-                        "gi.ssgi_resolution",
-                        format!(
-                            "unknown resolution \"{name}\"; expected \"full\", \"half\", \"quarter\" or \"eighth\""
-                        ),
-                    )
-                })?,
-        ),
-    };
-    let mips = match &g.ssgi_mips {
-        None => None,
-        Some(name) => Some(
-            crate::scene::SsgiMips::NAMES
-                .iter()
-                .find(|(n, _)| *n == name.as_str())
-                .map(|&(_, m)| m)
-                .ok_or_else(|| {
-                    ck.invalid(
-                        "gi.ssgi_mips",
-                        format!("unknown mip filter \"{name}\"; expected \"voting\" or \"fast\""),
-                    )
-                })?,
-        ),
-    };
-    let ssr_rays = match &g.ssr_rays {
-        None => None,
-        Some(name) => Some(
-            crate::scene::SsrRays::NAMES
-                .iter()
-                .find(|(n, _)| *n == name.as_str())
-                .map(|&(_, r)| r)
-                .ok_or_else(|| {
-                    ck.invalid(
-                        "gi.ssr_rays",
-                        format!("unknown ray choice \"{name}\"; expected \"mirror\" or \"lobe\""),
-                    )
-                })?,
-        ),
-    };
+    let resolution = named(
+        ck,
+        "gi.ssgi_resolution",
+        &SsgiResolution::NAMES,
+        &g.ssgi_resolution,
+    )?;
+    let mips = named(
+        ck,
+        "gi.ssgi_mips",
+        &crate::scene::SsgiMips::NAMES,
+        &g.ssgi_mips,
+    )?;
+    let ssr_rays = named(
+        ck,
+        "gi.ssr_rays",
+        &crate::scene::SsrRays::NAMES,
+        &g.ssr_rays,
+    )?;
     Ok(crate::scene::SsgiOverrides {
         resolution,
         samples: count(&limits::SSGI_SAMPLES, g.ssgi_samples)?,
@@ -983,21 +938,12 @@ fn build_vpl(
             count(&limits::VPL_PATTERN_SIDE, Some(m))?.unwrap_or(1),
         ]),
     };
-    let visibility = match &g.vpl_visibility {
-        None => None,
-        Some(name) => Some(
-            VISIBILITY_NAMES
-                .iter()
-                .find(|(n, _)| *n == name.as_str())
-                .map(|&(_, v)| v)
-                .ok_or_else(|| {
-                    ck.invalid(
-                        "gi.vpl_visibility",
-                        format!("unknown visibility \"{name}\"; expected \"voxel\" or \"none\""),
-                    )
-                })?,
-        ),
-    };
+    let visibility = named(
+        ck,
+        "gi.vpl_visibility",
+        &VISIBILITY_NAMES,
+        &g.vpl_visibility,
+    )?;
     Ok(crate::scene::vpl_settings::VplOverrides {
         per_set: count(&limits::VPLS, g.vpls)?,
         pattern,
