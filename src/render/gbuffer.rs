@@ -140,6 +140,9 @@ impl GbufferPass {
     ) -> Result<Self, VkError> {
         let multiview = views == GbufferViews::Multiview;
         let defect = super::stereo::MultiviewDefect::of(ctx.info.driver_id, &ctx.info.driver_info);
+        // The flushing instance relies on this pipeline's triangles needing no stage of the
+        // draw module's primitive pipeline except clipping (filled polygons, no depth bias,
+        // no cull distances), so an unclipped instance is emitted directly.
         let flush_instance = multiview && defect.is_some();
         let f = features;
         let has_lobe = f.phong || f.ggx;
