@@ -217,18 +217,34 @@ fn profile_flies_the_camera_path_or_says_the_scene_has_none() {
 
 /// `profile --stereo` lists both eyes' passes (the right eye's with `[R]`), the packing, and
 /// the mono frame of the same run; where one frame cannot render the pair (`--gi ssgi` keeps
-/// one history) it profiles two passes and says why; with `--demo` it is refused.
+/// one history) it profiles two passes and says why; without `--stereo-path` it takes
+/// multiview (lavapipe has the feature) and says why; with `--demo` it is refused.
 #[test]
 fn profile_stereo_lists_both_eyes_and_the_mono_frame() {
     let size = [
         "--width", "32", "--height", "32", "--frames", "3", "--warmup", "1",
     ];
-    for (gi, path) in [
-        ("none", "path one-frame"),
-        ("ssgi", "path two-pass (one-frame falls back: --gi ssgi"),
+    let one_frame = ["\ngbuffer ", "\ngbuffer[R] "];
+    for (gi, stereo_path, path, gbuffer) in [
+        ("none", Some("one-frame"), "path one-frame,", one_frame),
+        (
+            "ssgi",
+            Some("one-frame"),
+            "path two-pass (one-frame falls back: --gi ssgi",
+            one_frame,
+        ),
+        (
+            "none",
+            None,
+            "path multiview (default: the device has multiview",
+            ["\ngbuffer_multiview ", "\ndeferred_direct[R] "],
+        ),
     ] {
         let mut args = vec!["--validate", "profile", "cornell", "--gi", gi];
         args.extend(["--stereo", "anaglyph-gray"]);
+        if let Some(p) = stereo_path {
+            args.extend(["--stereo-path", p]);
+        }
         args.extend(size);
         let out = voxgi(&args);
         let stdout = String::from_utf8_lossy(&out.stdout);
@@ -237,9 +253,7 @@ fn profile_stereo_lists_both_eyes_and_the_mono_frame() {
             "{stdout}\n{}",
             String::from_utf8_lossy(&out.stderr)
         );
-        for want in [
-            "\ngbuffer ",
-            "\ngbuffer[R] ",
+        for want in gbuffer.into_iter().chain([
             "\ntonemap[R] ",
             "\nstereo_pack ",
             path,
@@ -248,7 +262,7 @@ fn profile_stereo_lists_both_eyes_and_the_mono_frame() {
             "stereo vs mono: ",
             "stereo vs mono, minima: ",
             "right eye's passes [R]: ",
-        ] {
+        ]) {
             assert!(stdout.contains(want), "{gi}: no `{want}` in\n{stdout}");
         }
     }

@@ -142,10 +142,14 @@ fn max_difference(a: &voxgi::render::RenderOutput, b: &voxgi::render::RenderOutp
 /// screen-space passes per layer) equals the two-pass pair and each eye's mono render: both
 /// paths draw the same triangles with the same matrices and run the same shaders on the same
 /// inputs, so nothing may differ (bit-exact; the GI methods' random sequences are seeded by the
-/// frame count, which both paths restart per eye). The multiview path is compared in
-/// `multiview_pair_equals_one_frame_pair_where_nothing_is_clipped`.
+/// frame count, which both paths restart per eye). The multiview pair (both eyes' G-buffer in
+/// one Vulkan multiview pass) equals the one-frame pair too: the same triangles through the
+/// same vertex and fragment code, only drawn as two views of one draw. Cornell's walls cross
+/// the viewport edges, so the driver clips triangles in both views of a draw (lavapipe before
+/// Mesa 23.0.4 put 479 of the right eye's 4096 pixels into the left eye's layer here without
+/// `render::MultiviewDefect`'s workaround).
 #[test]
-fn one_frame_pair_equals_two_pass_pair_and_mono_eyes() {
+fn one_frame_pair_equals_two_pass_and_multiview_pairs_and_mono_eyes() {
     let ctx = common::context();
     let scene = voxgi::scene::builtin("cornell").expect("cornell");
     let rig = StereoRig {
@@ -168,6 +172,7 @@ fn one_frame_pair_equals_two_pass_pair_and_mono_eyes() {
         };
         let one = render(StereoPath::OneFrame);
         let two = render(StereoPath::TwoPass);
+        let multiview = render(StereoPath::Multiview);
         let mono_left = render_image(&ctx, &eye_scene(&scene, rig, Eye::Left), &settings)
             .expect("left eye renders");
         let mono_right = render_image(&ctx, &eye_scene(&scene, rig, Eye::Right), &settings)
@@ -176,12 +181,19 @@ fn one_frame_pair_equals_two_pass_pair_and_mono_eyes() {
         for (name, a, b) in [
             ("one-frame vs two-pass, left", &one.left, &two.left),
             ("one-frame vs two-pass, right", &one.right, &two.right),
+            ("one-frame vs multiview, left", &one.left, &multiview.left),
+            (
+                "one-frame vs multiview, right",
+                &one.right,
+                &multiview.right,
+            ),
             ("one-frame vs mono, left", &one.left, &mono_left),
             ("one-frame vs mono, right", &one.right, &mono_right),
         ] {
             assert_eq!(max_difference(a, b), (0, 0.0), "{gi:?}: {name}");
         }
         assert_eq!(one.packed, two.packed, "{gi:?}");
+        assert_eq!(one.packed, multiview.packed, "{gi:?}");
     }
 }
 
@@ -225,18 +237,27 @@ scale = [0.15, 1.0, 0.15]
 material = { albedo = 0.0, emission_w_sr_m2 = [5.0, 5.0, 5.0] }
 "#;
 
+/// [`INSIDE`] with its plate grown from 2 m to 6 m: the plate's edges (±3 m) lie beyond
+/// both eyes' view at its depth (±1.73 m, shifted by at most the eye separation), so the
+/// driver clips its triangles in both views of its draw.
+fn clipped_scene() -> Scene {
+    let plate = "scale = [2.0, 1.0, 2.0]";
+    assert_eq!(INSIDE.matches(plate).count(), 1, "the plate's scale");
+    let toml = INSIDE.replace(plate, "scale = [6.0, 1.0, 6.0]");
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes");
+    Scene::from_toml_str(&toml, Path::new("<multiview test scene>"), &dir).expect("scene parses")
+}
+
 /// The multiview G-buffer (both eyes in one pass, `gl_ViewIndex` picking the eye's matrices
-/// and writing its layer) gives the one-frame pair bit for bit, where lavapipe 22.3 rasterizes
-/// it correctly: no triangle crosses a viewport edge. (Where one does, in both views of a
-/// draw, Mesa 22.3.6's draw module rasterizes view 1's clipped triangles into layer 0: README,
-/// "Stereo in one frame, measured". So multiview stays opt-in.) Both eyes must also differ
+/// and writing its layer) gives the one-frame pair bit for bit, with triangles that the driver
+/// clips in both views of a draw ([`clipped_scene`]). Lavapipe before Mesa 23.0.4 rasterizes
+/// view 1's clipped triangles into layer 0 (`render::MultiviewDefect`); without the
+/// workaround this scene's right eye lost the whole plate there. Both eyes must also differ
 /// from each other, so an eye's matrices or frame constants taken for the other's would fail.
 #[test]
-fn multiview_pair_equals_one_frame_pair_where_nothing_is_clipped() {
+fn multiview_pair_equals_one_frame_pair_with_clipped_triangles() {
     let ctx = common::context();
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes");
-    let scene = Scene::from_toml_str(INSIDE, Path::new("<multiview test scene>"), &dir)
-        .expect("scene parses");
+    let scene = clipped_scene();
     let rig = StereoRig {
         separation_m: 0.2,
         convergence_m: 3.0,
@@ -268,11 +289,16 @@ fn multiview_pair_equals_one_frame_pair_where_nothing_is_clipped() {
             (0, 0.0),
             "{gi:?} right"
         );
-        // The eyes differ (the near patch moves by its disparity, 55.4 · 0.2 · (1/3 − 1) = −7.4 px), and the
-        // patches and the lit plate are all in view.
+        // The eyes differ (the near patch moves by its disparity, 55.4 · 0.2 · (1/3 − 1) =
+        // −7.4 px), and the plate crosses every viewport edge: the image's corners, outside
+        // a 2 m plate's image (±1 m of ±1.73 m), are lit plate in both eyes.
         assert_ne!(one.left.ldr, one.right.ldr, "{gi:?}");
-        let lit = one.right.ldr.chunks(4).filter(|p| p[0] > 0).count();
-        assert!(lit > (SIZE * SIZE / 4) as usize, "{gi:?}: {lit} lit pixels");
+        for (eye, out) in [("left", &one.left), ("right", &one.right)] {
+            for (x, y) in [(0, 0), (SIZE - 1, 0), (0, SIZE - 1), (SIZE - 1, SIZE - 1)] {
+                let p = texel(&out.ldr, SIZE, x, y);
+                assert!(p[0] > 0, "{gi:?}: {eye} eye's corner ({x}, {y}) is {p:?}");
+            }
+        }
     }
 }
 
@@ -281,7 +307,7 @@ fn multiview_pair_equals_one_frame_pair_where_nothing_is_clipped() {
 /// pair after N jittered frames is each eye's mono `--taa` render after N frames, bit for bit
 /// (same sequence, same history, same shaders; a history or jitter shared between the eyes
 /// would mix the left eye into the right). The multiview pair equals the one-frame pair on
-/// the scene lavapipe rasterizes correctly (nothing crosses a viewport edge). TAA must also
+/// [`clipped_scene`] (triangles clipped in both views). TAA must also
 /// have changed the image (jittered frames blended), or the comparison would prove nothing.
 #[test]
 fn stereo_taa_pair_equals_each_eyes_mono_taa_render() {
@@ -298,9 +324,7 @@ fn stereo_taa_pair_equals_each_eyes_mono_taa_render() {
     });
     let mode = StereoMode::SideBySideFull;
     let cornell = voxgi::scene::builtin("cornell").expect("cornell");
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes");
-    let inside = Scene::from_toml_str(INSIDE, Path::new("<multiview test scene>"), &dir)
-        .expect("scene parses");
+    let clipped = clipped_scene();
     let rig = StereoRig {
         separation_m: 0.1,
         convergence_m: 1.0,
@@ -326,8 +350,8 @@ fn stereo_taa_pair_equals_each_eyes_mono_taa_render() {
         still.right.ldr, one.right.ldr,
         "TAA left the right eye unchanged"
     );
-    let one = render(&inside, &settings, StereoPath::OneFrame);
-    let multiview = render(&inside, &settings, StereoPath::Multiview);
+    let one = render(&clipped, &settings, StereoPath::OneFrame);
+    let multiview = render(&clipped, &settings, StereoPath::Multiview);
     assert_eq!(
         max_difference(&multiview.left, &one.left),
         (0, 0.0),

@@ -88,11 +88,12 @@ pub fn profile(global: &Global, args: &ProfileArgs, out: &mut dyn Write) -> Resu
         _ => None,
     };
     let ctx = context(global)?;
-    let report = if let (Some((scene, settings)), Some(stereo)) = (&scene, stereo) {
+    let report = if let (Some((scene, settings)), Some(mut stereo)) = (&scene, stereo) {
+        let chosen = args.stereo.take_default_path(&ctx.info, &mut stereo);
         let p = crate::render::profile_stereo(&ctx, scene, settings, stereo, frames, args.warmup)?;
         stereo_report(
             &ctx.info.name,
-            &p,
+            (&p, chosen.as_deref()),
             &scene_name,
             settings,
             stereo,
@@ -154,7 +155,7 @@ pub fn profile(global: &Global, args: &ProfileArgs, out: &mut dyn Write) -> Resu
 /// mono frame of the same run and their ratio in the notes.
 fn stereo_report(
     device: &str,
-    p: &crate::render::StereoProfile,
+    (p, chosen): (&crate::render::StereoProfile, Option<&str>),
     scene_name: &str,
     settings: &crate::render::RenderSettings,
     stereo: crate::render::StereoSettings,
@@ -164,10 +165,7 @@ fn stereo_report(
         ProfileReport::from_frames(device, &p.stereo.frames, warmup).with_setup(&p.stereo.setup);
     let mono = ProfileReport::from_frames(device, &p.mono.frames, warmup);
     let mode = stereo.mode.name();
-    let path = match &p.fallback {
-        Some(why) => format!("two-pass ({} falls back: {why})", stereo.path.name()),
-        None => p.path.name().to_owned(),
-    };
+    let path = super::render::stereo_path_line(stereo.path, chosen, p.path, p.fallback.as_deref());
     let right: f64 = report
         .passes
         .iter()

@@ -27,17 +27,16 @@ pub struct RenderArgs {
 }
 
 /// Prints the eyes' parallax and what the second eye and the packing cost on the GPU.
+/// `chosen`: why the path was chosen where --stereo-path was not given.
 fn print_stereo(
     stereo: &StereoSettings,
+    chosen: Option<&str>,
     s: &crate::render::StereoOutput,
     out: &mut dyn Write,
 ) -> Result<(), CliError> {
     let total = |t: &[crate::vk::PassTiming]| t.iter().map(|t| t.gpu_ms).sum::<f64>();
     let mode = stereo.mode.name();
-    let path = match &s.fallback {
-        Some(why) => format!("two-pass ({} falls back: {why})", stereo.path.name()),
-        None => s.path.name().to_owned(),
-    };
+    let path = stereo_path_line(stereo.path, chosen, s.path, s.fallback.as_deref());
     let (e, c) = (stereo.rig.separation_m, stereo.rig.convergence_m);
     let eyes = match s.path {
         crate::render::StereoPath::OneFrame | crate::render::StereoPath::Multiview => {
@@ -55,6 +54,21 @@ fn print_stereo(
         total(&s.pack_timings)
     );
     Ok(())
+}
+
+/// The path that ran (`ran`), with why where it was the default (`chosen`) and why it is
+/// not the one asked for (`fallback`).
+pub fn stereo_path_line(
+    asked: crate::render::StereoPath,
+    chosen: Option<&str>,
+    ran: crate::render::StereoPath,
+    fallback: Option<&str>,
+) -> String {
+    let chosen = chosen.map(|why| format!(" ({why})")).unwrap_or_default();
+    match fallback {
+        Some(why) => format!("two-pass ({}{chosen} falls back: {why})", asked.name()),
+        None => format!("{}{chosen}", ran.name()),
+    }
 }
 
 /// Stereo flags of `voxgi render`.
@@ -76,9 +90,11 @@ pub struct StereoArgs {
     /// with world-space work (shadow maps, voxels, light maps, VPLs) once, the G-buffer drawn
     /// per eye; multiview draws both eyes' G-buffer in one Vulkan multiview pass instead;
     /// two-pass renders the whole frame per eye. One-frame and multiview fall back to
-    /// two-pass where they cannot run, and say why.
-    #[arg(long, value_enum, value_name = "PATH", default_value = "one-frame")]
-    pub stereo_path: crate::render::StereoPath,
+    /// two-pass where they cannot run, and say why. Default (`render`, `profile`): multiview
+    /// where the device has the Vulkan feature, else one-frame; the viewer starts on
+    /// one-frame.
+    #[arg(long, value_enum, value_name = "PATH")]
+    pub stereo_path: Option<crate::render::StereoPath>,
 }
 
 impl StereoArgs {
@@ -95,8 +111,23 @@ impl StereoArgs {
         Ok(Some(StereoSettings {
             mode,
             rig: self.rig(scene, time_s)?,
-            path: self.stereo_path,
+            path: self.stereo_path.unwrap_or_default(),
         }))
+    }
+
+    /// Takes the device's default path ([`crate::render::default_stereo_path`]) into
+    /// `stereo` where --stereo-path was not given, and returns why it was chosen.
+    pub fn take_default_path(
+        &self,
+        info: &crate::vk::DeviceInfo,
+        stereo: &mut StereoSettings,
+    ) -> Option<String> {
+        if self.stereo_path.is_some() {
+            return None;
+        }
+        let (path, why) = crate::render::default_stereo_path(info);
+        stereo.path = path;
+        Some(why)
     }
 
     /// The eyes' parallax: --eye-separation and --convergence (default: the depth of the
@@ -140,9 +171,10 @@ pub fn render(global: &Global, args: &RenderArgs, out: &mut dyn Write) -> Result
             let ldr = std::mem::take(&mut image.ldr);
             (image, ldr, (frame.width, frame.height))
         }
-        Some(stereo) => {
+        Some(mut stereo) => {
+            let chosen = args.stereo.take_default_path(&ctx.info, &mut stereo);
             let s = render_stereo(&ctx, &scene, &settings, stereo)?;
-            print_stereo(&stereo, &s, out)?;
+            print_stereo(&stereo, chosen.as_deref(), &s, out)?;
             (s.left, s.packed, s.packed_size)
         }
     };

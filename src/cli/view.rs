@@ -154,7 +154,7 @@ pub fn view(global: &Global, args: ViewArgs, out: &mut dyn Write) -> Result<(), 
     let stereo = crate::app::StereoControls {
         mode: args.stereo.stereo,
         rig: args.stereo.rig(&scene, settings.time_s)?,
-        path: args.stereo.stereo_path,
+        path: args.stereo.stereo_path.unwrap_or_default(),
     };
     if let Some(path) = &args.save {
         check_save_path(path)?;

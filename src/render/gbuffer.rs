@@ -101,6 +101,10 @@ pub enum GbufferViews {
 
 pub struct GbufferPass {
     pipeline: GraphicsPipeline,
+    /// Instances per draw: 2 on a multiview path whose driver has
+    /// [`super::stereo::MultiviewDefect`] (instance 0 flushes the driver's batch, instance 1
+    /// is the mesh: `gbuffer_vert.glsl`, `FLUSH_INSTANCE`), else 1.
+    instances: u32,
     /// The scene has Phong or GGX materials.
     has_lobe: bool,
     has_emission: bool,
@@ -135,6 +139,11 @@ impl GbufferPass {
         views: GbufferViews,
     ) -> Result<Self, VkError> {
         let multiview = views == GbufferViews::Multiview;
+        let defect = super::stereo::MultiviewDefect::of(ctx.info.driver_id, &ctx.info.driver_info);
+        // The flushing instance relies on this pipeline's triangles needing no stage of the
+        // draw module's primitive pipeline except clipping (filled polygons, no depth bias,
+        // no cull distances), so an unclipped instance is emitted directly.
+        let flush_instance = multiview && defect.is_some();
         let f = features;
         let has_lobe = f.phong || f.ggx;
         let mut colors = vec![GBUFFER_COLOR, GBUFFER_COLOR];
@@ -147,6 +156,19 @@ impl GbufferPass {
             true => "gbuffer_multiview",
             false => "gbuffer",
         };
+        let mut spec = vec![
+            (0, u32::from(f.phong)),
+            (1, u32::from(f.textures)),
+            (2, u32::from(f.bump)),
+            (3, u32::from(f.dissolve)),
+            (4, u32::from(f.ggx)),
+            (5, u32::from(f.emission)),
+            (6, u32::from(f.pbr_maps)),
+            (7, u32::from(f.motion)),
+        ];
+        if multiview {
+            spec.push((8, u32::from(flush_instance)));
+        }
         let pipeline = ctx.graphics_pipeline(&GraphicsPipelineDesc {
             vertex: format!("{stem}.vert"),
             geometry: None,
@@ -163,19 +185,11 @@ impl GbufferPass {
             depth_bias: false,
             logic_op: None,
             view_mask: if multiview { STEREO_VIEW_MASK } else { 0 },
-            spec: vec![
-                (0, u32::from(f.phong)),
-                (1, u32::from(f.textures)),
-                (2, u32::from(f.bump)),
-                (3, u32::from(f.dissolve)),
-                (4, u32::from(f.ggx)),
-                (5, u32::from(f.emission)),
-                (6, u32::from(f.pbr_maps)),
-                (7, u32::from(f.motion)),
-            ],
+            spec,
         })?;
         Ok(Self {
             pipeline,
+            instances: if flush_instance { 2 } else { 1 },
             has_lobe,
             has_emission: f.emission,
             views,
@@ -234,6 +248,7 @@ impl GbufferPass {
     ) {
         let multiview = right.is_some();
         let pipe = *self.pipeline;
+        let instances = self.instances;
         let (vertices, indices) = (scene.vertices, scene.indices);
         let draws = scene.draws.clone();
         let textures = scene.textures.clone();
@@ -303,8 +318,12 @@ impl GbufferPass {
                     }
                     let push = GpuGbufferPush::of(d);
                     ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
-                    ctx.cmd
-                        .draw_indexed(d.index_count, d.first_index, d.vertex_offset);
+                    ctx.cmd.draw_indexed_instanced(
+                        d.index_count,
+                        instances,
+                        d.first_index,
+                        d.vertex_offset,
+                    );
                 }
             }
             ctx.cmd.end_rendering();

@@ -35,10 +35,11 @@ pub use run::{
 pub use scene_gpu::{Draw, DrawLists, SceneGpu, SceneInputs};
 pub use settings_check::{check_device_limits, check_render_settings};
 pub use stereo::{
-    declare_pair as declare_stereo_pair, default_convergence_m, eye_scene, multiview_blocker,
-    pack as stereo_pack, prepare_pair as prepare_stereo_pair, profile_stereo, render_stereo,
-    StereoOutput, StereoPath, StereoProfile, StereoRenderers, StereoSettings, PROFILE_ROUND_FRAMES,
-    RIGHT_EYE_SUFFIX,
+    declare_pair as declare_stereo_pair, default_convergence_m,
+    default_path as default_stereo_path, eye_scene, multiview_blocker, pack as stereo_pack,
+    prepare_pair as prepare_stereo_pair, profile_stereo, render_stereo, MesaVersion,
+    MultiviewDefect, StereoOutput, StereoPath, StereoProfile, StereoRenderers, StereoSettings,
+    PROFILE_ROUND_FRAMES, RIGHT_EYE_SUFFIX,
 };
 
 use crate::eval::HdrImage;

@@ -317,11 +317,27 @@ impl<'a> Cmd<'a> {
     }
 
     pub fn draw_indexed(&self, indices: u32, first_index: u32, vertex_offset: i32) {
+        self.draw_indexed_instanced(indices, 1, first_index, vertex_offset);
+    }
+
+    /// An indexed draw of `instances` instances (`gl_InstanceIndex` 0 to `instances` − 1).
+    pub fn draw_indexed_instanced(
+        &self,
+        indices: u32,
+        instances: u32,
+        first_index: u32,
+        vertex_offset: i32,
+    ) {
         // SAFETY: Cmd invariant; index buffer bound.
         unsafe {
-            self.ctx
-                .device
-                .cmd_draw_indexed(self.raw, indices, 1, first_index, vertex_offset, 0)
+            self.ctx.device.cmd_draw_indexed(
+                self.raw,
+                indices,
+                instances,
+                first_index,
+                vertex_offset,
+                0,
+            )
         };
     }
 

@@ -165,6 +165,12 @@ pub struct DeviceInfo {
     /// views into the layers of its attachments (`gl_ViewIndex`); stereo uses it for a
     /// one-pass G-buffer of both eyes, and falls back to two passes without it.
     pub multiview: bool,
+    /// `VkPhysicalDeviceDriverProperties::driverID` (Vulkan 1.2): which driver this is
+    /// (`MESA_LLVMPIPE` for lavapipe).
+    pub driver_id: vk::DriverId,
+    /// `VkPhysicalDeviceDriverProperties::driverInfo`: the driver's version text (lavapipe:
+    /// `Mesa 22.3.6 (LLVM 15.0.6)`).
+    pub driver_info: String,
 }
 
 pub struct Context {
@@ -692,10 +698,13 @@ fn pick_device(
     let families = unsafe { instance.get_physical_device_queue_family_properties(pd) };
     let mut maintenance3 = vk::PhysicalDeviceMaintenance3Properties::default();
     let mut maintenance4 = vk::PhysicalDeviceMaintenance4Properties::default();
+    let mut driver = vk::PhysicalDeviceDriverProperties::default();
     let mut props2 = vk::PhysicalDeviceProperties2::builder()
         .push_next(&mut maintenance3)
-        .push_next(&mut maintenance4);
-    // SAFETY: pd is valid; props2 chains a live output struct (Vulkan 1.1 core).
+        .push_next(&mut maintenance4)
+        .push_next(&mut driver);
+    // SAFETY: pd is valid; props2 chains live output structs (Vulkan 1.1 core; the driver
+    // properties are Vulkan 1.2 core, and voxgi requires 1.3).
     unsafe { instance.get_physical_device_properties2(pd, &mut props2) };
     // SAFETY: pd is valid.
     let memory = unsafe { instance.get_physical_device_memory_properties(pd) };
@@ -713,6 +722,11 @@ fn pick_device(
         max_memory_allocation_bytes: maintenance3.max_memory_allocation_size,
         max_buffer_bytes: maintenance4.max_buffer_size,
         multiview: has_multiview(instance, pd),
+        driver_id: driver.driver_id,
+        // SAFETY: driver_info is a NUL-terminated array filled by the driver.
+        driver_info: unsafe { CStr::from_ptr(driver.driver_info.as_ptr()) }
+            .to_string_lossy()
+            .into_owned(),
     };
     Ok((pd, family, info))
 }
