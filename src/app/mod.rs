@@ -267,6 +267,11 @@ struct Viewer {
     /// Where the selected object's position x field was drawn (window pixels; logged when it
     /// moves, for scripted tests).
     position_field: Option<[f32; 2]>,
+    /// The panel's scroll state last logged (window px: offset, largest offset, contents'
+    /// and view's heights, the screenshot button's centre), for scripted tests.
+    panel_scroll: Option<[f32; 6]>,
+    /// The panel's named controls last logged and their centres (window px), likewise.
+    panel_spots: std::collections::HashMap<String, [f32; 2]>,
     /// Per frame slot, when its pick was recorded and the frame count then (for the log).
     pick_started: [Option<(Instant, u64)>; MAX_FRAMES_IN_FLIGHT],
 }
@@ -501,6 +506,8 @@ impl Viewer {
             scene_shape: None,
             light_backup: None,
             position_field: None,
+            panel_scroll: None,
+            panel_spots: Default::default(),
             pick_started: [None; MAX_FRAMES_IN_FLIGHT],
         }
     }
@@ -1022,6 +1029,8 @@ impl Viewer {
         self.panel_px = (layout.panel.width() * out.pixels_per_point)
             .max(0.0)
             .floor() as u32;
+        self.log_panel_scroll(&layout.scroll, out.pixels_per_point);
+        self.log_panel_spots(&layout.spots, out.pixels_per_point);
         self.panel_layout = layout;
         self.fly.speed_m_s = self.controls.speed_m_s;
         self.egui_state
@@ -1035,6 +1044,43 @@ impl Viewer {
         }
         let ppp = out.pixels_per_point;
         Ok((egui_ctx.tessellate(out.shapes, ppp), ppp))
+    }
+
+    /// Logs where the panel's scroll area stands and where its last control is when either
+    /// changed (window px): the window tests scroll with the wheel and aim their clicks.
+    fn log_panel_scroll(&mut self, s: &panel::ScrollLayout, ppp: f32) {
+        let button = s.screenshot_button.center();
+        let now = [
+            s.offset,
+            s.max_offset(),
+            s.content_height,
+            s.view.height(),
+            button.x,
+            button.y,
+        ]
+        .map(|v| (v * ppp).round());
+        if self.panel_scroll != Some(now) && now.iter().all(|v| v.is_finite()) {
+            let [offset, max, content, view, x, y] = now;
+            log::info!(
+                "panel: scrolled {offset} of {max} px (contents {content} px in a {view} px view); screenshot button at [{x}, {y}] (window px)"
+            );
+            self.panel_scroll = Some(now);
+        }
+    }
+
+    /// Logs where each of the panel's named controls is when it appeared or moved (window
+    /// px): the window tests aim their clicks with it.
+    fn log_panel_spots(&mut self, spots: &[panel::Spot], ppp: f32) {
+        self.panel_spots
+            .retain(|name, _| spots.iter().any(|(n, _)| n == name));
+        for (name, rect) in spots {
+            let c = rect.center() * ppp;
+            let at = [c.x.round(), c.y.round()];
+            if at.iter().all(|v| v.is_finite()) && self.panel_spots.get(name) != Some(&at) {
+                log::info!("panel: `{name}` at [{}, {}] (window px)", at[0], at[1]);
+                self.panel_spots.insert(name.clone(), at);
+            }
+        }
     }
 
     /// Replaces the renderer by one made for `settings` and the panel's stereo controls (and
