@@ -370,6 +370,78 @@ fn viewer_presents_stereo_packings_as_render_writes_them() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// `voxgi view --taa` on a scene with a moving object (its G-buffer draws motion vectors):
+/// every frame is one jittered TAA frame blended into the history, so the scripted run's last
+/// frame, the K-th of its renderer (the viewer logs K), is what a headless
+/// `voxgi render --taa --taa-frames K` of the same size computes (the same Halton jitters, the
+/// same blend weights 1/(n+1) in the same order): within ±1 step of 8 bits, the bound of the
+/// mono view. A negative control: the render without TAA (one unjittered frame) differs at
+/// the edges by more than that.
+#[test]
+fn viewer_accumulates_taa_per_frame_as_render_does() {
+    require_display();
+    let _display = lock_display();
+    let dir = scratch_dir("window-taa");
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/cornell_mover.toml");
+    let shot = dir.join("taa.png");
+    let out = voxgi_with(
+        &[
+            "--validate",
+            "view",
+            scene.to_str().expect("utf-8 path"),
+            "--gi",
+            "none",
+            "--taa",
+            "--width",
+            "480",
+            "--height",
+            "160",
+            "--frames",
+            "8",
+            "--screenshot",
+            shot.to_str().expect("utf-8 path"),
+        ],
+        |cmd| {
+            cmd.env("RUST_LOG", "warn,voxgi::app=info");
+        },
+    );
+    assert_success(&out, "voxgi --validate view --taa");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("post-processing: taa α 0.9"),
+        "the viewer did not start with TAA:\n{stderr}"
+    );
+    let frames: u32 = stderr
+        .lines()
+        .filter_map(|l| l.split_once("the last frame is frame ").map(|(_, r)| r))
+        .filter_map(|r| r.split_whitespace().next()?.parse().ok())
+        .next_back()
+        .unwrap_or_else(|| panic!("the viewer did not log its renderer's frames:\n{stderr}"));
+    assert!(frames >= 2, "only {frames} TAA frame(s) blended");
+    let img = load(&shot);
+    let size = img.dimensions();
+    let taa_frames = frames.to_string();
+    let taa = render_headless(
+        &dir,
+        &scene,
+        &["--gi", "none", "--taa", "--taa-frames", &taa_frames],
+        size,
+    );
+    let diff = max_channel_diff(&img, &taa);
+    assert!(
+        diff <= 1,
+        "the viewer's {frames} TAA frames differ from `voxgi render --taa --taa-frames \
+         {frames}` by up to {diff}/255"
+    );
+    let aliased = render_headless(&dir, &scene, &["--gi", "none"], size);
+    let control = max_channel_diff(&img, &aliased);
+    assert!(
+        control > 8,
+        "the TAA image equals the render without TAA (up to {control}/255): nothing blended"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 #[test]
 fn viewer_shows_voxel_debug_views_without_validation_messages() {
     require_display();

@@ -272,6 +272,9 @@ struct Viewer {
     panel_scroll: Option<[f32; 6]>,
     /// The panel's named controls last logged and their centres (window px), likewise.
     panel_spots: std::collections::HashMap<String, [f32; 2]>,
+    /// Frames recorded with the current renderer (in a still view, the frames TAA has
+    /// blended); scripted runs log it for their last frame.
+    renderer_frames: u64,
     /// Per frame slot, when its pick was recorded and the frame count then (for the log).
     pick_started: [Option<(Instant, u64)>; MAX_FRAMES_IN_FLIGHT],
 }
@@ -508,6 +511,7 @@ impl Viewer {
             position_field: None,
             panel_scroll: None,
             panel_spots: Default::default(),
+            renderer_frames: 0,
             pick_started: [None; MAX_FRAMES_IN_FLIGHT],
         }
     }
@@ -527,6 +531,7 @@ impl Viewer {
         );
         let (renderer, stereo) = self.new_renderer(ctx, &settings)?;
         self.renderer = Some(renderer);
+        self.renderer_frames = 0;
         self.stereo = stereo;
         self.scene_shape = Some(edit::SceneShape::of(&self.scene));
         self.overlay = Some(Overlay::new(ctx, format)?);
@@ -901,6 +906,13 @@ impl Viewer {
             self.edit_picked(p);
         }
         self.report.frames += 1;
+        self.renderer_frames += 1;
+        if last_scripted {
+            log::info!(
+                "scripted run: the last frame is frame {} of its renderer",
+                self.renderer_frames
+            );
+        }
         if shot {
             self.controls.screenshot = false;
             self.save_screenshot(ctx)?;
@@ -1099,6 +1111,7 @@ impl Viewer {
         match self.new_renderer(ctx, settings) {
             Ok((r, st)) => {
                 self.renderer = Some(r);
+                self.renderer_frames = 0;
                 self.stereo = st;
                 self.scene_shape = Some(edit::SceneShape::of(&self.scene));
                 log::info!(

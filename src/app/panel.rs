@@ -1,5 +1,5 @@
-//! The side panel: per-pass GPU timings, light, tone-mapping, shadow and global-illumination
-//! controls, screenshot.
+//! The side panel: per-pass GPU timings, light, post-processing (tone mapping included),
+//! shadow and global-illumination controls, screenshot.
 
 use crate::gi::{Bounces, GiMethod, GiSettings};
 use crate::light::ShadowSettings;
@@ -383,36 +383,9 @@ pub fn draw(
                         .default_open(true)
                         .show(ui, |ui| edit_ui(ui));
 
-                    egui::CollapsingHeader::new("Tone mapping")
+                    egui::CollapsingHeader::new("Post-processing")
                         .default_open(true)
-                        .show(ui, |ui| {
-                            egui::ComboBox::from_label("operator")
-                                .selected_text(format!("{:?}", c.tonemap.operator))
-                                .show_ui(ui, |ui| {
-                                    for op in OPERATORS {
-                                        ui.selectable_value(
-                                            &mut c.tonemap.operator,
-                                            op,
-                                            format!("{op:?}"),
-                                        );
-                                    }
-                                });
-                            ui.add(
-                                egui::Slider::new(
-                                    &mut c.tonemap.exposure,
-                                    limits::EXPOSURE.slider(0.001, 1000.0),
-                                )
-                                .logarithmic(true)
-                                .text("exposure"),
-                            );
-                            ui.add(
-                                egui::Slider::new(&mut c.tonemap.white, 0.01..=100.0)
-                                    .logarithmic(true)
-                                    .text("white"),
-                            );
-                            ui.checkbox(&mut c.tonemap.dither, "dither");
-                            post_controls(ui, &mut c.post);
-                        });
+                        .show(ui, |ui| post_controls(ui, &mut c.post, &mut c.tonemap));
 
                     egui::CollapsingHeader::new("Shadows")
                         .default_open(true)
@@ -552,10 +525,14 @@ fn projection_controls(ui: &mut egui::Ui, c: &mut Controls) {
     }
 }
 
-/// The post-processing switches and their main parameter (ranges from [`limits`]).
-fn post_controls(ui: &mut egui::Ui, p: &mut crate::post::PostSettings) {
+/// The post-processing chain in its order (TAA, auto exposure, bloom, tone mapping, FXAA,
+/// dither; ranges from [`limits`]). In the viewer every frame is one TAA frame (the
+/// headless `--taa-frames` does not apply); TAA, auto exposure, bloom and FXAA switched or
+/// changed make a new renderer, tone mapping and dither a new graph.
+fn post_controls(ui: &mut egui::Ui, p: &mut crate::post::PostSettings, tone: &mut ToneMap) {
     let mut taa = p.taa.is_some();
-    ui.checkbox(&mut taa, "TAA");
+    ui.checkbox(&mut taa, "TAA")
+        .on_hover_text("temporal anti-aliasing: each frame jittered, blended with the history");
     p.taa = taa.then(|| p.taa.unwrap_or_default());
     if let Some(t) = &mut p.taa {
         ui.add(
@@ -565,6 +542,10 @@ fn post_controls(ui: &mut egui::Ui, p: &mut crate::post::PostSettings) {
             )
             .text("TAA history weight"),
         );
+        ui.checkbox(&mut t.motion_vectors, "motion vectors")
+            .on_hover_text(
+                "reproject moving objects with their own motion (scenes with animated objects)",
+            );
     }
     let mut auto = p.auto_exposure.is_some();
     ui.checkbox(&mut auto, "auto exposure");
@@ -575,6 +556,14 @@ fn post_controls(ui: &mut egui::Ui, p: &mut crate::post::PostSettings) {
                 .logarithmic(true)
                 .text("key"),
         );
+        ui.add(
+            egui::Slider::new(
+                &mut a.adaptation,
+                limits::EXPOSURE_ADAPTATION.slider(0.001, 1.0),
+            )
+            .logarithmic(true)
+            .text("adaptation / frame"),
+        );
     }
     let mut bloom = p.bloom.is_some();
     ui.checkbox(&mut bloom, "bloom");
@@ -584,7 +573,25 @@ fn post_controls(ui: &mut egui::Ui, p: &mut crate::post::PostSettings) {
             egui::Slider::new(s, limits::BLOOM_STRENGTH.slider(0.0, 1.0)).text("bloom strength"),
         );
     }
+    egui::ComboBox::from_label("tone mapping")
+        .selected_text(format!("{:?}", tone.operator))
+        .show_ui(ui, |ui| {
+            for op in OPERATORS {
+                ui.selectable_value(&mut tone.operator, op, format!("{op:?}"));
+            }
+        });
+    ui.add(
+        egui::Slider::new(&mut tone.exposure, limits::EXPOSURE.slider(0.001, 1000.0))
+            .logarithmic(true)
+            .text("exposure"),
+    );
+    ui.add(
+        egui::Slider::new(&mut tone.white, 0.01..=100.0)
+            .logarithmic(true)
+            .text("white"),
+    );
     ui.checkbox(&mut p.fxaa, "FXAA");
+    ui.checkbox(&mut tone.dither, "dither");
 }
 
 #[cfg(test)]
