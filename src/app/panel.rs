@@ -319,9 +319,11 @@ pub fn draw(
         .default_width(240.0)
         .show(ctx, |ui| {
             // Taller than a short window: the contents scroll (wheel over the panel, or the
-            // bar). The width stays the panel's, as without scrolling.
+            // bar). The width stays the panel's, as without scrolling. No scrolling by
+            // dragging the contents: a drag there is a slider's or a drag value's.
             let area = egui::ScrollArea::vertical()
                 .auto_shrink([false, true])
+                .drag_to_scroll(false)
                 .show(ui, |ui| {
                     // The panel's inner right edge as this frame lays it out (within the window): a
                     // control wider than that (a collapsing header's title, a slider) widens the
