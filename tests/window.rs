@@ -435,6 +435,83 @@ fn viewer_accumulates_taa_per_frame_as_render_does() {
     );
     let aliased = render_headless(&dir, &scene, &["--gi", "none"], size);
     let control = max_channel_diff(&img, &aliased);
+    eprintln!(
+        "{size:?}: {frames} TAA frames; against render --taa {diff}/255, without TAA {control}/255"
+    );
+    assert!(
+        control > 8,
+        "the TAA image equals the render without TAA (up to {control}/255): nothing blended"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// TAA switched on at runtime with a real click (xdotool) on the panel's checkbox, scrolled
+/// into view with the wheel in a 320 px window: the viewer makes a renderer with TAA and
+/// blends one jittered frame per viewer frame, so F12's screenshot, the K-th frame of that
+/// renderer (the viewer logs K), is what `voxgi render --taa --taa-frames K` computes (±1 step
+/// of 8 bits, as above), and not the render without TAA. Validation clean.
+#[test]
+fn viewer_turns_taa_on_with_a_click_and_blends_a_frame_per_frame() {
+    require_display();
+    let _display = lock_display();
+    let dir = scratch_dir("window-taa-click");
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/cornell_mover.toml");
+    let shot = dir.join("taa.png");
+    let shot_arg = shot.to_str().expect("utf-8 path");
+    let mut s = EditSession::start(&[
+        "--validate",
+        "view",
+        scene.to_str().expect("utf-8 path"),
+        "--gi",
+        "none",
+        "--width",
+        "480",
+        "--height",
+        "320",
+        "--screenshot",
+        shot_arg,
+    ]);
+    let first = s.wait_for("panel: scrolled");
+    s.latest(first, "panel: scrolled", Duration::from_secs(3));
+    let taa = scroll_panel_to(&mut s, "post TAA", 320.0);
+    s.click(taa);
+    let made = s.wait_for("new renderer");
+    assert!(
+        made.contains("post-processing: taa α 0.9"),
+        "the click made no renderer with TAA: {made}"
+    );
+    // Off the checkbox (its tooltip), onto the panel's heading; frames go on meanwhile.
+    xdotool(&["mousemove", "--window", &s.window, "60", "10"]);
+    std::thread::sleep(Duration::from_secs(2));
+    s.key("F12");
+    s.wait_for(&format!("wrote {shot_arg}"));
+    let line = s.wait_for("screenshot: frame ");
+    let frames: u32 = line
+        .split_once("screenshot: frame ")
+        .and_then(|(_, r)| r.split_whitespace().next()?.parse().ok())
+        .unwrap_or_else(|| panic!("no frame count in {line}"));
+    s.finish();
+    assert!(frames >= 2, "only {frames} TAA frame(s) blended");
+    let img = load(&shot);
+    let size = img.dimensions();
+    let taa_frames = frames.to_string();
+    let taa = render_headless(
+        &dir,
+        &scene,
+        &["--gi", "none", "--taa", "--taa-frames", &taa_frames],
+        size,
+    );
+    let diff = max_channel_diff(&img, &taa);
+    assert!(
+        diff <= 1,
+        "the viewer's {frames} TAA frames differ from `voxgi render --taa --taa-frames \
+         {frames}` by up to {diff}/255"
+    );
+    let aliased = render_headless(&dir, &scene, &["--gi", "none"], size);
+    let control = max_channel_diff(&img, &aliased);
+    eprintln!(
+        "{size:?}: {frames} TAA frames; against render --taa {diff}/255, without TAA {control}/255"
+    );
     assert!(
         control > 8,
         "the TAA image equals the render without TAA (up to {control}/255): nothing blended"
@@ -563,8 +640,8 @@ fn viewer_panel_scrolls_to_its_last_section_with_the_wheel() {
 /// says, reach their bottom; returns the scroll state there.
 fn scroll_panel_to_bottom(s: &mut EditSession, from: &PanelScroll) -> PanelScroll {
     const LOG: &str = "panel: scrolled";
-    // Each notch scrolls 50 points (egui's line height for wheels): enough notches to pass
-    // the bottom, where the area stops.
+    // Each notch scrolls at least 50 points (egui's line height for wheels; 100 under Xvfb):
+    // enough notches to pass the bottom, where the area stops.
     let notches = ((from.max - from.offset) / 50.0).ceil() as u32 + 4;
     xdotool(&["mousemove", "--window", &s.window, "100", "160"]);
     std::thread::sleep(Duration::from_millis(300));
@@ -583,6 +660,21 @@ fn scroll_panel_to_bottom(s: &mut EditSession, from: &PanelScroll) -> PanelScrol
             break panel_scroll(&s.latest(line, LOG, Duration::from_secs(1)));
         }
     }
+}
+
+/// Turns the wheel over the panel a notch at a time (X button 5 down, 4 up; 100 points a
+/// notch under Xvfb) until its control `name` lies within the window's rows
+/// [20, `height` − 20), wider than a notch; returns where it is then.
+fn scroll_panel_to(s: &mut EditSession, name: &str, height: f32) -> [f32; 2] {
+    xdotool(&["mousemove", "--window", &s.window, "100", "160"]);
+    for _ in 0..30 {
+        let at = panel_spot(s, name, false);
+        if (20.0..height - 20.0).contains(&at[1]) {
+            return at;
+        }
+        xdotool(&["click", if at[1] >= height - 20.0 { "5" } else { "4" }]);
+    }
+    panic!("the panel did not scroll `{name}` into view:\n{}", s.log)
 }
 
 /// Where the panel's control `name` is (window px) after a second of settling: where the

@@ -1115,10 +1115,11 @@ impl Viewer {
                 self.stereo = st;
                 self.scene_shape = Some(edit::SceneShape::of(&self.scene));
                 log::info!(
-                    "new renderer {}x{}, indirect light: {} (made in {} ms)",
+                    "new renderer {}x{}, indirect light: {}; post-processing: {} (made in {} ms)",
                     settings.width,
                     settings.height,
                     describe_gi(&settings.gi),
+                    describe_post(&settings.post, &settings.tonemap),
                     started.elapsed().as_millis()
                 );
                 Ok(())
@@ -1346,6 +1347,8 @@ impl Viewer {
         })?;
         self.status = format!("wrote {}", path.display());
         log::info!("{}", self.status);
+        // In a still view, the frames TAA has blended into this image.
+        log::info!("screenshot: frame {} of its renderer", self.renderer_frames);
         self.report.screenshots.push(path);
         Ok(())
     }

@@ -387,7 +387,9 @@ pub fn draw(
 
                     egui::CollapsingHeader::new("Post-processing")
                         .default_open(true)
-                        .show(ui, |ui| post_controls(ui, &mut c.post, &mut c.tonemap));
+                        .show(ui, |ui| {
+                            post_controls(ui, &mut c.post, &mut c.tonemap, &mut spots)
+                        });
 
                     egui::CollapsingHeader::new("Shadows")
                         .default_open(true)
@@ -530,11 +532,19 @@ fn projection_controls(ui: &mut egui::Ui, c: &mut Controls) {
 /// The post-processing chain in its order (TAA, auto exposure, bloom, tone mapping, FXAA,
 /// dither; ranges from [`limits`]). In the viewer every frame is one TAA frame (the
 /// headless `--taa-frames` does not apply); TAA, auto exposure, bloom and FXAA switched or
-/// changed make a new renderer, tone mapping and dither a new graph.
-fn post_controls(ui: &mut egui::Ui, p: &mut crate::post::PostSettings, tone: &mut ToneMap) {
+/// changed make a new renderer, tone mapping and dither a new graph. Adds where the TAA
+/// checkbox was drawn to `spots` ("post TAA").
+fn post_controls(
+    ui: &mut egui::Ui,
+    p: &mut crate::post::PostSettings,
+    tone: &mut ToneMap,
+    spots: &mut Vec<Spot>,
+) {
     let mut taa = p.taa.is_some();
-    ui.checkbox(&mut taa, "TAA")
+    let taa_box = ui
+        .checkbox(&mut taa, "TAA")
         .on_hover_text("temporal anti-aliasing: each frame jittered, blended with the history");
+    spots.push(("post TAA".into(), taa_box.rect));
     p.taa = taa.then(|| p.taa.unwrap_or_default());
     if let Some(t) = &mut p.taa {
         ui.add(
