@@ -695,12 +695,13 @@ fn panel_spot(s: &mut EditSession, name: &str, fresh: bool) -> [f32; 2] {
     logged_point(&s.latest(first, &want, Duration::from_secs(1)), "at")
 }
 
-/// The panel's stereo packing turned on and off with real clicks (xdotool): in a window
-/// 320 px high the wheel scrolls the panel down to the "Stereo" section; a click opens it, a
-/// click opens the packing combo and one picks anaglyph-dubois: F12's screenshot equals
+/// The panel's stereo packing turned on, changed and off with real clicks (xdotool): in a
+/// window 320 px high the wheel scrolls the panel down to the "Stereo" section; a click opens
+/// it, a click opens the packing combo and one picks anaglyph-dubois: F12's screenshot equals
 /// `voxgi render --stereo anaglyph-dubois` of the same size and parallax (±1 step of 8 bits,
-/// as the viewer's startup packing does). Then the combo's "off": the screenshot is the mono
-/// `voxgi render` again. Validation clean, teardown included.
+/// as the viewer's startup packing does). Then side-by-side-full (each eye half the area's
+/// width), likewise; then "off": the screenshot is the mono `voxgi render` again. Validation
+/// clean, teardown included.
 #[test]
 fn viewer_switches_stereo_on_and_off_from_the_panel() {
     require_display();
@@ -725,7 +726,6 @@ fn viewer_switches_stereo_on_and_off_from_the_panel() {
     };
     let header = panel_spot(&mut s, "stereo section", false);
     s.click(in_window(header, "the Stereo header"));
-    let mode = "anaglyph-dubois";
     let pick = |s: &mut EditSession, entry: &str| {
         let combo = panel_spot(s, "stereo packing", false);
         s.click(in_window(combo, "the packing combo"));
@@ -733,47 +733,59 @@ fn viewer_switches_stereo_on_and_off_from_the_panel() {
         let entry = panel_spot(s, &name, true);
         s.click(in_window(entry, &name));
     };
-    pick(&mut s, mode);
-    s.wait_for("new renderer");
-    assert!(
-        s.log.contains("stereo: "),
-        "no stereo renderer after picking {mode}:\n{}",
-        s.log
-    );
-    s.key("F12");
-    s.wait_for(&format!("wrote {shot_arg}"));
-    let stereo = load(&shot);
-    pick(&mut s, "off");
-    s.wait_for("new renderer");
-    s.key("F12");
-    s.wait_for(&format!("wrote {shot_arg}"));
-    let mono = load(&shot);
+    // On (a new renderer of both eyes), another packing (each eye half as wide: a new graph),
+    // off (a new mono renderer); each screenshot once the viewer's graph presents it.
+    let mut shots = Vec::new();
+    for (entry, presents) in [
+        ("anaglyph-dubois", "anaglyph-dubois"),
+        ("side-by-side-full", "side-by-side-full"),
+        ("off", "mono"),
+    ] {
+        pick(&mut s, entry);
+        let line = s.wait_for(&format!("frame graph: {presents}"));
+        // The panel may resize the area once more: read what arrived meanwhile.
+        s.latest(line, "frame graph: ", Duration::from_secs(2));
+        s.key("F12");
+        s.wait_for(&format!("wrote {shot_arg}"));
+        shots.push((entry, load(&shot)));
+    }
     s.finish();
-
-    let (w, h) = stereo.dimensions();
-    assert_eq!(
-        mono.dimensions(),
-        (w, h),
-        "anaglyph eyes are the scene area's size"
-    );
-    assert_not_blank(&stereo);
-    let reference = dir.join("stereo-render.png");
-    let (ws, hs) = (w.to_string(), h.to_string());
-    let mut args = vec!["--validate", "render", "--gi", "none", "--stereo", mode];
-    args.extend(["--width", &ws, "--height", &hs, "-o"]);
-    args.push(reference.to_str().expect("utf-8 path"));
-    args.extend(parallax);
-    let out = voxgi(&args);
-    assert_success(&out, &format!("voxgi --validate render --stereo {mode}"));
-    let diff = max_channel_diff(&stereo, &load(&reference));
+    let mono = shots
+        .pop()
+        .map(|(_, img)| img)
+        .expect("the mono screenshot");
+    for (mode, img) in &shots {
+        let (w, h) = img.dimensions();
+        assert_not_blank(img);
+        // Each eye fills the scene area (the mono image), or half its width (rounded down)
+        // side by side.
+        let full = *mode == "side-by-side-full";
+        let eye_w = if full { mono.width() / 2 } else { mono.width() };
+        let packed_w = if full { 2 * eye_w } else { eye_w };
+        assert_eq!(
+            (w, h),
+            (packed_w, mono.height()),
+            "{mode}: the packing against the mono {:?}",
+            mono.dimensions()
+        );
+        let reference = dir.join(format!("{mode}-render.png"));
+        let (ws, hs) = (eye_w.to_string(), h.to_string());
+        let mut args = vec!["--validate", "render", "--gi", "none", "--stereo", mode];
+        args.extend(["--width", &ws, "--height", &hs, "-o"]);
+        args.push(reference.to_str().expect("utf-8 path"));
+        args.extend(parallax);
+        let out = voxgi(&args);
+        assert_success(&out, &format!("voxgi --validate render --stereo {mode}"));
+        let diff = max_channel_diff(img, &load(&reference));
+        assert!(
+            diff <= 1,
+            "after switching to {mode} the viewer differs from `voxgi render --stereo` by up \
+             to {diff}/255"
+        );
+    }
+    // The mono image is not the anaglyph: the checks above saw the switch, not the mono view.
     assert!(
-        diff <= 1,
-        "after switching to {mode} the viewer differs from `voxgi render --stereo` by up to \
-         {diff}/255"
-    );
-    // The mono image is not the anaglyph: the check above saw the switch, not the mono view.
-    assert!(
-        max_channel_diff(&stereo, &mono) > 16,
+        max_channel_diff(&shots[0].1, &mono) > 16,
         "the anaglyph equals the mono view"
     );
     assert_matches_render(&mono, &dir);

@@ -1313,6 +1313,10 @@ impl Viewer {
             "edit: scene viewport at [{}, 0] size [{w}, {h}] px",
             scene_rect.offset.x
         );
+        log::info!(
+            "frame graph: {}, presents {w}x{h}",
+            stereo_mode.map_or_else(|| "mono".to_owned(), crate::post::StereoMode::name)
+        );
         self.graph = Some(FrameGraph {
             exec,
             present,
