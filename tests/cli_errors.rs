@@ -334,3 +334,25 @@ fn view_refuses_a_save_path_it_cannot_write_before_opening_a_window() {
         );
     }
 }
+
+#[test]
+fn view_refuses_post_flags_out_of_range_before_opening_a_window() {
+    // The viewer takes the post-processing flags `render` takes, checked against the same
+    // limits (`src/limits.rs`) before the window and the device: no display is needed.
+    for (args, want) in [
+        (
+            &["--taa", "--taa-history-weight", "1"][..],
+            "--taa-history-weight = 1 is invalid",
+        ),
+        (&["--bloom", "2"][..], "--bloom = 2 is invalid"),
+        (
+            &["--auto-exposure", "--exposure-adaptation", "0"][..],
+            "--exposure-adaptation = 0 is invalid",
+        ),
+    ] {
+        let out = voxgi(&[&["view"][..], args].concat());
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "view {args:?} was accepted");
+        assert!(err.contains(want), "view {args:?}: {err}");
+    }
+}

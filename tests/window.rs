@@ -370,6 +370,155 @@ fn viewer_presents_stereo_packings_as_render_writes_them() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// `voxgi view --taa` on a scene with a moving object (its G-buffer draws motion vectors):
+/// every frame is one jittered TAA frame blended into the history, so the scripted run's last
+/// frame, the K-th of its renderer (the viewer logs K), is what a headless
+/// `voxgi render --taa --taa-frames K` of the same size computes (the same Halton jitters, the
+/// same blend weights 1/(n+1) in the same order): within ±1 step of 8 bits, the bound of the
+/// mono view. A negative control: the render without TAA (one unjittered frame) differs at
+/// the edges by more than that.
+#[test]
+fn viewer_accumulates_taa_per_frame_as_render_does() {
+    require_display();
+    let _display = lock_display();
+    let dir = scratch_dir("window-taa");
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/cornell_mover.toml");
+    let shot = dir.join("taa.png");
+    let out = voxgi_with(
+        &[
+            "--validate",
+            "view",
+            scene.to_str().expect("utf-8 path"),
+            "--gi",
+            "none",
+            "--taa",
+            "--width",
+            "480",
+            "--height",
+            "160",
+            "--frames",
+            "8",
+            "--screenshot",
+            shot.to_str().expect("utf-8 path"),
+        ],
+        |cmd| {
+            cmd.env("RUST_LOG", "warn,voxgi::app=info");
+        },
+    );
+    assert_success(&out, "voxgi --validate view --taa");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("post-processing: taa α 0.9"),
+        "the viewer did not start with TAA:\n{stderr}"
+    );
+    let frames: u32 = stderr
+        .lines()
+        .filter_map(|l| l.split_once("the last frame is frame ").map(|(_, r)| r))
+        .filter_map(|r| r.split_whitespace().next()?.parse().ok())
+        .next_back()
+        .unwrap_or_else(|| panic!("the viewer did not log its renderer's frames:\n{stderr}"));
+    assert!(frames >= 2, "only {frames} TAA frame(s) blended");
+    let img = load(&shot);
+    let size = img.dimensions();
+    let taa_frames = frames.to_string();
+    let taa = render_headless(
+        &dir,
+        &scene,
+        &["--gi", "none", "--taa", "--taa-frames", &taa_frames],
+        size,
+    );
+    let diff = max_channel_diff(&img, &taa);
+    assert!(
+        diff <= 1,
+        "the viewer's {frames} TAA frames differ from `voxgi render --taa --taa-frames \
+         {frames}` by up to {diff}/255"
+    );
+    let aliased = render_headless(&dir, &scene, &["--gi", "none"], size);
+    let control = max_channel_diff(&img, &aliased);
+    eprintln!(
+        "{size:?}: {frames} TAA frames; against render --taa {diff}/255, without TAA {control}/255"
+    );
+    assert!(
+        control > 8,
+        "the TAA image equals the render without TAA (up to {control}/255): nothing blended"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// TAA switched on at runtime with a real click (xdotool) on the panel's checkbox, scrolled
+/// into view with the wheel in a 320 px window: the viewer makes a renderer with TAA and
+/// blends one jittered frame per viewer frame, so F12's screenshot, the K-th frame of that
+/// renderer (the viewer logs K), is what `voxgi render --taa --taa-frames K` computes (±1 step
+/// of 8 bits, as above), and not the render without TAA. Validation clean.
+#[test]
+fn viewer_turns_taa_on_with_a_click_and_blends_a_frame_per_frame() {
+    require_display();
+    let _display = lock_display();
+    let dir = scratch_dir("window-taa-click");
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/cornell_mover.toml");
+    let shot = dir.join("taa.png");
+    let shot_arg = shot.to_str().expect("utf-8 path");
+    let mut s = EditSession::start(&[
+        "--validate",
+        "view",
+        scene.to_str().expect("utf-8 path"),
+        "--gi",
+        "none",
+        "--width",
+        "480",
+        "--height",
+        "320",
+        "--screenshot",
+        shot_arg,
+    ]);
+    let first = s.wait_for("panel: scrolled");
+    s.latest(first, "panel: scrolled", Duration::from_secs(3));
+    let taa = scroll_panel_to(&mut s, "post TAA", 320.0);
+    s.click(taa);
+    let made = s.wait_for("new renderer");
+    assert!(
+        made.contains("post-processing: taa α 0.9"),
+        "the click made no renderer with TAA: {made}"
+    );
+    // Off the checkbox (its tooltip), onto the panel's heading; frames go on meanwhile.
+    xdotool(&["mousemove", "--window", &s.window, "60", "10"]);
+    std::thread::sleep(Duration::from_secs(2));
+    s.key("F12");
+    s.wait_for(&format!("wrote {shot_arg}"));
+    let line = s.wait_for("screenshot: frame ");
+    let frames: u32 = line
+        .split_once("screenshot: frame ")
+        .and_then(|(_, r)| r.split_whitespace().next()?.parse().ok())
+        .unwrap_or_else(|| panic!("no frame count in {line}"));
+    s.finish();
+    assert!(frames >= 2, "only {frames} TAA frame(s) blended");
+    let img = load(&shot);
+    let size = img.dimensions();
+    let taa_frames = frames.to_string();
+    let taa = render_headless(
+        &dir,
+        &scene,
+        &["--gi", "none", "--taa", "--taa-frames", &taa_frames],
+        size,
+    );
+    let diff = max_channel_diff(&img, &taa);
+    assert!(
+        diff <= 1,
+        "the viewer's {frames} TAA frames differ from `voxgi render --taa --taa-frames \
+         {frames}` by up to {diff}/255"
+    );
+    let aliased = render_headless(&dir, &scene, &["--gi", "none"], size);
+    let control = max_channel_diff(&img, &aliased);
+    eprintln!(
+        "{size:?}: {frames} TAA frames; against render --taa {diff}/255, without TAA {control}/255"
+    );
+    assert!(
+        control > 8,
+        "the TAA image equals the render without TAA (up to {control}/255): nothing blended"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 #[test]
 fn viewer_shows_voxel_debug_views_without_validation_messages() {
     require_display();
@@ -421,8 +570,12 @@ fn viewer_panel_table_keeps_names_and_times_apart() {
         });
         assert_success(&out, "voxgi --validate view (panel table)");
         let stderr = String::from_utf8_lossy(&out.stderr);
-        let window_width = resize.map_or(width, |(w, _)| w) as f32;
-        faults.extend(panel_table_faults(&stderr, window_width));
+        let (window_width, window_height) = resize.unwrap_or((width, height));
+        faults.extend(panel_table_faults(
+            &stderr,
+            window_width as f32,
+            window_height as f32,
+        ));
     }
     let _ = std::fs::remove_dir_all(&dir);
     assert!(
@@ -430,6 +583,247 @@ fn viewer_panel_table_keeps_names_and_times_apart() {
         "the panel's GPU-time table:\n{}",
         faults.join("\n")
     );
+}
+
+/// A window 320 px high is shorter than the panel's contents: at first the last section's
+/// "Screenshot" button lies below the window; the mouse wheel over the panel (real X button 5
+/// events through xdotool) scrolls the contents to their bottom, and a click on the button,
+/// now in view, writes the screenshot. Validation clean, teardown included.
+#[test]
+fn viewer_panel_scrolls_to_its_last_section_with_the_wheel() {
+    require_display();
+    let _display = lock_display();
+    let dir = scratch_dir("window-scroll");
+    let shot = dir.join("shot.png");
+    let shot_arg = shot.to_str().expect("utf-8 path");
+    let mut s = EditSession::start(&[
+        "--validate",
+        "view",
+        "--gi",
+        "none",
+        "--width",
+        "400",
+        "--height",
+        "320",
+        "--screenshot",
+        shot_arg,
+    ]);
+    // The GPU-time table fills in over the first frames: let the layout settle.
+    let first = s.wait_for("panel: scrolled");
+    let top = panel_scroll(&s.latest(first, "panel: scrolled", Duration::from_secs(3)));
+    assert_eq!(top.offset, 0.0, "{top:?}");
+    assert!(
+        top.view <= 320.0 && top.content > top.view && top.max > 0.0,
+        "nothing to scroll in a 320 px window: {top:?}"
+    );
+    assert!(
+        top.button[1] > 320.0,
+        "the Screenshot button is in view without scrolling: {top:?}"
+    );
+    let bottom = scroll_panel_to_bottom(&mut s, &top);
+    assert!(
+        bottom.offset == bottom.max && bottom.offset > 0.0,
+        "the wheel did not scroll to the bottom: {bottom:?}"
+    );
+    assert!(
+        (0.0..320.0).contains(&bottom.button[1]),
+        "the Screenshot button is not in the window after scrolling: {bottom:?}"
+    );
+    s.click(bottom.button);
+    s.wait_for(&format!("wrote {shot_arg}"));
+    s.finish();
+    assert_not_blank(&load(&shot));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Turns the mouse wheel over the panel (X button 5) until its contents, scrolled as `from`
+/// says, reach their bottom; returns the scroll state there.
+fn scroll_panel_to_bottom(s: &mut EditSession, from: &PanelScroll) -> PanelScroll {
+    const LOG: &str = "panel: scrolled";
+    // Each notch scrolls at least 50 points (egui's line height for wheels; 100 under Xvfb):
+    // enough notches to pass the bottom, where the area stops.
+    let notches = ((from.max - from.offset) / 50.0).ceil() as u32 + 4;
+    xdotool(&["mousemove", "--window", &s.window, "100", "160"]);
+    std::thread::sleep(Duration::from_millis(300));
+    xdotool(&[
+        "click",
+        "--repeat",
+        &notches.to_string(),
+        "--delay",
+        "50",
+        "5",
+    ]);
+    loop {
+        let line = s.wait_for(LOG);
+        let now = panel_scroll(&line);
+        if now.offset == now.max {
+            break panel_scroll(&s.latest(line, LOG, Duration::from_secs(1)));
+        }
+    }
+}
+
+/// Turns the wheel over the panel a notch at a time (X button 5 down, 4 up; 100 points a
+/// notch under Xvfb) until its control `name` lies within the window's rows
+/// [20, `height` − 20), wider than a notch; returns where it is then.
+fn scroll_panel_to(s: &mut EditSession, name: &str, height: f32) -> [f32; 2] {
+    xdotool(&["mousemove", "--window", &s.window, "100", "160"]);
+    for _ in 0..30 {
+        let at = panel_spot(s, name, false);
+        if (20.0..height - 20.0).contains(&at[1]) {
+            return at;
+        }
+        xdotool(&["click", if at[1] >= height - 20.0 { "5" } else { "4" }]);
+    }
+    panic!("the panel did not scroll `{name}` into view:\n{}", s.log)
+}
+
+/// Where the panel's control `name` is (window px) after a second of settling: where the
+/// viewer logged it last (it logs a control when it appears or moves), or with `fresh` where
+/// it logs it next (a combo's entries, logged anew each time the combo opens).
+fn panel_spot(s: &mut EditSession, name: &str, fresh: bool) -> [f32; 2] {
+    let want = format!("panel: `{name}` at");
+    let first = if fresh {
+        s.wait_for(&want)
+    } else {
+        // Reads what arrived into the session's log, then looks there.
+        s.latest(String::new(), &want, Duration::from_secs(1));
+        match s.log.lines().rev().find(|l| l.contains(&want)) {
+            Some(line) => line.to_owned(),
+            None => s.wait_for(&want),
+        }
+    };
+    logged_point(&s.latest(first, &want, Duration::from_secs(1)), "at")
+}
+
+/// The panel's stereo packing turned on, changed and off with real clicks (xdotool): in a
+/// window 320 px high the wheel scrolls the panel down to the "Stereo" section; a click opens
+/// it, a click opens the packing combo and one picks anaglyph-dubois: F12's screenshot equals
+/// `voxgi render --stereo anaglyph-dubois` of the same size and parallax (±1 step of 8 bits,
+/// as the viewer's startup packing does). Then side-by-side-full (each eye half the area's
+/// width), likewise; then "off": the screenshot is the mono `voxgi render` again. Validation
+/// clean, teardown included.
+#[test]
+fn viewer_switches_stereo_on_and_off_from_the_panel() {
+    require_display();
+    let _display = lock_display();
+    let dir = scratch_dir("window-stereo-switch");
+    let shot = dir.join("shot.png");
+    let shot_arg = shot.to_str().expect("utf-8 path");
+    let parallax = ["--eye-separation", "0.1", "--convergence", "1.0"];
+    let mut args = vec!["--validate", "view", "--gi", "none", "--width", "400"];
+    args.extend(["--height", "320", "--screenshot", shot_arg]);
+    args.extend(parallax);
+    let mut s = EditSession::start(&args);
+    let first = s.wait_for("panel: scrolled");
+    let top = panel_scroll(&s.latest(first, "panel: scrolled", Duration::from_secs(3)));
+    scroll_panel_to_bottom(&mut s, &top);
+    let in_window = |p: [f32; 2], what: &str| {
+        assert!(
+            (0.0..400.0).contains(&p[0]) && (0.0..320.0).contains(&p[1]),
+            "{what} at {p:?} is not in the 400x320 window"
+        );
+        p
+    };
+    let header = panel_spot(&mut s, "stereo section", false);
+    s.click(in_window(header, "the Stereo header"));
+    let pick = |s: &mut EditSession, entry: &str| {
+        let combo = panel_spot(s, "stereo packing", false);
+        s.click(in_window(combo, "the packing combo"));
+        let name = format!("stereo packing: {entry}");
+        let entry = panel_spot(s, &name, true);
+        s.click(in_window(entry, &name));
+    };
+    // On (a new renderer of both eyes), another packing (each eye half as wide: a new graph),
+    // off (a new mono renderer); each screenshot once the viewer's graph presents it.
+    let mut shots = Vec::new();
+    for (entry, presents) in [
+        ("anaglyph-dubois", "anaglyph-dubois"),
+        ("side-by-side-full", "side-by-side-full"),
+        ("off", "mono"),
+    ] {
+        pick(&mut s, entry);
+        let line = s.wait_for(&format!("frame graph: {presents}"));
+        // The panel may resize the area once more: read what arrived meanwhile.
+        s.latest(line, "frame graph: ", Duration::from_secs(2));
+        s.key("F12");
+        s.wait_for(&format!("wrote {shot_arg}"));
+        shots.push((entry, load(&shot)));
+    }
+    s.finish();
+    let mono = shots
+        .pop()
+        .map(|(_, img)| img)
+        .expect("the mono screenshot");
+    for (mode, img) in &shots {
+        let (w, h) = img.dimensions();
+        assert_not_blank(img);
+        // Each eye fills the scene area (the mono image), or half its width (rounded down)
+        // side by side.
+        let full = *mode == "side-by-side-full";
+        let eye_w = if full { mono.width() / 2 } else { mono.width() };
+        let packed_w = if full { 2 * eye_w } else { eye_w };
+        assert_eq!(
+            (w, h),
+            (packed_w, mono.height()),
+            "{mode}: the packing against the mono {:?}",
+            mono.dimensions()
+        );
+        let reference = dir.join(format!("{mode}-render.png"));
+        let (ws, hs) = (eye_w.to_string(), h.to_string());
+        let mut args = vec!["--validate", "render", "--gi", "none", "--stereo", mode];
+        args.extend(["--width", &ws, "--height", &hs, "-o"]);
+        args.push(reference.to_str().expect("utf-8 path"));
+        args.extend(parallax);
+        let out = voxgi(&args);
+        assert_success(&out, &format!("voxgi --validate render --stereo {mode}"));
+        let diff = max_channel_diff(img, &load(&reference));
+        assert!(
+            diff <= 1,
+            "after switching to {mode} the viewer differs from `voxgi render --stereo` by up \
+             to {diff}/255"
+        );
+    }
+    // The mono image is not the anaglyph: the checks above saw the switch, not the mono view.
+    assert!(
+        max_channel_diff(&shots[0].1, &mono) > 16,
+        "the anaglyph equals the mono view"
+    );
+    assert_matches_render(&mono, &dir);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The panel's scroll state as the viewer logs it (window px).
+#[derive(Debug)]
+struct PanelScroll {
+    offset: f32,
+    max: f32,
+    content: f32,
+    view: f32,
+    button: [f32; 2],
+}
+
+/// Parses `panel: scrolled O of M px (contents C px in a V px view); screenshot button at
+/// [x, y] (window px)`.
+fn panel_scroll(line: &str) -> PanelScroll {
+    let rest = line
+        .split_once("panel: scrolled ")
+        .unwrap_or_else(|| panic!("not a scroll line: {line}"))
+        .1;
+    let words: Vec<&str> = rest.split_whitespace().collect();
+    let num = |i: usize| -> f32 {
+        words
+            .get(i)
+            .map(|w| w.trim_start_matches('('))
+            .and_then(|w| w.parse().ok())
+            .unwrap_or_else(|| panic!("no number at word {i} of {line}"))
+    };
+    PanelScroll {
+        offset: num(0),
+        max: num(2),
+        content: num(5),
+        view: num(9),
+        button: logged_point(line, "at"),
+    }
 }
 
 /// A rectangle `[min x, min y, max x, max y]` of the viewer's panel log.
@@ -446,9 +840,10 @@ fn rect(v: &serde_json::Value) -> [f32; 4] {
 
 /// What is wrong with the GPU-time table the viewer drew on its last frame (logged as "panel
 /// timing table: JSON", positions in points): a pass name running into its time, times not
-/// ending at one right edge, rows overlapping, a cell outside the panel or the window. Panics
-/// when the table is missing or lacks the frame's passes.
-fn panel_table_faults(stderr: &str, window_width: f32) -> Vec<String> {
+/// ending at one right edge, rows overlapping, a cell outside the panel's contents or across
+/// the window, the panel's scroll area out of the window or scrolled. Panics when the table
+/// is missing or lacks the frame's passes.
+fn panel_table_faults(stderr: &str, window_width: f32, window_height: f32) -> Vec<String> {
     let json = stderr
         .lines()
         .filter_map(|l| l.split_once("panel timing table: ").map(|(_, j)| j))
@@ -467,17 +862,35 @@ fn panel_table_faults(stderr: &str, window_width: f32) -> Vec<String> {
         names.len() >= 5 && names.contains(&"shadow_depth") && names.last() == Some(&"total"),
         "the table lists {names:?}"
     );
-    // Inside the panel, and in view: a window narrower than the panel's widest control cuts
-    // the panel off, not the table (under Xvfb a point is a pixel).
+    // The panel's scroll area: within the panel's and the window's height, and not scrolled
+    // (the scripted run turns no wheel).
+    let scroll = &table["scroll"];
+    let view = rect(&scroll["view"]);
+    let number = |key: &str| scroll[key].as_f64().expect("a number") as f32;
+    let (offset, content) = (number("offset"), number("content_height"));
+    let mut faults = Vec::new();
+    if view[1] < panel[1].max(0.0) || view[3] > panel[3].min(window_height) {
+        faults.push(format!(
+            "{window_width} px: scroll view {view:?} outside the panel {panel:?} or the window"
+        ));
+    }
+    if offset != 0.0 || content <= 0.0 {
+        faults.push(format!(
+            "{window_width} px: scrolled to {offset} of contents {content} points high"
+        ));
+    }
+    // Inside the panel's contents, and in view across: a window narrower than the panel's
+    // widest control cuts the panel off, not the table (under Xvfb a point is a pixel). Below
+    // a short window the contents scroll: down to their height.
+    let top = view[1] - offset;
     let inside = |r: [f32; 4]| {
         r[0] >= panel[0].max(0.0)
-            && r[1] >= panel[1]
+            && r[1] >= top
             && r[2] <= panel[2].min(window_width)
-            && r[3] <= panel[3]
+            && r[3] <= top + content
     };
     let right = rect(&rows[0]["time_rect"])[2];
     let mut above = f32::NEG_INFINITY;
-    let mut faults = Vec::new();
     for (row, name) in rows.iter().zip(&names) {
         let (n, t) = (rect(&row["name_rect"]), rect(&row["time_rect"]));
         if n[2] > t[0] {
@@ -506,7 +919,7 @@ fn panel_table_faults(stderr: &str, window_width: f32) -> Vec<String> {
             }
         }
     }
-    // The frame-time graph below the table: in the panel and the window, below the table,
+    // The frame-time graph below the table: in the panel's contents, below the table,
     // over the frames whose timings came back, each series a family of the table's passes
     // (the name before `[`) or "other".
     let graph = &table["graph"];

@@ -267,6 +267,14 @@ struct Viewer {
     /// Where the selected object's position x field was drawn (window pixels; logged when it
     /// moves, for scripted tests).
     position_field: Option<[f32; 2]>,
+    /// The panel's scroll state last logged (window px: offset, largest offset, contents'
+    /// and view's heights, the screenshot button's centre), for scripted tests.
+    panel_scroll: Option<[f32; 6]>,
+    /// The panel's named controls last logged and their centres (window px), likewise.
+    panel_spots: std::collections::HashMap<String, [f32; 2]>,
+    /// Frames recorded with the current renderer (in a still view, the frames TAA has
+    /// blended); scripted runs log it for their last frame.
+    renderer_frames: u64,
     /// Per frame slot, when its pick was recorded and the frame count then (for the log).
     pick_started: [Option<(Instant, u64)>; MAX_FRAMES_IN_FLIGHT],
 }
@@ -501,6 +509,9 @@ impl Viewer {
             scene_shape: None,
             light_backup: None,
             position_field: None,
+            panel_scroll: None,
+            panel_spots: Default::default(),
+            renderer_frames: 0,
             pick_started: [None; MAX_FRAMES_IN_FLIGHT],
         }
     }
@@ -520,6 +531,7 @@ impl Viewer {
         );
         let (renderer, stereo) = self.new_renderer(ctx, &settings)?;
         self.renderer = Some(renderer);
+        self.renderer_frames = 0;
         self.stereo = stereo;
         self.scene_shape = Some(edit::SceneShape::of(&self.scene));
         self.overlay = Some(Overlay::new(ctx, format)?);
@@ -894,6 +906,13 @@ impl Viewer {
             self.edit_picked(p);
         }
         self.report.frames += 1;
+        self.renderer_frames += 1;
+        if last_scripted {
+            log::info!(
+                "scripted run: the last frame is frame {} of its renderer",
+                self.renderer_frames
+            );
+        }
         if shot {
             self.controls.screenshot = false;
             self.save_screenshot(ctx)?;
@@ -1022,6 +1041,8 @@ impl Viewer {
         self.panel_px = (layout.panel.width() * out.pixels_per_point)
             .max(0.0)
             .floor() as u32;
+        self.log_panel_scroll(&layout.scroll, out.pixels_per_point);
+        self.log_panel_spots(&layout.spots, out.pixels_per_point);
         self.panel_layout = layout;
         self.fly.speed_m_s = self.controls.speed_m_s;
         self.egui_state
@@ -1035,6 +1056,43 @@ impl Viewer {
         }
         let ppp = out.pixels_per_point;
         Ok((egui_ctx.tessellate(out.shapes, ppp), ppp))
+    }
+
+    /// Logs where the panel's scroll area stands and where its last control is when either
+    /// changed (window px): the window tests scroll with the wheel and aim their clicks.
+    fn log_panel_scroll(&mut self, s: &panel::ScrollLayout, ppp: f32) {
+        let button = s.screenshot_button.center();
+        let now = [
+            s.offset,
+            s.max_offset(),
+            s.content_height,
+            s.view.height(),
+            button.x,
+            button.y,
+        ]
+        .map(|v| (v * ppp).round());
+        if self.panel_scroll != Some(now) && now.iter().all(|v| v.is_finite()) {
+            let [offset, max, content, view, x, y] = now;
+            log::info!(
+                "panel: scrolled {offset} of {max} px (contents {content} px in a {view} px view); screenshot button at [{x}, {y}] (window px)"
+            );
+            self.panel_scroll = Some(now);
+        }
+    }
+
+    /// Logs where each of the panel's named controls is when it appeared or moved (window
+    /// px): the window tests aim their clicks with it.
+    fn log_panel_spots(&mut self, spots: &[panel::Spot], ppp: f32) {
+        self.panel_spots
+            .retain(|name, _| spots.iter().any(|(n, _)| n == name));
+        for (name, rect) in spots {
+            let c = rect.center() * ppp;
+            let at = [c.x.round(), c.y.round()];
+            if at.iter().all(|v| v.is_finite()) && self.panel_spots.get(name) != Some(&at) {
+                log::info!("panel: `{name}` at [{}, {}] (window px)", at[0], at[1]);
+                self.panel_spots.insert(name.clone(), at);
+            }
+        }
     }
 
     /// Replaces the renderer by one made for `settings` and the panel's stereo controls (and
@@ -1053,13 +1111,15 @@ impl Viewer {
         match self.new_renderer(ctx, settings) {
             Ok((r, st)) => {
                 self.renderer = Some(r);
+                self.renderer_frames = 0;
                 self.stereo = st;
                 self.scene_shape = Some(edit::SceneShape::of(&self.scene));
                 log::info!(
-                    "new renderer {}x{}, indirect light: {} (made in {} ms)",
+                    "new renderer {}x{}, indirect light: {}; post-processing: {} (made in {} ms)",
                     settings.width,
                     settings.height,
                     describe_gi(&settings.gi),
+                    describe_post(&settings.post, &settings.tonemap),
                     started.elapsed().as_millis()
                 );
                 Ok(())
@@ -1253,6 +1313,10 @@ impl Viewer {
             "edit: scene viewport at [{}, 0] size [{w}, {h}] px",
             scene_rect.offset.x
         );
+        log::info!(
+            "frame graph: {}, presents {w}x{h}",
+            stereo_mode.map_or_else(|| "mono".to_owned(), crate::post::StereoMode::name)
+        );
         self.graph = Some(FrameGraph {
             exec,
             present,
@@ -1287,6 +1351,8 @@ impl Viewer {
         })?;
         self.status = format!("wrote {}", path.display());
         log::info!("{}", self.status);
+        // In a still view, the frames TAA has blended into this image.
+        log::info!("screenshot: frame {} of its renderer", self.renderer_frames);
         self.report.screenshots.push(path);
         Ok(())
     }

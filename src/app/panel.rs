@@ -1,5 +1,5 @@
-//! The side panel: per-pass GPU timings, light, tone-mapping, shadow and global-illumination
-//! controls, screenshot.
+//! The side panel: per-pass GPU timings, light, post-processing (tone mapping included),
+//! shadow and global-illumination controls, screenshot.
 
 use crate::gi::{Bounces, GiMethod, GiSettings};
 use crate::light::ShadowSettings;
@@ -153,6 +153,44 @@ pub struct PanelLayout {
     pub rows: Vec<TableRow>,
     /// The frame-time graph.
     pub graph: super::frame_graph::GraphLayout,
+    /// The panel's vertical scrolling (its contents are taller than a short window).
+    pub scroll: ScrollLayout,
+    /// Controls the window tests click, where this frame drew them.
+    pub spots: Vec<Spot>,
+}
+
+/// A control's name and where it was drawn, in points.
+pub type Spot = (String, egui::Rect);
+
+/// Where the panel's scroll area stands, in points.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ScrollLayout {
+    /// How far the contents are scrolled down.
+    pub offset: f32,
+    /// The height of all the contents.
+    pub content_height: f32,
+    /// The visible part of the scroll area.
+    pub view: egui::Rect,
+    /// The "Screenshot" button at the bottom of the contents, where this frame drew it.
+    pub screenshot_button: egui::Rect,
+}
+
+impl ScrollLayout {
+    /// The largest offset: the contents' bottom at the view's bottom.
+    pub fn max_offset(&self) -> f32 {
+        (self.content_height - self.view.height()).max(0.0)
+    }
+}
+
+impl Default for ScrollLayout {
+    fn default() -> Self {
+        Self {
+            offset: 0.0,
+            content_height: 0.0,
+            view: egui::Rect::NOTHING,
+            screenshot_button: egui::Rect::NOTHING,
+        }
+    }
 }
 
 /// A row of the GPU-time table: the pass name, where its name and its time were drawn.
@@ -164,6 +202,8 @@ impl Default for PanelLayout {
             panel: egui::Rect::NOTHING,
             rows: Vec::new(),
             graph: Default::default(),
+            scroll: Default::default(),
+            spots: Vec::new(),
         }
     }
 }
@@ -184,7 +224,15 @@ impl PanelLayout {
             "frames": g.frames,
             "scale_ms": g.scale_ms,
         });
-        serde_json::json!({ "panel": r(&self.panel), "rows": rows, "graph": graph }).to_string()
+        let s = &self.scroll;
+        let scroll = serde_json::json!({
+            "offset": s.offset,
+            "content_height": s.content_height,
+            "view": r(&s.view),
+            "screenshot_button": r(&s.screenshot_button),
+        });
+        serde_json::json!({ "panel": r(&self.panel), "rows": rows, "graph": graph, "scroll": scroll })
+            .to_string()
     }
 }
 
@@ -264,195 +312,198 @@ pub fn draw(
 ) -> PanelLayout {
     let mut rows = Vec::new();
     let mut graph = Default::default();
+    let mut scroll = ScrollLayout::default();
+    let mut spots = Vec::new();
     let panel = egui::SidePanel::left("voxgi panel")
         .resizable(false)
         .default_width(240.0)
         .show(ctx, |ui| {
-            // The panel's inner right edge as this frame lays it out (within the window): a
-            // control wider than that (a collapsing header's title, a slider) widens the
-            // `Ui` as it is added, and the table would follow it off the window.
-            let right_x = ui.max_rect().right();
-            ui.heading("voxgi");
-            ui.label(format!(
-                "{} · {}×{} · {:.1} ms/frame",
-                info.device, info.extent_px.0, info.extent_px.1, info.frame_ms
-            ));
-            ui.label(
+            // Taller than a short window: the contents scroll (wheel over the panel, or the
+            // bar). The width stays the panel's, as without scrolling. No scrolling by
+            // dragging the contents: a drag there is a slider's or a drag value's.
+            let area = egui::ScrollArea::vertical()
+                .auto_shrink([false, true])
+                .drag_to_scroll(false)
+                .show(ui, |ui| {
+                    // The panel's inner right edge as this frame lays it out (within the window): a
+                    // control wider than that (a collapsing header's title, a slider) widens the
+                    // `Ui` as it is added, and the table would follow it off the window.
+                    let right_x = ui.max_rect().right();
+                    ui.heading("voxgi");
+                    ui.label(format!(
+                        "{} · {}×{} · {:.1} ms/frame",
+                        info.device, info.extent_px.0, info.extent_px.1, info.frame_ms
+                    ));
+                    ui.label(
                 "WASD move · Q/E down/up · right mouse look · wheel speed · G next GI method · \
                  O orthographic · F12 screenshot",
             );
-            ui.separator();
+                    ui.separator();
 
-            egui::CollapsingHeader::new("GPU time per pass (median)")
-                .default_open(true)
-                .show(ui, |ui| {
-                    rows = timing_table(ui, &stats.medians(), right_x);
-                });
-
-            egui::CollapsingHeader::new("GPU time per frame (stacked by pass)")
-                .default_open(true)
-                .show(ui, |ui| {
-                    let width = ui.available_width().min(right_x - ui.cursor().min.x);
-                    graph = super::frame_graph::draw(ui, info.history, width);
-                });
-
-            egui::CollapsingHeader::new("Camera")
-                .default_open(true)
-                .show(ui, |ui| {
-                    ui.add(
-                        egui::Slider::new(&mut c.speed_m_s, 0.01..=100.0)
-                            .logarithmic(true)
-                            .text("speed m/s"),
-                    );
-                    ui.horizontal(|ui| {
-                        ui.checkbox(&mut c.animate, "animate");
-                        ui.label(format!("t = {:.2} s", c.time_s));
-                    });
-                    projection_controls(ui, c);
-                });
-
-            egui::CollapsingHeader::new("Lights")
-                .default_open(true)
-                .show(ui, |ui| {
-                    for (i, s) in c.light_scale.iter_mut().enumerate() {
-                        let name = info.light_names.get(i).map_or("light", |n| n.as_str());
-                        ui.add(
-                            egui::Slider::new(s, 0.0..=100.0)
-                                .logarithmic(true)
-                                .text(format!("{name} ×")),
-                        );
-                    }
-                });
-
-            egui::CollapsingHeader::new("Edit scene")
-                .default_open(true)
-                .show(ui, |ui| edit_ui(ui));
-
-            egui::CollapsingHeader::new("Tone mapping")
-                .default_open(true)
-                .show(ui, |ui| {
-                    egui::ComboBox::from_label("operator")
-                        .selected_text(format!("{:?}", c.tonemap.operator))
-                        .show_ui(ui, |ui| {
-                            for op in OPERATORS {
-                                ui.selectable_value(&mut c.tonemap.operator, op, format!("{op:?}"));
-                            }
+                    egui::CollapsingHeader::new("GPU time per pass (median)")
+                        .default_open(true)
+                        .show(ui, |ui| {
+                            rows = timing_table(ui, &stats.medians(), right_x);
                         });
-                    ui.add(
-                        egui::Slider::new(
-                            &mut c.tonemap.exposure,
-                            limits::EXPOSURE.slider(0.001, 1000.0),
-                        )
-                        .logarithmic(true)
-                        .text("exposure"),
-                    );
-                    ui.add(
-                        egui::Slider::new(&mut c.tonemap.white, 0.01..=100.0)
-                            .logarithmic(true)
-                            .text("white"),
-                    );
-                    ui.checkbox(&mut c.tonemap.dither, "dither");
-                    post_controls(ui, &mut c.post);
-                });
 
-            egui::CollapsingHeader::new("Shadows")
-                .default_open(true)
-                .show(ui, |ui| {
-                    egui::ComboBox::from_label("resolution")
-                        .selected_text(format!("{}²", c.shadow.resolution))
-                        .show_ui(ui, |ui| {
-                            for r in SHADOW_RESOLUTIONS {
-                                ui.selectable_value(&mut c.shadow.resolution, r, format!("{r}²"));
-                            }
+                    egui::CollapsingHeader::new("GPU time per frame (stacked by pass)")
+                        .default_open(true)
+                        .show(ui, |ui| {
+                            let width = ui.available_width().min(right_x - ui.cursor().min.x);
+                            graph = super::frame_graph::draw(ui, info.history, width);
                         });
-                    ui.add(
-                        egui::Slider::new(
-                            &mut c.shadow.pcf_radius,
-                            limits::PCF_RADIUS.slider(0, 4),
-                        )
-                        .text("PCF radius"),
-                    );
-                    ui.add(
-                        egui::Slider::new(
-                            &mut c.shadow.cascades,
-                            limits::SHADOW_CASCADES.slider(1, 8),
-                        )
-                        .text("sun cascades"),
-                    );
-                    ui.add(
-                        egui::Slider::new(
-                            &mut c.shadow.cascade_lambda,
-                            limits::SHADOW_CASCADE_LAMBDA.slider(0.0, 1.0),
-                        )
-                        .text("cascade log/uniform λ"),
-                    );
-                    ui.add(
-                        egui::Slider::new(&mut c.shadow.bias_texels, 0.0..=8.0).text("bias texels"),
-                    );
-                    ui.add(
-                        egui::Slider::new(&mut c.shadow.slope_bias_texels, 0.0..=8.0)
-                            .text("slope bias"),
-                    );
-                    ui.add(
-                        egui::Slider::new(&mut c.shadow.normal_offset_texels, 0.0..=8.0)
-                            .text("normal offset"),
-                    );
-                });
 
-            egui::CollapsingHeader::new("Global illumination")
-                .default_open(true)
-                .show(ui, |ui| {
-                    gi_controls(ui, &mut c.gi, info.gi_frames);
-                    budget_controls(ui, c);
-                });
-
-            egui::CollapsingHeader::new("Stereo")
-                .default_open(c.stereo.mode.is_some())
-                .show(ui, |ui| {
-                    super::stereo::panel_section(ui, &mut c.stereo, info.stereo)
-                });
-
-            egui::CollapsingHeader::new("View")
-                .default_open(false)
-                .show(ui, |ui| {
-                    egui::ComboBox::from_label("image")
-                        .selected_text(debug_name(c.debug))
-                        .show_ui(ui, |ui| {
-                            for v in VIEWS {
-                                ui.selectable_value(&mut c.debug, v, debug_name(v));
-                            }
-                        });
-                    if c.debug == Some(DebugView::Atlas) {
-                        let name = |i: usize| info.object_names.get(i).map_or("?", |n| n.as_str());
-                        egui::ComboBox::from_label("object")
-                            .selected_text(name(c.atlas_object))
-                            .show_ui(ui, |ui| {
-                                for i in 0..info.object_names.len() {
-                                    ui.selectable_value(&mut c.atlas_object, i, name(i));
-                                }
+                    egui::CollapsingHeader::new("Camera")
+                        .default_open(true)
+                        .show(ui, |ui| {
+                            ui.add(
+                                egui::Slider::new(&mut c.speed_m_s, 0.01..=100.0)
+                                    .logarithmic(true)
+                                    .text("speed m/s"),
+                            );
+                            ui.horizontal(|ui| {
+                                ui.checkbox(&mut c.animate, "animate");
+                                ui.label(format!("t = {:.2} s", c.time_s));
                             });
+                            projection_controls(ui, c);
+                        });
+
+                    egui::CollapsingHeader::new("Lights")
+                        .default_open(true)
+                        .show(ui, |ui| {
+                            for (i, s) in c.light_scale.iter_mut().enumerate() {
+                                let name = info.light_names.get(i).map_or("light", |n| n.as_str());
+                                ui.add(
+                                    egui::Slider::new(s, 0.0..=100.0)
+                                        .logarithmic(true)
+                                        .text(format!("{name} ×")),
+                                );
+                            }
+                        });
+
+                    egui::CollapsingHeader::new("Edit scene")
+                        .default_open(true)
+                        .show(ui, |ui| edit_ui(ui));
+
+                    egui::CollapsingHeader::new("Post-processing")
+                        .default_open(true)
+                        .show(ui, |ui| {
+                            post_controls(ui, &mut c.post, &mut c.tonemap, &mut spots)
+                        });
+
+                    egui::CollapsingHeader::new("Shadows")
+                        .default_open(true)
+                        .show(ui, |ui| {
+                            egui::ComboBox::from_label("resolution")
+                                .selected_text(format!("{}²", c.shadow.resolution))
+                                .show_ui(ui, |ui| {
+                                    for r in SHADOW_RESOLUTIONS {
+                                        ui.selectable_value(
+                                            &mut c.shadow.resolution,
+                                            r,
+                                            format!("{r}²"),
+                                        );
+                                    }
+                                });
+                            ui.add(
+                                egui::Slider::new(
+                                    &mut c.shadow.pcf_radius,
+                                    limits::PCF_RADIUS.slider(0, 4),
+                                )
+                                .text("PCF radius"),
+                            );
+                            ui.add(
+                                egui::Slider::new(
+                                    &mut c.shadow.cascades,
+                                    limits::SHADOW_CASCADES.slider(1, 8),
+                                )
+                                .text("sun cascades"),
+                            );
+                            ui.add(
+                                egui::Slider::new(
+                                    &mut c.shadow.cascade_lambda,
+                                    limits::SHADOW_CASCADE_LAMBDA.slider(0.0, 1.0),
+                                )
+                                .text("cascade log/uniform λ"),
+                            );
+                            ui.add(
+                                egui::Slider::new(&mut c.shadow.bias_texels, 0.0..=8.0)
+                                    .text("bias texels"),
+                            );
+                            ui.add(
+                                egui::Slider::new(&mut c.shadow.slope_bias_texels, 0.0..=8.0)
+                                    .text("slope bias"),
+                            );
+                            ui.add(
+                                egui::Slider::new(&mut c.shadow.normal_offset_texels, 0.0..=8.0)
+                                    .text("normal offset"),
+                            );
+                        });
+
+                    egui::CollapsingHeader::new("Global illumination")
+                        .default_open(true)
+                        .show(ui, |ui| {
+                            gi_controls(ui, &mut c.gi, info.gi_frames);
+                            budget_controls(ui, c);
+                        });
+
+                    let stereo = egui::CollapsingHeader::new("Stereo")
+                        .default_open(c.stereo.mode.is_some())
+                        .show(ui, |ui| {
+                            super::stereo::panel_section(ui, &mut c.stereo, info.stereo, &mut spots)
+                        });
+                    spots.push(("stereo section".into(), stereo.header_response.rect));
+
+                    egui::CollapsingHeader::new("View")
+                        .default_open(false)
+                        .show(ui, |ui| {
+                            egui::ComboBox::from_label("image")
+                                .selected_text(debug_name(c.debug))
+                                .show_ui(ui, |ui| {
+                                    for v in VIEWS {
+                                        ui.selectable_value(&mut c.debug, v, debug_name(v));
+                                    }
+                                });
+                            if c.debug == Some(DebugView::Atlas) {
+                                let name =
+                                    |i: usize| info.object_names.get(i).map_or("?", |n| n.as_str());
+                                egui::ComboBox::from_label("object")
+                                    .selected_text(name(c.atlas_object))
+                                    .show_ui(ui, |ui| {
+                                        for i in 0..info.object_names.len() {
+                                            ui.selectable_value(&mut c.atlas_object, i, name(i));
+                                        }
+                                    });
+                            }
+                        });
+
+                    ui.separator();
+                    let shot = ui.button("Screenshot (F12)");
+                    if shot.clicked() {
+                        c.screenshot = true;
+                    }
+                    scroll.screenshot_button = shot.rect;
+                    if ui
+                        .button("Add camera keyframe")
+                        .on_hover_text("printed as a [camera_path] table on exit, keys 2 s apart")
+                        .clicked()
+                    {
+                        c.add_keyframe = true;
+                    }
+                    if !info.status.is_empty() {
+                        ui.label(info.status);
                     }
                 });
-
-            ui.separator();
-            if ui.button("Screenshot (F12)").clicked() {
-                c.screenshot = true;
-            }
-            if ui
-                .button("Add camera keyframe")
-                .on_hover_text("printed as a [camera_path] table on exit, keys 2 s apart")
-                .clicked()
-            {
-                c.add_keyframe = true;
-            }
-            if !info.status.is_empty() {
-                ui.label(info.status);
-            }
+            scroll.offset = area.state.offset.y;
+            scroll.content_height = area.content_size.y;
+            scroll.view = area.inner_rect;
         });
     PanelLayout {
         panel: panel.response.rect,
         rows,
         graph,
+        scroll,
+        spots,
     }
 }
 
@@ -478,10 +529,22 @@ fn projection_controls(ui: &mut egui::Ui, c: &mut Controls) {
     }
 }
 
-/// The post-processing switches and their main parameter (ranges from [`limits`]).
-fn post_controls(ui: &mut egui::Ui, p: &mut crate::post::PostSettings) {
+/// The post-processing chain in its order (TAA, auto exposure, bloom, tone mapping, FXAA,
+/// dither; ranges from [`limits`]). In the viewer every frame is one TAA frame (the
+/// headless `--taa-frames` does not apply); TAA, auto exposure, bloom and FXAA switched or
+/// changed make a new renderer, tone mapping and dither a new graph. Adds where the TAA
+/// checkbox was drawn to `spots` ("post TAA").
+fn post_controls(
+    ui: &mut egui::Ui,
+    p: &mut crate::post::PostSettings,
+    tone: &mut ToneMap,
+    spots: &mut Vec<Spot>,
+) {
     let mut taa = p.taa.is_some();
-    ui.checkbox(&mut taa, "TAA");
+    let taa_box = ui
+        .checkbox(&mut taa, "TAA")
+        .on_hover_text("temporal anti-aliasing: each frame jittered, blended with the history");
+    spots.push(("post TAA".into(), taa_box.rect));
     p.taa = taa.then(|| p.taa.unwrap_or_default());
     if let Some(t) = &mut p.taa {
         ui.add(
@@ -491,6 +554,10 @@ fn post_controls(ui: &mut egui::Ui, p: &mut crate::post::PostSettings) {
             )
             .text("TAA history weight"),
         );
+        ui.checkbox(&mut t.motion_vectors, "motion vectors")
+            .on_hover_text(
+                "reproject moving objects with their own motion (scenes with animated objects)",
+            );
     }
     let mut auto = p.auto_exposure.is_some();
     ui.checkbox(&mut auto, "auto exposure");
@@ -501,6 +568,14 @@ fn post_controls(ui: &mut egui::Ui, p: &mut crate::post::PostSettings) {
                 .logarithmic(true)
                 .text("key"),
         );
+        ui.add(
+            egui::Slider::new(
+                &mut a.adaptation,
+                limits::EXPOSURE_ADAPTATION.slider(0.001, 1.0),
+            )
+            .logarithmic(true)
+            .text("adaptation / frame"),
+        );
     }
     let mut bloom = p.bloom.is_some();
     ui.checkbox(&mut bloom, "bloom");
@@ -510,7 +585,25 @@ fn post_controls(ui: &mut egui::Ui, p: &mut crate::post::PostSettings) {
             egui::Slider::new(s, limits::BLOOM_STRENGTH.slider(0.0, 1.0)).text("bloom strength"),
         );
     }
+    egui::ComboBox::from_label("tone mapping")
+        .selected_text(format!("{:?}", tone.operator))
+        .show_ui(ui, |ui| {
+            for op in OPERATORS {
+                ui.selectable_value(&mut tone.operator, op, format!("{op:?}"));
+            }
+        });
+    ui.add(
+        egui::Slider::new(&mut tone.exposure, limits::EXPOSURE.slider(0.001, 1000.0))
+            .logarithmic(true)
+            .text("exposure"),
+    );
+    ui.add(
+        egui::Slider::new(&mut tone.white, 0.01..=100.0)
+            .logarithmic(true)
+            .text("white"),
+    );
     ui.checkbox(&mut p.fxaa, "FXAA");
+    ui.checkbox(&mut tone.dither, "dither");
 }
 
 #[cfg(test)]
@@ -538,6 +631,16 @@ mod table_tests {
     fn draw_headless(
         size: egui::Vec2,
         hover: Option<egui::Pos2>,
+    ) -> (PanelLayout, Vec<(String, bool)>) {
+        draw_headless_scrolled(size, hover, 0.0)
+    }
+
+    /// [`draw_headless`], with the mouse wheel turned by `scroll_y` points (negative: down)
+    /// over the hovered point in the fourth frame.
+    fn draw_headless_scrolled(
+        size: egui::Vec2,
+        hover: Option<egui::Pos2>,
+        scroll_y: f32,
     ) -> (PanelLayout, Vec<(String, bool)>) {
         let ctx = egui::Context::default();
         ctx.set_visuals(egui::Visuals::dark());
@@ -601,6 +704,10 @@ mod table_tests {
             };
             if let (Some(p), 3) = (hover, frame) {
                 raw.events.push(egui::Event::PointerMoved(p));
+                if scroll_y != 0.0 {
+                    raw.events
+                        .push(egui::Event::Scroll(egui::vec2(0.0, scroll_y)));
+                }
             }
             let out = ctx.run(raw, |ctx| {
                 layout = draw(ctx, &mut c, &stats, &info, &mut |_| {})
@@ -617,8 +724,15 @@ mod table_tests {
         (layout, texts)
     }
 
+    /// The panel's contents as scrolled: the panel's width, the scroll area's whole height
+    /// (what lies below a short window is reached by scrolling).
+    fn contents(l: &PanelLayout) -> egui::Rect {
+        let top = l.scroll.view.min.y - l.scroll.offset;
+        egui::Rect::from_x_y_ranges(l.panel.x_range(), top..=top + l.scroll.content_height)
+    }
+
     /// What is wrong with the table's geometry: a name overlapping its time, times not
-    /// right-aligned to one edge, rows overlapping, a cell outside the panel.
+    /// right-aligned to one edge, rows overlapping, a cell outside the panel's contents.
     fn table_faults(l: &PanelLayout) -> Vec<String> {
         let mut faults = Vec::new();
         let right = l.rows.first().map_or(0.0, |(_, _, t)| t.max.x);
@@ -636,10 +750,10 @@ mod table_tests {
             }
             above = n.max.y.max(t.max.y);
             for (what, r) in [("name", n), ("time", t)] {
-                if !l.panel.contains_rect(*r) {
+                if !contents(l).contains_rect(*r) {
                     faults.push(format!(
-                        "{name}: {what} {r:?} outside the panel {:?}",
-                        l.panel
+                        "{name}: {what} {r:?} outside the panel's contents {:?}",
+                        contents(l)
                     ));
                 }
             }
@@ -674,8 +788,11 @@ mod table_tests {
             // first and the two gi_filter passes as one.
             let g = &layout.graph;
             match g.rect {
-                Some(r) if l_contains(&layout.panel, &r) => {}
-                r => faults.push(format!("{w}x{h}: graph {r:?} outside {:?}", layout.panel)),
+                Some(r) if l_contains(&contents(&layout), &r) => {}
+                r => faults.push(format!(
+                    "{w}x{h}: graph {r:?} outside {:?}",
+                    contents(&layout)
+                )),
             }
             assert_eq!(g.frames, 5);
             assert_eq!(
@@ -696,6 +813,47 @@ mod table_tests {
                 }
             }
         }
+        assert!(faults.is_empty(), "{}", faults.join("\n"));
+    }
+
+    /// In a window shorter than the panel's contents the panel scrolls: its last control is
+    /// below the window at first and in view once the wheel turned far enough down, and the
+    /// table (at the top) keeps names and times apart inside the panel.
+    #[test]
+    fn the_panel_scrolls_to_its_last_control_in_a_short_window() {
+        let short = egui::vec2(240.0, 320.0);
+        let (top, _) = draw_headless(short, None);
+        let s = top.scroll;
+        assert!(
+            s.content_height > s.view.height() + 100.0,
+            "contents {} points high in a {} point view: nothing to scroll",
+            s.content_height,
+            s.view.height()
+        );
+        assert!(s.view.min.y >= 0.0 && s.view.max.y <= short.y, "{s:?}");
+        assert_eq!(s.offset, 0.0);
+        assert!(
+            s.screenshot_button.min.y > short.y,
+            "the last control {:?} is in view without scrolling",
+            s.screenshot_button
+        );
+        // Far more than the contents' height: the area stops at its bottom.
+        let over_panel = Some(top.panel.center());
+        let (bottom, _) = draw_headless_scrolled(short, over_panel, -10_000.0);
+        let s = bottom.scroll;
+        assert!(
+            (s.offset - s.max_offset()).abs() < 0.5,
+            "scrolled to {} of {}",
+            s.offset,
+            s.max_offset()
+        );
+        assert!(
+            s.view.contains_rect(s.screenshot_button),
+            "the last control {:?} is not in the view {:?} at the bottom",
+            s.screenshot_button,
+            s.view
+        );
+        let faults = table_faults(&top);
         assert!(faults.is_empty(), "{}", faults.join("\n"));
     }
 

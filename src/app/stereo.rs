@@ -170,16 +170,24 @@ impl ViewerStereo {
 
 /// The panel's stereo section: the packing (off or a mode), the path, eye separation and
 /// convergence (ranges from [`limits`]); `status` is the path that runs or why it fell back.
-pub fn panel_section(ui: &mut egui::Ui, c: &mut StereoControls, status: Option<&str>) {
+/// Adds where the packing combo and, while it is open, its entries were drawn to `spots`
+/// ("stereo packing", "stereo packing: NAME").
+pub fn panel_section(
+    ui: &mut egui::Ui,
+    c: &mut StereoControls,
+    status: Option<&str>,
+    spots: &mut Vec<super::panel::Spot>,
+) {
     let label = |m: Option<StereoMode>| m.map_or_else(|| "off".to_owned(), StereoMode::name);
-    egui::ComboBox::from_label("packing")
+    let combo = egui::ComboBox::from_label("packing")
         .selected_text(label(c.mode))
         .show_ui(ui, |ui| {
-            ui.selectable_value(&mut c.mode, None, "off");
-            for m in MODES {
-                ui.selectable_value(&mut c.mode, Some(m), m.name());
+            for m in [None].into_iter().chain(MODES.map(Some)) {
+                let entry = ui.selectable_value(&mut c.mode, m, label(m));
+                spots.push((format!("stereo packing: {}", label(m)), entry.rect));
             }
         });
+    spots.push(("stereo packing".into(), combo.response.rect));
     if c.mode.is_none() {
         return;
     }

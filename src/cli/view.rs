@@ -60,6 +60,10 @@ pub struct ViewArgs {
     /// (a built-in scene has none and needs this).
     #[arg(long, value_name = "PATH")]
     pub save: Option<PathBuf>,
+    // The initial post-processing (over the scene's `[post]` table); the panel's
+    // "Post-processing" section changes it. In the viewer every frame is one TAA frame.
+    #[command(flatten)]
+    pub post: super::args::PostArgs,
     // The initial indirect light; the panel changes it.
     #[command(flatten)]
     pub gi: GiArgs,
@@ -125,12 +129,11 @@ pub fn view(global: &Global, args: ViewArgs, out: &mut dyn Write) -> Result<(), 
         }),
         ..Default::default()
     };
-    // The scene's `[post]` table starts the panel's post-processing; the flags override its
-    // operator and exposure.
+    // The scene's `[post]` table starts the panel's post-processing; the flags override it.
     let post = crate::scene::PostOverrides {
         tonemap: args.tonemap,
         exposure: args.exposure,
-        ..Default::default()
+        ..args.post.overrides()
     };
     (settings.post, settings.tonemap) =
         crate::post::apply_overrides(&post.or(scene.post), settings.post, settings.tonemap);
