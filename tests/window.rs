@@ -1473,7 +1473,10 @@ impl EditSession {
             format!("{}", from[1].round()),
         );
         xdotool(&["mousemove", "--window", &self.window, &x, &y]);
-        std::thread::sleep(Duration::from_millis(300));
+        // A frame must pass between the move and the press: egui's drag delta is the pointer's
+        // motion over a frame, so a frame (several hundred ms on lavapipe under load) that sees
+        // the jump here, the press and the first step would add the jump to the drag.
+        std::thread::sleep(Duration::from_millis(1500));
         xdotool(&["mousedown", "1"]);
         std::thread::sleep(Duration::from_millis(300));
         for _ in 0..steps {
