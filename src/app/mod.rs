@@ -107,6 +107,9 @@ pub struct ViewerOptions {
     /// Start in stereo (`--stereo`): packing, parallax and path. `None`: mono, the panel's
     /// parallax starting at [`StereoControls::off`].
     pub stereo: Option<StereoControls>,
+    /// `--stereo-path`; `None`: the device's default ([`crate::render::default_stereo_path`]),
+    /// which replaces the path in `stereo` (or the panel's) once the device is known.
+    pub stereo_path: Option<crate::render::StereoPath>,
     /// Where "Save scene" (Ctrl+S) writes; `None`: the scene's own file.
     pub save_to: Option<PathBuf>,
     /// The built-in scene shown (its TOML text is what a save edits), `None` for a file.
@@ -130,6 +133,7 @@ impl Default for ViewerOptions {
             scene_name: "cornell".into(),
             budget_ms: 100.0,
             stereo: None,
+            stereo_path: None,
             save_to: None,
             builtin: None,
         }
@@ -417,6 +421,14 @@ impl Viewer {
             MAX_FRAMES_IN_FLIGHT,
         )?;
         let mut viewer = Self::with_swapchain(window, scene, opts, swapchain);
+        viewer.controls.stereo.path = match opts.stereo_path {
+            Some(path) => path,
+            None => {
+                let (path, why) = crate::render::default_stereo_path(&ctx.info);
+                log::info!("stereo path {} ({why})", path.name());
+                path
+            }
+        };
         viewer.init_gpu(ctx)?;
         Ok(viewer)
     }

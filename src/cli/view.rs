@@ -157,6 +157,7 @@ pub fn view(global: &Global, args: ViewArgs, out: &mut dyn Write) -> Result<(), 
     let stereo = crate::app::StereoControls {
         mode: args.stereo.stereo,
         rig: args.stereo.rig(&scene, settings.time_s)?,
+        // Resolved against the device when the viewer opens (`ViewerOptions::stereo_path`).
         path: args.stereo.stereo_path.unwrap_or_default(),
     };
     if let Some(path) = &args.save {
@@ -177,6 +178,7 @@ pub fn view(global: &Global, args: ViewArgs, out: &mut dyn Write) -> Result<(), 
         scene_name: name,
         budget_ms: args.budget_ms.unwrap_or(100.0) as f32,
         stereo: Some(stereo),
+        stereo_path: args.stereo.stereo_path,
         save_to: args.save,
         builtin: crate::scene::builtin_toml(
             args.scene.as_deref().unwrap_or(crate::scene::DEFAULT_SCENE),

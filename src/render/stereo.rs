@@ -32,7 +32,7 @@ use crate::vk::{vk, Buffer, Context, ImageDesc, PassTiming};
 pub const RIGHT_EYE_SUFFIX: &str = "[R]";
 
 /// How a stereo pair is rendered (`--stereo-path`; without it the command line takes
-/// [`default_path`], the viewer [`StereoPath::default`]).
+/// [`default_path`], and so does the viewer).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
 pub enum StereoPath {
     /// Both eyes in one frame, world-space work once, the G-buffer drawn once per eye into
