@@ -915,6 +915,9 @@ fn ggx_senders_match_the_brdf_integral_for_hemisphere_and_vpls() {
 /// measured 0.3% and 0.1% at most.
 const VOLUME_BOUND: f32 = 0.05;
 
+/// A floor's BRDF toward wo for the light of [`ggx_floor_scene`].
+type SenderBrdf = Box<dyn Fn(glam::Vec3) -> f32>;
+
 /// Lambert and Phong senders through the direct-radiance volume, in the scene of
 /// [`ggx_senders_match_the_brdf_integral_for_hemisphere_and_vpls`]: the floor sends
 /// ρ/π·E_floor (Lambert, the volume's original case; it calibrates [`VOLUME_BOUND`]), or
@@ -934,7 +937,7 @@ fn lambert_and_phong_senders_match_their_integral_through_the_radiance_volume() 
         rho_d / std::f32::consts::PI
             + rho_s * (shininess + 2.0) / (2.0 * std::f32::consts::PI) * c.powf(shininess)
     };
-    let cases: [(&str, String, Box<dyn Fn(glam::Vec3) -> f32>); 2] = [
+    let cases: [(&str, String, SenderBrdf); 2] = [
         (
             "lambert",
             "albedo = [0.6, 0.6, 0.6]".to_string(),
