@@ -7,7 +7,8 @@
 // With Phong or GGX materials (HAS_LOBES) the stored part is a glossy voxel's diffuse part, as
 // the light maps store it: Phong rho_d / pi * E (rho_d the albedo volume's value), GGX
 // (1 - m) b / pi * (1 - F_d(n.wi)) * E (b the albedo volume's base color, m from the material
-// volume); gi_hemisphere_volume.comp adds the specular lobe toward each ray at its hit.
+// volume); gi_hemisphere_volume.comp adds the specular lobe toward each ray at its hit, with
+// the voxel's visibility of its lights, which a glossy voxel keeps in a (below).
 #include "frame.glsl"
 #include "gi_common.glsl"
 #include "brdf.glsl"
@@ -45,12 +46,18 @@ void main() {
     n = dot(n, n) > 0.25 ? normalize(n) : vec3(0.0, 1.0, 0.0);
     vec3 a = texelFetch(albedo_volume, v, 0).rgb;
     bool ggx = false;
+    bool glossy = false;
     if (HAS_LOBES) {
         Lobe m = voxel_lobe(a, texelFetch(material_volume, v, 0));
         ggx = m.kind == LOBE_GGX;
+        glossy = m.kind != LOBE_LAMBERT;
         a = m.diffuse;
     }
     vec3 lit[2] = vec3[2](vec3(0.0), vec3(0.0));
+    // With lobes: the sums over lights and sides of |E| V and |E| (|E| the sum of E's
+    // channels), whose ratio the lookup's specular lobe takes as its visibility.
+    float e_visible = 0.0;
+    float e_total = 0.0;
     for (int side = 0; side < 2; ++side) {
         vec3 ns = side == 0 ? n : -n;
         for (uint i = 0u; i < frame.counts.x; ++i) {
@@ -61,12 +68,21 @@ void main() {
             vec3 d = a;
             if (HAS_LOBES) {
                 if (ggx) d *= ggx_diffuse_weight(dot(ns, wi));
-                if (all(equal(d, vec3(0.0)))) continue;  // a metal: no diffuse part
+                float visibility = voxel_light_visibility(shadow_maps, l, p, ns, wi);
+                lit[side] += d / PI * e * visibility;
+                e_visible += dot(e, vec3(1.0)) * visibility;
+                e_total += dot(e, vec3(1.0));
+                continue;
             }
             lit[side] += d / PI * e * voxel_light_visibility(shadow_maps, l, p, ns, wi);
         }
     }
     if (HAS_EMISSION) lit[0] += texelFetch(emission_volume, v, 0).rgb;
     bool front = dot(lit[0], vec3(1.0)) >= dot(lit[1], vec3(1.0));
-    imageStore(radiance_volume, v, vec4(front ? lit[0] : lit[1], front ? 1.0 : -1.0));
+    float side_flag = front ? 1.0 : -1.0;
+    // A glossy voxel keeps its lights' irradiance-weighted visibility V = sum |E| V_l / sum |E|
+    // as |a| = 1 + V for gi_hemisphere_volume's specular lobe: exactly the light's visibility
+    // with one light (E is 0 on its other side), the mean where several lights reach the voxel.
+    if (HAS_LOBES && glossy) side_flag *= 1.0 + (e_total > 0.0 ? e_visible / e_total : 0.0);
+    imageStore(radiance_volume, v, vec4(front ? lit[0] : lit[1], side_flag));
 }

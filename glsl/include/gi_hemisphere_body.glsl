@@ -27,13 +27,12 @@ layout(set = 0, binding = 4, std430) readonly buffer RayMasks { uvec4 ray_masks[
 #ifdef RADIANCE_FROM_VOLUME
 layout(set = 0, binding = 5) uniform sampler3D radiance_volume;  // rgb radiance, a: lit side
 layout(set = 0, binding = 6) uniform sampler3D normal_volume;
-// Glossy senders (HAS_PHONG or HAS_GGX): a hit voxel's material, base color and emission, and
-// the shadow maps, to add its specular lobe toward the ray (read only then; otherwise the
-// albedo volume fills the material and emission bindings).
+// Glossy senders (HAS_PHONG or HAS_GGX): a hit voxel's material, base color and emission, to
+// add its specular lobe toward the ray (read only then; otherwise the albedo volume fills the
+// material and emission bindings).
 layout(constant_id = 2) const bool HAS_EMISSION = false;
 layout(set = 0, binding = 7) uniform sampler3D material_volume;
 layout(set = 0, binding = 11) uniform sampler3D albedo_volume;
-layout(set = 0, binding = 12) uniform sampler2DArray shadow_maps;
 layout(set = 0, binding = 13) uniform sampler3D emission_volume;
 #else
 layout(set = 0, binding = 5) uniform sampler2DArray rlm_radiance;
@@ -77,9 +76,13 @@ bool vx_voxel(int x, int y, int k) {
 // A glossy voxel (the material volume) sends its whole BRDF toward the ray, wo = -dir, as a
 // light-map texel does: the volume holds its diffuse part (GGX: times (1 - F_d(n.wi)), so the
 // lookup multiplies (1 - F_d(n.wo)) in, leaving the emission out), and the specular lobe
-// f_s(wi, wo) E is evaluated here per light with E and visibility exactly as
-// gi_radiance_volume.comp computes them, at the voxel's center on the side the ray arrives
-// on (voxel_light.glsl). Normal and material are the voxel's averages.
+// f_s(wi, wo) E V is evaluated here per light, with E exactly as gi_radiance_volume.comp
+// computes it, at the voxel's center on the side the ray arrives on (voxel_light.glsl), and V
+// the visibility that pass kept in the volume's a (|a| = 1 + V): the light's own with one
+// light, the lights' irradiance-weighted mean with several. No shadow lookup here: on
+// lavapipe, which executes every branch for all lanes, a PCF lookup per light made every hit
+// of a glossy scene pay for it (the pass took twice as long). Normal and material are the
+// voxel's averages.
 vec3 hit_radiance(VxHit h, vec3 hit, vec3 dir) {
     vec4 r = texelFetch(radiance_volume, ivec3(h.voxel), 0);
     vec3 n = texelFetch(normal_volume, ivec3(h.voxel), 0).xyz * (r.a < 0.0 ? -1.0 : 1.0);
@@ -100,17 +103,16 @@ vec3 hit_radiance(VxHit h, vec3 hit, vec3 dir) {
         lit = (lit - em) * ggx_diffuse_weight(dot(ns, wo)) + em;
     }
     vec3 p = (inverse(gi.world_to_voxel) * vec4(vec3(v) + 0.5, 1.0)).xyz;
+    vec3 lobe = vec3(0.0);
     for (uint i = 0u; i < frame.counts.x; ++i) {
-        GpuLight l = frame.lights[i];
         vec3 wi;
-        vec3 e = voxel_light_e(l, p, ns, wi);
-        if (all(equal(e, vec3(0.0)))) continue;
+        vec3 e = voxel_light_e(frame.lights[i], p, ns, wi);
         // Roughness kept at r >= 0.01 (alpha >= 1e-4), where D stays finite (as the light maps).
         vec3 f = m.kind == LOBE_GGX ? brdf_ggx_specular(m.specular, max(m.param, 0.01), ns, wi, wo)
                                     : brdf_phong(m.specular, m.param, ns, wi, wo);
-        if (all(equal(f, vec3(0.0)))) continue;
-        lit += f * e * voxel_light_visibility(shadow_maps, l, p, ns, wi);
+        lobe += f * e;
     }
+    lit += lobe * (abs(r.a) - 1.0);
     return lit;
 }
 #else

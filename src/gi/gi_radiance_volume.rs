@@ -2,9 +2,9 @@
 //! §6.4.1) that reads the radiance leaving a hit from a direct-radiance voxel volume (§6.3.2)
 //! instead of the light maps. The first pass fills the volume from the attribute volumes and the shadow
 //! maps, the second samples the hemisphere against it. With Phong or GGX materials the volume
-//! holds a glossy voxel's diffuse part and the second pass adds its specular lobe toward each
-//! ray from the material volume, the lights and the shadow maps (docs/ARCHITECTURE.md,
-//! "Materials").
+//! holds a glossy voxel's diffuse part and its lights' visibility, and the second pass adds
+//! its specular lobe toward each ray from the material volume and the lights
+//! (docs/ARCHITECTURE.md, "Materials").
 
 use super::gi_common::{add_ray_pass, GiShared, GpuGiPush};
 use super::{GiInputs, GiMethodPasses, GiOutput, GiTarget, MethodWorld};
@@ -132,7 +132,7 @@ impl GiMethodPasses for GiRadianceVolume {
         };
         let normal = v.normal;
         // A glossy hit's specular lobe (Phong or GGX materials) reads the material, base color
-        // and emission volumes and the shadow maps; otherwise albedo fills the volume bindings.
+        // and emission volumes; otherwise albedo fills the material and emission bindings.
         let material = v.material.unwrap_or(v.albedo);
         let emission = v.emission.unwrap_or(v.albedo);
         let push = shared.push;
@@ -153,7 +153,6 @@ impl GiMethodPasses for GiRadianceVolume {
                 (6, normal),
                 (7, material),
                 (11, v.albedo),
-                (12, i.shadow_map),
                 (13, emission),
             ],
             (irradiance, Access::StorageWrite(c)),
