@@ -712,6 +712,11 @@ fn ggx_floor_scene(floor: &str) -> voxgi::scene::Scene {
 /// [`ggx_floor_scene`] with its light split into `lights` equal directional lights from the
 /// same direction (the same E⊥ = π W/m² in all).
 fn floor_scene(floor: &str, lights: u32) -> voxgi::scene::Scene {
+    floor_scene_with(floor, lights, "")
+}
+
+/// [`floor_scene`] with `extra` TOML (more objects) appended.
+fn floor_scene_with(floor: &str, lights: u32, extra: &str) -> voxgi::scene::Scene {
     let light = format!(
         r#"
 [[lights]]
@@ -740,7 +745,7 @@ rotate_deg = [-90.0, 0.0, 0.0]
 translate = [0.0, 1.5, 1.0]
 scale = [4.0, 1.0, 4.0]
 material = {{ albedo = [0.8, 0.8, 0.8] }}
-"#,
+{extra}"#,
         light.repeat(lights as usize)
     );
     voxgi::scene::Scene::from_toml_str(&toml, Path::new("<ggx floor>"), Path::new(ROOT))
@@ -1020,6 +1025,58 @@ fn lambert_phong_and_two_light_senders_match_their_integral_through_the_radiance
                 "{name}, window at ({cx}, {cy}): indirect {got} vs integral {expected}"
             );
         }
+    }
+}
+
+/// A glossy voxel's lobe takes the visibility the volume pass kept: the metal floor of
+/// [`ggx_senders_match_the_brdf_integral_for_hemisphere_and_vpls`] (which sends the wall 0.50
+/// and 0.46 in red unshadowed) under a black quad 2 m up whose shadow along the 45° light
+/// covers the floor in front of the wall (z from −2.5 to 1.2; the quad spans z −4.5 to −0.8,
+/// away from the paths between wall and floor and black, so it sends nothing). Every floor
+/// voxel's V is then 0 and the wall's indirect radiance must be 0 (bound 1% of the unshadowed
+/// value, for PCF at the shadow's edge); a lookup that ignored V would give the unshadowed
+/// lobe. Measured: 0 in both windows; a build whose lookup took V = 1 gave 0.499 in red.
+#[test]
+fn a_shadowed_metal_sender_sends_nothing_through_the_radiance_volume() {
+    let occluder = r#"
+[[objects]]
+builtin = "quad"
+translate = [0.0, 2.0, -2.65]
+scale = [6.0, 1.0, 3.7]
+material = { albedo = [0.0, 0.0, 0.0] }
+"#;
+    let scene = floor_scene_with(
+        "albedo = [0.95, 0.64, 0.54], roughness = 0.4, metallic = 1.0",
+        1,
+        occluder,
+    );
+    let ctx = common::context();
+    let render = |gi: GiSettings| {
+        let settings = RenderSettings {
+            width: 64,
+            height: 64,
+            gi,
+            ..Default::default()
+        };
+        let out = render_image(&ctx, &scene, &settings).expect("renders");
+        common::assert_no_validation_messages(&ctx);
+        out.hdr
+    };
+    let direct = render(GiSettings::default());
+    let img = render(GiSettings {
+        method: GiMethod::Hemisphere,
+        radiance_source: voxgi::gi::RadianceSource::Volume,
+        rays: 256,
+        filter_radius: 0,
+        ..Default::default()
+    });
+    for ((cx, cy), pixels, _) in wall_windows(&scene, |_| glam::Vec3::ZERO) {
+        let got = window_indirect(&img, &direct, &pixels);
+        println!("window at ({cx}, {cy}): indirect {got:.5}");
+        assert!(
+            got.max_element() < 0.005,
+            "window at ({cx}, {cy}): indirect {got} from a shadowed metal floor"
+        );
     }
 }
 
