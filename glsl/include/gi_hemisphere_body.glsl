@@ -81,7 +81,7 @@ bool vx_voxel(int x, int y, int k) {
 // the visibility that pass kept in the volume's a (|a| = 1 + V): the light's own with one
 // light, the lights' irradiance-weighted mean with several. No shadow lookup here: on
 // lavapipe, which executes every branch for all lanes, a PCF lookup per light made every hit
-// of a glossy scene pay for it (the pass took twice as long). Normal and material are the
+// of a glossy scene pay for it (the pass took 1.8 times as long). Normal and material are the
 // voxel's averages.
 vec3 hit_radiance(VxHit h, vec3 hit, vec3 dir) {
     vec4 r = texelFetch(radiance_volume, ivec3(h.voxel), 0);
