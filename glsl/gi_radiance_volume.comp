@@ -4,10 +4,19 @@
 // light, rho/pi * E with shadow-map visibility, on the side the light reaches (stored in a as
 // +1: along the normal volume's normal, -1: against it). In scenes with emitters the emitted
 // radiance (emission volume, leaving the side the normal points to) adds to that side's.
+// With Phong or GGX materials (HAS_LOBES) the stored part is a glossy voxel's diffuse part, as
+// the light maps store it: Phong rho_d / pi * E (rho_d the albedo volume's value), GGX
+// (1 - m) b / pi * (1 - F_d(n.wi)) * E (b the albedo volume's base color, m from the material
+// volume); gi_hemisphere_volume.comp adds the specular lobe toward each ray at its hit, with
+// the voxel's visibility of its lights, which a glossy voxel keeps in a (below).
 #include "frame.glsl"
 #include "gi_common.glsl"
+#include "brdf.glsl"
+#include "material_lobe.glsl"
 
 layout(constant_id = 0) const bool HAS_EMISSION = false;
+// Some material is Phong or GGX: binding 7 is the material volume.
+layout(constant_id = 1) const bool HAS_LOBES = false;
 
 layout(local_size_x = 4, local_size_y = 4, local_size_z = 4) in;
 layout(set = 0, binding = 0, std430) readonly buffer FrameBuf { GpuFrame frame; };
@@ -17,8 +26,10 @@ layout(set = 0, binding = 3) uniform sampler3D normal_volume;
 layout(set = 0, binding = 4) uniform sampler2DArray shadow_maps;
 layout(set = 0, binding = 5, rgba32f) uniform writeonly image3D radiance_volume;
 layout(set = 0, binding = 6) uniform sampler3D emission_volume;  // albedo when !HAS_EMISSION
+layout(set = 0, binding = 7) uniform sampler3D material_volume;  // albedo when !HAS_LOBES
 
 #include "shadow.glsl"
+#include "voxel_light.glsl"
 
 void main() {
     ivec3 v = ivec3(gl_GlobalInvocationID);
@@ -34,31 +45,44 @@ void main() {
     vec3 n = texelFetch(normal_volume, v, 0).xyz;
     n = dot(n, n) > 0.25 ? normalize(n) : vec3(0.0, 1.0, 0.0);
     vec3 a = texelFetch(albedo_volume, v, 0).rgb;
+    bool ggx = false;
+    bool glossy = false;
+    if (HAS_LOBES) {
+        Lobe m = voxel_lobe(a, texelFetch(material_volume, v, 0));
+        ggx = m.kind == LOBE_GGX;
+        glossy = m.kind != LOBE_LAMBERT;
+        a = m.diffuse;
+    }
     vec3 lit[2] = vec3[2](vec3(0.0), vec3(0.0));
+    // With lobes: the sums over lights and sides of |E| V and |E| (|E| the sum of E's
+    // channels), whose ratio the lookup's specular lobe takes as its visibility.
+    float e_visible = 0.0;
+    float e_total = 0.0;
     for (int side = 0; side < 2; ++side) {
         vec3 ns = side == 0 ? n : -n;
-        // Shadow lookups from a voxel diagonal off the voxel center on that side, so the
-        // surface inside the voxel does not shadow itself.
-        vec3 ps = p + ns * gi.voxel_diagonal_m;
         for (uint i = 0u; i < frame.counts.x; ++i) {
             GpuLight l = frame.lights[i];
             vec3 wi;
-            vec3 e;
-            if (l.info.x == LIGHT_DIRECTIONAL) {
-                wi = -l.direction.xyz;
-                e = l.intensity.rgb * max(dot(ns, wi), 0.0);
-            } else {
-                vec3 d = l.position.xyz - p;
-                float d2 = max(dot(d, d), 1e-30);
-                wi = d * inversesqrt(d2);
-                float falloff = light_falloff(l, dot(-wi, l.direction.xyz));
-                e = l.intensity.rgb * (falloff * max(dot(ns, wi), 0.0) / d2);
-            }
+            vec3 e = voxel_light_e(l, p, ns, wi);
             if (all(equal(e, vec3(0.0)))) continue;
-            lit[side] += a / PI * e * shadow_visibility(shadow_maps, l, ps, ns, max(dot(ns, wi), 0.0));
+            vec3 d = a;
+            if (HAS_LOBES) {
+                if (ggx) d *= ggx_diffuse_weight(dot(ns, wi));
+                float visibility = voxel_light_visibility(shadow_maps, l, p, ns, wi);
+                lit[side] += d / PI * e * visibility;
+                e_visible += dot(e, vec3(1.0)) * visibility;
+                e_total += dot(e, vec3(1.0));
+                continue;
+            }
+            lit[side] += d / PI * e * voxel_light_visibility(shadow_maps, l, p, ns, wi);
         }
     }
     if (HAS_EMISSION) lit[0] += texelFetch(emission_volume, v, 0).rgb;
     bool front = dot(lit[0], vec3(1.0)) >= dot(lit[1], vec3(1.0));
-    imageStore(radiance_volume, v, vec4(front ? lit[0] : lit[1], front ? 1.0 : -1.0));
+    float side_flag = front ? 1.0 : -1.0;
+    // A glossy voxel keeps its lights' irradiance-weighted visibility V = sum |E| V_l / sum |E|
+    // as |a| = 1 + V for gi_hemisphere_volume's specular lobe: exactly the light's visibility
+    // with one light (E is 0 on its other side), the mean where several lights reach the voxel.
+    if (HAS_LOBES && glossy) side_flag *= 1.0 + (e_total > 0.0 ? e_visible / e_total : 0.0);
+    imageStore(radiance_volume, v, vec4(front ? lit[0] : lit[1], side_flag));
 }

@@ -27,6 +27,13 @@ layout(set = 0, binding = 4, std430) readonly buffer RayMasks { uvec4 ray_masks[
 #ifdef RADIANCE_FROM_VOLUME
 layout(set = 0, binding = 5) uniform sampler3D radiance_volume;  // rgb radiance, a: lit side
 layout(set = 0, binding = 6) uniform sampler3D normal_volume;
+// Glossy senders (HAS_PHONG or HAS_GGX): a hit voxel's material, base color and emission, to
+// add its specular lobe toward the ray (read only then; otherwise the albedo volume fills the
+// material and emission bindings).
+layout(constant_id = 2) const bool HAS_EMISSION = false;
+layout(set = 0, binding = 7) uniform sampler3D material_volume;
+layout(set = 0, binding = 11) uniform sampler3D albedo_volume;
+layout(set = 0, binding = 13) uniform sampler3D emission_volume;
 #else
 layout(set = 0, binding = 5) uniform sampler2DArray rlm_radiance;
 layout(set = 0, binding = 6) uniform sampler2DArray rlm_position;
@@ -63,11 +70,50 @@ bool vx_voxel(int x, int y, int k) {
 #include "material_lobe.glsl"
 
 #ifdef RADIANCE_FROM_VOLUME
+#include "voxel_light.glsl"
+
 // Radiance of the hit voxel's lit side, if the ray arrives on that side (back-face test).
+// A glossy voxel (the material volume) sends its whole BRDF toward the ray, wo = -dir, as a
+// light-map texel does: the volume holds its diffuse part (GGX: times (1 - F_d(n.wi)), so the
+// lookup multiplies (1 - F_d(n.wo)) in, leaving the emission out), and the specular lobe
+// f_s(wi, wo) E V is evaluated here per light, with E exactly as gi_radiance_volume.comp
+// computes it, at the voxel's center on the side the ray arrives on (voxel_light.glsl), and V
+// the visibility that pass kept in the volume's a (|a| = 1 + V): the light's own with one
+// light, the lights' irradiance-weighted mean with several. No shadow lookup here: on
+// lavapipe, which executes every branch for all lanes, a PCF lookup per light made every hit
+// of a glossy scene pay for it (the pass took 1.8 times as long). Normal and material are the
+// voxel's averages.
 vec3 hit_radiance(VxHit h, vec3 hit, vec3 dir) {
     vec4 r = texelFetch(radiance_volume, ivec3(h.voxel), 0);
     vec3 n = texelFetch(normal_volume, ivec3(h.voxel), 0).xyz * (r.a < 0.0 ? -1.0 : 1.0);
-    return dot(n, -dir) > 0.0 ? r.rgb : vec3(0.0);
+    bool on_lit_side = dot(n, -dir) > 0.0;
+    vec3 lit = on_lit_side ? r.rgb : vec3(0.0);
+    if (!(HAS_PHONG || HAS_GGX)) return lit;
+    ivec3 v = ivec3(h.voxel);
+    vec4 t = texelFetch(material_volume, v, 0);
+    if (t.w == 0.0) return lit;  // Lambert
+    Lobe m = voxel_lobe(texelFetch(albedo_volume, v, 0).rgb, t);
+    vec3 wo = -dir;
+    vec3 nv = texelFetch(normal_volume, v, 0).xyz;
+    nv = dot(nv, nv) > 0.25 ? normalize(nv) : vec3(0.0, 1.0, 0.0);
+    vec3 ns = dot(nv, wo) >= 0.0 ? nv : -nv;
+    if (m.kind == LOBE_GGX) {
+        // Emission is added to the front side only (gi_radiance_volume.comp).
+        vec3 em = HAS_EMISSION && on_lit_side && r.a > 0.0 ? texelFetch(emission_volume, v, 0).rgb : vec3(0.0);
+        lit = (lit - em) * ggx_diffuse_weight(dot(ns, wo)) + em;
+    }
+    vec3 p = (inverse(gi.world_to_voxel) * vec4(vec3(v) + 0.5, 1.0)).xyz;
+    vec3 lobe = vec3(0.0);
+    for (uint i = 0u; i < frame.counts.x; ++i) {
+        vec3 wi;
+        vec3 e = voxel_light_e(frame.lights[i], p, ns, wi);
+        // Roughness kept at r >= 0.01 (alpha >= 1e-4), where D stays finite (as the light maps).
+        vec3 f = m.kind == LOBE_GGX ? brdf_ggx_specular(m.specular, max(m.param, 0.01), ns, wi, wo)
+                                    : brdf_phong(m.specular, m.param, ns, wi, wo);
+        lobe += f * e;
+    }
+    lit += lobe * (abs(r.a) - 1.0);
+    return lit;
 }
 #else
 // Radiance leaving the surface at world point `hit`, seen along `dir`, from every light's

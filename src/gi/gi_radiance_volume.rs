@@ -1,7 +1,10 @@
 //! `gi_radiance_volume` and `gi_hemisphere_volume`: hemisphere sampling (Thiedemann 2010
 //! §6.4.1) that reads the radiance leaving a hit from a direct-radiance voxel volume (§6.3.2)
 //! instead of the light maps. The first pass fills the volume from the attribute volumes and the shadow
-//! maps, the second samples the hemisphere against it.
+//! maps, the second samples the hemisphere against it. With Phong or GGX materials the volume
+//! holds a glossy voxel's diffuse part and its lights' visibility, and the second pass adds
+//! its specular lobe toward each ray from the material volume and the lights
+//! (docs/ARCHITECTURE.md, "Materials").
 
 use super::gi_common::{add_ray_pass, GiShared, GpuGiPush};
 use super::{GiInputs, GiMethodPasses, GiOutput, GiTarget, MethodWorld};
@@ -22,7 +25,10 @@ impl GiRadianceVolume {
         let volume_pipeline = ctx.compute_pipeline(
             "gi_radiance_volume.comp",
             PushLayout::of::<GpuGiPush>(),
-            &[(0, u32::from(target.scene.has_emission()))],
+            &[
+                (0, u32::from(target.scene.has_emission())),
+                (1, u32::from(!target.scene.is_all_lambert())),
+            ],
         )?;
         let hemisphere_pipeline = ctx.compute_pipeline(
             "gi_hemisphere_volume.comp",
@@ -30,6 +36,7 @@ impl GiRadianceVolume {
             &[
                 (0, u32::from(target.has_phong)),
                 (1, u32::from(target.scene.has_ggx())),
+                (2, u32::from(target.scene.has_emission())),
             ],
         )?;
         let ext = target.grid.extent_voxels();
@@ -78,8 +85,10 @@ impl GiMethodPasses for GiRadianceVolume {
             return world;
         };
         let (albedo, normal) = (v.albedo, v.normal);
-        // Without emitters the shader never reads its emission binding; albedo fills it.
+        // Without emitters the shader never reads its emission binding, nor without Phong or
+        // GGX materials its material binding; albedo fills them.
         let emission = v.emission.unwrap_or(albedo);
+        let material = v.material.unwrap_or(albedo);
         let pipe = *self.volume_pipeline;
         let push = shared.push;
         let dims = push.dims;
@@ -97,6 +106,7 @@ impl GiMethodPasses for GiRadianceVolume {
             .bind_sampled(4, i.shadow_map, sampler, c)
             .bind(5, volume, Access::StorageWrite(c))
             .bind_sampled(6, emission, sampler, c)
+            .bind_sampled(7, material, sampler, c)
             .when(Some(shared.first_frame.clone()))
             .record(move |ctx| {
                 ctx.bind(&pipe);
@@ -121,6 +131,10 @@ impl GiMethodPasses for GiRadianceVolume {
             return volume.into();
         };
         let normal = v.normal;
+        // A glossy hit's specular lobe (Phong or GGX materials) reads the material, base color
+        // and emission volumes; otherwise albedo fills the material and emission bindings.
+        let material = v.material.unwrap_or(v.albedo);
+        let emission = v.emission.unwrap_or(v.albedo);
         let push = shared.push;
         let irradiance = g.create_image(ImageDesc::new_2d(
             "indirect irradiance",
@@ -134,7 +148,13 @@ impl GiMethodPasses for GiRadianceVolume {
             *self.hemisphere_pipeline,
             i,
             shared,
-            &[(5, volume), (6, normal)],
+            &[
+                (5, volume),
+                (6, normal),
+                (7, material),
+                (11, v.albedo),
+                (13, emission),
+            ],
             (irradiance, Access::StorageWrite(c)),
             &[],
             move || push,

@@ -300,10 +300,13 @@ impl GiPasses {
 
     /// The emission and material volumes the chosen method reads with the albedo and normal
     /// volumes, and the PBR maps they sample: the path tracer's lobes at later bounces read
-    /// the material volume, and so do the VPLs' glossy hits (bounces and emitter rays).
+    /// the material volume, and so do the VPLs' glossy hits (bounces and emitter rays) and the
+    /// direct-radiance volume's glossy voxels (their diffuse part and specular lobe).
     pub fn value_volumes(settings: &GiSettings, scene: &Scene) -> ValueVolumes {
         let lobes = (settings.method == GiMethod::Pathtrace && settings.pathtrace_lobes)
-            || settings.method == GiMethod::Vpl;
+            || settings.method == GiMethod::Vpl
+            || (settings.method == GiMethod::Hemisphere
+                && settings.radiance_source == RadianceSource::Volume);
         ValueVolumes::new(scene, lobes, settings.voxel_map_texels)
     }
 
