@@ -488,8 +488,8 @@ pub struct PostArgs {
     /// scene's `[post] taa_history_weight`, else 0.9].
     #[arg(long, value_name = "ALPHA")]
     pub taa_history_weight: Option<f32>,
-    /// Frames a headless render with TAA runs [default: the scene's `[post] taa_frames`,
-    /// else 16].
+    /// Frames a headless render with TAA runs; the viewer blends one per frame and has no
+    /// count [default: the scene's `[post] taa_frames`, else 16].
     #[arg(long, value_name = "N")]
     pub taa_frames: Option<u32>,
     /// Auto exposure: exposure = KEY / log-average luminance (KEY 0.18 when left out), adapted
