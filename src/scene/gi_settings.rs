@@ -397,7 +397,8 @@ pub enum RadianceSource {
     /// Reflective light maps rendered per shadow view (radiance, position, normal).
     #[default]
     Maps,
-    /// A direct-radiance voxel volume congruent with the bits (diffuse senders).
+    /// A direct-radiance voxel volume congruent with the bits (its diffuse part; a glossy
+    /// sender's lobe is evaluated at the hit from the material volume).
     Volume,
 }
 
