@@ -93,11 +93,7 @@ const WINDOW: u32 = 4;
 #[test]
 fn floor_under_an_emissive_rectangle_matches_the_form_factor() {
     let scene = emitter_scene(&format!("{{ albedo = {FLOOR_ALBEDO} }}"));
-    let h = VoxelSettings::default()
-        .grid_for(&scene, 0.0)
-        .expect("grid")
-        .voxel_size_m()
-        .max_element();
+    let h = voxel_side_m(&scene);
     let ctx = common::context();
     let methods = [
         GiSettings {
@@ -129,21 +125,14 @@ fn floor_under_an_emissive_rectangle_matches_the_form_factor() {
             ..Default::default()
         },
     ];
-    let (a, d) = (SIDE_M, HEIGHT_M);
-    let expect = |f: f32| FLOOR_ALBEDO * EMISSION_W_SR_M2 * f;
-    let exact = expect(form_factor(a, a, d));
-    let largest = expect(form_factor(
-        a + 2.0 * h,
-        a + 2.0 * h,
-        d - h - 3f32.sqrt() * h,
-    ));
+    let (exact, largest) = floor_radiance_bounds(h);
     for gi in methods {
         let traced = central_floor_radiance(&ctx, &scene, gi);
         println!(
             "{:?}: voxel {h:.4} m: traced {traced:.4}, exact emitter {exact:.4}, voxel bound \
              {largest:.4} (F = {:.4})",
             gi.method,
-            form_factor(a, a, d)
+            form_factor(SIDE_M, SIDE_M, HEIGHT_M)
         );
         assert!(
             traced > 0.96 * exact && traced < 1.04 * largest,
@@ -154,6 +143,31 @@ fn floor_under_an_emissive_rectangle_matches_the_form_factor() {
         );
     }
     common::assert_no_validation_messages(&ctx);
+}
+
+/// The largest side of a voxel of `scene`'s default grid (m).
+fn voxel_side_m(scene: &Scene) -> f32 {
+    VoxelSettings::default()
+        .grid_for(scene, 0.0)
+        .expect("grid")
+        .voxel_size_m()
+        .max_element()
+}
+
+/// The floor's radiance ρ L F under the exact emitter, and under the largest emitter its
+/// voxels of side `h` can stand for (derived above
+/// `floor_under_an_emissive_rectangle_matches_the_form_factor`).
+fn floor_radiance_bounds(h: f32) -> (f32, f32) {
+    let (a, d) = (SIDE_M, HEIGHT_M);
+    let expect = |f: f32| FLOOR_ALBEDO * EMISSION_W_SR_M2 * f;
+    (
+        expect(form_factor(a, a, d)),
+        expect(form_factor(
+            a + 2.0 * h,
+            a + 2.0 * h,
+            d - h - 3f32.sqrt() * h,
+        )),
+    )
 }
 
 /// The mean red radiance of the central 2·WINDOW x 2·WINDOW pixels of `scene` rendered with `gi`.
@@ -203,20 +217,9 @@ fn a_metal_emitter_sends_its_emission_through_the_radiance_volume() {
             "{{ albedo = 0.9, metallic = 1.0, roughness = 0.5, emission_w_sr_m2 = {EMISSION_W_SR_M2} }}"
         ),
     );
-    let h = VoxelSettings::default()
-        .grid_for(&scene, 0.0)
-        .expect("grid")
-        .voxel_size_m()
-        .max_element();
+    let h = voxel_side_m(&scene);
     let ctx = common::context();
-    let (a, d) = (SIDE_M, HEIGHT_M);
-    let expect = |f: f32| FLOOR_ALBEDO * EMISSION_W_SR_M2 * f;
-    let exact = expect(form_factor(a, a, d));
-    let largest = expect(form_factor(
-        a + 2.0 * h,
-        a + 2.0 * h,
-        d - h - 3f32.sqrt() * h,
-    ));
+    let (exact, largest) = floor_radiance_bounds(h);
     let [volume, maps] = [RadianceSource::Volume, RadianceSource::Maps].map(|radiance_source| {
         let gi = GiSettings {
             method: GiMethod::Hemisphere,
@@ -334,11 +337,7 @@ fn ggx_floor_under_an_emissive_rectangle_matches_the_brdf_quadrature() {
         roughness,
         metallic: 1.0,
     };
-    let h = VoxelSettings::default()
-        .grid_for(&scene, 0.0)
-        .expect("grid")
-        .voxel_size_m()
-        .max_element();
+    let h = voxel_side_m(&scene);
     let ctx = common::context();
     let settings = RenderSettings {
         width: SIZE,

@@ -418,31 +418,7 @@ fn viewer_accumulates_taa_per_frame_as_render_does() {
         .filter_map(|r| r.split_whitespace().next()?.parse().ok())
         .next_back()
         .unwrap_or_else(|| panic!("the viewer did not log its renderer's frames:\n{stderr}"));
-    assert!(frames >= 2, "only {frames} TAA frame(s) blended");
-    let img = load(&shot);
-    let size = img.dimensions();
-    let taa_frames = frames.to_string();
-    let taa = render_headless(
-        &dir,
-        &scene,
-        &["--gi", "none", "--taa", "--taa-frames", &taa_frames],
-        size,
-    );
-    let diff = max_channel_diff(&img, &taa);
-    assert!(
-        diff <= 1,
-        "the viewer's {frames} TAA frames differ from `voxgi render --taa --taa-frames \
-         {frames}` by up to {diff}/255"
-    );
-    let aliased = render_headless(&dir, &scene, &["--gi", "none"], size);
-    let control = max_channel_diff(&img, &aliased);
-    eprintln!(
-        "{size:?}: {frames} TAA frames; against render --taa {diff}/255, without TAA {control}/255"
-    );
-    assert!(
-        control > 8,
-        "the TAA image equals the render without TAA (up to {control}/255): nothing blended"
-    );
+    assert_taa_screenshot_is_the_render(&dir, &scene, &shot, frames);
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -492,31 +468,7 @@ fn viewer_turns_taa_on_with_a_click_and_blends_a_frame_per_frame() {
         .and_then(|(_, r)| r.split_whitespace().next()?.parse().ok())
         .unwrap_or_else(|| panic!("no frame count in {line}"));
     s.finish();
-    assert!(frames >= 2, "only {frames} TAA frame(s) blended");
-    let img = load(&shot);
-    let size = img.dimensions();
-    let taa_frames = frames.to_string();
-    let taa = render_headless(
-        &dir,
-        &scene,
-        &["--gi", "none", "--taa", "--taa-frames", &taa_frames],
-        size,
-    );
-    let diff = max_channel_diff(&img, &taa);
-    assert!(
-        diff <= 1,
-        "the viewer's {frames} TAA frames differ from `voxgi render --taa --taa-frames \
-         {frames}` by up to {diff}/255"
-    );
-    let aliased = render_headless(&dir, &scene, &["--gi", "none"], size);
-    let control = max_channel_diff(&img, &aliased);
-    eprintln!(
-        "{size:?}: {frames} TAA frames; against render --taa {diff}/255, without TAA {control}/255"
-    );
-    assert!(
-        control > 8,
-        "the TAA image equals the render without TAA (up to {control}/255): nothing blended"
-    );
+    assert_taa_screenshot_is_the_render(&dir, &scene, &shot, frames);
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -1832,4 +1784,35 @@ fn viewer_edits_lights_and_a_field_and_saves_with_real_input_events() {
         "the light edits did not change the image"
     );
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The viewer's screenshot `shot` after `frames` TAA frames of `scene` (at least 2) equals
+/// `voxgi render --taa --taa-frames FRAMES` within one 8-bit step and differs from the render
+/// without TAA by more than 8/255 (something was blended).
+fn assert_taa_screenshot_is_the_render(dir: &Path, scene: &Path, shot: &Path, frames: u32) {
+    assert!(frames >= 2, "only {frames} TAA frame(s) blended");
+    let img = load(shot);
+    let size = img.dimensions();
+    let taa_frames = frames.to_string();
+    let taa = render_headless(
+        dir,
+        scene,
+        &["--gi", "none", "--taa", "--taa-frames", &taa_frames],
+        size,
+    );
+    let diff = max_channel_diff(&img, &taa);
+    assert!(
+        diff <= 1,
+        "the viewer's {frames} TAA frames differ from `voxgi render --taa --taa-frames \
+         {frames}` by up to {diff}/255"
+    );
+    let aliased = render_headless(dir, scene, &["--gi", "none"], size);
+    let control = max_channel_diff(&img, &aliased);
+    eprintln!(
+        "{size:?}: {frames} TAA frames; against render --taa {diff}/255, without TAA {control}/255"
+    );
+    assert!(
+        control > 8,
+        "the TAA image equals the render without TAA (up to {control}/255): nothing blended"
+    );
 }
