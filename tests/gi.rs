@@ -385,31 +385,9 @@ fn phong_receivers_sample_their_lobe() {
     // lit head-on by a directional light (E = pi, so the wall's radiance is 0.8). The floor
     // gets no direct light. At the floor point the camera sees, the reflected radiance is
     // rho_s (n+2)/(n+1) * L_wall * cos(theta_r) (normalized Phong over a uniform wall).
-    let toml = r#"
-[camera]
-position = [0.0, 0.5, -1.0]
-target = [0.0, 0.0, 0.0]
-fov_y_deg = 30.0
-near = 0.01
-far = 20.0
-[[lights]]
-kind = "directional"
-direction = [0.0, 0.0, 1.0]
-irradiance_w_m2 = 3.14159265
-[[objects]]
-builtin = "quad"
-scale = [4.0, 1.0, 4.0]
-material = { albedo = [0.0, 0.0, 0.0], specular = [0.5, 0.5, 0.5], shininess = 200.0 }
-[[objects]]
-builtin = "quad"
-rotate_deg = [-90.0, 0.0, 0.0]
-translate = [0.0, 1.5, 1.0]
-scale = [4.0, 1.0, 4.0]
-material = { albedo = [0.8, 0.8, 0.8] }
-"#;
-    let scene =
-        voxgi::scene::Scene::from_toml_str(toml, Path::new("<phong lobe>"), Path::new(ROOT))
-            .expect("parses");
+    let scene = ggx_receiver_scene(
+        "albedo = [0.0, 0.0, 0.0], specular = [0.5, 0.5, 0.5], shininess = 200.0",
+    );
     let cos_r = 0.5f32 / (0.5f32 * 0.5 + 1.0).sqrt();
     let want = 0.5 * 202.0 / 201.0 * 0.8 * cos_r;
     let ctx = common::context();
@@ -1181,12 +1159,10 @@ material = {{ albedo = [0.8, 0.8, 0.8] }}
     }
 }
 
-/// A GGX floor (`floor`, its material table) under a white Lambert wall at z = 1 lit head-on by
-/// a directional light (E = π, so the wall's radiance is 0.8 everywhere; the floor itself gets
-/// no direct light, the light runs parallel to it): the floor's radiance is all indirect.
-fn ggx_receiver_scene(floor: &str) -> voxgi::scene::Scene {
-    let toml = format!(
-        r#"
+/// The view and light of the floor-and-wall scenes: a camera 0.5 m above a floor looking down
+/// at its centre, and a directional light of E = π along +z (parallel to the floor, head-on
+/// on a wall at z = 1).
+const FLOOR_WALL_VIEW: &str = r#"
 [camera]
 position = [0.0, 0.5, -1.0]
 target = [0.0, 0.0, 0.0]
@@ -1196,7 +1172,15 @@ far = 20.0
 [[lights]]
 kind = "directional"
 direction = [0.0, 0.0, 1.0]
-irradiance_w_m2 = 3.14159265
+irradiance_w_m2 = 3.14159265"#;
+
+/// A floor (`floor`, its material table: GGX or Phong) under a white Lambert wall at z = 1 lit
+/// head-on by a directional light (E = π, so the wall's radiance is 0.8 everywhere; the floor
+/// itself gets no direct light, the light runs parallel to it): the floor's radiance is all
+/// indirect.
+fn ggx_receiver_scene(floor: &str) -> voxgi::scene::Scene {
+    let toml = format!(
+        r#"{FLOOR_WALL_VIEW}
 [[objects]]
 builtin = "quad"
 scale = [4.0, 1.0, 4.0]
@@ -1530,35 +1514,27 @@ fn a_metal_receiver_reflects_no_more_than_its_directional_albedo() {
 /// metal band went from 0.151 to 0.316.
 #[test]
 fn the_filter_keeps_lambert_and_metal_pixels_apart() {
-    let toml = r#"
-[camera]
-position = [0.0, 0.5, -1.0]
-target = [0.0, 0.0, 0.0]
-fov_y_deg = 30.0
-near = 0.01
-far = 20.0
-[[lights]]
-kind = "directional"
-direction = [0.0, 0.0, 1.0]
-irradiance_w_m2 = 3.14159265
+    let toml = format!(
+        r#"{FLOOR_WALL_VIEW}
 [[objects]]
 builtin = "quad"
 translate = [-1.0, 0.0, 0.0]
 scale = [2.0, 1.0, 4.0]
-material = { albedo = 0.5 }
+material = {{ albedo = 0.5 }}
 [[objects]]
 builtin = "quad"
 translate = [1.0, 0.0, 0.0]
 scale = [2.0, 1.0, 4.0]
-material = { albedo = 0.2, roughness = 0.4, metallic = 1.0 }
+material = {{ albedo = 0.2, roughness = 0.4, metallic = 1.0 }}
 [[objects]]
 builtin = "quad"
 rotate_deg = [-90.0, 0.0, 0.0]
 translate = [0.0, 1.5, 1.0]
 scale = [4.0, 1.0, 4.0]
-material = { albedo = [0.8, 0.8, 0.8] }
-"#;
-    let scene = voxgi::scene::Scene::from_toml_str(toml, Path::new("<seam>"), Path::new(ROOT))
+material = {{ albedo = [0.8, 0.8, 0.8] }}
+"#
+    );
+    let scene = voxgi::scene::Scene::from_toml_str(&toml, Path::new("<seam>"), Path::new(ROOT))
         .expect("parses");
     let ctx = common::context();
     let size = 64u32;
@@ -1614,35 +1590,27 @@ material = { albedo = [0.8, 0.8, 0.8] }
 /// (column 28, four pixels from it, went from 0 to 0.075).
 #[test]
 fn the_filter_keeps_a_sharp_reflection_sharp() {
-    let toml = r#"
-[camera]
-position = [0.0, 0.5, -1.0]
-target = [0.0, 0.0, 0.0]
-fov_y_deg = 30.0
-near = 0.01
-far = 20.0
-[[lights]]
-kind = "directional"
-direction = [0.0, 0.0, 1.0]
-irradiance_w_m2 = 3.14159265
+    let toml = format!(
+        r#"{FLOOR_WALL_VIEW}
 [[objects]]
 builtin = "quad"
 scale = [4.0, 1.0, 4.0]
-material = { albedo = 1.0, roughness = 0.05, metallic = 1.0 }
+material = {{ albedo = 1.0, roughness = 0.05, metallic = 1.0 }}
 [[objects]]
 builtin = "quad"
 rotate_deg = [-90.0, 0.0, 0.0]
 translate = [-1.0, 1.5, 1.0]
 scale = [2.0, 1.0, 4.0]
-material = { albedo = 0.8 }
+material = {{ albedo = 0.8 }}
 [[objects]]
 builtin = "quad"
 rotate_deg = [-90.0, 0.0, 0.0]
 translate = [1.0, 1.5, 1.0]
 scale = [2.0, 1.0, 4.0]
-material = { albedo = 0.0 }
-"#;
-    let scene = voxgi::scene::Scene::from_toml_str(toml, Path::new("<edge>"), Path::new(ROOT))
+material = {{ albedo = 0.0 }}
+"#
+    );
+    let scene = voxgi::scene::Scene::from_toml_str(&toml, Path::new("<edge>"), Path::new(ROOT))
         .expect("parses");
     let ctx = common::context();
     let size = 64u32;
