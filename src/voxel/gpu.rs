@@ -721,7 +721,7 @@ impl VoxelSettings {
     }
 }
 
-/// The two voxelizers of docs/ARCHITECTURE.md, "The voxel representation".
+/// The two voxelizers of docs/design/voxels.md.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
 pub enum Voxelizer {
     /// Exact conservative triangle/box test (`voxelize_triangles`), bit for bit the CPU

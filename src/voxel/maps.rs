@@ -1,4 +1,4 @@
-//! The MTL texture maps in the voxel volumes (docs/ARCHITECTURE.md, "Materials"): `map_Kd` in
+//! The MTL texture maps in the voxel volumes (docs/design/materials.md): `map_Kd` in
 //! the albedo volume, `map_Ke` in the emission volume, `map_Pr` / `map_Pm` in the material
 //! volume, sampled per texel at the surface points each voxelizer averages, instead of `Kd`
 //! or each map's mean; and `map_Ke` at the points the VPL emitter rays start from.
