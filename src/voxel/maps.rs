@@ -33,7 +33,7 @@ pub struct MapUse {
 impl MapUse {
     /// The maps a scene's volumes sample: `emission` / `material` say which volumes exist
     /// (the albedo volume always does), `per_texel` whether maps are sampled at all (else each
-    /// map's mean and `Kd`, as before). A volume whose materials have no map samples none.
+    /// map's mean and `Kd`). A volume whose materials have no map samples none.
     pub fn new(scene: &Scene, emission: bool, material: bool, per_texel: bool) -> Self {
         let has = |f: &dyn Fn(&Material) -> bool| scene.materials.iter().any(f);
         Self {
