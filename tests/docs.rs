@@ -189,38 +189,49 @@ fn readme_and_code_map_stay_short() {
     }
 }
 
-/// `voxgi ARGS --help`, each line wrapped to [`HELP_WIDTH`] at spaces with its indentation
-/// kept, trailing spaces removed.
-fn help(args: &[&str]) -> String {
+/// `voxgi ARGS --help` as the program prints it.
+fn raw_help(args: &[&str]) -> String {
     let out = Command::new(env!("CARGO_BIN_EXE_voxgi"))
         .args(args)
         .arg("--help")
-        .env_remove("VOXGI_DEVICE")
         .output()
         .expect("voxgi runs");
     assert!(out.status.success(), "voxgi {args:?} --help failed");
-    let text = String::from_utf8(out.stdout).expect("UTF-8 help");
+    String::from_utf8(out.stdout).expect("UTF-8 help")
+}
+
+/// `voxgi ARGS --help`, each line wrapped to [`HELP_WIDTH`] at spaces, trailing spaces removed.
+fn help(args: &[&str]) -> String {
     let mut wrapped = String::new();
-    for line in text.lines() {
+    for line in raw_help(args).lines() {
         wrap(line.trim_end(), &mut wrapped);
     }
     wrapped
 }
 
+/// Where a wrapped line continues: under the text of an item (`  -o, --out <PATH>  text`,
+/// `  render  text`, `- name: text`), else under the line's own indentation.
+fn hanging_indent(line: &str) -> usize {
+    let indent = line.len() - line.trim_start().len();
+    let body = &line[indent..];
+    let text_after = |at: usize| {
+        let rest = &body[at..];
+        indent + at + rest.len() - rest.trim_start().len()
+    };
+    if body.starts_with("- ") {
+        if let Some(colon) = body.find(": ") {
+            return text_after(colon + 1);
+        }
+    }
+    match body.find("  ") {
+        Some(gap) if indent > 0 && gap < 40 => text_after(gap),
+        _ => indent,
+    }
+}
+
 fn wrap(line: &str, out: &mut String) {
     let indent = line.len() - line.trim_start().len();
-    // A flag line (`  -o, --out <PATH>  text`) continues under its text, others under
-    // their own indentation.
-    let hang = match line.trim_start().starts_with('-') {
-        true => line[indent..]
-            .find("  ")
-            .map(|gap| {
-                let rest = &line[indent + gap..];
-                indent + gap + rest.len() - rest.trim_start().len()
-            })
-            .unwrap_or(indent),
-        false => indent,
-    };
+    let hang = hanging_indent(line);
     let mut current = String::new();
     for word in line[indent..].split(' ') {
         let fits = current.chars().count() + 1 + word.chars().count() <= HELP_WIDTH;
@@ -297,12 +308,12 @@ fn commands_md_holds_the_current_help_of_every_command() {
         );
     }
     let mut missing = Vec::new();
-    let mut commands: Vec<String> = subcommands(&help(&[]))
+    let mut commands: Vec<String> = subcommands(&raw_help(&[]))
         .into_iter()
         .map(|c| format!("voxgi {c}"))
         .collect();
     commands.extend(
-        subcommands(&help(&["bench"]))
+        subcommands(&raw_help(&["bench"]))
             .into_iter()
             .map(|c| format!("voxgi bench {c}")),
     );
@@ -320,15 +331,29 @@ fn commands_md_holds_the_current_help_of_every_command() {
 }
 
 #[test]
-fn help_wrapping_keeps_words_and_indentation() {
-    let long = format!("      --flag <N>  {}", "word ".repeat(40));
-    let mut out = String::new();
-    wrap(&long, &mut out);
-    assert!(out.lines().count() > 1);
-    for l in out.lines().skip(1) {
-        assert!(l.starts_with(&" ".repeat(18)) && !l.starts_with(&" ".repeat(19)), "{l:?}");
+fn help_wrapping_keeps_words_and_hangs_under_the_text() {
+    let words = "word ".repeat(40);
+    for (line, hang) in [
+        (format!("      --flag <N>  {words}"), 18),
+        (format!("  render  {words}"), 10),
+        (format!("          - paraboloid: {words}"), 24),
+        (format!("          {words}"), 10),
+    ] {
+        let mut out = String::new();
+        wrap(&line, &mut out);
+        assert!(out.lines().count() > 1, "{out}");
+        for l in out.lines().skip(1) {
+            let indent = l.len() - l.trim_start().len();
+            assert_eq!(indent, hang, "{l:?} of {line:?}");
+        }
+        assert!(out.lines().all(|l| l.chars().count() <= HELP_WIDTH));
+        assert_eq!(out.split_whitespace().count(), line.split_whitespace().count());
     }
-    assert!(out.lines().all(|l| l.chars().count() <= HELP_WIDTH));
-    let words: Vec<&str> = out.split_whitespace().collect();
-    assert_eq!(words.len(), 2 + 40);
+}
+
+#[test]
+fn subcommands_are_read_from_the_commands_list() {
+    let help = "Usage: voxgi <COMMAND>\n\nCommands:\n  render  Renders\n  bench   Runs\n  \
+                help    Print this\n\nOptions:\n  -h, --help  Print help\n";
+    assert_eq!(subcommands(help), ["render", "bench"]);
 }
