@@ -127,7 +127,11 @@ fn every_relative_link_points_to_a_file_of_the_repository() {
     let mut checked = 0;
     for file in markdown_files() {
         let text = std::fs::read_to_string(&file).expect("markdown file");
-        let rel = file.strip_prefix(&root).unwrap_or(&file).display().to_string();
+        let rel = file
+            .strip_prefix(&root)
+            .unwrap_or(&file)
+            .display()
+            .to_string();
         for target in link_targets(&text) {
             if target.contains("://") || target.starts_with("mailto:") {
                 continue;
@@ -159,7 +163,10 @@ fn every_relative_link_points_to_a_file_of_the_repository() {
             }
         }
     }
-    assert!(checked > 50, "only {checked} links found: is the parser broken?");
+    assert!(
+        checked > 50,
+        "only {checked} links found: is the parser broken?"
+    );
     assert!(broken.is_empty(), "broken links:\n{}", broken.join("\n"));
 }
 
@@ -169,7 +176,12 @@ fn link_parser_finds_links_and_skips_code() {
               ```\n[d](z.md)\n```\n[e](<w.md>)";
     assert_eq!(link_targets(md), ["x.md#b", "img.png", "w.md"]);
     let anchors = anchors("# A title\n## `voxgi bench leak`\n## Flags, shared\n## Flags, shared");
-    for a in ["a-title", "voxgi-bench-leak", "flags-shared", "flags-shared-1"] {
+    for a in [
+        "a-title",
+        "voxgi-bench-leak",
+        "flags-shared",
+        "flags-shared-1",
+    ] {
         assert!(anchors.contains(a), "{a} missing from {anchors:?}");
     }
 }
@@ -347,7 +359,10 @@ fn help_wrapping_keeps_words_and_hangs_under_the_text() {
             assert_eq!(indent, hang, "{l:?} of {line:?}");
         }
         assert!(out.lines().all(|l| l.chars().count() <= HELP_WIDTH));
-        assert_eq!(out.split_whitespace().count(), line.split_whitespace().count());
+        assert_eq!(
+            out.split_whitespace().count(),
+            line.split_whitespace().count()
+        );
     }
 }
 
