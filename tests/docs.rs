@@ -1,7 +1,8 @@
 //! The documentation stays usable (no Vulkan): every relative link in README.md and docs/
 //! resolves to a file of the repository (and a `#section` to a heading of that file), the
-//! README and the code map stay short, and docs/commands.md holds the current `--help` of every
-//! command. After changing a command's flags, regenerate its blocks with
+//! README links every document under docs/, the README and the code map stay short, and
+//! docs/commands.md holds the current `--help` of every command. After changing a command's
+//! flags, regenerate its blocks with
 //!
 //! ```sh
 //! VOXGI_UPDATE_DOCS=1 cargo test --test docs
@@ -168,6 +169,28 @@ fn every_relative_link_points_to_a_file_of_the_repository() {
         "only {checked} links found: is the parser broken?"
     );
     assert!(broken.is_empty(), "broken links:\n{}", broken.join("\n"));
+}
+
+#[test]
+fn readme_links_every_document() {
+    let root = root();
+    let readme = std::fs::read_to_string(root.join("README.md")).expect("README.md");
+    let linked: HashSet<String> = link_targets(&readme)
+        .into_iter()
+        .map(|t| t.split('#').next().unwrap_or("").to_string())
+        .collect();
+    let unlinked: Vec<String> = markdown_files()
+        .into_iter()
+        .skip(1) // README.md itself
+        .filter_map(|f| {
+            let rel = f.strip_prefix(&root).ok()?.to_string_lossy().into_owned();
+            (!linked.contains(&rel)).then_some(rel)
+        })
+        .collect();
+    assert!(
+        unlinked.is_empty(),
+        "README.md's Documentation list does not link {unlinked:?}"
+    );
 }
 
 #[test]
