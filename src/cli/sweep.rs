@@ -37,7 +37,7 @@ pub struct SweepArgs {
     /// --references (name: the built-in's name or the file's stem). Default: every built-in
     /// and every assets/scenes/*.toml that has one.
     pub scenes: Vec<String>,
-    /// Methods, comma-separated. Default: the methods swept by default (all but ssgi).
+    /// Methods, comma-separated.
     #[arg(long, default_value_t = crate::bench::sweep::default_sweep_methods())]
     pub methods: String,
     /// A GI flag of `voxgi render` (without `--`) and its values: `--grid gi-rays=4,16`.

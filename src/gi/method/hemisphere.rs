@@ -11,7 +11,7 @@ use crate::vk::{Context, VkError};
 pub(super) static SPEC: MethodSpec = MethodSpec {
     name: "hemisphere",
     description: "One bounce: N rays per pixel, radiance at hits from reflective light maps \
-                  (Thiedemann 2010 §6.4.1).",
+                  (Thiedemann 2010 §6.4.1)",
     summary: "one bounce",
     accumulates: false,
     needs_voxels: true,

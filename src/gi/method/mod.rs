@@ -6,7 +6,7 @@
 //! the method: code that needs a fact about one asks its spec ([`GiMethod::spec`]).
 //!
 //! Adding a method: a file here with its `SPEC` (and its passes, in a file of their own when
-//! they are large), and one line in `registry!` (`docs/design/gi-methods.md`).
+//! they are large), its `mod` line and one line in `registry!` (`docs/design/gi-methods.md`).
 
 mod hemisphere;
 mod none;

@@ -4,7 +4,7 @@ use super::MethodSpec;
 
 pub(super) static SPEC: MethodSpec = MethodSpec {
     name: "none",
-    description: "No indirect light.",
+    description: "No indirect light",
     summary: "direct light only",
     accumulates: false,
     needs_voxels: false,

@@ -10,7 +10,7 @@ pub(super) static SPEC: MethodSpec = MethodSpec {
     name: "pathtrace",
     description: "B bounces with albedo and normal from voxel volumes and direct light at \
                   every hit from the shadow maps, accumulated over frames (Thiedemann 2010 \
-                  §6.4.2).",
+                  §6.4.2)",
     summary: "multi-bounce",
     accumulates: true,
     needs_voxels: true,

@@ -10,7 +10,7 @@ use super::{MethodSpec, Refusal};
 pub(super) static SPEC: MethodSpec = MethodSpec {
     name: "ssgi",
     description: "Screen-space diffuse gathering over a depth/normal/colour pyramid, unlimited \
-                  bounces by feedback over frames; no voxels (Oetke 2017 §2.3, §5.1–5.3).",
+                  bounces by feedback over frames; no voxels (Oetke 2017 §2.3, §5.1–5.3)",
     summary: "screen-space GI",
     // Feedback adds a bounce per frame.
     accumulates: true,

@@ -10,7 +10,7 @@ pub(super) static SPEC: MethodSpec = MethodSpec {
     name: "vpl",
     description: "Virtual point lights from the reflective light maps, B bounces, interleaved \
                   sampling with voxel visibility and the geometry-aware filter (Thiedemann \
-                  2010 Ch. 7).",
+                  2010 Ch. 7)",
     summary: "virtual point lights",
     accumulates: false,
     needs_voxels: true,
