@@ -372,33 +372,7 @@ fn describe_post(post: &crate::post::PostSettings, tone: &crate::post::ToneMap) 
 }
 
 fn describe_gi_method(gi: &GiSettings) -> String {
-    match gi.method {
-        GiMethod::None => "none".into(),
-        GiMethod::Hemisphere => format!(
-            "hemisphere, {} rays, filter {}×{}",
-            gi.rays, gi.filter_radius, gi.filter_passes
-        ),
-        GiMethod::Pathtrace => format!(
-            "pathtrace, {} rays, {} bounces, filter {}×{}",
-            gi.rays, gi.bounces, gi.filter_radius, gi.filter_passes
-        ),
-        GiMethod::Vpl => format!(
-            "vpl, {} per set, {}×{} sets, {} bounces, filter {}×{}",
-            gi.vpl.per_set,
-            gi.vpl.pattern[0],
-            gi.vpl.pattern[1],
-            gi.vpl.bounces,
-            gi.filter_radius,
-            gi.filter_passes
-        ),
-        GiMethod::Ssgi => format!(
-            "ssgi, 1/{} resolution, {} samples, filter {}×{}",
-            gi.ssgi.resolution.divisor(),
-            gi.ssgi.samples,
-            gi.filter_radius,
-            gi.filter_passes
-        ),
-    }
+    (gi.method.spec().describe)(gi)
 }
 
 impl Viewer {
@@ -662,9 +636,7 @@ impl Viewer {
             KeyCode::KeyQ => k.down = down,
             KeyCode::ShiftLeft | KeyCode::ShiftRight => k.fast = down,
             KeyCode::F12 if press => self.controls.screenshot = true,
-            KeyCode::KeyG if press => {
-                self.controls.gi.method = panel::next_gi_method(self.controls.gi.method)
-            }
+            KeyCode::KeyG if press => self.controls.gi.method = self.controls.gi.method.next(),
             KeyCode::KeyO if press => {
                 self.controls.projection = match self.controls.projection {
                     Projection::Perspective => Projection::Orthographic,

@@ -1,7 +1,7 @@
 //! The side panel: per-pass GPU timings, light, post-processing (tone mapping included),
 //! shadow and global-illumination controls, screenshot.
 
-use crate::gi::{Bounces, GiMethod, GiSettings};
+use crate::gi::{GiMethod, GiSettings};
 use crate::light::ShadowSettings;
 use crate::limits;
 use crate::post::{ToneMap, ToneOperator};
@@ -112,27 +112,6 @@ pub struct PanelInfo<'a> {
     pub stereo: Option<&'a str>,
     /// Per-pass GPU times of the last frames, for the frame-time graph.
     pub history: &'a super::frame_graph::FrameHistory,
-}
-
-const GI_METHODS: [(GiMethod, &str); 5] = [
-    (GiMethod::None, "none"),
-    (GiMethod::Hemisphere, "hemisphere"),
-    (GiMethod::Pathtrace, "pathtrace"),
-    (GiMethod::Vpl, "vpl"),
-    (GiMethod::Ssgi, "ssgi"),
-];
-
-/// The method after `m` in the panel's list (wrapping): the `G` key steps through them.
-pub fn next_gi_method(m: GiMethod) -> GiMethod {
-    let i = GI_METHODS.iter().position(|(g, _)| *g == m).unwrap_or(0);
-    GI_METHODS[(i + 1) % GI_METHODS.len()].0
-}
-
-fn gi_method_name(m: GiMethod) -> &'static str {
-    GI_METHODS
-        .iter()
-        .find(|(g, _)| *g == m)
-        .map_or("?", |(_, n)| n)
 }
 
 const SHADOW_RESOLUTIONS: [u32; 5] = [256, 512, 1024, 2048, 4096];
@@ -933,41 +912,19 @@ fn budget_controls(ui: &mut egui::Ui, c: &mut Controls) {
     });
 }
 
-/// The GI method and its parameters; what does not apply to the method is hidden.
+/// The GI method, its own section ([`crate::gi::MethodSpec::panel`]) and the parameters the
+/// methods share; without indirect light, only the method's section.
 fn gi_controls(ui: &mut egui::Ui, gi: &mut GiSettings, frames: Option<u32>) {
     egui::ComboBox::from_label("method")
-        .selected_text(gi_method_name(gi.method))
+        .selected_text(gi.method.name())
         .show_ui(ui, |ui| {
-            for (m, name) in GI_METHODS {
-                ui.selectable_value(&mut gi.method, m, name);
+            for &m in GiMethod::ALL {
+                ui.selectable_value(&mut gi.method, m, m.name());
             }
         });
+    (gi.method.spec().panel)(ui, gi, frames);
     if gi.method == GiMethod::None {
-        ui.label("direct light only");
         return;
-    }
-    if gi.method == GiMethod::Vpl {
-        vpl_controls(ui, gi);
-    } else if gi.method == GiMethod::Ssgi {
-        ssgi_controls(ui, gi);
-    } else {
-        ui.add(
-            egui::Slider::new(&mut gi.rays, limits::GI_RAYS.slider(1, 256))
-                .logarithmic(true)
-                .text("rays / pixel"),
-        );
-    }
-    if gi.method == GiMethod::Pathtrace {
-        let mut unbounded = gi.bounces == Bounces::Unbounded;
-        ui.checkbox(&mut unbounded, "unbounded (Russian roulette)");
-        match (unbounded, gi.bounces) {
-            (true, Bounces::Fixed(_)) => gi.bounces = Bounces::Unbounded,
-            (false, Bounces::Unbounded) => gi.bounces = Bounces::Fixed(2),
-            _ => {}
-        }
-        if let Bounces::Fixed(n) = &mut gi.bounces {
-            ui.add(egui::Slider::new(n, 1..=8).text("bounces"));
-        }
     }
     let mut limited = gi.radius_m.is_some();
     ui.checkbox(&mut limited, "limit ray length");
@@ -1020,109 +977,6 @@ fn gi_controls(ui: &mut egui::Ui, gi: &mut GiSettings, frames: Option<u32>) {
         .logarithmic(true)
         .text("max iterations"),
     );
-    if gi.method == GiMethod::Pathtrace {
-        match frames {
-            Some(n) => ui.label(format!("accumulated frames: {n}")),
-            None => ui.label("accumulated frames: –"),
-        };
-    }
-}
-
-/// The screen-space GI's parameters (Oetke 2017 §5.1–5.3): resolution, samples, mips,
-/// feedback.
-fn ssgi_controls(ui: &mut egui::Ui, gi: &mut GiSettings) {
-    use crate::gi::SsgiResolution;
-    let s = &mut gi.ssgi;
-    egui::ComboBox::from_label("GI resolution")
-        .selected_text(format!("1/{}", s.resolution.divisor()))
-        .show_ui(ui, |ui| {
-            for (_, r) in SsgiResolution::NAMES {
-                ui.selectable_value(&mut s.resolution, r, format!("1/{}", r.divisor()));
-            }
-        });
-    ui.add(
-        egui::Slider::new(&mut s.samples, limits::SSGI_SAMPLES.slider(8, 256))
-            .logarithmic(true)
-            .text("samples / texel / level"),
-    );
-    let mut fast = s.mips == crate::gi::SsgiMips::Fast;
-    ui.checkbox(&mut fast, "fast (nearest) mips");
-    s.mips = if fast {
-        crate::gi::SsgiMips::Fast
-    } else {
-        crate::gi::SsgiMips::Voting
-    };
-    ui.checkbox(&mut s.feedback, "feedback bounces");
-    let mut lobe = s.ssr_rays == crate::gi::SsrRays::Lobe;
-    ui.checkbox(&mut lobe, "reflection rays sample the lobe");
-    s.ssr_rays = if lobe {
-        crate::gi::SsrRays::Lobe
-    } else {
-        crate::gi::SsrRays::Mirror
-    };
-    ui.add(
-        egui::Slider::new(
-            &mut s.history_weight,
-            limits::SSGI_HISTORY_WEIGHT.slider(0.0, 0.99),
-        )
-        .text("history weight τ"),
-    );
-}
-
-/// The VPL method's parameters (Thiedemann 2010, Ch. 7): VPLs per set, pattern, bounces,
-/// d_min, the glossy receivers' roughness floor, visibility, normalization, spot sampling.
-fn vpl_controls(ui: &mut egui::Ui, gi: &mut GiSettings) {
-    use crate::gi::vpl::{VplNormalize, VplShading, VplSpotSampling, VplVisibility};
-    let v = &mut gi.vpl;
-    ui.add(
-        egui::Slider::new(&mut v.per_set, limits::VPLS.slider(1, 64))
-            .logarithmic(true)
-            .text("VPLs / set / light"),
-    );
-    for (side, name) in v.pattern.iter_mut().zip(["pattern N", "pattern M"]) {
-        ui.add(egui::Slider::new(side, limits::VPL_PATTERN_SIDE.slider(1, 8)).text(name));
-    }
-    ui.add(egui::Slider::new(&mut v.bounces, limits::VPL_BOUNCES.slider(1, 8)).text("bounces"));
-    ui.add(
-        egui::Slider::new(&mut v.d_min_voxels, limits::VPL_D_MIN.slider(0.0, 64.0))
-            .text("d_min (voxel diagonals)"),
-    );
-    ui.add(
-        egui::Slider::new(
-            &mut v.min_roughness,
-            limits::VPL_MIN_ROUGHNESS.slider(0.0, 1.0),
-        )
-        .text("glossy receivers' min. roughness"),
-    );
-    let mut visible = v.visibility == VplVisibility::Voxel;
-    ui.checkbox(&mut visible, "voxel visibility");
-    v.visibility = if visible {
-        VplVisibility::Voxel
-    } else {
-        VplVisibility::None
-    };
-    let mut valid = v.normalize == VplNormalize::Valid;
-    ui.checkbox(&mut valid, "renormalize by valid VPLs");
-    v.normalize = if valid {
-        VplNormalize::Valid
-    } else {
-        VplNormalize::All
-    };
-    let mut disk = v.spot_sampling == VplSpotSampling::Disk;
-    ui.checkbox(&mut disk, "spot VPLs in the image-plane disk");
-    v.spot_sampling = if disk {
-        VplSpotSampling::Disk
-    } else {
-        VplSpotSampling::SolidAngle
-    };
-    let mut splat = v.shading == VplShading::Splat;
-    ui.checkbox(&mut splat, "splat (one pass per VPL)");
-    v.shading = if splat {
-        VplShading::Splat
-    } else {
-        VplShading::Gather
-    };
-    ui.checkbox(&mut v.show, "show VPLs");
 }
 
 #[cfg(test)]

@@ -42,13 +42,7 @@ impl Default for SoakBenchDesc {
             every: 500,
             width: 32,
             height: 32,
-            methods: vec![
-                GiMethod::None,
-                GiMethod::Hemisphere,
-                GiMethod::Pathtrace,
-                GiMethod::Vpl,
-                GiMethod::Ssgi,
-            ],
+            methods: GiMethod::ALL.to_vec(),
             period_s: 1.0,
         }
     }

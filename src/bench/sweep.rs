@@ -73,48 +73,6 @@ pub enum SweepError {
     Reference(#[from] super::reference_cache::ReferenceError),
 }
 
-/// The GI flags a grid may vary (their names as `voxgi render` spells them, without `--`)
-/// and the methods each one changes; a key is left out of the other methods' configurations,
-/// so that no configuration is measured twice.
-pub const GRID_KEYS: &[(&str, &[GiMethod])] = &[
-    ("gi-rays", RAY_METHODS),
-    ("gi-radius", RAY_METHODS),
-    ("gi-normal-offset", GI_METHODS),
-    ("gi-ray-offset", GI_METHODS),
-    ("gi-filter-radius", FILTERED),
-    ("gi-filter-passes", FILTERED),
-    ("gi-start-level", GI_METHODS),
-    ("gi-max-iterations", GI_METHODS),
-    ("light-map-resolution", GI_METHODS),
-    ("gi-radiance", &[GiMethod::Hemisphere]),
-    ("gi-bounces", &[GiMethod::Pathtrace]),
-    ("gi-frames", &[GiMethod::Pathtrace, GiMethod::Ssgi]),
-    ("vpls", VPL),
-    ("vpl-pattern", VPL),
-    ("vpl-d-min", VPL),
-    ("vpl-bounces", VPL),
-    ("vpl-visibility", VPL),
-    ("vpl-normalize", VPL),
-    ("vpl-spot-sampling", VPL),
-    ("vpl-shading", VPL),
-    ("ssgi-resolution", SSGI),
-    ("ssgi-samples", SSGI),
-    ("ssgi-mips", SSGI),
-    ("ssr-rays", SSGI),
-];
-
-const GI_METHODS: &[GiMethod] = &[GiMethod::Hemisphere, GiMethod::Pathtrace, GiMethod::Vpl];
-const RAY_METHODS: &[GiMethod] = &[GiMethod::Hemisphere, GiMethod::Pathtrace];
-const VPL: &[GiMethod] = &[GiMethod::Vpl];
-const SSGI: &[GiMethod] = &[GiMethod::Ssgi];
-/// The methods whose output the shared geometry-aware filter smooths.
-const FILTERED: &[GiMethod] = &[
-    GiMethod::Hemisphere,
-    GiMethod::Pathtrace,
-    GiMethod::Vpl,
-    GiMethod::Ssgi,
-];
-
 /// One `--grid KEY=V1,V2,…`: a GI flag and the values it takes.
 #[derive(Clone, Debug, PartialEq)]
 pub struct GridAxis {
@@ -136,7 +94,8 @@ pub fn parse_grid(spec: &str) -> Result<GridAxis, SweepError> {
     if key == "gi" {
         return Err(err("the method is chosen by --methods, not --grid".into()));
     }
-    let known: Vec<&str> = GRID_KEYS.iter().map(|(k, _)| *k).collect();
+    // The keys are the methods' own (`MethodSpec::sweep_keys`).
+    let known = GiMethod::sweep_keys();
     let key = known.iter().copied().find(|k| *k == key).ok_or_else(|| {
         err(format!(
             "unknown key `{key}`; expected one of {}",
@@ -166,8 +125,18 @@ pub fn parse_methods(list: &str) -> Result<Vec<GiMethod>, SweepError> {
 
 /// A method's name as `--gi` and a scene's `method` spell it.
 pub fn method_name(m: GiMethod) -> String {
-    m.to_possible_value()
-        .map_or_else(|| format!("{m:?}"), |v| v.get_name().to_owned())
+    m.name().to_owned()
+}
+
+/// The `--methods` of `voxgi sweep` when none are given: those whose spec says
+/// [`crate::gi::MethodSpec::swept_by_default`].
+pub fn default_sweep_methods() -> String {
+    let names: Vec<&str> = GiMethod::ALL
+        .iter()
+        .filter(|m| m.spec().swept_by_default)
+        .map(|m| m.name())
+        .collect();
+    names.join(",")
 }
 
 /// One configuration of the sweep: a method and the grid values that apply to it.
@@ -205,11 +174,7 @@ pub fn configs(methods: &[GiMethod], grid: &[GridAxis]) -> Vec<Config> {
     for &method in methods {
         let axes: Vec<&GridAxis> = grid
             .iter()
-            .filter(|a| {
-                GRID_KEYS
-                    .iter()
-                    .any(|(k, ms)| *k == a.key && ms.contains(&method))
-            })
+            .filter(|a| method.spec().sweep_keys.contains(&a.key))
             .collect();
         let mut partial: Vec<Vec<(&'static str, String)>> = vec![Vec::new()];
         for axis in axes {
@@ -698,13 +663,8 @@ pub fn downsample(img: &crate::eval::HdrImage, factor: u32) -> crate::eval::HdrI
 
 /// Colours of the methods in the plot.
 fn method_colour(method: &str) -> &'static str {
-    match method {
-        "none" => "#7f7f7f",
-        "hemisphere" => "#1f77b4",
-        "pathtrace" => "#d62728",
-        "vpl" => "#2ca02c",
-        _ => "#9467bd",
-    }
+    // A CSV from another build may name a method this one lacks.
+    GiMethod::from_name(method).map_or("#8c564b", |m| m.spec().plot_colour)
 }
 
 /// Escapes text for SVG.

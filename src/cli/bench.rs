@@ -554,7 +554,7 @@ fn ssgi_limits(
     refs: &References,
 ) -> Result<crate::bench::ssgi_limits::LimitReport, CliError> {
     use crate::bench::ssgi_limits as sl;
-    let methods = [("ssgi", GiMethod::Ssgi), ("pathtrace", GiMethod::Pathtrace)];
+    let methods = [GiMethod::Ssgi, GiMethod::Pathtrace];
     let mut rows = Vec::new();
     for case in sl::limit_cases(size)? {
         for (k, (view, scene)) in case.views.iter().enumerate() {
@@ -565,10 +565,10 @@ fn ssgi_limits(
             let reference = sl::indirect_mean(&gi, &direct, mask);
             let own_direct = sl::render(ctx, scene, size, sl::method_settings(GiMethod::None, 1))?;
             let mut measured = Vec::new();
-            for (m, method) in methods {
+            for method in methods {
                 let img = sl::render(ctx, scene, size, sl::method_settings(method, frames))?;
                 let v = sl::indirect_mean(&img, &own_direct, mask);
-                measured.push((m.to_owned(), v, v / reference));
+                measured.push((method.name().to_owned(), v, v / reference));
             }
             eprintln!("{} {view}: done", case.case);
             rows.push(sl::LimitRow {

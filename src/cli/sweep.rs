@@ -38,7 +38,7 @@ pub struct SweepArgs {
     /// and every assets/scenes/*.toml that has one.
     pub scenes: Vec<String>,
     /// Methods, comma-separated.
-    #[arg(long, default_value = "none,hemisphere,pathtrace,vpl")]
+    #[arg(long, default_value_t = crate::bench::sweep::default_sweep_methods())]
     pub methods: String,
     /// A GI flag of `voxgi render` (without `--`) and its values: `--grid gi-rays=4,16`.
     /// Repeat for more keys; each method runs every combination of the keys that change it.
@@ -398,11 +398,10 @@ fn measure(
     let lag = lag_after_switch_off(ctx, &s.scene, &job.settings, args.lag_frames)?;
     let gi = frame_stats(&run.frames, is_gi_pass);
     let frame = frame_stats(&run.frames, |_| true);
-    let accumulate = match job.settings.gi.method {
-        crate::gi::GiMethod::Pathtrace | crate::gi::GiMethod::Ssgi => {
-            job.settings.gi.accumulate_frames.max(1)
-        }
-        _ => 1,
+    let accumulate = if job.settings.gi.method.spec().accumulates {
+        job.settings.gi.accumulate_frames.max(1)
+    } else {
+        1
     };
     Ok(SweepRow {
         scene: s.name.clone(),

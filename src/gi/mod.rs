@@ -1,5 +1,7 @@
 //! Indirect light on the voxel ray test (Thiedemann 2010 ch. 6): the assembly of the GI passes.
-//! Each pass (or pass family) lives in the file named after its shader: `gi_hemisphere`
+//! Each method is one file in `method/`, its [`MethodSpec`], which says what the method needs
+//! and builds its passes; the registry there lists the methods once. Each pass (or pass
+//! family) lives in the file named after its shader: `gi_hemisphere`
 //! (one bounce, radiance from reflective light maps), `gi_radiance_volume` (one bounce,
 //! radiance from a direct-radiance volume), `gi_pathtrace` (B bounces, accumulated), then
 //! `gi_filter` (geometry-aware filter), `sao` (ambient obscurance, optional) and
@@ -14,6 +16,7 @@ mod gi_hemisphere;
 mod gi_pathtrace;
 mod gi_radiance_volume;
 mod gi_vpl_emit;
+mod method;
 mod sao;
 pub mod ssgi;
 pub mod ssgi_brdf_lut;
@@ -21,10 +24,11 @@ pub mod ssgi_reflect;
 pub mod vpl;
 
 pub use crate::scene::{
-    Bounces, GiMethod, GiSettings, RadianceSource, SaoSettings, SsgiMips, SsgiResolution,
-    SsgiSettings, SsrMode, SsrRays,
+    Bounces, GiSettings, RadianceSource, SaoSettings, SsgiMips, SsgiResolution, SsgiSettings,
+    SsrMode, SsrRays,
 };
 pub use gi_common::GpuGiPush;
+pub use method::{GiMethod, MethodSpec, Refusal};
 pub use sao::GpuSaoPush;
 
 use crate::graph::{Access, BufferHandle, ImageHandle, RenderGraph, Shader, SlotCondition};
@@ -36,9 +40,6 @@ use crate::voxel::VoxelGrid;
 use gi_common::GiShared;
 use gi_composite::GiComposite;
 use gi_filter::GiFilter;
-use gi_hemisphere::GiHemisphere;
-use gi_pathtrace::GiPathtrace;
-use gi_radiance_volume::GiRadianceVolume;
 use std::sync::atomic::{AtomicU32, Ordering};
 use std::sync::Arc;
 
@@ -177,16 +178,8 @@ impl GiPasses {
         size: (u32, u32),
         glossy: bool,
     ) -> Vec<ImageDesc> {
-        match settings.method {
-            // Per stereo eye: see `GiTarget::eyes` (the renderer repeats this list per eye).
-            GiMethod::Pathtrace => vec![GiPathtrace::history_desc(size)],
-            GiMethod::Ssgi if settings.ssgi.ssr && glossy => vec![
-                ssgi::Ssgi::history_desc(size),
-                ssgi_reflect::Ssr::history_desc(size),
-            ],
-            GiMethod::Ssgi => vec![ssgi::Ssgi::history_desc(size)],
-            GiMethod::Vpl | GiMethod::Hemisphere | GiMethod::None => Vec::new(),
-        }
+        // Per stereo eye: see `GiTarget::eyes` (the renderer repeats this list per eye).
+        (settings.method.spec().history)(settings, size, glossy)
     }
 
     /// Creates the pipelines (and the method's volumes and history) for `target`.
@@ -195,22 +188,7 @@ impl GiPasses {
         settings: GiSettings,
         target: &GiTarget<'_>,
     ) -> Result<Self, VkError> {
-        let method: Box<dyn GiMethodPasses> = match settings.method {
-            GiMethod::Pathtrace => {
-                Box::new(GiPathtrace::new(ctx, target, settings.pathtrace_lobes)?)
-            }
-            GiMethod::Vpl => Box::new(vpl::VplPasses::new(ctx, &settings, target)?),
-            GiMethod::Ssgi => Box::new(ssgi::Ssgi::new(ctx, settings.ssgi, target)?),
-            GiMethod::Hemisphere if settings.radiance_source == RadianceSource::Volume => {
-                Box::new(GiRadianceVolume::new(ctx, target)?)
-            }
-            GiMethod::Hemisphere | GiMethod::None => Box::new(GiHemisphere::new(
-                ctx,
-                target.has_phong,
-                target.scene.has_ggx(),
-                target.scene.has_emission(),
-            )?),
-        };
+        let method = (settings.method.spec().build)(ctx, &settings, target)?;
         // Objects the atlas voxelizer handles get their attributes from its points.
         let attributes = Self::needs_attribute_volumes(&settings, target.scene)
             .then(|| {
@@ -299,35 +277,17 @@ impl GiPasses {
     }
 
     /// The emission and material volumes the chosen method reads with the albedo and normal
-    /// volumes, and the PBR maps they sample: the path tracer's lobes at later bounces read
-    /// the material volume, and so do the VPLs' glossy hits (bounces and emitter rays) and the
-    /// direct-radiance volume's glossy voxels (their diffuse part and specular lobe).
+    /// volumes, and the PBR maps they sample (the material volume where the method's hits
+    /// sample the lobes, [`MethodSpec::material_volume`]).
     pub fn value_volumes(settings: &GiSettings, scene: &Scene) -> ValueVolumes {
-        let lobes = (settings.method == GiMethod::Pathtrace && settings.pathtrace_lobes)
-            || settings.method == GiMethod::Vpl
-            || (settings.method == GiMethod::Hemisphere
-                && settings.radiance_source == RadianceSource::Volume);
+        let lobes = (settings.method.spec().material_volume)(settings);
         ValueVolumes::new(scene, lobes, settings.voxel_map_texels)
     }
 
     /// Whether the chosen method reads the albedo and normal volumes (and with them, in
     /// scenes with emitters, the emission volume).
     pub fn needs_attribute_volumes(settings: &GiSettings, scene: &Scene) -> bool {
-        match settings.method {
-            GiMethod::Pathtrace => true,
-            // The light maps do not see emitters: the hits read the emission volume.
-            GiMethod::Hemisphere => {
-                settings.radiance_source == RadianceSource::Volume || scene.has_emission()
-            }
-            // Bounces after the first, and the emitters' rays, read albedo and normal at their
-            // voxel hits.
-            GiMethod::Vpl => {
-                settings.vpl.bounces > 1
-                    || scene.has_emission()
-                    || scene.lights.iter().any(crate::scene::Light::is_area)
-            }
-            GiMethod::None | GiMethod::Ssgi => false,
-        }
+        (settings.method.spec().attribute_volumes)(settings, scene)
     }
 
     /// Declares the indirect-light, filter and composite passes; returns the total radiance.
@@ -391,11 +351,7 @@ impl GiPasses {
         shared.world = w.method;
         let GiOutput { indirect, overlay } = self.method.add_passes(g, inp, &shared);
         let s = &self.settings;
-        let tile = if s.method == GiMethod::Vpl {
-            s.vpl.pattern
-        } else {
-            [1, 1]
-        };
+        let tile = (s.method.spec().filter_tile)(s);
         let filtered = self.filter.add_passes(
             g,
             inp,

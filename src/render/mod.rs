@@ -118,13 +118,14 @@ pub fn check_projection(
             instead: "leave out --stereo",
         });
     }
-    if settings.gi.method == crate::gi::GiMethod::Ssgi && settings.debug.is_none() {
-        return Err(RenderError::Orthographic {
-            what: "--gi ssgi",
-            why: "screen-space GI's patch areas, reflection rays and history assume a pinhole \
-                  camera's depth",
-            instead: "choose another --gi method (hemisphere, pathtrace, vpl)",
-        });
+    if let Some(r) = settings.gi.method.spec().orthographic_blocker {
+        if settings.debug.is_none() {
+            return Err(RenderError::Orthographic {
+                what: r.what,
+                why: r.why,
+                instead: r.instead,
+            });
+        }
     }
     Ok(())
 }
@@ -639,7 +640,7 @@ impl Renderer {
                         ctx,
                         scene.has_transparency(),
                         scene.has_ggx(),
-                        settings.gi.method == crate::gi::GiMethod::Hemisphere,
+                        settings.gi.method.spec().reads_area_light_maps,
                         LightMapPass::scene_has_maps(scene),
                     )
                 })

@@ -81,11 +81,10 @@ pub(super) fn render_frames(
 /// screen-space GI adds a bounce per frame by feedback, TAA converges over jittered frames;
 /// everything else is done in one.
 pub fn frames_to_image(settings: &super::RenderSettings) -> usize {
-    let gi_frames = match settings.gi.method {
-        crate::gi::GiMethod::Pathtrace | crate::gi::GiMethod::Ssgi => {
-            settings.gi.accumulate_frames.max(1) as usize
-        }
-        _ => 1,
+    let gi_frames = if settings.gi.method.spec().accumulates {
+        settings.gi.accumulate_frames.max(1) as usize
+    } else {
+        1
     };
     let taa_frames = settings.post.taa.map_or(1, |t| t.frames.max(1) as usize);
     gi_frames.max(taa_frames)

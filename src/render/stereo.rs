@@ -80,8 +80,8 @@ fn multiview_blocker_for(
         Some("the device lacks the Vulkan 1.1 feature `multiview`".into())
     } else if settings.debug.is_some() {
         Some("--debug views render one view".into())
-    } else if settings.gi.method == crate::gi::GiMethod::Ssgi {
-        Some("--gi ssgi keeps one history and one previous camera".into())
+    } else if let Some(why) = settings.gi.method.spec().multiview_blocker {
+        Some(why.into())
     } else if oit {
         Some("the transparency lists (--transparency oit) are drawn for one view".into())
     } else if directional && settings.shadow.cascades >= 2 {

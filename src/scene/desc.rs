@@ -8,7 +8,7 @@ use serde::Deserialize;
 use super::camera::{Camera, Projection};
 use super::camera_path::{CameraKey, CameraPath};
 use super::error::{field_ref, from_toml_error, SceneError};
-use super::gi::{bounces_from_toml, GiOverrides, GI_METHOD_NAMES};
+use super::gi::{bounces_from_toml, GiOverrides};
 use super::light::Light;
 use super::mesh::{Aabb, BUILTIN_MESH_NAMES};
 use super::obj::AssetStore;
@@ -729,22 +729,15 @@ fn build_camera(ck: &Check<'_>, c: &CameraDesc) -> Result<Camera, SceneError> {
 fn build_gi(ck: &Check<'_>, g: &GiDesc) -> Result<GiOverrides, SceneError> {
     let method = match &g.method {
         None => None,
-        Some(name) => Some(
-            GI_METHOD_NAMES
-                .iter()
-                .find(|(n, _)| *n == name.as_str())
-                .map(|&(_, m)| m)
-                .ok_or_else(|| {
-                    ck.invalid(
-                        "gi.method",
-                        format!(
-                            "unknown method \"{name}\"; expected \"none\" (direct light only), \
-                             \"hemisphere\" (one bounce), \"pathtrace\" (multi-bounce) or \"vpl\" (virtual \
-                             point lights)"
-                        ),
-                    )
-                })?,
-        ),
+        Some(name) => Some(crate::scene::GiMethod::from_name(name).ok_or_else(|| {
+            ck.invalid(
+                "gi.method",
+                format!(
+                    "unknown method \"{name}\"; expected one of {}",
+                    crate::scene::GiMethod::choices()
+                ),
+            )
+        })?),
     };
     // The ranges and words are those of the flags (`crate::limits`); the error names the key.
     let count = |limit: &Limit<u32>, v: Option<i64>| {

@@ -97,15 +97,6 @@ pub(crate) fn bounces_from_toml(v: &toml::Value) -> Result<Bounces, String> {
     parsed.ok_or_else(|| format!("{v}; expected path-tracer bounces, {}", Bounces::expected()))
 }
 
-/// The names a scene file may give `method`, and their methods.
-pub(crate) const GI_METHOD_NAMES: [(&str, GiMethod); 5] = [
-    ("none", GiMethod::None),
-    ("hemisphere", GiMethod::Hemisphere),
-    ("pathtrace", GiMethod::Pathtrace),
-    ("vpl", GiMethod::Vpl),
-    ("ssgi", GiMethod::Ssgi),
-];
-
 #[cfg(test)]
 mod tests {
     use super::*;

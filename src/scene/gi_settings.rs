@@ -2,33 +2,8 @@
 //! (no GPU), here at the bottom so that scene files (`[gi]` tables), the command line
 //! and the viewer's panel share them with the GI passes (`crate::gi`, which re-exports them).
 
-/// A GI method of the speed/accuracy ladder.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
-pub enum GiMethod {
-    /// No indirect light.
-    #[default]
-    None,
-    /// One bounce: N rays per pixel, radiance at hits from reflective light maps
-    /// (Thiedemann 2010 §6.4.1).
-    Hemisphere,
-    /// B bounces with albedo and normal from voxel volumes and direct light at every hit from
-    /// the shadow maps, accumulated over frames (Thiedemann 2010 §6.4.2).
-    Pathtrace,
-    /// Virtual point lights from the reflective light maps, B bounces, interleaved sampling
-    /// with voxel visibility and the geometry-aware filter (Thiedemann 2010 Ch. 7).
-    Vpl,
-    /// Screen-space diffuse gathering over a depth/normal/colour pyramid, unlimited bounces by
-    /// feedback over frames; no voxels (Oetke 2017 §2.3, §5.1–5.3).
-    Ssgi,
-}
-
-impl GiMethod {
-    /// Whether the method traces rays in the voxel grid (all but screen-space GI; `None`
-    /// has no passes at all).
-    pub fn needs_voxels(self) -> bool {
-        !matches!(self, GiMethod::None | GiMethod::Ssgi)
-    }
-}
+/// The GI methods are declared with their passes, one file each (`crate::gi::MethodSpec`).
+pub use crate::gi::GiMethod;
 
 /// Parameters of the indirect-light passes (all exposed on the command line).
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -1,0 +1,69 @@
+//! One bounce: N rays per pixel in the voxel grid, the radiance at their hits from the
+//! reflective light maps (Thiedemann 2010 §6.4.1) or from a direct-radiance volume
+//! (`--gi-radiance volume`). Passes: `gi_hemisphere`, `gi_radiance_volume`.
+
+use super::super::gi_hemisphere::GiHemisphere;
+use super::super::gi_radiance_volume::GiRadianceVolume;
+use super::super::{GiMethodPasses, GiSettings, GiTarget, RadianceSource};
+use super::{rays_slider, MethodSpec};
+use crate::vk::{Context, VkError};
+
+pub(super) static SPEC: MethodSpec = MethodSpec {
+    name: "hemisphere",
+    description: "One bounce: N rays per pixel, radiance at hits from reflective light maps \
+                  (Thiedemann 2010 §6.4.1)",
+    summary: "one bounce",
+    accumulates: false,
+    needs_voxels: true,
+    // The area lights' light maps are rendered for this method alone.
+    reads_area_light_maps: true,
+    // The light maps do not see emitters: the hits read the emission volume.
+    attribute_volumes: |s, scene| {
+        s.radiance_source == RadianceSource::Volume || scene.has_emission()
+    },
+    // The direct-radiance volume's glossy voxels (their diffuse part and specular lobe).
+    material_volume: |s| s.radiance_source == RadianceSource::Volume,
+    history: |_, _, _| Vec::new(),
+    filter_tile: |_| [1, 1],
+    multiview_blocker: None,
+    orthographic_blocker: None,
+    sweep_keys: &[
+        "gi-rays",
+        "gi-radius",
+        "gi-normal-offset",
+        "gi-ray-offset",
+        "gi-filter-radius",
+        "gi-filter-passes",
+        "gi-start-level",
+        "gi-max-iterations",
+        "light-map-resolution",
+        "gi-radiance",
+    ],
+    swept_by_default: true,
+    plot_colour: "#1f77b4",
+    describe: |gi| {
+        format!(
+            "hemisphere, {} rays, filter {}×{}",
+            gi.rays, gi.filter_radius, gi.filter_passes
+        )
+    },
+    panel: |ui, gi, _| rays_slider(ui, gi),
+    build,
+};
+
+pub(super) fn build(
+    ctx: &Context,
+    settings: &GiSettings,
+    target: &GiTarget<'_>,
+) -> Result<Box<dyn GiMethodPasses>, VkError> {
+    Ok(if settings.radiance_source == RadianceSource::Volume {
+        Box::new(GiRadianceVolume::new(ctx, target)?)
+    } else {
+        Box::new(GiHemisphere::new(
+            ctx,
+            target.has_phong,
+            target.scene.has_ggx(),
+            target.scene.has_emission(),
+        )?)
+    })
+}

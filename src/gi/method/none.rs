@@ -1,0 +1,28 @@
+//! No indirect light: the frame is the direct light alone.
+
+use super::MethodSpec;
+
+pub(super) static SPEC: MethodSpec = MethodSpec {
+    name: "none",
+    description: "No indirect light",
+    summary: "direct light only",
+    accumulates: false,
+    needs_voxels: false,
+    reads_area_light_maps: false,
+    attribute_volumes: |_, _| false,
+    material_volume: |_| false,
+    history: |_, _, _| Vec::new(),
+    filter_tile: |_| [1, 1],
+    multiview_blocker: None,
+    orthographic_blocker: None,
+    sweep_keys: &[],
+    swept_by_default: true,
+    plot_colour: "#7f7f7f",
+    describe: |_| "none".into(),
+    panel: |ui, _, _| {
+        ui.label("direct light only");
+    },
+    // The renderer builds no GI passes without indirect light; should anything ask, the
+    // hemisphere's passes are the cheapest that fill the indirect image.
+    build: super::hemisphere::build,
+};

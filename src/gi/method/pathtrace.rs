@@ -1,0 +1,71 @@
+//! B bounces with albedo and normal from the voxel volumes and the direct light at every hit
+//! from the shadow maps, accumulated over frames (Thiedemann 2010 §6.4.2). Pass:
+//! `gi_pathtrace`.
+
+use super::super::gi_pathtrace::GiPathtrace;
+use super::super::Bounces;
+use super::{rays_slider, MethodSpec};
+
+pub(super) static SPEC: MethodSpec = MethodSpec {
+    name: "pathtrace",
+    description: "B bounces with albedo and normal from voxel volumes and direct light at \
+                  every hit from the shadow maps, accumulated over frames (Thiedemann 2010 \
+                  §6.4.2)",
+    summary: "multi-bounce",
+    accumulates: true,
+    needs_voxels: true,
+    reads_area_light_maps: false,
+    attribute_volumes: |_, _| true,
+    // Later bounces sample the Phong and GGX lobes unless `--pathtrace-lobes false`.
+    material_volume: |s| s.pathtrace_lobes,
+    // Per stereo eye: see `GiTarget::eyes` (the renderer repeats this list per eye).
+    history: |_, size, _| vec![GiPathtrace::history_desc(size)],
+    filter_tile: |_| [1, 1],
+    multiview_blocker: None,
+    orthographic_blocker: None,
+    sweep_keys: &[
+        "gi-rays",
+        "gi-radius",
+        "gi-normal-offset",
+        "gi-ray-offset",
+        "gi-filter-radius",
+        "gi-filter-passes",
+        "gi-start-level",
+        "gi-max-iterations",
+        "light-map-resolution",
+        "gi-bounces",
+        "gi-frames",
+    ],
+    swept_by_default: true,
+    plot_colour: "#d62728",
+    describe: |gi| {
+        format!(
+            "pathtrace, {} rays, {} bounces, filter {}×{}",
+            gi.rays, gi.bounces, gi.filter_radius, gi.filter_passes
+        )
+    },
+    panel: |ui, gi, frames| {
+        rays_slider(ui, gi);
+        let mut unbounded = gi.bounces == Bounces::Unbounded;
+        ui.checkbox(&mut unbounded, "unbounded (Russian roulette)");
+        match (unbounded, gi.bounces) {
+            (true, Bounces::Fixed(_)) => gi.bounces = Bounces::Unbounded,
+            (false, Bounces::Unbounded) => gi.bounces = Bounces::Fixed(2),
+            _ => {}
+        }
+        if let Bounces::Fixed(n) = &mut gi.bounces {
+            ui.add(egui::Slider::new(n, 1..=8).text("bounces"));
+        }
+        match frames {
+            Some(n) => ui.label(format!("accumulated frames: {n}")),
+            None => ui.label("accumulated frames: –"),
+        };
+    },
+    build: |ctx, settings, target| {
+        Ok(Box::new(GiPathtrace::new(
+            ctx,
+            target,
+            settings.pathtrace_lobes,
+        )?))
+    },
+};

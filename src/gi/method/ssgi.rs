@@ -1,0 +1,100 @@
+//! Screen-space diffuse gathering over a depth/normal/colour pyramid, unlimited bounces by
+//! feedback over frames, and screen-space reflections on glossy materials; no voxels (Oetke
+//! 2017 §2.3, §5.1–5.4). Passes: `ssgi` (`ssgi_*`), `ssgi_reflect`, `ssgi_brdf_lut`.
+
+use super::super::ssgi::Ssgi;
+use super::super::ssgi_reflect::Ssr;
+use super::super::GiSettings;
+use super::{MethodSpec, Refusal};
+
+pub(super) static SPEC: MethodSpec = MethodSpec {
+    name: "ssgi",
+    description: "Screen-space diffuse gathering over a depth/normal/colour pyramid, unlimited \
+                  bounces by feedback over frames; no voxels (Oetke 2017 §2.3, §5.1–5.3)",
+    summary: "screen-space GI",
+    // Feedback adds a bounce per frame.
+    accumulates: true,
+    needs_voxels: false,
+    reads_area_light_maps: false,
+    attribute_volumes: |_, _| false,
+    material_volume: |_| false,
+    history: |s, size, glossy| {
+        if s.ssgi.ssr && glossy {
+            vec![Ssgi::history_desc(size), Ssr::history_desc(size)]
+        } else {
+            vec![Ssgi::history_desc(size)]
+        }
+    },
+    filter_tile: |_| [1, 1],
+    multiview_blocker: Some("--gi ssgi keeps one history and one previous camera"),
+    orthographic_blocker: Some(Refusal {
+        what: "--gi ssgi",
+        why: "screen-space GI's patch areas, reflection rays and history assume a pinhole \
+              camera's depth",
+        instead: "choose another --gi method (hemisphere, pathtrace, vpl)",
+    }),
+    sweep_keys: &[
+        "gi-filter-radius",
+        "gi-filter-passes",
+        "gi-frames",
+        "ssgi-resolution",
+        "ssgi-samples",
+        "ssgi-mips",
+        "ssr-rays",
+    ],
+    // Not in the sweep's default list (`--methods` adds it), as before the registry.
+    swept_by_default: false,
+    plot_colour: "#9467bd",
+    describe: |gi| {
+        format!(
+            "ssgi, 1/{} resolution, {} samples, filter {}×{}",
+            gi.ssgi.resolution.divisor(),
+            gi.ssgi.samples,
+            gi.filter_radius,
+            gi.filter_passes
+        )
+    },
+    panel: |ui, gi, _| ssgi_controls(ui, gi),
+    build: |ctx, settings, target| Ok(Box::new(Ssgi::new(ctx, settings.ssgi, target)?)),
+};
+
+/// The screen-space GI's parameters (Oetke 2017 §5.1–5.3): resolution, samples, mips,
+/// feedback.
+fn ssgi_controls(ui: &mut egui::Ui, gi: &mut GiSettings) {
+    use crate::gi::SsgiResolution;
+    let s = &mut gi.ssgi;
+    egui::ComboBox::from_label("GI resolution")
+        .selected_text(format!("1/{}", s.resolution.divisor()))
+        .show_ui(ui, |ui| {
+            for (_, r) in SsgiResolution::NAMES {
+                ui.selectable_value(&mut s.resolution, r, format!("1/{}", r.divisor()));
+            }
+        });
+    ui.add(
+        egui::Slider::new(&mut s.samples, crate::limits::SSGI_SAMPLES.slider(8, 256))
+            .logarithmic(true)
+            .text("samples / texel / level"),
+    );
+    let mut fast = s.mips == crate::gi::SsgiMips::Fast;
+    ui.checkbox(&mut fast, "fast (nearest) mips");
+    s.mips = if fast {
+        crate::gi::SsgiMips::Fast
+    } else {
+        crate::gi::SsgiMips::Voting
+    };
+    ui.checkbox(&mut s.feedback, "feedback bounces");
+    let mut lobe = s.ssr_rays == crate::gi::SsrRays::Lobe;
+    ui.checkbox(&mut lobe, "reflection rays sample the lobe");
+    s.ssr_rays = if lobe {
+        crate::gi::SsrRays::Lobe
+    } else {
+        crate::gi::SsrRays::Mirror
+    };
+    ui.add(
+        egui::Slider::new(
+            &mut s.history_weight,
+            crate::limits::SSGI_HISTORY_WEIGHT.slider(0.0, 0.99),
+        )
+        .text("history weight τ"),
+    );
+}
