@@ -246,7 +246,7 @@ fn made_reference(args: &SweepArgs, name: &str, scene: &Scene) -> Result<PathBuf
     let settings = rc::ReferenceSettings {
         size: args.size.saturating_mul(2),
         spp: args.reference_spp.max(1),
-        max_depth: crate::eval::mitsuba::DEFAULT_MAX_DEPTH,
+        max_depth: crate::export::mitsuba::DEFAULT_MAX_DEPTH,
         seed: 0,
     };
     let cache = args
@@ -264,7 +264,7 @@ fn made_reference(args: &SweepArgs, name: &str, scene: &Scene) -> Result<PathBuf
         std::fs::remove_dir_all(&export).map_err(io(&export))?;
     }
     let report =
-        crate::eval::mitsuba::export_mitsuba(scene, 0.0, settings.size, settings.size, &export)?;
+        crate::export::mitsuba::export_mitsuba(scene, 0.0, settings.size, settings.size, &export)?;
     for w in &report.warnings {
         eprintln!("warning: {name}: {w}");
     }
