@@ -9,6 +9,8 @@
 #[forbid(unsafe_code)]
 pub mod app;
 #[forbid(unsafe_code)]
+pub mod assets;
+#[forbid(unsafe_code)]
 pub mod bench;
 #[forbid(unsafe_code)]
 pub mod cli;

@@ -27,7 +27,7 @@ const LAYERS: &[&[&str]] = &[
     &["export", "eval", "graph"],
     &["scene"],
     &["imaging", "vk"],
-    &["stats", "limits"],
+    &["stats", "limits", "assets"],
 ];
 
 /// One source file: its module path (`["render", "gbuffer"]` for `src/render/gbuffer.rs`,

@@ -58,6 +58,8 @@ pub enum CliError {
     #[error(transparent)]
     Tune(#[from] crate::tune::TuneError),
     #[error(transparent)]
+    Plot(#[from] crate::bench::plot::PlotError),
+    #[error(transparent)]
     App(#[from] crate::app::AppError),
     #[error(transparent)]
     Generate(#[from] crate::scene::atrium::GenerateError),
