@@ -235,8 +235,9 @@ mod tests {
             "hemisphere",
             "pathtrace",
             "none",
-            ">0.01<",
-            ">10<",
+            // Tick values, each on its own line inside its <text> element.
+            "\n0.1\n",
+            "\n10\n",
         ] {
             assert!(svg.contains(text), "no `{text}` in the SVG:\n{svg}");
         }
