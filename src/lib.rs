@@ -9,6 +9,8 @@
 #[forbid(unsafe_code)]
 pub mod app;
 #[forbid(unsafe_code)]
+pub mod assets;
+#[forbid(unsafe_code)]
 pub mod bench;
 #[forbid(unsafe_code)]
 pub mod cli;
@@ -16,9 +18,13 @@ pub mod demo;
 #[forbid(unsafe_code)]
 pub mod eval;
 #[forbid(unsafe_code)]
+pub mod export;
+#[forbid(unsafe_code)]
 pub mod gi;
 #[forbid(unsafe_code)]
 pub mod graph;
+#[forbid(unsafe_code)]
+pub mod imaging;
 #[forbid(unsafe_code)]
 pub mod light;
 pub mod limits;
@@ -32,6 +38,8 @@ pub mod render;
 pub mod scene;
 #[forbid(unsafe_code)]
 pub mod stats;
+#[forbid(unsafe_code)]
+pub mod tune;
 pub mod vk;
 #[forbid(unsafe_code)]
 pub mod voxel;

@@ -351,7 +351,8 @@ fn bunny_scene_atlas_vs_cpu_256x256x128() {
 /// rigid mover's atlas points transformed per frame; each frame's mip 0 against the CPU.
 #[test]
 fn voxel_frame_atlas_follows_a_moving_object() {
-    use voxgi::voxel::gpu::{VoxelFrame, VoxelSettings, Voxelizer};
+    use voxgi::voxel::gpu::{VoxelSettings, Voxelizer};
+    use voxgi::voxel::VoxelFrame;
     let ctx = common::context();
     let s = common::animated_scene();
     let settings = VoxelSettings {
@@ -523,7 +524,7 @@ struct Volumes {
 
 fn run_volume_frame(
     ctx: &Context,
-    frame: &voxgi::voxel::gpu::VoxelFrame,
+    frame: &voxgi::voxel::frame::VoxelFrame,
     volumes: &voxgi::voxel::gpu_atlas_volumes::AttributeVolumes,
 ) -> (Volumes, Vec<String>) {
     let grid = frame.voxels.grid;
@@ -627,8 +628,9 @@ fn assert_congruent(v: &Volumes, grid: &VoxelGrid, what: &str) -> usize {
 /// the albedo is the wall's material and the normal points into the box.
 #[test]
 fn atlas_volumes_match_the_bits_and_the_red_wall() {
-    use voxgi::voxel::gpu::{VoxelFrame, VoxelSettings, Voxelizer};
+    use voxgi::voxel::gpu::{VoxelSettings, Voxelizer};
     use voxgi::voxel::gpu_atlas_volumes::AttributeVolumes;
+    use voxgi::voxel::VoxelFrame;
     let ctx = common::context();
     let s = scene("cornell");
     let settings = VoxelSettings {
@@ -732,8 +734,9 @@ fn atlas_volumes_match_the_bits_and_the_red_wall() {
 /// the volumes follow it (voxels it leaves are cleared) and stay congruent with the bits.
 #[test]
 fn atlas_volumes_follow_a_moving_object() {
-    use voxgi::voxel::gpu::{VoxelFrame, VoxelSettings, Voxelizer};
+    use voxgi::voxel::gpu::{VoxelSettings, Voxelizer};
     use voxgi::voxel::gpu_atlas_volumes::AttributeVolumes;
+    use voxgi::voxel::VoxelFrame;
     let ctx = common::context();
     let s = common::animated_scene();
     let settings = VoxelSettings {
@@ -828,7 +831,8 @@ const SEQUENCE_TIMES: [(f32, usize); 4] = [(0.0, 0), (1.5, 1), (2.5, 2), (4.2, 4
 /// reference of that frame as closely as the rigid atlas tests do.
 #[test]
 fn voxel_frame_atlas_follows_an_obj_sequence() {
-    use voxgi::voxel::gpu::{VoxelFrame, VoxelSettings, Voxelizer};
+    use voxgi::voxel::gpu::{VoxelSettings, Voxelizer};
+    use voxgi::voxel::VoxelFrame;
     let ctx = common::context();
     let s = sequence_scene("bits");
     let sheet = s.objects.iter().find(|o| o.name == "sheet").expect("sheet");
@@ -886,8 +890,9 @@ fn voxel_frame_atlas_follows_an_obj_sequence() {
 /// bits (the layered pass splats the slot's frame list with that frame's triangles).
 #[test]
 fn atlas_volumes_follow_an_obj_sequence() {
-    use voxgi::voxel::gpu::{VoxelFrame, VoxelSettings, Voxelizer};
+    use voxgi::voxel::gpu::{VoxelSettings, Voxelizer};
     use voxgi::voxel::gpu_atlas_volumes::AttributeVolumes;
+    use voxgi::voxel::VoxelFrame;
     let ctx = common::context();
     let s = sequence_scene("volumes");
     let settings = VoxelSettings {

@@ -17,8 +17,9 @@ use voxgi::render::{render_image, RenderSettings};
 use voxgi::scene::{load_scene_arg, Scene};
 use voxgi::vk::Context;
 use voxgi::voxel::attributes::{TriangleAttributeVolumes, ValueVolumes};
-use voxgi::voxel::gpu::{VoxelFrame, VoxelSettings, Voxelizer};
+use voxgi::voxel::gpu::{VoxelSettings, Voxelizer};
 use voxgi::voxel::maps::sample_map_cpu;
+use voxgi::voxel::VoxelFrame;
 use voxgi::voxel::VoxelGrid;
 
 fn root() -> &'static Path {

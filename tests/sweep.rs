@@ -405,7 +405,7 @@ fn a_made_reference_is_keyed_by_the_scene_content() {
         let scene = voxgi::scene::load_scene_arg(Some(&scene_file.to_string_lossy()))
             .expect("the scene loads");
         let export = dir.join(format!("export{k}"));
-        voxgi::eval::mitsuba::export_mitsuba(&scene, 0.0, 32, 32, &export).expect("exports");
+        voxgi::export::mitsuba::export_mitsuba(&scene, 0.0, 32, 32, &export).expect("exports");
         export_key(&export, s, &[("tool".into(), b"v1".to_vec())]).expect("hashes")
     };
     std::fs::write(

@@ -9,7 +9,8 @@ use voxgi::graph::{GraphExecutor, RenderGraph};
 use voxgi::render::{render_image, RenderSettings};
 use voxgi::scene::{builtin, Scene};
 use voxgi::vk::{FrameLoop, MAX_FRAMES_IN_FLIGHT};
-use voxgi::voxel::gpu::{VoxelFrame, VoxelSettings};
+use voxgi::voxel::gpu::VoxelSettings;
+use voxgi::voxel::VoxelFrame;
 use voxgi::voxel::{voxelize_scene, BitGrid, BitHierarchy};
 
 /// The CPU reference hierarchy of the whole scene at `t_s` on `frame`'s grid.

@@ -56,7 +56,7 @@ vec3 vpl_intensity(GpuVpl v, vec3 w) {
     return i;
 }
 
-// Mirrors `GpuVplGeneratePush` in src/gi/vpl.rs.
+// Mirrors `GpuVplGeneratePush` in src/gi/gi_common.rs.
 #ifdef VPL_GENERATE_PUSH
 layout(push_constant) uniform VplGeneratePush {
     mat4 world_to_voxel;

@@ -99,7 +99,7 @@ pub struct ViewerOptions {
     /// the panel button write here (default `voxgi-shot-N.png`).
     pub screenshot: Option<PathBuf>,
     /// The sweep (its folder, as `voxgi sweep --out` wrote it) and the scene's name in it,
-    /// for the panel's "best within budget" ([`crate::bench::sweep::tune_from_dir`]).
+    /// for the panel's "best within budget" ([`crate::tune::tune_from_dir`]).
     pub sweep_dir: PathBuf,
     pub scene_name: String,
     /// The panel's initial time budget, ms.
@@ -1190,7 +1190,7 @@ impl Viewer {
     fn apply_best_within_budget(&mut self) {
         let budget = f64::from(self.controls.budget_ms);
         let dir = &self.opts.sweep_dir;
-        match crate::bench::sweep::tune_from_dir(dir, &self.opts.scene_name, budget) {
+        match crate::tune::tune_from_dir(dir, &self.opts.scene_name, budget) {
             Ok((row, _, overrides)) => {
                 self.controls.gi = overrides.apply(self.controls.gi);
                 self.status = format!(

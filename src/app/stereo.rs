@@ -171,12 +171,13 @@ impl ViewerStereo {
 /// The panel's stereo section: the packing (off or a mode), the path, eye separation and
 /// convergence (ranges from [`limits`]); `status` is the path that runs or why it fell back.
 /// Adds where the packing combo and, while it is open, its entries were drawn to `spots`
-/// ("stereo packing", "stereo packing: NAME").
+/// ("stereo packing", "stereo packing: NAME"), each a name and a rectangle in points as the
+/// panel's `Spot`s are (the panel calls this section, so it cannot be named from here).
 pub fn panel_section(
     ui: &mut egui::Ui,
     c: &mut StereoControls,
     status: Option<&str>,
-    spots: &mut Vec<super::panel::Spot>,
+    spots: &mut Vec<(String, egui::Rect)>,
 ) {
     let label = |m: Option<StereoMode>| m.map_or_else(|| "off".to_owned(), StereoMode::name);
     let combo = egui::ComboBox::from_label("packing")

@@ -22,6 +22,7 @@
 
 mod flicker;
 mod leak;
+pub mod plot;
 pub mod reference_cache;
 mod scenes;
 mod soak;
@@ -102,7 +103,7 @@ pub enum BenchError {
         "the scene has no point or spot light to move: the flicker benchmark moves the first          one along a circle; add one to the scene"
     )]
     NoMovableLight,
-    #[error("no reference image {}: render one with tools/reference (see assets/references/README.md) or choose a scene that has one", path.display())]
+    #[error("no reference image {}: point --references at the folder that has it, render one with tools/reference (see assets/references/README.md) or choose a scene that has one", path.display())]
     NoReference { path: std::path::PathBuf },
     #[error("--size {size}: the reference {} is {width}x{height}; --size must divide it and the reference must be square (e.g. 32, 64, 128, 256)", path.display())]
     ReferenceSize {

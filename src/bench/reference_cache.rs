@@ -18,7 +18,7 @@ pub struct ReferenceSettings {
     pub size: u32,
     /// Samples per pixel.
     pub spp: u32,
-    /// Path segments from the camera (64: full GI, see `eval::mitsuba::DEFAULT_MAX_DEPTH`).
+    /// Path segments from the camera (64: full GI, see `export::mitsuba::DEFAULT_MAX_DEPTH`).
     pub max_depth: u32,
     pub seed: u32,
 }

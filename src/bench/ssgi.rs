@@ -171,7 +171,7 @@ pub fn load_reference(
     name: &str,
     size: u32,
 ) -> Result<HdrImage, BenchError> {
-    let path = dir.join(format!("{name}_gi.exr"));
+    let path = crate::assets::find(&dir.join(format!("{name}_gi.exr")));
     if !path.exists() {
         return Err(BenchError::NoReference { path });
     }

@@ -523,7 +523,7 @@ fn limit_reference(
     if export.exists() {
         std::fs::remove_dir_all(&export).map_err(io(&export))?;
     }
-    crate::eval::mitsuba::export_mitsuba(scene, 0.0, size, size, &export)?;
+    crate::export::mitsuba::export_mitsuba(scene, 0.0, size, size, &export)?;
     let key = rc::export_key(&export, &settings, &tool).map_err(SweepError::from)?;
     let path = rc::cached_path(&refs.cache, name, &key);
     if !path.exists() {

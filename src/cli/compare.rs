@@ -28,7 +28,7 @@ pub struct CompareArgs {
 pub fn compare(args: &CompareArgs, out: &mut dyn Write) -> Result<(), CliError> {
     let mask = match &args.mask {
         Some(path) => {
-            let img = HdrImage::load(path)?;
+            let img = HdrImage::load(crate::assets::find(path))?;
             Some(
                 img.data
                     .iter()
@@ -38,9 +38,12 @@ pub fn compare(args: &CompareArgs, out: &mut dyn Write) -> Result<(), CliError> 
         }
         None => None,
     };
-    let m = crate::eval::compare_files(&args.reference, &args.test, mask.as_deref())?;
+    // Inputs found from the current directory, else the project's root (assets/references).
+    let reference = crate::assets::find(&args.reference);
+    let test = crate::assets::find(&args.test);
+    let m = crate::eval::compare_files(&reference, &test, mask.as_deref())?;
     if let Some(path) = &args.heatmap {
-        write_heatmap(&args.reference, &args.test, path)?;
+        write_heatmap(&reference, &test, path)?;
     }
     if args.json {
         outln!(out, "{}", serde_json::to_string_pretty(&m)?);

@@ -27,7 +27,7 @@ pub struct ExportArgs {
 /// Writes the XML and PLY files; warnings (what Mitsuba cannot show) go to stderr.
 pub fn export_mitsuba(args: &ExportArgs, out: &mut dyn Write) -> Result<(), CliError> {
     let scene = args.camera.load_scene(args.scene.as_deref())?;
-    let report = crate::eval::mitsuba::export_mitsuba(
+    let report = crate::export::mitsuba::export_mitsuba(
         &scene,
         args.time,
         args.width,

@@ -50,11 +50,15 @@ pub enum CliError {
     #[error(transparent)]
     Eval(#[from] crate::eval::EvalError),
     #[error(transparent)]
-    Mitsuba(#[from] crate::eval::mitsuba::MitsubaExportError),
+    Mitsuba(#[from] crate::export::mitsuba::MitsubaExportError),
     #[error(transparent)]
     Bench(#[from] crate::bench::BenchError),
     #[error(transparent)]
     Sweep(#[from] crate::bench::sweep::SweepError),
+    #[error(transparent)]
+    Tune(#[from] crate::tune::TuneError),
+    #[error(transparent)]
+    Plot(#[from] crate::bench::plot::PlotError),
     #[error(transparent)]
     App(#[from] crate::app::AppError),
     #[error(transparent)]

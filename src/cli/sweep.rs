@@ -6,9 +6,10 @@
 
 use super::args::FrameArgs;
 use super::{check_validation, context, outln, CliError, Global};
+use crate::bench::plot::{pareto_png, pareto_svg};
 use crate::bench::sweep::read_rows;
 use crate::bench::sweep::{
-    configs, downsample, gi_inline, method_name, pareto_svg, parse_grid, parse_methods, read_csv,
+    configs, downsample, gi_inline, method_name, parse_grid, parse_methods, read_csv,
     tune_from_dir, Config, CsvAppender, SweepError, SweepRow,
 };
 use crate::bench::sweep_traverse::{
@@ -161,7 +162,7 @@ fn scene_args(args: &SweepArgs) -> Vec<String> {
         .iter()
         .map(|s| (*s).to_owned())
         .collect();
-    if let Ok(dir) = std::fs::read_dir("assets/scenes") {
+    if let Ok(dir) = std::fs::read_dir(crate::assets::find(Path::new("assets/scenes"))) {
         let mut files: Vec<String> = dir
             .filter_map(Result::ok)
             .map(|e| e.path())
@@ -180,8 +181,9 @@ fn scene_args(args: &SweepArgs) -> Vec<String> {
     all
 }
 
+/// `<name>_gi.exr` in `dir`, from the current directory or else the project's root.
 fn reference_path(dir: &Path, name: &str) -> PathBuf {
-    dir.join(format!("{name}_gi.exr"))
+    crate::assets::find(&dir.join(format!("{name}_gi.exr")))
 }
 
 /// Loads each scene and its reference, box-filtered to `size`.
@@ -246,7 +248,7 @@ fn made_reference(args: &SweepArgs, name: &str, scene: &Scene) -> Result<PathBuf
     let settings = rc::ReferenceSettings {
         size: args.size.saturating_mul(2),
         spp: args.reference_spp.max(1),
-        max_depth: crate::eval::mitsuba::DEFAULT_MAX_DEPTH,
+        max_depth: crate::export::mitsuba::DEFAULT_MAX_DEPTH,
         seed: 0,
     };
     let cache = args
@@ -264,7 +266,7 @@ fn made_reference(args: &SweepArgs, name: &str, scene: &Scene) -> Result<PathBuf
         std::fs::remove_dir_all(&export).map_err(io(&export))?;
     }
     let report =
-        crate::eval::mitsuba::export_mitsuba(scene, 0.0, settings.size, settings.size, &export)?;
+        crate::export::mitsuba::export_mitsuba(scene, 0.0, settings.size, settings.size, &export)?;
     for w in &report.warnings {
         eprintln!("warning: {name}: {w}");
     }
@@ -455,9 +457,9 @@ fn write_summaries(
     for scene in scenes {
         let of: Vec<&SweepRow> = rows.iter().filter(|r| r.scene == scene).collect();
         let svg = dir.join(format!("{scene}_pareto.svg"));
-        std::fs::write(&svg, pareto_svg(scene, &of)).map_err(io(&svg))?;
+        std::fs::write(&svg, pareto_svg(scene, &of)?).map_err(io(&svg))?;
         let png = dir.join(format!("{scene}_pareto.png"));
-        crate::bench::sweep::pareto_png(&of)
+        pareto_png(scene, &of)?
             .save(&png)
             .map_err(|e| SweepError::Io {
                 path: png.clone(),

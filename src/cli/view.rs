@@ -141,7 +141,7 @@ pub fn view(global: &Global, args: ViewArgs, out: &mut dyn Write) -> Result<(), 
     args.gi.check_sao(&settings.gi)?;
     let name = super::sweep::scene_name(args.scene.as_deref().unwrap_or("cornell"));
     if let Some(budget) = args.budget_ms {
-        let (row, _, overrides) = crate::bench::sweep::tune_from_dir(&args.sweep, &name, budget)?;
+        let (row, _, overrides) = crate::tune::tune_from_dir(&args.sweep, &name, budget)?;
         settings.gi = overrides.apply(settings.gi);
         outln!(
             out,

@@ -2,8 +2,8 @@
 
 use std::path::Path;
 
-use super::error::EvalError;
-use super::image_io::save_rgb8_png;
+use super::EvalError;
+use crate::imaging::image_io::save_rgb8_png;
 
 /// The 256-entry magma colormap that FLIP itself uses for its error maps (dark purple for no
 /// error, through red, to pale yellow for the largest). Perceptually uniform, so equal steps in

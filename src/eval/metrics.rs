@@ -12,9 +12,9 @@ use std::path::Path;
 
 use serde::Serialize;
 
-use super::color::{display, luminance, to_srgb8};
-use super::error::EvalError;
-use super::image_io::HdrImage;
+use super::EvalError;
+use crate::imaging::color::display;
+use crate::imaging::{luminance, to_srgb8, HdrImage};
 
 /// ε in the relMSE denominator. It keeps near-black reference pixels from dominating the mean;
 /// the denoising literature uses 1e-3 to 1e-2 (relMSE as introduced by Rousselle, Knaus and

@@ -168,6 +168,30 @@ pub fn add_ray_pass(
     });
 }
 
+/// Push constants of `gi_vpl_generate` and `gi_vpl_bounce` (`glsl/include/vpl.glsl`), and of
+/// `gi_vpl_emit`, which generates the emitters' VPLs the same way.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct GpuVplGeneratePush {
+    pub world_to_voxel: [f32; 16],
+    /// Voxels x, y, depth; w the top hierarchy level.
+    pub dims: [i32; 4],
+    /// Sets, lights, VPLs per set and light, bounces.
+    pub counts: [u32; 4],
+    /// Start level, max iterations, this pass's bounce, shadow-map resolution.
+    pub trace: [u32; 4],
+    /// Normal offset (voxel diagonals), voxel diagonal (m), ray length (m), unused.
+    pub params: [f32; 4],
+}
+
+crate::push_constants!(GpuVplGeneratePush {
+    world_to_voxel,
+    dims,
+    counts,
+    trace,
+    params
+});
+
 #[cfg(test)]
 mod tests {
     use super::*;

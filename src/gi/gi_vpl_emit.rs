@@ -29,7 +29,7 @@ use bytemuck::{Pod, Zeroable};
 use glam::{Vec2, Vec3};
 use std::f32::consts::PI;
 
-use super::vpl::GpuVplGeneratePush;
+use super::gi_common::GpuVplGeneratePush;
 
 /// `GpuEmitter::origin.w` of an emissive triangle (origin, edges; face normal e1 × e2).
 pub const EMITTER_TRIANGLE: f32 = 0.0;

@@ -85,7 +85,7 @@ pub struct GiTarget<'a> {
     /// The scene has Phong materials (the G-buffer has a specular image).
     pub has_phong: bool,
     /// The atlas voxelizer writes the attribute volumes of the objects it voxelizes
-    /// ([`crate::voxel::gpu::VoxelFrame::enable_attribute_volumes`]); the triangle
+    /// ([`crate::voxel::frame::VoxelFrame::enable_attribute_volumes`]); the triangle
     /// attribute pass covers only the others.
     pub atlas_attributes: bool,
 }
@@ -297,7 +297,7 @@ impl GiPasses {
         &self,
         g: &mut RenderGraph,
         inp: &GiInputs,
-        voxels: Option<&crate::voxel::gpu::VoxelFrame>,
+        voxels: Option<&crate::voxel::frame::VoxelFrame>,
     ) -> ImageHandle {
         self.add_eye_passes(g, inp, voxels, 0, &mut None)
     }
@@ -310,7 +310,7 @@ impl GiPasses {
         &self,
         g: &mut RenderGraph,
         inp: &GiInputs,
-        voxels: Option<&crate::voxel::gpu::VoxelFrame>,
+        voxels: Option<&crate::voxel::frame::VoxelFrame>,
         eye: u32,
         world: &mut Option<GiWorld>,
     ) -> ImageHandle {

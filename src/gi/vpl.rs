@@ -13,6 +13,7 @@ pub use crate::scene::vpl_settings::{
 };
 
 use super::gi_common::GiShared;
+pub use super::gi_common::GpuVplGeneratePush;
 use super::gi_vpl_emit::GiVplEmit;
 use super::{GiInputs, GiMethodPasses, GiOutput, GiSettings, GiTarget, Overlay};
 use crate::graph::{Access, BufferHandle, ImageHandle, RenderGraph, Shader};
@@ -45,29 +46,6 @@ crate::gpu_struct!(GpuVpl {
     lobe,
     specular,
     incident
-});
-
-/// Push constants of `gi_vpl_generate` and `gi_vpl_bounce` (`glsl/include/vpl.glsl`).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
-pub struct GpuVplGeneratePush {
-    pub world_to_voxel: [f32; 16],
-    /// Voxels x, y, depth; w the top hierarchy level.
-    pub dims: [i32; 4],
-    /// Sets, lights, VPLs per set and light, bounces.
-    pub counts: [u32; 4],
-    /// Start level, max iterations, this pass's bounce, shadow-map resolution.
-    pub trace: [u32; 4],
-    /// Normal offset (voxel diagonals), voxel diagonal (m), ray length (m), unused.
-    pub params: [f32; 4],
-}
-
-crate::push_constants!(GpuVplGeneratePush {
-    world_to_voxel,
-    dims,
-    counts,
-    trace,
-    params
 });
 
 /// Push constants of `gi_vpl_gather`.

@@ -875,6 +875,19 @@ pub fn texel_bytes(format: vk::Format) -> u64 {
     }
 }
 
+/// Bytes of every texel of `desc`, all mips and layers, tightly packed.
+pub fn texel_bytes_of(desc: &crate::vk::ImageDesc) -> u64 {
+    let texel = texel_bytes(desc.format);
+    (0..desc.mip_levels)
+        .map(|m| {
+            let side = |v: u32| u64::from((v >> m).max(1));
+            side(desc.width) * side(desc.height) * side(desc.depth)
+        })
+        .sum::<u64>()
+        * texel
+        * u64::from(desc.layers)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

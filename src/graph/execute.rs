@@ -352,7 +352,7 @@ impl MemoryOracle for DeviceOracle<'_> {
         };
         if self.at_least_texels {
             let floor = match r.image {
-                Some(desc) => crate::render::memory::texel_bytes_of(desc),
+                Some(desc) => super::texel_bytes_of(desc),
                 None => r.buffer_size_bytes,
             };
             req.size = req.size.max(floor);

@@ -36,8 +36,8 @@ mod oneshot;
 pub use access::{Access, AccessInfo, Shader, Subresource, SubresourceSel};
 pub use bind::Load;
 pub use compile::{
-    texel_bytes, Arena, Barrier, CompiledGraph, EstimateOracle, MemoryOracle, MemoryRequirements,
-    MemoryStats, Placement, ResourceDeclView,
+    texel_bytes, texel_bytes_of, Arena, Barrier, CompiledGraph, EstimateOracle, MemoryOracle,
+    MemoryRequirements, MemoryStats, Placement, ResourceDeclView,
 };
 pub use execute::{transient_arenas, GpuBuffer, GpuImage, GraphExecutor, PassContext};
 pub use oneshot::{add_readback, readback_buffer, run_frames, run_once, OneShotError};

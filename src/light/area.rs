@@ -20,7 +20,7 @@
 //!    the receiver would need one per receiver). Far away the sum is L·πR²/d², the sphere's
 //!    exact irradiance (∫ max(n·w, 0) dA = πR²).
 
-use super::shadow::{AreaShadow, ShadowSettings};
+use super::settings::{AreaShadow, ShadowSettings};
 use crate::scene::Light;
 use glam::Vec3;
 

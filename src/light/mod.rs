@@ -6,9 +6,8 @@
 
 pub mod area;
 pub mod cascade;
+mod settings;
 mod shadow;
 
-pub use shadow::{
-    shadow_views, AreaShadow, LightShadows, PointShadow, ShadowProjection, ShadowSettings,
-    ShadowView, DEFAULT_CASCADES,
-};
+pub use settings::{AreaShadow, PointShadow, ShadowSettings, DEFAULT_CASCADES};
+pub use shadow::{shadow_views, LightShadows, ShadowProjection, ShadowView};

@@ -102,7 +102,7 @@ pub enum GbufferViews {
 pub struct GbufferPass {
     pipeline: GraphicsPipeline,
     /// Instances per draw: 2 on a multiview path whose driver has
-    /// [`super::stereo::MultiviewDefect`] (instance 0 flushes the driver's batch, instance 1
+    /// [`super::multiview::MultiviewDefect`] (instance 0 flushes the driver's batch, instance 1
     /// is the mesh: `gbuffer_vert.glsl`, `FLUSH_INSTANCE`), else 1.
     instances: u32,
     /// The scene has Phong or GGX materials.
@@ -139,7 +139,8 @@ impl GbufferPass {
         views: GbufferViews,
     ) -> Result<Self, VkError> {
         let multiview = views == GbufferViews::Multiview;
-        let defect = super::stereo::MultiviewDefect::of(ctx.info.driver_id, &ctx.info.driver_info);
+        let defect =
+            super::multiview::MultiviewDefect::of(ctx.info.driver_id, &ctx.info.driver_info);
         // The flushing instance relies on this pipeline's triangles needing no stage of the
         // draw module's primitive pipeline except clipping (filled polygons, no depth bias,
         // no cull distances), so an unclipped instance is emitted directly.
@@ -227,7 +228,7 @@ impl GbufferPass {
                 for (eye, frame) in [(0, scene.frame), (1, right)] {
                     let targets = out.eye(g, eye);
                     if eye == 1 {
-                        g.set_pass_suffix(super::stereo::RIGHT_EYE_SUFFIX);
+                        g.set_pass_suffix(super::multiview::RIGHT_EYE_SUFFIX);
                     }
                     self.add_pass(g, scene, &targets, (frame, None));
                     g.set_pass_suffix("");

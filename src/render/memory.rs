@@ -11,6 +11,7 @@
 //! (G-buffer, direct and indirect radiance, post chain), one set per frame in flight.
 
 use super::RenderError;
+pub use crate::graph::texel_bytes_of;
 use crate::vk::{BufferDesc, Context, ImageDesc};
 
 const GIB: f64 = (1u64 << 30) as f64;
@@ -46,19 +47,6 @@ impl MemoryNeed {
             is_buffer: true,
         }
     }
-}
-
-/// Bytes of every texel of `desc`, all mips and layers, tightly packed.
-pub fn texel_bytes_of(desc: &ImageDesc) -> u64 {
-    let texel = crate::graph::texel_bytes(desc.format);
-    (0..desc.mip_levels)
-        .map(|m| {
-            let side = |v: u32| u64::from((v >> m).max(1));
-            side(desc.width) * side(desc.height) * side(desc.depth)
-        })
-        .sum::<u64>()
-        * texel
-        * u64::from(desc.layers)
 }
 
 /// Which device limit a set of resources exceeds.

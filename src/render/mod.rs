@@ -12,6 +12,7 @@ mod gbuffer_view;
 pub mod gpu;
 mod light_map;
 pub mod memory;
+mod multiview;
 mod oit;
 mod oit_clear;
 mod oit_gather;
@@ -26,6 +27,7 @@ mod textures;
 
 pub use gbuffer::Gbuffer;
 pub use light_map::LightMaps;
+pub use multiview::{MesaVersion, MultiviewDefect, RIGHT_EYE_SUFFIX};
 pub use oit::{OitStats, DEFAULT_NODES_PER_PIXEL as OIT_DEFAULT_NODES_PER_PIXEL};
 pub use oit_resolve::MAX_LAYERS as OIT_MAX_LAYERS;
 pub use run::{
@@ -37,9 +39,8 @@ pub use settings_check::{check_device_limits, check_render_settings};
 pub use stereo::{
     declare_pair as declare_stereo_pair, default_convergence_m,
     default_path as default_stereo_path, eye_scene, multiview_blocker, pack as stereo_pack,
-    prepare_pair as prepare_stereo_pair, profile_stereo, render_stereo, MesaVersion,
-    MultiviewDefect, StereoOutput, StereoPath, StereoProfile, StereoRenderers, StereoSettings,
-    PROFILE_ROUND_FRAMES, RIGHT_EYE_SUFFIX,
+    prepare_pair as prepare_stereo_pair, profile_stereo, render_stereo, StereoOutput, StereoPath,
+    StereoProfile, StereoRenderers, StereoSettings, PROFILE_ROUND_FRAMES,
 };
 
 use crate::eval::HdrImage;
@@ -344,7 +345,7 @@ pub struct Renderer {
     frame_data: GpuFrame,
     /// The un-jittered view-projection of the last frame written (motion vectors only).
     prev_view_proj: Option<glam::Mat4>,
-    voxels: Option<crate::voxel::gpu::VoxelFrame>,
+    voxels: Option<crate::voxel::frame::VoxelFrame>,
     /// Indirect-light passes and the light-map pass (for the voxel methods), when a GI method
     /// is on.
     gi: Option<(crate::gi::GiPasses, Option<LightMapPass>)>,
@@ -587,7 +588,7 @@ impl Renderer {
             .transpose()?;
         let mut voxels = None;
         if let Some(v) = &voxel_settings {
-            voxels = Some(crate::voxel::gpu::VoxelFrame::new(
+            voxels = Some(crate::voxel::frame::VoxelFrame::new(
                 ctx,
                 scene,
                 settings.time_s,
@@ -907,7 +908,11 @@ impl Renderer {
         let readbacks = std::iter::once([&self.readback_hdr, &self.readback_ldr])
             .chain(self.stereo.as_ref().map(|st| st.readback_right.each_ref()));
         for (i, (images, [hdr, ldr])) in eyes.into_iter().zip(readbacks).enumerate() {
-            g.set_pass_suffix(if i == 0 { "" } else { stereo::RIGHT_EYE_SUFFIX });
+            g.set_pass_suffix(if i == 0 {
+                ""
+            } else {
+                multiview::RIGHT_EYE_SUFFIX
+            });
             let hdr_buf = g.import_buffer(hdr, Access::HostRead);
             let ldr_buf = g.import_buffer(ldr, Access::HostRead);
             crate::graph::add_readback(&mut g, "readback_hdr", images.radiance, hdr_buf);
@@ -937,7 +942,7 @@ impl Renderer {
     /// and the right eye's. The world-space passes (shadow maps, voxels, light maps, the GI
     /// methods' VPLs and radiance volume) are declared once; the G-buffer draws both eyes
     /// into two-layer images (per eye, or in one multiview pass); every later pass runs per
-    /// eye on its layer, the right eye's named with the suffix [`stereo::RIGHT_EYE_SUFFIX`].
+    /// eye on its layer, the right eye's named with the suffix [`multiview::RIGHT_EYE_SUFFIX`].
     pub fn declare_eyes(&self, g: &mut RenderGraph) -> Vec<FrameImages> {
         self.declare_eyes_with_scene(g).0
     }
@@ -970,7 +975,7 @@ impl Renderer {
         // The right eye's passes read its frame constants.
         let mut scene_right = scene.clone();
         scene_right.frame = scene.frame_right.unwrap_or(scene.frame);
-        g.set_pass_suffix(stereo::RIGHT_EYE_SUFFIX);
+        g.set_pass_suffix(multiview::RIGHT_EYE_SUFFIX);
         let right = self.declare_view(
             g,
             &scene_right,

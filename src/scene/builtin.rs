@@ -91,7 +91,7 @@ pub fn load_scene_arg(arg: Option<&str>) -> Result<Scene, SceneError> {
     if let Some(result) = try_builtin(name) {
         return result;
     }
-    Scene::load(name)
+    Scene::load(crate::assets::find(Path::new(name)))
 }
 
 #[cfg(test)]

@@ -257,7 +257,7 @@ impl TextureData {
                             let v = f32::from(prev[((sy * w + sx) * 4 + c) as usize]) / 255.0;
                             // Average light, not encoded values: decode sRGB color channels first.
                             sum += if self.srgb && c < 3 {
-                                crate::eval::srgb_decode(v)
+                                crate::imaging::srgb_decode(v)
                             } else {
                                 v
                             };
@@ -265,7 +265,7 @@ impl TextureData {
                         }
                         let avg = sum / n;
                         let enc = if self.srgb && c < 3 {
-                            crate::eval::srgb_encode(avg)
+                            crate::imaging::srgb_encode(avg)
                         } else {
                             avg
                         };
@@ -287,7 +287,11 @@ fn mean_linear_rgb(rgba8: &[u8], srgb: bool) -> Vec3 {
     let decode: Vec<f64> = (0..=255u8)
         .map(|c| {
             let v = f32::from(c) / 255.0;
-            f64::from(if srgb { crate::eval::srgb_decode(v) } else { v })
+            f64::from(if srgb {
+                crate::imaging::srgb_decode(v)
+            } else {
+                v
+            })
         })
         .collect();
     let mut sum = [0.0f64; 3];

@@ -8,7 +8,6 @@ use super::VkError;
 use ash::extensions::{ext, khr};
 use ash::vk;
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
-use std::collections::BTreeMap;
 use std::ffi::{c_void, CStr, CString};
 use std::sync::atomic::{AtomicU32, Ordering};
 use std::sync::{Arc, Mutex};
@@ -61,43 +60,6 @@ impl ValidationLog {
         if let Ok(mut m) = self.messages.lock() {
             m.push(text);
         }
-    }
-}
-
-/// GPU memory handed out and not yet freed, keyed by (memory handle, offset), with the name
-/// it was allocated under and its size: what [`Context::finish`] reports as leaked, and what
-/// [`Context::allocated_bytes`] sums. gpu-allocator only logs its leaks at shutdown; this
-/// table lets teardown fail on them instead.
-#[derive(Debug, Default)]
-pub struct LiveAllocations(Mutex<BTreeMap<(u64, u64), (String, u64)>>);
-
-impl LiveAllocations {
-    pub(super) fn insert(&self, key: (u64, u64), name: &str, size_bytes: u64) {
-        if let Ok(mut m) = self.0.lock() {
-            m.insert(key, (name.to_owned(), size_bytes));
-        }
-    }
-    pub(super) fn remove(&self, key: (u64, u64)) {
-        if let Ok(mut m) = self.0.lock() {
-            m.remove(&key);
-        }
-    }
-    /// The names of every allocation still alive, sorted.
-    pub(super) fn names(&self) -> Vec<String> {
-        let mut names: Vec<String> = self
-            .0
-            .lock()
-            .map(|m| m.values().map(|(name, _)| name.clone()).collect())
-            .unwrap_or_default();
-        names.sort();
-        names
-    }
-    /// Bytes of every allocation still alive.
-    pub(super) fn total_bytes(&self) -> u64 {
-        self.0
-            .lock()
-            .map(|m| m.values().map(|(_, size)| size).sum())
-            .unwrap_or(0)
     }
 }
 

@@ -18,12 +18,11 @@
 //! context was destroyed touches nothing: it is logged and leaked, and [`Context::finish`]
 //! already reported its memory as never freed.
 
-use super::context::LiveAllocations;
 use ash::extensions::khr;
 use ash::vk;
 use ash::vk::Handle;
 use gpu_allocator::vulkan::{Allocation, Allocator};
-use std::collections::VecDeque;
+use std::collections::{BTreeMap, VecDeque};
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard};
 
@@ -225,8 +224,7 @@ impl ReleaseQueue {
 
     /// Returns an allocation to the allocator and drops it from the live table.
     pub(super) fn free(&self, allocation: Allocation) {
-        self.live_allocations
-            .remove(super::resources::allocation_key(&allocation));
+        self.live_allocations.remove(allocation_key(&allocation));
         if let Ok(mut alloc) = self.allocator.lock() {
             if let Some(alloc) = alloc.as_mut() {
                 if let Err(e) = alloc.free(allocation) {
@@ -249,4 +247,48 @@ impl ReleaseQueue {
         let _ = unsafe { self.device.device_wait_idle() };
         self.mark_completed(target);
     }
+}
+
+/// GPU memory handed out and not yet freed, keyed by (memory handle, offset), with the name
+/// it was allocated under and its size: what [`Context::finish`] reports as leaked, and what
+/// [`Context::allocated_bytes`] sums. gpu-allocator only logs its leaks at shutdown; this
+/// table lets teardown fail on them instead.
+#[derive(Debug, Default)]
+pub struct LiveAllocations(Mutex<BTreeMap<(u64, u64), (String, u64)>>);
+
+impl LiveAllocations {
+    pub(super) fn insert(&self, key: (u64, u64), name: &str, size_bytes: u64) {
+        if let Ok(mut m) = self.0.lock() {
+            m.insert(key, (name.to_owned(), size_bytes));
+        }
+    }
+    pub(super) fn remove(&self, key: (u64, u64)) {
+        if let Ok(mut m) = self.0.lock() {
+            m.remove(&key);
+        }
+    }
+    /// The names of every allocation still alive, sorted.
+    pub(super) fn names(&self) -> Vec<String> {
+        let mut names: Vec<String> = self
+            .0
+            .lock()
+            .map(|m| m.values().map(|(name, _)| name.clone()).collect())
+            .unwrap_or_default();
+        names.sort();
+        names
+    }
+    /// Bytes of every allocation still alive.
+    pub(super) fn total_bytes(&self) -> u64 {
+        self.0
+            .lock()
+            .map(|m| m.values().map(|(_, size)| size).sum())
+            .unwrap_or(0)
+    }
+}
+
+/// The key of an allocation in the context's table of live allocations.
+pub(super) fn allocation_key(allocation: &Allocation) -> (u64, u64) {
+    // SAFETY: only the handle's value is read, as a key; no memory is touched.
+    let memory = unsafe { allocation.memory() };
+    (memory.as_raw(), allocation.offset())
 }

@@ -1,7 +1,7 @@
 //! Persistent buffers and images, allocated with gpu-allocator; staging upload and read-back.
 //! Buffers, images and arenas release themselves when dropped (see `release.rs`).
 
-use super::release::{Garbage, ReleaseQueue};
+use super::release::{allocation_key, Garbage, ReleaseQueue};
 use super::{Context, VkError};
 use ash::vk;
 use ash::vk::Handle;
@@ -204,13 +204,6 @@ impl Drop for Arena {
     fn drop(&mut self) {
         self.release.release(vec![Garbage::Memory(self.raw)]);
     }
-}
-
-/// The key of an allocation in the context's table of live allocations.
-pub(super) fn allocation_key(allocation: &Allocation) -> (u64, u64) {
-    // SAFETY: only the handle's value is read, as a key; no memory is touched.
-    let memory = unsafe { allocation.memory() };
-    (memory.as_raw(), allocation.offset())
 }
 
 impl Context {

@@ -29,7 +29,6 @@
 //! ([`super::gpu_atlas_volumes`]), and this writer only the others.
 
 use super::gpu::{voxelize_loads, voxelize_splits, GpuVoxelizePush};
-use super::gpu_atlas_volumes::AttributeVolumes;
 use super::maps::{owner_sample_spacing_m, GpuTriangleMaps, MapUse, VoxelMaps};
 use super::VoxelGrid;
 use crate::graph::{Access, BufferHandle, ImageHandle, RenderGraph, Shader, SlotCondition};
@@ -43,7 +42,7 @@ use std::sync::atomic::{AtomicU32, Ordering};
 use std::sync::Arc;
 
 /// State of both volumes between frames: sampled by compute shaders.
-pub const ATTRIBUTE_VOLUME_STATE: Access = super::gpu_atlas_volumes::VOLUME_STATE;
+pub const ATTRIBUTE_VOLUME_STATE: Access = VOLUME_STATE;
 
 /// Group size of the attribute voxelizer (one workgroup per triangle).
 const ATTRIBUTE_GROUP_SIZE: u32 = 64;
@@ -859,6 +858,54 @@ fn attribute_triangles(scene: &Scene, t_s: f32, maps: MapUse, spacing_m: f32) ->
         v.materials.push(m);
     }
     v
+}
+
+/// Formats of the resolved volumes (what `gi_pathtrace.comp` samples).
+pub const ALBEDO_FORMAT: vk::Format = vk::Format::R8G8B8A8_UNORM;
+pub const NORMAL_FORMAT: vk::Format = vk::Format::R8G8B8A8_SNORM;
+
+/// State of the resolved volumes between frames: sampled by compute shaders.
+pub const VOLUME_STATE: Access = Access::Sampled(Shader::Compute);
+
+/// The albedo (`RGBA8`, a = 1 where occupied) and normal (`RGBA8_SNORM`) 3D volumes,
+/// one texel per voxel, in the voxel grid's (x, y, depth) order.
+pub struct AttributeVolumes {
+    pub albedo: Image,
+    pub normal: Image,
+}
+
+impl AttributeVolumes {
+    /// Cleared volumes in their resting state [`VOLUME_STATE`].
+    pub fn new(ctx: &Context, grid: &VoxelGrid) -> Result<Self, VkError> {
+        let ext = grid.extent_voxels();
+        let usage = vk::ImageUsageFlags::STORAGE
+            | vk::ImageUsageFlags::SAMPLED
+            | vk::ImageUsageFlags::TRANSFER_SRC
+            | vk::ImageUsageFlags::TRANSFER_DST;
+        let volume = |name: &str, format| {
+            ImageDesc::new_2d(name, format, ext.x, ext.y)
+                .with_depth(ext.z)
+                .with_usage(usage)
+        };
+        let resting = VOLUME_STATE.info().layout;
+        let zero = vk::ClearColorValue { float32: [0.0; 4] };
+        let albedo = ctx.create_image(&volume("albedo volume", ALBEDO_FORMAT))?;
+        let normal = ctx.create_image(&volume("normal volume", NORMAL_FORMAT))?;
+        let me = Self { albedo, normal };
+        let cleared = ctx
+            .clear_new_image(&me.albedo, zero, resting)
+            .and_then(|()| ctx.clear_new_image(&me.normal, zero, resting));
+        cleared?;
+        Ok(me)
+    }
+
+    /// Imports both volumes into `g` in their resting state: `(albedo, normal)`.
+    pub fn import(&self, g: &mut RenderGraph) -> (ImageHandle, ImageHandle) {
+        (
+            g.import_image(&self.albedo, VOLUME_STATE),
+            g.import_image(&self.normal, VOLUME_STATE),
+        )
+    }
 }
 
 #[cfg(test)]

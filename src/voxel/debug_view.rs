@@ -17,7 +17,8 @@
 //! tests and `--exr` read) and the `RGBA8` color image the renderer reads back as its picture.
 
 use super::attributes::{TriangleAttributeVolumes, ATTRIBUTE_VOLUME_STATE};
-use super::gpu::{GpuVoxelError, VoxelFrame};
+use super::frame::VoxelFrame;
+use super::gpu::GpuVoxelError;
 use super::ray_mask::RayMaskLut;
 use super::traverse::TraversalParams;
 use super::VoxelGrid;

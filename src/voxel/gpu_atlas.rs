@@ -681,8 +681,6 @@ pub struct AtlasScene {
     /// `(points, model, index of the object in the scene)`.
     pub(super) static_instances: Vec<(usize, Mat4, usize)>,
     pub(super) dynamic_instances: Vec<DynamicInstance>,
-    /// Albedo and normal volumes from the same points, when a GI method reads them.
-    pub(super) volumes: Option<super::gpu_atlas_volumes::AtlasVolumes>,
 }
 
 impl AtlasScene {
@@ -715,7 +713,6 @@ impl AtlasScene {
             points: Vec::new(),
             static_instances: Vec::new(),
             dynamic_instances: Vec::new(),
-            volumes: None,
         };
         // `(atlas, sequence frame, index into points)`: objects sharing a mesh (sequence)
         // and scale share its point lists.

@@ -2,7 +2,7 @@
 //! points that set the bits ([`super::gpu_atlas`]) also write albedo and normal volumes
 //! congruent with them, for the GI methods that read more than occupancy (the voxel path
 //! tracer and the direct-radiance volume). They exist only when such a method runs
-//! ([`super::gpu::VoxelFrame::enable_attribute_volumes`]).
+//! ([`super::frame::VoxelFrame::enable_attribute_volumes`]).
 //!
 //! # Passes (named after their GLSL stems)
 //! - `voxelize_atlas_volumes` (graphics): the point lists drawn as `POINT_LIST`, one vertex
@@ -39,6 +39,7 @@
 //! resolve adds both. Nothing records while nothing moves (the voxel frame's [`SlotGate`]).
 
 use super::attributes::{material_texel, AttributeHandles, ValueVolumes};
+pub use super::attributes::{AttributeVolumes, ALBEDO_FORMAT, NORMAL_FORMAT, VOLUME_STATE};
 use super::gpu::{GpuVoxelError, SlotGate};
 use super::gpu_atlas::{import_chunks, AtlasScene, FrameAt, GpuAtlasVoxelizePush, ModelAt};
 use super::maps::{GpuTriangleMaps, VoxelMaps};
@@ -56,12 +57,6 @@ use std::sync::Arc;
 /// Format of the per-voxel sums: f16 counts are exact up to 2048 points per voxel, far more
 /// than an atlas sized for the grid puts into one (a few per surface crossing it).
 pub const SUM_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
-/// Formats of the resolved volumes (what `gi_pathtrace.comp` samples).
-pub const ALBEDO_FORMAT: vk::Format = vk::Format::R8G8B8A8_UNORM;
-pub const NORMAL_FORMAT: vk::Format = vk::Format::R8G8B8A8_SNORM;
-
-/// State of the resolved volumes between frames: sampled by compute shaders.
-pub const VOLUME_STATE: Access = Access::Sampled(Shader::Compute);
 
 /// Push constants of `voxelize_atlas_resolve.comp`.
 #[repr(C)]
@@ -72,47 +67,6 @@ pub struct GpuAtlasResolvePush {
 }
 
 crate::push_constants!(GpuAtlasResolvePush { dims });
-
-/// The albedo (`RGBA8`, a = 1 where occupied) and normal (`RGBA8_SNORM`) 3D volumes,
-/// one texel per voxel, in the voxel grid's (x, y, depth) order.
-pub struct AttributeVolumes {
-    pub albedo: Image,
-    pub normal: Image,
-}
-
-impl AttributeVolumes {
-    /// Cleared volumes in their resting state [`VOLUME_STATE`].
-    pub fn new(ctx: &Context, grid: &VoxelGrid) -> Result<Self, VkError> {
-        let ext = grid.extent_voxels();
-        let usage = vk::ImageUsageFlags::STORAGE
-            | vk::ImageUsageFlags::SAMPLED
-            | vk::ImageUsageFlags::TRANSFER_SRC
-            | vk::ImageUsageFlags::TRANSFER_DST;
-        let volume = |name: &str, format| {
-            ImageDesc::new_2d(name, format, ext.x, ext.y)
-                .with_depth(ext.z)
-                .with_usage(usage)
-        };
-        let resting = VOLUME_STATE.info().layout;
-        let zero = vk::ClearColorValue { float32: [0.0; 4] };
-        let albedo = ctx.create_image(&volume("albedo volume", ALBEDO_FORMAT))?;
-        let normal = ctx.create_image(&volume("normal volume", NORMAL_FORMAT))?;
-        let me = Self { albedo, normal };
-        let cleared = ctx
-            .clear_new_image(&me.albedo, zero, resting)
-            .and_then(|()| ctx.clear_new_image(&me.normal, zero, resting));
-        cleared?;
-        Ok(me)
-    }
-
-    /// Imports both volumes into `g` in their resting state: `(albedo, normal)`.
-    pub fn import(&self, g: &mut RenderGraph) -> (ImageHandle, ImageHandle) {
-        (
-            g.import_image(&self.albedo, VOLUME_STATE),
-            g.import_image(&self.normal, VOLUME_STATE),
-        )
-    }
-}
 
 /// Pipelines, per-instance triangle attributes and the static objects' sums.
 pub struct AtlasVolumes {

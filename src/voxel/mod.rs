@@ -49,6 +49,7 @@ pub mod atlas_view;
 pub mod attributes;
 pub mod bits;
 pub mod debug_view;
+pub mod frame;
 pub mod gpu;
 pub mod gpu_atlas;
 pub mod gpu_atlas_raster;
@@ -64,6 +65,7 @@ pub mod voxelize;
 mod traverse_tests;
 
 pub use bits::{BitGrid, BitHierarchy, Column};
+pub use frame::VoxelFrame;
 pub use grid::{Axis, GridDesc, VoxelGrid};
 pub use traverse::{HitResult, TraversalParams};
 pub use voxelize::voxelize_scene;

@@ -7,7 +7,7 @@ use std::path::Path;
 use image::{DynamicImage, ImageFormat};
 
 use super::color::{srgb_decode, to_srgb8};
-use super::error::EvalError;
+use super::error::ImageError as EvalError;
 
 /// A linear-RGB image (sRGB / Rec.709 primaries), row-major with the top row first.
 #[derive(Clone, Debug, PartialEq)]

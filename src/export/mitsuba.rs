@@ -40,7 +40,7 @@ use std::path::{Path, PathBuf};
 
 use glam::{Mat3, Vec2, Vec3};
 
-use super::color::srgb_decode;
+use crate::imaging::srgb_decode;
 use crate::scene::{Light, Material, Mesh, Scene, TextureData};
 
 /// Samples per pixel written as the XML's `spp` default. The sampler is `independent`, which

@@ -1,11 +1,12 @@
 use std::path::PathBuf;
 
-/// Everything that can go wrong while loading, comparing or writing evaluation images.
+/// Everything that can go wrong while loading, comparing or writing images (the evaluation
+/// names it `eval::EvalError`).
 ///
 /// Messages are meant for the person running `voxgi`: they say which file or image, what is
 /// wrong with it, and what to do about it.
 #[derive(Debug, thiserror::Error)]
-pub enum EvalError {
+pub enum ImageError {
     #[error(
         "image file {} does not exist: check the path, or render / regenerate it first",
         path.display()
