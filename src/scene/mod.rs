@@ -435,6 +435,8 @@ impl Scene {
 }
 
 #[cfg(test)]
+mod gltf_tests;
+#[cfg(test)]
 mod input_tests;
 #[cfg(test)]
 mod material_tests;
