@@ -8,8 +8,8 @@ use serde::Deserialize;
 use super::camera::{Camera, Projection};
 use super::camera_path::{CameraKey, CameraPath};
 use super::error::{field_ref, from_toml_error, SceneError};
-use super::gltf::{is_gltf_path, GltfAsset};
 use super::gi::{bounces_from_toml, GiOverrides, GI_METHOD_NAMES};
+use super::gltf::{is_gltf_path, GltfAsset};
 use super::light::Light;
 use super::mesh::{Aabb, BUILTIN_MESH_NAMES};
 use super::obj::AssetStore;
@@ -528,9 +528,11 @@ pub(crate) fn build_with(
     let camera = match (camera, gltf_camera) {
         (Some(c), _) => c,
         (None, Some(c)) => c,
-        (None, None) if fallbacks.frame_camera => {
-            framing_camera(objects.iter().fold(Aabb::EMPTY, |b, o| b.union(o.aabb_at(0.0))))
-        }
+        (None, None) if fallbacks.frame_camera => framing_camera(
+            objects
+                .iter()
+                .fold(Aabb::EMPTY, |b, o| b.union(o.aabb_at(0.0))),
+        ),
         (None, None) => {
             return Err(ck.camera(
                 "camera",
@@ -544,7 +546,10 @@ pub(crate) fn build_with(
         .as_ref()
         .map(|p| build_camera_path(&ck, p, camera.up))
         .transpose()?;
-    if fallbacks.default_sun && lights.is_empty() && !store.materials.iter().any(|m| m.is_emissive()) {
+    if fallbacks.default_sun
+        && lights.is_empty()
+        && !store.materials.iter().any(|m| m.is_emissive())
+    {
         lights.push(DEFAULT_SUN);
         log::warn!(
             "{}: the glTF has no KHR_lights_punctual lights and nothing emits; it is lit by a \

@@ -223,8 +223,8 @@ impl Loader {
             message,
         };
         // Required extensions first: the schema check below would report them without a hint.
-        let unchecked =
-            gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| malformed(e.to_string()))?;
+        let unchecked = gltf::Gltf::from_slice_without_validation(bytes)
+            .map_err(|e| malformed(e.to_string()))?;
         if let Some(ext) = unchecked
             .extensions_required()
             .find(|e| !SUPPORTED_REQUIRED_EXTENSIONS.contains(e))
@@ -673,8 +673,10 @@ impl Loader {
                 t.swap(1, 2);
             }
         }
-        let world_positions: Vec<Vec3> =
-            positions.iter().map(|&v| world.transform_point3(v)).collect();
+        let world_positions: Vec<Vec3> = positions
+            .iter()
+            .map(|&v| world.transform_point3(v))
+            .collect();
         let normal_matrix = Mat3::from_mat4(world).inverse().transpose();
         let (positions, normals, uvs, indices) = match normals {
             Some(local) => {
@@ -684,9 +686,7 @@ impl Loader {
                     .zip(&computed)
                     .map(|(&v, &c)| {
                         // A zero or non-finite normal falls back to the computed one.
-                        (normal_matrix * v)
-                            .try_normalize()
-                            .unwrap_or(c)
+                        (normal_matrix * v).try_normalize().unwrap_or(c)
                     })
                     .collect();
                 (world_positions, normals, uvs, indices)
@@ -694,14 +694,15 @@ impl Loader {
             None => {
                 // glTF asks for flat normals here (§3.7.2.1); voxgi smooths across edges
                 // below the crease angle, as for OBJ files without normals.
-                let s = split_normals(
-                    &world_positions,
-                    &indices,
-                    Smoothing::CreaseDeg(crease_deg),
-                );
+                let s = split_normals(&world_positions, &indices, Smoothing::CreaseDeg(crease_deg));
                 let gather = |k: &u32| world_positions[*k as usize];
                 let uvs = uvs.map(|u| s.source.iter().map(|&k| u[k as usize]).collect());
-                (s.source.iter().map(gather).collect(), s.normals, uvs, s.indices)
+                (
+                    s.source.iter().map(gather).collect(),
+                    s.normals,
+                    uvs,
+                    s.indices,
+                )
             }
         };
         Ok(Some(Part {
@@ -740,21 +741,27 @@ impl Loader {
         let file = self.file.display().to_string();
         let used_by = |slot: &str| format!("{file}: material `{name}` {slot}");
         let finite = |v: f32, d: f32| if v.is_finite() { v } else { d };
-        let base = Vec3::new(factor[0], factor[1], factor[2])
-            .clamp(Vec3::ZERO, Vec3::ONE);
+        let base = Vec3::new(factor[0], factor[1], factor[2]).clamp(Vec3::ZERO, Vec3::ONE);
         let roughness = finite(pbr.roughness_factor(), 1.0).clamp(0.0, 1.0);
         let metallic = finite(pbr.metallic_factor(), 1.0).clamp(0.0, 1.0);
-        warn_tex_coord(&self.file, &name, [
-            pbr.base_color_texture().map(|t| t.tex_coord()),
-            pbr.metallic_roughness_texture().map(|t| t.tex_coord()),
-            m.normal_texture().map(|t| t.tex_coord()),
-            m.emissive_texture().map(|t| t.tex_coord()),
-        ]);
+        warn_tex_coord(
+            &self.file,
+            &name,
+            [
+                pbr.base_color_texture().map(|t| t.tex_coord()),
+                pbr.metallic_roughness_texture().map(|t| t.tex_coord()),
+                m.normal_texture().map(|t| t.tex_coord()),
+                m.emissive_texture().map(|t| t.tex_coord()),
+            ],
+        );
         let albedo_texture = match pbr.base_color_texture() {
             Some(t) => {
                 let image = t.texture().source();
                 if m.alpha_mode() != gltf::material::AlphaMode::Opaque
-                    && self.rgba(&image, &used_by("baseColorTexture"))?.pixels().any(|p| p[3] < 255)
+                    && self
+                        .rgba(&image, &used_by("baseColorTexture"))?
+                        .pixels()
+                        .any(|p| p[3] < 255)
                 {
                     log::warn!(
                         "{}: material `{name}`: the base color texture's alpha is ignored \
@@ -768,7 +775,12 @@ impl Loader {
                         }
                     );
                 }
-                Some(self.texture(store, &image, TexelUse::Color(base), &used_by("baseColorTexture"))?)
+                Some(self.texture(
+                    store,
+                    &image,
+                    TexelUse::Color(base),
+                    &used_by("baseColorTexture"),
+                )?)
             }
             None => None,
         };
@@ -777,8 +789,18 @@ impl Loader {
                 let image = t.texture().source();
                 let what = used_by("metallicRoughnessTexture");
                 PbrMaps {
-                    roughness: Some(self.texture(store, &image, TexelUse::Channel(1, roughness), &what)?),
-                    metallic: Some(self.texture(store, &image, TexelUse::Channel(2, metallic), &what)?),
+                    roughness: Some(self.texture(
+                        store,
+                        &image,
+                        TexelUse::Channel(1, roughness),
+                        &what,
+                    )?),
+                    metallic: Some(self.texture(
+                        store,
+                        &image,
+                        TexelUse::Channel(2, metallic),
+                        &what,
+                    )?),
                     emission: None,
                 }
             }
@@ -787,13 +809,22 @@ impl Loader {
         let bump_texture = match m.normal_texture() {
             Some(t) => {
                 let scale = finite(t.scale(), 1.0);
-                Some(self.texture(store, &t.texture().source(), TexelUse::Normal(scale), &used_by("normalTexture"))?)
+                Some(self.texture(
+                    store,
+                    &t.texture().source(),
+                    TexelUse::Normal(scale),
+                    &used_by("normalTexture"),
+                )?)
             }
             None => None,
         };
         let strength = finite(m.emissive_strength().unwrap_or(1.0), 1.0).max(0.0);
         let emission = Vec3::from_array(m.emissive_factor()).max(Vec3::ZERO) * strength;
-        let emission = if emission.is_finite() { emission } else { Vec3::ZERO };
+        let emission = if emission.is_finite() {
+            emission
+        } else {
+            Vec3::ZERO
+        };
         let emission_map = match m.emissive_texture() {
             Some(t) if emission.max_element() > 0.0 => Some(self.texture(
                 store,
@@ -879,7 +910,12 @@ impl Loader {
         Ok(rgba)
     }
 
-    fn image_missing(&self, image: &gltf::Image<'_>, uri: Option<&str>, used_by: &str) -> SceneError {
+    fn image_missing(
+        &self,
+        image: &gltf::Image<'_>,
+        uri: Option<&str>,
+        used_by: &str,
+    ) -> SceneError {
         SceneError::GltfImageMissing {
             file: self.file.clone(),
             image: image.index(),
@@ -924,7 +960,10 @@ impl Loader {
                 }
             }
         }
-        let key = (self.file.clone(), format!("image{}:{texel_use:?}", image.index()));
+        let key = (
+            self.file.clone(),
+            format!("image{}:{texel_use:?}", image.index()),
+        );
         if let Some(&i) = store.gltf_textures.get(&key) {
             return Ok(i);
         }

@@ -184,11 +184,23 @@ fn a_triangle_loads_with_its_node_transform_material_and_flipped_uvs() {
     let s = load(&b.write(&dir, "tri"));
     let mesh = &s.meshes[s.objects[0].mesh];
     // (1, 0, 0) → scale 2 → rotated to (0, 0, −2) → + (1, 2, 3).
-    assert!(mesh.positions[1].abs_diff_eq(Vec3::new(1.0, 2.0, 1.0), 1e-5), "{:?}", mesh.positions);
+    assert!(
+        mesh.positions[1].abs_diff_eq(Vec3::new(1.0, 2.0, 1.0), 1e-5),
+        "{:?}",
+        mesh.positions
+    );
     // +Z rotated 90° about Y is +X.
-    assert!(mesh.normals[0].abs_diff_eq(Vec3::X, 1e-5), "{:?}", mesh.normals);
+    assert!(
+        mesh.normals[0].abs_diff_eq(Vec3::X, 1e-5),
+        "{:?}",
+        mesh.normals
+    );
     let uvs = mesh.uvs.as_ref().expect("uvs");
-    assert_eq!(uvs[0], glam::Vec2::new(0.0, 0.0), "v flipped: glTF's v runs down");
+    assert_eq!(
+        uvs[0],
+        glam::Vec2::new(0.0, 0.0),
+        "v flipped: glTF's v runs down"
+    );
     let mat = &s.materials[mesh.submeshes[0].material];
     assert_eq!(mat.albedo, Vec3::new(0.5, 0.25, 1.0));
     let g = mat.ggx.expect("GGX");
@@ -215,7 +227,9 @@ fn glb_and_data_uri_buffers_load_the_same_mesh() {
     assert_eq!(m1.positions, m2.positions);
     assert_eq!(m1.indices, vec![0, 1, 2]);
     // The default glTF material: white, metallic 1, roughness 1.
-    let g = from_glb.materials[m1.submeshes[0].material].ggx.expect("GGX");
+    let g = from_glb.materials[m1.submeshes[0].material]
+        .ggx
+        .expect("GGX");
     assert_eq!((g.roughness, g.metallic), (1.0, 1.0));
 }
 
@@ -280,7 +294,10 @@ fn bad_files_give_their_errors() {
     let mut c = Builder::new();
     c.json["images"] = json!([{ "uri": "nowhere.png" }]);
     c.json["textures"] = json!([{ "source": 0 }]);
-    let m = c.push("materials", json!({ "pbrMetallicRoughness": { "baseColorTexture": { "index": 0 } } }));
+    let m = c.push(
+        "materials",
+        json!({ "pbrMetallicRoughness": { "baseColorTexture": { "index": 0 } } }),
+    );
     c.triangle(Some(m), json!({}));
     let e = error(&c.write(&dir, "img"));
     assert_eq!(e.kind(), "gltf-image-missing", "{e}");
@@ -347,7 +364,10 @@ fn a_gltf_alone_brings_its_lights_and_camera_or_a_sun_and_a_framing_camera() {
     let mut b = Builder::new();
     b.triangle(None, json!({}));
     let bare = load(&b.write(&dir, "bare"));
-    assert!(matches!(bare.lights[..], [Light::Directional { .. }]), "the default sun");
+    assert!(
+        matches!(bare.lights[..], [Light::Directional { .. }]),
+        "the default sun"
+    );
     let bounds = bare.aabb_at(0.0);
     let to_center = (bounds.center() - bare.camera.position).normalize();
     assert!(to_center.dot(bare.camera.forward) > 0.999, "framed");
@@ -375,7 +395,9 @@ fn a_gltf_alone_brings_its_lights_and_camera_or_a_sun_and_a_framing_camera() {
     let toml = "[[objects]]\nmesh = \"lit.gltf\"\ntranslate = [10.0, 0.0, 0.0]\n";
     let s = Scene::from_toml_str(toml, Path::new("s.toml"), &dir).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(s.camera.position, Vec3::new(10.0, 0.0, 4.0));
-    assert!(matches!(s.lights[..], [Light::Point { position, .. }] if position == Vec3::new(10.0, 1.0, 0.0)));
+    assert!(
+        matches!(s.lights[..], [Light::Point { position, .. }] if position == Vec3::new(10.0, 1.0, 0.0))
+    );
 
     // An orthographic camera: its view is 2·ymag high.
     b.json["cameras"] = json!([{ "type": "orthographic", "orthographic": { "xmag": 1.0, "ymag": 0.75, "znear": 0.0, "zfar": 10.0 } }]);
@@ -388,7 +410,8 @@ fn a_gltf_alone_brings_its_lights_and_camera_or_a_sun_and_a_framing_camera() {
 fn textures_are_split_and_scaled_as_glsl_reads_them() {
     let dir = temp_dir("tex");
     // 2×1: texel 0 (R, G, B) = (10, 200, 50), texel 1 = (0, 100, 255).
-    let packed = image::RgbaImage::from_raw(2, 1, vec![10, 200, 50, 255, 0, 100, 255, 255]).expect("image");
+    let packed =
+        image::RgbaImage::from_raw(2, 1, vec![10, 200, 50, 255, 0, 100, 255, 255]).expect("image");
     packed.save(dir.join("mr.png")).expect("png");
     let white = image::RgbaImage::from_raw(1, 1, vec![255, 255, 255, 255]).expect("image");
     white.save(dir.join("base.png")).expect("png");
@@ -423,14 +446,18 @@ fn primitives_without_normals_follow_the_crease_rule() {
     let mut b = Builder::new();
     let pos = b.floats(&[0., 0., 0., 1., 0., 0., 0., 0., -1., 0., 1., 0.], "VEC3");
     let ix = b.indices(&[0, 1, 2, 1, 0, 3]);
-    b.mesh_node(json!({ "attributes": { "POSITION": pos }, "indices": ix }), json!({}));
+    b.mesh_node(
+        json!({ "attributes": { "POSITION": pos }, "indices": ix }),
+        json!({}),
+    );
     b.write(&dir, "fold");
     for (crease, vertices) in [(60.0, 6), (120.0, 4)] {
         let toml = format!(
             "[camera]\nposition = [0.0, 0.0, 5.0]\ntarget = [0.0, 0.0, 0.0]\nfov_y_deg = 40.0\n\
              [[objects]]\nmesh = \"fold.gltf\"\ncrease_deg = {crease}\n"
         );
-        let s = Scene::from_toml_str(&toml, Path::new("s.toml"), &dir).unwrap_or_else(|e| panic!("{e}"));
+        let s = Scene::from_toml_str(&toml, Path::new("s.toml"), &dir)
+            .unwrap_or_else(|e| panic!("{e}"));
         assert_eq!(s.meshes[0].positions.len(), vertices, "crease {crease}°");
     }
 }
