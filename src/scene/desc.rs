@@ -550,7 +550,7 @@ pub(crate) fn build_with(
         && lights.is_empty()
         && !store.materials.iter().any(|m| m.is_emissive())
     {
-        lights.push(DEFAULT_SUN);
+        lights.push(default_sun());
         log::warn!(
             "{}: the glTF has no KHR_lights_punctual lights and nothing emits; it is lit by a \
              default sun ({} W/m² from above and in front). To light it yourself, write a scene \
@@ -1334,18 +1334,19 @@ pub(crate) fn build_transform(
     })
 }
 
-/// The irradiance of [`DEFAULT_SUN`]: π W/m², so a white Lambert surface facing it reflects a
+/// The irradiance of [`default_sun`]: π W/m², so a white Lambert surface facing it reflects a
 /// radiance of 1 W/(m²·sr), mid-range for the default tone mapping.
 const DEFAULT_SUN_IRRADIANCE_W_M2: f32 = std::f32::consts::PI;
 
 /// The light of a glTF scene rendered alone that has no lights and no emission: a directional
 /// light from above, in front (+Z, the side glTF models face) and a little to the side, so
 /// that the faces a default camera sees are lit at different angles.
-const DEFAULT_SUN: Light = Light::Directional {
-    // normalize([-0.3, -1.0, -0.5])
-    direction: Vec3::new(-0.259_281_02, -0.864_270_07, -0.432_135_03),
-    irradiance_w_m2: Vec3::splat(DEFAULT_SUN_IRRADIANCE_W_M2),
-};
+fn default_sun() -> Light {
+    Light::Directional {
+        direction: Vec3::new(-0.3, -1.0, -0.5).normalize(),
+        irradiance_w_m2: Vec3::splat(DEFAULT_SUN_IRRADIANCE_W_M2),
+    }
+}
 
 /// A camera looking at `bounds` from the front (+Z) and a little above, 45° vertical field of
 /// view, far enough away that the bounding sphere fits the view.

@@ -525,7 +525,9 @@ impl Loader {
                 if !(yfov > 0.0 && yfov < std::f32::consts::PI) {
                     return Err(bad(format!("yfov {yfov} is not in (0, π)")));
                 }
-                if !(znear > 0.0 && znear.is_finite()) || zfar.is_some_and(|f| !(f > znear)) {
+                if !(znear > 0.0 && znear.is_finite())
+                    || zfar.is_some_and(|f| f.is_nan() || f <= znear)
+                {
                     return Err(bad(format!("znear {znear}, zfar {zfar:?}")));
                 }
                 GltfProjection::Perspective {
