@@ -234,6 +234,36 @@ fn glb_and_data_uri_buffers_load_the_same_mesh() {
 }
 
 #[test]
+fn an_image_in_a_glb_buffer_is_decoded_by_its_bytes() {
+    let dir = temp_dir("glbimage");
+    let texels = vec![255, 0, 0, 255, 0, 0, 255, 128];
+    let mut png = Vec::new();
+    image::RgbaImage::from_raw(2, 1, texels.clone())
+        .expect("image")
+        .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+        .expect("encode");
+    let mut b = Builder::new();
+    let view = b.view(&png);
+    // A wrong MIME type: the bytes decide.
+    b.json["images"] = json!([{ "bufferView": view, "mimeType": "image/jpeg" }]);
+    b.json["textures"] = json!([{ "source": 0 }]);
+    let m = b.push(
+        "materials",
+        json!({ "pbrMetallicRoughness": { "baseColorTexture": { "index": 0 } } }),
+    );
+    b.triangle(Some(m), json!({}));
+    let s = load(&b.write_glb(&dir, "img"));
+    let t = &s.textures[s.materials[0].albedo_texture.expect("albedo map")];
+    assert_eq!((t.width, t.height, &t.rgba8), (2, 1, &texels));
+    assert!(t.srgb);
+    assert!(
+        t.path.to_string_lossy().ends_with("img.glb#image0"),
+        "{:?}",
+        t.path
+    );
+}
+
+#[test]
 fn bad_files_give_their_errors() {
     let dir = temp_dir("bad");
     let mut b = Builder::new();
