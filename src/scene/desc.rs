@@ -9,6 +9,7 @@ use super::camera::{Camera, Projection};
 use super::camera_path::{CameraKey, CameraPath};
 use super::error::{field_ref, from_toml_error, SceneError};
 use super::gi::{bounces_from_toml, GiOverrides};
+use super::gltf::{is_gltf_path, GltfAsset};
 use super::light::Light;
 use super::mesh::{Aabb, BUILTIN_MESH_NAMES};
 use super::obj::AssetStore;
@@ -37,7 +38,8 @@ impl ScalarOrVec3 {
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct SceneDesc {
-    pub camera: CameraDesc,
+    /// Optional when an object's glTF file has a camera (the first one is used).
+    pub camera: Option<CameraDesc>,
     #[serde(default)]
     pub lights: Vec<LightDesc>,
     #[serde(default)]
@@ -188,7 +190,7 @@ pub(crate) struct LightDesc {
     pub samples: Option<i64>,
 }
 
-#[derive(Clone, Debug, Deserialize)]
+#[derive(Clone, Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct ObjectDesc {
     pub name: Option<String>,
@@ -286,7 +288,7 @@ pub const ORIGIN_GRID_M: f64 = 256.0;
 /// 1 mm, relative ones keep sub-micrometre precision. Values that fail their checks later are
 /// left out here.
 fn local_origin(desc: &SceneDesc) -> DVec3 {
-    let mut points: Vec<[f64; 3]> = vec![desc.camera.position];
+    let mut points: Vec<[f64; 3]> = desc.camera.iter().map(|c| c.position).collect();
     points.extend(desc.lights.iter().filter_map(|l| l.position));
     for o in &desc.objects {
         points.push(o.translate.unwrap_or_default());
@@ -445,15 +447,34 @@ pub(crate) fn build(
     base_dir: &Path,
     source: Option<PathBuf>,
 ) -> Result<Scene, SceneError> {
+    build_with(desc, file, base_dir, source, SceneFallbacks::default())
+}
+
+/// What a scene made from a glTF file alone (`voxgi render x.glb`) gets that a scene file
+/// does not: a camera framing the scene when the glTF has none, and a default sun when it has
+/// no lights and nothing emits (see [`super::Scene::load_gltf`]).
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct SceneFallbacks {
+    pub frame_camera: bool,
+    pub default_sun: bool,
+}
+
+/// [`build`] with the fallbacks of a scene made from a glTF file alone.
+pub(crate) fn build_with(
+    desc: SceneDesc,
+    file: &Path,
+    base_dir: &Path,
+    source: Option<PathBuf>,
+    fallbacks: SceneFallbacks,
+) -> Result<Scene, SceneError> {
     let ck = Check {
         file,
         origin: local_origin(&desc),
     };
-    let camera = build_camera(&ck, &desc.camera)?;
-    let camera_path = desc
-        .camera_path
+    let camera = desc
+        .camera
         .as_ref()
-        .map(|p| build_camera_path(&ck, p, camera.up))
+        .map(|c| build_camera(&ck, c))
         .transpose()?;
     let gi = desc
         .gi
@@ -478,7 +499,7 @@ pub(crate) fn build(
         .map(|t| build_post(&ck, t))
         .transpose()?
         .unwrap_or_default();
-    let lights = desc
+    let mut lights = desc
         .lights
         .iter()
         .enumerate()
@@ -491,14 +512,53 @@ pub(crate) fn build(
     }
     let mut store = AssetStore::default();
     let mut objects = Vec::with_capacity(desc.objects.len());
+    let mut gltf_camera = None;
     for (i, o) in desc.objects.iter().enumerate() {
-        objects.push(build_object(
-            &ck,
-            &format!("objects[{i}]"),
-            o,
-            base_dir,
-            &mut store,
-        )?);
+        let (object, gltf) = build_object(&ck, &format!("objects[{i}]"), o, base_dir, &mut store)?;
+        if let Some(g) = gltf {
+            // A glTF's lights and camera sit where the object puts the file at time 0.
+            let model = object.transform_at(0.0);
+            lights.extend(g.lights.iter().map(|l| transformed_light(*l, model)));
+            if gltf_camera.is_none() {
+                gltf_camera = g.camera.map(|c| c.to_camera(model));
+            }
+        }
+        objects.push(object);
+    }
+    let camera = match (camera, gltf_camera) {
+        (Some(c), _) => c,
+        (None, Some(c)) => c,
+        (None, None) if fallbacks.frame_camera => framing_camera(
+            objects
+                .iter()
+                .fold(Aabb::EMPTY, |b, o| b.union(o.aabb_at(0.0))),
+        ),
+        (None, None) => {
+            return Err(ck.camera(
+                "camera",
+                "the scene has no `[camera]` table (and no glTF object with a camera); add \
+                 one with `position`, `target` and `fov_y_deg`",
+            ))
+        }
+    };
+    let camera_path = desc
+        .camera_path
+        .as_ref()
+        .map(|p| build_camera_path(&ck, p, camera.up))
+        .transpose()?;
+    if fallbacks.default_sun
+        && lights.is_empty()
+        && !store.materials.iter().any(|m| m.is_emissive())
+    {
+        lights.push(default_sun());
+        log::warn!(
+            "{}: the glTF has no KHR_lights_punctual lights and nothing emits; it is lit by a \
+             default sun ({} W/m² from above and in front). To light it yourself, write a scene \
+             file with `[[objects]] mesh = \"{}\"` and `[[lights]]` tables",
+            file.display(),
+            DEFAULT_SUN_IRRADIANCE_W_M2,
+            file.display()
+        );
     }
     let mut scene = Scene {
         origin_m: ck.origin,
@@ -1267,13 +1327,88 @@ pub(crate) fn build_transform(
     })
 }
 
+/// The irradiance of [`default_sun`]: π W/m², so a white Lambert surface facing it reflects a
+/// radiance of 1 W/(m²·sr), mid-range for the default tone mapping.
+const DEFAULT_SUN_IRRADIANCE_W_M2: f32 = std::f32::consts::PI;
+
+/// The light of a glTF scene rendered alone that has no lights and no emission: a directional
+/// light from above, in front (+Z, the side glTF models face) and a little to the side, so
+/// that the faces a default camera sees are lit at different angles.
+fn default_sun() -> Light {
+    Light::Directional {
+        direction: Vec3::new(-0.3, -1.0, -0.5).normalize(),
+        irradiance_w_m2: Vec3::splat(DEFAULT_SUN_IRRADIANCE_W_M2),
+    }
+}
+
+/// A camera looking at `bounds` from the front (+Z) and a little above, 45° vertical field of
+/// view, far enough away that the bounding sphere fits the view.
+fn framing_camera(bounds: Aabb) -> Camera {
+    let center = if bounds.is_empty() {
+        Vec3::ZERO
+    } else {
+        bounds.center()
+    };
+    let radius = (bounds.extent().length() * 0.5).max(1e-3);
+    let fov_y_deg: f32 = 45.0;
+    let distance = radius / (0.5 * fov_y_deg.to_radians()).sin() * 1.05;
+    let forward = -Vec3::new(0.0, 0.3, 1.0).normalize();
+    Camera {
+        position: center - forward * distance,
+        forward,
+        up: Vec3::Y,
+        fov_y_deg,
+        near: (distance - radius).max(distance * 1e-3),
+        far: distance + 2.0 * radius,
+        shift_x_tan: 0.0,
+        projection: super::camera::Projection::Perspective,
+        ortho_height_m: f32::NAN,
+    }
+}
+
+/// `l` moved by the object transform `model` (directions renormalized).
+fn transformed_light(l: Light, model: glam::Mat4) -> Light {
+    let dir = |d: Vec3| model.transform_vector3(d).try_normalize().unwrap_or(d);
+    match l {
+        Light::Point {
+            position,
+            intensity_w_sr,
+        } => Light::Point {
+            position: model.transform_point3(position),
+            intensity_w_sr,
+        },
+        Light::Spot {
+            position,
+            direction,
+            intensity_w_sr,
+            cutoff_deg,
+            beam_deg,
+        } => Light::Spot {
+            position: model.transform_point3(position),
+            direction: dir(direction),
+            intensity_w_sr,
+            cutoff_deg,
+            beam_deg,
+        },
+        Light::Directional {
+            direction,
+            irradiance_w_m2,
+        } => Light::Directional {
+            direction: dir(direction),
+            irradiance_w_m2,
+        },
+        other => other,
+    }
+}
+
+/// An object and, for a glTF mesh, what else the file gives (lights, camera).
 fn build_object(
     ck: &Check<'_>,
     field: &str,
     o: &ObjectDesc,
     base_dir: &Path,
     store: &mut AssetStore,
-) -> Result<Object, SceneError> {
+) -> Result<(Object, Option<GltfAsset>), SceneError> {
     let f = |name: &str| format!("{field}.{name}");
     let transform = build_transform(
         ck,
@@ -1288,6 +1423,7 @@ fn build_object(
         },
     )?;
     let sequence = o.animation.as_ref().and_then(|a| a.obj_sequence.as_ref());
+    let mut gltf = None;
     if o.crease_deg.is_some() && o.mesh.is_none() {
         return Err(ck.invalid(
             &f("crease_deg"),
@@ -1326,7 +1462,14 @@ fn build_object(
                 .unwrap_or_else(|| m.clone());
             let crease_deg = crease_angle(ck, &f("crease_deg"), o.crease_deg)?;
             let referenced_by = field_ref(ck.file, &f("mesh"));
-            let idx = store.obj_mesh(&path, "OBJ mesh", &referenced_by, crease_deg)?;
+            let idx = if is_gltf_path(&path) {
+                let asset = store.gltf(&path, &referenced_by, crease_deg)?;
+                let idx = asset.mesh;
+                gltf = Some(asset);
+                idx
+            } else {
+                store.obj_mesh(&path, "OBJ mesh", &referenced_by, crease_deg)?
+            };
             (Some(idx), name)
         }
         (None, Some(b)) => match store.builtin_mesh(b) {
@@ -1387,15 +1530,18 @@ fn build_object(
         .get(mesh)
         .map(|m| m.aabb)
         .unwrap_or(Aabb::EMPTY);
-    Ok(Object {
-        name,
-        mesh,
-        materials,
-        transform,
-        dynamic,
-        animation,
-        local_aabb,
-    })
+    Ok((
+        Object {
+            name,
+            mesh,
+            materials,
+            transform,
+            dynamic,
+            animation,
+            local_aabb,
+        },
+        gltf,
+    ))
 }
 
 /// Derives one material per distinct submesh material with the override's fields replaced.

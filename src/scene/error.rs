@@ -246,6 +246,82 @@ pub enum SceneError {
         rgb: [u8; 3],
         referenced_by: String,
     },
+
+    /// A glTF file that cannot be read as glTF 2.0 (bad JSON or GLB framing, a document the
+    /// glTF schema rejects, a node tree with a cycle, a camera without a projection).
+    #[error("{}: malformed glTF: {message}; fix or re-export the file", file.display())]
+    GltfMalformed { file: PathBuf, message: String },
+
+    /// A glTF buffer that is missing, cannot be decoded, or is shorter than the file declares
+    /// (or than a bufferView needs).
+    #[error(
+        "{}: glTF buffer {buffer}{}: {problem}; put the buffer next to the glTF file (its URI is \
+         relative to it) or re-export as a self-contained .glb",
+        file.display(),
+        uri.as_ref().map(|u| format!(" (`{u}`)")).unwrap_or_default()
+    )]
+    GltfBuffer {
+        file: PathBuf,
+        buffer: usize,
+        uri: Option<String>,
+        problem: String,
+    },
+
+    /// A glTF accessor that reads outside its bufferView, has a type voxgi cannot use for its
+    /// attribute, or (indices) points past the vertices.
+    #[error(
+        "{}: glTF accessor {accessor} ({what}): {problem}; the file is corrupt or truncated, \
+         re-export it",
+        file.display()
+    )]
+    GltfAccessor {
+        file: PathBuf,
+        accessor: usize,
+        /// "POSITION of mesh `x` primitive 0", …
+        what: String,
+        problem: String,
+    },
+
+    /// The glTF requires an extension voxgi does not implement.
+    #[error(
+        "{}: the glTF requires extension {extension}, which voxgi does not support (supported: \
+         {supported}); re-export without it (e.g. without Draco or meshopt compression, \
+         texture transforms or quantized vertices)",
+        file.display()
+    )]
+    GltfExtension {
+        file: PathBuf,
+        extension: String,
+        supported: String,
+    },
+
+    /// A glTF primitive that is not made of triangles.
+    #[error(
+        "{}: glTF mesh `{mesh}` primitive {primitive} draws {mode}; voxgi draws triangles \
+         only (TRIANGLES, TRIANGLE_STRIP, TRIANGLE_FAN); remove the primitive or convert it \
+         to faces",
+        file.display()
+    )]
+    GltfPrimitiveMode {
+        file: PathBuf,
+        mesh: String,
+        primitive: usize,
+        mode: &'static str,
+    },
+
+    /// An image a glTF material uses that does not exist (or whose data cannot be found).
+    #[error(
+        "{}: glTF image {image}{} not found (used by {referenced_by}); put the image next to \
+         the glTF file (its URI is relative to it) or re-export as a self-contained .glb",
+        file.display(),
+        uri.as_ref().map(|u| format!(" (`{u}`)")).unwrap_or_default()
+    )]
+    GltfImageMissing {
+        file: PathBuf,
+        image: usize,
+        uri: Option<String>,
+        referenced_by: String,
+    },
 }
 
 fn show_source_line(line: &str) -> String {
@@ -355,6 +431,12 @@ impl SceneError {
             SceneError::TextureMissing { .. } => "texture-missing",
             SceneError::TextureDecode { .. } => "texture-decode",
             SceneError::TextureChannels { .. } => "texture-channels",
+            SceneError::GltfMalformed { .. } => "gltf-malformed",
+            SceneError::GltfBuffer { .. } => "gltf-buffer",
+            SceneError::GltfAccessor { .. } => "gltf-accessor",
+            SceneError::GltfExtension { .. } => "gltf-extension",
+            SceneError::GltfPrimitiveMode { .. } => "gltf-primitive-mode",
+            SceneError::GltfImageMissing { .. } => "gltf-image-missing",
         }
     }
 }

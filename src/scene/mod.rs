@@ -16,7 +16,8 @@
 //! transparency = "oit"              # optional: how the camera view draws materials with
 //!                                   #   d < 1, "oit" (linked lists, default) or "hashed";
 //!                                   #   `--transparency` overrides it
-//! [camera]
+//! [camera]                          # optional only when an object's glTF has a camera (the
+//!                                   #   first glTF object's first camera is used)
 //! position = [0.278, 0.273, -0.80]  # meters
 //! target = [0.278, 0.273, 0.0]      # a point to look at, or instead:
 //! # forward = [0.0, 0.0, 1.0]       # a viewing direction (not both)
@@ -64,9 +65,16 @@
 //!
 //! [[objects]]                       # at least one
 //! name = "bunny"                    # optional, for the UI and logs
-//! mesh = "../meshes/bunny.obj"      # an OBJ file (its MTL and textures beside it), or:
-//! crease_deg = 60.0                 # OBJ without `vn` or `s` lines: faces meeting at more
-//!                                   #   than this stay sharp, vertices split [60]
+//! mesh = "../meshes/bunny.obj"      # an OBJ file (its MTL and textures beside it), or a
+//!                                   #   glTF 2.0 file (`.gltf`, `.glb`; docs/gltf.md): its
+//!                                   #   default scene's node tree flattened, this object's
+//!                                   #   transform applied on top; its KHR_lights_punctual
+//!                                   #   lights join `[[lights]]` (placed at time 0), its
+//!                                   #   first camera serves when there is no `[camera]`;
+//!                                   #   or:
+//! crease_deg = 60.0                 # OBJ without `vn` or `s` lines, glTF primitives without
+//!                                   #   NORMAL: faces meeting at more than this stay sharp,
+//!                                   #   vertices split [60]
 //! # builtin = "cube"                # "cube" (1 m, centered), "quad" (1 m², XZ plane, facing
 //!                                   #   +Y), "sphere" (diameter 1 m), "cornell_walls",
 //!                                   #   "cornell_short_block", "cornell_tall_block"
@@ -183,6 +191,7 @@ mod desc;
 mod error;
 mod gi;
 mod gi_settings;
+mod gltf;
 mod light;
 mod material;
 mod mesh;
@@ -206,6 +215,7 @@ pub use gi_settings::{
     Bounces, GiMethod, GiSettings, RadianceSource, SaoOverrides, SaoSettings, SsgiMips,
     SsgiOverrides, SsgiResolution, SsgiSettings, SsrMode, SsrRays,
 };
+pub use gltf::{is_gltf_path, LUMENS_PER_WATT, SUPPORTED_REQUIRED_EXTENSIONS};
 pub use light::{scaled, spot_falloff, Light};
 pub use material::{
     fresnel_schlick, ggx_brdf, ggx_d, ggx_diffuse, ggx_g1, ggx_specular, BumpKind, Ggx, Material,
@@ -263,13 +273,52 @@ pub struct Scene {
 }
 
 impl Scene {
-    /// Loads a TOML scene file and everything it references.
+    /// Loads a TOML scene file and everything it references, or a glTF file as a scene of
+    /// its own ([`Scene::load_gltf`]).
     pub fn load(path: impl AsRef<Path>) -> Result<Scene, SceneError> {
         let path = path.as_ref();
+        if is_gltf_path(path) {
+            return Scene::load_gltf(path);
+        }
         let text = obj::read_text(path, "scene file", None)?;
         let base_dir = path.parent().unwrap_or(Path::new("."));
         let desc = desc::parse(&text, path)?;
         desc::build(desc, path, base_dir, Some(path.to_path_buf()))
+    }
+
+    /// A scene made from a glTF file alone (`voxgi render x.glb`): one object holding the
+    /// file's default scene, its `KHR_lights_punctual` lights, and its first camera, else a
+    /// camera framing its bounds from the front (+Z) and a little above. A file without lights
+    /// and without emissive materials gets a default sun (with a warning): glTF viewers light
+    /// such models by default, and a black picture would look like a broken import; a scene
+    /// file naming the glTF as an object's `mesh` gets no sun and sets its own lights.
+    pub fn load_gltf(path: impl AsRef<Path>) -> Result<Scene, SceneError> {
+        let path = path.as_ref();
+        let base_dir = path.parent().unwrap_or(Path::new("."));
+        let file_name = path
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        let desc = desc::SceneDesc {
+            camera: None,
+            lights: Vec::new(),
+            objects: vec![desc::ObjectDesc {
+                mesh: Some(file_name),
+                ..Default::default()
+            }],
+            voxel: None,
+            gi: None,
+            shadow: None,
+            post: None,
+            camera_path: None,
+            transparency: None,
+        };
+        let fallbacks = desc::SceneFallbacks {
+            frame_camera: true,
+            default_sun: true,
+        };
+        // No TOML file to save edits into: the viewer treats it like a built-in scene.
+        desc::build_with(desc, path, base_dir, None, fallbacks)
     }
 
     /// Parses scene TOML from a string. `origin` names it in error messages; relative paths
@@ -385,6 +434,8 @@ impl Scene {
     }
 }
 
+#[cfg(test)]
+mod gltf_tests;
 #[cfg(test)]
 mod input_tests;
 #[cfg(test)]

@@ -28,6 +28,14 @@ pub(crate) struct AssetStore {
     builtin_materials: HashMap<BuiltinMaterial, usize>,
     /// (path, sRGB) → texture, `None` when missing (warned once).
     textures_by_path: HashMap<(PathBuf, bool), Option<usize>>,
+    /// Loaded glTF files by path and crease angle (its bits), so objects sharing a file share
+    /// its mesh ([`super::gltf`]).
+    pub(super) gltf_files: HashMap<(PathBuf, u32), super::gltf::GltfAsset>,
+    /// Textures made from glTF images (a channel split off, a factor baked in), by glTF file
+    /// and a key naming the image and what was made of it.
+    pub(super) gltf_textures: HashMap<(PathBuf, String), usize>,
+    /// glTF materials by (file, material index; `None` for the default material).
+    pub(super) gltf_materials: HashMap<(PathBuf, Option<usize>), usize>,
 }
 
 impl AssetStore {
@@ -514,6 +522,36 @@ fn check_texture_size(path: &Path) -> Result<(), String> {
         .map_err(|e| e.to_string())?
         .into_dimensions()
         .map_err(|e| e.to_string())?;
+    check_texture_side(w, h)
+}
+
+/// Decodes an image held in memory (a glTF image embedded in a buffer or a `data:` URI) to
+/// RGBA8, refusing the sizes [`check_texture_size`] refuses before decoding; the message says
+/// what is wrong.
+pub(crate) fn decode_image_bytes(bytes: &[u8]) -> Result<image::RgbaImage, String> {
+    let reader = || {
+        image::ImageReader::new(Cursor::new(bytes))
+            .with_guessed_format()
+            .map_err(|e| e.to_string())
+    };
+    let (w, h) = reader()?.into_dimensions().map_err(|e| e.to_string())?;
+    check_texture_side(w, h)?;
+    Ok(reader()?.decode().map_err(|e| e.to_string())?.to_rgba8())
+}
+
+/// Decodes an image file to RGBA8 as [`AssetStore::texture`] does (size checked first, the
+/// format from the file's first bytes).
+pub(crate) fn decode_image_file(path: &Path) -> Result<image::RgbaImage, String> {
+    check_texture_size(path)?;
+    Ok(image::ImageReader::open(path)
+        .and_then(|r| r.with_guessed_format())
+        .map_err(|e| e.to_string())?
+        .decode()
+        .map_err(|e| e.to_string())?
+        .to_rgba8())
+}
+
+fn check_texture_side(w: u32, h: u32) -> Result<(), String> {
     if w == 0 || h == 0 || w > MAX_TEXTURE_SIDE || h > MAX_TEXTURE_SIDE {
         return Err(format!(
             "the image is {w}×{h} texels; expected 1 to {MAX_TEXTURE_SIDE} texels per side \
@@ -639,27 +677,43 @@ fn mtl_material_names(mtl_text: &str) -> impl Iterator<Item = String> + '_ {
     })
 }
 
+/// Reads a whole file; a missing file becomes [`SceneError::NotFound`].
+pub(crate) fn read_bytes(
+    path: &Path,
+    what: &'static str,
+    referenced_by: Option<&str>,
+) -> Result<Vec<u8>, SceneError> {
+    std::fs::read(path).map_err(|e| read_error(e, path, what, referenced_by))
+}
+
+fn read_error(
+    e: std::io::Error,
+    path: &Path,
+    what: &'static str,
+    referenced_by: Option<&str>,
+) -> SceneError {
+    if e.kind() == std::io::ErrorKind::NotFound {
+        SceneError::NotFound {
+            file: path.to_path_buf(),
+            what,
+            referenced_by: referenced_by.map(str::to_string),
+        }
+    } else {
+        SceneError::Io {
+            file: path.to_path_buf(),
+            what,
+            source: e,
+        }
+    }
+}
+
 /// Reads a whole text file; a missing file becomes [`SceneError::NotFound`].
 pub(crate) fn read_text(
     path: &Path,
     what: &'static str,
     referenced_by: Option<&str>,
 ) -> Result<String, SceneError> {
-    std::fs::read_to_string(path).map_err(|e| {
-        if e.kind() == std::io::ErrorKind::NotFound {
-            SceneError::NotFound {
-                file: path.to_path_buf(),
-                what,
-                referenced_by: referenced_by.map(str::to_string),
-            }
-        } else {
-            SceneError::Io {
-                file: path.to_path_buf(),
-                what,
-                source: e,
-            }
-        }
-    })
+    std::fs::read_to_string(path).map_err(|e| read_error(e, path, what, referenced_by))
 }
 
 /// Checks what tobj does not report with a line number: unparsable or non-finite numbers in
