@@ -60,7 +60,10 @@ fn lit_pixels(ctx: &voxgi::vk::Context, scene: &Scene, method: GiMethod) -> usiz
 /// the order of `METHODS`.
 fn lit_per_method(scene: &Scene) -> Vec<usize> {
     let ctx = common::context();
-    METHODS.iter().map(|&m| lit_pixels(&ctx, scene, m)).collect()
+    METHODS
+        .iter()
+        .map(|&m| lit_pixels(&ctx, scene, m))
+        .collect()
 }
 
 const PIXELS: usize = (WIDTH * HEIGHT) as usize;
@@ -69,12 +72,20 @@ const PIXELS: usize = (WIDTH * HEIGHT) as usize;
 fn cornell_original_lit_by_its_emissive_quad_through_gi() {
     let scene = load("cornell_original.toml");
     // 18 quads as published (5 walls, 6 faces of each box, the light), two triangles each.
-    assert_eq!(triangles(&scene), 36, "every quad of the OBJ, as two triangles");
+    assert_eq!(
+        triangles(&scene),
+        36,
+        "every quad of the OBJ, as two triangles"
+    );
     let lit = lit_per_method(&scene);
     // No light but the emissive quad, which only GI carries to other surfaces: without GI
     // the image holds the quad alone. It is 0.47 m wide at 3.4 m (3.4 of 32 columns) and seen
     // edge-on from 1 m below (0.8 of 18 rows), so at most its bounding 5x2 pixels are lit.
-    assert!(lit[0] <= 10, "gi none lights {} pixels, more than the light", lit[0]);
+    assert!(
+        lit[0] <= 10,
+        "gi none lights {} pixels, more than the light",
+        lit[0]
+    );
     // The open front (+-1 m at 2.41 m) spans +-0.41/0.36 of the half-height, i.e. every row,
     // and 1/2.41/0.65 = 64% of the width: the box's inside covers about 370 of 576 pixels,
     // all of it facing the light except the boxes' sides turned away from it. A GI method
@@ -88,7 +99,10 @@ fn cornell_original_lit_by_its_emissive_quad_through_gi() {
         if *method == GiMethod::Ssgi {
             continue;
         }
-        assert!(n * 4 >= PIXELS, "{method:?}: only {n} of {PIXELS} pixels are lit");
+        assert!(
+            n * 4 >= PIXELS,
+            "{method:?}: only {n} of {PIXELS} pixels are lit"
+        );
     }
 }
 
@@ -98,7 +112,7 @@ fn modern_hall_lit_by_its_emitters_through_gi() {
     // Every one of the flattened OBJ's 31,087 `f` lines, each a triangle (its emitter disks
     // and rectangles included).
     assert_eq!(triangles(&scene), 31_087);
-    // Its 26 emitters (MTL `Ke` 1.5) are the only light.
+    // Its emitting materials (13 in the MTL, `Ke` 1.5 to 4.6) are the only light.
     let emitters = scene
         .materials
         .iter()
@@ -109,13 +123,16 @@ fn modern_hall_lit_by_its_emitters_through_gi() {
     // Without GI only the emitters' own pixels are lit, and how many land on pixel centres at
     // 32x18 is not a bound to derive; `none` is checked for validation and finite values.
     // With GI the view is walls, stairs and floor in a hall lit by 26 emitters, all of them
-    // facing several; the authors' reference has no pixel darker than 1e-2. Require a
-    // quarter of the image: a loader that loses the `Ke` values lights nothing.
+    // facing several; the authors' reference has no pixel whose
+    // radiance sum is below 0.03. Require a
+    // quarter of the image: a loader that loses the `Ke` values lights nothing. (Measured:
+    // `none` 24 pixels, hemisphere 493, path tracer 536, VPLs 560, and screen-space GI 430,
+    // which gathers from the emitters in view, the tall one at the left among them.)
     for (method, &n) in METHODS.iter().zip(&lit).skip(1) {
-        if *method == GiMethod::Ssgi {
-            continue;
-        }
-        assert!(n * 4 >= PIXELS, "{method:?}: only {n} of {PIXELS} pixels are lit");
+        assert!(
+            n * 4 >= PIXELS,
+            "{method:?}: only {n} of {PIXELS} pixels are lit"
+        );
     }
 }
 
@@ -136,6 +153,9 @@ fn sponza_lit_by_the_sun_with_every_method() {
     // opening in direct light, which every method shows. Require an eighth of the image lit
     // by every method: a loader that loses the mesh or its light leaves it black.
     for (method, &n) in METHODS.iter().zip(&lit) {
-        assert!(n * 8 >= PIXELS, "{method:?}: only {n} of {PIXELS} pixels are lit");
+        assert!(
+            n * 8 >= PIXELS,
+            "{method:?}: only {n} of {PIXELS} pixels are lit"
+        );
     }
 }
