@@ -11,7 +11,7 @@
 // the weight exp(-(delta / theta)^2 / 2), delta the angle between the two pixels' mirror
 // directions of the view ray, theta the lobe's half-maximum angle about the mirror direction
 // (Phong cos^n: cos theta = 2^(-1/n); GGX through the exponent n = 2 / alpha^2 - 2 of the same
-// width, as ssgi_reflect.comp's cone). A rough lobe is blurred as before; a sharp one (a
+// width, as ssgi_reflect.comp's cone). A rough lobe (wide theta) is blurred by the other weights alone; a sharp one (a
 // mirror's reflection, a curved metal whose mirror direction turns fast) keeps its detail.
 // Except within the VPLs' interleaving tile (|k| < tile_px, the pattern's side along this
 // pass): there the pixels hold different VPL sets of one estimate, which the filter has to

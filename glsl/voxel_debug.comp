@@ -1,5 +1,5 @@
 #version 450
-// Debug views of the voxel grid (issue 4/5): camera rays cast through the GPU column image.
+// Debug views of the voxel grid: camera rays cast through the GPU column image.
 // mode 0 (voxels): hierarchical first hit, shaded by the face the ray entered through (N.L);
 // mode 1 (steps): hierarchical traversal step count on a heat ramp;
 // mode 2 (level): occupancy of hierarchy level `level` (texel x,y blocks of 2^level voxels,

@@ -583,8 +583,8 @@ fn run_volume_frame(
     (v, names)
 }
 
-/// Congruence (docs/ARCHITECTURE.md, "The voxel representation"): a voxel has an attribute (albedo
-/// alpha 1, a unit normal or a cancelled one) exactly where its bit is set, and nothing elsewhere.
+/// Congruence (docs/design/voxels.md): a voxel has an attribute (albedo alpha 1, a unit normal
+/// or a cancelled one) exactly where its bit is set, and nothing elsewhere.
 fn assert_congruent(v: &Volumes, grid: &VoxelGrid, what: &str) -> usize {
     let ext = grid.extent_voxels();
     let (mut set, mut mismatches) = (0, Vec::new());

@@ -127,7 +127,7 @@ fn render(ctx: &voxgi::vk::Context, scene: &Scene, gi: &GiSettings) -> HdrImage 
 /// that straddle an edge and flip (a silhouette pixel, a shadow-map texel, a voxel boundary
 /// the walls lie on, a ray or VPL hit): one pixel off by 100 % adds 1/4096 ≈ 2.4e-4 at 64².
 /// The bound 1e-3 allows about four such pixels and nothing systematic; before the rebase
-/// the same renders were 3e-2 to 2.5e-1 off (README).
+/// the same renders were 3e-2 to 2.5e-1 off (docs/measurements/far-from-origin.md).
 const REL_MSE_BOUND: f64 = 1e-3;
 
 #[test]

@@ -1,5 +1,5 @@
 //! The MTL texture maps (`map_Kd`, `map_Pr`, `map_Pm`, `map_Ke`) in the voxel volumes, per
-//! texel, for both voxelizers (docs/ARCHITECTURE.md, "Materials"), and the committed PBR-map scene
+//! texel, for both voxelizers (docs/design/materials.md), and the committed PBR-map scene
 //! (`assets/scenes/cornell_pbr.toml`) against its Mitsuba reference. Validation is on; any
 //! message fails.
 

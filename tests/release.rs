@@ -81,7 +81,8 @@ fn allocated_bytes_follow_a_buffer_from_creation_to_drop() {
 /// sample before the first frame, one every 10 frames and one after the last, each with an
 /// RSS (on Linux) and the GPU memory the renderer holds; slopes are finite and the renderer
 /// leaves no GPU memory behind once dropped. Not a memory assertion: 40 frames say nothing
-/// about leaks; the benchmark's long runs do (README).
+/// about leaks; the benchmark's long runs do
+/// (docs/measurements/long-runs.md).
 #[test]
 fn a_short_soak_run_reports_every_sample() {
     use voxgi::bench::{bench_soak, SoakBenchDesc};

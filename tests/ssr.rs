@@ -216,8 +216,7 @@ fn rays_leaving_the_screen_fall_back_to_the_diffuse_light() {
 
 /// (c) `--ssr off` has no reflection pass (and so none of their images), nor has a scene
 /// without Phong or GGX materials with reflections on, whose image is then bit-identical to
-/// the one with them off. (That `--ssr off` leaves the image the renderer made before the
-/// reflections existed is checked by the README's render hashes.)
+/// the one with them off.
 #[test]
 fn without_reflections_nothing_is_declared() {
     const SIZE: u32 = 32;

@@ -1,4 +1,4 @@
-//! Texture maps on the senders of indirect light (docs/ARCHITECTURE.md, "Materials"): an albedo
+//! Texture maps on the senders of indirect light (docs/design/materials.md): an albedo
 //! texture (`map_Kd`) in the reflective light maps (hemisphere method, VPLs) and in the albedo
 //! volume (path tracer), and an emission map (`map_Ke`) at the points the VPL emitter rays
 //! start from, each against the closed-form integral over the texture. Validation is on; any

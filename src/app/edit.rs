@@ -756,7 +756,7 @@ pub fn light_name(i: usize, l: &Light) -> String {
 }
 
 /// The union of the bounds of the objects that do not move by themselves: what edits change
-/// (keyframed objects move every frame without a new renderer, as before the editor).
+/// (keyframed objects move every frame without a new renderer).
 pub fn edited_bounds(scene: &Scene) -> Aabb {
     scene
         .objects

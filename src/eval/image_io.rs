@@ -215,7 +215,7 @@ fn from_rgb32f(buffer: image::Rgb32FImage, per_channel: impl Fn(f32) -> f32) -> 
     }
 }
 
-fn open(path: &Path) -> Result<image::io::Reader<BufReader<File>>, EvalError> {
+fn open(path: &Path) -> Result<image::ImageReader<BufReader<File>>, EvalError> {
     let file = File::open(path).map_err(|source| match source.kind() {
         ErrorKind::NotFound => EvalError::MissingFile {
             path: path.to_owned(),
@@ -225,7 +225,7 @@ fn open(path: &Path) -> Result<image::io::Reader<BufReader<File>>, EvalError> {
             source,
         },
     })?;
-    image::io::Reader::new(BufReader::new(file))
+    image::ImageReader::new(BufReader::new(file))
         .with_guessed_format()
         .map_err(|source| EvalError::Io {
             path: path.to_owned(),

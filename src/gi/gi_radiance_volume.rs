@@ -4,7 +4,7 @@
 //! maps, the second samples the hemisphere against it. With Phong or GGX materials the volume
 //! holds a glossy voxel's diffuse part and its lights' visibility, and the second pass adds
 //! its specular lobe toward each ray from the material volume and the lights
-//! (docs/ARCHITECTURE.md, "Materials").
+//! (docs/design/materials.md).
 
 use super::gi_common::{add_ray_pass, GiShared, GpuGiPush};
 use super::{GiInputs, GiMethodPasses, GiOutput, GiTarget, MethodWorld};

@@ -483,7 +483,7 @@ builtin = "quad"
 
     /// An emission map: the rows keep the weight `Ke` × the map's mean but carry π·W·Ke/w, the
     /// map and the triangle's texture coordinates, for the shader to multiply by the texel at
-    /// its point; without `per_texel` they carry the mean's flux and no map, as before.
+    /// its point; without `per_texel` they carry the mean's flux and no map.
     #[test]
     fn emission_map_rows_carry_ke_and_the_map() {
         let mut s = scene(

@@ -52,8 +52,7 @@ pub struct TaaSettings {
     /// Frames a headless render runs (jittered), so a still image is anti-aliased.
     pub frames: u32,
     /// Reproject moving objects' pixels with their motion vectors (scenes with moving objects
-    /// only; false reprojects them with the camera alone, as before motion vectors, for
-    /// comparisons).
+    /// only; false reprojects them with the camera alone, for comparisons).
     pub motion_vectors: bool,
 }
 

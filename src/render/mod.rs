@@ -234,7 +234,7 @@ fn per_eye_frame_images(
 }
 
 /// Whether `settings` combine at all, independent of scene and device: the combination a
-/// renderer refuses (SAO without GI; every GI method now renders with paraboloid point
+/// renderer refuses (SAO without GI; every GI method renders with paraboloid point
 /// shadows and with area lights). [`Renderer::new`] runs it first; `voxgi sweep` asks it to
 /// leave such configurations out instead of failing on them.
 pub fn check_setting_combination(settings: &RenderSettings) -> Result<(), RenderError> {

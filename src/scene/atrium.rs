@@ -1,4 +1,4 @@
-//! A procedural atrium: the Sponza-scale scene for performance measurements (issue 16).
+//! A procedural atrium: the Sponza-scale scene for performance measurements.
 //!
 //! A rectangular courtyard surrounded by arcades on two floors — columns (a square plinth, a
 //! turned base, a shaft with a slight entasis, a flared capital and a square abacus) carrying

@@ -59,14 +59,14 @@ pub struct GiSettings {
     /// Path-tracer bounces: a fixed count, or unbounded by Russian roulette.
     pub bounces: Bounces,
     /// Path tracer: sample the Phong and GGX lobes at every bounce (a material volume, in
-    /// scenes with such materials); `false` makes later bounces Lambert with the base color,
-    /// the behaviour before the material volume, kept for comparisons.
+    /// scenes with such materials); `false` makes later bounces Lambert with the base color
+    /// (no material volume), kept for comparisons.
     pub pathtrace_lobes: bool,
     /// The voxel volumes sample the MTL texture maps (`map_Kd` in the albedo volume, `map_Ke`
     /// in the emission volume, `map_Pr` / `map_Pm` in the material volume) per texel at the
     /// surface in each voxel (`voxel::maps`), and the VPL emitter rays take `map_Ke`'s texel at
     /// their points; `false` gives the volumes `Kd` and each map's mean per material and the
-    /// emitter rays the mean, the behaviour before, kept for comparisons. Scenes without such
+    /// emitter rays the mean, kept for comparisons. Scenes without such
     /// maps are the same either way. (The reflective light maps sample `map_Kd` / `map_Pm`
     /// like the G-buffer either way.)
     pub voxel_map_texels: bool,

@@ -119,7 +119,7 @@ where
     [S]: image::EncodableLayout,
 {
     let mut out = std::io::Cursor::new(Vec::new());
-    img.write_to(&mut out, image::ImageOutputFormat::Png)
+    img.write_to(&mut out, image::ImageFormat::Png)
         .expect("encode PNG");
     out.into_inner()
 }
@@ -136,6 +136,78 @@ fn sixteen_bit_and_grayscale_textures_load_as_rgba8() {
     let s = load_texture(&dir, &png_bytes(&gray)).expect("grayscale PNG loads");
     assert_eq!((s.textures[0].width, s.textures[0].height), (3, 1));
     assert_eq!(&s.textures[0].rgba8[..4], &[77, 77, 77, 255]);
+}
+
+/// `img` encoded as `format`.
+fn encoded(img: &image::DynamicImage, format: image::ImageFormat) -> Vec<u8> {
+    let mut out = std::io::Cursor::new(Vec::new());
+    img.write_to(&mut out, format).expect("encode");
+    out.into_inner()
+}
+
+#[test]
+fn jpeg_tga_bmp_and_hdr_textures_load_whatever_their_extension_says() {
+    // A flat colour survives JPEG's 8×8 DCT nearly exactly: every block is its DC term, so
+    // the only error is the quantization of one coefficient and the YCbCr round trip
+    // (a few levels of 255); the lossless formats must return it exactly.
+    let rgb = image::DynamicImage::ImageRgb8(image::RgbImage::from_pixel(
+        16,
+        16,
+        image::Rgb([200, 120, 40]),
+    ));
+    let cases = [
+        ("tex.jpg", image::ImageFormat::Jpeg, 3),
+        // Sponza's textures are named `*.JPG`.
+        ("tex.JPG", image::ImageFormat::Jpeg, 3),
+        ("tex.tga", image::ImageFormat::Tga, 0),
+        ("tex.bmp", image::ImageFormat::Bmp, 0),
+        // The extension says PNG, the bytes are a JPEG: the bytes decide.
+        ("tex.png", image::ImageFormat::Jpeg, 3),
+    ];
+    for (name, format, tolerance) in cases {
+        let dir = Dir::new("texformats");
+        dir.write("m.mtl", format!("newmtl a\nKd 1 1 1\nmap_Kd {name}\n"));
+        dir.write(name, encoded(&rgb, format));
+        let s = dir
+            .load_obj(TEXTURED_OBJ)
+            .unwrap_or_else(|e| panic!("{name}: {e}"));
+        let t = &s.textures[0];
+        assert_eq!((t.width, t.height), (16, 16), "{name}");
+        for (got, want) in t.rgba8[..4].iter().zip([200u8, 120, 40, 255]) {
+            assert!(
+                got.abs_diff(want) <= tolerance,
+                "{name}: {:?}",
+                &t.rgba8[..4]
+            );
+        }
+    }
+    // Radiance .hdr: linear floats, converted to 8 bits like a 16-bit PNG (clamped to 1).
+    let hdr = image::DynamicImage::ImageRgb32F(image::Rgb32FImage::from_pixel(
+        4,
+        4,
+        image::Rgb([0.5, 2.0, 0.0]),
+    ));
+    let dir = Dir::new("texhdr");
+    dir.write("m.mtl", "newmtl a\nKd 1 1 1\nmap_Kd tex.hdr\n");
+    dir.write("tex.hdr", encoded(&hdr, image::ImageFormat::Hdr));
+    let s = dir.load_obj(TEXTURED_OBJ).expect("HDR texture loads");
+    let px = &s.textures[0].rgba8[..4];
+    assert!(
+        px[0].abs_diff(128) <= 1 && px[1] == 255 && px[2] == 0,
+        "{px:?}"
+    );
+}
+
+#[test]
+fn a_texture_in_no_known_format_is_an_error_naming_the_file() {
+    let dir = Dir::new("texunknown");
+    dir.write("m.mtl", "newmtl a\nKd 1 1 1\nmap_Kd tex.jpg\n");
+    dir.write("tex.jpg", b"this is not an image at all, just text");
+    let e = dir.load_obj(TEXTURED_OBJ).expect_err("text as a texture");
+    assert!(
+        matches!(e, SceneError::TextureDecode { .. }) && e.to_string().contains("tex.jpg"),
+        "{e}"
+    );
 }
 
 #[test]

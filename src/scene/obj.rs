@@ -480,7 +480,13 @@ impl AssetStore {
             referenced_by: referenced_by.to_string(),
         };
         check_texture_size(path).map_err(decode_error)?;
-        let img = image::open(path).map_err(|e| decode_error(e.to_string()))?;
+        // The format comes from the file's first bytes, not its extension: real scenes ship
+        // `.JPG`, `.jpeg` and textures whose extension lies.
+        let img = image::ImageReader::open(path)
+            .and_then(|r| r.with_guessed_format())
+            .map_err(|e| decode_error(e.to_string()))?
+            .decode()
+            .map_err(|e| decode_error(e.to_string()))?;
         let rgba = img.to_rgba8();
         let i = self.textures.len();
         let (width, height) = rgba.dimensions();
@@ -503,7 +509,7 @@ pub const MAX_TEXTURE_SIDE: u32 = 16384;
 /// Reads only the header of a texture file and refuses an empty image or one larger than
 /// [`MAX_TEXTURE_SIDE`], before decoding allocates its texels.
 fn check_texture_size(path: &Path) -> Result<(), String> {
-    let (w, h) = image::io::Reader::open(path)
+    let (w, h) = image::ImageReader::open(path)
         .and_then(|r| r.with_guessed_format())
         .map_err(|e| e.to_string())?
         .into_dimensions()

@@ -1,6 +1,5 @@
 //! Albedo and normal volumes congruent with the bit grid, written from triangles
-//! (docs/ARCHITECTURE.md, "The voxel representation": non-binary volumes exist only when something
-//! reads them): for the GI methods that read volumes (`gi::GiPasses`, for the objects the atlas
+//! (docs/design/voxels.md: non-binary volumes exist only when something reads them): for the GI methods that read volumes (`gi::GiPasses`, for the objects the atlas
 //! voxelizer does not handle; [`super::gpu_atlas_volumes`] writes the others) and for the albedo
 //! debug view.
 //!

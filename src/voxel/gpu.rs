@@ -226,11 +226,12 @@ pub struct VoxelPipelines {
 
 /// Invocations per triangle of `voxelize_triangles` (see [`VoxelPipelines::with_group_size`]).
 ///
-/// Every group size is exact. Smaller groups once lost voxels on lavapipe (the bunny box at
-/// 256×255×256 and group size 8 missed 10,082 of 333,361): lavapipe ends all loops of an
-/// invocation after 65,535 iterations of them together, and one invocation walked 125 columns
-/// of the ceiling's bounding box at 246 depths each. Large steep triangles hit the same limit
-/// at 64. The dispatch now splits such triangles over more workgroups ([`voxelize_loads`]).
+/// Every group size is exact. Lavapipe ends all loops of an invocation after 65,535
+/// iterations of them together, so an invocation that walks a large triangle's box alone (125
+/// columns of the bunny box's ceiling at 246 depths each, at 256×255×256 and group size 8)
+/// would stop early and lose voxels (10,082 of 333,361 there); large steep triangles reach
+/// the same limit at 64. The dispatch splits such triangles over more workgroups
+/// ([`voxelize_loads`]).
 /// A group of 8 (lavapipe's SIMD width) is faster there; 64 stays the default until the
 /// benchmark compares them.
 pub const VOXELIZE_GROUP_SIZE: u32 = 64;
@@ -721,7 +722,7 @@ impl VoxelSettings {
     }
 }
 
-/// The two voxelizers of docs/ARCHITECTURE.md, "The voxel representation".
+/// The two voxelizers of docs/design/voxels.md.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
 pub enum Voxelizer {
     /// Exact conservative triangle/box test (`voxelize_triangles`), bit for bit the CPU

@@ -17,7 +17,7 @@
 //!   voxelizers share `voxel_clear` / `voxel_copy_static` (static grid + dynamic objects),
 //!   `voxel_store` and the mip chain, and can be mixed in one frame.
 //!
-//! # OBJ sequences (issue 4)
+//! # OBJ sequences
 //! A sequence whose frames share topology gets one atlas for all frames
 //! ([`super::atlas::build_sequence_atlas`], hole-free in every frame). Its position atlas
 //! is rendered once per frame with that frame's vertices through the shared layout, giving

@@ -1,4 +1,4 @@
-//! The MTL texture maps in the voxel volumes (docs/ARCHITECTURE.md, "Materials"): `map_Kd` in
+//! The MTL texture maps in the voxel volumes (docs/design/materials.md): `map_Kd` in
 //! the albedo volume, `map_Ke` in the emission volume, `map_Pr` / `map_Pm` in the material
 //! volume, sampled per texel at the surface points each voxelizer averages, instead of `Kd`
 //! or each map's mean; and `map_Ke` at the points the VPL emitter rays start from.
@@ -33,7 +33,7 @@ pub struct MapUse {
 impl MapUse {
     /// The maps a scene's volumes sample: `emission` / `material` say which volumes exist
     /// (the albedo volume always does), `per_texel` whether maps are sampled at all (else each
-    /// map's mean and `Kd`, as before). A volume whose materials have no map samples none.
+    /// map's mean and `Kd`). A volume whose materials have no map samples none.
     pub fn new(scene: &Scene, emission: bool, material: bool, per_texel: bool) -> Self {
         let has = |f: &dyn Fn(&Material) -> bool| scene.materials.iter().any(f);
         Self {
