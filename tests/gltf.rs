@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 
 use serde_json::json;
 use voxgi::eval::compare;
-use voxgi::eval::mitsuba::export_mitsuba;
+use voxgi::export::mitsuba::export_mitsuba;
 use voxgi::gi::{GiMethod, GiSettings};
 use voxgi::render::{render_image, RenderSettings};
 use voxgi::scene::{Light, Scene};
