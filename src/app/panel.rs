@@ -5,6 +5,7 @@ use crate::gi::{Bounces, GiMethod, GiSettings};
 use crate::light::ShadowSettings;
 use crate::limits;
 use crate::post::{ToneMap, ToneOperator};
+use crate::scene::gi_range;
 use crate::vk::PassTiming;
 use crate::voxel::debug_view::DebugView;
 use std::collections::VecDeque;
@@ -952,7 +953,7 @@ fn gi_controls(ui: &mut egui::Ui, gi: &mut GiSettings, frames: Option<u32>) {
         ssgi_controls(ui, gi);
     } else {
         ui.add(
-            egui::Slider::new(&mut gi.rays, limits::GI_RAYS.slider(1, 256))
+            egui::Slider::new(&mut gi.rays, gi_range::GI_RAYS.slider(1, 256))
                 .logarithmic(true)
                 .text("rays / pixel"),
         );
@@ -978,7 +979,7 @@ fn gi_controls(ui: &mut egui::Ui, gi: &mut GiSettings, frames: Option<u32>) {
     }
     if let Some(r) = &mut gi.radius_m {
         ui.add(
-            egui::Slider::new(r, limits::GI_RADIUS_M.slider(0.01, 100.0))
+            egui::Slider::new(r, gi_range::GI_RADIUS_M.slider(0.01, 100.0))
                 .logarithmic(true)
                 .text("radius m"),
         );
@@ -986,36 +987,39 @@ fn gi_controls(ui: &mut egui::Ui, gi: &mut GiSettings, frames: Option<u32>) {
     ui.add(
         egui::Slider::new(
             &mut gi.filter_radius,
-            limits::GI_FILTER_RADIUS.slider(0, 16),
+            gi_range::GI_FILTER_RADIUS.slider(0, 16),
         )
         .text("filter radius"),
     );
     ui.add(
-        egui::Slider::new(&mut gi.filter_passes, limits::GI_FILTER_PASSES.slider(0, 8))
-            .text("filter passes"),
+        egui::Slider::new(
+            &mut gi.filter_passes,
+            gi_range::GI_FILTER_PASSES.slider(0, 8),
+        )
+        .text("filter passes"),
     );
     ui.add(
         egui::Slider::new(
             &mut gi.normal_offset_voxels,
-            limits::GI_NORMAL_OFFSET.slider(0.0, 4.0),
+            gi_range::GI_NORMAL_OFFSET.slider(0.0, 4.0),
         )
         .text("normal offset k1"),
     );
     ui.add(
         egui::Slider::new(
             &mut gi.ray_offset_voxels,
-            limits::GI_RAY_OFFSET.slider(0.0, 2.0),
+            gi_range::GI_RAY_OFFSET.slider(0.0, 2.0),
         )
         .text("ray offset k2"),
     );
     ui.add(
-        egui::Slider::new(&mut gi.start_level, limits::GI_START_LEVEL.slider(0, 8))
+        egui::Slider::new(&mut gi.start_level, gi_range::GI_START_LEVEL.slider(0, 8))
             .text("start level"),
     );
     ui.add(
         egui::Slider::new(
             &mut gi.max_iterations,
-            limits::GI_MAX_ITERATIONS.slider(16, 4096),
+            gi_range::GI_MAX_ITERATIONS.slider(16, 4096),
         )
         .logarithmic(true)
         .text("max iterations"),
@@ -1041,7 +1045,7 @@ fn ssgi_controls(ui: &mut egui::Ui, gi: &mut GiSettings) {
             }
         });
     ui.add(
-        egui::Slider::new(&mut s.samples, limits::SSGI_SAMPLES.slider(8, 256))
+        egui::Slider::new(&mut s.samples, gi_range::SSGI_SAMPLES.slider(8, 256))
             .logarithmic(true)
             .text("samples / texel / level"),
     );
@@ -1063,7 +1067,7 @@ fn ssgi_controls(ui: &mut egui::Ui, gi: &mut GiSettings) {
     ui.add(
         egui::Slider::new(
             &mut s.history_weight,
-            limits::SSGI_HISTORY_WEIGHT.slider(0.0, 0.99),
+            gi_range::SSGI_HISTORY_WEIGHT.slider(0.0, 0.99),
         )
         .text("history weight τ"),
     );
@@ -1075,22 +1079,22 @@ fn vpl_controls(ui: &mut egui::Ui, gi: &mut GiSettings) {
     use crate::gi::vpl::{VplNormalize, VplShading, VplSpotSampling, VplVisibility};
     let v = &mut gi.vpl;
     ui.add(
-        egui::Slider::new(&mut v.per_set, limits::VPLS.slider(1, 64))
+        egui::Slider::new(&mut v.per_set, gi_range::VPLS.slider(1, 64))
             .logarithmic(true)
             .text("VPLs / set / light"),
     );
     for (side, name) in v.pattern.iter_mut().zip(["pattern N", "pattern M"]) {
-        ui.add(egui::Slider::new(side, limits::VPL_PATTERN_SIDE.slider(1, 8)).text(name));
+        ui.add(egui::Slider::new(side, gi_range::VPL_PATTERN_SIDE.slider(1, 8)).text(name));
     }
-    ui.add(egui::Slider::new(&mut v.bounces, limits::VPL_BOUNCES.slider(1, 8)).text("bounces"));
+    ui.add(egui::Slider::new(&mut v.bounces, gi_range::VPL_BOUNCES.slider(1, 8)).text("bounces"));
     ui.add(
-        egui::Slider::new(&mut v.d_min_voxels, limits::VPL_D_MIN.slider(0.0, 64.0))
+        egui::Slider::new(&mut v.d_min_voxels, gi_range::VPL_D_MIN.slider(0.0, 64.0))
             .text("d_min (voxel diagonals)"),
     );
     ui.add(
         egui::Slider::new(
             &mut v.min_roughness,
-            limits::VPL_MIN_ROUGHNESS.slider(0.0, 1.0),
+            gi_range::VPL_MIN_ROUGHNESS.slider(0.0, 1.0),
         )
         .text("glossy receivers' min. roughness"),
     );

@@ -22,7 +22,7 @@ pub mod vpl;
 
 pub use crate::scene::{
     Bounces, GiMethod, GiSettings, RadianceSource, SaoSettings, SsgiMips, SsgiResolution,
-    SsgiSettings, SsrMode, SsrRays,
+    SsgiSettings, SsrRays,
 };
 pub use gi_common::GpuGiPush;
 pub use sao::GpuSaoPush;
