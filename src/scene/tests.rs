@@ -785,7 +785,7 @@ fn gi_table_parses_every_key() {
             bias: 0.02,
             contrast: 3.0,
             epsilon_m2: 0.5,
-            view: false,
+            ..Default::default()
         }),
         ..d
     };
