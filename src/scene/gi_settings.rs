@@ -153,13 +153,14 @@ pub struct SaoSettings {
     pub contrast: f32,
     /// ε in the denominator v·v + ε, m² (thesis: 0.01).
     pub epsilon_m2: f32,
+    /// N: taps on the spiral per pixel (Oetke 2017 Eq. 2.20, N = 16): fewer are faster and
+    /// noisier before the blur.
+    pub taps: u32,
     /// Show the AO term (grey, 1 = unoccluded) instead of the lit image (`--debug sao`).
     pub view: bool,
 }
 
 impl SaoSettings {
-    /// Taps on the spiral (Oetke 2017 Eq. 2.20, N = 16).
-    pub const TAPS: u32 = 16;
     /// Spiral turns τ (7, as the thesis's code uses).
     pub const SPIRAL_TURNS: f32 = 7.0;
 }
@@ -171,6 +172,7 @@ impl Default for SaoSettings {
             bias: 0.04,
             contrast: 2.0,
             epsilon_m2: 0.01,
+            taps: 16,
             view: false,
         }
     }
@@ -358,7 +360,7 @@ use range::*;
 
 /// Every `[gi]` key: the scene file's key, the path `--set`, the sweep's grid and the panel
 /// use, its range, its flag and its field.
-static GI_KEYS: [Key<GiSettings>; 35] = [
+static GI_KEYS: [Key<GiSettings>; 36] = [
     key!("gi.method", Kind::Choice(choices::<GiMethod>),
         "Indirect-light method (none: direct light only)",
         flag("gi", "METHOD"), choice GiMethod, method),
@@ -562,6 +564,9 @@ static GI_KEYS: [Key<GiSettings>; 35] = [
         flag("sao-contrast", "K"), sao contrast),
     key!("gi.sao_epsilon_m2", Kind::Number(SAO_EPSILON), "SAO: ε of v·v + ε in m²",
         flag("sao-epsilon", "M2"), sao epsilon_m2),
+    key!("gi.sao_taps", Kind::Count(SAO_TAPS),
+        "SAO: taps on the spiral per pixel (fewer: faster and noisier)",
+        flag("sao-taps", "N"), sao taps),
     // After the SAO values (see the `sao` arm of `key!`).
     key!("gi.sao", Kind::Bool,
     "Modified SAO (Oetke 2017 §2.5) at half resolution, multiplied into the indirect light \
@@ -787,6 +792,16 @@ pub mod range {
         "a history weight",
         0.0,
         0.99,
+    );
+
+    /// SAO taps per pixel around the thesis's 16 (Oetke 2017 Eq. 2.20); the cap bounds the
+    /// shader's per-pixel loop.
+    pub const SAO_TAPS: Limit<u32> = Limit::new(
+        "--sao-taps",
+        Some("gi.sao_taps"),
+        "SAO taps per pixel",
+        1,
+        256,
     );
 
     /// Path-tracer bounces: a fixed count up to the safety cap (or `"unbounded"`).
