@@ -112,10 +112,10 @@ impl clap::Args for GiArgs {
                 .value_name("KEY=VALUE")
                 .action(ArgAction::Append)
                 .help(
-                    "Sets any `[gi]` key by its path, as the scene file's table would (e.g.                      --set gi.rays=8, --set gi.vpl_pattern=2x2); repeatable, applied after the                      named flags",
+                    "Sets any `[gi]` key by its path, as the scene file's table would (e.g. --set gi.rays=8, --set gi.vpl_pattern=2x2); repeatable, applied after the named flags",
                 )
                 .long_help(format!(
-                    "Sets any `[gi]` key by its path, as the scene file's table would (e.g.                      --set gi.rays=8, --set gi.vpl_pattern=2x2); repeatable, applied after the                      named flags. Keys: {paths}"
+                    "Sets any `[gi]` key by its path, as the scene file's table would (e.g. --set gi.rays=8, --set gi.vpl_pattern=2x2); repeatable, applied after the named flags. Keys: {paths}"
                 )),
         )
         .arg(
@@ -123,7 +123,7 @@ impl clap::Args for GiArgs {
                 .long("vpl-show")
                 .action(ArgAction::SetTrue)
                 .help(
-                    "`--gi vpl`: debug view, every VPL drawn as a dot over the image (first                      bounce yellow, later ones cyan)",
+                    "`--gi vpl`: debug view, every VPL drawn as a dot over the image (first bounce yellow, later ones cyan)",
                 ),
         )
         .arg(
@@ -131,7 +131,7 @@ impl clap::Args for GiArgs {
                 .long("sao-show")
                 .action(ArgAction::SetTrue)
                 .help(
-                    "SAO debug view: the AO term as grey (1 white = unoccluded) instead of the                      image (needs SAO on, by --sao or the scene)",
+                    "SAO debug view: the AO term as grey (1 white = unoccluded) instead of the image (needs SAO on, by --sao or the scene)",
                 ),
         )
     }
