@@ -37,7 +37,7 @@ pub struct LimitError {
 }
 
 impl<T: Copy + PartialOrd + fmt::Display> Limit<T> {
-    const fn new(
+    pub const fn new(
         flag: &'static str,
         key: Option<&'static str>,
         what: &'static str,
@@ -223,97 +223,6 @@ pub const VOXEL_LAYERS: Limit<u32> = Limit::new(
     1,
     64,
 );
-pub const GI_RAYS: Limit<u32> = Limit::new("--gi-rays", Some("gi.rays"), "rays per pixel", 1, 4096);
-/// SAO (Oetke 2017 §2.5): the world-space sample radius r.
-pub const SAO_RADIUS_M: Limit<f32> = Limit {
-    min_exclusive: true,
-    ..Limit::new(
-        "--sao-radius",
-        Some("gi.sao_radius_m"),
-        "an SAO radius in meters",
-        0.0,
-        1e6,
-    )
-};
-/// SAO bias β, in meters of v·n (v the tap offset, n the normal).
-pub const SAO_BIAS: Limit<f32> = Limit::new(
-    "--sao-bias",
-    Some("gi.sao_bias"),
-    "an SAO bias in meters",
-    0.0,
-    1e6,
-);
-/// SAO contrast k, the exponent of the AO term.
-pub const SAO_CONTRAST: Limit<f32> = Limit::new(
-    "--sao-contrast",
-    Some("gi.sao_contrast"),
-    "an SAO contrast exponent",
-    0.0,
-    64.0,
-);
-/// SAO ε of the denominator v·v + ε, in m² (positive: keeps a tap at the centre finite).
-pub const SAO_EPSILON: Limit<f32> = Limit {
-    min_exclusive: true,
-    ..Limit::new(
-        "--sao-epsilon",
-        Some("gi.sao_epsilon_m2"),
-        "an SAO epsilon in square meters",
-        0.0,
-        1e6,
-    )
-};
-pub const GI_RADIUS_M: Limit<f32> = Limit {
-    min_exclusive: true,
-    ..Limit::new(
-        "--gi-radius",
-        Some("gi.radius_m"),
-        "a ray length in meters",
-        0.0,
-        1e9,
-    )
-};
-pub const GI_NORMAL_OFFSET: Limit<f32> = Limit::new(
-    "--gi-normal-offset",
-    Some("gi.normal_offset_voxels"),
-    "an offset along the normal in voxel diagonals",
-    0.0,
-    1e3,
-);
-pub const GI_RAY_OFFSET: Limit<f32> = Limit::new(
-    "--gi-ray-offset",
-    Some("gi.ray_offset_voxels"),
-    "an offset along the ray in voxel diagonals",
-    0.0,
-    1e3,
-);
-pub const GI_FILTER_RADIUS: Limit<u32> = Limit::new(
-    "--gi-filter-radius",
-    Some("gi.filter_radius"),
-    "a filter radius in pixels (0: off)",
-    0,
-    64,
-);
-pub const GI_FILTER_PASSES: Limit<u32> = Limit::new(
-    "--gi-filter-passes",
-    Some("gi.filter_passes"),
-    "a number of filter passes",
-    0,
-    16,
-);
-pub const GI_FRAMES: Limit<u32> = Limit::new(
-    "--gi-frames",
-    Some("gi.accumulate_frames"),
-    "frames to accumulate",
-    1,
-    1 << 20,
-);
-pub const LIGHT_MAP_RESOLUTION: Limit<u32> = Limit::new(
-    "--light-map-resolution",
-    Some("gi.light_map_resolution"),
-    "texels per side of a light map",
-    16,
-    8192,
-);
 /// Sub-lights an area light is rendered with (`light::area`): each is a light with one shadow
 /// view, and a frame has at most 64 of each (`render::gpu::MAX_LIGHTS`, `MAX_SHADOW_VIEWS`).
 pub const AREA_SAMPLES: Limit<u32> = Limit::new(
@@ -332,21 +241,6 @@ pub const OIT_NODES_PER_PIXEL: Limit<u32> = Limit::new(
     1,
     64,
 );
-/// Traversal starts at most at the top of a 16384² hierarchy (log2 16384 = 14).
-pub const GI_START_LEVEL: Limit<u32> = Limit::new(
-    "--gi-start-level",
-    None,
-    "a hierarchy level to start traversal at",
-    0,
-    14,
-);
-pub const GI_MAX_ITERATIONS: Limit<u32> = Limit::new(
-    "--gi-max-iterations",
-    None,
-    "a traversal iteration cap",
-    1,
-    1 << 20,
-);
 /// Hierarchy levels of a 16384² grid: 0..=14.
 pub const DEBUG_LEVEL: Limit<u32> = Limit::new(
     "--debug-level",
@@ -361,67 +255,6 @@ pub const DEBUG_STEPS_SCALE: Limit<u32> = Limit::new(
     "a number of traversal steps shown white",
     1,
     1 << 20,
-);
-
-/// `--gi vpl`'s values (Thiedemann 2010, Ch. 7): VPLs per set and light, the interleaving
-/// pattern's sides, bounces (each adds one voxel ray per VPL), d_min in voxel diagonals.
-pub const VPLS: Limit<u32> =
-    Limit::new("--vpls", Some("gi.vpls"), "VPLs per set and light", 1, 1024);
-pub const VPL_PATTERN_SIDE: Limit<u32> = Limit::new(
-    "--vpl-pattern",
-    Some("gi.vpl_pattern"),
-    "a side of the interleaving pattern",
-    1,
-    16,
-);
-pub const VPL_BOUNCES: Limit<u32> =
-    Limit::new("--vpl-bounces", Some("gi.vpl_bounces"), "VPL bounces", 1, 8);
-pub const VPL_D_MIN: Limit<f32> = Limit::new(
-    "--vpl-d-min",
-    Some("gi.vpl_d_min_voxels"),
-    "d_min in voxel diagonals",
-    0.0,
-    1e6,
-);
-
-/// `--gi vpl`: the roughness floor of glossy receivers (perceptual GGX roughness; Phong
-/// exponents are capped at the matching 2/r⁴ − 2), which bounds the peak of a receiver's lobe
-/// toward a VPL as d_min bounds 1/d² (`glsl/include/gi_vpl_gather_body.glsl`).
-pub const VPL_MIN_ROUGHNESS: Limit<f32> = Limit::new(
-    "--vpl-min-roughness",
-    Some("gi.vpl_min_roughness"),
-    "a roughness",
-    0.0,
-    1.0,
-);
-
-/// `--gi ssgi`: samples per texel and pyramid level (Oetke 2017 §5.2: 8–256 in the GUI).
-pub const SSGI_SAMPLES: Limit<u32> = Limit::new(
-    "--ssgi-samples",
-    Some("gi.ssgi_samples"),
-    "screen-space GI samples per texel and level",
-    1,
-    1024,
-);
-/// `--gi ssgi`: the clamp of the fed-back irradiance (Oetke 2017 §5.1: 20).
-pub const SSGI_FEEDBACK_MAX: Limit<f32> = Limit {
-    min_exclusive: true,
-    ..Limit::new(
-        "--ssgi-feedback-max",
-        Some("gi.ssgi_feedback_max_w_m2"),
-        "a fed-back irradiance clamp in W/m²",
-        0.0,
-        1e9,
-    )
-};
-
-/// `--gi ssgi`: τ of the temporal blend (below 1: the history must fade).
-pub const SSGI_HISTORY_WEIGHT: Limit<f32> = Limit::new(
-    "--ssgi-history-weight",
-    Some("gi.ssgi_history_weight"),
-    "a history weight",
-    0.0,
-    0.99,
 );
 
 /// Stereo eye separation: 0 gives two identical eyes (allowed, a mono check); 1e3 m is beyond
@@ -507,17 +340,19 @@ mod tests {
 
     #[test]
     fn integers_are_checked_at_both_ends_and_against_overflow() {
-        assert_eq!(GI_RAYS.check_flag(1), Ok(1));
-        assert_eq!(GI_RAYS.check_flag(4096), Ok(4096));
-        let e = GI_RAYS.check_flag(0).unwrap_err();
+        assert_eq!(TAA_FRAMES.check_flag(1), Ok(1));
+        assert_eq!(TAA_FRAMES.check_flag(4096), Ok(4096));
+        let e = TAA_FRAMES.check_flag(0).unwrap_err();
         assert_eq!(
             e.to_string(),
-            "--gi-rays = 0 is invalid; expected rays per pixel, an integer in [1, 4096]"
+            "--taa-frames = 0 is invalid; expected a number of TAA frames, an integer in [1, 4096]"
         );
-        assert!(GI_RAYS.check_flag(4097).is_err());
+        assert!(TAA_FRAMES.check_flag(4097).is_err());
         // A TOML integer beyond u32 is refused, not wrapped.
-        assert!(GI_RAYS.check_as("gi.rays", (1 << 32) + 5).is_err());
-        assert!(GI_RAYS.check_as("gi.rays", -1).is_err());
+        assert!(TAA_FRAMES
+            .check_as("post.taa_frames", (1 << 32) + 5)
+            .is_err());
+        assert!(TAA_FRAMES.check_as("post.taa_frames", -1).is_err());
     }
 
     #[test]
@@ -528,8 +363,8 @@ mod tests {
             assert!(e.to_string().contains("(0, 1000000]"), "{e}");
         }
         assert_eq!(EXPOSURE.check_flag(2.5), Ok(2.5));
-        assert_eq!(GI_NORMAL_OFFSET.check_flag(0.0), Ok(0.0));
-        assert!(GI_RADIUS_M.check_as("gi.radius_m", 0.0).is_err());
+        assert_eq!(BLOOM_STRENGTH.check_flag(0.0), Ok(0.0));
+        assert!(EXPOSURE.check_as("post.exposure", 0.0).is_err());
     }
 
     #[test]

@@ -7,7 +7,7 @@ mod common;
 
 use voxgi::gi::GiMethod;
 use voxgi::render::{render_image, RenderSettings};
-use voxgi::scene::{resolve_gi, GiOverrides, Scene};
+use voxgi::scene::{resolve_gi, schema::Layer, Scene};
 
 const WIDTH: u32 = 32;
 const HEIGHT: u32 = 18;
@@ -32,14 +32,12 @@ fn triangles(scene: &Scene) -> usize {
 /// validating context, and returns the number of pixels whose radiance sum exceeds 1e-3 (the
 /// threshold of tests/atrium.rs: far below any lit surface here, far above a black one).
 fn lit_pixels(ctx: &voxgi::vk::Context, scene: &Scene, method: GiMethod) -> usize {
-    let only_method = GiOverrides {
-        method: Some(method),
-        ..Default::default()
-    };
+    let mut gi = resolve_gi(&scene.gi, &Layer::default());
+    gi.method = method;
     let settings = RenderSettings {
         width: WIDTH,
         height: HEIGHT,
-        gi: resolve_gi(&scene.gi, &only_method),
+        gi,
         ..Default::default()
     };
     let out = render_image(ctx, scene, &settings)

@@ -1191,8 +1191,8 @@ impl Viewer {
         let budget = f64::from(self.controls.budget_ms);
         let dir = &self.opts.sweep_dir;
         match crate::tune::tune_from_dir(dir, &self.opts.scene_name, budget) {
-            Ok((row, _, overrides)) => {
-                self.controls.gi = overrides.apply(self.controls.gi);
+            Ok((row, _, layer)) => {
+                self.controls.gi = crate::scene::schema::apply(self.controls.gi, &[&layer]);
                 self.status = format!(
                     "best within {budget} ms: {} ({:.1} ms to the image, relMSE {:.4}, on {})",
                     row.config, row.image_ms, row.rel_mse, row.device

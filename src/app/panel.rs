@@ -5,6 +5,7 @@ use crate::gi::{GiMethod, GiSettings};
 use crate::light::ShadowSettings;
 use crate::limits;
 use crate::post::{ToneMap, ToneOperator};
+use crate::scene::gi_range;
 use crate::vk::PassTiming;
 use crate::voxel::debug_view::DebugView;
 use std::collections::VecDeque;
@@ -935,7 +936,7 @@ fn gi_controls(ui: &mut egui::Ui, gi: &mut GiSettings, frames: Option<u32>) {
     }
     if let Some(r) = &mut gi.radius_m {
         ui.add(
-            egui::Slider::new(r, limits::GI_RADIUS_M.slider(0.01, 100.0))
+            egui::Slider::new(r, gi_range::GI_RADIUS_M.slider(0.01, 100.0))
                 .logarithmic(true)
                 .text("radius m"),
         );
@@ -943,36 +944,39 @@ fn gi_controls(ui: &mut egui::Ui, gi: &mut GiSettings, frames: Option<u32>) {
     ui.add(
         egui::Slider::new(
             &mut gi.filter_radius,
-            limits::GI_FILTER_RADIUS.slider(0, 16),
+            gi_range::GI_FILTER_RADIUS.slider(0, 16),
         )
         .text("filter radius"),
     );
     ui.add(
-        egui::Slider::new(&mut gi.filter_passes, limits::GI_FILTER_PASSES.slider(0, 8))
-            .text("filter passes"),
+        egui::Slider::new(
+            &mut gi.filter_passes,
+            gi_range::GI_FILTER_PASSES.slider(0, 8),
+        )
+        .text("filter passes"),
     );
     ui.add(
         egui::Slider::new(
             &mut gi.normal_offset_voxels,
-            limits::GI_NORMAL_OFFSET.slider(0.0, 4.0),
+            gi_range::GI_NORMAL_OFFSET.slider(0.0, 4.0),
         )
         .text("normal offset k1"),
     );
     ui.add(
         egui::Slider::new(
             &mut gi.ray_offset_voxels,
-            limits::GI_RAY_OFFSET.slider(0.0, 2.0),
+            gi_range::GI_RAY_OFFSET.slider(0.0, 2.0),
         )
         .text("ray offset k2"),
     );
     ui.add(
-        egui::Slider::new(&mut gi.start_level, limits::GI_START_LEVEL.slider(0, 8))
+        egui::Slider::new(&mut gi.start_level, gi_range::GI_START_LEVEL.slider(0, 8))
             .text("start level"),
     );
     ui.add(
         egui::Slider::new(
             &mut gi.max_iterations,
-            limits::GI_MAX_ITERATIONS.slider(16, 4096),
+            gi_range::GI_MAX_ITERATIONS.slider(16, 4096),
         )
         .logarithmic(true)
         .text("max iterations"),

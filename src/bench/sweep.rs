@@ -56,11 +56,26 @@ pub enum SweepError {
     Tune(#[from] crate::tune::TuneError),
 }
 
-/// One `--grid KEY=V1,V2,…`: a GI flag and the values it takes.
+/// One `--grid KEY=V1,V2,…`: a `[gi]` key (one of the methods' [`crate::gi::MethodSpec::sweep_keys`]) and the values it takes.
 #[derive(Clone, Debug, PartialEq)]
 pub struct GridAxis {
+    /// The key path.
     pub key: &'static str,
+    /// The key as the grid named it (its path or its flag's alias), for the configuration's
+    /// label, so that a sweep resumed with the same `--grid` finds its rows.
+    pub name: String,
     pub values: Vec<String>,
+}
+
+/// The grid key `name` names: a key path of [`GRID_KEYS`] or its flag without `--`.
+fn grid_key(name: &str) -> Option<&'static str> {
+    use crate::scene::schema::key;
+    GiMethod::sweep_keys().into_iter().find(|k| {
+        *k == name
+            || key::<GiSettings>(k)
+                .and_then(|k| k.flag)
+                .is_some_and(|f| f.long == name)
+    })
 }
 
 /// Parses `KEY=V1,V2,…`. The values are checked later, as flags of the configurations
@@ -72,24 +87,27 @@ pub fn parse_grid(spec: &str) -> Result<GridAxis, SweepError> {
     };
     let (key, values) = spec
         .split_once('=')
-        .ok_or_else(|| err("expected KEY=V1,V2,… (e.g. gi-rays=4,16)".into()))?;
-    let key = key.trim().trim_start_matches("--");
-    if key == "gi" {
+        .ok_or_else(|| err("expected KEY=V1,V2,… (e.g. gi.rays=4,16)".into()))?;
+    let name = key.trim().trim_start_matches("--");
+    if name == "gi" || name == "gi.method" {
         return Err(err("the method is chosen by --methods, not --grid".into()));
     }
-    // The keys are the methods' own (`MethodSpec::sweep_keys`).
-    let known = GiMethod::sweep_keys();
-    let key = known.iter().copied().find(|k| *k == key).ok_or_else(|| {
+    let key = grid_key(name).ok_or_else(|| {
+        let known = GiMethod::sweep_keys();
         err(format!(
-            "unknown key `{key}`; expected one of {}",
+            "unknown key `{name}`; expected one of {} (or their flags' names, e.g. gi-rays)",
             known.join(", ")
         ))
     })?;
     let values: Vec<String> = values.split(',').map(|v| v.trim().to_owned()).collect();
     if values.iter().any(String::is_empty) {
-        return Err(err(format!("an empty value for {key}")));
+        return Err(err(format!("an empty value for {name}")));
     }
-    Ok(GridAxis { key, values })
+    Ok(GridAxis {
+        key,
+        name: name.to_owned(),
+        values,
+    })
 }
 
 /// Parses `--methods none,hemisphere,…`.
@@ -122,29 +140,39 @@ pub fn default_sweep_methods() -> String {
     names.join(",")
 }
 
+/// One value of a grid axis in a configuration: the key path, the name the grid gave it, the
+/// value.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GridValue {
+    pub key: &'static str,
+    pub name: String,
+    pub value: String,
+}
+
 /// One configuration of the sweep: a method and the grid values that apply to it.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Config {
     pub method: GiMethod,
-    pub flags: Vec<(&'static str, String)>,
+    pub values: Vec<GridValue>,
 }
 
 impl Config {
-    /// `method key=value …`, the configuration's name in the CSV.
+    /// `method key=value …`, the configuration's name in the CSV (each key as the grid
+    /// named it).
     pub fn label(&self) -> String {
         let mut s = method_name(self.method);
-        for (k, v) in &self.flags {
-            s += &format!(" {k}={v}");
+        for v in &self.values {
+            s += &format!(" {}={}", v.name, v.value);
         }
         s
     }
 
-    /// The configuration as `voxgi render` flags.
+    /// The configuration as `voxgi render` flags: `--gi METHOD` and `--set KEY=VALUE`.
     pub fn argv(&self) -> Vec<String> {
         let mut a = vec!["--gi".to_owned(), method_name(self.method)];
-        for (k, v) in &self.flags {
-            a.push(format!("--{k}"));
-            a.push(v.clone());
+        for v in &self.values {
+            a.push("--set".to_owned());
+            a.push(format!("{}={}", v.key, v.value));
         }
         a
     }
@@ -159,20 +187,24 @@ pub fn configs(methods: &[GiMethod], grid: &[GridAxis]) -> Vec<Config> {
             .iter()
             .filter(|a| method.spec().sweep_keys.contains(&a.key))
             .collect();
-        let mut partial: Vec<Vec<(&'static str, String)>> = vec![Vec::new()];
+        let mut partial: Vec<Vec<GridValue>> = vec![Vec::new()];
         for axis in axes {
             partial = partial
                 .into_iter()
                 .flat_map(|p| {
                     axis.values.iter().map(move |v| {
                         let mut q = p.clone();
-                        q.push((axis.key, v.clone()));
+                        q.push(GridValue {
+                            key: axis.key,
+                            name: axis.name.clone(),
+                            value: v.clone(),
+                        });
                         q
                     })
                 })
                 .collect();
         }
-        out.extend(partial.into_iter().map(|flags| Config { method, flags }));
+        out.extend(partial.into_iter().map(|values| Config { method, values }));
     }
     out
 }
@@ -205,91 +237,10 @@ pub fn pareto_front(points: &[(f64, f64)]) -> Vec<usize> {
     front
 }
 
-/// An `f32` as the TOML float that prints as the `f32` does (0.1, not 0.10000000149…).
-fn toml_f32(v: f32) -> toml::Value {
-    toml::Value::Float(format!("{v}").parse::<f64>().unwrap_or(f64::from(v)))
-}
-
-/// The resolved GI settings as a scene's `[gi]` table (every key it has; the flags without
-/// a key — radiance source, start level, iteration cap, VPL shading — are left out).
+/// The resolved GI settings as a scene's `[gi]` table: every key of the schema
+/// ([`GiSettings::keys`]; an unset ray length left out).
 pub fn gi_table(s: &GiSettings) -> toml::Table {
-    use toml::Value;
-    let int = |v: u32| Value::Integer(i64::from(v));
-    let mut t = toml::Table::new();
-    t.insert("method".into(), Value::String(method_name(s.method)));
-    t.insert("rays".into(), int(s.rays));
-    let bounces = match s.bounces {
-        crate::gi::Bounces::Fixed(n) => int(n),
-        crate::gi::Bounces::Unbounded => {
-            Value::String(crate::gi::Bounces::UNBOUNDED_NAME.to_owned())
-        }
-    };
-    t.insert("bounces".into(), bounces);
-    if let Some(r) = s.radius_m {
-        t.insert("radius_m".into(), toml_f32(r));
-    }
-    t.insert(
-        "normal_offset_voxels".into(),
-        toml_f32(s.normal_offset_voxels),
-    );
-    t.insert("ray_offset_voxels".into(), toml_f32(s.ray_offset_voxels));
-    t.insert("filter_radius".into(), int(s.filter_radius));
-    t.insert("filter_passes".into(), int(s.filter_passes));
-    t.insert("light_map_resolution".into(), int(s.light_map_resolution));
-    t.insert("accumulate_frames".into(), int(s.accumulate_frames));
-    t.insert("vpls".into(), int(s.vpl.per_set));
-    t.insert(
-        "vpl_pattern".into(),
-        Value::Array(s.vpl.pattern.iter().map(|&v| int(v)).collect()),
-    );
-    t.insert("vpl_bounces".into(), int(s.vpl.bounces));
-    t.insert("vpl_d_min_voxels".into(), toml_f32(s.vpl.d_min_voxels));
-    t.insert("vpl_min_roughness".into(), toml_f32(s.vpl.min_roughness));
-    let visibility = s
-        .vpl
-        .visibility
-        .to_possible_value()
-        .map_or_else(String::new, |v| v.get_name().to_owned());
-    t.insert("vpl_visibility".into(), Value::String(visibility));
-    t.insert("vpl_normalize".into(), value_name(s.vpl.normalize));
-    t.insert("vpl_spot_sampling".into(), value_name(s.vpl.spot_sampling));
-    let name = |r: crate::gi::SsgiResolution| {
-        r.to_possible_value()
-            .map_or_else(String::new, |v| v.get_name().to_owned())
-    };
-    t.insert(
-        "ssgi_resolution".into(),
-        Value::String(name(s.ssgi.resolution)),
-    );
-    t.insert("ssgi_samples".into(), int(s.ssgi.samples));
-    t.insert("ssgi_mips".into(), value_name(s.ssgi.mips));
-    t.insert("ssgi_feedback".into(), Value::Boolean(s.ssgi.feedback));
-    t.insert(
-        "ssgi_feedback_max_w_m2".into(),
-        toml_f32(s.ssgi.feedback_max_w_m2),
-    );
-    t.insert(
-        "ssgi_history_weight".into(),
-        toml_f32(s.ssgi.history_weight),
-    );
-    t.insert("ssr".into(), Value::Boolean(s.ssgi.ssr));
-    t.insert("ssr_rays".into(), value_name(s.ssgi.ssr_rays));
-    t.insert("sao".into(), Value::Boolean(s.sao.is_some()));
-    if let Some(a) = s.sao {
-        t.insert("sao_radius_m".into(), toml_f32(a.radius_m));
-        t.insert("sao_bias".into(), toml_f32(a.bias));
-        t.insert("sao_contrast".into(), toml_f32(a.contrast));
-        t.insert("sao_epsilon_m2".into(), toml_f32(a.epsilon_m2));
-    }
-    t
-}
-
-/// A value enum's name as its flag and scene key spell it, as a TOML string.
-fn value_name<T: clap::ValueEnum>(v: T) -> toml::Value {
-    toml::Value::String(
-        v.to_possible_value()
-            .map_or_else(String::new, |p| p.get_name().to_owned()),
-    )
+    crate::scene::schema::table(s)
 }
 
 /// [`gi_table`] as a one-line inline table, for the CSV.
@@ -372,13 +323,27 @@ mod tests {
     fn grid_specs_parse_or_name_the_problem() {
         let a = parse_grid("gi-rays=4, 16").expect("parses");
         assert_eq!(
-            (a.key, a.values),
-            ("gi-rays", vec!["4".into(), "16".into()])
+            (a.key, a.name.as_str(), a.values),
+            ("gi.rays", "gi-rays", vec!["4".into(), "16".into()])
         );
+        // A key path and its flag's alias name the same key.
+        assert_eq!(
+            parse_grid("gi.vpl_pattern=2x2").map(|a| a.key).ok(),
+            Some("gi.vpl_pattern")
+        );
+        assert_eq!(
+            parse_grid("vpl-pattern=2x2").map(|a| a.key).ok(),
+            Some("gi.vpl_pattern")
+        );
+        // Every grid key is a `[gi]` key.
+        for k in GiMethod::sweep_keys() {
+            assert!(crate::scene::schema::key::<GiSettings>(k).is_some(), "{k}");
+        }
         for (spec, says) in [
             ("gi-rays", "KEY=V1"),
             ("rays=4", "unknown key `rays`"),
             ("gi=vpl", "--methods"),
+            ("gi.method=vpl", "--methods"),
             ("vpls=4,,8", "empty value"),
         ] {
             let e = parse_grid(spec).expect_err(spec).to_string();
@@ -394,7 +359,7 @@ mod tests {
         let grid = [
             parse_grid("gi-rays=4,16").expect("rays"),
             parse_grid("vpls=8,32").expect("vpls"),
-            parse_grid("gi-frames=1,4").expect("frames"),
+            parse_grid("gi.accumulate_frames=1,4").expect("frames"),
         ];
         let c = configs(
             &[
@@ -421,10 +386,17 @@ mod tests {
             .iter()
             .find(|c| c.method == GiMethod::Pathtrace)
             .expect("pt");
-        assert_eq!(pt.label(), "pathtrace gi-rays=4 gi-frames=1");
+        assert_eq!(pt.label(), "pathtrace gi-rays=4 gi.accumulate_frames=1");
         assert_eq!(
             pt.argv(),
-            ["--gi", "pathtrace", "--gi-rays", "4", "--gi-frames", "1"]
+            [
+                "--gi",
+                "pathtrace",
+                "--set",
+                "gi.rays=4",
+                "--set",
+                "gi.accumulate_frames=1"
+            ]
         );
     }
 
@@ -501,15 +473,7 @@ mod tests {
         )
         .expect("the scene with the tuned table loads");
         let back = crate::scene::resolve_gi(&scene.gi, &Default::default());
-        let keep = |s: &GiSettings| GiSettings {
-            vpl: crate::gi::vpl::VplSettings {
-                shading: Default::default(),
-                show: false,
-                ..s.vpl
-            },
-            ..*s
-        };
-        assert_eq!(keep(&back), keep(&settings));
+        assert_eq!(back, settings);
     }
 
     #[test]

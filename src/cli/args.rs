@@ -1,231 +1,187 @@
 //! The flags shared by several commands, and their conversion into the renderer's settings.
 
 use crate::gi::GiMethod;
+use crate::gi::GiSettings;
 use crate::light::PointShadow;
 use crate::post::ToneOperator;
 use crate::render::RenderSettings;
-use crate::scene::{resolve_gi, GiOverrides, Scene};
+use crate::scene::schema::{Flag, FlagStyle, Key, Kind, Layer, Settings, Value};
+use crate::scene::{resolve_gi, Scene};
 
-/// Indirect-light flags of `render`, `profile`, `graph` and `view`. Each one given overrides the
-/// scene file's `[gi]` value, which overrides the default shown.
-#[derive(clap::Args, Clone, Debug, Default)]
+/// Indirect-light flags of `render`, `profile`, `graph`, `sweep`'s configurations and `view`,
+/// generated from the `[gi]` key table ([`GiSettings::keys`]): each key's named flag (its
+/// help, value name and values from the table), and `--set KEY=VALUE` for every key. Each
+/// one given overrides the scene file's `[gi]` value, which overrides the default.
+#[derive(Clone, Debug, Default)]
 pub struct GiArgs {
-    /// Indirect-light method (none: direct light only) [default: the scene's `[gi] method`,
-    /// else none].
-    #[arg(long, value_enum)]
-    pub gi: Option<GiMethod>,
-    /// Where hemisphere sampling reads the radiance at ray hits: reflective light maps or a
-    /// direct-radiance voxel volume.
-    #[arg(long, value_enum, default_value_t = crate::gi::RadianceSource::Maps)]
-    pub gi_radiance: crate::gi::RadianceSource,
-    /// Hierarchy level GI rays start their traversal at (Thiedemann 2010, §5.3.2).
-    #[arg(long, default_value_t = 1)]
-    pub gi_start_level: u32,
-    /// Iteration cap of GI rays' hierarchical traversal (too low shows as missing indirect
-    /// shadows, thesis Fig. 46).
-    #[arg(long, default_value_t = 1024)]
-    pub gi_max_iterations: u32,
-    /// GI rays per pixel [default: the scene's `[gi] rays`, else 16].
-    #[arg(long, value_name = "N")]
-    pub gi_rays: Option<u32>,
-    /// GI ray length in meters [default: the scene's `[gi] radius_m`, else the scene's
-    /// diagonal].
-    #[arg(long, value_name = "M")]
-    pub gi_radius: Option<f32>,
-    /// Self-intersection offset along the normal, in voxel diagonals (thesis k1) [default: the
-    /// scene's `[gi] normal_offset_voxels`, else 1].
-    #[arg(long, value_name = "K1")]
-    pub gi_normal_offset: Option<f32>,
-    /// Self-intersection offset along the ray, in voxel diagonals over cos (thesis k2)
-    /// [default: the scene's `[gi] ray_offset_voxels`, else 0].
-    #[arg(long, value_name = "K2")]
-    pub gi_ray_offset: Option<f32>,
-    /// Geometry-aware filter radius in pixels, 0: off [default: the scene's `[gi]
-    /// filter_radius`, else 4].
-    #[arg(long, value_name = "R")]
-    pub gi_filter_radius: Option<u32>,
-    /// Geometry-aware filter passes, each horizontal + vertical [default: the scene's `[gi]
-    /// filter_passes`, else 2].
-    #[arg(long, value_name = "P")]
-    pub gi_filter_passes: Option<u32>,
-    /// Path-tracer bounces, 1..=64, or `unbounded`: 3 bounces, then Russian roulette ends each
-    /// path (unbiased; capped at 64) [default: the scene's `[gi] bounces`, else 2].
-    #[arg(long, value_name = "B")]
-    pub gi_bounces: Option<crate::gi::Bounces>,
-    /// Frames the path tracer accumulates in a headless render [default: the scene's `[gi]
-    /// accumulate_frames`, else 1].
-    #[arg(long, value_name = "F")]
-    pub gi_frames: Option<u32>,
-    /// Reflective light-map resolution per light view [default: the scene's `[gi]
-    /// light_map_resolution`, else 256].
-    #[arg(long, value_name = "L")]
-    pub light_map_resolution: Option<u32>,
-    /// `--gi vpl`: VPLs per interleaving set and light (thesis §7.2) [default: the scene's
-    /// `[gi] vpls`, else 16].
-    #[arg(long, value_name = "K")]
-    pub vpls: Option<u32>,
-    /// `--gi vpl`: interleaved-sampling pattern NxM, N·M VPL sets (thesis §7.3.2) [default:
-    /// the scene's `[gi] vpl_pattern`, else 4x4].
-    #[arg(long, value_name = "NxM", value_parser = crate::gi::vpl::parse_pattern)]
-    pub vpl_pattern: Option<[u32; 2]>,
-    /// `--gi vpl`: d_min of E = I cos cos / (d_min + d²) (thesis §7.3) as a distance in voxel
-    /// diagonals h: d_min = (D · h)² [default: the scene's `[gi] vpl_d_min_voxels`, else 8].
-    #[arg(long, value_name = "D")]
-    pub vpl_d_min: Option<f32>,
-    /// `--gi vpl`: the roughness floor of glossy receivers, in [0, 1]: GGX pixels are shaded
-    /// with roughness max(r, R) toward the VPLs, Phong exponents capped at 2/R⁴ − 2; bounds a
-    /// sharp lobe's highlights of single VPLs, blurs smoother receivers [default: the scene's
-    /// `[gi] vpl_min_roughness`, else 0.4].
-    #[arg(long, value_name = "R")]
-    pub vpl_min_roughness: Option<f32>,
-    /// `--gi vpl`: VPL bounces: 1 reflects the lights' direct light once, 2 adds one voxel
-    /// ray per VPL (thesis §7.2), up to 8 [default: the scene's `[gi] vpl_bounces`, else 2].
-    #[arg(long, value_name = "B")]
-    pub vpl_bounces: Option<u32>,
-    /// `--gi vpl`: visibility per VPL and pixel: the voxel segment test, or none (v = 1)
-    /// [default: the scene's `[gi] vpl_visibility`, else voxel].
-    #[arg(long, value_enum)]
-    pub vpl_visibility: Option<crate::gi::vpl::VplVisibility>,
-    /// `--gi vpl`: divide a light's flux among all K samples of its emission domain
-    /// (unbiased: light that hits nothing leaves the scene) or among the valid ones only (the
-    /// thesis's renormalization) [default: the scene's `[gi] vpl_normalize`, else all].
-    #[arg(long, value_enum)]
-    pub vpl_normalize: Option<crate::gi::vpl::VplNormalize>,
-    /// `--gi vpl`: spot VPL directions uniform in solid angle on the cone, or uniform in the
-    /// disk of the spot's image plane (thesis §7.2), weighted by their solid angle [default:
-    /// the scene's `[gi] vpl_spot_sampling`, else solid-angle].
-    #[arg(long, value_enum)]
-    pub vpl_spot_sampling: Option<crate::gi::vpl::VplSpotSampling>,
-    /// `--gi vpl`: shade by one gather loop per pixel, or by one additive pass per VPL
-    /// (the thesis's splatting).
-    #[arg(long, value_enum, default_value_t = crate::gi::vpl::VplShading::Gather)]
-    pub vpl_shading: crate::gi::vpl::VplShading,
-    /// `--gi vpl`: debug view, every VPL drawn as a dot over the image (first bounce yellow,
-    /// later ones cyan).
-    #[arg(long)]
+    /// The named flags given, in the table's order, as their keys' values (not yet checked
+    /// against the ranges: [`GiArgs::layer`] does that, naming the flag).
+    pub given: Vec<(&'static Key<GiSettings>, Value)>,
+    /// `--set KEY=VALUE`, as typed, in the order given (applied after the named flags).
+    pub set: Vec<String>,
+    /// `--gi vpl`: debug view, every VPL drawn as a dot over the image.
     pub vpl_show: bool,
-    /// `--gi ssgi`: the internal GI resolution, the frame's divided by 1, 2, 4 or 8 [default:
-    /// the scene's `[gi] ssgi_resolution`, else half].
-    #[arg(long, value_enum)]
-    pub ssgi_resolution: Option<crate::gi::SsgiResolution>,
-    /// `--gi ssgi`: samples per texel and pyramid level [default: the scene's `[gi]
-    /// ssgi_samples`, else 64].
-    #[arg(long, value_name = "N")]
-    pub ssgi_samples: Option<u32>,
-    /// `--gi ssgi`: how depth and normal mips pick a texel: the voting filter or the nearest
-    /// child (fast) [default: the scene's `[gi] ssgi_mips`, else voting].
-    #[arg(long, value_enum)]
-    pub ssgi_mips: Option<crate::gi::SsgiMips>,
-    /// `--gi ssgi`: no feedback of the previous frame's indirect light (one bounce only)
-    /// [default: the scene's `[gi] ssgi_feedback`, else feedback on].
-    #[arg(long)]
-    pub ssgi_no_feedback: bool,
-    /// `--gi ssgi`: clamp of the fed-back irradiance in W/m² [default: the scene's `[gi]
-    /// ssgi_feedback_max_w_m2`, else 20].
-    #[arg(long, value_name = "E")]
-    pub ssgi_feedback_max: Option<f32>,
-    /// `--gi ssgi`: τ of the temporal blend with the reprojected history, 0 (off) to 0.99
-    /// [default: the scene's `[gi] ssgi_history_weight`, else 0.9].
-    #[arg(long, value_name = "TAU")]
-    pub ssgi_history_weight: Option<f32>,
-    /// `--gi ssgi`: screen-space reflection rays on Phong and GGX materials (on), or only the
-    /// diffuse fallback (off) [default: the scene's `[gi] ssr`, else on].
-    #[arg(long, value_enum)]
-    pub ssr: Option<crate::gi::SsrMode>,
-    /// `--gi ssgi`: reflection rays along the mirror direction, the lobe's width read as a
-    /// coarser colour mip (mirror), or one lobe sample per pixel and frame averaged by the
-    /// history (lobe) [default: the scene's `[gi] ssr_rays`, else mirror].
-    #[arg(long, value_enum)]
-    pub ssr_rays: Option<crate::gi::SsrRays>,
-    /// Modified SAO (Oetke 2017 §2.5) at half resolution, multiplied into the indirect light
-    /// (needs a --gi method: direct light is not darkened); `--sao off` turns off the scene's
-    /// [default: the scene's `[gi] sao`, else off].
-    #[arg(long, value_enum, value_name = "on|off", num_args = 0..=1, default_missing_value = "on")]
-    pub sao: Option<Toggle>,
-    /// SAO: sample radius r in meters [default: the scene's `[gi] sao_radius_m`, else 1.8].
-    #[arg(long, value_name = "M")]
-    pub sao_radius: Option<f32>,
-    /// SAO: bias β in meters of v·n [default: the scene's `[gi] sao_bias`, else 0.04].
-    #[arg(long, value_name = "M")]
-    pub sao_bias: Option<f32>,
-    /// SAO: contrast k, the AO term's exponent [default: the scene's `[gi] sao_contrast`,
-    /// else 2].
-    #[arg(long, value_name = "K")]
-    pub sao_contrast: Option<f32>,
-    /// SAO: ε of v·v + ε in m² [default: the scene's `[gi] sao_epsilon_m2`, else 0.01].
-    #[arg(long, value_name = "M2")]
-    pub sao_epsilon: Option<f32>,
-    /// SAO debug view: the AO term as grey (1 white = unoccluded) instead of the image (needs
-    /// SAO on, by --sao or the scene).
-    #[arg(long)]
+    /// SAO debug view: the AO term as grey instead of the image.
     pub sao_show: bool,
 }
 
-impl GiArgs {
-    /// The flags given, for [`crate::scene::resolve_gi`].
-    pub fn overrides(&self) -> GiOverrides {
-        GiOverrides {
-            method: self.gi,
-            rays: self.gi_rays,
-            bounces: self.gi_bounces,
-            radius_m: self.gi_radius,
-            normal_offset_voxels: self.gi_normal_offset,
-            ray_offset_voxels: self.gi_ray_offset,
-            filter_radius: self.gi_filter_radius,
-            filter_passes: self.gi_filter_passes,
-            light_map_resolution: self.light_map_resolution,
-            accumulate_frames: self.gi_frames,
-            vpl: crate::gi::vpl::VplOverrides {
-                per_set: self.vpls,
-                pattern: self.vpl_pattern,
-                bounces: self.vpl_bounces,
-                d_min_voxels: self.vpl_d_min,
-                min_roughness: self.vpl_min_roughness,
-                visibility: self.vpl_visibility,
-                normalize: self.vpl_normalize,
-                spot_sampling: self.vpl_spot_sampling,
-            },
-            ssgi: crate::scene::SsgiOverrides {
-                resolution: self.ssgi_resolution,
-                samples: self.ssgi_samples,
-                mips: self.ssgi_mips,
-                feedback: self.ssgi_no_feedback.then_some(false),
-                feedback_max_w_m2: self.ssgi_feedback_max,
-                history_weight: self.ssgi_history_weight,
-                ssr: self.ssr.map(|m| m == crate::gi::SsrMode::On),
-                ssr_rays: self.ssr_rays,
-            },
-            sao: crate::scene::SaoOverrides {
-                enabled: self.sao.map(Toggle::on),
-                radius_m: self.sao_radius,
-                bias: self.sao_bias,
-                contrast: self.sao_contrast,
-                epsilon_m2: self.sao_epsilon,
-            },
+const SET_ID: &str = "set";
+const VPL_SHOW_ID: &str = "vpl-show";
+const SAO_SHOW_ID: &str = "sao-show";
+
+/// What a key's flag help says its default is: "the scene's `[gi] rays`, else 16".
+fn default_words(k: &Key<GiSettings>) -> String {
+    let v = (k.get)(&GiSettings::default());
+    let text = match v {
+        Value::Bool(true) => "on".to_owned(),
+        Value::Bool(false) => "off".to_owned(),
+        v => k.kind.to_text(v),
+    };
+    format!(
+        "the scene's `[{}] {}`, else {text}",
+        GiSettings::TABLE,
+        k.name()
+    )
+}
+
+/// The named flag of key `k`.
+fn key_arg(k: &'static Key<GiSettings>, f: Flag) -> clap::Arg {
+    use clap::builder::{PossibleValuesParser, TypedValueParser as _};
+    use clap::{Arg, ArgAction};
+    let help = format!("{} [default: {}]", k.doc, default_words(k));
+    let arg = Arg::new(k.path).long(f.long).help(help);
+    let kind = k.kind;
+    let read = move |s: String| kind.parse(&s);
+    match (f.style, kind) {
+        (FlagStyle::SetsFalse, _) => arg.action(ArgAction::SetTrue),
+        (FlagStyle::Toggle, _) => arg
+            .value_name(f.value_name)
+            .num_args(0..=1)
+            .default_missing_value("on")
+            .value_parser(PossibleValuesParser::new(["on", "off"]).try_map(read)),
+        (FlagStyle::Value, Kind::Choice(values)) => arg
+            .value_name(f.value_name)
+            .value_parser(PossibleValuesParser::new(values()).try_map(read)),
+        (FlagStyle::Value, _) => arg
+            .value_name(f.value_name)
+            .value_parser(move |s: &str| kind.parse(s)),
+    }
+}
+
+impl clap::FromArgMatches for GiArgs {
+    fn from_arg_matches(m: &clap::ArgMatches) -> Result<Self, clap::Error> {
+        let mut a = GiArgs::default();
+        a.update_from_arg_matches(m)?;
+        Ok(a)
+    }
+
+    fn update_from_arg_matches(&mut self, m: &clap::ArgMatches) -> Result<(), clap::Error> {
+        for k in GiSettings::keys() {
+            let Some(f) = k.flag else { continue };
+            let v = match f.style {
+                FlagStyle::SetsFalse => m.get_flag(k.path).then_some(Value::Bool(false)),
+                _ => m.try_get_one::<Value>(k.path).ok().flatten().copied(),
+            };
+            if let Some(v) = v {
+                self.given.retain(|(g, _)| g.path != k.path);
+                self.given.push((k, v));
+            }
         }
+        if let Ok(Some(set)) = m.try_get_many::<String>(SET_ID) {
+            self.set.extend(set.cloned());
+        }
+        self.vpl_show |= m.get_flag(VPL_SHOW_ID);
+        self.sao_show |= m.get_flag(SAO_SHOW_ID);
+        Ok(())
+    }
+}
+
+impl clap::Args for GiArgs {
+    fn augment_args(cmd: clap::Command) -> clap::Command {
+        use clap::{Arg, ArgAction};
+        let mut cmd = cmd;
+        for k in GiSettings::keys() {
+            if let Some(f) = k.flag {
+                cmd = cmd.arg(key_arg(k, f));
+            }
+        }
+        let paths = crate::scene::schema::paths::<GiSettings>().join(", ");
+        cmd.arg(
+            Arg::new(SET_ID)
+                .long("set")
+                .value_name("KEY=VALUE")
+                .action(ArgAction::Append)
+                .help(
+                    "Sets any `[gi]` key by its path, as the scene file's table would (e.g. --set gi.rays=8, --set gi.vpl_pattern=2x2); repeatable, applied after the named flags",
+                )
+                .long_help(format!(
+                    "Sets any `[gi]` key by its path, as the scene file's table would (e.g. --set gi.rays=8, --set gi.vpl_pattern=2x2); repeatable, applied after the named flags. Keys: {paths}"
+                )),
+        )
+        .arg(
+            Arg::new(VPL_SHOW_ID)
+                .long("vpl-show")
+                .action(ArgAction::SetTrue)
+                .help(
+                    "`--gi vpl`: debug view, every VPL drawn as a dot over the image (first bounce yellow, later ones cyan)",
+                ),
+        )
+        .arg(
+            Arg::new(SAO_SHOW_ID)
+                .long("sao-show")
+                .action(ArgAction::SetTrue)
+                .help(
+                    "SAO debug view: the AO term as grey (1 white = unoccluded) instead of the image (needs SAO on, by --sao or the scene)",
+                ),
+        )
+    }
+
+    fn augment_args_for_update(cmd: clap::Command) -> clap::Command {
+        Self::augment_args(cmd)
+    }
+}
+
+impl GiArgs {
+    /// The command line's layer: the named flags, then `--set`, each checked against its
+    /// key's range and named as the user typed it (the flag, or the key path).
+    pub fn layer(&self) -> Result<Layer, super::CliError> {
+        let mut layer = Layer::default();
+        for (k, v) in &self.given {
+            layer.set(k.path, k.kind.check(&k.flag_name(), *v)?);
+        }
+        for s in &self.set {
+            let (path, value) = s.split_once('=').unwrap_or((s.as_str(), ""));
+            let k = crate::scene::schema::key::<GiSettings>(path.trim()).ok_or_else(|| {
+                crate::limits::LimitError {
+                    name: "--set".into(),
+                    value: s.clone(),
+                    expected: format!(
+                        "KEY=VALUE with KEY one of {}",
+                        crate::scene::schema::paths::<GiSettings>().join(", ")
+                    ),
+                }
+            })?;
+            layer.set(k.path, k.kind.parse_checked(k.path, value)?);
+        }
+        Ok(layer)
     }
 
     /// SAO's value flags and `--sao-show` need SAO on (by `--sao` or the scene's `[gi] sao`):
     /// given while it is off they would do nothing, which is an error naming them.
     pub fn check_sao(&self, s: &crate::gi::GiSettings) -> Result<(), super::CliError> {
-        let o = self.overrides().sao;
-        if s.sao.is_none() && (o.has_values() || self.sao_show) {
+        let layer = self.layer()?;
+        let values = layer.iter().any(|(p, _)| p.starts_with("gi.sao_"));
+        if s.sao.is_none() && (values || self.sao_show) {
             return Err(super::CliError::SaoOff);
         }
         Ok(())
     }
 
     /// The scene's `[gi]` values, overridden by the flags given.
-    pub fn settings(&self, scene: &Scene) -> crate::gi::GiSettings {
-        let s = crate::gi::GiSettings {
-            radiance_source: self.gi_radiance,
-            start_level: self.gi_start_level,
-            max_iterations: self.gi_max_iterations,
-            ..resolve_gi(&scene.gi, &self.overrides())
-        };
-        crate::gi::GiSettings {
+    pub fn settings(&self, scene: &Scene) -> Result<crate::gi::GiSettings, super::CliError> {
+        let s = resolve_gi(&scene.gi, &self.layer()?);
+        Ok(crate::gi::GiSettings {
             vpl: crate::gi::vpl::VplSettings {
-                shading: self.vpl_shading,
                 show: self.vpl_show,
                 ..s.vpl
             },
@@ -234,7 +190,7 @@ impl GiArgs {
                 ..a
             }),
             ..s
-        }
+        })
     }
 }
 
@@ -403,7 +359,7 @@ impl FrameArgs {
             s.shadow.area_samples = Some(crate::limits::AREA_SAMPLES.check_flag(n)?);
         }
         let default_res = crate::voxel::gpu::VoxelSettings::default().max_res_xy;
-        s.gi = self.gi.settings(scene);
+        s.gi = self.gi.settings(scene)?;
         // GI and the voxel debug views voxelize without --voxels, honouring --voxelizer,
         // --voxel-layers and --revoxelize (the atlas and G-buffer views draw no voxels).
         let needs_voxels =
@@ -553,8 +509,8 @@ mod tests {
             .frame
     }
 
-    fn render_gi(args: &[&str]) -> GiOverrides {
-        parse(args).gi.overrides()
+    fn render_gi(args: &[&str]) -> Layer {
+        parse(args).gi.layer().expect("in range")
     }
 
     fn render_settings(args: &[&str]) -> RenderSettings {
@@ -724,11 +680,8 @@ mod tests {
         let plain = crate::scene::load_scene_arg(None).expect("the built-in scene");
         assert_eq!(parse(&[]).settings(&plain).expect("settings").gi.sao, None);
         let mut scene = plain.clone();
-        scene.gi.sao = crate::scene::SaoOverrides {
-            enabled: Some(true),
-            radius_m: Some(0.5),
-            ..Default::default()
-        };
+        scene.gi.set("gi.sao", Value::Bool(true));
+        scene.gi.set("gi.sao_radius_m", Value::Number(0.5));
         let sao = |args: &[&str]| parse(args).settings(&scene).expect("settings").gi.sao;
         let d = crate::gi::SaoSettings::default();
         assert_eq!(sao(&[]).map(|s| (s.radius_m, s.bias)), Some((0.5, d.bias)));
@@ -740,6 +693,7 @@ mod tests {
             &["--sao-radius", "1"][..],
             &["--sao-show"],
             &["--sao", "off", "--sao-bias", "0.1"],
+            &["--set", "gi.sao_contrast=3"],
         ] {
             let e = parse(args).settings(&plain).expect_err("SAO is off");
             assert!(e.to_string().contains("add --sao"), "{args:?}: {e}");
@@ -749,12 +703,10 @@ mod tests {
     #[test]
     fn gi_flags_not_given_leave_the_scene_values() {
         assert!(render_gi(&[]).is_empty());
-        let scene = GiOverrides {
-            method: Some(GiMethod::Pathtrace),
-            rays: Some(4),
-            bounces: Some(crate::gi::Bounces::Fixed(3)),
-            ..Default::default()
-        };
+        let mut scene = Layer::default();
+        scene.set("gi.method", Value::Choice(2));
+        scene.set("gi.rays", Value::Count(4));
+        scene.set("gi.bounces", Value::Count(3));
         let s = resolve_gi(&scene, &render_gi(&[]));
         assert_eq!(
             (s.method, s.rays, s.bounces),
@@ -770,112 +722,81 @@ mod tests {
         );
     }
 
+    /// Every GI flag is a key's, with the key's range: each flag given a value other than the
+    /// default's sets its key to it, and one past the key's range is refused naming the flag.
     #[test]
-    fn every_gi_flag_maps_to_its_field() {
-        let o = render_gi(&[
-            "--gi",
-            "pathtrace",
-            "--gi-rays",
-            "2",
-            "--gi-bounces",
-            "3",
-            "--gi-radius",
-            "0.5",
-            "--gi-normal-offset",
-            "0.25",
-            "--gi-ray-offset",
-            "1.5",
-            "--gi-filter-radius",
-            "6",
-            "--gi-filter-passes",
-            "7",
-            "--gi-frames",
-            "9",
-            "--light-map-resolution",
-            "128",
-            "--vpls",
-            "5",
-            "--vpl-pattern",
-            "8x2",
-            "--vpl-bounces",
-            "3",
-            "--vpl-d-min",
-            "1.5",
-            "--vpl-min-roughness",
-            "0.35",
-            "--vpl-visibility",
-            "none",
-            "--vpl-normalize",
-            "valid",
-            "--vpl-spot-sampling",
-            "disk",
-            "--ssgi-resolution",
-            "quarter",
-            "--ssgi-samples",
-            "17",
-            "--ssgi-mips",
-            "fast",
-            "--ssgi-no-feedback",
-            "--ssgi-feedback-max",
-            "4.5",
-            "--ssgi-history-weight",
-            "0.3",
-            "--ssr",
-            "off",
-            "--ssr-rays",
-            "lobe",
-            "--sao",
-            "--sao-radius",
-            "0.6",
-            "--sao-bias",
-            "0.03",
-            "--sao-contrast",
-            "1.5",
-            "--sao-epsilon",
-            "0.02",
-        ]);
-        assert_eq!(
-            o,
-            GiOverrides {
-                method: Some(GiMethod::Pathtrace),
-                rays: Some(2),
-                bounces: Some(crate::gi::Bounces::Fixed(3)),
-                radius_m: Some(0.5),
-                normal_offset_voxels: Some(0.25),
-                ray_offset_voxels: Some(1.5),
-                filter_radius: Some(6),
-                filter_passes: Some(7),
-                light_map_resolution: Some(128),
-                accumulate_frames: Some(9),
-                vpl: crate::gi::vpl::VplOverrides {
-                    per_set: Some(5),
-                    pattern: Some([8, 2]),
-                    bounces: Some(3),
-                    d_min_voxels: Some(1.5),
-                    min_roughness: Some(0.35),
-                    visibility: Some(crate::gi::vpl::VplVisibility::None),
-                    normalize: Some(crate::gi::vpl::VplNormalize::Valid),
-                    spot_sampling: Some(crate::gi::vpl::VplSpotSampling::Disk),
-                },
-                ssgi: crate::scene::SsgiOverrides {
-                    resolution: Some(crate::gi::SsgiResolution::Quarter),
-                    samples: Some(17),
-                    mips: Some(crate::gi::SsgiMips::Fast),
-                    feedback: Some(false),
-                    feedback_max_w_m2: Some(4.5),
-                    history_weight: Some(0.3),
-                    ssr: Some(false),
-                    ssr_rays: Some(crate::gi::SsrRays::Lobe),
-                },
-                sao: crate::scene::SaoOverrides {
-                    enabled: Some(true),
-                    radius_m: Some(0.6),
-                    bias: Some(0.03),
-                    contrast: Some(1.5),
-                    epsilon_m2: Some(0.02),
-                },
+    fn every_gi_flag_maps_to_its_key_and_range() {
+        use crate::scene::schema::Kind;
+        let d = GiSettings::default();
+        let mut flags = 0;
+        for k in GiSettings::keys() {
+            let Some(f) = k.flag else { continue };
+            flags += 1;
+            let flag = format!("--{}", f.long);
+            let (text, want): (Vec<String>, Value) = match (f.style, k.kind, (k.get)(&d)) {
+                (FlagStyle::SetsFalse, ..) => (vec![flag.clone()], Value::Bool(false)),
+                (FlagStyle::Toggle, _, Value::Bool(b)) => {
+                    let t = if b { "off" } else { "on" };
+                    (vec![flag.clone(), t.into()], Value::Bool(!b))
+                }
+                (_, Kind::Choice(_), Value::Choice(i)) => {
+                    let other = usize::from(i == 0);
+                    let name = k.kind.names()[other].clone();
+                    (vec![flag.clone(), name], Value::Choice(other))
+                }
+                (_, Kind::Count(l), _) | (_, Kind::CountOr(l, ..), _) => {
+                    let n = if l.min == 2 {
+                        3
+                    } else {
+                        l.min.max(2).min(l.max)
+                    };
+                    (vec![flag.clone(), n.to_string()], Value::Count(n))
+                }
+                (_, Kind::Pair(_), _) => (vec![flag.clone(), "2x3".into()], Value::Pair([2, 3])),
+                (_, Kind::Number(_) | Kind::OptNumber(..), _) => {
+                    (vec![flag.clone(), "0.375".into()], Value::Number(0.375))
+                }
+                other => panic!("{flag}: no test value for {other:?}"),
+            };
+            let args: Vec<&str> = text.iter().map(String::as_str).collect();
+            let layer = render_gi(&args);
+            assert_eq!(layer.iter().collect::<Vec<_>>(), [(k.path, want)], "{flag}");
+            // `--set` reaches the same key with the same value.
+            let set = format!("{}={}", k.path, k.kind.to_text(want));
+            assert_eq!(render_gi(&["--set", &set]), layer, "{set}");
+            // One past the range: the flag's error names the flag, `--set`'s the key.
+            let past = match k.kind {
+                Kind::Count(l) | Kind::CountOr(l, ..) => Some((l.max + 1).to_string()),
+                Kind::Number(l) | Kind::OptNumber(l, _) => Some(format!("{}", l.max * 2.0)),
+                Kind::Pair(l) => Some(format!("{}x1", l.max + 1)),
+                _ => None,
+            };
+            if let Some(past) = past {
+                let e = parse(&[&flag, &past])
+                    .gi
+                    .layer()
+                    .expect_err(&flag)
+                    .to_string();
+                assert!(e.starts_with(&format!("{flag} = ")), "{e}");
+                assert!(e.contains(&k.kind.expected()), "{e}");
+                let set = format!("{}={past}", k.path);
+                let e = parse(&["--set", &set])
+                    .gi
+                    .layer()
+                    .expect_err(&set)
+                    .to_string();
+                assert!(e.starts_with(&format!("{} = ", k.path)), "{e}");
             }
-        );
+        }
+        assert!(flags >= 30, "{flags} GI flags");
+        // Later values win: `--set` after the named flag.
+        let l = render_gi(&["--gi-rays", "4", "--set", "gi.rays=8", "--set", "gi.rays=9"]);
+        assert_eq!(l.get("gi.rays"), Some(Value::Count(9)));
+        let e = parse(&["--set", "gi.rayz=2"])
+            .gi
+            .layer()
+            .expect_err("unknown");
+        assert!(e.to_string().contains("gi.rays"), "{e}");
     }
 }
 

@@ -397,9 +397,9 @@ pub fn bench(global: &Global, command: &BenchCommand, out: &mut dyn Write) -> Re
             json,
         } => {
             for &n in samples {
-                crate::limits::SSGI_SAMPLES.check_as("--samples", i64::from(n))?;
+                crate::scene::gi_range::SSGI_SAMPLES.check_as("--samples", i64::from(n))?;
             }
-            crate::limits::GI_FRAMES.check_flag(*gi_frames)?;
+            crate::scene::gi_range::GI_FRAMES.check_flag(*gi_frames)?;
             let arg = scene.as_deref().unwrap_or(DEFAULT_SCENE);
             let name = super::sweep::scene_name(arg);
             let loaded = load_scene_arg(Some(arg))?;

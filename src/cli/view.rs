@@ -137,12 +137,12 @@ pub fn view(global: &Global, args: ViewArgs, out: &mut dyn Write) -> Result<(), 
     };
     (settings.post, settings.tonemap) =
         crate::post::apply_overrides(&post.or(scene.post), settings.post, settings.tonemap);
-    settings.gi = args.gi.settings(&scene);
+    settings.gi = args.gi.settings(&scene)?;
     args.gi.check_sao(&settings.gi)?;
     let name = super::sweep::scene_name(args.scene.as_deref().unwrap_or("cornell"));
     if let Some(budget) = args.budget_ms {
-        let (row, _, overrides) = crate::tune::tune_from_dir(&args.sweep, &name, budget)?;
-        settings.gi = overrides.apply(settings.gi);
+        let (row, _, layer) = crate::tune::tune_from_dir(&args.sweep, &name, budget)?;
+        settings.gi = crate::scene::schema::apply(settings.gi, &[&layer]);
         outln!(
             out,
             "best within {budget} ms: {} ({:.1} ms to the image, relMSE {:.4}, on {})",
@@ -242,13 +242,11 @@ mod tests {
         let v = View::try_parse_from(["view", "--gi", "pathtrace", "--gi-bounces", "1"])
             .expect("parses")
             .args;
+        let layer = v.gi.layer().expect("in range");
+        let s = crate::scene::resolve_gi(&Default::default(), &layer);
         assert_eq!(
-            (v.gi.gi, v.gi.gi_bounces, v.gi.gi_rays),
-            (
-                Some(GiMethod::Pathtrace),
-                Some(crate::gi::Bounces::Fixed(1)),
-                None
-            )
+            (s.method, s.bounces, layer.get("gi.rays")),
+            (GiMethod::Pathtrace, crate::gi::Bounces::Fixed(1), None)
         );
     }
 

@@ -25,7 +25,7 @@ pub mod vpl;
 
 pub use crate::scene::{
     Bounces, GiSettings, RadianceSource, SaoSettings, SsgiMips, SsgiResolution, SsgiSettings,
-    SsrMode, SsrRays,
+    SsrRays,
 };
 pub use gi_common::GpuGiPush;
 pub use method::{GiMethod, MethodSpec, Refusal};

@@ -57,7 +57,7 @@ impl GpuSaoPush {
             contrast: s.contrast,
             epsilon_m2: s.epsilon_m2,
             px_per_m_at_1m: height_px as f32 / (2.0 * (fov_y_deg.to_radians() * 0.5).tan()),
-            taps: SaoSettings::TAPS,
+            taps: s.taps,
             spiral_turns: SaoSettings::SPIRAL_TURNS,
             seed,
             depth_levels: depth_levels(width_px, height_px),
@@ -283,6 +283,18 @@ mod tests {
             PushLayout::of::<GpuSaoUpsamplePush>(),
         )
         .unwrap();
+    }
+
+    /// The spiral takes the settings' tap count (`gi.sao_taps`, `--sao-taps`).
+    #[test]
+    fn the_push_takes_the_tap_count() {
+        for taps in [1, 8, 16, 256] {
+            let s = SaoSettings {
+                taps,
+                ..Default::default()
+            };
+            assert_eq!(GpuSaoPush::new(&s, 60.0, (64, 64), 0).taps, taps);
+        }
     }
 
     /// Six levels at any frame of 32 pixels or more a side; a 16×8 frame halves to one texel

@@ -8,8 +8,7 @@
 //! (`gi_vpl_emit`, [`super::gi_vpl_emit`]).
 
 pub use crate::scene::vpl_settings::{
-    parse_pattern, VplNormalize, VplOverrides, VplSettings, VplShading, VplSpotSampling,
-    VplVisibility, NORMALIZE_NAMES, SPOT_SAMPLING_NAMES, VISIBILITY_NAMES,
+    VplNormalize, VplSettings, VplShading, VplSpotSampling, VplVisibility,
 };
 
 use super::gi_common::GiShared;
@@ -536,16 +535,6 @@ mod tests {
         ] {
             crate::vk::check_struct_against::<GpuVpl>(&[shader], "GpuVpl")
                 .unwrap_or_else(|e| panic!("{shader}: {e}"));
-        }
-    }
-
-    #[test]
-    fn pattern_parses_and_rejects() {
-        assert_eq!(parse_pattern("4x4"), Ok([4, 4]));
-        assert_eq!(parse_pattern("8X2"), Ok([8, 2]));
-        for bad in ["4", "0x4", "4x17", "ax4", "", "4x4x4"] {
-            let e = parse_pattern(bad).expect_err(bad);
-            assert!(e.contains("NxM") && e.contains("[1, 16]"), "{bad}: {e}");
         }
     }
 

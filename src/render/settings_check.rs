@@ -55,7 +55,10 @@ pub fn check_device_limits(
         (&WIDTH, s.width),
         (&HEIGHT, s.height),
         (&SHADOW_RESOLUTION, s.shadow.resolution),
-        (&LIGHT_MAP_RESOLUTION, s.gi.light_map_resolution),
+        (
+            &crate::scene::gi_range::LIGHT_MAP_RESOLUTION,
+            s.gi.light_map_resolution,
+        ),
     ];
     for (limit, v) in sizes {
         if v > max_image_dimension_2d {
@@ -72,36 +75,10 @@ pub fn check_device_limits(
     Ok(())
 }
 
-/// Checks the indirect-light values (bounces are checked where they are parsed).
+/// Checks the indirect-light values against their keys' ranges (`GiSettings::keys`), naming
+/// the flag.
 pub fn check_gi(g: &crate::gi::GiSettings) -> Result<(), LimitError> {
-    GI_RAYS.check_flag(g.rays)?;
-    if let Some(r) = g.radius_m {
-        GI_RADIUS_M.check_flag(r)?;
-    }
-    GI_NORMAL_OFFSET.check_flag(g.normal_offset_voxels)?;
-    GI_RAY_OFFSET.check_flag(g.ray_offset_voxels)?;
-    GI_FILTER_RADIUS.check_flag(g.filter_radius)?;
-    GI_FILTER_PASSES.check_flag(g.filter_passes)?;
-    GI_FRAMES.check_flag(g.accumulate_frames)?;
-    LIGHT_MAP_RESOLUTION.check_flag(g.light_map_resolution)?;
-    GI_START_LEVEL.check_flag(g.start_level)?;
-    GI_MAX_ITERATIONS.check_flag(g.max_iterations)?;
-    VPLS.check_flag(g.vpl.per_set)?;
-    VPL_PATTERN_SIDE.check_flag(g.vpl.pattern[0])?;
-    VPL_PATTERN_SIDE.check_flag(g.vpl.pattern[1])?;
-    VPL_BOUNCES.check_flag(g.vpl.bounces)?;
-    VPL_D_MIN.check_flag(g.vpl.d_min_voxels)?;
-    VPL_MIN_ROUGHNESS.check_flag(g.vpl.min_roughness)?;
-    SSGI_SAMPLES.check_flag(g.ssgi.samples)?;
-    SSGI_FEEDBACK_MAX.check_flag(g.ssgi.feedback_max_w_m2)?;
-    SSGI_HISTORY_WEIGHT.check_flag(g.ssgi.history_weight)?;
-    if let Some(sao) = &g.sao {
-        SAO_RADIUS_M.check_flag(sao.radius_m)?;
-        SAO_BIAS.check_flag(sao.bias)?;
-        SAO_CONTRAST.check_flag(sao.contrast)?;
-        SAO_EPSILON.check_flag(sao.epsilon_m2)?;
-    }
-    Ok(())
+    crate::scene::schema::check(g)
 }
 
 #[cfg(test)]

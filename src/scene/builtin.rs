@@ -147,18 +147,17 @@ mod tests {
 
     #[test]
     fn the_default_scene_renders_indirect_light_unless_switched_off() {
-        use crate::scene::{resolve_gi, GiOverrides};
+        use crate::scene::resolve_gi;
+        use crate::scene::schema::{Layer, Value};
         use crate::scene::{Bounces, GiMethod};
         let s = builtin(DEFAULT_SCENE).unwrap_or_else(|| panic!("{DEFAULT_SCENE}"));
-        let gi = resolve_gi(&s.gi, &GiOverrides::default());
+        let gi = resolve_gi(&s.gi, &Layer::default());
         assert_eq!(
             (gi.method, gi.bounces, gi.rays, gi.filter_radius),
             (GiMethod::Pathtrace, Bounces::Unbounded, 4, 8)
         );
-        let off = GiOverrides {
-            method: Some(GiMethod::None),
-            ..Default::default()
-        };
+        let mut off = Layer::default();
+        off.set("gi.method", Value::Choice(0));
         assert_eq!(resolve_gi(&s.gi, &off).method, GiMethod::None);
     }
 

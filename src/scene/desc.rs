@@ -8,12 +8,13 @@ use serde::Deserialize;
 use super::camera::{Camera, Projection};
 use super::camera_path::{CameraKey, CameraPath};
 use super::error::{field_ref, from_toml_error, SceneError};
-use super::gi::{bounces_from_toml, GiOverrides};
+use super::gi_settings::GiSettings;
 use super::gltf::{is_gltf_path, GltfAsset};
 use super::light::Light;
 use super::mesh::{Aabb, BUILTIN_MESH_NAMES};
 use super::obj::AssetStore;
 use super::object::{rotation_from_euler_xyz_deg, Animation, Keyframe, Object, Transform};
+use super::schema::{Layer, RawTable, Settings, TomlValueError};
 use super::Scene;
 use super::ShadowOverrides;
 use crate::limits::{self, Limit};
@@ -45,7 +46,7 @@ pub(crate) struct SceneDesc {
     #[serde(default)]
     pub objects: Vec<ObjectDesc>,
     pub voxel: Option<toml::Table>,
-    pub gi: Option<GiDesc>,
+    pub gi: Option<RawTable<GiSettings>>,
     pub shadow: Option<ShadowDesc>,
     pub post: Option<PostDesc>,
     pub camera_path: Option<CameraPathDesc>,
@@ -94,45 +95,6 @@ pub(crate) struct CameraKeyDesc {
     pub look_at: Option<[f64; 3]>,
     pub direction: Option<[f32; 3]>,
     pub fov_y_deg: Option<f32>,
-}
-
-/// The `[gi]` table. Integers are read signed so that a negative count is reported by
-/// [`build_gi`] with the field's name, not as a type mismatch.
-#[derive(Clone, Debug, Default, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub(crate) struct GiDesc {
-    pub method: Option<String>,
-    pub rays: Option<i64>,
-    /// An integer or `"unbounded"`, checked by [`build_gi`].
-    pub bounces: Option<toml::Value>,
-    pub radius_m: Option<f32>,
-    pub normal_offset_voxels: Option<f32>,
-    pub ray_offset_voxels: Option<f32>,
-    pub filter_radius: Option<i64>,
-    pub filter_passes: Option<i64>,
-    pub light_map_resolution: Option<i64>,
-    pub accumulate_frames: Option<i64>,
-    pub vpls: Option<i64>,
-    pub vpl_pattern: Option<[i64; 2]>,
-    pub vpl_bounces: Option<i64>,
-    pub vpl_d_min_voxels: Option<f32>,
-    pub vpl_min_roughness: Option<f32>,
-    pub vpl_visibility: Option<String>,
-    pub vpl_normalize: Option<String>,
-    pub vpl_spot_sampling: Option<String>,
-    pub ssgi_resolution: Option<String>,
-    pub ssgi_samples: Option<i64>,
-    pub ssgi_mips: Option<String>,
-    pub ssgi_feedback: Option<bool>,
-    pub ssgi_feedback_max_w_m2: Option<f32>,
-    pub ssgi_history_weight: Option<f32>,
-    pub ssr: Option<bool>,
-    pub sao: Option<bool>,
-    pub sao_radius_m: Option<f32>,
-    pub sao_bias: Option<f32>,
-    pub sao_contrast: Option<f32>,
-    pub sao_epsilon_m2: Option<f32>,
-    pub ssr_rays: Option<String>,
 }
 
 #[derive(Clone, Debug, Deserialize)]
@@ -253,11 +215,11 @@ pub(crate) fn parse(text: &str, file: &Path) -> Result<SceneDesc, SceneError> {
 
 /// The `[gi]` table of a TOML document (what `voxgi tune` prints), checked as a scene file's
 /// `[gi]` table is: the same keys, ranges and messages; `file` names it in errors.
-pub fn gi_table_overrides(text: &str, file: &Path) -> Result<super::GiOverrides, SceneError> {
+pub fn gi_table_layer(text: &str, file: &Path) -> Result<Layer, SceneError> {
     #[derive(Deserialize)]
     #[serde(deny_unknown_fields)]
     struct OnlyGi {
-        gi: Option<GiDesc>,
+        gi: Option<RawTable<GiSettings>>,
     }
     if let Err(e) = text.parse::<toml::Table>() {
         return Err(from_toml_error(file, text, &e, true));
@@ -269,7 +231,7 @@ pub fn gi_table_overrides(text: &str, file: &Path) -> Result<super::GiOverrides,
         origin: DVec3::ZERO,
     };
     desc.gi
-        .map(|g| build_gi(&ck, &g))
+        .map(|g| build_table(&ck, &g))
         .transpose()
         .map(Option::unwrap_or_default)
 }
@@ -479,7 +441,7 @@ pub(crate) fn build_with(
     let gi = desc
         .gi
         .as_ref()
-        .map(|g| build_gi(&ck, g))
+        .map(|g| build_table(&ck, g))
         .transpose()?
         .unwrap_or_default();
     let transparency = desc
@@ -785,65 +747,22 @@ fn build_camera(ck: &Check<'_>, c: &CameraDesc) -> Result<Camera, SceneError> {
     })
 }
 
-/// Checks the `[gi]` table; ranges are those the GI passes handle in one frame.
-fn build_gi(ck: &Check<'_>, g: &GiDesc) -> Result<GiOverrides, SceneError> {
-    let method = match &g.method {
-        None => None,
-        Some(name) => Some(crate::scene::GiMethod::from_name(name).ok_or_else(|| {
-            ck.invalid(
-                "gi.method",
-                format!(
-                    "unknown method \"{name}\"; expected one of {}",
-                    crate::scene::GiMethod::choices()
-                ),
-            )
-        })?),
-    };
-    // The ranges and words are those of the flags (`crate::limits`); the error names the key.
-    let count = |limit: &Limit<u32>, v: Option<i64>| {
-        v.map(|v| {
-            let key = limit.key.unwrap_or(limit.flag);
-            limit
-                .check_as(key, v)
-                .map_err(|e| ck.invalid(key, limit_message(&e)))
-        })
-        .transpose()
-    };
-    let length = |limit: &Limit<f32>, v: Option<f32>| {
-        v.map(|v| {
-            let key = limit.key.unwrap_or(limit.flag);
-            let v = ck.scalar(key, v)?;
-            limit
-                .check_as(key, v)
-                .map_err(|e| ck.invalid(key, limit_message(&e)))
-        })
-        .transpose()
-    };
-    Ok(GiOverrides {
-        method,
-        rays: count(&limits::GI_RAYS, g.rays)?,
-        bounces: g
-            .bounces
-            .as_ref()
-            .map(|v| bounces_from_toml(v).map_err(|e| ck.invalid("gi.bounces", e)))
-            .transpose()?,
-        radius_m: length(&limits::GI_RADIUS_M, g.radius_m)?,
-        normal_offset_voxels: length(&limits::GI_NORMAL_OFFSET, g.normal_offset_voxels)?,
-        ray_offset_voxels: length(&limits::GI_RAY_OFFSET, g.ray_offset_voxels)?,
-        filter_radius: count(&limits::GI_FILTER_RADIUS, g.filter_radius)?,
-        filter_passes: count(&limits::GI_FILTER_PASSES, g.filter_passes)?,
-        light_map_resolution: count(&limits::LIGHT_MAP_RESOLUTION, g.light_map_resolution)?,
-        accumulate_frames: count(&limits::GI_FRAMES, g.accumulate_frames)?,
-        vpl: build_vpl(ck, g, &count, &length)?,
-        ssgi: build_ssgi(ck, g, &count, &length)?,
-        sao: crate::scene::SaoOverrides {
-            enabled: g.sao,
-            radius_m: length(&limits::SAO_RADIUS_M, g.sao_radius_m)?,
-            bias: length(&limits::SAO_BIAS, g.sao_bias)?,
-            contrast: length(&limits::SAO_CONTRAST, g.sao_contrast)?,
-            epsilon_m2: length(&limits::SAO_EPSILON, g.sao_epsilon_m2)?,
-        },
-    })
+/// Checks a settings table's values against their keys' ranges (those of the flags), each
+/// error naming the file and the key path.
+fn build_table<S: Settings>(ck: &Check<'_>, t: &RawTable<S>) -> Result<Layer, SceneError> {
+    let mut layer = Layer::default();
+    for (k, v) in &t.values {
+        let value = k.kind.from_toml(k.path, v).map_err(|e| match e {
+            TomlValueError::NonFinite(value) => SceneError::NonFinite {
+                file: ck.file.to_path_buf(),
+                field: k.path.to_owned(),
+                value,
+            },
+            TomlValueError::Invalid(problem) => ck.invalid(k.path, problem),
+        })?;
+        layer.set(k.path, value);
+    }
+    Ok(layer)
 }
 
 /// Checks the `[shadow]` table against the flags' ranges (`crate::limits`).
@@ -930,87 +849,6 @@ fn build_post(ck: &Check<'_>, t: &PostDesc) -> Result<super::PostOverrides, Scen
         dither: t.dither,
         tonemap,
         exposure: number(&limits::EXPOSURE, t.exposure)?,
-    })
-}
-
-/// The `[gi]` table's screen-space GI keys (`ssgi_resolution`, `ssgi_samples`, `ssgi_mips`,
-/// `ssgi_feedback`, `ssgi_feedback_max_w_m2`, `ssgi_history_weight`, `ssr`, `ssr_rays`).
-fn build_ssgi(
-    ck: &Check<'_>,
-    g: &GiDesc,
-    count: &CountCheck<'_>,
-    length: &LengthCheck<'_>,
-) -> Result<crate::scene::SsgiOverrides, SceneError> {
-    use crate::scene::SsgiResolution;
-    let resolution = named(
-        ck,
-        "gi.ssgi_resolution",
-        &SsgiResolution::NAMES,
-        &g.ssgi_resolution,
-    )?;
-    let mips = named(
-        ck,
-        "gi.ssgi_mips",
-        &crate::scene::SsgiMips::NAMES,
-        &g.ssgi_mips,
-    )?;
-    let ssr_rays = named(
-        ck,
-        "gi.ssr_rays",
-        &crate::scene::SsrRays::NAMES,
-        &g.ssr_rays,
-    )?;
-    Ok(crate::scene::SsgiOverrides {
-        resolution,
-        samples: count(&limits::SSGI_SAMPLES, g.ssgi_samples)?,
-        mips,
-        feedback: g.ssgi_feedback,
-        feedback_max_w_m2: length(&limits::SSGI_FEEDBACK_MAX, g.ssgi_feedback_max_w_m2)?,
-        history_weight: length(&limits::SSGI_HISTORY_WEIGHT, g.ssgi_history_weight)?,
-        ssr: g.ssr,
-        ssr_rays,
-    })
-}
-
-type CountCheck<'a> = dyn Fn(&Limit<u32>, Option<i64>) -> Result<Option<u32>, SceneError> + 'a;
-type LengthCheck<'a> = dyn Fn(&Limit<f32>, Option<f32>) -> Result<Option<f32>, SceneError> + 'a;
-
-/// The `[gi]` table's VPL keys (`vpls`, `vpl_pattern`, `vpl_bounces`, `vpl_d_min_voxels`,
-/// `vpl_min_roughness`, `vpl_visibility`, `vpl_normalize`, `vpl_spot_sampling`).
-fn build_vpl(
-    ck: &Check<'_>,
-    g: &GiDesc,
-    count: &CountCheck<'_>,
-    length: &LengthCheck<'_>,
-) -> Result<crate::scene::vpl_settings::VplOverrides, SceneError> {
-    use crate::scene::vpl_settings::{NORMALIZE_NAMES, SPOT_SAMPLING_NAMES, VISIBILITY_NAMES};
-    let pattern = match g.vpl_pattern {
-        None => None,
-        Some([n, m]) => Some([
-            count(&limits::VPL_PATTERN_SIDE, Some(n))?.unwrap_or(1),
-            count(&limits::VPL_PATTERN_SIDE, Some(m))?.unwrap_or(1),
-        ]),
-    };
-    let visibility = named(
-        ck,
-        "gi.vpl_visibility",
-        &VISIBILITY_NAMES,
-        &g.vpl_visibility,
-    )?;
-    Ok(crate::scene::vpl_settings::VplOverrides {
-        per_set: count(&limits::VPLS, g.vpls)?,
-        pattern,
-        bounces: count(&limits::VPL_BOUNCES, g.vpl_bounces)?,
-        d_min_voxels: length(&limits::VPL_D_MIN, g.vpl_d_min_voxels)?,
-        min_roughness: length(&limits::VPL_MIN_ROUGHNESS, g.vpl_min_roughness)?,
-        visibility,
-        normalize: named(ck, "gi.vpl_normalize", &NORMALIZE_NAMES, &g.vpl_normalize)?,
-        spot_sampling: named(
-            ck,
-            "gi.vpl_spot_sampling",
-            &SPOT_SAMPLING_NAMES,
-            &g.vpl_spot_sampling,
-        )?,
     })
 }
 

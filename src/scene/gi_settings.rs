@@ -1,6 +1,9 @@
 //! The indirect-light settings: which GI method a frame uses and its parameters. Plain data
 //! (no GPU), here at the bottom so that scene files (`[gi]` tables), the command line
 //! and the viewer's panel share them with the GI passes (`crate::gi`, which re-exports them).
+//! The `[gi]` keys are declared once, in [`GiSettings::keys`]'s table (`scene::schema`).
+
+use super::schema::{choices, FieldValue, Flag, FlagStyle, Key, Kind, Settings, Value};
 
 /// The GI methods are declared with their passes, one file each (`crate::gi::MethodSpec`).
 pub use crate::gi::GiMethod;
@@ -113,22 +116,6 @@ pub enum SsrRays {
     Lobe,
 }
 
-impl SsrRays {
-    /// The names the scene file's `ssr_rays` (and `--ssr-rays`) take.
-    pub const NAMES: [(&'static str, SsrRays); 2] =
-        [("mirror", SsrRays::Mirror), ("lobe", SsrRays::Lobe)];
-}
-
-/// `--ssr on|off`.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
-pub enum SsrMode {
-    /// Reflection rays where the scene has Phong or GGX materials.
-    #[default]
-    On,
-    /// The diffuse fallback only (the image before reflection rays).
-    Off,
-}
-
 /// Scalable Ambient Obscurance as modified by Oetke 2017 §2.5 (after McGuire et al. 2012):
 /// the estimator's constants, with the thesis's values as defaults.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -141,13 +128,14 @@ pub struct SaoSettings {
     pub contrast: f32,
     /// ε in the denominator v·v + ε, m² (thesis: 0.01).
     pub epsilon_m2: f32,
+    /// N: taps on the spiral per pixel (Oetke 2017 Eq. 2.20, N = 16): fewer are faster and
+    /// noisier before the blur.
+    pub taps: u32,
     /// Show the AO term (grey, 1 = unoccluded) instead of the lit image (`--debug sao`).
     pub view: bool,
 }
 
 impl SaoSettings {
-    /// Taps on the spiral (Oetke 2017 Eq. 2.20, N = 16).
-    pub const TAPS: u32 = 16;
     /// Spiral turns τ (7, as the thesis's code uses).
     pub const SPIRAL_TURNS: f32 = 7.0;
 }
@@ -159,58 +147,9 @@ impl Default for SaoSettings {
             bias: 0.04,
             contrast: 2.0,
             epsilon_m2: 0.01,
+            taps: 16,
             view: false,
         }
-    }
-}
-
-/// SAO settings given by a scene's `[gi]` table (`sao`, `sao_radius_m`, `sao_bias`,
-/// `sao_contrast`, `sao_epsilon_m2`) or by the `--sao*` flags; `None`: not given there.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct SaoOverrides {
-    /// SAO on or off (`sao = true`, `--sao [on|off]`).
-    pub enabled: Option<bool>,
-    pub radius_m: Option<f32>,
-    pub bias: Option<f32>,
-    pub contrast: Option<f32>,
-    pub epsilon_m2: Option<f32>,
-}
-
-impl SaoOverrides {
-    /// Field by field: `self`'s value where given, else `fallback`'s.
-    pub fn or(self, fallback: SaoOverrides) -> SaoOverrides {
-        SaoOverrides {
-            enabled: self.enabled.or(fallback.enabled),
-            radius_m: self.radius_m.or(fallback.radius_m),
-            bias: self.bias.or(fallback.bias),
-            contrast: self.contrast.or(fallback.contrast),
-            epsilon_m2: self.epsilon_m2.or(fallback.epsilon_m2),
-        }
-    }
-
-    /// Whether a value of the estimator (not the switch) is given.
-    pub fn has_values(&self) -> bool {
-        SaoOverrides {
-            enabled: None,
-            ..*self
-        } != SaoOverrides::default()
-    }
-
-    /// `base` with the given values replaced: off when `enabled` says so (or when it is not
-    /// given and `base` is off), else `base`'s values (the defaults when `base` is off) with
-    /// the given ones replaced.
-    pub fn apply(&self, base: Option<SaoSettings>) -> Option<SaoSettings> {
-        if !self.enabled.unwrap_or(base.is_some()) {
-            return None;
-        }
-        let b = base.unwrap_or_default();
-        Some(SaoSettings {
-            radius_m: self.radius_m.unwrap_or(b.radius_m),
-            bias: self.bias.unwrap_or(b.bias),
-            contrast: self.contrast.unwrap_or(b.contrast),
-            epsilon_m2: self.epsilon_m2.unwrap_or(b.epsilon_m2),
-            view: b.view,
-        })
     }
 }
 
@@ -252,56 +191,6 @@ pub enum SsgiMips {
     Voting,
     /// The first non-sky child (the thesis's fast nearest-neighbour blit).
     Fast,
-}
-
-impl SsgiMips {
-    /// The names the scene file's `ssgi_mips` (and `--ssgi-mips`) take.
-    pub const NAMES: [(&'static str, SsgiMips); 2] =
-        [("voting", SsgiMips::Voting), ("fast", SsgiMips::Fast)];
-}
-
-/// Screen-space GI settings given by a scene's `[gi]` table or by flags; `None`: not given
-/// there (see [`crate::scene::resolve_gi`] for the precedence).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct SsgiOverrides {
-    pub resolution: Option<SsgiResolution>,
-    pub samples: Option<u32>,
-    pub mips: Option<SsgiMips>,
-    pub feedback: Option<bool>,
-    pub feedback_max_w_m2: Option<f32>,
-    pub history_weight: Option<f32>,
-    pub ssr: Option<bool>,
-    pub ssr_rays: Option<SsrRays>,
-}
-
-impl SsgiOverrides {
-    /// Field by field: `self`'s value where given, else `fallback`'s.
-    pub fn or(self, fallback: SsgiOverrides) -> SsgiOverrides {
-        SsgiOverrides {
-            resolution: self.resolution.or(fallback.resolution),
-            samples: self.samples.or(fallback.samples),
-            mips: self.mips.or(fallback.mips),
-            feedback: self.feedback.or(fallback.feedback),
-            feedback_max_w_m2: self.feedback_max_w_m2.or(fallback.feedback_max_w_m2),
-            history_weight: self.history_weight.or(fallback.history_weight),
-            ssr: self.ssr.or(fallback.ssr),
-            ssr_rays: self.ssr_rays.or(fallback.ssr_rays),
-        }
-    }
-
-    /// `base` with the given values replaced.
-    pub fn apply(&self, base: SsgiSettings) -> SsgiSettings {
-        SsgiSettings {
-            resolution: self.resolution.unwrap_or(base.resolution),
-            samples: self.samples.unwrap_or(base.samples),
-            mips: self.mips.unwrap_or(base.mips),
-            feedback: self.feedback.unwrap_or(base.feedback),
-            feedback_max_w_m2: self.feedback_max_w_m2.unwrap_or(base.feedback_max_w_m2),
-            history_weight: self.history_weight.unwrap_or(base.history_weight),
-            ssr: self.ssr.unwrap_or(base.ssr),
-            ssr_rays: self.ssr_rays.unwrap_or(base.ssr_rays),
-        }
-    }
 }
 
 /// How long the path tracer's paths are.
@@ -403,6 +292,501 @@ impl Default for GiSettings {
             ssgi: SsgiSettings::default(),
         }
     }
+}
+
+/// `--flag VALUE`.
+const fn flag(long: &'static str, value_name: &'static str) -> Option<Flag> {
+    Some(Flag {
+        long,
+        value_name,
+        style: FlagStyle::Value,
+    })
+}
+
+/// `--flag [on|off]`.
+const fn toggle(long: &'static str) -> Option<Flag> {
+    Some(Flag {
+        long,
+        value_name: "on|off",
+        style: FlagStyle::Toggle,
+    })
+}
+
+/// An SAO value ([`GiSettings::sao`]'s field `$f`), written into the estimator's settings,
+/// which it switches on with the defaults for the others; `gi.sao`, written after every
+/// value, switches it off again where it is not on. So values without the switch leave SAO
+/// off, and a layer that only switches it on keeps the values of the layers below.
+macro_rules! key {
+    ($path:literal, $kind:expr, $doc:literal, $flag:expr, sao $f:ident) => {
+        crate::settings_key!(GiSettings; $path, $kind, $doc, $flag,
+            get |s: &GiSettings| FieldValue::to_value(&s.sao.unwrap_or_default().$f),
+            set |s: &mut GiSettings, v| {
+                if let Some(x) = FieldValue::from_value(v) {
+                    s.sao.get_or_insert_with(SaoSettings::default).$f = x;
+                }
+            })
+    };
+    ($($t:tt)*) => {
+        crate::settings_key!(GiSettings; $($t)*)
+    };
+}
+
+use range::*;
+
+/// Every `[gi]` key: the scene file's key, the path `--set`, the sweep's grid and the panel
+/// use, its range, its flag and its field.
+static GI_KEYS: [Key<GiSettings>; 36] = [
+    key!("gi.method", Kind::Choice(choices::<GiMethod>),
+        "Indirect-light method (none: direct light only)",
+        flag("gi", "METHOD"), choice GiMethod, method),
+    key!(
+        "gi.rays",
+        Kind::Count(GI_RAYS),
+        "GI rays per pixel",
+        flag("gi-rays", "N"),
+        rays
+    ),
+    key!(
+        "gi.bounces",
+        Kind::CountOr(GI_BOUNCES, Bounces::UNBOUNDED_NAME, "(Russian roulette)"),
+        "Path-tracer bounces, or `unbounded`: 3 bounces, then Russian roulette ends each path \
+         (unbiased; capped at 64)",
+        flag("gi-bounces", "B"),
+        bounces
+    ),
+    key!(
+        "gi.radius_m",
+        Kind::OptNumber(GI_RADIUS_M, "the scene's diagonal"),
+        "GI ray length in meters",
+        flag("gi-radius", "M"),
+        radius_m
+    ),
+    key!(
+        "gi.normal_offset_voxels",
+        Kind::Number(GI_NORMAL_OFFSET),
+        "Self-intersection offset along the normal, in voxel diagonals (thesis k1)",
+        flag("gi-normal-offset", "K1"),
+        normal_offset_voxels
+    ),
+    key!(
+        "gi.ray_offset_voxels",
+        Kind::Number(GI_RAY_OFFSET),
+        "Self-intersection offset along the ray, in voxel diagonals over cos (thesis k2)",
+        flag("gi-ray-offset", "K2"),
+        ray_offset_voxels
+    ),
+    key!(
+        "gi.filter_radius",
+        Kind::Count(GI_FILTER_RADIUS),
+        "Geometry-aware filter radius in pixels, 0: off",
+        flag("gi-filter-radius", "R"),
+        filter_radius
+    ),
+    key!(
+        "gi.filter_passes",
+        Kind::Count(GI_FILTER_PASSES),
+        "Geometry-aware filter passes, each horizontal + vertical",
+        flag("gi-filter-passes", "P"),
+        filter_passes
+    ),
+    key!(
+        "gi.light_map_resolution",
+        Kind::Count(LIGHT_MAP_RESOLUTION),
+        "Reflective light-map resolution per light view",
+        flag("light-map-resolution", "L"),
+        light_map_resolution
+    ),
+    key!(
+        "gi.accumulate_frames",
+        Kind::Count(GI_FRAMES),
+        "Frames the path tracer accumulates in a headless render",
+        flag("gi-frames", "F"),
+        accumulate_frames
+    ),
+    key!("gi.radiance_source", Kind::Choice(choices::<RadianceSource>),
+        "Where hemisphere sampling reads the radiance at ray hits: reflective light maps or a \
+         direct-radiance voxel volume",
+        flag("gi-radiance", "SOURCE"), choice RadianceSource, radiance_source),
+    key!(
+        "gi.start_level",
+        Kind::Count(GI_START_LEVEL),
+        "Hierarchy level GI rays start their traversal at (Thiedemann 2010, §5.3.2)",
+        flag("gi-start-level", "LEVEL"),
+        start_level
+    ),
+    key!(
+        "gi.max_iterations",
+        Kind::Count(GI_MAX_ITERATIONS),
+        "Iteration cap of GI rays' hierarchical traversal (too low shows as missing indirect \
+         shadows, thesis Fig. 46)",
+        flag("gi-max-iterations", "N"),
+        max_iterations
+    ),
+    key!(
+        "gi.vpls",
+        Kind::Count(VPLS),
+        "`--gi vpl`: VPLs per interleaving set and light (thesis §7.2)",
+        flag("vpls", "K"),
+        vpl.per_set
+    ),
+    key!(
+        "gi.vpl_pattern",
+        Kind::Pair(VPL_PATTERN_SIDE),
+        "`--gi vpl`: interleaved-sampling pattern NxM, N·M VPL sets (thesis §7.3.2)",
+        flag("vpl-pattern", "NxM"),
+        vpl.pattern
+    ),
+    key!(
+        "gi.vpl_bounces",
+        Kind::Count(VPL_BOUNCES),
+        "`--gi vpl`: VPL bounces: 1 reflects the lights' direct light once, 2 adds one voxel \
+         ray per VPL (thesis §7.2)",
+        flag("vpl-bounces", "B"),
+        vpl.bounces
+    ),
+    key!(
+        "gi.vpl_d_min_voxels",
+        Kind::Number(VPL_D_MIN),
+        "`--gi vpl`: d_min of E = I cos cos / (d_min + d²) (thesis §7.3) as a distance in voxel \
+         diagonals h: d_min = (D · h)²",
+        flag("vpl-d-min", "D"),
+        vpl.d_min_voxels
+    ),
+    key!(
+        "gi.vpl_min_roughness",
+        Kind::Number(VPL_MIN_ROUGHNESS),
+        "`--gi vpl`: the roughness floor of glossy receivers: GGX pixels are shaded with \
+         roughness max(r, R) toward the VPLs, Phong exponents capped at 2/R⁴ − 2",
+        flag("vpl-min-roughness", "R"),
+        vpl.min_roughness
+    ),
+    key!("gi.vpl_visibility", Kind::Choice(choices::<super::VplVisibility>),
+        "`--gi vpl`: visibility per VPL and pixel: the voxel segment test, or none (v = 1)",
+        flag("vpl-visibility", "V"), choice super::VplVisibility, vpl.visibility),
+    key!("gi.vpl_normalize", Kind::Choice(choices::<super::vpl_settings::VplNormalize>),
+        "`--gi vpl`: divide a light's flux among all K samples of its emission domain \
+         (unbiased) or among the valid ones only (the thesis's renormalization)",
+        flag("vpl-normalize", "N"),
+        choice super::vpl_settings::VplNormalize, vpl.normalize),
+    key!("gi.vpl_spot_sampling", Kind::Choice(choices::<super::vpl_settings::VplSpotSampling>),
+        "`--gi vpl`: spot VPL directions uniform in solid angle on the cone, or uniform in the \
+         disk of the spot's image plane (thesis §7.2)",
+        flag("vpl-spot-sampling", "S"),
+        choice super::vpl_settings::VplSpotSampling, vpl.spot_sampling),
+    key!("gi.vpl_shading", Kind::Choice(choices::<super::VplShading>),
+        "`--gi vpl`: shade by one gather loop per pixel, or by one additive pass per VPL (the \
+         thesis's splatting)",
+        flag("vpl-shading", "S"), choice super::VplShading, vpl.shading),
+    key!("gi.ssgi_resolution", Kind::Choice(choices::<SsgiResolution>),
+        "`--gi ssgi`: the internal GI resolution, the frame's divided by 1, 2, 4 or 8",
+        flag("ssgi-resolution", "R"), choice SsgiResolution, ssgi.resolution),
+    key!(
+        "gi.ssgi_samples",
+        Kind::Count(SSGI_SAMPLES),
+        "`--gi ssgi`: samples per texel and pyramid level",
+        flag("ssgi-samples", "N"),
+        ssgi.samples
+    ),
+    key!("gi.ssgi_mips", Kind::Choice(choices::<SsgiMips>),
+        "`--gi ssgi`: how depth and normal mips pick a texel: the voting filter or the nearest \
+         child (fast)",
+        flag("ssgi-mips", "M"), choice SsgiMips, ssgi.mips),
+    key!(
+        "gi.ssgi_feedback",
+        Kind::Bool,
+        "`--gi ssgi`: feed the previous frame's indirect light back (one more bounce per \
+         frame); the flag turns it off",
+        Some(Flag {
+            long: "ssgi-no-feedback",
+            value_name: "",
+            style: FlagStyle::SetsFalse
+        }),
+        ssgi.feedback
+    ),
+    key!(
+        "gi.ssgi_feedback_max_w_m2",
+        Kind::Number(SSGI_FEEDBACK_MAX),
+        "`--gi ssgi`: clamp of the fed-back irradiance in W/m²",
+        flag("ssgi-feedback-max", "E"),
+        ssgi.feedback_max_w_m2
+    ),
+    key!(
+        "gi.ssgi_history_weight",
+        Kind::Number(SSGI_HISTORY_WEIGHT),
+        "`--gi ssgi`: τ of the temporal blend with the reprojected history, 0 (off) to 0.99",
+        flag("ssgi-history-weight", "TAU"),
+        ssgi.history_weight
+    ),
+    key!(
+        "gi.ssr",
+        Kind::Bool,
+        "`--gi ssgi`: screen-space reflection rays on Phong and GGX materials (on), or only \
+         the diffuse fallback (off)",
+        toggle("ssr"),
+        ssgi.ssr
+    ),
+    key!("gi.ssr_rays", Kind::Choice(choices::<SsrRays>),
+        "`--gi ssgi`: reflection rays along the mirror direction, the lobe's width read as a \
+         coarser colour mip (mirror), or one lobe sample per pixel and frame averaged by the \
+         history (lobe)",
+        flag("ssr-rays", "RAYS"), choice SsrRays, ssgi.ssr_rays),
+    key!("gi.sao_radius_m", Kind::Number(SAO_RADIUS_M),
+        "SAO: sample radius r in meters",
+        flag("sao-radius", "M"), sao radius_m),
+    key!("gi.sao_bias", Kind::Number(SAO_BIAS), "SAO: bias β in meters of v·n",
+        flag("sao-bias", "M"), sao bias),
+    key!("gi.sao_contrast", Kind::Number(SAO_CONTRAST), "SAO: contrast k, the AO term's exponent",
+        flag("sao-contrast", "K"), sao contrast),
+    key!("gi.sao_epsilon_m2", Kind::Number(SAO_EPSILON), "SAO: ε of v·v + ε in m²",
+        flag("sao-epsilon", "M2"), sao epsilon_m2),
+    key!("gi.sao_taps", Kind::Count(SAO_TAPS),
+        "SAO: taps on the spiral per pixel (fewer: faster and noisier)",
+        flag("sao-taps", "N"), sao taps),
+    // After the SAO values (see the `sao` arm of `key!`).
+    key!("gi.sao", Kind::Bool,
+    "Modified SAO (Oetke 2017 §2.5) at half resolution, multiplied into the indirect light \
+     (needs a --gi method: direct light is not darkened)",
+    toggle("sao"),
+    get |s: &GiSettings| Value::Bool(s.sao.is_some()),
+    set |s: &mut GiSettings, v| match v {
+            Value::Bool(false) => s.sao = None,
+            Value::Bool(true) => s.sao = Some(s.sao.unwrap_or_default()),
+        _ => {}
+    }),
+];
+
+impl Settings for GiSettings {
+    const TABLE: &'static str = "gi";
+    fn keys() -> &'static [Key<Self>] {
+        &GI_KEYS
+    }
+}
+
+impl FieldValue for Bounces {
+    fn to_value(&self) -> Value {
+        match self {
+            Bounces::Fixed(n) => Value::Count(*n),
+            Bounces::Unbounded => Value::Word,
+        }
+    }
+    fn from_value(v: Value) -> Option<Self> {
+        match v {
+            Value::Count(n) => Some(Bounces::Fixed(n)),
+            Value::Word => Some(Bounces::Unbounded),
+            _ => None,
+        }
+    }
+}
+
+/// The ranges of the `[gi]` keys (and their flags), which [`GiSettings::keys`] gives each key;
+/// the panel's sliders are cut to them.
+pub mod range {
+    use crate::limits::Limit;
+
+    pub const GI_RAYS: Limit<u32> =
+        Limit::new("--gi-rays", Some("gi.rays"), "rays per pixel", 1, 4096);
+
+    /// SAO (Oetke 2017 §2.5): the world-space sample radius r.
+    pub const SAO_RADIUS_M: Limit<f32> = Limit {
+        min_exclusive: true,
+        ..Limit::new(
+            "--sao-radius",
+            Some("gi.sao_radius_m"),
+            "an SAO radius in meters",
+            0.0,
+            1e6,
+        )
+    };
+
+    /// SAO bias β, in meters of v·n (v the tap offset, n the normal).
+    pub const SAO_BIAS: Limit<f32> = Limit::new(
+        "--sao-bias",
+        Some("gi.sao_bias"),
+        "an SAO bias in meters",
+        0.0,
+        1e6,
+    );
+
+    /// SAO contrast k, the exponent of the AO term.
+    pub const SAO_CONTRAST: Limit<f32> = Limit::new(
+        "--sao-contrast",
+        Some("gi.sao_contrast"),
+        "an SAO contrast exponent",
+        0.0,
+        64.0,
+    );
+
+    /// SAO ε of the denominator v·v + ε, in m² (positive: keeps a tap at the centre finite).
+    pub const SAO_EPSILON: Limit<f32> = Limit {
+        min_exclusive: true,
+        ..Limit::new(
+            "--sao-epsilon",
+            Some("gi.sao_epsilon_m2"),
+            "an SAO epsilon in square meters",
+            0.0,
+            1e6,
+        )
+    };
+
+    pub const GI_RADIUS_M: Limit<f32> = Limit {
+        min_exclusive: true,
+        ..Limit::new(
+            "--gi-radius",
+            Some("gi.radius_m"),
+            "a ray length in meters",
+            0.0,
+            1e9,
+        )
+    };
+
+    pub const GI_NORMAL_OFFSET: Limit<f32> = Limit::new(
+        "--gi-normal-offset",
+        Some("gi.normal_offset_voxels"),
+        "an offset along the normal in voxel diagonals",
+        0.0,
+        1e3,
+    );
+
+    pub const GI_RAY_OFFSET: Limit<f32> = Limit::new(
+        "--gi-ray-offset",
+        Some("gi.ray_offset_voxels"),
+        "an offset along the ray in voxel diagonals",
+        0.0,
+        1e3,
+    );
+
+    pub const GI_FILTER_RADIUS: Limit<u32> = Limit::new(
+        "--gi-filter-radius",
+        Some("gi.filter_radius"),
+        "a filter radius in pixels (0: off)",
+        0,
+        64,
+    );
+
+    pub const GI_FILTER_PASSES: Limit<u32> = Limit::new(
+        "--gi-filter-passes",
+        Some("gi.filter_passes"),
+        "a number of filter passes",
+        0,
+        16,
+    );
+
+    pub const GI_FRAMES: Limit<u32> = Limit::new(
+        "--gi-frames",
+        Some("gi.accumulate_frames"),
+        "frames to accumulate",
+        1,
+        1 << 20,
+    );
+
+    pub const LIGHT_MAP_RESOLUTION: Limit<u32> = Limit::new(
+        "--light-map-resolution",
+        Some("gi.light_map_resolution"),
+        "texels per side of a light map",
+        16,
+        8192,
+    );
+
+    /// Traversal starts at most at the top of a 16384² hierarchy (log2 16384 = 14).
+    pub const GI_START_LEVEL: Limit<u32> = Limit::new(
+        "--gi-start-level",
+        None,
+        "a hierarchy level to start traversal at",
+        0,
+        14,
+    );
+
+    pub const GI_MAX_ITERATIONS: Limit<u32> = Limit::new(
+        "--gi-max-iterations",
+        None,
+        "a traversal iteration cap",
+        1,
+        1 << 20,
+    );
+
+    /// `--gi vpl`'s values (Thiedemann 2010, Ch. 7): VPLs per set and light, the interleaving
+    /// pattern's sides, bounces (each adds one voxel ray per VPL), d_min in voxel diagonals.
+    pub const VPLS: Limit<u32> =
+        Limit::new("--vpls", Some("gi.vpls"), "VPLs per set and light", 1, 1024);
+
+    pub const VPL_PATTERN_SIDE: Limit<u32> = Limit::new(
+        "--vpl-pattern",
+        Some("gi.vpl_pattern"),
+        "a side of the interleaving pattern",
+        1,
+        16,
+    );
+
+    pub const VPL_BOUNCES: Limit<u32> =
+        Limit::new("--vpl-bounces", Some("gi.vpl_bounces"), "VPL bounces", 1, 8);
+
+    pub const VPL_D_MIN: Limit<f32> = Limit::new(
+        "--vpl-d-min",
+        Some("gi.vpl_d_min_voxels"),
+        "d_min in voxel diagonals",
+        0.0,
+        1e6,
+    );
+
+    /// `--gi vpl`: the roughness floor of glossy receivers (perceptual GGX roughness; Phong
+    /// exponents are capped at the matching 2/r⁴ − 2), which bounds the peak of a receiver's lobe
+    /// toward a VPL as d_min bounds 1/d² (`glsl/include/gi_vpl_gather_body.glsl`).
+    pub const VPL_MIN_ROUGHNESS: Limit<f32> = Limit::new(
+        "--vpl-min-roughness",
+        Some("gi.vpl_min_roughness"),
+        "a roughness",
+        0.0,
+        1.0,
+    );
+
+    /// `--gi ssgi`: samples per texel and pyramid level (Oetke 2017 §5.2: 8–256 in the GUI).
+    pub const SSGI_SAMPLES: Limit<u32> = Limit::new(
+        "--ssgi-samples",
+        Some("gi.ssgi_samples"),
+        "screen-space GI samples per texel and level",
+        1,
+        1024,
+    );
+
+    /// `--gi ssgi`: the clamp of the fed-back irradiance (Oetke 2017 §5.1: 20).
+    pub const SSGI_FEEDBACK_MAX: Limit<f32> = Limit {
+        min_exclusive: true,
+        ..Limit::new(
+            "--ssgi-feedback-max",
+            Some("gi.ssgi_feedback_max_w_m2"),
+            "a fed-back irradiance clamp in W/m²",
+            0.0,
+            1e9,
+        )
+    };
+
+    /// `--gi ssgi`: τ of the temporal blend (below 1: the history must fade).
+    pub const SSGI_HISTORY_WEIGHT: Limit<f32> = Limit::new(
+        "--ssgi-history-weight",
+        Some("gi.ssgi_history_weight"),
+        "a history weight",
+        0.0,
+        0.99,
+    );
+
+    /// SAO taps per pixel around the thesis's 16 (Oetke 2017 Eq. 2.20); the cap bounds the
+    /// shader's per-pixel loop.
+    pub const SAO_TAPS: Limit<u32> = Limit::new(
+        "--sao-taps",
+        Some("gi.sao_taps"),
+        "SAO taps per pixel",
+        1,
+        256,
+    );
+
+    /// Path-tracer bounces: a fixed count up to the safety cap (or `"unbounded"`).
+    pub const GI_BOUNCES: Limit<u32> = Limit::new(
+        "--gi-bounces",
+        Some("gi.bounces"),
+        "path-tracer bounces",
+        1,
+        super::Bounces::MAX,
+    );
 }
 
 #[cfg(test)]

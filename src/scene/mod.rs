@@ -200,6 +200,7 @@ mod object;
 mod post_settings;
 mod query;
 pub mod save;
+pub mod schema;
 pub mod vpl_settings;
 
 use std::path::{Path, PathBuf};
@@ -208,12 +209,12 @@ pub use builtin::{builtin, builtin_names, builtin_toml, load_scene_arg, DEFAULT_
 pub use camera::{Camera, Eye, Projection, StereoRig};
 pub use camera_path::{CameraKey, CameraPath, CameraPathError};
 pub use cull::aabb_visible;
-pub use desc::gi_table_overrides;
+pub use desc::gi_table_layer;
 pub use error::SceneError;
-pub use gi::{resolve_gi, GiOverrides};
+pub use gi::resolve_gi;
 pub use gi_settings::{
-    Bounces, GiMethod, GiSettings, RadianceSource, SaoOverrides, SaoSettings, SsgiMips,
-    SsgiOverrides, SsgiResolution, SsgiSettings, SsrMode, SsrRays,
+    range as gi_range, Bounces, GiMethod, GiSettings, RadianceSource, SaoSettings, SsgiMips,
+    SsgiResolution, SsgiSettings, SsrRays,
 };
 pub use gltf::{is_gltf_path, LUMENS_PER_WATT, SUPPORTED_REQUIRED_EXTENSIONS};
 pub use light::{scaled, spot_falloff, Light};
@@ -227,7 +228,7 @@ pub use object::{
 };
 pub use post_settings::{PostOverrides, Stage, ToneOperator};
 pub use query::NoSuchObject;
-pub use vpl_settings::{VplOverrides, VplSettings, VplShading, VplVisibility};
+pub use vpl_settings::{VplSettings, VplShading, VplVisibility};
 
 /// The `[shadow]` table's values (nothing given without the table); the command line's flags
 /// override each.
@@ -257,9 +258,9 @@ pub struct Scene {
     pub textures: Vec<TextureData>,
     /// The `[voxel]` table as written, for the voxel module to interpret.
     pub voxel: Option<toml::Table>,
-    /// The `[gi]` table: the scene's defaults of the indirect-light settings (nothing given
+    /// The `[gi]` table: the scene's layer of the indirect-light settings (nothing given
     /// without the table); see [`resolve_gi`].
-    pub gi: GiOverrides,
+    pub gi: schema::Layer,
     /// The top-level `transparency` key ("oit" or "hashed"): how the camera view draws
     /// surfaces with d < 1 unless `--transparency` says otherwise; `None` without the key.
     pub transparency: Option<Transparency>,

@@ -173,9 +173,10 @@ fn doc_example_follows_the_schema() {
     let d = desc::parse(&toml, Path::new("doc")).unwrap_or_else(|e| panic!("{e}\n{toml}"));
     assert_eq!(d.objects.len(), 2);
     assert_eq!(d.lights.len(), 3);
-    assert!(d
-        .gi
-        .is_some_and(|g| g.method.as_deref() == Some("pathtrace")));
+    assert!(d.gi.is_some_and(|g| g
+        .values
+        .iter()
+        .any(|(k, v)| k.path == "gi.method" && v.as_str() == Some("pathtrace"))));
 }
 
 // ---- error cases -----------------------------------------------------------------------------
@@ -745,48 +746,52 @@ fn gi_table_parses_every_key() {
          sao = true\nsao_radius_m = 0.6\nsao_bias = 0.02\nsao_contrast = 3\nsao_epsilon_m2 = 0.5\n"
     );
     let s = load_ok(&text, &[]);
-    assert_eq!(
-        s.gi,
-        GiOverrides {
-            method: Some(crate::scene::GiMethod::Pathtrace),
-            rays: Some(8),
-            bounces: Some(crate::scene::Bounces::Fixed(3)),
-            radius_m: Some(1.5),
-            normal_offset_voxels: Some(0.5),
-            ray_offset_voxels: Some(2.0),
-            filter_radius: Some(0),
-            filter_passes: Some(1),
-            light_map_resolution: Some(128),
-            accumulate_frames: Some(64),
-            vpl: crate::scene::vpl_settings::VplOverrides {
-                per_set: Some(4),
-                pattern: Some([2, 3]),
-                bounces: Some(1),
-                d_min_voxels: Some(2.5),
-                min_roughness: Some(0.3),
-                visibility: Some(crate::scene::vpl_settings::VplVisibility::None),
-                normalize: Some(crate::scene::vpl_settings::VplNormalize::Valid),
-                spot_sampling: Some(crate::scene::vpl_settings::VplSpotSampling::Disk),
-            },
-            ssgi: crate::scene::SsgiOverrides {
-                resolution: Some(crate::scene::SsgiResolution::Quarter),
-                samples: Some(12),
-                mips: Some(crate::scene::SsgiMips::Fast),
-                feedback: Some(false),
-                feedback_max_w_m2: Some(5.5),
-                history_weight: Some(0.5),
-                ssr: Some(false),
-                ssr_rays: Some(crate::scene::SsrRays::Lobe),
-            },
-            sao: crate::scene::SaoOverrides {
-                enabled: Some(true),
-                radius_m: Some(0.6),
-                bias: Some(0.02),
-                contrast: Some(3.0),
-                epsilon_m2: Some(0.5),
-            },
-        }
-    );
+    use crate::scene::vpl_settings::{VplNormalize, VplSpotSampling};
+    let d = GiSettings::default();
+    let want = GiSettings {
+        method: crate::scene::GiMethod::Pathtrace,
+        rays: 8,
+        bounces: crate::scene::Bounces::Fixed(3),
+        radius_m: Some(1.5),
+        normal_offset_voxels: 0.5,
+        ray_offset_voxels: 2.0,
+        filter_radius: 0,
+        filter_passes: 1,
+        light_map_resolution: 128,
+        accumulate_frames: 64,
+        vpl: crate::scene::VplSettings {
+            per_set: 4,
+            pattern: [2, 3],
+            bounces: 1,
+            d_min_voxels: 2.5,
+            min_roughness: 0.3,
+            visibility: crate::scene::VplVisibility::None,
+            normalize: VplNormalize::Valid,
+            spot_sampling: VplSpotSampling::Disk,
+            ..d.vpl
+        },
+        ssgi: crate::scene::SsgiSettings {
+            resolution: crate::scene::SsgiResolution::Quarter,
+            samples: 12,
+            mips: crate::scene::SsgiMips::Fast,
+            feedback: false,
+            feedback_max_w_m2: 5.5,
+            history_weight: 0.5,
+            ssr: false,
+            ssr_rays: crate::scene::SsrRays::Lobe,
+        },
+        sao: Some(crate::scene::SaoSettings {
+            radius_m: 0.6,
+            bias: 0.02,
+            contrast: 3.0,
+            epsilon_m2: 0.5,
+            ..Default::default()
+        }),
+        ..d
+    };
+    assert_eq!(resolve_gi(&s.gi, &schema::Layer::default()), want);
+    // Every key the table names is in the scene's layer, and nothing else.
+    assert_eq!(s.gi.iter().count(), 31);
     // Partial tables give only what they name; the rest stays the defaults'.
     for (method, m) in [
         ("none", crate::scene::GiMethod::None),
@@ -795,11 +800,12 @@ fn gi_table_parses_every_key() {
         let text = format!("{CAMERA}{LIGHT}{CUBE}[gi]\nmethod = \"{method}\"\n");
         let s = load_ok(&text, &[]);
         assert_eq!(
-            s.gi,
-            GiOverrides {
-                method: Some(m),
-                ..Default::default()
-            }
+            s.gi.iter().map(|(k, _)| k).collect::<Vec<_>>(),
+            ["gi.method"]
+        );
+        assert_eq!(
+            resolve_gi(&s.gi, &schema::Layer::default()),
+            GiSettings { method: m, ..d }
         );
     }
     // Bounces: a count up to the safety cap, or unbounded (Russian roulette).
@@ -812,10 +818,11 @@ fn gi_table_parses_every_key() {
             &format!("{CAMERA}{LIGHT}{CUBE}[gi]\nbounces = {value}\n"),
             &[],
         );
-        assert_eq!(s.gi.bounces, Some(b), "{value}");
+        let gi = resolve_gi(&s.gi, &schema::Layer::default());
+        assert_eq!(gi.bounces, b, "{value}");
     }
     let s = load_ok(&format!("{CAMERA}{LIGHT}{CUBE}[gi]\nrays = 4\n"), &[]);
-    let settings = resolve_gi(&s.gi, &GiOverrides::default());
+    let settings = resolve_gi(&s.gi, &schema::Layer::default());
     assert_eq!(settings.rays, 4);
     assert_eq!(settings.method, crate::scene::GiMethod::None);
 }

@@ -76,10 +76,10 @@ pub struct VplSettings {
 
 impl VplSettings {
     /// The most VPLs per set and light, and the largest pattern side.
-    pub const MAX_PER_SET: u32 = crate::limits::VPLS.max;
-    pub const MAX_PATTERN: u32 = crate::limits::VPL_PATTERN_SIDE.max;
+    pub const MAX_PER_SET: u32 = super::gi_range::VPLS.max;
+    pub const MAX_PATTERN: u32 = super::gi_range::VPL_PATTERN_SIDE.max;
     /// The most VPL bounces (each adds one ray per VPL and a row segment).
-    pub const MAX_BOUNCES: u32 = crate::limits::VPL_BOUNCES.max;
+    pub const MAX_BOUNCES: u32 = super::gi_range::VPL_BOUNCES.max;
 }
 
 impl Default for VplSettings {
@@ -96,86 +96,5 @@ impl Default for VplSettings {
             spot_sampling: VplSpotSampling::SolidAngle,
             show: false,
         }
-    }
-}
-
-/// VPL settings given by a scene's `[gi]` table or by flags; `None`: not given there
-/// (see [`crate::scene::resolve_gi`] for the precedence).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct VplOverrides {
-    pub per_set: Option<u32>,
-    pub pattern: Option<[u32; 2]>,
-    pub bounces: Option<u32>,
-    pub d_min_voxels: Option<f32>,
-    pub min_roughness: Option<f32>,
-    pub visibility: Option<VplVisibility>,
-    pub normalize: Option<VplNormalize>,
-    pub spot_sampling: Option<VplSpotSampling>,
-}
-
-impl VplOverrides {
-    /// Field by field: `self`'s value where given, else `fallback`'s.
-    pub fn or(self, fallback: VplOverrides) -> VplOverrides {
-        VplOverrides {
-            per_set: self.per_set.or(fallback.per_set),
-            pattern: self.pattern.or(fallback.pattern),
-            bounces: self.bounces.or(fallback.bounces),
-            d_min_voxels: self.d_min_voxels.or(fallback.d_min_voxels),
-            min_roughness: self.min_roughness.or(fallback.min_roughness),
-            visibility: self.visibility.or(fallback.visibility),
-            normalize: self.normalize.or(fallback.normalize),
-            spot_sampling: self.spot_sampling.or(fallback.spot_sampling),
-        }
-    }
-
-    /// `base` with the given values replaced.
-    pub fn apply(&self, base: VplSettings) -> VplSettings {
-        VplSettings {
-            per_set: self.per_set.unwrap_or(base.per_set),
-            pattern: self.pattern.unwrap_or(base.pattern),
-            bounces: self.bounces.unwrap_or(base.bounces),
-            d_min_voxels: self.d_min_voxels.unwrap_or(base.d_min_voxels),
-            min_roughness: self.min_roughness.unwrap_or(base.min_roughness),
-            visibility: self.visibility.unwrap_or(base.visibility),
-            normalize: self.normalize.unwrap_or(base.normalize),
-            spot_sampling: self.spot_sampling.unwrap_or(base.spot_sampling),
-            shading: base.shading,
-            show: base.show,
-        }
-    }
-}
-
-/// The names of [`VplVisibility`] in scene files and on the command line.
-pub const VISIBILITY_NAMES: [(&str, VplVisibility); 2] = [
-    ("voxel", VplVisibility::Voxel),
-    ("none", VplVisibility::None),
-];
-
-/// The names of [`VplNormalize`] in scene files and on the command line.
-pub const NORMALIZE_NAMES: [(&str, VplNormalize); 2] =
-    [("all", VplNormalize::All), ("valid", VplNormalize::Valid)];
-
-/// The names of [`VplSpotSampling`] in scene files and on the command line.
-pub const SPOT_SAMPLING_NAMES: [(&str, VplSpotSampling); 2] = [
-    ("solid-angle", VplSpotSampling::SolidAngle),
-    ("disk", VplSpotSampling::Disk),
-];
-
-/// Parses `--vpl-pattern NxM` (e.g. `4x4`).
-pub fn parse_pattern(s: &str) -> Result<[u32; 2], String> {
-    let bad = || {
-        format!(
-            "expected NxM with N and M in [1, {}], e.g. 4x4",
-            VplSettings::MAX_PATTERN
-        )
-    };
-    let (a, b) = s.split_once(['x', 'X']).ok_or_else(bad)?;
-    let n: u32 = a.trim().parse().map_err(|_| bad())?;
-    let m: u32 = b.trim().parse().map_err(|_| bad())?;
-    let ok = |v: u32| (1..=VplSettings::MAX_PATTERN).contains(&v);
-    if ok(n) && ok(m) {
-        Ok([n, m])
-    } else {
-        Err(bad())
     }
 }

@@ -192,7 +192,7 @@ pub fn tune_from_dir(
     dir: &Path,
     scene: &str,
     budget_ms: f64,
-) -> Result<(SweepRow, String, crate::scene::GiOverrides), TuneError> {
+) -> Result<(SweepRow, String, crate::scene::schema::Layer), TuneError> {
     let csv = dir.join("sweep.csv");
     if !csv.exists() {
         return Err(TuneError::Io {
@@ -211,9 +211,8 @@ pub fn tune_from_dir(
         reason: format!("the gi_toml of `{}`: {reason}", row.config),
     };
     let table = gi_table_text(&row).map_err(bad)?;
-    let overrides =
-        crate::scene::gi_table_overrides(&table, &csv).map_err(|e| bad(e.to_string()))?;
-    Ok((row, table, overrides))
+    let layer = crate::scene::gi_table_layer(&table, &csv).map_err(|e| bad(e.to_string()))?;
+    Ok((row, table, layer))
 }
 
 #[cfg(test)]
@@ -283,7 +282,7 @@ mod tests {
     }
 
     /// What the viewer's "best within budget" and `voxgi tune` read: the row within the budget,
-    /// its `[gi]` table and that table as scene-file overrides; a folder without a sweep is an
+    /// its `[gi]` table and that table as the scene file's settings layer; a folder without a sweep is an
     /// error naming its sweep.csv.
     #[test]
     fn tune_from_dir_reads_the_sweep_and_its_gi_table() {
@@ -300,12 +299,12 @@ mod tests {
         ] {
             csv.append(&r).expect("appends");
         }
-        let (r, table, overrides) = tune_from_dir(&dir, "cornell", 5.0).expect("tunes");
+        let (r, table, layer) = tune_from_dir(&dir, "cornell", 5.0).expect("tunes");
         assert_eq!(r.config, "hemisphere gi-rays=4");
         assert!(table.starts_with("[gi]\n"), "{table}");
         // `row` stores rays = its ms (4 here) in the resolved settings.
-        assert_eq!(overrides.method, Some(GiMethod::Hemisphere));
-        assert_eq!(overrides.rays, Some(4));
+        let s = crate::scene::resolve_gi(&layer, &Default::default());
+        assert_eq!((s.method, s.rays), (GiMethod::Hemisphere, 4));
         let _ = std::fs::remove_dir_all(&dir);
     }
 

@@ -181,7 +181,7 @@ impl GiMethod {
 /// The panel's rays-per-pixel slider, for the methods that shoot rays per pixel.
 fn rays_slider(ui: &mut egui::Ui, gi: &mut GiSettings) {
     ui.add(
-        egui::Slider::new(&mut gi.rays, crate::limits::GI_RAYS.slider(1, 256))
+        egui::Slider::new(&mut gi.rays, crate::scene::gi_range::GI_RAYS.slider(1, 256))
             .logarithmic(true)
             .text("rays / pixel"),
     );

@@ -34,13 +34,13 @@ pub(super) static SPEC: MethodSpec = MethodSpec {
         instead: "choose another --gi method (hemisphere, pathtrace, vpl)",
     }),
     sweep_keys: &[
-        "gi-filter-radius",
-        "gi-filter-passes",
-        "gi-frames",
-        "ssgi-resolution",
-        "ssgi-samples",
-        "ssgi-mips",
-        "ssr-rays",
+        "gi.filter_radius",
+        "gi.filter_passes",
+        "gi.accumulate_frames",
+        "gi.ssgi_resolution",
+        "gi.ssgi_samples",
+        "gi.ssgi_mips",
+        "gi.ssr_rays",
     ],
     // Not in the sweep's default list (`--methods` adds it), as before the registry.
     swept_by_default: false,
@@ -71,9 +71,12 @@ fn ssgi_controls(ui: &mut egui::Ui, gi: &mut GiSettings) {
             }
         });
     ui.add(
-        egui::Slider::new(&mut s.samples, crate::limits::SSGI_SAMPLES.slider(8, 256))
-            .logarithmic(true)
-            .text("samples / texel / level"),
+        egui::Slider::new(
+            &mut s.samples,
+            crate::scene::gi_range::SSGI_SAMPLES.slider(8, 256),
+        )
+        .logarithmic(true)
+        .text("samples / texel / level"),
     );
     let mut fast = s.mips == crate::gi::SsgiMips::Fast;
     ui.checkbox(&mut fast, "fast (nearest) mips");
@@ -93,7 +96,7 @@ fn ssgi_controls(ui: &mut egui::Ui, gi: &mut GiSettings) {
     ui.add(
         egui::Slider::new(
             &mut s.history_weight,
-            crate::limits::SSGI_HISTORY_WEIGHT.slider(0.0, 0.99),
+            crate::scene::gi_range::SSGI_HISTORY_WEIGHT.slider(0.0, 0.99),
         )
         .text("history weight τ"),
     );

@@ -30,21 +30,21 @@ pub(super) static SPEC: MethodSpec = MethodSpec {
     multiview_blocker: None,
     orthographic_blocker: None,
     sweep_keys: &[
-        "gi-normal-offset",
-        "gi-ray-offset",
-        "gi-filter-radius",
-        "gi-filter-passes",
-        "gi-start-level",
-        "gi-max-iterations",
-        "light-map-resolution",
-        "vpls",
-        "vpl-pattern",
-        "vpl-d-min",
-        "vpl-bounces",
-        "vpl-visibility",
-        "vpl-normalize",
-        "vpl-spot-sampling",
-        "vpl-shading",
+        "gi.normal_offset_voxels",
+        "gi.ray_offset_voxels",
+        "gi.filter_radius",
+        "gi.filter_passes",
+        "gi.start_level",
+        "gi.max_iterations",
+        "gi.light_map_resolution",
+        "gi.vpls",
+        "gi.vpl_pattern",
+        "gi.vpl_d_min_voxels",
+        "gi.vpl_bounces",
+        "gi.vpl_visibility",
+        "gi.vpl_normalize",
+        "gi.vpl_spot_sampling",
+        "gi.vpl_shading",
     ],
     swept_by_default: true,
     plot_colour: "#2ca02c",
@@ -69,27 +69,34 @@ fn vpl_controls(ui: &mut egui::Ui, gi: &mut GiSettings) {
     use crate::gi::vpl::{VplNormalize, VplShading, VplSpotSampling, VplVisibility};
     let v = &mut gi.vpl;
     ui.add(
-        egui::Slider::new(&mut v.per_set, crate::limits::VPLS.slider(1, 64))
+        egui::Slider::new(&mut v.per_set, crate::scene::gi_range::VPLS.slider(1, 64))
             .logarithmic(true)
             .text("VPLs / set / light"),
     );
     for (side, name) in v.pattern.iter_mut().zip(["pattern N", "pattern M"]) {
-        ui.add(egui::Slider::new(side, crate::limits::VPL_PATTERN_SIDE.slider(1, 8)).text(name));
+        ui.add(
+            egui::Slider::new(side, crate::scene::gi_range::VPL_PATTERN_SIDE.slider(1, 8))
+                .text(name),
+        );
     }
     ui.add(
-        egui::Slider::new(&mut v.bounces, crate::limits::VPL_BOUNCES.slider(1, 8)).text("bounces"),
+        egui::Slider::new(
+            &mut v.bounces,
+            crate::scene::gi_range::VPL_BOUNCES.slider(1, 8),
+        )
+        .text("bounces"),
     );
     ui.add(
         egui::Slider::new(
             &mut v.d_min_voxels,
-            crate::limits::VPL_D_MIN.slider(0.0, 64.0),
+            crate::scene::gi_range::VPL_D_MIN.slider(0.0, 64.0),
         )
         .text("d_min (voxel diagonals)"),
     );
     ui.add(
         egui::Slider::new(
             &mut v.min_roughness,
-            crate::limits::VPL_MIN_ROUGHNESS.slider(0.0, 1.0),
+            crate::scene::gi_range::VPL_MIN_ROUGHNESS.slider(0.0, 1.0),
         )
         .text("glossy receivers' min. roughness"),
     );
