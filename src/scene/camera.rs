@@ -439,3 +439,7 @@ mod tests {
         }
     }
 }
+
+/// The field of view an orthographic camera without `fov_y_deg` switches to (the viewer's
+/// toggle, `--projection perspective`).
+pub(crate) const DEFAULT_ORTHO_FOV_Y_DEG: f32 = 40.0;

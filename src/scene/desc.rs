@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 use glam::{DVec3, Vec3};
 use serde::Deserialize;
 
-use super::camera::{Camera, Projection};
+use super::camera::{Camera, Projection, DEFAULT_ORTHO_FOV_Y_DEG};
 use super::camera_path::{CameraKey, CameraPath};
 use super::error::{field_ref, from_toml_error, SceneError};
 use super::gi_settings::GiSettings;
@@ -114,10 +114,6 @@ pub(crate) struct CameraDesc {
     pub near: Option<f32>,
     pub far: Option<f32>,
 }
-
-/// The field of view an orthographic camera without `fov_y_deg` switches to (the viewer's
-/// toggle, `--projection perspective`).
-pub(crate) const DEFAULT_ORTHO_FOV_Y_DEG: f32 = 40.0;
 
 #[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq, Eq)]
 #[serde(rename_all = "lowercase")]

@@ -5,8 +5,30 @@
 
 use super::schema::{choices, FieldValue, Flag, FlagStyle, Key, Kind, Settings, Value};
 
-/// The GI methods are declared with their passes, one file each (`crate::gi::MethodSpec`).
-pub use crate::gi::GiMethod;
+/// A GI method of the speed/accuracy ladder. Only the names live here, at the bottom, so that
+/// settings can hold one; what a method does and needs is its spec (`crate::gi::MethodSpec`),
+/// in the file named after it in `gi/method/`, found by `GiMethod::spec`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub enum GiMethod {
+    /// Direct light only.
+    #[default]
+    None,
+    Hemisphere,
+    Pathtrace,
+    Vpl,
+    Ssgi,
+}
+
+impl GiMethod {
+    /// Every method, in the order the panel, the `G` key and `--help` list them.
+    pub const ALL: &'static [GiMethod] = &[
+        GiMethod::None,
+        GiMethod::Hemisphere,
+        GiMethod::Pathtrace,
+        GiMethod::Vpl,
+        GiMethod::Ssgi,
+    ];
+}
 
 /// Parameters of the indirect-light passes (all exposed on the command line).
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -19,6 +19,7 @@ use gltf::mesh::Mode;
 use super::camera::{Camera, Projection};
 use super::crease::{split_normals, Smoothing};
 use super::error::SceneError;
+pub(crate) use super::gltf_asset::{GltfAsset, GltfCamera, GltfProjection};
 use super::light::Light;
 use super::material::{BumpKind, Ggx, Material, PbrMaps, TextureData};
 use super::mesh::{Aabb, Mesh, SubMesh};
@@ -35,40 +36,6 @@ pub const LUMENS_PER_WATT: f32 = 683.0;
 /// The `extensionsRequired` entries voxgi implements; any other is an error.
 pub const SUPPORTED_REQUIRED_EXTENSIONS: [&str; 2] =
     ["KHR_lights_punctual", "KHR_materials_emissive_strength"];
-
-/// What a glTF file gives a scene besides its mesh, in the file's own coordinates (the
-/// default scene's root space); an object's transform applies on top.
-#[derive(Clone, Debug)]
-pub(crate) struct GltfAsset {
-    /// Index into the store's meshes.
-    pub mesh: usize,
-    pub lights: Vec<Light>,
-    pub camera: Option<GltfCamera>,
-}
-
-/// A glTF camera placed by its node.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) struct GltfCamera {
-    /// The camera node's world matrix (the camera looks down its −Z with +Y up).
-    pub world: Mat4,
-    pub projection: GltfProjection,
-}
-
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) enum GltfProjection {
-    Perspective {
-        yfov_rad: f32,
-        znear: f32,
-        /// `None`: an infinite projection.
-        zfar: Option<f32>,
-    },
-    Orthographic {
-        /// Half the view's height.
-        ymag: f32,
-        znear: f32,
-        zfar: f32,
-    },
-}
 
 impl GltfCamera {
     /// The voxgi camera this glTF camera becomes under the object transform `model`.
@@ -101,7 +68,7 @@ impl GltfCamera {
             }
             GltfProjection::Orthographic { ymag, znear, zfar } => (
                 Projection::Orthographic,
-                super::desc::DEFAULT_ORTHO_FOV_Y_DEG,
+                super::camera::DEFAULT_ORTHO_FOV_Y_DEG,
                 znear,
                 zfar,
                 2.0 * ymag * s,
@@ -1002,8 +969,8 @@ fn convert_texels(texels: &mut [u8], texel_use: TexelUse) {
             TexelUse::Color(f) => {
                 if f != Vec3::ONE {
                     for (c, k) in t.iter_mut().zip(f.to_array()) {
-                        let linear = crate::eval::srgb_decode(f32::from(*c) / 255.0) * k;
-                        *c = to_u8(crate::eval::srgb_encode(linear));
+                        let linear = crate::imaging::srgb_decode(f32::from(*c) / 255.0) * k;
+                        *c = to_u8(crate::imaging::srgb_encode(linear));
                     }
                 }
             }

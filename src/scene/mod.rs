@@ -192,6 +192,7 @@ mod error;
 mod gi;
 mod gi_settings;
 mod gltf;
+mod gltf_asset;
 mod light;
 mod material;
 mod mesh;

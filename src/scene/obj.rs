@@ -30,7 +30,7 @@ pub(crate) struct AssetStore {
     textures_by_path: HashMap<(PathBuf, bool), Option<usize>>,
     /// Loaded glTF files by path and crease angle (its bits), so objects sharing a file share
     /// its mesh ([`super::gltf`]).
-    pub(super) gltf_files: HashMap<(PathBuf, u32), super::gltf::GltfAsset>,
+    pub(super) gltf_files: HashMap<(PathBuf, u32), super::gltf_asset::GltfAsset>,
     /// Textures made from glTF images (a channel split off, a factor baked in), by glTF file
     /// and a key naming the image and what was made of it.
     pub(super) gltf_textures: HashMap<(PathBuf, String), usize>,

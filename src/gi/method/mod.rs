@@ -1,12 +1,14 @@
 //! The GI methods, one file each: a [`MethodSpec`] that states what the rest of the program
 //! asks about the method (its name, whether it accumulates, what it reads, its panel section,
-//! its sweep keys) and builds its passes. The registry below lists them once; the enum
-//! [`GiMethod`], the `--gi` values, the scene files' `[gi] method` names, the panel's list,
-//! the viewer's `G` cycle and the sweep's methods all come from it. Nothing else matches on
-//! the method: code that needs a fact about one asks its spec ([`GiMethod::spec`]).
+//! its sweep keys) and builds its passes. [`GiMethod::spec`] below is the registry; the
+//! `--gi` values, the scene files' `[gi] method` names, the panel's list, the viewer's `G`
+//! cycle and the sweep's methods all come from the specs. Nothing else matches on the method:
+//! code that needs a fact about one asks its spec.
 //!
 //! Adding a method: a file here with its `SPEC` (and its passes, in a file of their own when
-//! they are large), its `mod` line and one line in `registry!` (`docs/design/gi-methods.md`).
+//! they are large), its `mod` line, its arm in [`GiMethod::spec`], and its variant in the
+//! enum, which lives with the settings in `scene` (the lowest layer that holds a method;
+//! `docs/design/gi-methods.md`).
 
 mod hemisphere;
 mod none;
@@ -18,43 +20,20 @@ use super::{GiMethodPasses, GiSettings, GiTarget};
 use crate::scene::Scene;
 use crate::vk::{Context, ImageDesc, VkError};
 
-/// Declares [`GiMethod`] with one variant per line and each variant's spec, in the order the
-/// panel, the `G` key and `--help` list them.
-macro_rules! registry {
-    ($($variant:ident => $file:ident),+ $(,)?) => {
-        /// A GI method of the speed/accuracy ladder; what it does and needs is its
-        /// [`MethodSpec`], in the file named after it in `gi/method/`.
-        #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
-        pub enum GiMethod {
-            $($variant),+
+pub use crate::scene::GiMethod;
+
+impl GiMethod {
+    /// What the program knows about the method: its file's spec. The registry: one arm per
+    /// method, in the order of [`GiMethod::ALL`] (exhaustive, so a new variant does not
+    /// compile until its spec is named here).
+    pub fn spec(self) -> &'static MethodSpec {
+        match self {
+            GiMethod::None => &none::SPEC,
+            GiMethod::Hemisphere => &hemisphere::SPEC,
+            GiMethod::Pathtrace => &pathtrace::SPEC,
+            GiMethod::Vpl => &vpl::SPEC,
+            GiMethod::Ssgi => &ssgi::SPEC,
         }
-
-        impl GiMethod {
-            /// Every method, in registry order.
-            pub const ALL: &'static [GiMethod] = &[$(GiMethod::$variant),+];
-
-            /// What the program knows about the method.
-            pub fn spec(self) -> &'static MethodSpec {
-                match self {
-                    $(GiMethod::$variant => &$file::SPEC),+
-                }
-            }
-        }
-    };
-}
-
-registry! {
-    None => none,
-    Hemisphere => hemisphere,
-    Pathtrace => pathtrace,
-    Vpl => vpl,
-    Ssgi => ssgi,
-}
-
-impl Default for GiMethod {
-    /// Direct light only: indirect light is asked for.
-    fn default() -> Self {
-        GiMethod::None
     }
 }
 
