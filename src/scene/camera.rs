@@ -251,6 +251,10 @@ impl StereoRig {
     }
 }
 
+/// The field of view an orthographic camera without `fov_y_deg` switches to (the viewer's
+/// toggle, `--projection perspective`).
+pub(crate) const DEFAULT_ORTHO_FOV_Y_DEG: f32 = 40.0;
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -439,7 +443,3 @@ mod tests {
         }
     }
 }
-
-/// The field of view an orthographic camera without `fov_y_deg` switches to (the viewer's
-/// toggle, `--projection perspective`).
-pub(crate) const DEFAULT_ORTHO_FOV_Y_DEG: f32 = 40.0;
