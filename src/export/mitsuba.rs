@@ -615,6 +615,37 @@ fn write_material(
             None => material.albedo.max_element(),
         };
         let specular_max = material.specular.max_element();
+        let specular_bsdf = |reflectance: Vec3| {
+            [
+                "<bsdf type=\"roughconductor\">".to_owned(),
+                "    <string name=\"distribution\" value=\"beckmann\"/>".to_owned(),
+                format!(
+                    "    <float name=\"alpha\" value=\"{}\"/>",
+                    phong_to_beckmann_alpha(material.shininess)
+                ),
+                "    <string name=\"material\" value=\"none\"/>".to_owned(),
+                format!(
+                    "    <rgb name=\"specular_reflectance\" value=\"{}\"/>",
+                    vec3(reflectance)
+                ),
+                "</bsdf>".to_owned(),
+            ]
+        };
+        if diffuse_max <= 0.0 {
+            // No diffuse part (an MTL metal: `Kd 0 0 0`, `Ks 1 1 1`): the lobe alone. A blend
+            // would weigh the diffuse by 1 − w = 0 and scale it by 1 / 0, writing NaN.
+            let _ = writeln!(
+                xml,
+                "        <!-- normalized Phong, specular {}, shininess {}, no diffuse part -->",
+                vec3(material.specular),
+                material.shininess
+            );
+            for line in specular_bsdf(material.specular) {
+                let _ = writeln!(xml, "        {line}");
+            }
+            let _ = writeln!(xml, "    </bsdf>\n");
+            return Ok(());
+        }
         let weight = specular_max / (diffuse_max + specular_max);
         let diffuse_scale = 1.0 / (1.0 - weight);
         let reflectance = match texture {
@@ -646,21 +677,7 @@ fn write_material(
             xml,
             "            <bsdf type=\"diffuse\">\n                {reflectance}\n            </bsdf>"
         );
-        let specular = [
-            "<bsdf type=\"roughconductor\">".to_owned(),
-            "    <string name=\"distribution\" value=\"beckmann\"/>".to_owned(),
-            format!(
-                "    <float name=\"alpha\" value=\"{}\"/>",
-                phong_to_beckmann_alpha(material.shininess)
-            ),
-            "    <string name=\"material\" value=\"none\"/>".to_owned(),
-            format!(
-                "    <rgb name=\"specular_reflectance\" value=\"{}\"/>",
-                vec3(material.specular / weight)
-            ),
-            "</bsdf>".to_owned(),
-        ];
-        for line in specular {
+        for line in specular_bsdf(material.specular / weight) {
             let _ = writeln!(xml, "            {line}");
         }
         let _ = writeln!(xml, "        </bsdf>");
@@ -1133,6 +1150,36 @@ mod tests {
     }
 
     const CAMERA: &str = "[camera]\nposition = [0, 1, -3]\ntarget = [0, 0, 0]\nfov_y_deg = 40\n";
+
+    /// An MTL metal as OBJ exporters write it (`Kd 0 0 0`, `Ks 1 1 1`, no `Ns`, so shininess 0:
+    /// the brass of Bitterli's staircase, the Modern Hall's chrome): no diffuse part, so the
+    /// lobe alone. A blend would scale the empty diffuse part by 1 / (1 − w) = 1 / 0 and write
+    /// NaN, which Mitsuba renders as NaN in every pixel.
+    #[test]
+    fn a_phong_material_without_diffuse_exports_the_lobe_alone_and_every_number_is_finite() {
+        let text = format!(
+            "{CAMERA}[[lights]]\nkind = \"directional\"\ndirection = [0, -1, 0]\n\
+             irradiance_w_m2 = [2, 2, 2]\n[[objects]]\nbuiltin = \"sphere\"\n\
+             material = {{ albedo = [0, 0, 0], specular = [1, 1, 1], shininess = 0.0 }}\n"
+        );
+        let scene = Scene::from_toml_str(&text, Path::new("<test>"), Path::new(".")).unwrap();
+        let dir = TempDir::new("phong_metal");
+        let report = export_mitsuba(&scene, 0.0, 32, 32, &dir.0).unwrap();
+        let xml = std::fs::read_to_string(&report.xml_path).unwrap();
+        assert!(!xml.contains("blendbsdf"), "{xml}");
+        let ks = numbers(&xml, "<rgb name=\"specular_reflectance\"", "value");
+        assert!(close(&ks, &[1.0, 1.0, 1.0]), "{ks:?}");
+        // Every number the exporter wrote in a `value` attribute is finite.
+        for part in xml.split("value=\"").skip(1) {
+            let v = &part[..part.find('"').unwrap()];
+            for n in v.split(',') {
+                if let Ok(x) = n.trim().parse::<f64>() {
+                    assert!(x.is_finite(), "non-finite {v} in the export");
+                }
+            }
+        }
+        assert!(!xml.to_lowercase().contains("nan"), "{xml}");
+    }
 
     #[test]
     fn phong_material_is_approximated_with_a_warning() {
