@@ -400,38 +400,7 @@ mod tests {
         );
     }
 
-    fn row(scene: &str, config: &str, ms: f64, rel_mse: f64) -> SweepRow {
-        SweepRow {
-            scene: scene.into(),
-            config: config.into(),
-            method: config.split(' ').next().unwrap_or("").into(),
-            size: 32,
-            frames: 5,
-            gi_median_ms: ms / 2.0,
-            gi_min_ms: ms / 3.0,
-            gi_max_ms: ms,
-            frame_median_ms: ms,
-            frame_min_ms: ms,
-            frame_max_ms: ms,
-            accumulate_frames: 1,
-            image_ms: ms,
-            transient_bytes: 1 << 20,
-            rel_mse,
-            flip: 0.1,
-            psnr_db: 30.0,
-            ssim: 0.9,
-            device: "a, \"quoted\" device".into(),
-            gi_toml: gi_inline(&GiSettings {
-                method: GiMethod::Hemisphere,
-                rays: (ms as u32).max(1),
-                ..GiSettings::default()
-            }),
-            // One measured, one not settled, so the round trip sees numbers and empties.
-            flicker: Some(0.0125),
-            ghost: Some(0.5),
-            lag_frames: None,
-        }
-    }
+    use crate::tune::sample_row as row;
 
     #[test]
     fn the_tuned_table_is_a_scene_gi_table() {

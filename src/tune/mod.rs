@@ -215,43 +215,45 @@ pub fn tune_from_dir(
     Ok((row, table, layer))
 }
 
+/// A row for the tests of the tuner and the sweep: the hemisphere method with `ms` rays.
+#[cfg(test)]
+pub(crate) fn sample_row(scene: &str, config: &str, ms: f64, rel_mse: f64) -> SweepRow {
+    SweepRow {
+        scene: scene.into(),
+        config: config.into(),
+        method: config.split(' ').next().unwrap_or("").into(),
+        size: 32,
+        frames: 5,
+        gi_median_ms: ms / 2.0,
+        gi_min_ms: ms / 3.0,
+        gi_max_ms: ms,
+        frame_median_ms: ms,
+        frame_min_ms: ms,
+        frame_max_ms: ms,
+        accumulate_frames: 1,
+        image_ms: ms,
+        transient_bytes: 1 << 20,
+        rel_mse,
+        flip: 0.1,
+        psnr_db: 30.0,
+        ssim: 0.9,
+        device: "a, \"quoted\" device".into(),
+        gi_toml: format!(
+            "{{ method = \"hemisphere\", rays = {} }}",
+            (ms as u32).max(1)
+        ),
+        // One measured, one not settled, so the round trip sees numbers and empties.
+        flicker: Some(0.0125),
+        ghost: Some(0.5),
+        lag_frames: None,
+    }
+}
+
 #[cfg(test)]
 mod tests {
+    use super::sample_row as row;
     use super::*;
     use crate::gi::GiMethod;
-
-    /// A row whose resolved `[gi]` table is the hemisphere method with `ms` rays.
-    fn row(scene: &str, config: &str, ms: f64, rel_mse: f64) -> SweepRow {
-        SweepRow {
-            scene: scene.into(),
-            config: config.into(),
-            method: config.split(' ').next().unwrap_or("").into(),
-            size: 32,
-            frames: 5,
-            gi_median_ms: ms / 2.0,
-            gi_min_ms: ms / 3.0,
-            gi_max_ms: ms,
-            frame_median_ms: ms,
-            frame_min_ms: ms,
-            frame_max_ms: ms,
-            accumulate_frames: 1,
-            image_ms: ms,
-            transient_bytes: 1 << 20,
-            rel_mse,
-            flip: 0.1,
-            psnr_db: 30.0,
-            ssim: 0.9,
-            device: "a, \"quoted\" device".into(),
-            gi_toml: format!(
-                "{{ method = \"hemisphere\", rays = {} }}",
-                (ms as u32).max(1)
-            ),
-            // One measured, one not settled, so the round trip sees numbers and empties.
-            flicker: Some(0.0125),
-            ghost: Some(0.5),
-            lag_frames: None,
-        }
-    }
 
     #[test]
     fn rows_survive_the_csv_round_trip() {
