@@ -9,12 +9,20 @@ vec3 brdf_lambert(vec3 albedo) {
     return albedo / PI;
 }
 
+// cos^n(alpha) of the Phong lobe, 0 where alpha >= 90 degrees. Not pow(max(c, 0), n): GLSL
+// leaves pow(0, n) undefined for n <= 0, and NVIDIA's exp2(n log2 c) returns NaN for pow(0, 0).
+// A material without a specular part has n = 0 and rho_s = 0, and 0 * NaN is NaN: on an H200
+// (driver 580) every pixel of such a surface that faced away from the mirror direction was NaN
+// in any scene that also had a Phong material (lavapipe returns 1 there).
+float phong_cos_power(float c, float shininess) {
+    return c > 0.0 ? pow(c, shininess) : 0.0;
+}
+
 // Normalized Phong (Lafortune & Willems 1994): f = rho_s (n + 2) / (2 pi) cos^n(alpha), alpha the
 // angle between the mirror direction of wi and wo.
 vec3 brdf_phong(vec3 specular, float shininess, vec3 n, vec3 wi, vec3 wo) {
     vec3 r = reflect(-wi, n);
-    float c = max(dot(r, wo), 0.0);
-    return specular * (shininess + 2.0) / (2.0 * PI) * pow(c, shininess);
+    return specular * (shininess + 2.0) / (2.0 * PI) * phong_cos_power(dot(r, wo), shininess);
 }
 
 // GGX metal/roughness (docs/ARCHITECTURE.md, units; the Rust twin is scene::ggx_brdf), from

@@ -185,8 +185,9 @@ vec3 light_map_radiance(vec3 hit, vec3 dir) {
                 radiance = radiance * ggx_diffuse_weight(dot(nn, -dir))
                     + brdf_ggx_specular(f0, max(g.x, 0.01), nn, wl, -dir) * e;
             } else {
-                float ca = max(dot(reflect(-wl, n), -dir), 0.0);
-                radiance += m.specular.rgb * (m.specular.a + 2.0) / (2.0 * PI) * pow(ca, m.specular.a) * e;
+                float ca = dot(reflect(-wl, n), -dir);
+                radiance += m.specular.rgb * (m.specular.a + 2.0) / (2.0 * PI)
+                    * phong_cos_power(ca, m.specular.a) * e;
             }
         }
         sum += radiance;

@@ -6,7 +6,9 @@ use glam::Vec3;
 
 /// The scene rows' scenes: Cornell, bunny-in-box and [`dense_scene`].
 pub fn bench_scenes() -> Result<Vec<(String, Scene)>, BenchError> {
-    let scenes_dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes");
+    // From the current directory, else the project's root (the binary may run elsewhere,
+    // e.g. a release build carried to another machine).
+    let scenes_dir = crate::assets::find(std::path::Path::new("assets/scenes"));
     Ok(vec![
         ("cornell".into(), crate::scene::load_scene_arg(None)?),
         (
