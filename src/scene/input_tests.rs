@@ -85,24 +85,55 @@ fn empty_and_non_utf8_obj_files_are_errors_naming_the_file() {
 }
 
 #[test]
-fn mtl_nan_or_negative_colors_and_exponents_fall_back_to_valid_values() {
+fn mtl_out_of_range_numbers_clamp() {
+    // MTL files come from other tools: out-of-range reflectances, dissolves and exponents
+    // load clamped (with a warning naming the file, line and key), unlike a scene file's.
     let dir = Dir::new("mtl");
     dir.write(
         "m.mtl",
-        "newmtl a\nKd -1 0.5 0.25\nKs nan 0 0\nNs -5\n\
-         newmtl b\nKd nan 0.5 0.5\nNs nan\n",
+        "newmtl a\nKd -1 0.5 0.25\nKs 2 0 0\nNs -5\nd 1.5\n\
+         newmtl b\nKd 1.02 0.5 0.5\nNs 30\nd -0.5\n",
     );
     let obj = "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\n\
                usemtl a\nf 1 2 3\nusemtl b\nf 2 4 3\n";
     let s = dir.load_obj(obj).expect("loads");
     let m = |i: usize| &s.materials[s.objects[0].materials[i]];
-    // Negative components clamp to 0; a color with NaN falls back to the default (0.5 gray
-    // albedo, black specular); negative or NaN exponents to 0.
     assert_eq!(m(0).albedo, glam::Vec3::new(0.0, 0.5, 0.25));
-    assert_eq!(m(0).specular, glam::Vec3::ZERO);
+    assert_eq!(m(0).specular, glam::Vec3::new(1.0, 0.0, 0.0));
     assert_eq!(m(0).shininess, 0.0);
-    assert_eq!(m(1).albedo, glam::Vec3::splat(0.5));
-    assert_eq!(m(1).shininess, 0.0);
+    assert_eq!(m(0).opacity, 1.0);
+    assert_eq!(m(1).albedo, glam::Vec3::new(1.0, 0.5, 0.5));
+    assert_eq!(m(1).shininess, 30.0);
+    assert_eq!(m(1).opacity, 0.0);
+}
+
+#[test]
+fn mtl_non_finite_numbers_are_errors_naming_file_line_and_key() {
+    let obj = "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl a\nf 1 2 3\n";
+    for (line, key) in [
+        ("Kd -1 2 nan", "Kd"),
+        ("Ks nan 0 0", "Ks"),
+        ("Ke 0 inf 0", "Ke"),
+        ("Ka 0 0 -inf", "Ka"),
+        ("Tf nan 1 1", "Tf"),
+        ("Ns nan", "Ns"),
+        ("d inf", "d"),
+        ("Tr nan", "Tr"),
+        ("Ni nan", "Ni"),
+        ("Pr nan", "Pr"),
+    ] {
+        let dir = Dir::new("mtl-nan");
+        dir.write("m.mtl", &format!("newmtl a\nKd 0.5 0.5 0.5\n{line}\n"));
+        let e = dir.load_obj(obj).expect_err(line);
+        let msg = e.to_string();
+        assert!(
+            matches!(e, SceneError::MalformedObj { kind: "MTL", .. }),
+            "{line}: {msg}"
+        );
+        for part in ["m.mtl", "line 3", key] {
+            assert!(msg.contains(part), "{line}: `{part}` missing from: {msg}");
+        }
+    }
 }
 
 /// Loads the textured triangle whose `map_Kd` is `tex.png` with `png`'s bytes.

@@ -131,7 +131,7 @@ impl AssetStore {
                 let mtl_path = dir.join(mtl);
                 match std::fs::read_to_string(&mtl_path) {
                     Ok(mtl_text) => {
-                        if let Err((line, message)) = prescan_mtl(&mtl_text) {
+                        if let Err((line, message)) = prescan_mtl(&mtl_text, &mtl_path) {
                             mtl_problems.borrow_mut().push((
                                 mtl_path.clone(),
                                 false,
@@ -432,8 +432,9 @@ impl AssetStore {
             pbr_maps,
             emission: rgb(m.emissive, ke_default),
             name: m.name.clone(),
-            albedo: rgb(m.diffuse, BuiltinMaterial::Default.albedo()),
-            specular: rgb(m.specular, Vec3::ZERO),
+            // prescan_mtl warned about reflectances outside [0, 1].
+            albedo: rgb(m.diffuse, BuiltinMaterial::Default.albedo()).min(Vec3::ONE),
+            specular: rgb(m.specular, Vec3::ZERO).min(Vec3::ONE),
             shininess: finite_or(m.shininess, 0.0).max(0.0),
             albedo_texture,
             bump_texture,
@@ -594,24 +595,58 @@ fn guarded<T>(f: impl FnOnce() -> T) -> Option<T> {
     std::panic::catch_unwind(std::panic::AssertUnwindSafe(f)).ok()
 }
 
-/// Checks the MTL statements tobj would panic on or report without a line: colors need three
-/// numbers, emission (`Ke`) must not be negative, `Pr` and `Pm` need one number in [0, 1].
-/// Returns (line, message).
-fn prescan_mtl(text: &str) -> Result<(), (usize, String)> {
+/// Checks the MTL statements tobj would panic on or report without a line, and the numbers
+/// voxgi reads (`mtl` names the file in warnings). Returns (line, message) of the first error.
+///
+/// - `Ka`, `Kd`, `Ks`, `Ke` need three numbers, `Ns`, `d`, `Tr`, `Ni`, `Pr`, `Pm` one; a
+///   non-finite number (`nan`, `inf`) there or in `Tf` is an error naming the line and the key.
+/// - Out-of-range numbers that an exporter plausibly wrote (`Kd 1.02`, `Ks 2`, `d 1.5`,
+///   `Ns -1`) are clamped with a warning naming the file, line and key: MTL files come from
+///   other tools, and the rest of such a file is usually fine. (A scene file is written for
+///   voxgi, so there the same values are errors.) `Kd`, `Ks`, `d`, `Tr` clamp to [0, 1],
+///   `Ns` to >= 0.
+/// - Emission (`Ke`) must not be negative, and `Pr` and `Pm` must lie in [0, 1]: errors, as
+///   these keys are new enough that a wrong value is a mistake in the file at hand.
+fn prescan_mtl(text: &str, mtl: &Path) -> Result<(), (usize, String)> {
     for (i, raw) in text.lines().enumerate() {
         let l = raw.split('#').next().unwrap_or("");
         let mut toks = l.split_whitespace();
         let Some(kw) = toks.next() else { continue };
-        if matches!(kw, "Ka" | "Kd" | "Ks" | "Ke") {
-            let nums: Vec<&str> = toks.collect();
-            if nums.len() < 3 || nums.iter().take(3).any(|t| t.parse::<f32>().is_err()) {
+        let nums: Vec<&str> = toks.collect();
+        let parsed: Vec<Option<f32>> = nums.iter().map(|t| t.parse::<f32>().ok()).collect();
+        let non_finite = |n: usize| parsed.iter().take(n).flatten().any(|v| !v.is_finite());
+        let warn_clamp = |range: &str| {
+            log::warn!(
+                "{}:{}: `{}`: {kw} outside {range}; clamped to {range}",
+                mtl.display(),
+                i + 1,
+                raw.trim()
+            )
+        };
+        if kw == "Tf" && non_finite(3) {
+            // Transmission filter: not used, but never a NaN.
+            return Err((
+                i + 1,
+                format!("`{}`: Tf has a non-finite number", raw.trim()),
+            ));
+        } else if matches!(kw, "Ka" | "Kd" | "Ks" | "Ke") {
+            if nums.len() < 3 || parsed.iter().take(3).any(Option::is_none) {
                 return Err((
                     i + 1,
                     format!("`{}`: expected `{kw} r g b` with three numbers", raw.trim()),
                 ));
             }
-            let emission_ok = |t: &&str| t.parse::<f32>().is_ok_and(|v| v.is_finite() && v >= 0.0);
-            if kw == "Ke" && !nums.iter().take(3).all(emission_ok) {
+            if non_finite(3) {
+                return Err((
+                    i + 1,
+                    format!(
+                        "`{}`: {kw} has a non-finite number; expected three finite numbers",
+                        raw.trim()
+                    ),
+                ));
+            }
+            let v = parsed.iter().take(3).flatten();
+            if kw == "Ke" && v.clone().any(|&v| v < 0.0) {
                 return Err((
                     i + 1,
                     format!(
@@ -621,10 +656,15 @@ fn prescan_mtl(text: &str) -> Result<(), (usize, String)> {
                     ),
                 ));
             }
-        } else if matches!(kw, "Pr" | "Pm") {
-            let nums: Vec<&str> = toks.collect();
-            let v = nums.first().and_then(|t| t.parse::<f32>().ok());
-            if nums.len() != 1 || !v.is_some_and(|v| (0.0..=1.0).contains(&v)) {
+            if matches!(kw, "Kd" | "Ks") && v.clone().any(|&v| !(0.0..=1.0).contains(&v)) {
+                warn_clamp("[0, 1]");
+            }
+        } else if matches!(kw, "Ns" | "d" | "Tr" | "Ni" | "Pr" | "Pm") {
+            let v = match parsed.as_slice() {
+                [Some(v)] if v.is_finite() => Some(*v),
+                _ => None,
+            };
+            if matches!(kw, "Pr" | "Pm") && !v.is_some_and(|v| (0.0..=1.0).contains(&v)) {
                 let what = if kw == "Pr" { "roughness" } else { "metalness" };
                 return Err((
                     i + 1,
@@ -633,6 +673,18 @@ fn prescan_mtl(text: &str) -> Result<(), (usize, String)> {
                         raw.trim()
                     ),
                 ));
+            }
+            let Some(v) = v else {
+                return Err((
+                    i + 1,
+                    format!("`{}`: expected `{kw}` and one finite number", raw.trim()),
+                ));
+            };
+            if matches!(kw, "d" | "Tr") && !(0.0..=1.0).contains(&v) {
+                warn_clamp("[0, 1]");
+            }
+            if kw == "Ns" && v < 0.0 {
+                warn_clamp("[0, ∞)");
             }
         }
     }
