@@ -557,6 +557,9 @@ pub fn phong_to_beckmann_alpha(shininess: f32) -> f32 {
     (2.0 / (4.0 * shininess.max(0.0) + 2.0)).sqrt()
 }
 
+/// Writes `material` as the BSDF `id`. A material of opacity below 1 (MTL `d`) is a `mask`
+/// around it: Mitsuba's mask passes a ray straight through with probability 1 − opacity, the
+/// expectation of voxgi's hashed coverage in the G-buffer, the shadow maps and the voxels.
 fn write_material(
     xml: &mut String,
     scene: &Scene,
@@ -566,12 +569,40 @@ fn write_material(
     report: &mut ExportReport,
     warned_phong: &mut bool,
 ) -> Result<(), MitsubaExportError> {
-    if !material.is_opaque() {
-        report.warnings.push(format!(
-            "material `{}` has opacity {}; Mitsuba gets it fully opaque",
-            material.name, material.opacity
-        ));
+    if material.is_opaque() {
+        return write_opaque_material(xml, scene, material, id, out_dir, report, warned_phong);
     }
+    let mut inner = String::new();
+    write_opaque_material(
+        &mut inner,
+        scene,
+        material,
+        &format!("{id}_opaque"),
+        out_dir,
+        report,
+        warned_phong,
+    )?;
+    let _ = writeln!(
+        xml,
+        "    <bsdf type=\"mask\" id=\"{id}\">\n        <float name=\"opacity\" value=\"{}\"/>",
+        material.opacity
+    );
+    for line in inner.trim_end().lines() {
+        let _ = writeln!(xml, "    {line}");
+    }
+    let _ = writeln!(xml, "    </bsdf>\n");
+    Ok(())
+}
+
+fn write_opaque_material(
+    xml: &mut String,
+    scene: &Scene,
+    material: &Material,
+    id: &str,
+    out_dir: &Path,
+    report: &mut ExportReport,
+    warned_phong: &mut bool,
+) -> Result<(), MitsubaExportError> {
     if material.bump_texture.is_some() {
         report.warnings.push(format!(
             "material `{}` has a bump or normal map, which is not exported",
