@@ -77,45 +77,36 @@ fn reference_floor(name: &str) -> f64 {
 /// Opacity 0: the pane sets no voxel and no attribute (the bits are those of the box without
 /// it, tests/voxelize.rs), and it is invisible in the G-buffer, so the floor's light is that of
 /// the box without the pane up to the path tracer's noise, which is the same sequence in both
-/// renders. Before stochastic coverage the ratio was 0.000. The bound is the brief's 5%.
+/// renders. Before stochastic coverage the ratio was 0.032 (the light through the gaps along
+/// the walls). The bound is the brief's 5%.
+///
+/// Opacity 0.5 against Mitsuba's `mask` pane: the bound is the brief's 5% on the ratio
+/// pane / no pane, which divides out the path tracer's own error on this lighting (+2.4%
+/// without the pane). Mitsuba's references hold 1024 spp over ~1,000 floor pixels (noise far
+/// below 1%). Measured on lavapipe: ratio 0.579 against Mitsuba's 0.591 (−2.0%;
+/// docs/measurements/transparency.md). One test, so the box without the pane renders once.
 #[test]
-fn a_clear_pane_blocks_no_gi_ray() {
+fn panes_of_opacity_0_and_half_pass_what_mitsubas_mask_passes() {
     let ctx = common::context();
     let without = render_floor(&ctx, "cornell_ceiling_spot.toml");
     let clear = render_floor(&ctx, "cornell_pane_clear.toml");
-    common::assert_no_validation_messages(&ctx);
-    println!(
-        "floor: no pane {without:.5}, clear pane {clear:.5}, ratio {:.4}",
-        clear / without
-    );
-    assert!(without > 0.0, "the floor gets indirect light");
-    assert!(
-        (clear / without - 1.0).abs() < 0.05,
-        "ratio {}",
-        clear / without
-    );
-}
-
-/// Opacity 0.5 against Mitsuba's `mask` pane, and the box without the pane against Mitsuba's
-/// same box (the path tracer's own error on this lighting, which the pane's ratio then does
-/// not carry). Measured on lavapipe: see docs/measurements/transparency.md. Bounds: the brief's
-/// 5% on the pane's light relative to Mitsuba, on the ratio pane / no pane, which divides out
-/// the path tracer's error without the pane; Mitsuba's references hold 1024 spp over ~1,000
-/// floor pixels (noise far below 1%).
-#[test]
-fn a_half_pane_passes_the_light_mitsubas_mask_passes() {
-    let ctx = common::context();
-    let without = render_floor(&ctx, "cornell_ceiling_spot.toml");
     let half = render_floor(&ctx, "cornell_pane.toml");
     common::assert_no_validation_messages(&ctx);
     let ref_without = reference_floor("cornell_ceiling_spot_gi.exr");
     let ref_half = reference_floor("cornell_pane_gi.exr");
     let (ratio, ref_ratio) = (half / without, ref_half / ref_without);
     println!(
-        "floor: voxgi no pane {without:.5}, half pane {half:.5} (ratio {ratio:.4}); \
-         Mitsuba {ref_without:.5}, {ref_half:.5} (ratio {ref_ratio:.4}); \
-         half pane / Mitsuba {:.4}",
+        "floor: voxgi no pane {without:.5}, clear pane {clear:.5} (ratio {:.4}), half pane \
+         {half:.5} (ratio {ratio:.4}); Mitsuba {ref_without:.5}, {ref_half:.5} (ratio \
+         {ref_ratio:.4}); half pane / Mitsuba {:.4}",
+        clear / without,
         half / ref_half
+    );
+    assert!(without > 0.0, "the floor gets indirect light");
+    assert!(
+        (clear / without - 1.0).abs() < 0.05,
+        "clear pane ratio {}",
+        clear / without
     );
     assert!(
         (ratio / ref_ratio - 1.0).abs() < 0.05,

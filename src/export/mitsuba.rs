@@ -1213,6 +1213,28 @@ mod tests {
     }
 
     #[test]
+    fn a_material_below_full_opacity_is_a_mask_around_its_bsdf() {
+        let text = format!(
+            "{CAMERA}[[lights]]\nkind = \"directional\"\ndirection = [0, -1, 0]\n\
+             irradiance_w_m2 = [2, 2, 2]\n[[objects]]\nbuiltin = \"quad\"\n\
+             material = {{ albedo = [0.5, 0.5, 0.5], opacity = 0.25 }}\n\
+             [[objects]]\nbuiltin = \"cube\"\nmaterial = {{ albedo = [0.5, 0.5, 0.5] }}\n"
+        );
+        let scene = Scene::from_toml_str(&text, Path::new("<test>"), Path::new(".")).unwrap();
+        let dir = TempDir::new("mask");
+        let report = export_mitsuba(&scene, 0.0, 32, 32, &dir.0).unwrap();
+        let xml = std::fs::read_to_string(&report.xml_path).unwrap();
+        // One mask (the quad's), holding the opacity and the twosided diffuse BSDF.
+        assert_eq!(xml.matches("<bsdf type=\"mask\"").count(), 1, "{xml}");
+        let mask = &xml[xml.find("<bsdf type=\"mask\"").unwrap()..];
+        let opacity = numbers(mask, "<float name=\"opacity\"", "value");
+        assert!(close(&opacity, &[0.25]), "{opacity:?}");
+        let inner = mask.find("<bsdf type=\"twosided\"").unwrap();
+        assert!(inner < mask.find("</bsdf>\n\n").unwrap(), "{mask}");
+        assert!(report.warnings.iter().all(|w| !w.contains("opaque")));
+    }
+
+    #[test]
     fn phong_material_is_approximated_with_a_warning() {
         let text = format!(
             "{CAMERA}[[lights]]\nkind = \"directional\"\ndirection = [0, -1, 0]\n\
