@@ -14,6 +14,7 @@ layout(constant_id = 0) const bool HAS_MAPS = false;
 
 struct Triangle {
     vec4 v[3];   // world-space vertices; w of v[0..2] = the material's albedo r, g, b
+    vec4 coverage;   // read by voxelize_attributes.comp only
 };
 layout(set = 0, binding = 0, std430) readonly buffer Triangles { Triangle tris[]; };
 layout(set = 0, binding = 1, r32ui) uniform uimage3D owner_volume;

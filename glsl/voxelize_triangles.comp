@@ -17,7 +17,9 @@
 layout(local_size_x_id = 0) in;
 
 struct Triangle {
-    vec4 v[3];   // world-space vertices, w unused
+    // World-space vertices; v[0].w = 1 - opacity, v[1].w = the object's coverage seed
+    // (voxel_coverage.glsl), v[2].w unused.
+    vec4 v[3];
 };
 layout(set = 0, binding = 0, std430) readonly buffer Triangles { Triangle tris[]; };
 layout(set = 0, binding = 1, std430) buffer Columns { uint words[]; };
@@ -41,6 +43,7 @@ layout(push_constant) uniform Push {
         bits |= 1u << voxel_bit(k);                                     \
     }
 #define VOXEL_COLUMN_END(x, y) if (bits != 0u) atomicOr(words[word], bits);
+#define VOXEL_COVERAGE(t) vec2(t.v[0].w, t.v[1].w)
 #include "voxelize_core.glsl"
 
 void main() {

@@ -9,11 +9,12 @@ use std::path::Path;
 use voxgi::graph::run_once;
 use voxgi::graph::RenderGraph;
 use voxgi::vk::Context;
+use voxgi::voxel::coverage::{scene_coverage, Coverage};
 use voxgi::voxel::gpu::{
     add_store_and_mip_passes, add_voxelize_passes, column_bytes, scene_triangles, voxelize_static,
     ColumnBase, GpuVoxelGrid, TriangleBuffer, VoxelPipelines, VOXELIZE_GROUP_SIZE,
 };
-use voxgi::voxel::voxelize::voxelize_triangles;
+use voxgi::voxel::voxelize::{voxelize_scene, voxelize_triangles};
 use voxgi::voxel::{Axis, BitGrid, BitHierarchy, GridDesc, VoxelGrid};
 
 /// Every level of the GPU hierarchy, cropped to the CPU sizes. Panics if the power-of-two
@@ -35,10 +36,30 @@ fn gpu_levels_with(
     static_tris: &[[Vec3; 3]],
     dynamic_tris: &[[Vec3; 3]],
 ) -> Vec<BitGrid> {
+    gpu_levels_covered(
+        ctx,
+        group_size,
+        grid,
+        (static_tris, &[]),
+        (dynamic_tris, &[]),
+    )
+}
+
+/// [`gpu_levels_with`] with each set's triangle coverage (opacity below 1).
+fn gpu_levels_covered(
+    ctx: &Context,
+    group_size: u32,
+    grid: &VoxelGrid,
+    (static_tris, static_coverage): (&[[Vec3; 3]], &[Coverage]),
+    (dynamic_tris, dynamic_coverage): (&[[Vec3; 3]], &[Coverage]),
+) -> Vec<BitGrid> {
     let pipes = VoxelPipelines::with_group_size(ctx, group_size).expect("voxel pipelines");
     let voxels = GpuVoxelGrid::new(ctx, grid).expect("voxel image");
-    let st = TriangleBuffer::upload(ctx, "static triangles", static_tris).expect("upload");
-    let dy = TriangleBuffer::upload(ctx, "dynamic triangles", dynamic_tris).expect("upload");
+    let st = TriangleBuffer::upload_covered(ctx, "static triangles", static_tris, static_coverage)
+        .expect("upload");
+    let dy =
+        TriangleBuffer::upload_covered(ctx, "dynamic triangles", dynamic_tris, dynamic_coverage)
+            .expect("upload");
     // Static geometry voxelized once; the frame copies it and inserts the dynamic triangles.
     let static_columns = voxelize_static(ctx, &pipes, grid, &st).expect("static voxelization");
 
@@ -148,6 +169,59 @@ fn check_scene_with(name: &str, group_size: u32, layers: u32, max_res_xy: u32) {
         &grid,
         &tris,
         split / 2,
+    );
+}
+
+/// Panes of opacity 0, 0.5 (one pane, and three overlapping) and none: the GPU voxelizer
+/// takes the same coverage decisions as the CPU reference (`voxelize_scene` reads the
+/// materials' opacity itself, the GPU gets `scene_coverage` with the triangles), a pane of
+/// opacity 0 sets no voxel, and one of opacity 0.5 sets a fraction of its voxels.
+#[test]
+fn transparent_panes_gpu_equals_cpu() {
+    let mut counts = Vec::new();
+    for name in [
+        "assets/scenes/cornell_ceiling_spot.toml",
+        "assets/scenes/cornell_pane_clear.toml",
+        "assets/scenes/cornell_pane.toml",
+        "assets/scenes/transparency.toml",
+    ] {
+        let s = scene(name);
+        let aabb = s.aabb_at(0.0);
+        let desc = GridDesc {
+            layers: 1,
+            max_res_xy: 128,
+            ..Default::default()
+        };
+        let grid = VoxelGrid::around(aabb.min, aabb.max, &desc).expect("grid");
+        let mut cpu = BitGrid::for_grid(&grid);
+        voxelize_scene(&grid, &mut cpu, &s, 0.0).expect("cpu voxelization");
+        let tris = scene_triangles(&s, 0.0, false);
+        let coverage = scene_coverage(&s, 0.0, false);
+        assert_eq!(tris.len(), coverage.len());
+        // The last object (a pane) as the dynamic set: both upload paths carry coverage.
+        let split = tris.len() - 2;
+        let ctx = common::context();
+        let gpu = gpu_levels_covered(
+            &ctx,
+            VOXELIZE_GROUP_SIZE,
+            &grid,
+            (&tris[..split], &coverage[..split]),
+            (&tris[split..], &coverage[split..]),
+        );
+        let (n, first) = diff(&gpu[0], &cpu, 8);
+        assert_eq!(n, 0, "{name}: {n} voxels differ, first at {first:?}");
+        common::assert_no_validation_messages(&ctx);
+        counts.push(cpu.count_ones());
+    }
+    // The pane is 0.5 m square in a grid of 0.5488 / 128 m voxels (the box's height is its
+    // shortest side, the depth axis): about (0.5 / 0.0043)² = 13,500 voxels when opaque.
+    let (none, clear, half) = (counts[0], counts[1], counts[2]);
+    assert_eq!(clear, none, "a pane of opacity 0 sets no voxel");
+    let p = 1.0 - f64::from(Coverage::new("pane", 0.5).transparency);
+    let pane = (half - none) as f64;
+    assert!(
+        pane > 0.8 * p * 13_000.0 && pane < 1.2 * p * 14_000.0,
+        "{pane} pane voxels, p = {p}"
     );
 }
 

@@ -1,8 +1,10 @@
 // The exact conservative triangle voxelizer shared by `voxelize_triangles.comp` (bits) and
 // `voxelize_attributes.comp` (albedo and normal volumes), so both set exactly the same voxels.
-// The including shader declares `tris` (struct Triangle { vec4 v[3]; }), the push constants
-// `pc` of voxelize_triangles.comp, and the hooks VOXEL_COLUMN_BEGIN(x, y), VOXEL_HIT(x, y, k)
-// and VOXEL_COLUMN_END(x, y); it calls voxelize_triangle_core() from main.
+// The including shader declares `tris` (struct Triangle with vec4 v[3]), the push constants
+// `pc` of voxelize_triangles.comp, the hooks VOXEL_COLUMN_BEGIN(x, y), VOXEL_HIT(x, y, k) and
+// VOXEL_COLUMN_END(x, y), and VOXEL_COVERAGE(t): the triangle's (1 - opacity, object seed)
+// as a vec2 (voxel_coverage.glsl); it calls voxelize_triangle_core() from main. A touched
+// voxel is a hit where the coverage hash sets it (always for opaque triangles).
 //
 // Exactness: the f32 operations are those of the reference in the same order. Every value
 // that mixes products and sums is `precise`, so no fused multiply-add is contracted (Vulkan
@@ -10,6 +12,8 @@
 // range, widened by a voxel, and never decide a bit).
 #ifndef VOXELIZE_CORE_GLSL
 #define VOXELIZE_CORE_GLSL
+
+#include "voxel_coverage.glsl"
 
 // f32 bit pattern of DEGENERATE_REL = 1e-9 in voxelize.rs (a literal could round twice).
 #define DEGENERATE_REL uintBitsToFloat(0x3089705fu)
@@ -96,6 +100,8 @@ void voxelize_triangle_core() {
     vec3 a = to_voxel(t.v[0].xyz);
     vec3 b = to_voxel(t.v[1].xyz);
     vec3 c = to_voxel(t.v[2].xyz);
+    vec2 coverage = VOXEL_COVERAGE(t);
+    uint seed = uint(coverage.y);
     vec3 dims_f = vec3(pc.dims.xyz);
     vec3 lo = min(min(a, b), c);
     vec3 hi = max(max(a, b), c);
@@ -137,7 +143,8 @@ void voxelize_triangle_core() {
         VOXEL_COLUMN_BEGIN(x, y)
         for (uint k = k0; k <= k1; ++k) {
             vec3 center = vec3(float(x), float(y), float(k)) + HALF;
-            if (tri_box_overlap(center, a, b, c)) {
+            if (tri_box_overlap(center, a, b, c)
+                && coverage_covers(uvec3(x, y, k), coverage.x, seed)) {
                 VOXEL_HIT(x, y, k)
             }
         }

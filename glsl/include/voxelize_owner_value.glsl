@@ -23,6 +23,7 @@ layout(set = 0, binding = 1, r32ui) uniform readonly uimage3D owner_volume;
 layout(set = 0, binding = 2, rgba16f) uniform writeonly image3D value_volume;
 struct Triangle {
     vec4 v[3];   // world-space vertices (w: albedo, unused here)
+    vec4 coverage;   // read by voxelize_attributes.comp only
 };
 // Read only with HAS_MAPS (the bindings below are bound to the values otherwise).
 layout(set = 0, binding = 3, std430) readonly buffer Triangles { Triangle tris[]; };

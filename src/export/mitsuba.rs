@@ -557,6 +557,9 @@ pub fn phong_to_beckmann_alpha(shininess: f32) -> f32 {
     (2.0 / (4.0 * shininess.max(0.0) + 2.0)).sqrt()
 }
 
+/// Writes `material` as the BSDF `id`. A material of opacity below 1 (MTL `d`) is a `mask`
+/// around it: Mitsuba's mask passes a ray straight through with probability 1 − opacity, the
+/// expectation of voxgi's hashed coverage in the G-buffer, the shadow maps and the voxels.
 fn write_material(
     xml: &mut String,
     scene: &Scene,
@@ -566,12 +569,40 @@ fn write_material(
     report: &mut ExportReport,
     warned_phong: &mut bool,
 ) -> Result<(), MitsubaExportError> {
-    if !material.is_opaque() {
-        report.warnings.push(format!(
-            "material `{}` has opacity {}; Mitsuba gets it fully opaque",
-            material.name, material.opacity
-        ));
+    if material.is_opaque() {
+        return write_opaque_material(xml, scene, material, id, out_dir, report, warned_phong);
     }
+    let mut inner = String::new();
+    write_opaque_material(
+        &mut inner,
+        scene,
+        material,
+        &format!("{id}_opaque"),
+        out_dir,
+        report,
+        warned_phong,
+    )?;
+    let _ = writeln!(
+        xml,
+        "    <bsdf type=\"mask\" id=\"{id}\">\n        <float name=\"opacity\" value=\"{}\"/>",
+        material.opacity
+    );
+    for line in inner.trim_end().lines() {
+        let _ = writeln!(xml, "    {line}");
+    }
+    let _ = writeln!(xml, "    </bsdf>\n");
+    Ok(())
+}
+
+fn write_opaque_material(
+    xml: &mut String,
+    scene: &Scene,
+    material: &Material,
+    id: &str,
+    out_dir: &Path,
+    report: &mut ExportReport,
+    warned_phong: &mut bool,
+) -> Result<(), MitsubaExportError> {
     if material.bump_texture.is_some() {
         report.warnings.push(format!(
             "material `{}` has a bump or normal map, which is not exported",
@@ -1179,6 +1210,28 @@ mod tests {
             }
         }
         assert!(!xml.to_lowercase().contains("nan"), "{xml}");
+    }
+
+    #[test]
+    fn a_material_below_full_opacity_is_a_mask_around_its_bsdf() {
+        let text = format!(
+            "{CAMERA}[[lights]]\nkind = \"directional\"\ndirection = [0, -1, 0]\n\
+             irradiance_w_m2 = [2, 2, 2]\n[[objects]]\nbuiltin = \"quad\"\n\
+             material = {{ albedo = [0.5, 0.5, 0.5], opacity = 0.25 }}\n\
+             [[objects]]\nbuiltin = \"cube\"\nmaterial = {{ albedo = [0.5, 0.5, 0.5] }}\n"
+        );
+        let scene = Scene::from_toml_str(&text, Path::new("<test>"), Path::new(".")).unwrap();
+        let dir = TempDir::new("mask");
+        let report = export_mitsuba(&scene, 0.0, 32, 32, &dir.0).unwrap();
+        let xml = std::fs::read_to_string(&report.xml_path).unwrap();
+        // One mask (the quad's), holding the opacity and the twosided diffuse BSDF.
+        assert_eq!(xml.matches("<bsdf type=\"mask\"").count(), 1, "{xml}");
+        let mask = &xml[xml.find("<bsdf type=\"mask\"").unwrap()..];
+        let opacity = numbers(mask, "<float name=\"opacity\"", "value");
+        assert!(close(&opacity, &[0.25]), "{opacity:?}");
+        let inner = mask.find("<bsdf type=\"twosided\"").unwrap();
+        assert!(inner < mask.find("</bsdf>\n\n").unwrap(), "{mask}");
+        assert!(report.warnings.iter().all(|w| !w.contains("opaque")));
     }
 
     #[test]

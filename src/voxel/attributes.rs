@@ -28,6 +28,7 @@
 //! voxelizer its points write all four volumes of the objects it voxelizes
 //! ([`super::gpu_atlas_volumes`]), and this writer only the others.
 
+use super::coverage::Coverage;
 use super::gpu::{voxelize_loads, voxelize_splits, GpuVoxelizePush};
 use super::maps::{owner_sample_spacing_m, GpuTriangleMaps, MapUse, VoxelMaps};
 use super::VoxelGrid;
@@ -54,8 +55,9 @@ const NO_OWNER: u32 = u32::MAX;
 const OWNER_STATE: Access = Access::StorageReadWrite(Shader::Compute);
 
 /// A triangle as `voxelize_attributes.comp` reads it: world-space vertices, the w of vertex
-/// i = the material albedo's channel i.
-type AttributeTriangle = [[f32; 4]; 3];
+/// i = the material albedo's channel i; then the coverage row `[1 − opacity, seed, 0, 0]`
+/// ([`Coverage`]), so a pane of opacity below 1 owns only the voxels the bits keep.
+type AttributeTriangle = [[f32; 4]; 4];
 
 /// Which value volumes exist besides albedo and normal, and whether they sample the PBR maps
 /// per texel; what both voxelizers' value passes are built for.
@@ -766,7 +768,7 @@ fn attribute_splits(grid: &VoxelGrid, tris: &[AttributeTriangle]) -> u32 {
     let loads = tris
         .iter()
         .map(|t| {
-            let [a, b, c] = t.map(|v| Vec3::new(v[0], v[1], v[2]));
+            let [a, b, c] = [0, 1, 2].map(|k| Vec3::new(t[k][0], t[k][1], t[k][2]));
             voxelize_loads(grid, a.min(b).min(c), a.max(b).max(c))
         })
         .max()
@@ -803,6 +805,8 @@ fn attribute_triangles(scene: &Scene, t_s: f32, maps: MapUse, spacing_m: f32) ->
         let m = object.transform_at(t_s);
         for (si, sub) in mesh.submeshes.iter().enumerate() {
             let material = object.materials.get(si).copied().unwrap_or(sub.material);
+            let opacity = scene.materials.get(material).map_or(1.0, |m| m.opacity);
+            let [transparency, seed] = Coverage::new(&object.name, opacity).gpu_w();
             let (albedo, emission, lobe, map_ids) = scene.materials.get(material).map_or(
                 (Vec3::splat(0.5), Vec3::ZERO, [0.0; 4], [-1; 4]),
                 |m| {
@@ -818,7 +822,8 @@ fn attribute_triangles(scene: &Scene, t_s: f32, maps: MapUse, spacing_m: f32) ->
             let range = sub.first_index as usize..(sub.first_index + sub.index_count) as usize;
             for t in mesh.indices[range].chunks_exact(3) {
                 let p = [0, 1, 2].map(|k| m.transform_point3(mesh.positions[t[k] as usize]));
-                out.push([0, 1, 2].map(|k| [p[k].x, p[k].y, p[k].z, albedo[k]]));
+                let [v0, v1, v2] = [0, 1, 2].map(|k| [p[k].x, p[k].y, p[k].z, albedo[k]]);
+                out.push([v0, v1, v2, [transparency, seed, 0.0, 0.0]]);
                 let row = if map_ids == [-1; 4] {
                     GpuTriangleMaps::NONE
                 } else {

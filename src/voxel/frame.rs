@@ -2,6 +2,7 @@
 //! passes (`super::gpu`), the atlas voxelizer's (`super::gpu_atlas`) and, for the GI methods
 //! that read them, the atlas's attribute volumes (`super::gpu_atlas_volumes`), assembled.
 
+use super::coverage::scene_coverage;
 use super::gpu::{
     add_store_and_mip_passes, add_store_and_mip_passes_gated, add_voxelize_passes,
     add_voxelize_passes_gated, check_finite, column_bytes, scene_triangles, voxelize_static_timed,
@@ -63,7 +64,12 @@ struct DynamicVoxels {
 fn dynamic_triangles(scene: &Scene, t_s: f32) -> Result<Vec<GpuTriangle>, GpuVoxelError> {
     let tris = scene_triangles(scene, t_s, true);
     check_finite(&tris)?;
-    Ok(tris.iter().map(|&t| GpuTriangle::new(t)).collect())
+    let coverage = scene_coverage(scene, t_s, true);
+    Ok(tris
+        .iter()
+        .zip(coverage)
+        .map(|(&t, c)| GpuTriangle::covered(t, c))
+        .collect())
 }
 
 /// The most triangles the dynamic objects of `scene` have at any time (OBJ sequences change
@@ -99,15 +105,16 @@ impl VoxelFrame {
         let pipelines = VoxelPipelines::new(ctx)?;
         let voxels = GpuVoxelGrid::new(ctx, &grid)?;
         let atlas_mode = settings.voxelizer == Voxelizer::Atlas;
-        let static_tris = TriangleBuffer::upload(
-            ctx,
-            "static triangles",
-            &if atlas_mode {
-                Vec::new()
-            } else {
-                scene_triangles(scene, t_s, false)
-            },
-        )?;
+        let (tris, coverage) = if atlas_mode {
+            (Vec::new(), Vec::new())
+        } else {
+            (
+                scene_triangles(scene, t_s, false),
+                scene_coverage(scene, t_s, false),
+            )
+        };
+        let static_tris =
+            TriangleBuffer::upload_covered(ctx, "static triangles", &tris, &coverage)?;
         let mut frame = Self {
             voxels,
             pipelines,

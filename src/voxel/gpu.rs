@@ -25,6 +25,7 @@
 //! [`BitHierarchy`]: super::BitHierarchy
 
 use super::bits::mip_count;
+use super::coverage::Coverage;
 use super::{VoxelError, VoxelGrid};
 use crate::graph::{
     run_once, Access, BufferHandle, GraphError, ImageHandle, OneShotError, RenderGraph, Shader,
@@ -134,7 +135,8 @@ impl From<OneShotError> for GpuVoxelError {
 }
 
 /// One world-space triangle as the shader reads it (`struct Triangle` in
-/// `voxelize_triangles.comp`, std430: three `vec4`, w unused).
+/// `voxelize_triangles.comp`, std430: three `vec4`); `v[0].w` and `v[1].w` carry its
+/// [`Coverage`] (0 and 0: opaque).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct GpuTriangle {
@@ -146,6 +148,13 @@ impl GpuTriangle {
         Self {
             v: tri.map(|p| p.extend(0.0).to_array()),
         }
+    }
+
+    /// A triangle that sets only the voxels `coverage` keeps.
+    pub fn covered(tri: [Vec3; 3], coverage: Coverage) -> Self {
+        let mut t = Self::new(tri);
+        [t.v[0][3], t.v[1][3]] = coverage.gpu_w();
+        t
     }
 }
 
@@ -301,14 +310,31 @@ pub struct TriangleBuffer {
 }
 
 impl TriangleBuffer {
-    /// Validates (finite vertices, like the CPU reference) and uploads `triangles`.
+    /// Validates (finite vertices, like the CPU reference) and uploads `triangles`, opaque.
     pub fn upload(
         ctx: &Context,
         name: &str,
         triangles: &[[Vec3; 3]],
     ) -> Result<Self, GpuVoxelError> {
+        Self::upload_covered(ctx, name, triangles, &[])
+    }
+
+    /// [`Self::upload`] with each triangle's [`Coverage`] (`coverage[i]` for triangle i; the
+    /// triangles past its end are opaque), as [`crate::voxel::coverage::scene_coverage`] gives.
+    pub fn upload_covered(
+        ctx: &Context,
+        name: &str,
+        triangles: &[[Vec3; 3]],
+        coverage: &[Coverage],
+    ) -> Result<Self, GpuVoxelError> {
         check_finite(triangles)?;
-        let data: Vec<GpuTriangle> = triangles.iter().map(|&t| GpuTriangle::new(t)).collect();
+        let data: Vec<GpuTriangle> = triangles
+            .iter()
+            .enumerate()
+            .map(|(i, &t)| {
+                GpuTriangle::covered(t, coverage.get(i).copied().unwrap_or(Coverage::OPAQUE))
+            })
+            .collect();
         let buffer = ctx.upload_buffer(
             name,
             bytemuck::cast_slice(&data),

@@ -28,6 +28,8 @@
 //! - [`grid`]: grid placement and the world→voxel transforms.
 //! - [`bits`]: [`bits::BitGrid`] (CPU copy of the column image) and [`bits::BitHierarchy`].
 //! - [`voxelize`]: exact triangle surface voxelizer (Akenine-Möller triangle/box SAT).
+//! - [`coverage`]: surfaces of opacity below 1 as stochastic coverage (each touched voxel set
+//!   with probability α by a hash of the voxel and the object), shared by every voxelizer.
 //! - [`gpu`]: the GPU column image, triangle voxelizer and OR mip chain as render-graph passes.
 //! - [`atlas`]: automatic injective per-mesh atlases (packing, coverage rule, density).
 //! - [`gpu_atlas`]: the thesis's atlas voxelizer (`atlas_positions`, `atlas_points`,
@@ -48,6 +50,7 @@ pub mod atlas;
 pub mod atlas_view;
 pub mod attributes;
 pub mod bits;
+pub mod coverage;
 pub mod debug_view;
 pub mod frame;
 pub mod gpu;

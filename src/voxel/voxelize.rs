@@ -17,6 +17,7 @@
 
 use glam::{UVec3, Vec3};
 
+use super::coverage::{object_coverage, Coverage};
 use super::{BitGrid, VoxelError, VoxelGrid};
 
 /// Counters of one voxelization call.
@@ -74,7 +75,12 @@ pub fn tri_box_overlap(center: Vec3, half: Vec3, tri: [Vec3; 3]) -> bool {
 
 /// Voxelizes one triangle given in voxel-space coordinates; the part outside the grid is
 /// clipped. Vertices must be finite (checked by the public entry points).
-fn voxelize_voxel_space(bits: &mut BitGrid, tri: [Vec3; 3], stats: &mut VoxelizeStats) {
+fn voxelize_voxel_space(
+    bits: &mut BitGrid,
+    tri: [Vec3; 3],
+    coverage: Coverage,
+    stats: &mut VoxelizeStats,
+) {
     stats.triangles += 1;
     let dims = UVec3::new(bits.res_x(), bits.res_y(), bits.depth());
     let dims_f = dims.as_vec3();
@@ -117,7 +123,7 @@ fn voxelize_voxel_space(bits: &mut BitGrid, tri: [Vec3; 3], stats: &mut Voxelize
             for k in k0..=k1 {
                 stats.box_tests += 1;
                 let c = Vec3::new(x as f32, y as f32, k as f32) + half;
-                if tri_box_overlap(c, half, tri) {
+                if tri_box_overlap(c, half, tri) && coverage.covers(UVec3::new(x, y, k)) {
                     bits.set(x, y, k);
                 }
             }
@@ -155,7 +161,7 @@ pub fn voxelize_triangles(
     let mut stats = VoxelizeStats::default();
     for tri in triangles {
         let t = tri.map(|p| grid.world_to_voxel(p));
-        voxelize_voxel_space(bits, t, &mut stats);
+        voxelize_voxel_space(bits, t, Coverage::OPAQUE, &mut stats);
     }
     Ok(stats)
 }
@@ -167,6 +173,18 @@ pub fn voxelize_mesh(
     bits: &mut BitGrid,
     positions: &[Vec3],
     indices: &[u32],
+) -> Result<VoxelizeStats, VoxelError> {
+    voxelize_mesh_covered(grid, bits, positions, indices, &[])
+}
+
+/// [`voxelize_mesh`] with each triangle's [`Coverage`] (`coverage[t]` for triangle t; those
+/// past its end are opaque).
+pub fn voxelize_mesh_covered(
+    grid: &VoxelGrid,
+    bits: &mut BitGrid,
+    positions: &[Vec3],
+    indices: &[u32],
+    coverage: &[Coverage],
 ) -> Result<VoxelizeStats, VoxelError> {
     check_dims(grid, bits)?;
     if indices.len() % 3 != 0 {
@@ -190,14 +208,16 @@ pub fn voxelize_mesh(
         }
     }
     let mut stats = VoxelizeStats::default();
-    for tri in indices.chunks_exact(3) {
+    for (i, tri) in indices.chunks_exact(3).enumerate() {
         let t = [tri[0], tri[1], tri[2]].map(|i| grid.world_to_voxel(positions[i as usize]));
-        voxelize_voxel_space(bits, t, &mut stats);
+        let c = coverage.get(i).copied().unwrap_or(Coverage::OPAQUE);
+        voxelize_voxel_space(bits, t, c, &mut stats);
     }
     Ok(stats)
 }
 
-/// Voxelizes every object of `scene` at time `t_s` (its world-space triangles) into `bits`.
+/// Voxelizes every object of `scene` at time `t_s` (its world-space triangles, with their
+/// materials' opacity as [`Coverage`]) into `bits`.
 pub fn voxelize_scene(
     grid: &VoxelGrid,
     bits: &mut BitGrid,
@@ -215,7 +235,8 @@ pub fn voxelize_scene(
             .iter()
             .map(|p| m.transform_point3(*p))
             .collect();
-        let s = voxelize_mesh(grid, bits, &world, &mesh.indices)?;
+        let coverage = object_coverage(scene, object, object.mesh_at(t_s));
+        let s = voxelize_mesh_covered(grid, bits, &world, &mesh.indices, &coverage)?;
         total.triangles += s.triangles;
         total.degenerate += s.degenerate;
         total.outside += s.outside;
