@@ -162,3 +162,25 @@ fn a_cornell_box_far_from_the_origin_renders_like_the_one_at_it() {
         }
     }
 }
+
+/// The negative control: the same box moved 10 km in f32 without the rebase must fail the
+/// bound above, or the test above could not tell a rebased scene from an unrebased one. At
+/// 10 km an f32 position has an ulp of 2^-10 m ≈ 1 mm, 0.18% of the 0.55 m box: vertices,
+/// camera and light snap to a millimetre grid, shadow-map depths lose their precision, and
+/// the measured relMSE of direct light was 3e-2 and more (docs/measurements/far-from-origin.md),
+/// 30× the bound.
+#[test]
+fn the_box_moved_without_the_rebase_fails_the_bound() {
+    let ctx = common::context();
+    let at_origin = cornell_at(DVec3::ZERO);
+    let direct = GiSettings::default();
+    let reference = render(&ctx, &at_origin, &direct);
+    let moved = moved_in_f32(&at_origin, DVec3::new(1e4, 0.0, -1e4));
+    let m = compare(&reference, &render(&ctx, &moved, &direct), None).expect("same size");
+    assert!(
+        m.rel_mse > 10.0 * REL_MSE_BOUND,
+        "unrebased at 10 km: relMSE {:.2e} is within 10x the bound {REL_MSE_BOUND:.0e}: the \
+         far test would not notice a missing rebase",
+        m.rel_mse
+    );
+}
