@@ -792,9 +792,9 @@ mod tests {
     #[test]
     fn every_post_and_shadow_flag_maps_to_its_key_and_range() {
         let post = every_flag_maps_to_its_key_and_range::<PostTable>(|a| a.post.layer(&a.gi.set));
-        assert_eq!(post, 10, "the [post] flags");
+        assert!(post >= 10, "{post} [post] flags");
         let shadow =
             every_flag_maps_to_its_key_and_range::<ShadowSettings>(|a| a.shadow.layer(&a.gi.set));
-        assert_eq!(shadow, 7, "the [shadow] flags");
+        assert!(shadow >= 7, "{shadow} [shadow] flags");
     }
 }

@@ -714,6 +714,27 @@ pub fn paths<S: Settings>() -> Vec<&'static str> {
     S::keys().iter().map(|k| k.path).collect()
 }
 
+/// `S`'s keys as a Markdown table, for docs/settings.md (`tests/docs.rs` keeps the page's
+/// tables current): key path, flag, what it takes, default, doc line.
+pub fn doc_table<S: Settings>() -> String {
+    let cell = |s: &str| s.replace('|', "\\|");
+    let d = S::default();
+    let mut out = String::from("| key | flag | takes | default | what |\n|---|---|---|---|---|\n");
+    for k in S::keys() {
+        let flag = k
+            .flag
+            .map_or_else(|| "`--set` only".to_owned(), |f| format!("`--{}`", f.long));
+        out.push_str(&format!(
+            "| `{}` | {flag} | {} | {} | {} |\n",
+            k.path,
+            cell(&k.kind.expected()),
+            cell(&k.kind.to_text((k.get)(&d))),
+            cell(k.doc)
+        ));
+    }
+    out
+}
+
 /// `S`'s table as a scene file writes it, from `s`: every key (an unset number left out).
 pub fn table<S: Settings>(s: &S) -> toml::Table {
     S::keys()
