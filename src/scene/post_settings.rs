@@ -168,7 +168,7 @@ use range::*;
 
 /// Every `[post]` key: the scene file's key, the path `--set` and the panel use, its range,
 /// its flag and its field.
-static POST_KEYS: [Key<PostTable>; 10] = [
+static POST_KEYS: [Key<PostTable>; 11] = [
     key!("post.taa_history_weight", Kind::Number(TAA_HISTORY_WEIGHT),
         "TAA history weight α: each frame keeps α of the reprojected history",
         flag("taa-history-weight", "ALPHA"), stage taa history_weight),
@@ -235,6 +235,13 @@ static POST_KEYS: [Key<PostTable>; 10] = [
         flag("exposure", "E"),
         tonemap.exposure
     ),
+    key!(
+        "post.white",
+        Kind::Number(WHITE),
+        "Luminance (after exposure) the logarithmic and Drago operators map to display white",
+        flag("tonemap-white", "L"),
+        tonemap.white
+    ),
 ];
 
 impl Settings for PostTable {
@@ -296,6 +303,18 @@ pub mod range {
             "an adaptation fraction per frame",
             0.0,
             1.0,
+        )
+    };
+    /// The logarithmic operators divide by log(1 + white): positive (`glsl/tonemap.comp`
+    /// clamps it to 1e-6 for the same reason), at most the exposure's range.
+    pub const WHITE: Limit<f32> = Limit {
+        min_exclusive: true,
+        ..Limit::new(
+            "--tonemap-white",
+            Some("post.white"),
+            "a white luminance",
+            0.0,
+            1e6,
         )
     };
     /// Bloom strength: the share of the radiance moved into the blur.
