@@ -558,11 +558,7 @@ fn post_controls(
         true,
         "exposure",
     );
-    ui.add(
-        egui::Slider::new(&mut t.tonemap.white, 0.01..=100.0)
-            .logarithmic(true)
-            .text("white"),
-    );
+    key_slider(ui, &mut t, "post.white", (0.01, 100.0), true, "white");
     key_checkbox(ui, &mut t, "post.fxaa", "FXAA");
     key_checkbox(ui, &mut t, "post.dither", "dither");
     (*p, *tone) = (t.post, t.tonemap);

@@ -823,6 +823,29 @@ mod tests {
         check::<crate::scene::ShadowSettings>();
     }
 
+    /// A row's range names the row's flag (the `--set` path where it has none), so that a
+    /// value refused anywhere is named as the user gives it: a new row with a range copied
+    /// from another fails here.
+    #[test]
+    fn every_range_names_its_rows_flag() {
+        fn check<S: Settings>() {
+            for k in S::keys() {
+                let flag = match k.kind {
+                    Kind::Count(l)
+                    | Kind::Pair(l)
+                    | Kind::CountOr(l, ..)
+                    | Kind::OptCount(l, _) => l.flag,
+                    Kind::Number(l) | Kind::OptNumber(l, _) | Kind::Switch(l, _) => l.flag,
+                    Kind::Bool | Kind::Choice(_) => continue,
+                };
+                assert_eq!(flag, k.flag_name(), "{}", k.path);
+            }
+        }
+        check::<crate::scene::GiSettings>();
+        check::<crate::scene::PostTable>();
+        check::<crate::scene::ShadowSettings>();
+    }
+
     /// A switch turned on alone keeps the value of the layers below, unless one of them
     /// turns it off between: `--auto-exposure` over a scene's `auto_exposure = 0.3`.
     #[test]
