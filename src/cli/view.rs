@@ -57,6 +57,10 @@ pub struct ViewArgs {
     // "Post-processing" section changes it. In the viewer every frame is one TAA frame.
     #[command(flatten)]
     pub post: super::args::PostArgs,
+    // The initial shadows (over the scene's `[shadow]` table); the panel's "Shadows" section
+    // changes them.
+    #[command(flatten)]
+    pub shadow: super::args::ShadowArgs,
     // The initial indirect light; the panel changes it.
     #[command(flatten)]
     pub gi: GiArgs,
@@ -126,6 +130,11 @@ pub fn view(global: &Global, args: ViewArgs, out: &mut dyn Write) -> Result<(), 
     (settings.post, settings.tonemap) =
         args.gi
             .post(&args.post, &scene, settings.post, settings.tonemap)?;
+    // The scene's `[shadow]` table, under the flags, starts the panel's shadows ("Save scene"
+    // writes them back).
+    settings.shadow = args
+        .shadow
+        .apply(settings.shadow, &scene.shadow, &args.gi.set)?;
     settings.gi = args.gi.settings(&scene)?;
     args.gi.check_sao(&settings.gi)?;
     let name = super::sweep::scene_name(args.scene.as_deref().unwrap_or("cornell"));
