@@ -1,9 +1,10 @@
-//! The ranges of every settings value, in one place: command-line flags (`cli::args`), scene
-//! files' `[gi]` tables (`scene::desc`), the viewer's panel (`app::panel`) and
-//! `render::check_render_settings` (run by `Renderer::new` for every caller) all check
-//! against these, so a value is accepted or refused with the same range and words everywhere.
-//! Plain data at the bottom layer, using no other module: the settings types live in `scene`
-//! (whose maxima are these limits'), the whole-settings check in `render`.
+//! The ranges of settings values: command-line flags (`cli::args`), scene files
+//! (`scene::desc`), the viewer's panel (`app::panel`) and `render::check_render_settings` (run
+//! by `Renderer::new` for every caller) all check against these, so a value is accepted or
+//! refused with the same range and words everywhere. The ranges of the `[gi]`, `[post]` and
+//! `[shadow]` keys live beside their key tables (`scene::gi_range`, `scene::post_range`,
+//! `scene::shadow_range`); those here are the frame's other values. Plain data at the bottom
+//! layer, using no other module.
 //!
 //! A [`Limit`] names the value three ways: its flag, its scene-file key (where a scene file
 //! can give it) and what it is; an error from it names the one the user typed.
@@ -125,89 +126,6 @@ pub const WIDTH: Limit<u32> = Limit::new("--width", None, "a width in pixels", 1
 pub const HEIGHT: Limit<u32> = Limit::new("--height", None, "a height in pixels", 1, 16384);
 /// Scene time: any finite number of seconds within ±1e9 (animations are evaluated in f32).
 pub const TIME_S: Limit<f32> = Limit::new("--time", None, "a scene time in seconds", -1e9, 1e9);
-/// Exposure multiplies the radiance before tone mapping; 0 would be black, NaN garbage.
-pub const EXPOSURE: Limit<f32> = Limit {
-    min_exclusive: true,
-    ..Limit::new(
-        "--exposure",
-        Some("post.exposure"),
-        "an exposure factor",
-        0.0,
-        1e6,
-    )
-};
-/// TAA history weight α in [0, 0.999]: 1 would never let the current frame in.
-pub const TAA_HISTORY_WEIGHT: Limit<f32> = Limit::new(
-    "--taa-history-weight",
-    Some("post.taa_history_weight"),
-    "a TAA history weight",
-    0.0,
-    0.999,
-);
-/// Frames of a headless TAA render.
-pub const TAA_FRAMES: Limit<u32> = Limit::new(
-    "--taa-frames",
-    Some("post.taa_frames"),
-    "a number of TAA frames",
-    1,
-    4096,
-);
-/// Auto exposure's key value (the display luminance of the log-average scene luminance).
-pub const AUTO_EXPOSURE_KEY: Limit<f32> = Limit {
-    min_exclusive: true,
-    ..Limit::new(
-        "--auto-exposure",
-        Some("post.auto_exposure"),
-        "an auto exposure key value",
-        0.0,
-        1e3,
-    )
-};
-/// Auto exposure's adaptation per frame: 0 would never adapt, 1 jumps at once.
-pub const EXPOSURE_ADAPTATION: Limit<f32> = Limit {
-    min_exclusive: true,
-    ..Limit::new(
-        "--exposure-adaptation",
-        Some("post.exposure_adaptation"),
-        "an adaptation fraction per frame",
-        0.0,
-        1.0,
-    )
-};
-/// Bloom strength: the share of the radiance moved into the blur.
-pub const BLOOM_STRENGTH: Limit<f32> = Limit::new(
-    "--bloom",
-    Some("post.bloom"),
-    "a bloom strength (share of the radiance)",
-    0.0,
-    1.0,
-);
-pub const SHADOW_RESOLUTION: Limit<u32> = Limit::new(
-    "--shadow-resolution",
-    None,
-    "texels per side of a shadow map",
-    16,
-    8192,
-);
-/// Cascades per directional light (`light::cascade`; 1: the whole-scene map alone). Eight
-/// keeps a frame of several suns under the 64 shadow views.
-pub const SHADOW_CASCADES: Limit<u32> = Limit::new(
-    "--shadow-cascades",
-    Some("shadow.cascades"),
-    "a number of shadow cascades per directional light",
-    1,
-    8,
-);
-/// Zhang et al. 2006's blend of logarithmic (1) and uniform (0) cascade splits.
-pub const SHADOW_CASCADE_LAMBDA: Limit<f32> = Limit::new(
-    "--shadow-cascade-lambda",
-    Some("shadow.cascade_lambda"),
-    "a blend of logarithmic (1) and uniform (0) splits",
-    0.0,
-    1.0,
-);
-/// The deferred pass filters (2r+1)² shadow-map taps per view.
-pub const PCF_RADIUS: Limit<u32> = Limit::new("--pcf-radius", None, "a PCF radius in texels", 0, 8);
 /// The voxel grid's x/y resolution cap: one image texel per column, at most 16384 per side.
 pub const VOXELS: Limit<u32> = Limit::new(
     "--voxels",
@@ -337,6 +255,27 @@ pub const TRAVERSE_REPEATS: Limit<u32> = Limit::new(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Limits of the shape the settings tables use (`scene::post_settings::range`).
+    const TAA_FRAMES: Limit<u32> = Limit::new(
+        "--taa-frames",
+        Some("post.taa_frames"),
+        "a number of TAA frames",
+        1,
+        4096,
+    );
+    const EXPOSURE: Limit<f32> = Limit {
+        min_exclusive: true,
+        ..Limit::new(
+            "--exposure",
+            Some("post.exposure"),
+            "an exposure factor",
+            0.0,
+            1e6,
+        )
+    };
+    const BLOOM_STRENGTH: Limit<f32> =
+        Limit::new("--bloom", Some("post.bloom"), "a bloom strength", 0.0, 1.0);
 
     #[test]
     fn integers_are_checked_at_both_ends_and_against_overflow() {

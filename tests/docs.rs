@@ -1,8 +1,8 @@
 //! The documentation stays usable (no Vulkan): every relative link in README.md and docs/
 //! resolves to a file of the repository (and a `#section` to a heading of that file), the
 //! README links every document under docs/, the README and the code map stay short, and
-//! docs/commands.md holds the current `--help` of every command. After changing a command's
-//! flags, regenerate its blocks with
+//! docs/commands.md holds the current `--help` of every command and docs/settings.md the
+//! current key tables. After changing a command's flags or a key's row, regenerate them with
 //!
 //! ```sh
 //! VOXGI_UPDATE_DOCS=1 cargo test --test docs
@@ -363,6 +363,58 @@ fn commands_md_holds_the_current_help_of_every_command() {
         "docs/commands.md has no help block for {missing:?}: add a section with \
          `{HELP_MARKER}voxgi COMMAND -->` and run `VOXGI_UPDATE_DOCS=1 cargo test --test docs`"
     );
+}
+
+/// The marker before a key table of docs/settings.md: `<!-- keys: post -->`.
+const KEYS_MARKER: &str = "<!-- keys: ";
+
+/// docs/settings.md with every key table replaced by the schema's current one.
+fn settings_regenerated(doc: &str) -> String {
+    use voxgi::scene::schema::doc_table;
+    let mut out = String::new();
+    let mut lines = doc.lines().peekable();
+    while let Some(line) = lines.next() {
+        out.push_str(line);
+        out.push('\n');
+        let Some(table) = line
+            .strip_prefix(KEYS_MARKER)
+            .and_then(|l| l.strip_suffix(" -->"))
+        else {
+            continue;
+        };
+        while lines.peek().is_some_and(|l| l.starts_with('|')) {
+            lines.next();
+        }
+        out.push_str(&match table {
+            "gi" => doc_table::<voxgi::scene::GiSettings>(),
+            "post" => doc_table::<voxgi::scene::PostTable>(),
+            "shadow" => doc_table::<voxgi::scene::ShadowSettings>(),
+            other => panic!("docs/settings.md: no key table `{other}`"),
+        });
+    }
+    out
+}
+
+#[test]
+fn settings_md_lists_every_key_of_every_table() {
+    let path = root().join("docs/settings.md");
+    let doc = std::fs::read_to_string(&path).expect("docs/settings.md");
+    let new = settings_regenerated(&doc);
+    if std::env::var_os("VOXGI_UPDATE_DOCS").is_some() {
+        std::fs::write(&path, &new).expect("writing docs/settings.md");
+    } else {
+        assert!(
+            new == doc,
+            "docs/settings.md's key tables are not the schema's: run \
+             `VOXGI_UPDATE_DOCS=1 cargo test --test docs` and commit the file"
+        );
+    }
+    for table in ["gi", "post", "shadow"] {
+        assert!(
+            doc.contains(&format!("{KEYS_MARKER}{table} -->")),
+            "docs/settings.md has no `{KEYS_MARKER}{table} -->` table"
+        );
+    }
 }
 
 #[test]

@@ -568,6 +568,7 @@ impl Editor {
             )
             .ok(),
             relocate_from: None,
+            settings: None,
         }
     }
 
@@ -578,6 +579,7 @@ impl Editor {
         fly: &FlyCamera,
         camera: &Camera,
         keys: &[Camera],
+        settings: crate::scene::save::FrameTables,
     ) -> Result<PathBuf, crate::scene::save::SaveError> {
         use crate::scene::save::SaveError;
         let target = match (&self.save_to, &self.source) {
@@ -599,6 +601,7 @@ impl Editor {
             (None, None) => return Err(SaveError::NoFile("?".into())),
         };
         let mut edits = self.edits(scene, fly, camera, keys);
+        edits.settings = Some(settings);
         if let Some(src) = &self.source {
             let dir = |p: &Path| {
                 let d = p.parent().unwrap_or(Path::new("."));
@@ -1012,9 +1015,19 @@ impl super::Viewer {
     /// Writes the scene with its edits (Ctrl+S, the panel's button).
     pub(super) fn save_scene(&mut self) {
         let keys = self.report.camera_keys.clone();
+        // The panel's frame settings, written into the scene's `[gi]`, `[post]` and `[shadow]`.
+        let c = &self.controls;
+        let settings = crate::scene::save::FrameTables {
+            gi: c.gi,
+            post: crate::scene::PostTable {
+                post: c.post,
+                tonemap: c.tonemap,
+            },
+            shadow: c.shadow,
+        };
         match self
             .editor
-            .save(&self.scene, &self.fly, &self.scene.camera, &keys)
+            .save(&self.scene, &self.fly, &self.scene.camera, &keys, settings)
         {
             Ok(path) => {
                 self.editor.status = format!("saved scene to {}", path.display());

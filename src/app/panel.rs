@@ -3,9 +3,10 @@
 
 use crate::gi::{GiMethod, GiSettings};
 use crate::light::ShadowSettings;
-use crate::limits;
 use crate::post::{ToneMap, ToneOperator};
 use crate::scene::gi_range;
+use crate::scene::schema::{self, Kind, Settings, Value};
+use crate::scene::PostTable;
 use crate::vk::PassTiming;
 use crate::voxel::debug_view::DebugView;
 use std::collections::VecDeque;
@@ -385,39 +386,7 @@ pub fn draw(
                                         );
                                     }
                                 });
-                            ui.add(
-                                egui::Slider::new(
-                                    &mut c.shadow.pcf_radius,
-                                    limits::PCF_RADIUS.slider(0, 4),
-                                )
-                                .text("PCF radius"),
-                            );
-                            ui.add(
-                                egui::Slider::new(
-                                    &mut c.shadow.cascades,
-                                    limits::SHADOW_CASCADES.slider(1, 8),
-                                )
-                                .text("sun cascades"),
-                            );
-                            ui.add(
-                                egui::Slider::new(
-                                    &mut c.shadow.cascade_lambda,
-                                    limits::SHADOW_CASCADE_LAMBDA.slider(0.0, 1.0),
-                                )
-                                .text("cascade log/uniform λ"),
-                            );
-                            ui.add(
-                                egui::Slider::new(&mut c.shadow.bias_texels, 0.0..=8.0)
-                                    .text("bias texels"),
-                            );
-                            ui.add(
-                                egui::Slider::new(&mut c.shadow.slope_bias_texels, 0.0..=8.0)
-                                    .text("slope bias"),
-                            );
-                            ui.add(
-                                egui::Slider::new(&mut c.shadow.normal_offset_texels, 0.0..=8.0)
-                                    .text("normal offset"),
-                            );
+                            shadow_controls(ui, &mut c.shadow);
                         });
 
                     egui::CollapsingHeader::new("Global illumination")
@@ -501,7 +470,7 @@ fn projection_controls(ui: &mut egui::Ui, c: &mut Controls) {
         ui.add(
             egui::Slider::new(
                 &mut c.ortho_height_m,
-                limits::ORTHO_HEIGHT_M.slider(0.01, 1000.0),
+                crate::limits::ORTHO_HEIGHT_M.slider(0.01, 1000.0),
             )
             .logarithmic(true)
             .text("view height m"),
@@ -520,70 +489,198 @@ fn post_controls(
     tone: &mut ToneMap,
     spots: &mut Vec<Spot>,
 ) {
-    let mut taa = p.taa.is_some();
-    let taa_box = ui
-        .checkbox(&mut taa, "TAA")
+    let mut t = PostTable {
+        post: *p,
+        tonemap: *tone,
+    };
+    let taa_box = key_checkbox(ui, &mut t, "post.taa", "TAA")
         .on_hover_text("temporal anti-aliasing: each frame jittered, blended with the history");
     spots.push(("post TAA".into(), taa_box.rect));
-    p.taa = taa.then(|| p.taa.unwrap_or_default());
-    if let Some(t) = &mut p.taa {
-        ui.add(
-            egui::Slider::new(
-                &mut t.history_weight,
-                limits::TAA_HISTORY_WEIGHT.slider(0.0, 0.999),
-            )
-            .text("TAA history weight"),
+    if t.post.taa.is_some() {
+        key_slider(
+            ui,
+            &mut t,
+            "post.taa_history_weight",
+            (0.0, 0.999),
+            false,
+            "TAA history weight",
         );
-        ui.checkbox(&mut t.motion_vectors, "motion vectors")
-            .on_hover_text(
-                "reproject moving objects with their own motion (scenes with animated objects)",
-            );
+        if let Some(taa) = &mut t.post.taa {
+            ui.checkbox(&mut taa.motion_vectors, "motion vectors")
+                .on_hover_text(
+                    "reproject moving objects with their own motion (scenes with animated objects)",
+                );
+        }
     }
-    let mut auto = p.auto_exposure.is_some();
-    ui.checkbox(&mut auto, "auto exposure");
-    p.auto_exposure = auto.then(|| p.auto_exposure.unwrap_or_default());
-    if let Some(a) = &mut p.auto_exposure {
-        ui.add(
-            egui::Slider::new(&mut a.key, limits::AUTO_EXPOSURE_KEY.slider(0.01, 1.0))
-                .logarithmic(true)
-                .text("key"),
-        );
-        ui.add(
-            egui::Slider::new(
-                &mut a.adaptation,
-                limits::EXPOSURE_ADAPTATION.slider(0.001, 1.0),
-            )
-            .logarithmic(true)
-            .text("adaptation / frame"),
+    key_checkbox(ui, &mut t, "post.auto_exposure", "auto exposure");
+    if t.post.auto_exposure.is_some() {
+        key_slider(ui, &mut t, "post.auto_exposure", (0.01, 1.0), true, "key");
+        key_slider(
+            ui,
+            &mut t,
+            "post.exposure_adaptation",
+            (0.001, 1.0),
+            true,
+            "adaptation / frame",
         );
     }
-    let mut bloom = p.bloom.is_some();
+    let mut bloom = t.post.bloom.is_some();
     ui.checkbox(&mut bloom, "bloom");
-    p.bloom = bloom.then(|| p.bloom.unwrap_or(0.1));
-    if let Some(s) = &mut p.bloom {
-        ui.add(
-            egui::Slider::new(s, limits::BLOOM_STRENGTH.slider(0.0, 1.0)).text("bloom strength"),
+    // Bloom has no "on" without a strength: the box starts it at 0.1.
+    let on = schema::Value::Number(t.post.bloom.unwrap_or(0.1));
+    set_key(
+        &mut t,
+        "post.bloom",
+        if bloom { on } else { Value::Bool(false) },
+    );
+    if bloom {
+        key_slider(
+            ui,
+            &mut t,
+            "post.bloom",
+            (0.0, 1.0),
+            false,
+            "bloom strength",
         );
     }
     egui::ComboBox::from_label("tone mapping")
-        .selected_text(format!("{:?}", tone.operator))
+        .selected_text(format!("{:?}", t.tonemap.operator))
         .show_ui(ui, |ui| {
             for op in OPERATORS {
-                ui.selectable_value(&mut tone.operator, op, format!("{op:?}"));
+                ui.selectable_value(&mut t.tonemap.operator, op, format!("{op:?}"));
             }
         });
-    ui.add(
-        egui::Slider::new(&mut tone.exposure, limits::EXPOSURE.slider(0.001, 1000.0))
-            .logarithmic(true)
-            .text("exposure"),
+    key_slider(
+        ui,
+        &mut t,
+        "post.exposure",
+        (0.001, 1000.0),
+        true,
+        "exposure",
     );
-    ui.add(
-        egui::Slider::new(&mut tone.white, 0.01..=100.0)
-            .logarithmic(true)
-            .text("white"),
+    key_slider(ui, &mut t, "post.white", (0.01, 100.0), true, "white");
+    key_checkbox(ui, &mut t, "post.fxaa", "FXAA");
+    key_checkbox(ui, &mut t, "post.dither", "dither");
+    (*p, *tone) = (t.post, t.tonemap);
+}
+
+/// The shadow controls; each is the `[shadow]` key of its label.
+fn shadow_controls(ui: &mut egui::Ui, shadow: &mut ShadowSettings) {
+    egui::ComboBox::from_label("resolution")
+        .selected_text(format!("{}²", shadow.resolution))
+        .show_ui(ui, |ui| {
+            for r in SHADOW_RESOLUTIONS {
+                let chosen = !shadow.auto_resolution && shadow.resolution == r;
+                if ui.selectable_label(chosen, format!("{r}²")).clicked() {
+                    set_key(shadow, "shadow.resolution", Value::Count(r));
+                }
+            }
+        });
+    key_slider(
+        ui,
+        shadow,
+        "shadow.pcf_radius",
+        (0.0, 4.0),
+        false,
+        "PCF radius",
     );
-    ui.checkbox(&mut p.fxaa, "FXAA");
-    ui.checkbox(&mut tone.dither, "dither");
+    key_slider(
+        ui,
+        shadow,
+        "shadow.cascades",
+        (1.0, 8.0),
+        false,
+        "sun cascades",
+    );
+    key_slider(
+        ui,
+        shadow,
+        "shadow.cascade_lambda",
+        (0.0, 1.0),
+        false,
+        "cascade log/uniform λ",
+    );
+    key_slider(
+        ui,
+        shadow,
+        "shadow.bias_texels",
+        (0.0, 8.0),
+        false,
+        "bias texels",
+    );
+    key_slider(
+        ui,
+        shadow,
+        "shadow.slope_bias_texels",
+        (0.0, 8.0),
+        false,
+        "slope bias",
+    );
+    key_slider(
+        ui,
+        shadow,
+        "shadow.normal_offset_texels",
+        (0.0, 8.0),
+        false,
+        "normal offset",
+    );
+}
+
+/// Writes `v` to the key `path` of `s`, as `--set` and scene files write it (a path missing
+/// from the table writes nothing: the panel's own paths are checked by a test).
+fn set_key<S: Settings>(s: &mut S, path: &str, v: Value) {
+    if let Some(k) = schema::key::<S>(path) {
+        (k.set)(s, v);
+    }
+}
+
+/// The key `path` of `s` (a boolean) as a checkbox labelled `text`.
+fn key_checkbox<S: Settings>(
+    ui: &mut egui::Ui,
+    s: &mut S,
+    path: &str,
+    text: &str,
+) -> egui::Response {
+    let mut on = schema::key::<S>(path).is_some_and(|k| (k.get)(s) != Value::Bool(false));
+    let r = ui.checkbox(&mut on, text);
+    if r.changed() {
+        set_key(s, path, Value::Bool(on));
+    }
+    r
+}
+
+/// A slider for the count or number key `path` of `s` over `lo..=hi` cut to the key's range
+/// (so the panel never offers what flags and scene files refuse), labelled `text`.
+fn key_slider<S: Settings>(
+    ui: &mut egui::Ui,
+    s: &mut S,
+    path: &str,
+    (lo, hi): (f64, f64),
+    logarithmic: bool,
+    text: &str,
+) {
+    let Some(k) = schema::key::<S>(path) else {
+        return;
+    };
+    match (k.kind, (k.get)(s)) {
+        (Kind::Count(l), Value::Count(mut n)) => {
+            let slider = egui::Slider::new(&mut n, l.slider(lo as u32, hi as u32))
+                .logarithmic(logarithmic)
+                .text(text);
+            if ui.add(slider).changed() {
+                (k.set)(s, Value::Count(n));
+            }
+        }
+        (Kind::Number(l) | Kind::Switch(l, _), Value::Number(mut x)) => {
+            let slider = egui::Slider::new(&mut x, l.slider(lo as f32, hi as f32))
+                .logarithmic(logarithmic)
+                .text(text);
+            if ui.add(slider).changed() {
+                (k.set)(s, Value::Number(x));
+            }
+        }
+        _ => {}
+    }
 }
 
 #[cfg(test)]

@@ -2,22 +2,34 @@
 
 use crate::gi::GiMethod;
 use crate::gi::GiSettings;
-use crate::light::PointShadow;
-use crate::post::ToneOperator;
+use crate::post::{PostSettings, ToneMap};
 use crate::render::RenderSettings;
 use crate::scene::schema::{Flag, FlagStyle, Key, Kind, Layer, Settings, Value};
-use crate::scene::{resolve_gi, Scene};
+use crate::scene::{resolve_gi, PostTable, Scene, ShadowSettings};
 
-/// Indirect-light flags of `render`, `profile`, `graph`, `sweep`'s configurations and `view`,
-/// generated from the `[gi]` key table ([`GiSettings::keys`]): each key's named flag (its
-/// help, value name and values from the table), and `--set KEY=VALUE` for every key. Each
-/// one given overrides the scene file's `[gi]` value, which overrides the default.
+/// The named flags of a settings table's keys (`S::keys`), generated from the table: each
+/// key's flag, with its help, value name and values from the key's row. Each one given
+/// overrides the scene file's value, which overrides the default.
+#[derive(Clone, Debug, Default)]
+pub struct KeyFlags<S: Settings> {
+    /// The named flags given, in the table's order, as their keys' values (not yet checked
+    /// against the ranges: [`KeyFlags::layer`] does that, naming the flag).
+    pub given: Vec<(&'static Key<S>, Value)>,
+}
+
+/// The `[post]` keys' flags (`--taa`, `--bloom`, `--tonemap`, …).
+pub type PostArgs = KeyFlags<PostTable>;
+/// The `[shadow]` keys' flags (`--shadow-resolution`, `--pcf-radius`, …).
+pub type ShadowArgs = KeyFlags<ShadowSettings>;
+
+/// Indirect-light flags of `render`, `profile`, `graph`, `sweep`'s configurations and `view`:
+/// the `[gi]` keys' named flags ([`GiSettings::keys`]), `--set KEY=VALUE` for every key of
+/// every table, and the GI debug views.
 #[derive(Clone, Debug, Default)]
 pub struct GiArgs {
-    /// The named flags given, in the table's order, as their keys' values (not yet checked
-    /// against the ranges: [`GiArgs::layer`] does that, naming the flag).
-    pub given: Vec<(&'static Key<GiSettings>, Value)>,
-    /// `--set KEY=VALUE`, as typed, in the order given (applied after the named flags).
+    pub flags: KeyFlags<GiSettings>,
+    /// `--set KEY=VALUE`, as typed, in the order given (applied after the named flags; each
+    /// table's layer takes its own keys).
     pub set: Vec<String>,
     /// `--gi vpl`: debug view, every VPL drawn as a dot over the image.
     pub vpl_show: bool,
@@ -29,23 +41,33 @@ const SET_ID: &str = "set";
 const VPL_SHOW_ID: &str = "vpl-show";
 const SAO_SHOW_ID: &str = "sao-show";
 
+/// The tables `--set` reaches.
+const SET_TABLES: [&str; 3] = [GiSettings::TABLE, PostTable::TABLE, ShadowSettings::TABLE];
+
+/// Every key path `--set` takes, for its help and its error.
+fn set_paths() -> String {
+    [
+        crate::scene::schema::paths::<GiSettings>(),
+        crate::scene::schema::paths::<PostTable>(),
+        crate::scene::schema::paths::<ShadowSettings>(),
+    ]
+    .concat()
+    .join(", ")
+}
+
 /// What a key's flag help says its default is: "the scene's `[gi] rays`, else 16".
-fn default_words(k: &Key<GiSettings>) -> String {
-    let v = (k.get)(&GiSettings::default());
+fn default_words<S: Settings>(k: &Key<S>) -> String {
+    let v = (k.get)(&S::default());
     let text = match v {
         Value::Bool(true) => "on".to_owned(),
         Value::Bool(false) => "off".to_owned(),
         v => k.kind.to_text(v),
     };
-    format!(
-        "the scene's `[{}] {}`, else {text}",
-        GiSettings::TABLE,
-        k.name()
-    )
+    format!("the scene's `[{}] {}`, else {text}", S::TABLE, k.name())
 }
 
 /// The named flag of key `k`.
-fn key_arg(k: &'static Key<GiSettings>, f: Flag) -> clap::Arg {
+fn key_arg<S: Settings>(k: &'static Key<S>, f: Flag) -> clap::Arg {
     use clap::builder::{PossibleValuesParser, TypedValueParser as _};
     use clap::{Arg, ArgAction};
     let help = format!("{} [default: {}]", k.doc, default_words(k));
@@ -59,12 +81,91 @@ fn key_arg(k: &'static Key<GiSettings>, f: Flag) -> clap::Arg {
             .num_args(0..=1)
             .default_missing_value("on")
             .value_parser(PossibleValuesParser::new(["on", "off"]).try_map(read)),
+        (FlagStyle::OptionalValue, _) => arg
+            .value_name(f.value_name)
+            .num_args(0..=1)
+            .default_missing_value("on")
+            .value_parser(move |s: &str| kind.parse(s)),
         (FlagStyle::Value, Kind::Choice(values)) => arg
             .value_name(f.value_name)
             .value_parser(PossibleValuesParser::new(values()).try_map(read)),
         (FlagStyle::Value, _) => arg
             .value_name(f.value_name)
             .value_parser(move |s: &str| kind.parse(s)),
+    }
+}
+
+impl<S: Settings> clap::FromArgMatches for KeyFlags<S> {
+    fn from_arg_matches(m: &clap::ArgMatches) -> Result<Self, clap::Error> {
+        let mut a = KeyFlags { given: Vec::new() };
+        a.update_from_arg_matches(m)?;
+        Ok(a)
+    }
+
+    fn update_from_arg_matches(&mut self, m: &clap::ArgMatches) -> Result<(), clap::Error> {
+        for k in S::keys() {
+            let Some(f) = k.flag else { continue };
+            let v = match f.style {
+                FlagStyle::SetsFalse => m.get_flag(k.path).then_some(Value::Bool(false)),
+                _ => m.try_get_one::<Value>(k.path).ok().flatten().copied(),
+            };
+            if let Some(v) = v {
+                self.given.retain(|(g, _)| g.path != k.path);
+                self.given.push((k, v));
+            }
+        }
+        Ok(())
+    }
+}
+
+impl<S: Settings> clap::Args for KeyFlags<S> {
+    fn augment_args(cmd: clap::Command) -> clap::Command {
+        S::keys()
+            .iter()
+            .filter_map(|k| Some(key_arg(k, k.flag?)))
+            .fold(cmd, clap::Command::arg)
+    }
+
+    fn augment_args_for_update(cmd: clap::Command) -> clap::Command {
+        Self::augment_args(cmd)
+    }
+}
+
+impl<S: Settings> KeyFlags<S> {
+    /// The command line's layer of `S`: the named flags, then the entries of `set`
+    /// (`--set KEY=VALUE`, in the order given) of `S`'s table, each checked against its key's
+    /// range and named as the user typed it (the flag, or the key path). A `--set` key of no
+    /// table is an error listing every key.
+    pub fn layer(&self, set: &[String]) -> Result<Layer, super::CliError> {
+        let mut layer = Layer::default();
+        for (k, v) in &self.given {
+            layer.set(k.path, k.kind.check(&k.flag_name(), *v)?);
+        }
+        for s in set {
+            let (path, value) = s.split_once('=').unwrap_or((s.as_str(), ""));
+            let path = path.trim();
+            let table = path.split_once('.').map_or("", |(t, _)| t);
+            if table != S::TABLE && SET_TABLES.contains(&table) {
+                continue;
+            }
+            let k =
+                crate::scene::schema::key::<S>(path).ok_or_else(|| crate::limits::LimitError {
+                    name: "--set".into(),
+                    value: s.clone(),
+                    expected: format!("KEY=VALUE with KEY one of {}", set_paths()),
+                })?;
+            layer.set(k.path, k.kind.parse_checked(k.path, value)?);
+        }
+        Ok(layer)
+    }
+
+    /// `base` under the scene's layer of `S` (`scene`), under the command line's (these flags
+    /// and `set`): the frame's settings of `S`.
+    pub fn apply(&self, base: S, scene: &Layer, set: &[String]) -> Result<S, super::CliError> {
+        Ok(crate::scene::schema::apply(
+            base,
+            &[scene, &self.layer(set)?],
+        ))
     }
 }
 
@@ -76,17 +177,7 @@ impl clap::FromArgMatches for GiArgs {
     }
 
     fn update_from_arg_matches(&mut self, m: &clap::ArgMatches) -> Result<(), clap::Error> {
-        for k in GiSettings::keys() {
-            let Some(f) = k.flag else { continue };
-            let v = match f.style {
-                FlagStyle::SetsFalse => m.get_flag(k.path).then_some(Value::Bool(false)),
-                _ => m.try_get_one::<Value>(k.path).ok().flatten().copied(),
-            };
-            if let Some(v) = v {
-                self.given.retain(|(g, _)| g.path != k.path);
-                self.given.push((k, v));
-            }
-        }
+        self.flags.update_from_arg_matches(m)?;
         if let Ok(Some(set)) = m.try_get_many::<String>(SET_ID) {
             self.set.extend(set.cloned());
         }
@@ -99,41 +190,36 @@ impl clap::FromArgMatches for GiArgs {
 impl clap::Args for GiArgs {
     fn augment_args(cmd: clap::Command) -> clap::Command {
         use clap::{Arg, ArgAction};
-        let mut cmd = cmd;
-        for k in GiSettings::keys() {
-            if let Some(f) = k.flag {
-                cmd = cmd.arg(key_arg(k, f));
-            }
-        }
-        let paths = crate::scene::schema::paths::<GiSettings>().join(", ");
-        cmd.arg(
-            Arg::new(SET_ID)
-                .long("set")
-                .value_name("KEY=VALUE")
-                .action(ArgAction::Append)
-                .help(
-                    "Sets any `[gi]` key by its path, as the scene file's table would (e.g. --set gi.rays=8, --set gi.vpl_pattern=2x2); repeatable, applied after the named flags",
-                )
-                .long_help(format!(
-                    "Sets any `[gi]` key by its path, as the scene file's table would (e.g. --set gi.rays=8, --set gi.vpl_pattern=2x2); repeatable, applied after the named flags. Keys: {paths}"
-                )),
-        )
-        .arg(
-            Arg::new(VPL_SHOW_ID)
-                .long("vpl-show")
-                .action(ArgAction::SetTrue)
-                .help(
-                    "`--gi vpl`: debug view, every VPL drawn as a dot over the image (first bounce yellow, later ones cyan)",
-                ),
-        )
-        .arg(
-            Arg::new(SAO_SHOW_ID)
-                .long("sao-show")
-                .action(ArgAction::SetTrue)
-                .help(
-                    "SAO debug view: the AO term as grey (1 white = unoccluded) instead of the image (needs SAO on, by --sao or the scene)",
-                ),
-        )
+        KeyFlags::<GiSettings>::augment_args(cmd)
+            .arg(
+                Arg::new(SET_ID)
+                    .long("set")
+                    .value_name("KEY=VALUE")
+                    .action(ArgAction::Append)
+                    .help(
+                        "Sets any `[gi]`, `[post]` or `[shadow]` key by its path, as the scene file's table would (e.g. --set gi.rays=8, --set post.bloom=0.3); repeatable, applied after the named flags",
+                    )
+                    .long_help(format!(
+                        "Sets any `[gi]`, `[post]` or `[shadow]` key by its path, as the scene file's table would (e.g. --set gi.rays=8, --set post.bloom=0.3); repeatable, applied after the named flags. Keys: {}",
+                        set_paths()
+                    )),
+            )
+            .arg(
+                Arg::new(VPL_SHOW_ID)
+                    .long("vpl-show")
+                    .action(ArgAction::SetTrue)
+                    .help(
+                        "`--gi vpl`: debug view, every VPL drawn as a dot over the image (first bounce yellow, later ones cyan)",
+                    ),
+            )
+            .arg(
+                Arg::new(SAO_SHOW_ID)
+                    .long("sao-show")
+                    .action(ArgAction::SetTrue)
+                    .help(
+                        "SAO debug view: the AO term as grey (1 white = unoccluded) instead of the image (needs SAO on, by --sao or the scene)",
+                    ),
+            )
     }
 
     fn augment_args_for_update(cmd: clap::Command) -> clap::Command {
@@ -142,28 +228,9 @@ impl clap::Args for GiArgs {
 }
 
 impl GiArgs {
-    /// The command line's layer: the named flags, then `--set`, each checked against its
-    /// key's range and named as the user typed it (the flag, or the key path).
+    /// The command line's layer of `[gi]`: the named flags, then `--set`'s `gi.` keys.
     pub fn layer(&self) -> Result<Layer, super::CliError> {
-        let mut layer = Layer::default();
-        for (k, v) in &self.given {
-            layer.set(k.path, k.kind.check(&k.flag_name(), *v)?);
-        }
-        for s in &self.set {
-            let (path, value) = s.split_once('=').unwrap_or((s.as_str(), ""));
-            let k = crate::scene::schema::key::<GiSettings>(path.trim()).ok_or_else(|| {
-                crate::limits::LimitError {
-                    name: "--set".into(),
-                    value: s.clone(),
-                    expected: format!(
-                        "KEY=VALUE with KEY one of {}",
-                        crate::scene::schema::paths::<GiSettings>().join(", ")
-                    ),
-                }
-            })?;
-            layer.set(k.path, k.kind.parse_checked(k.path, value)?);
-        }
-        Ok(layer)
+        self.flags.layer(&self.set)
     }
 
     /// SAO's value flags and `--sao-show` need SAO on (by `--sao` or the scene's `[gi] sao`):
@@ -191,6 +258,19 @@ impl GiArgs {
             }),
             ..s
         })
+    }
+
+    /// The scene's `[post]` values over `post` and `tone`, overridden by the `[post]` flags
+    /// (`flags`) and `--set`'s `post.` keys.
+    pub fn post(
+        &self,
+        flags: &PostArgs,
+        scene: &Scene,
+        post: PostSettings,
+        tonemap: ToneMap,
+    ) -> Result<(PostSettings, ToneMap), super::CliError> {
+        let t = flags.apply(PostTable { post, tonemap }, &scene.post, &self.set)?;
+        Ok((t.post, t.tonemap))
     }
 }
 
@@ -239,39 +319,6 @@ pub struct FrameArgs {
     /// Scene time in seconds (animations).
     #[arg(long, default_value_t = 0.0)]
     pub time: f32,
-    /// Tone-mapping operator [default: the scene's `[post] tonemap`, else filmic].
-    #[arg(long, value_enum)]
-    pub tonemap: Option<ToneOperator>,
-    /// Exposure factor before tone mapping [default: the scene's `[post] exposure`, else 1].
-    #[arg(long, value_name = "E")]
-    pub exposure: Option<f32>,
-    /// Shadow-map resolution: texels per side, or `auto`: the smallest power of two that keeps
-    /// the shadow texel under a pixel on 95% of the lit pixels of the view (picked from one
-    /// probe frame of `--debug shadow-texels` when the renderer is made).
-    #[arg(long, default_value = "1024", value_name = "TEXELS|auto")]
-    pub shadow_resolution: ShadowResolutionArg,
-    /// PCF radius in texels.
-    #[arg(long, default_value_t = 1)]
-    pub pcf_radius: u32,
-    /// Shadow cascades per directional light for the camera's direct light (1: one map for
-    /// the whole scene); default: the scene's `[shadow] cascades`, else 4.
-    #[arg(long, value_name = "N")]
-    pub shadow_cascades: Option<u32>,
-    /// Cascade splits: blend of logarithmic (1) and uniform (0) splits (Zhang et al. 2006);
-    /// default: the scene's `[shadow] cascade_lambda`, else 0.5.
-    #[arg(long, value_name = "LAMBDA")]
-    pub shadow_cascade_lambda: Option<f32>,
-    /// Shadow maps of point lights: six cube faces or two paraboloid hemispheres.
-    #[arg(long, value_enum, default_value_t = PointShadow::Cube)]
-    pub point_shadows: PointShadow,
-    /// Sub-lights (one shadow view each) per sphere or rectangle light, for every area light;
-    /// default: each light's `samples` key (16 without it).
-    #[arg(long, value_name = "S")]
-    pub area_samples: Option<u32>,
-    /// Soft shadows of area lights: S sampled sub-lights (converges) or PCSS for rectangles
-    /// (one shadow view each; spheres stay sampled).
-    #[arg(long, value_enum, default_value_t = crate::light::AreaShadow::Sampled)]
-    pub area_shadows: crate::light::AreaShadow,
     /// Surfaces with MTL d < 1 in the camera view: per-pixel linked lists sorted and blended
     /// (oit), or hashed alpha testing (hashed); default: the scene's `transparency` key, else
     /// oit. Shadow and light maps always use hashed alpha.
@@ -301,6 +348,8 @@ pub struct FrameArgs {
     pub gi: GiArgs,
     #[command(flatten)]
     pub post: PostArgs,
+    #[command(flatten)]
+    pub shadow: ShadowArgs,
     /// Show a debug view instead of the lit image: the voxel views (voxels, steps, level,
     /// albedo) voxelize at 128 unless --voxels; atlas shows an object's atlas; gbuffer-albedo,
     /// gbuffer-normal and gbuffer-distance show a G-buffer channel; shadow-texels the
@@ -330,34 +379,11 @@ impl FrameArgs {
             time_s: self.time,
             ..Default::default()
         };
-        let post = crate::scene::PostOverrides {
-            tonemap: self.tonemap,
-            exposure: self.exposure,
-            ..self.post.overrides()
-        };
-        (s.post, s.tonemap) = crate::post::apply_overrides(&post.or(scene.post), s.post, s.tonemap);
-        match self.shadow_resolution {
-            ShadowResolutionArg::Texels(n) => s.shadow.resolution = n,
-            ShadowResolutionArg::Auto => {
-                s.shadow.resolution = crate::render::shadow_texels::AUTO_PROBE_RESOLUTION;
-                s.shadow.auto_resolution = true;
-            }
-        }
-        s.shadow.pcf_radius = self.pcf_radius;
-        s.shadow.point_technique = self.point_shadows;
-        s.shadow.area_technique = self.area_shadows;
+        (s.post, s.tonemap) = self.gi.post(&self.post, scene, s.post, s.tonemap)?;
+        s.shadow = self.shadow.apply(s.shadow, &scene.shadow, &self.gi.set)?;
         s.transparency = self.transparency.or(scene.transparency).unwrap_or_default();
         s.oit_nodes_per_pixel =
             crate::limits::OIT_NODES_PER_PIXEL.check_flag(self.oit_nodes_per_pixel)?;
-        if let Some(n) = self.shadow_cascades.or(scene.shadow.cascades) {
-            s.shadow.cascades = crate::limits::SHADOW_CASCADES.check_flag(n)?;
-        }
-        if let Some(l) = self.shadow_cascade_lambda.or(scene.shadow.cascade_lambda) {
-            s.shadow.cascade_lambda = crate::limits::SHADOW_CASCADE_LAMBDA.check_flag(l)?;
-        }
-        if let Some(n) = self.area_samples {
-            s.shadow.area_samples = Some(crate::limits::AREA_SAMPLES.check_flag(n)?);
-        }
         let default_res = crate::voxel::gpu::VoxelSettings::default().max_res_xy;
         s.gi = self.gi.settings(scene)?;
         // GI and the voxel debug views voxelize without --voxels, honouring --voxelizer,
@@ -389,105 +415,6 @@ impl FrameArgs {
         self.gi.check_sao(&s.gi)?;
         crate::render::check_render_settings(&s)?;
         Ok(s)
-    }
-}
-
-/// `--taa`, `--fxaa`, `--dither`, `--sao`: given alone the stage is on; `off` turns off what
-/// the scene file's table turns on.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum Toggle {
-    On,
-    Off,
-}
-
-impl Toggle {
-    fn on(self) -> bool {
-        self == Toggle::On
-    }
-}
-
-/// `--auto-exposure [KEY|off]`: on (with the scene's or the default key), on with KEY, or off.
-fn parse_key_or_off(s: &str) -> Result<crate::scene::Stage, String> {
-    use crate::scene::Stage;
-    match s {
-        "on" => Ok(Stage::On(None)),
-        "off" => Ok(Stage::Off),
-        v => v
-            .parse::<f32>()
-            .map(|k| Stage::On(Some(k)))
-            .map_err(|_| format!("`{v}`: expected a key value (e.g. 0.18) or `off`")),
-    }
-}
-
-/// `--bloom STRENGTH|off`.
-fn parse_strength_or_off(s: &str) -> Result<crate::scene::Stage, String> {
-    use crate::scene::Stage;
-    match s {
-        "off" => Ok(Stage::Off),
-        v => v
-            .parse::<f32>()
-            .map(|k| Stage::On(Some(k)))
-            .map_err(|_| format!("`{v}`: expected a strength in [0, 1] (e.g. 0.05) or `off`")),
-    }
-}
-
-/// Post-processing flags (all off by default). Each one given overrides the scene file's
-/// `[post]` value, which overrides the default.
-#[derive(clap::Args, Clone)]
-pub struct PostArgs {
-    /// Temporal anti-aliasing: Halton(2,3) sub-pixel jitter, reprojected and clipped history
-    /// (a headless render runs --taa-frames frames); `--taa off` turns off the scene's
-    /// [default: the scene's `[post] taa`, else off].
-    #[arg(long, value_enum, value_name = "on|off", num_args = 0..=1, default_missing_value = "on")]
-    pub taa: Option<Toggle>,
-    /// TAA history weight α: each frame keeps α of the reprojected history [default: the
-    /// scene's `[post] taa_history_weight`, else 0.9].
-    #[arg(long, value_name = "ALPHA")]
-    pub taa_history_weight: Option<f32>,
-    /// Frames a headless render with TAA runs; the viewer blends one per frame and has no
-    /// count [default: the scene's `[post] taa_frames`, else 16].
-    #[arg(long, value_name = "N")]
-    pub taa_frames: Option<u32>,
-    /// Auto exposure: exposure = KEY / log-average luminance (KEY 0.18 when left out), adapted
-    /// over frames; --exposure then multiplies it as a compensation; `off` turns off the
-    /// scene's [default: the scene's `[post] auto_exposure`, else off].
-    #[arg(long, value_name = "KEY|off", num_args = 0..=1, default_missing_value = "on",
-          value_parser = parse_key_or_off)]
-    pub auto_exposure: Option<crate::scene::Stage>,
-    /// Auto exposure: fraction of the way (in log exposure) to the target per frame [default:
-    /// the scene's `[post] exposure_adaptation`, else 0.05].
-    #[arg(long, value_name = "F")]
-    pub exposure_adaptation: Option<f32>,
-    /// Triangular dither of ±1/255 before the 8-bit quantization (no banding on gradients)
-    /// [default: the scene's `[post] dither`, else off].
-    #[arg(long, value_enum, value_name = "on|off", num_args = 0..=1, default_missing_value = "on")]
-    pub dither: Option<Toggle>,
-    /// Bloom: moves the share STRENGTH of the radiance into a wide blur (energy-conserving,
-    /// no threshold); `off` turns off the scene's [default: the scene's `[post] bloom`, else
-    /// off].
-    #[arg(long, value_name = "STRENGTH|off", value_parser = parse_strength_or_off)]
-    pub bloom: Option<crate::scene::Stage>,
-    /// FXAA on the tone-mapped image [default: the scene's `[post] fxaa`, else off].
-    #[arg(long, value_enum, value_name = "on|off", num_args = 0..=1, default_missing_value = "on")]
-    pub fxaa: Option<Toggle>,
-}
-
-impl PostArgs {
-    /// The flags given (`--tonemap` and `--exposure` are the frame's, filled in by
-    /// [`FrameArgs::settings`]).
-    pub fn overrides(&self) -> crate::scene::PostOverrides {
-        crate::scene::PostOverrides {
-            taa: self.taa.map(Toggle::on),
-            taa_history_weight: self.taa_history_weight,
-            taa_frames: self.taa_frames,
-            auto_exposure: self.auto_exposure,
-            exposure_adaptation: self.exposure_adaptation,
-            bloom: self.bloom,
-            fxaa: self.fxaa.map(Toggle::on),
-            dither: self.dither.map(Toggle::on),
-            tonemap: None,
-            exposure: None,
-        }
     }
 }
 
@@ -582,8 +509,7 @@ mod tests {
 
     #[test]
     fn post_flags_override_the_scene_post_table() {
-        use crate::post::{PostSettings, TaaSettings, ToneMap};
-        use crate::scene::{PostOverrides, Stage};
+        use crate::post::{PostSettings, TaaSettings, ToneMap, ToneOperator};
         let plain = crate::scene::load_scene_arg(None).expect("the built-in scene");
         // No table, no flags: everything off, the default tone map.
         let s = parse(&[]).settings(&plain).expect("settings");
@@ -602,18 +528,17 @@ mod tests {
         assert_eq!(s.post.bloom, Some(0.1));
         assert!(s.tonemap.dither && !s.post.fxaa);
         let mut scene = plain.clone();
-        scene.post = PostOverrides {
-            taa: Some(true),
-            taa_frames: Some(4),
-            auto_exposure: Some(Stage::On(None)),
-            exposure_adaptation: Some(0.5),
-            bloom: Some(Stage::On(Some(0.2))),
-            fxaa: Some(true),
-            dither: Some(true),
-            tonemap: Some(ToneOperator::Drago),
-            exposure: Some(2.0),
-            ..Default::default()
-        };
+        scene.post = text_layer::<PostTable>(&[
+            ("post.taa", "true"),
+            ("post.taa_frames", "4"),
+            ("post.auto_exposure", "true"),
+            ("post.exposure_adaptation", "0.5"),
+            ("post.bloom", "0.2"),
+            ("post.fxaa", "true"),
+            ("post.dither", "true"),
+            ("post.tonemap", "drago"),
+            ("post.exposure", "2"),
+        ]);
         // The table alone.
         let s = parse(&[]).settings(&scene).expect("settings");
         let taa = s.post.taa.expect("the scene's TAA");
@@ -663,7 +588,7 @@ mod tests {
         assert_eq!(s.post.taa.map(|t| t.frames), Some(2));
         assert_eq!(s.post.auto_exposure, None);
         // `--auto-exposure` alone switches on and keeps the scene's key.
-        scene.post.auto_exposure = Some(Stage::On(Some(0.3)));
+        scene.post.set("post.auto_exposure", Value::Number(0.3));
         let s = parse(&["--auto-exposure"])
             .settings(&scene)
             .expect("settings");
@@ -673,6 +598,56 @@ mod tests {
             .settings(&scene)
             .expect_err("out of range");
         assert!(e.to_string().contains("--bloom = 2"), "{e}");
+        // `--set` reaches every `[post]` key, after the named flags.
+        let s = parse(&["--bloom", "0.1", "--set", "post.bloom=0.3"])
+            .settings(&plain)
+            .expect("settings");
+        assert_eq!(s.post.bloom, Some(0.3));
+        let e = parse(&["--set", "post.bloom=2"])
+            .settings(&plain)
+            .expect_err("out of range");
+        assert!(e.to_string().starts_with("post.bloom = 2"), "{e}");
+    }
+
+    #[test]
+    fn shadow_flags_override_the_scene_shadow_table() {
+        let plain = crate::scene::load_scene_arg(None).expect("the built-in scene");
+        let s = parse(&[]).settings(&plain).expect("settings");
+        assert_eq!(s.shadow, ShadowSettings::default());
+        let mut scene = plain.clone();
+        scene.shadow = text_layer::<ShadowSettings>(&[
+            ("shadow.cascades", "2"),
+            ("shadow.pcf_radius", "3"),
+            ("shadow.resolution", "auto"),
+        ]);
+        let s = parse(&[]).settings(&scene).expect("settings").shadow;
+        assert_eq!((s.cascades, s.pcf_radius, s.auto_resolution), (2, 3, true));
+        let s = parse(&["--shadow-resolution", "512", "--set", "shadow.cascades=1"])
+            .settings(&scene)
+            .expect("settings")
+            .shadow;
+        assert_eq!(
+            (s.cascades, s.pcf_radius, s.resolution, s.auto_resolution),
+            (1, 3, 512, false)
+        );
+        let s = parse(&["--area-samples", "4", "--point-shadows", "paraboloid"])
+            .settings(&plain)
+            .expect("settings")
+            .shadow;
+        assert_eq!(
+            (s.area_samples, s.point_technique),
+            (Some(4), crate::light::PointShadow::DualParaboloid)
+        );
+    }
+
+    /// A layer of `S` from `(path, text)` pairs, read as `--set` reads them.
+    fn text_layer<S: Settings>(values: &[(&str, &str)]) -> Layer {
+        let mut l = Layer::default();
+        for (path, text) in values {
+            let k = crate::scene::schema::key::<S>(path).expect(path);
+            l.set(k.path, k.kind.parse_checked(path, text).expect(text));
+        }
+        l
     }
 
     #[test]
@@ -722,14 +697,18 @@ mod tests {
         );
     }
 
-    /// Every GI flag is a key's, with the key's range: each flag given a value other than the
-    /// default's sets its key to it, and one past the key's range is refused naming the flag.
-    #[test]
-    fn every_gi_flag_maps_to_its_key_and_range() {
+    /// Every flag of every table is a key's, with the key's range: each flag given a value
+    /// other than the default's sets its key to it, `--set` reaches the same key with the same
+    /// value, and one past the key's range is refused naming the flag (or, by `--set`, the
+    /// key path). A new row is covered here without an edit.
+    fn every_flag_maps_to_its_key_and_range<S: Settings>(
+        table_layer: fn(&FrameArgs) -> Result<Layer, crate::cli::CliError>,
+    ) -> usize {
         use crate::scene::schema::Kind;
-        let d = GiSettings::default();
+        let d = S::default();
+        let layer = |args: &[&str]| table_layer(&parse(args)).expect("in range");
         let mut flags = 0;
-        for k in GiSettings::keys() {
+        for k in S::keys() {
             let Some(f) = k.flag else { continue };
             flags += 1;
             let flag = format!("--{}", f.long);
@@ -744,7 +723,7 @@ mod tests {
                     let name = k.kind.names()[other].clone();
                     (vec![flag.clone(), name], Value::Choice(other))
                 }
-                (_, Kind::Count(l), _) | (_, Kind::CountOr(l, ..), _) => {
+                (_, Kind::Count(l) | Kind::CountOr(l, ..) | Kind::OptCount(l, _), _) => {
                     let n = if l.min == 2 {
                         3
                     } else {
@@ -753,41 +732,45 @@ mod tests {
                     (vec![flag.clone(), n.to_string()], Value::Count(n))
                 }
                 (_, Kind::Pair(_), _) => (vec![flag.clone(), "2x3".into()], Value::Pair([2, 3])),
-                (_, Kind::Number(_) | Kind::OptNumber(..), _) => {
+                (_, Kind::Number(_) | Kind::OptNumber(..) | Kind::Switch(..), _) => {
                     (vec![flag.clone(), "0.375".into()], Value::Number(0.375))
                 }
                 other => panic!("{flag}: no test value for {other:?}"),
             };
             let args: Vec<&str> = text.iter().map(String::as_str).collect();
-            let layer = render_gi(&args);
-            assert_eq!(layer.iter().collect::<Vec<_>>(), [(k.path, want)], "{flag}");
-            // `--set` reaches the same key with the same value.
+            let given = layer(&args);
+            assert_eq!(given.iter().collect::<Vec<_>>(), [(k.path, want)], "{flag}");
             let set = format!("{}={}", k.path, k.kind.to_text(want));
-            assert_eq!(render_gi(&["--set", &set]), layer, "{set}");
-            // One past the range: the flag's error names the flag, `--set`'s the key.
+            assert_eq!(layer(&["--set", &set]), given, "{set}");
             let past = match k.kind {
-                Kind::Count(l) | Kind::CountOr(l, ..) => Some((l.max + 1).to_string()),
-                Kind::Number(l) | Kind::OptNumber(l, _) => Some(format!("{}", l.max * 2.0)),
+                Kind::Count(l) | Kind::CountOr(l, ..) | Kind::OptCount(l, _) => {
+                    Some((l.max + 1).to_string())
+                }
+                Kind::Number(l) | Kind::OptNumber(l, _) | Kind::Switch(l, _) => {
+                    Some(format!("{}", l.max * 2.0))
+                }
                 Kind::Pair(l) => Some(format!("{}x1", l.max + 1)),
                 _ => None,
             };
             if let Some(past) = past {
-                let e = parse(&[&flag, &past])
-                    .gi
-                    .layer()
+                let e = table_layer(&parse(&[&flag, &past]))
                     .expect_err(&flag)
                     .to_string();
                 assert!(e.starts_with(&format!("{flag} = ")), "{e}");
                 assert!(e.contains(&k.kind.expected()), "{e}");
                 let set = format!("{}={past}", k.path);
-                let e = parse(&["--set", &set])
-                    .gi
-                    .layer()
+                let e = table_layer(&parse(&["--set", &set]))
                     .expect_err(&set)
                     .to_string();
                 assert!(e.starts_with(&format!("{} = ", k.path)), "{e}");
             }
         }
+        flags
+    }
+
+    #[test]
+    fn every_gi_flag_maps_to_its_key_and_range() {
+        let flags = every_flag_maps_to_its_key_and_range::<GiSettings>(|a| a.gi.layer());
         assert!(flags >= 30, "{flags} GI flags");
         // Later values win: `--set` after the named flag.
         let l = render_gi(&["--gi-rays", "4", "--set", "gi.rays=8", "--set", "gi.rays=9"]);
@@ -797,34 +780,21 @@ mod tests {
             .layer()
             .expect_err("unknown");
         assert!(e.to_string().contains("gi.rays"), "{e}");
-    }
-}
-
-/// `--shadow-resolution`: texels per side, or `auto`.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum ShadowResolutionArg {
-    Texels(u32),
-    Auto,
-}
-
-impl std::str::FromStr for ShadowResolutionArg {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
-        match s {
-            "auto" => Ok(Self::Auto),
-            n => n
-                .parse()
-                .map(Self::Texels)
-                .map_err(|_| format!("`{n}`: expected texels per side (e.g. 1024) or `auto`")),
+        // A key of no table names every table's keys.
+        let e = parse(&["--set", "post.blom=0.1"])
+            .settings(&crate::scene::load_scene_arg(None).expect("built in"))
+            .expect_err("unknown");
+        for path in ["gi.rays", "post.bloom", "shadow.resolution"] {
+            assert!(e.to_string().contains(path), "{e}");
         }
     }
-}
 
-impl std::fmt::Display for ShadowResolutionArg {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            Self::Texels(n) => write!(f, "{n}"),
-            Self::Auto => f.write_str("auto"),
-        }
+    #[test]
+    fn every_post_and_shadow_flag_maps_to_its_key_and_range() {
+        let post = every_flag_maps_to_its_key_and_range::<PostTable>(|a| a.post.layer(&a.gi.set));
+        assert!(post >= 10, "{post} [post] flags");
+        let shadow =
+            every_flag_maps_to_its_key_and_range::<ShadowSettings>(|a| a.shadow.layer(&a.gi.set));
+        assert!(shadow >= 7, "{shadow} [shadow] flags");
     }
 }

@@ -2,7 +2,6 @@
 
 use super::args::GiArgs;
 use super::{out, outln, CliError, Global};
-use crate::post::ToneOperator;
 use crate::render::RenderSettings;
 use crate::voxel::debug_view::{DebugSettings, DebugView};
 use std::io::Write;
@@ -20,12 +19,6 @@ pub struct ViewArgs {
     pub width: u32,
     #[arg(long, default_value_t = 720)]
     pub height: u32,
-    /// Tone-mapping operator [default: the scene's `[post] tonemap`, else filmic].
-    #[arg(long, value_enum)]
-    pub tonemap: Option<ToneOperator>,
-    /// Exposure factor before tone mapping [default: the scene's `[post] exposure`, else 1].
-    #[arg(long, value_name = "E")]
-    pub exposure: Option<f32>,
     /// Start with a voxel debug view instead of the lit image (the panel switches views).
     #[arg(long, value_enum)]
     pub debug: Option<DebugView>,
@@ -64,6 +57,10 @@ pub struct ViewArgs {
     // "Post-processing" section changes it. In the viewer every frame is one TAA frame.
     #[command(flatten)]
     pub post: super::args::PostArgs,
+    // The initial shadows (over the scene's `[shadow]` table); the panel's "Shadows" section
+    // changes them.
+    #[command(flatten)]
+    pub shadow: super::args::ShadowArgs,
     // The initial indirect light; the panel changes it.
     #[command(flatten)]
     pub gi: GiArgs,
@@ -130,13 +127,14 @@ pub fn view(global: &Global, args: ViewArgs, out: &mut dyn Write) -> Result<(), 
         ..Default::default()
     };
     // The scene's `[post]` table starts the panel's post-processing; the flags override it.
-    let post = crate::scene::PostOverrides {
-        tonemap: args.tonemap,
-        exposure: args.exposure,
-        ..args.post.overrides()
-    };
     (settings.post, settings.tonemap) =
-        crate::post::apply_overrides(&post.or(scene.post), settings.post, settings.tonemap);
+        args.gi
+            .post(&args.post, &scene, settings.post, settings.tonemap)?;
+    // The scene's `[shadow]` table, under the flags, starts the panel's shadows ("Save scene"
+    // writes them back).
+    settings.shadow = args
+        .shadow
+        .apply(settings.shadow, &scene.shadow, &args.gi.set)?;
     settings.gi = args.gi.settings(&scene)?;
     args.gi.check_sao(&settings.gi)?;
     let name = super::sweep::scene_name(args.scene.as_deref().unwrap_or("cornell"));

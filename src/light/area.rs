@@ -20,8 +20,8 @@
 //!    the receiver would need one per receiver). Far away the sum is L·πR²/d², the sphere's
 //!    exact irradiance (∫ max(n·w, 0) dA = πR²).
 
-use super::settings::{AreaShadow, ShadowSettings};
 use crate::scene::Light;
+use crate::scene::{AreaShadow, ShadowSettings};
 use glam::Vec3;
 
 /// The lights a frame renders with `settings`: [`sample_lights`], except that with

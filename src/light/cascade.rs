@@ -17,8 +17,8 @@
 //! Only the camera's direct light (`deferred_direct`) reads the cascades: the reflective light
 //! maps, the VPLs and the path tracer keep the light's single whole-scene map.
 
-use super::settings::ShadowSettings;
 use super::shadow::{ShadowProjection, ShadowView};
+use crate::scene::ShadowSettings;
 use crate::scene::{Aabb, Camera, Light, Projection};
 use glam::{Mat4, Vec3};
 

@@ -6,8 +6,7 @@
 
 pub mod area;
 pub mod cascade;
-mod settings;
 mod shadow;
 
-pub use settings::{AreaShadow, PointShadow, ShadowSettings, DEFAULT_CASCADES};
+pub use crate::scene::{AreaShadow, PointShadow, ShadowSettings, DEFAULT_CASCADES};
 pub use shadow::{shadow_views, LightShadows, ShadowProjection, ShadowView};

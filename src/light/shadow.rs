@@ -7,9 +7,9 @@
 //! Directional lights may add cascades for the camera's direct light ([`cascade_views`]):
 //! orthographic maps fitted to slices of the view frustum, after every light's own views.
 
-use super::settings::{PointShadow, ShadowSettings};
 use crate::scene::aabb_visible;
 use crate::scene::{Aabb, Light, Scene};
+use crate::scene::{PointShadow, ShadowSettings};
 use glam::{Mat4, Vec3};
 
 /// The projection of a shadow view.

@@ -12,31 +12,17 @@ pub fn check_render_settings(s: &RenderSettings) -> Result<(), LimitError> {
     WIDTH.check_flag(s.width)?;
     HEIGHT.check_flag(s.height)?;
     TIME_S.check_flag(s.time_s)?;
-    EXPOSURE.check_flag(s.tonemap.exposure)?;
-    SHADOW_RESOLUTION.check_flag(s.shadow.resolution)?;
-    PCF_RADIUS.check_flag(s.shadow.pcf_radius)?;
-    SHADOW_CASCADES.check_flag(s.shadow.cascades)?;
-    SHADOW_CASCADE_LAMBDA.check_flag(s.shadow.cascade_lambda)?;
-    if let Some(n) = s.shadow.area_samples {
-        AREA_SAMPLES.check_flag(n)?;
-    }
+    crate::scene::schema::check(&crate::scene::PostTable {
+        post: s.post,
+        tonemap: s.tonemap,
+    })?;
+    crate::scene::schema::check(&s.shadow)?;
     if let Some(v) = &s.voxels {
         VOXELS.check_flag(v.max_res_xy)?;
         VOXEL_LAYERS.check_flag(v.layers)?;
     }
     check_gi(&s.gi)?;
     OIT_NODES_PER_PIXEL.check_flag(s.oit_nodes_per_pixel)?;
-    if let Some(t) = &s.post.taa {
-        TAA_HISTORY_WEIGHT.check_flag(t.history_weight)?;
-        TAA_FRAMES.check_flag(t.frames)?;
-    }
-    if let Some(a) = &s.post.auto_exposure {
-        AUTO_EXPOSURE_KEY.check_flag(a.key)?;
-        EXPOSURE_ADAPTATION.check_flag(a.adaptation)?;
-    }
-    if let Some(b) = s.post.bloom {
-        BLOOM_STRENGTH.check_flag(b)?;
-    }
     if let Some(d) = &s.debug {
         DEBUG_LEVEL.check_flag(d.level)?;
         DEBUG_STEPS_SCALE.check_flag(d.steps_scale)?;
@@ -54,7 +40,10 @@ pub fn check_device_limits(
     let sizes = [
         (&WIDTH, s.width),
         (&HEIGHT, s.height),
-        (&SHADOW_RESOLUTION, s.shadow.resolution),
+        (
+            &crate::scene::shadow_range::SHADOW_RESOLUTION,
+            s.shadow.resolution,
+        ),
         (
             &crate::scene::gi_range::LIGHT_MAP_RESOLUTION,
             s.gi.light_map_resolution,

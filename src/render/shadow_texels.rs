@@ -194,7 +194,7 @@ pub fn resolve_auto_resolution(
     scene: &crate::scene::Scene,
     settings: &super::RenderSettings,
 ) -> Result<(super::RenderSettings, AutoShadowResolution), super::RenderError> {
-    let max = crate::limits::SHADOW_RESOLUTION
+    let max = crate::scene::shadow_range::SHADOW_RESOLUTION
         .max
         .min(ctx.info.max_image_dimension_2d);
     let probe_res = AUTO_PROBE_RESOLUTION.min(max);

@@ -16,8 +16,7 @@ use super::obj::AssetStore;
 use super::object::{rotation_from_euler_xyz_deg, Animation, Keyframe, Object, Transform};
 use super::schema::{Layer, RawTable, Settings, TomlValueError};
 use super::Scene;
-use super::ShadowOverrides;
-use crate::limits::{self, Limit};
+use crate::limits;
 
 /// A number or three numbers (`scale = 2` or `scale = [1, 2, 1]`; `albedo = 0.5`).
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
@@ -47,36 +46,11 @@ pub(crate) struct SceneDesc {
     pub objects: Vec<ObjectDesc>,
     pub voxel: Option<toml::Table>,
     pub gi: Option<RawTable<GiSettings>>,
-    pub shadow: Option<ShadowDesc>,
-    pub post: Option<PostDesc>,
+    pub shadow: Option<RawTable<super::ShadowSettings>>,
+    pub post: Option<RawTable<super::PostTable>>,
     pub camera_path: Option<CameraPathDesc>,
     /// "oit" or "hashed" ([`super::Transparency`]).
     pub transparency: Option<String>,
-}
-
-/// The `[shadow]` table (`cascades` signed so that a negative count names the key).
-#[derive(Clone, Debug, Default, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub(crate) struct ShadowDesc {
-    pub cascades: Option<i64>,
-    pub cascade_lambda: Option<f32>,
-}
-
-/// The `[post]` table (`taa_frames` signed so that a negative count names the key;
-/// `auto_exposure` and `bloom` a number or a boolean, checked by [`build_post`]).
-#[derive(Clone, Debug, Default, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub(crate) struct PostDesc {
-    pub taa: Option<bool>,
-    pub taa_history_weight: Option<f32>,
-    pub taa_frames: Option<i64>,
-    pub auto_exposure: Option<toml::Value>,
-    pub exposure_adaptation: Option<f32>,
-    pub bloom: Option<toml::Value>,
-    pub fxaa: Option<bool>,
-    pub dither: Option<bool>,
-    pub tonemap: Option<String>,
-    pub exposure: Option<f32>,
 }
 
 /// The `[camera_path]` table, checked by [`build_camera_path`].
@@ -448,13 +422,13 @@ pub(crate) fn build_with(
     let shadow = desc
         .shadow
         .as_ref()
-        .map(|t| build_shadow(&ck, t))
+        .map(|t| build_table(&ck, t))
         .transpose()?
         .unwrap_or_default();
     let post = desc
         .post
         .as_ref()
-        .map(|t| build_post(&ck, t))
+        .map(|t| build_table(&ck, t))
         .transpose()?
         .unwrap_or_default();
     let mut lights = desc
@@ -759,114 +733,6 @@ fn build_table<S: Settings>(ck: &Check<'_>, t: &RawTable<S>) -> Result<Layer, Sc
         layer.set(k.path, value);
     }
     Ok(layer)
-}
-
-/// Checks the `[shadow]` table against the flags' ranges (`crate::limits`).
-fn build_shadow(ck: &Check<'_>, t: &ShadowDesc) -> Result<ShadowOverrides, SceneError> {
-    let cascades = t
-        .cascades
-        .map(|v| {
-            let key = "shadow.cascades";
-            limits::SHADOW_CASCADES
-                .check_as(key, v)
-                .map_err(|e| ck.invalid(key, limit_message(&e)))
-        })
-        .transpose()?;
-    let cascade_lambda = t
-        .cascade_lambda
-        .map(|v| {
-            let key = "shadow.cascade_lambda";
-            let v = ck.scalar(key, v)?;
-            limits::SHADOW_CASCADE_LAMBDA
-                .check_as(key, v)
-                .map_err(|e| ck.invalid(key, limit_message(&e)))
-        })
-        .transpose()?;
-    Ok(ShadowOverrides {
-        cascades,
-        cascade_lambda,
-    })
-}
-
-/// Checks the `[post]` table against the flags' ranges (`crate::limits`).
-fn build_post(ck: &Check<'_>, t: &PostDesc) -> Result<super::PostOverrides, SceneError> {
-    use super::Stage;
-    let number = |limit: &Limit<f32>, v: Option<f32>| {
-        v.map(|v| {
-            let key = limit.key.unwrap_or(limit.flag);
-            let v = ck.scalar(key, v)?;
-            limit
-                .check_as(key, v)
-                .map_err(|e| ck.invalid(key, limit_message(&e)))
-        })
-        .transpose()
-    };
-    // A number (the stage on with that value) or a boolean (on with the default; off).
-    let stage = |limit: &Limit<f32>, v: &Option<toml::Value>, bool_on: bool| {
-        let key = limit.key.unwrap_or(limit.flag);
-        let v = match v {
-            None => return Ok(None),
-            Some(v) => v,
-        };
-        let value = match v {
-            toml::Value::Float(f) => Some(*f as f32),
-            toml::Value::Integer(i) => Some(*i as f32),
-            toml::Value::Boolean(false) => return Ok(Some(Stage::Off)),
-            toml::Value::Boolean(true) if bool_on => return Ok(Some(Stage::On(None))),
-            _ => None,
-        };
-        let words = if bool_on {
-            "a number, true (the default) or false (off)"
-        } else {
-            "a number or false (off)"
-        };
-        let value = value
-            .ok_or_else(|| ck.invalid(key, format!("{v}; expected {}: {words}", limit.what)))?;
-        Ok(Some(Stage::On(number(limit, Some(value))?)))
-    };
-    let tonemap = named(ck, "post.tonemap", &super::ToneOperator::NAMES, &t.tonemap)?;
-    let taa_frames = t
-        .taa_frames
-        .map(|v| {
-            let key = "post.taa_frames";
-            limits::TAA_FRAMES
-                .check_as(key, v)
-                .map_err(|e| ck.invalid(key, limit_message(&e)))
-        })
-        .transpose()?;
-    Ok(super::PostOverrides {
-        taa: t.taa,
-        taa_history_weight: number(&limits::TAA_HISTORY_WEIGHT, t.taa_history_weight)?,
-        taa_frames,
-        auto_exposure: stage(&limits::AUTO_EXPOSURE_KEY, &t.auto_exposure, true)?,
-        exposure_adaptation: number(&limits::EXPOSURE_ADAPTATION, t.exposure_adaptation)?,
-        bloom: stage(&limits::BLOOM_STRENGTH, &t.bloom, false)?,
-        fxaa: t.fxaa,
-        dither: t.dither,
-        tonemap,
-        exposure: number(&limits::EXPOSURE, t.exposure)?,
-    })
-}
-
-/// The value named `name` among `names` (a `[gi]` key's choices); an error listing them.
-fn named<T: Copy>(
-    ck: &Check<'_>,
-    key: &str,
-    names: &[(&str, T)],
-    name: &Option<String>,
-) -> Result<Option<T>, SceneError> {
-    let Some(name) = name else { return Ok(None) };
-    names
-        .iter()
-        .find(|(n, _)| *n == name.as_str())
-        .map(|&(_, v)| Some(v))
-        .ok_or_else(|| {
-            let all: Vec<String> = names.iter().map(|(n, _)| format!("\"{n}\"")).collect();
-            ck.invalid(
-                key,
-                format!("unknown value \"{name}\"; expected {}", all.join(" or ")),
-            )
-        })
 }
 
 /// An object's `crease_deg`: in [0, 180], default 60.

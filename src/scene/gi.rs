@@ -13,7 +13,7 @@ pub fn resolve_gi(scene: &Layer, cli: &Layer) -> GiSettings {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::schema::{key, Settings, Value};
+    use crate::scene::schema::key;
     use crate::scene::{Bounces, GiMethod};
 
     /// A layer from `(path, text)` pairs, read as `--set` reads them.
@@ -94,41 +94,11 @@ mod tests {
         assert_eq!(s.map(|s| s.radius_m), Some(0.25));
     }
 
-    /// Every key writes its own field and reads it back: a value other than the default's
-    /// set through the key comes back from the settings, and no other key's value changes.
     #[test]
     fn every_key_reads_and_writes_its_own_field() {
-        let d = GiSettings::default();
-        for k in GiSettings::keys() {
-            let other = match (k.kind, (k.get)(&d)) {
-                (crate::scene::schema::Kind::Choice(_), Value::Choice(i)) => {
-                    Value::Choice(usize::from(i == 0))
-                }
-                (_, Value::Count(n)) => Value::Count(if n == 2 { 3 } else { 2 }),
-                (_, Value::Number(_) | Value::Unset) => Value::Number(0.375),
-                (_, Value::Bool(b)) => Value::Bool(!b),
-                (_, Value::Pair([n, m])) => Value::Pair([n + 1, m + 2]),
-                (_, Value::Word | Value::Choice(_)) => Value::Count(2),
-            };
-            // SAO's values are kept only where SAO is on.
-            let mut l = layer(&[("gi.sao", "true")]);
-            l.set(k.path, other);
-            let s = resolve_gi(&l, &Layer::default());
-            assert_eq!((k.get)(&s), other, "{}", k.path);
-            for j in GiSettings::keys().iter().filter(|j| j.path != k.path) {
-                let base = resolve_gi(&layer(&[("gi.sao", "true")]), &Layer::default());
-                assert_eq!((j.get)(&s), (j.get)(&base), "{} moved {}", k.path, j.path);
-            }
-        }
-    }
-
-    #[test]
-    fn key_paths_are_unique_and_name_their_table() {
-        let paths = crate::scene::schema::paths::<GiSettings>();
-        let mut unique = paths.clone();
-        unique.sort_unstable();
-        unique.dedup();
-        assert_eq!(unique.len(), paths.len());
-        assert!(paths.iter().all(|p| p.starts_with("gi.")), "{paths:?}");
+        // SAO's values are kept only where SAO is on.
+        crate::scene::schema::assert_every_key_reads_and_writes_its_own_field::<GiSettings>(
+            &layer(&[("gi.sao", "true")]),
+        );
     }
 }

@@ -202,6 +202,7 @@ mod post_settings;
 mod query;
 pub mod save;
 pub mod schema;
+mod shadow_settings;
 pub mod vpl_settings;
 
 use std::path::{Path, PathBuf};
@@ -227,19 +228,15 @@ pub use mesh::{area_weighted_normals, Aabb, Mesh, SubMesh, BUILTIN_MESH_NAMES};
 pub use object::{
     euler_xyz_deg, rotation_from_euler_xyz_deg, Animation, Keyframe, Object, Transform,
 };
-pub use post_settings::{PostOverrides, Stage, ToneOperator};
+pub use post_settings::{
+    range as post_range, AutoExposure, PostSettings, PostTable, TaaSettings, ToneMap, ToneOperator,
+};
 pub use query::NoSuchObject;
+pub use shadow_settings::{
+    range as shadow_range, AreaShadow, PointShadow, ShadowSettings, AUTO_RESOLUTION_NAME,
+    DEFAULT_CASCADES,
+};
 pub use vpl_settings::{VplSettings, VplShading, VplVisibility};
-
-/// The `[shadow]` table's values (nothing given without the table); the command line's flags
-/// override each.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct ShadowOverrides {
-    /// Cascades per directional light (`light::cascade`).
-    pub cascades: Option<u32>,
-    /// Blend of logarithmic and uniform cascade splits.
-    pub cascade_lambda: Option<f32>,
-}
 
 /// A loaded, validated scene: everything finite, directions unit length, indices in range.
 #[derive(Clone, Debug)]
@@ -265,11 +262,12 @@ pub struct Scene {
     /// The top-level `transparency` key ("oit" or "hashed"): how the camera view draws
     /// surfaces with d < 1 unless `--transparency` says otherwise; `None` without the key.
     pub transparency: Option<Transparency>,
-    /// The `[shadow]` table: the scene's defaults of shadow settings (flags override them).
-    pub shadow: ShadowOverrides,
-    /// The `[post]` table: the scene's defaults of the post-processing settings (flags
-    /// override them; `crate::post::apply_overrides`).
-    pub post: PostOverrides,
+    /// The `[shadow]` table: the scene's layer of the shadow settings (flags override it;
+    /// the keys are [`ShadowSettings::keys`](schema::Settings::keys)).
+    pub shadow: schema::Layer,
+    /// The `[post]` table: the scene's layer of the post-processing settings (flags override
+    /// it; the keys are [`PostTable::keys`](schema::Settings::keys)).
+    pub post: schema::Layer,
     /// The scene file; `None` for built-in scenes.
     pub source: Option<PathBuf>,
 }

@@ -1,11 +1,12 @@
-//! The post-processing settings a scene's `[post]` table gives (plain data, at the bottom so
-//! that scene files, the command line and the viewer share them with `crate::post`, which
-//! re-exports [`ToneOperator`] and applies [`PostOverrides`]).
+//! The post-processing settings: plain data at the bottom, so that scene files (`[post]`
+//! tables), the command line and the viewer's panel share them with `crate::post`, which
+//! re-exports them. The `[post]` keys are declared once, in [`PostTable::keys`]'s table
+//! (`scene::schema`).
 
-use serde::{Deserialize, Serialize};
+use super::schema::{choices, FieldValue, Flag, FlagStyle, Key, Kind, Settings, Value};
 
 /// Tone-mapping operator of `glsl/tonemap.comp`.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, clap::ValueEnum)]
 #[serde(rename_all = "lowercase")]
 pub enum ToneOperator {
     /// Exposure, then clamp.
@@ -28,72 +29,300 @@ impl ToneOperator {
             ToneOperator::Filmic => 3,
         }
     }
-
-    /// The names a scene file's `tonemap` takes (those of `--tonemap`).
-    pub const NAMES: [(&'static str, ToneOperator); 4] = [
-        ("linear", ToneOperator::Linear),
-        ("logarithmic", ToneOperator::Logarithmic),
-        ("drago", ToneOperator::Drago),
-        ("filmic", ToneOperator::Filmic),
-    ];
 }
 
-/// A post stage switched off, or on with its parameter (`None`: the stage's default): auto
-/// exposure's key (`--auto-exposure [KEY|off]`, `auto_exposure = true | KEY | false`) and
-/// bloom's strength (`--bloom STRENGTH|off`, `bloom = STRENGTH | false`).
+/// Tone-mapping parameters.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Stage {
-    Off,
-    On(Option<f32>),
+pub struct ToneMap {
+    pub operator: ToneOperator,
+    /// Multiplies radiance before the operator.
+    pub exposure: f32,
+    /// Luminance (after exposure) mapped to display white by the logarithmic operators.
+    pub white: f32,
+    /// Drago's bias b in [0.5, 1].
+    pub drago_bias: f32,
+    /// Triangular dither of ±1/255 before the 8-bit quantization (`--dither`).
+    pub dither: bool,
 }
 
-/// Post-processing settings given by a scene file's `[post]` table or by the command line's
-/// flags; `None`: not given there. The flags override the table, which overrides the
-/// defaults (`crate::post::apply_overrides`).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct PostOverrides {
-    /// TAA on or off (`taa`, `--taa [on|off]`).
-    pub taa: Option<bool>,
-    pub taa_history_weight: Option<f32>,
-    pub taa_frames: Option<u32>,
-    pub auto_exposure: Option<Stage>,
-    pub exposure_adaptation: Option<f32>,
-    pub bloom: Option<Stage>,
-    pub fxaa: Option<bool>,
-    pub dither: Option<bool>,
-    pub tonemap: Option<ToneOperator>,
-    /// The exposure factor (a compensation with auto exposure).
-    pub exposure: Option<f32>,
-}
-
-impl PostOverrides {
-    /// Nothing given.
-    pub fn is_empty(&self) -> bool {
-        *self == Self::default()
-    }
-
-    /// Field by field: `self`'s value where given, else `fallback`'s.
-    pub fn or(self, fallback: PostOverrides) -> PostOverrides {
-        PostOverrides {
-            taa: self.taa.or(fallback.taa),
-            taa_history_weight: self.taa_history_weight.or(fallback.taa_history_weight),
-            taa_frames: self.taa_frames.or(fallback.taa_frames),
-            auto_exposure: stage_or(self.auto_exposure, fallback.auto_exposure),
-            exposure_adaptation: self.exposure_adaptation.or(fallback.exposure_adaptation),
-            bloom: stage_or(self.bloom, fallback.bloom),
-            fxaa: self.fxaa.or(fallback.fxaa),
-            dither: self.dither.or(fallback.dither),
-            tonemap: self.tonemap.or(fallback.tonemap),
-            exposure: self.exposure.or(fallback.exposure),
+impl Default for ToneMap {
+    fn default() -> Self {
+        Self {
+            operator: ToneOperator::Filmic,
+            exposure: 1.0,
+            white: 1.0,
+            drago_bias: 0.85,
+            dither: false,
         }
     }
 }
 
-/// `a` where given, else `b`; a stage switched on without its value (`--auto-exposure` alone)
-/// keeps `b`'s value when `b` has one.
-fn stage_or(a: Option<Stage>, b: Option<Stage>) -> Option<Stage> {
-    match (a, b) {
-        (Some(Stage::On(None)), Some(Stage::On(Some(v)))) => Some(Stage::On(Some(v))),
-        (a, b) => a.or(b),
+/// Temporal anti-aliasing (`--taa`; Oetke 2017 §4.5).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TaaSettings {
+    /// α: the weight of the reprojected history in each frame's blend (the current frame
+    /// gets 1 − α, or 1/(n+1) while only n < 1/(1 − α) frames are in the history).
+    pub history_weight: f32,
+    /// Frames a headless render runs (jittered), so a still image is anti-aliased.
+    pub frames: u32,
+    /// Reproject moving objects' pixels with their motion vectors (scenes with moving objects
+    /// only; false reprojects them with the camera alone, for comparisons).
+    pub motion_vectors: bool,
+}
+
+impl Default for TaaSettings {
+    fn default() -> Self {
+        Self {
+            history_weight: 0.9,
+            frames: 16,
+            motion_vectors: true,
+        }
     }
+}
+
+/// Auto exposure (`--auto-exposure KEY`; Reinhard et al. 2002 §3.1, Oetke 2017 §4.4).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AutoExposure {
+    /// The key value a: the exposure is a / L̄, L̄ the log-average luminance.
+    pub key: f32,
+    /// Fraction of the way (in log exposure) towards the target covered per frame, in (0, 1].
+    pub adaptation: f32,
+}
+
+impl Default for AutoExposure {
+    fn default() -> Self {
+        Self {
+            key: 0.18,
+            adaptation: 0.05,
+        }
+    }
+}
+
+/// The post-processing stages around tone mapping; all off by default.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PostSettings {
+    pub taa: Option<TaaSettings>,
+    /// Multiplies `--exposure` (which stays a compensation factor).
+    pub auto_exposure: Option<AutoExposure>,
+    /// Bloom strength s in [0, 1] (`--bloom`): the share of the radiance moved into the blur.
+    pub bloom: Option<f32>,
+    /// FXAA after tone mapping (`--fxaa`).
+    pub fxaa: bool,
+}
+
+impl PostSettings {
+    /// Whether the G-buffer draws motion vectors: only for a scene with moving objects
+    /// (`moving`) under TAA that asks for them.
+    pub fn motion_vectors(&self, moving: bool) -> bool {
+        moving && self.taa.is_some_and(|t| t.motion_vectors)
+    }
+}
+
+/// The `[post]` table's settings: the stages around tone mapping and the tone map. Two parts
+/// because a frame keeps them apart: a new tone map only needs a new frame graph, a new stage
+/// a new renderer.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PostTable {
+    pub post: PostSettings,
+    pub tonemap: ToneMap,
+}
+
+/// `--flag VALUE`.
+const fn flag(long: &'static str, value_name: &'static str) -> Option<Flag> {
+    Some(Flag {
+        long,
+        value_name,
+        style: FlagStyle::Value,
+    })
+}
+
+/// `--flag [on|off]`.
+const fn toggle(long: &'static str) -> Option<Flag> {
+    Some(Flag {
+        long,
+        value_name: "on|off",
+        style: FlagStyle::Toggle,
+    })
+}
+
+/// A stage's value (`taa $f` of [`TaaSettings`], `auto_exposure $f` of [`AutoExposure`]),
+/// written into the stage, which it switches on with the defaults for the others; the stage's
+/// switch, written after its values, switches it off again where it is not on (as `gi.sao`
+/// does for SAO's values).
+macro_rules! key {
+    ($path:literal, $kind:expr, $doc:literal, $flag:expr, stage $stage:ident $f:ident) => {
+        crate::settings_key!(PostTable; $path, $kind, $doc, $flag,
+            get |s: &PostTable| FieldValue::to_value(&s.post.$stage.unwrap_or_default().$f),
+            set |s: &mut PostTable, v| {
+                if let Some(x) = FieldValue::from_value(v) {
+                    s.post.$stage.get_or_insert_with(Default::default).$f = x;
+                }
+            })
+    };
+    ($($t:tt)*) => {
+        crate::settings_key!(PostTable; $($t)*)
+    };
+}
+
+use range::*;
+
+/// Every `[post]` key: the scene file's key, the path `--set` and the panel use, its range,
+/// its flag and its field.
+static POST_KEYS: [Key<PostTable>; 11] = [
+    key!("post.taa_history_weight", Kind::Number(TAA_HISTORY_WEIGHT),
+        "TAA history weight α: each frame keeps α of the reprojected history",
+        flag("taa-history-weight", "ALPHA"), stage taa history_weight),
+    key!("post.taa_frames", Kind::Count(TAA_FRAMES),
+        "Frames a headless render with TAA runs; the viewer blends one per frame and has no \
+         count",
+        flag("taa-frames", "N"), stage taa frames),
+    // After the TAA values.
+    key!("post.taa", Kind::Bool,
+    "Temporal anti-aliasing: Halton(2,3) sub-pixel jitter, reprojected and clipped history \
+     (a headless render runs --taa-frames frames); `--taa off` turns off the scene's",
+    toggle("taa"),
+    get |s: &PostTable| Value::Bool(s.post.taa.is_some()),
+    set |s: &mut PostTable, v| if let Value::Bool(on) = v {
+        s.post.taa = on.then(|| s.post.taa.unwrap_or_default());
+    }),
+    key!("post.exposure_adaptation", Kind::Number(EXPOSURE_ADAPTATION),
+        "Auto exposure: fraction of the way (in log exposure) to the target per frame",
+        flag("exposure-adaptation", "F"), stage auto_exposure adaptation),
+    // After the adaptation.
+    key!("post.auto_exposure", Kind::Switch(AUTO_EXPOSURE_KEY, true),
+    "Auto exposure: exposure = KEY / log-average luminance (KEY 0.18 when left out), \
+     adapted over frames; --exposure then multiplies it as a compensation; `off` turns off \
+     the scene's",
+    Some(Flag { long: "auto-exposure", value_name: "KEY|off", style: FlagStyle::OptionalValue }),
+    get |s: &PostTable| s.post.auto_exposure.map_or(Value::Bool(false), |a| Value::Number(a.key)),
+    set |s: &mut PostTable, v| match v {
+        Value::Number(key) => {
+            s.post.auto_exposure = Some(AutoExposure { key, ..s.post.auto_exposure.unwrap_or_default() });
+        }
+        Value::Bool(on) => s.post.auto_exposure = on.then(|| s.post.auto_exposure.unwrap_or_default()),
+        _ => {}
+    }),
+    key!("post.bloom", Kind::Switch(BLOOM_STRENGTH, false),
+    "Bloom: moves the share STRENGTH of the radiance into a wide blur (energy-conserving, \
+     no threshold); `off` turns off the scene's",
+    flag("bloom", "STRENGTH|off"),
+    get |s: &PostTable| s.post.bloom.map_or(Value::Bool(false), Value::Number),
+    set |s: &mut PostTable, v| match v {
+        Value::Number(x) => s.post.bloom = Some(x),
+        Value::Bool(false) => s.post.bloom = None,
+        _ => {}
+    }),
+    key!(
+        "post.fxaa",
+        Kind::Bool,
+        "FXAA on the tone-mapped image",
+        toggle("fxaa"),
+        post.fxaa
+    ),
+    key!(
+        "post.dither",
+        Kind::Bool,
+        "Triangular dither of ±1/255 before the 8-bit quantization (no banding on gradients)",
+        toggle("dither"),
+        tonemap.dither
+    ),
+    key!("post.tonemap", Kind::Choice(choices::<ToneOperator>), "Tone-mapping operator",
+        flag("tonemap", "TONEMAP"), choice ToneOperator, tonemap.operator),
+    key!(
+        "post.exposure",
+        Kind::Number(EXPOSURE),
+        "Exposure factor before tone mapping (a compensation with auto exposure)",
+        flag("exposure", "E"),
+        tonemap.exposure
+    ),
+    key!(
+        "post.white",
+        Kind::Number(WHITE),
+        "Luminance (after exposure) the logarithmic and Drago operators map to display white",
+        flag("tonemap-white", "L"),
+        tonemap.white
+    ),
+];
+
+impl Settings for PostTable {
+    const TABLE: &'static str = "post";
+    fn keys() -> &'static [Key<Self>] {
+        &POST_KEYS
+    }
+}
+
+/// The ranges of the `[post]` keys (and their flags), which [`PostTable::keys`] gives each
+/// key; the panel's sliders are cut to them.
+pub mod range {
+    use crate::limits::Limit;
+
+    /// Exposure multiplies the radiance before tone mapping; 0 would be black, NaN garbage.
+    pub const EXPOSURE: Limit<f32> = Limit {
+        min_exclusive: true,
+        ..Limit::new(
+            "--exposure",
+            Some("post.exposure"),
+            "an exposure factor",
+            0.0,
+            1e6,
+        )
+    };
+    /// TAA history weight α in [0, 0.999]: 1 would never let the current frame in.
+    pub const TAA_HISTORY_WEIGHT: Limit<f32> = Limit::new(
+        "--taa-history-weight",
+        Some("post.taa_history_weight"),
+        "a TAA history weight",
+        0.0,
+        0.999,
+    );
+    /// Frames of a headless TAA render.
+    pub const TAA_FRAMES: Limit<u32> = Limit::new(
+        "--taa-frames",
+        Some("post.taa_frames"),
+        "a number of TAA frames",
+        1,
+        4096,
+    );
+    /// Auto exposure's key value (the display luminance of the log-average scene luminance).
+    pub const AUTO_EXPOSURE_KEY: Limit<f32> = Limit {
+        min_exclusive: true,
+        ..Limit::new(
+            "--auto-exposure",
+            Some("post.auto_exposure"),
+            "an auto exposure key value",
+            0.0,
+            1e3,
+        )
+    };
+    /// Auto exposure's adaptation per frame: 0 would never adapt, 1 jumps at once.
+    pub const EXPOSURE_ADAPTATION: Limit<f32> = Limit {
+        min_exclusive: true,
+        ..Limit::new(
+            "--exposure-adaptation",
+            Some("post.exposure_adaptation"),
+            "an adaptation fraction per frame",
+            0.0,
+            1.0,
+        )
+    };
+    /// The logarithmic operators divide by log(1 + white): positive (`glsl/tonemap.comp`
+    /// clamps it to 1e-6 for the same reason), at most the exposure's range.
+    pub const WHITE: Limit<f32> = Limit {
+        min_exclusive: true,
+        ..Limit::new(
+            "--tonemap-white",
+            Some("post.white"),
+            "a white luminance",
+            0.0,
+            1e6,
+        )
+    };
+    /// Bloom strength: the share of the radiance moved into the blur.
+    pub const BLOOM_STRENGTH: Limit<f32> = Limit::new(
+        "--bloom",
+        Some("post.bloom"),
+        "a bloom strength (share of the radiance)",
+        0.0,
+        1.0,
+    );
 }

@@ -1,5 +1,6 @@
 //! Writing edits back into a scene file: the viewer's moved objects, edited, added and removed
-//! lights, camera and recorded camera path, with everything else of the file kept as written
+//! lights, camera, recorded camera path and frame settings (`[gi]`, `[post]`, `[shadow]`, by
+//! their key tables), with everything else of the file kept as written
 //! (other keys, comments, order, formatting: the text is edited with `toml_edit`, not
 //! re-serialized).
 //!
@@ -20,7 +21,8 @@ use super::camera_path::CameraPath;
 use super::desc::{self, Check, LightDesc};
 use super::light::Light;
 use super::object::Transform;
-use super::SceneError;
+use super::schema::Settings;
+use super::{GiSettings, PostTable, SceneError, ShadowSettings};
 
 /// Why a scene could not be saved. Each says what to do.
 #[derive(Debug, thiserror::Error)]
@@ -72,6 +74,69 @@ pub struct SceneEdits {
     /// The folder relative `mesh` and `obj_sequence` paths were resolved against, when the
     /// file is saved into another folder: they are written as absolute paths then.
     pub relocate_from: Option<PathBuf>,
+    /// The frame settings to write into `[gi]`, `[post]` and `[shadow]`, `None` to leave them.
+    pub settings: Option<FrameTables>,
+}
+
+/// The settings of a frame's `[gi]`, `[post]` and `[shadow]` tables, as a save writes them.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct FrameTables {
+    pub gi: GiSettings,
+    pub post: PostTable,
+    pub shadow: ShadowSettings,
+}
+
+/// Writes `s` into the table `S::TABLE` of `doc` key by key, so that the file loads back as
+/// `s`: a key the file gives is set where its value differs (keeping its place and comment;
+/// an unset value removes it), a key it leaves out is added where `s` differs from the
+/// default. A table without keys is not added.
+fn write_settings<S: Settings>(doc: &mut DocumentMut, s: &S, file: &Path) -> Result<(), SaveError> {
+    let default = S::default();
+    let existed = doc.contains_key(S::TABLE);
+    let table = doc
+        .entry(S::TABLE)
+        .or_insert_with(|| Item::Table(Table::new()))
+        .as_table_like_mut()
+        .ok_or_else(|| SaveError::Syntax {
+            file: file.to_path_buf(),
+            reason: format!("its `{}` is not a table", S::TABLE),
+        })?;
+    for k in S::keys() {
+        let v = (k.get)(s);
+        // The value as the file writes it, read as the loader reads it.
+        let written = table.get(k.name()).and_then(Item::as_value).map(|old| {
+            let mut old = old.clone();
+            old.decor_mut().clear();
+            toml::from_str::<toml::Table>(&format!("v = {old}"))
+                .ok()
+                .and_then(|t| t.get("v").cloned())
+        });
+        let same = match &written {
+            Some(Some(old)) => k.kind.from_toml(k.path, old).ok() == Some(v),
+            Some(None) => false,
+            None => v == (k.get)(&default),
+        };
+        if same {
+            continue;
+        }
+        match k.kind.to_toml(v) {
+            None => {
+                table.remove(k.name());
+            }
+            Some(t) => {
+                let text = t.to_string();
+                let value = text.parse::<Value>().map_err(|e| SaveError::Syntax {
+                    file: file.to_path_buf(),
+                    reason: format!("`{}` = {text}: {e}", k.path),
+                })?;
+                set(table, k.name(), value);
+            }
+        }
+    }
+    if table.is_empty() && !existed {
+        doc.remove(S::TABLE);
+    }
+    Ok(())
 }
 
 /// A float as the shortest decimal that reads back as the same f32 (-0 as 0).
@@ -444,6 +509,11 @@ pub fn apply_edits(text: &str, file: &Path, edits: &SceneEdits) -> Result<String
             doc.insert("camera_path", item.clone());
         }
     }
+    if let Some(t) = &edits.settings {
+        write_settings(&mut doc, &t.gi, file)?;
+        write_settings(&mut doc, &t.post, file)?;
+        write_settings(&mut doc, &t.shadow, file)?;
+    }
     Ok(doc.to_string())
 }
 
@@ -669,6 +739,92 @@ mod tests {
         assert!(err.to_string().contains("3 `[[objects]]`"), "{err}");
         let err = apply_edits("[camera", Path::new(FILE), &e).expect_err("syntax");
         assert!(err.to_string().contains(FILE), "{err}");
+    }
+
+    /// The frame's `[gi]`, `[post]` and `[shadow]` settings as `load` gives them.
+    fn frame_tables(s: &Scene) -> FrameTables {
+        use crate::scene::schema::resolve;
+        FrameTables {
+            gi: resolve(&[&s.gi]),
+            post: resolve(&[&s.post]),
+            shadow: resolve(&[&s.shadow]),
+        }
+    }
+
+    #[test]
+    fn frame_settings_are_written_into_gi_post_and_shadow_and_load_back() {
+        use crate::scene::{AutoExposure, Bounces, GiMethod, SaoSettings, TaaSettings};
+        let text = format!("{}\n[gi]\nrays = 4 # few\nradius_m = 2\n", cornell_text());
+        let s = load(&text);
+        let mut t = frame_tables(&s);
+        assert_eq!(t.gi.rays, 4);
+        t.gi.method = GiMethod::Pathtrace;
+        t.gi.rays = 8;
+        t.gi.radius_m = None;
+        t.gi.bounces = Bounces::Unbounded;
+        t.gi.vpl.pattern = [2, 3];
+        t.gi.sao = Some(SaoSettings {
+            taps: 8,
+            ..Default::default()
+        });
+        t.post.post.taa = Some(TaaSettings {
+            frames: 4,
+            ..Default::default()
+        });
+        t.post.post.auto_exposure = Some(AutoExposure {
+            key: 0.3,
+            adaptation: 0.1,
+        });
+        t.post.post.bloom = Some(0.3);
+        t.post.tonemap.operator = crate::scene::ToneOperator::Drago;
+        t.post.tonemap.exposure = 0.1;
+        t.shadow.auto_resolution = true;
+        t.shadow.cascades = 2;
+        t.shadow.area_samples = Some(4);
+        t.shadow.bias_texels = 0.3;
+        let mut e = keep_all(&s);
+        e.settings = Some(t);
+        let out = apply_edits(&text, Path::new(FILE), &e).expect("saves");
+        let back = load(&out);
+        assert_eq!(frame_tables(&back), t, "{out}");
+        // A key set again keeps its comment; an unset value leaves the file.
+        assert!(out.contains("rays = 8 # few"), "{out}");
+        assert!(!out.contains("radius_m"), "{out}");
+        assert!(out.contains("[post]") && out.contains("[shadow]"), "{out}");
+        // Saving the same settings again changes nothing.
+        let mut again = keep_all(&back);
+        again.settings = Some(t);
+        assert_eq!(
+            apply_edits(&out, Path::new(FILE), &again).expect("saves"),
+            out
+        );
+    }
+
+    /// Every key of every table, set to a value other than the file's, is written and loads
+    /// back (a new row is covered without an edit here); the defaults write nothing.
+    #[test]
+    fn every_frame_key_saves_and_loads_back() {
+        use crate::scene::schema::{other_value, Settings};
+        fn each<S: Settings>(table: fn(&mut FrameTables) -> &mut S) {
+            let s = load(cornell_text());
+            let base = frame_tables(&s);
+            for k in S::keys() {
+                let mut t = base;
+                let v = other_value(k, table(&mut t));
+                (k.set)(table(&mut t), v);
+                let mut e = keep_all(&s);
+                e.settings = Some(t);
+                let out = apply_edits(cornell_text(), Path::new(FILE), &e).expect("saves");
+                assert_eq!(frame_tables(&load(&out)), t, "{}: {out}", k.path);
+            }
+            let mut e = keep_all(&s);
+            e.settings = Some(base);
+            let out = apply_edits(cornell_text(), Path::new(FILE), &e).expect("saves");
+            assert_eq!(out, cornell_text());
+        }
+        each::<GiSettings>(|t| &mut t.gi);
+        each::<PostTable>(|t| &mut t.post);
+        each::<ShadowSettings>(|t| &mut t.shadow);
     }
 
     #[test]

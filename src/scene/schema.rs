@@ -50,6 +50,12 @@ pub enum Kind {
     Pair(Limit<u32>),
     /// A count, or the word (`"unbounded"`) with what it means.
     CountOr(Limit<u32>, &'static str, &'static str),
+    /// A count, or unset (the default) meaning `unset`.
+    OptCount(Limit<u32>, &'static str),
+    /// A stage switched by its value: a number (on with that value) or off, and, where the
+    /// flag is true, on alone (keeping the value of the layers below, else the default):
+    /// `bloom = 0.05 | false`, `auto_exposure = 0.18 | true | false`.
+    Switch(Limit<f32>, bool),
 }
 
 /// How a key's named flag is spelt on the command line.
@@ -61,6 +67,8 @@ pub enum FlagStyle {
     Toggle,
     /// `--flag` alone sets the boolean to false (`--ssgi-no-feedback`).
     SetsFalse,
+    /// `--flag [VALUE]` of a [`Kind::Switch`]: alone it means on (`--auto-exposure [KEY|off]`).
+    OptionalValue,
 }
 
 /// A key's named flag (`--gi-rays N`).
@@ -163,11 +171,19 @@ pub fn resolve<S: Settings>(layers: &[&Layer]) -> S {
 pub fn apply<S: Settings>(base: S, layers: &[&Layer]) -> S {
     let mut s = base.clone();
     for k in S::keys() {
-        let v = layers
-            .iter()
-            .rev()
-            .find_map(|l| l.get(k.path))
-            .unwrap_or_else(|| (k.get)(&base));
+        let mut given = layers.iter().rev().filter_map(|l| l.get(k.path));
+        let v = match given.next() {
+            // A switch turned on alone keeps the value of the layers below (`--auto-exposure`
+            // over a scene's `auto_exposure = 0.3`), unless one of them turns it off.
+            Some(Value::Bool(true)) if matches!(k.kind, Kind::Switch(..)) => {
+                match given.find(|v| *v != Value::Bool(true)) {
+                    Some(Value::Number(x)) => Value::Number(x),
+                    _ => Value::Bool(true),
+                }
+            }
+            Some(v) => v,
+            None => (k.get)(&base),
+        };
         (k.set)(&mut s, v);
     }
     s
@@ -201,8 +217,10 @@ impl Kind {
     pub fn takes_toml_type(&self, v: &toml::Value) -> bool {
         use toml::Value as T;
         match self {
-            Kind::Count(_) => matches!(v, T::Integer(_)),
+            Kind::Count(_) | Kind::OptCount(..) => matches!(v, T::Integer(_)),
             Kind::Number(_) | Kind::OptNumber(..) => matches!(v, T::Integer(_) | T::Float(_)),
+            // Any other value is the key's error, which says what a switch takes.
+            Kind::Switch(..) => true,
             Kind::Bool => matches!(v, T::Boolean(_)),
             Kind::Choice(_) => matches!(v, T::String(_)),
             Kind::Pair(_) => matches!(v, T::Array(a) if a.len() == 2),
@@ -213,8 +231,9 @@ impl Kind {
     /// What [`Self::takes_toml_type`] takes, for the schema error.
     pub fn toml_type(&self) -> &'static str {
         match self {
-            Kind::Count(_) => "an integer",
+            Kind::Count(_) | Kind::OptCount(..) => "an integer",
             Kind::Number(_) | Kind::OptNumber(..) => "a number",
+            Kind::Switch(..) => "a number or a boolean",
             Kind::Bool => "a boolean",
             Kind::Choice(_) => "a string",
             Kind::Pair(_) => "an array of 2 integers",
@@ -238,10 +257,16 @@ impl Kind {
             l.check_as(path, x).map(Value::Number).map_err(invalid)
         };
         match (self, v) {
-            (Kind::Count(l), T::Integer(i)) => {
+            (Kind::Count(l) | Kind::OptCount(l, _), T::Integer(i)) => {
                 l.check_as(path, *i).map(Value::Count).map_err(invalid)
             }
             (Kind::Number(l) | Kind::OptNumber(l, _), _) => number(l),
+            (Kind::Switch(_, on), T::Boolean(b)) if !b || *on => Ok(Value::Bool(*b)),
+            (Kind::Switch(l, _), T::Integer(_) | T::Float(_)) => number(l),
+            (Kind::Switch(..), _) => Err(TomlValueError::Invalid(format!(
+                "{v}; expected {}",
+                self.expected()
+            ))),
             (Kind::Bool, T::Boolean(b)) => Ok(Value::Bool(*b)),
             (Kind::Choice(_), T::String(s)) => self.choice(s).map_err(TomlValueError::Invalid),
             (Kind::Pair(l), T::Array(a)) if a.len() == 2 => {
@@ -277,10 +302,15 @@ impl Kind {
         let s = s.trim();
         let bad = || format!("`{s}`: expected {}", self.expected());
         match self {
-            Kind::Count(_) => s.parse().map(Value::Count).map_err(|_| bad()),
+            Kind::Count(_) | Kind::OptCount(..) => s.parse().map(Value::Count).map_err(|_| bad()),
             Kind::Number(_) | Kind::OptNumber(..) => {
                 s.parse().map(Value::Number).map_err(|_| bad())
             }
+            Kind::Switch(_, on) => match s {
+                "on" | "true" if *on => Ok(Value::Bool(true)),
+                "off" | "false" => Ok(Value::Bool(false)),
+                _ => s.parse().map(Value::Number).map_err(|_| bad()),
+            },
             Kind::Bool => match s {
                 "true" | "on" => Ok(Value::Bool(true)),
                 "false" | "off" => Ok(Value::Bool(false)),
@@ -301,9 +331,19 @@ impl Kind {
     /// `v` when within the key's range, else the error naming it `name`.
     pub fn check(&self, name: &str, v: Value) -> Result<Value, LimitError> {
         match (self, v) {
-            (Kind::Count(l), Value::Count(n)) => l.check_as(name, i64::from(n)).map(Value::Count),
+            (Kind::Count(l) | Kind::OptCount(l, _), Value::Count(n)) => {
+                l.check_as(name, i64::from(n)).map(Value::Count)
+            }
             (Kind::Number(l) | Kind::OptNumber(l, _), Value::Number(x)) => {
                 l.check_as(name, x).map(Value::Number)
+            }
+            (Kind::Switch(l, _), Value::Number(x)) => {
+                l.check_as(name, x).map_err(|_| LimitError {
+                    name: name.to_owned(),
+                    value: x.to_string(),
+                    expected: self.expected(),
+                })?;
+                Ok(v)
             }
             (Kind::Pair(l), Value::Pair(p)) => {
                 for n in p {
@@ -361,15 +401,22 @@ impl Kind {
     pub fn expected(&self) -> String {
         let range = |l: &Limit<u32>| format!("{}, an integer in [{}, {}]", l.what, l.min, l.max);
         let open = |l: &Limit<f32>| if l.min_exclusive { "(" } else { "[" };
-        match self {
-            Kind::Count(l) => range(l),
-            Kind::Number(l) | Kind::OptNumber(l, _) => format!(
+        let number = |l: &Limit<f32>| {
+            format!(
                 "{}, a finite number in {}{}, {}]",
                 l.what,
                 open(l),
                 l.min,
                 l.max
-            ),
+            )
+        };
+        match self {
+            Kind::Count(l) | Kind::OptCount(l, _) => range(l),
+            Kind::Number(l) | Kind::OptNumber(l, _) => number(l),
+            Kind::Switch(l, true) => {
+                format!("{}: a number, true (the default) or false (off)", number(l))
+            }
+            Kind::Switch(l, false) => format!("{}: a number or false (off)", number(l)),
             Kind::Bool => "true or false (on or off)".into(),
             Kind::Choice(_) => {
                 let all: Vec<String> = self.names().iter().map(|n| format!("\"{n}\"")).collect();
@@ -407,7 +454,10 @@ impl Kind {
     pub fn to_text(&self, v: Value) -> String {
         match (self, v) {
             (_, Value::Pair([n, m])) => format!("{n}x{m}"),
-            (Kind::OptNumber(_, unset), Value::Unset) => (*unset).to_owned(),
+            (Kind::OptNumber(_, unset) | Kind::OptCount(_, unset), Value::Unset) => {
+                (*unset).to_owned()
+            }
+            (Kind::Switch(..), Value::Bool(b)) => if b { "on" } else { "off" }.to_owned(),
             _ => self
                 .to_toml(v)
                 .map(|t| match t {
@@ -468,6 +518,19 @@ impl FieldValue for Option<f32> {
     fn from_value(v: Value) -> Option<Self> {
         match v {
             Value::Number(x) => Some(Some(x)),
+            Value::Unset => Some(None),
+            _ => None,
+        }
+    }
+}
+
+impl FieldValue for Option<u32> {
+    fn to_value(&self) -> Value {
+        self.map_or(Value::Unset, Value::Count)
+    }
+    fn from_value(v: Value) -> Option<Self> {
+        match v {
+            Value::Count(n) => Some(Some(n)),
             Value::Unset => Some(None),
             _ => None,
         }
@@ -651,6 +714,27 @@ pub fn paths<S: Settings>() -> Vec<&'static str> {
     S::keys().iter().map(|k| k.path).collect()
 }
 
+/// `S`'s keys as a Markdown table, for docs/settings.md (`tests/docs.rs` keeps the page's
+/// tables current): key path, flag, what it takes, default, doc line.
+pub fn doc_table<S: Settings>() -> String {
+    let cell = |s: &str| s.replace('|', "\\|");
+    let d = S::default();
+    let mut out = String::from("| key | flag | takes | default | what |\n|---|---|---|---|---|\n");
+    for k in S::keys() {
+        let flag = k
+            .flag
+            .map_or_else(|| "`--set` only".to_owned(), |f| format!("`--{}`", f.long));
+        out.push_str(&format!(
+            "| `{}` | {flag} | {} | {} | {} |\n",
+            k.path,
+            cell(&k.kind.expected()),
+            cell(&k.kind.to_text((k.get)(&d))),
+            cell(k.doc)
+        ));
+    }
+    out
+}
+
 /// `S`'s table as a scene file writes it, from `s`: every key (an unset number left out).
 pub fn table<S: Settings>(s: &S) -> toml::Table {
     S::keys()
@@ -659,9 +743,136 @@ pub fn table<S: Settings>(s: &S) -> toml::Table {
         .collect()
 }
 
+/// A value of key `k` within its range other than its value in `d`, for the generic tests of
+/// every key of every table.
+#[cfg(test)]
+pub fn other_value<S>(k: &Key<S>, d: &S) -> Value {
+    let count = |l: &Limit<u32>, now: Option<u32>| {
+        [l.min, l.min + 1, l.max]
+            .into_iter()
+            .find(|n| Some(*n) != now)
+            .unwrap_or(l.min)
+    };
+    let number = |l: &Limit<f32>, now: Value| {
+        let x = |f: f32| l.min + (l.max - l.min) * f;
+        Value::Number(if now == Value::Number(x(0.375)) {
+            x(0.25)
+        } else {
+            x(0.375)
+        })
+    };
+    match (k.kind, (k.get)(d)) {
+        (Kind::Choice(_), Value::Choice(i)) => Value::Choice(usize::from(i == 0)),
+        (Kind::Count(l) | Kind::CountOr(l, ..) | Kind::OptCount(l, _), v) => {
+            Value::Count(count(&l, FieldValue::from_value(v)))
+        }
+        (Kind::Number(l) | Kind::OptNumber(l, _) | Kind::Switch(l, _), v) => number(&l, v),
+        (Kind::Pair(l), Value::Pair(p)) => Value::Pair(p.map(|n| count(&l, Some(n)))),
+        (_, Value::Bool(b)) => Value::Bool(!b),
+        (_, v) => v,
+    }
+}
+
+/// Every key of `S` writes its own field and reads it back: a value other than the default's
+/// set through the key comes back from the settings, and no other key's value changes. `on`
+/// switches on the stages whose values count only while on (`gi.sao`, `post.taa`).
+#[cfg(test)]
+pub fn assert_every_key_reads_and_writes_its_own_field<S: Settings>(on: &Layer) {
+    let base: S = resolve(&[on]);
+    for k in S::keys() {
+        let other = other_value(k, &base);
+        let mut l = on.clone();
+        l.set(k.path, other);
+        let s: S = resolve(&[&l]);
+        assert_eq!((k.get)(&s), other, "{}", k.path);
+        for j in S::keys().iter().filter(|j| j.path != k.path) {
+            assert_eq!((j.get)(&s), (j.get)(&base), "{} moved {}", k.path, j.path);
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The post and shadow tables' keys, as the GI table's are in `scene::gi`.
+    #[test]
+    fn every_post_and_shadow_key_reads_and_writes_its_own_field() {
+        use crate::scene::{PostTable, ShadowSettings};
+        let mut on = Layer::default();
+        on.set("post.taa", Value::Bool(true));
+        on.set("post.auto_exposure", Value::Number(0.5));
+        on.set("post.bloom", Value::Number(0.1));
+        assert_every_key_reads_and_writes_its_own_field::<PostTable>(&on);
+        assert_every_key_reads_and_writes_its_own_field::<ShadowSettings>(&Layer::default());
+    }
+
+    #[test]
+    fn key_paths_are_unique_and_name_their_table() {
+        fn check<S: Settings>() {
+            let paths = paths::<S>();
+            let mut unique = paths.clone();
+            unique.sort_unstable();
+            unique.dedup();
+            assert_eq!(unique.len(), paths.len());
+            let prefix = format!("{}.", S::TABLE);
+            assert!(paths.iter().all(|p| p.starts_with(&prefix)), "{paths:?}");
+        }
+        check::<crate::scene::GiSettings>();
+        check::<crate::scene::PostTable>();
+        check::<crate::scene::ShadowSettings>();
+    }
+
+    /// A row's range names the row's flag (the `--set` path where it has none), so that a
+    /// value refused anywhere is named as the user gives it: a new row with a range copied
+    /// from another fails here.
+    #[test]
+    fn every_range_names_its_rows_flag() {
+        fn check<S: Settings>() {
+            for k in S::keys() {
+                let flag = match k.kind {
+                    Kind::Count(l)
+                    | Kind::Pair(l)
+                    | Kind::CountOr(l, ..)
+                    | Kind::OptCount(l, _) => l.flag,
+                    Kind::Number(l) | Kind::OptNumber(l, _) | Kind::Switch(l, _) => l.flag,
+                    Kind::Bool | Kind::Choice(_) => continue,
+                };
+                assert_eq!(flag, k.flag_name(), "{}", k.path);
+            }
+        }
+        check::<crate::scene::GiSettings>();
+        check::<crate::scene::PostTable>();
+        check::<crate::scene::ShadowSettings>();
+    }
+
+    /// A switch turned on alone keeps the value of the layers below, unless one of them
+    /// turns it off between: `--auto-exposure` over a scene's `auto_exposure = 0.3`.
+    #[test]
+    fn a_switch_on_alone_keeps_the_value_below() {
+        use crate::scene::PostTable;
+        let layer = |v: Value| {
+            let mut l = Layer::default();
+            l.set("post.auto_exposure", v);
+            l
+        };
+        let key = |layers: &[&Layer]| {
+            resolve::<PostTable>(layers)
+                .post
+                .auto_exposure
+                .map(|a| a.key)
+        };
+        let (scene, on, off) = (
+            layer(Value::Number(0.3)),
+            layer(Value::Bool(true)),
+            layer(Value::Bool(false)),
+        );
+        assert_eq!(key(&[&scene, &on]), Some(0.3));
+        assert_eq!(key(&[&on]), Some(0.18));
+        assert_eq!(key(&[&scene, &off, &on]), Some(0.18));
+        assert_eq!(key(&[&scene, &off]), None);
+        assert_eq!(key(&[&on, &scene]), Some(0.3));
+    }
 
     #[test]
     fn pairs_parse_and_refuse_naming_the_key() {

@@ -1368,11 +1368,48 @@ fn shadow_table_gives_cascades_and_names_bad_values() {
         &format!("{CAMERA}{LIGHT}{CUBE}[shadow]\ncascades = 3\ncascade_lambda = 0.75\n"),
         &[],
     );
-    assert_eq!(s.shadow.cascades, Some(3));
-    assert_eq!(s.shadow.cascade_lambda, Some(0.75));
+    use schema::Value;
+    assert_eq!(s.shadow.get("shadow.cascades"), Some(Value::Count(3)));
+    assert_eq!(
+        s.shadow.get("shadow.cascade_lambda"),
+        Some(Value::Number(0.75))
+    );
     let s = load_ok(&format!("{CAMERA}{LIGHT}{CUBE}"), &[]);
-    assert_eq!(s.shadow, crate::scene::ShadowOverrides::default());
+    assert!(s.shadow.is_empty());
+    // The flags' other values are scene keys too.
+    let s = load_ok(
+        &format!(
+            "{CAMERA}{LIGHT}{CUBE}[shadow]
+resolution = \"auto\"
+pcf_radius = 2
+\
+             point_shadows = \"paraboloid\"
+area_samples = 4
+area_shadows = \"pcss\"
+"
+        ),
+        &[],
+    );
+    let t: ShadowSettings = schema::resolve(&[&s.shadow]);
+    assert!(t.auto_resolution);
+    assert_eq!(
+        (
+            t.pcf_radius,
+            t.point_technique,
+            t.area_samples,
+            t.area_technique
+        ),
+        (2, PointShadow::DualParaboloid, Some(4), AreaShadow::Pcss)
+    );
     for (line, field, expected) in [
+        (
+            "resolution = 8",
+            "shadow.resolution",
+            "[16, 8192] or \"auto\"",
+        ),
+        ("resolution = \"big\"", "shadow.resolution", "\"auto\""),
+        ("pcf_radius = 9", "shadow.pcf_radius", "[0, 8]"),
+        ("area_samples = 65", "shadow.area_samples", "[1, 64]"),
         ("cascades = 0", "shadow.cascades", "an integer in [1, 8]"),
         ("cascades = -2", "shadow.cascades", "[1, 8]"),
         ("cascades = 9", "shadow.cascades", "[1, 8]"),
@@ -1436,49 +1473,59 @@ fn gi_screen_space_keys_refuse_bad_values() {
 
 #[test]
 fn post_table_parses_every_key() {
-    use crate::scene::{PostOverrides, Stage, ToneOperator};
+    use crate::scene::schema::Value;
+    use crate::scene::{AutoExposure, PostTable, TaaSettings, ToneOperator};
     let text = format!(
         "{CAMERA}{LIGHT}{CUBE}[post]\ntaa = true\ntaa_history_weight = 0.8\ntaa_frames = 8\n\
          auto_exposure = 0.25\nexposure_adaptation = 0.5\nbloom = 0.05\nfxaa = true\n\
          dither = false\ntonemap = \"drago\"\nexposure = 2\n"
     );
+    let t: PostTable = schema::resolve(&[&load_ok(&text, &[]).post]);
     assert_eq!(
-        load_ok(&text, &[]).post,
-        PostOverrides {
-            taa: Some(true),
-            taa_history_weight: Some(0.8),
-            taa_frames: Some(8),
-            auto_exposure: Some(Stage::On(Some(0.25))),
-            exposure_adaptation: Some(0.5),
-            bloom: Some(Stage::On(Some(0.05))),
-            fxaa: Some(true),
-            dither: Some(false),
-            tonemap: Some(ToneOperator::Drago),
-            exposure: Some(2.0),
-        }
+        t.post.taa,
+        Some(TaaSettings {
+            history_weight: 0.8,
+            frames: 8,
+            ..Default::default()
+        })
+    );
+    assert_eq!(
+        t.post.auto_exposure,
+        Some(AutoExposure {
+            key: 0.25,
+            adaptation: 0.5
+        })
+    );
+    assert_eq!((t.post.bloom, t.post.fxaa), (Some(0.05), true));
+    assert_eq!(
+        (t.tonemap.operator, t.tonemap.exposure, t.tonemap.dither),
+        (ToneOperator::Drago, 2.0, false)
     );
     // `true` turns auto exposure on with its default key; `false` turns a stage off.
     let s = load_ok(
         &format!("{CAMERA}{LIGHT}{CUBE}[post]\nauto_exposure = true\nbloom = false\n"),
         &[],
     );
-    assert_eq!(s.post.auto_exposure, Some(Stage::On(None)));
-    assert_eq!(s.post.bloom, Some(Stage::Off));
+    assert_eq!(s.post.get("post.auto_exposure"), Some(Value::Bool(true)));
+    assert_eq!(s.post.get("post.bloom"), Some(Value::Bool(false)));
+    let t: PostTable = schema::resolve(&[&s.post]);
+    assert_eq!(
+        (t.post.auto_exposure, t.post.bloom),
+        (Some(AutoExposure::default()), None)
+    );
     assert!(load_ok(&format!("{CAMERA}{LIGHT}{CUBE}"), &[])
         .post
         .is_empty());
-    for (name, op) in ToneOperator::NAMES {
+    use clap::ValueEnum as _;
+    for &op in ToneOperator::value_variants() {
+        // The names are the flag's.
+        let name = op.to_possible_value().expect("named").get_name().to_owned();
         let s = load_ok(
             &format!("{CAMERA}{LIGHT}{CUBE}[post]\ntonemap = \"{name}\"\n"),
             &[],
         );
-        assert_eq!(s.post.tonemap, Some(op), "{name}");
-        // The names are the flag's.
-        use clap::ValueEnum as _;
-        assert_eq!(
-            op.to_possible_value().map(|v| v.get_name().to_owned()),
-            Some(name.to_owned())
-        );
+        let t: PostTable = schema::resolve(&[&s.post]);
+        assert_eq!(t.tonemap.operator, op, "{name}");
     }
 }
 
