@@ -122,7 +122,7 @@ fn emitter_sampling_matches_the_direct_light_reference() {
 /// light is at most the whole mean (and the patch's pixels, the same in both renders, only
 /// dilute the difference), so the voxelization moves the ratio by at most 8.1%. Bound: the
 /// ratio with / without emitter sampling within 1 − (8.1% + 3.3%) and 1 + 3.3%. Measured
-/// 0.960 (0.966 at 256² and 4 rays × 16 frames, 0.968 with a grid of twice the resolution).
+/// 0.960 (0.966 at 256² and 4 rays × 16 frames).
 #[test]
 fn emitter_sampling_converges_to_the_bsdf_only_mean() {
     let scene = cornell_emissive();
