@@ -12,7 +12,7 @@
 
 use super::emitters::EmitterBuffer;
 use super::gi_common::{add_ray_pass, GiShared, GpuGiPush};
-use super::{GiInputs, GiMethodPasses, GiOutput, GiTarget};
+use super::{GiInputs, GiMethodPasses, GiOutput, GiTarget, MethodWorld};
 use crate::graph::{Access, RenderGraph, Shader};
 use crate::vk::{vk, ComputePipeline, Context, Image, ImageDesc, PushLayout, VkError};
 use std::sync::atomic::Ordering;
@@ -75,6 +75,13 @@ impl GiPathtrace {
 }
 
 impl GiMethodPasses for GiPathtrace {
+    fn add_world_passes(&self, g: &mut RenderGraph, _i: &GiInputs, _s: &GiShared) -> MethodWorld {
+        MethodWorld {
+            image: None,
+            buffer: self.emitters.as_ref().map(|e| e.import(g)),
+        }
+    }
+
     fn add_passes(&self, g: &mut RenderGraph, i: &GiInputs, shared: &GiShared) -> GiOutput {
         // One history per eye; `GiTarget::eyes` made as many as the assembly declares.
         let own = &self.histories[(shared.eye as usize).min(self.histories.len() - 1)];
@@ -87,9 +94,10 @@ impl GiMethodPasses for GiPathtrace {
         let emission = v.emission.unwrap_or(v.albedo);
         // Without a material volume the shader never reads its binding either.
         let material = v.material.unwrap_or(v.albedo);
-        // Without emitter sampling the shader never reads its emitter binding; the ray-mask
-        // table fills it.
-        let emitters = self.emitters.as_ref().map_or(shared.lut, |e| e.import(g));
+        // The emitter list, imported once per frame (`add_world_passes`, shared by both
+        // stereo eyes); without emitter sampling the shader never reads its binding and the
+        // ray-mask table fills it.
+        let emitters = shared.world.buffer.unwrap_or(shared.lut);
         let push = shared.push;
         let frames = shared.frames.clone();
         add_ray_pass(
