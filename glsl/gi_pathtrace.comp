@@ -14,6 +14,12 @@
 // and per accumulated frame. The irradiance estimate E = pi/N sum L is accumulated over frames
 // into a history image while camera and scene stay still.
 //
+// With HAS_EMITTERS (emissive triangles and `gi.emitter_sampling`) every path vertex that
+// samples a further bounce also samples one emissive triangle by power (emitters.glsl): the
+// light sample and the BSDF ray's emitter hit are weighted by the power heuristic, each half
+// of the first bounce's split with its own part of the lobe, later vertices with both parts
+// and the lobe choice's probability in the BSDF density.
+//
 // Unbounded paths (bounces 0 in the push constants) take ROULETTE_AFTER bounces, then Russian
 // roulette (Arvo and Kirk 1990): before each further bounce the path goes on with probability
 // q = min(max throughput component, 0.95) and divides its throughput by q, so every bounce's
@@ -31,6 +37,7 @@
 layout(constant_id = 0) const bool HAS_PHONG = false;  // the G-buffer has a lobe target (Phong or GGX)
 layout(constant_id = 1) const bool HAS_EMISSION = false;
 layout(constant_id = 2) const bool HAS_MATERIAL_VOLUME = false;  // lobes at later bounces
+layout(constant_id = 3) const bool HAS_EMITTERS = false;  // next-event estimation (binding 14)
 
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(set = 0, binding = 0, std430) readonly buffer FrameBuf { GpuFrame frame; };
@@ -62,6 +69,8 @@ bool vx_voxel(int x, int y, int k) {
 #include "gbuffer_lobe.glsl"
 #include "brdf.glsl"
 #include "material_lobe.glsl"
+#define EMITTERS_BINDING 14
+#include "emitters.glsl"
 
 // Outgoing radiance toward wo at p (normal n, material m) from every light, shadowed.
 vec3 direct_at(vec3 p, vec3 n, vec3 wo, Lobe m) {
@@ -110,6 +119,21 @@ float halton(uint i, uint base) {
         i /= base;
     }
     return r;
+}
+
+// The light sample of path `path` at vertex `bounce`: at the pixel the rays' Hammersley points
+// under a rotation of their own (stratified over the pixel's paths like the first bounce),
+// later hashed like the roulette numbers, with another constant so the two differ.
+vec2 emitter_sample_u(uvec2 px, uint bounce, uint s, uint rays, uint path, uint frame_index) {
+    if (bounce == 0u) {
+        vec2 u = vec2((float(s) + 0.5) / float(rays), radical_inverse(s));
+        return fract(u + pixel_rotation(px, frame_index + 0x10000u));
+    }
+    uint h = wang_hash(px.x * 1973u + px.y * 9277u);
+    h = wang_hash(h ^ (path * 0x9e3779b9u));
+    h = wang_hash(h + bounce * 0x85ebca6bu + 0x68e31da4u);
+    uint h2 = wang_hash(h ^ 0x5bd1e995u);
+    return vec2(float(h >> 8u), float(h2 >> 8u)) * (1.0 / 16777216.0);
 }
 
 vec2 bounce_sample(uint bounce, uint s, uint rays, uint frame_index, vec2 rot) {
@@ -199,9 +223,18 @@ void main() {
                 u.x = specular ? u.x / ps : (u.x - ps) / (1.0 - ps);
                 pick = specular ? ps : 1.0 - ps;
             }
+            // The light sample at this vertex, before the BSDF ray leaves it.
+            if (HAS_EMITTERS) {
+                uint parts = b == 0u ? (lobe ? 1u : 0u) : 2u;
+                float ps = b == 0u ? 0.0 : lobe_specular_probability(m);
+                vec2 ul = emitter_sample_u(uvec2(px), b, j, count, frame_index * rays + s, frame_index);
+                l += throughput * emitter_sample(o, nn, from, m, parts, ps, ul);
+            }
             vec3 w;
             vec3 d = sample_lobe(m, nn, from, specular, u, w);
             if (dot(d, nn) <= 0.0) break;  // a lobe sample below the surface
+            // The BSDF ray's density, for the weight of an emitter it hits.
+            float pdf_bsdf = HAS_EMITTERS ? pick * lobe_pdf(m, nn, from, d, specular) : 0.0;
             // The diffuse color of the first bounce is applied after the paths.
             if (b > 0u && !specular) w *= m.diffuse;
             throughput *= w / pick;
@@ -222,7 +255,11 @@ void main() {
             vec3 hp = start + d * h.t;
             // An emitter sends its radiance from the side its normal points to (Mitsuba's area
             // emitter); the camera's own view of emitters is deferred_direct's.
-            if (HAS_EMISSION && !back) l += throughput * texelFetch(emission_volume, v, 0).rgb;
+            if (HAS_EMISSION && !back) {
+                vec3 le = texelFetch(emission_volume, v, 0).rgb;
+                if (HAS_EMITTERS) le *= emitter_hit_weight(le, length(hp - o), -dot(hn, d), pdf_bsdf);
+                l += throughput * le;
+            }
             m = hit_lobe(v, a);
             l += throughput * direct_at(hp, hn, -d, m);
             // The next bounce starts a voxel diagonal (k1, at most the way it came) back along

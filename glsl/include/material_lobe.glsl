@@ -106,4 +106,40 @@ vec3 sample_lobe(Lobe m, vec3 n, vec3 wo, bool specular, vec2 u, out vec3 weight
     return wi;
 }
 
+// The density (per solid angle) with which sample_lobe(m, n, wo, specular, ...) draws wi, for
+// multiple importance sampling against light samples (emitters.glsl):
+//   diffuse: (n.wi)/pi (Malley's method)
+//   Phong lobe: (n+1)/(2 pi) cos^n alpha about the mirror direction of wo
+//   GGX lobe: D_wo(h) / (4 wo.h) = G1(wo) D(h) / (4 n.wo) (Heitz 2018, eq. 17 and the
+//   reflection Jacobian 1/(4 wo.h)).
+float lobe_pdf(Lobe m, vec3 n, vec3 wo, vec3 wi, bool specular) {
+    if (specular && m.kind == LOBE_GGX) {
+        float co = dot(n, wo);
+        vec3 h = normalize(wi + wo);
+        if (co <= 0.0 || dot(wo, h) <= 0.0) return 0.0;
+        float alpha = lobe_alpha(m);
+        return ggx_g1(alpha, co) * ggx_d(alpha, max(dot(n, h), 0.0)) / (4.0 * co);
+    }
+    if (specular && m.kind == LOBE_PHONG) {
+        float c = max(dot(reflect(-wo, n), wi), 0.0);
+        return (m.param + 1.0) / (2.0 * PI) * pow(c, m.param);
+    }
+    return max(dot(n, wi), 0.0) / PI;
+}
+
+// The part of lobe_brdf that sample_lobe's `specular` choice samples: f cos / lobe_pdf is the
+// weight sample_lobe returns (times m.diffuse for diffuse samples, which it leaves out).
+vec3 lobe_part_brdf(Lobe m, vec3 n, vec3 wi, vec3 wo, bool specular) {
+    if (specular) {
+        if (m.kind == LOBE_PHONG) return brdf_phong(m.specular, m.param, n, wi, wo);
+        if (m.kind == LOBE_GGX) return brdf_ggx_specular(m.specular, sqrt(lobe_alpha(m)), n, wi, wo);
+        return vec3(0.0);
+    }
+    vec3 f = brdf_lambert(m.diffuse);
+    if (m.kind == LOBE_GGX) {
+        f *= ggx_diffuse_weight(max(dot(n, wi), 0.0)) * ggx_diffuse_weight(max(dot(n, wo), 0.0));
+    }
+    return f;
+}
+
 #endif

@@ -4,10 +4,15 @@
 //! side adds its emitted radiance from the emission volume (a specialization constant: no
 //! emission reads otherwise). With a material volume (Phong or GGX materials,
 //! `GiSettings::pathtrace_lobes`) every bounce samples its surface's lobe, not only the first
-//! (another specialization constant: later bounces are Lambert otherwise).
+//! (another specialization constant: later bounces are Lambert otherwise). With
+//! `GiSettings::emitter_sampling`, in scenes with emissive triangles, every path vertex also
+//! samples one of them by power (next-event estimation, [`super::emitters`]) and weighs it and
+//! the BSDF ray's emitter hit by multiple importance sampling (a third specialization
+//! constant and the emitter list's buffer at binding 14).
 
+use super::emitters::EmitterBuffer;
 use super::gi_common::{add_ray_pass, GiShared, GpuGiPush};
-use super::{GiInputs, GiMethodPasses, GiOutput, GiTarget};
+use super::{GiInputs, GiMethodPasses, GiOutput, GiTarget, MethodWorld};
 use crate::graph::{Access, RenderGraph, Shader};
 use crate::vk::{vk, ComputePipeline, Context, Image, ImageDesc, PushLayout, VkError};
 use std::sync::atomic::Ordering;
@@ -17,6 +22,9 @@ use std::sync::atomic::Ordering;
 pub struct GiPathtrace {
     pipeline: ComputePipeline,
     histories: Vec<Image>,
+    /// The emissive triangles next-event estimation samples (scenes with them, with
+    /// `GiSettings::emitter_sampling`).
+    emitters: Option<EmitterBuffer>,
 }
 
 impl GiPathtrace {
@@ -27,8 +35,18 @@ impl GiPathtrace {
     }
 
     /// `lobes`: later bounces read the material volume (the assembly creates it then).
-    pub fn new(ctx: &Context, target: &GiTarget<'_>, lobes: bool) -> Result<Self, VkError> {
+    /// `emitter_sampling`: next-event estimation toward the emissive triangles, if any.
+    pub fn new(
+        ctx: &Context,
+        target: &GiTarget<'_>,
+        lobes: bool,
+        emitter_sampling: bool,
+    ) -> Result<Self, VkError> {
         let (w, h) = target.size;
+        let emitters = match emitter_sampling && target.scene.has_emission() {
+            true => EmitterBuffer::new(ctx, target.scene, target.time_s)?,
+            false => None,
+        };
         let pipeline = ctx.compute_pipeline(
             "gi_pathtrace.comp",
             PushLayout::of::<GpuGiPush>(),
@@ -37,6 +55,7 @@ impl GiPathtrace {
                 (0, u32::from(target.has_phong || target.scene.has_ggx())),
                 (1, u32::from(target.scene.has_emission())),
                 (2, u32::from(lobes && !target.scene.is_all_lambert())),
+                (3, u32::from(emitters.is_some())),
             ],
         )?;
         let histories = (0..target.eyes.max(1))
@@ -50,11 +69,19 @@ impl GiPathtrace {
         Ok(Self {
             pipeline,
             histories,
+            emitters,
         })
     }
 }
 
 impl GiMethodPasses for GiPathtrace {
+    fn add_world_passes(&self, g: &mut RenderGraph, _i: &GiInputs, _s: &GiShared) -> MethodWorld {
+        MethodWorld {
+            image: None,
+            buffer: self.emitters.as_ref().map(|e| e.import(g)),
+        }
+    }
+
     fn add_passes(&self, g: &mut RenderGraph, i: &GiInputs, shared: &GiShared) -> GiOutput {
         // One history per eye; `GiTarget::eyes` made as many as the assembly declares.
         let own = &self.histories[(shared.eye as usize).min(self.histories.len() - 1)];
@@ -67,6 +94,10 @@ impl GiMethodPasses for GiPathtrace {
         let emission = v.emission.unwrap_or(v.albedo);
         // Without a material volume the shader never reads its binding either.
         let material = v.material.unwrap_or(v.albedo);
+        // The emitter list, imported once per frame (`add_world_passes`, shared by both
+        // stereo eyes); without emitter sampling the shader never reads its binding and the
+        // ray-mask table fills it.
+        let emitters = shared.world.buffer.unwrap_or(shared.lut);
         let push = shared.push;
         let frames = shared.frames.clone();
         add_ray_pass(
@@ -83,7 +114,7 @@ impl GiMethodPasses for GiPathtrace {
                 (13, material),
             ],
             (history, Access::StorageReadWrite(Shader::Compute)),
-            &[],
+            &[(14, emitters)],
             move || GpuGiPush {
                 // Frames accumulated before this one (`GiPasses::advance` ran before recording).
                 seed: frames.load(Ordering::SeqCst).saturating_sub(1),
@@ -91,5 +122,17 @@ impl GiMethodPasses for GiPathtrace {
             },
         );
         history.into()
+    }
+
+    fn update_scene(&mut self, scene: &crate::scene::Scene, t_s: f32) {
+        if let Some(e) = &mut self.emitters {
+            e.update(scene, t_s);
+        }
+    }
+
+    fn write_slot(&mut self, slot: usize) {
+        if let Some(e) = &mut self.emitters {
+            e.write_slot(slot);
+        }
     }
 }

@@ -70,13 +70,13 @@ crate::gpu_struct!(GpuEmitter {
 
 /// An emitter before normalization: kind, origin, edges, radiance L (W/(m²·sr); with an
 /// emission map its mean over the map, the weight of the power sampling), area (m²).
-struct Source {
+pub(super) struct Source {
     kind: f32,
-    origin: Vec3,
-    edge1: Vec3,
-    edge2: Vec3,
-    radiance: Vec3,
-    area_m2: f32,
+    pub(super) origin: Vec3,
+    pub(super) edge1: Vec3,
+    pub(super) edge2: Vec3,
+    pub(super) radiance: Vec3,
+    pub(super) area_m2: f32,
     /// An emission map sampled per texel: its texture index, `Ke` (what the map's texel
     /// multiplies) and the texture coordinates at origin, origin + edge1, origin + edge2.
     map: Option<(usize, Vec3, [Vec2; 3])>,
@@ -84,7 +84,7 @@ struct Source {
 
 /// The weight w of a radiance in the power sampling: the mean of its channels (positive
 /// whenever any channel is, unlike a luminance of a pure colour that could round to 0).
-fn weight(radiance: Vec3) -> f32 {
+pub(super) fn weight(radiance: Vec3) -> f32 {
     (radiance.x + radiance.y + radiance.z) / 3.0
 }
 
@@ -138,7 +138,7 @@ pub fn emitter_table(scene: &Scene, t_s: f32, per_texel: bool) -> Vec<GpuEmitter
 
 /// The scene's emissive triangles in world space at `t_s` (with `per_texel`, their emission
 /// maps).
-fn emissive_triangles(scene: &Scene, t_s: f32, per_texel: bool) -> Vec<Source> {
+pub(super) fn emissive_triangles(scene: &Scene, t_s: f32, per_texel: bool) -> Vec<Source> {
     let mut out = Vec::new();
     for object in &scene.objects {
         let Some(mesh) = scene.meshes.get(object.mesh_at(t_s)) else {

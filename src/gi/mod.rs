@@ -9,6 +9,7 @@
 //! holds what the ray passes share (push constants, common bindings). The settings are plain
 //! data in [`crate::scene`] (re-exported here).
 
+mod emitters;
 mod gi_common;
 mod gi_composite;
 mod gi_filter;

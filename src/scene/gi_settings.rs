@@ -62,6 +62,11 @@ pub struct GiSettings {
     /// scenes with such materials); `false` makes later bounces Lambert with the base color
     /// (no material volume), kept for comparisons.
     pub pathtrace_lobes: bool,
+    /// Path tracer: next-event estimation toward the scene's emissive triangles at every path
+    /// vertex, picked by power, combined with the BSDF-sampled rays' emitter hits by multiple
+    /// importance sampling (`gi::emitters`). Scenes without emissive triangles are the same
+    /// either way.
+    pub emitter_sampling: bool,
     /// The voxel volumes sample the MTL texture maps (`map_Kd` in the albedo volume, `map_Ke`
     /// in the emission volume, `map_Pr` / `map_Pm` in the material volume) per texel at the
     /// surface in each voxel (`voxel::maps`), and the VPL emitter rays take `map_Ke`'s texel at
@@ -306,6 +311,7 @@ impl Default for GiSettings {
             seed: 0,
             bounces: Bounces::Fixed(2),
             pathtrace_lobes: true,
+            emitter_sampling: true,
             voxel_map_texels: true,
             accumulate_frames: 1,
             radiance_source: RadianceSource::Maps,
@@ -357,7 +363,7 @@ use range::*;
 
 /// Every `[gi]` key: the scene file's key, the path `--set`, the sweep's grid and the panel
 /// use, its range, its flag and its field.
-static GI_KEYS: [Key<GiSettings>; 36] = [
+static GI_KEYS: [Key<GiSettings>; 37] = [
     key!("gi.method", Kind::Choice(choices::<GiMethod>),
         "Indirect-light method (none: direct light only)",
         flag("gi", "METHOD"), choice GiMethod, method),
@@ -375,6 +381,14 @@ static GI_KEYS: [Key<GiSettings>; 36] = [
          (unbiased; capped at 64)",
         flag("gi-bounces", "B"),
         bounces
+    ),
+    key!(
+        "gi.emitter_sampling",
+        Kind::Bool,
+        "Path tracer: sample emissive triangles by power at every path vertex (next-event \
+         estimation, MIS with the BSDF rays); off: emitters are found only by BSDF rays",
+        toggle("emitter-sampling"),
+        emitter_sampling
     ),
     key!(
         "gi.radius_m",

@@ -66,6 +66,7 @@ pub(super) static SPEC: MethodSpec = MethodSpec {
             ctx,
             target,
             settings.pathtrace_lobes,
+            settings.emitter_sampling,
         )?))
     },
 };

@@ -1,0 +1,120 @@
+// Next-event estimation toward the scene's emissive triangles (src/gi/emitters.rs builds the
+// list): a triangle picked by power, a point uniformly on it, visibility by the voxel ray test,
+// and multiple importance sampling with the power heuristic (Veach 1997, §9.2.4) against the
+// BSDF-sampled ray that may hit the same emitter in the voxels.
+//
+// The light strategy's density per unit area, p_A = w(L) / sum_t w(L_t) A_t (w the mean of
+// the radiance's channels), depends only on the emitted radiance L at the point; a BSDF ray
+// that hits an emitting voxel reads L from the emission volume and so knows p_A without
+// knowing the triangle (emitter_hit_weight). Both weights are then functions of the same
+// point, and they sum to 1 wherever the voxel emitter and the triangle agree: the combination
+// is unbiased up to the voxelization's own difference (docs/design/emitter-sampling.md).
+//
+// Needs before it: EMITTERS_BINDING, gi_common.glsl (the push constants), voxel_traverse.glsl
+// (voxel_visible), material_lobe.glsl (Lobe, lobe_pdf, lobe_part_brdf).
+#ifndef EMITTERS_GLSL
+#define EMITTERS_GLSL
+
+struct GpuEmitterHeader {
+    uint count;               // rows
+    float inv_weighted_area;  // 1 / sum_t w(L_t) A_t; 0: every triangle is black
+    uvec2 pad;
+};
+
+struct GpuEmissiveTriangle {
+    vec4 origin;    // a vertex (m); w the CDF of the power up to and including this row
+    vec4 edge1;     // to the second vertex (m); w the probability of picking this row
+    vec4 edge2;     // to the third vertex (m); the emitting side is edge1 x edge2's
+    vec4 radiance;  // L (W/(m^2 sr)); w its area density p_A (1/m^2)
+};
+
+layout(set = 0, binding = EMITTERS_BINDING, std430) readonly buffer Emitters {
+    GpuEmitterHeader emitter_header;
+    GpuEmissiveTriangle emitter_rows[];
+};
+
+// The power heuristic's weight of the strategy of density a against one of density b
+// (a^2 / (a^2 + b^2), as a ratio so that the huge densities of narrow lobes do not overflow).
+float mis_power(float a, float b) {
+    if (b <= 0.0) return 1.0;
+    if (a <= 0.0) return 0.0;
+    float r = b / a;
+    return 1.0 / (1.0 + r * r);
+}
+
+// The MIS weight of a BSDF-sampled ray of density pdf_bsdf (solid angle) that hit an emitting
+// voxel of radiance le at distance dist_m, arriving at cos_l to the voxel's normal: the light
+// strategy would have drawn that point with p_A(le) dist^2 / cos_l.
+float emitter_hit_weight(vec3 le, float dist_m, float cos_l, float pdf_bsdf) {
+    float pa = (le.r + le.g + le.b) / 3.0 * emitter_header.inv_weighted_area;
+    if (pa <= 0.0) return 1.0;
+    return mis_power(pdf_bsdf, pa * dist_m * dist_m / max(cos_l, 1e-6));
+}
+
+// One light sample at the path vertex o (normal n, wo toward where the path came from,
+// material m), u uniform in [0,1)^2: the MIS-weighted estimate of the radiance the vertex
+// reflects toward wo from the emissive triangles, f L cos_i cos_l / (d^2 p_A) per sampled lobe
+// part. `parts`: 0 the diffuse part only, 1 the specular part only (the first bounce's
+// stratified split, each half its own estimator), 2 both, where the BSDF sample picks the
+// specular part with probability ps (its density is then ps times that part's).
+vec3 emitter_sample(vec3 o, vec3 n, vec3 wo, Lobe m, uint parts, float ps, vec2 u) {
+    uint count = emitter_header.count;
+    if (count == 0u || emitter_header.inv_weighted_area <= 0.0) return vec3(0.0);
+    // The first row whose CDF exceeds u.x.
+    uint lo = 0u, hi = count - 1u;
+    while (lo < hi) {
+        uint mid = (lo + hi) / 2u;
+        if (emitter_rows[mid].origin.w > u.x) hi = mid;
+        else lo = mid + 1u;
+    }
+    GpuEmissiveTriangle e = emitter_rows[lo];
+    float pick = e.edge1.w;
+    float pa = e.radiance.w;
+    if (pick <= 0.0 || pa <= 0.0) return vec3(0.0);
+    // u.x rescaled within the row's interval picks the point with u.y (stratification kept):
+    // uniform on the triangle by the square-root map (Pharr, Jakob and Humphreys 2016, §13.6.5).
+    float below = lo == 0u ? 0.0 : emitter_rows[lo - 1u].origin.w;
+    float a = clamp((u.x - below) / pick, 0.0, 1.0);
+    float su = sqrt(a);
+    vec3 y = e.origin.xyz + e.edge1.xyz * (su * (1.0 - u.y)) + e.edge2.xyz * (su * u.y);
+    vec3 nl = cross(e.edge1.xyz, e.edge2.xyz);
+    float nl_len = length(nl);
+    vec3 to = y - o;
+    float d2 = dot(to, to);
+    if (nl_len <= 0.0 || d2 <= 0.0) return vec3(0.0);
+    nl /= nl_len;
+    float dist = sqrt(d2);
+    vec3 wi = to / dist;
+    float ci = dot(n, wi);
+    float cl = -dot(nl, wi);
+    // Below the vertex's surface, behind the emitter's front, or beyond the GI rays' reach.
+    if (ci <= 0.0 || cl <= 0.0 || dist > gi.radius_m) return vec3(0.0);
+    float pl = pa * d2 / cl;
+    vec3 f = vec3(0.0);
+    if (parts != 1u) {
+        float pd = (parts == 2u ? 1.0 - ps : 1.0) * lobe_pdf(m, n, wo, wi, false);
+        f += lobe_part_brdf(m, n, wi, wo, false) * mis_power(pl, pd);
+    }
+    if (parts != 0u) {
+        float pspec = (parts == 2u ? ps : 1.0) * lobe_pdf(m, n, wo, wi, true);
+        f += lobe_part_brdf(m, n, wi, wo, true) * mis_power(pl, pspec);
+    }
+    if (all(equal(f, vec3(0.0)))) return vec3(0.0);
+    // The segment leaves o as the BSDF rays do (k2 h / (d.n), clamped) and stops k1 voxel
+    // diagonals off the emitter along its normal, as the rays start off their own surface
+    // (Thiedemann 2010 §5.3.1), so neither end's own voxels block it.
+    float along = min(gi.ray_offset_voxels * gi.voxel_diagonal_m / max(ci, 1e-4),
+        gi.ray_offset_max_voxels * gi.voxel_diagonal_m);
+    vec3 start = o + wi * along;
+    vec3 end = y + nl * (gi.normal_offset_voxels * gi.voxel_diagonal_m);
+    if (dot(end - start, wi) > 0.0) {
+        vec3 a_v = (gi.world_to_voxel * vec4(start, 1.0)).xyz;
+        vec3 b_v = (gi.world_to_voxel * vec4(end, 1.0)).xyz;
+        if (!voxel_visible(gi.dims, uint(gi.max_level), a_v, b_v, gi.start_level, gi.max_iterations)) {
+            return vec3(0.0);
+        }
+    }
+    return f * e.radiance.rgb * (ci * cl / (d2 * pa));
+}
+
+#endif
