@@ -34,6 +34,10 @@
 //!   Mitsuba 3 has no Phong BSDF: a material with a specular lobe becomes a `blendbsdf` of
 //!   `diffuse` and a Beckmann `roughconductor` (perfect reflector, F = 1), which is an
 //!   approximation and is reported in [`ExportReport::warnings`].
+//! - Environment: `constant` with `radiance`, or `envmap` with the decoded map written as
+//!   `textures/environment.exr` (linear RGB, exactly the texels voxgi samples), its `scale`,
+//!   and `to_world` a rotation about +Y by `rotation_deg`; voxgi's equirectangular mapping is
+//!   Mitsuba's (`crate::scene::environment`).
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -41,7 +45,7 @@ use std::path::{Path, PathBuf};
 use glam::{Mat3, Vec2, Vec3};
 
 use crate::imaging::srgb_decode;
-use crate::scene::{Light, Material, Mesh, Scene, TextureData};
+use crate::scene::{Environment, Light, Material, Mesh, Scene, TextureData};
 
 /// Samples per pixel written as the XML's `spp` default. The sampler is `independent`, which
 /// takes any count as given (Mitsuba's stratified samplers round it to a grid) and whose
@@ -151,6 +155,7 @@ pub fn export_mitsuba(
 
     write_sensor(&mut xml, scene, width, height);
     write_lights(&mut xml, scene, &mut report);
+    write_environment(&mut xml, scene, out_dir, &mut report)?;
     write_materials_and_shapes(&mut xml, scene, time_s, out_dir, &mut report)?;
     xml.push_str("</scene>\n");
 
@@ -221,7 +226,7 @@ fn write_sensor(xml: &mut String, scene: &Scene, width: u32, height: u32) {
 }
 
 fn write_lights(xml: &mut String, scene: &Scene, report: &mut ExportReport) {
-    if scene.lights.is_empty() && !scene.has_emission() {
+    if scene.lights.is_empty() && !scene.has_emission() && scene.environment.is_none() {
         report.warnings.push(
             "the scene has no lights and no emitters: the Mitsuba image will be black".to_owned(),
         );
@@ -902,6 +907,55 @@ fn file_safe(name: &str) -> String {
 /// Text safe inside an XML comment (which must not contain `--`).
 fn comment_text(s: &str) -> String {
     s.replace("--", "- -")
+}
+
+/// The `[environment]` table as Mitsuba's `constant` or `envmap` emitter.
+fn write_environment(
+    xml: &mut String,
+    scene: &Scene,
+    out_dir: &Path,
+    report: &mut ExportReport,
+) -> Result<(), MitsubaExportError> {
+    match &scene.environment {
+        None => {}
+        Some(Environment::Constant { radiance }) => {
+            let _ = writeln!(
+                xml,
+                "    <emitter type=\"constant\">\n        <rgb name=\"radiance\" value=\"{}\"/>\n    \
+                 </emitter>\n",
+                vec3(*radiance)
+            );
+        }
+        Some(Environment::Map(m)) => {
+            let dir = out_dir.join("textures");
+            create_dir(&dir)?;
+            let path = dir.join("environment.exr");
+            let rgb: Vec<f32> = m
+                .texels
+                .chunks_exact(4)
+                .flat_map(|t| [t[0], t[1], t[2]])
+                .collect();
+            image::Rgb32FImage::from_raw(m.width, m.height, rgb)
+                .map(|img| img.save_with_format(&path, image::ImageFormat::OpenExr))
+                .unwrap_or(Ok(()))
+                .map_err(|source| MitsubaExportError::Texture {
+                    path: path.clone(),
+                    source,
+                })?;
+            report.files.push(path);
+            let _ = writeln!(
+                xml,
+                "    <!-- voxgi's [environment] map {} -->\n    <emitter type=\"envmap\">\n        \
+                 <string name=\"filename\" value=\"textures/environment.exr\"/>\n        \
+                 <float name=\"scale\" value=\"{}\"/>\n        <transform name=\"to_world\">\n            \
+                 <rotate y=\"1\" angle=\"{}\"/>\n        </transform>\n    </emitter>\n",
+                comment_text(&m.path.display().to_string()),
+                m.scale,
+                m.rotation_deg
+            );
+        }
+    }
+    Ok(())
 }
 
 fn create_dir(path: &Path) -> Result<(), MitsubaExportError> {

@@ -9,6 +9,7 @@
 use super::gi_common::{add_ray_pass, GiShared, GpuGiPush};
 use super::{GiInputs, GiMethodPasses, GiOutput, GiTarget};
 use crate::graph::{Access, RenderGraph, Shader};
+use crate::scene::Environment;
 use crate::vk::{vk, ComputePipeline, Context, Image, ImageDesc, PushLayout, VkError};
 use std::sync::atomic::Ordering;
 
@@ -37,6 +38,10 @@ impl GiPathtrace {
                 (0, u32::from(target.has_phong || target.scene.has_ggx())),
                 (1, u32::from(target.scene.has_emission())),
                 (2, u32::from(lobes && !target.scene.is_all_lambert())),
+                (
+                    8,
+                    Environment::shader_kind(target.scene.environment.as_ref()),
+                ),
             ],
         )?;
         let histories = (0..target.eyes.max(1))
