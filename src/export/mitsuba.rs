@@ -1277,6 +1277,55 @@ mod tests {
     }
 
     #[test]
+    fn environments_are_exported_as_constant_and_envmap() {
+        // A constant sky: Mitsuba's `constant` emitter with the radiance, and no warning about
+        // a black image although there are no lights.
+        let text = format!(
+            "{CAMERA}[[objects]]\nbuiltin = \"quad\"\n\
+             [environment]\nkind = \"constant\"\nradiance = [0.5, 1, 2]\n"
+        );
+        let scene = Scene::from_toml_str(&text, Path::new("<test>"), Path::new(".")).unwrap();
+        let dir = TempDir::new("constant-sky");
+        let report = export_mitsuba(&scene, 0.0, 16, 16, &dir.0).unwrap();
+        assert!(report.warnings.is_empty(), "{:?}", report.warnings);
+        let xml = std::fs::read_to_string(&report.xml_path).unwrap();
+        let constant = &xml[xml.find("<emitter type=\"constant\">").unwrap()..];
+        assert!(close(
+            &numbers(constant, "<rgb name=\"radiance\"", "value"),
+            &[0.5, 1.0, 2.0]
+        ));
+
+        // A map: its texels written as EXR beside the XML (read back equal), its scale and
+        // its rotation about +Y.
+        let maps = TempDir::new("sky-map");
+        let texels: Vec<f32> = (0..8 * 4 * 3).map(|i| i as f32 * 0.25).collect();
+        image::Rgb32FImage::from_raw(8, 4, texels.clone())
+            .unwrap()
+            .save_with_format(maps.0.join("sky.exr"), image::ImageFormat::OpenExr)
+            .unwrap();
+        let text = format!(
+            "{CAMERA}[[objects]]\nbuiltin = \"quad\"\n\
+             [environment]\nkind = \"map\"\nfile = \"sky.exr\"\nrotation_deg = 30\nscale = 1.5\n"
+        );
+        let scene = Scene::from_toml_str(&text, Path::new("<test>"), &maps.0).unwrap();
+        let dir = TempDir::new("map-sky");
+        let report = export_mitsuba(&scene, 0.0, 16, 16, &dir.0).unwrap();
+        let xml = std::fs::read_to_string(&report.xml_path).unwrap();
+        let envmap = &xml[xml.find("<emitter type=\"envmap\">").unwrap()..];
+        assert!(envmap.contains("<string name=\"filename\" value=\"textures/environment.exr\"/>"));
+        assert!(close(
+            &numbers(envmap, "<float name=\"scale\"", "value"),
+            &[1.5]
+        ));
+        assert!(close(&numbers(envmap, "<rotate y=\"1\"", "angle"), &[30.0]));
+        let written = image::open(dir.0.join("textures/environment.exr"))
+            .unwrap()
+            .into_rgb32f();
+        assert_eq!(written.dimensions(), (8, 4));
+        assert_eq!(written.into_raw(), texels);
+    }
+
+    #[test]
     fn ggx_materials_and_emitters_are_exported() {
         // A copper metal sphere (exact as principled, no warning), a GGX dielectric cube
         // (approximate, one warning) and an emissive Lambert quad (an area emitter with the

@@ -214,7 +214,7 @@ mod tests {
 
     fn scene_with(environment: &str, dir: &Path) -> Result<super::super::Scene, String> {
         let toml = format!(
-            "[camera]\nposition = [0, 1, -2]\ntarget = [0, 0, 0]\n[[objects]]\nbuiltin = \"quad\"\n\
+            "[camera]\nposition = [0, 1, -2]\ntarget = [0, 0, 0]\nfov_y_deg = 40\n[[objects]]\nbuiltin = \"quad\"\n\
              [environment]\n{environment}\n"
         );
         super::super::Scene::from_toml_str(&toml, Path::new("sky.toml"), dir)
