@@ -246,7 +246,7 @@ fn sky_courtyard_matches_its_mitsuba_reference() {
                 method: GiMethod::Pathtrace,
                 rays: 16,
                 bounces: Bounces::Unbounded,
-                accumulate_frames: 16,
+                accumulate_frames: 4,
                 ..Default::default()
             },
             0.02,
