@@ -12,7 +12,10 @@
 // surface along the normal and k2 h / (d . n) (clamped) along the ray (Thiedemann 2010 §5.3.1). Samples: Hammersley for the first
 // bounce, Halton (2,3) and (5,7) for the next two, hashed random after, all rotated per pixel
 // and per accumulated frame. The irradiance estimate E = pi/N sum L is accumulated over frames
-// into a history image while camera and scene stay still.
+// into a history image while camera and scene stay still. A path whose ray leaves the voxel
+// grid within its radius ends there with the environment's radiance (ENVIRONMENT,
+// environment.glsl; see escaped_radiance): a sky-lit point gets its sky light by cosine or
+// lobe sampling, no next event estimation toward the sky.
 //
 // With HAS_EMITTERS (emissive triangles and `gi.emitter_sampling`) every path vertex that
 // samples a further bounce also samples one emissive triangle by power (emitters.glsl): the
@@ -38,6 +41,7 @@ layout(constant_id = 0) const bool HAS_PHONG = false;  // the G-buffer has a lob
 layout(constant_id = 1) const bool HAS_EMISSION = false;
 layout(constant_id = 2) const bool HAS_MATERIAL_VOLUME = false;  // lobes at later bounces
 layout(constant_id = 3) const bool HAS_EMITTERS = false;  // next-event estimation (binding 14)
+layout(constant_id = 8) const uint ENVIRONMENT = 0u;  // environment.glsl's kinds
 
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(set = 0, binding = 0, std430) readonly buffer FrameBuf { GpuFrame frame; };
@@ -53,6 +57,8 @@ layout(set = 0, binding = 9) uniform sampler2D gb_specular;   // albedo when !HA
 layout(set = 0, binding = 10) uniform sampler2D gb_albedo;
 layout(set = 0, binding = 12) uniform sampler3D emission_volume;  // albedo when !HAS_EMISSION
 layout(set = 0, binding = 13) uniform sampler3D material_volume;  // albedo when !HAS_MATERIAL_VOLUME
+layout(set = 0, binding = 15) uniform sampler2D environment_map;  // albedo unless a map
+#include "environment.glsl"
 
 uvec4 vx_column(uint level, int x, int y, uint layer) {
     return texelFetch(voxels, ivec3(x, y, int(layer)), int(level));
@@ -158,6 +164,14 @@ VxHit trace_from(vec3 o, vec3 n, vec3 d, out vec3 start) {
         max(gi.radius_m - along, 0.0), gi.start_level, gi.max_iterations);
 }
 
+// The radiance a ray from o that trace_from started at `start` along d brings back when it hit
+// nothing (h): the environment's, if it left the grid within its length (environment.glsl).
+vec3 escaped_radiance(vec3 o, vec3 start, vec3 d, VxHit h) {
+    float t_max = max(gi.radius_m - distance(start, o), 0.0);
+    vec3 ov = (gi.world_to_voxel * vec4(start, 1.0)).xyz;
+    return environment_after_miss(gi.dims, ov, mat3(gi.world_to_voxel) * d, t_max, h.ran_out, d);
+}
+
 // The material at a voxel hit: the material volume's lobe, or Lambert with the albedo.
 Lobe hit_lobe(ivec3 v, vec3 albedo) {
     return HAS_MATERIAL_VOLUME ? voxel_lobe(albedo, texelFetch(material_volume, v, 0)) : lambert_lobe(albedo);
@@ -245,7 +259,10 @@ void main() {
             }
             vec3 start;
             VxHit h = trace_from(o, nn, d, start);
-            if (!h.hit) break;
+            if (!h.hit) {
+                if (ENVIRONMENT != ENVIRONMENT_NONE) l += throughput * escaped_radiance(o, start, d, h);
+                break;
+            }
             ivec3 v = ivec3(h.voxel);
             vec3 a = texelFetch(albedo_volume, v, 0).rgb;
             vec3 hn = texelFetch(normal_volume, v, 0).xyz;

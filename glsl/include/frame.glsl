@@ -39,6 +39,8 @@ struct GpuFrame {
     mat4 prev_view_proj;  // the previous frame's un-jittered view_proj (motion vectors)
     vec4 jitter_ndc;      // xy: this frame's TAA jitter in NDC, included in view_proj
     vec4 camera_forward;  // xyz unit viewing direction, w orthographic view height m (0: perspective)
+    vec4 environment;     // rgb constant radiance or map scale, w map rotation about +Y (rad);
+                          // environment.glsl reads it
 };
 
 // World position of pixel `px` of a `size` frame at depth-buffer value `depth`: the pixel's

@@ -11,12 +11,15 @@
 // lobe too (§5.7 for Phong): Phong and GGX pixels spend half their rays on the specular lobe
 // (GGX metals all of them) and store their indirect radiance, the diffuse part's estimate plus
 // the lobe's; a GGX pixel's rays are material_lobe.glsl's, as the path tracer's first bounce.
+// A ray that leaves the voxel grid within its radius reads the environment (ENVIRONMENT,
+// environment.glsl): the sky's light at the pixel, with voxel visibility.
 #include "frame.glsl"
 #include "gi_common.glsl"
 
 layout(constant_id = 0) const bool HAS_PHONG = false;
 // Some material is GGX: light-map senders that are GGX send their whole BRDF toward the ray.
 layout(constant_id = 1) const bool HAS_GGX = false;
+layout(constant_id = 8) const uint ENVIRONMENT = 0u;  // environment.glsl's kinds
 
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(set = 0, binding = 0, std430) readonly buffer FrameBuf { GpuFrame frame; };
@@ -51,6 +54,8 @@ layout(set = 0, binding = 13) uniform sampler3D normal_volume;
 layout(set = 0, binding = 8, rgba32f) uniform writeonly image2D irradiance;
 layout(set = 0, binding = 9) uniform sampler2D gb_specular;   // albedo when !HAS_PHONG
 layout(set = 0, binding = 10) uniform sampler2D gb_albedo;
+layout(set = 0, binding = 15) uniform sampler2D environment_map;  // albedo unless a map
+#include "environment.glsl"
 
 uvec4 vx_column(uint level, int x, int y, uint layer) {
     return texelFetch(voxels, ivec3(x, y, int(layer)), int(level));
@@ -267,9 +272,13 @@ void main() {
         // rays leave the surface's own voxels too.
         float along = min(gi.ray_offset_voxels * gi.voxel_diagonal_m / max(dot(d, n), 1e-4), gi.ray_offset_max_voxels * gi.voxel_diagonal_m);
         vec3 o = origin + d * along;
-        VxHit h = voxel_first_hit(gi.dims, uint(gi.max_level), ov + dir_to_voxel * (d * along), dir_to_voxel * d, max(gi.radius_m - along, 0.0), gi.start_level, gi.max_iterations);
-        if (!h.hit) continue;
-        vec3 l = hit_radiance(h, o + d * h.t, d);
+        vec3 ray_o = ov + dir_to_voxel * (d * along);
+        float ray_t = max(gi.radius_m - along, 0.0);
+        VxHit h = voxel_first_hit(gi.dims, uint(gi.max_level), ray_o, dir_to_voxel * d, ray_t, gi.start_level, gi.max_iterations);
+        vec3 l;
+        if (h.hit) l = hit_radiance(h, o + d * h.t, d);
+        else if (ENVIRONMENT != ENVIRONMENT_NONE) l = environment_after_miss(gi.dims, ray_o, dir_to_voxel * d, ray_t, h.ran_out, d);
+        else continue;
         if (ggx) l *= w;
         else if (lobe) l *= cos_n;
         if (lobe) lobe_sum += l;

@@ -34,6 +34,10 @@
 //!   Mitsuba 3 has no Phong BSDF: a material with a specular lobe becomes a `blendbsdf` of
 //!   `diffuse` and a Beckmann `roughconductor` (perfect reflector, F = 1), which is an
 //!   approximation and is reported in [`ExportReport::warnings`].
+//! - Environment: `constant` with `radiance`, or `envmap` with the decoded map written as
+//!   `textures/environment.exr` (linear RGB, exactly the texels voxgi samples), its `scale`,
+//!   and `to_world` a rotation about +Y by `rotation_deg`; voxgi's equirectangular mapping is
+//!   Mitsuba's (`crate::scene::environment`).
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -41,7 +45,7 @@ use std::path::{Path, PathBuf};
 use glam::{Mat3, Vec2, Vec3};
 
 use crate::imaging::srgb_decode;
-use crate::scene::{Light, Material, Mesh, Scene, TextureData};
+use crate::scene::{Environment, Light, Material, Mesh, Scene, TextureData};
 
 /// Samples per pixel written as the XML's `spp` default. The sampler is `independent`, which
 /// takes any count as given (Mitsuba's stratified samplers round it to a grid) and whose
@@ -151,6 +155,7 @@ pub fn export_mitsuba(
 
     write_sensor(&mut xml, scene, width, height);
     write_lights(&mut xml, scene, &mut report);
+    write_environment(&mut xml, scene, out_dir, &mut report)?;
     write_materials_and_shapes(&mut xml, scene, time_s, out_dir, &mut report)?;
     xml.push_str("</scene>\n");
 
@@ -221,7 +226,7 @@ fn write_sensor(xml: &mut String, scene: &Scene, width: u32, height: u32) {
 }
 
 fn write_lights(xml: &mut String, scene: &Scene, report: &mut ExportReport) {
-    if scene.lights.is_empty() && !scene.has_emission() {
+    if scene.lights.is_empty() && !scene.has_emission() && scene.environment.is_none() {
         report.warnings.push(
             "the scene has no lights and no emitters: the Mitsuba image will be black".to_owned(),
         );
@@ -935,6 +940,55 @@ fn comment_text(s: &str) -> String {
     s.replace("--", "- -")
 }
 
+/// The `[environment]` table as Mitsuba's `constant` or `envmap` emitter.
+fn write_environment(
+    xml: &mut String,
+    scene: &Scene,
+    out_dir: &Path,
+    report: &mut ExportReport,
+) -> Result<(), MitsubaExportError> {
+    match &scene.environment {
+        None => {}
+        Some(Environment::Constant { radiance }) => {
+            let _ = writeln!(
+                xml,
+                "    <emitter type=\"constant\">\n        <rgb name=\"radiance\" value=\"{}\"/>\n    \
+                 </emitter>\n",
+                vec3(*radiance)
+            );
+        }
+        Some(Environment::Map(m)) => {
+            let dir = out_dir.join("textures");
+            create_dir(&dir)?;
+            let path = dir.join("environment.exr");
+            let rgb: Vec<f32> = m
+                .texels
+                .chunks_exact(4)
+                .flat_map(|t| [t[0], t[1], t[2]])
+                .collect();
+            image::Rgb32FImage::from_raw(m.width, m.height, rgb)
+                .map(|img| img.save_with_format(&path, image::ImageFormat::OpenExr))
+                .unwrap_or(Ok(()))
+                .map_err(|source| MitsubaExportError::Texture {
+                    path: path.clone(),
+                    source,
+                })?;
+            report.files.push(path);
+            let _ = writeln!(
+                xml,
+                "    <!-- voxgi's [environment] map {} -->\n    <emitter type=\"envmap\">\n        \
+                 <string name=\"filename\" value=\"textures/environment.exr\"/>\n        \
+                 <float name=\"scale\" value=\"{}\"/>\n        <transform name=\"to_world\">\n            \
+                 <rotate y=\"1\" angle=\"{}\"/>\n        </transform>\n    </emitter>\n",
+                comment_text(&m.path.display().to_string()),
+                m.scale,
+                m.rotation_deg
+            );
+        }
+    }
+    Ok(())
+}
+
 fn create_dir(path: &Path) -> Result<(), MitsubaExportError> {
     std::fs::create_dir_all(path).map_err(|source| MitsubaExportError::Io {
         path: path.to_owned(),
@@ -1273,6 +1327,55 @@ mod tests {
             &numbers(&xml, "<rgb name=\"irradiance\"", "value"),
             &[2.0, 2.0, 2.0]
         ));
+    }
+
+    #[test]
+    fn environments_are_exported_as_constant_and_envmap() {
+        // A constant sky: Mitsuba's `constant` emitter with the radiance, and no warning about
+        // a black image although there are no lights.
+        let text = format!(
+            "{CAMERA}[[objects]]\nbuiltin = \"quad\"\n\
+             [environment]\nkind = \"constant\"\nradiance = [0.5, 1, 2]\n"
+        );
+        let scene = Scene::from_toml_str(&text, Path::new("<test>"), Path::new(".")).unwrap();
+        let dir = TempDir::new("constant-sky");
+        let report = export_mitsuba(&scene, 0.0, 16, 16, &dir.0).unwrap();
+        assert!(report.warnings.is_empty(), "{:?}", report.warnings);
+        let xml = std::fs::read_to_string(&report.xml_path).unwrap();
+        let constant = &xml[xml.find("<emitter type=\"constant\">").unwrap()..];
+        assert!(close(
+            &numbers(constant, "<rgb name=\"radiance\"", "value"),
+            &[0.5, 1.0, 2.0]
+        ));
+
+        // A map: its texels written as EXR beside the XML (read back equal), its scale and
+        // its rotation about +Y.
+        let maps = TempDir::new("sky-map");
+        let texels: Vec<f32> = (0..8 * 4 * 3).map(|i| i as f32 * 0.25).collect();
+        image::Rgb32FImage::from_raw(8, 4, texels.clone())
+            .unwrap()
+            .save_with_format(maps.0.join("sky.exr"), image::ImageFormat::OpenExr)
+            .unwrap();
+        let text = format!(
+            "{CAMERA}[[objects]]\nbuiltin = \"quad\"\n\
+             [environment]\nkind = \"map\"\nfile = \"sky.exr\"\nrotation_deg = 30\nscale = 1.5\n"
+        );
+        let scene = Scene::from_toml_str(&text, Path::new("<test>"), &maps.0).unwrap();
+        let dir = TempDir::new("map-sky");
+        let report = export_mitsuba(&scene, 0.0, 16, 16, &dir.0).unwrap();
+        let xml = std::fs::read_to_string(&report.xml_path).unwrap();
+        let envmap = &xml[xml.find("<emitter type=\"envmap\">").unwrap()..];
+        assert!(envmap.contains("<string name=\"filename\" value=\"textures/environment.exr\"/>"));
+        assert!(close(
+            &numbers(envmap, "<float name=\"scale\"", "value"),
+            &[1.5]
+        ));
+        assert!(close(&numbers(envmap, "<rotate y=\"1\"", "angle"), &[30.0]));
+        let written = image::open(dir.0.join("textures/environment.exr"))
+            .unwrap()
+            .into_rgb32f();
+        assert_eq!(written.dimensions(), (8, 4));
+        assert_eq!(written.into_raw(), texels);
     }
 
     #[test]

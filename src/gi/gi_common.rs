@@ -124,7 +124,8 @@ pub struct GiShared {
 
 /// Declares one of the GI ray passes (`gi_hemisphere`, `gi_hemisphere_volume`,
 /// `gi_pathtrace`): they share the frame, G-buffer, voxel and ray-mask inputs (bindings 0-4)
-/// and the specular and albedo images (9, 10); `own` are the pass's further sampled images by
+/// and the specular and albedo images (9, 10), and the environment map (15; the albedo image
+/// where the scene has none, which the shaders then never read); `own` are the pass's further sampled images by
 /// binding, `out` its output image at binding 8, `buffers` its storage buffers (read) by
 /// binding, and `push` its push constants at record time.
 #[allow(clippy::too_many_arguments)]
@@ -154,7 +155,13 @@ pub fn add_ray_pass(
         .bind(4, shared.lut, Access::StorageRead(c))
         .bind(8, out, out_access)
         .bind_sampled(9, specular, sampler, c)
-        .bind_sampled(10, i.albedo, sampler, c);
+        .bind_sampled(10, i.albedo, sampler, c)
+        .bind_sampled(
+            15,
+            i.environment_map.unwrap_or(i.albedo),
+            i.environment_sampler,
+            c,
+        );
     for &(b, h) in own {
         pass = pass.bind_sampled(b, h, sampler, c);
     }

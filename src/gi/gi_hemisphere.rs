@@ -21,11 +21,13 @@ impl GiHemisphere {
     /// `has_ggx`: some material is GGX, whose light-map senders get their whole BRDF toward
     /// the ray (specialization constant 1). `emission`: the scene has emitters; the assembly
     /// then writes the attribute volumes ([`super::GiPasses::needs_attribute_volumes`]).
+    /// `environment`: `Environment::shader_kind`, what rays leaving the grid read.
     pub fn new(
         ctx: &Context,
         has_phong: bool,
         has_ggx: bool,
         emission: bool,
+        environment: u32,
     ) -> Result<Self, VkError> {
         let pipeline = ctx.compute_pipeline(
             if emission {
@@ -34,7 +36,11 @@ impl GiHemisphere {
                 "gi_hemisphere.comp"
             },
             PushLayout::of::<GpuGiPush>(),
-            &[(0, u32::from(has_phong)), (1, u32::from(has_ggx))],
+            &[
+                (0, u32::from(has_phong)),
+                (1, u32::from(has_ggx)),
+                (8, environment),
+            ],
         )?;
         Ok(Self { pipeline, emission })
     }

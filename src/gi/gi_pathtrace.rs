@@ -14,6 +14,7 @@ use super::emitters::EmitterBuffer;
 use super::gi_common::{add_ray_pass, GiShared, GpuGiPush};
 use super::{GiInputs, GiMethodPasses, GiOutput, GiTarget, MethodWorld};
 use crate::graph::{Access, RenderGraph, Shader};
+use crate::scene::Environment;
 use crate::vk::{vk, ComputePipeline, Context, Image, ImageDesc, PushLayout, VkError};
 use std::sync::atomic::Ordering;
 
@@ -56,6 +57,10 @@ impl GiPathtrace {
                 (1, u32::from(target.scene.has_emission())),
                 (2, u32::from(lobes && !target.scene.is_all_lambert())),
                 (3, u32::from(emitters.is_some())),
+                (
+                    8,
+                    Environment::shader_kind(target.scene.environment.as_ref()),
+                ),
             ],
         )?;
         let histories = (0..target.eyes.max(1))

@@ -9,6 +9,7 @@
 use super::gi_common::{add_ray_pass, GiShared, GpuGiPush};
 use super::{GiInputs, GiMethodPasses, GiOutput, GiTarget, MethodWorld};
 use crate::graph::{Access, RenderGraph, Shader};
+use crate::scene::Environment;
 use crate::vk::{vk, ComputePipeline, Context, Image, ImageDesc, PushLayout, VkError};
 
 /// The direct-radiance volume (rgba32f, congruent with the bits) and its passes. f32 because
@@ -37,6 +38,10 @@ impl GiRadianceVolume {
                 (0, u32::from(target.has_phong)),
                 (1, u32::from(target.scene.has_ggx())),
                 (2, u32::from(target.scene.has_emission())),
+                (
+                    8,
+                    Environment::shader_kind(target.scene.environment.as_ref()),
+                ),
             ],
         )?;
         let ext = target.grid.extent_voxels();

@@ -66,6 +66,10 @@ pub struct GiInputs {
     pub materials: BufferHandle,
     /// Their GGX parameters (`GpuMaterialPbr`), for GGX senders in the light maps.
     pub materials_pbr: BufferHandle,
+    /// The environment map, in scenes lit by one (binding 15 of the ray passes), and the
+    /// bilinear, repeating sampler it is read with.
+    pub environment_map: Option<ImageHandle>,
+    pub environment_sampler: vk::Sampler,
     pub width: u32,
     pub height: u32,
 }

@@ -15,10 +15,11 @@ pub struct DeferredDirectPass {
 impl DeferredDirectPass {
     /// `sampler`: the nearest-neighbour sampler the G-buffer and shadow maps are read with.
     /// `phong`, `ggx`, `emission`: which material models the scene has (the shader compiles in
-    /// only those).
+    /// only those); `environment`: `Environment::shader_kind`, what the background shows.
     pub fn new(
         ctx: &Context,
         (phong, ggx, emission): (bool, bool, bool),
+        environment: u32,
         sampler: vk::Sampler,
     ) -> Result<Self, VkError> {
         let pipeline = ctx.compute_pipeline(
@@ -28,6 +29,7 @@ impl DeferredDirectPass {
                 (0, u32::from(phong)),
                 (1, u32::from(ggx)),
                 (2, u32::from(emission)),
+                (8, environment),
             ],
         )?;
         Ok(Self { pipeline, sampler })
@@ -49,6 +51,7 @@ impl DeferredDirectPass {
         // albedo fills them.
         let specular = gbuffer.specular.unwrap_or(gbuffer.albedo);
         let emission = gbuffer.emission.unwrap_or(gbuffer.albedo);
+        let environment = scene.environment_map.unwrap_or(gbuffer.albedo);
         g.add_pass("deferred_direct")
             .pipeline(&pipe)
             .bind(0, scene.frame, Access::StorageRead(c))
@@ -59,6 +62,7 @@ impl DeferredDirectPass {
             .bind_sampled(5, shadow_maps, s, c)
             .bind(6, radiance, Access::StorageWrite(c))
             .bind_sampled(7, emission, s, c)
+            .bind_sampled(8, environment, scene.texture_sampler, c)
             .record(move |ctx| {
                 ctx.bind(&pipe);
                 ctx.cmd.dispatch(w.div_ceil(8), h.div_ceil(8), 1);

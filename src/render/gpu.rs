@@ -74,6 +74,9 @@ pub struct GpuFrame {
     /// (0: perspective). Under orthographic projection every view ray runs along xyz
     /// (`toward_camera` etc. in frame.glsl).
     pub camera_forward: [f32; 4],
+    /// The scene's environment (`glsl/include/environment.glsl`): rgb the constant's radiance
+    /// or the map's scale, w the map's rotation about +Y in radians; zero without one.
+    pub environment: [f32; 4],
 }
 
 crate::gpu_struct!(GpuFrame {
@@ -86,7 +89,8 @@ crate::gpu_struct!(GpuFrame {
     shadow_views,
     prev_view_proj,
     jitter_ndc,
-    camera_forward
+    camera_forward,
+    environment
 });
 
 #[repr(C)]

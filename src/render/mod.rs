@@ -531,6 +531,7 @@ impl Renderer {
         let deferred = DeferredDirectPass::new(
             ctx,
             (features.phong, features.ggx, features.emission),
+            crate::scene::Environment::shader_kind(scene.environment.as_ref()),
             sampler.raw,
         )?;
         let oit = oit_on
@@ -792,6 +793,7 @@ impl Renderer {
         let view_proj = camera.view_proj(aspect);
         let mut f = GpuFrame::zeroed();
         set_frame_camera(&mut f, &camera, aspect);
+        f.environment = crate::scene::Environment::frame_constants(scene.environment.as_ref());
         f.counts = [lights.len() as u32, views.len() as u32, s.width, s.height];
         f.shadow = [
             s.shadow.bias_texels,
@@ -1036,6 +1038,8 @@ impl Renderer {
                         specular: gbuffer.specular,
                         materials: scene.materials,
                         materials_pbr: scene.materials_pbr,
+                        environment_map: scene.environment_map,
+                        environment_sampler: scene.texture_sampler,
                         width: w,
                         height: h,
                     },

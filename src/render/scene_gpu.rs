@@ -78,6 +78,8 @@ pub struct SceneGpu {
     /// placeholder (always last).
     textures: Vec<Image>,
     texture_sampler: crate::vk::Sampler,
+    /// The `[environment]` map (RGBA32F, linear radiance before its scale), if it is one.
+    environment_map: Option<Image>,
     pub draws: Arc<RwLock<DrawLists>>,
     pub all_draws: Vec<Draw>,
     /// Draws of materials with d < 1 leave the G-buffer's list for `transparent`.
@@ -105,7 +107,10 @@ pub struct SceneInputs {
     pub materials_pbr: BufferHandle,
     /// The scene's textures, the placeholder last.
     pub textures: Vec<ImageHandle>,
+    /// Bilinear and repeating: the textures' and the environment map's sampler.
     pub texture_sampler: vk::Sampler,
+    /// The environment map (`glsl/include/environment.glsl`), in scenes lit by one.
+    pub environment_map: Option<ImageHandle>,
     pub draws: Arc<RwLock<DrawLists>>,
 }
 
@@ -190,6 +195,18 @@ impl SceneGpu {
         )?);
         let texture_sampler =
             ctx.create_sampler_with(vk::Filter::LINEAR, true, vk::SamplerAddressMode::REPEAT)?;
+        let environment_map = match &scene.environment {
+            Some(crate::scene::Environment::Map(m)) => Some(ctx.upload_image(
+                &crate::vk::ImageDesc::new_2d(
+                    &format!("environment {}", m.path.display()),
+                    vk::Format::R32G32B32A32_SFLOAT,
+                    m.width,
+                    m.height,
+                ),
+                &[bytemuck::cast_slice(&m.texels).to_vec()],
+            )?),
+            _ => None,
+        };
         Ok(Self {
             vertices: geometry.vertices,
             indices: geometry.indices,
@@ -200,6 +217,7 @@ impl SceneGpu {
             frame_right: None,
             textures,
             texture_sampler,
+            environment_map,
             draws: Arc::new(RwLock::new(DrawLists::default())),
             all_draws: geometry.draws,
             split_transparent: false,
@@ -233,6 +251,10 @@ impl SceneGpu {
                 .map(|t| g.import_image(t, Access::Sampled(Shader::Fragment)))
                 .collect(),
             texture_sampler: self.texture_sampler.raw,
+            environment_map: self
+                .environment_map
+                .as_ref()
+                .map(|m| g.import_image(m, Access::Sampled(Shader::Compute))),
             draws: self.draws.clone(),
         }
     }

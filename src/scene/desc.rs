@@ -7,6 +7,7 @@ use serde::Deserialize;
 
 use super::camera::{Camera, Projection, DEFAULT_ORTHO_FOV_Y_DEG};
 use super::camera_path::{CameraKey, CameraPath};
+use super::environment::Environment;
 use super::error::{field_ref, from_toml_error, SceneError};
 use super::gi_settings::GiSettings;
 use super::gltf::{is_gltf_path, GltfAsset};
@@ -51,6 +52,19 @@ pub(crate) struct SceneDesc {
     pub camera_path: Option<CameraPathDesc>,
     /// "oit" or "hashed" ([`super::Transparency`]).
     pub transparency: Option<String>,
+    pub environment: Option<EnvironmentDesc>,
+}
+
+/// The `[environment]` table, checked by [`build_environment`].
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct EnvironmentDesc {
+    /// "constant" or "map" ([`super::environment::ENVIRONMENT_KINDS`]).
+    pub kind: String,
+    pub radiance: Option<ScalarOrVec3>,
+    pub file: Option<String>,
+    pub rotation_deg: Option<f32>,
+    pub scale: Option<f32>,
 }
 
 /// The `[camera_path]` table, checked by [`build_camera_path`].
@@ -431,6 +445,11 @@ pub(crate) fn build_with(
         .map(|t| build_table(&ck, t))
         .transpose()?
         .unwrap_or_default();
+    let environment = desc
+        .environment
+        .as_ref()
+        .map(|e| build_environment(&ck, e, base_dir))
+        .transpose()?;
     let mut lights = desc
         .lights
         .iter()
@@ -506,19 +525,124 @@ pub(crate) fn build_with(
         transparency,
         shadow,
         post,
+        environment,
         source,
     };
     if scene.camera.ortho_height_m.is_nan() {
         scene.camera.ortho_height_m = scene.default_ortho_height_m();
     }
-    if scene.lights.is_empty() && !scene.has_emission() {
+    if scene.lights.is_empty() && !scene.has_emission() && scene.environment.is_none() {
         log::warn!(
-            "{}: the scene has no lights and no emissive materials, so it will render black; \
-             add a `[[lights]]` table",
+            "{}: the scene has no lights, no emissive materials and no environment, so it will \
+             render black; add a `[[lights]]` or an `[environment]` table",
             file.display()
         );
     }
     Ok(scene)
+}
+
+/// The `[environment]` table: a constant radiance or an equirectangular map (read here, so
+/// that a missing or malformed file is an error naming the scene file and the key).
+fn build_environment(
+    ck: &Check<'_>,
+    e: &EnvironmentDesc,
+    base_dir: &Path,
+) -> Result<Environment, SceneError> {
+    use super::environment::{read_map, EnvironmentMap, MapReadError, ENVIRONMENT_KINDS};
+    let only = |key: &str, present: bool, kind: &str| {
+        if present {
+            Err(ck.invalid(
+                &format!("environment.{key}"),
+                format!("`{key}` does not apply to kind = \"{kind}\"; remove it"),
+            ))
+        } else {
+            Ok(())
+        }
+    };
+    match e.kind.as_str() {
+        "constant" => {
+            only("file", e.file.is_some(), "constant")?;
+            only("rotation_deg", e.rotation_deg.is_some(), "constant")?;
+            only("scale", e.scale.is_some(), "constant")?;
+            let Some(radiance) = e.radiance else {
+                return Err(ck.invalid(
+                    "environment.radiance",
+                    "missing; a constant environment needs `radiance = [r, g, b]` (W/(m²·sr), \
+                     linear RGB, >= 0)",
+                ));
+            };
+            let radiance = ck.emission("environment.radiance", radiance)?;
+            Ok(Environment::Constant { radiance })
+        }
+        "map" => {
+            only("radiance", e.radiance.is_some(), "map")?;
+            let Some(file) = &e.file else {
+                return Err(ck.invalid(
+                    "environment.file",
+                    "missing; a map environment needs `file = \"sky.hdr\"` (an \
+                     equirectangular Radiance .hdr or OpenEXR image, 2:1, relative to the \
+                     scene file)",
+                ));
+            };
+            let rotation_deg =
+                ck.scalar("environment.rotation_deg", e.rotation_deg.unwrap_or(0.0))?;
+            let scale = ck.scalar("environment.scale", e.scale.unwrap_or(1.0))?;
+            if scale < 0.0 {
+                return Err(ck.invalid(
+                    "environment.scale",
+                    format!("{scale} is negative; use a factor >= 0"),
+                ));
+            }
+            let path = base_dir.join(file);
+            let referenced_by = format!("{}: environment.file", ck.file.display());
+            let (width, height, texels) = read_map(&path).map_err(|err| match err {
+                MapReadError::NotFound => SceneError::NotFound {
+                    file: path.clone(),
+                    what: "environment map",
+                    referenced_by: Some(referenced_by.clone()),
+                },
+                MapReadError::Decode(message) => SceneError::TextureDecode {
+                    file: path.clone(),
+                    message,
+                    referenced_by: referenced_by.clone(),
+                },
+                MapReadError::NotTwoToOne { width, height } => ck.invalid(
+                    "environment.file",
+                    format!(
+                        "{} is {width}×{height} texels; an equirectangular map is twice as \
+                         wide as high (e.g. 2048×1024): resample or crop it",
+                        path.display()
+                    ),
+                ),
+                MapReadError::NonFinite { x, y } => ck.invalid(
+                    "environment.file",
+                    format!(
+                        "{} has a NaN or infinite texel at ({x}, {y}); fix the image",
+                        path.display()
+                    ),
+                ),
+            })?;
+            Ok(Environment::Map(EnvironmentMap {
+                path,
+                width,
+                height,
+                texels,
+                rotation_deg,
+                scale,
+            }))
+        }
+        other => Err(ck.invalid(
+            "environment.kind",
+            format!(
+                "unknown kind \"{other}\"; use one of {}",
+                ENVIRONMENT_KINDS
+                    .iter()
+                    .map(|k| format!("\"{k}\""))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        )),
+    }
 }
 
 /// The `transparency` key: one of [`super::TRANSPARENCY_NAMES`].

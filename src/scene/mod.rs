@@ -151,6 +151,20 @@
 //! sao_contrast = 2.0                # SAO contrast exponent k, 0..=64 [2]; --sao-contrast
 //! sao_epsilon_m2 = 0.01             # SAO ε of v·v + ε, m² > 0 [0.01]; --sao-epsilon
 //!
+//! [environment]                     # optional: light from far away, seen by camera rays that
+//!                                   #   miss (the background) and by GI rays that leave the
+//!                                   #   voxel grid within their radius; black without it
+//! kind = "constant"                 # "constant" | "map"
+//! radiance = [0.8, 0.9, 1.0]        # constant: W/(m²·sr), >= 0 (a number means gray);
+//!                                   #   Mitsuba's `constant` emitter
+//! # file = "sky.hdr"                # map: an equirectangular (2:1) Radiance .hdr or OpenEXR
+//!                                   #   image of linear radiance; Mitsuba's `envmap` (+Y up,
+//!                                   #   the top row up, u = 0 along −Z, u = 1/4 along +X; see
+//!                                   #   [`environment`])
+//! # rotation_deg = 0.0              # map, optional: turn about +Y, counter-clockwise seen
+//!                                   #   from above, degrees [0]
+//! # scale = 1.0                     # map, optional: factor on the map's radiance, >= 0 [1]
+//!
 //! [shadow]   # optional: shadow defaults; `--shadow-cascades`, `--shadow-cascade-lambda` override
 //! cascades = 4                      # cascades per directional light (camera's direct light),
 //!                                   #   1..=8; 1: the single whole-scene map [4]
@@ -188,6 +202,7 @@ mod camera_path;
 mod crease;
 mod cull;
 mod desc;
+pub mod environment;
 mod error;
 mod gi;
 mod gi_settings;
@@ -212,6 +227,7 @@ pub use camera::{Camera, Eye, Projection, StereoRig};
 pub use camera_path::{CameraKey, CameraPath, CameraPathError};
 pub use cull::aabb_visible;
 pub use desc::gi_table_layer;
+pub use environment::{Environment, EnvironmentMap};
 pub use error::SceneError;
 pub use gi::resolve_gi;
 pub use gi_settings::{
@@ -268,6 +284,9 @@ pub struct Scene {
     /// The `[post]` table: the scene's layer of the post-processing settings (flags override
     /// it; the keys are [`PostTable::keys`](schema::Settings::keys)).
     pub post: schema::Layer,
+    /// The `[environment]` table: the light from far away (the background and what GI rays
+    /// leaving the voxel grid read); `None`: black, as without the table.
+    pub environment: Option<Environment>,
     /// The scene file; `None` for built-in scenes.
     pub source: Option<PathBuf>,
 }
@@ -312,6 +331,7 @@ impl Scene {
             post: None,
             camera_path: None,
             transparency: None,
+            environment: None,
         };
         let fallbacks = desc::SceneFallbacks {
             frame_camera: true,

@@ -64,6 +64,7 @@ pub(super) fn build(
             target.has_phong,
             target.scene.has_ggx(),
             target.scene.has_emission(),
+            crate::scene::Environment::shader_kind(target.scene.environment.as_ref()),
         )?)
     })
 }

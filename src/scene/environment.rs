@@ -1,0 +1,340 @@
+//! The `[environment]` table: light arriving from infinitely far away, seen by camera rays
+//! that miss every surface and by GI rays that leave the voxel grid.
+//!
+//! # Convention (Mitsuba 3's `envmap`)
+//! World +Y is up. A map is equirectangular, `width = 2 × height`. For a direction `d` in the
+//! map's own frame (the world direction rotated by `-rotation_deg` about +Y),
+//! `u = atan2(d.x, -d.z) / 2π` (wrapped to [0, 1)) and `v = acos(d.y) / π`: the top row
+//! (`v = 0`) is straight up, `u = 0` looks along −Z, `u = 1/4` along +X, `u = 1/2` along +Z
+//! and `u = 3/4` along −X, as Mitsuba 3's `envmap` emitter maps `-si.wi` (its
+//! `src/emitters/envmap.cpp`, `eval`). `rotation_deg` turns the map about +Y the way
+//! Mitsuba's `<rotate y="1" angle="…"/>` on the emitter's `to_world` does (counter-clockwise
+//! seen from above), so the export writes it unchanged.
+
+use std::path::{Path, PathBuf};
+
+use glam::Vec3;
+
+/// Where the light from far away comes from.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Environment {
+    /// The same radiance from every direction, W/(m²·sr) (Mitsuba's `constant` emitter).
+    Constant { radiance: Vec3 },
+    /// An equirectangular map (Mitsuba's `envmap` emitter).
+    Map(EnvironmentMap),
+}
+
+/// A decoded equirectangular map (linear RGB radiance before `scale`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct EnvironmentMap {
+    /// The file, as resolved against the scene's directory.
+    pub path: PathBuf,
+    pub width: u32,
+    pub height: u32,
+    /// RGBA f32 texels, row 0 at the top (+Y), alpha 1.
+    pub texels: Vec<f32>,
+    /// Rotation about +Y in degrees (Mitsuba's `to_world` rotate).
+    pub rotation_deg: f32,
+    /// Factor on every texel (Mitsuba's `scale`).
+    pub scale: f32,
+}
+
+/// The kinds the `kind` key takes.
+pub const ENVIRONMENT_KINDS: [&str; 2] = ["constant", "map"];
+
+impl Environment {
+    /// The shaders' `ENVIRONMENT` specialization constant (`glsl/include/environment.glsl`):
+    /// 0 none, 1 constant, 2 map. Shaders compile the lookup in only where it is not 0, so a
+    /// scene without the table runs the same code as before it existed.
+    pub fn shader_kind(environment: Option<&Environment>) -> u32 {
+        match environment {
+            None => 0,
+            Some(Environment::Constant { .. }) => 1,
+            Some(Environment::Map(_)) => 2,
+        }
+    }
+
+    /// `GpuFrame::environment`: rgb the constant's radiance or the map's scale, w the map's
+    /// rotation about +Y in radians; zero without an environment.
+    pub fn frame_constants(environment: Option<&Environment>) -> [f32; 4] {
+        match environment {
+            None => [0.0; 4],
+            Some(Environment::Constant { radiance }) => radiance.extend(0.0).to_array(),
+            Some(Environment::Map(m)) => [m.scale, m.scale, m.scale, m.rotation_deg.to_radians()],
+        }
+    }
+
+    /// The radiance arriving from direction `toward` (unit, pointing away from the scene,
+    /// i.e. the direction a ray travels), as the shaders' `environment_radiance` computes it
+    /// with nearest-texel lookup. For tests and CPU references.
+    pub fn radiance_toward(&self, toward: Vec3) -> Vec3 {
+        match self {
+            Environment::Constant { radiance } => *radiance,
+            Environment::Map(m) => {
+                let (u, v) = equirect_uv(toward, m.rotation_deg.to_radians());
+                let x = ((u * m.width as f32) as u32).min(m.width - 1);
+                let y = ((v * m.height as f32) as u32).min(m.height - 1);
+                let i = 4 * (y as usize * m.width as usize + x as usize);
+                Vec3::new(m.texels[i], m.texels[i + 1], m.texels[i + 2]) * m.scale
+            }
+        }
+    }
+
+    /// The mean radiance over the sphere of directions (solid-angle weighted): the constant,
+    /// or the map's texels weighted by sin θ of their row. For tests.
+    pub fn mean_radiance(&self) -> Vec3 {
+        match self {
+            Environment::Constant { radiance } => *radiance,
+            Environment::Map(m) => {
+                let mut sum = Vec3::ZERO;
+                let mut weight = 0.0;
+                for y in 0..m.height {
+                    let theta = (y as f32 + 0.5) / m.height as f32 * std::f32::consts::PI;
+                    let w = theta.sin();
+                    for x in 0..m.width {
+                        let i = 4 * (y as usize * m.width as usize + x as usize);
+                        sum += Vec3::new(m.texels[i], m.texels[i + 1], m.texels[i + 2]) * w;
+                        weight += w;
+                    }
+                }
+                sum / weight.max(f32::MIN_POSITIVE) * m.scale
+            }
+        }
+    }
+}
+
+/// The equirectangular coordinates of world direction `d` (unit) under a map rotated by
+/// `rotation_rad` about +Y: the CPU twin of `environment_uv` in `glsl/include/environment.glsl`
+/// (see the module documentation for the convention).
+pub fn equirect_uv(d: Vec3, rotation_rad: f32) -> (f32, f32) {
+    // World to map frame: the inverse of Mitsuba's rotate about +Y, R(θ)ᵀ.
+    let (s, c) = rotation_rad.sin_cos();
+    let local = Vec3::new(c * d.x - s * d.z, d.y, s * d.x + c * d.z);
+    let u = local.x.atan2(-local.z) / std::f32::consts::TAU;
+    let v = local.y.clamp(-1.0, 1.0).acos() / std::f32::consts::PI;
+    (u - u.floor(), v)
+}
+
+/// The direction of a map's `(u, v)`, in world space: the inverse of [`equirect_uv`].
+pub fn equirect_direction(u: f32, v: f32, rotation_rad: f32) -> Vec3 {
+    let phi = u * std::f32::consts::TAU;
+    let theta = v * std::f32::consts::PI;
+    let local = Vec3::new(
+        theta.sin() * phi.sin(),
+        theta.cos(),
+        -theta.sin() * phi.cos(),
+    );
+    let (s, c) = rotation_rad.sin_cos();
+    Vec3::new(
+        c * local.x + s * local.z,
+        local.y,
+        -s * local.x + c * local.z,
+    )
+}
+
+/// Why a map could not be read (the caller turns it into a [`super::SceneError`] naming the
+/// scene file and the key).
+#[derive(Debug)]
+pub(crate) enum MapReadError {
+    NotFound,
+    Decode(String),
+    NotTwoToOne { width: u32, height: u32 },
+    NonFinite { x: u32, y: u32 },
+}
+
+/// Reads an equirectangular map (Radiance `.hdr`, OpenEXR, or anything else the `image`
+/// crate decodes; 8-bit formats are taken as sRGB-encoded and linearized by the decoder's
+/// conversion to f32, which is linear for HDR formats only, so LDR files are refused).
+pub(crate) fn read_map(path: &Path) -> Result<(u32, u32, Vec<f32>), MapReadError> {
+    if !path.is_file() {
+        return Err(MapReadError::NotFound);
+    }
+    let reader = image::ImageReader::open(path)
+        .and_then(|r| r.with_guessed_format())
+        .map_err(|e| MapReadError::Decode(e.to_string()))?;
+    let format = reader.format();
+    if !matches!(
+        format,
+        Some(image::ImageFormat::Hdr) | Some(image::ImageFormat::OpenExr)
+    ) {
+        return Err(MapReadError::Decode(
+            "not a Radiance .hdr or OpenEXR file (an environment map holds linear radiance)".into(),
+        ));
+    }
+    let img = reader
+        .decode()
+        .map_err(|e| MapReadError::Decode(e.to_string()))?
+        .into_rgba32f();
+    let (width, height) = img.dimensions();
+    if width != 2 * height || height == 0 {
+        return Err(MapReadError::NotTwoToOne { width, height });
+    }
+    let mut texels = img.into_raw();
+    for (i, t) in texels.chunks_exact_mut(4).enumerate() {
+        if !t[..3].iter().all(|c| c.is_finite()) {
+            let i = i as u32;
+            return Err(MapReadError::NonFinite {
+                x: i % width,
+                y: i / width,
+            });
+        }
+        // Negative values (some EXR writers' ringing) are not radiance.
+        for c in &mut t[..3] {
+            *c = c.max(0.0);
+        }
+        t[3] = 1.0;
+    }
+    Ok((width, height, texels))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn equirect_matches_mitsubas_axes() {
+        // Mitsuba 3 envmap: u = atan2(x, -z) / 2π, v = acos(y) / π.
+        let close = |a: (f32, f32), b: (f32, f32)| {
+            let du = (a.0 - b.0).abs().min(1.0 - (a.0 - b.0).abs());
+            du < 1e-5 && (a.1 - b.1).abs() < 1e-5
+        };
+        assert!(close(equirect_uv(Vec3::NEG_Z, 0.0), (0.0, 0.5)));
+        assert!(close(equirect_uv(Vec3::X, 0.0), (0.25, 0.5)));
+        assert!(close(equirect_uv(Vec3::Z, 0.0), (0.5, 0.5)));
+        assert!(close(equirect_uv(Vec3::NEG_X, 0.0), (0.75, 0.5)));
+        assert!((equirect_uv(Vec3::Y, 0.0).1).abs() < 1e-6);
+        assert!((equirect_uv(Vec3::NEG_Y, 0.0).1 - 1.0).abs() < 1e-6);
+        // Rotating the map by +90° about +Y (counter-clockwise from above) carries the map's −Z
+        // column to world −X: R_y(90°) (0, 0, −1) = (−1, 0, 0).
+        assert!(close(
+            equirect_uv(Vec3::NEG_X, 90f32.to_radians()),
+            (0.0, 0.5)
+        ));
+    }
+
+    fn scene_with(environment: &str, dir: &Path) -> Result<super::super::Scene, String> {
+        let toml = format!(
+            "[camera]\nposition = [0, 1, -2]\ntarget = [0, 0, 0]\nfov_y_deg = 40\n[[objects]]\nbuiltin = \"quad\"\n\
+             [environment]\n{environment}\n"
+        );
+        super::super::Scene::from_toml_str(&toml, Path::new("sky.toml"), dir)
+            .map_err(|e| e.to_string())
+    }
+
+    fn temp_dir(tag: &str) -> PathBuf {
+        let dir = std::env::temp_dir().join(format!("voxgi-env-{tag}-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        dir
+    }
+
+    fn write_exr(path: &Path, w: u32, h: u32, value: f32) {
+        image::Rgb32FImage::from_raw(w, h, vec![value; (w * h * 3) as usize])
+            .unwrap()
+            .save_with_format(path, image::ImageFormat::OpenExr)
+            .unwrap();
+    }
+
+    #[test]
+    fn tables_parse_into_constant_and_map() {
+        let dir = temp_dir("ok");
+        write_exr(&dir.join("sky.exr"), 8, 4, 0.5);
+        let s = scene_with("kind = \"constant\"\nradiance = [1, 2, 3]", &dir).unwrap();
+        assert_eq!(
+            s.environment,
+            Some(Environment::Constant {
+                radiance: Vec3::new(1.0, 2.0, 3.0)
+            })
+        );
+        let s = scene_with(
+            "kind = \"map\"\nfile = \"sky.exr\"\nrotation_deg = 45\nscale = 2",
+            &dir,
+        )
+        .unwrap();
+        let Some(Environment::Map(m)) = &s.environment else {
+            panic!("not a map: {:?}", s.environment)
+        };
+        assert_eq!(
+            (m.width, m.height, m.rotation_deg, m.scale),
+            (8, 4, 45.0, 2.0)
+        );
+        assert_eq!(m.texels.len(), 8 * 4 * 4);
+        assert!(
+            (s.environment.as_ref().unwrap().mean_radiance() - Vec3::splat(1.0))
+                .abs()
+                .max_element()
+                < 1e-6
+        );
+        assert!(scene_with("", &dir).is_err(), "kind is required");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn bad_tables_name_the_file_and_key() {
+        let dir = temp_dir("bad");
+        write_exr(&dir.join("square.exr"), 4, 4, 1.0);
+        std::fs::write(dir.join("sky.png"), b"not really").unwrap();
+        let cases = [
+            (
+                "kind = \"sphere\"",
+                vec!["sky.toml", "environment.kind", "\"constant\", \"map\""],
+            ),
+            (
+                "kind = \"constant\"",
+                vec!["sky.toml", "environment.radiance", "missing"],
+            ),
+            (
+                "kind = \"constant\"\nradiance = [1, -1, 1]",
+                vec!["sky.toml", "environment.radiance"],
+            ),
+            (
+                "kind = \"constant\"\nradiance = 1\nscale = 2",
+                vec!["environment.scale", "does not apply"],
+            ),
+            (
+                "kind = \"map\"",
+                vec!["sky.toml", "environment.file", "missing"],
+            ),
+            (
+                "kind = \"map\"\nfile = \"nowhere.hdr\"",
+                vec![
+                    "nowhere.hdr",
+                    "environment map not found",
+                    "sky.toml: environment.file",
+                ],
+            ),
+            (
+                "kind = \"map\"\nfile = \"square.exr\"",
+                vec!["sky.toml", "environment.file", "4×4", "twice as wide"],
+            ),
+            (
+                "kind = \"map\"\nfile = \"sky.png\"",
+                vec!["sky.png", "sky.toml: environment.file"],
+            ),
+            (
+                "kind = \"map\"\nfile = \"square.exr\"\nscale = -1",
+                vec!["environment.scale", "negative"],
+            ),
+            ("kind = \"map\"\ncolour = 1", vec!["colour"]),
+        ];
+        for (table, words) in cases {
+            let err = scene_with(table, &dir).expect_err(table);
+            for w in words {
+                assert!(err.contains(w), "{table:?}: {err:?} lacks {w:?}");
+            }
+        }
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn direction_inverts_uv() {
+        for &(u, v, r) in &[(0.1, 0.3, 0.0), (0.7, 0.8, 1.0), (0.45, 0.05, -2.5)] {
+            let d = equirect_direction(u, v, r);
+            assert!((d.length() - 1.0).abs() < 1e-5);
+            let (u2, v2) = equirect_uv(d, r);
+            assert!(
+                (u - u2).abs() < 1e-4 && (v - v2).abs() < 1e-4,
+                "{u} {v} {u2} {v2}"
+            );
+        }
+    }
+}
