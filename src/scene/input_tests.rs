@@ -123,7 +123,7 @@ fn mtl_non_finite_numbers_are_errors_naming_file_line_and_key() {
         ("Pr nan", "Pr"),
     ] {
         let dir = Dir::new("mtl-nan");
-        dir.write("m.mtl", &format!("newmtl a\nKd 0.5 0.5 0.5\n{line}\n"));
+        dir.write("m.mtl", format!("newmtl a\nKd 0.5 0.5 0.5\n{line}\n"));
         let e = dir.load_obj(obj).expect_err(line);
         let msg = e.to_string();
         assert!(
