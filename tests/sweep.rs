@@ -480,3 +480,78 @@ fn a_scene_without_a_reference_gets_a_cached_one() {
     assert_eq!(made.len(), 1);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A render larger than the reference is box-filtered to the reference's size before it is
+/// scored: a 32² sweep against a 16² reference (the committed 256² Cornell reference
+/// box-filtered by 16). Direct light's error against the full-GI reference is the missing
+/// indirect light, about 0.38 relMSE at any resolution (the ladder's first row, measured at
+/// 256²), so the 32² render scored at 16² must land near the 16² sweep's own score: within
+/// 20%, where a misaligned or unfiltered comparison would be an error, not a row.
+#[test]
+fn a_render_larger_than_the_reference_is_filtered_down_before_scoring() {
+    let refs = out_dir("small-ref");
+    std::fs::create_dir_all(&refs).expect("refs dir");
+    let full = voxgi::eval::HdrImage::load(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/references/cornell_gi.exr"),
+    )
+    .expect("the committed reference");
+    voxgi::bench::sweep::downsample(&full, 16)
+        .save_exr(refs.join("cornell_gi.exr"))
+        .expect("writes the small reference");
+    let refs_arg = refs.to_string_lossy().into_owned();
+    let score = |size: &str, name: &str| {
+        let dir = out_dir(name);
+        let dir_arg = dir.to_string_lossy().into_owned();
+        let o = voxgi(&[
+            "--validate",
+            "sweep",
+            "cornell",
+            "--size",
+            size,
+            "--frames",
+            "1",
+            "--warmup",
+            "0",
+            "--methods",
+            "none",
+            "--no-traverse",
+            "--temporal-steps",
+            "0",
+            "--lag-frames",
+            "0",
+            "--references",
+            &refs_arg,
+            "--out",
+            &dir_arg,
+        ]);
+        assert!(o.status.success(), "--size {size}: {}", text(&o.stderr));
+        let r = rows(&dir);
+        assert_eq!(r.len(), 1);
+        let _ = std::fs::remove_dir_all(&dir);
+        r[0].rel_mse
+    };
+    let at_16 = score("16", "ref16-at16");
+    let at_32 = score("32", "ref16-at32");
+    assert!(
+        (at_32 / at_16 - 1.0).abs() < 0.2,
+        "32² scored at 16²: relMSE {at_32} against the 16² render's {at_16}"
+    );
+    // A size that neither divides nor is a multiple of the reference is refused.
+    let dir = out_dir("ref16-at24");
+    let o = voxgi(&[
+        "sweep",
+        "cornell",
+        "--size",
+        "24",
+        "--methods",
+        "none",
+        "--no-traverse",
+        "--references",
+        &refs_arg,
+        "--out",
+        &dir.to_string_lossy(),
+    ]);
+    assert!(!o.status.success());
+    assert!(text(&o.stderr).contains("--size 24"), "{}", text(&o.stderr));
+    let _ = std::fs::remove_dir_all(&refs);
+}

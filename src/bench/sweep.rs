@@ -27,7 +27,7 @@ pub enum SweepError {
     Flag { config: String, message: String },
     #[error("scene {scene}: no reference image {}; point --references at the folder that has it, render one with tools/reference (see assets/references/README.md) or leave the scene out", path.display())]
     NoReference { scene: String, path: PathBuf },
-    #[error("--size {size}: the reference {} is {width}x{height}; --size must divide it (e.g. 32, 64, 128, 256)", path.display())]
+    #[error("--size {size}: the reference {} is {width}x{height}; --size must divide it (e.g. 32, 64, 128, 256) or be a multiple of it (512 for a 256² reference), and the reference must be square", path.display())]
     Size {
         size: u32,
         width: u32,

@@ -50,7 +50,8 @@ pub struct SweepArgs {
     /// sweep.json (both) and <scene>_pareto.svg and .png.
     #[arg(long)]
     pub out: PathBuf,
-    /// Image width and height in pixels; must divide the references' size.
+    /// Image width and height in pixels; must divide the references' size, or be a multiple
+    /// of it (each render is then box-filtered to the reference's size before scoring).
     #[arg(long, default_value_t = 128)]
     pub size: u32,
     /// Frames profiled per configuration (after --warmup).
@@ -130,11 +131,13 @@ pub struct TuneArgs {
     pub from: PathBuf,
 }
 
-/// A scene of the sweep with its reference at the sweep's size.
+/// A scene of the sweep with its reference at the sweep's size, or smaller by
+/// `render_factor` (then each render is box-filtered by that factor before scoring).
 struct SweepScene {
     name: String,
     scene: Scene,
     reference: HdrImage,
+    render_factor: u32,
 }
 
 /// One configuration ready to run: its flags checked and turned into settings.
@@ -217,10 +220,12 @@ fn load_scenes(args: &SweepArgs) -> Result<Vec<SweepScene>, CliError> {
                 path = made_reference(args, &name, &scene)?;
             }
             let full = HdrImage::load(&path)?;
-            let fits = args.size > 0
-                && full.width % args.size == 0
-                && full.height % args.size == 0
-                && full.width == full.height;
+            // Either --size divides the reference (the reference is box-filtered down to
+            // it), or the reference divides --size (each render is box-filtered down to the
+            // reference before scoring: a 512² sweep against 256² references).
+            let square = full.width == full.height && args.size > 0;
+            let fits = square
+                && (full.width % args.size == 0 || (full.width > 0 && args.size % full.width == 0));
             if !fits {
                 return Err(SweepError::Size {
                     size: args.size,
@@ -230,11 +235,17 @@ fn load_scenes(args: &SweepArgs) -> Result<Vec<SweepScene>, CliError> {
                 }
                 .into());
             }
-            let reference = downsample(&full, full.width / args.size);
+            let (reference, render_factor) = if full.width >= args.size {
+                (downsample(&full, full.width / args.size), 1)
+            } else {
+                let factor = args.size / full.width;
+                (full, factor)
+            };
             Ok(SweepScene {
                 name,
                 scene,
                 reference,
+                render_factor,
             })
         })
         .collect()
@@ -393,7 +404,11 @@ fn measure(
 ) -> Result<SweepRow, CliError> {
     let run = profile_scene(ctx, &s.scene, &job.settings, args.frames, args.warmup)?;
     let image = render_image(ctx, &s.scene, &job.settings)?;
-    let m = crate::eval::compare(&s.reference, &image.hdr, None)?;
+    let scored = match s.render_factor {
+        1 => image.hdr,
+        k => downsample(&image.hdr, k),
+    };
+    let m = crate::eval::compare(&s.reference, &scored, None)?;
     let flicker = path
         .map(|p| path_flicker(ctx, p, &job.settings))
         .transpose()?;
