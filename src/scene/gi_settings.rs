@@ -3,7 +3,9 @@
 //! and the viewer's panel share them with the GI passes (`crate::gi`, which re-exports them).
 //! The `[gi]` keys are declared once, in [`GiSettings::keys`]'s table (`scene::schema`).
 
-use super::schema::{choices, FieldValue, Flag, FlagStyle, Key, Kind, Settings, Value};
+use super::schema::{
+    choices, flag, toggle, FieldValue, Flag, FlagStyle, Key, Kind, Settings, Value,
+};
 
 /// A GI method of the speed/accuracy ladder. Only the names live here, at the bottom, so that
 /// settings can hold one; what a method does and needs is its spec (`crate::gi::MethodSpec`),
@@ -320,24 +322,6 @@ impl Default for GiSettings {
             ssgi: SsgiSettings::default(),
         }
     }
-}
-
-/// `--flag VALUE`.
-const fn flag(long: &'static str, value_name: &'static str) -> Option<Flag> {
-    Some(Flag {
-        long,
-        value_name,
-        style: FlagStyle::Value,
-    })
-}
-
-/// `--flag [on|off]`.
-const fn toggle(long: &'static str) -> Option<Flag> {
-    Some(Flag {
-        long,
-        value_name: "on|off",
-        style: FlagStyle::Toggle,
-    })
 }
 
 /// An SAO value ([`GiSettings::sao`]'s field `$f`), written into the estimator's settings,

@@ -3,7 +3,9 @@
 //! re-exports them. The `[post]` keys are declared once, in [`PostTable::keys`]'s table
 //! (`scene::schema`).
 
-use super::schema::{choices, FieldValue, Flag, FlagStyle, Key, Kind, Settings, Value};
+use super::schema::{
+    choices, flag, toggle, FieldValue, Flag, FlagStyle, Key, Kind, Settings, Value,
+};
 
 /// Tone-mapping operator of `glsl/tonemap.comp`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, clap::ValueEnum)]
@@ -125,24 +127,6 @@ impl PostSettings {
 pub struct PostTable {
     pub post: PostSettings,
     pub tonemap: ToneMap,
-}
-
-/// `--flag VALUE`.
-const fn flag(long: &'static str, value_name: &'static str) -> Option<Flag> {
-    Some(Flag {
-        long,
-        value_name,
-        style: FlagStyle::Value,
-    })
-}
-
-/// `--flag [on|off]`.
-const fn toggle(long: &'static str) -> Option<Flag> {
-    Some(Flag {
-        long,
-        value_name: "on|off",
-        style: FlagStyle::Toggle,
-    })
 }
 
 /// A stage's value (`taa $f` of [`TaaSettings`], `auto_exposure $f` of [`AutoExposure`]),

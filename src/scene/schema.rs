@@ -80,6 +80,24 @@ pub struct Flag {
     pub style: FlagStyle,
 }
 
+/// `--flag VALUE`: a key's flag that takes a value.
+pub const fn flag(long: &'static str, value_name: &'static str) -> Option<Flag> {
+    Some(Flag {
+        long,
+        value_name,
+        style: FlagStyle::Value,
+    })
+}
+
+/// `--flag [on|off]`: a key's switch.
+pub const fn toggle(long: &'static str) -> Option<Flag> {
+    Some(Flag {
+        long,
+        value_name: "on|off",
+        style: FlagStyle::Toggle,
+    })
+}
+
 /// One setting of a settings struct `S`.
 pub struct Key<S> {
     /// `table.key`: the scene file's table and key, and the name `--set`, the sweep's grid

@@ -3,7 +3,7 @@
 //! re-exports them) and the area lights' sampling. The `[shadow]` keys are declared once, in
 //! [`ShadowSettings::keys`]'s table (`scene::schema`).
 
-use super::schema::{choices, Flag, FlagStyle, Key, Kind, Settings, Value};
+use super::schema::{choices, flag, Key, Kind, Settings, Value};
 
 /// How point lights are shadowed.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
@@ -94,15 +94,6 @@ pub const DEFAULT_CASCADES: u32 = 4;
 
 /// The word of `--shadow-resolution auto` (and a scene's `resolution = "auto"`).
 pub const AUTO_RESOLUTION_NAME: &str = "auto";
-
-/// `--flag VALUE`.
-const fn flag(long: &'static str, value_name: &'static str) -> Option<Flag> {
-    Some(Flag {
-        long,
-        value_name,
-        style: FlagStyle::Value,
-    })
-}
 
 macro_rules! key {
     ($($t:tt)*) => {
