@@ -356,3 +356,46 @@ fn view_refuses_post_flags_out_of_range_before_opening_a_window() {
         assert!(err.contains(want), "view {args:?}: {err}");
     }
 }
+
+/// An MTL material with `Ks` but no `Ns` (what OBJ exports write for a bare metal, e.g. the
+/// brass of Bitterli's staircase: `Kd 0`, `Ks 1`) renders a Phong lobe of exponent 0, which is
+/// Ks/π in every direction: a white diffuse layer. Loading it says so, naming the file and the
+/// material, and so does an explicit `Ns 0`; a material with an exponent loads silently.
+#[test]
+fn mtl_specular_without_exponent_warns_naming_the_material() {
+    let dir = std::env::temp_dir().join(format!("voxgi-cli-ns-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    std::fs::write(
+        dir.join("m.mtl"),
+        "newmtl brass\nKd 0 0 0\nKs 1 1 1\n\
+         newmtl zero\nKd 0.5 0.5 0.5\nKs 0.5 0.5 0.5\nNs 0\n\
+         newmtl shiny\nKd 0.5 0.5 0.5\nKs 0.5 0.5 0.5\nNs 50\n",
+    )
+    .expect("writes the MTL");
+    std::fs::write(
+        dir.join("m.obj"),
+        "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nv 2 1 0\n\
+         usemtl brass\nf 1 2 3\nusemtl zero\nf 2 4 3\nusemtl shiny\nf 2 5 4\n",
+    )
+    .expect("writes the OBJ");
+    let obj = dir.join("m.obj").to_string_lossy().into_owned();
+    let out_dir = dir.join("export").to_string_lossy().into_owned();
+    let out = voxgi(&["export-mitsuba", &obj, "--output", &out_dir]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "export-mitsuba failed:\n{stderr}");
+    let warnings: Vec<&str> = stderr
+        .lines()
+        .filter(|l| l.contains("a Phong lobe of exponent 0"))
+        .collect();
+    assert_eq!(warnings.len(), 2, "{stderr}");
+    assert!(
+        warnings[0].contains("`brass`") && warnings[0].contains("no Ns"),
+        "{stderr}"
+    );
+    assert!(
+        warnings[1].contains("`zero`") && warnings[1].contains("Ns 0"),
+        "{stderr}"
+    );
+    assert!(!stderr.contains("`shiny`"), "{stderr}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

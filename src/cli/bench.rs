@@ -33,7 +33,7 @@ pub enum BenchCommand {
     /// GPU ms, rays/s, steps per ray, and the marching samples needed to match >= 99% of
     /// the hierarchical results.
     Traverse {
-        /// A built-in scene or a TOML scene file. Default: cornell.
+        /// A built-in scene, a TOML scene file, or a glTF/OBJ model alone. Default: cornell.
         scene: Option<String>,
         /// Voxel grid x/y resolution (depth 128).
         #[arg(long, default_value_t = 128)]
@@ -75,7 +75,7 @@ pub enum BenchCommand {
     /// renders each step and its frame-to-frame change is compared with a converged path
     /// tracer's along the same path (flicker = the change the reference does not have).
     Flicker {
-        /// A built-in scene or a TOML scene file. Default: cornell.
+        /// A built-in scene, a TOML scene file, or a glTF/OBJ model alone. Default: cornell.
         scene: Option<String>,
         /// Light positions along the path.
         #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u32).range(2..=1024))]
@@ -214,7 +214,7 @@ pub enum BenchCommand {
     /// the column buffer) vs the thesis's raster pass (single-bit LUT, logicOp OR): GPU ms and
     /// whether the bits agree.
     Voxelize {
-        /// A built-in scene or a TOML scene file. Default: cornell.
+        /// A built-in scene, a TOML scene file, or a glTF/OBJ model alone. Default: cornell.
         scene: Option<String>,
         /// Voxel grid x/y resolution cap.
         #[arg(long, default_value_t = 128)]

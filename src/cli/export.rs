@@ -7,7 +7,7 @@ use std::path::PathBuf;
 /// Arguments of `voxgi export-mitsuba`.
 #[derive(clap::Args, Clone)]
 pub struct ExportArgs {
-    /// A built-in scene or a TOML scene file. Default: cornell.
+    /// A built-in scene, a TOML scene file, or a glTF/OBJ model alone. Default: cornell.
     pub scene: Option<String>,
     /// Output directory.
     #[arg(short, long)]

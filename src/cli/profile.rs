@@ -13,7 +13,7 @@ use std::io::Write;
 /// Arguments of `voxgi profile`.
 #[derive(clap::Args, Clone)]
 pub struct ProfileArgs {
-    /// A built-in scene or a TOML scene file. Default: cornell.
+    /// A built-in scene, a TOML scene file, or a glTF/OBJ model alone. Default: cornell.
     pub scene: Option<String>,
     /// Profile the render-graph demo frame instead of a scene.
     #[arg(long)]
@@ -45,7 +45,7 @@ pub struct ProfileArgs {
 /// Arguments of `voxgi graph`.
 #[derive(clap::Args, Clone)]
 pub struct GraphArgs {
-    /// A built-in scene or a TOML scene file. Default: cornell.
+    /// A built-in scene, a TOML scene file, or a glTF/OBJ model alone. Default: cornell.
     pub scene: Option<String>,
     /// The render-graph demo frame instead of a scene's frame.
     #[arg(long)]

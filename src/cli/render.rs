@@ -9,7 +9,9 @@ use std::path::PathBuf;
 /// Arguments of `voxgi render`.
 #[derive(clap::Args, Clone)]
 pub struct RenderArgs {
-    /// A built-in scene (cornell, cornell-point) or a TOML scene file. Default: cornell.
+    /// A built-in scene (cornell, cornell-point), a TOML scene file, or a glTF (.gltf/.glb) or
+    /// OBJ model alone (framed by a camera, lit by a default sun without lights). Default:
+    /// cornell.
     pub scene: Option<String>,
     /// Output PNG (tone-mapped, sRGB; the name must end in .png — `--exr` writes the HDR).
     #[arg(short, long, default_value = "voxgi.png")]

@@ -12,7 +12,7 @@ use crate::app::RECORDED_KEY_SPACING_S;
 /// Arguments of `voxgi view`.
 #[derive(clap::Args, Clone)]
 pub struct ViewArgs {
-    /// A built-in scene or a TOML scene file. Default: cornell.
+    /// A built-in scene, a TOML scene file, or a glTF/OBJ model alone. Default: cornell.
     pub scene: Option<String>,
     /// Initial window width and height, pixels.
     #[arg(long, default_value_t = 1280)]

@@ -396,16 +396,16 @@ pub(crate) fn build(
     build_with(desc, file, base_dir, source, SceneFallbacks::default())
 }
 
-/// What a scene made from a glTF file alone (`voxgi render x.glb`) gets that a scene file
-/// does not: a camera framing the scene when the glTF has none, and a default sun when it has
-/// no lights and nothing emits (see [`super::Scene::load_gltf`]).
+/// What a scene made from a glTF or OBJ file alone (`voxgi render x.glb`) gets that a scene
+/// file does not: a camera framing the scene when the file has none, and a default sun when it
+/// has no lights and nothing emits (see [`super::Scene::load_model`]).
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct SceneFallbacks {
     pub frame_camera: bool,
     pub default_sun: bool,
 }
 
-/// [`build`] with the fallbacks of a scene made from a glTF file alone.
+/// [`build`] with the fallbacks of a scene made from a glTF or OBJ file alone.
 pub(crate) fn build_with(
     desc: SceneDesc,
     file: &Path,

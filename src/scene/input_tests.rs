@@ -566,3 +566,34 @@ fn area_lights_load_and_bad_values_name_the_file_and_key() {
         );
     }
 }
+
+#[test]
+fn an_obj_file_alone_is_a_scene_framed_and_lit_by_the_default_sun() {
+    // `voxgi render model.obj` once read the OBJ as TOML ("TOML syntax error ... mtllib").
+    // Like a glTF alone, it is one object, framed by a camera and lit by the default sun.
+    let dir = Dir::new("obj-alone");
+    dir.write("m.mtl", "newmtl red\nKd 0.8 0.1 0.1\n");
+    let path = dir.write(
+        "Model.OBJ",
+        "mtllib m.mtl\nv 0 0 0\nv 2 0 0\nv 0 1 0\nusemtl red\nf 1 2 3\n",
+    );
+    let s = Scene::load(&path).expect("an OBJ alone loads");
+    assert_eq!(s.objects.len(), 1);
+    assert_eq!(s.materials[s.objects[0].materials[0]].albedo.x, 0.8);
+    assert!(
+        matches!(
+            s.lights.as_slice(),
+            [crate::scene::Light::Directional { .. }]
+        ),
+        "{:?}",
+        s.lights
+    );
+    // The framing camera looks at the model's bounds from the front.
+    let centre = (s.aabb_at(0.0).min + s.aabb_at(0.0).max) * 0.5;
+    let to_centre = (centre - s.camera.position).normalize();
+    assert!(to_centre.dot(s.camera.forward) > 0.99, "{:?}", s.camera);
+    // A file that is not OBJ by its extension is still a TOML scene file, with TOML's errors.
+    let toml = dir.write("m.toml", "mtllib m.mtl\n");
+    let e = Scene::load(&toml).expect_err("not TOML");
+    assert!(e.to_string().contains("TOML"), "{e}");
+}

@@ -292,12 +292,12 @@ pub struct Scene {
 }
 
 impl Scene {
-    /// Loads a TOML scene file and everything it references, or a glTF file as a scene of
-    /// its own ([`Scene::load_gltf`]).
+    /// Loads a TOML scene file and everything it references, or a glTF or OBJ file as a scene
+    /// of its own ([`Scene::load_model`]).
     pub fn load(path: impl AsRef<Path>) -> Result<Scene, SceneError> {
         let path = path.as_ref();
-        if is_gltf_path(path) {
-            return Scene::load_gltf(path);
+        if is_gltf_path(path) || obj::is_obj_path(path) {
+            return Scene::load_model(path);
         }
         let text = obj::read_text(path, "scene file", None)?;
         let base_dir = path.parent().unwrap_or(Path::new("."));
@@ -305,13 +305,14 @@ impl Scene {
         desc::build(desc, path, base_dir, Some(path.to_path_buf()))
     }
 
-    /// A scene made from a glTF file alone (`voxgi render x.glb`): one object holding the
-    /// file's default scene, its `KHR_lights_punctual` lights, and its first camera, else a
-    /// camera framing its bounds from the front (+Z) and a little above. A file without lights
-    /// and without emissive materials gets a default sun (with a warning): glTF viewers light
-    /// such models by default, and a black picture would look like a broken import; a scene
-    /// file naming the glTF as an object's `mesh` gets no sun and sets its own lights.
-    pub fn load_gltf(path: impl AsRef<Path>) -> Result<Scene, SceneError> {
+    /// A scene made from a glTF or OBJ file alone (`voxgi render x.glb`, `voxgi render
+    /// x.obj`): one object holding the file (a glTF's default scene with its
+    /// `KHR_lights_punctual` lights), the glTF's first camera, else a camera framing its bounds
+    /// from the front (+Z) and a little above. A file without lights and without emissive
+    /// materials gets a default sun (with a warning): model viewers light such models by
+    /// default, and a black picture would look like a broken import; a scene file naming the
+    /// model as an object's `mesh` gets no sun and sets its own lights.
+    pub fn load_model(path: impl AsRef<Path>) -> Result<Scene, SceneError> {
         let path = path.as_ref();
         let base_dir = path.parent().unwrap_or(Path::new("."));
         let file_name = path

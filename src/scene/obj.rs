@@ -427,6 +427,27 @@ impl AssetStore {
         } else {
             Vec3::ZERO
         };
+        // Normalized Phong at n = 0 is (n + 2)/(2π) cos⁰ = Ks/π toward every direction: a
+        // white diffuse layer on top of Kd, not a highlight. OBJ exports write `Ks` without
+        // `Ns` (the brass of Bitterli's staircase: `Kd 0`, `Ks 1`), so say what it renders as.
+        let specular = rgb(m.specular, Vec3::ZERO).min(Vec3::ONE);
+        let shininess = finite_or(m.shininess, 0.0).max(0.0);
+        if ggx.is_none() && specular.max_element() > 0.0 && shininess == 0.0 {
+            log::warn!(
+                "{}: Ks {} {} {} with {}: a Phong lobe of exponent 0 reflects Ks/π in every \
+                 direction, a white diffuse layer rather than a highlight; give the material \
+                 `Ns` (a highlight's exponent, e.g. 10 to 1000) or remove `Ks`",
+                field("Ks"),
+                specular.x,
+                specular.y,
+                specular.z,
+                if m.shininess.is_some() {
+                    "Ns 0"
+                } else {
+                    "no Ns"
+                }
+            );
+        }
         let material = Material {
             ggx,
             pbr_maps,
@@ -434,8 +455,8 @@ impl AssetStore {
             name: m.name.clone(),
             // prescan_mtl warned about reflectances outside [0, 1].
             albedo: rgb(m.diffuse, BuiltinMaterial::Default.albedo()).min(Vec3::ONE),
-            specular: rgb(m.specular, Vec3::ZERO).min(Vec3::ONE),
-            shininess: finite_or(m.shininess, 0.0).max(0.0),
+            specular,
+            shininess,
             albedo_texture,
             bump_texture,
             bump_kind,
@@ -706,6 +727,14 @@ fn bump_multiplier(s: Option<&str>) -> f32 {
         }
     }
     1.0
+}
+
+/// Whether `path` names a Wavefront OBJ file (by its extension, any case): `voxgi render x.obj`
+/// loads it as a scene of its own instead of reading it as TOML.
+pub fn is_obj_path(path: &Path) -> bool {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("obj"))
 }
 
 fn texture_file(s: Option<&str>) -> Option<String> {
