@@ -144,18 +144,26 @@ fn one_frame_in_the_sphere_matches_eq_2_12_integrated_on_the_cpu() {
         let lit = window_mean(&render(&scene, FURNACE_SIZE, ssgi(1, settings)));
         let measured = lit / direct - 1.0;
         println!("sphere, GI at 1/{divisor}: indirect/direct {measured:.5}, Eq. 2.12 on the CPU {predicted:.5}");
+        let tolerance = if divisor >= 4 {
+            TOLERANCE_QUARTER
+        } else {
+            TOLERANCE
+        };
         assert!(
-            (measured - predicted).abs() < TOLERANCE * predicted,
+            (measured - predicted).abs() < tolerance * predicted,
             "1/{divisor}: {measured} vs {predicted}"
         );
     }
 }
 
-/// Relative tolerance of the one-frame gather. Measured (64², 64 samples): 0.5% off at GI
-/// resolution 1/1 and 1/2, 7% at 1/4 (a 16² GI level, where the sphere's curvature within a
-/// texel and the upsampling show); the residue is the spiral's sampling noise averaged over
-/// the window, the tessellated sphere and the 0.5-texel disk left out. 10% covers all three.
-const TOLERANCE: f32 = 0.1;
+/// Relative tolerance of the one-frame gather at GI resolution 1/1 and 1/2. Measured (64², 64
+/// samples): 0.53% and 0.59% off (`cargo test --test ssgi sphere -- --nocapture`); the residue
+/// is the spiral's sampling noise averaged over the window, the tessellated sphere and the
+/// 0.5-texel disk left out. 2% leaves more than three times that.
+const TOLERANCE: f32 = 0.02;
+/// The same at 1/4: measured 7.3% (a 16² GI level, where the sphere's curvature within a texel
+/// and the upsampling show); 10% leaves a third more.
+const TOLERANCE_QUARTER: f32 = 0.1;
 
 #[test]
 fn feedback_in_the_sphere_stays_below_the_furnace_value_and_converges() {
@@ -183,6 +191,14 @@ fn feedback_in_the_sphere_stays_below_the_furnace_value_and_converges() {
     assert!(
         (r30 - r20).abs() < 0.002 * r30,
         "not converged: {r20} → {r30}"
+    );
+    // Where it converges: the indirect part r − 1 against the geometric series' converged − 1.
+    // Measured 0.06244 against 0.06163, 1.3% off: the one-frame gather's 0.5% (above) plus
+    // feeding back a window that is not uniform (receivers near its edge gather less). 3%
+    // leaves more than twice that.
+    assert!(
+        ((r30 - 1.0) - (converged - 1.0)).abs() < 0.03 * (converged - 1.0),
+        "converged to {r30}, the geometric series gives {converged}"
     );
 }
 
