@@ -399,3 +399,85 @@ fn mtl_specular_without_exponent_warns_naming_the_material() {
     assert!(!stderr.contains("`shiny`"), "{stderr}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The negative control of the command line's teardown check on error paths: every command that
+/// uses the device runs in [`voxgi::cli::with_context`], which destroys the context and checks
+/// what its life left behind also when the command fails. A command body that leaks GPU memory,
+/// or raises a validation message, and then fails must report both its error and the teardown's
+/// finding; a body that fails cleanly reports only its error.
+#[test]
+fn a_failing_command_that_leaks_or_misuses_the_gpu_is_reported() {
+    use voxgi::cli::{with_context, CliError, Global};
+    use voxgi::graph::{run_once, Access, RenderGraph};
+    use voxgi::vk::{vk, BufferDesc, MemoryLocation};
+    let global = Global {
+        validate: true,
+        device: None,
+    };
+    let failure = || CliError::StereoProfile;
+    let buffer = |ctx: &voxgi::vk::Context, name: &str| {
+        ctx.create_buffer(&BufferDesc {
+            name: name.into(),
+            size_bytes: 256,
+            usage: vk::BufferUsageFlags::TRANSFER_DST,
+            location: MemoryLocation::GpuToCpu,
+        })
+        .expect("buffer")
+    };
+
+    let clean = with_context(&global, |_| -> Result<(), CliError> { Err(failure()) });
+    assert!(
+        matches!(clean, Err(CliError::StereoProfile)),
+        "a clean failure: {clean:?}"
+    );
+
+    let leak = with_context(&global, |ctx| -> Result<(), CliError> {
+        std::mem::forget(buffer(ctx, "leaked on the error path"));
+        Err(failure())
+    });
+    match &leak {
+        Err(CliError::ErrorThenTeardown { error, teardown }) => {
+            assert!(matches!(**error, CliError::StereoProfile), "{leak:?}");
+            // The buffer never destroyed is a validation message at device destruction, which
+            // the check reports before the allocation leak it also is.
+            assert!(
+                matches!(
+                    &**teardown,
+                    CliError::Validation { count } if *count > 0
+                ) || matches!(
+                    &**teardown,
+                    CliError::Leak { names } if names.iter().any(|n| n.contains("leaked on the error path"))
+                ),
+                "{leak:?}"
+            );
+        }
+        other => panic!("a leak on an error path went unreported: {other:?}"),
+    }
+
+    let hazard = with_context(&global, |ctx| -> Result<(), CliError> {
+        // Two fills of one buffer in one pass: nothing orders the second after the first
+        // (synchronization validation's WRITE_AFTER_WRITE), as in tests/validation_controls.rs.
+        let target = buffer(ctx, "hazard target");
+        let mut g = RenderGraph::new();
+        let out = g.import_buffer(&target, Access::HostRead);
+        g.add_pass("hazard")
+            .write(out, Access::TransferWrite)
+            .record(move |p| {
+                let raw = p.buffer(out).raw;
+                p.cmd.fill_buffer(raw, 1);
+                p.cmd.fill_buffer(raw, 2);
+            });
+        run_once(ctx, g).expect("the graph runs");
+        Err(failure())
+    });
+    match &hazard {
+        Err(CliError::ErrorThenTeardown { error, teardown }) => {
+            assert!(matches!(**error, CliError::StereoProfile), "{hazard:?}");
+            assert!(
+                matches!(**teardown, CliError::Validation { count } if count > 0),
+                "{hazard:?}"
+            );
+        }
+        other => panic!("a validation message on an error path went unreported: {other:?}"),
+    }
+}

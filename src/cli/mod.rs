@@ -119,6 +119,13 @@ pub enum CliError {
     Validation { count: usize },
     #[error("GPU memory was never freed: {}; this is a bug in voxgi, please report it", names.join(", "))]
     Leak { names: Vec<String> },
+    /// The command failed, and its teardown then found validation messages or leaked memory
+    /// too: both are reported, the command's error first.
+    #[error("{error}; and then, at teardown: {teardown}")]
+    ErrorThenTeardown {
+        error: Box<CliError>,
+        teardown: Box<CliError>,
+    },
 }
 
 /// `writeln!` into a command's `out`, a failed write becoming [`CliError::Stdout`].
@@ -144,6 +151,29 @@ pub fn context(global: &Global) -> Result<Context, CliError> {
         device: global.device.clone(),
         ..Default::default()
     })?)
+}
+
+/// Runs `body` with the context the global flags ask for, then destroys the context and fails
+/// when the validation layers reported anything during the command or its teardown (objects
+/// never destroyed), or when GPU memory was never freed. The check runs when `body` fails too:
+/// an error path that leaks or raises a validation message is reported like a success path's
+/// (the command's own error first). Everything `body` made is dropped before the check.
+pub fn with_context<T>(
+    global: &Global,
+    body: impl FnOnce(&Context) -> Result<T, CliError>,
+) -> Result<T, CliError> {
+    let ctx = context(global)?;
+    let result = body(&ctx);
+    let teardown = check_teardown(&ctx.finish());
+    match (result, teardown) {
+        (Ok(value), Ok(())) => Ok(value),
+        (Ok(_), Err(teardown)) => Err(teardown),
+        (Err(error), Ok(())) => Err(error),
+        (Err(error), Err(teardown)) => Err(CliError::ErrorThenTeardown {
+            error: Box::new(error),
+            teardown: Box::new(teardown),
+        }),
+    }
 }
 
 /// Destroys the context, then fails when the validation layers reported anything during the

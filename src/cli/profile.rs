@@ -2,7 +2,7 @@
 //! render graph), for a scene's frame or the render-graph demo frame.
 
 use super::args::FrameArgs;
-use super::{check_validation, context, out, outln, CliError, Global};
+use super::{out, outln, with_context, CliError, Global};
 use crate::demo::Demo;
 use crate::graph::GraphExecutor;
 use crate::profile::ProfileReport;
@@ -87,68 +87,70 @@ pub fn profile(global: &Global, args: &ProfileArgs, out: &mut dyn Write) -> Resu
         (_, Some(_)) => return Err(CliError::StereoProfile),
         _ => None,
     };
-    let ctx = context(global)?;
-    let report = if let (Some((scene, settings)), Some(mut stereo)) = (&scene, stereo) {
-        let chosen = args.stereo.take_default_path(&ctx.info, &mut stereo);
-        let p = crate::render::profile_stereo(&ctx, scene, settings, stereo, frames, args.warmup)?;
-        stereo_report(
-            &ctx.info.name,
-            (&p, chosen.as_deref()),
-            &scene_name,
-            settings,
-            stereo,
-            args.warmup,
-        )
-    } else if let Some((scene, settings)) = &scene {
-        let run = match &path {
-            Some(p) => profile_camera_path(&ctx, scene, settings, p, frames, args.warmup)?,
-            None => profile_scene(&ctx, scene, settings, frames, args.warmup)?,
+    with_context(global, |ctx| {
+        let report = if let (Some((scene, settings)), Some(mut stereo)) = (&scene, stereo) {
+            let chosen = args.stereo.take_default_path(&ctx.info, &mut stereo);
+            let p =
+                crate::render::profile_stereo(ctx, scene, settings, stereo, frames, args.warmup)?;
+            stereo_report(
+                &ctx.info.name,
+                (&p, chosen.as_deref()),
+                &scene_name,
+                settings,
+                stereo,
+                args.warmup,
+            )
+        } else if let Some((scene, settings)) = &scene {
+            let run = match &path {
+                Some(p) => profile_camera_path(ctx, scene, settings, p, frames, args.warmup)?,
+                None => profile_scene(ctx, scene, settings, frames, args.warmup)?,
+            };
+            let mut report = ProfileReport::from_frames(&ctx.info.name, &run.frames, args.warmup)
+                .with_setup(&run.setup);
+            report.notes.push(("scene".into(), scene_name));
+            if let Some(p) = &path {
+                let (t0, t1) = p.time_range_s();
+                report.notes.push((
+                    "camera path".into(),
+                    format!(
+                        "{frames} frames evenly over {t0}..{t1} s ({} keyframes)",
+                        p.keys().len()
+                    ),
+                ));
+            }
+            report.notes.push((
+                "resolution".into(),
+                format!("{}x{}", frame.width, frame.height),
+            ));
+            if let Some(a) = run.auto_shadow {
+                report.notes.push((
+                    "shadow resolution".into(),
+                    format!(
+                        "auto: {r}² (95th percentile of the lit pixels' shadow texels {q:.3} px at \
+                         the {p}² probe)",
+                        r = a.resolution,
+                        q = a.quantile_px_at_probe,
+                        p = a.probe_resolution
+                    ),
+                ));
+            }
+            report
+                .notes
+                .push(("transient memory".into(), run.transient_memory.summary()));
+            report
+                .notes
+                .push(("culled passes".into(), run.culled_passes.join(", ")));
+            report
+        } else {
+            profile_demo(ctx, args.frames, args.warmup, frame.width, frame.height)?
         };
-        let mut report = ProfileReport::from_frames(&ctx.info.name, &run.frames, args.warmup)
-            .with_setup(&run.setup);
-        report.notes.push(("scene".into(), scene_name));
-        if let Some(p) = &path {
-            let (t0, t1) = p.time_range_s();
-            report.notes.push((
-                "camera path".into(),
-                format!(
-                    "{frames} frames evenly over {t0}..{t1} s ({} keyframes)",
-                    p.keys().len()
-                ),
-            ));
+        if args.json {
+            outln!(out, "{}", serde_json::to_string_pretty(&report)?);
+        } else {
+            out!(out, "{}", report.table());
         }
-        report.notes.push((
-            "resolution".into(),
-            format!("{}x{}", frame.width, frame.height),
-        ));
-        if let Some(a) = run.auto_shadow {
-            report.notes.push((
-                "shadow resolution".into(),
-                format!(
-                    "auto: {r}² (95th percentile of the lit pixels' shadow texels {q:.3} px at \
-                     the {p}² probe)",
-                    r = a.resolution,
-                    q = a.quantile_px_at_probe,
-                    p = a.probe_resolution
-                ),
-            ));
-        }
-        report
-            .notes
-            .push(("transient memory".into(), run.transient_memory.summary()));
-        report
-            .notes
-            .push(("culled passes".into(), run.culled_passes.join(", ")));
-        report
-    } else {
-        profile_demo(&ctx, args.frames, args.warmup, frame.width, frame.height)?
-    };
-    if args.json {
-        outln!(out, "{}", serde_json::to_string_pretty(&report)?);
-    } else {
-        out!(out, "{}", report.table());
-    }
-    check_validation(ctx)
+        Ok(())
+    })
 }
 
 /// The stereo frame's statistics (both eyes' passes, the right eye's marked `[R]`), with the
@@ -264,24 +266,25 @@ pub fn graph(global: &Global, args: &GraphArgs, out: &mut dyn Write) -> Result<(
             Some((scene, settings))
         }
     };
-    let ctx = context(global)?;
-    let mut dump = |exec: &GraphExecutor| -> Result<(), CliError> {
-        let c = exec.compiled();
-        if args.dot {
-            out!(out, "{}", c.dump_dot(exec.graph()));
+    with_context(global, |ctx| {
+        let mut dump = |exec: &GraphExecutor| -> Result<(), CliError> {
+            let c = exec.compiled();
+            if args.dot {
+                out!(out, "{}", c.dump_dot(exec.graph()));
+            } else {
+                out!(out, "{}", c.dump_text(exec.graph()));
+            }
+            Ok(())
+        };
+        // Whatever fails (compiling, or writing to a closed stdout), everything made is released
+        // as it goes out of scope, before the context's teardown check.
+        if let Some((scene, settings)) = scene {
+            let renderer = crate::render::Renderer::new(ctx, &scene, settings)?;
+            dump(&GraphExecutor::new(ctx, renderer.graph(), 1)?)?;
         } else {
-            out!(out, "{}", c.dump_text(exec.graph()));
+            let demo = Demo::new(ctx, args.frame.width, args.frame.height)?;
+            dump(&demo.executor(ctx, 1)?)?;
         }
         Ok(())
-    };
-    // Whatever fails (compiling, or writing to a closed stdout), everything made is released
-    // as it goes out of scope, before the context's teardown check.
-    if let Some((scene, settings)) = scene {
-        let renderer = crate::render::Renderer::new(&ctx, &scene, settings)?;
-        dump(&GraphExecutor::new(&ctx, renderer.graph(), 1)?)?;
-    } else {
-        let demo = Demo::new(&ctx, args.frame.width, args.frame.height)?;
-        dump(&demo.executor(&ctx, 1)?)?;
-    }
-    check_validation(ctx)
+    })
 }

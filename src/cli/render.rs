@@ -1,7 +1,7 @@
 //! `voxgi render`: one headless frame to PNG (and EXR), optionally compared with a reference.
 
 use super::args::FrameArgs;
-use super::{check_validation, context, outln, CliError, Global};
+use super::{outln, with_context, CliError, Global};
 use crate::render::{render_image, render_stereo, StereoSettings};
 use std::io::Write;
 use std::path::PathBuf;
@@ -166,60 +166,61 @@ pub fn render(global: &Global, args: &RenderArgs, out: &mut dyn Write) -> Result
     let scene = frame.camera.load_scene(args.scene.as_deref())?;
     let settings = frame.settings(&scene)?;
     let stereo = args.stereo.settings(&scene, settings.time_s)?;
-    let ctx = context(global)?;
-    let (image, packed, packed_size) = match stereo {
-        None => {
-            let mut image = render_image(&ctx, &scene, &settings)?;
-            let ldr = std::mem::take(&mut image.ldr);
-            (image, ldr, (frame.width, frame.height))
+    with_context(global, |ctx| {
+        let (image, packed, packed_size) = match stereo {
+            None => {
+                let mut image = render_image(ctx, &scene, &settings)?;
+                let ldr = std::mem::take(&mut image.ldr);
+                (image, ldr, (frame.width, frame.height))
+            }
+            Some(mut stereo) => {
+                let chosen = args.stereo.take_default_path(&ctx.info, &mut stereo);
+                let s = render_stereo(ctx, &scene, &settings, stereo)?;
+                print_stereo(&stereo, chosen.as_deref(), &s, out)?;
+                (s.left, s.packed, s.packed_size)
+            }
+        };
+        image::save_buffer(
+            &args.output,
+            &packed,
+            packed_size.0,
+            packed_size.1,
+            image::ColorType::Rgba8,
+        )
+        .map_err(|source| CliError::WriteImage {
+            path: args.output.clone(),
+            source,
+        })?;
+        outln!(out, "wrote {}", args.output.display());
+        if let Some(path) = &args.exr {
+            image.hdr.save_exr(path)?;
+            outln!(out, "wrote {}", path.display());
         }
-        Some(mut stereo) => {
-            let chosen = args.stereo.take_default_path(&ctx.info, &mut stereo);
-            let s = render_stereo(&ctx, &scene, &settings, stereo)?;
-            print_stereo(&stereo, chosen.as_deref(), &s, out)?;
-            (s.left, s.packed, s.packed_size)
+        for t in &image.timings {
+            outln!(out, "  {:<16} {:>9.3} ms", t.name, t.gpu_ms);
         }
-    };
-    image::save_buffer(
-        &args.output,
-        &packed,
-        packed_size.0,
-        packed_size.1,
-        image::ColorType::Rgba8,
-    )
-    .map_err(|source| CliError::WriteImage {
-        path: args.output.clone(),
-        source,
-    })?;
-    outln!(out, "wrote {}", args.output.display());
-    if let Some(path) = &args.exr {
-        image.hdr.save_exr(path)?;
-        outln!(out, "wrote {}", path.display());
-    }
-    for t in &image.timings {
-        outln!(out, "  {:<16} {:>9.3} ms", t.name, t.gpu_ms);
-    }
-    if let Some(a) = image.auto_shadow {
-        eprintln!(
-            "shadow maps: --shadow-resolution auto picked {r}² (95% of the lit pixels' shadow \
-             texels at most 1 px: their 95th percentile was {q:.3} px at the {p}² probe, so \
-             {scaled:.3} px at {r}²)",
-            r = a.resolution,
-            q = a.quantile_px_at_probe,
-            p = a.probe_resolution,
-            scaled = a.quantile_px_at_probe * a.probe_resolution as f32 / a.resolution as f32
-        );
-    }
-    if let Some(d) = &image.debug_description {
-        outln!(out, "{d}");
-    }
-    if let Some(warning) = image.oit.and_then(|s| s.overflow_warning()) {
-        log::warn!("transparency: {warning}");
-    }
-    if let Some(reference) = &args.compare {
-        let r = crate::eval::HdrImage::load(reference)?;
-        let m = crate::eval::compare(&r, &image.hdr, None)?;
-        super::compare::print_metrics(&m, out)?;
-    }
-    check_validation(ctx)
+        if let Some(a) = image.auto_shadow {
+            eprintln!(
+                "shadow maps: --shadow-resolution auto picked {r}² (95% of the lit pixels' shadow \
+                 texels at most 1 px: their 95th percentile was {q:.3} px at the {p}² probe, so \
+                 {scaled:.3} px at {r}²)",
+                r = a.resolution,
+                q = a.quantile_px_at_probe,
+                p = a.probe_resolution,
+                scaled = a.quantile_px_at_probe * a.probe_resolution as f32 / a.resolution as f32
+            );
+        }
+        if let Some(d) = &image.debug_description {
+            outln!(out, "{d}");
+        }
+        if let Some(warning) = image.oit.and_then(|s| s.overflow_warning()) {
+            log::warn!("transparency: {warning}");
+        }
+        if let Some(reference) = &args.compare {
+            let r = crate::eval::HdrImage::load(reference)?;
+            let m = crate::eval::compare(&r, &image.hdr, None)?;
+            super::compare::print_metrics(&m, out)?;
+        }
+        Ok(())
+    })
 }

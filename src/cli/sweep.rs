@@ -5,7 +5,7 @@
 //! configuration within a time budget, as a `[gi]` table).
 
 use super::args::FrameArgs;
-use super::{check_validation, context, outln, CliError, Global};
+use super::{outln, with_context, CliError, Global};
 use crate::bench::plot::{pareto_png, pareto_svg};
 use crate::bench::sweep::read_rows;
 use crate::bench::sweep::{
@@ -572,8 +572,6 @@ pub fn sweep(global: &Global, args: &SweepArgs, out: &mut dyn Write) -> Result<(
         eprintln!("resuming: {skipped} row(s) already in {}", csv.display());
     }
     let mut appender = CsvAppender::open(&csv)?;
-    let ctx = context(global)?;
-    let start = Instant::now();
     let temporal = TemporalDesc {
         steps: args.temporal_steps,
         lag_max_frames: args.lag_frames,
@@ -581,11 +579,12 @@ pub fn sweep(global: &Global, args: &SweepArgs, out: &mut dyn Write) -> Result<(
     };
     // Each scene's light path and its references, rendered when its first row is due.
     let mut paths: Vec<Option<Option<LightPath>>> = scenes.iter().map(|_| None).collect();
-    let result = (|| -> Result<(), CliError> {
+    let start = Instant::now();
+    with_context(global, |ctx| -> Result<(), CliError> {
         for (k, (i, job)) in todo.iter().enumerate() {
             let s = &scenes[*i];
             if paths[*i].is_none() {
-                paths[*i] = Some(light_path(&ctx, &s.scene, &job.settings, &temporal)?);
+                paths[*i] = Some(light_path(ctx, &s.scene, &job.settings, &temporal)?);
             }
             let path = paths[*i].as_ref().and_then(Option::as_ref);
             let eta = match k {
@@ -600,7 +599,7 @@ pub fn sweep(global: &Global, args: &SweepArgs, out: &mut dyn Write) -> Result<(
                 job.config.label(),
                 clock(start.elapsed().as_secs_f64())
             );
-            let row = measure(&ctx, s, path, job, args)?;
+            let row = measure(ctx, s, path, job, args)?;
             appender.append(&row)?;
             outln!(
                 out,
@@ -626,13 +625,10 @@ pub fn sweep(global: &Global, args: &SweepArgs, out: &mut dyn Write) -> Result<(
                 gi_rows: &rows,
                 dir: &args.out,
             };
-            measure_traverse(&ctx, &scenes, desc, &traverse_todo, &mut file, out)?;
+            measure_traverse(ctx, &scenes, desc, &traverse_todo, &mut file, out)?;
         }
         Ok(())
-    })();
-    let checked = check_validation(ctx);
-    result?;
-    checked?;
+    })?;
     outln!(
         out,
         "wrote {} ({} rows), sweep.json and the plots in {}",
