@@ -202,6 +202,28 @@ impl Loader {
                 supported: SUPPORTED_REQUIRED_EXTENSIONS.join(", "),
             });
         }
+        // gltf-json 1.4's validation indexes the accessors by a primitive's POSITION before
+        // checking that index, so an out-of-range one panics there (found by fuzz_tests):
+        // check every attribute's accessor here first.
+        let json = unchecked.document.as_json();
+        for (m, mesh) in json.meshes.iter().enumerate() {
+            for (p, primitive) in mesh.primitives.iter().enumerate() {
+                for (semantic, accessor) in &primitive.attributes {
+                    if accessor.value() >= json.accessors.len() {
+                        let name = match semantic {
+                            gltf::json::validation::Checked::Valid(s) => s.to_string(),
+                            gltf::json::validation::Checked::Invalid => "?".to_string(),
+                        };
+                        return Err(malformed(format!(
+                            "`meshes[{m}].primitives[{p}].attributes.{name}`: accessor {} \
+                             does not exist (the file has {})",
+                            accessor.value(),
+                            json.accessors.len()
+                        )));
+                    }
+                }
+            }
+        }
         let gltf = gltf::Gltf::from_slice(bytes).map_err(|e| match e {
             gltf::Error::Validation(errors) => {
                 let shown: Vec<String> = errors

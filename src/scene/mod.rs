@@ -456,6 +456,8 @@ impl Scene {
 }
 
 #[cfg(test)]
+mod fuzz_tests;
+#[cfg(test)]
 mod gltf_tests;
 #[cfg(test)]
 mod input_tests;

@@ -154,6 +154,21 @@ impl AssetStore {
                         }
                         r
                     }
+                    Err(_) if mtl_path.is_dir() => {
+                        // `mtllib` with no name (or a folder's): say so on the OBJ's side, not
+                        // as a malformed MTL "Is a directory" (found by fuzz_tests).
+                        mtl_problems.borrow_mut().push((
+                            path.to_path_buf(),
+                            false,
+                            format!(
+                                "`mtllib {}` names the folder {}, not an MTL file; name the \
+                                 .mtl file or remove the line",
+                                mtl.display(),
+                                mtl_path.display()
+                            ),
+                        ));
+                        Ok((Vec::new(), Default::default()))
+                    }
                     Err(e) => {
                         let missing = e.kind() == std::io::ErrorKind::NotFound;
                         mtl_problems
@@ -181,9 +196,10 @@ impl AssetStore {
                     mtl_path.display()
                 );
             } else {
+                let kind = if mtl_path == path { "OBJ" } else { "MTL" };
                 return Err(SceneError::MalformedObj {
                     file: mtl_path,
-                    kind: "MTL",
+                    kind,
                     line: None,
                     message,
                 });
