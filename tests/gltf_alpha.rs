@@ -294,8 +294,15 @@ fn the_cutout_matches_mitsuba_rendering_its_export() {
         "cutout vs Mitsuba: relMSE {:.4}, FLIP {:.4}",
         m.rel_mse, m.flip_mean
     );
-    // BOUND
-    assert!(m.rel_mse < BOUND, "relMSE {}", m.rel_mse);
+    // Measured on lavapipe against 1024 spp (the reference's own noise is about 3e-7): relMSE
+    // 0.0064, FLIP 0.11. Nearly all of it is the material mapping: the GGX dielectric is
+    // exported as Mitsuba's `principled`, whose Disney diffuse makes the lit floor 8% brighter
+    // (0.3665 against voxgi's 0.3364), and lit pixels fill most of the view, so
+    // 0.082² × 0.93 ≈ 0.0063; the shadow square and the quad add 0.0017 at their texel edges.
+    // The same render with the alpha ignored (shadow square all dark, quad all red) scores
+    // 0.101 against this reference. The bound 0.02 is three times the measurement and a fifth
+    // of that failure.
+    assert!(m.rel_mse < 0.02, "relMSE {}", m.rel_mse);
     common::assert_no_validation_messages(&ctx);
 }
 
@@ -306,6 +313,8 @@ fn export_mitsuba_writes_the_cutout_as_a_mask_bitmap() {
     let report =
         voxgi::export::mitsuba::export_mitsuba(&scene, 0.0, WIDTH, HEIGHT, &out).expect("exports");
     let xml = std::fs::read_to_string(&report.xml_path).expect("xml");
+    // `path` would stop the sun's shadow rays at the quad's holes.
+    assert!(xml.contains("<integrator type=\"volpath\">"), "{xml}");
     let mask = xml
         .find("<bsdf type=\"mask\"")
         .map(|i| &xml[i..])

@@ -149,7 +149,18 @@ pub fn export_mitsuba(
     xml.push_str(
         "    <!-- max_depth counts path segments from the camera: 2 = direct light only. -->\n",
     );
-    xml.push_str("    <integrator type=\"path\">\n");
+    // A `mask` (opacity below 1, an alpha map) must pass the light of delta emitters (spot,
+    // point, directional) through its open part, as voxgi's shadow maps do. Mitsuba's `path`
+    // traces its shadow rays with an occlusion test that stops at any surface, so a cutout
+    // under a sun would cast a solid shadow; `volpath` evaluates null-BSDF transmission along
+    // shadow rays and does not count passing through a mask as a bounce (without media it is
+    // otherwise the same path tracer). Scenes without masks keep `path`.
+    let integrator = if scene.has_transparency() || scene.has_alpha_maps() {
+        "volpath"
+    } else {
+        "path"
+    };
+    let _ = writeln!(xml, "    <integrator type=\"{integrator}\">");
     xml.push_str("        <integer name=\"max_depth\" value=\"$max_depth\"/>\n");
     xml.push_str("    </integrator>\n\n");
 
