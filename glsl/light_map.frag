@@ -18,12 +18,16 @@
 // constants (base color, roughness, metalness): see docs/ARCHITECTURE.md, "Materials".
 #include "frame.glsl"
 #include "dissolve.glsl"
+#include "alpha_map.glsl"
 #include "paraboloid.glsl"
 
 // Some material has MTL d < 1: its texels are covered as in the shadow maps (dissolve.glsl).
 layout(constant_id = 0) const bool HAS_DISSOLVE = false;
 layout(constant_id = 1) const bool HAS_GGX = false;
 layout(constant_id = 3) const bool HAS_MAPS = false;
+// Some material has an alpha map (alpha_map.glsl) in the alpha of binding 3 (HAS_MAPS is then
+// set too): its texels are cut or thinned as in the shadow maps.
+layout(constant_id = 4) const bool HAS_ALPHA_MAP = false;
 
 layout(set = 0, binding = 0, std430) readonly buffer FrameBuf { GpuFrame frame; };
 struct GpuMaterial { vec4 albedo; vec4 specular; uvec4 flags; };
@@ -117,9 +121,12 @@ void main() {
         e = l.intensity.rgb * (falloff * cos_i / d2);
     }
     GpuMaterial m = materials[pc.material];
-    if (HAS_DISSOLVE && m.albedo.a < coverage_threshold) discard;
+    vec4 texel = HAS_MAPS ? textureGrad(albedo_texture, st, st_dx, st_dy) : vec4(1.0);
+    float opacity = HAS_ALPHA_MAP ? alpha_map_opacity(m.flags.w, m.albedo.a, texel.a) : m.albedo.a;
+    float keep = alpha_map_keep_threshold(HAS_DISSOLVE, coverage_threshold);
+    if ((HAS_DISSOLVE || HAS_ALPHA_MAP) && opacity < keep) discard;
     vec3 diffuse = m.albedo.rgb;
-    if (HAS_MAPS && m.flags.x != 0u) diffuse = textureGrad(albedo_texture, st, st_dx, st_dy).rgb;
+    if (HAS_MAPS && m.flags.x != 0u) diffuse = texel.rgb;
     if (HAS_GGX && pbr[pc.material].ggx.z != 0.0) {
         // Schlick with F0 = 0.04 (brdf.glsl's fresnel_schlick), inlined.
         float f_d = 0.04 + 0.96 * pow(1.0 - clamp(cos_i, 0.0, 1.0), 5.0);

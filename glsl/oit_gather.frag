@@ -13,6 +13,8 @@ layout(early_fragment_tests) in;  // a fragment behind the opaque depth appends 
 layout(constant_id = 0) const bool HAS_PHONG = false;
 layout(constant_id = 1) const bool HAS_GGX = false;
 layout(constant_id = 2) const bool HAS_TEXTURES = false;
+// Some material has an alpha map (alpha_map.glsl): per-texel opacity (blend), or a cutout.
+layout(constant_id = 3) const bool HAS_ALPHA_MAP = false;
 
 struct GpuMaterial {
     vec4 albedo;    // rgb albedo, a opacity
@@ -27,6 +29,7 @@ struct GpuMaterialPbr {
 
 #include "frame.glsl"
 #include "brdf.glsl"
+#include "alpha_map.glsl"
 layout(set = 0, binding = 0, std430) readonly buffer FrameBuf { GpuFrame frame; };
 #include "shadow.glsl"
 #include "direct_light.glsl"
@@ -63,7 +66,11 @@ void main() {
     bool front = dot(n, toward_camera(frame.camera_position, frame.camera_forward, in_world)) >= 0.0;
     if (!front) n = -n;
     vec3 albedo = m.albedo.rgb;
-    if (HAS_TEXTURES && m.flags.x != 0u) albedo = texture(albedo_texture, vec2(in_uv.x, 1.0 - in_uv.y)).rgb;
+    vec4 texel = HAS_TEXTURES ? texture(albedo_texture, vec2(in_uv.x, 1.0 - in_uv.y)) : vec4(1.0);
+    if (HAS_TEXTURES && m.flags.x != 0u) albedo = texel.rgb;
+    float opacity = HAS_ALPHA_MAP ? alpha_map_opacity(m.flags.w, m.albedo.a, texel.a) : m.albedo.a;
+    // Cut away (or fully clear): no layer.
+    if (HAS_ALPHA_MAP && opacity <= 0.0) return;
     vec4 lobe = vec4(m.specular.rgb, 1.0);
     float lobe_parameter = m.specular.a;
     if (HAS_GGX && mp.ggx.z != 0.0) {
@@ -79,6 +86,6 @@ void main() {
     uint index = atomicAdd(counters.x, 1u);
     if (index >= counters.y) return;  // full: dropped, and counted by counters.x
     uint next = imageAtomicExchange(heads, ivec2(gl_FragCoord.xy), index);
-    nodes[index] = uvec4(packHalf2x16(lo.rg), packHalf2x16(vec2(lo.b, m.albedo.a)),
+    nodes[index] = uvec4(packHalf2x16(lo.rg), packHalf2x16(vec2(lo.b, opacity)),
                          floatBitsToUint(gl_FragCoord.z), next);
 }

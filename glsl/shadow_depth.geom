@@ -12,6 +12,8 @@ layout(triangle_strip, max_vertices = 4) out;
 
 layout(set = 0, binding = 0, std430) readonly buffer FrameBuf { GpuFrame frame; };
 
+layout(location = 0) in vec2 in_tex_uv[];
+
 layout(push_constant) uniform Push {
     mat4 model;
     uint view;
@@ -27,6 +29,10 @@ layout(location = 3) flat out vec3 out_v2;
 layout(location = 4) flat out vec2 out_range;
 // The other projections: world position, for dissolve coverage (shadow_depth.frag).
 layout(location = 5) out vec3 out_world;
+// Texture coordinates for alpha maps: interpolated (other projections), or those of vertex 2
+// (paraboloid views; vertices 0 and 1 in out_t01, weighted by the hit's barycentric weights).
+layout(location = 6) out vec2 out_tex_uv;
+layout(location = 7) flat out vec4 out_t01;
 
 void emit_corner(vec2 uv, GpuShadowView sv, vec3 tri[3]) {
     // Depth comes from the fragment shader (gl_FragDepth); the box's own is irrelevant.
@@ -38,6 +44,8 @@ void emit_corner(vec2 uv, GpuShadowView sv, vec3 tri[3]) {
     out_v2 = tri[2];
     out_range = sv.params.zw;
     out_world = vec3(0.0);
+    out_tex_uv = in_tex_uv[2];
+    out_t01 = vec4(in_tex_uv[0], in_tex_uv[1]);
     EmitVertex();
 }
 
@@ -53,6 +61,8 @@ void main() {
             out_v2 = vec3(0.0);
             out_range = sv.params.zw;
             out_world = gl_in[i].gl_Position.xyz;
+            out_tex_uv = in_tex_uv[i];
+            out_t01 = vec4(0.0);
             EmitVertex();
         }
         EndPrimitive();

@@ -17,17 +17,22 @@ layout(constant_id = 5) const bool HAS_EMISSION = false;
 layout(constant_id = 6) const bool HAS_PBR_MAPS = false;
 // Moving objects under TAA: write the motion vector.
 layout(constant_id = 7) const bool HAS_MOTION = false;
+// Some material has per-texel alpha (alpha_map.glsl): a cutout or blend map in the alpha
+// channel of binding 2.
+layout(constant_id = 9) const bool HAS_ALPHA_MAP = false;
 const bool HAS_LOBE = HAS_PHONG || HAS_GGX;
 
 struct GpuMaterial {
     vec4 albedo;    // rgb albedo, a opacity
     vec4 specular;  // rgb specular reflectance, a shininess
     uvec4 flags;    // x: an albedo texture replaces albedo; y: bump map kind (0 none,
-                    // 1 height, 2 tangent-space normal); z: bump scale (float bits, m per unit)
+                    // 1 height, 2 tangent-space normal); z: bump scale (float bits, m per unit);
+                    // w: the alpha map's mode (alpha_map.glsl)
 };
 
 #include "frame.glsl"
 #include "dissolve.glsl"
+#include "alpha_map.glsl"
 layout(set = 0, binding = 0, std430) readonly buffer FrameBuf { GpuFrame frame; };
 #ifdef MULTIVIEW
 // The right eye's frame (view 1 of gbuffer_multiview.frag; view 0 is `frame`).
@@ -41,7 +46,8 @@ layout(set = 0, binding = 8, std430) readonly buffer FrameRightBuf { GpuFrame fr
 #define EYE_FRAME(member) frame.member
 #endif
 layout(set = 0, binding = 1, std430) readonly buffer Materials { GpuMaterial materials[]; };
-// The draw's albedo texture (a 1x1 placeholder when the material has none).
+// The draw's albedo texture, or its alpha map when it has no albedo texture (a 1x1 placeholder
+// when the material has neither).
 layout(set = 0, binding = 2) uniform sampler2D albedo_texture;
 // The draw's bump or normal map (the placeholder when it has none).
 layout(set = 0, binding = 3) uniform sampler2D bump_texture;
@@ -128,7 +134,9 @@ void main() {
     vec3 albedo = m.albedo.rgb;
     // OBJ texture coordinates have v up; image rows start at the top.
     vec2 tex_uv = vec2(in_uv.x, 1.0 - in_uv.y);
-    if (HAS_TEXTURES && m.flags.x != 0u) albedo = texture(albedo_texture, tex_uv).rgb;
+    vec4 texel = HAS_TEXTURES ? texture(albedo_texture, tex_uv) : vec4(1.0);
+    if (HAS_TEXTURES && m.flags.x != 0u) albedo = texel.rgb;
+    float opacity = HAS_ALPHA_MAP ? alpha_map_opacity(m.flags.w, m.albedo.a, texel.a) : m.albedo.a;
     if (HAS_BUMP && m.flags.y == 2u) {
         vec3 t = texture(bump_texture, tex_uv).xyz * 2.0 - 1.0;
         vec3 bumped = normalize(cotangent_frame(n, in_world, in_uv) * t);
@@ -139,7 +147,8 @@ void main() {
         if (!any(isnan(bumped))) n = bumped;
     }
     // After the bump's derivatives, which a discarded neighbour would leave undefined.
-    if (HAS_DISSOLVE && m.albedo.a < coverage_threshold) discard;
+    float keep = alpha_map_keep_threshold(HAS_DISSOLVE, coverage_threshold);
+    if ((HAS_DISSOLVE || HAS_ALPHA_MAP) && opacity < keep) discard;
     vec4 lobe = vec4(m.specular.rgb, 1.0);
     float lobe_parameter = m.specular.a;
     GpuMaterialPbr mp = pbr[pc.material];

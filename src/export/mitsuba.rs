@@ -45,7 +45,7 @@ use std::path::{Path, PathBuf};
 use glam::{Mat3, Vec2, Vec3};
 
 use crate::imaging::srgb_decode;
-use crate::scene::{Environment, Light, Material, Mesh, Scene, TextureData};
+use crate::scene::{AlphaMap, AlphaMode, Environment, Light, Material, Mesh, Scene, TextureData};
 
 /// Samples per pixel written as the XML's `spp` default. The sampler is `independent`, which
 /// takes any count as given (Mitsuba's stratified samplers round it to a grid) and whose
@@ -149,7 +149,18 @@ pub fn export_mitsuba(
     xml.push_str(
         "    <!-- max_depth counts path segments from the camera: 2 = direct light only. -->\n",
     );
-    xml.push_str("    <integrator type=\"path\">\n");
+    // A `mask` (opacity below 1, an alpha map) must pass the light of delta emitters (spot,
+    // point, directional) through its open part, as voxgi's shadow maps do. Mitsuba's `path`
+    // traces its shadow rays with an occlusion test that stops at any surface, so a cutout
+    // under a sun would cast a solid shadow; `volpath` evaluates null-BSDF transmission along
+    // shadow rays and does not count passing through a mask as a bounce (without media it is
+    // otherwise the same path tracer). Scenes without masks keep `path`.
+    let integrator = if scene.has_transparency() || scene.has_alpha_maps() {
+        "volpath"
+    } else {
+        "path"
+    };
+    let _ = writeln!(xml, "    <integrator type=\"{integrator}\">");
     xml.push_str("        <integer name=\"max_depth\" value=\"$max_depth\"/>\n");
     xml.push_str("    </integrator>\n\n");
 
@@ -564,7 +575,8 @@ pub fn phong_to_beckmann_alpha(shininess: f32) -> f32 {
 
 /// Writes `material` as the BSDF `id`. A material of opacity below 1 (MTL `d`) is a `mask`
 /// around it: Mitsuba's mask passes a ray straight through with probability 1 − opacity, the
-/// expectation of voxgi's hashed coverage in the G-buffer, the shadow maps and the voxels.
+/// expectation of voxgi's hashed coverage in the G-buffer, the shadow maps and the voxels. A
+/// material with an alpha map is a `mask` whose opacity is a bitmap ([`alpha_texture_xml`]).
 fn write_material(
     xml: &mut String,
     scene: &Scene,
@@ -574,7 +586,7 @@ fn write_material(
     report: &mut ExportReport,
     warned_phong: &mut bool,
 ) -> Result<(), MitsubaExportError> {
-    if material.is_opaque() {
+    if material.is_opaque() && material.alpha_map.is_none() {
         return write_opaque_material(xml, scene, material, id, out_dir, report, warned_phong);
     }
     let mut inner = String::new();
@@ -587,10 +599,16 @@ fn write_material(
         report,
         warned_phong,
     )?;
+    let map = material
+        .alpha_map
+        .and_then(|a| scene.textures.get(a.texture).map(|data| (a, data)));
+    let opacity = match map {
+        Some((a, data)) => alpha_texture_xml(data, a, material.opacity, out_dir, report)?,
+        None => format!("<float name=\"opacity\" value=\"{}\"/>", material.opacity),
+    };
     let _ = writeln!(
         xml,
-        "    <bsdf type=\"mask\" id=\"{id}\">\n        <float name=\"opacity\" value=\"{}\"/>",
-        material.opacity
+        "    <bsdf type=\"mask\" id=\"{id}\">\n        {opacity}"
     );
     for line in inner.trim_end().lines() {
         let _ = writeln!(xml, "    {line}");
@@ -805,6 +823,70 @@ fn radiance_xml(
             ),
         },
     )
+}
+
+/// Writes the opacity of an alpha map as an 8-bit grey PNG and returns the `opacity` bitmap
+/// that reads it raw. A cutout is baked to `opacity` where the texel's alpha passes the cutoff
+/// and 0 elsewhere, read with nearest filtering: voxgi thresholds the bilinear alpha, and
+/// between two texels on either side of the cutoff the threshold falls near their shared
+/// edge (exactly there for alphas symmetric about it, such as a 0/255 checker at 0.5), where
+/// the nearest lookup switches. A blend map is `opacity` × alpha, read bilinearly as voxgi
+/// does.
+fn alpha_texture_xml(
+    data: &TextureData,
+    map: AlphaMap,
+    opacity: f32,
+    out_dir: &Path,
+    report: &mut ExportReport,
+) -> Result<String, MitsubaExportError> {
+    create_dir(&out_dir.join("textures"))?;
+    let pixels = (data.width as usize) * (data.height as usize);
+    let rgba = data.rgba8.get(..pixels * 4).unwrap_or(&[]);
+    let to_u8 = |v: f32| (v.clamp(0.0, 1.0) * 255.0).round() as u8;
+    let (values, rel, filter): (Vec<u8>, String, &str) = match map.mode {
+        AlphaMode::Cutout(c) => (
+            rgba.chunks_exact(4)
+                .map(|p| {
+                    to_u8(if f32::from(p[3]) / 255.0 >= c {
+                        opacity
+                    } else {
+                        0.0
+                    })
+                })
+                .collect(),
+            format!("textures/tex{}_cutout{c}_x{opacity}.png", map.texture),
+            "nearest",
+        ),
+        AlphaMode::Blend => (
+            rgba.chunks_exact(4)
+                .map(|p| to_u8(opacity * f32::from(p[3]) / 255.0))
+                .collect(),
+            format!("textures/tex{}_alpha_x{opacity}.png", map.texture),
+            "bilinear",
+        ),
+    };
+    let path = out_dir.join(&rel);
+    match image::GrayImage::from_raw(data.width, data.height, values)
+        .map(|img| img.save_with_format(&path, image::ImageFormat::Png))
+    {
+        Some(Ok(())) => {}
+        Some(Err(source)) => return Err(MitsubaExportError::Texture { path, source }),
+        None => {
+            report.warnings.push(format!(
+                "texture {} has fewer bytes than its size says; opacity {opacity} is used \
+                 instead of its alpha",
+                data.path.display()
+            ));
+            return Ok(format!("<float name=\"opacity\" value=\"{opacity}\"/>"));
+        }
+    }
+    report.files.push(path);
+    Ok(format!(
+        "<texture type=\"bitmap\" name=\"opacity\">\n            <string \
+         name=\"filename\" value=\"{rel}\"/>\n            <boolean name=\"raw\" \
+         value=\"true\"/>\n            <string name=\"filter_type\" value=\"{filter}\"/>\n        \
+         </texture>"
+    ))
 }
 
 /// Writes the first channel of the linear (data) map `index` as an 8-bit grey PNG and returns

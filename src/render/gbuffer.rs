@@ -125,6 +125,8 @@ pub struct GbufferFeatures {
     pub pbr_maps: bool,
     /// Motion vectors (moving objects under TAA).
     pub motion: bool,
+    /// Per-texel alpha (a cutout or blend map, `scene::AlphaMap`).
+    pub alpha_maps: bool,
 }
 
 impl GbufferPass {
@@ -166,6 +168,7 @@ impl GbufferPass {
             (5, u32::from(f.emission)),
             (6, u32::from(f.pbr_maps)),
             (7, u32::from(f.motion)),
+            (9, u32::from(f.alpha_maps)),
         ];
         if multiview {
             spec.push((8, u32::from(flush_instance)));

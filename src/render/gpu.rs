@@ -100,7 +100,9 @@ pub struct GpuMaterial {
     pub albedo: [f32; 4],
     /// rgb specular reflectance, a shininess.
     pub specular: [f32; 4],
-    /// x: 1 if an albedo texture replaces `albedo` (as in the Mitsuba export).
+    /// x: 1 if an albedo texture replaces `albedo` (as in the Mitsuba export); y: bump map
+    /// kind; z: bump scale (f32 bits); w: the alpha map's mode (f32 bits,
+    /// `scene_gpu::alpha_map_flag`, `glsl/include/alpha_map.glsl`).
     pub flags: [u32; 4],
 }
 

@@ -42,13 +42,15 @@ impl LightMapPass {
     /// part (`glsl/light_map.frag`). `area_lights`: the area lights' (paraboloid) views get
     /// light maps too — only the hemisphere method reads them (`glsl/light_map.geom`).
     /// `has_maps`: some material has an albedo texture, or a GGX one a metalness map
-    /// ([`Self::scene_has_maps`]), which the texels sample.
+    /// ([`Self::scene_has_maps`]), which the texels sample. `has_alpha_maps`: some material
+    /// has per-texel alpha (`scene::AlphaMap`, implies `has_maps`), tested per texel.
     pub fn new(
         ctx: &Context,
         has_dissolve: bool,
         has_ggx: bool,
         area_lights: bool,
         has_maps: bool,
+        has_alpha_maps: bool,
     ) -> Result<Self, VkError> {
         let pipeline = ctx.graphics_pipeline(&GraphicsPipelineDesc {
             vertex: "light_map.vert".into(),
@@ -70,10 +72,14 @@ impl LightMapPass {
                 (0, u32::from(has_dissolve)),
                 (1, u32::from(has_ggx)),
                 (2, u32::from(area_lights)),
-                (3, u32::from(has_maps)),
+                (3, u32::from(has_maps || has_alpha_maps)),
+                (4, u32::from(has_alpha_maps)),
             ],
         })?;
-        Ok(Self { pipeline, has_maps })
+        Ok(Self {
+            pipeline,
+            has_maps: has_maps || has_alpha_maps,
+        })
     }
 
     /// Whether the texels of `scene` sample maps: a drawn material has an albedo texture, or

@@ -514,7 +514,12 @@ impl Renderer {
             || scene.lights.iter().any(Light::is_area);
         let sampler = ctx.create_sampler(vk::Filter::NEAREST, false)?;
         let sampler_raw = sampler.raw;
-        let shadow_depth = ShadowDepthPass::new(ctx, paraboloid, scene.has_transparency())?;
+        let shadow_depth = ShadowDepthPass::new(
+            ctx,
+            paraboloid,
+            scene.has_transparency(),
+            scene.has_alpha_maps(),
+        )?;
         let features = GbufferFeatures {
             phong: has_phong,
             ggx: scene.has_ggx(),
@@ -525,6 +530,7 @@ impl Renderer {
             pbr_maps: scene.has_pbr_maps(),
             // Moving objects under TAA (a debug view has no TAA).
             motion: settings.debug.is_none() && settings.post.motion_vectors(scene.has_animation()),
+            alpha_maps: scene.has_alpha_maps(),
         };
         scene_gpu.motion = features.motion;
         let gbuffer = GbufferPass::new(ctx, features, views)?;
@@ -536,7 +542,12 @@ impl Renderer {
         )?;
         let oit = oit_on
             .then(|| {
-                let materials = (features.phong, features.ggx, features.textures);
+                let materials = (
+                    features.phong,
+                    features.ggx,
+                    features.textures,
+                    features.alpha_maps,
+                );
                 oit::OitPasses::new(ctx, materials, settings.oit_nodes_per_pixel, sampler.raw)
             })
             .transpose()?;
@@ -644,6 +655,7 @@ impl Renderer {
                         scene.has_ggx(),
                         settings.gi.method.spec().reads_area_light_maps,
                         LightMapPass::scene_has_maps(scene),
+                        scene.has_alpha_maps(),
                     )
                 })
                 .transpose()?;

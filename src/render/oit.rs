@@ -70,11 +70,11 @@ pub struct OitPasses {
 }
 
 impl OitPasses {
-    /// `materials`: (Phong, GGX, albedo textures) in the scene; `sampler`: the renderer's
+    /// `materials`: (Phong, GGX, albedo textures, alpha maps) in the scene; `sampler`: the renderer's
     /// nearest-neighbour sampler (shadow maps, radiance).
     pub fn new(
         ctx: &Context,
-        materials: (bool, bool, bool),
+        materials: (bool, bool, bool, bool),
         nodes_per_pixel: u32,
         sampler: vk::Sampler,
     ) -> Result<Self, VkError> {

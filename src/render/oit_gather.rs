@@ -21,9 +21,12 @@ pub struct OitGatherPass {
 }
 
 impl OitGatherPass {
-    /// `phong`, `ggx`, `textures`: what the scene's materials have (the shader compiles in
-    /// only those).
-    pub fn new(ctx: &Context, (phong, ggx, textures): (bool, bool, bool)) -> Result<Self, VkError> {
+    /// `phong`, `ggx`, `textures`, `alpha_maps`: what the scene's materials have (the shader
+    /// compiles in only those).
+    pub fn new(
+        ctx: &Context,
+        (phong, ggx, textures, alpha_maps): (bool, bool, bool, bool),
+    ) -> Result<Self, VkError> {
         let pipeline = ctx.graphics_pipeline(&GraphicsPipelineDesc {
             // The G-buffer's vertex stage: the same positions, so the depth test against the
             // opaque depth compares equal transforms.
@@ -46,6 +49,7 @@ impl OitGatherPass {
                 (0, u32::from(phong)),
                 (1, u32::from(ggx)),
                 (2, u32::from(textures)),
+                (3, u32::from(alpha_maps)),
             ],
         })?;
         Ok(Self { pipeline })

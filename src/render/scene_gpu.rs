@@ -138,7 +138,7 @@ impl SceneGpu {
                         (Some(_), BumpKind::TangentNormal) => 2,
                     },
                     (BUMP_SCALE_M * m.bump_scale).to_bits(),
-                    0,
+                    alpha_map_flag(m),
                 ],
             })
             .collect();
@@ -178,7 +178,7 @@ impl SceneGpu {
         let mut textures = Vec::new();
         for (i, t) in scene.textures.iter().enumerate() {
             let used = scene.materials.iter().any(|m| {
-                m.albedo_texture == Some(i)
+                m.draw_texture() == Some(i)
                     || m.bump_texture == Some(i)
                     || m.pbr_maps.as_array().contains(&Some(i))
             });
@@ -422,8 +422,9 @@ pub fn record_shadow_and_cascade_views(
     pipe: &PipelineHandle,
     scene: (BufferHandle, BufferHandle),
     draws: &RwLock<DrawLists>,
+    per_draw: &mut dyn FnMut(&Draw),
 ) {
-    record_views(ctx, pipe, scene, draws, true, &mut |_| {});
+    record_views(ctx, pipe, scene, draws, true, per_draw);
 }
 
 fn record_views(
@@ -456,6 +457,24 @@ fn record_views(
         }
     }
     ctx.cmd.end_rendering();
+}
+
+/// `GpuMaterial::flags.w`: how the draw texture's alpha acts, as f32 bits (the shaders'
+/// `alpha_map_discard`, glsl/include/alpha_map.glsl): 0 none, a cutoff in (0, 1] for a
+/// cutout, −1 for per-texel opacity (blend).
+pub fn alpha_map_flag(m: &crate::scene::Material) -> u32 {
+    use crate::scene::{AlphaMap, AlphaMode};
+    match m.alpha_map {
+        None => 0,
+        Some(AlphaMap {
+            mode: AlphaMode::Cutout(c),
+            ..
+        }) => c.clamp(f32::MIN_POSITIVE, 1.0).to_bits(),
+        Some(AlphaMap {
+            mode: AlphaMode::Blend,
+            ..
+        }) => (-1.0f32).to_bits(),
+    }
 }
 
 /// The vertex layout every mesh pass reads: position, normal, uv.
@@ -527,7 +546,7 @@ fn upload_geometry(ctx: &Context, scene: &Scene, t_s: f32) -> Result<Geometry, R
         let aabb = mesh.aabb.transformed(&model);
         for (si, sub) in mesh.submeshes.iter().enumerate() {
             let material = object.materials.get(si).copied().unwrap_or(sub.material);
-            let texture = scene.materials.get(material).and_then(|m| m.albedo_texture);
+            let texture = scene.materials.get(material).and_then(|m| m.draw_texture());
             let bump = scene.materials.get(material).and_then(|m| m.bump_texture);
             let pbr_maps = scene
                 .materials

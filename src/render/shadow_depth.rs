@@ -3,20 +3,30 @@
 //! geometry shader routes each draw to its view's layer (`glsl/shadow_depth.{vert,geom,frag}`,
 //! `glsl/shadow_depth_paraboloid.frag`).
 
-use super::scene_gpu::{record_shadow_and_cascade_views, GpuShadowViewPush, SceneInputs};
+use super::scene_gpu::{record_shadow_and_cascade_views, Draw, GpuShadowViewPush, SceneInputs};
 use super::DEPTH;
 use crate::graph::{Access, ImageHandle, Load, RenderGraph, Shader};
 use crate::vk::{vk, Context, GraphicsPipeline, GraphicsPipelineDesc, ImageDesc, VkError};
 
 pub struct ShadowDepthPass {
     pipeline: GraphicsPipeline,
+    /// Some material has an alpha map, which the fragments sample (binding 2).
+    has_alpha_maps: bool,
 }
 
 impl ShadowDepthPass {
     /// `paraboloid`: some view is a paraboloid hemisphere, whose depth the fragment shader
     /// writes (which costs the other maps their early depth test, so only scenes that have
-    /// them pay for it); `has_dissolve`: some material has MTL d < 1 (hashed coverage).
-    pub fn new(ctx: &Context, paraboloid: bool, has_dissolve: bool) -> Result<Self, VkError> {
+    /// them pay for it); `has_dissolve`: some material has MTL d < 1 (hashed coverage);
+    /// `has_alpha_maps`: some material has per-texel alpha (`scene::AlphaMap`), tested per
+    /// fragment.
+    pub fn new(
+        ctx: &Context,
+        paraboloid: bool,
+        has_dissolve: bool,
+        has_alpha_maps: bool,
+    ) -> Result<Self, VkError> {
+        use std::mem::offset_of;
         let pipeline = ctx.graphics_pipeline(&GraphicsPipelineDesc {
             vertex: "shadow_depth.vert".into(),
             geometry: Some("shadow_depth.geom".into()),
@@ -27,7 +37,17 @@ impl ShadowDepthPass {
             },
             push: crate::vk::PushLayout::of::<GpuShadowViewPush>(),
             vertex_stride: std::mem::size_of::<super::gpu::GpuVertex>() as u32,
-            vertex_attributes: vec![(vk::Format::R32G32B32_SFLOAT, 0)],
+            // Position, and the texture coordinates of the alpha maps.
+            vertex_attributes: vec![
+                (
+                    vk::Format::R32G32B32_SFLOAT,
+                    offset_of!(super::gpu::GpuVertex, position) as u32,
+                ),
+                (
+                    vk::Format::R32G32_SFLOAT,
+                    offset_of!(super::gpu::GpuVertex, uv) as u32,
+                ),
+            ],
             topology: vk::PrimitiveTopology::TRIANGLE_LIST,
             cull_mode: vk::CullModeFlags::NONE,
             color_formats: vec![],
@@ -37,9 +57,12 @@ impl ShadowDepthPass {
             depth_bias: false,
             logic_op: None,
             view_mask: 0,
-            spec: vec![(0, u32::from(has_dissolve))],
+            spec: vec![(0, u32::from(has_dissolve)), (1, u32::from(has_alpha_maps))],
         })?;
-        Ok(Self { pipeline })
+        Ok(Self {
+            pipeline,
+            has_alpha_maps,
+        })
     }
 
     /// Declares the shadow maps of `views` views at `resolution`² (the lights' own views, then
@@ -59,15 +82,40 @@ impl ShadowDepthPass {
         let pipe = *self.pipeline;
         let (vertices, indices) = (scene.vertices, scene.indices);
         let draws = scene.draws.clone();
-        g.add_pass("shadow_depth")
+        let (sampler, placeholder) = (scene.texture_sampler, scene.placeholder());
+        let pass = g
+            .add_pass("shadow_depth")
             .pipeline(&pipe)
             .bind(0, scene.frame, Access::StorageRead(Shader::Geometry))
-            .bind(1, scene.materials, Access::StorageRead(Shader::Fragment))
-            .read(vertices, Access::VertexBuffer)
+            .bind(1, scene.materials, Access::StorageRead(Shader::Fragment));
+        // Without alpha maps the shader never samples: the placeholder fills the binding.
+        let textures = self.has_alpha_maps.then(|| scene.textures.clone());
+        let pass = match &textures {
+            Some(t) => pass.bind_one_of_sampled(2, t.clone(), sampler, Shader::Fragment),
+            None => pass.bind_sampled(2, placeholder, sampler, Shader::Fragment),
+        };
+        pass.read(vertices, Access::VertexBuffer)
             .read(indices, Access::IndexBuffer)
             .depth(maps, Load::ClearDepth(1.0))
             .record(move |ctx| {
-                record_shadow_and_cascade_views(ctx, &pipe, (vertices, indices), &draws)
+                // The draw's texture (its alpha map), pushed when it differs from the last
+                // draw's.
+                let mut bound = None;
+                let mut per_draw = |d: &Draw| {
+                    let Some(t) = &textures else { return };
+                    if bound != Some(d.texture) {
+                        let pick = d.texture.and_then(|i| t.get(i).copied());
+                        ctx.push_with(&pipe, &[(2, pick.unwrap_or(placeholder))]);
+                        bound = Some(d.texture);
+                    }
+                };
+                record_shadow_and_cascade_views(
+                    ctx,
+                    &pipe,
+                    (vertices, indices),
+                    &draws,
+                    &mut per_draw,
+                )
             });
         maps
     }

@@ -21,7 +21,7 @@ use super::crease::{split_normals, Smoothing};
 use super::error::SceneError;
 pub(crate) use super::gltf_asset::{GltfAsset, GltfCamera, GltfProjection};
 use super::light::Light;
-use super::material::{BumpKind, Ggx, Material, PbrMaps, TextureData};
+use super::material::{AlphaMap, AlphaMode, BumpKind, Ggx, Material, PbrMaps, TextureData};
 use super::mesh::{Aabb, Mesh, SubMesh};
 use super::obj::{decode_image_bytes, decode_image_file, read_bytes, AssetStore};
 
@@ -746,35 +746,20 @@ impl Loader {
             ],
         );
         let albedo_texture = match pbr.base_color_texture() {
-            Some(t) => {
-                let image = t.texture().source();
-                if m.alpha_mode() != gltf::material::AlphaMode::Opaque
-                    && self
-                        .rgba(&image, &used_by("baseColorTexture"))?
-                        .pixels()
-                        .any(|p| p[3] < 255)
-                {
-                    log::warn!(
-                        "{}: material `{name}`: the base color texture's alpha is ignored \
-                         (voxgi takes a material's opacity from baseColorFactor's alpha, {alpha}); \
-                         the surface is drawn {}",
-                        self.file.display(),
-                        if m.alpha_mode() == gltf::material::AlphaMode::Mask {
-                            "without its cutout"
-                        } else {
-                            "with that constant opacity"
-                        }
-                    );
-                }
-                Some(self.texture(
-                    store,
-                    &image,
-                    TexelUse::Color(base),
-                    &used_by("baseColorTexture"),
-                )?)
-            }
+            Some(t) => Some(self.texture(
+                store,
+                &t.texture().source(),
+                TexelUse::Color(base),
+                &used_by("baseColorTexture"),
+            )?),
             None => None,
         };
+        let alpha_map = alpha_map(
+            m.alpha_mode(),
+            alpha,
+            cutoff,
+            albedo_texture.and_then(|t| store.textures.get(t).map(|d| (t, d))),
+        );
         let pbr_maps = match pbr.metallic_roughness_texture() {
             Some(t) => {
                 let image = t.texture().source();
@@ -848,6 +833,7 @@ impl Loader {
                 emission: emission_map,
                 ..pbr_maps
             },
+            alpha_map,
         };
         let i = store.materials.len();
         store.materials.push(material);
@@ -970,6 +956,45 @@ impl Loader {
         store.gltf_textures.insert(key, i);
         Ok(i)
     }
+}
+
+/// The per-texel alpha of a material whose base colour texture is `texture` (index and
+/// texels), under glTF 2.0 §3.9.4: the alpha is `baseColorFactor`'s alpha (`factor_alpha`)
+/// times the texel's. `MASK` keeps a texel where that product is at least `cutoff`, so the
+/// texture's own alpha is compared with cutoff / factor alpha (the caller has dropped
+/// primitives whose factor alpha is below the cutoff, so the quotient is at most 1); `BLEND`
+/// multiplies the texel's alpha into the material's opacity in the shaders. `None` for
+/// `OPAQUE`, without a texture, for a texture whose texels are all opaque (nothing to test, so
+/// the material costs the passes nothing), and for a cutoff of 0 (every texel passes).
+fn alpha_map(
+    mode: gltf::material::AlphaMode,
+    factor_alpha: f32,
+    cutoff: f32,
+    texture: Option<(usize, &TextureData)>,
+) -> Option<AlphaMap> {
+    let (index, data) = texture?;
+    if data.rgba8.chunks_exact(4).all(|p| p[3] == 255) {
+        return None;
+    }
+    let mode = match mode {
+        gltf::material::AlphaMode::Opaque => return None,
+        gltf::material::AlphaMode::Blend => AlphaMode::Blend,
+        gltf::material::AlphaMode::Mask => {
+            let c = if factor_alpha > 0.0 {
+                (cutoff / factor_alpha).min(1.0)
+            } else {
+                0.0
+            };
+            if c.is_nan() || c <= 0.0 {
+                return None;
+            }
+            AlphaMode::Cutout(c)
+        }
+    };
+    Some(AlphaMap {
+        texture: index,
+        mode,
+    })
 }
 
 /// A primitive's triangles in world space.

@@ -7,7 +7,7 @@ use glam::{Mat4, Vec3};
 use serde_json::{json, Value};
 
 use super::gltf::{punctual_light, LUMENS_PER_WATT};
-use super::{Light, Projection, Scene, SceneError};
+use super::{AlphaMode, Light, Projection, Scene, SceneError};
 
 /// A glTF document under construction: JSON plus one binary buffer.
 struct Builder {
@@ -507,4 +507,54 @@ fn alpha_modes_map_to_opacity_or_drop_the_primitive() {
     assert_eq!(subs.len(), 2, "the primitive below its cutoff is dropped");
     assert_eq!(s.materials[subs[0].material].opacity, 0.25);
     assert!(s.materials[subs[1].material].is_opaque());
+}
+
+#[test]
+fn base_colour_alpha_becomes_a_cutout_or_a_blend_map() {
+    let dir = temp_dir("alphamap");
+    // 2×1: one opaque texel, one at alpha 64; and an all-opaque texture.
+    let holes =
+        image::RgbaImage::from_raw(2, 1, vec![255, 0, 0, 255, 255, 0, 0, 64]).expect("image");
+    holes.save(dir.join("holes.png")).expect("png");
+    let solid = image::RgbaImage::from_raw(1, 1, vec![255, 255, 255, 255]).expect("image");
+    solid.save(dir.join("solid.png")).expect("png");
+    let mut b = Builder::new();
+    b.json["images"] = json!([{ "uri": "holes.png" }, { "uri": "solid.png" }]);
+    b.json["textures"] = json!([{ "source": 0 }, { "source": 1 }]);
+    let tex = |i: usize, alpha: f32| json!({ "baseColorTexture": { "index": i }, "baseColorFactor": [1, 1, 1, alpha] });
+    let mask = b.push(
+        "materials",
+        json!({ "alphaMode": "MASK", "alphaCutoff": 0.5, "pbrMetallicRoughness": tex(0, 0.8) }),
+    );
+    let blend = b.push(
+        "materials",
+        json!({ "alphaMode": "BLEND", "pbrMetallicRoughness": tex(0, 0.5) }),
+    );
+    let solid_mask = b.push(
+        "materials",
+        json!({ "alphaMode": "MASK", "pbrMetallicRoughness": tex(1, 1.0) }),
+    );
+    let opaque = b.push("materials", json!({ "pbrMetallicRoughness": tex(0, 1.0) }));
+    for (k, m) in [mask, blend, solid_mask, opaque].into_iter().enumerate() {
+        b.triangle(Some(m), json!({ "translation": [0, 0, k] }));
+    }
+    let s = load(&b.write(&dir, "alphamap"));
+    let mat = |k: usize| &s.materials[s.meshes[0].submeshes[k].material];
+    // MASK: factor alpha × texel alpha ≥ 0.5 ⟺ texel alpha ≥ 0.5 / 0.8.
+    let cut = mat(0).alpha_map.expect("a cutout");
+    assert_eq!(cut.mode, AlphaMode::Cutout(0.5 / 0.8));
+    assert_eq!(Some(cut.texture), mat(0).albedo_texture);
+    assert!(mat(0).is_opaque());
+    // Texel alphas 1 and 0.25 against 0.625: one of the two texels is open.
+    assert_eq!(mat(0).coverage_opacity(&s.textures), 0.5);
+    // BLEND: the factor is the opacity, the texel multiplies it; the mean alpha is
+    // (255 + 64) / 510.
+    assert_eq!(mat(1).alpha_map.map(|a| a.mode), Some(AlphaMode::Blend));
+    assert_eq!(mat(1).opacity, 0.5);
+    assert!(!mat(1).is_opaque());
+    let mean = 0.5 * (255.0 + 64.0) / 510.0;
+    assert!((mat(1).coverage_opacity(&s.textures) - mean).abs() < 1e-6);
+    // An all-opaque texture needs no test, and OPAQUE ignores alpha.
+    assert!(mat(2).alpha_map.is_none() && mat(3).alpha_map.is_none());
+    assert!(mat(3).is_opaque());
 }

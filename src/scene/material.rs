@@ -41,6 +41,31 @@ pub struct Material {
     /// The MTL PBR maps (`map_Pr`, `map_Pm`, `map_Ke`), indices into
     /// [`super::Scene::textures`].
     pub pbr_maps: PbrMaps,
+    /// Per-texel alpha (glTF base colour alpha, MTL `map_d`), `None` for the constant
+    /// `opacity` alone.
+    pub alpha_map: Option<AlphaMap>,
+}
+
+/// A material's per-texel alpha: the alpha channel of one texture, which is the albedo texture
+/// itself when the material has one (loaders merge an MTL `map_d` into a copy of `map_Kd`), so
+/// that every pass that samples the albedo map reads the alpha with the same lookup.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AlphaMap {
+    /// Index into [`super::Scene::textures`]; equal to [`Material::albedo_texture`] when that
+    /// is set (the invariant [`Material::draw_texture`] relies on).
+    pub texture: usize,
+    pub mode: AlphaMode,
+}
+
+/// How the alpha of an [`AlphaMap`] acts.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum AlphaMode {
+    /// A cutout (glTF `MASK`, MTL `map_d`): the surface exists where the texel's alpha is at
+    /// least the cutoff (in (0, 1]) and is absent elsewhere, in every pass that draws it.
+    Cutout(f32),
+    /// Per-texel opacity (glTF `BLEND`): `opacity` × texel alpha, drawn by the transparency
+    /// path (OIT or hashed) as a constant opacity is.
+    Blend,
 }
 
 /// Texture maps of the GGX parameters and of the emission (MTL PBR extension), read by the
@@ -160,6 +185,7 @@ impl Material {
             ggx: None,
             emission: Vec3::ZERO,
             pbr_maps: PbrMaps::default(),
+            alpha_map: None,
         }
     }
 
@@ -179,9 +205,66 @@ impl Material {
         self.emission.max_element() > 0.0
     }
 
-    /// True when MTL `d` (or `opacity`) is 1: the surface hides what is behind it.
+    /// True when MTL `d` (or `opacity`) is 1 and no texel blends: the surface hides what is
+    /// behind it (where a cutout leaves it).
     pub fn is_opaque(&self) -> bool {
         self.opacity >= 1.0
+            && !matches!(
+                self.alpha_map,
+                Some(AlphaMap {
+                    mode: AlphaMode::Blend,
+                    ..
+                })
+            )
+    }
+
+    /// The cutoff of a cutout alpha map, `None` without one.
+    pub fn alpha_cutoff(&self) -> Option<f32> {
+        match self.alpha_map {
+            Some(AlphaMap {
+                mode: AlphaMode::Cutout(c),
+                ..
+            }) => Some(c),
+            _ => None,
+        }
+    }
+
+    /// The texture the passes bind for a draw of this material: the albedo map, or the alpha
+    /// map of a material without one (whose `flags.x` keeps the constant albedo).
+    pub fn draw_texture(&self) -> Option<usize> {
+        self.albedo_texture.or(self.alpha_map.map(|a| a.texture))
+    }
+
+    /// The fraction of the surface that the binary voxel grid should keep: `opacity`, times
+    /// the fraction of texels whose alpha passes the cutoff (a cutout) or the mean texel alpha
+    /// (blend). A voxel spans many texels, so the voxelizers take this mean through the
+    /// stochastic coverage of `voxel::coverage` rather than testing texels.
+    pub fn coverage_opacity(&self, textures: &[TextureData]) -> f32 {
+        let Some(map) = self.alpha_map else {
+            return self.opacity;
+        };
+        let Some(t) = textures.get(map.texture) else {
+            return self.opacity;
+        };
+        let n = (t.rgba8.len() / 4).max(1) as f64;
+        let mean = match map.mode {
+            AlphaMode::Cutout(c) => {
+                let open = t
+                    .rgba8
+                    .chunks_exact(4)
+                    .filter(|p| f32::from(p[3]) / 255.0 >= c)
+                    .count();
+                open as f64 / n
+            }
+            AlphaMode::Blend => {
+                t.rgba8
+                    .chunks_exact(4)
+                    .map(|p| f64::from(p[3]))
+                    .sum::<f64>()
+                    / (255.0 * n)
+            }
+        };
+        self.opacity * mean as f32
     }
 
     /// The GGX parameters the voxel volumes take: a `map_Pr` / `map_Pm` replaced by the mean

@@ -237,8 +237,8 @@ pub use gi_settings::{
 pub use gltf::{is_gltf_path, LUMENS_PER_WATT, SUPPORTED_REQUIRED_EXTENSIONS};
 pub use light::{scaled, spot_falloff, Light};
 pub use material::{
-    fresnel_schlick, ggx_brdf, ggx_d, ggx_diffuse, ggx_g1, ggx_specular, BumpKind, Ggx, Material,
-    PbrMaps, TextureData, Transparency, DIELECTRIC_F0, TRANSPARENCY_NAMES,
+    fresnel_schlick, ggx_brdf, ggx_d, ggx_diffuse, ggx_g1, ggx_specular, AlphaMap, AlphaMode,
+    BumpKind, Ggx, Material, PbrMaps, TextureData, Transparency, DIELECTRIC_F0, TRANSPARENCY_NAMES,
 };
 pub use mesh::{area_weighted_normals, Aabb, Mesh, SubMesh, BUILTIN_MESH_NAMES};
 pub use object::{
@@ -426,7 +426,13 @@ impl Scene {
 
     /// Some drawn material samples an albedo texture.
     pub fn has_albedo_textures(&self) -> bool {
-        self.used_materials().any(|m| m.albedo_texture.is_some())
+        self.used_materials().any(|m| m.draw_texture().is_some())
+    }
+
+    /// Some drawn material has per-texel alpha ([`Material::alpha_map`]): the passes that
+    /// rasterize materials test it (a specialization constant, so other scenes skip it).
+    pub fn has_alpha_maps(&self) -> bool {
+        self.used_materials().any(|m| m.alpha_map.is_some())
     }
 
     /// Some drawn material has a bump or normal map.

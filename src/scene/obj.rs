@@ -10,7 +10,7 @@ use glam::{Vec2, Vec3};
 
 use super::crease::{obj_smoothing_groups, split_normals, Smoothing};
 use super::error::SceneError;
-use super::material::{BumpKind, Ggx, Material, PbrMaps, TextureData};
+use super::material::{AlphaMap, AlphaMode, BumpKind, Ggx, Material, PbrMaps, TextureData};
 use super::mesh::{area_weighted_normals, builtin_shape, BuiltinMaterial, Mesh, SubMesh};
 
 /// Meshes, materials and textures of a scene under construction.
@@ -361,13 +361,17 @@ impl AssetStore {
             }
         }
         let finite_or = |v: Option<f32>, d: f32| v.filter(|x| x.is_finite()).unwrap_or(d);
-        if m.dissolve_texture.is_some() {
-            log::warn!(
-                "{}: map_d is not supported; the constant d = {} is used (remove map_d or bake it into d)",
-                field("map_d"),
-                finite_or(m.dissolve, 1.0)
-            );
-        }
+        let alpha_map = match texture_file(m.dissolve_texture.as_deref()) {
+            Some(t) => self
+                .texture(&dir.join(t), false, &field("map_d"), false)?
+                .map(|mask| self.merge_alpha_map(mask, albedo_texture)),
+            None => None,
+        };
+        // The merged copy carries the albedo too (AlphaMap's invariant).
+        let albedo_texture = match (albedo_texture, alpha_map) {
+            (Some(_), Some(a)) => Some(a.texture),
+            (t, _) => t,
+        };
         // The PBR extension's maps: roughness and metalness linear, emission sRGB. A missing
         // one is an error naming the MTL file: these maps are new enough that a broken path is
         // a mistake in the scene at hand, not an old download (unlike `map_Kd` above).
@@ -478,11 +482,60 @@ impl AssetStore {
             bump_kind,
             bump_scale: bump_multiplier(m.normal_texture.as_deref()),
             opacity: finite_or(m.dissolve, 1.0).clamp(0.0, 1.0),
+            alpha_map,
         };
         let i = self.materials.len();
         self.materials.push(material);
         self.mtl_materials.insert(key, i);
         Ok(i)
+    }
+
+    /// An MTL `map_d` (texture `mask`) as a cutout at 0.5, the usual reading of a dissolve map
+    /// in the OBJ tools that export foliage (Blender's, tinyobjloader's users): a texel is
+    /// kept where its value is at least one half. The value is the mask's alpha when some texel
+    /// of it is not opaque (an RGBA cutout image), else its first channel (a grey mask, as the
+    /// MTL specification's scalar `map_d`). The passes read the alpha of the draw's texture, so
+    /// with a `map_Kd` the mask becomes the alpha of a copy of it (the mask sampled at the
+    /// nearest texel where the sizes differ), and without one a copy of the mask whose alpha
+    /// holds the value (the material keeps its constant `Kd`).
+    fn merge_alpha_map(&mut self, mask: usize, albedo: Option<usize>) -> AlphaMap {
+        let Some(mask_data) = self.textures.get(mask) else {
+            return AlphaMap {
+                texture: mask,
+                mode: AlphaMode::Cutout(0.5),
+            };
+        };
+        let has_alpha = mask_data.rgba8.chunks_exact(4).any(|p| p[3] < 255);
+        let channel = if has_alpha { 3 } else { 0 };
+        let (mw, mh) = (mask_data.width.max(1), mask_data.height.max(1));
+        let value = |x: u32, y: u32| {
+            mask_data
+                .rgba8
+                .get(((y.min(mh - 1) * mw + x.min(mw - 1)) * 4 + channel) as usize)
+                .copied()
+                .unwrap_or(255)
+        };
+        let base = albedo
+            .and_then(|a| self.textures.get(a))
+            .unwrap_or(mask_data);
+        let (w, h) = (base.width.max(1), base.height.max(1));
+        let mut rgba8 = base.rgba8.clone();
+        for (i, p) in rgba8.chunks_exact_mut(4).enumerate() {
+            let (x, y) = (i as u32 % w, i as u32 / w);
+            // Nearest texel of the mask at the same texture coordinates (texel centres).
+            let mx = ((u64::from(x) * 2 + 1) * u64::from(mw) / (2 * u64::from(w))) as u32;
+            let my = ((u64::from(y) * 2 + 1) * u64::from(mh) / (2 * u64::from(h))) as u32;
+            p[3] = value(mx, my);
+        }
+        let mut path = base.path.clone().into_os_string();
+        path.push(format!("+map_d:{}", mask_data.path.display()));
+        let merged = TextureData::new(path.into(), base.width, base.height, rgba8, base.srgb);
+        let texture = self.textures.len();
+        self.textures.push(merged);
+        AlphaMap {
+            texture,
+            mode: AlphaMode::Cutout(0.5),
+        }
     }
 
     /// Loads a texture once. A missing file is an error when `required` (the MTL PBR maps),

@@ -805,7 +805,10 @@ fn attribute_triangles(scene: &Scene, t_s: f32, maps: MapUse, spacing_m: f32) ->
         let m = object.transform_at(t_s);
         for (si, sub) in mesh.submeshes.iter().enumerate() {
             let material = object.materials.get(si).copied().unwrap_or(sub.material);
-            let opacity = scene.materials.get(material).map_or(1.0, |m| m.opacity);
+            let opacity = scene
+                .materials
+                .get(material)
+                .map_or(1.0, |m| m.coverage_opacity(&scene.textures));
             let [transparency, seed] = Coverage::new(&object.name, opacity).gpu_w();
             let (albedo, emission, lobe, map_ids) = scene.materials.get(material).map_or(
                 (Vec3::splat(0.5), Vec3::ZERO, [0.0; 4], [-1; 4]),

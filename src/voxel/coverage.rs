@@ -29,9 +29,12 @@
 //! moving objects (a scene of its own) seeds them as the whole scene does; objects that share
 //! a name share their pattern.
 //!
-//! What is supported: the material's constant opacity. Texture alpha (`map_d`, the alpha of
-//! `map_Kd`) is not read by any pass (the loader warns about `map_d`), so cut-out leaves are
-//! voxelized whole.
+//! What is supported: the material's constant opacity, and per-texel alpha (glTF base colour
+//! alpha, MTL `map_d`) as its mean over the texture ([`crate::scene::Material::coverage_opacity`]:
+//! the open fraction of a cutout, the mean alpha of a blend map). A voxel spans many texels, so
+//! a leaf texture that is 40% open keeps 40% of the leaves' voxels, at hashed places rather than
+//! the texture's holes; the rasterizing passes (G-buffer, shadow and light maps) test each
+//! texel.
 //!
 //! The GPU twin is `glsl/include/voxel_coverage.glsl`; both compute the same integer hash, so
 //! their decisions are identical.
@@ -136,7 +139,10 @@ pub fn object_coverage(scene: &Scene, object: &Object, mesh: usize) -> Vec<Cover
     let mut out = vec![Coverage::OPAQUE; mesh.indices.len() / 3];
     for (si, sub) in mesh.submeshes.iter().enumerate() {
         let material = object.materials.get(si).copied().unwrap_or(sub.material);
-        let opacity = scene.materials.get(material).map_or(1.0, |m| m.opacity);
+        let opacity = scene
+            .materials
+            .get(material)
+            .map_or(1.0, |m| m.coverage_opacity(&scene.textures));
         let c = Coverage::new(&object.name, opacity);
         let first = sub.first_index as usize / 3;
         let count = sub.index_count as usize / 3;
