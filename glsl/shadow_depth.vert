@@ -7,6 +7,7 @@ layout(push_constant) uniform Push {
     mat4 model;
     uint view;
     uint material;
+    uint layer_base;
 } pc;
 
 void main() {
