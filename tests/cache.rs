@@ -91,7 +91,10 @@ fn cached_sequences_match_uncached_across_light_and_camera_changes() {
         let run =
             |cache| render_sequence(&ctx, &scene, &settings(cache, gi), 2, &then).expect("renders");
         let (cached, uncached) = (run(true), run(false));
-        assert_identical(&[cached.warm.clone()], &[uncached.warm.clone()]);
+        assert_identical(
+            std::slice::from_ref(&cached.warm),
+            std::slice::from_ref(&uncached.warm),
+        );
         assert_identical(&cached.frames, &uncached.frames);
         // The light changes must show: otherwise this test could not tell a stale map.
         assert_ne!(
