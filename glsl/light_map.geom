@@ -20,6 +20,7 @@ layout(push_constant) uniform Push {
     mat4 model;
     uint view;
     uint material;
+    uint layer_base;
 } pc;
 
 layout(location = 0) in vec3 in_normal[];

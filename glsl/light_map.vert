@@ -9,6 +9,7 @@ layout(push_constant) uniform Push {
     mat4 model;
     uint view;
     uint material;
+    uint layer_base;
 } pc;
 
 layout(location = 0) out vec3 out_normal;

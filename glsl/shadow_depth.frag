@@ -22,6 +22,7 @@ layout(push_constant) uniform Push {
     mat4 model;
     uint view;
     uint material;
+    uint layer_base;
 } pc;
 
 // World position (shadow_depth.geom, non-paraboloid views).

@@ -18,6 +18,9 @@ layout(push_constant) uniform Push {
     mat4 model;
     uint view;
     uint material;
+    // The first layer of the attachment: a pass that draws one view into one layer of the
+    // array (a cached shadow map) has gl_Layer = view - layer_base.
+    uint layer_base;
 } pc;
 
 // Paraboloid only: uv of the fragment (exact, as w = 1), the triangle's vertices in the
@@ -37,7 +40,7 @@ layout(location = 7) flat out vec4 out_t01;
 void emit_corner(vec2 uv, GpuShadowView sv, vec3 tri[3]) {
     // Depth comes from the fragment shader (gl_FragDepth); the box's own is irrelevant.
     gl_Position = vec4(uv, 0.0, 1.0);
-    gl_Layer = int(pc.view);
+    gl_Layer = int(pc.view - pc.layer_base);
     out_uv = uv;
     out_v0 = vec4(tri[0], 1.0);
     out_v1 = tri[1];
@@ -54,7 +57,7 @@ void main() {
     if (sv.params.y < 1.5) {
         for (int i = 0; i < 3; ++i) {
             gl_Position = sv.view_proj * gl_in[i].gl_Position;
-            gl_Layer = int(pc.view);
+            gl_Layer = int(pc.view - pc.layer_base);
             out_uv = vec2(0.0);
             out_v0 = vec4(0.0);
             out_v1 = vec3(0.0);

@@ -8,6 +8,7 @@ layout(push_constant) uniform Push {
     mat4 model;
     uint view;
     uint material;
+    uint layer_base;
 } pc;
 
 // Texture coordinates (OBJ's v up), read by the fragment shaders only in scenes with alpha

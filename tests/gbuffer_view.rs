@@ -27,7 +27,12 @@ fn render(scene: &Scene, view: DebugView) -> RenderOutput {
     };
     let out = render_image(&ctx, scene, &settings).expect("renders the G-buffer view");
     common::assert_no_validation_messages(&ctx);
-    let live = |name: &str| out.live_passes.iter().any(|p| p == name);
+    // The cached shadow maps are drawn per layer, `shadow_depth[v]`.
+    let live = |name: &str| {
+        out.live_passes
+            .iter()
+            .any(|p| p == name || p.starts_with(&format!("{name}[")))
+    };
     assert!(
         live("gbuffer_view") && live("gbuffer"),
         "{:?}",

@@ -576,6 +576,7 @@ fn shadow_controls(ui: &mut egui::Ui, shadow: &mut ShadowSettings) {
                 }
             }
         });
+    key_checkbox(ui, shadow, "shadow.cache", "cache shadow and light maps");
     key_slider(
         ui,
         shadow,

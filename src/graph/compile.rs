@@ -282,13 +282,16 @@ impl RenderGraph {
     }
 
     /// Walks passes from last to first; a pass lives if it writes something needed.
-    /// Outputs: imported resources (persistent, seen by the next frame or the host) and
-    /// resources marked with `mark_output`.
+    /// Outputs: imported resources (persistent, seen by the next frame or the host) but for
+    /// the graph's cached images, and resources marked with `mark_output`.
     fn cull(&self) -> Result<(Vec<usize>, Vec<usize>), GraphError> {
         let mut needed: Vec<bool> = self
             .resources
             .iter()
-            .map(|r| r.output || matches!(r.origin, Origin::Imported { .. }))
+            // A cached image is the graph's own: kept only for the passes that read it.
+            .map(|r| {
+                r.output || (matches!(r.origin, Origin::Imported { .. }) && r.caches.is_empty())
+            })
             .collect();
         if !needed.iter().any(|&n| n) {
             return Err(GraphError::NoOutput);

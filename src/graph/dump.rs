@@ -144,12 +144,14 @@ impl CompiledGraph {
 }
 
 /// Marks a pass declared with `.when()`: it records only in the frame slots its condition
-/// leaves open (its barriers and timestamps are emitted in every frame).
+/// leaves open (its barriers and timestamps are emitted in every frame); a pass declared with
+/// `.cached()` records only in frames where its cache's key changed.
 fn conditional_note(graph: &RenderGraph, pass: usize) -> &'static str {
-    if graph.passes[pass].condition.is_some() {
-        " (conditional)"
-    } else {
-        ""
+    let p = &graph.passes[pass];
+    match (&p.cache, &p.condition) {
+        (Some(_), _) => " (cached)",
+        (None, Some(_)) => " (conditional)",
+        (None, None) => "",
     }
 }
 
@@ -172,6 +174,20 @@ mod tests {
             .read(a, Access::TransferRead)
             .write(out, Access::TransferWrite)
             .record(|_| {});
+        let cache = crate::graph::Cache::new("baked");
+        let baked = g.create_cached_image(
+            ImageDesc::new_2d("baked", vk::Format::R8G8B8A8_UNORM, 8, 8),
+            Access::Sampled(Shader::Compute),
+            &[cache.clone()],
+        );
+        g.add_pass("bake")
+            .cached(Some(&cache))
+            .write(baked, Access::StorageWrite(Shader::Compute))
+            .record(|_| {});
+        g.add_pass("use_baked")
+            .read(baked, Access::Sampled(Shader::Compute))
+            .write(out, Access::TransferWrite)
+            .record(|_| {});
         let c = g.compile(&EstimateOracle).expect("compiles");
         let text = c.dump_text(&g);
         for word in [
@@ -185,6 +201,7 @@ mod tests {
             assert!(text.contains(word), "text dump lacks {word}:\n{text}");
         }
         assert!(text.contains("] copy (conditional)"), "{text}");
+        assert!(text.contains("] bake (cached)"), "{text}");
         assert!(!text.contains("draw (conditional)"), "{text}");
         let dot = c.dump_dot(&g);
         assert!(

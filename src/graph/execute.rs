@@ -331,6 +331,9 @@ pub struct GraphExecutor {
     graph: RenderGraph,
     compiled: CompiledGraph,
     slots: Vec<Slot>,
+    /// The cached images ([`RenderGraph::create_cached_image`]) by resource index, shared by
+    /// every slot. After `slots`: the slots only copy their handles.
+    cached: Vec<(usize, Image)>,
 }
 
 /// Memory requirements from the device, without creating anything.
@@ -391,6 +394,40 @@ pub fn transient_arenas(
     Ok(compiled.arenas)
 }
 
+/// The cached images ([`RenderGraph::create_cached_image`]) that [`GraphExecutor::new`]
+/// would create for `graph` (once, not per slot): their names and device sizes in bytes, for
+/// checking memory before anything is allocated.
+pub fn cached_image_sizes(
+    ctx: &Context,
+    graph: &RenderGraph,
+) -> Result<Vec<(String, u64)>, GraphError> {
+    let compiled = graph.compile(&super::compile::EstimateOracle)?;
+    let mut used = vec![false; graph.resources.len()];
+    for &p in &compiled.order {
+        for &(id, ..) in &graph.passes[p].accesses {
+            used[id.0 as usize] = true;
+        }
+    }
+    Ok(graph
+        .resources
+        .iter()
+        .enumerate()
+        .filter(|&(i, r)| !r.caches.is_empty() && used[i])
+        .filter_map(|(i, r)| match &r.kind {
+            ResourceKind::Image(desc) => {
+                let mut d = desc.clone();
+                d.usage |= compiled.image_usage[i];
+                let bytes = ctx
+                    .image_requirements(&d)
+                    .size
+                    .max(super::texel_bytes_of(&d));
+                Some((r.name.clone(), bytes))
+            }
+            ResourceKind::Buffer { .. } => None,
+        })
+        .collect())
+}
+
 impl GraphExecutor {
     /// Compiles `graph` against the device and creates its transients for `frames_in_flight`
     /// slots (each slot has its own arenas, so frames in flight never share transients).
@@ -412,7 +449,11 @@ impl GraphExecutor {
             graph,
             compiled,
             slots: Vec::new(),
+            cached: Vec::new(),
         };
+        exec.cached = exec
+            .create_cached(ctx)
+            .map_err(|e| GraphError::Gpu(e.to_string()))?;
         for s in 0..frames_in_flight.max(1) {
             let slot = exec
                 .create_slot(ctx, s)
@@ -420,6 +461,37 @@ impl GraphExecutor {
             exec.slots.push(slot);
         }
         Ok(exec)
+    }
+
+    /// Creates the cached images that a live pass uses, in their resting layout, and
+    /// invalidates their caches: new images hold nothing yet.
+    fn create_cached(&self, ctx: &Context) -> Result<Vec<(usize, Image)>, crate::vk::VkError> {
+        let mut used = vec![false; self.graph.resources.len()];
+        for &p in &self.compiled.order {
+            for &(id, ..) in &self.graph.passes[p].accesses {
+                used[id.0 as usize] = true;
+            }
+        }
+        let mut images = Vec::new();
+        for (i, r) in self.graph.resources.iter().enumerate() {
+            let (ResourceKind::Image(desc), Origin::Imported { state, .. }) = (&r.kind, &r.origin)
+            else {
+                continue;
+            };
+            if r.caches.is_empty() {
+                continue;
+            }
+            for cache in &r.caches {
+                cache.invalidate();
+            }
+            if !used[i] {
+                continue;
+            }
+            let mut d = desc.clone();
+            d.usage |= self.compiled.image_usage[i];
+            images.push((i, ctx.create_image_in_layout(&d, state.info().layout)?));
+        }
+        Ok(images)
     }
 
     fn create_slot(&self, ctx: &Context, index: usize) -> Result<Slot, crate::vk::VkError> {
@@ -500,6 +572,21 @@ impl GraphExecutor {
                         }
                     };
                     Some(created?)
+                }
+                // Cached: the executor's image, the same in every slot.
+                (Origin::Imported { .. }, ResourceKind::Image(desc)) if !r.caches.is_empty() => {
+                    self.cached
+                        .iter()
+                        .find(|(index, _)| *index == i)
+                        .map(|(_, img)| {
+                            GpuResource::Image(GpuImage {
+                                raw: img.raw,
+                                view: img.view,
+                                mip_views: img.mip_views.clone(),
+                                layer_views: img.layer_views.clone(),
+                                desc: desc.clone(),
+                            })
+                        })
                 }
                 // Imported by description only: compile-only graphs cannot execute.
                 _ => None,

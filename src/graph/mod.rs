@@ -28,6 +28,7 @@
 mod access;
 mod bind;
 pub mod buddy;
+mod cache;
 mod compile;
 mod dump;
 mod execute;
@@ -35,11 +36,14 @@ mod oneshot;
 
 pub use access::{Access, AccessInfo, Shader, Subresource, SubresourceSel};
 pub use bind::Load;
+pub use cache::{Cache, KeyHasher};
 pub use compile::{
     texel_bytes, texel_bytes_of, Arena, Barrier, CompiledGraph, EstimateOracle, MemoryOracle,
     MemoryRequirements, MemoryStats, Placement, ResourceDeclView,
 };
-pub use execute::{transient_arenas, GpuBuffer, GpuImage, GraphExecutor, PassContext};
+pub use execute::{
+    cached_image_sizes, transient_arenas, GpuBuffer, GpuImage, GraphExecutor, PassContext,
+};
 pub use oneshot::{add_readback, readback_buffer, run_frames, run_once, OneShotError};
 
 use crate::vk::{vk, Bindable, Buffer, Image, ImageDesc, ShaderInterface};
@@ -219,6 +223,9 @@ pub(crate) struct ResourceDecl {
     /// A view of one layer of another image ([`RenderGraph::layer`]): (image, layer). It owns
     /// no memory; every access declared on it is an access of that layer of the image.
     pub layer_of: Option<(ResourceId, u32)>,
+    /// A persistent image the executor owns and keeps while these validities hold
+    /// ([`RenderGraph::create_cached_image`]; empty: not cached).
+    pub caches: Vec<std::sync::Arc<Cache>>,
 }
 
 impl ResourceDecl {
@@ -286,6 +293,9 @@ pub(crate) struct PassDecl {
     pub view_mask: u32,
     /// Records only in the slots this leaves open (`None`: always).
     pub condition: Option<std::sync::Arc<SlotCondition>>,
+    /// The cache whose images the pass produces ([`PassBuilder::cached`]; its condition is
+    /// `condition`).
+    pub cache: Option<std::sync::Arc<Cache>>,
 }
 
 /// The declared frame.
@@ -310,6 +320,7 @@ impl RenderGraph {
             output: false,
             slot_window: None,
             layer_of: None,
+            caches: Vec::new(),
         });
         ResourceId(self.resources.len() as u32 - 1)
     }
@@ -414,6 +425,22 @@ impl RenderGraph {
         h
     }
 
+    /// A persistent image that the graph's executor creates and owns (one for every frame
+    /// slot, never aliased), in `state` before and after each frame like an imported one,
+    /// whose contents stay valid while `caches` hold: the passes that write it declare
+    /// [`PassBuilder::cached`] with one of them (one cache for the whole image, or one per
+    /// part, such as a layer a pass of its own writes; see `graph/cache.rs`).
+    pub fn create_cached_image(
+        &mut self,
+        desc: ImageDesc,
+        state: Access,
+        caches: &[std::sync::Arc<Cache>],
+    ) -> ImageHandle {
+        let h = self.import_image_desc(desc, state);
+        self.resources[h.0 .0 as usize].caches = caches.to_vec();
+        h
+    }
+
     /// Imports an image by description only (no GPU handle): for compiling without a GPU.
     pub fn import_image_desc(&mut self, desc: ImageDesc, state: Access) -> ImageHandle {
         let name = desc.name.clone();
@@ -473,6 +500,7 @@ impl RenderGraph {
             bindings: Vec::new(),
             attachments: Vec::new(),
             condition: None,
+            cache: None,
             view_mask: 0,
         });
         let index = self.passes.len() - 1;
@@ -679,6 +707,13 @@ impl PassBuilder<'_> {
     pub fn when(self, condition: Option<std::sync::Arc<SlotCondition>>) -> Self {
         self.graph.passes[self.index].condition = condition;
         self
+    }
+    /// Records the pass only in the frame slots where `cache` is invalid: it produces the
+    /// cache's images ([`RenderGraph::create_cached_image`]), and the host validates the
+    /// cache with the frame's key before recording ([`Cache::validate`]). `None`: always.
+    pub fn cached(self, cache: Option<&std::sync::Arc<Cache>>) -> Self {
+        self.graph.passes[self.index].cache = cache.cloned();
+        self.when(cache.map(|c| c.condition()))
     }
     /// Hands over the recording closure; ends the declaration.
     pub fn record(self, f: impl Fn(&PassContext) + 'static) {

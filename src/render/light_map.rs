@@ -10,10 +10,14 @@
 //! the sampler's mip selection from the texel's own footprint comes with them. Other scenes
 //! bind the placeholder and never sample (a specialization constant).
 
-use super::scene_gpu::{record_shadow_views, Draw, GpuShadowViewPush, SceneInputs};
+use super::gpu::GpuFrame;
+use super::scene_gpu::{
+    hash_view_draws, record_shadow_views, Draw, DrawLists, GpuShadowViewPush, SceneInputs,
+};
 use super::DEPTH;
-use crate::graph::{Access, ImageHandle, Load, RenderGraph, Shader};
+use crate::graph::{Access, Cache, ImageHandle, KeyHasher, Load, RenderGraph, Shader};
 use crate::vk::{vk, Context, GraphicsPipeline, GraphicsPipelineDesc, ImageDesc, VkError};
+use std::sync::Arc;
 
 /// Reflected radiance in the light maps. f32, not f16: light intensities from 1e-6 to 1e6 W/sr
 /// (the extremes `tests/extremes.rs` renders) put it outside f16's range (max 65504, normal
@@ -34,6 +38,9 @@ pub struct LightMapPass {
     pipeline: GraphicsPipeline,
     /// The texels sample the draws' albedo textures and metalness maps.
     has_maps: bool,
+    /// The maps' validity while `shadow.cache` is on (`None`: rendered every frame, into
+    /// transients).
+    cache: Option<Arc<Cache>>,
 }
 
 impl LightMapPass {
@@ -44,13 +51,13 @@ impl LightMapPass {
     /// `has_maps`: some material has an albedo texture, or a GGX one a metalness map
     /// ([`Self::scene_has_maps`]), which the texels sample. `has_alpha_maps`: some material
     /// has per-texel alpha (`scene::AlphaMap`, implies `has_maps`), tested per texel.
+    /// `cached`: keep the maps while their lights, views and draws stay (`shadow.cache`).
     pub fn new(
         ctx: &Context,
         has_dissolve: bool,
         has_ggx: bool,
         area_lights: bool,
-        has_maps: bool,
-        has_alpha_maps: bool,
+        (has_maps, has_alpha_maps, cached): (bool, bool, bool),
     ) -> Result<Self, VkError> {
         let pipeline = ctx.graphics_pipeline(&GraphicsPipelineDesc {
             vertex: "light_map.vert".into(),
@@ -79,7 +86,30 @@ impl LightMapPass {
         Ok(Self {
             pipeline,
             has_maps: has_maps || has_alpha_maps,
+            cache: cached.then(|| Cache::new("light maps")),
         })
+    }
+
+    /// Before recording frame slot `slot`: the maps are rendered again only when what they
+    /// are drawn from changed: the lights (a texel's reflected radiance is lit by every light
+    /// of the frame), the lights' own views, and the draws culled into each (the cascades
+    /// have no light maps). Materials and textures are fixed for the renderer's life.
+    pub fn validate(&self, slot: usize, frame: &GpuFrame, draws: &DrawLists) {
+        let Some(cache) = &self.cache else { return };
+        let lights = (frame.counts[0] as usize).min(frame.lights.len());
+        let views = draws.shadow.len().min(frame.shadow_views.len());
+        let mut key = KeyHasher::default();
+        key.u64(lights as u64)
+            .bytes(bytemuck::cast_slice(&frame.lights[..lights]))
+            .u64(views as u64)
+            .bytes(bytemuck::cast_slice(&frame.shadow_views[..views]));
+        hash_view_draws(&mut key, draws.shadow.iter());
+        cache.validate(slot, key.finish());
+    }
+
+    /// The maps' validity (`None`: `shadow.cache` is off).
+    pub fn cache(&self) -> Option<&Arc<Cache>> {
+        self.cache.as_ref()
     }
 
     /// Whether the texels of `scene` sample maps: a drawn material has an albedo texture, or
@@ -102,15 +132,23 @@ impl LightMapPass {
     ) -> LightMaps {
         let res = resolution.max(1);
         let layers = views.max(1);
-        let mut layer = |name: &str, format| {
-            g.create_image(ImageDesc::new_2d(name, format, res, res).with_layers(layers))
+        let desc =
+            |name: &str, format| ImageDesc::new_2d(name, format, res, res).with_layers(layers);
+        // The GI passes sample the maps; the depth buffer lives only inside the pass.
+        let mut kept = |name: &str, format| match &self.cache {
+            Some(c) => g.create_cached_image(
+                desc(name, format),
+                Access::Sampled(Shader::Compute),
+                std::slice::from_ref(c),
+            ),
+            None => g.create_image(desc(name, format)),
         };
         let maps = LightMaps {
-            radiance: layer("light map radiance", LIGHT_MAP_RADIANCE),
-            position: layer("light map position", LIGHT_MAP_POSITION),
-            normal: layer("light map normal", LIGHT_MAP_NORMAL),
+            radiance: kept("light map radiance", LIGHT_MAP_RADIANCE),
+            position: kept("light map position", LIGHT_MAP_POSITION),
+            normal: kept("light map normal", LIGHT_MAP_NORMAL),
         };
-        let depth = layer("light map depth", DEPTH);
+        let depth = g.create_image(desc("light map depth", DEPTH));
         let pipe = *self.pipeline;
         let (vertices, indices) = (scene.vertices, scene.indices);
         let draws = scene.draws.clone();
@@ -118,6 +156,7 @@ impl LightMapPass {
         let (sampler, placeholder) = (scene.texture_sampler, scene.placeholder());
         let pass = g
             .add_pass("light_map")
+            .cached(self.cache.as_ref())
             .pipeline(&pipe)
             .bind(0, scene.frame, Access::StorageRead(Shader::Graphics))
             .bind(1, scene.materials, Access::StorageRead(Shader::Fragment))

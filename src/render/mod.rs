@@ -438,8 +438,16 @@ impl Renderer {
     /// the graph's arenas, one set per frame in flight) cannot fit beside what is allocated
     /// now, before the executor allocates them.
     fn check_transient_memory(&self, ctx: &Context) -> Result<(), RenderError> {
-        let arenas = crate::graph::transient_arenas(ctx, &self.graph())?;
+        let graph = self.graph();
+        let arenas = crate::graph::transient_arenas(ctx, &graph)?;
         let slots = crate::vk::MAX_FRAMES_IN_FLIGHT;
+        // The cached shadow and light maps: once, shared by the slots.
+        let cached = crate::graph::cached_image_sizes(ctx, &graph)?;
+        let cached = cached.into_iter().map(|(name, bytes)| memory::MemoryNeed {
+            name,
+            bytes,
+            is_buffer: false,
+        });
         let needs: Vec<_> = (0..slots)
             .flat_map(|s| {
                 arenas
@@ -451,6 +459,7 @@ impl Renderer {
                         is_buffer: false,
                     })
             })
+            .chain(cached)
             .collect();
         memory::check_fits(
             ctx,
@@ -519,6 +528,7 @@ impl Renderer {
             paraboloid,
             scene.has_transparency(),
             scene.has_alpha_maps(),
+            settings.shadow.cache,
         )?;
         let features = GbufferFeatures {
             phong: has_phong,
@@ -654,8 +664,11 @@ impl Renderer {
                         scene.has_transparency(),
                         scene.has_ggx(),
                         settings.gi.method.spec().reads_area_light_maps,
-                        LightMapPass::scene_has_maps(scene),
-                        scene.has_alpha_maps(),
+                        (
+                            LightMapPass::scene_has_maps(scene),
+                            scene.has_alpha_maps(),
+                            settings.shadow.cache,
+                        ),
                     )
                 })
                 .transpose()?;
@@ -870,6 +883,7 @@ impl Renderer {
         if let Some(pass) = &mut self.voxel_debug {
             pass.update(self.settings.time_s, slot);
         }
+        self.validate_caches(slot);
         // With TAA every frame renders with its own sub-pixel jitter; `frame_data` keeps the
         // un-jittered camera (what `prepare` compares to restart accumulation).
         let view_proj = glam::Mat4::from_cols_array(&self.frame_data.view_proj);
@@ -888,6 +902,34 @@ impl Renderer {
             let right = st.jittered_right_frame(motion);
             self.scene.write_frame_right(slot, &right);
         }
+    }
+
+    /// Opens the cached light-space passes of slot `slot` where their inputs changed since
+    /// they were last rendered (`graph::Cache`; nothing while `shadow.cache` is off).
+    fn validate_caches(&self, slot: usize) {
+        let Ok(draws) = self.scene.draws.read() else {
+            return;
+        };
+        let layers = self.shadow_view_count + self.cascade_view_capacity;
+        self.shadow_depth
+            .validate(slot, &self.frame_data, &draws, layers);
+        if let Some((_, Some(light_map))) = &self.gi {
+            light_map.validate(slot, &self.frame_data, &draws);
+        }
+    }
+
+    /// The caches of the light-space passes, by name (`shadow map V` per layer, `light
+    /// maps`): how often each rendered and was reused (empty while `shadow.cache` is off).
+    pub fn cache_counts(&self) -> Vec<(String, (u64, u64))> {
+        let layers = self.shadow_view_count + self.cascade_view_capacity;
+        let light_map = self.gi.as_ref().and_then(|(_, lm)| lm.as_ref());
+        let light_map = light_map.and_then(|lm| lm.cache());
+        self.shadow_depth
+            .caches(layers)
+            .iter()
+            .chain(light_map)
+            .map(|c| (c.name().to_owned(), c.counts()))
+            .collect()
     }
 
     /// Frames the indirect light has accumulated since the last reset (`None`: GI off).

@@ -385,20 +385,23 @@ fn write_slot(buffer: &mut Buffer, stride: u64, slot: usize, frame: &GpuFrame) {
 
 /// Push constants of the passes that draw every shadow view's draw list (`shadow_depth.vert`,
 /// `light_map.vert`): the model matrix, the shadow view the geometry shader routes the draw
-/// to, and the material (dissolve coverage).
+/// to, the material (dissolve coverage), and the attachment's first layer (a pass that draws
+/// one view into one layer of the array, [`record_one_view`]; 0 otherwise).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct GpuShadowViewPush {
     pub model: [f32; 16],
     pub view: u32,
     pub material: u32,
-    pub _pad: [u32; 2],
+    pub layer_base: u32,
+    pub _pad: u32,
 }
 
 crate::push_constants!(GpuShadowViewPush {
     model,
     view,
     material,
+    layer_base,
     _pad
 });
 
@@ -427,6 +430,25 @@ pub fn record_shadow_and_cascade_views(
     record_views(ctx, pipe, scene, draws, true, per_draw);
 }
 
+/// Hashes into `key` what [`record_shadow_views`] draws of `lists` (per view: its draws'
+/// ranges, model matrices and materials), so that a cache of the views' maps changes its key
+/// exactly when the recorded draws change.
+pub fn hash_view_draws<'a>(
+    key: &mut crate::graph::KeyHasher,
+    lists: impl Iterator<Item = &'a Vec<Draw>>,
+) {
+    for list in lists {
+        key.u64(list.len() as u64);
+        for d in list {
+            key.bytes(bytemuck::cast_slice(&d.model.to_cols_array()))
+                .u64(u64::from(d.first_index))
+                .u64(u64::from(d.index_count))
+                .u64(d.vertex_offset as u64)
+                .u64(u64::from(d.material));
+        }
+    }
+}
+
 fn record_views(
     ctx: &PassContext,
     pipe: &PipelineHandle,
@@ -442,18 +464,7 @@ fn record_views(
     if let Ok(lists) = draws.read() {
         let cascade_lists = if cascades { &lists.cascades[..] } else { &[] };
         for (v, list) in lists.shadow.iter().chain(cascade_lists).enumerate() {
-            for d in list {
-                per_draw(d);
-                let push = GpuShadowViewPush {
-                    model: d.model.to_cols_array(),
-                    view: v as u32,
-                    material: d.material,
-                    _pad: [0; 2],
-                };
-                ctx.cmd.push_constants(pipe, bytemuck::bytes_of(&push));
-                ctx.cmd
-                    .draw_indexed(d.index_count, d.first_index, d.vertex_offset);
-            }
+            draw_view(ctx, pipe, list, (v as u32, 0), per_draw);
         }
     }
     ctx.cmd.end_rendering();
@@ -474,6 +485,58 @@ pub fn alpha_map_flag(m: &crate::scene::Material) -> u32 {
             mode: AlphaMode::Blend,
             ..
         }) => (-1.0f32).to_bits(),
+    }
+}
+
+/// Records a pass that draws shadow view `view`'s list (a light's own view, then the cascades
+/// after them, as [`record_shadow_and_cascade_views`] numbers them) into its declared
+/// attachment, one layer of the shadow array viewed alone (so its draws land in layer 0 of
+/// the attachment). A view the frame does not use (a dropped cascade) is only cleared.
+pub fn record_one_view(
+    ctx: &PassContext,
+    pipe: &PipelineHandle,
+    scene: (BufferHandle, BufferHandle),
+    draws: &RwLock<DrawLists>,
+    view: u32,
+    per_draw: &mut dyn FnMut(&Draw),
+) {
+    ctx.begin_rendering();
+    ctx.bind(pipe);
+    ctx.bind_vertex_buffer(scene.0);
+    ctx.bind_index_buffer(scene.1);
+    if let Ok(lists) = draws.read() {
+        if let Some(list) = lists
+            .shadow
+            .iter()
+            .chain(&lists.cascades)
+            .nth(view as usize)
+        {
+            draw_view(ctx, pipe, list, (view, view), per_draw);
+        }
+    }
+    ctx.cmd.end_rendering();
+}
+
+/// Draws `list` into shadow view `view`, at attachment layer `view - layer_base`.
+fn draw_view(
+    ctx: &PassContext,
+    pipe: &PipelineHandle,
+    list: &[Draw],
+    (view, layer_base): (u32, u32),
+    per_draw: &mut dyn FnMut(&Draw),
+) {
+    for d in list {
+        per_draw(d);
+        let push = GpuShadowViewPush {
+            model: d.model.to_cols_array(),
+            view,
+            material: d.material,
+            layer_base,
+            _pad: 0,
+        };
+        ctx.cmd.push_constants(pipe, bytemuck::bytes_of(&push));
+        ctx.cmd
+            .draw_indexed(d.index_count, d.first_index, d.vertex_offset);
     }
 }
 

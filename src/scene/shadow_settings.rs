@@ -3,7 +3,7 @@
 //! re-exports them) and the area lights' sampling. The `[shadow]` keys are declared once, in
 //! [`ShadowSettings::keys`]'s table (`scene::schema`).
 
-use super::schema::{choices, flag, Key, Kind, Settings, Value};
+use super::schema::{choices, flag, Flag, FlagStyle, Key, Kind, Settings, Value};
 
 /// How point lights are shadowed.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
@@ -68,6 +68,10 @@ pub struct ShadowSettings {
     /// `--shadow-resolution auto`: [`Self::resolution`] is picked when a renderer is created,
     /// from a probe frame of the shadow-texel view (`render::shadow_texels`).
     pub auto_resolution: bool,
+    /// Keep the light-space passes' results (shadow maps, light maps) from frame to frame
+    /// and render them again only when their lights, views or drawn geometry change
+    /// (`graph::Cache`); off (`--no-cache`) renders them every frame, to measure the two.
+    pub cache: bool,
 }
 
 impl Default for ShadowSettings {
@@ -85,6 +89,7 @@ impl Default for ShadowSettings {
             cascade_lambda: 0.5,
             cascade_snap: true,
             auto_resolution: false,
+            cache: true,
         }
     }
 }
@@ -105,7 +110,7 @@ use range::*;
 
 /// Every `[shadow]` key: the scene file's key, the path `--set` and the panel use, its range,
 /// its flag and its field.
-static SHADOW_KEYS: [Key<ShadowSettings>; 11] = [
+static SHADOW_KEYS: [Key<ShadowSettings>; 12] = [
     key!("shadow.resolution",
     Kind::CountOr(SHADOW_RESOLUTION, AUTO_RESOLUTION_NAME,
         "(the smallest power of two that keeps the shadow texel under a pixel)"),
@@ -192,6 +197,18 @@ static SHADOW_KEYS: [Key<ShadowSettings>; 11] = [
         "Soft shadows of area lights: S sampled sub-lights (converges) or PCSS for rectangles \
          (one shadow view each; spheres stay sampled)",
         flag("area-shadows", "AREA_SHADOWS"), choice AreaShadow, area_technique),
+    key!(
+        "shadow.cache",
+        Kind::Bool,
+        "Keep shadow maps and light maps from frame to frame, rendered again only when their \
+         lights, views or the geometry in them change; the flag renders them every frame",
+        Some(Flag {
+            long: "no-cache",
+            value_name: "",
+            style: FlagStyle::SetsFalse
+        }),
+        cache
+    ),
 ];
 
 impl Settings for ShadowSettings {

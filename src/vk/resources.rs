@@ -494,6 +494,43 @@ impl Context {
         })
     }
 
+    /// Creates an image and moves it from UNDEFINED to `layout` without touching its
+    /// contents: a render graph's cached image, which imports it in a resting state with that
+    /// layout and renders it before any read (its cache starts invalid). Waits.
+    pub fn create_image_in_layout(
+        &self,
+        desc: &ImageDesc,
+        layout: vk::ImageLayout,
+    ) -> Result<Image, VkError> {
+        let image = self.create_image(desc)?;
+        let range = vk::ImageSubresourceRange {
+            aspect_mask: desc.aspect(),
+            base_mip_level: 0,
+            level_count: desc.mip_levels,
+            base_array_layer: 0,
+            layer_count: desc.layers,
+        };
+        let to_layout = [vk::ImageMemoryBarrier2::builder()
+            .src_stage_mask(vk::PipelineStageFlags2::NONE)
+            .src_access_mask(vk::AccessFlags2::NONE)
+            .dst_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
+            .dst_access_mask(vk::AccessFlags2::MEMORY_READ | vk::AccessFlags2::MEMORY_WRITE)
+            .old_layout(vk::ImageLayout::UNDEFINED)
+            .new_layout(layout)
+            .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+            .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+            .image(image.raw)
+            .subresource_range(range)
+            .build()];
+        self.one_time_submit(|device, cmd| {
+            let dep = vk::DependencyInfo::builder().image_memory_barriers(&to_layout);
+            // SAFETY: cmd is recording; the image is live and unused by any pending work
+            // (it was just created); the range covers the whole image.
+            unsafe { device.cmd_pipeline_barrier2(cmd, &dep) };
+        })?;
+        Ok(image)
+    }
+
     /// Fills mip 0 (all layers) of `image` with `data` (tightly packed texels) and leaves it
     /// in `layout_after`; see [`Context::write_image_levels`].
     pub fn write_image(
