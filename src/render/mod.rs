@@ -435,7 +435,7 @@ impl Renderer {
         if r.pre_exposure.k != 0 {
             log::info!(
                 "half-float radiance is stored pre-exposed by 2^{} (the scene's brightest \
-                 source is outside 2^-8 to 2^8)",
+                 source is outside 2^-14 to 2^14)",
                 -r.pre_exposure.k
             );
         }

@@ -12,15 +12,16 @@
 //! brightest source lies in [`NEUTRAL_BAND`] — the multiplications by 1 change no bit.
 //!
 //! `k` is chosen once per scene from its brightest source ([`brightest_source`]), so that it
-//! lands in [1, 2): 2^15 of headroom for sums of fragments and for lit values above the
+//! lands in [1, 2) outside [`NEUTRAL_BAND`]: 2^15 of headroom for sums of fragments and for lit values above the
 //! sources, and 2^14 below it before half floats lose precision (subnormals).
 
 use super::{Environment, Light, Scene};
 
-/// The brightest source (max channel) for which `k` stays 0, and the dimmest: every scene in
-/// `assets/` has its brightest source within (at most 50 W/(m²·sr)), and so renders as before.
-/// Above 2^8 a voxel's sum of fragments (at most a few hundred) could pass 65,504.
-pub const NEUTRAL_BAND: (f32, f32) = (1.0 / 256.0, 256.0);
+/// The dimmest and the brightest source (max channel) for which `k` stays 0: half floats'
+/// normal range, less 2^2 of headroom at the top for the voxelizer's sums of a few fragments
+/// per voxel. Every scene in `assets/scenes` lies within (the brightest source is the
+/// 16,000 W/(m²·sr) sphere light of `sponza_authors`), and so renders bit for bit as before.
+pub const NEUTRAL_BAND: (f32, f32) = (1.0 / 16384.0, 16384.0);
 
 /// The largest |k|: 2^±k must be a normal f32 (2^-126 to 2^127), with room for the values the
 /// scale multiplies.
@@ -181,16 +182,16 @@ mod tests {
             -1.0,
             f32::NAN,
             f32::INFINITY,
-            1.0 / 256.0,
+            1.0 / 16384.0,
             0.5,
             1.0,
-            50.0,
-            256.0,
+            16000.0,
+            16384.0,
         ] {
             assert_eq!(PreExposure::for_brightest(b), PreExposure::NEUTRAL, "{b}");
         }
         for b in [
-            1e-30, 1e-9, 1e-6, 0.0039, 256.01, 65504.0, 65536.0, 1e6, 1e9, 1e30,
+            1e-30, 1e-9, 1e-6, 6.1e-5, 16384.01, 65504.0, 65536.0, 1e6, 1e9, 1e30,
         ] {
             let p = PreExposure::for_brightest(b);
             let stored = b * p.store_scale();

@@ -956,7 +956,7 @@ mod tests {
         assert_eq!(i.structs["GpuShadowView"].array_stride, Some(96));
         assert_eq!(members(&i.structs["GpuShadowView"])[2], ("axis", 80, 16));
         // The block itself, by its type name: one member, the struct.
-        assert_eq!(members(&i.structs["FrameBuf"]), [("frame", 0, 11552)]);
+        assert_eq!(members(&i.structs["FrameBuf"]), [("frame", 0, 11568)]);
         // A runtime array of structs: `Ray { vec4 origin_tmax; vec4 dir; }`, stride 32.
         let rays = reflect("voxel_rays.comp", &words("voxel_rays.comp")).unwrap();
         let ray = &rays.structs["Ray"];
