@@ -53,6 +53,7 @@ void main() {
     vec3 wo = toward_camera(frame.camera_position, frame.camera_forward, p);
     vec4 lobe = HAS_PHONG || HAS_GGX ? texelFetch(gb_specular, px, 0) : vec4(0.0);
     vec3 lo = direct_radiance(shadow_maps, p, n, wo, albedo, lobe, ns.w);
-    if (HAS_EMISSION) lo += texelFetch(gb_emission, px, 0).rgb;
+    // The half-float emission is pre-exposed (gbuffer_frag.glsl); ×2^k restores it in f32.
+    if (HAS_EMISSION) lo += texelFetch(gb_emission, px, 0).rgb * frame.radiance_scale.y;
     imageStore(radiance, px, vec4(lo, 1.0));
 }

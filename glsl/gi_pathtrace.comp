@@ -273,7 +273,8 @@ void main() {
             // An emitter sends its radiance from the side its normal points to (Mitsuba's area
             // emitter); the camera's own view of emitters is deferred_direct's.
             if (HAS_EMISSION && !back) {
-                vec3 le = texelFetch(emission_volume, v, 0).rgb;
+                // The half-float emission volume holds pre-exposed radiance (frame.glsl).
+                vec3 le = texelFetch(emission_volume, v, 0).rgb * frame.radiance_scale.y;
                 if (HAS_EMITTERS) le *= emitter_hit_weight(le, length(hp - o), -dot(hn, d), pdf_bsdf);
                 l += throughput * le;
             }

@@ -77,7 +77,8 @@ void main() {
             lit[side] += d / PI * e * voxel_light_visibility(shadow_maps, l, p, ns, wi);
         }
     }
-    if (HAS_EMISSION) lit[0] += texelFetch(emission_volume, v, 0).rgb;
+    // The half-float emission volume holds pre-exposed radiance (frame.glsl).
+    if (HAS_EMISSION) lit[0] += texelFetch(emission_volume, v, 0).rgb * frame.radiance_scale.y;
     bool front = dot(lit[0], vec3(1.0)) >= dot(lit[1], vec3(1.0));
     float side_flag = front ? 1.0 : -1.0;
     // A glossy voxel keeps its lights' irradiance-weighted visibility V = sum |E| V_l / sum |E|

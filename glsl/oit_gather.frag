@@ -82,6 +82,8 @@ void main() {
     vec3 lo = direct_radiance(shadow_maps, in_world, n, wo, albedo, lobe, lobe_parameter);
     // Emission leaves the front side only, as Mitsuba's area emitter.
     if (front) lo += mp.emission.rgb;
+    // The node holds half floats: pre-exposed radiance (frame.glsl; oit_resolve scales back).
+    lo *= frame.radiance_scale.x;
 
     uint index = atomicAdd(counters.x, 1u);
     if (index >= counters.y) return;  // full: dropped, and counted by counters.x

@@ -4,6 +4,8 @@
 // then blended back to front over the lit opaque radiance, C = a c + (1 - a) C_behind (the
 // "over" operator; Dachsbacher 2014, part 3). Pixels with more than K layers and the layers
 // they drop are counted (counters.z, counters.w) for the host to report.
+#include "frame.glsl"
+
 layout(constant_id = 0) const uint K = 16u;  // render::oit::MAX_LAYERS
 
 layout(local_size_x = 8, local_size_y = 8) in;
@@ -12,6 +14,7 @@ layout(set = 0, binding = 1, std430) readonly buffer Nodes { uvec4 nodes[]; };
 layout(set = 0, binding = 2, std430) buffer Counters { uvec4 counters; };
 layout(set = 0, binding = 3) uniform sampler2D opaque;
 layout(set = 0, binding = 4, rgba32f) uniform writeonly image2D radiance;
+layout(set = 0, binding = 5, std430) readonly buffer FrameBuf { GpuFrame frame; };
 
 void main() {
     ivec2 px = ivec2(gl_GlobalInvocationID.xy);
@@ -49,7 +52,8 @@ void main() {
         uvec4 n = nodes[node[j - 1u]];
         vec2 rg = unpackHalf2x16(n.x);
         vec2 ba = unpackHalf2x16(n.y);
-        c.rgb = ba.y * vec3(rg, ba.x) + (1.0 - ba.y) * c.rgb;
+        // The layers' colour is half float, pre-exposed by oit_gather.frag (frame.glsl).
+        c.rgb = ba.y * (vec3(rg, ba.x) * frame.radiance_scale.y) + (1.0 - ba.y) * c.rgb;
     }
     imageStore(radiance, px, c);
 }

@@ -157,7 +157,8 @@ vec4 trace(vec3 x, vec3 r, float cone_tan) {
     float a = toward * edge * far * front;
     float footprint_px = 2.0 * dist_m * cone_tan / (hit_pos.w * pc.pixel_angle);
     float lod = clamp(log2(max(footprint_px, 1.0)), 0.0, float(pc.levels - 1));
-    vec3 color = textureLod(lit_color, uv, lod).rgb;
+    // The half-float pyramid holds pre-exposed colour (ssgi_reflect_hiz.comp).
+    vec3 color = textureLod(lit_color, uv, lod).rgb * frame.radiance_scale.y;
     return vec4(a * color, a);
 }
 

@@ -10,6 +10,11 @@
 //   box average, as the GI pyramid's colour.
 // FIRST: level 0 from the GI pyramid's level 0 (position with view depth in w, lit colour);
 // otherwise level k from level k − 1 of these pyramids.
+// The colour pyramid is half float: level 0 holds the lit colour pre-exposed by the scene's
+// 2^-k (frame.glsl's radiance_scale), so that bright emitters and lights stay in range;
+// ssgi_reflect.comp multiplies by 2^k. The averages above it are of pre-exposed values.
+#include "frame.glsl"
+
 layout(constant_id = 0) const bool FIRST = false;
 
 layout(local_size_x = 8, local_size_y = 8) in;
@@ -17,6 +22,7 @@ layout(set = 0, binding = 0) uniform sampler2D in_depth;   // FIRST: GI position
 layout(set = 0, binding = 1) uniform sampler2D in_color;
 layout(set = 0, binding = 2, r32f) uniform writeonly image2D out_depth;
 layout(set = 0, binding = 3, rgba16f) uniform writeonly image2D out_color;
+layout(set = 0, binding = 4, std430) readonly buffer FrameBuf { GpuFrame frame; };
 
 void main() {
     ivec2 q = ivec2(gl_GlobalInvocationID.xy);
@@ -24,7 +30,7 @@ void main() {
     if (FIRST) {
         float z = texelFetch(in_depth, q, 0).w;
         imageStore(out_depth, q, vec4(z > 0.0 ? 1.0 / z : 0.0));
-        imageStore(out_color, q, vec4(texelFetch(in_color, q, 0).rgb, 1.0));
+        imageStore(out_color, q, vec4(texelFetch(in_color, q, 0).rgb * frame.radiance_scale.x, 1.0));
         return;
     }
     // Mip sizes are halved rounding down: the last texel of an odd-sized level also covers

@@ -97,7 +97,14 @@ fn every_gi_path() -> [(&'static str, GiSettings); 5] {
 fn radiance_scales_linearly_with_light_intensity_from_1e_minus_6_to_1e6() {
     let scene = load_scene_arg(None).expect("the built-in Cornell box");
     let ctx = common::context();
-    let methods = every_gi_path();
+    // ssgi's colour pyramid is f32 and its reflections' colour pre-exposed half floats
+    // (scene::pre_exposure); the feedback's clamp is an absolute irradiance, but it clamps
+    // the previous frame's light, and this renders a single frame.
+    let ssgi = GiSettings {
+        method: GiMethod::Ssgi,
+        ..Default::default()
+    };
+    let methods = every_gi_path().into_iter().chain([("ssgi", ssgi)]);
     for (name, gi) in methods {
         let unit = render_per_unit(&ctx, &scene, &gi, 1.0);
         let peak = unit
@@ -267,6 +274,125 @@ fn a_1e6_a_1e_minus_6_and_a_zero_light_together_add_up() {
                     s[ch], pa[ch], pb[ch]
                 );
             }
+        }
+    }
+}
+
+/// `scene` with every material's emission times `s` (its lights untouched).
+fn emission_scaled(scene: &Scene, s: f32) -> Scene {
+    let mut scene = scene.clone();
+    for m in &mut scene.materials {
+        m.emission *= s;
+    }
+    scene
+}
+
+/// The unit roundoff of half floats (IEEE 754 binary16: 11 significant bits): storing a
+/// normal number rounds it to within 2^-11 of itself, relative.
+const HALF_ROUNDOFF: f32 = 1.0 / 2048.0;
+
+#[test]
+fn radiance_scales_linearly_with_emission_beyond_half_float_range() {
+    // The Cornell box lit only by its emissive ceiling patch (30 W/(m²·sr)), rendered with the
+    // emission × s for s = 1e-6 and 1e6 (3e-5 and 3e7: below the half floats' normal range
+    // and far above their largest value, 65,504) and divided by s. Half-float images hold
+    // radiance pre-exposed by the scene's 2^-k (scene::pre_exposure), a power of two that
+    // keeps the scaled values normal: each half-float store then rounds the value to within
+    // HALF_ROUNDOFF relative whatever s is, and at s = 1 the emission (30) and what the box
+    // sums from it are as rounded. A pixel of positive contributions that went through n
+    // stores (the deepest path) differs by at most n HALF_ROUNDOFF relative, plus f32
+    // rounding (~1e-6). Without the pre-exposure the 1e6 image lost 15× (65,504 / 3e7 of
+    // the emission).
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("assets/scenes/cornell_emissive.toml");
+    let scene = Scene::load(&path).expect("cornell_emissive loads");
+    let emission = 30.0f32;
+    let ctx = common::context();
+    // Stores on the deepest path of each method's emitted radiance:
+    // - direct: the G-buffer's emission attachment (1);
+    // - the voxel methods: that, or the voxelizer's per-voxel sum of the fragments' emission
+    //   (blended in half float, one rounding per fragment; a few per voxel: 4 at most here)
+    //   and the emission volume it is resolved into (1);
+    // - ssgi: the G-buffer's emission (1), and the reflections' colour pyramid, whose level
+    //   0 and each of its 6 coarser levels (64² down to 1²) round once (7).
+    let methods: [(&str, GiSettings, f32); 5] = [
+        ("direct", GiSettings::default(), 1.0),
+        (
+            "hemisphere, light maps",
+            GiSettings {
+                method: GiMethod::Hemisphere,
+                rays: 4,
+                ..Default::default()
+            },
+            5.0,
+        ),
+        (
+            "hemisphere, radiance volume",
+            GiSettings {
+                method: GiMethod::Hemisphere,
+                rays: 4,
+                radiance_source: RadianceSource::Volume,
+                ..Default::default()
+            },
+            5.0,
+        ),
+        (
+            "path tracer",
+            GiSettings {
+                method: GiMethod::Pathtrace,
+                rays: 2,
+                bounces: voxgi::gi::Bounces::Fixed(2),
+                ..Default::default()
+            },
+            5.0,
+        ),
+        (
+            "ssgi",
+            GiSettings {
+                method: GiMethod::Ssgi,
+                ..Default::default()
+            },
+            8.0,
+        ),
+    ];
+    for (name, gi, stores) in methods {
+        let unit = render_hdr(&ctx, &scene, &gi);
+        let peak = unit.iter().flatten().fold(0.0f32, |a, &b| a.max(b));
+        assert_eq!(
+            peak, emission,
+            "{name}: the emitter reads {peak}, not its emission"
+        );
+        let bound = stores * HALF_ROUNDOFF + 1e-5;
+        for s in [1e-6f32, 1e6] {
+            let img = render_hdr(&ctx, &emission_scaled(&scene, s), &gi);
+            // The visible emitter reads its emission (the largest pixel: the box has no other
+            // light, and nothing it reflects is brighter than its source).
+            let scaled_peak = img.iter().flatten().fold(0.0f32, |a, &b| a.max(b));
+            let want = emission * s;
+            assert!(
+                (scaled_peak - want).abs() <= HALF_ROUNDOFF * want,
+                "{name}: emission × {s:e}: the emitter reads {scaled_peak}, not {want}"
+            );
+            // Per pixel, relative to the pixel: the indirect light is ~1e-4 of the emitter,
+            // which an error relative to the peak would not see. Pixels below 1e-6 of the
+            // peak (f32's resolution of the emitter's own pixels) are compared absolutely.
+            let mut worst = 0.0f32;
+            for (a, b) in unit.iter().zip(&img) {
+                for c in 0..3 {
+                    let b = b[c] / s;
+                    assert!(b.is_finite() && b >= 0.0, "{name}: × {s:e}: a pixel is {b}");
+                    worst = worst.max((a[c] - b).abs() / a[c].max(1e-6 * peak));
+                }
+            }
+            println!(
+                "{name}: emission × {s:e}: largest per-unit difference {worst:.2e} of the pixel \
+                 (bound {bound:.2e})"
+            );
+            assert!(
+                worst <= bound,
+                "{name}: emission × {s:e} differs from the unscaled image by {worst:.2e} of a \
+                 pixel (bound {bound:.2e})"
+            );
         }
     }
 }

@@ -41,6 +41,9 @@ struct GpuFrame {
     vec4 camera_forward;  // xyz unit viewing direction, w orthographic view height m (0: perspective)
     vec4 environment;     // rgb constant radiance or map scale, w map rotation about +Y (rad);
                           // environment.glsl reads it
+    vec4 radiance_scale;  // the scene's pre-exposure (src/scene/pre_exposure.rs): half-float
+                          // images hold radiance * x (x = 2^-k), their readers multiply by
+                          // y = 2^k; both 1 for almost every scene
 };
 
 // World position of pixel `px` of a `size` frame at depth-buffer value `depth`: the pixel's

@@ -166,7 +166,9 @@ void main() {
     // Emission leaves the front side only, as Mitsuba's area emitter.
     vec3 emitted = mp.emission.rgb;
     if (HAS_PBR_MAPS && mp.maps.z != 0u) emitted *= texture(emission_map, tex_uv).rgb;
-    vec4 emission = vec4(front ? emitted : vec3(0.0), 1.0);
+    // The attachment is half float: it holds the pre-exposed emission (frame.glsl's
+    // radiance_scale; ×1 in almost every scene), which deferred_direct scales back.
+    vec4 emission = vec4(front ? emitted * frame.radiance_scale.x : vec3(0.0), 1.0);
     if (HAS_LOBE) out_slot2 = lobe;
     if (HAS_EMISSION && HAS_LOBE) out_slot3 = emission;
     if (HAS_EMISSION && !HAS_LOBE) out_slot2 = emission;

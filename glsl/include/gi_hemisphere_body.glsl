@@ -104,7 +104,9 @@ vec3 hit_radiance(VxHit h, vec3 hit, vec3 dir) {
     vec3 ns = dot(nv, wo) >= 0.0 ? nv : -nv;
     if (m.kind == LOBE_GGX) {
         // Emission is added to the front side only (gi_radiance_volume.comp).
-        vec3 em = HAS_EMISSION && on_lit_side && r.a > 0.0 ? texelFetch(emission_volume, v, 0).rgb : vec3(0.0);
+        // The half-float emission volume holds pre-exposed radiance (frame.glsl).
+        vec3 em = HAS_EMISSION && on_lit_side && r.a > 0.0
+            ? texelFetch(emission_volume, v, 0).rgb * frame.radiance_scale.y : vec3(0.0);
         lit = (lit - em) * ggx_diffuse_weight(dot(ns, wo)) + em;
     }
     vec3 p = (inverse(gi.world_to_voxel) * vec4(vec3(v) + 0.5, 1.0)).xyz;
@@ -208,7 +210,7 @@ vec3 emitted_radiance(VxHit h, vec3 dir) {
     ivec3 v = ivec3(h.voxel);
     vec3 n = texelFetch(normal_volume, v, 0).xyz;
     if (dot(n, n) > 0.25 && dot(n, dir) > 0.0) return vec3(0.0);
-    return texelFetch(emission_volume, v, 0).rgb;
+    return texelFetch(emission_volume, v, 0).rgb * frame.radiance_scale.y;  // pre-exposed
 }
 #endif
 

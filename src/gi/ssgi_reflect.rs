@@ -240,6 +240,7 @@ impl Ssr {
             };
             pass.bind_mip(2, hiz, k, write, None)
                 .bind_mip(3, color, k, write, None)
+                .bind(4, i.frame, Access::StorageRead(c))
                 .record(move |ctx| {
                     ctx.bind(&pipe);
                     ctx.cmd.dispatch(groups.0, groups.1, 1);

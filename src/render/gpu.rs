@@ -77,6 +77,9 @@ pub struct GpuFrame {
     /// The scene's environment (`glsl/include/environment.glsl`): rgb the constant's radiance
     /// or the map's scale, w the map's rotation about +Y in radians; zero without one.
     pub environment: [f32; 4],
+    /// The scene's pre-exposure of half-float radiance (`scene::pre_exposure`): x 2^-k, what
+    /// writers of half-float radiance multiply by; y 2^k, what their readers multiply by.
+    pub radiance_scale: [f32; 4],
 }
 
 crate::gpu_struct!(GpuFrame {
@@ -90,7 +93,8 @@ crate::gpu_struct!(GpuFrame {
     prev_view_proj,
     jitter_ndc,
     camera_forward,
-    environment
+    environment,
+    radiance_scale
 });
 
 #[repr(C)]

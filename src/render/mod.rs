@@ -343,6 +343,9 @@ pub struct Renderer {
     /// views: the cascade count × the directional lights (a frame may use fewer).
     cascade_view_capacity: u32,
     frame_data: GpuFrame,
+    /// The scene's pre-exposure of half-float radiance, fixed when the renderer is made (the
+    /// voxelizers scale their emission with the same one).
+    pre_exposure: crate::scene::PreExposure,
     /// The un-jittered view-projection of the last frame written (motion vectors only).
     prev_view_proj: Option<glam::Mat4>,
     voxels: Option<crate::voxel::frame::VoxelFrame>,
@@ -429,6 +432,16 @@ impl Renderer {
         // hierarchy, …) drops what was made so far, which releases it.
         let mut r = Self::create(ctx, scene, &settings, rig)?;
         r.auto_shadow = auto_shadow;
+        if r.pre_exposure.k != 0 {
+            log::info!(
+                "half-float radiance is stored pre-exposed by 2^{} (the scene's brightest \
+                 source is outside 2^-14 to 2^14)",
+                -r.pre_exposure.k
+            );
+        }
+        for warning in crate::scene::pre_exposure::unrepresentable_emission(scene, r.pre_exposure) {
+            log::warn!("{warning}");
+        }
         r.prepare(scene)?;
         r.check_transient_memory(ctx)?;
         Ok(r)
@@ -725,6 +738,7 @@ impl Renderer {
             shadow_view_count: 0,
             cascade_view_capacity: 0,
             frame_data: GpuFrame::zeroed(),
+            pre_exposure: crate::scene::PreExposure::of_scene(scene),
             prev_view_proj: None,
             voxels,
             gi,
@@ -819,6 +833,7 @@ impl Renderer {
         let mut f = GpuFrame::zeroed();
         set_frame_camera(&mut f, &camera, aspect);
         f.environment = crate::scene::Environment::frame_constants(scene.environment.as_ref());
+        f.radiance_scale = self.pre_exposure.frame_constants();
         f.counts = [lights.len() as u32, views.len() as u32, s.width, s.height];
         f.shadow = [
             s.shadow.bias_texels,

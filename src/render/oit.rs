@@ -118,9 +118,13 @@ impl OitPasses {
             .declare(g, lists.heads, lists.counters, capacity, size);
         self.gather
             .declare(g, scene, lists, depth, shadow_maps, self.shadow_sampler);
-        let out = self
-            .resolve
-            .declare(g, (lists.heads, lists.nodes, lists.counters), opaque, size);
+        let out = self.resolve.declare(
+            g,
+            (lists.heads, lists.nodes, lists.counters),
+            scene.frame,
+            opaque,
+            size,
+        );
         let stats = g.import_buffer(&self.stats, Access::HostRead);
         let counters = lists.counters;
         g.add_pass("oit_stats")

@@ -21,11 +21,13 @@ impl OitResolvePass {
         Ok(Self { pipeline, sampler })
     }
 
-    /// Declares the pass; returns the blended radiance (RGBA32F).
+    /// Declares the pass; returns the blended radiance (RGBA32F). `frame`: the frame
+    /// constants, whose pre-exposure scales the half-float layers back.
     pub fn declare(
         &self,
         g: &mut RenderGraph,
         (heads, nodes, counters): (ImageHandle, BufferHandle, BufferHandle),
+        frame: BufferHandle,
         opaque: ImageHandle,
         (w, h): (u32, u32),
     ) -> ImageHandle {
@@ -39,6 +41,7 @@ impl OitResolvePass {
             .bind(2, counters, Access::StorageReadWrite(c))
             .bind_sampled(3, opaque, self.sampler, c)
             .bind(4, radiance, Access::StorageWrite(c))
+            .bind(5, frame, Access::StorageRead(c))
             .record(move |ctx| {
                 ctx.bind(&pipe);
                 ctx.cmd.dispatch(w.div_ceil(8), h.div_ceil(8), 1);

@@ -214,6 +214,7 @@ mod mesh;
 mod obj;
 mod object;
 mod post_settings;
+pub mod pre_exposure;
 mod query;
 pub mod save;
 pub mod schema;
@@ -247,6 +248,7 @@ pub use object::{
 pub use post_settings::{
     range as post_range, AutoExposure, PostSettings, PostTable, TaaSettings, ToneMap, ToneOperator,
 };
+pub use pre_exposure::PreExposure;
 pub use query::NoSuchObject;
 pub use shadow_settings::{
     range as shadow_range, AreaShadow, PointShadow, ShadowSettings, AUTO_RESOLUTION_NAME,

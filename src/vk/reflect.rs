@@ -920,7 +920,7 @@ mod tests {
     /// array of structs the struct's size as stride: GpuLight is five vec4 (80 bytes),
     /// GpuShadowView a mat4 and two vec4 (96); GpuFrame two mat4 (0, 64), three vec4 (128,
     /// 144, 160), 64 lights at 176 (5120 bytes), 64 shadow views at 5296 (6144 bytes), a mat4
-    /// at 11440 and vec4s at 11504, 11520 and 11536.
+    /// at 11440 and vec4s at 11504, 11520, 11536 and 11552.
     #[test]
     fn buffer_structs_have_their_std430_layout() {
         let i = reflect("gi_filter.comp", &words("gi_filter.comp")).unwrap();
@@ -939,9 +939,10 @@ mod tests {
                 ("jitter_ndc", 11504, 16),
                 ("camera_forward", 11520, 16),
                 ("environment", 11536, 16),
+                ("radiance_scale", 11552, 16),
             ]
         );
-        assert_eq!((frame.size_bytes, frame.array_stride), (11552, None));
+        assert_eq!((frame.size_bytes, frame.array_stride), (11568, None));
         let light = &i.structs["GpuLight"];
         assert_eq!(light.array_stride, Some(80));
         assert_eq!(
@@ -955,7 +956,7 @@ mod tests {
         assert_eq!(i.structs["GpuShadowView"].array_stride, Some(96));
         assert_eq!(members(&i.structs["GpuShadowView"])[2], ("axis", 80, 16));
         // The block itself, by its type name: one member, the struct.
-        assert_eq!(members(&i.structs["FrameBuf"]), [("frame", 0, 11552)]);
+        assert_eq!(members(&i.structs["FrameBuf"]), [("frame", 0, 11568)]);
         // A runtime array of structs: `Ray { vec4 origin_tmax; vec4 dir; }`, stride 32.
         let rays = reflect("voxel_rays.comp", &words("voxel_rays.comp")).unwrap();
         let ray = &rays.structs["Ray"];

@@ -33,7 +33,7 @@ use super::gpu::{voxelize_loads, voxelize_splits, GpuVoxelizePush};
 use super::maps::{owner_sample_spacing_m, GpuTriangleMaps, MapUse, VoxelMaps};
 use super::VoxelGrid;
 use crate::graph::{Access, BufferHandle, ImageHandle, RenderGraph, Shader, SlotCondition};
-use crate::scene::{Material, Scene, TextureData};
+use crate::scene::{Material, PreExposure, Scene, TextureData};
 use crate::vk::{
     vk, Buffer, BufferDesc, ComputePipeline, Context, Image, ImageDesc, MemoryLocation, VkError,
     MAX_FRAMES_IN_FLIGHT,
@@ -144,6 +144,9 @@ pub struct TriangleAttributes {
     maps_used: MapUse,
     /// The value passes' sample spacing ([`owner_sample_spacing_m`]).
     spacing_m: f32,
+    /// The scene's pre-exposure store scale 2^-k ([`PreExposure`]): the emission volume is
+    /// half float, so it holds the emission times this.
+    emission_scale: f32,
 }
 
 /// The pipeline of a pass that writes one value per owner triangle into a volume
@@ -362,12 +365,13 @@ impl TriangleAttributes {
             &[(0, u32::from(maps_used.albedo))],
         )?;
         let spacing_m = owner_sample_spacing_m(grid.voxel_size_m());
+        let emission_scale = PreExposure::of_scene(scene).store_scale();
         let TriangleValues {
             tris,
             emissions,
             materials,
             albedo_maps,
-        } = attribute_triangles(scene, time_s, maps_used, spacing_m);
+        } = attribute_triangles(scene, time_s, maps_used, spacing_m, emission_scale);
         let bytes: &[u8] = if tris.is_empty() {
             &[0; 48]
         } else {
@@ -461,6 +465,7 @@ impl TriangleAttributes {
             maps,
             maps_used,
             spacing_m,
+            emission_scale,
         })
     }
 
@@ -489,7 +494,13 @@ impl TriangleAttributes {
             emissions,
             materials,
             albedo_maps,
-        } = attribute_triangles(&a.scene, t_s, self.maps_used, self.spacing_m);
+        } = attribute_triangles(
+            &a.scene,
+            t_s,
+            self.maps_used,
+            self.spacing_m,
+            self.emission_scale,
+        );
         if a.last.as_ref() == Some(&tris) {
             return false;
         }
@@ -793,8 +804,15 @@ struct TriangleValues {
 /// the maps `maps` samples (spaced `spacing_m`). The emission is `Ke` where `map_Ke` is
 /// sampled per texel (the pass multiplies), else [`Material::voxel_emission`] (`Ke` × the
 /// map's mean); the lobe holds the constants or means, which sampled maps replace; the
-/// albedo is `Kd`, which a sampled `map_Kd` replaces.
-fn attribute_triangles(scene: &Scene, t_s: f32, maps: MapUse, spacing_m: f32) -> TriangleValues {
+/// albedo is `Kd`, which a sampled `map_Kd` replaces. The emission is multiplied by
+/// `emission_scale`, the pre-exposure of the half-float emission volume ([`PreExposure`]).
+fn attribute_triangles(
+    scene: &Scene,
+    t_s: f32,
+    maps: MapUse,
+    spacing_m: f32,
+    emission_scale: f32,
+) -> TriangleValues {
     let mut out = Vec::new();
     let mut emissions = Vec::new();
     let mut materials = Vec::new();
@@ -819,6 +837,7 @@ fn attribute_triangles(scene: &Scene, t_s: f32, maps: MapUse, spacing_m: f32) ->
                     } else {
                         m.voxel_emission(&scene.textures)
                     };
+                    let emission = emission * emission_scale;
                     (m.albedo, emission, material_texel(m, &scene.textures), ids)
                 },
             );
@@ -939,7 +958,7 @@ mod tests {
                     emission_w_sr_m2 = [2, 4, 6] }\n";
         let mut scene = Scene::from_toml_str(text, Path::new("t.toml"), Path::new(".")).unwrap();
         let none = MapUse::default();
-        let plain = attribute_triangles(&scene, 0.0, none, 0.01);
+        let plain = attribute_triangles(&scene, 0.0, none, 0.01, 1.0);
         // Without maps the voxelizer gets the constants.
         assert!(plain.emissions.iter().all(|e| e.0 == [2.0, 4.0, 6.0, 0.0]));
         assert!(plain.materials.iter().all(|m| m.0 == [0.9, 0.0, 0.0, -1.0]));
@@ -968,7 +987,7 @@ mod tests {
             emissions,
             materials,
             albedo_maps,
-        } = attribute_triangles(&scene, 0.0, none, 0.01);
+        } = attribute_triangles(&scene, 0.0, none, 0.01, 1.0);
         assert_eq!(tris.len(), plain.tris.len());
         assert!(tris
             .iter()
@@ -991,7 +1010,7 @@ mod tests {
             albedo: true,
         };
         assert_eq!(MapUse::new(&scene, true, true, true), texel);
-        let v = attribute_triangles(&scene, 0.0, texel, 0.01);
+        let v = attribute_triangles(&scene, 0.0, texel, 0.01, 1.0);
         assert!(v
             .emissions
             .iter()

@@ -46,7 +46,7 @@ use super::maps::{GpuTriangleMaps, VoxelMaps};
 use super::VoxelGrid;
 use crate::graph::run_once;
 use crate::graph::{Access, BufferHandle, ImageHandle, Load, RenderGraph, Shader};
-use crate::scene::Scene;
+use crate::scene::{PreExposure, Scene};
 use crate::vk::{
     vk, Buffer, ComputePipeline, Context, GraphicsPipeline, GraphicsPipelineDesc, Image, ImageDesc,
     PipelineHandle, VkError,
@@ -218,6 +218,8 @@ impl AtlasVolumes {
         let with_values = vv.emission || vv.material || vv.maps.albedo;
         // The atlas's texel size (`AtlasScene::new_chunked`): the points' spacing.
         let texel_m = super::atlas::texel_size_for_voxel(grid.voxel_size_m().min_element());
+        // The emission sums and volume are half float: they hold the pre-exposed emission.
+        let emission_scale = PreExposure::of_scene(scene).store_scale();
         let upload = |name: &str, bytes: &[u8]| {
             let bytes: &[u8] = if bytes.is_empty() { &[0; 80] } else { bytes };
             ctx.upload_buffer(name, bytes, vk::BufferUsageFlags::STORAGE_BUFFER)
@@ -232,7 +234,7 @@ impl AtlasVolumes {
                     per_frame.push(b);
                 }
                 if with_values {
-                    let rows = model_values(scene, o, mesh, vv, texel_m);
+                    let rows = model_values(scene, o, mesh, vv, texel_m, emission_scale);
                     let b = upload("atlas triangle values", bytemuck::cast_slice(&rows))?;
                     if let Some(per_frame) = self.values.last_mut() {
                         per_frame.push(b);
@@ -581,13 +583,15 @@ fn model_triangles(scene: &Scene, object: usize, mesh: usize) -> Vec<[[f32; 4]; 
 /// the map's mean; w 1 for an emissive material), the material texel ([`material_texel`]),
 /// then the triangle's [`GpuTriangleMaps`] for points `texel_m` apart (the level of detail
 /// comes from the triangle's size in the world: the object's transform at time 0), whose
-/// `map_Kd` replaces the triangles' albedo.
+/// `map_Kd` replaces the triangles' albedo. The emission is multiplied by `emission_scale`, the
+/// scene's pre-exposure ([`PreExposure`]).
 fn model_values(
     scene: &Scene,
     object: usize,
     mesh: usize,
     vv: ValueVolumes,
     texel_m: f32,
+    emission_scale: f32,
 ) -> Vec<[[f32; 4]; 5]> {
     let (Some(o), Some(mesh)) = (scene.objects.get(object), scene.meshes.get(mesh)) else {
         return Vec::new();
@@ -613,6 +617,7 @@ fn model_values(
             } else {
                 m.voxel_emission(&scene.textures)
             };
+            let emission = emission * emission_scale;
             let flag = if m.is_emissive() { 1.0 } else { 0.0 };
             let row = if ids == [-1; 4] {
                 GpuTriangleMaps::NONE
