@@ -37,7 +37,7 @@ impl ShadowDepthPass {
             depth_bias: false,
             logic_op: None,
             view_mask: 0,
-            spec: vec![(0, u32::from(has_dissolve))],
+            spec: crate::spec_constants![HAS_DISSOLVE = has_dissolve].to_vec(),
         })?;
         Ok(Self { pipeline })
     }
