@@ -318,9 +318,9 @@ const OP_CONSTANT: u16 = 43;
 const OP_SPEC_CONSTANT_TRUE: u16 = 48;
 const OP_SPEC_CONSTANT_FALSE: u16 = 49;
 const OP_SPEC_CONSTANT: u16 = 50;
-const OP_SPEC_CONSTANT_COMPOSITE: u16 = 51;
 const OP_VARIABLE: u16 = 59;
 const OP_DECORATE: u16 = 71;
+const OP_EXECUTION_MODE_ID: u16 = 331;
 const OP_MEMBER_DECORATE: u16 = 72;
 
 const DEC_SPEC_ID: u32 = 1;
@@ -333,8 +333,7 @@ const DEC_NON_READABLE: u32 = 25;
 const DEC_BINDING: u32 = 33;
 const DEC_DESCRIPTOR_SET: u32 = 34;
 const DEC_OFFSET: u32 = 35;
-const DEC_BUILT_IN: u32 = 11;
-const BUILT_IN_WORKGROUP_SIZE: u32 = 25;
+const EXECUTION_MODE_LOCAL_SIZE_ID: u32 = 38;
 
 const SC_UNIFORM_CONSTANT: u32 = 0;
 const SC_UNIFORM: u32 = 2;
@@ -389,9 +388,8 @@ struct Module {
     scalar_types: HashMap<u32, SpecType>,
     /// (result id, type id) of each scalar specialization constant, in module order.
     spec_constants: Vec<(u32, u32)>,
-    /// (result id, constituents) of each specialization constant composite (the workgroup
-    /// size is one).
-    spec_composites: Vec<(u32, Vec<u32>)>,
+    /// The x, y and z operands of `OpExecutionModeId … LocalSizeId` (`local_size_x_id`).
+    local_size_ids: Vec<u32>,
 }
 
 impl Module {
@@ -438,9 +436,8 @@ impl Module {
                 OP_SPEC_CONSTANT_TRUE | OP_SPEC_CONSTANT_FALSE | OP_SPEC_CONSTANT => {
                     m.spec_constants.push((at(1), at(0)));
                 }
-                OP_SPEC_CONSTANT_COMPOSITE => {
-                    m.spec_composites
-                        .push((at(1), ops.get(2..).unwrap_or(&[]).to_vec()));
+                OP_EXECUTION_MODE_ID if at(1) == EXECUTION_MODE_LOCAL_SIZE_ID => {
+                    m.local_size_ids = ops.get(2..).unwrap_or(&[]).to_vec();
                 }
                 OP_TYPE_VECTOR => {
                     m.types.insert(
@@ -613,7 +610,8 @@ impl Module {
 
 impl Module {
     /// The specialization constants by name. glslang may emit one `constant_id` twice (the
-    /// workgroup size's constant appears once alone and once in the composite), so the
+    /// workgroup size's constant appears once in the execution mode and once in
+    /// `gl_WorkGroupSize`), so the
     /// constants are grouped by id; a group takes the name one of its members has, else, for a
     /// component of the workgroup size, `local_size_x`, `_y` or `_z`.
     fn spec(&self, shader: &str) -> Result<BTreeMap<String, SpecConstant>, ReflectError> {
@@ -646,13 +644,12 @@ impl Module {
         Ok(out)
     }
 
-    /// `local_size_x` (`_y`, `_z`) when constant `id` is that component of the workgroup size.
+    /// `local_size_x` (`_y`, `_z`) when constant `id` is that component of the workgroup size
+    /// (the operands of the LocalSizeId execution mode).
     fn workgroup_component(&self, id: u32) -> Option<String> {
-        self.spec_composites
-            .iter()
-            .filter(|(c, _)| self.decoration(*c, DEC_BUILT_IN) == Some(BUILT_IN_WORKGROUP_SIZE))
-            .find_map(|(_, parts)| parts.iter().position(|&p| p == id))
-            .and_then(|k| ["local_size_x", "local_size_y", "local_size_z"].get(k))
+        let k = self.local_size_ids.iter().position(|&x| x == id)?;
+        ["local_size_x", "local_size_y", "local_size_z"]
+            .get(k)
             .map(|n| (*n).to_string())
     }
 }
@@ -1358,8 +1355,8 @@ mod tests {
     /// `gi_vpl_gather.comp` (through `gi_vpl_gather_body.glsl`) declares `bool HAS_PHONG` at
     /// constant_id 0, `bool HAS_GGX` at 1 and `float MIN_ROUGHNESS` at 2;
     /// `voxelize_triangles.comp` sets its workgroup width with `local_size_x_id = 0`, a
-    /// constant without a GLSL name, which glslang emits twice (alone and in the
-    /// `WorkgroupSize` composite).
+    /// constant without a GLSL name, which glslang emits twice (in the LocalSizeId execution
+    /// mode and in `gl_WorkGroupSize`).
     #[test]
     fn spec_constants_are_reflected_by_name_id_and_type() {
         let spec = spec_of("gi_vpl_gather.comp");
