@@ -29,6 +29,8 @@ pub mod imaging;
 pub mod light;
 pub mod limits;
 #[forbid(unsafe_code)]
+pub mod panel_keys;
+#[forbid(unsafe_code)]
 pub mod post;
 #[forbid(unsafe_code)]
 pub mod profile;

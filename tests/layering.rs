@@ -24,7 +24,7 @@ const LAYERS: &[&[&str]] = &[
     &["render"],
     &["gi"],
     &["voxel", "light", "post"],
-    &["export", "eval", "graph"],
+    &["export", "eval", "graph", "panel_keys"],
     &["scene"],
     &["imaging", "vk"],
     &["stats", "limits", "assets"],

@@ -652,6 +652,33 @@ impl Viewer {
 
     /// Renders and presents one frame. Returns `true` when a scripted run is done.
     fn redraw(&mut self, ctx: &Context, window: &Window) -> Result<bool, AppError> {
+        self.advance(window)?;
+        let Some(extent) = self.presentable_extent(ctx, window)? else {
+            return Ok(false);
+        };
+        // The scripted run's last frame is the one it screenshots.
+        let last_scripted = self.opts.frames.is_some_and(|n| {
+            self.report.frames + 1 >= n
+                && self.minimize_script == MinimizeScript::Done
+                && self
+                    .opts
+                    .resize_to
+                    .map_or(true, |(w, h)| (extent.width, extent.height) == (w, h))
+        });
+        let (prims, ppp) = self.run_ui(ctx, window, extent)?;
+        if last_scripted {
+            // For the window tests: they check the table's geometry at the window's size.
+            log::info!("panel timing table: {}", self.panel_layout.to_json());
+        }
+        if !self.apply_controls(ctx, extent)? {
+            return Ok(false);
+        }
+        self.draw_and_present(ctx, extent, (&prims, ppp), last_scripted)
+    }
+
+    /// Advances the clock, the scripted run's steps and the camera, and applies the panel's
+    /// one-shot buttons (keyframe, tune).
+    fn advance(&mut self, window: &Window) -> Result<(), AppError> {
         let now = Instant::now();
         let dt_s = (now - self.last_frame).as_secs_f32();
         self.last_frame = now;
@@ -685,7 +712,16 @@ impl Viewer {
         if std::mem::take(&mut self.controls.tune) {
             self.apply_best_within_budget();
         }
+        Ok(())
+    }
 
+    /// The swapchain's extent, recreated for the window's size when needed; `None` while
+    /// there is nothing to present (minimized, zero-sized, no swapchain).
+    fn presentable_extent(
+        &mut self,
+        ctx: &Context,
+        window: &Window,
+    ) -> Result<Option<vk::Extent2D>, AppError> {
         // Minimized (or zero-sized): nothing to present until the window is back. On X11 an
         // iconified window keeps its size (and the surface its extent), so ask the window
         // manager's state too.
@@ -710,7 +746,7 @@ impl Viewer {
             }
             self.report.skipped_minimized += 1;
             std::thread::sleep(MINIMIZED_POLL);
-            return Ok(false);
+            return Ok(None);
         }
         if self.minimized {
             // Back from minimized: the surface may have changed meanwhile.
@@ -719,7 +755,7 @@ impl Viewer {
             self.swapchain_dirty = true;
         }
         let Some(swapchain) = self.swapchain.as_mut() else {
-            return Ok(false);
+            return Ok(None);
         };
         let window_px = vk::Extent2D {
             width: size.width,
@@ -730,26 +766,13 @@ impl Viewer {
             self.swapchain_dirty = false;
         }
         let extent = swapchain.extent;
-        if extent.width == 0 || extent.height == 0 {
-            return Ok(false);
-        }
+        Ok((extent.width > 0 && extent.height > 0).then_some(extent))
+    }
 
-        // The scripted run's last frame is the one it screenshots.
-        let last_scripted = self.opts.frames.is_some_and(|n| {
-            self.report.frames + 1 >= n
-                && self.minimize_script == MinimizeScript::Done
-                && self
-                    .opts
-                    .resize_to
-                    .map_or(true, |(w, h)| (extent.width, extent.height) == (w, h))
-        });
-        let (prims, ppp) = self.run_ui(ctx, window, extent)?;
-        if last_scripted {
-            // For the window tests: they check the table's geometry at the window's size.
-            log::info!("panel timing table: {}", self.panel_layout.to_json());
-        }
-
-        // Apply the panel.
+    /// Applies the panel to the scene and the renderer's settings: a new renderer or graph
+    /// where a setting needs one, then the frame's constants. `false` when there is no
+    /// renderer to draw with.
+    fn apply_controls(&mut self, ctx: &Context, extent: vk::Extent2D) -> Result<bool, AppError> {
         for (i, base) in self.base_lights.iter().enumerate() {
             let s = self.controls.light_scale.get(i).copied().unwrap_or(1.0);
             self.scene.lights[i] = scaled(base, s);
@@ -815,7 +838,18 @@ impl Viewer {
         }) {
             self.rebuild(ctx)?;
         }
+        Ok(true)
+    }
 
+    /// Records the frame (with the panel's `ui` primitives and pixels per point), submits and
+    /// presents it, answers a pick that landed and saves a screenshot when one is due.
+    fn draw_and_present(
+        &mut self,
+        ctx: &Context,
+        extent: vk::Extent2D,
+        (prims, ppp): (&[egui::ClippedPrimitive], f32),
+        last_scripted: bool,
+    ) -> Result<bool, AppError> {
         let (Some(frame_loop), Some(graph), Some(renderer), Some(overlay), Some(swapchain)) = (
             self.frame_loop.as_mut(),
             self.graph.as_mut(),
@@ -868,7 +902,7 @@ impl Viewer {
         if let Some(st) = &mut self.stereo {
             st.write_frame(slot);
         }
-        overlay.write_frame(slot, &prims, ppp, extent);
+        overlay.write_frame(slot, prims, ppp, extent);
         let shot = self.controls.screenshot || last_scripted;
         graph.shot_wanted.set(shot);
         graph.exec.record(&cmd, slot, timestamps);

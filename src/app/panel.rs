@@ -3,9 +3,9 @@
 
 use crate::gi::{GiMethod, GiSettings};
 use crate::light::ShadowSettings;
+use crate::panel_keys::{key_checkbox, key_choice, key_slider, key_switch, set_key};
 use crate::post::{ToneMap, ToneOperator};
-use crate::scene::gi_range;
-use crate::scene::schema::{self, Kind, Settings, Value};
+use crate::scene::schema::{self, Value};
 use crate::scene::PostTable;
 use crate::vk::PassTiming;
 use crate::voxel::debug_view::DebugView;
@@ -627,63 +627,6 @@ fn shadow_controls(ui: &mut egui::Ui, shadow: &mut ShadowSettings) {
     );
 }
 
-/// Writes `v` to the key `path` of `s`, as `--set` and scene files write it (a path missing
-/// from the table writes nothing: the panel's own paths are checked by a test).
-fn set_key<S: Settings>(s: &mut S, path: &str, v: Value) {
-    if let Some(k) = schema::key::<S>(path) {
-        (k.set)(s, v);
-    }
-}
-
-/// The key `path` of `s` (a boolean) as a checkbox labelled `text`.
-fn key_checkbox<S: Settings>(
-    ui: &mut egui::Ui,
-    s: &mut S,
-    path: &str,
-    text: &str,
-) -> egui::Response {
-    let mut on = schema::key::<S>(path).is_some_and(|k| (k.get)(s) != Value::Bool(false));
-    let r = ui.checkbox(&mut on, text);
-    if r.changed() {
-        set_key(s, path, Value::Bool(on));
-    }
-    r
-}
-
-/// A slider for the count or number key `path` of `s` over `lo..=hi` cut to the key's range
-/// (so the panel never offers what flags and scene files refuse), labelled `text`.
-fn key_slider<S: Settings>(
-    ui: &mut egui::Ui,
-    s: &mut S,
-    path: &str,
-    (lo, hi): (f64, f64),
-    logarithmic: bool,
-    text: &str,
-) {
-    let Some(k) = schema::key::<S>(path) else {
-        return;
-    };
-    match (k.kind, (k.get)(s)) {
-        (Kind::Count(l), Value::Count(mut n)) => {
-            let slider = egui::Slider::new(&mut n, l.slider(lo as u32, hi as u32))
-                .logarithmic(logarithmic)
-                .text(text);
-            if ui.add(slider).changed() {
-                (k.set)(s, Value::Count(n));
-            }
-        }
-        (Kind::Number(l) | Kind::Switch(l, _), Value::Number(mut x)) => {
-            let slider = egui::Slider::new(&mut x, l.slider(lo as f32, hi as f32))
-                .logarithmic(logarithmic)
-                .text(text);
-            if ui.add(slider).changed() {
-                (k.set)(s, Value::Number(x));
-            }
-        }
-        _ => {}
-    }
-}
-
 #[cfg(test)]
 mod table_tests {
     use super::*;
@@ -1012,72 +955,58 @@ fn budget_controls(ui: &mut egui::Ui, c: &mut Controls) {
 }
 
 /// The GI method, its own section ([`crate::gi::MethodSpec::panel`]) and the parameters the
-/// methods share; without indirect light, only the method's section.
+/// methods share, each the `[gi]` key of its label; without indirect light, only the method's
+/// section.
 fn gi_controls(ui: &mut egui::Ui, gi: &mut GiSettings, frames: Option<u32>) {
-    egui::ComboBox::from_label("method")
-        .selected_text(gi.method.name())
-        .show_ui(ui, |ui| {
-            for &m in GiMethod::ALL {
-                ui.selectable_value(&mut gi.method, m, m.name());
-            }
-        });
+    key_choice(ui, gi, "gi.method", "method");
     (gi.method.spec().panel)(ui, gi, frames);
     if gi.method == GiMethod::None {
         return;
     }
-    let mut limited = gi.radius_m.is_some();
-    ui.checkbox(&mut limited, "limit ray length");
-    match (limited, gi.radius_m) {
-        (true, None) => gi.radius_m = Some(1.0),
-        (false, Some(_)) => gi.radius_m = None,
-        _ => {}
+    let limited = (Value::Number(1.0), Value::Unset);
+    if key_switch(ui, gi, "gi.radius_m", "limit ray length", limited) {
+        key_slider(ui, gi, "gi.radius_m", (0.01, 100.0), true, "radius m");
     }
-    if let Some(r) = &mut gi.radius_m {
-        ui.add(
-            egui::Slider::new(r, gi_range::GI_RADIUS_M.slider(0.01, 100.0))
-                .logarithmic(true)
-                .text("radius m"),
-        );
-    }
-    ui.add(
-        egui::Slider::new(
-            &mut gi.filter_radius,
-            gi_range::GI_FILTER_RADIUS.slider(0, 16),
-        )
-        .text("filter radius"),
+    key_slider(
+        ui,
+        gi,
+        "gi.filter_radius",
+        (0.0, 16.0),
+        false,
+        "filter radius",
     );
-    ui.add(
-        egui::Slider::new(
-            &mut gi.filter_passes,
-            gi_range::GI_FILTER_PASSES.slider(0, 8),
-        )
-        .text("filter passes"),
+    key_slider(
+        ui,
+        gi,
+        "gi.filter_passes",
+        (0.0, 8.0),
+        false,
+        "filter passes",
     );
-    ui.add(
-        egui::Slider::new(
-            &mut gi.normal_offset_voxels,
-            gi_range::GI_NORMAL_OFFSET.slider(0.0, 4.0),
-        )
-        .text("normal offset k1"),
+    key_slider(
+        ui,
+        gi,
+        "gi.normal_offset_voxels",
+        (0.0, 4.0),
+        false,
+        "normal offset k1",
     );
-    ui.add(
-        egui::Slider::new(
-            &mut gi.ray_offset_voxels,
-            gi_range::GI_RAY_OFFSET.slider(0.0, 2.0),
-        )
-        .text("ray offset k2"),
+    key_slider(
+        ui,
+        gi,
+        "gi.ray_offset_voxels",
+        (0.0, 2.0),
+        false,
+        "ray offset k2",
     );
-    ui.add(
-        egui::Slider::new(&mut gi.start_level, gi_range::GI_START_LEVEL.slider(0, 8))
-            .text("start level"),
-    );
-    ui.add(
-        egui::Slider::new(
-            &mut gi.max_iterations,
-            gi_range::GI_MAX_ITERATIONS.slider(16, 4096),
-        )
-        .logarithmic(true)
-        .text("max iterations"),
+    key_slider(ui, gi, "gi.start_level", (0.0, 8.0), false, "start level");
+    key_slider(
+        ui,
+        gi,
+        "gi.max_iterations",
+        (16.0, 4096.0),
+        true,
+        "max iterations",
     );
 }
 

@@ -32,45 +32,7 @@ pub enum BenchCommand {
     /// Hierarchical voxel ray test vs uniform 1-bit marching on the same rays (Thiedemann 2010, §9.3.1):
     /// GPU ms, rays/s, steps per ray, and the marching samples needed to match >= 99% of
     /// the hierarchical results.
-    Traverse {
-        /// A built-in scene, a TOML scene file, or a glTF/OBJ model alone. Default: cornell.
-        scene: Option<String>,
-        /// Voxel grid x/y resolution (depth 128).
-        #[arg(long, default_value_t = 128)]
-        resolution: u32,
-        /// G-buffer size in pixels per side (surface points rays start from).
-        #[arg(long, default_value_t = 128)]
-        gbuffer: u32,
-        /// Rays per surface point.
-        #[arg(long, default_value_t = 16)]
-        rays: u32,
-        /// Hierarchy levels the traversal starts at (thesis §5.3.2); the first is the
-        /// reference of the agreement columns, each further one a row of its own.
-        #[arg(long, value_delimiter = ',', default_values_t = [1],
-              value_parser = clap::value_parser!(u32).range(0..=14))]
-        start_level: Vec<u32>,
-        /// Iteration cap of the hierarchical traversal.
-        #[arg(long, default_value_t = 1024)]
-        max_iterations: u32,
-        /// Ray lengths in units of the thesis's test box (radius_m = r / 6 × the scene's
-        /// largest extent).
-        #[arg(long, value_delimiter = ',', default_values_t = [2.0, 4.0, 8.0])]
-        radii: Vec<f32>,
-        /// Marching sample counts (1-bit and 3-bit rows each).
-        #[arg(long, value_delimiter = ',', default_values_t = [8, 16, 32, 64, 128, 256, 512],
-              value_parser = clap::value_parser!(u32).range(1..=65536))]
-        march_steps: Vec<u32>,
-        /// Leave out the marching rows (only the hierarchical test and the exact walk).
-        #[arg(long)]
-        no_march: bool,
-        /// Timed runs of every method, interleaved, after one untimed warm-up run: the
-        /// median and the fastest and slowest run are printed.
-        #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=1000))]
-        repeats: u32,
-        /// Print JSON instead of tables.
-        #[arg(long)]
-        json: bool,
-    },
+    Traverse(TraverseArgs),
     /// Temporal stability: the first point or spot light moves along a circle; every method
     /// renders each step and its frame-to-frame change is compared with a converged path
     /// tracer's along the same path (flicker = the change the reference does not have).
@@ -119,42 +81,7 @@ pub enum BenchCommand {
     /// Screen-space GI scalability (Oetke 2017 Fig. 4.8): every mip filter × GI resolution ×
     /// samples per texel and level, with the GPU ms of each ssgi stage and of the frame
     /// (median [min, max]) and the image's relMSE and FLIP against the scene's reference.
-    Ssgi {
-        /// A built-in scene or a TOML scene file with a reference `<name>_gi.exr` in
-        /// --references. Default: cornell.
-        scene: Option<String>,
-        /// Depth/normal mip filters.
-        #[arg(long, value_enum, value_delimiter = ',', default_values = ["fast", "voting"])]
-        mips: Vec<crate::gi::SsgiMips>,
-        /// GI resolutions.
-        #[arg(long, value_enum, value_delimiter = ',',
-              default_values = ["full", "half", "quarter", "eighth"])]
-        resolutions: Vec<crate::gi::SsgiResolution>,
-        /// Samples per texel and pyramid level.
-        #[arg(long, value_delimiter = ',', default_values_t = [16, 32, 64, 128, 256])]
-        samples: Vec<u32>,
-        /// Image width and height in pixels; must divide the reference's size.
-        #[arg(long, default_value_t = 128, value_parser = clap::value_parser!(u32).range(8..=4096))]
-        size: u32,
-        /// Frames profiled per configuration (after --warmup).
-        #[arg(long, default_value_t = 20, value_parser = clap::value_parser!(u64).range(1..=100_000))]
-        frames: u64,
-        /// Frames run before profiling.
-        #[arg(long, default_value_t = 3)]
-        warmup: usize,
-        /// Frames of the scored image (feedback bounces and the temporal blend).
-        #[arg(long, default_value_t = 8)]
-        gi_frames: u32,
-        /// Folder of the reference images.
-        #[arg(long, default_value = "assets/references")]
-        references: std::path::PathBuf,
-        /// Print CSV instead of the table.
-        #[arg(long, conflicts_with = "json")]
-        csv: bool,
-        /// Print JSON instead of the table.
-        #[arg(long)]
-        json: bool,
-    },
+    Ssgi(SsgiArgs),
     /// The screen-space method's limitations (Oetke 2017 §7) on purpose-made scenes: light
     /// from off-screen (the camera turns away from a lit wall) and missing indirect shadows
     /// (a panel seen edge-on): the indirect light in view of `ssgi` and of the voxel path
@@ -187,29 +114,7 @@ pub enum BenchCommand {
     /// `--every` frames the process RSS, the GPU memory the context holds and the release
     /// queue's backlog are printed, and at the end their growth in bytes per 1000 frames
     /// (least squares over the samples after the first). Flat means no leak.
-    Soak {
-        /// A built-in scene or a TOML scene file; objects with keyframes move. Default:
-        /// `assets/scenes/cornell_mover.toml` (embedded: runs from any directory).
-        scene: Option<String>,
-        /// Frames per method.
-        #[arg(long, default_value_t = 10_000, value_parser = clap::value_parser!(u64).range(1..=100_000_000))]
-        frames: u64,
-        /// Frames between samples.
-        #[arg(long, default_value_t = 500, value_parser = clap::value_parser!(u64).range(1..=100_000_000))]
-        every: u64,
-        /// Image width in pixels.
-        #[arg(long, default_value_t = 32, value_parser = clap::value_parser!(u32).range(8..=4096))]
-        width: u32,
-        /// Image height in pixels.
-        #[arg(long, default_value_t = 32, value_parser = clap::value_parser!(u32).range(8..=4096))]
-        height: u32,
-        /// The GI methods, run one after another.
-        #[arg(long, value_delimiter = ',', default_values = ["none", "hemisphere", "pathtrace", "vpl", "ssgi"])]
-        methods: Vec<GiMethod>,
-        /// Print JSON instead of the progress lines and the table.
-        #[arg(long)]
-        json: bool,
-    },
+    Soak(SoakArgs),
     /// Atlas binary voxelization two ways on the same points: the compute pass (atomicOr into
     /// the column buffer) vs the thesis's raster pass (single-bit LUT, logicOp OR): GPU ms and
     /// whether the bits agree.
@@ -231,10 +136,51 @@ pub enum BenchCommand {
     },
 }
 
-/// Runs one benchmark and prints its report (a table, or JSON with `--json`).
-pub fn bench(global: &Global, command: &BenchCommand, out: &mut dyn Write) -> Result<(), CliError> {
-    match command {
-        BenchCommand::Traverse {
+/// The arguments of `voxgi bench traverse`.
+#[derive(clap::Args, Clone)]
+pub struct TraverseArgs {
+    /// A built-in scene, a TOML scene file, or a glTF/OBJ model alone. Default: cornell.
+    scene: Option<String>,
+    /// Voxel grid x/y resolution (depth 128).
+    #[arg(long, default_value_t = 128)]
+    resolution: u32,
+    /// G-buffer size in pixels per side (surface points rays start from).
+    #[arg(long, default_value_t = 128)]
+    gbuffer: u32,
+    /// Rays per surface point.
+    #[arg(long, default_value_t = 16)]
+    rays: u32,
+    /// Hierarchy levels the traversal starts at (thesis §5.3.2); the first is the
+    /// reference of the agreement columns, each further one a row of its own.
+    #[arg(long, value_delimiter = ',', default_values_t = [1],
+          value_parser = clap::value_parser!(u32).range(0..=14))]
+    start_level: Vec<u32>,
+    /// Iteration cap of the hierarchical traversal.
+    #[arg(long, default_value_t = 1024)]
+    max_iterations: u32,
+    /// Ray lengths in units of the thesis's test box (radius_m = r / 6 × the scene's
+    /// largest extent).
+    #[arg(long, value_delimiter = ',', default_values_t = [2.0, 4.0, 8.0])]
+    radii: Vec<f32>,
+    /// Marching sample counts (1-bit and 3-bit rows each).
+    #[arg(long, value_delimiter = ',', default_values_t = [8, 16, 32, 64, 128, 256, 512],
+          value_parser = clap::value_parser!(u32).range(1..=65536))]
+    march_steps: Vec<u32>,
+    /// Leave out the marching rows (only the hierarchical test and the exact walk).
+    #[arg(long)]
+    no_march: bool,
+    /// Timed runs of every method, interleaved, after one untimed warm-up run: the
+    /// median and the fastest and slowest run are printed.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=1000))]
+    repeats: u32,
+    /// Print JSON instead of tables.
+    #[arg(long)]
+    json: bool,
+}
+
+impl TraverseArgs {
+    fn run(&self, global: &Global, out: &mut dyn Write) -> Result<(), CliError> {
+        let Self {
             scene,
             resolution,
             gbuffer,
@@ -246,33 +192,194 @@ pub fn bench(global: &Global, command: &BenchCommand, out: &mut dyn Write) -> Re
             no_march,
             repeats,
             json,
-        } => {
-            let scene = load_scene_arg(scene.as_deref())?;
-            let ctx = context(global)?;
-            let desc = TraverseBenchDesc {
-                resolution: *resolution,
-                gbuffer_size: *gbuffer,
-                rays_per_point: *rays,
-                radii_box_units: radii.clone(),
-                march_steps: if *no_march {
-                    Vec::new()
-                } else {
-                    march_steps.clone()
-                },
-                params: start_level
-                    .iter()
-                    .map(|&start_level| TraversalParams {
-                        start_level,
-                        max_iterations: *max_iterations,
-                    })
-                    .collect(),
-                repeats: *repeats,
-                ..Default::default()
-            };
-            let report = bench_traverse(&ctx, &scene, &desc)?;
-            print(out, *json, &report, || report.table())?;
-            check_validation(ctx)
+        } = self;
+        let scene = load_scene_arg(scene.as_deref())?;
+        let ctx = context(global)?;
+        let desc = TraverseBenchDesc {
+            resolution: *resolution,
+            gbuffer_size: *gbuffer,
+            rays_per_point: *rays,
+            radii_box_units: radii.clone(),
+            march_steps: if *no_march {
+                Vec::new()
+            } else {
+                march_steps.clone()
+            },
+            params: start_level
+                .iter()
+                .map(|&start_level| TraversalParams {
+                    start_level,
+                    max_iterations: *max_iterations,
+                })
+                .collect(),
+            repeats: *repeats,
+            ..Default::default()
+        };
+        let report = bench_traverse(&ctx, &scene, &desc)?;
+        print(out, *json, &report, || report.table())?;
+        check_validation(ctx)
+    }
+}
+
+/// The arguments of `voxgi bench soak`.
+#[derive(clap::Args, Clone)]
+pub struct SoakArgs {
+    /// A built-in scene or a TOML scene file; objects with keyframes move. Default:
+    /// `assets/scenes/cornell_mover.toml` (embedded: runs from any directory).
+    scene: Option<String>,
+    /// Frames per method.
+    #[arg(long, default_value_t = 10_000, value_parser = clap::value_parser!(u64).range(1..=100_000_000))]
+    frames: u64,
+    /// Frames between samples.
+    #[arg(long, default_value_t = 500, value_parser = clap::value_parser!(u64).range(1..=100_000_000))]
+    every: u64,
+    /// Image width in pixels.
+    #[arg(long, default_value_t = 32, value_parser = clap::value_parser!(u32).range(8..=4096))]
+    width: u32,
+    /// Image height in pixels.
+    #[arg(long, default_value_t = 32, value_parser = clap::value_parser!(u32).range(8..=4096))]
+    height: u32,
+    /// The GI methods, run one after another.
+    #[arg(long, value_delimiter = ',', default_values = ["none", "hemisphere", "pathtrace", "vpl", "ssgi"])]
+    methods: Vec<GiMethod>,
+    /// Print JSON instead of the progress lines and the table.
+    #[arg(long)]
+    json: bool,
+}
+
+impl SoakArgs {
+    fn run(&self, global: &Global, out: &mut dyn Write) -> Result<(), CliError> {
+        let Self {
+            scene,
+            frames,
+            every,
+            width,
+            height,
+            methods,
+            json,
+        } = self;
+        let (name, loaded) = match scene {
+            Some(arg) => (arg.clone(), load_scene_arg(Some(arg))?),
+            None => (SOAK_SCENE_NAME.to_owned(), soak_default_scene()?),
+        };
+        let ctx = context(global)?;
+        let desc = SoakBenchDesc {
+            frames: *frames as usize,
+            every: *every as usize,
+            width: *width,
+            height: *height,
+            methods: methods.clone(),
+            ..Default::default()
+        };
+        let mut progress = |method: GiMethod, s: &crate::bench::SoakSample| {
+            if !*json {
+                let rss = s
+                    .rss_bytes
+                    .map_or("unavailable".to_owned(), |b| b.to_string());
+                let _ = writeln!(
+                    out,
+                    "{:<11} frame {:>8}  RSS {:>12} B  GPU {:>12} B  pending {}",
+                    format!("{method:?}").to_lowercase(),
+                    s.frame,
+                    rss,
+                    s.gpu_bytes,
+                    s.pending_releases
+                );
+                let _ = out.flush();
+            }
+        };
+        let report = bench_soak(&ctx, &loaded, &name, &desc, &mut progress)?;
+        print(out, *json, &report, || report.table())?;
+        check_validation(ctx)
+    }
+}
+
+/// The arguments of `voxgi bench ssgi`.
+#[derive(clap::Args, Clone)]
+pub struct SsgiArgs {
+    /// A built-in scene or a TOML scene file with a reference `<name>_gi.exr` in
+    /// --references. Default: cornell.
+    scene: Option<String>,
+    /// Depth/normal mip filters.
+    #[arg(long, value_enum, value_delimiter = ',', default_values = ["fast", "voting"])]
+    mips: Vec<crate::gi::SsgiMips>,
+    /// GI resolutions.
+    #[arg(long, value_enum, value_delimiter = ',',
+          default_values = ["full", "half", "quarter", "eighth"])]
+    resolutions: Vec<crate::gi::SsgiResolution>,
+    /// Samples per texel and pyramid level.
+    #[arg(long, value_delimiter = ',', default_values_t = [16, 32, 64, 128, 256])]
+    samples: Vec<u32>,
+    /// Image width and height in pixels; must divide the reference's size.
+    #[arg(long, default_value_t = 128, value_parser = clap::value_parser!(u32).range(8..=4096))]
+    size: u32,
+    /// Frames profiled per configuration (after --warmup).
+    #[arg(long, default_value_t = 20, value_parser = clap::value_parser!(u64).range(1..=100_000))]
+    frames: u64,
+    /// Frames run before profiling.
+    #[arg(long, default_value_t = 3)]
+    warmup: usize,
+    /// Frames of the scored image (feedback bounces and the temporal blend).
+    #[arg(long, default_value_t = 8)]
+    gi_frames: u32,
+    /// Folder of the reference images.
+    #[arg(long, default_value = "assets/references")]
+    references: std::path::PathBuf,
+    /// Print CSV instead of the table.
+    #[arg(long, conflicts_with = "json")]
+    csv: bool,
+    /// Print JSON instead of the table.
+    #[arg(long)]
+    json: bool,
+}
+
+impl SsgiArgs {
+    fn run(&self, global: &Global, out: &mut dyn Write) -> Result<(), CliError> {
+        let Self {
+            scene,
+            mips,
+            resolutions,
+            samples,
+            size,
+            frames,
+            warmup,
+            gi_frames,
+            references,
+            csv,
+            json,
+        } = self;
+        for &n in samples {
+            crate::scene::gi_range::SSGI_SAMPLES.check_as("--samples", i64::from(n))?;
         }
+        crate::scene::gi_range::GI_FRAMES.check_flag(*gi_frames)?;
+        let arg = scene.as_deref().unwrap_or(DEFAULT_SCENE);
+        let name = super::sweep::scene_name(arg);
+        let loaded = load_scene_arg(Some(arg))?;
+        let reference = crate::bench::load_reference(references, &name, *size)?;
+        let ctx = context(global)?;
+        let desc = crate::bench::SsgiBenchDesc {
+            mips: mips.clone(),
+            resolutions: resolutions.clone(),
+            samples: samples.clone(),
+            size: *size,
+            frames: *frames as usize,
+            warmup: *warmup,
+            gi_frames: *gi_frames,
+        };
+        let report = crate::bench::bench_ssgi(&ctx, &loaded, &name, &reference, &desc)?;
+        if *csv {
+            out!(out, "{}", report.csv());
+        } else {
+            print(out, *json, &report, || report.table())?;
+        }
+        check_validation(ctx)
+    }
+}
+
+/// Runs one benchmark and prints its report (a table, or JSON with `--json`).
+pub fn bench(global: &Global, command: &BenchCommand, out: &mut dyn Write) -> Result<(), CliError> {
+    match command {
+        BenchCommand::Traverse(args) => args.run(global, out),
         BenchCommand::Voxelize {
             scene,
             resolution,
@@ -311,49 +418,7 @@ pub fn bench(global: &Global, command: &BenchCommand, out: &mut dyn Write) -> Re
             print(out, *json, &report, || report.table())?;
             check_validation(ctx)
         }
-        BenchCommand::Soak {
-            scene,
-            frames,
-            every,
-            width,
-            height,
-            methods,
-            json,
-        } => {
-            let (name, loaded) = match scene {
-                Some(arg) => (arg.clone(), load_scene_arg(Some(arg))?),
-                None => (SOAK_SCENE_NAME.to_owned(), soak_default_scene()?),
-            };
-            let ctx = context(global)?;
-            let desc = SoakBenchDesc {
-                frames: *frames as usize,
-                every: *every as usize,
-                width: *width,
-                height: *height,
-                methods: methods.clone(),
-                ..Default::default()
-            };
-            let mut progress = |method: GiMethod, s: &crate::bench::SoakSample| {
-                if !*json {
-                    let rss = s
-                        .rss_bytes
-                        .map_or("unavailable".to_owned(), |b| b.to_string());
-                    let _ = writeln!(
-                        out,
-                        "{:<11} frame {:>8}  RSS {:>12} B  GPU {:>12} B  pending {}",
-                        format!("{method:?}").to_lowercase(),
-                        s.frame,
-                        rss,
-                        s.gpu_bytes,
-                        s.pending_releases
-                    );
-                    let _ = out.flush();
-                }
-            };
-            let report = bench_soak(&ctx, &loaded, &name, &desc, &mut progress)?;
-            print(out, *json, &report, || report.table())?;
-            check_validation(ctx)
-        }
+        BenchCommand::Soak(args) => args.run(global, out),
         BenchCommand::Leak {
             methods,
             lights,
@@ -383,45 +448,7 @@ pub fn bench(global: &Global, command: &BenchCommand, out: &mut dyn Write) -> Re
             }
             check_validation(ctx)
         }
-        BenchCommand::Ssgi {
-            scene,
-            mips,
-            resolutions,
-            samples,
-            size,
-            frames,
-            warmup,
-            gi_frames,
-            references,
-            csv,
-            json,
-        } => {
-            for &n in samples {
-                crate::scene::gi_range::SSGI_SAMPLES.check_as("--samples", i64::from(n))?;
-            }
-            crate::scene::gi_range::GI_FRAMES.check_flag(*gi_frames)?;
-            let arg = scene.as_deref().unwrap_or(DEFAULT_SCENE);
-            let name = super::sweep::scene_name(arg);
-            let loaded = load_scene_arg(Some(arg))?;
-            let reference = crate::bench::load_reference(references, &name, *size)?;
-            let ctx = context(global)?;
-            let desc = crate::bench::SsgiBenchDesc {
-                mips: mips.clone(),
-                resolutions: resolutions.clone(),
-                samples: samples.clone(),
-                size: *size,
-                frames: *frames as usize,
-                warmup: *warmup,
-                gi_frames: *gi_frames,
-            };
-            let report = crate::bench::bench_ssgi(&ctx, &loaded, &name, &reference, &desc)?;
-            if *csv {
-                out!(out, "{}", report.csv());
-            } else {
-                print(out, *json, &report, || report.table())?;
-            }
-            check_validation(ctx)
-        }
+        BenchCommand::Ssgi(args) => args.run(global, out),
         BenchCommand::SsgiLimits {
             size,
             frames,

@@ -23,11 +23,11 @@ impl GiComposite {
         (sao, sao_view): (bool, bool),
         ggx_radiance: bool,
     ) -> Result<Self, VkError> {
-        let spec = [
-            (0, u32::from(has_phong)),
-            (1, u32::from(sao)),
-            (2, u32::from(sao && sao_view)),
-            (3, u32::from(ggx_radiance)),
+        let spec = crate::spec_constants![
+            HAS_PHONG = has_phong,
+            HAS_SAO = sao,
+            SAO_VIEW = sao && sao_view,
+            GGX_RADIANCE = ggx_radiance,
         ];
         let pipeline = ctx.compute_pipeline("gi_composite.comp", None, &spec)?;
         Ok(Self { pipeline })

@@ -41,7 +41,7 @@ impl GiFilter {
         let pipeline = ctx.compute_pipeline(
             "gi_filter.comp",
             PushLayout::of::<GpuFilterPush>(),
-            &[(0, u32::from(glossy))],
+            &crate::spec_constants![GLOSSY = glossy],
         )?;
         Ok(Self { pipeline })
     }

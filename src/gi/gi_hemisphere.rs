@@ -36,10 +36,10 @@ impl GiHemisphere {
                 "gi_hemisphere.comp"
             },
             PushLayout::of::<GpuGiPush>(),
-            &[
-                (0, u32::from(has_phong)),
-                (1, u32::from(has_ggx)),
-                (8, environment),
+            &crate::spec_constants![
+                HAS_PHONG = has_phong,
+                HAS_GGX = has_ggx,
+                ENVIRONMENT = environment,
             ],
         )?;
         Ok(Self { pipeline, emission })

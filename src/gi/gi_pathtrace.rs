@@ -51,16 +51,13 @@ impl GiPathtrace {
         let pipeline = ctx.compute_pipeline(
             "gi_pathtrace.comp",
             PushLayout::of::<GpuGiPush>(),
-            &[
+            &crate::spec_constants![
                 // The lobe target exists with Phong or GGX materials; both sample it.
-                (0, u32::from(target.has_phong || target.scene.has_ggx())),
-                (1, u32::from(target.scene.has_emission())),
-                (2, u32::from(lobes && !target.scene.is_all_lambert())),
-                (3, u32::from(emitters.is_some())),
-                (
-                    8,
-                    Environment::shader_kind(target.scene.environment.as_ref()),
-                ),
+                HAS_PHONG = target.has_phong || target.scene.has_ggx(),
+                HAS_EMISSION = target.scene.has_emission(),
+                HAS_MATERIAL_VOLUME = lobes && !target.scene.is_all_lambert(),
+                HAS_EMITTERS = emitters.is_some(),
+                ENVIRONMENT = Environment::shader_kind(target.scene.environment.as_ref()),
             ],
         )?;
         let histories = (0..target.eyes.max(1))

@@ -26,22 +26,19 @@ impl GiRadianceVolume {
         let volume_pipeline = ctx.compute_pipeline(
             "gi_radiance_volume.comp",
             PushLayout::of::<GpuGiPush>(),
-            &[
-                (0, u32::from(target.scene.has_emission())),
-                (1, u32::from(!target.scene.is_all_lambert())),
+            &crate::spec_constants![
+                HAS_EMISSION = target.scene.has_emission(),
+                HAS_LOBES = !target.scene.is_all_lambert(),
             ],
         )?;
         let hemisphere_pipeline = ctx.compute_pipeline(
             "gi_hemisphere_volume.comp",
             PushLayout::of::<GpuGiPush>(),
-            &[
-                (0, u32::from(target.has_phong)),
-                (1, u32::from(target.scene.has_ggx())),
-                (2, u32::from(target.scene.has_emission())),
-                (
-                    8,
-                    Environment::shader_kind(target.scene.environment.as_ref()),
-                ),
+            &crate::spec_constants![
+                HAS_PHONG = target.has_phong,
+                HAS_GGX = target.scene.has_ggx(),
+                HAS_EMISSION = target.scene.has_emission(),
+                ENVIRONMENT = Environment::shader_kind(target.scene.environment.as_ref()),
             ],
         )?;
         let ext = target.grid.extent_voxels();

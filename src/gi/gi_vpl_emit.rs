@@ -274,10 +274,10 @@ impl GiVplEmit {
         let pipeline = ctx.compute_pipeline(
             "gi_vpl_emit.comp",
             PushLayout::of::<GpuVplGeneratePush>(),
-            &[
-                (2, if has_surfaces { per_set } else { 0 }),
-                (3, u32::from(lobes)),
-                (4, u32::from(maps.is_some())),
+            &crate::spec_constants![
+                SOURCE_VPLS = if has_surfaces { per_set } else { 0 },
+                HAS_LOBES = lobes,
+                HAS_MAPS = maps.is_some(),
             ],
         )?;
         let bytes = std::mem::size_of_val(table.as_slice()) as u64;

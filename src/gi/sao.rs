@@ -114,8 +114,16 @@ pub struct Sao {
 
 impl Sao {
     pub fn new(ctx: &Context, push: GpuSaoPush) -> Result<Self, VkError> {
-        let depth_first = ctx.compute_pipeline("sao_depth.comp", None, &[(0, 1)])?;
-        let depth = ctx.compute_pipeline("sao_depth.comp", None, &[(0, 0)])?;
+        let depth_first = ctx.compute_pipeline(
+            "sao_depth.comp",
+            None,
+            &crate::spec_constants![FIRST = true],
+        )?;
+        let depth = ctx.compute_pipeline(
+            "sao_depth.comp",
+            None,
+            &crate::spec_constants![FIRST = false],
+        )?;
         let sao = ctx.compute_pipeline("sao.comp", PushLayout::of::<GpuSaoPush>(), &[])?;
         let blur =
             ctx.compute_pipeline("sao_blur.comp", PushLayout::of::<GpuSaoBlurPush>(), &[])?;

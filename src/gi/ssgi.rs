@@ -145,22 +145,22 @@ impl Ssgi {
         let input = ctx.compute_pipeline(
             "ssgi_input.comp",
             PushLayout::of::<GpuSsgiInputPush>(),
-            &[(0, u32::from(settings.feedback))],
+            &crate::spec_constants![FEEDBACK = settings.feedback],
         )?;
         let mip = ctx.compute_pipeline(
             "ssgi_mip.comp",
             None,
-            &[(0, u32::from(settings.mips == SsgiMips::Voting))],
+            &crate::spec_constants![VOTING = settings.mips == SsgiMips::Voting],
         )?;
         let gather = ctx.compute_pipeline(
             "ssgi_gather.comp",
             PushLayout::of::<GpuSsgiGatherPush>(),
-            &[(0, 1)],
+            &crate::spec_constants![HAS_COARSER = true],
         )?;
         let gather_top = ctx.compute_pipeline(
             "ssgi_gather.comp",
             PushLayout::of::<GpuSsgiGatherPush>(),
-            &[(0, 0)],
+            &crate::spec_constants![HAS_COARSER = false],
         )?;
         let glossy = target.has_phong || target.scene.has_ggx();
         let ssr = (settings.ssr && glossy)
@@ -169,10 +169,10 @@ impl Ssgi {
         let upsample = ctx.compute_pipeline(
             "ssgi_upsample.comp",
             PushLayout::of::<GpuSsgiUpsamplePush>(),
-            &[
-                (0, u32::from(target.has_phong)),
-                (1, u32::from(target.scene.has_ggx())),
-                (2, u32::from(ssr.is_some())),
+            &crate::spec_constants![
+                HAS_PHONG = target.has_phong,
+                HAS_GGX = target.scene.has_ggx(),
+                SSR = ssr.is_some(),
             ],
         )?;
         let (history, prev_camera) = Self::create_history(ctx, target.size)?;

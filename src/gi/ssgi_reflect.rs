@@ -108,12 +108,20 @@ impl Ssr {
         history_weight: f32,
         rays: SsrRays,
     ) -> Result<Self, VkError> {
-        let hiz_first = ctx.compute_pipeline("ssgi_reflect_hiz.comp", None, &[(0, 1)])?;
-        let hiz = ctx.compute_pipeline("ssgi_reflect_hiz.comp", None, &[(0, 0)])?;
+        let hiz_first = ctx.compute_pipeline(
+            "ssgi_reflect_hiz.comp",
+            None,
+            &crate::spec_constants![FIRST = true],
+        )?;
+        let hiz = ctx.compute_pipeline(
+            "ssgi_reflect_hiz.comp",
+            None,
+            &crate::spec_constants![FIRST = false],
+        )?;
         let reflect = ctx.compute_pipeline(
             "ssgi_reflect.comp",
             PushLayout::of::<GpuSsrPush>(),
-            &[(0, u32::from(rays == SsrRays::Lobe))],
+            &crate::spec_constants![LOBE = rays == SsrRays::Lobe],
         )?;
         let blur = ctx.compute_pipeline("ssgi_reflect_blur.comp", None, &[])?;
         let (w, h) = target.size;

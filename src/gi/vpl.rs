@@ -214,11 +214,11 @@ impl VplPasses {
         let generate = ctx.compute_pipeline(
             "gi_vpl_generate.comp",
             PushLayout::of::<GpuVplGeneratePush>(),
-            &[
-                (0, u32::from(v.normalize == VplNormalize::Valid)),
-                (1, u32::from(v.spot_sampling == VplSpotSampling::Disk)),
-                (2, layout.sources),
-                (3, u32::from(target.scene.has_ggx())),
+            &crate::spec_constants![
+                NORMALIZE_VALID = v.normalize == VplNormalize::Valid,
+                SPOT_DISK = v.spot_sampling == VplSpotSampling::Disk,
+                SOURCE_VPLS = layout.sources,
+                HAS_GGX = target.scene.has_ggx(),
             ],
         )?;
         let shader = match v.shading {
@@ -230,10 +230,10 @@ impl VplPasses {
         let gather = ctx.compute_pipeline(
             shader,
             PushLayout::of::<GpuVplGatherPush>(),
-            &[
-                (0, u32::from(target.has_phong)),
-                (1, u32::from(target.scene.has_ggx())),
-                (2, v.min_roughness.to_bits()),
+            &crate::spec_constants![
+                HAS_PHONG = target.has_phong,
+                HAS_GGX = target.scene.has_ggx(),
+                MIN_ROUGHNESS = v.min_roughness,
             ],
         )?;
         let points = v
@@ -253,7 +253,7 @@ impl VplPasses {
                 ctx.compute_pipeline(
                     "gi_vpl_bounce.comp",
                     PushLayout::of::<GpuVplGeneratePush>(),
-                    &[(2, layout.sources), (3, u32::from(lobes))],
+                    &crate::spec_constants![SOURCE_VPLS = layout.sources, HAS_LOBES = lobes],
                 )
             })
             .transpose()?;

@@ -103,7 +103,7 @@ impl TaaPass {
         let pipeline = ctx.compute_pipeline(
             "taa.comp",
             PushLayout::of::<GpuTaaPush>(),
-            &[(0, u32::from(motion))],
+            &crate::spec_constants![MOTION = motion],
         )?;
         let history = ctx.create_zeroed_image(
             &Self::history_desc((w, h)),

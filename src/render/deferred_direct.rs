@@ -25,11 +25,11 @@ impl DeferredDirectPass {
         let pipeline = ctx.compute_pipeline(
             "deferred_direct.comp",
             None,
-            &[
-                (0, u32::from(phong)),
-                (1, u32::from(ggx)),
-                (2, u32::from(emission)),
-                (8, environment),
+            &crate::spec_constants![
+                HAS_PHONG = phong,
+                HAS_GGX = ggx,
+                HAS_EMISSION = emission,
+                ENVIRONMENT = environment,
             ],
         )?;
         Ok(Self { pipeline, sampler })

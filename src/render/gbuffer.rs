@@ -159,19 +159,20 @@ impl GbufferPass {
             true => "gbuffer_multiview",
             false => "gbuffer",
         };
-        let mut spec = vec![
-            (0, u32::from(f.phong)),
-            (1, u32::from(f.textures)),
-            (2, u32::from(f.bump)),
-            (3, u32::from(f.dissolve)),
-            (4, u32::from(f.ggx)),
-            (5, u32::from(f.emission)),
-            (6, u32::from(f.pbr_maps)),
-            (7, u32::from(f.motion)),
-            (9, u32::from(f.alpha_maps)),
-        ];
+        let mut spec = crate::spec_constants![
+            HAS_PHONG = f.phong,
+            HAS_TEXTURES = f.textures,
+            HAS_BUMP = f.bump,
+            HAS_DISSOLVE = f.dissolve,
+            HAS_GGX = f.ggx,
+            HAS_EMISSION = f.emission,
+            HAS_PBR_MAPS = f.pbr_maps,
+            HAS_MOTION = f.motion,
+            HAS_ALPHA_MAP = f.alpha_maps,
+        ]
+        .to_vec();
         if multiview {
-            spec.push((8, u32::from(flush_instance)));
+            spec.extend(crate::spec_constants![FLUSH_INSTANCE = flush_instance]);
         }
         let pipeline = ctx.graphics_pipeline(&GraphicsPipelineDesc {
             vertex: format!("{stem}.vert"),

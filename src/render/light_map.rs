@@ -75,13 +75,14 @@ impl LightMapPass {
             depth_bias: false,
             logic_op: None,
             view_mask: 0,
-            spec: vec![
-                (0, u32::from(has_dissolve)),
-                (1, u32::from(has_ggx)),
-                (2, u32::from(area_lights)),
-                (3, u32::from(has_maps || has_alpha_maps)),
-                (4, u32::from(has_alpha_maps)),
-            ],
+            spec: crate::spec_constants![
+                HAS_DISSOLVE = has_dissolve,
+                HAS_GGX = has_ggx,
+                AREA_LIGHT_MAPS = area_lights,
+                HAS_MAPS = has_maps || has_alpha_maps,
+                HAS_ALPHA_MAP = has_alpha_maps,
+            ]
+            .to_vec(),
         })?;
         Ok(Self {
             pipeline,

@@ -45,12 +45,13 @@ impl OitGatherPass {
             depth_bias: false,
             logic_op: None,
             view_mask: 0,
-            spec: vec![
-                (0, u32::from(phong)),
-                (1, u32::from(ggx)),
-                (2, u32::from(textures)),
-                (3, u32::from(alpha_maps)),
-            ],
+            spec: crate::spec_constants![
+                HAS_PHONG = phong,
+                HAS_GGX = ggx,
+                HAS_TEXTURES = textures,
+                HAS_ALPHA_MAP = alpha_maps,
+            ]
+            .to_vec(),
         })?;
         Ok(Self { pipeline })
     }

@@ -17,7 +17,11 @@ pub struct OitResolvePass {
 impl OitResolvePass {
     /// `sampler`: the nearest-neighbour sampler the opaque radiance is read with.
     pub fn new(ctx: &Context, sampler: vk::Sampler) -> Result<Self, VkError> {
-        let pipeline = ctx.compute_pipeline("oit_resolve.comp", None, &[(0, MAX_LAYERS)])?;
+        let pipeline = ctx.compute_pipeline(
+            "oit_resolve.comp",
+            None,
+            &crate::spec_constants![K = MAX_LAYERS],
+        )?;
         Ok(Self { pipeline, sampler })
     }
 

@@ -67,7 +67,11 @@ impl ShadowDepthPass {
             depth_bias: false,
             logic_op: None,
             view_mask: 0,
-            spec: vec![(0, u32::from(has_dissolve)), (1, u32::from(has_alpha_maps))],
+            spec: crate::spec_constants![
+                HAS_DISSOLVE = has_dissolve,
+                HAS_ALPHA_MAP = has_alpha_maps
+            ]
+            .to_vec(),
         })?;
         let caches = if cached {
             (0..MAX_SHADOW_VIEWS)

@@ -184,53 +184,122 @@ fn feature_enabled(f: &vk::PhysicalDeviceFeatures, name: &str) -> bool {
     }
 }
 
+/// The instance layers and extensions a context enables: validation (with debug utils) when
+/// asked for, debug utils where available (object names), and the caller's extensions.
+struct InstanceLayers {
+    layers: Vec<*const i8>,
+    extensions: Vec<*const i8>,
+    debug_utils_available: bool,
+}
+
+/// Checks that what `desc` asks of the instance exists and lists it (the pointers are to
+/// `'static` names: the validation layer's, ash's extension names, and `desc`'s).
+fn instance_layers(entry: &ash::Entry, desc: &ContextDesc) -> Result<InstanceLayers, VkError> {
+    let available_ext: Vec<CString> = entry
+        .enumerate_instance_extension_properties(None)
+        .map_err(VkError::vk("enumerate instance extensions"))?
+        .iter()
+        // SAFETY: extension_name is a NUL-terminated array filled by the loader.
+        .map(|p| unsafe { CStr::from_ptr(p.extension_name.as_ptr()) }.to_owned())
+        .collect();
+    let has_ext = |name: &CStr| available_ext.iter().any(|e| e.as_c_str() == name);
+    let debug_utils_available = has_ext(ext::DebugUtils::name());
+
+    let mut layers: Vec<*const i8> = Vec::new();
+    let validation_layer = c"VK_LAYER_KHRONOS_validation";
+    if desc.validation {
+        let layer_present = entry
+            .enumerate_instance_layer_properties()
+            .map_err(VkError::vk("enumerate instance layers"))?
+            .iter()
+            // SAFETY: layer_name is a NUL-terminated array filled by the loader.
+            .any(|l| unsafe { CStr::from_ptr(l.layer_name.as_ptr()) } == validation_layer);
+        if !layer_present {
+            return Err(VkError::MissingValidationLayer);
+        }
+        if !debug_utils_available {
+            return Err(VkError::MissingInstanceExtension(
+                "VK_EXT_debug_utils".into(),
+            ));
+        }
+        layers.push(validation_layer.as_ptr());
+    }
+
+    let mut extensions: Vec<*const i8> = Vec::new();
+    if debug_utils_available {
+        extensions.push(ext::DebugUtils::name().as_ptr());
+    }
+    for e in &desc.instance_extensions {
+        if !has_ext(e) {
+            return Err(VkError::MissingInstanceExtension(
+                e.to_string_lossy().into(),
+            ));
+        }
+        extensions.push(e.as_ptr());
+    }
+    Ok(InstanceLayers {
+        layers,
+        extensions,
+        debug_utils_available,
+    })
+}
+
+/// The logical device with one queue of `queue_family` and the features voxgi uses
+/// (multiview where the device has it; the swapchain extension for a window).
+fn create_device(
+    instance: &ash::Instance,
+    physical_device: vk::PhysicalDevice,
+    queue_family: u32,
+    info: &DeviceInfo,
+    desc: &ContextDesc,
+) -> Result<ash::Device, vk::Result> {
+    let priorities = [1.0f32];
+    let queue_info = [vk::DeviceQueueCreateInfo::builder()
+        .queue_family_index(queue_family)
+        .queue_priorities(&priorities)
+        .build()];
+    let features = vk::PhysicalDeviceFeatures::builder()
+        .geometry_shader(true)
+        .logic_op(true)
+        .fragment_stores_and_atomics(true)
+        .sampler_anisotropy(true)
+        .independent_blend(true)
+        // Out-of-range buffer reads return zero instead of faulting: the ray tests rely on
+        // it only as a safety net, and the validation layers check every access anyway.
+        .robust_buffer_access(desc.validation)
+        .build();
+    // maintenance4 is mandatory in Vulkan 1.3; shaderc's SPIR-V 1.6 relies on it (LocalSizeId).
+    let mut features13 = vk::PhysicalDeviceVulkan13Features::builder()
+        .dynamic_rendering(true)
+        .synchronization2(true)
+        .maintenance4(true);
+    let mut features12 = vk::PhysicalDeviceVulkan12Features::builder().host_query_reset(true);
+    // Optional: stereo renders both eyes' G-buffer in one pass with it.
+    let mut features11 = vk::PhysicalDeviceVulkan11Features::builder().multiview(info.multiview);
+    let mut device_ext: Vec<*const i8> = vec![khr::PushDescriptor::name().as_ptr()];
+    if desc.swapchain {
+        device_ext.push(khr::Swapchain::name().as_ptr());
+    }
+    let device_info = vk::DeviceCreateInfo::builder()
+        .queue_create_infos(&queue_info)
+        .enabled_features(&features)
+        .enabled_extension_names(&device_ext)
+        .push_next(&mut features13)
+        .push_next(&mut features12)
+        .push_next(&mut features11);
+    // SAFETY: physical_device comes from this instance; all pointers refer to live locals.
+    unsafe { instance.create_device(physical_device, &device_info, None) }
+}
+
 impl Context {
     pub fn new(desc: &ContextDesc) -> Result<Self, VkError> {
         // SAFETY: loads the system Vulkan loader; the returned Entry keeps the library alive.
         let entry = unsafe { ash::Entry::load() }.map_err(|e| VkError::NoLoader(e.to_string()))?;
-
-        let available_ext: Vec<CString> = entry
-            .enumerate_instance_extension_properties(None)
-            .map_err(VkError::vk("enumerate instance extensions"))?
-            .iter()
-            // SAFETY: extension_name is a NUL-terminated array filled by the loader.
-            .map(|p| unsafe { CStr::from_ptr(p.extension_name.as_ptr()) }.to_owned())
-            .collect();
-        let has_ext = |name: &CStr| available_ext.iter().any(|e| e.as_c_str() == name);
-        let debug_utils_available = has_ext(ext::DebugUtils::name());
-
-        let mut layers: Vec<*const i8> = Vec::new();
-        let validation_layer = c"VK_LAYER_KHRONOS_validation";
-        if desc.validation {
-            let layer_present = entry
-                .enumerate_instance_layer_properties()
-                .map_err(VkError::vk("enumerate instance layers"))?
-                .iter()
-                // SAFETY: layer_name is a NUL-terminated array filled by the loader.
-                .any(|l| unsafe { CStr::from_ptr(l.layer_name.as_ptr()) } == validation_layer);
-            if !layer_present {
-                return Err(VkError::MissingValidationLayer);
-            }
-            if !debug_utils_available {
-                return Err(VkError::MissingInstanceExtension(
-                    "VK_EXT_debug_utils".into(),
-                ));
-            }
-            layers.push(validation_layer.as_ptr());
-        }
-
-        let mut extensions: Vec<*const i8> = Vec::new();
-        if debug_utils_available {
-            extensions.push(ext::DebugUtils::name().as_ptr());
-        }
-        for e in &desc.instance_extensions {
-            if !has_ext(e) {
-                return Err(VkError::MissingInstanceExtension(
-                    e.to_string_lossy().into(),
-                ));
-            }
-            extensions.push(e.as_ptr());
-        }
+        let InstanceLayers {
+            layers,
+            extensions,
+            debug_utils_available,
+        } = instance_layers(&entry, desc)?;
 
         let app_name = c"voxgi";
         let app_info = vk::ApplicationInfo::builder()
@@ -299,44 +368,7 @@ impl Context {
             info.name,
             info.device_type
         );
-
-        let priorities = [1.0f32];
-        let queue_info = [vk::DeviceQueueCreateInfo::builder()
-            .queue_family_index(queue_family)
-            .queue_priorities(&priorities)
-            .build()];
-        let features = vk::PhysicalDeviceFeatures::builder()
-            .geometry_shader(true)
-            .logic_op(true)
-            .fragment_stores_and_atomics(true)
-            .sampler_anisotropy(true)
-            .independent_blend(true)
-            // Out-of-range buffer reads return zero instead of faulting: the ray tests rely on
-            // it only as a safety net, and the validation layers check every access anyway.
-            .robust_buffer_access(desc.validation)
-            .build();
-        // maintenance4 is mandatory in Vulkan 1.3; shaderc's SPIR-V 1.6 relies on it (LocalSizeId).
-        let mut features13 = vk::PhysicalDeviceVulkan13Features::builder()
-            .dynamic_rendering(true)
-            .synchronization2(true)
-            .maintenance4(true);
-        let mut features12 = vk::PhysicalDeviceVulkan12Features::builder().host_query_reset(true);
-        // Optional: stereo renders both eyes' G-buffer in one pass with it.
-        let mut features11 =
-            vk::PhysicalDeviceVulkan11Features::builder().multiview(info.multiview);
-        let mut device_ext: Vec<*const i8> = vec![khr::PushDescriptor::name().as_ptr()];
-        if desc.swapchain {
-            device_ext.push(khr::Swapchain::name().as_ptr());
-        }
-        let device_info = vk::DeviceCreateInfo::builder()
-            .queue_create_infos(&queue_info)
-            .enabled_features(&features)
-            .enabled_extension_names(&device_ext)
-            .push_next(&mut features13)
-            .push_next(&mut features12)
-            .push_next(&mut features11);
-        // SAFETY: physical_device comes from this instance; all pointers refer to live locals.
-        let device = unsafe { instance.create_device(physical_device, &device_info, None) }
+        let device = create_device(&instance, physical_device, queue_family, &info, desc)
             .map_err(|r| release_instance(VkError::vk("create the logical device")(r)))?;
         let release_device = |e: VkError| {
             // SAFETY: the device is idle and nothing created from it is alive.

@@ -17,11 +17,11 @@ pub use context::{
 };
 pub use frame::{FrameLoop, FrameSlot, PassTiming, TimestampRecorder, MAX_FRAMES_IN_FLIGHT};
 pub use pipeline::{
-    check_push_against, check_struct_against, descriptor_type, interface_of, Bindable,
-    ComputePipeline, Descriptor, GraphicsPipeline, GraphicsPipelineDesc, Pipeline, PipelineHandle,
-    PushLayout, Sampler, ShaderModule,
+    check_push_against, check_spec_against, check_struct_against, descriptor_type, interface_of,
+    Bindable, ComputePipeline, Descriptor, GraphicsPipeline, GraphicsPipelineDesc, Pipeline,
+    PipelineHandle, PushLayout, Sampler, ShaderModule,
 };
-pub use reflect::{BindingKind, GpuStruct, PushConstants, ShaderInterface};
+pub use reflect::{BindingKind, GpuStruct, PushConstants, ShaderInterface, SpecEntry, SpecValue};
 pub use release::ReleaseQueue;
 pub use resources::{Arena, Buffer, BufferDesc, Image, ImageDesc, MemoryLocation};
 pub use swapchain::{surface_extensions, Acquired, Swapchain};

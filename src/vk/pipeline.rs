@@ -1,7 +1,7 @@
 //! Shader modules, compute and graphics pipelines with one push-descriptor set whose layout
 //! is reflected from the shaders, samplers.
 
-use super::reflect::{self, BindingKind, PushConstants, ShaderInterface};
+use super::reflect::{self, BindingKind, PushConstants, ShaderInterface, SpecEntry};
 use super::release::{Garbage, ReleaseQueue};
 use super::{shaders, Context, VkError};
 use ash::vk;
@@ -109,6 +109,32 @@ fn check_push_layout(
             interface.name
         ))
     })
+}
+
+/// The (constant id, value) pairs of the named specialization constants `spec`, checked
+/// against those the pipeline's shaders declare (see [`reflect::check_spec`]).
+fn check_spec_values(
+    interface: &ShaderInterface,
+    spec: &[SpecEntry],
+) -> Result<Vec<(u32, u32)>, VkError> {
+    reflect::check_spec(&interface.spec, spec).map_err(|problems| {
+        // A pass is named after its shaders' file stem (`gbuffer.vert+gbuffer.frag`: `gbuffer`).
+        let pass = interface
+            .name
+            .split(['.', '+'])
+            .next()
+            .unwrap_or(&interface.name);
+        VkError::ShaderInterface(format!(
+            "pass `{pass}` (shader `{}`): specialization constants do not match the shader: {problems}",
+            interface.name
+        ))
+    })
+}
+
+/// Checks the named specialization constants `spec` against those the embedded shaders
+/// `files` declare, without a device (what creating their pipeline checks): for tier-1 tests.
+pub fn check_spec_against(files: &[&str], spec: &[SpecEntry]) -> Result<(), VkError> {
+    check_spec_values(interface_of(files)?, spec).map(|_| ())
 }
 
 /// Checks the Rust push struct `push` against the block the embedded shaders `files` declare,
@@ -292,20 +318,23 @@ impl Context {
 
     /// A compute pipeline of `glsl/<file_name>`. Its set-0 bindings and push-constant range
     /// come from the shader itself (reflected SPIR-V); `push` is the Rust struct pushed to it,
-    /// whose fields must match the shader's block by name, offset and size. `spec` holds
-    /// 32-bit specialization constants by constant id.
+    /// whose fields must match the shader's block by name, offset and size. `spec` names a value
+    /// for each specialization constant the shader declares ([`spec_constants!`]).
+    ///
+    /// [`spec_constants!`]: crate::spec_constants
     pub fn compute_pipeline(
         &self,
         file_name: &str,
         push: Option<PushLayout>,
-        spec: &[(u32, u32)],
+        spec: &[SpecEntry],
     ) -> Result<ComputePipeline, VkError> {
         let interface = interface_of(&[file_name])?;
         check_push_layout(interface, push.as_ref())?;
+        let spec = check_spec_values(interface, spec)?;
         let module = self.shader_module(file_name)?;
         let mut owner = self.pipeline_with_layout(vk::PipelineBindPoint::COMPUTE, interface)?;
         let layout = owner.layout;
-        let (entries, data) = spec_data(spec);
+        let (entries, data) = spec_data(&spec);
         let spec_info = vk::SpecializationInfo::builder()
             .map_entries(&entries)
             .data(&data);
@@ -367,6 +396,7 @@ impl Context {
         files.push(desc.fragment.as_str());
         let interface = interface_of(&files)?;
         check_push_layout(interface, desc.push.as_ref())?;
+        let spec = check_spec_values(interface, &desc.spec)?;
         let mut modules = vec![
             (
                 vk::ShaderStageFlags::VERTEX,
@@ -382,7 +412,7 @@ impl Context {
         }
         let mut owner = self.pipeline_with_layout(vk::PipelineBindPoint::GRAPHICS, interface)?;
         let layout = owner.layout;
-        let (entries, data) = spec_data(&desc.spec);
+        let (entries, data) = spec_data(&spec);
         let spec_info = vk::SpecializationInfo::builder()
             .map_entries(&entries)
             .data(&data);
@@ -669,8 +699,9 @@ pub struct GraphicsPipelineDesc {
     pub depth_bias: bool,
     /// Logic op on every color attachment (e.g. OR for binary voxel columns).
     pub logic_op: Option<vk::LogicOp>,
-    /// 32-bit specialization constants (constant id, value), applied to every stage.
-    pub spec: Vec<(u32, u32)>,
+    /// Specialization constants by GLSL name ([`spec_constants!`](crate::spec_constants)),
+    /// applied to every stage; together the stages must declare exactly these.
+    pub spec: Vec<SpecEntry>,
     /// Multiview (`VkPipelineRenderingCreateInfo::viewMask`): the views the pipeline renders
     /// in one draw, one bit per attachment layer; 0 for an ordinary single-view pipeline. The
     /// pass that binds it begins rendering with the same mask.
@@ -698,5 +729,42 @@ impl GraphicsPipelineDesc {
             view_mask: 0,
             spec: vec![],
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::vk::reflect::SpecValue;
+
+    /// What creating the light-map pipeline checks, without a device: its three stages
+    /// together declare four constants, and a wrong type or a missing one is an error naming
+    /// the pass, the shaders and the constant.
+    #[test]
+    fn spec_constants_are_checked_at_pipeline_creation() {
+        let files = ["light_map.vert", "light_map.geom", "light_map.frag"];
+        let good = crate::spec_constants![
+            HAS_DISSOLVE = false,
+            HAS_GGX = true,
+            AREA_LIGHT_MAPS = true,
+            HAS_MAPS = false,
+        ];
+        assert!(check_spec_against(&files, &good).is_ok());
+        let mut wrong = good;
+        wrong[2] = ("AREA_LIGHT_MAPS", SpecValue::Uint(1));
+        let err = check_spec_against(&files, &wrong).unwrap_err().to_string();
+        assert!(
+            err.contains(
+                "pass `light_map` (shader `light_map.vert+light_map.geom+light_map.frag`)"
+            ) && err.contains("`AREA_LIGHT_MAPS` is a bool in the shader but given a uint"),
+            "{err}"
+        );
+        let err = check_spec_against(&files, &good[..3])
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("`HAS_MAPS` (bool at constant_id 3) is not given a value"),
+            "{err}"
+        );
     }
 }

@@ -1,12 +1,13 @@
-//! SPIR-V reflection: the descriptor bindings, the push-constant block and the layouts of the
-//! structs in buffer blocks a shader declares.
+//! SPIR-V reflection: the descriptor bindings, the push-constant block, the specialization
+//! constants and the layouts of the structs in buffer blocks a shader declares.
 //!
 //! The shader is the one statement of a pipeline's interface. Pipeline layouts are built from
 //! what this module reads out of the SPIR-V, and the render graph checks each pass's declared
 //! bindings against it (`graph::bind`), so a binding is never typed in twice. Rust structs
 //! that mirror push blocks ([`push_constants!`](crate::push_constants)) or buffer structs
 //! ([`gpu_struct!`](crate::gpu_struct)) are checked against the reflected layouts by name,
-//! offset and size. Pure logic: it reads the words `build.rs` embedded and needs no device.
+//! offset and size; specialization constants ([`spec_constants!`](crate::spec_constants)) by
+//! name and type. Pure logic: it reads the words `build.rs` embedded and needs no device.
 //!
 //! Only what voxgi's shaders use is understood: descriptor set 0, combined image samplers,
 //! storage images, storage and uniform buffers (arrays of them count as one binding with a
@@ -151,6 +152,106 @@ pub struct ShaderInterface {
     /// The structs of its storage and uniform buffer blocks (nested ones too) and the blocks
     /// themselves, by GLSL type name.
     pub structs: BTreeMap<String, StructLayout>,
+    /// Its specialization constants by GLSL name: those the compiled SPIR-V still declares
+    /// (the optimizer drops a constant no code reads).
+    pub spec: BTreeMap<String, SpecConstant>,
+}
+
+/// The scalar type of a specialization constant.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum SpecType {
+    Bool,
+    Uint,
+    Int,
+    Float,
+}
+
+impl SpecType {
+    pub fn glsl_name(self) -> &'static str {
+        match self {
+            SpecType::Bool => "bool",
+            SpecType::Uint => "uint",
+            SpecType::Int => "int",
+            SpecType::Float => "float",
+        }
+    }
+}
+
+/// One specialization constant (`layout(constant_id = N) const T NAME`). The workgroup size
+/// set by `layout(local_size_x_id = N) in;` has no GLSL name and is called `local_size_x`
+/// (`_y`, `_z`) after its layout qualifier.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct SpecConstant {
+    pub name: String,
+    pub id: u32,
+    pub ty: SpecType,
+}
+
+/// A value for a specialization constant, typed so that a `bool` cannot be given to a `uint`.
+/// Make lists of them with [`spec_constants!`](crate::spec_constants).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum SpecValue {
+    Bool(bool),
+    Uint(u32),
+    Int(i32),
+    Float(f32),
+}
+
+impl SpecValue {
+    pub fn ty(self) -> SpecType {
+        match self {
+            SpecValue::Bool(_) => SpecType::Bool,
+            SpecValue::Uint(_) => SpecType::Uint,
+            SpecValue::Int(_) => SpecType::Int,
+            SpecValue::Float(_) => SpecType::Float,
+        }
+    }
+
+    /// The 32 bits Vulkan reads: a `VkBool32` (0 or 1) for a bool, the value's bits otherwise.
+    pub fn bits(self) -> u32 {
+        match self {
+            SpecValue::Bool(b) => u32::from(b),
+            SpecValue::Uint(v) => v,
+            SpecValue::Int(v) => v as u32,
+            SpecValue::Float(v) => v.to_bits(),
+        }
+    }
+}
+
+impl From<bool> for SpecValue {
+    fn from(v: bool) -> Self {
+        SpecValue::Bool(v)
+    }
+}
+impl From<u32> for SpecValue {
+    fn from(v: u32) -> Self {
+        SpecValue::Uint(v)
+    }
+}
+impl From<i32> for SpecValue {
+    fn from(v: i32) -> Self {
+        SpecValue::Int(v)
+    }
+}
+impl From<f32> for SpecValue {
+    fn from(v: f32) -> Self {
+        SpecValue::Float(v)
+    }
+}
+
+/// A named specialization constant value, as [`spec_constants!`](crate::spec_constants) lists
+/// them.
+pub type SpecEntry = (&'static str, SpecValue);
+
+/// The specialization constants of a pipeline by their GLSL names, checked against the SPIR-V
+/// when the pipeline is created: `spec_constants![HAS_PHONG = phong, K = MAX_LAYERS]` is an
+/// array of [`SpecEntry`]. The value's Rust type picks the GLSL type it must match (`bool`,
+/// `u32` for `uint`, `i32` for `int`, `f32` for `float`).
+#[macro_export]
+macro_rules! spec_constants {
+    ($($name:ident = $value:expr),* $(,)?) => {
+        [$((stringify!($name), $crate::vk::reflect::SpecValue::from($value))),*]
+    };
 }
 
 /// Why a shader's interface could not be read.
@@ -180,6 +281,15 @@ pub enum ReflectError {
     },
     #[error("pipeline `{pipeline}`: its stages lay out struct `{name}` differently: declare it the same way in every stage")]
     StructConflict { pipeline: String, name: String },
+    #[error("pipeline `{pipeline}`: its stages declare specialization constant `{name}` differently ({a} vs {b}): give it the same constant_id and type in every stage")]
+    SpecConflict {
+        pipeline: String,
+        name: String,
+        a: String,
+        b: String,
+    },
+    #[error("shader `{shader}`: specialization constant id {id} has no name: declare it as `layout(constant_id = {id}) const T NAME`")]
+    UnnamedSpec { shader: String, id: u32 },
     #[error("pipeline `{pipeline}`: the push-constant blocks of its stages disagree on member `{member}` ({a} vs {b}): declare the same block in every stage")]
     PushConflict {
         pipeline: String,
@@ -192,6 +302,7 @@ pub enum ReflectError {
 // SPIR-V opcodes, decorations and storage classes used here (SPIR-V 1.6 specification, §3).
 const OP_NAME: u16 = 5;
 const OP_MEMBER_NAME: u16 = 6;
+const OP_TYPE_BOOL: u16 = 20;
 const OP_TYPE_INT: u16 = 21;
 const OP_TYPE_FLOAT: u16 = 22;
 const OP_TYPE_VECTOR: u16 = 23;
@@ -204,10 +315,15 @@ const OP_TYPE_RUNTIME_ARRAY: u16 = 29;
 const OP_TYPE_STRUCT: u16 = 30;
 const OP_TYPE_POINTER: u16 = 32;
 const OP_CONSTANT: u16 = 43;
+const OP_SPEC_CONSTANT_TRUE: u16 = 48;
+const OP_SPEC_CONSTANT_FALSE: u16 = 49;
+const OP_SPEC_CONSTANT: u16 = 50;
 const OP_VARIABLE: u16 = 59;
 const OP_DECORATE: u16 = 71;
+const OP_EXECUTION_MODE_ID: u16 = 331;
 const OP_MEMBER_DECORATE: u16 = 72;
 
+const DEC_SPEC_ID: u32 = 1;
 const DEC_BLOCK: u32 = 2;
 const DEC_BUFFER_BLOCK: u32 = 3;
 const DEC_ARRAY_STRIDE: u32 = 6;
@@ -217,6 +333,7 @@ const DEC_NON_READABLE: u32 = 25;
 const DEC_BINDING: u32 = 33;
 const DEC_DESCRIPTOR_SET: u32 = 34;
 const DEC_OFFSET: u32 = 35;
+const EXECUTION_MODE_LOCAL_SIZE_ID: u32 = 38;
 
 const SC_UNIFORM_CONSTANT: u32 = 0;
 const SC_UNIFORM: u32 = 2;
@@ -267,6 +384,12 @@ struct Module {
     constants: HashMap<u32, u32>,
     /// (id, pointer type, storage class)
     variables: Vec<(u32, u32, u32)>,
+    /// The scalar type of each scalar type id (bool, int, float), for specialization constants.
+    scalar_types: HashMap<u32, SpecType>,
+    /// (result id, type id) of each scalar specialization constant, in module order.
+    spec_constants: Vec<(u32, u32)>,
+    /// The x, y and z operands of `OpExecutionModeId … LocalSizeId` (`local_size_x_id`).
+    local_size_ids: Vec<u32>,
 }
 
 impl Module {
@@ -300,6 +423,21 @@ impl Module {
                     .push((at(2), at(3))),
                 OP_TYPE_INT | OP_TYPE_FLOAT => {
                     m.types.insert(at(0), Type::Scalar { bytes: at(1) / 8 });
+                    let ty = match (opcode, at(2)) {
+                        (OP_TYPE_FLOAT, _) => SpecType::Float,
+                        (_, 0) => SpecType::Uint,
+                        _ => SpecType::Int,
+                    };
+                    m.scalar_types.insert(at(0), ty);
+                }
+                OP_TYPE_BOOL => {
+                    m.scalar_types.insert(at(0), SpecType::Bool);
+                }
+                OP_SPEC_CONSTANT_TRUE | OP_SPEC_CONSTANT_FALSE | OP_SPEC_CONSTANT => {
+                    m.spec_constants.push((at(1), at(0)));
+                }
+                OP_EXECUTION_MODE_ID if at(1) == EXECUTION_MODE_LOCAL_SIZE_ID => {
+                    m.local_size_ids = ops.get(2..).unwrap_or(&[]).to_vec();
                 }
                 OP_TYPE_VECTOR => {
                     m.types.insert(
@@ -470,6 +608,52 @@ impl Module {
     }
 }
 
+impl Module {
+    /// The specialization constants by name. glslang may emit one `constant_id` twice (the
+    /// workgroup size's constant appears once in the execution mode and once in
+    /// `gl_WorkGroupSize`), so the
+    /// constants are grouped by id; a group takes the name one of its members has, else, for a
+    /// component of the workgroup size, `local_size_x`, `_y` or `_z`.
+    fn spec(&self, shader: &str) -> Result<BTreeMap<String, SpecConstant>, ReflectError> {
+        let mut by_id: BTreeMap<u32, (String, SpecType)> = BTreeMap::new();
+        for &(id, ty) in &self.spec_constants {
+            let Some(spec_id) = self.decoration(id, DEC_SPEC_ID) else {
+                continue;
+            };
+            let Some(&ty) = self.scalar_types.get(&ty) else {
+                continue;
+            };
+            let entry = by_id.entry(spec_id).or_insert((String::new(), ty));
+            if entry.0.is_empty() {
+                entry.0 = self.name_of(id);
+            }
+            if entry.0.is_empty() {
+                entry.0 = self.workgroup_component(id).unwrap_or_default();
+            }
+        }
+        let mut out = BTreeMap::new();
+        for (id, (name, ty)) in by_id {
+            if name.is_empty() {
+                return Err(ReflectError::UnnamedSpec {
+                    shader: shader.into(),
+                    id,
+                });
+            }
+            out.insert(name.clone(), SpecConstant { name, id, ty });
+        }
+        Ok(out)
+    }
+
+    /// `local_size_x` (`_y`, `_z`) when constant `id` is that component of the workgroup size
+    /// (the operands of the LocalSizeId execution mode).
+    fn workgroup_component(&self, id: u32) -> Option<String> {
+        let k = self.local_size_ids.iter().position(|&x| x == id)?;
+        ["local_size_x", "local_size_y", "local_size_z"]
+            .get(k)
+            .map(|n| (*n).to_string())
+    }
+}
+
 /// Decodes a nul-terminated SPIR-V literal string.
 fn string(words: &[u32]) -> String {
     let bytes: Vec<u8> = words
@@ -486,6 +670,7 @@ pub fn reflect(shader: &str, words: &[u32]) -> Result<ShaderInterface, ReflectEr
     let stage = Stages::of_file(shader).unwrap_or_default();
     let mut out = ShaderInterface {
         name: shader.into(),
+        spec: m.spec(shader)?,
         ..Default::default()
     };
     for &(var, pointer, class) in &m.variables {
@@ -659,6 +844,24 @@ pub fn merge(stages: &[ShaderInterface]) -> Result<ShaderInterface, ReflectError
                     out.structs.insert(struct_name.clone(), layout.clone());
                 }
             }
+        }
+        for (spec_name, c) in &s.spec {
+            let clash = out
+                .spec
+                .values()
+                .find(|x| (x.name == c.name || x.id == c.id) && *x != c);
+            if let Some(x) = clash {
+                let show = |c: &SpecConstant| {
+                    format!("`{}` {} at constant_id {}", c.name, c.ty.glsl_name(), c.id)
+                };
+                return Err(ReflectError::SpecConflict {
+                    pipeline: name,
+                    name: spec_name.clone(),
+                    a: show(x),
+                    b: show(c),
+                });
+            }
+            out.spec.insert(spec_name.clone(), c.clone());
         }
         if let Some(p) = &s.push {
             let merged = out.push.get_or_insert_with(Default::default);
@@ -848,6 +1051,57 @@ pub fn check_struct(
         _ => {}
     }
     problems_to_result(problems)
+}
+
+/// Checks the named values `given` against the shader's specialization constants `declared`
+/// and returns (constant id, 32-bit value) for each: every given name must be declared, with
+/// the value's type, and every declared constant given, so that a constant the shader starts
+/// reading cannot keep its GLSL default unnoticed. Returns what differs, for an error naming
+/// the pipeline.
+pub fn check_spec(
+    declared: &BTreeMap<String, SpecConstant>,
+    given: &[SpecEntry],
+) -> Result<Vec<(u32, u32)>, String> {
+    let mut problems = Vec::new();
+    let mut out = Vec::with_capacity(given.len());
+    for (k, &(name, value)) in given.iter().enumerate() {
+        match declared.get(name) {
+            None => problems.push(format!(
+                "`{name}` is not a specialization constant of the shader (it declares {})",
+                list(declared.keys())
+            )),
+            Some(c) if c.ty != value.ty() => problems.push(format!(
+                "`{name}` is a {} in the shader but given a {} ({value:?})",
+                c.ty.glsl_name(),
+                value.ty().glsl_name()
+            )),
+            Some(_) if given[..k].iter().any(|g| g.0 == name) => {
+                problems.push(format!("`{name}` is given twice"))
+            }
+            Some(c) => out.push((c.id, value.bits())),
+        }
+    }
+    for c in declared.values() {
+        if !given.iter().any(|g| g.0 == c.name) {
+            problems.push(format!(
+                "the shader's `{}` ({} at constant_id {}) is not given a value",
+                c.name,
+                c.ty.glsl_name(),
+                c.id
+            ));
+        }
+    }
+    problems_to_result(problems).map(|()| out)
+}
+
+/// `none` or the names in backticks, for messages.
+fn list<'a>(names: impl Iterator<Item = &'a String>) -> String {
+    let v: Vec<String> = names.map(|n| format!("`{n}`")).collect();
+    if v.is_empty() {
+        "none".into()
+    } else {
+        v.join(", ")
+    }
 }
 
 #[cfg(test)]
@@ -1093,5 +1347,118 @@ mod tests {
             err.contains("`drago_bias` (offset 12) has no field"),
             "{err}"
         );
+    }
+
+    fn spec_of(file: &str) -> BTreeMap<String, SpecConstant> {
+        reflect(file, &words(file)).unwrap().spec
+    }
+
+    /// `gi_vpl_gather.comp` (through `gi_vpl_gather_body.glsl`) declares `bool HAS_PHONG` at
+    /// constant_id 0, `bool HAS_GGX` at 1 and `float MIN_ROUGHNESS` at 2;
+    /// `voxelize_triangles.comp` sets its workgroup width with `local_size_x_id = 0`, a
+    /// constant without a GLSL name, which glslang emits twice (in the LocalSizeId execution
+    /// mode and in `gl_WorkGroupSize`).
+    #[test]
+    fn spec_constants_are_reflected_by_name_id_and_type() {
+        let spec = spec_of("gi_vpl_gather.comp");
+        let got: Vec<(&str, u32, SpecType)> = spec
+            .values()
+            .map(|c| (c.name.as_str(), c.id, c.ty))
+            .collect();
+        assert_eq!(
+            got,
+            [
+                ("HAS_GGX", 1, SpecType::Bool),
+                ("HAS_PHONG", 0, SpecType::Bool),
+                ("MIN_ROUGHNESS", 2, SpecType::Float),
+            ]
+        );
+        let size = spec_of("voxelize_triangles.comp");
+        assert_eq!(size.len(), 1);
+        assert_eq!(
+            size["local_size_x"],
+            SpecConstant {
+                name: "local_size_x".into(),
+                id: 0,
+                ty: SpecType::Uint
+            }
+        );
+        assert!(spec_of("tonemap.comp").is_empty());
+    }
+
+    #[test]
+    fn spec_values_are_checked_by_name_and_type() {
+        let spec = spec_of("gi_vpl_gather.comp");
+        let ok = check_spec(
+            &spec,
+            &crate::spec_constants![HAS_PHONG = true, HAS_GGX = false, MIN_ROUGHNESS = 0.5f32],
+        );
+        assert_eq!(ok, Ok(vec![(0, 1), (1, 0), (2, 0.5f32.to_bits())]));
+        // A misspelt name is unknown, and the constant it meant is left without a value.
+        let err = check_spec(
+            &spec,
+            &crate::spec_constants![HAS_PONG = true, HAS_GGX = false, MIN_ROUGHNESS = 0.5f32],
+        )
+        .unwrap_err();
+        assert!(
+            err.contains("`HAS_PONG` is not a specialization constant of the shader")
+                && err.contains("`HAS_PHONG` (bool at constant_id 0) is not given a value"),
+            "{err}"
+        );
+        // A bool given as a number, and a float given as its bits.
+        let err = check_spec(
+            &spec,
+            &crate::spec_constants![
+                HAS_PHONG = 1u32,
+                HAS_GGX = false,
+                MIN_ROUGHNESS = 0.5f32.to_bits()
+            ],
+        )
+        .unwrap_err();
+        assert!(
+            err.contains("`HAS_PHONG` is a bool in the shader but given a uint")
+                && err.contains("`MIN_ROUGHNESS` is a float in the shader but given a uint"),
+            "{err}"
+        );
+        let err = check_spec(
+            &spec,
+            &crate::spec_constants![
+                HAS_PHONG = true,
+                HAS_PHONG = true,
+                HAS_GGX = false,
+                MIN_ROUGHNESS = 0.0f32
+            ],
+        )
+        .unwrap_err();
+        assert!(err.contains("`HAS_PHONG` is given twice"), "{err}");
+    }
+
+    /// Vulkan applies one specialization to every stage by constant_id, so the stages of a
+    /// pipeline must agree on each constant's id and type: `light_map.geom` declares
+    /// `AREA_LIGHT_MAPS` at 2, `light_map.frag` `HAS_DISSOLVE`, `HAS_GGX` and `HAS_MAPS` at 0,
+    /// 1 and 3.
+    #[test]
+    fn stages_merge_their_spec_constants_and_conflicts_are_errors() {
+        let geom = reflect("light_map.geom", &words("light_map.geom")).unwrap();
+        let frag = reflect("light_map.frag", &words("light_map.frag")).unwrap();
+        let m = merge(&[geom.clone(), frag.clone()]).unwrap();
+        let ids: Vec<(&str, u32)> = m.spec.values().map(|c| (c.name.as_str(), c.id)).collect();
+        assert_eq!(
+            ids,
+            [
+                ("AREA_LIGHT_MAPS", 2),
+                ("HAS_DISSOLVE", 0),
+                ("HAS_GGX", 1),
+                ("HAS_MAPS", 3)
+            ]
+        );
+        let mut moved = geom;
+        if let Some(c) = moved.spec.get_mut("AREA_LIGHT_MAPS") {
+            c.id = 1;
+        }
+        assert!(matches!(
+            merge(&[moved, frag]),
+            Err(ReflectError::SpecConflict { .. })
+        ));
     }
 }

@@ -356,13 +356,13 @@ impl TriangleAttributes {
         let pipeline = ctx.compute_pipeline(
             "voxelize_attributes.comp",
             crate::vk::PushLayout::of::<GpuVoxelizePush>(),
-            &[(0, ATTRIBUTE_GROUP_SIZE)],
+            &crate::spec_constants![local_size_x = ATTRIBUTE_GROUP_SIZE],
         )?;
         let maps_used = values.maps;
         let resolve_pipeline = ctx.compute_pipeline(
             "voxelize_attributes_resolve.comp",
             crate::vk::PushLayout::of::<GpuVoxelizePush>(),
-            &[(0, u32::from(maps_used.albedo))],
+            &crate::spec_constants![HAS_MAPS = maps_used.albedo],
         )?;
         let spacing_m = owner_sample_spacing_m(grid.voxel_size_m());
         let emission_scale = PreExposure::of_scene(scene).store_scale();
@@ -646,7 +646,7 @@ impl OwnerValueWriter {
         let pipeline = ctx.compute_pipeline(
             &format!("{name}.comp"),
             crate::vk::PushLayout::of::<GpuVoxelizePush>(),
-            &[(0, u32::from(with_maps))],
+            &crate::spec_constants![HAS_MAPS = with_maps],
         )?;
         let values = TriangleRows::new(ctx, &format!("{name} values"), &rows, capacity)?;
         Ok(Self {

@@ -256,7 +256,7 @@ impl VoxelPipelines {
         let voxelize = ctx.compute_pipeline(
             "voxelize_triangles.comp",
             crate::vk::PushLayout::of::<GpuVoxelizePush>(),
-            &[(0, group_size.max(1))],
+            &crate::spec_constants![local_size_x = group_size.max(1)],
         )?;
         let mip = ctx.compute_pipeline("voxel_mip.comp", None, &[])?;
         let sampler = ctx.create_sampler(vk::Filter::NEAREST, false)?;

@@ -151,11 +151,12 @@ impl AtlasVolumes {
         let targets = 2 + usize::from(values.emission) + usize::from(values.material);
         desc.color_formats = vec![SUM_FORMAT; targets];
         desc.push = crate::vk::PushLayout::of::<GpuAtlasVoxelizePush>();
-        desc.spec = vec![
-            (0, u32::from(values.emission)),
-            (1, u32::from(values.material)),
-            (2, u32::from(values.maps.any())),
-        ];
+        desc.spec = crate::spec_constants![
+            HAS_EMISSION = values.emission,
+            HAS_MATERIAL = values.material,
+            HAS_MAPS = values.maps.any(),
+        ]
+        .to_vec();
         let splat = ctx.graphics_pipeline_additive(&desc)?;
         let push = crate::vk::PushLayout::of::<GpuAtlasResolvePush>;
         let resolve = ctx.compute_pipeline("voxelize_atlas_resolve.comp", push(), &[])?;

@@ -157,13 +157,9 @@ impl GiMethod {
     }
 }
 
-/// The panel's rays-per-pixel slider, for the methods that shoot rays per pixel.
+/// The panel's rays-per-pixel slider (`gi.rays`), for the methods that shoot rays per pixel.
 fn rays_slider(ui: &mut egui::Ui, gi: &mut GiSettings) {
-    ui.add(
-        egui::Slider::new(&mut gi.rays, crate::scene::gi_range::GI_RAYS.slider(1, 256))
-            .logarithmic(true)
-            .text("rays / pixel"),
-    );
+    crate::panel_keys::key_slider(ui, gi, "gi.rays", (1.0, 256.0), true, "rays / pixel");
 }
 
 #[cfg(test)]

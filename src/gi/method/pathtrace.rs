@@ -3,7 +3,6 @@
 //! `gi_pathtrace`.
 
 use super::super::gi_pathtrace::GiPathtrace;
-use super::super::Bounces;
 use super::{rays_slider, MethodSpec};
 
 pub(super) static SPEC: MethodSpec = MethodSpec {
@@ -45,17 +44,18 @@ pub(super) static SPEC: MethodSpec = MethodSpec {
         )
     },
     panel: |ui, gi, frames| {
+        use crate::panel_keys::{key_slider, key_switch};
+        use crate::scene::schema::Value;
         rays_slider(ui, gi);
-        let mut unbounded = gi.bounces == Bounces::Unbounded;
-        ui.checkbox(&mut unbounded, "unbounded (Russian roulette)");
-        match (unbounded, gi.bounces) {
-            (true, Bounces::Fixed(_)) => gi.bounces = Bounces::Unbounded,
-            (false, Bounces::Unbounded) => gi.bounces = Bounces::Fixed(2),
-            _ => {}
-        }
-        if let Bounces::Fixed(n) = &mut gi.bounces {
-            ui.add(egui::Slider::new(n, 1..=8).text("bounces"));
-        }
+        let unbounded = (Value::Word, Value::Count(2));
+        key_switch(
+            ui,
+            gi,
+            "gi.bounces",
+            "unbounded (Russian roulette)",
+            unbounded,
+        );
+        key_slider(ui, gi, "gi.bounces", (1.0, 8.0), false, "bounces");
         match frames {
             Some(n) => ui.label(format!("accumulated frames: {n}")),
             None => ui.label("accumulated frames: –"),

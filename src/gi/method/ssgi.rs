@@ -61,43 +61,25 @@ pub(super) static SPEC: MethodSpec = MethodSpec {
 /// The screen-space GI's parameters (Oetke 2017 §5.1–5.3): resolution, samples, mips,
 /// feedback.
 fn ssgi_controls(ui: &mut egui::Ui, gi: &mut GiSettings) {
-    use crate::gi::SsgiResolution;
-    let s = &mut gi.ssgi;
-    egui::ComboBox::from_label("GI resolution")
-        .selected_text(format!("1/{}", s.resolution.divisor()))
-        .show_ui(ui, |ui| {
-            for (_, r) in SsgiResolution::NAMES {
-                ui.selectable_value(&mut s.resolution, r, format!("1/{}", r.divisor()));
-            }
-        });
-    ui.add(
-        egui::Slider::new(
-            &mut s.samples,
-            crate::scene::gi_range::SSGI_SAMPLES.slider(8, 256),
-        )
-        .logarithmic(true)
-        .text("samples / texel / level"),
+    use crate::panel_keys::{key_checkbox, key_choice, key_slider};
+    key_choice(ui, gi, "gi.ssgi_resolution", "GI resolution");
+    key_slider(
+        ui,
+        gi,
+        "gi.ssgi_samples",
+        (8.0, 256.0),
+        true,
+        "samples / texel / level",
     );
-    let mut fast = s.mips == crate::gi::SsgiMips::Fast;
-    ui.checkbox(&mut fast, "fast (nearest) mips");
-    s.mips = if fast {
-        crate::gi::SsgiMips::Fast
-    } else {
-        crate::gi::SsgiMips::Voting
-    };
-    ui.checkbox(&mut s.feedback, "feedback bounces");
-    let mut lobe = s.ssr_rays == crate::gi::SsrRays::Lobe;
-    ui.checkbox(&mut lobe, "reflection rays sample the lobe");
-    s.ssr_rays = if lobe {
-        crate::gi::SsrRays::Lobe
-    } else {
-        crate::gi::SsrRays::Mirror
-    };
-    ui.add(
-        egui::Slider::new(
-            &mut s.history_weight,
-            crate::scene::gi_range::SSGI_HISTORY_WEIGHT.slider(0.0, 0.99),
-        )
-        .text("history weight τ"),
+    key_choice(ui, gi, "gi.ssgi_mips", "depth and normal mips");
+    key_checkbox(ui, gi, "gi.ssgi_feedback", "feedback bounces");
+    key_choice(ui, gi, "gi.ssr_rays", "reflection rays");
+    key_slider(
+        ui,
+        gi,
+        "gi.ssgi_history_weight",
+        (0.0, 0.99),
+        false,
+        "history weight τ",
     );
 }

@@ -66,67 +66,30 @@ pub(super) static SPEC: MethodSpec = MethodSpec {
 /// The VPL method's parameters (Thiedemann 2010, Ch. 7): VPLs per set, pattern, bounces,
 /// d_min, the glossy receivers' roughness floor, visibility, normalization, spot sampling.
 fn vpl_controls(ui: &mut egui::Ui, gi: &mut GiSettings) {
-    use crate::gi::vpl::{VplNormalize, VplShading, VplSpotSampling, VplVisibility};
-    let v = &mut gi.vpl;
-    ui.add(
-        egui::Slider::new(&mut v.per_set, crate::scene::gi_range::VPLS.slider(1, 64))
-            .logarithmic(true)
-            .text("VPLs / set / light"),
+    use crate::panel_keys::{key_choice, key_pair_sliders, key_slider};
+    key_slider(ui, gi, "gi.vpls", (1.0, 64.0), true, "VPLs / set / light");
+    key_pair_sliders(ui, gi, "gi.vpl_pattern", (1, 8), ["pattern N", "pattern M"]);
+    key_slider(ui, gi, "gi.vpl_bounces", (1.0, 8.0), false, "bounces");
+    key_slider(
+        ui,
+        gi,
+        "gi.vpl_d_min_voxels",
+        (0.0, 64.0),
+        false,
+        "d_min (voxel diagonals)",
     );
-    for (side, name) in v.pattern.iter_mut().zip(["pattern N", "pattern M"]) {
-        ui.add(
-            egui::Slider::new(side, crate::scene::gi_range::VPL_PATTERN_SIDE.slider(1, 8))
-                .text(name),
-        );
-    }
-    ui.add(
-        egui::Slider::new(
-            &mut v.bounces,
-            crate::scene::gi_range::VPL_BOUNCES.slider(1, 8),
-        )
-        .text("bounces"),
+    key_slider(
+        ui,
+        gi,
+        "gi.vpl_min_roughness",
+        (0.0, 1.0),
+        false,
+        "glossy receivers' min. roughness",
     );
-    ui.add(
-        egui::Slider::new(
-            &mut v.d_min_voxels,
-            crate::scene::gi_range::VPL_D_MIN.slider(0.0, 64.0),
-        )
-        .text("d_min (voxel diagonals)"),
-    );
-    ui.add(
-        egui::Slider::new(
-            &mut v.min_roughness,
-            crate::scene::gi_range::VPL_MIN_ROUGHNESS.slider(0.0, 1.0),
-        )
-        .text("glossy receivers' min. roughness"),
-    );
-    let mut visible = v.visibility == VplVisibility::Voxel;
-    ui.checkbox(&mut visible, "voxel visibility");
-    v.visibility = if visible {
-        VplVisibility::Voxel
-    } else {
-        VplVisibility::None
-    };
-    let mut valid = v.normalize == VplNormalize::Valid;
-    ui.checkbox(&mut valid, "renormalize by valid VPLs");
-    v.normalize = if valid {
-        VplNormalize::Valid
-    } else {
-        VplNormalize::All
-    };
-    let mut disk = v.spot_sampling == VplSpotSampling::Disk;
-    ui.checkbox(&mut disk, "spot VPLs in the image-plane disk");
-    v.spot_sampling = if disk {
-        VplSpotSampling::Disk
-    } else {
-        VplSpotSampling::SolidAngle
-    };
-    let mut splat = v.shading == VplShading::Splat;
-    ui.checkbox(&mut splat, "splat (one pass per VPL)");
-    v.shading = if splat {
-        VplShading::Splat
-    } else {
-        VplShading::Gather
-    };
-    ui.checkbox(&mut v.show, "show VPLs");
+    key_choice(ui, gi, "gi.vpl_visibility", "visibility");
+    key_choice(ui, gi, "gi.vpl_normalize", "normalize by");
+    key_choice(ui, gi, "gi.vpl_spot_sampling", "spot VPLs");
+    key_choice(ui, gi, "gi.vpl_shading", "shading");
+    // Drawing the VPLs is a view of the viewer, not a setting of the method: no key.
+    ui.checkbox(&mut gi.vpl.show, "show VPLs");
 }
