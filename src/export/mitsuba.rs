@@ -1418,14 +1418,26 @@ mod tests {
             &numbers(sunsky, "<vector name=\"sun_direction\"", "value"),
             &[0.0, h, h]
         ));
-        assert!(close(&numbers(sunsky, "<float name=\"turbidity\"", "value"), &[4.0]));
+        assert!(close(
+            &numbers(sunsky, "<float name=\"turbidity\"", "value"),
+            &[4.0]
+        ));
         assert!(close(
             &numbers(sunsky, "<rgb name=\"albedo\"", "value"),
             &[0.1, 0.2, 0.3]
         ));
-        assert!(close(&numbers(sunsky, "<float name=\"sun_scale\"", "value"), &[0.0]));
-        assert!(close(&numbers(sunsky, "<float name=\"sky_scale\"", "value"), &[0.5]));
-        assert!(close(&numbers(sunsky, "<rotate x=\"1\"", "angle"), &[-90.0]));
+        assert!(close(
+            &numbers(sunsky, "<float name=\"sun_scale\"", "value"),
+            &[0.0]
+        ));
+        assert!(close(
+            &numbers(sunsky, "<float name=\"sky_scale\"", "value"),
+            &[0.5]
+        ));
+        assert!(close(
+            &numbers(sunsky, "<rotate x=\"1\"", "angle"),
+            &[-90.0]
+        ));
         assert!(xml.contains("<emitter type=\"directional\">"));
     }
 

@@ -26,10 +26,7 @@ pub enum Environment {
     Map(EnvironmentMap),
     /// Hosek and Wilkie's analytic sky whose sun is the scene's directional light (Mitsuba's
     /// `sunsky` emitter without its sun disk), baked into `map` at load (`super::sky`).
-    Sky {
-        sky: SkyParams,
-        map: EnvironmentMap,
-    },
+    Sky { sky: SkyParams, map: EnvironmentMap },
 }
 
 /// A decoded equirectangular map (linear RGB radiance before `scale`).
@@ -334,7 +331,12 @@ mod tests {
             ),
             (
                 "kind = \"sky\"",
-                vec!["sky.toml", "environment.kind", "directional light", "[[lights]]"],
+                vec![
+                    "sky.toml",
+                    "environment.kind",
+                    "directional light",
+                    "[[lights]]",
+                ],
             ),
             (
                 "kind = \"map\"\nfile = \"square.exr\"\nturbidity = 3",
@@ -376,21 +378,36 @@ mod tests {
             (sky.turbidity, sky.ground_albedo, sky.scale),
             (4.5, Vec3::new(0.1, 0.2, 0.3), 2.0)
         );
-        assert_eq!((map.width, map.height), (super::super::sky::BAKE_WIDTH, super::super::sky::BAKE_HEIGHT));
+        assert_eq!(
+            (map.width, map.height),
+            (
+                super::super::sky::BAKE_WIDTH,
+                super::super::sky::BAKE_HEIGHT
+            )
+        );
         assert_eq!(Environment::shader_kind(s.environment.as_ref()), 2);
         // Defaults: Mitsuba's (turbidity 3, albedo 0.3, scale 1).
         let s = sky_scene("").unwrap();
         let Some(Environment::Sky { sky, .. }) = &s.environment else {
             panic!("not a sky")
         };
-        assert_eq!((sky.turbidity, sky.ground_albedo, sky.scale), (3.0, Vec3::splat(0.3), 1.0));
+        assert_eq!(
+            (sky.turbidity, sky.ground_albedo, sky.scale),
+            (3.0, Vec3::splat(0.3), 1.0)
+        );
         for (table, words) in [
             ("turbidity = 0.5", vec!["environment.turbidity", "1..=10"]),
             ("turbidity = 11", vec!["environment.turbidity"]),
             ("ground_albedo = 1.5", vec!["environment.ground_albedo"]),
             ("scale = -2", vec!["environment.scale", "negative"]),
-            ("file = \"sky.exr\"", vec!["environment.file", "does not apply"]),
-            ("radiance = 1", vec!["environment.radiance", "does not apply"]),
+            (
+                "file = \"sky.exr\"",
+                vec!["environment.file", "does not apply"],
+            ),
+            (
+                "radiance = 1",
+                vec!["environment.radiance", "does not apply"],
+            ),
         ] {
             let err = sky_scene(table).expect_err(table);
             for w in words {

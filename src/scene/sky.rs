@@ -224,14 +224,20 @@ mod tests {
         let env = super::super::Environment::Sky { sky, map };
         // Texel centers: the map's nearest-texel lookup returns the model there exactly.
         for (u, v) in [(0.1, 0.2), (0.6, 0.45), (0.3, 0.05)] {
-            let (x, y) = ((u * BAKE_WIDTH as f32).floor(), (v * BAKE_HEIGHT as f32).floor());
+            let (x, y) = (
+                (u * BAKE_WIDTH as f32).floor(),
+                (v * BAKE_HEIGHT as f32).floor(),
+            );
             let d = equirect_direction(
                 (x + 0.5) / BAKE_WIDTH as f32,
                 (y + 0.5) / BAKE_HEIGHT as f32,
                 0.0,
             );
             let (a, b) = (env.radiance_toward(d), model.radiance_toward(d));
-            assert!((a - b).abs().max_element() <= 1e-6 * b.max_element(), "{a} {b}");
+            assert!(
+                (a - b).abs().max_element() <= 1e-6 * b.max_element(),
+                "{a} {b}"
+            );
             assert!(b.min_element() > 0.0);
         }
         // The lower half is black.
