@@ -280,3 +280,42 @@ fn sky_courtyard_matches_its_mitsuba_reference() {
     }
     common::assert_no_validation_messages(&ctx);
 }
+
+/// The courtyard under the analytic sky (`assets/scenes/sky_courtyard_sunsky.toml`:
+/// Hosek–Wilkie, turbidity 3, its sun the directional light 44.6° up in the south-west)
+/// against Mitsuba 3's `sunsky` emitter (`sun_scale` 0) plus a `directional` emitter, full GI
+/// (`assets/references/sky_courtyard_sunsky_gi.exr`, 128², 1024 spp, max_depth 64): Mitsuba
+/// evaluates the sky itself, so this checks voxgi's model, its bake into the map and the
+/// export together. Path tracer, unbounded, 16 rays × 4 frames. The bound is the issue's target
+/// for a sky-lit scene's path tracer, 0.02; measured on lavapipe: relMSE 0.0019, mean 0.983,
+/// 0.978, 0.971 of Mitsuba's (docs/measurements/environment.md), so a tenfold margin for the
+/// path tracer's noise at 64 paths per pixel and the reference's at 1024 spp.
+#[test]
+fn sunsky_courtyard_matches_its_mitsuba_reference() {
+    let scene = Scene::load(Path::new(ROOT).join("assets/scenes/sky_courtyard_sunsky.toml"))
+        .expect("loads the courtyard");
+    assert!(matches!(scene.environment, Some(Environment::Sky { .. })));
+    let reference =
+        HdrImage::load(Path::new(ROOT).join("assets/references/sky_courtyard_sunsky_gi.exr"))
+            .expect("reads the reference");
+    let ctx = common::context();
+    let gi = GiSettings {
+        method: GiMethod::Pathtrace,
+        rays: 16,
+        bounces: Bounces::Unbounded,
+        accumulate_frames: 4,
+        ..Default::default()
+    };
+    let settings = RenderSettings {
+        width: reference.width,
+        height: reference.height,
+        gi,
+        ..Default::default()
+    };
+    let img = render_image(&ctx, &scene, &settings).expect("renders").hdr;
+    let m = compare(&reference, &img, None).expect("same size");
+    println!("sunsky courtyard, path tracer: relMSE {:.4}", m.rel_mse);
+    const BOUND: f64 = 0.02;
+    assert!(m.rel_mse < BOUND, "relMSE {} >= {BOUND}", m.rel_mse);
+    common::assert_no_validation_messages(&ctx);
+}

@@ -37,7 +37,10 @@
 //! - Environment: `constant` with `radiance`, or `envmap` with the decoded map written as
 //!   `textures/environment.exr` (linear RGB, exactly the texels voxgi samples), its `scale`,
 //!   and `to_world` a rotation about +Y by `rotation_deg`; voxgi's equirectangular mapping is
-//!   Mitsuba's (`crate::scene::environment`).
+//!   Mitsuba's (`crate::scene::environment`). A sky is `sunsky` with the same `turbidity`,
+//!   `albedo`, `sky_scale` and `sun_direction`, `sun_scale` 0 (the sun is the directional
+//!   light, exported as above) and `to_world` a −90° turn about +X (its +Z up to voxgi's +Y);
+//!   Mitsuba evaluates the model itself, so the reference does not see voxgi's bake.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -1022,7 +1025,7 @@ fn comment_text(s: &str) -> String {
     s.replace("--", "- -")
 }
 
-/// The `[environment]` table as Mitsuba's `constant` or `envmap` emitter.
+/// The `[environment]` table as Mitsuba's `constant`, `envmap` or `sunsky` emitter.
 fn write_environment(
     xml: &mut String,
     scene: &Scene,
@@ -1037,6 +1040,26 @@ fn write_environment(
                 "    <emitter type=\"constant\">\n        <rgb name=\"radiance\" value=\"{}\"/>\n    \
                  </emitter>\n",
                 vec3(*radiance)
+            );
+        }
+        Some(Environment::Sky { sky, .. }) => {
+            // The sky's +Z up turned to +Y: rotate(x, −90°) takes (0, 0, 1) to (0, 1, 0). The
+            // sun direction is given in world space (Mitsuba turns it by the inverse).
+            let _ = writeln!(
+                xml,
+                "    <!-- voxgi's [environment] sky: Hosek-Wilkie without the sun's disk; the sun \
+                 is the directional light -->\n    <emitter type=\"sunsky\">\n        \
+                 <vector name=\"sun_direction\" value=\"{}\"/>\n        \
+                 <float name=\"turbidity\" value=\"{}\"/>\n        \
+                 <rgb name=\"albedo\" value=\"{}\"/>\n        \
+                 <float name=\"sun_scale\" value=\"0\"/>\n        \
+                 <float name=\"sky_scale\" value=\"{}\"/>\n        \
+                 <transform name=\"to_world\">\n            <rotate x=\"1\" angle=\"-90\"/>\n        \
+                 </transform>\n    </emitter>\n",
+                vec3(sky.toward_sun),
+                sky.turbidity,
+                vec3(sky.ground_albedo),
+                sky.scale
             );
         }
         Some(Environment::Map(m)) => {
@@ -1458,6 +1481,46 @@ mod tests {
             .into_rgb32f();
         assert_eq!(written.dimensions(), (8, 4));
         assert_eq!(written.into_raw(), texels);
+
+        // A sky: `sunsky` with the model's parameters, the sun toward the directional light's
+        // source (its direction reversed), no sun disk, and the directional light itself.
+        let text = format!(
+            "{CAMERA}[[objects]]\nbuiltin = \"quad\"\n\
+             [[lights]]\nkind = \"directional\"\ndirection = [0, -1, -1]\nirradiance_w_m2 = 3\n\
+             [environment]\nkind = \"sky\"\nturbidity = 4\nground_albedo = [0.1, 0.2, 0.3]\n\
+             scale = 0.5\n"
+        );
+        let scene = Scene::from_toml_str(&text, Path::new("<test>"), Path::new(".")).unwrap();
+        let dir = TempDir::new("analytic-sky");
+        let report = export_mitsuba(&scene, 0.0, 16, 16, &dir.0).unwrap();
+        let xml = std::fs::read_to_string(&report.xml_path).unwrap();
+        let sunsky = &xml[xml.find("<emitter type=\"sunsky\">").unwrap()..];
+        let h = std::f32::consts::FRAC_1_SQRT_2;
+        assert!(close(
+            &numbers(sunsky, "<vector name=\"sun_direction\"", "value"),
+            &[0.0, h, h]
+        ));
+        assert!(close(
+            &numbers(sunsky, "<float name=\"turbidity\"", "value"),
+            &[4.0]
+        ));
+        assert!(close(
+            &numbers(sunsky, "<rgb name=\"albedo\"", "value"),
+            &[0.1, 0.2, 0.3]
+        ));
+        assert!(close(
+            &numbers(sunsky, "<float name=\"sun_scale\"", "value"),
+            &[0.0]
+        ));
+        assert!(close(
+            &numbers(sunsky, "<float name=\"sky_scale\"", "value"),
+            &[0.5]
+        ));
+        assert!(close(
+            &numbers(sunsky, "<rotate x=\"1\"", "angle"),
+            &[-90.0]
+        ));
+        assert!(xml.contains("<emitter type=\"directional\">"));
     }
 
     #[test]

@@ -195,8 +195,8 @@ impl SceneGpu {
         )?);
         let texture_sampler =
             ctx.create_sampler_with(vk::Filter::LINEAR, true, vk::SamplerAddressMode::REPEAT)?;
-        let environment_map = match &scene.environment {
-            Some(crate::scene::Environment::Map(m)) => Some(ctx.upload_image(
+        let environment_map = match scene.environment.as_ref().and_then(|e| e.map()) {
+            Some(m) => Some(ctx.upload_image(
                 &crate::vk::ImageDesc::new_2d(
                     &format!("environment {}", m.path.display()),
                     vk::Format::R32G32B32A32_SFLOAT,

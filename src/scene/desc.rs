@@ -59,12 +59,14 @@ pub(crate) struct SceneDesc {
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct EnvironmentDesc {
-    /// "constant" or "map" ([`super::environment::ENVIRONMENT_KINDS`]).
+    /// "constant", "map" or "sky" ([`super::environment::ENVIRONMENT_KINDS`]).
     pub kind: String,
     pub radiance: Option<ScalarOrVec3>,
     pub file: Option<String>,
     pub rotation_deg: Option<f32>,
     pub scale: Option<f32>,
+    pub turbidity: Option<f32>,
+    pub ground_albedo: Option<ScalarOrVec3>,
 }
 
 /// The `[camera_path]` table, checked by [`build_camera_path`].
@@ -445,11 +447,6 @@ pub(crate) fn build_with(
         .map(|t| build_table(&ck, t))
         .transpose()?
         .unwrap_or_default();
-    let environment = desc
-        .environment
-        .as_ref()
-        .map(|e| build_environment(&ck, e, base_dir))
-        .transpose()?;
     let mut lights = desc
         .lights
         .iter()
@@ -511,6 +508,12 @@ pub(crate) fn build_with(
             file.display()
         );
     }
+    // After the lights (the glTF files' included): a sky takes its sun from them.
+    let environment = desc
+        .environment
+        .as_ref()
+        .map(|e| build_environment(&ck, e, base_dir, &lights))
+        .transpose()?;
     let mut scene = Scene {
         origin_m: ck.origin,
         camera,
@@ -547,6 +550,7 @@ fn build_environment(
     ck: &Check<'_>,
     e: &EnvironmentDesc,
     base_dir: &Path,
+    lights: &[super::Light],
 ) -> Result<Environment, SceneError> {
     use super::environment::{read_map, EnvironmentMap, MapReadError, ENVIRONMENT_KINDS};
     let only = |key: &str, present: bool, kind: &str| {
@@ -559,6 +563,10 @@ fn build_environment(
             Ok(())
         }
     };
+    if e.kind == "constant" || e.kind == "map" {
+        only("turbidity", e.turbidity.is_some(), e.kind.as_str())?;
+        only("ground_albedo", e.ground_albedo.is_some(), e.kind.as_str())?;
+    }
     match e.kind.as_str() {
         "constant" => {
             only("file", e.file.is_some(), "constant")?;
@@ -630,6 +638,54 @@ fn build_environment(
                 rotation_deg,
                 scale,
             }))
+        }
+        "sky" => {
+            only("radiance", e.radiance.is_some(), "sky")?;
+            only("file", e.file.is_some(), "sky")?;
+            only("rotation_deg", e.rotation_deg.is_some(), "sky")?;
+            let range = super::sky::TURBIDITY_RANGE;
+            let turbidity = ck.scalar("environment.turbidity", e.turbidity.unwrap_or(3.0))?;
+            if !range.contains(&turbidity) {
+                return Err(ck.invalid(
+                    "environment.turbidity",
+                    format!(
+                        "{turbidity} is outside the model's {}..={} (2: clear, 3: a temperate \
+                         day, 8-10: hazy); pick one inside",
+                        range.start(),
+                        range.end()
+                    ),
+                ));
+            }
+            let ground_albedo = ck.reflectance(
+                "environment.ground_albedo",
+                e.ground_albedo.unwrap_or(ScalarOrVec3::Scalar(0.3)),
+            )?;
+            let scale = ck.scalar("environment.scale", e.scale.unwrap_or(1.0))?;
+            if scale < 0.0 {
+                return Err(ck.invalid(
+                    "environment.scale",
+                    format!("{scale} is negative; use a factor >= 0"),
+                ));
+            }
+            let Some(toward_sun) = lights.iter().find_map(|l| match l {
+                super::Light::Directional { direction, .. } => Some(-*direction),
+                _ => None,
+            }) else {
+                return Err(ck.invalid(
+                    "environment.kind",
+                    "a sky takes its sun from the scene's directional light, and the scene has \
+                     none; add `[[lights]] kind = \"directional\"` with the sun's `direction` \
+                     and `irradiance_w_m2` (or use kind = \"constant\" or \"map\")",
+                ));
+            };
+            let sky = super::sky::SkyParams {
+                turbidity,
+                ground_albedo,
+                scale,
+                toward_sun,
+            };
+            let map = super::sky::bake(&sky);
+            Ok(Environment::Sky { sky, map })
         }
         other => Err(ck.invalid(
             "environment.kind",

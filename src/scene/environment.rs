@@ -15,6 +15,8 @@ use std::path::{Path, PathBuf};
 
 use glam::Vec3;
 
+use super::sky::SkyParams;
+
 /// Where the light from far away comes from.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Environment {
@@ -22,6 +24,9 @@ pub enum Environment {
     Constant { radiance: Vec3 },
     /// An equirectangular map (Mitsuba's `envmap` emitter).
     Map(EnvironmentMap),
+    /// Hosek and Wilkie's analytic sky whose sun is the scene's directional light (Mitsuba's
+    /// `sunsky` emitter without its sun disk), baked into `map` at load (`super::sky`).
+    Sky { sky: SkyParams, map: EnvironmentMap },
 }
 
 /// A decoded equirectangular map (linear RGB radiance before `scale`).
@@ -40,17 +45,25 @@ pub struct EnvironmentMap {
 }
 
 /// The kinds the `kind` key takes.
-pub const ENVIRONMENT_KINDS: [&str; 2] = ["constant", "map"];
+pub const ENVIRONMENT_KINDS: [&str; 3] = ["constant", "map", "sky"];
 
 impl Environment {
     /// The shaders' `ENVIRONMENT` specialization constant (`glsl/include/environment.glsl`):
-    /// 0 none, 1 constant, 2 map. Shaders compile the lookup in only where it is not 0, so a
-    /// scene without the table runs the same code as before it existed.
+    /// 0 none, 1 constant, 2 map (a sky is its baked map). Shaders compile the lookup in only
+    /// where it is not 0, so a scene without the table runs the same code as before it existed.
     pub fn shader_kind(environment: Option<&Environment>) -> u32 {
         match environment {
             None => 0,
             Some(Environment::Constant { .. }) => 1,
-            Some(Environment::Map(_)) => 2,
+            Some(Environment::Map(_) | Environment::Sky { .. }) => 2,
+        }
+    }
+
+    /// The map the shaders sample: the file's, or the sky's bake; `None` for a constant.
+    pub fn map(&self) -> Option<&EnvironmentMap> {
+        match self {
+            Environment::Constant { .. } => None,
+            Environment::Map(m) | Environment::Sky { map: m, .. } => Some(m),
         }
     }
 
@@ -60,7 +73,9 @@ impl Environment {
         match environment {
             None => [0.0; 4],
             Some(Environment::Constant { radiance }) => radiance.extend(0.0).to_array(),
-            Some(Environment::Map(m)) => [m.scale, m.scale, m.scale, m.rotation_deg.to_radians()],
+            Some(Environment::Map(m) | Environment::Sky { map: m, .. }) => {
+                [m.scale, m.scale, m.scale, m.rotation_deg.to_radians()]
+            }
         }
     }
 
@@ -70,7 +85,7 @@ impl Environment {
     pub fn radiance_toward(&self, toward: Vec3) -> Vec3 {
         match self {
             Environment::Constant { radiance } => *radiance,
-            Environment::Map(m) => {
+            Environment::Map(m) | Environment::Sky { map: m, .. } => {
                 let (u, v) = equirect_uv(toward, m.rotation_deg.to_radians());
                 let x = ((u * m.width as f32) as u32).min(m.width - 1);
                 let y = ((v * m.height as f32) as u32).min(m.height - 1);
@@ -85,7 +100,7 @@ impl Environment {
     pub fn mean_radiance(&self) -> Vec3 {
         match self {
             Environment::Constant { radiance } => *radiance,
-            Environment::Map(m) => {
+            Environment::Map(m) | Environment::Sky { map: m, .. } => {
                 let mut sum = Vec3::ZERO;
                 let mut weight = 0.0;
                 for y in 0..m.height {
@@ -314,10 +329,87 @@ mod tests {
                 "kind = \"map\"\nfile = \"square.exr\"\nscale = -1",
                 vec!["environment.scale", "negative"],
             ),
+            (
+                "kind = \"sky\"",
+                vec![
+                    "sky.toml",
+                    "environment.kind",
+                    "directional light",
+                    "[[lights]]",
+                ],
+            ),
+            (
+                "kind = \"map\"\nfile = \"square.exr\"\nturbidity = 3",
+                vec!["environment.turbidity", "does not apply"],
+            ),
             ("kind = \"map\"\ncolour = 1", vec!["colour"]),
         ];
         for (table, words) in cases {
             let err = scene_with(table, &dir).expect_err(table);
+            for w in words {
+                assert!(err.contains(w), "{table:?}: {err:?} lacks {w:?}");
+            }
+        }
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    /// A sky takes its sun from the first directional light and checks its own keys.
+    #[test]
+    fn sky_tables_take_the_directional_light_as_their_sun() {
+        let dir = temp_dir("sky");
+        let sun = "[[lights]]\nkind = \"point\"\nposition = [0, 3, 0]\nintensity_w_sr = 1\n\
+                   [[lights]]\nkind = \"directional\"\ndirection = [0, -1, 1]\n\
+                   irradiance_w_m2 = 2\n";
+        let sky_scene = |table: &str| {
+            let toml = format!(
+                "[camera]\nposition = [0, 1, -2]\ntarget = [0, 0, 0]\nfov_y_deg = 40\n\
+                 [[objects]]\nbuiltin = \"quad\"\n{sun}[environment]\nkind = \"sky\"\n{table}\n"
+            );
+            super::super::Scene::from_toml_str(&toml, Path::new("sky.toml"), &dir)
+                .map_err(|e| e.to_string())
+        };
+        let s = sky_scene("turbidity = 4.5\nground_albedo = [0.1, 0.2, 0.3]\nscale = 2").unwrap();
+        let Some(Environment::Sky { sky, map }) = &s.environment else {
+            panic!("not a sky: {:?}", s.environment)
+        };
+        let h = std::f32::consts::FRAC_1_SQRT_2;
+        assert!((sky.toward_sun - Vec3::new(0.0, h, -h)).length() < 1e-6);
+        assert_eq!(
+            (sky.turbidity, sky.ground_albedo, sky.scale),
+            (4.5, Vec3::new(0.1, 0.2, 0.3), 2.0)
+        );
+        assert_eq!(
+            (map.width, map.height),
+            (
+                super::super::sky::BAKE_WIDTH,
+                super::super::sky::BAKE_HEIGHT
+            )
+        );
+        assert_eq!(Environment::shader_kind(s.environment.as_ref()), 2);
+        // Defaults: Mitsuba's (turbidity 3, albedo 0.3, scale 1).
+        let s = sky_scene("").unwrap();
+        let Some(Environment::Sky { sky, .. }) = &s.environment else {
+            panic!("not a sky")
+        };
+        assert_eq!(
+            (sky.turbidity, sky.ground_albedo, sky.scale),
+            (3.0, Vec3::splat(0.3), 1.0)
+        );
+        for (table, words) in [
+            ("turbidity = 0.5", vec!["environment.turbidity", "1..=10"]),
+            ("turbidity = 11", vec!["environment.turbidity"]),
+            ("ground_albedo = 1.5", vec!["environment.ground_albedo"]),
+            ("scale = -2", vec!["environment.scale", "negative"]),
+            (
+                "file = \"sky.exr\"",
+                vec!["environment.file", "does not apply"],
+            ),
+            (
+                "radiance = 1",
+                vec!["environment.radiance", "does not apply"],
+            ),
+        ] {
+            let err = sky_scene(table).expect_err(table);
             for w in words {
                 assert!(err.contains(w), "{table:?}: {err:?} lacks {w:?}");
             }

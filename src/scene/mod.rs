@@ -154,7 +154,7 @@
 //! [environment]                     # optional: light from far away, seen by camera rays that
 //!                                   #   miss (the background) and by GI rays that leave the
 //!                                   #   voxel grid within their radius; black without it
-//! kind = "constant"                 # "constant" | "map"
+//! kind = "constant"                 # "constant" | "map" | "sky"
 //! radiance = [0.8, 0.9, 1.0]        # constant: W/(m²·sr), >= 0 (a number means gray);
 //!                                   #   Mitsuba's `constant` emitter
 //! # file = "sky.hdr"                # map: an equirectangular (2:1) Radiance .hdr or OpenEXR
@@ -163,7 +163,13 @@
 //!                                   #   [`environment`])
 //! # rotation_deg = 0.0              # map, optional: turn about +Y, counter-clockwise seen
 //!                                   #   from above, degrees [0]
-//! # scale = 1.0                     # map, optional: factor on the map's radiance, >= 0 [1]
+//! # scale = 1.0                     # map, sky, optional: factor on the radiance, >= 0 [1]
+//! # turbidity = 3.0                 # sky: Hosek–Wilkie turbidity, 1..=10 [3]; the sky's sun
+//!                                   #   is the first directional light (required; its
+//!                                   #   irradiance is the sun's, the sky adds no sun disk);
+//!                                   #   Mitsuba's `sunsky` with sun_scale 0 (see [`sky`])
+//! # ground_albedo = 0.3             # sky: ground albedo under the atmosphere, 0..=1 or
+//!                                   #   [r, g, b] [0.3]
 //!
 //! [shadow]   # optional: shadow defaults; `--shadow-cascades`, `--shadow-cascade-lambda` override
 //! cascades = 4                      # cascades per directional light (camera's direct light),
@@ -219,6 +225,8 @@ mod query;
 pub mod save;
 pub mod schema;
 mod shadow_settings;
+pub mod sky;
+mod sky_data;
 pub mod vpl_settings;
 
 use std::path::{Path, PathBuf};
