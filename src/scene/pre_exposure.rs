@@ -109,7 +109,7 @@ pub fn brightest_source(scene: &Scene) -> f32 {
     });
     let environment = scene.environment.iter().map(|e| match e {
         Environment::Constant { radiance } => max3(*radiance),
-        Environment::Map(map) => {
+        Environment::Map(map) | Environment::Sky { map, .. } => {
             let texel = map
                 .texels
                 .chunks_exact(4)
