@@ -42,7 +42,7 @@ def rust_array(name, doc, a):
     flat = a.reshape(-1)
     lines = ["/// %s" % d for d in doc]
     lines.append("#[rustfmt::skip]")
-    lines.append("pub const %s: [f64; %d] = [" % (name, flat.size))
+    lines.append("pub static %s: [f64; %d] = [" % (name, flat.size))
     for i in range(0, flat.size, 6):
         lines.append("    " + " ".join("%r," % float(v) for v in flat[i:i + 6]))
     lines.append("];")

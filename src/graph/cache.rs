@@ -154,8 +154,11 @@ mod tests {
             let mut g = RenderGraph::new();
             let cache = Cache::new("maps");
             let desc = ImageDesc::new_2d("maps", vk::Format::R8G8B8A8_UNORM, 8, 8);
-            let maps =
-                g.create_cached_image(desc, Access::Sampled(Shader::Compute), &[cache.clone()]);
+            let maps = g.create_cached_image(
+                desc,
+                Access::Sampled(Shader::Compute),
+                std::slice::from_ref(&cache),
+            );
             let out = g.import_buffer_desc("out", 256, Access::HostRead);
             g.add_pass("bake")
                 .cached(Some(&cache))

@@ -178,7 +178,7 @@ mod tests {
         let baked = g.create_cached_image(
             ImageDesc::new_2d("baked", vk::Format::R8G8B8A8_UNORM, 8, 8),
             Access::Sampled(Shader::Compute),
-            &[cache.clone()],
+            std::slice::from_ref(&cache),
         );
         g.add_pass("bake")
             .cached(Some(&cache))

@@ -36,7 +36,7 @@
 /// The nine parameters A..I of the model (Hosek and Wilkie 2012, eq. 9), indexed
 /// `[turbidity 1..=10][ground albedo 0, 1][Bezier control point 0..6][R, G, B][A..I]`.
 #[rustfmt::skip]
-pub const SKY_PARAMS_RGB: [f64; 3240] = [
+pub static SKY_PARAMS_RGB: [f64; 3240] = [
     -1.099459, -0.1335146, -4.083223, 5.919603, -0.1104166, 1.600158,
     -1.326538e-06, 4.917807, 0.5127716, -1.14053, -0.1982747, -7.51273,
     8.403899, -0.05699038, 0.9015907, 0.03392161, 4.772522, 0.5111184,
@@ -582,7 +582,7 @@ pub const SKY_PARAMS_RGB: [f64; 3240] = [
 /// The radiance scale L_M of the model, indexed
 /// `[turbidity 1..=10][ground albedo 0, 1][Bezier control point 0..6][R, G, B]`.
 #[rustfmt::skip]
-pub const SKY_RAD_RGB: [f64; 360] = [
+pub static SKY_RAD_RGB: [f64; 360] = [
     1.962684, 1.59033, 0.9926518, 1.159831, 1.355401, 1.999494,
     4.450588, 1.151412, -4.136109, 5.079633, 13.59116, 18.5627,
     4.437388, 5.857714, 13.51028, 4.324573, 8.090833, 13.90238,
