@@ -738,7 +738,7 @@ mod tests {
     use crate::vk::reflect::SpecValue;
 
     /// What creating the light-map pipeline checks, without a device: its three stages
-    /// together declare four constants, and a wrong type or a missing one is an error naming
+    /// together declare five constants, and a wrong type or a missing one is an error naming
     /// the pass, the shaders and the constant.
     #[test]
     fn spec_constants_are_checked_at_pipeline_creation() {
@@ -748,6 +748,7 @@ mod tests {
             HAS_GGX = true,
             AREA_LIGHT_MAPS = true,
             HAS_MAPS = false,
+            HAS_ALPHA_MAP = false,
         ];
         assert!(check_spec_against(&files, &good).is_ok());
         let mut wrong = good;

@@ -1435,8 +1435,8 @@ mod tests {
 
     /// Vulkan applies one specialization to every stage by constant_id, so the stages of a
     /// pipeline must agree on each constant's id and type: `light_map.geom` declares
-    /// `AREA_LIGHT_MAPS` at 2, `light_map.frag` `HAS_DISSOLVE`, `HAS_GGX` and `HAS_MAPS` at 0,
-    /// 1 and 3.
+    /// `AREA_LIGHT_MAPS` at 2, `light_map.frag` `HAS_DISSOLVE`, `HAS_GGX`, `HAS_MAPS` and
+    /// `HAS_ALPHA_MAP` at 0, 1, 3 and 4.
     #[test]
     fn stages_merge_their_spec_constants_and_conflicts_are_errors() {
         let geom = reflect("light_map.geom", &words("light_map.geom")).unwrap();
@@ -1447,6 +1447,7 @@ mod tests {
             ids,
             [
                 ("AREA_LIGHT_MAPS", 2),
+                ("HAS_ALPHA_MAP", 4),
                 ("HAS_DISSOLVE", 0),
                 ("HAS_GGX", 1),
                 ("HAS_MAPS", 3)
