@@ -1,6 +1,6 @@
 //! `voxgi bench traverse|voxelize|voxelize-sweep|flicker|soak|leak|ssgi|ssgi-limits`: the benchmarks of [`crate::bench`].
 
-use super::{check_validation, context, out, outln, CliError, Global};
+use super::{out, outln, with_context, CliError, Global};
 use crate::bench::{
     bench_flicker, bench_leak, bench_soak, bench_traverse, bench_voxelize_atlas,
     bench_voxelize_sweep, FlickerBenchDesc, LeakBenchDesc, SoakBenchDesc, TraverseBenchDesc,
@@ -194,30 +194,31 @@ impl TraverseArgs {
             json,
         } = self;
         let scene = load_scene_arg(scene.as_deref())?;
-        let ctx = context(global)?;
-        let desc = TraverseBenchDesc {
-            resolution: *resolution,
-            gbuffer_size: *gbuffer,
-            rays_per_point: *rays,
-            radii_box_units: radii.clone(),
-            march_steps: if *no_march {
-                Vec::new()
-            } else {
-                march_steps.clone()
-            },
-            params: start_level
-                .iter()
-                .map(|&start_level| TraversalParams {
-                    start_level,
-                    max_iterations: *max_iterations,
-                })
-                .collect(),
-            repeats: *repeats,
-            ..Default::default()
-        };
-        let report = bench_traverse(&ctx, &scene, &desc)?;
-        print(out, *json, &report, || report.table())?;
-        check_validation(ctx)
+        with_context(global, |ctx| {
+            let desc = TraverseBenchDesc {
+                resolution: *resolution,
+                gbuffer_size: *gbuffer,
+                rays_per_point: *rays,
+                radii_box_units: radii.clone(),
+                march_steps: if *no_march {
+                    Vec::new()
+                } else {
+                    march_steps.clone()
+                },
+                params: start_level
+                    .iter()
+                    .map(|&start_level| TraversalParams {
+                        start_level,
+                        max_iterations: *max_iterations,
+                    })
+                    .collect(),
+                repeats: *repeats,
+                ..Default::default()
+            };
+            let report = bench_traverse(ctx, &scene, &desc)?;
+            print(out, *json, &report, || report.table())?;
+            Ok(())
+        })
     }
 }
 
@@ -262,35 +263,36 @@ impl SoakArgs {
             Some(arg) => (arg.clone(), load_scene_arg(Some(arg))?),
             None => (SOAK_SCENE_NAME.to_owned(), soak_default_scene()?),
         };
-        let ctx = context(global)?;
-        let desc = SoakBenchDesc {
-            frames: *frames as usize,
-            every: *every as usize,
-            width: *width,
-            height: *height,
-            methods: methods.clone(),
-            ..Default::default()
-        };
-        let mut progress = |method: GiMethod, s: &crate::bench::SoakSample| {
-            if !*json {
-                let rss = s
-                    .rss_bytes
-                    .map_or("unavailable".to_owned(), |b| b.to_string());
-                let _ = writeln!(
-                    out,
-                    "{:<11} frame {:>8}  RSS {:>12} B  GPU {:>12} B  pending {}",
-                    format!("{method:?}").to_lowercase(),
-                    s.frame,
-                    rss,
-                    s.gpu_bytes,
-                    s.pending_releases
-                );
-                let _ = out.flush();
-            }
-        };
-        let report = bench_soak(&ctx, &loaded, &name, &desc, &mut progress)?;
-        print(out, *json, &report, || report.table())?;
-        check_validation(ctx)
+        with_context(global, |ctx| {
+            let desc = SoakBenchDesc {
+                frames: *frames as usize,
+                every: *every as usize,
+                width: *width,
+                height: *height,
+                methods: methods.clone(),
+                ..Default::default()
+            };
+            let mut progress = |method: GiMethod, s: &crate::bench::SoakSample| {
+                if !*json {
+                    let rss = s
+                        .rss_bytes
+                        .map_or("unavailable".to_owned(), |b| b.to_string());
+                    let _ = writeln!(
+                        out,
+                        "{:<11} frame {:>8}  RSS {:>12} B  GPU {:>12} B  pending {}",
+                        format!("{method:?}").to_lowercase(),
+                        s.frame,
+                        rss,
+                        s.gpu_bytes,
+                        s.pending_releases
+                    );
+                    let _ = out.flush();
+                }
+            };
+            let report = bench_soak(ctx, &loaded, &name, &desc, &mut progress)?;
+            print(out, *json, &report, || report.table())?;
+            Ok(())
+        })
     }
 }
 
@@ -356,23 +358,24 @@ impl SsgiArgs {
         let name = super::sweep::scene_name(arg);
         let loaded = load_scene_arg(Some(arg))?;
         let reference = crate::bench::load_reference(references, &name, *size)?;
-        let ctx = context(global)?;
-        let desc = crate::bench::SsgiBenchDesc {
-            mips: mips.clone(),
-            resolutions: resolutions.clone(),
-            samples: samples.clone(),
-            size: *size,
-            frames: *frames as usize,
-            warmup: *warmup,
-            gi_frames: *gi_frames,
-        };
-        let report = crate::bench::bench_ssgi(&ctx, &loaded, &name, &reference, &desc)?;
-        if *csv {
-            out!(out, "{}", report.csv());
-        } else {
-            print(out, *json, &report, || report.table())?;
-        }
-        check_validation(ctx)
+        with_context(global, |ctx| {
+            let desc = crate::bench::SsgiBenchDesc {
+                mips: mips.clone(),
+                resolutions: resolutions.clone(),
+                samples: samples.clone(),
+                size: *size,
+                frames: *frames as usize,
+                warmup: *warmup,
+                gi_frames: *gi_frames,
+            };
+            let report = crate::bench::bench_ssgi(ctx, &loaded, &name, &reference, &desc)?;
+            if *csv {
+                out!(out, "{}", report.csv());
+            } else {
+                print(out, *json, &report, || report.table())?;
+            }
+            Ok(())
+        })
     }
 }
 
@@ -388,15 +391,16 @@ pub fn bench(global: &Global, command: &BenchCommand, out: &mut dyn Write) -> Re
             json,
         } => {
             let scene = load_scene_arg(scene.as_deref())?;
-            let ctx = context(global)?;
-            let desc = VoxelizeBenchDesc {
-                resolution: *resolution,
-                layers: *layers,
-                repeats: *repeats,
-            };
-            let report = bench_voxelize_atlas(&ctx, &scene, &desc)?;
-            print(out, *json, &report, || report.table())?;
-            check_validation(ctx)
+            with_context(global, |ctx| {
+                let desc = VoxelizeBenchDesc {
+                    resolution: *resolution,
+                    layers: *layers,
+                    repeats: *repeats,
+                };
+                let report = bench_voxelize_atlas(ctx, &scene, &desc)?;
+                print(out, *json, &report, || report.table())?;
+                Ok(())
+            })
         }
         BenchCommand::Flicker {
             scene,
@@ -407,16 +411,17 @@ pub fn bench(global: &Global, command: &BenchCommand, out: &mut dyn Write) -> Re
         } => {
             let name = scene.clone().unwrap_or_else(|| DEFAULT_SCENE.to_owned());
             let scene = load_scene_arg(scene.as_deref())?;
-            let ctx = context(global)?;
-            let desc = FlickerBenchDesc {
-                steps: *steps,
-                size: *size,
-                reference_frames: *reference_frames,
-                ..Default::default()
-            };
-            let report = bench_flicker(&ctx, &scene, &name, &desc)?;
-            print(out, *json, &report, || report.table())?;
-            check_validation(ctx)
+            with_context(global, |ctx| {
+                let desc = FlickerBenchDesc {
+                    steps: *steps,
+                    size: *size,
+                    reference_frames: *reference_frames,
+                    ..Default::default()
+                };
+                let report = bench_flicker(ctx, &scene, &name, &desc)?;
+                print(out, *json, &report, || report.table())?;
+                Ok(())
+            })
         }
         BenchCommand::Soak(args) => args.run(global, out),
         BenchCommand::Leak {
@@ -432,21 +437,22 @@ pub fn bench(global: &Global, command: &BenchCommand, out: &mut dyn Write) -> Re
                 .into_iter()
                 .filter(|(name, _)| methods.contains(name))
                 .collect();
-            let ctx = context(global)?;
-            let desc = LeakBenchDesc {
-                walls_voxels: walls.clone(),
-                lights: lights.clone(),
-                size: *size,
-                methods: chosen,
-                ..Default::default()
-            };
-            let report = bench_leak(&ctx, &desc)?;
-            if *csv {
-                out!(out, "{}", report.csv());
-            } else {
-                print(out, *json, &report, || report.table())?;
-            }
-            check_validation(ctx)
+            with_context(global, |ctx| {
+                let desc = LeakBenchDesc {
+                    walls_voxels: walls.clone(),
+                    lights: lights.clone(),
+                    size: *size,
+                    methods: chosen,
+                    ..Default::default()
+                };
+                let report = bench_leak(ctx, &desc)?;
+                if *csv {
+                    out!(out, "{}", report.csv());
+                } else {
+                    print(out, *json, &report, || report.table())?;
+                }
+                Ok(())
+            })
         }
         BenchCommand::Ssgi(args) => args.run(global, out),
         BenchCommand::SsgiLimits {
@@ -457,8 +463,7 @@ pub fn bench(global: &Global, command: &BenchCommand, out: &mut dyn Write) -> Re
             reference_cache,
             reference_tool,
             json,
-        } => {
-            let ctx = context(global)?;
+        } => with_context(global, |ctx| {
             let refs = References {
                 spp: *reference_spp,
                 make: *make_references,
@@ -467,25 +472,24 @@ pub fn bench(global: &Global, command: &BenchCommand, out: &mut dyn Write) -> Re
                     .unwrap_or_else(crate::bench::reference_cache::default_cache_dir),
                 tool: reference_tool.clone(),
             };
-            let report = ssgi_limits(&ctx, *size, *frames, &refs)?;
+            let report = ssgi_limits(ctx, *size, *frames, &refs)?;
             print(out, *json, &report, || report.table())?;
-            check_validation(ctx)
-        }
+            Ok(())
+        }),
         BenchCommand::VoxelizeSweep {
             resolutions,
             reps,
             json,
-        } => {
-            let ctx = context(global)?;
+        } => with_context(global, |ctx| {
             let desc = VoxelizeSweepDesc {
                 resolutions: resolutions.clone(),
                 reps: *reps,
                 ..Default::default()
             };
-            let report = bench_voxelize_sweep(&ctx, &desc)?;
+            let report = bench_voxelize_sweep(ctx, &desc)?;
             print(out, *json, &report, || report.table())?;
-            check_validation(ctx)
-        }
+            Ok(())
+        }),
     }
 }
 
