@@ -144,8 +144,9 @@ macro_rules! out {
 
 pub(crate) use {out, outln};
 
-/// The Vulkan context the global flags ask for.
-pub fn context(global: &Global) -> Result<Context, CliError> {
+/// The Vulkan context the global flags ask for; commands get it through [`with_context`],
+/// which checks its teardown on every path.
+fn context(global: &Global) -> Result<Context, CliError> {
     Ok(Context::new(&ContextDesc {
         validation: global.validate,
         device: global.device.clone(),
@@ -176,11 +177,6 @@ pub fn with_context<T>(
     }
 }
 
-/// Destroys the context, then fails when the validation layers reported anything during the
-/// command or its teardown (objects never destroyed), or when GPU memory was never freed.
-pub fn check_validation(ctx: Context) -> Result<(), CliError> {
-    check_teardown(&ctx.finish())
-}
 
 /// The command's verdict on what a context's life left behind ([`Context::finish`]).
 pub fn check_teardown(report: &crate::vk::TeardownReport) -> Result<(), CliError> {
