@@ -299,9 +299,13 @@ fn sunsky_courtyard_matches_its_mitsuba_reference() {
         HdrImage::load(Path::new(ROOT).join("assets/references/sky_courtyard_sunsky_gi.exr"))
             .expect("reads the reference");
     let ctx = common::context();
+    // 4 rays × 4 frames (16 paths per pixel): relMSE 0.0020 measured, against 0.0019 at
+    // 16 × 4, which took most of the suite's 414 s in this file. The error is the voxel
+    // bias, not noise, so a quarter of the paths costs nothing against the bound, and the test
+    // takes about a minute under load.
     let gi = GiSettings {
         method: GiMethod::Pathtrace,
-        rays: 16,
+        rays: 4,
         bounces: Bounces::Unbounded,
         accumulate_frames: 4,
         ..Default::default()
@@ -314,7 +318,10 @@ fn sunsky_courtyard_matches_its_mitsuba_reference() {
     };
     let img = render_image(&ctx, &scene, &settings).expect("renders").hdr;
     let m = compare(&reference, &img, None).expect("same size");
-    println!("sunsky courtyard, path tracer: relMSE {:.4}", m.rel_mse);
+    println!(
+        "sunsky courtyard, path tracer 4 × 4: relMSE {:.4}",
+        m.rel_mse
+    );
     const BOUND: f64 = 0.02;
     assert!(m.rel_mse < BOUND, "relMSE {} >= {BOUND}", m.rel_mse);
     common::assert_no_validation_messages(&ctx);

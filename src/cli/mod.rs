@@ -177,7 +177,6 @@ pub fn with_context<T>(
     }
 }
 
-
 /// The command's verdict on what a context's life left behind ([`Context::finish`]).
 pub fn check_teardown(report: &crate::vk::TeardownReport) -> Result<(), CliError> {
     if !report.validation_messages.is_empty() {
