@@ -15,7 +15,19 @@ use std::path::{Path, PathBuf};
 
 use glam::Vec3;
 
-use super::sky::SkyParams;
+/// A validated `kind = "sky"` table (evaluated and baked by `super::sky`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct SkyParams {
+    /// Atmospheric turbidity, 1..=10 (Mitsuba's `turbidity`).
+    pub turbidity: f32,
+    /// The ground's albedo per channel, 0..=1 (Mitsuba's `albedo`): the light the ground
+    /// reflects back into the atmosphere, which brightens the sky near the horizon.
+    pub ground_albedo: Vec3,
+    /// Factor on the sky's radiance (Mitsuba's `sky_scale`).
+    pub scale: f32,
+    /// Unit direction toward the sun: the scene's first directional light, reversed.
+    pub toward_sun: Vec3,
+}
 
 /// Where the light from far away comes from.
 #[derive(Clone, Debug, PartialEq)]

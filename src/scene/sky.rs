@@ -14,6 +14,9 @@
 
 use glam::{DVec3, Vec3};
 
+// The table's parameters live with the environment that holds them, so that this module only
+// reads the environment's types (never the other way round).
+pub use super::environment::SkyParams;
 use super::environment::{equirect_direction, EnvironmentMap};
 use super::sky_data::{SKY_PARAMS_RGB, SKY_RAD_RGB};
 
@@ -29,20 +32,6 @@ pub const TURBIDITY_RANGE: std::ops::RangeInclusive<f32> = 1.0..=10.0;
 /// brightening, whose narrowest term (the Mie lobe with `I` up to about 0.8) spans degrees.
 pub const BAKE_WIDTH: u32 = 512;
 pub const BAKE_HEIGHT: u32 = 256;
-
-/// A validated `kind = "sky"` table.
-#[derive(Clone, Debug, PartialEq)]
-pub struct SkyParams {
-    /// Atmospheric turbidity, 1..=10 (Mitsuba's `turbidity`).
-    pub turbidity: f32,
-    /// The ground's albedo per channel, 0..=1 (Mitsuba's `albedo`): the light the ground
-    /// reflects back into the atmosphere, which brightens the sky near the horizon.
-    pub ground_albedo: Vec3,
-    /// Factor on the sky's radiance (Mitsuba's `sky_scale`).
-    pub scale: f32,
-    /// Unit direction toward the sun: the scene's first directional light, reversed.
-    pub toward_sun: Vec3,
-}
 
 /// The model's parameters for one sun elevation, turbidity and ground albedo (Hosek and
 /// Wilkie 2012, §5: the tables' Bézier control points interpolated in elevation, then linearly
