@@ -31,6 +31,7 @@ impl TimingStats {
         if frame.is_empty() {
             return;
         }
+        let frame = merge_shadow_layers(frame);
         if self.frames.len() == self.capacity {
             self.frames.pop_front();
         }
@@ -59,6 +60,28 @@ impl TimingStats {
             })
             .collect()
     }
+}
+
+/// The cached shadow maps record one pass per layer (`shadow_depth[v]`, one per shadow view:
+/// six per point light); the table shows their sum as one `shadow_depth` row, as an uncached
+/// frame names it, so that a scene with many lights does not push the panel's other sections
+/// off screen. (The frame-time graph groups them by family too.)
+fn merge_shadow_layers(frame: Vec<PassTiming>) -> Vec<PassTiming> {
+    let mut out: Vec<PassTiming> = Vec::with_capacity(frame.len());
+    for t in frame {
+        if t.name.starts_with("shadow_depth[") {
+            match out.iter_mut().find(|r| r.name == "shadow_depth") {
+                Some(row) => row.gpu_ms += t.gpu_ms,
+                None => out.push(PassTiming {
+                    name: "shadow_depth".to_string(),
+                    gpu_ms: t.gpu_ms,
+                }),
+            }
+        } else {
+            out.push(t);
+        }
+    }
+    out
 }
 
 /// What the panel edits. The viewer compares it with the renderer's settings each frame.
