@@ -16,9 +16,18 @@
 // Except within the VPLs' interleaving tile (|k| < tile_px, the pattern's side along this
 // pass): there the pixels hold different VPL sets of one estimate, which the filter has to
 // merge (Thiedemann 2010 §7.3.2) whatever the lobe; elsewhere tile_px = 1.
+//
+// VARIANCE_GUIDED (under temporal accumulation, gi_temporal.comp): a tap also weighs
+// exp(-|l_p - l_q| / (SIGMA_L sigma_p)), l the luminance and sigma_p the standard error of
+// the centre pixel's accumulated mean, sqrt(var / n) from its moments and history length n
+// (Schied et al. 2017 §4.3 use the variance of one sample; the mean's makes the filter step
+// back as frames accumulate, so that a long render converges to the method's own image, not
+// the filter's). Pixels with fewer than MIN_FRAMES frames have no usable moments and are
+// filtered by the geometric weights alone.
 #include "frame.glsl"
 
 layout(constant_id = 0) const bool GLOSSY = false;
+layout(constant_id = 1) const bool VARIANCE_GUIDED = false;
 
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(set = 0, binding = 0, std430) readonly buffer FrameBuf { GpuFrame frame; };
@@ -27,6 +36,15 @@ layout(set = 0, binding = 2) uniform sampler2D gb_depth;
 layout(set = 0, binding = 3) uniform sampler2D src;
 layout(set = 0, binding = 4, rgba32f) uniform writeonly image2D dst;
 layout(set = 0, binding = 5) uniform sampler2D gb_specular;  // the normals when !GLOSSY
+layout(set = 0, binding = 6) uniform sampler2D accumulated;  // VARIANCE_GUIDED: a = frames n
+layout(set = 0, binding = 7) uniform sampler2D moments;      // VARIANCE_GUIDED: x = mean l^2
+
+// Schied et al. 2017 §4.3: sigma_l = 4, differences beyond four standard errors are edges.
+const float SIGMA_L = 4.0;
+// Below 4 frames the moments say little about the variance (Schied et al. 2017 §4.2).
+const float MIN_FRAMES = 4.0;
+
+float luminance(vec3 c) { return dot(c, vec3(0.2126, 0.7152, 0.0722)); }
 
 layout(push_constant) uniform Push {
     ivec2 direction;
@@ -77,6 +95,18 @@ void main() {
         mirror0 = reflect(-toward_camera(frame.camera_position, frame.camera_forward, p0), n0);
         if (kind0 != 0) theta0 = lobe_half_angle(kind0, texelFetch(gb_normal, px, 0).w);
     }
+    // The centre's standard error of its mean luminance; negative: no luminance weight.
+    float sigma_p = -1.0;
+    float l0 = 0.0;
+    if (VARIANCE_GUIDED) {
+        vec4 acc = texelFetch(accumulated, px, 0);
+        if (acc.a >= MIN_FRAMES) {
+            float m1 = luminance(acc.rgb);
+            float var = max(texelFetch(moments, px, 0).x - m1 * m1, 0.0);
+            sigma_p = sqrt(var / acc.a);
+            l0 = luminance(texelFetch(src, px, 0).rgb);
+        }
+    }
     vec3 sum = vec3(0.0);
     float wsum = 0.0;
     for (int k = -pc.radius; k <= pc.radius; ++k) {
@@ -96,7 +126,12 @@ void main() {
                 w *= exp(-0.5 * delta * delta);
             }
         }
-        sum += w * texelFetch(src, q, 0).rgb;
+        vec3 c = texelFetch(src, q, 0).rgb;
+        if (VARIANCE_GUIDED && sigma_p >= 0.0 && k != 0) {
+            // 1e-6 of the luminance keeps a noiseless pixel from dividing by zero.
+            w *= exp(-abs(luminance(c) - l0) / (SIGMA_L * sigma_p + 1e-6 * l0 + 1e-30));
+        }
+        sum += w * c;
         wsum += w;
     }
     imageStore(dst, px, vec4(wsum > 0.0 ? sum / wsum : texelFetch(src, px, 0).rgb, 1.0));

@@ -42,6 +42,9 @@ layout(constant_id = 1) const bool HAS_EMISSION = false;
 layout(constant_id = 2) const bool HAS_MATERIAL_VOLUME = false;  // lobes at later bounces
 layout(constant_id = 3) const bool HAS_EMITTERS = false;  // next-event estimation (binding 14)
 layout(constant_id = 8) const uint ENVIRONMENT = 0u;  // environment.glsl's kinds
+// Off under temporal accumulation (gi_temporal.comp accumulates, with reprojection): the
+// output is this frame's estimate alone, and the seed is the frame's sample index.
+layout(constant_id = 9) const bool ACCUMULATE = true;
 
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(set = 0, binding = 0, std430) readonly buffer FrameBuf { GpuFrame frame; };
@@ -298,6 +301,10 @@ void main() {
     if (pixel.kind != LOBE_LAMBERT) {
         vec3 diffuse = texelFetch(gb_albedo, px, 0).rgb;
         e = diffuse / PI * e + lobe_sum / float(max(lobe_rays, 1u));
+    }
+    if (!ACCUMULATE) {
+        imageStore(history, px, vec4(e, 1.0));
+        return;
     }
     vec3 old = frame_index == 0u ? e : imageLoad(history, px).rgb;
     imageStore(history, px, vec4(mix(old, e, 1.0 / float(frame_index + 1u)), 1.0));

@@ -51,6 +51,14 @@ vec2 pixel_rotation(uvec2 p, uint seed) {
     return vec2(float(h & 0xffffu), float(h2 >> 16u)) / 65536.0;
 }
 
+// Element i of the R2 sequence (Roberts 2018): the additive recurrence by the powers of the
+// plastic number's inverse, the 2D low-discrepancy sequence with the best packing. In 32-bit
+// fixed point, so that any index keeps full precision.
+vec2 r2(uint i) {
+    uvec2 a = uvec2(3242174889u, 2447445413u);  // 2^32 / g, 2^32 / g^2, g = 1.3247...
+    return vec2(i * a) / 4294967296.0;
+}
+
 // Direction at polar cosine `c` and azimuth 2 pi u around the unit axis `a`.
 vec3 around_axis(vec3 a, float c, float u) {
     float s = sqrt(max(1.0 - c * c, 0.0));

@@ -20,6 +20,10 @@ layout(constant_id = 0) const bool HAS_PHONG = false;
 // Some material is GGX: light-map senders that are GGX send their whole BRDF toward the ray.
 layout(constant_id = 1) const bool HAS_GGX = false;
 layout(constant_id = 8) const uint ENVIRONMENT = 0u;  // environment.glsl's kinds
+// Temporal accumulation (gi_temporal.comp): the per-pixel rotation of the ray pattern advances
+// by the R2 sequence of the frame (gi.seed, counted per frame), so that the frames' patterns
+// interleave and N frames of K rays cover the hemisphere like N·K rays.
+layout(constant_id = 9) const bool ADVANCE = false;
 
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(set = 0, binding = 0, std430) readonly buffer FrameBuf { GpuFrame frame; };
@@ -255,7 +259,8 @@ void main() {
     uint lobe_rays = phong ? rays / 2u : 0u;
     if (ggx) lobe_rays = lobe_specular_probability(receiver) == 1.0 ? rays : rays / 2u;
     uint diffuse_rays = rays - lobe_rays;
-    vec2 rot = pixel_rotation(uvec2(px), gi.seed);
+    vec2 rot = ADVANCE ? fract(pixel_rotation(uvec2(px), 0u) + r2(gi.seed))
+                       : pixel_rotation(uvec2(px), gi.seed);
     vec3 sum = vec3(0.0);
     vec3 lobe_sum = vec3(0.0);
     for (uint i = 0u; i < rays; ++i) {

@@ -108,6 +108,9 @@ pub struct GiShared {
     pub push: GpuGiPush,
     /// Frames accumulated since the last restart, counting the one being recorded.
     pub frames: Arc<AtomicU32>,
+    /// Under temporal accumulation (`gi.temporal`): frames recorded so far, counting the one
+    /// being recorded, by which the sample pattern advances ([`GiShared::seed`]).
+    pub sample_index: Option<Arc<AtomicU32>>,
     /// Open in the frame slots that record the first frame after a restart (camera, lights,
     /// scene or settings changed): passes whose output lasts until then run only there.
     pub first_frame: Arc<SlotCondition>,
@@ -120,6 +123,24 @@ pub struct GiShared {
     /// What the method's view-independent passes produced this frame
     /// ([`super::GiMethodPasses::add_world_passes`]), shared by both stereo eyes.
     pub world: super::MethodWorld,
+}
+
+impl GiShared {
+    /// The push constants' seed at record time: `push.seed`, advanced by the frame's index
+    /// under temporal accumulation (so that frames sample other directions and their mean
+    /// converges), fixed otherwise.
+    pub fn seed(&self) -> impl Fn() -> u32 + 'static {
+        let base = self.push.seed;
+        let index = self.sample_index.clone();
+        move || match &index {
+            // Counting the frame being recorded: the first frame samples as an accumulating
+            // path tracer's first frame does.
+            Some(i) => {
+                base.wrapping_add(i.load(std::sync::atomic::Ordering::SeqCst).wrapping_sub(1))
+            }
+            None => base,
+        }
+    }
 }
 
 /// Declares one of the GI ray passes (`gi_hemisphere`, `gi_hemisphere_volume`,

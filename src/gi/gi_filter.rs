@@ -35,13 +35,14 @@ pub struct GiFilter {
 }
 
 impl GiFilter {
-    /// `glossy`: the G-buffer has a lobe target (Phong or GGX materials; specialization
-    /// constant 0), which the filter then reads.
-    pub fn new(ctx: &Context, glossy: bool) -> Result<Self, VkError> {
+    /// `glossy`: the G-buffer has a lobe target (Phong or GGX materials), which the filter
+    /// then reads. `variance_guided`: the indirect light is accumulated over frames
+    /// (`gi_temporal`), and the filter steps back as the variance of its mean falls.
+    pub fn new(ctx: &Context, glossy: bool, variance_guided: bool) -> Result<Self, VkError> {
         let pipeline = ctx.compute_pipeline(
             "gi_filter.comp",
             PushLayout::of::<GpuFilterPush>(),
-            &crate::spec_constants![GLOSSY = glossy],
+            &crate::spec_constants![GLOSSY = glossy, VARIANCE_GUIDED = variance_guided],
         )?;
         Ok(Self { pipeline })
     }
@@ -50,6 +51,9 @@ impl GiFilter {
     /// `irradiance` (none when either is 0); returns the filtered image. `tile` is the VPLs'
     /// interleaving pattern N×M (`[1, 1]` for the other methods): within it glossy pixels are
     /// averaged like Lambert ones, since each holds only one of the tile's VPL sets.
+    /// `moments`: under temporal accumulation, `irradiance` holds the history length in its
+    /// alpha and these images the moments (`gi_temporal`); the filter must then have been
+    /// made `variance_guided`.
     pub fn add_passes(
         &self,
         g: &mut RenderGraph,
@@ -57,6 +61,7 @@ impl GiFilter {
         sampler: vk::Sampler,
         (radius_px, passes, tile): (u32, u32, [u32; 2]),
         irradiance: ImageHandle,
+        moments: Option<ImageHandle>,
     ) -> ImageHandle {
         let (w, h) = (i.width, i.height);
         let groups = (w.div_ceil(8), h.div_ceil(8));
@@ -65,6 +70,12 @@ impl GiFilter {
         let pipe = *self.pipeline;
         // Without a lobe target the shader never reads its binding 5; the normals fill it.
         let lobes = i.specular.unwrap_or(i.normal);
+        // Without temporal accumulation the shader never reads bindings 6 and 7; the normals
+        // fill them.
+        let (accumulated, moments) = match moments {
+            Some(m) => (irradiance, m),
+            None => (i.normal, i.normal),
+        };
         let mut current = irradiance;
         for p in 0..passes {
             for (axis, dir, tile_px) in [("h", [1, 0], tile[0]), ("v", [0, 1], tile[1])] {
@@ -88,6 +99,8 @@ impl GiFilter {
                     .bind_sampled(3, current, sampler, c)
                     .bind(4, out, Access::StorageWrite(c))
                     .bind_sampled(5, lobes, sampler, c)
+                    .bind_sampled(6, accumulated, sampler, c)
+                    .bind_sampled(7, moments, sampler, c)
                     .record(move |ctx| {
                         ctx.bind(&pipe);
                         ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&fp));

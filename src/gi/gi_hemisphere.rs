@@ -22,12 +22,13 @@ impl GiHemisphere {
     /// the ray (specialization constant 1). `emission`: the scene has emitters; the assembly
     /// then writes the attribute volumes ([`super::GiPasses::needs_attribute_volumes`]).
     /// `environment`: `Environment::shader_kind`, what rays leaving the grid read.
+    /// `advance`: the ray pattern advances every frame (temporal accumulation).
     pub fn new(
         ctx: &Context,
-        has_phong: bool,
-        has_ggx: bool,
+        (has_phong, has_ggx): (bool, bool),
         emission: bool,
         environment: u32,
+        advance: bool,
     ) -> Result<Self, VkError> {
         let pipeline = ctx.compute_pipeline(
             if emission {
@@ -40,6 +41,7 @@ impl GiHemisphere {
                 HAS_PHONG = has_phong,
                 HAS_GGX = has_ggx,
                 ENVIRONMENT = environment,
+                ADVANCE = advance,
             ],
         )?;
         Ok(Self { pipeline, emission })
@@ -64,6 +66,7 @@ impl GiMethodPasses for GiHemisphere {
             i.height,
         ));
         let push = shared.push;
+        let seed = shared.seed();
         let mut own = vec![(5, i.rlm_radiance), (6, i.rlm_position), (7, i.rlm_normal)];
         if self.emission {
             // The assembly writes the volumes (with an emission volume) in scenes with emitters.
@@ -81,7 +84,10 @@ impl GiMethodPasses for GiHemisphere {
             &own,
             (irradiance, Access::StorageWrite(Shader::Compute)),
             &[(11, i.materials), (14, i.materials_pbr)],
-            move || push,
+            move || GpuGiPush {
+                seed: seed(),
+                ..push
+            },
         );
         irradiance.into()
     }

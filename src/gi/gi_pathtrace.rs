@@ -22,6 +22,8 @@ use std::sync::atomic::Ordering;
 /// per stereo eye of a one-pass stereo frame.
 pub struct GiPathtrace {
     pipeline: ComputePipeline,
+    /// Empty under temporal accumulation (`gi_temporal` keeps the history; the pass writes
+    /// each frame's estimate to an image of the frame).
     histories: Vec<Image>,
     /// The emissive triangles next-event estimation samples (scenes with them, with
     /// `GiSettings::emitter_sampling`).
@@ -37,11 +39,13 @@ impl GiPathtrace {
 
     /// `lobes`: later bounces read the material volume (the assembly creates it then).
     /// `emitter_sampling`: next-event estimation toward the emissive triangles, if any.
+    /// `temporal`: `gi_temporal` accumulates; the pass keeps no history of its own.
     pub fn new(
         ctx: &Context,
         target: &GiTarget<'_>,
         lobes: bool,
         emitter_sampling: bool,
+        temporal: bool,
     ) -> Result<Self, VkError> {
         let (w, h) = target.size;
         let emitters = match emitter_sampling && target.scene.has_emission() {
@@ -58,9 +62,11 @@ impl GiPathtrace {
                 HAS_MATERIAL_VOLUME = lobes && !target.scene.is_all_lambert(),
                 HAS_EMITTERS = emitters.is_some(),
                 ENVIRONMENT = Environment::shader_kind(target.scene.environment.as_ref()),
+                ACCUMULATE = !temporal,
             ],
         )?;
-        let histories = (0..target.eyes.max(1))
+        let eyes = if temporal { 0 } else { target.eyes.max(1) };
+        let histories = (0..eyes)
             .map(|_| {
                 ctx.create_zeroed_image(
                     &Self::history_desc((w, h)),
@@ -85,9 +91,26 @@ impl GiMethodPasses for GiPathtrace {
     }
 
     fn add_passes(&self, g: &mut RenderGraph, i: &GiInputs, shared: &GiShared) -> GiOutput {
-        // One history per eye; `GiTarget::eyes` made as many as the assembly declares.
-        let own = &self.histories[(shared.eye as usize).min(self.histories.len() - 1)];
-        let history = g.import_image(own, Access::Sampled(Shader::Compute));
+        // One history per eye; `GiTarget::eyes` made as many as the assembly declares. Under
+        // temporal accumulation, this frame's estimate.
+        let (history, out_access) = match self.histories.len() {
+            0 => (
+                g.create_image(ImageDesc::new_2d(
+                    "path tracer estimate",
+                    vk::Format::R32G32B32A32_SFLOAT,
+                    i.width,
+                    i.height,
+                )),
+                Access::StorageWrite(Shader::Compute),
+            ),
+            n => {
+                let own = &self.histories[(shared.eye as usize).min(n - 1)];
+                (
+                    g.import_image(own, Access::Sampled(Shader::Compute)),
+                    Access::StorageReadWrite(Shader::Compute),
+                )
+            }
+        };
         // The assembly writes the volumes for the methods that need them (this one does).
         let Some(v) = shared.attributes else {
             return history.into();
@@ -102,6 +125,7 @@ impl GiMethodPasses for GiPathtrace {
         let emitters = shared.world.buffer.unwrap_or(shared.lut);
         let push = shared.push;
         let frames = shared.frames.clone();
+        let temporal_seed = shared.sample_index.is_some().then(|| shared.seed());
         add_ray_pass(
             g,
             "gi_pathtrace",
@@ -115,11 +139,15 @@ impl GiMethodPasses for GiPathtrace {
                 (12, emission),
                 (13, material),
             ],
-            (history, Access::StorageReadWrite(Shader::Compute)),
+            (history, out_access),
             &[(14, emitters)],
             move || GpuGiPush {
-                // Frames accumulated before this one (`GiPasses::advance` ran before recording).
-                seed: frames.load(Ordering::SeqCst).saturating_sub(1),
+                seed: match &temporal_seed {
+                    Some(seed) => seed(),
+                    // Frames accumulated before this one (`GiPasses::advance` ran before
+                    // recording).
+                    None => frames.load(Ordering::SeqCst).saturating_sub(1),
+                },
                 ..push
             },
         );

@@ -39,6 +39,7 @@ impl GiRadianceVolume {
                 HAS_GGX = target.scene.has_ggx(),
                 HAS_EMISSION = target.scene.has_emission(),
                 ENVIRONMENT = Environment::shader_kind(target.scene.environment.as_ref()),
+                ADVANCE = target.temporal,
             ],
         )?;
         let ext = target.grid.extent_voxels();
@@ -138,6 +139,7 @@ impl GiMethodPasses for GiRadianceVolume {
         let material = v.material.unwrap_or(v.albedo);
         let emission = v.emission.unwrap_or(v.albedo);
         let push = shared.push;
+        let seed = shared.seed();
         let irradiance = g.create_image(ImageDesc::new_2d(
             "indirect irradiance",
             vk::Format::R32G32B32A32_SFLOAT,
@@ -159,7 +161,10 @@ impl GiMethodPasses for GiRadianceVolume {
             ],
             (irradiance, Access::StorageWrite(c)),
             &[],
-            move || push,
+            move || GpuGiPush {
+                seed: seed(),
+                ..push
+            },
         );
         irradiance.into()
     }

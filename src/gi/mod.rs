@@ -16,6 +16,7 @@ mod gi_filter;
 mod gi_hemisphere;
 mod gi_pathtrace;
 mod gi_radiance_volume;
+mod gi_temporal;
 mod gi_vpl_emit;
 mod method;
 mod sao;
@@ -29,6 +30,7 @@ pub use crate::scene::{
     SsrRays,
 };
 pub use gi_common::GpuGiPush;
+pub use gi_temporal::TemporalView;
 pub use method::{GiMethod, MethodSpec, Refusal};
 pub use sao::GpuSaoPush;
 
@@ -60,6 +62,8 @@ pub struct GiInputs {
     pub rlm_position: ImageHandle,
     pub rlm_normal: ImageHandle,
     pub shadow_map: ImageHandle,
+    /// The G-buffer's motion vectors, in scenes with moving objects.
+    pub motion: Option<ImageHandle>,
     /// The G-buffer's specular image, present when the scene has Phong materials.
     pub specular: Option<ImageHandle>,
     /// The scene's materials (`GpuMaterial`), for glossy senders in the light maps.
@@ -89,6 +93,11 @@ pub struct GiTarget<'a> {
     pub size: (u32, u32),
     /// The scene has Phong materials (the G-buffer has a specular image).
     pub has_phong: bool,
+    /// The G-buffer has motion vectors (scenes with moving objects).
+    pub motion: bool,
+    /// Temporal accumulation ([`GiPasses::temporal_on`]): the ray passes advance their
+    /// sample pattern every frame.
+    pub temporal: bool,
     /// The atlas voxelizer writes the attribute volumes of the objects it voxelizes
     /// ([`crate::voxel::frame::VoxelFrame::enable_attribute_volumes`]); the triangle
     /// attribute pass covers only the others.
@@ -165,6 +174,12 @@ pub struct GiPasses {
     /// The albedo and normal volumes, for the methods that read them.
     attributes: Option<TriangleAttributeVolumes>,
     filter: GiFilter,
+    /// Temporal accumulation between the method and the filter (`gi.temporal`, for the
+    /// methods whose spec has `temporal`).
+    temporal: Option<gi_temporal::GiTemporal>,
+    /// Frames recorded since the passes were made: the sample pattern's index under
+    /// `gi.temporal`.
+    sample_index: Arc<AtomicU32>,
     /// Ambient obscurance multiplied into the indirect light, when on.
     sao: Option<sao::Sao>,
     composite: GiComposite,
@@ -184,7 +199,16 @@ impl GiPasses {
         glossy: bool,
     ) -> Vec<ImageDesc> {
         // Per stereo eye: see `GiTarget::eyes` (the renderer repeats this list per eye).
-        (settings.method.spec().history)(settings, size, glossy)
+        let mut images = (settings.method.spec().history)(settings, size, glossy);
+        if Self::temporal_on(settings) {
+            images.extend(gi_temporal::GiTemporal::history_descs(size));
+        }
+        images
+    }
+
+    /// Whether `settings` accumulate the indirect light over frames with reprojection.
+    pub fn temporal_on(settings: &GiSettings) -> bool {
+        settings.temporal && settings.method.spec().temporal
     }
 
     /// Creates the pipelines (and the method's volumes and history) for `target`.
@@ -212,7 +236,22 @@ impl GiPasses {
             settings,
             method,
             attributes,
-            filter: GiFilter::new(ctx, target.has_phong || target.scene.has_ggx())?,
+            filter: GiFilter::new(
+                ctx,
+                target.has_phong || target.scene.has_ggx(),
+                Self::temporal_on(&settings),
+            )?,
+            temporal: Self::temporal_on(&settings)
+                .then(|| {
+                    gi_temporal::GiTemporal::new(
+                        ctx,
+                        target.motion,
+                        target.eyes,
+                        settings.temporal_frames,
+                    )
+                })
+                .transpose()?,
+            sample_index: Arc::default(),
             sao: settings
                 .sao
                 .map(|s| {
@@ -238,7 +277,8 @@ impl GiPasses {
     }
 
     /// Prepares frame slot `slot` for scene time `t_s` (after the slot's fence): rewrites the
-    /// attribute volumes and restarts accumulation when moving objects moved.
+    /// attribute volumes and restarts accumulation when moving objects moved (shortens the
+    /// history under temporal accumulation).
     pub fn update_dynamic(&mut self, t_s: f32, slot: usize) {
         self.method.write_slot(slot);
         if self
@@ -246,7 +286,7 @@ impl GiPasses {
             .as_mut()
             .is_some_and(|a| a.update(t_s, slot))
         {
-            self.reset();
+            self.objects_moved();
         }
     }
 
@@ -269,11 +309,41 @@ impl GiPasses {
     /// it only if it is the first.
     pub fn advance(&self, slot: usize) {
         self.accumulation.advance(slot);
+        self.sample_index.fetch_add(1, Ordering::SeqCst);
+        if let Some(t) = &self.temporal {
+            t.advance(slot);
+        }
     }
 
-    /// Restarts accumulation (camera, lights or scene changed).
+    /// Restarts accumulation (lights or scene changed; without temporal accumulation, the
+    /// camera too).
     pub fn reset(&self) {
         self.accumulation.reset();
+        if let Some(t) = &self.temporal {
+            t.reset();
+        }
+    }
+
+    /// Whether the indirect light is accumulated with reprojection: a camera move keeps it
+    /// ([`Self::set_views`]), only a change of lights or scene calls for [`Self::reset`].
+    pub fn reprojects(&self) -> bool {
+        self.temporal.is_some()
+    }
+
+    /// The cameras (one per eye) of the next frame to be recorded, for the reprojection.
+    pub fn set_views(&self, views: &[TemporalView]) {
+        if let Some(t) = &self.temporal {
+            t.set_views(views);
+        }
+    }
+
+    /// Objects moved since the last frame: under temporal accumulation the next frame keeps
+    /// a short history instead of starting over.
+    pub fn objects_moved(&self) {
+        match &self.temporal {
+            Some(t) => t.objects_moved(),
+            None => self.reset(),
+        }
     }
 
     /// Frames accumulated so far.
@@ -324,6 +394,7 @@ impl GiPasses {
             sampler: self.sampler.raw,
             push: self.push,
             frames: self.accumulation.frames.clone(),
+            sample_index: self.temporal.is_some().then(|| self.sample_index.clone()),
             first_frame: self.accumulation.first_frame.clone(),
             attributes: None,
             eye,
@@ -355,6 +426,13 @@ impl GiPasses {
         shared.attributes = w.attributes;
         shared.world = w.method;
         let GiOutput { indirect, overlay } = self.method.add_passes(g, inp, &shared);
+        let (indirect, moments) = match &self.temporal {
+            Some(t) => {
+                let (accumulated, moments) = t.add_passes(g, inp, self.sampler.raw, indirect, eye);
+                (accumulated, Some(moments))
+            }
+            None => (indirect, None),
+        };
         let s = &self.settings;
         let tile = (s.method.spec().filter_tile)(s);
         let filtered = self.filter.add_passes(
@@ -363,6 +441,7 @@ impl GiPasses {
             self.sampler.raw,
             (s.filter_radius, s.filter_passes, tile),
             indirect,
+            moments,
         );
         let ao = self
             .sao

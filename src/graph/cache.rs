@@ -181,6 +181,47 @@ mod tests {
         assert_eq!(build(false), ["copy"]);
     }
 
+    /// A history is written after the pass that reads it: its writer lives while that reader
+    /// lives (walking back from the output alone would cull it), and both go when nothing
+    /// reads the reader's output.
+    #[test]
+    fn a_history_lives_with_its_reader() {
+        use crate::graph::compile::EstimateOracle;
+        use crate::graph::{Access, RenderGraph, Shader};
+        use crate::vk::{vk, ImageDesc};
+        let build = |read: bool| {
+            let mut g = RenderGraph::new();
+            let validity = Cache::new("history");
+            let desc = ImageDesc::new_2d("h", vk::Format::R32G32B32A32_SFLOAT, 8, 8);
+            let history =
+                g.create_history_image(desc.clone(), Access::Sampled(Shader::Compute), &validity);
+            let now = g.create_image(desc);
+            let out = g.import_buffer_desc("out", 256, Access::HostRead);
+            g.add_pass("accumulate")
+                .read(history, Access::Sampled(Shader::Compute))
+                .write(now, Access::StorageWrite(Shader::Compute))
+                .record(|_| {});
+            let pass = g.add_pass("use").write(out, Access::TransferWrite);
+            let pass = if read {
+                pass.read(now, Access::TransferRead)
+            } else {
+                pass
+            };
+            pass.record(|_| {});
+            g.add_pass("keep")
+                .read(now, Access::TransferRead)
+                .write(history, Access::TransferWrite)
+                .record(|_| {});
+            let c = g.compile(&EstimateOracle).expect("compiles");
+            c.order
+                .iter()
+                .map(|&p| c.pass_names[p].clone())
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(build(true), ["accumulate", "use", "keep"]);
+        assert_eq!(build(false), ["use"]);
+    }
+
     #[test]
     fn keys_tell_inputs_apart() {
         let k = |b: &[u8]| KeyHasher::default().bytes(b).finish();

@@ -297,18 +297,32 @@ impl RenderGraph {
             return Err(GraphError::NoOutput);
         }
         let mut live = vec![false; self.passes.len()];
-        for (i, pass) in self.passes.iter().enumerate().rev() {
-            let feeds_output = pass
-                .accesses
-                .iter()
-                .any(|&(id, a, _, _)| a.info().writes && needed[id.0 as usize]);
-            if feeds_output {
-                live[i] = true;
-                for &(id, a, _, _) in &pass.accesses {
-                    if a.info().reads {
-                        needed[id.0 as usize] = true;
+        // A history is written for the next frame, after the passes that read it in this one:
+        // once a live pass reads it, walk again so that its writers (and their inputs) live.
+        loop {
+            for (i, pass) in self.passes.iter().enumerate().rev() {
+                let feeds_output = pass
+                    .accesses
+                    .iter()
+                    .any(|&(id, a, _, _)| a.info().writes && needed[id.0 as usize]);
+                if feeds_output {
+                    live[i] = true;
+                    for &(id, a, _, _) in &pass.accesses {
+                        if a.info().reads {
+                            needed[id.0 as usize] = true;
+                        }
                     }
                 }
+            }
+            let revived = self.passes.iter().enumerate().any(|(i, pass)| {
+                !live[i]
+                    && pass.accesses.iter().any(|&(id, a, _, _)| {
+                        let r = id.0 as usize;
+                        a.info().writes && needed[r] && self.resources[r].history
+                    })
+            });
+            if !revived {
+                break;
             }
         }
         let order = (0..self.passes.len()).filter(|&i| live[i]).collect();

@@ -226,6 +226,10 @@ pub(crate) struct ResourceDecl {
     /// A persistent image the executor owns and keeps while these validities hold
     /// ([`RenderGraph::create_cached_image`]; empty: not cached).
     pub caches: Vec<std::sync::Arc<Cache>>,
+    /// A cached image that is a history ([`RenderGraph::create_history_image`]): a frame
+    /// writes it for the next one, so its writers live while a live pass reads it, even
+    /// earlier in the frame.
+    pub history: bool,
 }
 
 impl ResourceDecl {
@@ -321,6 +325,7 @@ impl RenderGraph {
             slot_window: None,
             layer_of: None,
             caches: Vec::new(),
+            history: false,
         });
         ResourceId(self.resources.len() as u32 - 1)
     }
@@ -438,6 +443,24 @@ impl RenderGraph {
     ) -> ImageHandle {
         let h = self.import_image_desc(desc, state);
         self.resources[h.0 .0 as usize].caches = caches.to_vec();
+        h
+    }
+
+    /// A history: a persistent image the executor owns, like a cached one, that a frame's
+    /// passes read (what the previous frame left) and then write (for the next frame).
+    /// `validity` says whether it holds a previous frame: the executor invalidates it when it
+    /// creates the image (a new graph, a resize), the owner when the history no longer
+    /// applies (the lights changed), and the owner's [`Cache::validate`] with a fixed key
+    /// before each frame tells the first frame after either (see `gi/gi_temporal.rs`). The
+    /// passes that write it live while a live pass reads it.
+    pub fn create_history_image(
+        &mut self,
+        desc: ImageDesc,
+        state: Access,
+        validity: &std::sync::Arc<Cache>,
+    ) -> ImageHandle {
+        let h = self.create_cached_image(desc, state, std::slice::from_ref(validity));
+        self.resources[h.0 .0 as usize].history = true;
         h
     }
 

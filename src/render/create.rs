@@ -292,8 +292,7 @@ impl LitPasses {
             bump: scene.has_bump_maps(),
             dissolve: scene.has_transparency() && !plan.oit_on,
             pbr_maps: scene.has_pbr_maps(),
-            // Moving objects under TAA (a debug view has no TAA).
-            motion: settings.debug.is_none() && settings.post.motion_vectors(scene.has_animation()),
+            motion: motion_vectors(scene, settings),
             alpha_maps: scene.has_alpha_maps(),
         };
         let gbuffer = GbufferPass::new(ctx, features, plan.views)?;
@@ -427,6 +426,8 @@ fn gi_passes(
             shadow_resolution: settings.shadow.resolution,
             size: (settings.width, settings.height),
             has_phong: plan.has_phong,
+            motion: motion_vectors(scene, settings),
+            temporal: crate::gi::GiPasses::temporal_on(&settings.gi),
             atlas_attributes,
         },
     )?;
@@ -505,4 +506,13 @@ fn voxel_debug(
         d,
         v,
     )?))
+}
+
+/// Whether the G-buffer writes motion vectors: for moving objects under TAA or temporal GI
+/// accumulation (a debug view has neither).
+fn motion_vectors(scene: &Scene, settings: &RenderSettings) -> bool {
+    let moving = scene.has_animation();
+    settings.debug.is_none()
+        && (settings.post.motion_vectors(moving)
+            || (moving && crate::gi::GiPasses::temporal_on(&settings.gi)))
 }

@@ -144,6 +144,7 @@ impl Renderer {
                         rlm_position: maps.position,
                         rlm_normal: maps.normal,
                         shadow_map,
+                        motion: gbuffer.motion,
                         specular: gbuffer.specular,
                         materials: scene.materials,
                         materials_pbr: scene.materials_pbr,

@@ -91,12 +91,20 @@ impl Renderer {
             st.frame_right = fr;
             view_projs.push(right.view_proj(aspect));
         }
-        // Accumulated indirect light is valid only while camera, lights and settings stay.
+        // Accumulated indirect light is valid only while camera, lights and settings stay;
+        // with reprojection (temporal accumulation) a camera move keeps it.
         if let Some((gi, _)) = &mut self.gi {
             gi.update_scene(scene, s.time_s);
-            if right_changed || bytemuck::bytes_of(&f) != bytemuck::bytes_of(&self.frame_data) {
+            let changed =
+                right_changed || bytemuck::bytes_of(&f) != bytemuck::bytes_of(&self.frame_data);
+            if changed && (!gi.reprojects() || light_key(&f) != light_key(&self.frame_data)) {
                 gi.reset();
             }
+            let mut cameras = vec![temporal_view(&camera, aspect)];
+            if let Some((_, right)) = eyes {
+                cameras.push(temporal_view(&right, aspect));
+            }
+            gi.set_views(&cameras);
         }
         self.frame_data = f;
         self.shadow_view_count = base_views as u32;
@@ -120,7 +128,7 @@ impl Renderer {
         if let Some((gi, _)) = &mut self.gi {
             gi.update_dynamic(self.settings.time_s, slot);
             if attributes_moved {
-                gi.reset();
+                gi.objects_moved();
             }
             gi.advance(slot);
         }
@@ -254,6 +262,42 @@ pub(super) fn jittered(mut frame: GpuFrame, post: &mut crate::post::PostPasses) 
 
 /// Sets the frame constants that depend on the camera: view-projection, its camera-relative
 /// inverse, the camera position and its viewing direction with the projection.
+/// What of the frame constants the indirect light depends on besides the camera: the lights
+/// (without their cascade views, which follow the camera), the environment, the
+/// pre-exposure and the shadow parameters. A change of it starts temporal accumulation over.
+fn light_key(f: &GpuFrame) -> u64 {
+    let mut key = crate::graph::KeyHasher::default();
+    for l in &f.lights[..(f.counts[0] as usize).min(f.lights.len())] {
+        let info = [l.info[0], l.info[1], l.info[2]];
+        key.bytes(bytemuck::bytes_of(&[
+            l.position,
+            l.direction,
+            l.intensity,
+            l.spot,
+        ]))
+        .bytes(bytemuck::bytes_of(&info));
+    }
+    key.u64(u64::from(f.counts[0]))
+        .bytes(bytemuck::bytes_of(&[
+            f.environment,
+            f.radiance_scale,
+            f.shadow,
+        ]))
+        .finish()
+}
+
+/// The camera as the temporal accumulation reprojects with it (un-jittered).
+fn temporal_view(camera: &crate::scene::Camera, aspect: f32) -> crate::gi::TemporalView {
+    let mut relative = *camera;
+    relative.position = glam::Vec3::ZERO;
+    crate::gi::TemporalView {
+        view_proj_relative: relative.view_proj(aspect),
+        position: camera.position,
+        forward: camera.forward,
+        orthographic: camera.is_orthographic(),
+    }
+}
+
 fn set_frame_camera(f: &mut GpuFrame, camera: &crate::scene::Camera, aspect: f32) {
     f.view_proj = camera.view_proj(aspect).to_cols_array();
     f.inv_view_proj = camera_relative_inverse(camera, aspect).to_cols_array();

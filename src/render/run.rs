@@ -77,11 +77,13 @@ pub(super) fn render_frames(
     })
 }
 
-/// Frames a headless render runs for its image: the path tracer converges over frames,
+/// Frames a headless render runs for its image: the path tracer (and every method under
+/// temporal accumulation) converges over frames,
 /// screen-space GI adds a bounce per frame by feedback, TAA converges over jittered frames;
 /// everything else is done in one.
 pub fn frames_to_image(settings: &super::RenderSettings) -> usize {
-    let gi_frames = if settings.gi.method.spec().accumulates {
+    let accumulates = settings.gi.method.spec().accumulates;
+    let gi_frames = if accumulates || crate::gi::GiPasses::temporal_on(&settings.gi) {
         settings.gi.accumulate_frames.max(1) as usize
     } else {
         1

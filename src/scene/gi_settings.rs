@@ -77,8 +77,18 @@ pub struct GiSettings {
     /// maps are the same either way. (The reflective light maps sample `map_Kd` / `map_Pm`
     /// like the G-buffer either way.)
     pub voxel_map_texels: bool,
-    /// Frames a headless render accumulates (path tracer; the viewer accumulates while still).
+    /// Frames a headless render accumulates (path tracer, and every method under `temporal`;
+    /// the viewer accumulates while still).
     pub accumulate_frames: u32,
+    /// Temporal accumulation (`gi::gi_temporal`): the voxel methods' indirect light is
+    /// reprojected from the previous frames with the camera and the motion vectors, blended
+    /// with this frame's, and the sample pattern advances every frame; disoccluded pixels
+    /// start over, a light change starts every pixel over.
+    pub temporal: bool,
+    /// The longest history a pixel keeps under `temporal` (frames): up to it a still pixel
+    /// holds the plain mean of its frames, after it an exponential mean of about twice as
+    /// many.
+    pub temporal_frames: u32,
     /// Where the hemisphere method reads the radiance at ray hits.
     pub radiance_source: RadianceSource,
     /// The VPL method's parameters.
@@ -316,6 +326,8 @@ impl Default for GiSettings {
             emitter_sampling: true,
             voxel_map_texels: true,
             accumulate_frames: 1,
+            temporal: false,
+            temporal_frames: 64,
             radiance_source: RadianceSource::Maps,
             vpl: super::VplSettings::default(),
             sao: None,
@@ -347,7 +359,7 @@ use range::*;
 
 /// Every `[gi]` key: the scene file's key, the path `--set`, the sweep's grid and the panel
 /// use, its range, its flag and its field.
-static GI_KEYS: [Key<GiSettings>; 37] = [
+static GI_KEYS: [Key<GiSettings>; 39] = [
     key!("gi.method", Kind::Choice(choices::<GiMethod>),
         "Indirect-light method (none: direct light only)",
         flag("gi", "METHOD"), choice GiMethod, method),
@@ -419,9 +431,26 @@ static GI_KEYS: [Key<GiSettings>; 37] = [
     key!(
         "gi.accumulate_frames",
         Kind::Count(GI_FRAMES),
-        "Frames the path tracer accumulates in a headless render",
+        "Frames a headless render accumulates (the path tracer, and every method under \
+         `gi.temporal`)",
         flag("gi-frames", "F"),
         accumulate_frames
+    ),
+    key!(
+        "gi.temporal",
+        Kind::Bool,
+        "Temporal accumulation of the voxel methods' indirect light: reprojected by camera and \
+         motion vectors, disocclusions rejected by depth and normal, the sample pattern \
+         advanced every frame, the filter stepping back as the variance of the mean falls",
+        toggle("gi-temporal"),
+        temporal
+    ),
+    key!(
+        "gi.temporal_frames",
+        Kind::Count(GI_TEMPORAL_FRAMES),
+        "`gi.temporal`: the longest history a pixel keeps, in frames",
+        flag("gi-temporal-frames", "N"),
+        temporal_frames
     ),
     key!("gi.radiance_source", Kind::Choice(choices::<RadianceSource>),
         "Where hemisphere sampling reads the radiance at ray hits: reflective light maps or a \
@@ -697,6 +726,15 @@ pub mod range {
         "frames to accumulate",
         1,
         1 << 20,
+    );
+
+    /// One frame is no accumulation; 4096 frames at 60 Hz is over a minute of history.
+    pub const GI_TEMPORAL_FRAMES: Limit<u32> = Limit::new(
+        "--gi-temporal-frames",
+        Some("gi.temporal_frames"),
+        "frames of history",
+        1,
+        4096,
     );
 
     pub const LIGHT_MAP_RESOLUTION: Limit<u32> = Limit::new(

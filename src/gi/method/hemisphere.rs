@@ -14,6 +14,7 @@ pub(super) static SPEC: MethodSpec = MethodSpec {
                   (Thiedemann 2010 §6.4.1)",
     summary: "one bounce",
     accumulates: false,
+    temporal: true,
     needs_voxels: true,
     // The area lights' light maps are rendered for this method alone.
     reads_area_light_maps: true,
@@ -61,10 +62,10 @@ pub(super) fn build(
     } else {
         Box::new(GiHemisphere::new(
             ctx,
-            target.has_phong,
-            target.scene.has_ggx(),
+            (target.has_phong, target.scene.has_ggx()),
             target.scene.has_emission(),
             crate::scene::Environment::shader_kind(target.scene.environment.as_ref()),
+            target.temporal,
         )?)
     })
 }

@@ -52,6 +52,9 @@ pub struct MethodSpec {
     /// A headless render runs `accumulate_frames` frames for its image (the method converges
     /// or adds bounces over frames); otherwise one frame is the image.
     pub accumulates: bool,
+    /// `gi.temporal` accumulates the method's indirect light over frames with reprojection
+    /// (`gi_temporal`): its passes advance their samples by [`super::gi_common::GiShared::seed`].
+    pub temporal: bool,
     /// The method traces rays in the voxel grid and reads radiance from the reflective light
     /// maps: the frame voxelizes and renders the light maps.
     pub needs_voxels: bool,

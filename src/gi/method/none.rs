@@ -7,6 +7,7 @@ pub(super) static SPEC: MethodSpec = MethodSpec {
     description: "No indirect light",
     summary: "direct light only",
     accumulates: false,
+    temporal: false,
     needs_voxels: false,
     reads_area_light_maps: false,
     attribute_volumes: |_, _| false,

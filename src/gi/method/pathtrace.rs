@@ -12,13 +12,17 @@ pub(super) static SPEC: MethodSpec = MethodSpec {
                   §6.4.2)",
     summary: "multi-bounce",
     accumulates: true,
+    temporal: true,
     needs_voxels: true,
     reads_area_light_maps: false,
     attribute_volumes: |_, _| true,
     // Later bounces sample the Phong and GGX lobes unless `--pathtrace-lobes false`.
     material_volume: |s| s.pathtrace_lobes,
     // Per stereo eye: see `GiTarget::eyes` (the renderer repeats this list per eye).
-    history: |_, size, _| vec![GiPathtrace::history_desc(size)],
+    history: |s, size, _| match super::super::GiPasses::temporal_on(s) {
+        true => vec![],
+        false => vec![GiPathtrace::history_desc(size)],
+    },
     filter_tile: |_| [1, 1],
     multiview_blocker: None,
     orthographic_blocker: None,
@@ -67,6 +71,7 @@ pub(super) static SPEC: MethodSpec = MethodSpec {
             target,
             settings.pathtrace_lobes,
             settings.emitter_sampling,
+            super::super::GiPasses::temporal_on(settings),
         )?))
     },
 };

@@ -14,6 +14,7 @@ pub(super) static SPEC: MethodSpec = MethodSpec {
     summary: "screen-space GI",
     // Feedback adds a bounce per frame.
     accumulates: true,
+    temporal: false,
     needs_voxels: false,
     reads_area_light_maps: false,
     attribute_volumes: |_, _| false,

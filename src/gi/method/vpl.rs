@@ -13,6 +13,7 @@ pub(super) static SPEC: MethodSpec = MethodSpec {
                   2010 Ch. 7)",
     summary: "virtual point lights",
     accumulates: false,
+    temporal: false,
     needs_voxels: true,
     reads_area_light_maps: false,
     // Bounces after the first, and the emitters' rays, read albedo and normal at their voxel
