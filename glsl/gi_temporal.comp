@@ -10,9 +10,11 @@
 // camera (push constants: its un-jittered view-projection relative to its own position, and
 // the camera's move since then), or, with MOTION (scenes with moving objects), the G-buffer's
 // motion vector at surface pixels. The history is read bilinearly; each of the four taps
-// counts only where the surface it stored is this one (disocclusion, Schied et al. §4.1): its
-// camera distance within DEPTH_TOLERANCE of p's distance from the previous camera, its normal
-// within NORMAL_COS of this one. No valid tap: the pixel starts over (n = 1).
+// counts only where the surface it stored is this one (disocclusion, Schied et al. §4.1): the
+// tap's point (its pixel's ray from the previous camera, at its stored distance) lies within
+// PLANE_TOLERANCE of p's tangent plane (relative to the distance, so that slanted surfaces
+// and coarse pixels keep their neighbours, unlike a test of the distance alone), and its
+// normal within NORMAL_COS of this one. No valid tap: the pixel starts over (n = 1).
 //
 // Moments (§4.2): the history also keeps the mean of the squared luminance; with the mean
 // luminance (that of c, exactly, since luminance is linear) it gives the variance of one
@@ -50,10 +52,9 @@ layout(push_constant) uniform Push {
     uint has_history;
 } pc;
 
-// A surface moved this little, relative to its distance, between frames is the same surface:
-// a pixel's footprint at 1080p and a 60° field is about 1e-3 of the distance, and the
-// reconstruction from depth is good to a few of them at grazing angles.
-const float DEPTH_TOLERANCE = 0.03;
+// A point this close to p's tangent plane, relative to its distance, is on p's surface: as
+// gi_filter's plane test (0.02), with room for a moving object's change between frames.
+const float PLANE_TOLERANCE = 0.03;
 // About 25°: a normal that turned more is another surface (or another side of one).
 const float NORMAL_COS = 0.9;
 
@@ -108,6 +109,8 @@ void main() {
     vec3 history_sum = vec3(0.0);
     float m2_sum = 0.0, n_sum = 0.0, w_sum = 0.0;
     if (pc.has_history != 0u && in_front) {
+        // The previous camera's unprojection (relative to it), for the taps' points.
+        mat4 prev_inverse = inverse(pc.prev_view_proj);
         vec2 f = (prev_ndc * 0.5 + 0.5) * vec2(size) - 0.5;
         ivec2 i0 = ivec2(floor(f));
         vec2 t = f - vec2(i0);
@@ -117,7 +120,15 @@ void main() {
             if (any(lessThan(tap, ivec2(0))) || any(greaterThanEqual(tap, size))) continue;
             vec4 aux = texelFetch(history_aux, tap, 0);
             if (aux.y < 0.0) continue;  // sky, or never written
-            if (abs(aux.y - d_expected) > DEPTH_TOLERANCE * d_expected) continue;
+            vec2 tap_ndc = (vec2(tap) + 0.5) / vec2(size) * 2.0 - 1.0;
+            vec4 a = prev_inverse * vec4(tap_ndc, 0.0, 1.0);
+            vec4 b = prev_inverse * vec4(tap_ndc, 1.0, 1.0);
+            vec3 near = a.xyz / a.w;
+            vec3 dir = normalize(b.xyz / b.w - near);
+            // Perspective: the stored distance is from the camera (the origin) along the ray;
+            // orthographic: the depth along the viewing direction.
+            vec3 tap_point = ortho ? near + dir * (aux.y - dot(near, pc.prev_forward.xyz)) : dir * aux.y;
+            if (abs(dot(n, tap_point - q)) > PLANE_TOLERANCE * d_expected) continue;
             if (dot(oct_decode(aux.zw), n) < NORMAL_COS) continue;
             float w = (o.x == 1 ? t.x : 1.0 - t.x) * (o.y == 1 ? t.y : 1.0 - t.y);
             vec4 h = texelFetch(history, tap, 0);
