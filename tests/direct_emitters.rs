@@ -70,8 +70,9 @@ fn has_pass_and_grid(ctx: &common::TestContext, scene: &Scene, method: GiMethod)
 
 /// Who brings the emitters' and the environment's light to a pixel's surface, counted once
 /// (docs/design/emitter-sampling.md, "Direct light"): the pass runs for the emitters under
-/// `--gi none` only, for the environment under `none` and `ssgi`; the voxel methods keep
-/// their own path, their frames have no such pass (so their renders are those of before).
+/// `--gi none` only, for the environment under `none`, `ssgi` and `vpl` (whose rays never
+/// read it); the methods that bring that light themselves keep their own path, their frames
+/// have no such pass (so their renders are those of before).
 /// A scene with neither emitters nor an environment gets no pass and, under `--gi none`, no
 /// voxel grid.
 #[test]
@@ -99,7 +100,7 @@ fn the_pass_runs_only_where_no_method_brings_the_light() {
         (false, false)
     );
     let sky = floor_under(Vec3::ONE);
-    for m in [GiMethod::None, GiMethod::Ssgi] {
+    for m in [GiMethod::None, GiMethod::Ssgi, GiMethod::Vpl] {
         assert_eq!(
             has_pass_and_grid(&ctx, &sky, m),
             (true, true),
@@ -116,25 +117,25 @@ fn the_pass_runs_only_where_no_method_brings_the_light() {
 /// light only: E = ∫ L cos θ dω = π L over the upper hemisphere, so L_o = ρ/π · π L = ρ L.
 /// Every cosine-sampled direction leaves the grid unblocked and brings exactly L with weight 1
 /// (f cos / pdf = ρ): the estimate has no variance, and the bound is float rounding (1e-3).
-/// Without the pass (before this change) the floor was black under `--gi none`.
+/// Without the pass (before this change) the floor was black under `--gi none`. The same
+/// under `--gi vpl`: the scene has no lights, so no VPLs and no indirect light, and the
+/// frame is the direct image.
 #[test]
 fn floor_under_a_constant_sky_reflects_rho_times_l_without_gi() {
     let ctx = common::context();
     let sky = Vec3::new(0.8, 1.0, 1.2);
-    let img = render_image(
-        &ctx,
-        &floor_under(sky),
-        &settings(GiMethod::None, (32, 32), 4),
-    )
-    .expect("renders")
-    .hdr;
-    let floor = Vec3::from(img.data[(30 * img.width + 16) as usize]);
-    let expected = 0.5 * sky;
-    println!("floor {floor}, expected {expected}");
-    assert!(
-        (floor - expected).abs().max_element() < 1e-3 * expected.max_element(),
-        "floor {floor}, expected ρL = {expected}"
-    );
+    for method in [GiMethod::None, GiMethod::Vpl] {
+        let img = render_image(&ctx, &floor_under(sky), &settings(method, (32, 32), 4))
+            .expect("renders")
+            .hdr;
+        let floor = Vec3::from(img.data[(30 * img.width + 16) as usize]);
+        let expected = 0.5 * sky;
+        println!("{method:?}: floor {floor}, expected {expected}");
+        assert!(
+            (floor - expected).abs().max_element() < 1e-3 * expected.max_element(),
+            "{method:?}: floor {floor}, expected ρL = {expected}"
+        );
+    }
     common::assert_no_validation_messages(&ctx);
 }
 

@@ -6,8 +6,12 @@
 //!
 //! - the emitters under `--gi none` (the voxel methods reach them through their first bounce,
 //!   and screen-space GI gathers the on-screen emission from the direct image);
-//! - the environment under `--gi none` and `--gi ssgi` (screen-space GI has no ray that can
-//!   leave the scene, so it never reads the environment).
+//! - the environment under `--gi none`, `--gi ssgi` and `--gi vpl` (screen-space GI has no
+//!   ray that can leave the scene, and the VPLs start at lights only, so neither reads the
+//!   environment; the hemisphere rays and the path tracer bring its first bounce themselves).
+//!
+//! These are facts about the methods that their specs (`gi::method`) do not state yet; the
+//! match below is the one place that holds them.
 //!
 //! The emitter list is the path tracer's ([`crate::gi::emitters`]); the rays are the GI rays'
 //! voxel traversal with the GI settings' offsets and length ([`GpuGiPush`]), their count per
@@ -28,8 +32,8 @@ use crate::voxel::ray_mask::RayMaskLut;
 /// `None` when neither (then the pass, and for it the voxel grid, is not made).
 pub fn sampled_light(method: GiMethod, scene: &Scene) -> Option<(bool, bool)> {
     let emitters = method == GiMethod::None && scene.has_emission();
-    let environment =
-        matches!(method, GiMethod::None | GiMethod::Ssgi) && scene.environment.is_some();
+    let environment = matches!(method, GiMethod::None | GiMethod::Ssgi | GiMethod::Vpl)
+        && scene.environment.is_some();
     (emitters || environment).then_some((emitters, environment))
 }
 

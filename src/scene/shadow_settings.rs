@@ -217,7 +217,7 @@ static SHADOW_KEYS: [Key<ShadowSettings>; 13] = [
         "shadow.direct_samples",
         Kind::Count(DIRECT_SAMPLES),
         "Samples per pixel of the emissive meshes' and the environment's direct light, with \
-         voxel visibility (under --gi none; --gi ssgi: the environment's only)",
+         voxel visibility (under --gi none; --gi ssgi and vpl: the environment's only)",
         flag("direct-samples", "K"),
         direct_samples
     ),
