@@ -248,9 +248,11 @@ fn a_metal_emitter_sends_its_emission_through_the_radiance_volume() {
 /// The emissive Cornell box has no lights: everything but the patch itself is indirect light
 /// from the patch, which the path tracer reads from the emission volume. Against the Mitsuba
 /// full-GI reference (assets/references/cornell_emissive_gi.exr), 256², 2 bounces, 16 rays, one
-/// frame: measured relMSE 0.056 without emitter sampling, 0.032 with it (the default; direct
-/// only: 0.488, which shows only the patch; 0.067 with the copper sphere's lobe not sampled,
-/// i.e. black); the bound is the former plus 30% for other devices' rounding and sample noise.
+/// frame: measured relMSE 0.056 without emitter sampling, 0.032 with it (the default; 0.067
+/// with the copper sphere's lobe not sampled, i.e. black); the bound is the former plus 30%
+/// for other devices' rounding and sample noise. Direct light only (`--gi none`, the patch
+/// and its light reflected once by `direct_emitters`): 0.152 (0.488 when it showed
+/// the patch alone); the path tracer's second bounce must bring it below half of that.
 #[test]
 fn emissive_cornell_box_is_lit_by_the_path_tracer() {
     let scene = load_scene_arg(Some(&format!("{ROOT}/assets/scenes/cornell_emissive.toml")))
@@ -283,7 +285,7 @@ fn emissive_cornell_box_is_lit_by_the_path_tracer() {
         rel_mse[0], rel_mse[1]
     );
     assert!(rel_mse[1] < 0.073, "path tracer relMSE {}", rel_mse[1]);
-    assert!(rel_mse[1] < rel_mse[0] / 4.0, "path tracer {rel_mse:?}");
+    assert!(rel_mse[1] < rel_mse[0] / 2.0, "path tracer {rel_mse:?}");
 }
 
 /// Why `--gi hemisphere` and `--gi pathtrace` once gave the same image bit for bit in an

@@ -10,8 +10,10 @@
 // point, and they sum to 1 wherever the voxel emitter and the triangle agree: the combination
 // is unbiased up to the voxelization's own difference (docs/design/emitter-sampling.md).
 //
-// Needs before it: EMITTERS_BINDING, gi_common.glsl (the push constants), voxel_traverse.glsl
-// (voxel_visible), material_lobe.glsl (Lobe, lobe_pdf, lobe_part_brdf).
+// Shared by the path tracer (gi_pathtrace.comp) and the emitters' direct light
+// (direct_emitters.comp). Needs before it: EMITTERS_BINDING, gi_common.glsl (the push
+// constants), voxel_traverse.glsl (voxel_visible), material_lobe.glsl (Lobe, lobe_pdf,
+// lobe_part_brdf, lobe_brdf).
 #ifndef EMITTERS_GLSL
 #define EMITTERS_GLSL
 
@@ -56,7 +58,8 @@ float emitter_hit_weight(vec3 le, float dist_m, float cos_l, float pdf_bsdf) {
 // reflects toward wo from the emissive triangles, f L cos_i cos_l / (d^2 p_A) per sampled lobe
 // part. `parts`: 0 the diffuse part only, 1 the specular part only (the first bounce's
 // stratified split, each half its own estimator), 2 both, where the BSDF sample picks the
-// specular part with probability ps (its density is then ps times that part's).
+// specular part with probability ps (its density is then ps times that part's);
+// 3 the whole BRDF, unweighted (direct_emitters.comp: no BSDF strategy to combine with).
 vec3 emitter_sample(vec3 o, vec3 n, vec3 wo, Lobe m, uint parts, float ps, vec2 u) {
     uint count = emitter_header.count;
     if (count == 0u || emitter_header.inv_weighted_area <= 0.0) return vec3(0.0);
@@ -91,13 +94,17 @@ vec3 emitter_sample(vec3 o, vec3 n, vec3 wo, Lobe m, uint parts, float ps, vec2 
     if (ci <= 0.0 || cl <= 0.0 || dist > gi.radius_m) return vec3(0.0);
     float pl = pa * d2 / cl;
     vec3 f = vec3(0.0);
-    if (parts != 1u) {
-        float pd = (parts == 2u ? 1.0 - ps : 1.0) * lobe_pdf(m, n, wo, wi, false);
-        f += lobe_part_brdf(m, n, wi, wo, false) * mis_power(pl, pd);
-    }
-    if (parts != 0u) {
-        float pspec = (parts == 2u ? ps : 1.0) * lobe_pdf(m, n, wo, wi, true);
-        f += lobe_part_brdf(m, n, wi, wo, true) * mis_power(pl, pspec);
+    if (parts == 3u) {
+        f = lobe_brdf(m, n, wi, wo);
+    } else {
+        if (parts != 1u) {
+            float pd = (parts == 2u ? 1.0 - ps : 1.0) * lobe_pdf(m, n, wo, wi, false);
+            f += lobe_part_brdf(m, n, wi, wo, false) * mis_power(pl, pd);
+        }
+        if (parts != 0u) {
+            float pspec = (parts == 2u ? ps : 1.0) * lobe_pdf(m, n, wo, wi, true);
+            f += lobe_part_brdf(m, n, wi, wo, true) * mis_power(pl, pspec);
+        }
     }
     if (all(equal(f, vec3(0.0)))) return vec3(0.0);
     // The segment leaves o as the BSDF rays do (k2 h / (d.n), clamped) and stops k1 voxel

@@ -316,14 +316,15 @@ fn needs_new_graph(a: &RenderSettings, b: &RenderSettings) -> bool {
 
 /// Settings the renderer bakes into its resources differ: the GI passes are made for one method
 /// and set of parameters, and the path tracer's and TAA's histories (and the post passes) for
-/// one size; the light-space passes are made cached (`shadow.cache`) or not. A new renderer
-/// then.
+/// one size; the light-space passes are made cached (`shadow.cache`) or not, and the sampled
+/// direct light with its sample count (`shadow.direct_samples`). A new renderer then.
 fn needs_new_renderer(a: &RenderSettings, b: &RenderSettings) -> bool {
     let sized = a.gi.method != GiMethod::None
         || a.debug.is_some()
         || a.post != crate::post::PostSettings::default();
     a.gi != b.gi
         || a.shadow.cache != b.shadow.cache
+        || a.shadow.direct_samples != b.shadow.direct_samples
         || a.debug != b.debug
         || a.post != b.post
         || (sized && (a.width, a.height) != (b.width, b.height))

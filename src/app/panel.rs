@@ -603,6 +603,14 @@ fn shadow_controls(ui: &mut egui::Ui, shadow: &mut ShadowSettings) {
     key_slider(
         ui,
         shadow,
+        "shadow.direct_samples",
+        (1.0, 64.0),
+        true,
+        "emitter / sky samples",
+    );
+    key_slider(
+        ui,
+        shadow,
         "shadow.pcf_radius",
         (0.0, 4.0),
         false,

@@ -9,8 +9,8 @@
 //! holds what the ray passes share (push constants, common bindings). The settings are plain
 //! data in [`crate::scene`] (re-exported here).
 
-mod emitters;
-mod gi_common;
+pub mod emitters;
+pub mod gi_common;
 mod gi_composite;
 mod gi_filter;
 mod gi_hemisphere;

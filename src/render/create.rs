@@ -142,6 +142,28 @@ impl Renderer {
             true => Some(gi_passes(ctx, scene, settings, &plan, &mut voxels)?),
             false => None,
         };
+        let direct_emitters = match (plan.direct_light, voxels.as_ref()) {
+            (Some(light), Some(v)) => Some(direct_emitters::DirectEmittersPass::new(
+                ctx,
+                light,
+                &crate::gi::GiTarget {
+                    scene,
+                    eyes: plan.eyes,
+                    time_s: settings.time_s,
+                    grid: &v.voxels.grid,
+                    shadow_resolution: settings.shadow.resolution,
+                    size: (settings.width, settings.height),
+                    has_phong: plan.has_phong,
+                    motion: false,
+                    temporal: false,
+                    atlas_attributes: false,
+                },
+                &settings.gi,
+                settings.shadow.direct_samples,
+                sampler.raw,
+            )?),
+            _ => None,
+        };
         let atlas_view = atlas_view(ctx, scene, settings)?;
         let voxel_debug = voxel_debug(ctx, scene, settings, &plan, &mut voxels)?;
         Ok(Renderer {
@@ -152,6 +174,7 @@ impl Renderer {
             shadow_depth: lit.shadow_depth,
             gbuffer: lit.gbuffer,
             deferred: lit.deferred,
+            direct_emitters,
             tonemap: lit.tonemap,
             post: lit.post,
             has_phong: plan.has_phong,
@@ -195,7 +218,10 @@ struct FramePlan {
     gi_voxels: bool,
     /// A debug view shows the voxels.
     voxel_view_on: bool,
-    /// The voxelization, when a GI method or a debug view needs one.
+    /// The emitters' and the environment's direct light with voxel visibility
+    /// (`direct_emitters::sampled_light`), in scenes with them where no GI method brings it.
+    direct_light: Option<(bool, bool)>,
+    /// The voxelization, when a GI method, the sampled direct light or a debug view needs one.
     voxel_settings: Option<crate::voxel::gpu::VoxelSettings>,
     /// Transparent surfaces go to the linked lists instead of the G-buffer.
     oit_on: bool,
@@ -222,9 +248,15 @@ impl FramePlan {
         check_setting_combination(settings)?;
         check_projection(&scene.camera, settings, rig.is_some())?;
         let voxel_view_on = settings.debug.is_some_and(|d| d.view.shows_voxels());
+        // A debug view replaces the lit image: no direct light to add to.
+        let direct_light = match settings.debug {
+            None => direct_emitters::sampled_light(settings.gi.method, scene),
+            Some(_) => None,
+        };
         let voxel_settings = settings
             .voxels
             .or(gi_voxels.then(Default::default))
+            .or(direct_light.map(|_| Default::default()))
             .or(voxel_view_on.then(Default::default));
         if let Some(v) = &voxel_settings {
             check_voxel_memory(ctx, scene, settings, v)?;
@@ -241,6 +273,7 @@ impl FramePlan {
             has_phong: scene.has_phong(),
             gi_on,
             gi_voxels,
+            direct_light,
             voxel_view_on,
             voxel_settings,
             oit_on,

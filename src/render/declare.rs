@@ -8,6 +8,7 @@ use super::*;
 struct SharedByEyes {
     light_maps: Option<LightMaps>,
     gi: Option<crate::gi::GiWorld>,
+    direct_emitters: Option<direct_emitters::DirectEmittersWorld>,
 }
 
 impl Renderer {
@@ -115,6 +116,13 @@ impl Renderer {
         let (w, h) = (s.width, s.height);
         let views = self.shadow_view_count;
         let direct = self.deferred.declare(g, scene, gbuffer, shadow_map, (w, h));
+        let direct = match (&self.direct_emitters, voxel_image) {
+            (Some(pass), Some(voxels)) => {
+                let world = *shared.direct_emitters.get_or_insert_with(|| pass.import(g));
+                pass.declare(g, scene, gbuffer, direct, voxels, world, (w, h))
+            }
+            _ => direct,
+        };
         let radiance = match &self.gi {
             Some((gi, light_map)) if voxel_image.is_some() || light_map.is_none() => {
                 // Screen-space GI reads neither voxels nor light maps (GiInputs::voxels).

@@ -91,6 +91,9 @@ impl Renderer {
             st.frame_right = fr;
             view_projs.push(right.view_proj(aspect));
         }
+        if let Some(pass) = &mut self.direct_emitters {
+            pass.update_scene(scene, s.time_s);
+        }
         // Accumulated indirect light is valid only while camera, lights and settings stay;
         // with reprojection (temporal accumulation) a camera move keeps it.
         if let Some((gi, _)) = &mut self.gi {
@@ -134,6 +137,9 @@ impl Renderer {
         }
         if let Some(pass) = &mut self.voxel_debug {
             pass.update(self.settings.time_s, slot);
+        }
+        if let Some(pass) = &mut self.direct_emitters {
+            pass.write_slot(slot);
         }
         self.validate_caches(slot);
         // With TAA every frame renders with its own sub-pixel jitter; `frame_data` keeps the

@@ -9,6 +9,7 @@
 mod create;
 mod declare;
 mod deferred_direct;
+mod direct_emitters;
 mod frame;
 mod gbuffer;
 mod gbuffer_view;
@@ -173,6 +174,8 @@ pub struct Renderer {
     shadow_depth: ShadowDepthPass,
     gbuffer: GbufferPass,
     deferred: DeferredDirectPass,
+    /// The emitters' and the environment's direct light, where no GI method brings it.
+    direct_emitters: Option<direct_emitters::DirectEmittersPass>,
     tonemap: TonemapPass,
     post: crate::post::PostPasses,
     has_phong: bool,

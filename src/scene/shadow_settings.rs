@@ -72,6 +72,9 @@ pub struct ShadowSettings {
     /// and render them again only when their lights, views or drawn geometry change
     /// (`graph::Cache`); off (`--no-cache`) renders them every frame, to measure the two.
     pub cache: bool,
+    /// Samples per pixel of the emissive triangles' and the environment's direct light, with
+    /// voxel visibility (`render::direct_emitters`; when no GI method brings that light).
+    pub direct_samples: u32,
 }
 
 impl Default for ShadowSettings {
@@ -90,6 +93,7 @@ impl Default for ShadowSettings {
             cascade_snap: true,
             auto_resolution: false,
             cache: true,
+            direct_samples: 8,
         }
     }
 }
@@ -110,7 +114,7 @@ use range::*;
 
 /// Every `[shadow]` key: the scene file's key, the path `--set` and the panel use, its range,
 /// its flag and its field.
-static SHADOW_KEYS: [Key<ShadowSettings>; 12] = [
+static SHADOW_KEYS: [Key<ShadowSettings>; 13] = [
     key!("shadow.resolution",
     Kind::CountOr(SHADOW_RESOLUTION, AUTO_RESOLUTION_NAME,
         "(the smallest power of two that keeps the shadow texel under a pixel)"),
@@ -209,6 +213,14 @@ static SHADOW_KEYS: [Key<ShadowSettings>; 12] = [
         }),
         cache
     ),
+    key!(
+        "shadow.direct_samples",
+        Kind::Count(DIRECT_SAMPLES),
+        "Samples per pixel of the emissive meshes' and the environment's direct light, with \
+         voxel visibility (under --gi none; --gi ssgi and vpl: the environment's only)",
+        flag("direct-samples", "K"),
+        direct_samples
+    ),
 ];
 
 impl Settings for ShadowSettings {
@@ -229,6 +241,15 @@ pub mod range {
         "texels per side of a shadow map",
         16,
         8192,
+    );
+    /// Light samples and environment directions per pixel of `direct_emitters`, each a voxel
+    /// ray: 1024 is past where a 320×180 frame takes seconds on a CPU device.
+    pub const DIRECT_SAMPLES: Limit<u32> = Limit::new(
+        "--direct-samples",
+        Some("shadow.direct_samples"),
+        "direct-light samples per pixel",
+        1,
+        1024,
     );
     /// The deferred pass filters (2r+1)² shadow-map taps per view.
     pub const PCF_RADIUS: Limit<u32> = Limit::new(
