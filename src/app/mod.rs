@@ -253,6 +253,9 @@ struct Viewer {
     minimize_script: MinimizeScript,
     /// The window was minimized (or zero-sized) at the last redraw.
     minimized: bool,
+    /// The window was larger than the device draws at the last redraw (see
+    /// [`max_window_px`]): nothing is drawn until it is smaller.
+    oversized: bool,
     /// Width of the side panel in pixels: the scene renders to the right of it.
     panel_px: u32,
     /// Where the panel's GPU-time table was drawn last frame (logged by scripted runs).
@@ -305,6 +308,16 @@ enum MinimizeScript {
 
 /// The status line's prefix for a refused projection switch.
 const PROJECTION_STATUS: &str = "projection not switched";
+
+/// The largest window the viewer draws into: its swapchain images are 2D images of the
+/// window's size, and the panel's pass sets a viewport of that size.
+fn max_window_px(info: &crate::vk::DeviceInfo) -> [u32; 2] {
+    let [vw, vh] = info.max_viewport_dimensions;
+    [
+        info.max_image_dimension_2d.min(vw),
+        info.max_image_dimension_2d.min(vh),
+    ]
+}
 
 /// Graph-shaping settings differ (per-frame values such as PCF radius do not count; the
 /// cascade count sets the shadow maps' layers).
@@ -488,6 +501,7 @@ impl Viewer {
                 MinimizeScript::Done
             },
             minimized: false,
+            oversized: false,
             panel_px: 0,
             panel_layout: panel::PanelLayout::default(),
             editor,
@@ -752,6 +766,33 @@ impl Viewer {
             // Back from minimized: the surface may have changed meanwhile.
             log::info!("restored: recreating the swapchain");
             self.minimized = false;
+            self.swapchain_dirty = true;
+        }
+        // A window larger than the device's largest image or viewport cannot have a
+        // swapchain of its size (the X11 surface admits no other), so nothing is drawn until
+        // it is smaller; the scene, edits and settings stay as they are.
+        let [max_w, max_h] = max_window_px(&ctx.info);
+        if size.width > max_w || size.height > max_h {
+            if !self.oversized {
+                self.oversized = true;
+                self.status = format!(
+                    "the window is {}x{} px, larger than this device draws ({max_w}x{max_h} px \
+                     at most): nothing is drawn until it is that small",
+                    size.width, size.height
+                );
+                log::warn!("{}", self.status);
+            }
+            std::thread::sleep(MINIMIZED_POLL);
+            return Ok(None);
+        }
+        if self.oversized {
+            self.oversized = false;
+            self.status.clear();
+            log::info!(
+                "the window is {}x{} px again: drawing",
+                size.width,
+                size.height
+            );
             self.swapchain_dirty = true;
         }
         let Some(swapchain) = self.swapchain.as_mut() else {
