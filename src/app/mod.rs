@@ -253,9 +253,16 @@ struct Viewer {
     minimize_script: MinimizeScript,
     /// The window was minimized (or zero-sized) at the last redraw.
     minimized: bool,
+    /// The window's inner size as winit last reported it (`Resized`). Kept here rather than
+    /// asked of the window each frame: winit's X11 backend panics on asking a window that
+    /// another client destroyed, before the viewer sees `Destroyed`.
+    window_px: PhysicalSize<u32>,
     /// The window was larger than the device draws at the last redraw (see
     /// [`max_window_px`]): nothing is drawn until it is smaller.
     oversized: bool,
+    /// The window was destroyed under the viewer (not closed): the viewer exits without
+    /// touching it again.
+    window_gone: bool,
     /// Width of the side panel in pixels: the scene renders to the right of it.
     panel_px: u32,
     /// Where the panel's GPU-time table was drawn last frame (logged by scripted runs).
@@ -501,7 +508,9 @@ impl Viewer {
                 MinimizeScript::Done
             },
             minimized: false,
+            window_px: window.inner_size(),
             oversized: false,
+            window_gone: false,
             panel_px: 0,
             panel_layout: panel::PanelLayout::default(),
             editor,
@@ -550,12 +559,25 @@ impl Viewer {
         elwt: &EventLoopWindowTarget<()>,
     ) -> Result<(), AppError> {
         match event {
-            Event::AboutToWait => window.request_redraw(),
+            Event::AboutToWait if !self.window_gone => window.request_redraw(),
+            Event::WindowEvent {
+                event: WindowEvent::Destroyed,
+                ..
+            } => {
+                // Another client destroyed the window (a close asks first: CloseRequested).
+                log::warn!("the window was destroyed: exiting");
+                self.window_gone = true;
+                elwt.exit();
+            }
+            Event::WindowEvent { .. } if self.window_gone => {}
             Event::WindowEvent { event, .. } => {
                 let consumed = self.egui_state.on_window_event(window, &event).consumed;
                 match event {
                     WindowEvent::CloseRequested => elwt.exit(),
-                    WindowEvent::Resized(_) => self.swapchain_dirty = true,
+                    WindowEvent::Resized(size) => {
+                        self.window_px = size;
+                        self.swapchain_dirty = true;
+                    }
                     WindowEvent::RedrawRequested => {
                         let script_done = self.redraw(ctx, window)?;
                         if script_done {
@@ -739,7 +761,7 @@ impl Viewer {
         // Minimized (or zero-sized): nothing to present until the window is back. On X11 an
         // iconified window keeps its size (and the surface its extent), so ask the window
         // manager's state too.
-        let size = window.inner_size();
+        let size = self.window_px;
         if size.width == 0 || size.height == 0 || window.is_minimized() == Some(true) {
             if !self.minimized {
                 self.minimized = true;
