@@ -674,7 +674,12 @@ impl Viewer {
             KeyCode::KeyQ => k.down = down,
             KeyCode::ShiftLeft | KeyCode::ShiftRight => k.fast = down,
             KeyCode::F12 if press => self.controls.screenshot = true,
-            KeyCode::KeyG if press => self.controls.gi.method = self.controls.gi.method.next(),
+            KeyCode::KeyG if press => {
+                self.controls.gi.method = self.controls.gi.method.next();
+                // Presses between two frames take effect together, in the next frame: the
+                // log says each was seen (scripted tests count them).
+                log::info!("key G: indirect light {}", self.controls.gi.method.name());
+            }
             KeyCode::KeyO if press => {
                 self.controls.projection = match self.controls.projection {
                     Projection::Perspective => Projection::Orthographic,
@@ -990,6 +995,18 @@ impl Viewer {
         }
         self.report.frames += 1;
         self.renderer_frames += 1;
+        // For scripted tests (`RUST_LOG=voxgi::app=debug`): they wait for frames and for the
+        // camera to get somewhere, not for a fixed time. Local coordinates (without
+        // `Scene::origin_m`).
+        log::debug!(
+            "frame {} presented at {}x{} ({} of its renderer); camera at {:?} looking {:?}",
+            self.report.frames,
+            extent.width,
+            extent.height,
+            self.renderer_frames,
+            self.scene.camera.position.to_array(),
+            self.scene.camera.forward.to_array()
+        );
         if last_scripted {
             log::info!(
                 "scripted run: the last frame is frame {} of its renderer",
@@ -1270,6 +1287,7 @@ impl Viewer {
             Ok(()) => {
                 self.lens = lens;
                 self.scene.camera = self.fly.apply(&self.lens);
+                log::info!("projection: {}", lens.projection.name());
                 if self.status.starts_with(PROJECTION_STATUS) {
                     self.status.clear();
                 }
