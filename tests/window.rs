@@ -449,7 +449,7 @@ fn viewer_turns_taa_on_with_a_click_and_blends_a_frame_per_frame() {
         shot_arg,
     ]);
     let first = s.wait_for("panel: scrolled");
-    s.latest(first, "panel: scrolled", Duration::from_secs(3));
+    s.settled(first, "panel: scrolled", 5);
     let taa = scroll_panel_to(&mut s, "post TAA", 320.0);
     s.click(taa);
     let made = s.wait_for("new renderer");
@@ -457,9 +457,9 @@ fn viewer_turns_taa_on_with_a_click_and_blends_a_frame_per_frame() {
         made.contains("post-processing: taa α 0.9"),
         "the click made no renderer with TAA: {made}"
     );
-    // Off the checkbox (its tooltip), onto the panel's heading; frames go on meanwhile.
-    xdotool(&["mousemove", "--window", &s.window, "60", "10"]);
-    std::thread::sleep(Duration::from_secs(2));
+    // Off the checkbox (its tooltip), onto the panel's heading; TAA blends a few frames.
+    s.hover([60.0, 10.0]);
+    s.frames(2);
     s.key("F12");
     s.wait_for(&format!("wrote {shot_arg}"));
     let line = s.wait_for("screenshot: frame ");
@@ -561,9 +561,9 @@ fn viewer_panel_scrolls_to_its_last_section_with_the_wheel() {
         "--screenshot",
         shot_arg,
     ]);
-    // The GPU-time table fills in over the first frames: let the layout settle.
+    // The GPU-time table fills in over the first frames: until the layout settles.
     let first = s.wait_for("panel: scrolled");
-    let top = panel_scroll(&s.latest(first, "panel: scrolled", Duration::from_secs(3)));
+    let top = panel_scroll(&s.settled(first, "panel: scrolled", 5));
     assert_eq!(top.offset, 0.0, "{top:?}");
     assert!(
         top.view <= 320.0 && top.content > top.view && top.max > 0.0,
@@ -582,8 +582,24 @@ fn viewer_panel_scrolls_to_its_last_section_with_the_wheel() {
         (0.0..320.0).contains(&bottom.button[1]),
         "the Screenshot button is not in the window after scrolling: {bottom:?}"
     );
-    s.click(bottom.button);
-    s.wait_for(&format!("wrote {shot_arg}"));
+    // A click egui does not take (the panel still laying out or scrolling) is tried again
+    // at where the button is then, a few times: the test is about reaching the button.
+    let wrote = format!("wrote {shot_arg}");
+    let mut button = bottom.button;
+    for attempt in 1.. {
+        s.click(button);
+        if s.within_frames(&wrote, 10).is_some() {
+            break;
+        }
+        assert!(
+            attempt < 4,
+            "{attempt} clicks on the Screenshot button missed:\n{}",
+            s.log
+        );
+        let line = s.log.lines().rev().find(|l| l.contains("panel: scrolled"));
+        button = panel_scroll(line.expect("a scroll line")).button;
+        eprintln!("click {attempt} missed the Screenshot button; again at {button:?}");
+    }
     s.finish();
     assert_not_blank(&load(&shot));
     let _ = std::fs::remove_dir_all(&dir);
@@ -596,8 +612,7 @@ fn scroll_panel_to_bottom(s: &mut EditSession, from: &PanelScroll) -> PanelScrol
     // Each notch scrolls at least 50 points (egui's line height for wheels; 100 under Xvfb):
     // enough notches to pass the bottom, where the area stops.
     let notches = ((from.max - from.offset) / 50.0).ceil() as u32 + 4;
-    xdotool(&["mousemove", "--window", &s.window, "100", "160"]);
-    std::thread::sleep(Duration::from_millis(300));
+    s.hover([100.0, 160.0]);
     xdotool(&[
         "click",
         "--repeat",
@@ -610,7 +625,7 @@ fn scroll_panel_to_bottom(s: &mut EditSession, from: &PanelScroll) -> PanelScrol
         let line = s.wait_for(LOG);
         let now = panel_scroll(&line);
         if now.offset == now.max {
-            break panel_scroll(&s.latest(line, LOG, Duration::from_secs(1)));
+            break panel_scroll(&s.settled(line, LOG, 2));
         }
     }
 }
@@ -619,7 +634,7 @@ fn scroll_panel_to_bottom(s: &mut EditSession, from: &PanelScroll) -> PanelScrol
 /// notch under Xvfb) until its control `name` lies within the window's rows
 /// [20, `height` − 20), wider than a notch; returns where it is then.
 fn scroll_panel_to(s: &mut EditSession, name: &str, height: f32) -> [f32; 2] {
-    xdotool(&["mousemove", "--window", &s.window, "100", "160"]);
+    s.hover([100.0, 160.0]);
     for _ in 0..30 {
         let at = panel_spot(s, name, false);
         if (20.0..height - 20.0).contains(&at[1]) {
@@ -630,7 +645,7 @@ fn scroll_panel_to(s: &mut EditSession, name: &str, height: f32) -> [f32; 2] {
     panic!("the panel did not scroll `{name}` into view:\n{}", s.log)
 }
 
-/// Where the panel's control `name` is (window px) after a second of settling: where the
+/// Where the panel's control `name` is (window px) once it stays put for two frames: where the
 /// viewer logged it last (it logs a control when it appears or moves), or with `fresh` where
 /// it logs it next (a combo's entries, logged anew each time the combo opens).
 fn panel_spot(s: &mut EditSession, name: &str, fresh: bool) -> [f32; 2] {
@@ -639,13 +654,13 @@ fn panel_spot(s: &mut EditSession, name: &str, fresh: bool) -> [f32; 2] {
         s.wait_for(&want)
     } else {
         // Reads what arrived into the session's log, then looks there.
-        s.latest(String::new(), &want, Duration::from_secs(1));
+        s.drain("");
         match s.log.lines().rev().find(|l| l.contains(&want)) {
             Some(line) => line.to_owned(),
             None => s.wait_for(&want),
         }
     };
-    logged_point(&s.latest(first, &want, Duration::from_secs(1)), "at")
+    logged_point(&s.settled(first, &want, 2), "at")
 }
 
 /// The panel's stereo packing turned on, changed and off with real clicks (xdotool): in a
@@ -668,7 +683,7 @@ fn viewer_switches_stereo_on_and_off_from_the_panel() {
     args.extend(parallax);
     let mut s = EditSession::start(&args);
     let first = s.wait_for("panel: scrolled");
-    let top = panel_scroll(&s.latest(first, "panel: scrolled", Duration::from_secs(3)));
+    let top = panel_scroll(&s.settled(first, "panel: scrolled", 5));
     scroll_panel_to_bottom(&mut s, &top);
     let in_window = |p: [f32; 2], what: &str| {
         assert!(
@@ -697,7 +712,7 @@ fn viewer_switches_stereo_on_and_off_from_the_panel() {
         pick(&mut s, entry);
         let line = s.wait_for(&format!("frame graph: {presents}"));
         // The panel may resize the area once more: read what arrived meanwhile.
-        s.latest(line, "frame graph: ", Duration::from_secs(2));
+        s.settled(line, "frame graph: ", 2);
         s.key("F12");
         s.wait_for(&format!("wrote {shot_arg}"));
         shots.push((entry, load(&shot)));
@@ -1034,55 +1049,33 @@ fn viewer_flies_with_real_keyboard_and_mouse_events() {
     let _display = lock_display();
     // The viewer runs until Escape; X events go through the server (XTEST), the same path as a
     // person's keyboard and mouse, so winit's event decoding is part of what is tested.
-    let mut child = Command::new(env!("CARGO_BIN_EXE_voxgi"))
-        .args([
-            "--validate",
-            "view",
-            "--gi",
-            "none",
-            "--width",
-            "480",
-            "--height",
-            "320",
-        ])
-        .env_remove("WAYLAND_DISPLAY")
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("run the voxgi binary");
-    let window = xdotool(&["search", "--sync", "--onlyvisible", "--name", "^voxgi$"]);
-    let window = window.lines().next().expect("a window id").to_string();
-    xdotool(&["windowfocus", "--sync", &window]);
-    // Hold W: fly forward for a while (the fly camera integrates frame times).
-    xdotool(&["keydown", "w"]);
-    std::thread::sleep(Duration::from_millis(1500));
-    xdotool(&["keyup", "w"]);
-    // Look right: drag with the right button held, over the scene (right of the panel).
-    xdotool(&["mousemove", "--window", &window, "400", "160"]);
-    std::thread::sleep(Duration::from_millis(300));
+    let mut s = EditSession::start(&[
+        "--validate",
+        "view",
+        "--gi",
+        "none",
+        "--width",
+        "480",
+        "--height",
+        "320",
+    ]);
+    // Hold W: fly forward (the fly camera integrates frame times) until 10 cm further in.
+    let first = s.frames(1);
+    s.hold_until("w", "the camera 10 cm forward", |f| {
+        f.position.z - first.position.z > 0.1
+    });
+    // Look right: drag with the right button held, over the scene (right of the panel), a
+    // frame per step.
+    s.hover([400.0, 160.0]);
     xdotool(&["mousedown", "3"]);
-    std::thread::sleep(Duration::from_millis(300));
+    s.frames(1);
     for _ in 0..5 {
         xdotool(&["mousemove_relative", "--", "10", "0"]);
-        std::thread::sleep(Duration::from_millis(100));
+        s.frames(1);
     }
     xdotool(&["mouseup", "3"]);
-    std::thread::sleep(Duration::from_millis(300));
-    xdotool(&["key", "Escape"]);
-
-    let started = Instant::now();
-    while child.try_wait().expect("poll the viewer").is_none() {
-        if started.elapsed() > Duration::from_secs(60) {
-            let _ = child.kill();
-            panic!("the viewer did not close within 60 s of Escape");
-        }
-        std::thread::sleep(Duration::from_millis(50));
-    }
-    let out = child
-        .wait_with_output()
-        .expect("collect the viewer's output");
-    assert_success(&out, "voxgi --validate view driven by xdotool");
-    let stdout = String::from_utf8_lossy(&out.stdout);
+    s.frames(1);
+    let (_, stdout) = s.finish_with_stdout();
 
     // The built-in Cornell box's camera: at z = -0.8 looking along +Z.
     let start = glam::Vec3::new(0.278, 0.273, -0.8);
@@ -1109,36 +1102,22 @@ fn viewer_switches_to_orthographic_with_o_unless_the_gi_cannot() {
     require_display();
     let _display = lock_display();
     for gi in ["none", "ssgi"] {
-        let mut child = Command::new(env!("CARGO_BIN_EXE_voxgi"))
-            .args([
-                "--validate",
-                "view",
-                "--gi",
-                gi,
-                "--width",
-                "480",
-                "--height",
-                "320",
-            ])
-            .env_remove("WAYLAND_DISPLAY")
-            .stdout(Stdio::piped())
-            .stderr(Stdio::piped())
-            .spawn()
-            .expect("run the voxgi binary");
-        let window = xdotool(&["search", "--sync", "--onlyvisible", "--name", "^voxgi$"]);
-        let window = window.lines().next().expect("a window id").to_string();
-        xdotool(&["windowfocus", "--sync", &window]);
-        xdotool(&["key", "o"]);
-        // A few frames for the switch (or its refusal) to be applied.
-        std::thread::sleep(Duration::from_millis(2000));
-        xdotool(&["key", "Escape"]);
-        wait_for_exit(&mut child, "the viewer after O");
-        let out = child
-            .wait_with_output()
-            .expect("collect the viewer's output");
-        assert_success(&out, "voxgi --validate view with O");
-        let stdout = String::from_utf8_lossy(&out.stdout);
-        let stderr = String::from_utf8_lossy(&out.stderr);
+        let mut s = EditSession::start(&[
+            "--validate",
+            "view",
+            "--gi",
+            gi,
+            "--width",
+            "480",
+            "--height",
+            "320",
+        ]);
+        s.key("o");
+        // The switch is applied (or refused) in the next frame.
+        s.wait_until("the projection switch or its refusal", |_, l| {
+            l.contains("projection: ") || l.contains("projection not switched")
+        });
+        let (stderr, stdout) = s.finish_with_stdout();
         let ortho = stdout.contains("projection = \"orthographic\"");
         match gi {
             "none" => assert!(ortho, "O did not switch to orthographic:\n{stdout}"),
@@ -1177,57 +1156,19 @@ fn viewer_survives_a_storm_of_resizes_minimizes_and_gi_switches() {
     let _display = lock_display();
     let dir = scratch_dir("storm");
     let _wm = start_window_manager(&dir);
-    let mut child = Command::new(env!("CARGO_BIN_EXE_voxgi"))
-        .args([
-            "--validate",
-            "view",
-            "--gi",
-            "none",
-            "--width",
-            "320",
-            "--height",
-            "240",
-        ])
-        .env_remove("WAYLAND_DISPLAY")
-        .env("RUST_LOG", "warn,voxgi::app=info")
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("run the voxgi binary");
-    // The viewer's log, line by line, so the storm can wait for each new renderer.
-    let stderr = child.stderr.take().expect("piped stderr");
-    let (tx, rx) = std::sync::mpsc::channel::<String>();
-    let reader = std::thread::spawn(move || {
-        use std::io::BufRead;
-        for line in std::io::BufReader::new(stderr)
-            .lines()
-            .map_while(Result::ok)
-        {
-            let _ = tx.send(line);
-        }
-    });
-    let mut log = String::new();
-    let mut wait_for = |want: &str| {
-        let started = Instant::now();
-        loop {
-            let left = Duration::from_secs(60).saturating_sub(started.elapsed());
-            match rx.recv_timeout(left) {
-                Ok(line) => {
-                    log += &line;
-                    log.push('\n');
-                    if line.contains(want) {
-                        return;
-                    }
-                }
-                Err(_) => panic!("no `{want}` in the viewer's log within 60 s:\n{log}"),
-            }
-        }
-    };
-    let window = xdotool(&["search", "--sync", "--onlyvisible", "--name", "^voxgi$"]);
-    let window = window.lines().next().expect("a window id").to_string();
+    let mut s = EditSession::start(&[
+        "--validate",
+        "view",
+        "--gi",
+        "none",
+        "--width",
+        "320",
+        "--height",
+        "240",
+    ]);
+    let window = s.window.clone();
     let focus = || xdotool(&["windowactivate", "--sync", &window]);
     focus();
-    let pause = || std::thread::sleep(Duration::from_millis(400));
     // (width, height) of each resize, then whether to press G after it.
     let steps: [(&str, &str, bool); 8] = [
         ("200", "150", true),
@@ -1242,13 +1183,14 @@ fn viewer_survives_a_storm_of_resizes_minimizes_and_gi_switches() {
     let mut methods = ["hemisphere", "pathtrace", "vpl", "ssgi", "none"].into_iter();
     for (i, (w, h, switch)) in steps.into_iter().enumerate() {
         // No --sync: the window manager may refuse a tiny size, and the viewer must cope
-        // with whatever size it gets.
+        // with whatever size it gets. A frame or two at whatever size that is.
         xdotool(&["windowsize", &window, w, h]);
-        pause();
+        s.frames(2);
         if i == 3 {
             xdotool(&["windowminimize", "--sync", &window]);
-            pause();
+            s.wait_for("minimized: window");
             focus();
+            s.wait_for("restored: recreating the swapchain");
         }
         if switch {
             // Real key events go to the focused window (XTEST, as a keyboard's would).
@@ -1257,25 +1199,11 @@ fn viewer_survives_a_storm_of_resizes_minimizes_and_gi_switches() {
             // Each press is a new renderer with the next method (none → hemisphere → … →
             // ssgi → none): wait for it, at whatever size the window has now.
             let method = methods.next().expect("five presses");
-            wait_for(&format!("indirect light: {method}"));
+            s.wait_for(&format!("indirect light: {method}"));
         }
     }
     focus();
-    xdotool(&["key", "Escape"]);
-    wait_for_exit(&mut child, "the storm");
-    let out = child
-        .wait_with_output()
-        .expect("collect the viewer's output");
-    reader.join().expect("the log reader");
-    for line in rx.try_iter() {
-        log += &line;
-        log.push('\n');
-    }
-    assert!(
-        out.status.success(),
-        "voxgi --validate view under a storm of window events failed ({}):\n{log}",
-        out.status
-    );
+    let log = s.finish();
     assert!(!log.contains("Validation"), "{log}");
     assert_eq!(methods.next(), None, "every method was switched to");
     let _ = std::fs::remove_dir_all(&dir);
@@ -1337,25 +1265,75 @@ fn viewer_starts_with_the_best_configuration_within_a_budget() {
 
 /// A viewer driven by real X events (XTEST through `xdotool`) whose log the test reads line by
 /// line: the editor logs what it selected, where the selection's handles are and what it
-/// saved, so the test can aim its clicks and wait for each step.
+/// saved, and every presented frame (at debug level: its number, size and camera), so the test
+/// can aim its clicks and wait for each step instead of sleeping. Every wait has a time limit
+/// (90 s: a new renderer on lavapipe under load) and fails with the log.
 struct EditSession {
     child: Child,
     window: String,
     lines: std::sync::mpsc::Receiver<String>,
     reader: Option<std::thread::JoinHandle<()>>,
+    /// The log read so far, without the per-frame lines.
     log: String,
+    /// The last presented frame the log reported.
+    frame: Option<Frame>,
 }
+
+/// A presented frame as the viewer logs it (`frame N presented at WxH (K of its renderer);
+/// camera at [x, y, z] looking [x, y, z]`), as far as the tests read it.
+#[derive(Clone, Copy, Debug)]
+struct Frame {
+    number: u64,
+    size: (u32, u32),
+    /// Where the camera is (local coordinates).
+    position: glam::Vec3,
+}
+
+impl Frame {
+    fn parse(line: &str) -> Option<Frame> {
+        let rest = line.split_once("frame ")?.1;
+        let (number, rest) = rest.split_once(" presented at ")?;
+        let (size, _) = rest.split_once(' ')?;
+        let (w, h) = size.split_once('x')?;
+        let vec = |key: &str| -> Option<glam::Vec3> {
+            let v: Vec<f32> = line
+                .split_once(&format!("{key} ["))?
+                .1
+                .split(']')
+                .next()?
+                .split(',')
+                .map(|x| x.trim().parse().ok())
+                .collect::<Option<_>>()?;
+            (v.len() == 3).then(|| glam::Vec3::from_slice(&v))
+        };
+        Some(Frame {
+            number: number.trim().parse().ok()?,
+            size: (w.parse().ok()?, h.parse().ok()?),
+            position: vec("camera at")?,
+        })
+    }
+}
+
+/// The viewer's log filter for the window tests: its info lines and its per-frame lines.
+const VIEWER_LOG: &str = "warn,voxgi::app=debug";
+
+/// How long a session waits for a log line.
+const LOG_WAIT: Duration = Duration::from_secs(90);
 
 impl EditSession {
     fn start(args: &[&str]) -> Self {
-        let mut child = Command::new(env!("CARGO_BIN_EXE_voxgi"))
-            .args(args)
+        Self::start_with(args, |_| {})
+    }
+
+    fn start_with(args: &[&str], setup: impl FnOnce(&mut Command)) -> Self {
+        let mut cmd = Command::new(env!("CARGO_BIN_EXE_voxgi"));
+        cmd.args(args)
             .env_remove("WAYLAND_DISPLAY")
-            .env("RUST_LOG", "warn,voxgi::app=info")
+            .env("RUST_LOG", VIEWER_LOG)
             .stdout(Stdio::piped())
-            .stderr(Stdio::piped())
-            .spawn()
-            .expect("run the voxgi binary");
+            .stderr(Stdio::piped());
+        setup(&mut cmd);
+        let mut child = cmd.spawn().expect("run the voxgi binary");
         let stderr = child.stderr.take().expect("piped stderr");
         let (tx, lines) = std::sync::mpsc::channel::<String>();
         let reader = std::thread::spawn(move || {
@@ -1367,7 +1345,17 @@ impl EditSession {
                 let _ = tx.send(line);
             }
         });
-        let window = xdotool(&["search", "--sync", "--onlyvisible", "--name", "^voxgi$"]);
+        // This viewer's window (winit sets `_NET_WM_PID`), not one a failed test left behind.
+        let pid = child.id().to_string();
+        let window = xdotool(&[
+            "search",
+            "--sync",
+            "--onlyvisible",
+            "--pid",
+            &pid,
+            "--name",
+            "^voxgi$",
+        ]);
         let window = window.lines().next().expect("a window id").to_string();
         xdotool(&["windowfocus", "--sync", &window]);
         Self {
@@ -1376,68 +1364,137 @@ impl EditSession {
             lines,
             reader: Some(reader),
             log: String::new(),
+            frame: None,
         }
     }
 
-    /// The next log line containing `want` (within 90 s: a new renderer on lavapipe).
-    fn wait_for(&mut self, want: &str) -> String {
+    /// Takes one line into the log (a frame line into `frame`); whether it contains `want`.
+    fn take(&mut self, line: &str, want: &str) -> bool {
+        match Frame::parse(line) {
+            Some(f) => self.frame = Some(f),
+            None => {
+                self.log += line;
+                self.log.push('\n');
+            }
+        }
+        !want.is_empty() && line.contains(want)
+    }
+
+    /// The next log line for which `done` holds, within [`LOG_WAIT`]; `what` names it in the
+    /// failure.
+    fn wait_until(&mut self, what: &str, mut done: impl FnMut(&mut Self, &str) -> bool) -> String {
         let started = Instant::now();
         loop {
-            let left = Duration::from_secs(90).saturating_sub(started.elapsed());
+            let left = LOG_WAIT.saturating_sub(started.elapsed());
             match self.lines.recv_timeout(left) {
                 Ok(line) => {
-                    self.log += &line;
-                    self.log.push('\n');
-                    if line.contains(want) {
+                    self.take(&line, "");
+                    if done(self, &line) {
                         return line;
                     }
                 }
                 Err(_) => {
                     let _ = self.child.kill();
-                    panic!("no `{want}` in the viewer's log within 90 s:\n{}", self.log)
+                    panic!(
+                        "{what} not in the viewer's log within {LOG_WAIT:?} (last frame \
+                         {:?}):\n{}",
+                        self.frame, self.log
+                    )
                 }
             }
         }
     }
 
-    /// `first` or the last line containing `want` logged since, once `settle` has passed
-    /// (the panel may lay out again in the frames after a change).
-    fn latest(&mut self, first: String, want: &str, settle: Duration) -> String {
-        std::thread::sleep(settle);
-        let mut last = first;
-        for line in self.lines.try_iter() {
-            self.log += &line;
-            self.log.push('\n');
-            if line.contains(want) {
-                last = line;
+    /// The next log line containing `want`.
+    fn wait_for(&mut self, want: &str) -> String {
+        self.wait_until(&format!("`{want}`"), |_, line| line.contains(want))
+    }
+
+    /// Reads what the viewer logged so far without waiting; the last line containing `want`
+    /// among it, if any.
+    fn drain(&mut self, want: &str) -> Option<String> {
+        let mut last = None;
+        while let Ok(line) = self.lines.try_recv() {
+            if self.take(&line, want) {
+                last = Some(line);
             }
         }
         last
     }
 
-    fn click(&self, [x, y]: [f32; 2]) {
+    /// Waits until `n` whole frames began after this call (the frame in progress when it was
+    /// made may have missed an input just sent): the input has been seen and drawn. Returns
+    /// the last frame.
+    fn frames(&mut self, n: u64) -> Frame {
+        self.drain("");
+        let target = self.frame.map_or(0, |f| f.number) + 1 + n;
+        self.wait_until(&format!("frame {target}"), |s, _| {
+            s.frame.is_some_and(|f| f.number >= target)
+        });
+        self.frame.expect("a frame was logged")
+    }
+
+    /// `first` or the last line containing `want` logged since, once the log has shown no
+    /// new `want` line for `quiet` whole frames (the panel may lay out again in the frames
+    /// after a change: the GPU-time table fills in, a combo opens).
+    fn settled(&mut self, first: String, want: &str, quiet: u64) -> String {
+        let mut last = first;
+        loop {
+            self.drain("");
+            let target = self.frame.map_or(0, |f| f.number) + 1 + quiet;
+            let mut moved = None;
+            self.wait_until(&format!("frame {target}"), |s, line| {
+                if line.contains(want) {
+                    moved = Some(line.to_owned());
+                }
+                s.frame.is_some_and(|f| f.number >= target)
+            });
+            match moved {
+                Some(line) => last = line,
+                None => return last,
+            }
+        }
+    }
+
+    /// The line containing `want` if the viewer logs it within `n` frames from now.
+    fn within_frames(&mut self, want: &str, n: u64) -> Option<String> {
+        if let Some(line) = self.drain(want) {
+            return Some(line);
+        }
+        let target = self.frame.map_or(0, |f| f.number) + 1 + n;
+        let mut found = None;
+        self.wait_until(&format!("`{want}` or frame {target}"), |s, line| {
+            if line.contains(want) {
+                found = Some(line.to_owned());
+            }
+            found.is_some() || s.frame.is_some_and(|f| f.number >= target)
+        });
+        found
+    }
+
+    /// Moves the pointer to window pixel `[x, y]` and waits until a frame has seen it (egui
+    /// takes a press where the pointer was last seen).
+    fn hover(&mut self, [x, y]: [f32; 2]) {
         let (x, y) = (format!("{}", x.round()), format!("{}", y.round()));
         xdotool(&["mousemove", "--window", &self.window, &x, &y]);
-        std::thread::sleep(Duration::from_millis(300));
+        self.frames(1);
+    }
+
+    fn click(&mut self, at: [f32; 2]) {
+        self.hover(at);
         xdotool(&["click", "1"]);
     }
 
-    /// Presses the left button at `from` and drags by `steps` × (`dx`, `dy`) pixels.
-    fn drag(&self, from: [f32; 2], (dx, dy): (i32, i32), steps: u32) {
-        let (x, y) = (
-            format!("{}", from[0].round()),
-            format!("{}", from[1].round()),
-        );
-        xdotool(&["mousemove", "--window", &self.window, &x, &y]);
-        // A frame must pass between the move and the press: egui's drag delta is the pointer's
-        // motion over a frame, so a frame (several hundred ms on lavapipe under load) that sees
-        // the jump here, the press and the first step would add the jump to the drag.
-        std::thread::sleep(Duration::from_millis(1500));
+    /// Presses the left button at `from` and drags by `steps` × (`dx`, `dy`) pixels, a frame
+    /// per step: egui's drag delta is the pointer's motion over a frame, so a frame that saw
+    /// the jump to `from`, the press and the first step at once would add the jump to the drag.
+    fn drag(&mut self, from: [f32; 2], (dx, dy): (i32, i32), steps: u32) {
+        self.hover(from);
         xdotool(&["mousedown", "1"]);
-        std::thread::sleep(Duration::from_millis(300));
+        self.frames(1);
         for _ in 0..steps {
             xdotool(&["mousemove_relative", "--", &dx.to_string(), &dy.to_string()]);
-            std::thread::sleep(Duration::from_millis(250));
+            self.frames(1);
         }
         xdotool(&["mouseup", "1"]);
     }
@@ -1447,24 +1504,59 @@ impl EditSession {
         xdotool(&["key", key]);
     }
 
+    /// Holds `key` down until the logged camera satisfies `arrived` (the fly camera integrates
+    /// frame times, so how far it gets in a fixed time depends on the machine's load).
+    fn hold_until(&mut self, key: &str, what: &str, arrived: impl Fn(&Frame) -> bool) -> Frame {
+        xdotool(&["windowfocus", "--sync", &self.window]);
+        xdotool(&["keydown", key]);
+        self.wait_until(what, |s, _| s.frame.as_ref().is_some_and(&arrived));
+        xdotool(&["keyup", key]);
+        self.frames(1)
+    }
+
     /// Escape, then the exit status (0: no validation message, teardown included).
-    fn finish(mut self) -> String {
+    fn finish(self) -> String {
+        self.finish_with_stdout().0
+    }
+
+    /// Escape, then the exit status, the log and what the viewer printed.
+    fn finish_with_stdout(self) -> (String, String) {
         self.key("Escape");
-        wait_for_exit(&mut self.child, "the editing session");
+        self.wait_for_exit()
+    }
+
+    /// Waits for the viewer to exit (asked by the test), reads the rest of its log and
+    /// output and asserts the exit status 0: no validation message, teardown included.
+    fn wait_for_exit(mut self) -> (String, String) {
+        wait_for_exit(&mut self.child, "the session");
+        let mut stdout = String::new();
+        if let Some(mut out) = self.child.stdout.take() {
+            use std::io::Read;
+            let _ = out.read_to_string(&mut stdout);
+        }
         let status = self.child.wait().expect("the viewer's status");
         if let Some(r) = self.reader.take() {
             r.join().expect("the log reader");
         }
-        for line in self.lines.try_iter() {
-            self.log += &line;
-            self.log.push('\n');
-        }
+        self.drain("");
         assert!(
             status.success(),
-            "voxgi --validate view (editing) failed ({status}):\n{}",
+            "voxgi --validate view failed ({status}):\n{}",
             self.log
         );
-        self.log
+        assert!(!self.log.contains("panicked"), "{}", self.log);
+        (std::mem::take(&mut self.log), stdout)
+    }
+}
+
+impl Drop for EditSession {
+    /// A test that fails midway stops its viewer: left running, its window would take the
+    /// next test's input.
+    fn drop(&mut self) {
+        if let Ok(None) = self.child.try_wait() {
+            let _ = self.child.kill();
+            let _ = self.child.wait();
+        }
     }
 }
 
@@ -1728,16 +1820,14 @@ fn viewer_edits_lights_and_a_field_and_saves_with_real_input_events() {
     );
     let want = "edit: position field x at";
     let first = s.wait_for(want);
-    let field = logged_point(&s.latest(first, want, Duration::from_millis(1500)), "at");
+    let field = logged_point(&s.settled(first, want, 3), "at");
     // egui's drag value: +5 × 6 points at 0.005 × the scene's diagonal per point.
     s.drag(field, (6, 0), 5);
-    std::thread::sleep(Duration::from_millis(1000));
-    // Held over several frames (a frame can take a few hundred ms on lavapipe).
-    xdotool(&["windowfocus", "--sync", &s.window]);
-    xdotool(&["keydown", "w"]);
-    std::thread::sleep(Duration::from_millis(1500));
-    xdotool(&["keyup", "w"]);
-    std::thread::sleep(Duration::from_millis(500));
+    // Held until the camera is 5 cm further in (frames take their time on lavapipe).
+    let from = s.frames(1);
+    s.hold_until("w", "the camera 5 cm forward", |f| {
+        f.position.z - from.position.z > 0.05
+    });
     s.key("ctrl+s");
     s.wait_for("saved scene to");
     s.key("F12");
@@ -1818,4 +1908,250 @@ fn assert_taa_screenshot_is_the_render(dir: &Path, scene: &Path, shot: &Path, fr
         control > 8,
         "the TAA image equals the render without TAA (up to {control}/255): nothing blended"
     );
+}
+
+/// Abuse (issue #32): scenes that fail to load, given on the command line: a missing file,
+/// TOML that does not parse, a value out of range, a mesh that is not there. `voxgi view`
+/// refuses each before it opens a window, with a message naming the file (and the line or
+/// field), and never panics. (The viewer loads no scene while it runs: this is the one way a
+/// scene gets in.)
+#[test]
+fn viewer_abuse_refuses_scenes_that_fail_to_load_naming_the_file() {
+    let dir = scratch_dir("abuse-load");
+    let cornell = include_str!("../assets/scenes/cornell.toml");
+    let write = |name: &str, text: &str| {
+        let path = dir.join(name);
+        std::fs::write(&path, text).expect("write the scene");
+        path
+    };
+    let cases = [
+        (dir.join("no-such-scene.toml"), vec!["no-such-scene.toml"]),
+        (write("broken.toml", "[camera\n"), vec!["broken.toml:1:"]),
+        (
+            write(
+                "wide.toml",
+                &cornell.replacen("fov_y_deg = ", "fov_y_deg = 400.0 # ", 1),
+            ),
+            vec!["wide.toml", "fov_y_deg"],
+        ),
+        (
+            write(
+                "no_mesh.toml",
+                &format!("{cornell}\n[[objects]]\nname = \"gone\"\nmesh = \"gone.obj\"\n"),
+            ),
+            vec!["gone.obj"],
+        ),
+    ];
+    for (scene, names) in cases {
+        let out = voxgi(&[
+            "--validate",
+            "view",
+            scene.to_str().expect("utf-8 path"),
+            "--width",
+            "320",
+            "--height",
+            "240",
+        ]);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            !out.status.success() && !stderr.contains("panicked"),
+            "voxgi view {} ({}):\n{stderr}",
+            scene.display(),
+            out.status
+        );
+        for name in names {
+            assert!(
+                stderr.contains(name),
+                "the message does not name {name}:\n{stderr}"
+            );
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Abuse (issue #32): 200 presses of G (the viewer's key for the next GI method), in bursts
+/// of 33 presses 5 ms apart (and one of 2), a frame between bursts. Presses between two
+/// frames take effect together in the next frame, and no burst comes back to the method it
+/// started from, so each burst makes at least one new renderer (while the last one's frames may be in flight). The
+/// viewer must see every press (it logs each), make those renderers, end on the method 200
+/// presses away, show it (with `none` there, exactly what `voxgi render` writes) and exit
+/// clean: no validation message, teardown included.
+#[test]
+fn viewer_abuse_switches_the_gi_method_200_times() {
+    require_display();
+    let _display = lock_display();
+    let dir = scratch_dir("abuse-switch");
+    let shot = dir.join("shot.png");
+    let shot_arg = shot.to_str().expect("utf-8 path");
+    let mut s = EditSession::start(&[
+        "--validate",
+        "view",
+        "--gi",
+        "none",
+        "--width",
+        "320",
+        "--height",
+        "240",
+        "--screenshot",
+        shot_arg,
+    ]);
+    s.frames(1);
+    xdotool(&["windowfocus", "--sync", &s.window]);
+    const PRESSES: usize = 200;
+    const BURST: usize = 33;
+    let all = voxgi::gi::GiMethod::ALL;
+    let mut seen = 0;
+    let mut bursts = 0;
+    while seen < PRESSES {
+        let burst = BURST.min(PRESSES - seen);
+        assert!(burst % all.len() != 0, "a burst comes back to its method");
+        bursts += 1;
+        xdotool(&[
+            "key",
+            "--repeat",
+            &burst.to_string(),
+            "--repeat-delay",
+            "5",
+            "g",
+        ]);
+        let want = seen + burst;
+        s.wait_until(&format!("{want} presses of G"), |_, line| {
+            seen += usize::from(line.contains("key G: indirect light"));
+            seen == want
+        });
+        s.frames(1);
+    }
+    let last = all[PRESSES % all.len()];
+    // The frame after the last press has the renderer for it.
+    s.frames(2);
+    s.key("F12");
+    s.wait_for(&format!("wrote {shot_arg}"));
+    let log = s.finish();
+    let renderers = log.matches("new renderer").count();
+    eprintln!("{PRESSES} presses of G made {renderers} renderers");
+    let current = log
+        .lines()
+        .filter_map(|l| l.split_once("indirect light: ").map(|(_, r)| r))
+        .next_back()
+        .unwrap_or_else(|| panic!("no renderer logged:\n{log}"));
+    assert!(
+        current.starts_with(last.name()),
+        "after {PRESSES} presses the renderer is for {current}, not {}",
+        last.name()
+    );
+    assert!(
+        renderers >= bursts,
+        "{bursts} bursts of G made {renderers} renderer(s):\n{log}"
+    );
+    let img = load(&shot);
+    assert_not_blank(&img);
+    if last == voxgi::gi::GiMethod::None {
+        assert_matches_render(&img, &dir);
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Abuse (issue #32): the window resized to 1×1 and back, then wider than the device draws
+/// (16400 px: lavapipe's largest image and viewport are 16384, and an X window may be 32767)
+/// and back. At 1×1 the viewer presents 1×1 frames; past the limit it says so, naming the
+/// size and the limit, draws nothing (no swapchain can have the window's size) and keeps
+/// everything; back at 320×240 it shows exactly what `voxgi render` writes, and exits clean
+/// (no validation message, teardown included). 8 px high, so the oversized window asks
+/// little memory of anyone.
+#[test]
+fn viewer_abuse_resizes_to_1x1_and_past_the_device_limit() {
+    require_display();
+    let _display = lock_display();
+    let dir = scratch_dir("abuse-resize");
+    let shot = dir.join("shot.png");
+    let shot_arg = shot.to_str().expect("utf-8 path");
+    let mut s = EditSession::start(&[
+        "--validate",
+        "view",
+        "--gi",
+        "none",
+        "--width",
+        "320",
+        "--height",
+        "240",
+        "--screenshot",
+        shot_arg,
+    ]);
+    s.frames(1);
+    let resize = |s: &mut EditSession, (w, h): (u32, u32)| {
+        // No window manager here: the size is applied as asked.
+        xdotool(&["windowsize", &s.window, &w.to_string(), &h.to_string()]);
+    };
+    let presented = |s: &mut EditSession, size: (u32, u32)| {
+        s.wait_until(&format!("a frame at {}x{}", size.0, size.1), |s, _| {
+            s.frame.is_some_and(|f| f.size == size)
+        });
+    };
+    resize(&mut s, (1, 1));
+    presented(&mut s, (1, 1));
+    s.frames(2);
+    resize(&mut s, (320, 240));
+    presented(&mut s, (320, 240));
+    resize(&mut s, (16400, 8));
+    let refused = s.wait_for("larger than this device draws");
+    assert!(
+        refused.contains("16400x8 px") && refused.contains("16384x16384 px at most"),
+        "{refused}"
+    );
+    resize(&mut s, (320, 240));
+    s.wait_for("the window is 320x240 px again: drawing");
+    presented(&mut s, (320, 240));
+    s.key("F12");
+    s.wait_for(&format!("wrote {shot_arg}"));
+    let log = s.finish();
+    assert!(!log.contains("Validation"), "{log}");
+    let img = load(&shot);
+    assert_eq!(img.height(), 240);
+    assert_matches_render(&img, &dir);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Abuse (issue #32): the window closed while a slow frame is in flight. The path tracer
+/// (4 rays, 1 bounce) takes a second or more per frame on lavapipe; right after the first
+/// frame was presented (the second is then recording or on the GPU), the window manager's
+/// close (Alt+F4 in openbox: WM_DELETE_WINDOW, as the title bar's button sends) arrives. The
+/// viewer finishes the frames in flight and exits 0: no validation message, teardown
+/// included, no panic. Then the window destroyed outright by another client (xdotool's
+/// `windowclose`: no request, the X window is simply gone mid-frame): the viewer says so and
+/// exits 0 as well, without asking the dead window anything.
+#[test]
+fn viewer_abuse_closes_cleanly_mid_frame() {
+    require_display();
+    let _display = lock_display();
+    let dir = scratch_dir("abuse-close");
+    let _wm = start_window_manager(&dir);
+    for destroy in [false, true] {
+        let mut s = EditSession::start(&[
+            "--validate",
+            "view",
+            "--gi",
+            "pathtrace",
+            "--gi-rays",
+            "4",
+            "--gi-bounces",
+            "1",
+            "--width",
+            "320",
+            "--height",
+            "240",
+        ]);
+        s.wait_until("the first frame", |s, _| s.frame.is_some());
+        if destroy {
+            xdotool(&["windowclose", &s.window]);
+        } else {
+            xdotool(&["windowactivate", "--sync", &s.window]);
+            xdotool(&["key", "alt+F4"]);
+        }
+        let (log, _) = s.wait_for_exit();
+        assert!(!log.contains("Validation"), "{log}");
+        if destroy {
+            assert!(log.contains("the window was destroyed: exiting"), "{log}");
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -253,6 +253,16 @@ struct Viewer {
     minimize_script: MinimizeScript,
     /// The window was minimized (or zero-sized) at the last redraw.
     minimized: bool,
+    /// The window's inner size as winit last reported it (`Resized`). Kept here rather than
+    /// asked of the window each frame: winit's X11 backend panics on asking a window that
+    /// another client destroyed, before the viewer sees `Destroyed`.
+    window_px: PhysicalSize<u32>,
+    /// The window was larger than the device draws at the last redraw (see
+    /// [`max_window_px`]): nothing is drawn until it is smaller.
+    oversized: bool,
+    /// The window was destroyed under the viewer (not closed): the viewer exits without
+    /// touching it again.
+    window_gone: bool,
     /// Width of the side panel in pixels: the scene renders to the right of it.
     panel_px: u32,
     /// Where the panel's GPU-time table was drawn last frame (logged by scripted runs).
@@ -305,6 +315,16 @@ enum MinimizeScript {
 
 /// The status line's prefix for a refused projection switch.
 const PROJECTION_STATUS: &str = "projection not switched";
+
+/// The largest window the viewer draws into: its swapchain images are 2D images of the
+/// window's size, and the panel's pass sets a viewport of that size.
+fn max_window_px(info: &crate::vk::DeviceInfo) -> [u32; 2] {
+    let [vw, vh] = info.max_viewport_dimensions;
+    [
+        info.max_image_dimension_2d.min(vw),
+        info.max_image_dimension_2d.min(vh),
+    ]
+}
 
 /// Graph-shaping settings differ (per-frame values such as PCF radius do not count; the
 /// cascade count sets the shadow maps' layers).
@@ -489,6 +509,9 @@ impl Viewer {
                 MinimizeScript::Done
             },
             minimized: false,
+            window_px: window.inner_size(),
+            oversized: false,
+            window_gone: false,
             panel_px: 0,
             panel_layout: panel::PanelLayout::default(),
             editor,
@@ -537,12 +560,25 @@ impl Viewer {
         elwt: &EventLoopWindowTarget<()>,
     ) -> Result<(), AppError> {
         match event {
-            Event::AboutToWait => window.request_redraw(),
+            Event::AboutToWait if !self.window_gone => window.request_redraw(),
+            Event::WindowEvent {
+                event: WindowEvent::Destroyed,
+                ..
+            } => {
+                // Another client destroyed the window (a close asks first: CloseRequested).
+                log::warn!("the window was destroyed: exiting");
+                self.window_gone = true;
+                elwt.exit();
+            }
+            Event::WindowEvent { .. } if self.window_gone => {}
             Event::WindowEvent { event, .. } => {
                 let consumed = self.egui_state.on_window_event(window, &event).consumed;
                 match event {
                     WindowEvent::CloseRequested => elwt.exit(),
-                    WindowEvent::Resized(_) => self.swapchain_dirty = true,
+                    WindowEvent::Resized(size) => {
+                        self.window_px = size;
+                        self.swapchain_dirty = true;
+                    }
                     WindowEvent::RedrawRequested => {
                         let script_done = self.redraw(ctx, window)?;
                         if script_done {
@@ -639,7 +675,12 @@ impl Viewer {
             KeyCode::KeyQ => k.down = down,
             KeyCode::ShiftLeft | KeyCode::ShiftRight => k.fast = down,
             KeyCode::F12 if press => self.controls.screenshot = true,
-            KeyCode::KeyG if press => self.controls.gi.method = self.controls.gi.method.next(),
+            KeyCode::KeyG if press => {
+                self.controls.gi.method = self.controls.gi.method.next();
+                // Presses between two frames take effect together, in the next frame: the
+                // log says each was seen (scripted tests count them).
+                log::info!("key G: indirect light {}", self.controls.gi.method.name());
+            }
             KeyCode::KeyO if press => {
                 self.controls.projection = match self.controls.projection {
                     Projection::Perspective => Projection::Orthographic,
@@ -726,7 +767,7 @@ impl Viewer {
         // Minimized (or zero-sized): nothing to present until the window is back. On X11 an
         // iconified window keeps its size (and the surface its extent), so ask the window
         // manager's state too.
-        let size = window.inner_size();
+        let size = self.window_px;
         if size.width == 0 || size.height == 0 || window.is_minimized() == Some(true) {
             if !self.minimized {
                 self.minimized = true;
@@ -753,6 +794,33 @@ impl Viewer {
             // Back from minimized: the surface may have changed meanwhile.
             log::info!("restored: recreating the swapchain");
             self.minimized = false;
+            self.swapchain_dirty = true;
+        }
+        // A window larger than the device's largest image or viewport cannot have a
+        // swapchain of its size (the X11 surface admits no other), so nothing is drawn until
+        // it is smaller; the scene, edits and settings stay as they are.
+        let [max_w, max_h] = max_window_px(&ctx.info);
+        if size.width > max_w || size.height > max_h {
+            if !self.oversized {
+                self.oversized = true;
+                self.status = format!(
+                    "the window is {}x{} px, larger than this device draws ({max_w}x{max_h} px \
+                     at most): nothing is drawn until it is that small",
+                    size.width, size.height
+                );
+                log::warn!("{}", self.status);
+            }
+            std::thread::sleep(MINIMIZED_POLL);
+            return Ok(None);
+        }
+        if self.oversized {
+            self.oversized = false;
+            self.status.clear();
+            log::info!(
+                "the window is {}x{} px again: drawing",
+                size.width,
+                size.height
+            );
             self.swapchain_dirty = true;
         }
         let Some(swapchain) = self.swapchain.as_mut() else {
@@ -928,6 +996,18 @@ impl Viewer {
         }
         self.report.frames += 1;
         self.renderer_frames += 1;
+        // For scripted tests (`RUST_LOG=voxgi::app=debug`): they wait for frames and for the
+        // camera to get somewhere, not for a fixed time. Local coordinates (without
+        // `Scene::origin_m`).
+        log::debug!(
+            "frame {} presented at {}x{} ({} of its renderer); camera at {:?} looking {:?}",
+            self.report.frames,
+            extent.width,
+            extent.height,
+            self.renderer_frames,
+            self.scene.camera.position.to_array(),
+            self.scene.camera.forward.to_array()
+        );
         if last_scripted {
             log::info!(
                 "scripted run: the last frame is frame {} of its renderer",
@@ -1208,6 +1288,7 @@ impl Viewer {
             Ok(()) => {
                 self.lens = lens;
                 self.scene.camera = self.fly.apply(&self.lens);
+                log::info!("projection: {}", lens.projection.name());
                 if self.status.starts_with(PROJECTION_STATUS) {
                     self.status.clear();
                 }

@@ -115,6 +115,8 @@ pub struct DeviceInfo {
     pub max_storage_buffer_range: u32,
     /// Largest side of a 2D image (16384 on lavapipe and desktop drivers).
     pub max_image_dimension_2d: u32,
+    /// `maxViewportDimensions`: the largest viewport, width and height (16384 on lavapipe).
+    pub max_viewport_dimensions: [u32; 2],
     /// Size of the largest device-local memory heap: what all resources together may take.
     pub device_local_heap_bytes: u64,
     /// `maxMemoryAllocationSize` (Vulkan 1.1, `VkPhysicalDeviceMaintenance3Properties`): the
@@ -712,6 +714,7 @@ fn pick_device(
         non_coherent_atom_size: props.limits.non_coherent_atom_size,
         max_storage_buffer_range: props.limits.max_storage_buffer_range,
         max_image_dimension_2d: props.limits.max_image_dimension2_d,
+        max_viewport_dimensions: props.limits.max_viewport_dimensions,
         device_local_heap_bytes: largest_device_local_heap(&memory),
         max_memory_allocation_bytes: maintenance3.max_memory_allocation_size,
         max_buffer_bytes: maintenance4.max_buffer_size,
