@@ -415,11 +415,7 @@ fn measure(
     let lag = lag_after_switch_off(ctx, &s.scene, &job.settings, args.lag_frames)?;
     let gi = frame_stats(&run.frames, is_gi_pass);
     let frame = frame_stats(&run.frames, |_| true);
-    let accumulate = if job.settings.gi.method.spec().accumulates {
-        job.settings.gi.accumulate_frames.max(1)
-    } else {
-        1
-    };
+    let accumulate = crate::render::frames_to_image(&job.settings) as u32;
     Ok(SweepRow {
         scene: s.name.clone(),
         config: job.config.label(),

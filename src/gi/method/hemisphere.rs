@@ -5,7 +5,7 @@
 use super::super::gi_hemisphere::GiHemisphere;
 use super::super::gi_radiance_volume::GiRadianceVolume;
 use super::super::{GiMethodPasses, GiSettings, GiTarget, RadianceSource};
-use super::{rays_slider, MethodSpec};
+use super::{rays_slider, temporal_controls, MethodSpec};
 use crate::vk::{Context, VkError};
 
 pub(super) static SPEC: MethodSpec = MethodSpec {
@@ -39,6 +39,9 @@ pub(super) static SPEC: MethodSpec = MethodSpec {
         "gi.max_iterations",
         "gi.light_map_resolution",
         "gi.radiance_source",
+        "gi.temporal",
+        "gi.temporal_frames",
+        "gi.accumulate_frames",
     ],
     swept_by_default: true,
     plot_colour: "#1f77b4",
@@ -48,7 +51,10 @@ pub(super) static SPEC: MethodSpec = MethodSpec {
             gi.rays, gi.filter_radius, gi.filter_passes
         )
     },
-    panel: |ui, gi, _| rays_slider(ui, gi),
+    panel: |ui, gi, _| {
+        rays_slider(ui, gi);
+        temporal_controls(ui, gi);
+    },
     build,
 };
 

@@ -165,6 +165,23 @@ fn rays_slider(ui: &mut egui::Ui, gi: &mut GiSettings) {
     crate::panel_keys::key_slider(ui, gi, "gi.rays", (1.0, 256.0), true, "rays / pixel");
 }
 
+/// The panel's temporal-accumulation switch and history length (`gi.temporal`,
+/// `gi.temporal_frames`), for the methods whose spec has `temporal`.
+fn temporal_controls(ui: &mut egui::Ui, gi: &mut GiSettings) {
+    use crate::panel_keys::{key_checkbox, key_slider};
+    key_checkbox(ui, gi, "gi.temporal", "temporal accumulation");
+    if gi.temporal {
+        key_slider(
+            ui,
+            gi,
+            "gi.temporal_frames",
+            (1.0, 256.0),
+            true,
+            "history frames",
+        );
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -38,6 +38,8 @@ pub(super) static SPEC: MethodSpec = MethodSpec {
         "gi.light_map_resolution",
         "gi.bounces",
         "gi.accumulate_frames",
+        "gi.temporal",
+        "gi.temporal_frames",
     ],
     swept_by_default: true,
     plot_colour: "#d62728",
@@ -60,6 +62,7 @@ pub(super) static SPEC: MethodSpec = MethodSpec {
             unbounded,
         );
         key_slider(ui, gi, "gi.bounces", (1.0, 8.0), false, "bounces");
+        super::temporal_controls(ui, gi);
         match frames {
             Some(n) => ui.label(format!("accumulated frames: {n}")),
             None => ui.label("accumulated frames: –"),
