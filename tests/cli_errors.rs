@@ -2,19 +2,9 @@
 //! after the device is up releases everything: no gpu-allocator leak report, no validation
 //! message at teardown.
 
-use std::process::{Command, Output};
+mod common;
 
-fn voxgi(args: &[&str]) -> Output {
-    if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
-        let dir = std::env::temp_dir().join("voxgi-xdg");
-        let _ = std::fs::create_dir_all(&dir);
-        std::env::set_var("XDG_RUNTIME_DIR", dir);
-    }
-    Command::new(env!("CARGO_BIN_EXE_voxgi"))
-        .args(args)
-        .output()
-        .expect("voxgi runs")
-}
+use common::voxgi;
 
 /// Runs `render` (at 32² unless `extra` gives a size) with `extra`, expects failure and
 /// returns stderr.
