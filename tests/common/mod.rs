@@ -85,6 +85,35 @@ pub fn voxgi_with(
     cmd.output().expect("the voxgi binary runs")
 }
 
+/// A small buffer the transfer queue fills and the host reads, for the negative controls.
+pub fn transfer_buffer(ctx: &Context, name: &str) -> voxgi::vk::Buffer {
+    use voxgi::vk::{vk, BufferDesc, MemoryLocation};
+    ctx.create_buffer(&BufferDesc {
+        name: name.into(),
+        size_bytes: 256,
+        usage: vk::BufferUsageFlags::TRANSFER_DST,
+        location: MemoryLocation::GpuToCpu,
+    })
+    .expect("buffer")
+}
+
+/// Runs a graph whose one pass fills `target` twice, a deliberate misuse for the negative
+/// controls: the graph places barriers only between passes, so nothing orders the second
+/// write after the first (synchronization validation's WRITE_AFTER_WRITE hazard).
+pub fn run_write_after_write(ctx: &Context, target: &voxgi::vk::Buffer) {
+    use voxgi::graph::{run_once, Access, RenderGraph};
+    let mut g = RenderGraph::new();
+    let out = g.import_buffer(target, Access::HostRead);
+    g.add_pass("hazard")
+        .write(out, Access::TransferWrite)
+        .record(move |p| {
+            let raw = p.buffer(out).raw;
+            p.cmd.fill_buffer(raw, 1);
+            p.cmd.fill_buffer(raw, 2);
+        });
+    run_once(ctx, g).expect("the graph runs");
+}
+
 /// A validating context on the default device (lavapipe on CI), checked at teardown (see
 /// [`TestContext`]). Without a Vulkan device the test fails with the install hint: these
 /// tests never pass silently.
