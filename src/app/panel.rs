@@ -62,18 +62,24 @@ impl TimingStats {
     }
 }
 
-/// The cached shadow maps record one pass per layer (`shadow_depth[v]`, one per shadow view:
-/// six per point light); the table shows their sum as one `shadow_depth` row, as an uncached
-/// frame names it, so that a scene with many lights does not push the panel's other sections
-/// off screen. (The frame-time graph groups them by family too.)
+/// Pass families ([`super::frame_graph::family`]) the table shows as one row, their sum: the
+/// cached shadow maps record one pass per layer (`shadow_depth[v]`, one per shadow view: six
+/// per point light), shown as one `shadow_depth` row, as an uncached frame names it, so that a
+/// scene with many lights does not push the panel's other sections off screen. (The
+/// frame-time graph groups every family.)
+const SUMMED_FAMILIES: &[&str] = &["shadow_depth"];
+
+/// `frame` with the members of each of [`SUMMED_FAMILIES`] summed into one row named for the
+/// family, where the first of them stood.
 fn merge_shadow_layers(frame: Vec<PassTiming>) -> Vec<PassTiming> {
     let mut out: Vec<PassTiming> = Vec::with_capacity(frame.len());
     for t in frame {
-        if t.name.starts_with("shadow_depth[") {
-            match out.iter_mut().find(|r| r.name == "shadow_depth") {
+        let family = super::frame_graph::family(&t.name);
+        if family != t.name && SUMMED_FAMILIES.contains(&family) {
+            match out.iter_mut().find(|r| r.name == family) {
                 Some(row) => row.gpu_ms += t.gpu_ms,
                 None => out.push(PassTiming {
-                    name: "shadow_depth".to_string(),
+                    name: family.to_string(),
                     gpu_ms: t.gpu_ms,
                 }),
             }
