@@ -424,29 +424,14 @@ pub(crate) fn build_with(
         .as_ref()
         .map(|c| build_camera(&ck, c))
         .transpose()?;
-    let gi = desc
-        .gi
-        .as_ref()
-        .map(|g| build_table(&ck, g))
-        .transpose()?
-        .unwrap_or_default();
+    let gi = table_layer(&ck, desc.gi.as_ref())?;
     let transparency = desc
         .transparency
         .as_deref()
         .map(|t| build_transparency(&ck, t))
         .transpose()?;
-    let shadow = desc
-        .shadow
-        .as_ref()
-        .map(|t| build_table(&ck, t))
-        .transpose()?
-        .unwrap_or_default();
-    let post = desc
-        .post
-        .as_ref()
-        .map(|t| build_table(&ck, t))
-        .transpose()?
-        .unwrap_or_default();
+    let shadow = table_layer(&ck, desc.shadow.as_ref())?;
+    let post = table_layer(&ck, desc.post.as_ref())?;
     let mut lights = desc
         .lights
         .iter()
@@ -917,6 +902,15 @@ fn build_camera(ck: &Check<'_>, c: &CameraDesc) -> Result<Camera, SceneError> {
     })
 }
 
+/// The layer of an optional settings table, empty where the scene has none.
+fn table_layer<S: Settings>(ck: &Check<'_>, t: Option<&RawTable<S>>) -> Result<Layer, SceneError> {
+    t.map(|t| build_table(ck, t))
+        .transpose()
+        .map(Option::unwrap_or_default)
+}
+
+/// Checks a settings table's values against their keys' ranges (those of the flags), each
+/// error naming the file and the key path.
 fn build_table<S: Settings>(ck: &Check<'_>, t: &RawTable<S>) -> Result<Layer, SceneError> {
     let mut layer = Layer::default();
     for (k, v) in &t.values {
