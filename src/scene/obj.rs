@@ -116,7 +116,11 @@ impl AssetStore {
         let groups = obj_smoothing_groups(&text);
 
         let dir = path.parent().unwrap_or(Path::new(".")).to_path_buf();
-        let (models, materials, mtl_files) = load_obj_models(path, &dir, &text)?;
+        let ObjContents {
+            models,
+            materials,
+            mtl_files,
+        } = load_obj_models(path, &dir, &text)?;
         let material_ids = materials
             .iter()
             .map(|m| {
@@ -532,21 +536,17 @@ fn warn_flat_phong(field: &str, specular: Vec3, shininess: f32, has_ns: bool) {
     }
 }
 
-/// A parsed OBJ's models and its MTL materials, with the MTL file defining each material (by
-/// name, for messages naming the MTL file). A missing MTL file is a warning (its materials
+/// What an OBJ file and its MTL libraries hold.
+struct ObjContents {
+    models: Vec<tobj::Model>,
+    materials: Vec<tobj::Material>,
+    /// The MTL file defining each material, by name, for messages naming the MTL file.
+    mtl_files: HashMap<String, PathBuf>,
+}
+
+/// A parsed OBJ's models and its MTL materials. A missing MTL file is a warning (its materials
 /// fall back to the default); a malformed one, or a malformed OBJ, is an error.
-fn load_obj_models(
-    path: &Path,
-    dir: &Path,
-    text: &str,
-) -> Result<
-    (
-        Vec<tobj::Model>,
-        Vec<tobj::Material>,
-        HashMap<String, PathBuf>,
-    ),
-    SceneError,
-> {
+fn load_obj_models(path: &Path, dir: &Path, text: &str) -> Result<ObjContents, SceneError> {
     // MTL problems found by tobj's callback: (path, missing?, message).
     let mtl_problems: RefCell<Vec<(PathBuf, bool, String)>> = RefCell::new(Vec::new());
     let mtl_files: RefCell<HashMap<String, PathBuf>> = RefCell::new(HashMap::new());
@@ -588,7 +588,11 @@ fn load_obj_models(
     }
     // tobj reports MTL errors here too; ours were already handled above.
     let materials = materials.unwrap_or_default();
-    Ok((models, materials, mtl_files.into_inner()))
+    Ok(ObjContents {
+        models,
+        materials,
+        mtl_files: mtl_files.into_inner(),
+    })
 }
 
 /// tobj's MTL callback for the OBJ at `obj` (in `dir`): reads the library `mtl`, recording
