@@ -3,8 +3,10 @@
 //! project, and compares against `assets/references/cornell_gi.exr`; a reference that exists
 //! nowhere is an error naming the flag that points at the folder.
 
+mod common;
+
 use std::path::PathBuf;
-use std::process::{Command, Output};
+use std::process::Output;
 
 fn empty_dir(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("voxgi-anywhere-{name}-{}", std::process::id()));
@@ -14,11 +16,9 @@ fn empty_dir(name: &str) -> PathBuf {
 }
 
 fn voxgi_in(dir: &PathBuf, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_voxgi"))
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("runs voxgi")
+    common::voxgi_with(args, |c| {
+        c.current_dir(dir);
+    })
 }
 
 fn text(o: &Output) -> String {

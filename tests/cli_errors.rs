@@ -2,19 +2,9 @@
 //! after the device is up releases everything: no gpu-allocator leak report, no validation
 //! message at teardown.
 
-use std::process::{Command, Output};
+mod common;
 
-fn voxgi(args: &[&str]) -> Output {
-    if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
-        let dir = std::env::temp_dir().join("voxgi-xdg");
-        let _ = std::fs::create_dir_all(&dir);
-        std::env::set_var("XDG_RUNTIME_DIR", dir);
-    }
-    Command::new(env!("CARGO_BIN_EXE_voxgi"))
-        .args(args)
-        .output()
-        .expect("voxgi runs")
-}
+use common::voxgi;
 
 /// Runs `render` (at 32² unless `extra` gives a size) with `extra`, expects failure and
 /// returns stderr.
@@ -408,22 +398,11 @@ fn mtl_specular_without_exponent_warns_naming_the_material() {
 #[test]
 fn a_failing_command_that_leaks_or_misuses_the_gpu_is_reported() {
     use voxgi::cli::{with_context, CliError, Global};
-    use voxgi::graph::{run_once, Access, RenderGraph};
-    use voxgi::vk::{vk, BufferDesc, MemoryLocation};
     let global = Global {
         validate: true,
         device: None,
     };
     let failure = || CliError::StereoProfile;
-    let buffer = |ctx: &voxgi::vk::Context, name: &str| {
-        ctx.create_buffer(&BufferDesc {
-            name: name.into(),
-            size_bytes: 256,
-            usage: vk::BufferUsageFlags::TRANSFER_DST,
-            location: MemoryLocation::GpuToCpu,
-        })
-        .expect("buffer")
-    };
 
     let clean = with_context(&global, |_| -> Result<(), CliError> { Err(failure()) });
     assert!(
@@ -432,7 +411,7 @@ fn a_failing_command_that_leaks_or_misuses_the_gpu_is_reported() {
     );
 
     let leak = with_context(&global, |ctx| -> Result<(), CliError> {
-        std::mem::forget(buffer(ctx, "leaked on the error path"));
+        std::mem::forget(common::transfer_buffer(ctx, "leaked on the error path"));
         Err(failure())
     });
     match &leak {
@@ -455,19 +434,9 @@ fn a_failing_command_that_leaks_or_misuses_the_gpu_is_reported() {
     }
 
     let hazard = with_context(&global, |ctx| -> Result<(), CliError> {
-        // Two fills of one buffer in one pass: nothing orders the second after the first
-        // (synchronization validation's WRITE_AFTER_WRITE), as in tests/validation_controls.rs.
-        let target = buffer(ctx, "hazard target");
-        let mut g = RenderGraph::new();
-        let out = g.import_buffer(&target, Access::HostRead);
-        g.add_pass("hazard")
-            .write(out, Access::TransferWrite)
-            .record(move |p| {
-                let raw = p.buffer(out).raw;
-                p.cmd.fill_buffer(raw, 1);
-                p.cmd.fill_buffer(raw, 2);
-            });
-        run_once(ctx, g).expect("the graph runs");
+        // The misuse tests/validation_controls.rs reports without the command line.
+        let target = common::transfer_buffer(ctx, "hazard target");
+        common::run_write_after_write(ctx, &target);
         Err(failure())
     });
     match &hazard {

@@ -2,20 +2,11 @@
 //! to a PNG of the asked size with something lit in it, and a malformed `.glb` fails with an
 //! error that names the file, without a panic.
 
-use std::path::PathBuf;
-use std::process::{Command, Output};
+mod common;
 
-fn voxgi(args: &[&str]) -> Output {
-    if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
-        let dir = std::env::temp_dir().join("voxgi-xdg");
-        let _ = std::fs::create_dir_all(&dir);
-        std::env::set_var("XDG_RUNTIME_DIR", dir);
-    }
-    Command::new(env!("CARGO_BIN_EXE_voxgi"))
-        .args(args)
-        .output()
-        .expect("voxgi runs")
-}
+use std::path::PathBuf;
+
+use common::voxgi;
 
 fn temp_file(name: &str) -> PathBuf {
     std::env::temp_dir().join(format!("voxgi-cli-gltf-{}-{name}", std::process::id()))

@@ -82,7 +82,8 @@ fn collect_sources(dir: &Path, root: &Path, out: &mut Vec<Source>) {
 }
 
 /// The code with comments, string literals and character literals replaced by spaces, so that
-/// a path in a doc comment or a message is not taken for a use.
+/// a path in a doc comment or a message is not taken for a use. Line breaks stay, so a line of
+/// the result is that line of the source.
 fn strip_comments_and_strings(text: &str) -> String {
     let c: Vec<char> = text.chars().collect();
     let mut out = String::with_capacity(text.len());
@@ -105,6 +106,9 @@ fn strip_comments_and_strings(text: &str) -> String {
                         break;
                     }
                 } else {
+                    if c[i] == '\n' {
+                        out.push('\n');
+                    }
                     i += 1;
                 }
             }
@@ -139,8 +143,10 @@ fn strip_comments_and_strings(text: &str) -> String {
                 j += 1;
             }
             out.push_str("\"\"");
+            push_newlines(&mut out, &c[i..j.min(c.len())]);
             i = j;
         } else if c[i] == '"' {
+            let start = i;
             i += 1;
             while i < c.len() && c[i] != '"' {
                 if c[i] == '\\' {
@@ -150,6 +156,7 @@ fn strip_comments_and_strings(text: &str) -> String {
             }
             i += 1;
             out.push_str("\"\"");
+            push_newlines(&mut out, &c[start..i.min(c.len())]);
         } else if c[i] == '\'' {
             // A character literal ('x', '\n', '\u{..}') or a lifetime ('a).
             if c.get(i + 1) == Some(&'\\') {
@@ -172,6 +179,11 @@ fn strip_comments_and_strings(text: &str) -> String {
         }
     }
     out
+}
+
+/// Appends the line breaks of `skipped` (a string or comment replaced by blanks) to `out`.
+fn push_newlines(out: &mut String, skipped: &[char]) {
+    out.extend(skipped.iter().filter(|&&ch| ch == '\n'));
 }
 
 /// The code without the items under `#[cfg(test)]` (test modules, test-only imports).
@@ -558,4 +570,139 @@ fn the_checker_sees_uses_and_loops() {
     let acyclic: BTreeSet<(String, String)> =
         edges.iter().filter(|(a, _)| a != "c").cloned().collect();
     assert!(loops(&acyclic).is_empty());
+}
+
+/// The longest a function in `src/` may be, in lines from its `fn` line to its closing brace.
+/// A longer one is to be split into named steps (issue #34).
+const MAX_FUNCTION_LINES: usize = 150;
+
+/// Every function with a body in `code` (stripped of comments and strings, line breaks kept):
+/// its name, first line (1-based) and length in lines, `fn` line to closing brace.
+fn function_lengths(code: &str) -> Vec<(String, usize, usize)> {
+    let chars: Vec<char> = code.chars().collect();
+    let line_at = |k: usize| 1 + chars[..k].iter().filter(|&&ch| ch == '\n').count();
+    let mut found = Vec::new();
+    let mut i = 0;
+    while i + 2 < chars.len() {
+        let is_fn = chars[i] == 'f'
+            && chars[i + 1] == 'n'
+            && !chars[i + 2].is_alphanumeric()
+            && chars[i + 2] != '_'
+            && (i == 0 || !is_ident_char(chars[i - 1]));
+        if !is_fn {
+            i += 1;
+            continue;
+        }
+        // `fn` then a name (a `fn(…)` pointer type has none).
+        let mut j = i + 2;
+        while j < chars.len() && chars[j].is_whitespace() {
+            j += 1;
+        }
+        let name: String = chars[j..]
+            .iter()
+            .take_while(|&&ch| is_ident_char(ch))
+            .collect();
+        if name.is_empty() {
+            i += 2;
+            continue;
+        }
+        // The body's `{`, or a `;` outside brackets for a declaration without one (`-> [u8; 3]`
+        // holds a `;` inside brackets).
+        let mut depth = 0i32;
+        let mut open = None;
+        while j < chars.len() {
+            match chars[j] {
+                '(' | '[' => depth += 1,
+                ')' | ']' => depth -= 1,
+                ';' if depth == 0 => break,
+                '{' if depth == 0 => {
+                    open = Some(j);
+                    break;
+                }
+                _ => {}
+            }
+            j += 1;
+        }
+        if let Some(open) = open {
+            let mut braces = 0usize;
+            let mut close = chars.len() - 1;
+            for (k, &ch) in chars.iter().enumerate().skip(open) {
+                match ch {
+                    '{' => braces += 1,
+                    '}' => {
+                        braces -= 1;
+                        if braces == 0 {
+                            close = k;
+                            break;
+                        }
+                    }
+                    _ => {}
+                }
+            }
+            let first = line_at(i);
+            found.push((name, first, line_at(close) - first + 1));
+        }
+        // Nested functions are measured on their own too.
+        i += 2;
+    }
+    found
+}
+
+/// Every `.rs` file under `dir`, test files included.
+fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
+    let entries =
+        std::fs::read_dir(dir).unwrap_or_else(|e| panic!("cannot read {}: {e}", dir.display()));
+    for entry in entries {
+        let path = entry.expect("directory entry").path();
+        if path.is_dir() {
+            rust_files(&path, out);
+        } else if path.extension().and_then(|e| e.to_str()) == Some("rs") {
+            out.push(path);
+        }
+    }
+}
+
+/// No function in `src/` (tests in it included) runs past [`MAX_FUNCTION_LINES`]: a long one
+/// is split into named steps, so each reads as one idea.
+#[test]
+fn no_function_is_longer_than_the_limit() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut files = Vec::new();
+    rust_files(&root.join("src"), &mut files);
+    files.sort();
+    assert!(files.len() > 10, "found only {} source files", files.len());
+    let mut problems = Vec::new();
+    for path in files {
+        let text = std::fs::read_to_string(&path).expect("readable source");
+        for (name, line, lines) in function_lengths(&strip_comments_and_strings(&text)) {
+            if lines > MAX_FUNCTION_LINES {
+                let rel = path.strip_prefix(root).expect("under the crate");
+                problems.push(format!("{}:{line} `{name}`: {lines} lines", rel.display()));
+            }
+        }
+    }
+    assert!(
+        problems.is_empty(),
+        "functions over {MAX_FUNCTION_LINES} lines (split them into named steps):\n  {}",
+        problems.join("\n  ")
+    );
+}
+
+/// The measure itself: bodies from `fn` to the closing brace, declarations and `fn` pointer
+/// types skipped, braces in strings and comments ignored, nested functions measured too.
+#[test]
+fn the_function_measure_counts_lines() {
+    let code = "trait T {\n    fn declared(&self) -> [u8; 3];\n}\n\
+                fn outer(f: fn(u32) -> u32) -> u32 {\n\
+                    // a brace { in a comment\n\
+                    let s = \"}\n}\";\n\
+                    fn inner() {}\n\
+                    /* a\n } \n block */\n\
+                    f(1)\n\
+                }\n";
+    let found = function_lengths(&strip_comments_and_strings(code));
+    assert_eq!(
+        found,
+        [("outer".to_string(), 4, 10), ("inner".to_string(), 8, 1)]
+    );
 }

@@ -6,22 +6,12 @@
 mod common;
 
 use voxgi::graph::{Access, GraphExecutor, RenderGraph};
-use voxgi::vk::{vk, Buffer, BufferDesc, Context, FrameLoop, MemoryLocation};
-
-fn host_buffer(ctx: &Context, name: &str) -> Buffer {
-    ctx.create_buffer(&BufferDesc {
-        name: name.into(),
-        size_bytes: 256,
-        usage: vk::BufferUsageFlags::TRANSFER_DST,
-        location: MemoryLocation::GpuToCpu,
-    })
-    .expect("buffer")
-}
+use voxgi::vk::FrameLoop;
 
 #[test]
 fn an_object_dropped_with_nothing_in_flight_is_destroyed_at_once() {
     let ctx = common::context();
-    let buffer = host_buffer(&ctx, "idle");
+    let buffer = common::transfer_buffer(&ctx, "idle");
     drop(buffer);
     assert_eq!(ctx.pending_releases(), 0);
 }
@@ -29,7 +19,7 @@ fn an_object_dropped_with_nothing_in_flight_is_destroyed_at_once() {
 #[test]
 fn an_object_dropped_while_its_frame_is_in_flight_waits_for_the_frame() {
     let ctx = common::context();
-    let target = host_buffer(&ctx, "in flight");
+    let target = common::transfer_buffer(&ctx, "in flight");
     let mut g = RenderGraph::new();
     let out = g.import_buffer(&target, Access::HostRead);
     g.add_pass("fill")
@@ -54,7 +44,7 @@ fn objects_dropped_after_their_frames_are_destroyed_by_finish() {
     let (_, _cmd, _, _) = frames.begin(&ctx).expect("begin");
     frames.submit(&ctx, &[], &[]).expect("submit");
     // Dropped with the frame (and the loop's own fences and pools) possibly in flight.
-    drop(host_buffer(&ctx, "dropped in flight"));
+    drop(common::transfer_buffer(&ctx, "dropped in flight"));
     drop(frames);
     let report = ctx.finish();
     assert!(report.is_clean(), "{report}");
@@ -67,7 +57,7 @@ fn objects_dropped_after_their_frames_are_destroyed_by_finish() {
 fn allocated_bytes_follow_a_buffer_from_creation_to_drop() {
     let ctx = common::context();
     let before = ctx.allocated_bytes();
-    let buffer = host_buffer(&ctx, "counted");
+    let buffer = common::transfer_buffer(&ctx, "counted");
     let with = ctx.allocated_bytes();
     assert!(
         with >= before + 256,

@@ -2,20 +2,11 @@
 //! survival across runs (`--resume`), the ray-test rows (traverse.csv), the files, and the
 //! errors that name the bad input.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
 
-fn voxgi(args: &[&str]) -> Output {
-    if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
-        let dir = std::env::temp_dir().join("voxgi-xdg");
-        let _ = std::fs::create_dir_all(&dir);
-        std::env::set_var("XDG_RUNTIME_DIR", dir);
-    }
-    Command::new(env!("CARGO_BIN_EXE_voxgi"))
-        .args(args)
-        .output()
-        .expect("voxgi runs")
-}
+use std::path::{Path, PathBuf};
+
+use common::voxgi;
 
 fn text(b: &[u8]) -> String {
     String::from_utf8_lossy(b).into_owned()
@@ -27,7 +18,7 @@ fn out_dir(name: &str) -> PathBuf {
     dir
 }
 
-fn sweep(dir: &Path, extra: &[&str]) -> Output {
+fn sweep(dir: &Path, extra: &[&str]) -> std::process::Output {
     let dir = dir.to_string_lossy().into_owned();
     let mut args = vec![
         "--validate",

@@ -6,36 +6,14 @@
 
 mod common;
 
-use voxgi::graph::{run_once, Access, RenderGraph};
-use voxgi::vk::{vk, BufferDesc, MemoryLocation};
-
-fn transfer_buffer(ctx: &voxgi::vk::Context, name: &str) -> voxgi::vk::Buffer {
-    ctx.create_buffer(&BufferDesc {
-        name: name.into(),
-        size_bytes: 256,
-        usage: vk::BufferUsageFlags::TRANSFER_DST,
-        location: MemoryLocation::GpuToCpu,
-    })
-    .expect("buffer")
-}
+use common::transfer_buffer;
+use voxgi::vk::vk;
 
 #[test]
 fn a_write_after_write_without_a_barrier_is_reported() {
     let ctx = common::raw_context();
     let target = transfer_buffer(&ctx, "hazard target");
-    let mut g = RenderGraph::new();
-    let out = g.import_buffer(&target, Access::HostRead);
-    // Two fills of one buffer in one pass: the graph places barriers only between passes, so
-    // nothing orders the second write after the first (synchronization validation's
-    // WRITE_AFTER_WRITE hazard).
-    g.add_pass("hazard")
-        .write(out, Access::TransferWrite)
-        .record(move |p| {
-            let raw = p.buffer(out).raw;
-            p.cmd.fill_buffer(raw, 1);
-            p.cmd.fill_buffer(raw, 2);
-        });
-    run_once(&ctx, g).expect("the graph runs");
+    common::run_write_after_write(&ctx, &target);
     drop(target);
     let report = ctx.finish();
     assert!(report.leaked_allocations.is_empty(), "{report}");

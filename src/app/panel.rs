@@ -62,18 +62,24 @@ impl TimingStats {
     }
 }
 
-/// The cached shadow maps record one pass per layer (`shadow_depth[v]`, one per shadow view:
-/// six per point light); the table shows their sum as one `shadow_depth` row, as an uncached
-/// frame names it, so that a scene with many lights does not push the panel's other sections
-/// off screen. (The frame-time graph groups them by family too.)
+/// Pass families ([`super::frame_graph::family`]) the table shows as one row, their sum: the
+/// cached shadow maps record one pass per layer (`shadow_depth[v]`, one per shadow view: six
+/// per point light), shown as one `shadow_depth` row, as an uncached frame names it, so that a
+/// scene with many lights does not push the panel's other sections off screen. (The
+/// frame-time graph groups every family.)
+const SUMMED_FAMILIES: &[&str] = &["shadow_depth"];
+
+/// `frame` with the members of each of [`SUMMED_FAMILIES`] summed into one row named for the
+/// family, where the first of them stood.
 fn merge_shadow_layers(frame: Vec<PassTiming>) -> Vec<PassTiming> {
     let mut out: Vec<PassTiming> = Vec::with_capacity(frame.len());
     for t in frame {
-        if t.name.starts_with("shadow_depth[") {
-            match out.iter_mut().find(|r| r.name == "shadow_depth") {
+        let family = super::frame_graph::family(&t.name);
+        if family != t.name && SUMMED_FAMILIES.contains(&family) {
+            match out.iter_mut().find(|r| r.name == family) {
                 Some(row) => row.gpu_ms += t.gpu_ms,
                 None => out.push(PassTiming {
-                    name: "shadow_depth".to_string(),
+                    name: family.to_string(),
                     gpu_ms: t.gpu_ms,
                 }),
             }
@@ -359,31 +365,10 @@ pub fn draw(
 
                     egui::CollapsingHeader::new("Camera")
                         .default_open(true)
-                        .show(ui, |ui| {
-                            ui.add(
-                                egui::Slider::new(&mut c.speed_m_s, 0.01..=100.0)
-                                    .logarithmic(true)
-                                    .text("speed m/s"),
-                            );
-                            ui.horizontal(|ui| {
-                                ui.checkbox(&mut c.animate, "animate");
-                                ui.label(format!("t = {:.2} s", c.time_s));
-                            });
-                            projection_controls(ui, c);
-                        });
-
+                        .show(ui, |ui| camera_controls(ui, c));
                     egui::CollapsingHeader::new("Lights")
                         .default_open(true)
-                        .show(ui, |ui| {
-                            for (i, s) in c.light_scale.iter_mut().enumerate() {
-                                let name = info.light_names.get(i).map_or("light", |n| n.as_str());
-                                ui.add(
-                                    egui::Slider::new(s, 0.0..=100.0)
-                                        .logarithmic(true)
-                                        .text(format!("{name} ×")),
-                                );
-                            }
-                        });
+                        .show(ui, |ui| light_controls(ui, c, info.light_names));
 
                     egui::CollapsingHeader::new("Edit scene")
                         .default_open(true)
@@ -397,20 +382,7 @@ pub fn draw(
 
                     egui::CollapsingHeader::new("Shadows")
                         .default_open(true)
-                        .show(ui, |ui| {
-                            egui::ComboBox::from_label("resolution")
-                                .selected_text(format!("{}²", c.shadow.resolution))
-                                .show_ui(ui, |ui| {
-                                    for r in SHADOW_RESOLUTIONS {
-                                        ui.selectable_value(
-                                            &mut c.shadow.resolution,
-                                            r,
-                                            format!("{r}²"),
-                                        );
-                                    }
-                                });
-                            shadow_controls(ui, &mut c.shadow);
-                        });
+                        .show(ui, |ui| shadow_section(ui, &mut c.shadow));
 
                     egui::CollapsingHeader::new("Global illumination")
                         .default_open(true)
@@ -428,43 +400,10 @@ pub fn draw(
 
                     egui::CollapsingHeader::new("View")
                         .default_open(false)
-                        .show(ui, |ui| {
-                            egui::ComboBox::from_label("image")
-                                .selected_text(debug_name(c.debug))
-                                .show_ui(ui, |ui| {
-                                    for v in VIEWS {
-                                        ui.selectable_value(&mut c.debug, v, debug_name(v));
-                                    }
-                                });
-                            if c.debug == Some(DebugView::Atlas) {
-                                let name =
-                                    |i: usize| info.object_names.get(i).map_or("?", |n| n.as_str());
-                                egui::ComboBox::from_label("object")
-                                    .selected_text(name(c.atlas_object))
-                                    .show_ui(ui, |ui| {
-                                        for i in 0..info.object_names.len() {
-                                            ui.selectable_value(&mut c.atlas_object, i, name(i));
-                                        }
-                                    });
-                            }
-                        });
+                        .show(ui, |ui| view_controls(ui, c, info.object_names));
 
                     ui.separator();
-                    let shot = ui.button("Screenshot (F12)");
-                    if shot.clicked() {
-                        c.screenshot = true;
-                    }
-                    scroll.screenshot_button = shot.rect;
-                    if ui
-                        .button("Add camera keyframe")
-                        .on_hover_text("printed as a [camera_path] table on exit, keys 2 s apart")
-                        .clicked()
-                    {
-                        c.add_keyframe = true;
-                    }
-                    if !info.status.is_empty() {
-                        ui.label(info.status);
-                    }
+                    scroll.screenshot_button = footer(ui, c, info.status);
                 });
             scroll.offset = area.state.offset.y;
             scroll.content_height = area.content_size.y;
@@ -477,6 +416,85 @@ pub fn draw(
         scroll,
         spots,
     }
+}
+
+/// The camera's speed, animation clock and projection.
+fn camera_controls(ui: &mut egui::Ui, c: &mut Controls) {
+    ui.add(
+        egui::Slider::new(&mut c.speed_m_s, 0.01..=100.0)
+            .logarithmic(true)
+            .text("speed m/s"),
+    );
+    ui.horizontal(|ui| {
+        ui.checkbox(&mut c.animate, "animate");
+        ui.label(format!("t = {:.2} s", c.time_s));
+    });
+    projection_controls(ui, c);
+}
+
+/// One intensity scale per light, named as in the scene.
+fn light_controls(ui: &mut egui::Ui, c: &mut Controls, light_names: &[String]) {
+    for (i, s) in c.light_scale.iter_mut().enumerate() {
+        let name = light_names.get(i).map_or("light", |n| n.as_str());
+        ui.add(
+            egui::Slider::new(s, 0.0..=100.0)
+                .logarithmic(true)
+                .text(format!("{name} ×")),
+        );
+    }
+}
+
+/// The shadow map's resolution and the shadow settings.
+fn shadow_section(ui: &mut egui::Ui, shadow: &mut ShadowSettings) {
+    egui::ComboBox::from_label("resolution")
+        .selected_text(format!("{}²", shadow.resolution))
+        .show_ui(ui, |ui| {
+            for r in SHADOW_RESOLUTIONS {
+                ui.selectable_value(&mut shadow.resolution, r, format!("{r}²"));
+            }
+        });
+    shadow_controls(ui, shadow);
+}
+
+/// The debug image shown instead of the frame, and for the atlas view its object.
+fn view_controls(ui: &mut egui::Ui, c: &mut Controls, object_names: &[String]) {
+    egui::ComboBox::from_label("image")
+        .selected_text(debug_name(c.debug))
+        .show_ui(ui, |ui| {
+            for v in VIEWS {
+                ui.selectable_value(&mut c.debug, v, debug_name(v));
+            }
+        });
+    if c.debug == Some(DebugView::Atlas) {
+        let name = |i: usize| object_names.get(i).map_or("?", |n| n.as_str());
+        egui::ComboBox::from_label("object")
+            .selected_text(name(c.atlas_object))
+            .show_ui(ui, |ui| {
+                for i in 0..object_names.len() {
+                    ui.selectable_value(&mut c.atlas_object, i, name(i));
+                }
+            });
+    }
+}
+
+/// The screenshot and keyframe buttons and the status line; returns where the screenshot
+/// button landed.
+fn footer(ui: &mut egui::Ui, c: &mut Controls, status: &str) -> egui::Rect {
+    let shot = ui.button("Screenshot (F12)");
+    if shot.clicked() {
+        c.screenshot = true;
+    }
+    if ui
+        .button("Add camera keyframe")
+        .on_hover_text("printed as a [camera_path] table on exit, keys 2 s apart")
+        .clicked()
+    {
+        c.add_keyframe = true;
+    }
+    if !status.is_empty() {
+        ui.label(status);
+    }
+    shot.rect
 }
 
 /// The projection switch (O) and the orthographic view's height (range from [`limits`]).

@@ -644,13 +644,14 @@ fn write_opaque_material(
     if let Some(ggx) = material.ggx {
         write_ggx(xml, scene, material, ggx, texture, out_dir, report)?;
     } else if material.is_lambert() {
-        let reflectance = match texture {
-            Some((t, data)) => texture_xml(data, t, "reflectance", Vec3::ONE, out_dir, report)?,
-            None => format!(
-                "<rgb name=\"reflectance\" value=\"{}\"/>",
-                vec3(material.albedo)
-            ),
-        };
+        let reflectance = albedo_xml(
+            texture,
+            "reflectance",
+            material.albedo,
+            1.0,
+            out_dir,
+            report,
+        )?;
         let _ = writeln!(
             xml,
             "        <bsdf type=\"diffuse\">\n            {reflectance}\n        </bsdf>"
@@ -705,20 +706,14 @@ fn write_opaque_material(
         }
         let weight = specular_max / (diffuse_max + specular_max);
         let diffuse_scale = 1.0 / (1.0 - weight);
-        let reflectance = match texture {
-            Some((t, data)) => texture_xml(
-                data,
-                t,
-                "reflectance",
-                Vec3::splat(diffuse_scale),
-                out_dir,
-                report,
-            )?,
-            None => format!(
-                "<rgb name=\"reflectance\" value=\"{}\"/>",
-                vec3(material.albedo * diffuse_scale)
-            ),
-        };
+        let reflectance = albedo_xml(
+            texture,
+            "reflectance",
+            material.albedo,
+            diffuse_scale,
+            out_dir,
+            report,
+        )?;
         let _ = writeln!(
             xml,
             "        <!-- normalized Phong, specular {}, shininess {} -->",
@@ -775,13 +770,7 @@ fn write_ggx(
             }
         ));
     }
-    let base = match texture {
-        Some((t, data)) => texture_xml(data, t, "base_color", Vec3::ONE, out_dir, report)?,
-        None => format!(
-            "<rgb name=\"base_color\" value=\"{}\"/>",
-            vec3(material.albedo)
-        ),
-    };
+    let base = albedo_xml(texture, "base_color", material.albedo, 1.0, out_dir, report)?;
     let _ = writeln!(
         xml,
         "        <!-- GGX metal/roughness, alpha = roughness^2 = {} -->",
@@ -927,6 +916,25 @@ fn scalar_texture_xml(
          name=\"filename\" value=\"{rel}\"/>\n                <boolean name=\"raw\" \
          value=\"true\"/>\n            </texture>"
     ))
+}
+
+/// A BSDF's colour parameter `name`: the albedo `texture` (index and data) where the material
+/// has one, else the constant `albedo`, either times `scale`.
+fn albedo_xml(
+    texture: Option<(usize, &TextureData)>,
+    name: &str,
+    albedo: Vec3,
+    scale: f32,
+    out_dir: &Path,
+    report: &mut ExportReport,
+) -> Result<String, MitsubaExportError> {
+    match texture {
+        Some((t, data)) => texture_xml(data, t, name, Vec3::splat(scale), out_dir, report),
+        None => Ok(format!(
+            "<rgb name=\"{name}\" value=\"{}\"/>",
+            vec3(albedo * scale)
+        )),
+    }
 }
 
 /// Writes texture `index` and returns the `<texture>` element named `name` that reads it.
@@ -1161,6 +1169,26 @@ mod tests {
         a.len() == b.len() && a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-5)
     }
 
+    /// Asserts that [`numbers`] of `element`'s `attr` are `want` (to 1e-5).
+    #[track_caller]
+    fn assert_numbers(xml: &str, element: &str, attr: &str, want: &[f32]) {
+        let got = numbers(xml, element, attr);
+        assert!(
+            close(&got, want),
+            "{element} {attr}: {got:?}, want {want:?}"
+        );
+    }
+
+    /// Asserts that [`all_numbers`] of `element`'s `attr` are `want` (to 1e-5).
+    #[track_caller]
+    fn assert_all_numbers(xml: &str, element: &str, attr: &str, want: &[f32]) {
+        let got = all_numbers(xml, element, attr);
+        assert!(
+            close(&got, want),
+            "every {element} {attr}: {got:?}, want {want:?}"
+        );
+    }
+
     /// Parses a PLY written by [`ply_bytes`]: (vertex count, face count, world positions).
     fn read_ply(path: &Path) -> (usize, usize, Vec<Vec3>) {
         let bytes = std::fs::read(path).unwrap();
@@ -1198,28 +1226,13 @@ mod tests {
 
         // Camera: vertical FOV, look-at from the published position towards +z.
         assert!(xml.contains("<string name=\"fov_axis\" value=\"y\"/>"));
-        assert!(close(
-            &numbers(&xml, "<float name=\"fov\"", "value"),
-            &[39.3]
-        ));
-        assert!(close(
-            &numbers(&xml, "<float name=\"near_clip\"", "value"),
-            &[0.01]
-        ));
-        assert!(close(
-            &numbers(&xml, "<float name=\"far_clip\"", "value"),
-            &[10.0]
-        ));
+        assert_numbers(&xml, "<float name=\"fov\"", "value", &[39.3]);
+        assert_numbers(&xml, "<float name=\"near_clip\"", "value", &[0.01]);
+        assert_numbers(&xml, "<float name=\"far_clip\"", "value", &[10.0]);
         let cam = &xml[xml.find("<sensor").unwrap()..];
-        assert!(close(
-            &numbers(cam, "<lookat", "origin"),
-            &[0.278, 0.273, -0.8]
-        ));
-        assert!(close(
-            &numbers(cam, "<lookat", "target"),
-            &[0.278, 0.273, 0.2]
-        ));
-        assert!(close(&numbers(cam, "<lookat", "up"), &[0.0, 1.0, 0.0]));
+        assert_numbers(cam, "<lookat", "origin", &[0.278, 0.273, -0.8]);
+        assert_numbers(cam, "<lookat", "target", &[0.278, 0.273, 0.2]);
+        assert_numbers(cam, "<lookat", "up", &[0.0, 1.0, 0.0]);
         assert!(xml.contains("<integer name=\"width\" value=\"256\"/>"));
         assert!(xml.contains("<integer name=\"height\" value=\"192\"/>"));
         assert!(xml.contains("<rfilter type=\"box\"/>"));
@@ -1228,26 +1241,11 @@ mod tests {
 
         // The spot light: intensity, angles, and a look-at straight down.
         let spot = &xml[xml.find("<emitter type=\"spot\">").unwrap()..];
-        assert!(close(
-            &numbers(spot, "<rgb name=\"intensity\"", "value"),
-            &[1.0, 1.0, 1.0]
-        ));
-        assert!(close(
-            &numbers(spot, "<float name=\"cutoff_angle\"", "value"),
-            &[50.0]
-        ));
-        assert!(close(
-            &numbers(spot, "<float name=\"beam_width\"", "value"),
-            &[40.0]
-        ));
-        assert!(close(
-            &numbers(spot, "<lookat", "origin"),
-            &[0.278, 0.54, 0.2796]
-        ));
-        assert!(close(
-            &numbers(spot, "<lookat", "target"),
-            &[0.278, -0.46, 0.2796]
-        ));
+        assert_numbers(spot, "<rgb name=\"intensity\"", "value", &[1.0, 1.0, 1.0]);
+        assert_numbers(spot, "<float name=\"cutoff_angle\"", "value", &[50.0]);
+        assert_numbers(spot, "<float name=\"beam_width\"", "value", &[40.0]);
+        assert_numbers(spot, "<lookat", "origin", &[0.278, 0.54, 0.2796]);
+        assert_numbers(spot, "<lookat", "target", &[0.278, -0.46, 0.2796]);
 
         // One shape per object submesh, each referencing a BSDF defined before it.
         let expected_shapes: usize = scene
@@ -1424,14 +1422,13 @@ mod tests {
         let alpha = numbers(&xml, "<float name=\"alpha\"", "value")[0];
         assert!((alpha - phong_to_beckmann_alpha(60.0)).abs() < 1e-6);
         // Directional light with its irradiance.
-        assert!(close(
-            &numbers(&xml, "<vector name=\"direction\"", "value"),
-            &[0.0, -1.0, 0.0]
-        ));
-        assert!(close(
-            &numbers(&xml, "<rgb name=\"irradiance\"", "value"),
-            &[2.0, 2.0, 2.0]
-        ));
+        assert_numbers(
+            &xml,
+            "<vector name=\"direction\"",
+            "value",
+            &[0.0, -1.0, 0.0],
+        );
+        assert_numbers(&xml, "<rgb name=\"irradiance\"", "value", &[2.0, 2.0, 2.0]);
     }
 
     #[test]
@@ -1448,10 +1445,12 @@ mod tests {
         assert!(report.warnings.is_empty(), "{:?}", report.warnings);
         let xml = std::fs::read_to_string(&report.xml_path).unwrap();
         let constant = &xml[xml.find("<emitter type=\"constant\">").unwrap()..];
-        assert!(close(
-            &numbers(constant, "<rgb name=\"radiance\"", "value"),
-            &[0.5, 1.0, 2.0]
-        ));
+        assert_numbers(
+            constant,
+            "<rgb name=\"radiance\"",
+            "value",
+            &[0.5, 1.0, 2.0],
+        );
 
         // A map: its texels written as EXR beside the XML (read back equal), its scale and
         // its rotation about +Y.
@@ -1471,11 +1470,8 @@ mod tests {
         let xml = std::fs::read_to_string(&report.xml_path).unwrap();
         let envmap = &xml[xml.find("<emitter type=\"envmap\">").unwrap()..];
         assert!(envmap.contains("<string name=\"filename\" value=\"textures/environment.exr\"/>"));
-        assert!(close(
-            &numbers(envmap, "<float name=\"scale\"", "value"),
-            &[1.5]
-        ));
-        assert!(close(&numbers(envmap, "<rotate y=\"1\"", "angle"), &[30.0]));
+        assert_numbers(envmap, "<float name=\"scale\"", "value", &[1.5]);
+        assert_numbers(envmap, "<rotate y=\"1\"", "angle", &[30.0]);
         let written = image::open(dir.0.join("textures/environment.exr"))
             .unwrap()
             .into_rgb32f();
@@ -1496,30 +1492,17 @@ mod tests {
         let xml = std::fs::read_to_string(&report.xml_path).unwrap();
         let sunsky = &xml[xml.find("<emitter type=\"sunsky\">").unwrap()..];
         let h = std::f32::consts::FRAC_1_SQRT_2;
-        assert!(close(
-            &numbers(sunsky, "<vector name=\"sun_direction\"", "value"),
-            &[0.0, h, h]
-        ));
-        assert!(close(
-            &numbers(sunsky, "<float name=\"turbidity\"", "value"),
-            &[4.0]
-        ));
-        assert!(close(
-            &numbers(sunsky, "<rgb name=\"albedo\"", "value"),
-            &[0.1, 0.2, 0.3]
-        ));
-        assert!(close(
-            &numbers(sunsky, "<float name=\"sun_scale\"", "value"),
-            &[0.0]
-        ));
-        assert!(close(
-            &numbers(sunsky, "<float name=\"sky_scale\"", "value"),
-            &[0.5]
-        ));
-        assert!(close(
-            &numbers(sunsky, "<rotate x=\"1\"", "angle"),
-            &[-90.0]
-        ));
+        assert_numbers(
+            sunsky,
+            "<vector name=\"sun_direction\"",
+            "value",
+            &[0.0, h, h],
+        );
+        assert_numbers(sunsky, "<float name=\"turbidity\"", "value", &[4.0]);
+        assert_numbers(sunsky, "<rgb name=\"albedo\"", "value", &[0.1, 0.2, 0.3]);
+        assert_numbers(sunsky, "<float name=\"sun_scale\"", "value", &[0.0]);
+        assert_numbers(sunsky, "<float name=\"sky_scale\"", "value", &[0.5]);
+        assert_numbers(sunsky, "<rotate x=\"1\"", "angle", &[-90.0]);
         assert!(xml.contains("<emitter type=\"directional\">"));
     }
 
@@ -1543,32 +1526,22 @@ mod tests {
         assert!(report.warnings[0].contains("GGX dielectric"));
         let xml = std::fs::read_to_string(&report.xml_path).unwrap();
         assert_eq!(xml.matches("<bsdf type=\"principled\">").count(), 2);
-        assert!(close(
-            &all_numbers(&xml, "<rgb name=\"base_color\"", "value"),
-            &[0.95, 0.64, 0.54, 0.5, 0.5, 0.5]
-        ));
-        assert!(close(
-            &all_numbers(&xml, "<float name=\"roughness\"", "value"),
-            &[0.3, 0.8]
-        ));
-        assert!(close(
-            &all_numbers(&xml, "<float name=\"metallic\"", "value"),
-            &[1.0, 0.0]
-        ));
-        assert!(close(
-            &all_numbers(&xml, "<float name=\"specular\"", "value"),
-            &[0.5, 0.5]
-        ));
+        assert_all_numbers(
+            &xml,
+            "<rgb name=\"base_color\"",
+            "value",
+            &[0.95, 0.64, 0.54, 0.5, 0.5, 0.5],
+        );
+        assert_all_numbers(&xml, "<float name=\"roughness\"", "value", &[0.3, 0.8]);
+        assert_all_numbers(&xml, "<float name=\"metallic\"", "value", &[1.0, 0.0]);
+        assert_all_numbers(&xml, "<float name=\"specular\"", "value", &[0.5, 0.5]);
         assert_eq!(xml.matches("<bsdf type=\"diffuse\">").count(), 1);
         // One area emitter, inside the quad's shape, with the radiance.
         assert_eq!(xml.matches("<emitter type=\"area\">").count(), 1);
         let quad = &xml[xml.find("<shape type=\"ply\" id=\"02_").unwrap()..];
         let quad = &quad[..quad.find("</shape>").unwrap()];
         assert!(quad.contains("<emitter type=\"area\">"), "{quad}");
-        assert!(close(
-            &numbers(quad, "<rgb name=\"radiance\"", "value"),
-            &[4.0, 3.0, 2.0]
-        ));
+        assert_numbers(quad, "<rgb name=\"radiance\"", "value", &[4.0, 3.0, 2.0]);
     }
 
     /// The file name of the first `<string name="filename"` after `from` in `xml`.
@@ -1663,10 +1636,7 @@ mod tests {
             let report = export_mitsuba(&scene, t, 16, 16, &dir.0).unwrap();
             let xml = std::fs::read_to_string(&report.xml_path).unwrap();
             assert!(close(&xml_point(&xml), &[0.0, 2.0, 0.0]));
-            assert!(close(
-                &numbers(&xml, "<rgb name=\"intensity\"", "value"),
-                &[2.0; 3]
-            ));
+            assert_numbers(&xml, "<rgb name=\"intensity\"", "value", &[2.0; 3]);
             let (nv, nf, positions) = read_ply(&report.files[0]);
             assert_eq!((nv, nf), (24, 12));
             let bounds = crate::scene::Aabb::from_points(&positions);

@@ -161,6 +161,8 @@ pub fn shadow_views(
 ) -> (Vec<ShadowView>, Vec<LightShadows>) {
     let aabb = scene.aabb_at(t_s);
     let res = settings.resolution.max(1) as f32;
+    // Texels of margin for the PCF kernel on each side of a view.
+    let pcf_texels = settings.pcf_radius as f32 + 1.0;
     let mut views = Vec::new();
     let mut per_light = Vec::new();
     let lights = super::area::frame_lights(&scene.lights, settings);
@@ -169,30 +171,7 @@ pub fn shadow_views(
         match *light {
             Light::Element {
                 position, normal, ..
-            } => {
-                // One paraboloid hemisphere around the normal: the element emits nothing
-                // behind itself (glsl/include/shadow.glsl treats taps past its rim as lit).
-                let (near, far) = depth_range(position, &aabb);
-                let t = up_for(normal).cross(normal).normalize();
-                let b = normal.cross(t);
-                let rot = Mat4::from_cols(
-                    t.extend(0.0),
-                    b.extend(0.0),
-                    normal.extend(0.0),
-                    glam::Vec4::W,
-                )
-                .transpose();
-                views.push(ShadowView {
-                    view_proj: rot * Mat4::from_translation(-position),
-                    texel_footprint: 2.0 / res,
-                    projection: ShadowProjection::Paraboloid,
-                    axis: normal,
-                    near,
-                    far,
-                    light: li,
-                    split_far_m: 0.0,
-                });
-            }
+            } => views.push(element_view(position, normal, &aabb, res, li)),
             Light::Rectangle { .. } => {
                 unreachable!("frame_lights replaced rectangles by elements")
             }
@@ -204,98 +183,19 @@ pub fn shadow_views(
                 direction,
                 cutoff_deg,
                 ..
-            } => {
-                let (near, far) = depth_range(position, &aabb);
-                // The cone plus the PCF footprint.
-                let half = (cutoff_deg.to_radians()
-                    * (1.0 + 2.0 * (settings.pcf_radius as f32 + 1.0) / res))
-                    .min(1.55);
-                let proj = perspective_vk(2.0 * half, near, far);
-                let view = Mat4::look_to_rh(position, direction, up_for(direction));
-                views.push(ShadowView {
-                    view_proj: proj * view,
-                    texel_footprint: 2.0 * half.tan() / res,
-                    projection: ShadowProjection::Perspective,
-                    axis: direction,
-                    near,
-                    far,
-                    light: li,
-                    split_far_m: 0.0,
-                });
-            }
+            } => views.push(spot_view(
+                position, direction, cutoff_deg, &aabb, res, pcf_texels, li,
+            )),
             Light::Point { position, .. }
                 if settings.point_technique == PointShadow::DualParaboloid =>
             {
                 paraboloid_pair(position, &aabb, res, li, &mut views)
             }
             Light::Point { position, .. } => {
-                let (near, far) = depth_range(position, &aabb);
-                // Slightly wider than 90 degrees so the PCF kernel never leaves a face.
-                let half = (1.0 + 2.0 * (settings.pcf_radius as f32 + 1.0) / res).atan();
-                let proj = perspective_vk(2.0 * half, near, far);
-                for axis in [
-                    Vec3::X,
-                    Vec3::NEG_X,
-                    Vec3::Y,
-                    Vec3::NEG_Y,
-                    Vec3::Z,
-                    Vec3::NEG_Z,
-                ] {
-                    let view = Mat4::look_to_rh(position, axis, up_for(axis));
-                    views.push(ShadowView {
-                        view_proj: proj * view,
-                        texel_footprint: 2.0 * half.tan() / res,
-                        projection: ShadowProjection::Perspective,
-                        axis,
-                        near,
-                        far,
-                        light: li,
-                        split_far_m: 0.0,
-                    });
-                }
+                cube_views(position, &aabb, res, pcf_texels, li, &mut views)
             }
             Light::Directional { direction, .. } => {
-                let center = aabb.center();
-                let radius = (aabb.extent().length() * 0.5).max(1e-6);
-                let eye = center - direction * radius * 2.0;
-                let view = Mat4::look_to_rh(eye, direction, up_for(direction));
-                let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
-                for i in 0..8 {
-                    let c = Vec3::new(
-                        if i & 1 == 0 { aabb.min.x } else { aabb.max.x },
-                        if i & 2 == 0 { aabb.min.y } else { aabb.max.y },
-                        if i & 4 == 0 { aabb.min.z } else { aabb.max.z },
-                    );
-                    let v = view.transform_point3(c);
-                    lo = lo.min(v);
-                    hi = hi.max(v);
-                }
-                // A texel of margin per PCF tap on each side.
-                let size = (hi.x - lo.x).max(hi.y - lo.y).max(1e-6);
-                let margin = size * (settings.pcf_radius as f32 + 1.0) / res;
-                let (near, far) = ((-hi.z - margin).max(0.0), -lo.z + margin);
-                let mut proj = Mat4::orthographic_rh(
-                    lo.x - margin,
-                    lo.x - margin + size + 2.0 * margin,
-                    lo.y - margin,
-                    lo.y - margin + size + 2.0 * margin,
-                    near,
-                    far,
-                );
-                // Vulkan's y points down: negate the whole y row (scale and offset), so the
-                // window stays where it was fitted (negating the scale alone mirrors an
-                // off-centre window about y = 0).
-                proj = flip_y(proj);
-                views.push(ShadowView {
-                    view_proj: proj * view,
-                    texel_footprint: (size + 2.0 * margin) / res,
-                    projection: ShadowProjection::Orthographic,
-                    axis: direction,
-                    near,
-                    far,
-                    light: li,
-                    split_far_m: 0.0,
-                });
+                views.push(directional_view(direction, &aabb, res, pcf_texels, li))
             }
         }
         per_light.push(LightShadows {
@@ -304,6 +204,146 @@ pub fn shadow_views(
         });
     }
     (views, per_light)
+}
+
+/// One paraboloid hemisphere around the normal of an area light's element at `position`,
+/// light index `li`: the element emits nothing behind itself (glsl/include/shadow.glsl treats
+/// taps past its rim as lit).
+fn element_view(position: Vec3, normal: Vec3, aabb: &Aabb, res: f32, li: usize) -> ShadowView {
+    let (near, far) = depth_range(position, aabb);
+    let t = up_for(normal).cross(normal).normalize();
+    let b = normal.cross(t);
+    let rot = Mat4::from_cols(
+        t.extend(0.0),
+        b.extend(0.0),
+        normal.extend(0.0),
+        glam::Vec4::W,
+    )
+    .transpose();
+    ShadowView {
+        view_proj: rot * Mat4::from_translation(-position),
+        texel_footprint: 2.0 / res,
+        projection: ShadowProjection::Paraboloid,
+        axis: normal,
+        near,
+        far,
+        light: li,
+        split_far_m: 0.0,
+    }
+}
+
+/// The perspective view of a spot light at `position` (light index `li`) along `direction`,
+/// covering its cone of half-angle `cutoff_deg` plus `pcf_texels` texels of PCF footprint at
+/// resolution `res`.
+fn spot_view(
+    position: Vec3,
+    direction: Vec3,
+    cutoff_deg: f32,
+    aabb: &Aabb,
+    res: f32,
+    pcf_texels: f32,
+    li: usize,
+) -> ShadowView {
+    let (near, far) = depth_range(position, aabb);
+    let half = (cutoff_deg.to_radians() * (1.0 + 2.0 * pcf_texels / res)).min(1.55);
+    let proj = perspective_vk(2.0 * half, near, far);
+    let view = Mat4::look_to_rh(position, direction, up_for(direction));
+    ShadowView {
+        view_proj: proj * view,
+        texel_footprint: 2.0 * half.tan() / res,
+        projection: ShadowProjection::Perspective,
+        axis: direction,
+        near,
+        far,
+        light: li,
+        split_far_m: 0.0,
+    }
+}
+
+/// The six cube-face views of a point light at `position`, light index `li`, appended to
+/// `views`: each slightly wider than 90 degrees so the PCF kernel (`pcf_texels` texels of
+/// margin) never leaves a face.
+fn cube_views(
+    position: Vec3,
+    aabb: &Aabb,
+    res: f32,
+    pcf_texels: f32,
+    li: usize,
+    views: &mut Vec<ShadowView>,
+) {
+    let (near, far) = depth_range(position, aabb);
+    let half = (1.0 + 2.0 * pcf_texels / res).atan();
+    let proj = perspective_vk(2.0 * half, near, far);
+    for axis in [
+        Vec3::X,
+        Vec3::NEG_X,
+        Vec3::Y,
+        Vec3::NEG_Y,
+        Vec3::Z,
+        Vec3::NEG_Z,
+    ] {
+        let view = Mat4::look_to_rh(position, axis, up_for(axis));
+        views.push(ShadowView {
+            view_proj: proj * view,
+            texel_footprint: 2.0 * half.tan() / res,
+            projection: ShadowProjection::Perspective,
+            axis,
+            near,
+            far,
+            light: li,
+            split_far_m: 0.0,
+        });
+    }
+}
+
+/// The orthographic view of a directional light along `direction`, light index `li`, fitted
+/// to the scene box plus a texel of margin per PCF tap (`pcf_texels`) on each side.
+fn directional_view(
+    direction: Vec3,
+    aabb: &Aabb,
+    res: f32,
+    pcf_texels: f32,
+    li: usize,
+) -> ShadowView {
+    let center = aabb.center();
+    let radius = (aabb.extent().length() * 0.5).max(1e-6);
+    let eye = center - direction * radius * 2.0;
+    let view = Mat4::look_to_rh(eye, direction, up_for(direction));
+    let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+    for i in 0..8 {
+        let c = Vec3::new(
+            if i & 1 == 0 { aabb.min.x } else { aabb.max.x },
+            if i & 2 == 0 { aabb.min.y } else { aabb.max.y },
+            if i & 4 == 0 { aabb.min.z } else { aabb.max.z },
+        );
+        let v = view.transform_point3(c);
+        lo = lo.min(v);
+        hi = hi.max(v);
+    }
+    let size = (hi.x - lo.x).max(hi.y - lo.y).max(1e-6);
+    let margin = size * pcf_texels / res;
+    let (near, far) = ((-hi.z - margin).max(0.0), -lo.z + margin);
+    let proj = Mat4::orthographic_rh(
+        lo.x - margin,
+        lo.x - margin + size + 2.0 * margin,
+        lo.y - margin,
+        lo.y - margin + size + 2.0 * margin,
+        near,
+        far,
+    );
+    // Vulkan's y points down: negate the whole y row (scale and offset), so the window stays
+    // where it was fitted (negating the scale alone mirrors an off-centre window about y = 0).
+    let proj = flip_y(proj);
+    ShadowView {
+        view_proj: proj * view,
+        texel_footprint: (size + 2.0 * margin) / res,
+        projection: ShadowProjection::Orthographic,
+        axis: direction,
+        near,
+        far,
+        light: li,
+        split_far_m: 0.0,
+    }
 }
 
 #[cfg(test)]

@@ -457,15 +457,30 @@ fn record_views(
     cascades: bool,
     per_draw: &mut dyn FnMut(&Draw),
 ) {
+    render_draw_lists(ctx, pipe, scene, draws, |lists| {
+        let cascade_lists = if cascades { &lists.cascades[..] } else { &[] };
+        for (v, list) in lists.shadow.iter().chain(cascade_lists).enumerate() {
+            draw_view(ctx, pipe, list, (v as u32, 0), per_draw);
+        }
+    });
+}
+
+/// The frame of every pass drawing the shadow views' lists: rendering into the pass's declared
+/// attachments with `pipe` and the scene's vertex and index buffers bound, `record` drawing
+/// from the lists.
+fn render_draw_lists(
+    ctx: &PassContext,
+    pipe: &PipelineHandle,
+    scene: (BufferHandle, BufferHandle),
+    draws: &RwLock<DrawLists>,
+    record: impl FnOnce(&DrawLists),
+) {
     ctx.begin_rendering();
     ctx.bind(pipe);
     ctx.bind_vertex_buffer(scene.0);
     ctx.bind_index_buffer(scene.1);
     if let Ok(lists) = draws.read() {
-        let cascade_lists = if cascades { &lists.cascades[..] } else { &[] };
-        for (v, list) in lists.shadow.iter().chain(cascade_lists).enumerate() {
-            draw_view(ctx, pipe, list, (v as u32, 0), per_draw);
-        }
+        record(&lists);
     }
     ctx.cmd.end_rendering();
 }
@@ -500,11 +515,7 @@ pub fn record_one_view(
     view: u32,
     per_draw: &mut dyn FnMut(&Draw),
 ) {
-    ctx.begin_rendering();
-    ctx.bind(pipe);
-    ctx.bind_vertex_buffer(scene.0);
-    ctx.bind_index_buffer(scene.1);
-    if let Ok(lists) = draws.read() {
+    render_draw_lists(ctx, pipe, scene, draws, |lists| {
         if let Some(list) = lists
             .shadow
             .iter()
@@ -513,8 +524,7 @@ pub fn record_one_view(
         {
             draw_view(ctx, pipe, list, (view, view), per_draw);
         }
-    }
-    ctx.cmd.end_rendering();
+    });
 }
 
 /// Draws `list` into shadow view `view`, at attachment layer `view - layer_base`.

@@ -424,29 +424,14 @@ pub(crate) fn build_with(
         .as_ref()
         .map(|c| build_camera(&ck, c))
         .transpose()?;
-    let gi = desc
-        .gi
-        .as_ref()
-        .map(|g| build_table(&ck, g))
-        .transpose()?
-        .unwrap_or_default();
+    let gi = table_layer(&ck, desc.gi.as_ref())?;
     let transparency = desc
         .transparency
         .as_deref()
         .map(|t| build_transparency(&ck, t))
         .transpose()?;
-    let shadow = desc
-        .shadow
-        .as_ref()
-        .map(|t| build_table(&ck, t))
-        .transpose()?
-        .unwrap_or_default();
-    let post = desc
-        .post
-        .as_ref()
-        .map(|t| build_table(&ck, t))
-        .transpose()?
-        .unwrap_or_default();
+    let shadow = table_layer(&ck, desc.shadow.as_ref())?;
+    let post = table_layer(&ck, desc.post.as_ref())?;
     let mut lights = desc
         .lights
         .iter()
@@ -552,7 +537,7 @@ fn build_environment(
     base_dir: &Path,
     lights: &[super::Light],
 ) -> Result<Environment, SceneError> {
-    use super::environment::{read_map, EnvironmentMap, MapReadError, ENVIRONMENT_KINDS};
+    use super::environment::ENVIRONMENT_KINDS;
     let only = |key: &str, present: bool, kind: &str| {
         if present {
             Err(ck.invalid(
@@ -584,108 +569,13 @@ fn build_environment(
         }
         "map" => {
             only("radiance", e.radiance.is_some(), "map")?;
-            let Some(file) = &e.file else {
-                return Err(ck.invalid(
-                    "environment.file",
-                    "missing; a map environment needs `file = \"sky.hdr\"` (an \
-                     equirectangular Radiance .hdr or OpenEXR image, 2:1, relative to the \
-                     scene file)",
-                ));
-            };
-            let rotation_deg =
-                ck.scalar("environment.rotation_deg", e.rotation_deg.unwrap_or(0.0))?;
-            let scale = ck.scalar("environment.scale", e.scale.unwrap_or(1.0))?;
-            if scale < 0.0 {
-                return Err(ck.invalid(
-                    "environment.scale",
-                    format!("{scale} is negative; use a factor >= 0"),
-                ));
-            }
-            let path = base_dir.join(file);
-            let referenced_by = format!("{}: environment.file", ck.file.display());
-            let (width, height, texels) = read_map(&path).map_err(|err| match err {
-                MapReadError::NotFound => SceneError::NotFound {
-                    file: path.clone(),
-                    what: "environment map",
-                    referenced_by: Some(referenced_by.clone()),
-                },
-                MapReadError::Decode(message) => SceneError::TextureDecode {
-                    file: path.clone(),
-                    message,
-                    referenced_by: referenced_by.clone(),
-                },
-                MapReadError::NotTwoToOne { width, height } => ck.invalid(
-                    "environment.file",
-                    format!(
-                        "{} is {width}×{height} texels; an equirectangular map is twice as \
-                         wide as high (e.g. 2048×1024): resample or crop it",
-                        path.display()
-                    ),
-                ),
-                MapReadError::NonFinite { x, y } => ck.invalid(
-                    "environment.file",
-                    format!(
-                        "{} has a NaN or infinite texel at ({x}, {y}); fix the image",
-                        path.display()
-                    ),
-                ),
-            })?;
-            Ok(Environment::Map(EnvironmentMap {
-                path,
-                width,
-                height,
-                texels,
-                rotation_deg,
-                scale,
-            }))
+            map_environment(ck, e, base_dir)
         }
         "sky" => {
             only("radiance", e.radiance.is_some(), "sky")?;
             only("file", e.file.is_some(), "sky")?;
             only("rotation_deg", e.rotation_deg.is_some(), "sky")?;
-            let range = super::sky::TURBIDITY_RANGE;
-            let turbidity = ck.scalar("environment.turbidity", e.turbidity.unwrap_or(3.0))?;
-            if !range.contains(&turbidity) {
-                return Err(ck.invalid(
-                    "environment.turbidity",
-                    format!(
-                        "{turbidity} is outside the model's {}..={} (2: clear, 3: a temperate \
-                         day, 8-10: hazy); pick one inside",
-                        range.start(),
-                        range.end()
-                    ),
-                ));
-            }
-            let ground_albedo = ck.reflectance(
-                "environment.ground_albedo",
-                e.ground_albedo.unwrap_or(ScalarOrVec3::Scalar(0.3)),
-            )?;
-            let scale = ck.scalar("environment.scale", e.scale.unwrap_or(1.0))?;
-            if scale < 0.0 {
-                return Err(ck.invalid(
-                    "environment.scale",
-                    format!("{scale} is negative; use a factor >= 0"),
-                ));
-            }
-            let Some(toward_sun) = lights.iter().find_map(|l| match l {
-                super::Light::Directional { direction, .. } => Some(-*direction),
-                _ => None,
-            }) else {
-                return Err(ck.invalid(
-                    "environment.kind",
-                    "a sky takes its sun from the scene's directional light, and the scene has \
-                     none; add `[[lights]] kind = \"directional\"` with the sun's `direction` \
-                     and `irradiance_w_m2` (or use kind = \"constant\" or \"map\")",
-                ));
-            };
-            let sky = super::sky::SkyParams {
-                turbidity,
-                ground_albedo,
-                scale,
-                toward_sun,
-            };
-            let map = super::sky::bake(&sky);
-            Ok(Environment::Sky { sky, map })
+            sky_environment(ck, e, lights)
         }
         other => Err(ck.invalid(
             "environment.kind",
@@ -699,6 +589,121 @@ fn build_environment(
             ),
         )),
     }
+}
+
+/// `[environment] kind = "map"`: the equirectangular map `file` (relative to `base_dir`), read
+/// here, so that a missing or malformed file is an error naming the scene file and the key.
+fn map_environment(
+    ck: &Check<'_>,
+    e: &EnvironmentDesc,
+    base_dir: &Path,
+) -> Result<Environment, SceneError> {
+    use super::environment::{read_map, EnvironmentMap, MapReadError};
+    let Some(file) = &e.file else {
+        return Err(ck.invalid(
+            "environment.file",
+            "missing; a map environment needs `file = \"sky.hdr\"` (an \
+             equirectangular Radiance .hdr or OpenEXR image, 2:1, relative to the \
+             scene file)",
+        ));
+    };
+    let rotation_deg = ck.scalar("environment.rotation_deg", e.rotation_deg.unwrap_or(0.0))?;
+    let scale = environment_scale(ck, e)?;
+    let path = base_dir.join(file);
+    let referenced_by = format!("{}: environment.file", ck.file.display());
+    let (width, height, texels) = read_map(&path).map_err(|err| match err {
+        MapReadError::NotFound => SceneError::NotFound {
+            file: path.clone(),
+            what: "environment map",
+            referenced_by: Some(referenced_by.clone()),
+        },
+        MapReadError::Decode(message) => SceneError::TextureDecode {
+            file: path.clone(),
+            message,
+            referenced_by: referenced_by.clone(),
+        },
+        MapReadError::NotTwoToOne { width, height } => ck.invalid(
+            "environment.file",
+            format!(
+                "{} is {width}×{height} texels; an equirectangular map is twice as \
+                 wide as high (e.g. 2048×1024): resample or crop it",
+                path.display()
+            ),
+        ),
+        MapReadError::NonFinite { x, y } => ck.invalid(
+            "environment.file",
+            format!(
+                "{} has a NaN or infinite texel at ({x}, {y}); fix the image",
+                path.display()
+            ),
+        ),
+    })?;
+    Ok(Environment::Map(EnvironmentMap {
+        path,
+        width,
+        height,
+        texels,
+        rotation_deg,
+        scale,
+    }))
+}
+
+/// `[environment] kind = "sky"`: the Hosek-Wilkie sky, its sun toward the scene's directional
+/// light (one of `lights`).
+fn sky_environment(
+    ck: &Check<'_>,
+    e: &EnvironmentDesc,
+    lights: &[super::Light],
+) -> Result<Environment, SceneError> {
+    let range = super::sky::TURBIDITY_RANGE;
+    let turbidity = ck.scalar("environment.turbidity", e.turbidity.unwrap_or(3.0))?;
+    if !range.contains(&turbidity) {
+        return Err(ck.invalid(
+            "environment.turbidity",
+            format!(
+                "{turbidity} is outside the model's {}..={} (2: clear, 3: a temperate \
+                 day, 8-10: hazy); pick one inside",
+                range.start(),
+                range.end()
+            ),
+        ));
+    }
+    let ground_albedo = ck.reflectance(
+        "environment.ground_albedo",
+        e.ground_albedo.unwrap_or(ScalarOrVec3::Scalar(0.3)),
+    )?;
+    let scale = environment_scale(ck, e)?;
+    let Some(toward_sun) = lights.iter().find_map(|l| match l {
+        super::Light::Directional { direction, .. } => Some(-*direction),
+        _ => None,
+    }) else {
+        return Err(ck.invalid(
+            "environment.kind",
+            "a sky takes its sun from the scene's directional light, and the scene has \
+             none; add `[[lights]] kind = \"directional\"` with the sun's `direction` \
+             and `irradiance_w_m2` (or use kind = \"constant\" or \"map\")",
+        ));
+    };
+    let sky = super::sky::SkyParams {
+        turbidity,
+        ground_albedo,
+        scale,
+        toward_sun,
+    };
+    let map = super::sky::bake(&sky);
+    Ok(Environment::Sky { sky, map })
+}
+
+/// `environment.scale`, a factor >= 0 (1 when not given).
+fn environment_scale(ck: &Check<'_>, e: &EnvironmentDesc) -> Result<f32, SceneError> {
+    let scale = ck.scalar("environment.scale", e.scale.unwrap_or(1.0))?;
+    if scale < 0.0 {
+        return Err(ck.invalid(
+            "environment.scale",
+            format!("{scale} is negative; use a factor >= 0"),
+        ));
+    }
+    Ok(scale)
 }
 
 /// The `transparency` key: one of [`super::TRANSPARENCY_NAMES`].
@@ -895,6 +900,13 @@ fn build_camera(ck: &Check<'_>, c: &CameraDesc) -> Result<Camera, SceneError> {
         // `Scene::default_ortho_height_m`); NaN never survives it.
         ortho_height_m: ortho_height_m.unwrap_or(f32::NAN),
     })
+}
+
+/// The layer of an optional settings table, empty where the scene has none.
+fn table_layer<S: Settings>(ck: &Check<'_>, t: Option<&RawTable<S>>) -> Result<Layer, SceneError> {
+    t.map(|t| build_table(ck, t))
+        .transpose()
+        .map(Option::unwrap_or_default)
 }
 
 /// Checks a settings table's values against their keys' ranges (those of the flags), each

@@ -558,7 +558,6 @@ impl Loader {
         let mesh_name = m
             .name()
             .map_or_else(|| m.index().to_string(), str::to_string);
-        let attr = |a: &str| format!("{a} of mesh `{mesh_name}` primitive {}", p.index());
         let mode = match p.mode() {
             Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan => p.mode(),
             other => {
@@ -579,6 +578,20 @@ impl Loader {
         let Some(material) = material else {
             return Ok(None);
         };
+        let local = self.read_primitive(&mesh_name, p)?;
+        let indices = triangles(mode, &local.vertex_indices);
+        Ok(Some(local.into_world(indices, world, crease_deg, material)))
+    }
+
+    /// The vertex attributes and indices of primitive `p` of mesh `mesh_name`, checked: finite
+    /// positions, indices within the vertices, and one normal and texture coordinate (where
+    /// given) per vertex.
+    fn read_primitive(
+        &self,
+        mesh_name: &str,
+        p: &gltf::Primitive<'_>,
+    ) -> Result<LocalPrimitive, SceneError> {
+        let attr = |a: &str| format!("{a} of mesh `{mesh_name}` primitive {}", p.index());
         let positions_acc = p.get(&gltf::Semantic::Positions).ok_or_else(|| {
             self.malformed(format!(
                 "mesh `{mesh_name}` primitive {} has no POSITION attribute",
@@ -656,53 +669,12 @@ impl Loader {
                 p.index()
             )));
         }
-        let mut indices = triangles(mode, &vertex_indices);
-        // A mirroring transform turns the winding around (glTF 2.0 §3.7.4: the front face
-        // is counter-clockwise after the node transform).
-        if world.determinant() < 0.0 {
-            for t in indices.chunks_exact_mut(3) {
-                t.swap(1, 2);
-            }
-        }
-        let world_positions: Vec<Vec3> = positions
-            .iter()
-            .map(|&v| world.transform_point3(v))
-            .collect();
-        let normal_matrix = Mat3::from_mat4(world).inverse().transpose();
-        let (positions, normals, uvs, indices) = match normals {
-            Some(local) => {
-                let computed = super::mesh::area_weighted_normals(&world_positions, &indices);
-                let normals = local
-                    .iter()
-                    .zip(&computed)
-                    .map(|(&v, &c)| {
-                        // A zero or non-finite normal falls back to the computed one.
-                        (normal_matrix * v).try_normalize().unwrap_or(c)
-                    })
-                    .collect();
-                (world_positions, normals, uvs, indices)
-            }
-            None => {
-                // glTF asks for flat normals here (§3.7.2.1); voxgi smooths across edges
-                // below the crease angle, as for OBJ files without normals.
-                let s = split_normals(&world_positions, &indices, Smoothing::CreaseDeg(crease_deg));
-                let gather = |k: &u32| world_positions[*k as usize];
-                let uvs = uvs.map(|u| s.source.iter().map(|&k| u[k as usize]).collect());
-                (
-                    s.source.iter().map(gather).collect(),
-                    s.normals,
-                    uvs,
-                    s.indices,
-                )
-            }
-        };
-        Ok(Some(Part {
+        Ok(LocalPrimitive {
             positions,
             normals,
             uvs,
-            indices,
-            material,
-        }))
+            vertex_indices,
+        })
     }
 
     /// The store's material for a glTF material (made once per file and index), or `None`
@@ -1004,6 +976,77 @@ struct Part {
     uvs: Option<Vec<Vec2>>,
     indices: Vec<u32>,
     material: usize,
+}
+
+/// A primitive's attributes as the file gives them, in its mesh's space.
+struct LocalPrimitive {
+    positions: Vec<Vec3>,
+    normals: Option<Vec<Vec3>>,
+    uvs: Option<Vec<Vec2>>,
+    /// The primitive's indices (or `0..n` without an index accessor), before triangulation.
+    vertex_indices: Vec<u32>,
+}
+
+impl LocalPrimitive {
+    /// The primitive as triangles `indices` in world space (`world` its node's transform), as
+    /// a part drawn with `material`. Without normals in the file, they are made by the
+    /// `crease_deg` crease angle.
+    fn into_world(
+        self,
+        mut indices: Vec<u32>,
+        world: Mat4,
+        crease_deg: f32,
+        material: usize,
+    ) -> Part {
+        // A mirroring transform turns the winding around (glTF 2.0 §3.7.4: the front face
+        // is counter-clockwise after the node transform).
+        if world.determinant() < 0.0 {
+            for t in indices.chunks_exact_mut(3) {
+                t.swap(1, 2);
+            }
+        }
+        let world_positions: Vec<Vec3> = self
+            .positions
+            .iter()
+            .map(|&v| world.transform_point3(v))
+            .collect();
+        let normal_matrix = Mat3::from_mat4(world).inverse().transpose();
+        let uvs = self.uvs;
+        let (positions, normals, uvs, indices) = match self.normals {
+            Some(local) => {
+                let computed = super::mesh::area_weighted_normals(&world_positions, &indices);
+                let normals = local
+                    .iter()
+                    .zip(&computed)
+                    .map(|(&v, &c)| {
+                        // A zero or non-finite normal falls back to the computed one.
+                        (normal_matrix * v).try_normalize().unwrap_or(c)
+                    })
+                    .collect();
+                (world_positions, normals, uvs, indices)
+            }
+            None => {
+                // glTF asks for flat normals here (§3.7.2.1); voxgi smooths across edges
+                // below the crease angle, as for OBJ files without normals.
+                let s = split_normals(&world_positions, &indices, Smoothing::CreaseDeg(crease_deg));
+                let gather = |k: &u32| world_positions[*k as usize];
+                let uvs = uvs.map(|u| s.source.iter().map(|&k| u[k as usize]).collect());
+                (
+                    s.source.iter().map(gather).collect(),
+                    s.normals,
+                    uvs,
+                    s.indices,
+                )
+            }
+        };
+        Part {
+            positions,
+            normals,
+            uvs,
+            indices,
+            material,
+        }
+    }
 }
 
 /// Rewrites RGBA8 texels for `texel_use` (glTF 2.0 §3.9: base color and emission are

@@ -116,99 +116,11 @@ impl AssetStore {
         let groups = obj_smoothing_groups(&text);
 
         let dir = path.parent().unwrap_or(Path::new(".")).to_path_buf();
-        // MTL problems found by tobj's callback: (path, missing?, message).
-        let mtl_problems: RefCell<Vec<(PathBuf, bool, String)>> = RefCell::new(Vec::new());
-        // Material name → the MTL file defining it, for messages naming the MTL file.
-        let mtl_files: RefCell<HashMap<String, PathBuf>> = RefCell::new(HashMap::new());
-        let options = tobj::LoadOptions {
-            single_index: true,
-            triangulate: true,
-            ignore_points: true,
-            ignore_lines: true,
-        };
-        let loaded = guarded(|| {
-            tobj::load_obj_buf(&mut Cursor::new(text.as_bytes()), &options, |mtl| {
-                let mtl_path = dir.join(mtl);
-                match std::fs::read_to_string(&mtl_path) {
-                    Ok(mtl_text) => {
-                        if let Err((line, message)) = prescan_mtl(&mtl_text, &mtl_path) {
-                            mtl_problems.borrow_mut().push((
-                                mtl_path.clone(),
-                                false,
-                                format!("line {line}: {message}"),
-                            ));
-                            return Ok((Vec::new(), Default::default()));
-                        }
-                        for name in mtl_material_names(&mtl_text) {
-                            mtl_files.borrow_mut().insert(name, mtl_path.clone());
-                        }
-                        let r =
-                            guarded(|| tobj::load_mtl_buf(&mut Cursor::new(mtl_text.as_bytes())))
-                                .unwrap_or(Err(tobj::LoadError::GenericFailure));
-                        if let Err(e) = &r {
-                            mtl_problems.borrow_mut().push((
-                                mtl_path.clone(),
-                                false,
-                                e.to_string(),
-                            ));
-                        }
-                        r
-                    }
-                    Err(_) if mtl_path.is_dir() => {
-                        // `mtllib` with no name (or a folder's): say so on the OBJ's side, not
-                        // as a malformed MTL "Is a directory" (found by fuzz_tests).
-                        mtl_problems.borrow_mut().push((
-                            path.to_path_buf(),
-                            false,
-                            format!(
-                                "`mtllib {}` names the folder {}, not an MTL file; name the \
-                                 .mtl file or remove the line",
-                                mtl.display(),
-                                mtl_path.display()
-                            ),
-                        ));
-                        Ok((Vec::new(), Default::default()))
-                    }
-                    Err(e) => {
-                        let missing = e.kind() == std::io::ErrorKind::NotFound;
-                        mtl_problems
-                            .borrow_mut()
-                            .push((mtl_path.clone(), missing, e.to_string()));
-                        // An empty library: faces using its materials get the default material.
-                        Ok((Vec::new(), Default::default()))
-                    }
-                }
-            })
-        })
-        .unwrap_or(Err(tobj::LoadError::GenericFailure));
-        let (models, materials) = loaded.map_err(|e| SceneError::MalformedObj {
-            file: path.to_path_buf(),
-            kind: "OBJ",
-            line: None,
-            message: e.to_string(),
-        })?;
-        for (mtl_path, missing, message) in mtl_problems.into_inner() {
-            if missing {
-                log::warn!(
-                    "{}: material library {} not found; its materials fall back to the \
-                     default gray (0.5). Put the MTL next to the OBJ or remove the `mtllib` line.",
-                    path.display(),
-                    mtl_path.display()
-                );
-            } else {
-                let kind = if mtl_path == path { "OBJ" } else { "MTL" };
-                return Err(SceneError::MalformedObj {
-                    file: mtl_path,
-                    kind,
-                    line: None,
-                    message,
-                });
-            }
-        }
-        // tobj reports MTL errors here too; ours were already handled above.
-        let materials = materials.unwrap_or_default();
-
-        let mtl_files = mtl_files.into_inner();
+        let ObjContents {
+            models,
+            materials,
+            mtl_files,
+        } = load_obj_models(path, &dir, &text)?;
         let material_ids = materials
             .iter()
             .map(|m| {
@@ -242,7 +154,7 @@ impl AssetStore {
             ok
         });
         let mut first_triangle = 0;
-        let mut uvs = Vec::new();
+        let mut uvs = any_uvs.then(Vec::new);
         for model in &models {
             let m = &model.mesh;
             let model_groups = groups.as_ref().map(|g| {
@@ -253,64 +165,22 @@ impl AssetStore {
             if m.indices.is_empty() {
                 continue;
             }
+            // No normals in the file: by smoothing group or crease angle, splitting vertices
+            // where their corners' normals differ.
             let split;
             let m = if m.normals.len() == m.positions.len() {
                 m
             } else {
-                // No normals in the file: by smoothing group or crease angle, splitting
-                // vertices where their corners' normals differ.
                 let smoothing =
                     model_groups.map_or(Smoothing::CreaseDeg(crease_deg), Smoothing::Groups);
                 split = split_model(m, smoothing);
                 &split
             };
-            let n = m.positions.len() / 3;
-            let base = mesh.positions.len();
-            let positions: Vec<Vec3> = m
-                .positions
-                .chunks_exact(3)
-                .map(|p| Vec3::new(p[0], p[1], p[2]))
-                .collect();
-            let local_indices = &m.indices;
-            let computed = area_weighted_normals(&positions, local_indices);
-            let normals: Vec<Vec3> = if m.normals.len() == 3 * n {
-                m.normals
-                    .chunks_exact(3)
-                    .zip(&computed)
-                    .map(|(v, c)| {
-                        // A zero-length normal in the file falls back to the computed one.
-                        let u = Vec3::new(v[0], v[1], v[2]).normalize_or_zero();
-                        if u == Vec3::ZERO {
-                            *c
-                        } else {
-                            u
-                        }
-                    })
-                    .collect()
-            } else {
-                computed
-            };
-            if any_uvs {
-                if m.texcoords.len() == 2 * n {
-                    uvs.extend(m.texcoords.chunks_exact(2).map(|t| Vec2::new(t[0], t[1])));
-                } else {
-                    uvs.resize(uvs.len() + n, Vec2::ZERO);
-                }
-            }
-            let first_index = mesh.indices.len() as u32;
-            mesh.indices
-                .extend(local_indices.iter().map(|&i| i + base as u32));
-            mesh.positions.extend(positions);
-            mesh.normals.extend(normals);
             let material = match m.material_id.and_then(|id| material_ids.get(id)) {
                 Some(&id) => id,
                 None => self.builtin_material(BuiltinMaterial::Default),
             };
-            mesh.submeshes.push(SubMesh {
-                first_index,
-                index_count: local_indices.len() as u32,
-                material,
-            });
+            append_model(&mut mesh, uvs.as_mut(), m, material);
         }
         if mesh.indices.is_empty() {
             return Err(SceneError::MalformedObj {
@@ -320,9 +190,7 @@ impl AssetStore {
                 message: "the file contains no faces (`f` lines)".into(),
             });
         }
-        if any_uvs {
-            mesh.uvs = Some(uvs);
-        }
+        mesh.uvs = uvs;
         mesh.update_aabb();
         Ok(mesh)
     }
@@ -383,49 +251,10 @@ impl AssetStore {
                 obj.display()
             )
         };
-        let mut pbr_map = |key: &str, srgb: bool| match texture_file(
-            m.unknown_param.get(key).map(String::as_str),
-        ) {
-            Some(t) => {
-                let path = dir.join(t);
-                let i = self.texture(&path, srgb, &pbr_field(key), true)?;
-                // Roughness and metalness are one value per texel: a map whose channels
-                // differ is most likely packed, and its first channel the wrong quantity.
-                let grey = |t: &TextureData| {
-                    t.rgba8
-                        .chunks_exact(4)
-                        .position(|c| c[0] != c[1] || c[0] != c[2])
-                        .map(|p| {
-                            (
-                                p as u32 % t.width,
-                                p as u32 / t.width,
-                                [0, 1, 2].map(|k| t.rgba8[4 * p + k]),
-                            )
-                        })
-                };
-                let packed = if srgb {
-                    None
-                } else {
-                    i.and_then(|i| self.textures.get(i)).and_then(grey)
-                };
-                match packed {
-                    Some((x, y, rgb)) => Err(SceneError::TextureChannels {
-                        file: path,
-                        key: key.to_string(),
-                        x,
-                        y,
-                        rgb,
-                        referenced_by: pbr_field(key),
-                    }),
-                    None => Ok(i),
-                }
-            }
-            None => Ok(None),
-        };
         let pbr_maps = PbrMaps {
-            roughness: pbr_map("map_Pr", false)?,
-            metallic: pbr_map("map_Pm", false)?,
-            emission: pbr_map("map_Ke", true)?,
+            roughness: self.mtl_pbr_map(dir, m, "map_Pr", false, &pbr_field)?,
+            metallic: self.mtl_pbr_map(dir, m, "map_Pm", false, &pbr_field)?,
+            emission: self.mtl_pbr_map(dir, m, "map_Ke", true, &pbr_field)?,
         };
         let pbr = |key: &str| {
             m.unknown_param
@@ -447,26 +276,10 @@ impl AssetStore {
         } else {
             Vec3::ZERO
         };
-        // Normalized Phong at n = 0 is (n + 2)/(2π) cos⁰ = Ks/π toward every direction: a
-        // white diffuse layer on top of Kd, not a highlight. OBJ exports write `Ks` without
-        // `Ns` (the brass of Bitterli's staircase: `Kd 0`, `Ks 1`), so say what it renders as.
         let specular = rgb(m.specular, Vec3::ZERO).min(Vec3::ONE);
         let shininess = finite_or(m.shininess, 0.0).max(0.0);
-        if ggx.is_none() && specular.max_element() > 0.0 && shininess == 0.0 {
-            log::warn!(
-                "{}: Ks {} {} {} with {}: a Phong lobe of exponent 0 reflects Ks/π in every \
-                 direction, a white diffuse layer rather than a highlight; give the material \
-                 `Ns` (a highlight's exponent, e.g. 10 to 1000) or remove `Ks`",
-                field("Ks"),
-                specular.x,
-                specular.y,
-                specular.z,
-                if m.shininess.is_some() {
-                    "Ns 0"
-                } else {
-                    "no Ns"
-                }
-            );
+        if ggx.is_none() {
+            warn_flat_phong(&field("Ks"), specular, shininess, m.shininess.is_some());
         }
         let material = Material {
             ggx,
@@ -488,6 +301,43 @@ impl AssetStore {
         self.materials.push(material);
         self.mtl_materials.insert(key, i);
         Ok(i)
+    }
+
+    /// The PBR extension's map `key` of MTL material `m` (textures under `dir`), `None` where
+    /// the material has none; `srgb` for colour (emission), else a linear map of one value per
+    /// texel. `referenced_by` names the key for messages.
+    fn mtl_pbr_map(
+        &mut self,
+        dir: &Path,
+        m: &tobj::Material,
+        key: &str,
+        srgb: bool,
+        referenced_by: &dyn Fn(&str) -> String,
+    ) -> Result<Option<usize>, SceneError> {
+        let Some(t) = texture_file(m.unknown_param.get(key).map(String::as_str)) else {
+            return Ok(None);
+        };
+        let path = dir.join(t);
+        let i = self.texture(&path, srgb, &referenced_by(key), true)?;
+        // Roughness and metalness are one value per texel: a map whose channels differ is most
+        // likely packed, and its first channel the wrong quantity.
+        let packed = if srgb {
+            None
+        } else {
+            i.and_then(|i| self.textures.get(i))
+                .and_then(first_coloured_texel)
+        };
+        match packed {
+            Some((x, y, rgb)) => Err(SceneError::TextureChannels {
+                file: path,
+                key: key.to_string(),
+                x,
+                y,
+                rgb,
+                referenced_by: referenced_by(key),
+            }),
+            None => Ok(i),
+        }
     }
 
     /// An MTL `map_d` (texture `mask`) as a cutout at 0.5, the usual reading of a dissolve map
@@ -650,6 +500,206 @@ fn check_texture_side(w: u32, h: u32) -> Result<(), String> {
         ));
     }
     Ok(())
+}
+
+/// The first texel of `t` whose channels differ (x, y and its RGB), `None` for a grey texture.
+fn first_coloured_texel(t: &TextureData) -> Option<(u32, u32, [u8; 3])> {
+    t.rgba8
+        .chunks_exact(4)
+        .position(|c| c[0] != c[1] || c[0] != c[2])
+        .map(|p| {
+            (
+                p as u32 % t.width,
+                p as u32 / t.width,
+                [0, 1, 2].map(|k| t.rgba8[4 * p + k]),
+            )
+        })
+}
+
+/// Warns about a Phong material (`field` names it) with `Ks` but exponent 0.
+///
+/// Normalized Phong at n = 0 is (n + 2)/(2π) cos⁰ = Ks/π toward every direction: a white
+/// diffuse layer on top of Kd, not a highlight. OBJ exports write `Ks` without `Ns` (the brass
+/// of Bitterli's staircase: `Kd 0`, `Ks 1`), so say what it renders as.
+fn warn_flat_phong(field: &str, specular: Vec3, shininess: f32, has_ns: bool) {
+    if specular.max_element() > 0.0 && shininess == 0.0 {
+        log::warn!(
+            "{}: Ks {} {} {} with {}: a Phong lobe of exponent 0 reflects Ks/π in every \
+             direction, a white diffuse layer rather than a highlight; give the material \
+             `Ns` (a highlight's exponent, e.g. 10 to 1000) or remove `Ks`",
+            field,
+            specular.x,
+            specular.y,
+            specular.z,
+            if has_ns { "Ns 0" } else { "no Ns" }
+        );
+    }
+}
+
+/// What an OBJ file and its MTL libraries hold.
+struct ObjContents {
+    models: Vec<tobj::Model>,
+    materials: Vec<tobj::Material>,
+    /// The MTL file defining each material, by name, for messages naming the MTL file.
+    mtl_files: HashMap<String, PathBuf>,
+}
+
+/// A parsed OBJ's models and its MTL materials. A missing MTL file is a warning (its materials
+/// fall back to the default); a malformed one, or a malformed OBJ, is an error.
+fn load_obj_models(path: &Path, dir: &Path, text: &str) -> Result<ObjContents, SceneError> {
+    // MTL problems found by tobj's callback: (path, missing?, message).
+    let mtl_problems: RefCell<Vec<(PathBuf, bool, String)>> = RefCell::new(Vec::new());
+    let mtl_files: RefCell<HashMap<String, PathBuf>> = RefCell::new(HashMap::new());
+    let options = tobj::LoadOptions {
+        single_index: true,
+        triangulate: true,
+        ignore_points: true,
+        ignore_lines: true,
+    };
+    let loaded = guarded(|| {
+        tobj::load_obj_buf(&mut Cursor::new(text.as_bytes()), &options, |mtl| {
+            load_mtl_library(path, dir, mtl, &mtl_problems, &mtl_files)
+        })
+    })
+    .unwrap_or(Err(tobj::LoadError::GenericFailure));
+    let (models, materials) = loaded.map_err(|e| SceneError::MalformedObj {
+        file: path.to_path_buf(),
+        kind: "OBJ",
+        line: None,
+        message: e.to_string(),
+    })?;
+    for (mtl_path, missing, message) in mtl_problems.into_inner() {
+        if missing {
+            log::warn!(
+                "{}: material library {} not found; its materials fall back to the \
+                 default gray (0.5). Put the MTL next to the OBJ or remove the `mtllib` line.",
+                path.display(),
+                mtl_path.display()
+            );
+        } else {
+            let kind = if mtl_path == path { "OBJ" } else { "MTL" };
+            return Err(SceneError::MalformedObj {
+                file: mtl_path,
+                kind,
+                line: None,
+                message,
+            });
+        }
+    }
+    // tobj reports MTL errors here too; ours were already handled above.
+    let materials = materials.unwrap_or_default();
+    Ok(ObjContents {
+        models,
+        materials,
+        mtl_files: mtl_files.into_inner(),
+    })
+}
+
+/// tobj's MTL callback for the OBJ at `obj` (in `dir`): reads the library `mtl`, recording
+/// its problems in `problems` (path, missing?, message) and the file of each material it
+/// defines in `files`. A library that cannot be used is empty, so faces using its materials
+/// get the default material.
+fn load_mtl_library(
+    obj: &Path,
+    dir: &Path,
+    mtl: &Path,
+    problems: &RefCell<Vec<(PathBuf, bool, String)>>,
+    files: &RefCell<HashMap<String, PathBuf>>,
+) -> tobj::MTLLoadResult {
+    let mtl_path = dir.join(mtl);
+    match std::fs::read_to_string(&mtl_path) {
+        Ok(mtl_text) => {
+            if let Err((line, message)) = prescan_mtl(&mtl_text, &mtl_path) {
+                problems.borrow_mut().push((
+                    mtl_path.clone(),
+                    false,
+                    format!("line {line}: {message}"),
+                ));
+                return Ok((Vec::new(), Default::default()));
+            }
+            for name in mtl_material_names(&mtl_text) {
+                files.borrow_mut().insert(name, mtl_path.clone());
+            }
+            let r = guarded(|| tobj::load_mtl_buf(&mut Cursor::new(mtl_text.as_bytes())))
+                .unwrap_or(Err(tobj::LoadError::GenericFailure));
+            if let Err(e) = &r {
+                problems
+                    .borrow_mut()
+                    .push((mtl_path.clone(), false, e.to_string()));
+            }
+            r
+        }
+        Err(_) if mtl_path.is_dir() => {
+            // `mtllib` with no name (or a folder's): say so on the OBJ's side, not as a
+            // malformed MTL "Is a directory" (found by fuzz_tests).
+            problems.borrow_mut().push((
+                obj.to_path_buf(),
+                false,
+                format!(
+                    "`mtllib {}` names the folder {}, not an MTL file; name the .mtl file or \
+                     remove the line",
+                    mtl.display(),
+                    mtl_path.display()
+                ),
+            ));
+            Ok((Vec::new(), Default::default()))
+        }
+        Err(e) => {
+            let missing = e.kind() == std::io::ErrorKind::NotFound;
+            problems
+                .borrow_mut()
+                .push((mtl_path.clone(), missing, e.to_string()));
+            Ok((Vec::new(), Default::default()))
+        }
+    }
+}
+
+/// Appends one tobj model to `mesh` as a submesh of `material`, with the file's normals (the
+/// area-weighted ones where a normal is zero or missing), and its texture coordinates to `uvs` when some model of the file has them (zeros for a
+/// model without).
+fn append_model(mesh: &mut Mesh, uvs: Option<&mut Vec<Vec2>>, m: &tobj::Mesh, material: usize) {
+    let n = m.positions.len() / 3;
+    let base = mesh.positions.len();
+    let positions: Vec<Vec3> = m
+        .positions
+        .chunks_exact(3)
+        .map(|p| Vec3::new(p[0], p[1], p[2]))
+        .collect();
+    let computed = area_weighted_normals(&positions, &m.indices);
+    let normals: Vec<Vec3> = if m.normals.len() == 3 * n {
+        m.normals
+            .chunks_exact(3)
+            .zip(&computed)
+            .map(|(v, c)| {
+                // A zero-length normal in the file falls back to the computed one.
+                let u = Vec3::new(v[0], v[1], v[2]).normalize_or_zero();
+                if u == Vec3::ZERO {
+                    *c
+                } else {
+                    u
+                }
+            })
+            .collect()
+    } else {
+        computed
+    };
+    if let Some(uvs) = uvs {
+        if m.texcoords.len() == 2 * n {
+            uvs.extend(m.texcoords.chunks_exact(2).map(|t| Vec2::new(t[0], t[1])));
+        } else {
+            uvs.resize(uvs.len() + n, Vec2::ZERO);
+        }
+    }
+    let first_index = mesh.indices.len() as u32;
+    mesh.indices
+        .extend(m.indices.iter().map(|&i| i + base as u32));
+    mesh.positions.extend(positions);
+    mesh.normals.extend(normals);
+    mesh.submeshes.push(SubMesh {
+        first_index,
+        index_count: m.indices.len() as u32,
+        material,
+    });
 }
 
 /// `m` with its vertices split and normals set by `smoothing` ([`split_normals`]).

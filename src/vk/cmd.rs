@@ -383,19 +383,7 @@ impl<'a> Cmd<'a> {
         buffer: vk::Buffer,
         offset_bytes: u64,
     ) {
-        let region = [vk::BufferImageCopy {
-            buffer_offset: offset_bytes,
-            buffer_row_length: 0,
-            buffer_image_height: 0,
-            image_subresource: vk::ImageSubresourceLayers {
-                aspect_mask: vk::ImageAspectFlags::COLOR,
-                mip_level: mip,
-                base_array_layer: 0,
-                layer_count: layers,
-            },
-            image_offset: vk::Offset3D::default(),
-            image_extent: extent,
-        }];
+        let region = [color_mip_copy(extent, mip, layers, offset_bytes)];
         // SAFETY: Cmd invariant; the graph put the image in TRANSFER_SRC_OPTIMAL; the buffer is
         // large enough past the offset (checked by the caller's read-back size).
         unsafe {
@@ -418,19 +406,7 @@ impl<'a> Cmd<'a> {
         mip: u32,
         layers: u32,
     ) {
-        let region = [vk::BufferImageCopy {
-            buffer_offset: 0,
-            buffer_row_length: 0,
-            buffer_image_height: 0,
-            image_subresource: vk::ImageSubresourceLayers {
-                aspect_mask: vk::ImageAspectFlags::COLOR,
-                mip_level: mip,
-                base_array_layer: 0,
-                layer_count: layers,
-            },
-            image_offset: vk::Offset3D::default(),
-            image_extent: extent,
-        }];
+        let region = [color_mip_copy(extent, mip, layers, 0)];
         // SAFETY: Cmd invariant; the graph put the image in TRANSFER_DST_OPTIMAL.
         unsafe {
             self.ctx.device.cmd_copy_buffer_to_image(
@@ -593,4 +569,27 @@ fn attachment_info(a: &Attachment, layout: vk::ImageLayout) -> vk::RenderingAtta
         None => info.load_op(vk::AttachmentLoadOp::LOAD),
     };
     info.build()
+}
+
+/// A copy between a tightly packed buffer (from `offset_bytes`) and mip `mip`, layers
+/// `0..layers`, of a color image of mip extent `extent`.
+fn color_mip_copy(
+    extent: vk::Extent3D,
+    mip: u32,
+    layers: u32,
+    offset_bytes: u64,
+) -> vk::BufferImageCopy {
+    vk::BufferImageCopy {
+        buffer_offset: offset_bytes,
+        buffer_row_length: 0,
+        buffer_image_height: 0,
+        image_subresource: vk::ImageSubresourceLayers {
+            aspect_mask: vk::ImageAspectFlags::COLOR,
+            mip_level: mip,
+            base_array_layer: 0,
+            layer_count: layers,
+        },
+        image_offset: vk::Offset3D::default(),
+        image_extent: extent,
+    }
 }

@@ -427,28 +427,7 @@ impl Context {
                     .build()
             })
             .collect();
-        let vertex_bindings: Vec<vk::VertexInputBindingDescription> = if desc.vertex_stride > 0 {
-            vec![vk::VertexInputBindingDescription {
-                binding: 0,
-                stride: desc.vertex_stride,
-                input_rate: vk::VertexInputRate::VERTEX,
-            }]
-        } else {
-            vec![]
-        };
-        let attributes: Vec<vk::VertexInputAttributeDescription> = desc
-            .vertex_attributes
-            .iter()
-            .enumerate()
-            .map(
-                |(i, &(format, offset))| vk::VertexInputAttributeDescription {
-                    location: i as u32,
-                    binding: 0,
-                    format,
-                    offset,
-                },
-            )
-            .collect();
+        let (vertex_bindings, attributes) = vertex_descriptions(desc);
         let vertex_input = vk::PipelineVertexInputStateCreateInfo::builder()
             .vertex_binding_descriptions(&vertex_bindings)
             .vertex_attribute_descriptions(&attributes);
@@ -472,31 +451,7 @@ impl Context {
         let blend_attachments: Vec<vk::PipelineColorBlendAttachmentState> = desc
             .color_formats
             .iter()
-            .map(|_| {
-                let b = vk::PipelineColorBlendAttachmentState::builder()
-                    .color_write_mask(vk::ColorComponentFlags::RGBA);
-                match blend {
-                    Blend::Premultiplied => b
-                        .blend_enable(true)
-                        .src_color_blend_factor(vk::BlendFactor::ONE)
-                        .dst_color_blend_factor(vk::BlendFactor::ONE_MINUS_SRC_ALPHA)
-                        .color_blend_op(vk::BlendOp::ADD)
-                        .src_alpha_blend_factor(vk::BlendFactor::ONE_MINUS_DST_ALPHA)
-                        .dst_alpha_blend_factor(vk::BlendFactor::ONE)
-                        .alpha_blend_op(vk::BlendOp::ADD)
-                        .build(),
-                    Blend::Additive => b
-                        .blend_enable(true)
-                        .src_color_blend_factor(vk::BlendFactor::ONE)
-                        .dst_color_blend_factor(vk::BlendFactor::ONE)
-                        .color_blend_op(vk::BlendOp::ADD)
-                        .src_alpha_blend_factor(vk::BlendFactor::ONE)
-                        .dst_alpha_blend_factor(vk::BlendFactor::ONE)
-                        .alpha_blend_op(vk::BlendOp::ADD)
-                        .build(),
-                    Blend::None => b.build(),
-                }
-            })
+            .map(|_| blend.attachment_state())
             .collect();
         let mut blend =
             vk::PipelineColorBlendStateCreateInfo::builder().attachments(&blend_attachments);
@@ -600,6 +555,68 @@ enum Blend {
     None,
     Premultiplied,
     Additive,
+}
+
+impl Blend {
+    /// The blend state of each color attachment.
+    fn attachment_state(self) -> vk::PipelineColorBlendAttachmentState {
+        let b = vk::PipelineColorBlendAttachmentState::builder()
+            .color_write_mask(vk::ColorComponentFlags::RGBA);
+        match self {
+            Blend::Premultiplied => b
+                .blend_enable(true)
+                .src_color_blend_factor(vk::BlendFactor::ONE)
+                .dst_color_blend_factor(vk::BlendFactor::ONE_MINUS_SRC_ALPHA)
+                .color_blend_op(vk::BlendOp::ADD)
+                .src_alpha_blend_factor(vk::BlendFactor::ONE_MINUS_DST_ALPHA)
+                .dst_alpha_blend_factor(vk::BlendFactor::ONE)
+                .alpha_blend_op(vk::BlendOp::ADD)
+                .build(),
+            Blend::Additive => b
+                .blend_enable(true)
+                .src_color_blend_factor(vk::BlendFactor::ONE)
+                .dst_color_blend_factor(vk::BlendFactor::ONE)
+                .color_blend_op(vk::BlendOp::ADD)
+                .src_alpha_blend_factor(vk::BlendFactor::ONE)
+                .dst_alpha_blend_factor(vk::BlendFactor::ONE)
+                .alpha_blend_op(vk::BlendOp::ADD)
+                .build(),
+            Blend::None => b.build(),
+        }
+    }
+}
+
+/// The vertex buffer binding (one interleaved buffer at binding 0, none for a stride of 0)
+/// and the attributes, at locations in the order `desc` lists them.
+fn vertex_descriptions(
+    desc: &GraphicsPipelineDesc,
+) -> (
+    Vec<vk::VertexInputBindingDescription>,
+    Vec<vk::VertexInputAttributeDescription>,
+) {
+    let bindings = if desc.vertex_stride > 0 {
+        vec![vk::VertexInputBindingDescription {
+            binding: 0,
+            stride: desc.vertex_stride,
+            input_rate: vk::VertexInputRate::VERTEX,
+        }]
+    } else {
+        vec![]
+    };
+    let attributes = desc
+        .vertex_attributes
+        .iter()
+        .enumerate()
+        .map(
+            |(i, &(format, offset))| vk::VertexInputAttributeDescription {
+                location: i as u32,
+                binding: 0,
+                format,
+                offset,
+            },
+        )
+        .collect();
+    (bindings, attributes)
 }
 
 /// Map entries and data of 32-bit specialization constants.

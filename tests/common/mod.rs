@@ -57,6 +57,63 @@ impl Drop for TestContext {
     }
 }
 
+/// Gives the process an `XDG_RUNTIME_DIR` where it has none (a bare CI container), so that
+/// the loader and winit do not warn about it on stderr, which the tests read.
+fn ensure_runtime_dir() {
+    if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
+        let dir = std::env::temp_dir().join("voxgi-xdg");
+        let _ = std::fs::create_dir_all(&dir);
+        std::env::set_var("XDG_RUNTIME_DIR", dir);
+    }
+}
+
+/// Runs the built `voxgi` binary with `args` and waits for it.
+pub fn voxgi(args: &[&str]) -> std::process::Output {
+    voxgi_with(args, |_| {})
+}
+
+/// [`voxgi`], with `setup` adjusting the command first (its working directory, its
+/// environment).
+pub fn voxgi_with(
+    args: &[&str],
+    setup: impl FnOnce(&mut std::process::Command),
+) -> std::process::Output {
+    ensure_runtime_dir();
+    let mut cmd = std::process::Command::new(env!("CARGO_BIN_EXE_voxgi"));
+    cmd.args(args);
+    setup(&mut cmd);
+    cmd.output().expect("the voxgi binary runs")
+}
+
+/// A small buffer the transfer queue fills and the host reads, for the negative controls.
+pub fn transfer_buffer(ctx: &Context, name: &str) -> voxgi::vk::Buffer {
+    use voxgi::vk::{vk, BufferDesc, MemoryLocation};
+    ctx.create_buffer(&BufferDesc {
+        name: name.into(),
+        size_bytes: 256,
+        usage: vk::BufferUsageFlags::TRANSFER_DST,
+        location: MemoryLocation::GpuToCpu,
+    })
+    .expect("buffer")
+}
+
+/// Runs a graph whose one pass fills `target` twice, a deliberate misuse for the negative
+/// controls: the graph places barriers only between passes, so nothing orders the second
+/// write after the first (synchronization validation's WRITE_AFTER_WRITE hazard).
+pub fn run_write_after_write(ctx: &Context, target: &voxgi::vk::Buffer) {
+    use voxgi::graph::{run_once, Access, RenderGraph};
+    let mut g = RenderGraph::new();
+    let out = g.import_buffer(target, Access::HostRead);
+    g.add_pass("hazard")
+        .write(out, Access::TransferWrite)
+        .record(move |p| {
+            let raw = p.buffer(out).raw;
+            p.cmd.fill_buffer(raw, 1);
+            p.cmd.fill_buffer(raw, 2);
+        });
+    run_once(ctx, g).expect("the graph runs");
+}
+
 /// A validating context on the default device (lavapipe on CI), checked at teardown (see
 /// [`TestContext`]). Without a Vulkan device the test fails with the install hint: these
 /// tests never pass silently.
@@ -66,11 +123,7 @@ pub fn context() -> TestContext {
 
 /// A validating context that does not check itself at teardown; call [`Context::finish`].
 pub fn raw_context() -> Context {
-    if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
-        let dir = std::env::temp_dir().join("voxgi-xdg");
-        let _ = std::fs::create_dir_all(&dir);
-        std::env::set_var("XDG_RUNTIME_DIR", dir);
-    }
+    ensure_runtime_dir();
     let _ = env_logger::builder().is_test(true).try_init();
     match Context::new(&ContextDesc { validation: true, ..Default::default() }) {
         Ok(ctx) => ctx,
