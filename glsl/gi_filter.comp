@@ -22,8 +22,8 @@
 // the centre pixel's accumulated mean, sqrt(var / n) from its moments and history length n
 // (Schied et al. 2017 §4.3 use the variance of one sample; the mean's makes the filter step
 // back as frames accumulate, so that a long render converges to the method's own image, not
-// the filter's). Pixels with fewer than MIN_FRAMES frames have no usable moments and are
-// filtered by the geometric weights alone.
+// the filter's), averaged over the centre's 3×3 pixels. Pixels with fewer than MIN_FRAMES
+// frames have no usable moments and are filtered by the geometric weights alone.
 #include "frame.glsl"
 
 layout(constant_id = 0) const bool GLOSSY = false;
@@ -98,14 +98,23 @@ void main() {
     // The centre's standard error of its mean luminance; negative: no luminance weight.
     float sigma_p = -1.0;
     float l0 = 0.0;
-    if (VARIANCE_GUIDED) {
-        vec4 acc = texelFetch(accumulated, px, 0);
-        if (acc.a >= MIN_FRAMES) {
-            float m1 = luminance(acc.rgb);
-            float var = max(texelFetch(moments, px, 0).x - m1 * m1, 0.0);
-            sigma_p = sqrt(var / acc.a);
-            l0 = luminance(texelFetch(src, px, 0).rgb);
+    if (VARIANCE_GUIDED && texelFetch(accumulated, px, 0).a >= MIN_FRAMES) {
+        // The variance of the mean, averaged over the 3×3 pixels of enough frames around: a
+        // few frames' moments of one pixel are a noisy estimate, and one that came out low
+        // would keep that pixel's noise (Schied et al. 2017 §4.3 blur it the same way).
+        float var_sum = 0.0, count = 0.0;
+        for (int dy = -1; dy <= 1; ++dy) {
+            for (int dx = -1; dx <= 1; ++dx) {
+                ivec2 q = clamp(px + ivec2(dx, dy), ivec2(0), size - 1);
+                vec4 acc = texelFetch(accumulated, q, 0);
+                if (acc.a < MIN_FRAMES || texelFetch(gb_depth, q, 0).r >= 1.0) continue;
+                float m1 = luminance(acc.rgb);
+                var_sum += max(texelFetch(moments, q, 0).x - m1 * m1, 0.0) / acc.a;
+                count += 1.0;
+            }
         }
+        sigma_p = sqrt(var_sum / max(count, 1.0));
+        l0 = luminance(texelFetch(src, px, 0).rgb);
     }
     vec3 sum = vec3(0.0);
     float wsum = 0.0;
