@@ -41,7 +41,6 @@ pub(super) static SPEC: MethodSpec = MethodSpec {
         "gi.radiance_source",
         "gi.temporal",
         "gi.temporal_frames",
-        "gi.accumulate_frames",
     ],
     swept_by_default: true,
     plot_colour: "#1f77b4",
