@@ -1440,7 +1440,11 @@ impl EditSession {
     fn settled(&mut self, first: String, want: &str, quiet: u64) -> String {
         let mut last = first;
         loop {
-            self.drain("");
+            // A `want` line already waiting counts too: the panel lays out a frame after the
+            // state it logs (the last wheel step's offset, then the button where it moved).
+            if let Some(line) = self.drain(want) {
+                last = line;
+            }
             let target = self.frame.map_or(0, |f| f.number) + 1 + quiet;
             let mut moved = None;
             self.wait_until(&format!("frame {target}"), |s, line| {
