@@ -190,12 +190,8 @@ impl GiTemporal {
         let out: Vec<ImageHandle> = descs
             .iter()
             .map(|d| {
-                let mut d = d.clone();
-                d.name = d
-                    .name
-                    .replace("history", "now")
-                    .replace("moments", "moments now");
-                g.create_image(d)
+                let name = format!("{} (this frame)", d.name);
+                g.create_image(ImageDesc { name, ..d.clone() })
             })
             .collect();
         let pipe = *self.pipeline;
