@@ -66,7 +66,7 @@ void main() {
         vpls[dst] = none;
         return;
     }
-    uint j = set_ * k + kk + 1u;
+    uint j = halton_point(set_, kk);
     // A golden-ratio shift per bounce decorrelates the bounces' directions.
     vec2 u = fract(vec2(halton(j, 5u), halton(j, 7u)) + float(b - 1u) * vec2(0.618034, 0.381966));
     vec3 n = src.normal.xyz;

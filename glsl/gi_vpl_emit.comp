@@ -140,7 +140,7 @@ void main() {
     uint set_ = i / k;
     uint kk = i % k;
     uint slot = pc.counts.y - 1u;  // the emitter slot: the row's last light
-    uint j = set_ * k + kk + 1u;
+    uint j = halton_point(set_, kk);
     float u_in;
     GpuEmitter e = emitters[pick_emitter(halton(j, 2u), u_in)];
     vec3 n, bary;

@@ -121,12 +121,12 @@ bool sample_valid(GpuLight l, uint j, ivec2 size) {
     return texelFetch(rlm_position, ivec3(q, int(v)), 0).w != 0.0;
 }
 
-// V: the valid samples among the K of set `set_` (Halton points set_ K + 1 .. set_ K + K).
+// V: the valid samples among the K of set `set_` this frame (halton_point).
 uint valid_count(GpuLight l, uint set_, ivec2 size) {
     uint k = max(pc.counts.z, 1u);
     uint valid = 0u;
     for (uint kk = 0u; kk < k; kk++) {
-        if (sample_valid(l, set_ * k + kk + 1u, size)) valid++;
+        if (sample_valid(l, halton_point(set_, kk), size)) valid++;
     }
     return valid;
 }
@@ -208,8 +208,9 @@ void main() {
     uint set_ = i / (lights * k);
     uint light = (i / k) % lights;
     uint kk = i % k;
-    // Each set takes its own K consecutive Halton points (index 0, the origin, is skipped):
-    // the sets together are the first sets * K points, each set a stratified subset.
-    uint j = set_ * k + kk + 1u;
+    // Each set takes its own K consecutive Halton points (halton_point): without temporal
+    // accumulation the sets together are the first sets * K points, each set a stratified
+    // subset.
+    uint j = halton_point(set_, kk);
     vpls[vpl_index(set_, 0u, light, kk)] = first_bounce(light, set_, j);
 }

@@ -21,6 +21,10 @@ fn the_gpu_run_rehearsal_runs_every_step_and_summarizes_them() {
         )
         .env("GPU_RUN_PROFILE_SCENES", "cornell")
         .env("GPU_RUN_SWEEP_SCENES", "cornell")
+        .env(
+            "GPU_RUN_REAL_SCENES",
+            "assets/scenes/cornell_original.toml:32",
+        )
         .current_dir(root)
         .output()
         .expect("runs tools/gpu-run");
@@ -50,6 +54,7 @@ fn the_gpu_run_rehearsal_runs_every_step_and_summarizes_them() {
         "bench_voxelize_sweep",
         "bench_voxelize",
         "sweep",
+        "sweep_real_cornell_original",
     ] {
         let row = rows
             .iter()

@@ -123,6 +123,35 @@ fn hemisphere_frames_interleave_like_one_frame_of_all_their_rays() {
     assert!(e16x2 <= e2 / 8.0, "16 × 2 rays {e16x2} against 2 rays {e2}");
 }
 
+/// The VPL method with temporal accumulation takes the next points of its Halton sequence
+/// every frame (`halton_start`), so 16 frames of K = 4 VPLs per set converge like one frame of
+/// 64: measured at 64², against the method converged (64 per set × 32 frames, unfiltered).
+/// Bounds as for the hemisphere: within 2× of the one-frame 64, and at least 8× better than one
+/// frame of 4 (independent frames alone would give 16×; a frame that repeated its VPLs would
+/// give 1×).
+#[test]
+fn vpl_frames_continue_the_halton_sequence() {
+    let ctx = common::context();
+    let scene = cornell();
+    let vpl = |per_set: u32, frames: u32, temporal: bool| {
+        let mut s = settings(GiMethod::Vpl, 1, frames, temporal, false);
+        s.gi.vpl.per_set = per_set;
+        s
+    };
+    let converged = render(&ctx, &scene, &vpl(64, 32, true));
+    let one_of_4 = render(&ctx, &scene, &vpl(4, 1, false));
+    let one_of_64 = render(&ctx, &scene, &vpl(64, 1, false));
+    let sixteen_of_4 = render(&ctx, &scene, &vpl(4, 16, true));
+    let (e4, e64, e16x4) = (
+        rel_mse(&converged, &one_of_4),
+        rel_mse(&converged, &one_of_64),
+        rel_mse(&converged, &sixteen_of_4),
+    );
+    println!("relMSE: 1×4 VPLs {e4:.5}, 1×64 VPLs {e64:.5}, 16×4 VPLs {e16x4:.5}");
+    assert!(e16x4 <= 2.0 * e64, "16 × 4 VPLs {e16x4} against 64 {e64}");
+    assert!(e16x4 <= e4 / 8.0, "16 × 4 VPLs {e16x4} against 4 {e4}");
+}
+
 /// As frames accumulate, the variance-guided filter steps back: after 48 frames the filtered
 /// image is no further from the converged unfiltered one than the unfiltered 48 frames are
 /// (it keeps only the noise reduction), and much closer than a single filtered frame, whose

@@ -121,8 +121,9 @@ float lobe_pdf(Lobe m, vec3 n, vec3 wo, vec3 wi, bool specular) {
         return ggx_g1(alpha, co) * ggx_d(alpha, max(dot(n, h), 0.0)) / (4.0 * co);
     }
     if (specular && m.kind == LOBE_PHONG) {
-        float c = max(dot(reflect(-wo, n), wi), 0.0);
-        return (m.param + 1.0) / (2.0 * PI) * pow(c, m.param);
+        // phong_cos_power, not pow(max(c, 0), n): the metals of an MTL without `Ns` have
+        // n = 0, and NVIDIA's pow(0, 0) is NaN (it poisoned the Modern Hall's path tracer).
+        return (m.param + 1.0) / (2.0 * PI) * phong_cos_power(dot(reflect(-wo, n), wi), m.param);
     }
     return max(dot(n, wi), 0.0) / PI;
 }

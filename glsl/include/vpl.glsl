@@ -63,8 +63,19 @@ layout(push_constant) uniform VplGeneratePush {
     ivec4 dims;     // voxels x, y, depth; w max hierarchy level
     uvec4 counts;   // x sets, y lights, z VPLs per set and light (K), w bounces
     uvec4 trace;    // x start level, y max iterations, z this pass's bounce, w shadow-map resolution
-    vec4 params;    // x normal offset (voxel diagonals), y voxel diagonal (m), z ray length (m), w unused
+    vec4 params;    // x normal offset (voxel diagonals), y voxel diagonal (m), z ray length (m), w halton_point's frames
 } pc;
+
+// The Halton index of VPL kk of set `set_` this frame. Each set owns a block of T K points
+// (index 0, the origin, skipped), T the history's frames under temporal accumulation
+// (gi.temporal) and 1 without, and frame f (modulo T) takes its K points f K .. f K + K - 1:
+// N frames of K points are the block's first N K, the points one frame of N K VPLs per set
+// would take from a block of its own. params.w's bits hold T << 16 | f.
+uint halton_point(uint set_, uint kk) {
+    uint packed = floatBitsToUint(pc.params.w);
+    uint k = max(pc.counts.z, 1u);
+    return set_ * k * max(packed >> 16u, 1u) + (packed & 0xffffu) * k + kk + 1u;
+}
 
 // Emitter VPLs at the end of each row (gi_vpl_emit.comp): K in scenes with emissive surfaces,
 // 0 otherwise (a specialization constant of every pass that indexes the buffer this way).

@@ -27,7 +27,7 @@ pub enum SweepError {
     Flag { config: String, message: String },
     #[error("scene {scene}: no reference image {}; point --references at the folder that has it, render one with tools/reference (see assets/references/README.md) or leave the scene out", path.display())]
     NoReference { scene: String, path: PathBuf },
-    #[error("--size {size}: the reference {} is {width}x{height}; --size must divide it (e.g. 32, 64, 128, 256) or be a multiple of it (512 for a 256² reference), and the reference must be square", path.display())]
+    #[error("--size {size}: the reference {} is {width}x{height}; --size, the renders' width, must divide its width so that the height scales by the same whole factor (e.g. 32, 64, 128 or 256 for a 256² reference, 32 or 64 for 320x180) or be a multiple of the width (512 for a 256² reference)", path.display())]
     Size {
         size: u32,
         width: u32,

@@ -35,8 +35,9 @@ use std::time::Instant;
 #[derive(clap::Args, Clone)]
 pub struct SweepArgs {
     /// Built-in scenes or TOML scene files, each with a reference `<name>_gi.exr` in
-    /// --references (name: the built-in's name or the file's stem). Default: every built-in
-    /// and every assets/scenes/*.toml that has one.
+    /// --references (name: the built-in's name or the file's stem), or for the third-party
+    /// scenes `<name>_authors.exr` or `<name>.exr` (their authors' scene rendered by Mitsuba).
+    /// Default: every built-in and every assets/scenes/*.toml with a `<name>_gi.exr`.
     pub scenes: Vec<String>,
     /// Methods, comma-separated.
     #[arg(long, default_value_t = crate::bench::sweep::default_sweep_methods())]
@@ -50,8 +51,9 @@ pub struct SweepArgs {
     /// sweep.json (both) and <scene>_pareto.svg and .png.
     #[arg(long)]
     pub out: PathBuf,
-    /// Image width and height in pixels; must divide the references' size, or be a multiple
-    /// of it (each render is then box-filtered to the reference's size before scoring).
+    /// Image width in pixels (the height follows each reference's aspect); must divide the
+    /// references' width, or be a multiple of it (each render is then box-filtered to the
+    /// reference's size before scoring).
     #[arg(long, default_value_t = 128)]
     pub size: u32,
     /// Frames profiled per configuration (after --warmup).
@@ -138,6 +140,8 @@ struct SweepScene {
     scene: Scene,
     reference: HdrImage,
     render_factor: u32,
+    /// The renders' width and height: `--size` wide, the reference's aspect.
+    render_size: (u32, u32),
 }
 
 /// One configuration ready to run: its flags checked and turned into settings.
@@ -189,6 +193,42 @@ fn reference_path(dir: &Path, name: &str) -> PathBuf {
     crate::assets::find(&dir.join(format!("{name}_gi.exr")))
 }
 
+/// The reference of a scene named on the command line: `<name>_gi.exr` (voxgi's export
+/// rendered by Mitsuba), else the third-party scenes' references of the authors' own scene
+/// descriptions, `<name>_authors.exr` or `<name>.exr` (`modern_hall` and `sponza_authors`;
+/// docs/measurements/real-scenes.md). The default list takes `<name>_gi.exr` alone, so that a
+/// plain `voxgi sweep` keeps its square scenes and its time.
+fn named_reference_path(dir: &Path, name: &str) -> PathBuf {
+    let gi = reference_path(dir, name);
+    if gi.exists() {
+        return gi;
+    }
+    [format!("{name}_authors.exr"), format!("{name}.exr")]
+        .iter()
+        .map(|f| crate::assets::find(&dir.join(f)))
+        .find(|p| p.exists())
+        .unwrap_or(gi)
+}
+
+/// The renders' size and the reference's box-filter factor (or the renders', `render_factor`
+/// > 1) for `--size` (the renders' width) against a `width` × `height` reference: `--size`
+/// divides the width (the reference is filtered down), or the width divides `--size` (the
+/// renders are), and the height must follow the width's scale exactly. `None`: it does not fit.
+fn fit_size(size: u32, width: u32, height: u32) -> Option<((u32, u32), u32, u32)> {
+    if size == 0 || width == 0 || height == 0 {
+        return None;
+    }
+    if width % size == 0 {
+        let f = width / size;
+        (height % f == 0).then_some(((size, height / f), f, 1))
+    } else if size % width == 0 {
+        let k = size / width;
+        Some(((size, height * k), 1, k))
+    } else {
+        None
+    }
+}
+
 /// Loads each scene and its reference, box-filtered to `size`.
 fn load_scenes(args: &SweepArgs) -> Result<Vec<SweepScene>, CliError> {
     let list = scene_args(args);
@@ -212,7 +252,7 @@ fn load_scenes(args: &SweepArgs) -> Result<Vec<SweepScene>, CliError> {
     loaded
         .into_iter()
         .map(|(name, scene)| {
-            let mut path = reference_path(&args.references, &name);
+            let mut path = named_reference_path(&args.references, &name);
             if !path.exists() {
                 if !args.make_references {
                     return Err(SweepError::NoReference { scene: name, path }.into());
@@ -220,13 +260,13 @@ fn load_scenes(args: &SweepArgs) -> Result<Vec<SweepScene>, CliError> {
                 path = made_reference(args, &name, &scene)?;
             }
             let full = HdrImage::load(&path)?;
-            // Either --size divides the reference (the reference is box-filtered down to
-            // it), or the reference divides --size (each render is box-filtered down to the
-            // reference before scoring: a 512² sweep against 256² references).
-            let square = full.width == full.height && args.size > 0;
-            let fits = square
-                && (full.width % args.size == 0 || (full.width > 0 && args.size % full.width == 0));
-            if !fits {
+            // Either --size divides the reference's width (the reference is box-filtered down
+            // to it), or the width divides --size (each render is box-filtered down to the
+            // reference before scoring: a 512² sweep against 256² references). The renders
+            // keep the reference's aspect (320×180 for the real scenes' references).
+            let Some((render_size, reference_factor, render_factor)) =
+                fit_size(args.size, full.width, full.height)
+            else {
                 return Err(SweepError::Size {
                     size: args.size,
                     width: full.width,
@@ -234,18 +274,13 @@ fn load_scenes(args: &SweepArgs) -> Result<Vec<SweepScene>, CliError> {
                     path,
                 }
                 .into());
-            }
-            let (reference, render_factor) = if full.width >= args.size {
-                (downsample(&full, full.width / args.size), 1)
-            } else {
-                let factor = args.size / full.width;
-                (full, factor)
             };
             Ok(SweepScene {
                 name,
                 scene,
-                reference,
+                reference: downsample(&full, reference_factor),
                 render_factor,
+                render_size,
             })
         })
         .collect()
@@ -321,15 +356,15 @@ struct FrameFlags {
     frame: FrameArgs,
 }
 
-/// A configuration's render settings on a scene, at `size`²: its flags parsed by clap and
-/// checked against their ranges, like `voxgi render`'s.
-fn job(config: &Config, scene: &Scene, size: u32) -> Result<Job, CliError> {
+/// A configuration's render settings on a scene, at `width` × `height`: its flags parsed by
+/// clap and checked against their ranges, like `voxgi render`'s.
+fn job(config: &Config, scene: &Scene, (width, height): (u32, u32)) -> Result<Job, CliError> {
     use clap::Parser as _;
     let mut argv = vec![
         "--width".to_owned(),
-        size.to_string(),
+        width.to_string(),
         "--height".to_owned(),
-        size.to_string(),
+        height.to_string(),
     ];
     argv.extend(config.argv());
     let flag_err = |message: String| SweepError::Flag {
@@ -517,7 +552,7 @@ pub fn sweep(global: &Global, args: &SweepArgs, out: &mut dyn Write) -> Result<(
         .map(|s| {
             let jobs = configs
                 .iter()
-                .map(|c| job(c, &s.scene, args.size))
+                .map(|c| job(c, &s.scene, s.render_size))
                 .collect::<Result<Vec<_>, _>>()?;
             Ok(renderable(&s.name, &s.scene.camera, jobs))
         })
@@ -887,17 +922,41 @@ mod tests {
         let scene = load_scene_arg(None).expect("cornell");
         let grid = [parse_grid("gi-rays=0").expect("grid")];
         let c = configs(&[crate::gi::GiMethod::Hemisphere], &grid);
-        let e = job(&c[0], &scene, 32).err().expect("0 rays").to_string();
+        let e = job(&c[0], &scene, (32, 32))
+            .err()
+            .expect("0 rays")
+            .to_string();
         assert!(e.contains("hemisphere gi-rays=0"), "{e}");
         let grid = [parse_grid("vpl-pattern=4y4").expect("grid")];
         let c = configs(&[crate::gi::GiMethod::Vpl], &grid);
-        let e = job(&c[0], &scene, 32)
+        let e = job(&c[0], &scene, (32, 32))
             .err()
             .expect("bad pattern")
             .to_string();
         assert!(e.contains("vpl-pattern") && e.contains("4y4"), "{e}");
-        let ok = job(&configs(&[crate::gi::GiMethod::Vpl], &[])[0], &scene, 32).expect("ok");
+        let ok = job(
+            &configs(&[crate::gi::GiMethod::Vpl], &[])[0],
+            &scene,
+            (32, 32),
+        )
+        .expect("ok");
         assert_eq!(ok.settings.width, 32);
+    }
+
+    #[test]
+    fn the_renders_keep_the_references_aspect_at_whole_factors() {
+        // (render size, the reference's box-filter factor, the renders' factor)
+        assert_eq!(fit_size(128, 256, 256), Some(((128, 128), 2, 1)));
+        assert_eq!(fit_size(512, 256, 256), Some(((512, 512), 1, 2)));
+        // The real scenes' 320×180 references: 64 × 36 (filtered by 5), 640 × 360 (renders
+        // filtered by 2); 128 does not divide 320, and 80 gives 180 / 4 = 45 rows.
+        assert_eq!(fit_size(64, 320, 180), Some(((64, 36), 5, 1)));
+        assert_eq!(fit_size(640, 320, 180), Some(((640, 360), 1, 2)));
+        assert_eq!(fit_size(80, 320, 180), Some(((80, 45), 4, 1)));
+        assert_eq!(fit_size(128, 320, 180), None);
+        // 40 divides 320 (factor 8), but 180 rows do not split into 8.
+        assert_eq!(fit_size(40, 320, 180), None);
+        assert_eq!(fit_size(0, 256, 256), None);
     }
 
     #[test]

@@ -131,14 +131,19 @@ impl GiShared {
     /// converges), fixed otherwise.
     pub fn seed(&self) -> impl Fn() -> u32 + 'static {
         let base = self.push.seed;
+        let index = self.frame_index();
+        move || base.wrapping_add(index())
+    }
+
+    /// At record time, the frame's index under temporal accumulation (0 for the first frame
+    /// since the history was reset), 0 otherwise.
+    pub fn frame_index(&self) -> impl Fn() -> u32 + Clone + 'static {
         let index = self.sample_index.clone();
         move || match &index {
             // Counting the frame being recorded: the first frame samples as an accumulating
             // path tracer's first frame does.
-            Some(i) => {
-                base.wrapping_add(i.load(std::sync::atomic::Ordering::SeqCst).wrapping_sub(1))
-            }
-            None => base,
+            Some(i) => i.load(std::sync::atomic::Ordering::SeqCst).wrapping_sub(1),
+            None => 0,
         }
     }
 }

@@ -343,7 +343,7 @@ impl GiVplEmit {
     pub fn add_pass(
         &self,
         g: &mut RenderGraph,
-        push: GpuVplGeneratePush,
+        push: impl Fn() -> GpuVplGeneratePush + 'static,
         invocations: u32,
         (voxels, lut): (ImageHandle, BufferHandle),
         (albedo, normal, material): (ImageHandle, ImageHandle, ImageHandle),
@@ -375,7 +375,7 @@ impl GiVplEmit {
             .bind(8, table, Access::StorageRead(c))
             .record(move |ctx| {
                 ctx.bind(&pipe);
-                ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
+                ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push()));
                 ctx.cmd.dispatch(invocations.div_ceil(64).max(1), 1, 1);
             });
     }

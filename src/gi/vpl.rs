@@ -128,6 +128,9 @@ pub struct VplPasses {
     points: Option<ComputePipeline>,
     layout: VplLayout,
     generate_push: GpuVplGeneratePush,
+    /// Frames of history under temporal accumulation (`gi.temporal_frames`), 1 without: each
+    /// set's block of the Halton sequence holds K points per history frame.
+    history_frames: u32,
     gather_push: GpuVplGatherPush,
     shading: VplShading,
 }
@@ -265,6 +268,11 @@ impl VplPasses {
             points,
             layout,
             generate_push,
+            history_frames: if target.temporal {
+                settings.temporal_frames.clamp(1, 4096)
+            } else {
+                1
+            },
             gather_push,
             shading: v.shading,
         })
@@ -297,16 +305,16 @@ impl VplPasses {
     fn add_vpls(&self, g: &mut RenderGraph, i: &GiInputs, shared: &GiShared) -> BufferHandle {
         let (lut, sampler) = (shared.lut, shared.sampler);
         let vpls = g.create_buffer("vpls", self.layout.size_bytes());
-        self.add_generate(g, i, vpls, sampler);
+        let push = self.frame_push(shared);
+        self.add_generate(g, i, vpls, sampler, push.clone());
         // The assembly writes the attribute volumes when the scene has emitters.
         if let (Some(emit), Some(v)) = (&self.emit, shared.attributes) {
             let invocations = self.layout.sets * self.layout.per_set;
-            let push = self.generate_push;
             // Without a material volume (all-Lambert scenes) the shader never reads it.
             let volumes = (v.albedo, v.normal, v.material.unwrap_or(v.albedo));
             emit.add_pass(
                 g,
-                push,
+                push.clone(),
                 invocations,
                 (i.voxels, lut),
                 volumes,
@@ -317,7 +325,14 @@ impl VplPasses {
         if let (Some(pipe), Some(v)) = (self.bounce.as_deref().copied(), shared.attributes) {
             let volumes = (v.albedo, v.normal, v.material.unwrap_or(v.albedo));
             for b in 1..self.layout.bounces {
-                self.add_bounce(g, (pipe, b), i, (lut, sampler), volumes, vpls);
+                self.add_bounce(
+                    g,
+                    (pipe, b),
+                    i,
+                    (lut, sampler),
+                    volumes,
+                    (vpls, push.clone()),
+                );
             }
         }
         vpls
@@ -327,10 +342,33 @@ impl VplPasses {
         self.layout.per_bounce().div_ceil(64).max(1)
     }
 
-    fn add_generate(&self, g: &mut RenderGraph, i: &GiInputs, vpls: BufferHandle, s: vk::Sampler) {
+    /// The generating passes' push constants at record time: under temporal accumulation
+    /// each set's frames continue its block of the Halton sequence where the last frame
+    /// stopped (`halton_point` in `glsl/include/vpl.glsl`: T history frames and this frame's
+    /// index modulo T, packed as T << 16 | f), so that N frames of K VPLs are the N·K that one
+    /// frame of N·K would take; without, T = 1 and f = 0, the blocks of one frame.
+    fn frame_push(&self, shared: &GiShared) -> impl Fn() -> GpuVplGeneratePush + Clone + 'static {
+        let base = self.generate_push;
+        let frame = shared.frame_index();
+        let t = self.history_frames;
+        move || {
+            let packed = (t << 16) | (frame() % t);
+            let mut push = base;
+            push.params[3] = f32::from_bits(packed);
+            push
+        }
+    }
+
+    fn add_generate(
+        &self,
+        g: &mut RenderGraph,
+        i: &GiInputs,
+        vpls: BufferHandle,
+        s: vk::Sampler,
+        push: impl Fn() -> GpuVplGeneratePush + 'static,
+    ) {
         let c = Shader::Compute;
         let pipe = *self.generate;
-        let push = self.generate_push;
         let groups = self.groups_1d();
         g.add_pass("gi_vpl_generate")
             .pipeline(&pipe)
@@ -343,7 +381,7 @@ impl VplPasses {
             .bind(6, i.materials_pbr, Access::StorageRead(c))
             .record(move |ctx| {
                 ctx.bind(&pipe);
-                ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
+                ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push()));
                 ctx.cmd.dispatch(groups, 1, 1);
             });
     }
@@ -355,11 +393,9 @@ impl VplPasses {
         i: &GiInputs,
         (lut, s): (BufferHandle, vk::Sampler),
         (albedo, normal, material): (ImageHandle, ImageHandle, ImageHandle),
-        vpls: BufferHandle,
+        (vpls, push): (BufferHandle, impl Fn() -> GpuVplGeneratePush + 'static),
     ) {
         let c = Shader::Compute;
-        let mut push = self.generate_push;
-        push.trace[2] = bounce;
         let groups = self.groups_1d();
         g.add_pass(&format!("gi_vpl_bounce[{bounce}]"))
             .pipeline(&pipe)
@@ -371,6 +407,8 @@ impl VplPasses {
             .bind_sampled(5, material, s, c)
             .record(move |ctx| {
                 ctx.bind(&pipe);
+                let mut push = push();
+                push.trace[2] = bounce;
                 ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
                 ctx.cmd.dispatch(groups, 1, 1);
             });

@@ -13,7 +13,8 @@ pub(super) static SPEC: MethodSpec = MethodSpec {
                   2010 Ch. 7)",
     summary: "virtual point lights",
     accumulates: false,
-    temporal: false,
+    // Each frame takes the next VPLs of the Halton sequence (`halton_start`).
+    temporal: true,
     needs_voxels: true,
     reads_area_light_maps: false,
     // Bounces after the first, and the emitters' rays, read albedo and normal at their voxel
@@ -46,6 +47,8 @@ pub(super) static SPEC: MethodSpec = MethodSpec {
         "gi.vpl_normalize",
         "gi.vpl_spot_sampling",
         "gi.vpl_shading",
+        "gi.temporal",
+        "gi.temporal_frames",
     ],
     swept_by_default: true,
     plot_colour: "#2ca02c",
@@ -60,7 +63,10 @@ pub(super) static SPEC: MethodSpec = MethodSpec {
             gi.filter_passes
         )
     },
-    panel: |ui, gi, _| vpl_controls(ui, gi),
+    panel: |ui, gi, _| {
+        vpl_controls(ui, gi);
+        super::temporal_controls(ui, gi);
+    },
     build: |ctx, settings, target| Ok(Box::new(VplPasses::new(ctx, settings, target)?)),
 };
 
