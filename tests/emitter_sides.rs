@@ -1,7 +1,7 @@
 //! Which side an emissive triangle lights: the side its vertex normals point to, as the
 //! G-buffer shades it and as Mitsuba 3's area emitter (which evaluates and samples emission in
 //! the shading frame) renders voxgi's export, even where an OBJ's winding says the opposite.
-//! The Modern Hall's two largest window emitters are such triangles (their `toWorld` matrices
+//! Two of the Modern Hall's four window emitters are such triangles (their `toWorld` matrices
 //! mirror, the flattened OBJ keeps the mirrored winding and the transformed normals); before
 //! the loader rewound them, the emitter list and the voxel normal volume took the winding's
 //! side and lost their light (docs/measurements/real-scenes.md, "Where the Modern Hall's light
