@@ -1,6 +1,7 @@
 //! Which side an emissive triangle lights: the side its vertex normals point to, as the
 //! G-buffer shades it and as Mitsuba 3's area emitter (which evaluates and samples emission in
-//! the shading frame) renders voxgi's export, even where an OBJ's winding says the opposite.
+//! the shading frame) renders voxgi's export, even where an OBJ's winding says the opposite or
+//! a mirroring object transform turns the world-space winding around.
 //! Two of the Modern Hall's four window emitters are such triangles (their `toWorld` matrices
 //! mirror, the flattened OBJ keeps the mirrored winding and the transformed normals); before
 //! the loader rewound them, the emitter list and the voxel normal volume took the winding's
@@ -32,8 +33,10 @@ fn temp_dir(name: &str) -> PathBuf {
 /// A square emitter of side `SIDE_M` at y = `HEIGHT_M` over a Lambert floor (albedo `RHO`, 8 m
 /// square at y = 0), seen obliquely from (0, 2, −2) toward the floor under the square's centre.
 /// The square's faces are wound so that e₁ × e₂ points up (+y, away from the floor), its `vn`
-/// down (−y, toward the floor); `rewound` writes the winding that agrees with `vn` instead.
-fn scene(dir: &Path, rewound: bool) -> Scene {
+/// down (−y, toward the floor); `rewound` writes the winding that agrees with `vn` instead;
+/// `mirrored` scales the square's object by −1 along x (the square maps onto itself, its
+/// world-space winding turns around, its normals stay down).
+fn scene(dir: &Path, rewound: bool, mirrored: bool) -> Scene {
     let h = SIDE_M / 2.0;
     // (−h, −h), (h, −h), (h, h), (−h, h) in (x, z): 1 → 3 → 2 has (e₁ × e₂).y > 0.
     let faces = if rewound {
@@ -65,7 +68,9 @@ scale = [8.0, 1.0, 8.0]
 material = {{ albedo = {RHO} }}
 [[objects]]
 mesh = "lamp.obj"
-"#
+scale = [{sx:.1}, 1.0, 1.0]
+"#,
+        sx = if mirrored { -1.0 } else { 1.0 },
     );
     Scene::from_toml_str(&toml, &dir.join("lamp.toml"), dir).expect("parses")
 }
@@ -136,13 +141,15 @@ fn floor_radiance(height_m: f32) -> f32 {
 /// measured +9.4%. The voxel end points are offsets of one voxel diagonal off each surface,
 /// without occluders between. Bounds: 5% with light samples, 15% without. Before the loader
 /// rewound such triangles the floor was black in all three (the light samples and the voxel
-/// normals took the winding's side, up; main's binary renders this scene's centre 0.0).
+/// normals took the winding's side, up; main's binary renders this scene's centre 0.0), and
+/// so was it under the mirrored object until the emitter list and the voxel attributes read a
+/// mirrored object's corners reversed (`scene::corner_order`).
 #[test]
 fn an_emitter_lights_the_side_its_vertex_normals_point_to() {
     let dir = temp_dir("emitter-sides");
     let delta = GiSettings::default().normal_offset_voxels
         * VoxelSettings::default()
-            .grid_for(&scene(&dir, true), 0.0)
+            .grid_for(&scene(&dir, true, false), 0.0)
             .expect("grid")
             .voxel_diagonal_m();
     let expected = floor_radiance(HEIGHT_M - delta);
@@ -161,8 +168,8 @@ fn an_emitter_lights_the_side_its_vertex_normals_point_to() {
             0.15,
         ),
     ];
-    for rewound in [false, true] {
-        let s = scene(&dir, rewound);
+    for (rewound, mirrored) in [(false, false), (true, false), (true, true)] {
+        let s = scene(&dir, rewound, mirrored);
         for (name, method, emitter_sampling, bound) in cases {
             let gi = GiSettings {
                 method,
@@ -175,11 +182,13 @@ fn an_emitter_lights_the_side_its_vertex_normals_point_to() {
             let img = render_image(&ctx, &s, &settings(gi)).expect("renders").hdr;
             let got = centre(&img);
             println!(
-                "{name}, winding rewound in the file: {rewound}: {got} (closed form at h − δ: {expected})"
+                "{name}, rewound in the file: {rewound}, mirrored: {mirrored}: {got} \
+                 (closed form at h − δ: {expected})"
             );
             assert!(
                 (got / expected - 1.0).abs() < bound,
-                "{name} (rewound in the file: {rewound}): floor {got}, closed form {expected}"
+                "{name} (rewound in the file: {rewound}, mirrored: {mirrored}): floor {got}, \
+                 closed form {expected}"
             );
         }
     }

@@ -173,6 +173,19 @@ pub fn orient_to_normals(positions: &[Vec3], normals: &[Vec3], indices: &mut [u3
     rewound
 }
 
+/// The order in which to read a triangle's corners after transforming them by `model` so
+/// that the world-space winding keeps the front [`orient_to_normals`] gave it: reversed
+/// (0, 2, 1) where `model` mirrors (a negative determinant, e.g. `scale = [-1, 1, 1]`), whose
+/// normals, transformed by the inverse transpose, still point to the front while the
+/// transformed positions turn the winding around.
+pub fn corner_order(model: &Mat4) -> [usize; 3] {
+    if glam::Mat3::from_mat4(*model).determinant() < 0.0 {
+        [0, 2, 1]
+    } else {
+        [0, 1, 2]
+    }
+}
+
 /// Names accepted by `builtin = "…"` in `[[objects]]`.
 pub const BUILTIN_MESH_NAMES: &[&str] = &[
     "cube",
@@ -550,6 +563,23 @@ mod tests {
         // Now the first sums to -3Z (rewound), the second to -Z (rewound too).
         assert_eq!(orient_to_normals(&p, &n, &mut idx), 2);
         assert_eq!(idx, [0, 2, 1, 1, 2, 3]);
+    }
+
+    #[test]
+    fn mirroring_transforms_reverse_the_corner_order() {
+        assert_eq!(corner_order(&Mat4::IDENTITY), [0, 1, 2]);
+        let mirror = Mat4::from_scale(Vec3::new(-1.0, 1.0, 1.0));
+        assert_eq!(corner_order(&mirror), [0, 2, 1]);
+        // Two mirrors are a rotation.
+        assert_eq!(
+            corner_order(&Mat4::from_scale(Vec3::new(-1.0, -2.0, 1.0))),
+            [0, 1, 2]
+        );
+        // The reversed order keeps the face normal where the normals point: +Z in object
+        // space stays the front after x is mirrored (normals by the inverse transpose: +Z).
+        let p = [Vec3::ZERO, Vec3::X, Vec3::Y].map(|v| mirror.transform_point3(v));
+        let [a, b, c] = corner_order(&mirror).map(|k| p[k]);
+        assert!((b - a).cross(c - a).z > 0.0);
     }
 
     #[test]
