@@ -145,6 +145,8 @@ pub(super) fn emissive_triangles(scene: &Scene, t_s: f32, per_texel: bool) -> Ve
             continue;
         };
         let m = object.transform_at(t_s);
+        // The emitting side is e1 x e2's: a mirroring transform reads the corners reversed.
+        let order = crate::scene::corner_order(&m);
         for (si, sub) in mesh.submeshes.iter().enumerate() {
             let material = object.materials.get(si).copied().unwrap_or(sub.material);
             let Some(mat) = scene.materials.get(material) else {
@@ -157,9 +159,8 @@ pub(super) fn emissive_triangles(scene: &Scene, t_s: f32, per_texel: bool) -> Ve
             let map = mat.pbr_maps.emission.filter(|_| per_texel);
             let range = sub.first_index as usize..(sub.first_index + sub.index_count) as usize;
             for t in mesh.indices[range].chunks_exact(3) {
-                let [a, b, c] =
-                    [0, 1, 2].map(|k| m.transform_point3(mesh.positions[t[k] as usize]));
-                let uv = [0, 1, 2].map(|k| {
+                let [a, b, c] = order.map(|k| m.transform_point3(mesh.positions[t[k] as usize]));
+                let uv = order.map(|k| {
                     mesh.uvs
                         .as_ref()
                         .and_then(|uvs| uvs.get(t[k] as usize).copied())

@@ -1022,7 +1022,10 @@ impl LocalPrimitive {
                         // A zero or non-finite normal falls back to the computed one.
                         (normal_matrix * v).try_normalize().unwrap_or(c)
                     })
-                    .collect();
+                    .collect::<Vec<_>>();
+                // The normals are the front, as for OBJ files: a triangle wound against
+                // them is rewound ([`super::mesh::orient_to_normals`]).
+                super::mesh::orient_to_normals(&world_positions, &normals, &mut indices);
                 (world_positions, normals, uvs, indices)
             }
             None => {

@@ -141,6 +141,51 @@ pub fn area_weighted_normals(positions: &[Vec3], indices: &[u32]) -> Vec<Vec3> {
         .collect()
 }
 
+/// Rewinds every triangle whose winding disagrees with its vertex normals (the face normal
+/// (b − a) × (c − a) points away from n_a + n_b + n_c) by swapping its last two indices, so
+/// that [`Mesh::indices`]' "counter-clockwise seen from the front" holds for files whose
+/// normals and winding disagree; returns how many it rewound. The normals decide because they
+/// are what the G-buffer shades, what emission leaves from (docs/ARCHITECTURE.md, "Units") and
+/// what Mitsuba 3's area emitter takes as its front when it renders voxgi's export; the
+/// consumers of the winding alone (the emitter list's e₁ × e₂, the voxel normal volume) then
+/// agree with them. Flattened scenes keep the winding of mirroring transforms while
+/// transforming the normals correctly: two of the Modern Hall's four window emitters (39% of
+/// its emitted power) are such triangles and lit the outside of the building before
+/// (docs/measurements/real-scenes.md, "Where the Modern Hall's light went"). Swapping b and c
+/// keeps each vertex's normal and texture coordinates; the G-buffer's tangent frame comes from
+/// screen-space derivatives, which the winding does not enter. Degenerate triangles, normals
+/// that cancel, and indices out of range are left alone.
+pub fn orient_to_normals(positions: &[Vec3], normals: &[Vec3], indices: &mut [u32]) -> usize {
+    let mut rewound = 0;
+    for tri in indices.chunks_exact_mut(3) {
+        let at = |k: usize| {
+            let i = tri[k] as usize;
+            positions.get(i).copied().zip(normals.get(i).copied())
+        };
+        let (Some((a, na)), Some((b, nb)), Some((c, nc))) = (at(0), at(1), at(2)) else {
+            continue;
+        };
+        if (b - a).cross(c - a).dot(na + nb + nc) < 0.0 {
+            tri.swap(1, 2);
+            rewound += 1;
+        }
+    }
+    rewound
+}
+
+/// The order in which to read a triangle's corners after transforming them by `model` so
+/// that the world-space winding keeps the front [`orient_to_normals`] gave it: reversed
+/// (0, 2, 1) where `model` mirrors (a negative determinant, e.g. `scale = [-1, 1, 1]`), whose
+/// normals, transformed by the inverse transpose, still point to the front while the
+/// transformed positions turn the winding around.
+pub fn corner_order(model: &Mat4) -> [usize; 3] {
+    if glam::Mat3::from_mat4(*model).determinant() < 0.0 {
+        [0, 2, 1]
+    } else {
+        [0, 1, 2]
+    }
+}
+
 /// Names accepted by `builtin = "…"` in `[[objects]]`.
 pub const BUILTIN_MESH_NAMES: &[&str] = &[
     "cube",
@@ -488,6 +533,53 @@ mod tests {
         // Clockwise: -Z.
         let n = area_weighted_normals(&p, &[0, 2, 1]);
         assert!((n[0] + Vec3::Z).length() < 1e-6);
+    }
+
+    #[test]
+    fn triangles_are_rewound_to_face_their_vertex_normals() {
+        // Counter-clockwise seen from +Z, so the face normal is +Z.
+        let p = [Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::new(5.0, 5.0, 0.0)];
+        // Normals toward -Z: the triangle is rewound to (0, 2, 1), whose face normal is -Z.
+        let mut idx = [0, 1, 2];
+        assert_eq!(orient_to_normals(&p, &[-Vec3::Z; 4], &mut idx), 1);
+        assert_eq!(idx, [0, 2, 1]);
+        let face = (p[2] - p[0]).cross(p[1] - p[0]);
+        assert!(face.dot(-Vec3::Z) > 0.0);
+        // Agreeing normals, normals that cancel (sum zero), a degenerate triangle and an index
+        // out of range are left alone.
+        let mut idx = [0, 1, 2];
+        assert_eq!(orient_to_normals(&p, &[Vec3::Z; 4], &mut idx), 0);
+        assert_eq!(idx, [0, 1, 2]);
+        let cancel = [Vec3::Z, -Vec3::Z, Vec3::ZERO, Vec3::ZERO];
+        let mut idx = [0, 1, 2, 0, 0, 1, 0, 1, 9];
+        assert_eq!(orient_to_normals(&p, &cancel, &mut idx), 0);
+        assert_eq!(idx, [0, 1, 2, 0, 0, 1, 0, 1, 9]);
+        // Only the disagreeing triangle of two changes.
+        let mut idx = [0, 1, 2, 1, 3, 2];
+        let n = [Vec3::Z, Vec3::Z, Vec3::Z, -Vec3::Z];
+        // (1, 3, 2): face normal ((5,5,0)-(1,0,0)) x ((0,1,0)-(1,0,0)) = +Z, normals sum +2Z: kept.
+        assert_eq!(orient_to_normals(&p, &n, &mut idx), 0);
+        let n = [-Vec3::Z, -Vec3::Z, -Vec3::Z, Vec3::Z];
+        // Now the first sums to -3Z (rewound), the second to -Z (rewound too).
+        assert_eq!(orient_to_normals(&p, &n, &mut idx), 2);
+        assert_eq!(idx, [0, 2, 1, 1, 2, 3]);
+    }
+
+    #[test]
+    fn mirroring_transforms_reverse_the_corner_order() {
+        assert_eq!(corner_order(&Mat4::IDENTITY), [0, 1, 2]);
+        let mirror = Mat4::from_scale(Vec3::new(-1.0, 1.0, 1.0));
+        assert_eq!(corner_order(&mirror), [0, 2, 1]);
+        // Two mirrors are a rotation.
+        assert_eq!(
+            corner_order(&Mat4::from_scale(Vec3::new(-1.0, -2.0, 1.0))),
+            [0, 1, 2]
+        );
+        // The reversed order keeps the face normal where the normals point: +Z in object
+        // space stays the front after x is mirrored (normals by the inverse transpose: +Z).
+        let p = [Vec3::ZERO, Vec3::X, Vec3::Y].map(|v| mirror.transform_point3(v));
+        let [a, b, c] = corner_order(&mirror).map(|k| p[k]);
+        assert!((b - a).cross(c - a).z > 0.0);
     }
 
     #[test]

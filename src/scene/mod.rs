@@ -249,7 +249,9 @@ pub use material::{
     fresnel_schlick, ggx_brdf, ggx_d, ggx_diffuse, ggx_g1, ggx_specular, AlphaMap, AlphaMode,
     BumpKind, Ggx, Material, PbrMaps, TextureData, Transparency, DIELECTRIC_F0, TRANSPARENCY_NAMES,
 };
-pub use mesh::{area_weighted_normals, Aabb, Mesh, SubMesh, BUILTIN_MESH_NAMES};
+pub use mesh::{
+    area_weighted_normals, corner_order, orient_to_normals, Aabb, Mesh, SubMesh, BUILTIN_MESH_NAMES,
+};
 pub use object::{
     euler_xyz_deg, rotation_from_euler_xyz_deg, Animation, Keyframe, Object, Transform,
 };

@@ -655,7 +655,8 @@ fn load_mtl_library(
 }
 
 /// Appends one tobj model to `mesh` as a submesh of `material`, with the file's normals (the
-/// area-weighted ones where a normal is zero or missing), and its texture coordinates to `uvs` when some model of the file has them (zeros for a
+/// area-weighted ones where a normal is zero or missing; a triangle wound against its normals
+/// is rewound, [`super::mesh::orient_to_normals`]), and its texture coordinates to `uvs` when some model of the file has them (zeros for a
 /// model without).
 fn append_model(mesh: &mut Mesh, uvs: Option<&mut Vec<Vec2>>, m: &tobj::Mesh, material: usize) {
     let n = m.positions.len() / 3;
@@ -690,9 +691,18 @@ fn append_model(mesh: &mut Mesh, uvs: Option<&mut Vec<Vec2>>, m: &tobj::Mesh, ma
             uvs.resize(uvs.len() + n, Vec2::ZERO);
         }
     }
+    // The file's normals are the front; a winding that disagrees is rewound to them.
+    let mut indices = m.indices.clone();
+    let rewound = super::mesh::orient_to_normals(&positions, &normals, &mut indices);
+    if rewound > 0 {
+        log::debug!(
+            "{}: {rewound} triangles rewound to face their vertex normals",
+            mesh.name
+        );
+    }
     let first_index = mesh.indices.len() as u32;
     mesh.indices
-        .extend(m.indices.iter().map(|&i| i + base as u32));
+        .extend(indices.iter().map(|&i| i + base as u32));
     mesh.positions.extend(positions);
     mesh.normals.extend(normals);
     mesh.submeshes.push(SubMesh {

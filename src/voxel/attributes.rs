@@ -821,6 +821,9 @@ fn attribute_triangles(
             continue;
         };
         let m = object.transform_at(t_s);
+        // The resolve pass takes the face normal from the winding: a mirroring transform
+        // reads the corners reversed, so it stays on the side the normals point to.
+        let order = crate::scene::corner_order(&m);
         for (si, sub) in mesh.submeshes.iter().enumerate() {
             let material = object.materials.get(si).copied().unwrap_or(sub.material);
             let opacity = scene
@@ -843,13 +846,13 @@ fn attribute_triangles(
             );
             let range = sub.first_index as usize..(sub.first_index + sub.index_count) as usize;
             for t in mesh.indices[range].chunks_exact(3) {
-                let p = [0, 1, 2].map(|k| m.transform_point3(mesh.positions[t[k] as usize]));
+                let p = order.map(|k| m.transform_point3(mesh.positions[t[k] as usize]));
                 let [v0, v1, v2] = [0, 1, 2].map(|k| [p[k].x, p[k].y, p[k].z, albedo[k]]);
                 out.push([v0, v1, v2, [transparency, seed, 0.0, 0.0]]);
                 let row = if map_ids == [-1; 4] {
                     GpuTriangleMaps::NONE
                 } else {
-                    let uv = [0, 1, 2].map(|k| {
+                    let uv = order.map(|k| {
                         mesh.uvs
                             .as_ref()
                             .and_then(|uvs| uvs.get(t[k] as usize).copied())
