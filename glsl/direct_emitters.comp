@@ -24,6 +24,13 @@
 layout(constant_id = 0) const bool HAS_PHONG = false;  // the G-buffer has a lobe target (Phong or GGX)
 layout(constant_id = 3) const bool HAS_EMITTERS = false;  // sample the emitter list (binding 14)
 layout(constant_id = 8) const uint ENVIRONMENT = 0u;  // environment.glsl's kinds
+// The frame accumulates (TAA): the pixel's sample rotation advances by the R2 sequence of the
+// frame (gi.seed, counted per frame), so that the frames' sample sets interleave and their
+// average converges; otherwise the rotation is fixed and a still image is the same every frame.
+layout(constant_id = 9) const bool ADVANCE = false;
+// Screen-space GI gathers the emission the camera sees (its lit colour includes it): the
+// emitter samples skip those points and bring the light of the others only.
+layout(constant_id = 10) const bool OFF_SCREEN_EMITTERS_ONLY = false;
 
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(set = 0, binding = 0, std430) readonly buffer FrameBuf { GpuFrame frame; };
@@ -55,6 +62,26 @@ bool vx_voxel(int x, int y, int k) {
 #include "gbuffer_lobe.glsl"
 #include "brdf.glsl"
 #include "material_lobe.glsl"
+// Whether the camera sees emitter point y (lit side's normal nl) in this frame, so that
+// screen-space GI gathers its light: y lies in the frame, the camera is on its lit side, and
+// the G-buffer's surface at y's pixel is y itself, within the pixel's footprint (a few
+// percent of the distance) plus a voxel diagonal (the emitter's own depth precision).
+bool seen_by_camera(vec3 y, vec3 nl) {
+    if (!OFF_SCREEN_EMITTERS_ONLY) return false;
+    vec3 to_camera = frame.camera_position.xyz - y;
+    if (dot(to_camera, nl) <= 0.0) return false;
+    vec4 c = frame.view_proj * vec4(y, 1.0);
+    if (c.w <= 0.0) return false;
+    vec2 uv = c.xy / c.w * 0.5 + 0.5;
+    if (any(lessThan(uv, vec2(0.0))) || any(greaterThanEqual(uv, vec2(1.0)))) return false;
+    vec2 size = vec2(frame.counts.zw);
+    ivec2 q = ivec2(uv * size);
+    float depth = texelFetch(gb_depth, q, 0).r;
+    if (depth >= 1.0) return false;
+    vec3 seen = pixel_world_position(frame.inv_view_proj, frame.camera_position.xyz, q, size, depth);
+    return distance(seen, y) < 0.05 * length(to_camera) + gi.voxel_diagonal_m;
+}
+#define EMITTER_POINT_SKIPPED seen_by_camera
 #define EMITTERS_BINDING 14
 #include "emitters.glsl"
 
@@ -88,7 +115,8 @@ vec3 environment_seen(vec3 o, vec3 n, vec3 d) {
 // gives the emitter and the environment samples rotations of their own.
 vec2 pixel_sample(uvec2 px, uint i, uint count, uint salt) {
     vec2 u = vec2((float(i) + 0.5) / float(count), radical_inverse(i));
-    return fract(u + pixel_rotation(px, gi.seed + salt));
+    vec2 rot = ADVANCE ? fract(pixel_rotation(px, salt) + r2(gi.seed)) : pixel_rotation(px, gi.seed + salt);
+    return fract(u + rot);
 }
 
 void main() {

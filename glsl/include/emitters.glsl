@@ -92,6 +92,11 @@ vec3 emitter_sample(vec3 o, vec3 n, vec3 wo, Lobe m, uint parts, float ps, vec2 
     float cl = -dot(nl, wi);
     // Below the vertex's surface, behind the emitter's front, or beyond the GI rays' reach.
     if (ci <= 0.0 || cl <= 0.0 || dist > gi.radius_m) return vec3(0.0);
+#ifdef EMITTER_POINT_SKIPPED
+    // The includer brings this point's light another way (direct_emitters.comp under
+    // screen-space GI: the emitting points the camera sees, which the gather reads).
+    if (EMITTER_POINT_SKIPPED(y, nl)) return vec3(0.0);
+#endif
     float pl = pa * d2 / cl;
     vec3 f = vec3(0.0);
     if (parts == 3u) {

@@ -31,7 +31,7 @@ pub use crate::scene::{
 };
 pub use gi_common::GpuGiPush;
 pub use gi_temporal::TemporalView;
-pub use method::{GiMethod, MethodSpec, Refusal};
+pub use method::{EmitterReach, GiMethod, MethodSpec, Refusal};
 pub use sao::GpuSaoPush;
 
 use crate::graph::{Access, BufferHandle, ImageHandle, RenderGraph, Shader, SlotCondition};

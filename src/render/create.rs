@@ -159,7 +159,7 @@ impl Renderer {
                     atlas_attributes: false,
                 },
                 &settings.gi,
-                settings.shadow.direct_samples,
+                (settings.shadow.direct_samples, settings.post.taa.is_some()),
                 sampler.raw,
             )?),
             _ => None,
@@ -220,7 +220,7 @@ struct FramePlan {
     voxel_view_on: bool,
     /// The emitters' and the environment's direct light with voxel visibility
     /// (`direct_emitters::sampled_light`), in scenes with them where no GI method brings it.
-    direct_light: Option<(bool, bool)>,
+    direct_light: Option<direct_emitters::SampledLight>,
     /// The voxelization, when a GI method, the sampled direct light or a debug view needs one.
     voxel_settings: Option<crate::voxel::gpu::VoxelSettings>,
     /// Transparent surfaces go to the linked lists instead of the G-buffer.

@@ -2,16 +2,10 @@
 //! every G-buffer pixel, with voxel visibility, added to `deferred_direct`'s radiance
 //! (`glsl/direct_emitters.comp`; docs/design/emitter-sampling.md, "Direct light").
 //!
-//! It runs only where no GI method brings that light already, so nothing is counted twice:
-//!
-//! - the emitters under `--gi none` (the voxel methods reach them through their first bounce,
-//!   and screen-space GI gathers the on-screen emission from the direct image);
-//! - the environment under `--gi none`, `--gi ssgi` and `--gi vpl` (screen-space GI has no
-//!   ray that can leave the scene, and the VPLs start at lights only, so neither reads the
-//!   environment; the hemisphere rays and the path tracer bring its first bounce themselves).
-//!
-//! These are facts about the methods that their specs (`gi::method`) do not state yet; the
-//! match below is the one place that holds them.
+//! It samples only the light that the frame's GI method does not bring itself, so nothing is
+//! counted twice: each method's spec states what its own passes bring
+//! ([`crate::gi::MethodSpec::brings_emitters`], [`crate::gi::MethodSpec::brings_environment`];
+//! the table method × light is in docs/design/emitter-sampling.md, "Who brings which light").
 //!
 //! The emitter list is the path tracer's ([`crate::gi::emitters`]); the rays are the GI rays'
 //! voxel traversal with the GI settings' offsets and length ([`GpuGiPush`]), their count per
@@ -22,29 +16,51 @@ use super::scene_gpu::SceneInputs;
 use super::HDR;
 use crate::gi::emitters::EmitterBuffer;
 use crate::gi::gi_common::GpuGiPush;
-use crate::gi::{GiMethod, GiTarget};
+use crate::gi::{EmitterReach, GiMethod, GiTarget};
 use crate::graph::{Access, BufferHandle, ImageHandle, RenderGraph, Shader};
 use crate::scene::{Environment, Scene};
 use crate::vk::{vk, Buffer, ComputePipeline, Context, ImageDesc, PushLayout, VkError};
 use crate::voxel::ray_mask::RayMaskLut;
+use std::sync::atomic::{AtomicU32, Ordering};
+use std::sync::Arc;
 
-/// Which light the pass samples for `method` in `scene`: (the emitters, the environment);
-/// `None` when neither (then the pass, and for it the voxel grid, is not made).
-pub fn sampled_light(method: GiMethod, scene: &Scene) -> Option<(bool, bool)> {
-    let emitters = method == GiMethod::None && scene.has_emission();
-    let environment = matches!(method, GiMethod::None | GiMethod::Ssgi | GiMethod::Vpl)
-        && scene.environment.is_some();
-    (emitters || environment).then_some((emitters, environment))
+/// What the pass samples (`None` of [`sampled_light`]: nothing, and the pass is not made).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SampledLight {
+    /// The emissive triangles' light.
+    pub emitters: bool,
+    /// Of the emitters, only the points the camera does not see: the method gathers the
+    /// others' light from the frame ([`EmitterReach::OnScreen`]).
+    pub emitters_off_screen_only: bool,
+    /// The environment's light.
+    pub environment: bool,
+}
+
+/// What the pass samples for `method` in `scene`: the light the scene has and the method's
+/// own passes do not bring (its spec says which); `None` when nothing (then the pass, and
+/// for it the voxel grid, is not made).
+pub fn sampled_light(method: GiMethod, scene: &Scene) -> Option<SampledLight> {
+    let spec = method.spec();
+    let emitters = spec.brings_emitters != EmitterReach::All && scene.has_emission();
+    let environment = !spec.brings_environment && scene.environment.is_some();
+    (emitters || environment).then_some(SampledLight {
+        emitters,
+        emitters_off_screen_only: emitters && spec.brings_emitters == EmitterReach::OnScreen,
+        environment,
+    })
 }
 
 pub struct DirectEmittersPass {
     pipeline: ComputePipeline,
-    /// The emissive triangles (scenes with them, under `--gi none`).
+    /// The emissive triangles (scenes with them, where the method does not bring them all).
     emitters: Option<EmitterBuffer>,
     /// The voxel traversal's ray-mask table (binding 4).
     lut: Buffer,
     sampler: vk::Sampler,
     push: GpuGiPush,
+    /// Frames written so far, by which the samples advance (`ADVANCE`), when the frame
+    /// accumulates (TAA); `None`: the samples are the same every frame.
+    frames: Option<Arc<AtomicU32>>,
 }
 
 /// The buffers the pass reads, imported once per frame (both stereo eyes share them).
@@ -56,21 +72,24 @@ pub struct DirectEmittersWorld {
 
 impl DirectEmittersPass {
     /// `light`: [`sampled_light`]'s answer; `target`: the grid the frame voxelizes and the
-    /// frame's size; `samples`: K per pixel; `sampler`: the nearest-neighbour sampler.
+    /// frame's size; `samples`: K per pixel; `advance`: the frame accumulates over frames
+    /// (TAA), so each frame draws other samples and their average converges (a frame that
+    /// does not accumulate keeps its samples, and a still image is the same every frame);
+    /// `sampler`: the nearest-neighbour sampler.
     pub fn new(
         ctx: &Context,
-        (emitters, environment): (bool, bool),
+        light: SampledLight,
         target: &GiTarget<'_>,
         gi: &crate::gi::GiSettings,
-        samples: u32,
+        (samples, advance): (u32, bool),
         sampler: vk::Sampler,
     ) -> Result<Self, VkError> {
         let scene = target.scene;
-        let emitters = match emitters {
+        let emitters = match light.emitters {
             true => EmitterBuffer::new(ctx, scene, target.time_s)?,
             false => None,
         };
-        let environment = match environment {
+        let environment = match light.environment {
             true => Environment::shader_kind(scene.environment.as_ref()),
             false => 0,
         };
@@ -80,6 +99,8 @@ impl DirectEmittersPass {
             &crate::spec_constants![
                 HAS_PHONG = target.has_phong || scene.has_ggx(),
                 HAS_EMITTERS = emitters.is_some(),
+                OFF_SCREEN_EMITTERS_ONLY = light.emitters_off_screen_only,
+                ADVANCE = advance,
                 ENVIRONMENT = environment,
             ],
         )?;
@@ -97,6 +118,7 @@ impl DirectEmittersPass {
                 rays: samples.max(1),
                 ..GpuGiPush::new(gi, target)
             },
+            frames: advance.then(|| Arc::new(AtomicU32::new(0))),
         })
     }
 
@@ -129,6 +151,7 @@ impl DirectEmittersPass {
         let environment = scene.environment_map.unwrap_or(gbuffer.albedo);
         let emitters = world.emitters.unwrap_or(world.lut);
         let push = self.push;
+        let frames = self.frames.clone();
         g.add_pass("direct_emitters")
             .pipeline(&pipe)
             .bind(0, scene.frame, Access::StorageRead(c))
@@ -143,6 +166,12 @@ impl DirectEmittersPass {
             .bind(14, emitters, Access::StorageRead(c))
             .bind_sampled(15, environment, scene.texture_sampler, c)
             .record(move |ctx| {
+                // The shader's R2 index: the base seed advanced by the frames written.
+                let advanced = frames.as_ref().map_or(0, |f| f.load(Ordering::SeqCst));
+                let push = GpuGiPush {
+                    seed: push.seed.wrapping_add(advanced),
+                    ..push
+                };
                 ctx.bind(&pipe);
                 ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
                 ctx.cmd.dispatch(w.div_ceil(8), h.div_ceil(8), 1);
@@ -157,8 +186,12 @@ impl DirectEmittersPass {
         }
     }
 
-    /// Writes the current emitter list into frame slot `slot`'s window.
+    /// Writes the current emitter list into frame slot `slot`'s window, and counts the frame
+    /// (once per frame, before it is recorded).
     pub fn write_slot(&mut self, slot: usize) {
+        if let Some(f) = &self.frames {
+            f.fetch_add(1, Ordering::SeqCst);
+        }
         if let Some(e) = &mut self.emitters {
             e.write_slot(slot);
         }

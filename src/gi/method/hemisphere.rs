@@ -5,7 +5,7 @@
 use super::super::gi_hemisphere::GiHemisphere;
 use super::super::gi_radiance_volume::GiRadianceVolume;
 use super::super::{GiMethodPasses, GiSettings, GiTarget, RadianceSource};
-use super::{rays_slider, temporal_controls, MethodSpec};
+use super::{rays_slider, temporal_controls, EmitterReach, MethodSpec};
 use crate::vk::{Context, VkError};
 
 pub(super) static SPEC: MethodSpec = MethodSpec {
@@ -18,6 +18,10 @@ pub(super) static SPEC: MethodSpec = MethodSpec {
     needs_voxels: true,
     // The area lights' light maps are rendered for this method alone.
     reads_area_light_maps: true,
+    // A ray that hits an emitting voxel reads the emission volume; a ray that leaves the grid reads
+    // the environment.
+    brings_emitters: EmitterReach::All,
+    brings_environment: true,
     // The light maps do not see emitters: the hits read the emission volume.
     attribute_volumes: |s, scene| {
         s.radiance_source == RadianceSource::Volume || scene.has_emission()

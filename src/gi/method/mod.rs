@@ -60,6 +60,14 @@ pub struct MethodSpec {
     pub needs_voxels: bool,
     /// The method reads the area lights' (paraboloid) light maps too.
     pub reads_area_light_maps: bool,
+    /// Which emissive surfaces' light the method's own passes bring to a pixel's surface
+    /// (its first bounce off them). What it does not bring, the `direct_emitters` pass
+    /// samples (`render::direct_emitters::sampled_light`), so that every emitter is counted
+    /// once.
+    pub brings_emitters: EmitterReach,
+    /// The method's own rays bring the environment's light to a pixel's surface (rays that
+    /// leave the voxel grid read it); otherwise `direct_emitters` samples it.
+    pub brings_environment: bool,
     /// The method reads the albedo and normal volumes (and with them, in scenes with emitters,
     /// the emission volume).
     pub attribute_volumes: fn(&GiSettings, &Scene) -> bool,
@@ -91,6 +99,19 @@ pub struct MethodSpec {
     pub panel: fn(&mut egui::Ui, &mut GiSettings, Option<u32>),
     /// Builds the method's passes.
     pub(in crate::gi) build: BuildPasses,
+}
+
+/// Which emitters' light a GI method brings to the surfaces it lights
+/// ([`MethodSpec::brings_emitters`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum EmitterReach {
+    /// None: the direct-light pass samples every emitter.
+    Nothing,
+    /// Only the emitting points the camera sees (screen-space GI gathers the frame's lit
+    /// colour, emission included): the direct-light pass samples the others.
+    OnScreen,
+    /// Every emitter, on screen or not: the direct-light pass samples none.
+    All,
 }
 
 /// A combination a renderer refuses, in the words of [`crate::render::RenderError`].

@@ -1,6 +1,6 @@
 //! No indirect light: the frame is the direct light alone.
 
-use super::MethodSpec;
+use super::{EmitterReach, MethodSpec};
 
 pub(super) static SPEC: MethodSpec = MethodSpec {
     name: "none",
@@ -10,6 +10,9 @@ pub(super) static SPEC: MethodSpec = MethodSpec {
     temporal: false,
     needs_voxels: false,
     reads_area_light_maps: false,
+    // No indirect light, so nothing reaches a surface but the direct light.
+    brings_emitters: EmitterReach::Nothing,
+    brings_environment: false,
     attribute_volumes: |_, _| false,
     material_volume: |_| false,
     history: |_, _, _| Vec::new(),

@@ -3,7 +3,7 @@
 //! `gi_pathtrace`.
 
 use super::super::gi_pathtrace::GiPathtrace;
-use super::{rays_slider, MethodSpec};
+use super::{rays_slider, EmitterReach, MethodSpec};
 
 pub(super) static SPEC: MethodSpec = MethodSpec {
     name: "pathtrace",
@@ -15,6 +15,10 @@ pub(super) static SPEC: MethodSpec = MethodSpec {
     temporal: true,
     needs_voxels: true,
     reads_area_light_maps: false,
+    // Next-event estimation toward the emissive triangles, MIS-weighted with the BSDF rays that hit
+    // emitting voxels; rays that leave the grid read the environment.
+    brings_emitters: EmitterReach::All,
+    brings_environment: true,
     attribute_volumes: |_, _| true,
     // Later bounces sample the Phong and GGX lobes unless `--pathtrace-lobes false`.
     material_volume: |s| s.pathtrace_lobes,

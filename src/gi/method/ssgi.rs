@@ -5,7 +5,7 @@
 use super::super::ssgi::Ssgi;
 use super::super::ssgi_reflect::Ssr;
 use super::super::GiSettings;
-use super::{MethodSpec, Refusal};
+use super::{EmitterReach, MethodSpec, Refusal};
 
 pub(super) static SPEC: MethodSpec = MethodSpec {
     name: "ssgi",
@@ -17,6 +17,10 @@ pub(super) static SPEC: MethodSpec = MethodSpec {
     temporal: false,
     needs_voxels: false,
     reads_area_light_maps: false,
+    // The gather reads the frame's lit colour, emission included, so it sees the emitters the
+    // camera sees; it has no ray that leaves the scene, so no environment.
+    brings_emitters: EmitterReach::OnScreen,
+    brings_environment: false,
     attribute_volumes: |_, _| false,
     material_volume: |_| false,
     history: |s, size, glossy| {

@@ -4,7 +4,7 @@
 
 use super::super::vpl::VplPasses;
 use super::super::GiSettings;
-use super::MethodSpec;
+use super::{EmitterReach, MethodSpec};
 
 pub(super) static SPEC: MethodSpec = MethodSpec {
     name: "vpl",
@@ -17,6 +17,10 @@ pub(super) static SPEC: MethodSpec = MethodSpec {
     temporal: true,
     needs_voxels: true,
     reads_area_light_maps: false,
+    // The emitter VPLs (`gi_vpl_emit`) carry the emitters' light; a VPL starts at a light, so no
+    // VPL brings the environment.
+    brings_emitters: EmitterReach::All,
+    brings_environment: false,
     // Bounces after the first, and the emitters' rays, read albedo and normal at their voxel
     // hits.
     attribute_volumes: |s, scene| {
