@@ -16,9 +16,10 @@
 //!   With a fixed cost per frame (shadow maps, the panel) the s² prediction overestimates
 //!   the time of a larger scale and underestimates that of a smaller one: up steps are
 //!   cautious and a down jump that was too optimistic is followed by a second one.
-//! - **Settle.** After a change, the measurements of the frames recorded before it (still in
-//!   flight) and of the new renderer's first frame (one-time work: voxelization, cleared
-//!   histories) are skipped.
+//! - **Each measurement at its own scale.** The viewer passes the scale a measured frame was
+//!   recorded at: the frames still in flight when the scale changed are not mistaken for
+//!   frames of the new scale (they are left out), and a renderer's first frame (one-time
+//!   work: voxelization, cleared histories) is not measured at all.
 //! - **Refine.** After `refine_frames` frames without camera motion the scene renders at the
 //!   full size (the image converges there); the first moving frame returns to the scale that
 //!   held the budget while moving, without measuring again.
@@ -32,9 +33,6 @@ pub const UP_FRACTION: f64 = 0.7;
 /// A down jump aims at this share of the budget, leaving room for the fixed costs the s²
 /// prediction leaves out.
 pub const DOWN_TARGET: f64 = 0.9;
-/// Measurements skipped after a change: the frames in flight that were recorded before it,
-/// and the new renderer's first frame.
-pub const SETTLE: u32 = crate::vk::MAX_FRAMES_IN_FLIGHT as u32 + 1;
 /// The median of this many measurements decides a step (one frame over twice the budget
 /// decides alone).
 pub const WINDOW: usize = 3;
@@ -63,7 +61,7 @@ pub struct ScaleController {
     /// Rendering at the full size because the camera stood still.
     refined: bool,
     still_frames: u32,
-    settle: u32,
+    /// GPU times of frames at the current moving scale since it was chosen.
     samples: Vec<f64>,
 }
 
@@ -76,7 +74,6 @@ impl ScaleController {
             moving: STEPS,
             refined: false,
             still_frames: 0,
-            settle: SETTLE,
             samples: Vec::new(),
         }
     }
@@ -109,14 +106,14 @@ impl ScaleController {
         self.settings = settings;
         self.moving = self.moving.clamp(self.min_steps(), STEPS);
         self.samples.clear();
-        self.settle = SETTLE;
         (self.steps() != before).then_some(Change::Settings)
     }
 
-    /// One presented frame: `gpu_ms`, the GPU time of the frame that finished (`None` when the
-    /// frame loop had none), and whether the camera stood still since the last frame.
-    /// `Some` when the scale changes for the next frame.
-    pub fn observe(&mut self, gpu_ms: Option<f64>, still: bool) -> Option<Change> {
+    /// One presented frame: `measured`, the GPU time of the frame that finished and the scale
+    /// (eighths) it was recorded at (`None` when there is none to measure), and whether the
+    /// camera stood still since the last frame. `Some` when the scale changes for the next
+    /// frame.
+    pub fn observe(&mut self, measured: Option<(f64, u32)>, still: bool) -> Option<Change> {
         if !self.settings.on() {
             return None;
         }
@@ -133,11 +130,8 @@ impl ScaleController {
             self.refined = true;
             return self.changed(Change::Refine, self.moving != STEPS);
         }
-        let ms = gpu_ms.filter(|t| t.is_finite() && *t > 0.0)?;
-        if self.settle > 0 {
-            self.settle -= 1;
-            return None;
-        }
+        // Only frames of the scale the decision is about (not the ones in flight at a change).
+        let (ms, _) = measured.filter(|&(t, s)| t.is_finite() && t > 0.0 && s == self.moving)?;
         self.samples.push(ms);
         let budget = f64::from(self.settings.frame_budget_ms);
         let far_over = ms > 2.0 * budget;
@@ -167,12 +161,11 @@ impl ScaleController {
         None
     }
 
-    /// `Some(change)` when the scale changed: then the next measurements are settling.
+    /// `Some(change)` when the scale changed; the samples of the old one are dropped.
     fn changed(&mut self, change: Change, scale_changed: bool) -> Option<Change> {
         if !scale_changed {
             return None;
         }
-        self.settle = SETTLE;
         self.samples.clear();
         Some(change)
     }
@@ -198,13 +191,24 @@ mod tests {
         }
     }
 
-    /// A frame whose GPU time is `fixed_ms + per_full_ms · s²` at scale s: the model the
-    /// controller assumes, plus a fixed cost it does not.
+    /// Frames whose GPU time is `fixed_ms + per_full_ms · s²` at scale s (the model the
+    /// controller assumes, plus a fixed cost it does not), measured two frames late as the
+    /// viewer's frame loop reads them: the scales of the frames in flight.
     fn run(c: &mut ScaleController, fixed_ms: f64, per_full_ms: f64, frames: usize) -> Vec<u32> {
         let mut seen = Vec::new();
+        let mut in_flight = std::collections::VecDeque::new();
         for _ in 0..frames {
-            let s = f64::from(c.steps()) / f64::from(STEPS);
-            c.observe(Some(fixed_ms + per_full_ms * s * s), false);
+            let measured = if in_flight.len() == 2 {
+                in_flight.pop_front().map(|steps: u32| {
+                    let s = f64::from(steps) / f64::from(STEPS);
+                    (fixed_ms + per_full_ms * s * s, steps)
+                })
+            } else {
+                None
+            };
+            let recorded = c.steps();
+            c.observe(measured, false);
+            in_flight.push_back(recorded);
             seen.push(c.steps());
         }
         seen
@@ -222,7 +226,7 @@ mod tests {
         // 1280×720 at 8900 ms on lavapipe, budget 100 ms: 8900 s² ≤ 90 wants s ≤ 0.1, so the
         // floor, 1/8.
         let mut c = ScaleController::new(settings(100.0));
-        let seen = run(&mut c, 0.0, 8900.0, (SETTLE + 1) as usize);
+        let seen = run(&mut c, 0.0, 8900.0, 3);
         assert_eq!(*seen.last().expect("frames"), 1);
         assert_eq!(c.internal_size((1280, 720)), (160, 90));
         // A 4 ms full frame against 16 ms: never scaled.
@@ -252,14 +256,17 @@ mod tests {
         // hysteresis's 0.7.
         let mut c = ScaleController::new(settings(100.0));
         c.moving = 6;
-        c.settle = 0;
         for _ in 0..30 {
-            assert_eq!(c.observe(Some(60.0), false), None);
+            assert_eq!(c.observe(Some((60.0, 6)), false), None);
         }
         assert_eq!(c.steps(), 6);
+        // Frames of another scale (in flight at a change) do not count.
+        for _ in 0..30 {
+            assert_eq!(c.observe(Some((10.0, 8)), false), None);
+        }
         // 0.45 of the budget: 7/8 predicts 0.61, up.
         for _ in 0..WINDOW {
-            c.observe(Some(45.0), false);
+            c.observe(Some((45.0, 6)), false);
         }
         assert_eq!(c.steps(), 7);
     }
@@ -274,15 +281,15 @@ mod tests {
         run(&mut c, 0.0, 1000.0, 10);
         assert_eq!(c.steps(), 1);
         for i in 0..4 {
-            assert_eq!(c.observe(Some(1000.0), true), None, "still frame {i}");
+            assert_eq!(c.observe(Some((1000.0, 1)), true), None, "still frame {i}");
         }
-        assert_eq!(c.observe(Some(1000.0), true), Some(Change::Refine));
+        assert_eq!(c.observe(Some((1000.0, 1)), true), Some(Change::Refine));
         assert_eq!(c.steps(), STEPS);
         // Full-size frames while still do not scale down.
         for _ in 0..20 {
-            assert_eq!(c.observe(Some(1e5), true), None);
+            assert_eq!(c.observe(Some((1e5, 8)), true), None);
         }
-        assert_eq!(c.observe(Some(1e5), false), Some(Change::Moving));
+        assert_eq!(c.observe(Some((1e5, 8)), false), Some(Change::Moving));
         assert_eq!(c.steps(), 1);
     }
 

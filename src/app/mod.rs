@@ -252,6 +252,8 @@ struct Viewer {
     history: frame_graph::FrameHistory,
     last_frame: Instant,
     frame_ms: f32,
+    /// The last frame's wall time (`frame_ms` is its moving average).
+    frame_dt_ms: f32,
     started: Instant,
     report: ViewerReport,
     status: String,
@@ -306,6 +308,9 @@ struct Viewer {
     /// resolution refines a still view).
     last_camera: Option<Camera>,
     still: bool,
+    /// Per frame slot, the scale (eighths) of the frame it recorded, for dynamic resolution's
+    /// measurement of it; `None` for a renderer's first frame (one-time work) or in stereo.
+    recorded_steps: [Option<u32>; MAX_FRAMES_IN_FLIGHT],
 }
 
 /// The view the editor's handles are drawn for.
@@ -524,6 +529,7 @@ impl Viewer {
             history: frame_graph::FrameHistory::new(frame_graph::HISTORY_FRAMES),
             last_frame: Instant::now(),
             frame_ms: 0.0,
+            frame_dt_ms: 0.0,
             started: Instant::now(),
             report: ViewerReport::default(),
             status: String::new(),
@@ -554,6 +560,7 @@ impl Viewer {
             display: None,
             last_camera: None,
             still: false,
+            recorded_steps: [None; MAX_FRAMES_IN_FLIGHT],
         }
     }
 
@@ -762,6 +769,7 @@ impl Viewer {
             self.controls.time_s += dt_s.min(0.1);
         }
         self.frame_ms = 0.9 * self.frame_ms + 0.1 * dt_s * 1000.0;
+        self.frame_dt_ms = dt_s * 1000.0;
         if let Some(wanted) = self.opts.frames {
             if self.started.elapsed() > SCRIPT_TIMEOUT {
                 return Err(AppError::Stalled {
@@ -988,8 +996,11 @@ impl Viewer {
             (p, gpu_ms, started)
         });
         // The finished frame's GPU time (its passes' timestamps): what dynamic resolution holds.
+        // It is measured at the scale that frame was recorded at (a renderer's first frame not).
         let gpu_ms = (!finished.is_empty()).then(|| finished.iter().map(|t| t.gpu_ms).sum());
-        let change = self.dynres.observe(gpu_ms, self.still);
+        let measured_steps = self.recorded_steps.get_mut(slot).and_then(Option::take);
+        let recording_steps = self.dynres.steps();
+        let change = self.dynres.observe(gpu_ms.zip(measured_steps), self.still);
         self.stats.push(finished);
         let (index, ready) = match swapchain.acquire(slot)? {
             Acquired::Image { index, ready } => (index, ready),
@@ -1026,6 +1037,9 @@ impl Viewer {
         overlay.write_frame(slot, prims, ppp, extent);
         let shot = self.controls.screenshot || last_scripted;
         graph.shot_wanted.set(shot);
+        if let Some(s) = self.recorded_steps.get_mut(slot) {
+            *s = (self.renderer_frames > 0 && self.display.is_some()).then_some(recording_steps);
+        }
         graph.exec.record(&cmd, slot, timestamps);
         frame_loop.submit(
             ctx,
@@ -1054,14 +1068,21 @@ impl Viewer {
         // For scripted tests (`RUST_LOG=voxgi::app=debug`): they wait for frames and for the
         // camera to get somewhere, not for a fixed time. Local coordinates (without
         // `Scene::origin_m`).
+        // Then what dynamic resolution saw: the size rendered, the GPU time of the frame
+        // that finished (two frames back) and this frame's wall time.
         log::debug!(
-            "frame {} presented at {}x{} ({} of its renderer); camera at {:?} looking {:?}",
+            "frame {} presented at {}x{} ({} of its renderer); camera at {:?} looking {:?}; \
+             renders {}x{}, GPU {} ms, wall {:.1} ms",
             self.report.frames,
             extent.width,
             extent.height,
             self.renderer_frames,
             self.scene.camera.position.to_array(),
-            self.scene.camera.forward.to_array()
+            self.scene.camera.forward.to_array(),
+            frame_size.0,
+            frame_size.1,
+            gpu_ms.map_or_else(|| "-".to_owned(), |t: f64| format!("{t:.1}")),
+            self.frame_dt_ms
         );
         if last_scripted {
             log::info!(
