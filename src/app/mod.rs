@@ -573,8 +573,11 @@ impl Viewer {
         (settings.width, settings.height) =
             stereo::eye_size(self.controls.stereo.mode, (extent.width, extent.height));
         if self.controls.stereo.mode.is_none() {
-            (settings.width, settings.height) =
-                self.dynres.internal_size((settings.width, settings.height));
+            let area = (settings.width, settings.height);
+            (settings.width, settings.height) = self.dynres.internal_size(area);
+            if self.dynres.steps() != dynres::STEPS {
+                self.log_scale(dynres::Change::Start, area);
+            }
         }
         log::info!("indirect light: {}", describe_gi(&settings.gi));
         log::info!(
@@ -1539,6 +1542,7 @@ impl Viewer {
             dynres::Change::Refine => "the camera stands still: refining".into(),
             dynres::Change::Moving => "the camera moves".into(),
             dynres::Change::Settings => "new settings".into(),
+            dynres::Change::Start => "starting at the smallest scale".into(),
         };
         log::info!(
             "dynamic resolution: {w}x{h} of {}x{} (scale {steps}/{}): {why}",
