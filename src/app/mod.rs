@@ -1669,6 +1669,19 @@ mod tests {
     }
 
     #[test]
+    fn clicks_map_to_the_internal_image_under_them() {
+        // The same size: the same pixel.
+        assert_eq!(internal_pixel((37, 11), (100, 50), (100, 50)), (37, 11));
+        // A quarter per axis: pixel x of the area lies in internal pixel ⌊x · 25/100⌋.
+        assert_eq!(internal_pixel((0, 0), (100, 50), (25, 12)), (0, 0));
+        assert_eq!(internal_pixel((3, 4), (100, 50), (25, 12)), (0, 0));
+        assert_eq!(internal_pixel((4, 5), (100, 50), (25, 12)), (1, 1));
+        assert_eq!(internal_pixel((99, 49), (100, 50), (25, 12)), (24, 11));
+        // Never outside the image, whatever the click.
+        assert_eq!(internal_pixel((500, 500), (100, 50), (25, 12)), (24, 11));
+    }
+
+    #[test]
     fn only_graph_shaping_settings_rebuild() {
         let a = RenderSettings::default();
         let mut b = a.clone();
