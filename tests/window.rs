@@ -28,12 +28,24 @@ fn voxgi(args: &[&str]) -> std::process::Output {
 
 fn voxgi_with(args: &[&str], setup: impl FnOnce(&mut Command)) -> std::process::Output {
     let mut cmd = Command::new(env!("CARGO_BIN_EXE_voxgi"));
-    cmd.args(args);
+    cmd.args(args).args(fixed_size(args));
     setup(&mut cmd);
     if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
         cmd.env("XDG_RUNTIME_DIR", scratch_dir("xdg"));
     }
     cmd.output().expect("run the voxgi binary")
+}
+
+/// The viewer's tests see the frame at the window's size: dynamic resolution (on by default,
+/// 100 ms, which lavapipe misses) would change the size mid-run. Off unless the test sets it.
+fn fixed_size(args: &[&str]) -> &'static [&'static str] {
+    let view = args.contains(&"view");
+    let sets_it = args.iter().any(|a| a.contains("frame_budget"));
+    if view && !sets_it {
+        &["--set", "post.frame_budget_ms=0"]
+    } else {
+        &[]
+    }
 }
 
 fn require_display() {
@@ -147,6 +159,94 @@ fn viewer_renders_resizes_and_screenshots_without_validation_messages() {
     assert_not_blank(&img);
     // With the camera untouched, the viewer shows exactly what `voxgi render` writes.
     assert_matches_render(&img, &dir);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Dynamic resolution: a budget no frame can hold drives the internal scale to its floor
+/// (upscaled to the window), and the still camera then refines to the full size; validation
+/// clean through both changes. With the path tracer (the default GI) each change makes a new
+/// renderer (its histories have the frame's size); without GI only a new graph, and the
+/// refined frame is then exactly what `voxgi render` writes.
+#[test]
+fn viewer_scales_down_to_hold_a_frame_budget_and_refines_when_still() {
+    require_display();
+    let _display = lock_display();
+    let dir = scratch_dir("dynres");
+    for gi in ["pathtrace", "none"] {
+        let shot = dir.join(format!("{gi}.png"));
+        let out = voxgi_with(
+            &[
+                "--validate",
+                "view",
+                "--gi",
+                gi,
+                "--width",
+                "400",
+                "--height",
+                "200",
+                // 1 µs: every frame is far over it.
+                "--set",
+                "post.frame_budget_ms=0.001",
+                "--set",
+                "post.min_scale=0.25",
+                "--set",
+                "post.refine_frames=14",
+                "--frames",
+                "20",
+                "--screenshot",
+                shot.to_str().expect("utf-8 path"),
+            ],
+            |cmd| {
+                cmd.env("RUST_LOG", "warn,voxgi::app=info");
+            },
+        );
+        assert_success(
+            &out,
+            "voxgi --validate view --set post.frame_budget_ms=0.001",
+        );
+        let log = String::from_utf8_lossy(&out.stderr);
+        let scales: Vec<&str> = log
+            .lines()
+            .filter(|l| l.contains("dynamic resolution: "))
+            .collect();
+        // Starts at the floor, 2/8 = 1/4 of each axis, and stays (every frame is over the
+        // budget), then full size when still.
+        assert_eq!(scales.len(), 2, "{gi}: {log}");
+        assert!(
+            scales[0].contains("(scale 2/8)") && scales[0].contains("smallest scale"),
+            "{gi}: {}",
+            scales[0]
+        );
+        assert!(
+            scales[1].contains("(scale 8/8)") && scales[1].contains("refining"),
+            "{gi}: {}",
+            scales[1]
+        );
+        // The area at a quarter, upscaled; then presented as it is.
+        let graphs: Vec<&str> = log
+            .lines()
+            .filter(|l| l.contains("frame graph: "))
+            .collect();
+        assert!(
+            graphs.iter().any(|l| l.contains(" upscaled to ")),
+            "{gi}: {graphs:?}"
+        );
+        assert!(
+            !graphs.last().expect("a graph").contains(" upscaled to "),
+            "{gi}: {graphs:?}"
+        );
+        if gi == "pathtrace" {
+            // One when the panel's width is first known (the scene's area narrows), one per
+            // change of scale: not one per frame.
+            let renderers = log.lines().filter(|l| l.contains("new renderer ")).count();
+            assert!((2..=4).contains(&renderers), "{gi}: {renderers}\n{log}");
+        }
+        let img = load(&shot);
+        assert_eq!(img.height(), 200, "{gi}: refined to the window's height");
+        if gi == "none" {
+            assert_matches_render(&img, &dir);
+        }
+    }
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -1328,6 +1428,7 @@ impl EditSession {
     fn start_with(args: &[&str], setup: impl FnOnce(&mut Command)) -> Self {
         let mut cmd = Command::new(env!("CARGO_BIN_EXE_voxgi"));
         cmd.args(args)
+            .args(fixed_size(args))
             .env_remove("WAYLAND_DISPLAY")
             .env("RUST_LOG", VIEWER_LOG)
             .stdout(Stdio::piped())

@@ -1022,6 +1022,7 @@ impl super::Viewer {
             post: crate::scene::PostTable {
                 post: c.post,
                 tonemap: c.tonemap,
+                dynres: c.dynres,
             },
             shadow: c.shadow,
         };

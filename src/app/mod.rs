@@ -14,6 +14,7 @@
 //! `egui`. The swapchain image is imported with [`Access::Present`] and rebound every frame.
 
 mod camera;
+mod dynres;
 mod edit;
 mod edit_ui;
 mod frame_graph;
@@ -104,6 +105,8 @@ pub struct ViewerOptions {
     pub scene_name: String,
     /// The panel's initial time budget, ms.
     pub budget_ms: f32,
+    /// Dynamic resolution: the frame budget the internal scale holds (`post.frame_budget_ms`).
+    pub dynres: crate::scene::DynamicResolution,
     /// Start in stereo (`--stereo`): packing, parallax and path. `None`: mono, the panel's
     /// parallax starting at [`StereoControls::off`].
     pub stereo: Option<StereoControls>,
@@ -132,6 +135,7 @@ impl Default for ViewerOptions {
             sweep_dir: PathBuf::from("sweep"),
             scene_name: "cornell".into(),
             budget_ms: 100.0,
+            dynres: Default::default(),
             stereo: None,
             stereo_path: None,
             save_to: None,
@@ -215,6 +219,8 @@ struct FrameGraph {
     stereo_mode: Option<crate::post::StereoMode>,
     /// Size of the presented (and screenshot) image: the packing's in stereo.
     shot_size: (u32, u32),
+    /// The scene's area of the window the image is upscaled to (mono; `None` in stereo).
+    display: Option<(u32, u32)>,
 }
 
 struct Viewer {
@@ -246,6 +252,8 @@ struct Viewer {
     history: frame_graph::FrameHistory,
     last_frame: Instant,
     frame_ms: f32,
+    /// The last frame's wall time (`frame_ms` is its moving average).
+    frame_dt_ms: f32,
     started: Instant,
     report: ViewerReport,
     status: String,
@@ -291,6 +299,18 @@ struct Viewer {
     renderer_frames: u64,
     /// Per frame slot, when its pick was recorded and the frame count then (for the log).
     pick_started: [Option<(Instant, u64)>; MAX_FRAMES_IN_FLIGHT],
+    /// Dynamic resolution: the internal scale of the scene's area (`dynres.rs`).
+    dynres: dynres::ScaleController,
+    /// The scene's area of the window (mono; `None` in stereo, which is not scaled): the
+    /// internal image is upscaled to it.
+    display: Option<(u32, u32)>,
+    /// The camera of the last frame, and whether this frame's is the same (dynamic
+    /// resolution refines a still view).
+    last_camera: Option<Camera>,
+    still: bool,
+    /// Per frame slot, the scale (eighths) of the frame it recorded, for dynamic resolution's
+    /// measurement of it; `None` for a renderer's first frame (one-time work) or in stereo.
+    recorded_steps: [Option<u32>; MAX_FRAMES_IN_FLIGHT],
 }
 
 /// The view the editor's handles are drawn for.
@@ -361,6 +381,15 @@ fn debug_settings(
         object: c.atlas_object,
         ..current.unwrap_or_default()
     })
+}
+
+/// The pixel of a `frame`-sized image under pixel `p` of the `display`-sized area it is
+/// scaled to (the same pixel when the sizes agree).
+fn internal_pixel((x, y): (u32, u32), display: (u32, u32), frame: (u32, u32)) -> (u32, u32) {
+    let map = |v: u32, d: u32, f: u32| {
+        ((u64::from(v) * u64::from(f) / u64::from(d.max(1))) as u32).min(f.saturating_sub(1))
+    };
+    (map(x, display.0, frame.0), map(y, display.1, frame.1))
 }
 
 /// One line about the indirect light, for the log.
@@ -468,6 +497,7 @@ impl Viewer {
             add_keyframe: false,
             budget_ms: opts.budget_ms,
             tune: false,
+            dynres: opts.dynres,
             stereo: opts
                 .stereo
                 .unwrap_or_else(|| StereoControls::off(&scene, opts.settings.time_s)),
@@ -499,6 +529,7 @@ impl Viewer {
             history: frame_graph::FrameHistory::new(frame_graph::HISTORY_FRAMES),
             last_frame: Instant::now(),
             frame_ms: 0.0,
+            frame_dt_ms: 0.0,
             started: Instant::now(),
             report: ViewerReport::default(),
             status: String::new(),
@@ -525,6 +556,11 @@ impl Viewer {
             panel_spots: Default::default(),
             renderer_frames: 0,
             pick_started: [None; MAX_FRAMES_IN_FLIGHT],
+            dynres: dynres::ScaleController::new(opts.dynres),
+            display: None,
+            last_camera: None,
+            still: false,
+            recorded_steps: [None; MAX_FRAMES_IN_FLIGHT],
         }
     }
 
@@ -536,6 +572,13 @@ impl Viewer {
         let mut settings = self.opts.settings.clone();
         (settings.width, settings.height) =
             stereo::eye_size(self.controls.stereo.mode, (extent.width, extent.height));
+        if self.controls.stereo.mode.is_none() {
+            let area = (settings.width, settings.height);
+            (settings.width, settings.height) = self.dynres.internal_size(area);
+            if self.dynres.steps() != dynres::STEPS {
+                self.log_scale(dynres::Change::Start, area);
+            }
+        }
         log::info!("indirect light: {}", describe_gi(&settings.gi));
         log::info!(
             "post-processing: {}",
@@ -729,6 +772,7 @@ impl Viewer {
             self.controls.time_s += dt_s.min(0.1);
         }
         self.frame_ms = 0.9 * self.frame_ms + 0.1 * dt_s * 1000.0;
+        self.frame_dt_ms = dt_s * 1000.0;
         if let Some(wanted) = self.opts.frames {
             if self.started.elapsed() > SCRIPT_TIMEOUT {
                 return Err(AppError::Stalled {
@@ -748,6 +792,9 @@ impl Viewer {
 
         self.fly.advance(self.keys, dt_s);
         self.scene.camera = self.fly.apply(&self.lens);
+        // Still: the same camera as the last frame and no running scene time.
+        self.still = self.last_camera == Some(self.scene.camera) && !self.controls.animate;
+        self.last_camera = Some(self.scene.camera);
         if std::mem::take(&mut self.controls.add_keyframe) {
             self.report.camera_keys.push(self.scene.camera);
         }
@@ -860,6 +907,15 @@ impl Viewer {
         // Stereo: each eye's size whose packing fills the area (`app/stereo.rs`).
         let area = (extent.width - panel_px, extent.height);
         (settings.width, settings.height) = stereo::eye_size(self.controls.stereo.mode, area);
+        // Mono: the internal size of dynamic resolution, upscaled to the area when presented.
+        // (A stereo packing is not scaled.)
+        if let Some(change) = self.dynres.set(self.controls.dynres) {
+            self.log_scale(change, area);
+        }
+        self.display = self.controls.stereo.mode.is_none().then_some(area);
+        if self.display.is_some() {
+            (settings.width, settings.height) = self.dynres.internal_size(area);
+        }
         settings.tonemap = self.controls.tonemap;
         settings.shadow = self.controls.shadow;
         // Each GI edit costs a new renderer: apply them once no slider is being dragged.
@@ -904,6 +960,7 @@ impl Viewer {
             g.extent != extent
                 || needs_new_graph(&g.settings, &settings)
                 || g.stereo_mode != stereo_mode
+                || g.display != self.display
         }) {
             self.rebuild(ctx)?;
         }
@@ -941,6 +998,12 @@ impl Viewer {
             let started = self.pick_started.get_mut(slot).and_then(Option::take);
             (p, gpu_ms, started)
         });
+        // The finished frame's GPU time (its passes' timestamps): what dynamic resolution holds.
+        // It is measured at the scale that frame was recorded at (a renderer's first frame not).
+        let gpu_ms = (!finished.is_empty()).then(|| finished.iter().map(|t| t.gpu_ms).sum());
+        let measured_steps = self.recorded_steps.get_mut(slot).and_then(Option::take);
+        let recording_steps = self.dynres.steps();
+        let change = self.dynres.observe(gpu_ms.zip(measured_steps), self.still);
         self.stats.push(finished);
         let (index, ready) = match swapchain.acquire(slot)? {
             Acquired::Image { index, ready } => (index, ready),
@@ -953,11 +1016,14 @@ impl Viewer {
         };
         // A click waiting for the GPU is answered by this frame (recorded below).
         let frame_size = (renderer.settings.width, renderer.settings.height);
-        // A stereo packing shows two eyes: clicks pick nothing there.
+        // A stereo packing shows two eyes: clicks pick nothing there. The click is in the
+        // window's pixels of the scene: the internal image's pixel under it.
+        let display = graph.display.unwrap_or(frame_size);
         let pick_request = self
             .editor
             .take_pick_request()
-            .filter(|_| self.stereo.is_none());
+            .filter(|_| self.stereo.is_none())
+            .map(|p| internal_pixel(p, display, frame_size));
         if let Some(p) = self.pick.as_mut() {
             p.arm(slot, pick_request, frame_size);
         }
@@ -974,6 +1040,9 @@ impl Viewer {
         overlay.write_frame(slot, prims, ppp, extent);
         let shot = self.controls.screenshot || last_scripted;
         graph.shot_wanted.set(shot);
+        if let Some(s) = self.recorded_steps.get_mut(slot) {
+            *s = (self.renderer_frames > 0 && self.display.is_some()).then_some(recording_steps);
+        }
         graph.exec.record(&cmd, slot, timestamps);
         frame_loop.submit(
             ctx,
@@ -996,17 +1065,27 @@ impl Viewer {
         }
         self.report.frames += 1;
         self.renderer_frames += 1;
+        if let (Some(change), Some(area)) = (change, self.display) {
+            self.log_scale(change, area);
+        }
         // For scripted tests (`RUST_LOG=voxgi::app=debug`): they wait for frames and for the
         // camera to get somewhere, not for a fixed time. Local coordinates (without
         // `Scene::origin_m`).
+        // Then what dynamic resolution saw: the size rendered, the GPU time of the frame
+        // that finished (two frames back) and this frame's wall time.
         log::debug!(
-            "frame {} presented at {}x{} ({} of its renderer); camera at {:?} looking {:?}",
+            "frame {} presented at {}x{} ({} of its renderer); camera at {:?} looking {:?}; \
+             renders {}x{}, GPU {} ms, wall {:.1} ms",
             self.report.frames,
             extent.width,
             extent.height,
             self.renderer_frames,
             self.scene.camera.position.to_array(),
-            self.scene.camera.forward.to_array()
+            self.scene.camera.forward.to_array(),
+            frame_size.0,
+            frame_size.1,
+            gpu_ms.map_or_else(|| "-".to_owned(), |t: f64| format!("{t:.1}")),
+            self.frame_dt_ms
         );
         if last_scripted {
             log::info!(
@@ -1094,6 +1173,11 @@ impl Viewer {
                 .and_then(Renderer::gi_accumulated_frames),
             stereo: stereo_status.as_deref(),
             history: &self.history,
+            internal: self
+                .renderer
+                .as_ref()
+                .map_or((0, 0), |r| (r.settings.width, r.settings.height)),
+            scale_steps: self.display.map_or(dynres::STEPS, |_| self.dynres.steps()),
         };
         let (controls, stats) = (&mut self.controls, &self.stats);
         let mut layout = panel::PanelLayout::default();
@@ -1359,7 +1443,16 @@ impl Viewer {
         };
         // The scene's place in the window: right-aligned, left of it is the panel. (Only a
         // side-by-side packing of 1-pixel eyes is wider than the window: squeezed into it.)
-        let (dst_w, dst_h) = (w.min(extent.width), h.min(extent.height));
+        // Under dynamic resolution the internal image is upscaled to the scene's area.
+        let display = self.display.filter(|_| stereo_mode.is_none());
+        let (dst_w, dst_h) = display.unwrap_or((w, h));
+        let (dst_w, dst_h) = (dst_w.min(extent.width), dst_h.min(extent.height));
+        // Bilinear where the sizes differ; the same size copies pixels as they are.
+        let filter = if (dst_w, dst_h) == (w, h) {
+            vk::Filter::NEAREST
+        } else {
+            vk::Filter::LINEAR
+        };
         let scene_rect = vk::Rect2D {
             offset: vk::Offset2D {
                 x: (extent.width - dst_w) as i32,
@@ -1386,13 +1479,8 @@ impl Viewer {
             .write(shot_handle, Access::TransferWrite)
             .record(move |c| {
                 let (src, dst) = (c.image(ldr), c.image(present));
-                c.cmd.blit_image(
-                    src.raw,
-                    src.extent_2d(),
-                    dst.raw,
-                    scene_rect,
-                    vk::Filter::NEAREST,
-                );
+                c.cmd
+                    .blit_image(src.raw, src.extent_2d(), dst.raw, scene_rect, filter);
                 if wanted.get() {
                     let e = src.extent_2d();
                     c.cmd.copy_image_to_buffer(
@@ -1410,14 +1498,19 @@ impl Viewer {
             });
         overlay.declare(&mut g, present);
         let exec = GraphExecutor::new(ctx, g, MAX_FRAMES_IN_FLIGHT)?;
-        self.view_rect = [scene_rect.offset.x as f32, 0.0, w as f32, h as f32];
+        self.view_rect = [scene_rect.offset.x as f32, 0.0, dst_w as f32, dst_h as f32];
         log::info!(
-            "edit: scene viewport at [{}, 0] size [{w}, {h}] px",
+            "edit: scene viewport at [{}, 0] size [{dst_w}, {dst_h}] px",
             scene_rect.offset.x
         );
         log::info!(
-            "frame graph: {}, presents {w}x{h}",
-            stereo_mode.map_or_else(|| "mono".to_owned(), crate::post::StereoMode::name)
+            "frame graph: {}, presents {w}x{h}{}",
+            stereo_mode.map_or_else(|| "mono".to_owned(), crate::post::StereoMode::name),
+            if (dst_w, dst_h) == (w, h) {
+                String::new()
+            } else {
+                format!(" upscaled to {dst_w}x{dst_h}")
+            }
         );
         self.graph = Some(FrameGraph {
             exec,
@@ -1428,8 +1521,35 @@ impl Viewer {
             settings: renderer.settings.clone(),
             stereo_mode,
             shot_size: (w, h),
+            display: self.display,
         });
         Ok(())
+    }
+
+    /// Logs a change of the internal scale (and why) for the `area` it scales.
+    fn log_scale(&self, change: dynres::Change, area: (u32, u32)) {
+        let steps = self.dynres.steps();
+        let (w, h) = self.dynres.internal_size(area);
+        let why = match change {
+            dynres::Change::Down { gpu_ms } => format!(
+                "{gpu_ms:.1} ms over the {} ms budget",
+                self.controls.dynres.frame_budget_ms
+            ),
+            dynres::Change::Up { gpu_ms } => format!(
+                "{gpu_ms:.1} ms well within the {} ms budget",
+                self.controls.dynres.frame_budget_ms
+            ),
+            dynres::Change::Refine => "the camera stands still: refining".into(),
+            dynres::Change::Moving => "the camera moves".into(),
+            dynres::Change::Settings => "new settings".into(),
+            dynres::Change::Start => "starting at the smallest scale".into(),
+        };
+        log::info!(
+            "dynamic resolution: {w}x{h} of {}x{} (scale {steps}/{}): {why}",
+            area.0,
+            area.1,
+            dynres::STEPS
+        );
     }
 
     fn save_screenshot(&mut self, ctx: &Context) -> Result<(), AppError> {
@@ -1502,6 +1622,7 @@ mod tests {
             add_keyframe: false,
             budget_ms: 100.0,
             tune: false,
+            dynres: Default::default(),
             stereo: StereoControls::off(&crate::scene::builtin("cornell").expect("cornell"), 0.0),
             projection: crate::scene::Projection::Perspective,
             ortho_height_m: 1.0,
@@ -1545,6 +1666,19 @@ mod tests {
         assert!(
             matches!(scaled(&d, 3.0), Light::Directional { irradiance_w_m2, .. } if irradiance_w_m2 == Vec3::splat(3.0))
         );
+    }
+
+    #[test]
+    fn clicks_map_to_the_internal_image_under_them() {
+        // The same size: the same pixel.
+        assert_eq!(internal_pixel((37, 11), (100, 50), (100, 50)), (37, 11));
+        // A quarter per axis: pixel x of the area lies in internal pixel ⌊x · 25/100⌋.
+        assert_eq!(internal_pixel((0, 0), (100, 50), (25, 12)), (0, 0));
+        assert_eq!(internal_pixel((3, 4), (100, 50), (25, 12)), (0, 0));
+        assert_eq!(internal_pixel((4, 5), (100, 50), (25, 12)), (1, 1));
+        assert_eq!(internal_pixel((99, 49), (100, 50), (25, 12)), (24, 11));
+        // Never outside the image, whatever the click.
+        assert_eq!(internal_pixel((500, 500), (100, 50), (25, 12)), (24, 11));
     }
 
     #[test]

@@ -119,6 +119,8 @@ pub struct Controls {
     pub budget_ms: f32,
     /// Set by the "Best within budget" button; the viewer applies the sweep's choice.
     pub tune: bool,
+    /// Dynamic resolution: the frame budget, the smallest scale, when to refine.
+    pub dynres: crate::scene::DynamicResolution,
     /// Stereo packing and parallax (`app/stereo.rs`); turning it on or off, or another
     /// path, needs a new renderer (applied like `gi`).
     pub stereo: super::stereo::StereoControls,
@@ -143,6 +145,10 @@ pub struct PanelInfo<'a> {
     pub stereo: Option<&'a str>,
     /// Per-pass GPU times of the last frames, for the frame-time graph.
     pub history: &'a super::frame_graph::FrameHistory,
+    /// The size the scene renders at and its scale of the scene's area, eighths (dynamic
+    /// resolution; 8: full size).
+    pub internal: (u32, u32),
+    pub scale_steps: u32,
 }
 
 const SHADOW_RESOLUTIONS: [u32; 5] = [256, 512, 1024, 2048, 4096];
@@ -344,6 +350,12 @@ pub fn draw(
                         "{} · {}×{} · {:.1} ms/frame",
                         info.device, info.extent_px.0, info.extent_px.1, info.frame_ms
                     ));
+                    ui.label(format!(
+                        "renders {}×{} (scale {})",
+                        info.internal.0,
+                        info.internal.1,
+                        scale_name(info.scale_steps)
+                    ));
                     ui.label(
                 "WASD move · Q/E down/up · right mouse look · wheel speed · G next GI method · \
                  O orthographic · F12 screenshot",
@@ -383,6 +395,10 @@ pub fn draw(
                     egui::CollapsingHeader::new("Shadows")
                         .default_open(true)
                         .show(ui, |ui| shadow_section(ui, &mut c.shadow));
+
+                    egui::CollapsingHeader::new("Dynamic resolution")
+                        .default_open(false)
+                        .show(ui, |ui| dynres_controls(ui, &mut c.dynres));
 
                     egui::CollapsingHeader::new("Global illumination")
                         .default_open(true)
@@ -533,6 +549,7 @@ fn post_controls(
     let mut t = PostTable {
         post: *p,
         tonemap: *tone,
+        ..Default::default()
     };
     let taa_box = key_checkbox(ui, &mut t, "post.taa", "TAA")
         .on_hover_text("temporal anti-aliasing: each frame jittered, blended with the history");
@@ -603,6 +620,50 @@ fn post_controls(
     key_checkbox(ui, &mut t, "post.fxaa", "FXAA");
     key_checkbox(ui, &mut t, "post.dither", "dither");
     (*p, *tone) = (t.post, t.tonemap);
+}
+
+/// A scale in eighths as the panel shows it: `1`, `5/8`, `1/2`.
+fn scale_name(steps: u32) -> String {
+    let d = super::dynres::STEPS;
+    match steps {
+        s if s >= d => "1".into(),
+        s if s % 4 == 0 => format!("{}/{}", s / 4, d / 4),
+        s if s % 2 == 0 => format!("{}/{}", s / 2, d / 2),
+        s => format!("{s}/{d}"),
+    }
+}
+
+/// Dynamic resolution's settings, each the `[post]` key of its label.
+fn dynres_controls(ui: &mut egui::Ui, d: &mut crate::scene::DynamicResolution) {
+    let mut t = PostTable {
+        dynres: *d,
+        ..Default::default()
+    };
+    key_slider(
+        ui,
+        &mut t,
+        "post.frame_budget_ms",
+        (0.0, 1000.0),
+        true,
+        "frame budget (ms, 0 off)",
+    );
+    key_slider(
+        ui,
+        &mut t,
+        "post.min_scale",
+        (0.125, 1.0),
+        false,
+        "minimum scale",
+    );
+    key_slider(
+        ui,
+        &mut t,
+        "post.refine_frames",
+        (0.0, 600.0),
+        false,
+        "still frames to refine (0 never)",
+    );
+    *d = t.dynres;
 }
 
 /// The shadow controls; each is the `[shadow]` key of its label.
@@ -742,6 +803,7 @@ mod table_tests {
             add_keyframe: false,
             budget_ms: 100.0,
             tune: false,
+            dynres: Default::default(),
             stereo: super::super::stereo::StereoControls {
                 mode: None,
                 rig: Default::default(),
@@ -761,6 +823,8 @@ mod table_tests {
             gi_frames: None,
             stereo: None,
             history: &history,
+            internal: (size.x as u32, size.y as u32),
+            scale_steps: 8,
         };
         let mut layout = PanelLayout::default();
         let mut texts = Vec::new();

@@ -261,16 +261,20 @@ impl GiArgs {
     }
 
     /// The scene's `[post]` values over `post` and `tone`, overridden by the `[post]` flags
-    /// (`flags`) and `--set`'s `post.` keys.
+    /// (`flags`) and `--set`'s `post.` keys; with the viewer's dynamic resolution.
     pub fn post(
         &self,
         flags: &PostArgs,
         scene: &Scene,
         post: PostSettings,
         tonemap: ToneMap,
-    ) -> Result<(PostSettings, ToneMap), super::CliError> {
-        let t = flags.apply(PostTable { post, tonemap }, &scene.post, &self.set)?;
-        Ok((t.post, t.tonemap))
+    ) -> Result<PostTable, super::CliError> {
+        let t = PostTable {
+            post,
+            tonemap,
+            ..Default::default()
+        };
+        flags.apply(t, &scene.post, &self.set)
     }
 }
 
@@ -379,7 +383,8 @@ impl FrameArgs {
             time_s: self.time,
             ..Default::default()
         };
-        (s.post, s.tonemap) = self.gi.post(&self.post, scene, s.post, s.tonemap)?;
+        let t = self.gi.post(&self.post, scene, s.post, s.tonemap)?;
+        (s.post, s.tonemap) = (t.post, t.tonemap);
         s.shadow = self.shadow.apply(s.shadow, &scene.shadow, &self.gi.set)?;
         s.transparency = self.transparency.or(scene.transparency).unwrap_or_default();
         s.oit_nodes_per_pixel =

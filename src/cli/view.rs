@@ -127,9 +127,10 @@ pub fn view(global: &Global, args: ViewArgs, out: &mut dyn Write) -> Result<(), 
         ..Default::default()
     };
     // The scene's `[post]` table starts the panel's post-processing; the flags override it.
-    (settings.post, settings.tonemap) =
-        args.gi
-            .post(&args.post, &scene, settings.post, settings.tonemap)?;
+    let post = args
+        .gi
+        .post(&args.post, &scene, settings.post, settings.tonemap)?;
+    (settings.post, settings.tonemap) = (post.post, post.tonemap);
     // The scene's `[shadow]` table, under the flags, starts the panel's shadows ("Save scene"
     // writes them back).
     settings.shadow = args
@@ -175,6 +176,7 @@ pub fn view(global: &Global, args: ViewArgs, out: &mut dyn Write) -> Result<(), 
         sweep_dir: args.sweep,
         scene_name: name,
         budget_ms: args.budget_ms.unwrap_or(100.0) as f32,
+        dynres: post.dynres,
         stereo: Some(stereo),
         stereo_path: args.stereo.stereo_path,
         save_to: args.save,

@@ -15,6 +15,7 @@ pub fn check_render_settings(s: &RenderSettings) -> Result<(), LimitError> {
     crate::scene::schema::check(&crate::scene::PostTable {
         post: s.post,
         tonemap: s.tonemap,
+        dynres: Default::default(),
     })?;
     crate::scene::schema::check(&s.shadow)?;
     if let Some(v) = &s.voxels {

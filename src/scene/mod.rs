@@ -256,7 +256,8 @@ pub use object::{
     euler_xyz_deg, rotation_from_euler_xyz_deg, Animation, Keyframe, Object, Transform,
 };
 pub use post_settings::{
-    range as post_range, AutoExposure, PostSettings, PostTable, TaaSettings, ToneMap, ToneOperator,
+    range as post_range, AutoExposure, DynamicResolution, PostSettings, PostTable, TaaSettings,
+    ToneMap, ToneOperator,
 };
 pub use pre_exposure::PreExposure;
 pub use query::NoSuchObject;

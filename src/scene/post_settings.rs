@@ -120,13 +120,52 @@ impl PostSettings {
     }
 }
 
-/// The `[post]` table's settings: the stages around tone mapping and the tone map. Two parts
-/// because a frame keeps them apart: a new tone map only needs a new frame graph, a new stage
-/// a new renderer.
+/// The viewer's dynamic resolution (`docs/design/dynamic-resolution.md`): the scene renders
+/// at an internal scale of the window chosen to hold a GPU frame-time budget, upscaled to the
+/// window, and refines to the full size when the camera stops. Only the viewer reads it; a
+/// headless render is always at its full size.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DynamicResolution {
+    /// The GPU time a frame may take, ms; 0 turns dynamic resolution off (always full size).
+    pub frame_budget_ms: f32,
+    /// The smallest internal scale (per axis) the viewer goes down to.
+    pub min_scale: f32,
+    /// Still frames after which the viewer renders at the full size again; 0: never.
+    pub refine_frames: u32,
+}
+
+impl DynamicResolution {
+    /// Whether the viewer scales at all.
+    pub fn on(&self) -> bool {
+        self.frame_budget_ms > 0.0
+    }
+}
+
+impl Default for DynamicResolution {
+    /// 100 ms: the point of the default is a viewer that answers on any device, a software
+    /// rasterizer included (lavapipe on two cores takes 8.9 s for the default path-traced
+    /// 1280×720 frame); a GPU that draws the full frame within it is never scaled. A scale of
+    /// 1/8 (160×90 of 1280×720) is the floor: below it the upscaled image no longer shows
+    /// the scene's shapes. 30 still frames (a few seconds on lavapipe) before refining:
+    /// long enough not to refine between two key presses.
+    fn default() -> Self {
+        Self {
+            frame_budget_ms: 100.0,
+            min_scale: 0.125,
+            refine_frames: 30,
+        }
+    }
+}
+
+/// The `[post]` table's settings: the stages around tone mapping, the tone map and the
+/// viewer's dynamic resolution. Apart because a frame keeps them apart: a new tone map only
+/// needs a new frame graph, a new stage a new renderer, and the dynamic resolution is the
+/// viewer's alone.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct PostTable {
     pub post: PostSettings,
     pub tonemap: ToneMap,
+    pub dynres: DynamicResolution,
 }
 
 /// A stage's value (`taa $f` of [`TaaSettings`], `auto_exposure $f` of [`AutoExposure`]),
@@ -152,7 +191,7 @@ use range::*;
 
 /// Every `[post]` key: the scene file's key, the path `--set` and the panel use, its range,
 /// its flag and its field.
-static POST_KEYS: [Key<PostTable>; 11] = [
+static POST_KEYS: [Key<PostTable>; 14] = [
     key!("post.taa_history_weight", Kind::Number(TAA_HISTORY_WEIGHT),
         "TAA history weight α: each frame keeps α of the reprojected history",
         flag("taa-history-weight", "ALPHA"), stage taa history_weight),
@@ -225,6 +264,31 @@ static POST_KEYS: [Key<PostTable>; 11] = [
         "Luminance (after exposure) the logarithmic and Drago operators map to display white",
         flag("tonemap-white", "L"),
         tonemap.white
+    ),
+    key!(
+        "post.frame_budget_ms",
+        Kind::Number(FRAME_BUDGET_MS),
+        "The viewer's GPU frame-time budget, ms: it renders at a reduced internal resolution \
+         (upscaled to the window) to hold it, and refines when the camera stops; 0 turns \
+         dynamic resolution off. Headless renders are always full size",
+        flag("frame-budget-ms", "MS"),
+        dynres.frame_budget_ms
+    ),
+    key!(
+        "post.min_scale",
+        Kind::Number(MIN_SCALE),
+        "The viewer's smallest internal resolution under dynamic resolution, as a fraction \
+         of the window's (per axis; used in steps of 1/8)",
+        None,
+        dynres.min_scale
+    ),
+    key!(
+        "post.refine_frames",
+        Kind::Count(REFINE_FRAMES),
+        "Still frames after which the viewer under dynamic resolution renders at the full \
+         size again; 0: never",
+        None,
+        dynres.refine_frames
     ),
 ];
 
@@ -301,6 +365,31 @@ pub mod range {
             1e6,
         )
     };
+    /// The viewer's frame budget: 0 is off; up to a minute a frame (beyond it the budget
+    /// holds nothing anyway).
+    pub const FRAME_BUDGET_MS: Limit<f32> = Limit::new(
+        "--frame-budget-ms",
+        Some("post.frame_budget_ms"),
+        "a frame budget in ms",
+        0.0,
+        60_000.0,
+    );
+    /// The smallest internal scale: the viewer's steps are eighths, so 1/8 is the least.
+    pub const MIN_SCALE: Limit<f32> = Limit::new(
+        "--set post.min_scale",
+        Some("post.min_scale"),
+        "a scale of the window's size",
+        0.125,
+        1.0,
+    );
+    /// Still frames before refining (0: never).
+    pub const REFINE_FRAMES: Limit<u32> = Limit::new(
+        "--set post.refine_frames",
+        Some("post.refine_frames"),
+        "a number of frames",
+        0,
+        100_000,
+    );
     /// Bloom strength: the share of the radiance moved into the blur.
     pub const BLOOM_STRENGTH: Limit<f32> = Limit::new(
         "--bloom",
