@@ -212,9 +212,9 @@ fn named_reference_path(dir: &Path, name: &str) -> PathBuf {
         .unwrap_or(gi)
 }
 
-/// The renders' size and the reference's box-filter factor (or the renders', `render_factor`
-/// > 1) for `--size` (the renders' width) against a `width` × `height` reference: `--size`
-/// divides the width (the reference is filtered down), or the width divides `--size` (the
+/// The renders' size and the reference's box-filter factor (or, when `render_factor` is
+/// above 1, the renders') for `--size` (the renders' width) against a `width` × `height`
+/// reference: `--size` divides the width (the reference is filtered down), or the width divides `--size` (the
 /// renders are), and the height must follow the width's scale exactly. `None`: it does not fit.
 fn fit_size(size: u32, width: u32, height: u32) -> Option<((u32, u32), u32, u32)> {
     if size == 0 || width == 0 || height == 0 {
