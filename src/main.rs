@@ -55,12 +55,13 @@ enum Command {
     ExportMitsuba(ExportArgs),
     /// Compares two images (EXR or PNG): relMSE, PSNR, SSIM, FLIP, mean/max absolute error.
     Compare(CompareArgs),
-    /// Measures the speed/accuracy trade: every method over a grid of GI settings on each
-    /// scene with a reference (GPU ms, transient memory, relMSE, FLIP, PSNR, SSIM) to CSV,
-    /// JSON and an SVG plot of error vs time with the Pareto front, per scene.
+    /// Measures the speed/accuracy trade: every method over a grid of GI, shadow and post
+    /// settings on each scene with a reference (GPU ms, transient memory, relMSE, FLIP, PSNR,
+    /// SSIM) to CSV, JSON and an SVG plot of error vs time with the Pareto front, per scene.
     Sweep(SweepArgs),
     /// From a sweep's CSV, prints the most accurate configuration within a GPU-time budget
-    /// as a `[gi]` table to paste into the scene file.
+    /// as a `[gi]` table (and the `[shadow]`/`[post]` keys its grid set) to paste into the
+    /// scene file.
     Tune(TuneArgs),
     /// Writes a procedural scene (OBJ, MTL, PNG textures and a scene TOML), e.g. the
     /// Sponza-scale atrium that assets/scenes/atrium.toml loads.

@@ -148,6 +148,71 @@ fn a_sweep_writes_its_rows_resumes_and_feeds_tune() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// A `[shadow]` axis multiplies every method, its rows resume by label, and `tune` prints the
+/// chosen row's `[shadow]` key beside its `[gi]` table. Direct light alone at 16², one frame,
+/// no temporal columns: only the bookkeeping is under test.
+#[test]
+fn a_shadow_axis_sweeps_every_method_and_reaches_tune() {
+    let dir = out_dir("shadow-axis");
+    let dir_s = dir.to_string_lossy().into_owned();
+    let args = [
+        "--validate",
+        "sweep",
+        "cornell",
+        "--size",
+        "16",
+        "--frames",
+        "1",
+        "--warmup",
+        "0",
+        "--temporal-steps",
+        "0",
+        "--lag-frames",
+        "0",
+        "--methods",
+        "none",
+        "--grid",
+        "shadow.direct_samples=1,4",
+        "--no-traverse",
+        "--out",
+        &dir_s,
+    ];
+    let run = voxgi(&args);
+    assert!(run.status.success(), "{}", text(&run.stderr));
+    let r = rows(&dir);
+    let configs: Vec<&str> = r.iter().map(|r| r.config.as_str()).collect();
+    assert_eq!(
+        configs,
+        [
+            "none shadow.direct_samples=1",
+            "none shadow.direct_samples=4"
+        ]
+    );
+    let resumed = voxgi(&[&args[..], &["--resume"]].concat());
+    assert!(resumed.status.success(), "{}", text(&resumed.stderr));
+    assert_eq!(rows(&dir).len(), 2, "the resumed sweep finds both rows");
+    let ample = r.iter().map(|r| r.image_ms).fold(0.0, f64::max) * 2.0;
+    let tune = voxgi(&[
+        "tune",
+        "cornell",
+        "--budget-ms",
+        &ample.to_string(),
+        "--from",
+        &dir_s,
+    ]);
+    assert!(tune.status.success(), "{}", text(&tune.stderr));
+    let table = text(&tune.stdout);
+    let parsed: toml::Table = toml::from_str(&table).expect("the output is TOML");
+    let chosen = table.lines().next().unwrap_or_default();
+    let samples = parsed["shadow"]["direct_samples"].as_integer();
+    assert!(
+        chosen.contains(&format!("shadow.direct_samples={}`", samples.unwrap_or(0))),
+        "{table}"
+    );
+    assert_eq!(parsed["gi"]["method"].as_str(), Some("none"), "{table}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// The temporal columns. Direct light keeps nothing between frames, so the first frame after
 /// the light switches off is already the light-off image (ghost 0, lag 1). Screen-space GI
 /// blends its indirect light with the reprojected history at weight τ = 0.9 (and feeds the

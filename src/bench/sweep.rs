@@ -9,9 +9,11 @@
 
 use crate::gi::GiMethod;
 use crate::gi::GiSettings;
+use crate::scene::schema::{Key, Settings};
+use crate::scene::{PostTable, ShadowSettings};
 pub use crate::tune::{
-    csv_header, gi_table_text, read_csv, read_rows, tune, tune_from_dir, CsvAppender, CsvRow,
-    SweepRow, CSV_COLUMNS,
+    csv_header, gi_table_text, read_csv, read_rows, tables_text, tune, tune_from_dir, CsvAppender,
+    CsvRow, SweepRow, CSV_COLUMNS,
 };
 use clap::ValueEnum;
 use std::path::PathBuf;
@@ -56,7 +58,9 @@ pub enum SweepError {
     Tune(#[from] crate::tune::TuneError),
 }
 
-/// One `--grid KEY=V1,V2,…`: a `[gi]` key (one of the methods' [`crate::gi::MethodSpec::sweep_keys`]) and the values it takes.
+/// One `--grid KEY=V1,V2,…`: a `[gi]` key (one of the methods'
+/// [`crate::gi::MethodSpec::sweep_keys`]) or any `[shadow]` or `[post]` key, and the values it
+/// takes.
 #[derive(Clone, Debug, PartialEq)]
 pub struct GridAxis {
     /// The key path.
@@ -67,15 +71,36 @@ pub struct GridAxis {
     pub values: Vec<String>,
 }
 
-/// The grid key `name` names: a key path of [`GRID_KEYS`] or its flag without `--`.
+impl GridAxis {
+    /// Whether the axis changes `method`'s renders: a `[gi]` key those methods whose spec
+    /// lists it, a `[shadow]` or `[post]` key every method (direct light and tone mapping
+    /// are in every image).
+    pub fn applies_to(&self, method: GiMethod) -> bool {
+        !is_gi_key(self.key) || method.spec().sweep_keys.contains(&self.key)
+    }
+}
+
+/// Whether `path` is a `[gi]` key path.
+fn is_gi_key(path: &str) -> bool {
+    path.split_once('.')
+        .is_some_and(|(table, _)| table == GiSettings::TABLE)
+}
+
+/// The key of `S` that `name` names: its path or its flag without `--`.
+fn named<S: Settings>(name: &str) -> Option<&'static Key<S>> {
+    S::keys()
+        .iter()
+        .find(|k| k.path == name || k.flag.is_some_and(|f| f.long == name))
+}
+
+/// The grid key `name` names: one of the methods' `[gi]` sweep keys or any key of the
+/// `[shadow]` and `[post]` schemas, by its path or its flag without `--`.
 fn grid_key(name: &str) -> Option<&'static str> {
-    use crate::scene::schema::key;
-    GiMethod::sweep_keys().into_iter().find(|k| {
-        *k == name
-            || key::<GiSettings>(k)
-                .and_then(|k| k.flag)
-                .is_some_and(|f| f.long == name)
-    })
+    named::<GiSettings>(name)
+        .map(|k| k.path)
+        .filter(|p| GiMethod::sweep_keys().contains(p))
+        .or_else(|| named::<ShadowSettings>(name).map(|k| k.path))
+        .or_else(|| named::<PostTable>(name).map(|k| k.path))
 }
 
 /// Parses `KEY=V1,V2,…`. The values are checked later, as flags of the configurations
@@ -95,7 +120,9 @@ pub fn parse_grid(spec: &str) -> Result<GridAxis, SweepError> {
     let key = grid_key(name).ok_or_else(|| {
         let known = GiMethod::sweep_keys();
         err(format!(
-            "unknown key `{name}`; expected one of {} (or their flags' names, e.g. gi-rays)",
+            "unknown key `{name}`; expected one of {}, or a `[shadow]` or `[post]` key path \
+             (`voxgi render --help` lists them under --set), or a flag's name (e.g. gi-rays, \
+             direct-samples, bloom)",
             known.join(", ")
         ))
     })?;
@@ -178,15 +205,12 @@ impl Config {
     }
 }
 
-/// Every method with the cartesian product of the grid axes that apply to it (a method no
-/// axis applies to is one configuration).
+/// Every method with the cartesian product of the grid axes that apply to it
+/// ([`GridAxis::applies_to`]; a method no axis applies to is one configuration).
 pub fn configs(methods: &[GiMethod], grid: &[GridAxis]) -> Vec<Config> {
     let mut out = Vec::new();
     for &method in methods {
-        let axes: Vec<&GridAxis> = grid
-            .iter()
-            .filter(|a| method.spec().sweep_keys.contains(&a.key))
-            .collect();
+        let axes: Vec<&GridAxis> = grid.iter().filter(|a| a.applies_to(method)).collect();
         let mut partial: Vec<Vec<GridValue>> = vec![Vec::new()];
         for axis in axes {
             partial = partial
@@ -246,6 +270,39 @@ pub fn gi_table(s: &GiSettings) -> toml::Table {
 /// [`gi_table`] as a one-line inline table, for the CSV.
 pub fn gi_inline(s: &GiSettings) -> String {
     toml::Value::Table(gi_table(s)).to_string()
+}
+
+/// The configuration's settings as the CSV's `gi_toml` column holds them: an inline TOML
+/// document of scene tables, the resolved `[gi]` table and the `[shadow]` and `[post]` keys
+/// the grid set (`{ gi = { … }, shadow = { direct_samples = 4 } }`), which `voxgi tune`
+/// prints ([`tables_text`]).
+pub fn settings_inline(gi: &GiSettings, config: &Config) -> String {
+    let mut doc = toml::Table::new();
+    doc.insert(GiSettings::TABLE.into(), toml::Value::Table(gi_table(gi)));
+    for v in config.values.iter().filter(|v| !is_gi_key(v.key)) {
+        let (Some((table, name)), Some(value)) = (v.key.split_once('.'), grid_toml(v)) else {
+            continue;
+        };
+        if let Some(t) = doc
+            .entry(table)
+            .or_insert_with(|| toml::Value::Table(toml::Table::new()))
+            .as_table_mut()
+        {
+            t.insert(name.to_owned(), value);
+        }
+    }
+    toml::Value::Table(doc).to_string()
+}
+
+/// A `[shadow]` or `[post]` grid value as a scene file writes it. `None` for a value its key
+/// does not read, which no row has: a configuration's values are parsed as its flags before
+/// it is measured (`cli::sweep`'s `job`); and for an unset number, which a table leaves out.
+fn grid_toml(v: &GridValue) -> Option<toml::Value> {
+    fn of<S: Settings>(v: &GridValue) -> Option<toml::Value> {
+        let k = crate::scene::schema::key::<S>(v.key)?;
+        k.kind.to_toml(k.kind.parse(&v.value).ok()?)
+    }
+    of::<ShadowSettings>(v).or_else(|| of::<PostTable>(v))
 }
 
 /// A box-filtered copy of `img` `factor` times smaller in each direction (the reference
@@ -401,6 +458,122 @@ mod tests {
     }
 
     use crate::tune::sample_row as row;
+
+    #[test]
+    fn every_shadow_and_post_key_is_a_grid_key_by_path_and_flag() {
+        fn each<S: Settings>() -> usize {
+            for k in S::keys() {
+                let by_path = parse_grid(&format!("{}=1", k.path)).expect(k.path);
+                assert_eq!((by_path.key, by_path.name.as_str()), (k.path, k.path));
+                if let Some(f) = k.flag {
+                    let by_flag = parse_grid(&format!("--{}=1", f.long)).expect(f.long);
+                    assert_eq!((by_flag.key, by_flag.name.as_str()), (k.path, f.long));
+                }
+            }
+            S::keys().len()
+        }
+        assert!(each::<ShadowSettings>() > 0 && each::<PostTable>() > 0);
+        let e = parse_grid("shadow.direct_sample=1")
+            .expect_err("no such key")
+            .to_string();
+        assert!(e.contains("unknown key `shadow.direct_sample`"), "{e}");
+        // A `[gi]` key no method sweeps stays refused: its axis would multiply nothing.
+        let unswept = GiSettings::keys()
+            .iter()
+            .find(|k| !GiMethod::sweep_keys().contains(&k.path) && k.path != "gi.method")
+            .expect("a [gi] key outside the sweep keys");
+        assert!(parse_grid(&format!("{}=1", unswept.path)).is_err());
+    }
+
+    #[test]
+    fn shadow_and_post_axes_apply_to_every_method() {
+        let grid = [
+            parse_grid("gi-rays=4,16").expect("rays"),
+            parse_grid("shadow.direct_samples=1,4").expect("direct"),
+            parse_grid("tonemap=linear,filmic,drago").expect("tonemap"),
+        ];
+        let c = configs(&[GiMethod::None, GiMethod::Hemisphere], &grid);
+        let count = |m| c.iter().filter(|c| c.method == m).count();
+        // none: direct 2 × tonemap 3; hemisphere: rays 2 × direct 2 × tonemap 3.
+        assert_eq!([GiMethod::None, GiMethod::Hemisphere].map(count), [6, 12]);
+        assert!(grid[1].applies_to(GiMethod::None) && !grid[0].applies_to(GiMethod::None));
+        let h = c
+            .iter()
+            .find(|c| c.method == GiMethod::Hemisphere)
+            .expect("hemisphere");
+        assert_eq!(
+            h.label(),
+            "hemisphere gi-rays=4 shadow.direct_samples=1 tonemap=linear"
+        );
+        assert_eq!(
+            h.argv(),
+            [
+                "--gi",
+                "hemisphere",
+                "--set",
+                "gi.rays=4",
+                "--set",
+                "shadow.direct_samples=1",
+                "--set",
+                "post.tonemap=linear"
+            ]
+        );
+        // Every label differs, so a resumed sweep tells each configuration's row apart.
+        let mut labels: Vec<String> = c.iter().map(Config::label).collect();
+        labels.sort();
+        labels.dedup();
+        assert_eq!(labels.len(), c.len());
+    }
+
+    #[test]
+    fn tune_prints_the_shadow_and_post_keys_of_the_configuration() {
+        let grid = [
+            parse_grid("direct-samples=4").expect("direct"),
+            parse_grid("post.tonemap=drago").expect("tonemap"),
+            parse_grid("bloom=0.25").expect("bloom"),
+        ];
+        let c = &configs(&[GiMethod::None], &grid)[0];
+        let gi = GiSettings {
+            method: GiMethod::None,
+            ..GiSettings::default()
+        };
+        let r = SweepRow {
+            gi_toml: settings_inline(&gi, c),
+            ..row("cornell", &c.label(), 1.0, 0.1)
+        };
+        let text = tables_text(&r).expect("prints");
+        assert!(text.starts_with("[gi]\n"), "{text}");
+        assert!(
+            text.contains("[post]\nbloom = 0.25\ntonemap = \"drago\"\n"),
+            "{text}"
+        );
+        assert!(text.contains("[shadow]\ndirect_samples = 4\n"), "{text}");
+        // The `[gi]` table alone is what the viewer applies.
+        let gi_only = gi_table_text(&r).expect("gi");
+        assert!(gi_only.starts_with("[gi]\n") && !gi_only.contains("[shadow]"));
+        // Pasted into a scene, the tables give back the swept values.
+        let base = include_str!("../../assets/scenes/cornell.toml");
+        assert!(!base.contains("[gi]") && !base.contains("[shadow]") && !base.contains("[post]"));
+        let scene = crate::scene::Scene::from_toml_str(
+            &format!("{base}\n{text}"),
+            std::path::Path::new("tuned.toml"),
+            std::path::Path::new("assets/scenes"),
+        )
+        .expect("the scene with the tuned tables loads");
+        let shadow: ShadowSettings = crate::scene::schema::resolve(&[&scene.shadow]);
+        assert_eq!(shadow.direct_samples, 4);
+        let post: PostTable = crate::scene::schema::resolve(&[&scene.post]);
+        for (path, text) in [("post.tonemap", "drago"), ("post.bloom", "0.25")] {
+            let k = crate::scene::schema::key::<PostTable>(path).expect(path);
+            assert_eq!(Ok((k.get)(&post)), k.kind.parse(text), "{path}");
+        }
+        // An older sweep's column, the `[gi]` table alone, prints as before.
+        let old = SweepRow {
+            gi_toml: gi_inline(&gi),
+            ..r.clone()
+        };
+        assert_eq!(tables_text(&old), gi_table_text(&r));
+    }
 
     #[test]
     fn the_tuned_table_is_a_scene_gi_table() {

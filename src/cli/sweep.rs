@@ -9,7 +9,7 @@ use super::{outln, with_context, CliError, Global};
 use crate::bench::plot::{pareto_png, pareto_svg};
 use crate::bench::sweep::read_rows;
 use crate::bench::sweep::{
-    configs, downsample, gi_inline, method_name, parse_grid, parse_methods, read_csv,
+    configs, downsample, method_name, parse_grid, parse_methods, read_csv, settings_inline,
     tune_from_dir, Config, CsvAppender, SweepError, SweepRow,
 };
 use crate::bench::sweep_traverse::{
@@ -42,7 +42,9 @@ pub struct SweepArgs {
     /// Methods, comma-separated.
     #[arg(long, default_value_t = crate::bench::sweep::default_sweep_methods())]
     pub methods: String,
-    /// A GI flag of `voxgi render` (without `--`) and its values: `--grid gi-rays=4,16`.
+    /// A key path or a flag of `voxgi render` (without `--`) and its values:
+    /// `--grid gi-rays=4,16`, `--grid shadow.direct_samples=1,4`. Takes the `[gi]` keys the
+    /// methods sweep and every `[shadow]` and `[post]` key (those apply to every method).
     /// Repeat for more keys; each method runs every combination of the keys that change it.
     #[arg(long, value_name = "KEY=V1,V2,…")]
     pub grid: Vec<String>,
@@ -210,9 +212,9 @@ fn named_reference_path(dir: &Path, name: &str) -> PathBuf {
         .unwrap_or(gi)
 }
 
-/// The renders' size and the reference's box-filter factor (or the renders', `render_factor`
-/// > 1) for `--size` (the renders' width) against a `width` × `height` reference: `--size`
-/// divides the width (the reference is filtered down), or the width divides `--size` (the
+/// The renders' size and the reference's box-filter factor (or, when `render_factor` is
+/// above 1, the renders') for `--size` (the renders' width) against a `width` × `height`
+/// reference: `--size` divides the width (the reference is filtered down), or the width divides `--size` (the
 /// renders are), and the height must follow the width's scale exactly. `None`: it does not fit.
 fn fit_size(size: u32, width: u32, height: u32) -> Option<((u32, u32), u32, u32)> {
     if size == 0 || width == 0 || height == 0 {
@@ -471,7 +473,7 @@ fn measure(
         psnr_db: m.psnr_db,
         ssim: m.ssim,
         device: ctx.info.name.clone(),
-        gi_toml: gi_inline(&job.settings.gi),
+        gi_toml: settings_inline(&job.settings.gi, &job.config),
         flicker,
         ghost: lag.map(|l| l.ghost),
         lag_frames: lag.and_then(|l| l.frames),
@@ -891,7 +893,8 @@ fn radius_text(scene: &str, r: &crate::bench::RadiusResult, rows: &[TraverseRow]
     t.trim_end_matches(';').to_owned()
 }
 
-/// Prints the most accurate configuration of the sweep within the budget as a `[gi]` table.
+/// Prints the most accurate configuration of the sweep within the budget as scene tables: its
+/// `[gi]` table, and the `[shadow]` and `[post]` keys its grid set.
 pub fn tune_command(args: &TuneArgs, out: &mut dyn Write) -> Result<(), CliError> {
     let name = scene_name(&args.scene);
     let (row, table, _) = tune_from_dir(&args.from, &name, args.budget_ms)?;

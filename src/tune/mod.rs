@@ -75,7 +75,10 @@ pub struct SweepRow {
     pub psnr_db: f64,
     pub ssim: f64,
     pub device: String,
-    /// The resolved `[gi]` table as an inline TOML table (what `voxgi tune` prints).
+    /// The configuration's settings as an inline TOML document of scene tables: the
+    /// resolved `[gi]` table and the `[shadow]` and `[post]` keys its grid set
+    /// (`{ gi = { … }, shadow = { … } }`, what `voxgi tune` prints). A row of an older
+    /// sweep holds the `[gi]` table alone (`{ method = …, … }`); [`tables_text`] reads both.
     pub gi_toml: String,
     /// Flicker along the light path (`bench::temporal`); empty when not measured (no
     /// light that can move, or `--temporal-steps 0`).
@@ -178,16 +181,39 @@ pub fn tune<'a>(
     }
 }
 
-/// A row's `[gi]` table as a scene file writes it.
-pub fn gi_table_text(row: &SweepRow) -> Result<String, String> {
+/// A row's settings as scene tables (`gi`, and `shadow` or `post` when its grid set their
+/// keys). The column of an older sweep is the `[gi]` table itself; its keys are `[gi]`'s,
+/// none of which is a table named `gi`, so the two forms are told apart by that key.
+fn row_tables(row: &SweepRow) -> Result<toml::Table, String> {
     let doc: toml::Table =
-        toml::from_str(&format!("gi = {}", row.gi_toml)).map_err(|e| e.to_string())?;
-    toml::to_string(&doc).map_err(|e| e.to_string())
+        toml::from_str(&format!("v = {}", row.gi_toml)).map_err(|e| e.to_string())?;
+    let v = match doc.get("v") {
+        Some(toml::Value::Table(t)) => t.clone(),
+        _ => return Err("not an inline table".into()),
+    };
+    Ok(match v.get("gi") {
+        Some(toml::Value::Table(_)) => v,
+        _ => toml::Table::from_iter([("gi".to_owned(), toml::Value::Table(v))]),
+    })
+}
+
+/// A row's settings as a scene file writes them: its `[gi]` table, then its `[post]` and
+/// `[shadow]` keys when its grid set some (what `voxgi tune` prints).
+pub fn tables_text(row: &SweepRow) -> Result<String, String> {
+    toml::to_string(&row_tables(row)?).map_err(|e| e.to_string())
+}
+
+/// A row's `[gi]` table alone as a scene file writes it.
+pub fn gi_table_text(row: &SweepRow) -> Result<String, String> {
+    let mut tables = row_tables(row)?;
+    tables.retain(|k, _| k == "gi");
+    toml::to_string(&tables).map_err(|e| e.to_string())
 }
 
 /// What `voxgi tune` and the viewer's "best within budget" choose from the sweep in `dir`
 /// (its sweep.csv): the most accurate row of `scene` within `budget_ms` ([`tune`]), its
-/// `[gi]` table as text, and that table read back as a scene file's `[gi]` would be.
+/// settings as text ([`tables_text`]: `[gi]`, and `[shadow]`/`[post]` keys its grid set),
+/// and its `[gi]` table read back as a scene file's `[gi]` would be.
 pub fn tune_from_dir(
     dir: &Path,
     scene: &str,
@@ -210,8 +236,9 @@ pub fn tune_from_dir(
         line: 0,
         reason: format!("the gi_toml of `{}`: {reason}", row.config),
     };
-    let table = gi_table_text(&row).map_err(bad)?;
-    let layer = crate::scene::gi_table_layer(&table, &csv).map_err(|e| bad(e.to_string()))?;
+    let table = tables_text(&row).map_err(bad)?;
+    let gi = gi_table_text(&row).map_err(bad)?;
+    let layer = crate::scene::gi_table_layer(&gi, &csv).map_err(|e| bad(e.to_string()))?;
     Ok((row, table, layer))
 }
 
