@@ -42,6 +42,8 @@ fn the_gpu_run_rehearsal_runs_every_step_and_summarizes_them() {
         "devices",
         "validate_cornell_none",
         "validate_cornell_pbr_ssgi",
+        "validate_cornell_hemisphere-temporal",
+        "validate_cornell_pathtrace-temporal",
         "profile_cornell_none",
         "profile_cornell_ssgi",
         "profile_cornell_hemisphere-4",
@@ -64,9 +66,10 @@ fn the_gpu_run_rehearsal_runs_every_step_and_summarizes_them() {
     }
 
     // The summary read the profiles: a frame time for each configuration and the targets'
-    // table, and the validation line counts all ten renders.
+    // table, and the validation line counts all twelve renders (5 methods on 2 scenes, and
+    // the two temporal methods on Cornell).
     let summary = std::fs::read_to_string(dest.join("summary.md")).expect("summary.md");
-    assert!(summary.contains("10 of 10 renders"), "{summary}");
+    assert!(summary.contains("12 of 12 renders"), "{summary}");
     for config in ["none", "ssgi", "hemisphere-4", "pathtrace-1x2", "vpl-16"] {
         let row = summary
             .lines()
