@@ -59,7 +59,10 @@ float emitter_hit_weight(vec3 le, float dist_m, float cos_l, float pdf_bsdf) {
 // part. `parts`: 0 the diffuse part only, 1 the specular part only (the first bounce's
 // stratified split, each half its own estimator), 2 both, where the BSDF sample picks the
 // specular part with probability ps (its density is then ps times that part's);
-// 3 the whole BRDF, unweighted (direct_emitters.comp: no BSDF strategy to combine with).
+// 3 the whole BRDF, unweighted (direct_emitters.comp's Lambert pixels: no BSDF strategy to
+// combine with); 4 the diffuse part unweighted and the specular part weighted against the
+// specular lobe's samples of emitter_lobe_hit, ps their count per light sample
+// (direct_emitters.comp's Phong and GGX pixels).
 vec3 emitter_sample(vec3 o, vec3 n, vec3 wo, Lobe m, uint parts, float ps, vec2 u) {
     uint count = emitter_header.count;
     if (count == 0u || emitter_header.inv_weighted_area <= 0.0) return vec3(0.0);
@@ -101,6 +104,9 @@ vec3 emitter_sample(vec3 o, vec3 n, vec3 wo, Lobe m, uint parts, float ps, vec2 
     vec3 f = vec3(0.0);
     if (parts == 3u) {
         f = lobe_brdf(m, n, wi, wo);
+    } else if (parts == 4u) {
+        f = lobe_part_brdf(m, n, wi, wo, false)
+            + lobe_part_brdf(m, n, wi, wo, true) * mis_power(pl, ps * lobe_pdf(m, n, wo, wi, true));
     } else {
         if (parts != 1u) {
             float pd = (parts == 2u ? 1.0 - ps : 1.0) * lobe_pdf(m, n, wo, wi, false);
@@ -127,6 +133,62 @@ vec3 emitter_sample(vec3 o, vec3 n, vec3 wo, Lobe m, uint parts, float ps, vec2 
         }
     }
     return f * e.radiance.rgb * (ci * cl / (d2 * pa));
+}
+
+// The BSDF strategy that emitter_sample's parts 4 is weighted against, for a vertex that has
+// no emission volume to read (direct_emitters.comp): the specular lobe's sample wi (weight w,
+// sample_lobe's f cos / pdf) is intersected with every emitting triangle (Moeller and Trumbore
+// 1997), and the nearest front face hit within the rays' reach, visible by the same voxel
+// segment as a light sample's, brings w L times the power heuristic's weight against the light
+// strategy, whose density there is p_A d^2 / cos_l (ps: these samples per light sample). The
+// loop is over all rows: fine for the tens to hundreds of triangles of a scene's lamps.
+vec3 emitter_lobe_hit(vec3 o, vec3 n, vec3 wo, Lobe m, vec3 wi, vec3 w, float ps) {
+    uint count = emitter_header.count;
+    float ci = dot(n, wi);
+    if (count == 0u || emitter_header.inv_weighted_area <= 0.0 || ci <= 0.0) return vec3(0.0);
+    float best = gi.radius_m;
+    int hit = -1;
+    for (uint r = 0u; r < count; ++r) {
+        GpuEmissiveTriangle e = emitter_rows[r];
+        vec3 pv = cross(wi, e.edge2.xyz);
+        float det = dot(e.edge1.xyz, pv);
+        // det = -wi . (edge1 x edge2): positive only where wi meets the emitting side.
+        if (det <= 1e-12) continue;
+        vec3 tv = o - e.origin.xyz;
+        float bu = dot(tv, pv) / det;
+        if (bu < 0.0 || bu > 1.0) continue;
+        vec3 qv = cross(tv, e.edge1.xyz);
+        float bv = dot(wi, qv) / det;
+        if (bv < 0.0 || bu + bv > 1.0) continue;
+        float t = dot(e.edge2.xyz, qv) / det;
+        if (t > 0.0 && t < best) {
+            best = t;
+            hit = int(r);
+        }
+    }
+    if (hit < 0) return vec3(0.0);
+    GpuEmissiveTriangle e = emitter_rows[hit];
+    float pa = e.radiance.w;
+    if (pa <= 0.0) return vec3(0.0);
+    vec3 nl = normalize(cross(e.edge1.xyz, e.edge2.xyz));
+    float cl = -dot(nl, wi);
+    vec3 y = o + wi * best;
+#ifdef EMITTER_POINT_SKIPPED
+    if (EMITTER_POINT_SKIPPED(y, nl)) return vec3(0.0);
+#endif
+    float along = min(gi.ray_offset_voxels * gi.voxel_diagonal_m / max(ci, 1e-4),
+        gi.ray_offset_max_voxels * gi.voxel_diagonal_m);
+    vec3 start = o + wi * along;
+    vec3 end = y + nl * (gi.normal_offset_voxels * gi.voxel_diagonal_m);
+    if (dot(end - start, wi) > 0.0) {
+        vec3 a_v = (gi.world_to_voxel * vec4(start, 1.0)).xyz;
+        vec3 b_v = (gi.world_to_voxel * vec4(end, 1.0)).xyz;
+        if (!voxel_visible(gi.dims, uint(gi.max_level), a_v, b_v, gi.start_level, gi.max_iterations)) {
+            return vec3(0.0);
+        }
+    }
+    float pl = pa * best * best / max(cl, 1e-6);
+    return w * e.radiance.rgb * mis_power(ps * lobe_pdf(m, n, wo, wi, true), pl);
 }
 
 #endif
