@@ -53,6 +53,21 @@ float emitter_hit_weight(vec3 le, float dist_m, float cos_l, float pdf_bsdf) {
     return mis_power(pdf_bsdf, pa * dist_m * dist_m / max(cos_l, 1e-6));
 }
 
+// Whether emitter point y (normal nl) is visible from the vertex o along wi (ci = n.wi): the
+// segment leaves o as the BSDF rays do (k2 h / (d.n), clamped) and stops k1 voxel diagonals
+// off the emitter along its normal, as the rays start off their own surface (Thiedemann 2010
+// §5.3.1), so neither end's own voxels block it.
+bool emitter_point_visible(vec3 o, vec3 wi, float ci, vec3 y, vec3 nl) {
+    float along = min(gi.ray_offset_voxels * gi.voxel_diagonal_m / max(ci, 1e-4),
+        gi.ray_offset_max_voxels * gi.voxel_diagonal_m);
+    vec3 start = o + wi * along;
+    vec3 end = y + nl * (gi.normal_offset_voxels * gi.voxel_diagonal_m);
+    if (dot(end - start, wi) <= 0.0) return true;
+    vec3 a_v = (gi.world_to_voxel * vec4(start, 1.0)).xyz;
+    vec3 b_v = (gi.world_to_voxel * vec4(end, 1.0)).xyz;
+    return voxel_visible(gi.dims, uint(gi.max_level), a_v, b_v, gi.start_level, gi.max_iterations);
+}
+
 // One light sample at the path vertex o (normal n, wo toward where the path came from,
 // material m), u uniform in [0,1)^2: the MIS-weighted estimate of the radiance the vertex
 // reflects toward wo from the emissive triangles, f L cos_i cos_l / (d^2 p_A) per sampled lobe
@@ -118,20 +133,7 @@ vec3 emitter_sample(vec3 o, vec3 n, vec3 wo, Lobe m, uint parts, float ps, vec2 
         }
     }
     if (all(equal(f, vec3(0.0)))) return vec3(0.0);
-    // The segment leaves o as the BSDF rays do (k2 h / (d.n), clamped) and stops k1 voxel
-    // diagonals off the emitter along its normal, as the rays start off their own surface
-    // (Thiedemann 2010 §5.3.1), so neither end's own voxels block it.
-    float along = min(gi.ray_offset_voxels * gi.voxel_diagonal_m / max(ci, 1e-4),
-        gi.ray_offset_max_voxels * gi.voxel_diagonal_m);
-    vec3 start = o + wi * along;
-    vec3 end = y + nl * (gi.normal_offset_voxels * gi.voxel_diagonal_m);
-    if (dot(end - start, wi) > 0.0) {
-        vec3 a_v = (gi.world_to_voxel * vec4(start, 1.0)).xyz;
-        vec3 b_v = (gi.world_to_voxel * vec4(end, 1.0)).xyz;
-        if (!voxel_visible(gi.dims, uint(gi.max_level), a_v, b_v, gi.start_level, gi.max_iterations)) {
-            return vec3(0.0);
-        }
-    }
+    if (!emitter_point_visible(o, wi, ci, y, nl)) return vec3(0.0);
     return f * e.radiance.rgb * (ci * cl / (d2 * pa));
 }
 
@@ -176,17 +178,7 @@ vec3 emitter_lobe_hit(vec3 o, vec3 n, vec3 wo, Lobe m, vec3 wi, vec3 w, float ps
 #ifdef EMITTER_POINT_SKIPPED
     if (EMITTER_POINT_SKIPPED(y, nl)) return vec3(0.0);
 #endif
-    float along = min(gi.ray_offset_voxels * gi.voxel_diagonal_m / max(ci, 1e-4),
-        gi.ray_offset_max_voxels * gi.voxel_diagonal_m);
-    vec3 start = o + wi * along;
-    vec3 end = y + nl * (gi.normal_offset_voxels * gi.voxel_diagonal_m);
-    if (dot(end - start, wi) > 0.0) {
-        vec3 a_v = (gi.world_to_voxel * vec4(start, 1.0)).xyz;
-        vec3 b_v = (gi.world_to_voxel * vec4(end, 1.0)).xyz;
-        if (!voxel_visible(gi.dims, uint(gi.max_level), a_v, b_v, gi.start_level, gi.max_iterations)) {
-            return vec3(0.0);
-        }
-    }
+    if (!emitter_point_visible(o, wi, ci, y, nl)) return vec3(0.0);
     float pl = pa * best * best / max(cl, 1e-6);
     return w * e.radiance.rgb * mis_power(ps * lobe_pdf(m, n, wo, wi, true), pl);
 }
