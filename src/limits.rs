@@ -129,14 +129,14 @@ pub const TIME_S: Limit<f32> = Limit::new("--time", None, "a scene time in secon
 /// The voxel grid's x/y resolution cap: one image texel per column, at most 16384 per side.
 pub const VOXELS: Limit<u32> = Limit::new(
     "--voxels",
-    None,
+    Some("voxel.resolution"),
     "a voxel grid resolution (columns per side)",
     1,
     16384,
 );
 pub const VOXEL_LAYERS: Limit<u32> = Limit::new(
     "--voxel-layers",
-    None,
+    Some("voxel.layers"),
     "a number of depth layers of 128 voxels",
     1,
     64,

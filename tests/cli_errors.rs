@@ -141,7 +141,22 @@ fn commands_failing_after_the_device_is_up_release_everything() {
             "lower --width/--height",
         ),
     ];
-    for (extra, want) in cases {
+    // The same grid from a scene's `[voxel]` table: the scene's keys reach the renderer (no
+    // flag names a grid here) and the advice names them too.
+    let scene = std::env::temp_dir().join(format!("voxgi-voxel-table-{}.toml", std::process::id()));
+    std::fs::write(
+        &scene,
+        format!(
+            "{}\n[voxel]\nresolution = 16384\nlayers = 64\n",
+            include_str!("../assets/scenes/cornell.toml")
+        ),
+    )
+    .expect("writes the scene");
+    let scene = scene.to_string_lossy().into_owned();
+    let from_scene: &[&str] = &["--validate", "--gi", "hemisphere", &scene];
+    let want_scene =
+        "lower --voxels or --voxel-layers (the scene's `[voxel] resolution` or `layers`)";
+    for (extra, want) in cases.iter().copied().chain([(from_scene, want_scene)]) {
         let stderr = render_fails(extra);
         assert!(stderr.contains(want), "{extra:?}: {stderr}");
         assert!(

@@ -389,6 +389,7 @@ fn settings_regenerated(doc: &str) -> String {
             "gi" => doc_table::<voxgi::scene::GiSettings>(),
             "post" => doc_table::<voxgi::scene::PostTable>(),
             "shadow" => doc_table::<voxgi::scene::ShadowSettings>(),
+            "voxel" => doc_table::<voxgi::scene::VoxelSettings>(),
             other => panic!("docs/settings.md: no key table `{other}`"),
         });
     }

@@ -10,7 +10,7 @@
 use crate::gi::GiMethod;
 use crate::gi::GiSettings;
 use crate::scene::schema::{Key, Settings};
-use crate::scene::{PostTable, ShadowSettings};
+use crate::scene::{PostTable, ShadowSettings, VoxelSettings};
 pub use crate::tune::{
     csv_header, gi_table_text, read_csv, read_rows, tables_text, tune, tune_from_dir, CsvAppender,
     CsvRow, SweepRow, CSV_COLUMNS,
@@ -59,8 +59,8 @@ pub enum SweepError {
 }
 
 /// One `--grid KEY=V1,V2,…`: a `[gi]` key (one of the methods'
-/// [`crate::gi::MethodSpec::sweep_keys`]) or any `[shadow]` or `[post]` key, and the values it
-/// takes.
+/// [`crate::gi::MethodSpec::sweep_keys`]) or any `[shadow]`, `[post]` or `[voxel]` key, and
+/// the values it takes.
 #[derive(Clone, Debug, PartialEq)]
 pub struct GridAxis {
     /// The key path.
@@ -73,8 +73,8 @@ pub struct GridAxis {
 
 impl GridAxis {
     /// Whether the axis changes `method`'s renders: a `[gi]` key those methods whose spec
-    /// lists it, a `[shadow]` or `[post]` key every method (direct light and tone mapping
-    /// are in every image).
+    /// lists it, a `[shadow]`, `[post]` or `[voxel]` key every method (direct light and tone
+    /// mapping are in every image, and the emitters' direct light has voxel visibility).
     pub fn applies_to(&self, method: GiMethod) -> bool {
         !is_gi_key(self.key) || method.spec().sweep_keys.contains(&self.key)
     }
@@ -94,13 +94,14 @@ fn named<S: Settings>(name: &str) -> Option<&'static Key<S>> {
 }
 
 /// The grid key `name` names: one of the methods' `[gi]` sweep keys or any key of the
-/// `[shadow]` and `[post]` schemas, by its path or its flag without `--`.
+/// `[shadow]`, `[post]` and `[voxel]` schemas, by its path or its flag without `--`.
 fn grid_key(name: &str) -> Option<&'static str> {
     named::<GiSettings>(name)
         .map(|k| k.path)
         .filter(|p| GiMethod::sweep_keys().contains(p))
         .or_else(|| named::<ShadowSettings>(name).map(|k| k.path))
         .or_else(|| named::<PostTable>(name).map(|k| k.path))
+        .or_else(|| named::<VoxelSettings>(name).map(|k| k.path))
 }
 
 /// Parses `KEY=V1,V2,…`. The values are checked later, as flags of the configurations
@@ -120,7 +121,7 @@ pub fn parse_grid(spec: &str) -> Result<GridAxis, SweepError> {
     let key = grid_key(name).ok_or_else(|| {
         let known = GiMethod::sweep_keys();
         err(format!(
-            "unknown key `{name}`; expected one of {}, or a `[shadow]` or `[post]` key path \
+            "unknown key `{name}`; expected one of {}, or a `[shadow]`, `[post]` or `[voxel]` key path \
              (`voxgi render --help` lists them under --set), or a flag's name (e.g. gi-rays, \
              direct-samples, bloom)",
             known.join(", ")
@@ -273,7 +274,7 @@ pub fn gi_inline(s: &GiSettings) -> String {
 }
 
 /// The configuration's settings as the CSV's `gi_toml` column holds them: an inline TOML
-/// document of scene tables, the resolved `[gi]` table and the `[shadow]` and `[post]` keys
+/// document of scene tables, the resolved `[gi]` table and the `[shadow]`, `[post]` and `[voxel]` keys
 /// the grid set (`{ gi = { … }, shadow = { direct_samples = 4 } }`), which `voxgi tune`
 /// prints ([`tables_text`]).
 pub fn settings_inline(gi: &GiSettings, config: &Config) -> String {
@@ -294,7 +295,7 @@ pub fn settings_inline(gi: &GiSettings, config: &Config) -> String {
     toml::Value::Table(doc).to_string()
 }
 
-/// A `[shadow]` or `[post]` grid value as a scene file writes it. `None` for a value its key
+/// A `[shadow]`, `[post]` or `[voxel]` grid value as a scene file writes it. `None` for a value its key
 /// does not read, which no row has: a configuration's values are parsed as its flags before
 /// it is measured (`cli::sweep`'s `job`); and for an unset number, which a table leaves out.
 fn grid_toml(v: &GridValue) -> Option<toml::Value> {
@@ -302,7 +303,9 @@ fn grid_toml(v: &GridValue) -> Option<toml::Value> {
         let k = crate::scene::schema::key::<S>(v.key)?;
         k.kind.to_toml(k.kind.parse(&v.value).ok()?)
     }
-    of::<ShadowSettings>(v).or_else(|| of::<PostTable>(v))
+    of::<ShadowSettings>(v)
+        .or_else(|| of::<PostTable>(v))
+        .or_else(|| of::<VoxelSettings>(v))
 }
 
 /// A box-filtered copy of `img` `factor` times smaller in each direction (the reference
@@ -473,6 +476,7 @@ mod tests {
             S::keys().len()
         }
         assert!(each::<ShadowSettings>() > 0 && each::<PostTable>() > 0);
+        assert!(each::<VoxelSettings>() > 0);
         let e = parse_grid("shadow.direct_sample=1")
             .expect_err("no such key")
             .to_string();

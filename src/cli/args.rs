@@ -5,7 +5,7 @@ use crate::gi::GiSettings;
 use crate::post::{PostSettings, ToneMap};
 use crate::render::RenderSettings;
 use crate::scene::schema::{Flag, FlagStyle, Key, Kind, Layer, Settings, Value};
-use crate::scene::{resolve_gi, PostTable, Scene, ShadowSettings};
+use crate::scene::{resolve_gi, PostTable, Scene, ShadowSettings, VoxelSettings};
 
 /// The named flags of a settings table's keys (`S::keys`), generated from the table: each
 /// key's flag, with its help, value name and values from the key's row. Each one given
@@ -21,6 +21,8 @@ pub struct KeyFlags<S: Settings> {
 pub type PostArgs = KeyFlags<PostTable>;
 /// The `[shadow]` keys' flags (`--shadow-resolution`, `--pcf-radius`, …).
 pub type ShadowArgs = KeyFlags<ShadowSettings>;
+/// The `[voxel]` keys' flags (`--voxels`, `--voxel-layers`, `--voxelizer`, `--revoxelize`).
+pub type VoxelArgs = KeyFlags<VoxelSettings>;
 
 /// Indirect-light flags of `render`, `profile`, `graph`, `sweep`'s configurations and `view`:
 /// the `[gi]` keys' named flags ([`GiSettings::keys`]), `--set KEY=VALUE` for every key of
@@ -42,7 +44,12 @@ const VPL_SHOW_ID: &str = "vpl-show";
 const SAO_SHOW_ID: &str = "sao-show";
 
 /// The tables `--set` reaches.
-const SET_TABLES: [&str; 3] = [GiSettings::TABLE, PostTable::TABLE, ShadowSettings::TABLE];
+const SET_TABLES: [&str; 4] = [
+    GiSettings::TABLE,
+    PostTable::TABLE,
+    ShadowSettings::TABLE,
+    VoxelSettings::TABLE,
+];
 
 /// Every key path `--set` takes, for its help and its error.
 fn set_paths() -> String {
@@ -50,6 +57,7 @@ fn set_paths() -> String {
         crate::scene::schema::paths::<GiSettings>(),
         crate::scene::schema::paths::<PostTable>(),
         crate::scene::schema::paths::<ShadowSettings>(),
+        crate::scene::schema::paths::<VoxelSettings>(),
     ]
     .concat()
     .join(", ")
@@ -197,10 +205,10 @@ impl clap::Args for GiArgs {
                     .value_name("KEY=VALUE")
                     .action(ArgAction::Append)
                     .help(
-                        "Sets any `[gi]`, `[post]` or `[shadow]` key by its path, as the scene file's table would (e.g. --set gi.rays=8, --set post.bloom=0.3); repeatable, applied after the named flags",
+                        "Sets any `[gi]`, `[post]`, `[shadow]` or `[voxel]` key by its path, as the scene file's table would (e.g. --set gi.rays=8, --set post.bloom=0.3); repeatable, applied after the named flags",
                     )
                     .long_help(format!(
-                        "Sets any `[gi]`, `[post]` or `[shadow]` key by its path, as the scene file's table would (e.g. --set gi.rays=8, --set post.bloom=0.3); repeatable, applied after the named flags. Keys: {}",
+                        "Sets any `[gi]`, `[post]`, `[shadow]` or `[voxel]` key by its path, as the scene file's table would (e.g. --set gi.rays=8, --set post.bloom=0.3); repeatable, applied after the named flags. Keys: {}",
                         set_paths()
                     )),
             )
@@ -332,20 +340,11 @@ pub struct FrameArgs {
     /// fragments are dropped and reported).
     #[arg(long, value_name = "N", default_value_t = crate::render::OIT_DEFAULT_NODES_PER_PIXEL)]
     pub oit_nodes_per_pixel: u32,
-    /// Voxelize the scene into a grid of at most N×N columns: static geometry once, dynamic
-    /// objects in the frames they move (`profile` then shows those voxel passes).
-    #[arg(long, value_name = "N")]
-    pub voxels: Option<u32>,
-    /// Depth layers of 128 voxels of the voxel grid.
-    #[arg(long, default_value_t = 1)]
-    pub voxel_layers: u32,
-    /// Re-voxelize static geometry every frame too (measures the full voxelization).
-    #[arg(long)]
-    pub revoxelize: bool,
-    /// Voxelizer: exact triangle/box test, or the thesis's texture-atlas splatting with
-    /// automatic atlases (applies to --voxels, GI and --debug voxel grids).
-    #[arg(long, value_enum, default_value_t = crate::voxel::gpu::Voxelizer::Triangle)]
-    pub voxelizer: crate::voxel::gpu::Voxelizer,
+    // The voxel grid (over the scene's `[voxel]` table): `--voxels N` voxelizes even without
+    // GI (static geometry once, dynamic objects in the frames they move; `profile` then shows
+    // those voxel passes).
+    #[command(flatten)]
+    pub voxel: VoxelArgs,
     #[command(flatten)]
     pub camera: CameraArgs,
     #[command(flatten)]
@@ -389,21 +388,22 @@ impl FrameArgs {
         s.transparency = self.transparency.or(scene.transparency).unwrap_or_default();
         s.oit_nodes_per_pixel =
             crate::limits::OIT_NODES_PER_PIXEL.check_flag(self.oit_nodes_per_pixel)?;
-        let default_res = crate::voxel::gpu::VoxelSettings::default().max_res_xy;
         s.gi = self.gi.settings(scene)?;
-        // GI and the voxel debug views voxelize without --voxels, honouring --voxelizer,
-        // --voxel-layers and --revoxelize (the atlas and G-buffer views draw no voxels).
+        // GI and the voxel debug views voxelize without --voxels, with the scene's `[voxel]`
+        // under the voxel flags (the atlas and G-buffer views draw no voxels); the renderer
+        // voxelizes for the emitters' direct light by the scene's table alone.
         let needs_voxels =
             s.gi.method != GiMethod::None || self.debug.is_some_and(|d| d.shows_voxels());
-        s.voxels = self
-            .voxels
-            .or(needs_voxels.then_some(default_res))
-            .map(|max_res_xy| crate::voxel::gpu::VoxelSettings {
-                max_res_xy,
-                layers: self.voxel_layers,
-                revoxelize_static: self.revoxelize,
-                voxelizer: self.voxelizer,
-            });
+        // `--voxels N` voxelizes even when nothing needs voxels (to measure the voxel passes);
+        // `--set voxel.resolution=N` is the scene key's value, as a sweep's axis sets it.
+        let voxel = self.voxel.layer(&self.gi.set)?;
+        let forced = self
+            .voxel
+            .given
+            .iter()
+            .any(|(k, _)| k.path == "voxel.resolution");
+        s.voxels = (needs_voxels || forced)
+            .then(|| crate::scene::schema::resolve(&[&scene.voxel, &voxel]));
         let object = match self.debug {
             Some(crate::voxel::debug_view::DebugView::Atlas) => scene.find_object(&self.object)?,
             _ => 0,

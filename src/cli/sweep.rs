@@ -43,9 +43,10 @@ pub struct SweepArgs {
     #[arg(long, default_value_t = crate::bench::sweep::default_sweep_methods())]
     pub methods: String,
     /// A key path or a flag of `voxgi render` (without `--`) and its values:
-    /// `--grid gi-rays=4,16`, `--grid shadow.direct_samples=1,4`. Takes the `[gi]` keys the
-    /// methods sweep and every `[shadow]` and `[post]` key (those apply to every method).
-    /// Repeat for more keys; each method runs every combination of the keys that change it.
+    /// `--grid gi-rays=4,16`, `--grid voxel.resolution=128,256`. Takes the `[gi]` keys the
+    /// methods sweep and every `[shadow]`, `[post]` and `[voxel]` key (those apply to every
+    /// method). Repeat for more keys; each method runs every combination of the keys that
+    /// change it.
     #[arg(long, value_name = "KEY=V1,V2,…")]
     pub grid: Vec<String>,
     /// Output folder: sweep.csv (a row per configuration, written as each finishes),
@@ -894,7 +895,7 @@ fn radius_text(scene: &str, r: &crate::bench::RadiusResult, rows: &[TraverseRow]
 }
 
 /// Prints the most accurate configuration of the sweep within the budget as scene tables: its
-/// `[gi]` table, and the `[shadow]` and `[post]` keys its grid set.
+/// `[gi]` table, and the `[shadow]`, `[post]` and `[voxel]` keys its grid set.
 pub fn tune_command(args: &TuneArgs, out: &mut dyn Write) -> Result<(), CliError> {
     let name = scene_name(&args.scene);
     let (row, table, _) = tune_from_dir(&args.from, &name, args.budget_ms)?;

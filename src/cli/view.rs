@@ -138,6 +138,11 @@ pub fn view(global: &Global, args: ViewArgs, out: &mut dyn Write) -> Result<(), 
         .apply(settings.shadow, &scene.shadow, &args.gi.set)?;
     settings.gi = args.gi.settings(&scene)?;
     args.gi.check_sao(&settings.gi)?;
+    // `--set voxel.KEY=V` over the scene's `[voxel]`: the grid of every renderer the viewer
+    // makes (it voxelizes when something needs voxels, as `render` does).
+    let voxel = super::args::VoxelArgs::default().layer(&args.gi.set)?;
+    let mut scene = scene;
+    scene.voxel = voxel.over(&scene.voxel);
     let name = super::sweep::scene_name(args.scene.as_deref().unwrap_or("cornell"));
     if let Some(budget) = args.budget_ms {
         let (row, _, layer) = crate::tune::tune_from_dir(&args.sweep, &name, budget)?;

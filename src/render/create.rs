@@ -253,11 +253,11 @@ impl FramePlan {
             None => direct_emitters::sampled_light(settings.gi.method, scene),
             Some(_) => None,
         };
+        // What needs voxels and the frame names no voxel settings gets the scene's `[voxel]`.
+        let needs_voxels = gi_voxels || direct_light.is_some() || voxel_view_on;
         let voxel_settings = settings
             .voxels
-            .or(gi_voxels.then(Default::default))
-            .or(direct_light.map(|_| Default::default()))
-            .or(voxel_view_on.then(Default::default));
+            .or(needs_voxels.then(|| scene.voxel_settings()));
         if let Some(v) = &voxel_settings {
             check_voxel_memory(ctx, scene, settings, v)?;
         }
@@ -442,7 +442,8 @@ fn gi_passes(
     let grid = match voxels.as_ref() {
         Some(v) => &v.voxels.grid,
         None => {
-            cpu_grid = crate::voxel::gpu::VoxelSettings::default()
+            cpu_grid = scene
+                .voxel_settings()
                 .grid_for(scene, settings.time_s)
                 .map_err(crate::voxel::gpu::GpuVoxelError::from)?;
             &cpu_grid
@@ -497,7 +498,7 @@ fn atlas_view(
     };
     let grid = settings
         .voxels
-        .unwrap_or_default()
+        .unwrap_or_else(|| scene.voxel_settings())
         .grid_for(scene, settings.time_s)
         .map_err(crate::voxel::gpu::GpuVoxelError::from)?;
     Ok(Some(crate::voxel::atlas_view::AtlasViewPass::new(

@@ -117,13 +117,14 @@ pub struct RenderSettings {
     pub time_s: f32,
     pub shadow: ShadowSettings,
     pub tonemap: ToneMap,
-    /// Voxelize the scene every frame (`None`: direct light needs no voxels). Indirect light
-    /// voxelizes with default settings when this is `None`.
+    /// Voxelize the scene with these settings, even if nothing needs voxels. `None`: voxelize
+    /// only what needs voxels (a GI method, the emitters' or the environment's direct light,
+    /// a voxel debug view), with the scene's `[voxel]` settings ([`Scene::voxel_settings`]).
     pub voxels: Option<crate::voxel::gpu::VoxelSettings>,
     /// Indirect light (method `None`: direct light only).
     pub gi: crate::gi::GiSettings,
-    /// Show a voxel debug view instead of the lit image (voxelizes with the default
-    /// [`crate::voxel::gpu::VoxelSettings`] when `voxels` is `None`).
+    /// Show a voxel debug view instead of the lit image (voxelizes with the scene's
+    /// `[voxel]` settings when `voxels` is `None`).
     pub debug: Option<crate::voxel::debug_view::DebugSettings>,
     /// Post-processing around tone mapping (TAA, …); off by default.
     pub post: crate::post::PostSettings,

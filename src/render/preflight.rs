@@ -68,7 +68,7 @@ pub(super) fn check_voxel_memory(
             grid.res_y(),
             grid.layers()
         ),
-        "--voxels or --voxel-layers",
+        "--voxels or --voxel-layers (the scene's `[voxel] resolution` or `layers`)",
         &[
             memory::MemoryNeed::image(ctx, &image),
             memory::MemoryNeed::buffer(ctx, &buffer),

@@ -45,7 +45,7 @@ pub(crate) struct SceneDesc {
     pub lights: Vec<LightDesc>,
     #[serde(default)]
     pub objects: Vec<ObjectDesc>,
-    pub voxel: Option<toml::Table>,
+    pub voxel: Option<RawTable<super::VoxelSettings>>,
     pub gi: Option<RawTable<GiSettings>>,
     pub shadow: Option<RawTable<super::ShadowSettings>>,
     pub post: Option<RawTable<super::PostTable>>,
@@ -431,6 +431,7 @@ pub(crate) fn build_with(
         .map(|t| build_transparency(&ck, t))
         .transpose()?;
     let shadow = table_layer(&ck, desc.shadow.as_ref())?;
+    let voxel = table_layer(&ck, desc.voxel.as_ref())?;
     let post = table_layer(&ck, desc.post.as_ref())?;
     let mut lights = desc
         .lights
@@ -508,7 +509,7 @@ pub(crate) fn build_with(
         meshes: store.meshes,
         materials: store.materials,
         textures: store.textures,
-        voxel: desc.voxel,
+        voxel,
         gi,
         transparency,
         shadow,

@@ -118,7 +118,14 @@
 //!                                   #   in time (C1, through every key; see [`CameraPath`]);
 //!                                   #   outside the keys' times the path holds its ends
 //!
-//! [voxel]    # optional, settings of the voxel grid (checked by `voxel`, not here)
+//! [voxel]    # optional: the voxel grid, when something needs one (a GI method, the
+//!            #   emitters' or the environment's direct light, a voxel debug view); flags
+//!            #   (`--voxels`, `--voxel-layers`, …) override it
+//! resolution = 256                  # at most N columns per side, 1..=16384; voxels are
+//!                                   #   near-cubic, so the longest side gets N [128]
+//! layers = 2                        # depth layers of 128 voxels, 1..=64 [1]
+//! voxelizer = "triangle"            # "triangle" | "atlas" ["triangle"]
+//! revoxelize = false                # static geometry every frame too [false]
 //!
 //! [gi]       # optional: the scene's indirect-light defaults; every key optional (default
 //!            #   in brackets); command-line flags (`--gi`, `--gi-rays`, …) override them
@@ -227,6 +234,7 @@ pub mod schema;
 mod shadow_settings;
 pub mod sky;
 mod sky_data;
+mod voxel_settings;
 pub mod vpl_settings;
 
 use std::path::{Path, PathBuf};
@@ -265,6 +273,7 @@ pub use shadow_settings::{
     range as shadow_range, AreaShadow, PointShadow, ShadowSettings, AUTO_RESOLUTION_NAME,
     DEFAULT_CASCADES,
 };
+pub use voxel_settings::{VoxelSettings, Voxelizer};
 pub use vpl_settings::{VplSettings, VplShading, VplVisibility};
 
 /// A loaded, validated scene: everything finite, directions unit length, indices in range.
@@ -283,8 +292,10 @@ pub struct Scene {
     pub meshes: Vec<Mesh>,
     pub materials: Vec<Material>,
     pub textures: Vec<TextureData>,
-    /// The `[voxel]` table as written, for the voxel module to interpret.
-    pub voxel: Option<toml::Table>,
+    /// The `[voxel]` table: the scene's layer of the voxel grid's settings (flags override
+    /// it; the keys are [`VoxelSettings::keys`](schema::Settings::keys)); see
+    /// [`Scene::voxel_settings`].
+    pub voxel: schema::Layer,
     /// The `[gi]` table: the scene's layer of the indirect-light settings (nothing given
     /// without the table); see [`resolve_gi`].
     pub gi: schema::Layer,
@@ -305,6 +316,13 @@ pub struct Scene {
 }
 
 impl Scene {
+    /// The voxel grid's settings of this scene: the defaults under its `[voxel]` table. What
+    /// a renderer voxelizes with when something needs voxels and the frame's settings name
+    /// none (`RenderSettings::voxels`).
+    pub fn voxel_settings(&self) -> VoxelSettings {
+        schema::resolve(&[&self.voxel])
+    }
+
     /// Loads a TOML scene file and everything it references, or a glTF or OBJ file as a scene
     /// of its own ([`Scene::load_model`]).
     pub fn load(path: impl AsRef<Path>) -> Result<Scene, SceneError> {

@@ -813,16 +813,17 @@ pub fn assert_every_key_reads_and_writes_its_own_field<S: Settings>(on: &Layer) 
 mod tests {
     use super::*;
 
-    /// The post and shadow tables' keys, as the GI table's are in `scene::gi`.
+    /// The post, shadow and voxel tables' keys, as the GI table's are in `scene::gi`.
     #[test]
-    fn every_post_and_shadow_key_reads_and_writes_its_own_field() {
-        use crate::scene::{PostTable, ShadowSettings};
+    fn every_post_shadow_and_voxel_key_reads_and_writes_its_own_field() {
+        use crate::scene::{PostTable, ShadowSettings, VoxelSettings};
         let mut on = Layer::default();
         on.set("post.taa", Value::Bool(true));
         on.set("post.auto_exposure", Value::Number(0.5));
         on.set("post.bloom", Value::Number(0.1));
         assert_every_key_reads_and_writes_its_own_field::<PostTable>(&on);
         assert_every_key_reads_and_writes_its_own_field::<ShadowSettings>(&Layer::default());
+        assert_every_key_reads_and_writes_its_own_field::<VoxelSettings>(&Layer::default());
     }
 
     #[test]
@@ -839,6 +840,7 @@ mod tests {
         check::<crate::scene::GiSettings>();
         check::<crate::scene::PostTable>();
         check::<crate::scene::ShadowSettings>();
+        check::<crate::scene::VoxelSettings>();
     }
 
     /// A row's range names the row's flag (the `--set` path where it has none), so that a
@@ -862,6 +864,7 @@ mod tests {
         check::<crate::scene::GiSettings>();
         check::<crate::scene::PostTable>();
         check::<crate::scene::ShadowSettings>();
+        check::<crate::scene::VoxelSettings>();
     }
 
     /// A switch turned on alone keeps the value of the layers below, unless one of them

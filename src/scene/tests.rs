@@ -715,18 +715,43 @@ fn keyframes_inherit_the_object_transform() {
     assert!(s.has_dynamic_objects());
 }
 
+/// The `[voxel]` table sets the grid a renderer voxelizes with, and refuses what its flags
+/// refuse, naming the file and the key.
 #[test]
-fn voxel_table_is_kept() {
-    let text = format!("{CAMERA}{LIGHT}{CUBE}[voxel]\nresolution = 128\n");
+fn voxel_table_sets_the_grid() {
+    use crate::scene::{VoxelSettings, Voxelizer};
+    let text = format!(
+        "{CAMERA}{LIGHT}{CUBE}[voxel]\nresolution = 256\nlayers = 2\nvoxelizer = \"atlas\"\n\
+         revoxelize = true\n"
+    );
     let s = load_ok(&text, &[]);
     assert_eq!(
-        s.voxel
-            .as_ref()
-            .and_then(|v| v.get("resolution"))
-            .and_then(|v| v.as_integer()),
-        Some(128)
+        s.voxel_settings(),
+        VoxelSettings {
+            max_res_xy: 256,
+            layers: 2,
+            revoxelize_static: true,
+            voxelizer: Voxelizer::Atlas,
+        }
     );
     assert!(s.gi.is_empty(), "no [gi] table: nothing given");
+    let s = load_ok(&format!("{CAMERA}{LIGHT}{CUBE}"), &[]);
+    assert_eq!(s.voxel_settings(), VoxelSettings::default());
+    for (line, field, expected) in [
+        ("resolution = 0", "voxel.resolution", "[1, 16384]"),
+        ("layers = 65", "voxel.layers", "[1, 64]"),
+        ("voxelizer = \"splat\"", "voxel.voxelizer", "triangle"),
+    ] {
+        let text = format!("{CAMERA}{LIGHT}{CUBE}[voxel]\n{line}\n");
+        let (e, scene) = load_err(&text, &[]);
+        assert!(
+            matches!(e, SceneError::InvalidValue { field: ref f, .. } if f == field),
+            "{line}: {e}"
+        );
+        assert_msg(&e, &scene, &[&format!("`{field}`"), expected]);
+    }
+    let (e, _) = load_err(&format!("{CAMERA}{LIGHT}{CUBE}[voxel]\nsize = 3\n"), &[]);
+    assert!(e.to_string().contains("resolution"), "{e}");
 }
 
 // ---- the [gi] table ------------------------------------------------------------------------

@@ -40,6 +40,8 @@ use glam::Vec3;
 use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
 use std::sync::Arc;
 
+pub use crate::scene::{VoxelSettings, Voxelizer};
+
 /// Format of the binary column image: one texel = one column of 128 voxels.
 pub const COLUMN_FORMAT: vk::Format = vk::Format::R32G32B32A32_UINT;
 
@@ -719,19 +721,6 @@ pub fn voxelize_static_timed(
     Ok((columns, timings))
 }
 
-/// What the renderer's frame voxelizes (absent: no voxel passes at all).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct VoxelSettings {
-    /// Cap on the x/y resolution; voxels are near-cubic ([`VoxelGrid::around`]).
-    pub max_res_xy: u32,
-    /// Depth layers of 128 voxels.
-    pub layers: u32,
-    /// Voxelize static geometry every frame too (to measure the full cost) instead of once.
-    pub revoxelize_static: bool,
-    /// Which voxelizer sets the bits.
-    pub voxelizer: Voxelizer,
-}
-
 impl VoxelSettings {
     /// The grid these settings put around `scene` at `t_s`.
     pub fn grid_for(&self, scene: &Scene, t_s: f32) -> Result<VoxelGrid, VoxelError> {
@@ -745,30 +734,6 @@ impl VoxelSettings {
                 ..Default::default()
             },
         )
-    }
-}
-
-/// The two voxelizers of docs/design/voxels.md.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
-pub enum Voxelizer {
-    /// Exact conservative triangle/box test (`voxelize_triangles`), bit for bit the CPU
-    /// reference.
-    #[default]
-    Triangle,
-    /// The thesis's texture-atlas splatting with automatic atlases (one per OBJ sequence);
-    /// sequences whose frames differ in topology still use the triangle voxelizer.
-    // See `voxel::gpu_atlas` (no intra-doc link: clap shows this text in --help).
-    Atlas,
-}
-
-impl Default for VoxelSettings {
-    fn default() -> Self {
-        Self {
-            max_res_xy: 128,
-            layers: 1,
-            revoxelize_static: false,
-            voxelizer: Voxelizer::Triangle,
-        }
     }
 }
 
