@@ -137,7 +137,9 @@ void main() {
     vec3 n = normalize(ns.xyz);
     vec3 wo = toward_camera(frame.camera_position, frame.camera_forward, p);
     Lobe m = pixel_lobe(px, texelFetch(gb_albedo, px, 0).rgb, ns.w);
-    // The rays leave k1 voxel diagonals off the surface along its normal, as the GI rays do.
+    // The rays leave k1 voxel diagonals off the surface along its normal, as the GI rays do;
+    // the light samples' geometry is the surface point's (an origin δ nearer an emitter close
+    // by measured its light as if the surface were δ nearer: +19% at 1 m for δ = 0.11 m).
     vec3 o = p + n * (gi.normal_offset_voxels * gi.voxel_diagonal_m);
     vec3 sum = vec3(0.0);
     if (HAS_EMITTERS) {
@@ -150,7 +152,7 @@ void main() {
         uint parts = lobe_count > 0u ? 4u : 3u;
         vec3 e = vec3(0.0);
         for (uint s = 0u; s < SAMPLES; ++s) {
-            e += emitter_sample(o, n, wo, m, parts, ps, pixel_sample(uvec2(px), s, SAMPLES, 0x10000u));
+            e += emitter_sample_from(p, o, n, wo, m, parts, ps, pixel_sample(uvec2(px), s, SAMPLES, 0x10000u));
         }
         sum += e / float(SAMPLES);
         vec3 b = vec3(0.0);

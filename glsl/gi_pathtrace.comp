@@ -210,6 +210,7 @@ void main() {
     // Phong and GGX pixels spend half their paths on the specular lobe (first bounce).
     uint lobe_rays = pixel.kind != LOBE_LAMBERT ? max(gi.rays, 1u) / 2u : 0u;
     float offset = gi.normal_offset_voxels * gi.voxel_diagonal_m;
+    mat4 voxel_to_world = inverse(gi.world_to_voxel);
     uint rays = max(gi.rays, 1u);
     uint bounce_param = gi.bounces;
     bool roulette = bounce_param == 0u;
@@ -223,6 +224,9 @@ void main() {
         uint j = lobe ? s - diffuse_rays : s;
         uint count = lobe ? lobe_rays : diffuse_rays;
         vec3 o = p + n * offset;
+        // Where the vertex's surface is: the light samples' geometry is taken there, their
+        // visibility from o (off the surface's own voxels).
+        vec3 g = p;
         vec3 nn = n;
         vec3 from = wo;
         Lobe m = pixel;
@@ -245,7 +249,7 @@ void main() {
                 uint parts = b == 0u ? (lobe ? 1u : 0u) : 2u;
                 float ps = b == 0u ? 0.0 : lobe_specular_probability(m);
                 vec2 ul = emitter_sample_u(uvec2(px), b, j, count, frame_index * rays + s, frame_index);
-                l += throughput * emitter_sample(o, nn, from, m, parts, ps, ul);
+                l += throughput * emitter_sample_from(g, o, nn, from, m, parts, ps, ul);
             }
             vec3 w;
             vec3 d = sample_lobe(m, nn, from, specular, u, w);
@@ -289,6 +293,7 @@ void main() {
             // than a voxel, through which the normal offset would push the origin. Every
             // point the ray passed through empty voxels is on its own side (`voxgi bench leak`).
             o = hp - d * min(offset, h.t);
+            g = (voxel_to_world * vec4(vec3(v) + 0.5, 1.0)).xyz;
             nn = hn;
             from = -d;
         }

@@ -78,7 +78,16 @@ bool emitter_point_visible(vec3 o, vec3 wi, float ci, vec3 y, vec3 nl) {
 // combine with); 4 the diffuse part unweighted and the specular part weighted against the
 // specular lobe's samples of emitter_lobe_hit, ps their count per light sample
 // (direct_emitters.comp's Phong and GGX pixels).
+vec3 emitter_sample_from(vec3 g, vec3 o, vec3 n, vec3 wo, Lobe m, uint parts, float ps, vec2 u);
+
 vec3 emitter_sample(vec3 o, vec3 n, vec3 wo, Lobe m, uint parts, float ps, vec2 u) {
+    return emitter_sample_from(o, o, n, wo, m, parts, ps, u);
+}
+
+// emitter_sample with the light's geometry (distance and both cosines) taken at the surface
+// point g, the distance no less than the offset |o - g|, and its visibility tested from the
+// offset origin o, which stays off the surface's own voxels.
+vec3 emitter_sample_from(vec3 g, vec3 o, vec3 n, vec3 wo, Lobe m, uint parts, float ps, vec2 u) {
     uint count = emitter_header.count;
     if (count == 0u || emitter_header.inv_weighted_area <= 0.0) return vec3(0.0);
     // The first row whose CDF exceeds u.x.
@@ -100,7 +109,7 @@ vec3 emitter_sample(vec3 o, vec3 n, vec3 wo, Lobe m, uint parts, float ps, vec2 
     vec3 y = e.origin.xyz + e.edge1.xyz * (su * (1.0 - u.y)) + e.edge2.xyz * (su * u.y);
     vec3 nl = cross(e.edge1.xyz, e.edge2.xyz);
     float nl_len = length(nl);
-    vec3 to = y - o;
+    vec3 to = y - g;
     float d2 = dot(to, to);
     if (nl_len <= 0.0 || d2 <= 0.0) return vec3(0.0);
     nl /= nl_len;
@@ -115,6 +124,10 @@ vec3 emitter_sample(vec3 o, vec3 n, vec3 wo, Lobe m, uint parts, float ps, vec2 
     // screen-space GI: the emitting points the camera sees, which the gather reads).
     if (EMITTER_POINT_SKIPPED(y, nl)) return vec3(0.0);
 #endif
+    // 1/d^2 is capped at the origin's offset |o - g|: where a surface touches an emitter (a
+    // window's reveal at its edge) the integrand's singularity makes fireflies of a few
+    // samples, which the offset bounded before the geometry moved to the surface point.
+    d2 = max(d2, dot(o - g, o - g));
     float pl = pa * d2 / cl;
     vec3 f = vec3(0.0);
     if (parts == 3u) {
@@ -133,7 +146,8 @@ vec3 emitter_sample(vec3 o, vec3 n, vec3 wo, Lobe m, uint parts, float ps, vec2 
         }
     }
     if (all(equal(f, vec3(0.0)))) return vec3(0.0);
-    if (!emitter_point_visible(o, wi, ci, y, nl)) return vec3(0.0);
+    vec3 wv = normalize(y - o);
+    if (!emitter_point_visible(o, wv, max(dot(n, wv), 0.0), y, nl)) return vec3(0.0);
     return f * e.radiance.rgb * (ci * cl / (d2 * pa));
 }
 

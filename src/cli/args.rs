@@ -389,21 +389,6 @@ impl FrameArgs {
         s.oit_nodes_per_pixel =
             crate::limits::OIT_NODES_PER_PIXEL.check_flag(self.oit_nodes_per_pixel)?;
         s.gi = self.gi.settings(scene)?;
-        // GI and the voxel debug views voxelize without --voxels, with the scene's `[voxel]`
-        // under the voxel flags (the atlas and G-buffer views draw no voxels); the renderer
-        // voxelizes for the emitters' direct light by the scene's table alone.
-        let needs_voxels =
-            s.gi.method != GiMethod::None || self.debug.is_some_and(|d| d.shows_voxels());
-        // `--voxels N` voxelizes even when nothing needs voxels (to measure the voxel passes);
-        // `--set voxel.resolution=N` is the scene key's value, as a sweep's axis sets it.
-        let voxel = self.voxel.layer(&self.gi.set)?;
-        let forced = self
-            .voxel
-            .given
-            .iter()
-            .any(|(k, _)| k.path == "voxel.resolution");
-        s.voxels = (needs_voxels || forced)
-            .then(|| crate::scene::schema::resolve(&[&scene.voxel, &voxel]));
         let object = match self.debug {
             Some(crate::voxel::debug_view::DebugView::Atlas) => scene.find_object(&self.object)?,
             _ => 0,
@@ -417,6 +402,19 @@ impl FrameArgs {
                 object,
                 ..Default::default()
             });
+        // What needs voxels (a GI method, the emitters' or the environment's direct light, a
+        // voxel debug view) voxelizes with the scene's `[voxel]` under the voxel flags and
+        // `--set voxel.*`; `--voxels N` voxelizes even when nothing does (to measure the voxel
+        // passes). Every GI method, screen-space GI too, voxelizes as before.
+        let voxel = self.voxel.layer(&self.gi.set)?;
+        let forced = self
+            .voxel
+            .given
+            .iter()
+            .any(|(k, _)| k.path == "voxel.resolution");
+        let needs_voxels = s.gi.method != GiMethod::None || crate::render::needs_voxels(&s, scene);
+        s.voxels = (needs_voxels || forced)
+            .then(|| crate::scene::schema::resolve(&[&scene.voxel, &voxel]));
         self.gi.check_sao(&s.gi)?;
         crate::render::check_render_settings(&s)?;
         Ok(s)
@@ -465,6 +463,23 @@ mod tests {
             .voxels
             .is_none());
         assert!(render_settings(&["--gi", "none"]).voxels.is_none());
+    }
+
+    /// A scene with emitters voxelizes for their direct light under `--gi none`, with the
+    /// command line's `[voxel]` keys over the scene's table.
+    #[test]
+    fn the_emitters_direct_light_voxelizes_with_the_command_lines_voxel_keys() {
+        let path = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/assets/scenes/cornell_emissive.toml"
+        );
+        let scene = crate::scene::Scene::load(path).expect("loads");
+        let v = parse(&["--gi", "none", "--set", "voxel.resolution=64"])
+            .settings(&scene)
+            .expect("settings")
+            .voxels
+            .expect("the emitters' direct light voxelizes");
+        assert_eq!((v.max_res_xy, v.layers), (64, 1));
     }
 
     #[test]

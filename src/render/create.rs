@@ -254,10 +254,9 @@ impl FramePlan {
             Some(_) => None,
         };
         // What needs voxels and the frame names no voxel settings gets the scene's `[voxel]`.
-        let needs_voxels = gi_voxels || direct_light.is_some() || voxel_view_on;
         let voxel_settings = settings
             .voxels
-            .or(needs_voxels.then(|| scene.voxel_settings()));
+            .or(needs_voxels(settings, scene).then(|| scene.voxel_settings()));
         if let Some(v) = &voxel_settings {
             check_voxel_memory(ctx, scene, settings, v)?;
         }
@@ -374,6 +373,17 @@ impl LitPasses {
 /// The debug views of the G-buffer and of the shadow maps' texel density, when
 /// `settings.debug` asks for one.
 #[allow(clippy::type_complexity)]
+/// Whether a renderer of `settings` for `scene` voxelizes the scene when `settings.voxels`
+/// does not ask it to: a voxel GI method, the emitters' or the environment's direct light
+/// with voxel visibility (what the method does not bring itself), or a voxel debug view.
+pub fn needs_voxels(settings: &RenderSettings, scene: &Scene) -> bool {
+    // A debug view replaces the lit image: neither the indirect nor the direct light is made.
+    let lit = settings.debug.is_none();
+    let gi_voxels = lit && settings.gi.method.needs_voxels();
+    let direct_light = lit && direct_emitters::sampled_light(settings.gi.method, scene).is_some();
+    gi_voxels || direct_light || settings.debug.is_some_and(|d| d.view.shows_voxels())
+}
+
 fn debug_views(
     ctx: &Context,
     scene: &Scene,

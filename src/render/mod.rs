@@ -30,6 +30,7 @@ pub mod shadow_texels;
 mod stereo;
 mod textures;
 
+pub use create::needs_voxels;
 pub use gbuffer::Gbuffer;
 pub use light_map::LightMaps;
 pub use multiview::{MesaVersion, MultiviewDefect, RIGHT_EYE_SUFFIX};
