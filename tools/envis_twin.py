@@ -224,11 +224,35 @@ def smooth_map(w=64, h=32):
     return np.stack([base, 0.9 * base, 1.2 * base], axis=-1).astype(np.float32)
 
 
+def write_hdr(path, img):
+    """A Radiance .hdr (RGBE, flat scanlines, top row first): exact for the sun map's values
+    (1000 = 250/256 * 2^10, 0.125 = 128/256 * 2^-2)."""
+    h, w, _ = img.shape
+    m = img.max(axis=-1)
+    e = np.where(m > 0, np.floor(np.log2(np.maximum(m, 1e-38))) + 1, 0)
+    scale = np.where(m > 0, 256.0 / np.exp2(e), 0.0)
+    rgbe = np.zeros((h, w, 4), np.uint8)
+    rgbe[..., :3] = np.clip(np.floor(img * scale[..., None]), 0, 255).astype(np.uint8)
+    rgbe[..., 3] = np.where(m > 0, e + 128, 0).astype(np.uint8)
+    with open(path, "wb") as f:
+        f.write(b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n" + f"-Y {h} +X {w}\n".encode())
+        f.write(rgbe.tobytes())
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--samples", type=int, default=200_000)
     ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument(
+        "--write-sun-map",
+        metavar="PATH",
+        help="write the measurement scene's map (64 x 32, a 2 x 2-texel sun of 1000 over a sky "
+        "of 0.125) as Radiance .hdr and exit",
+    )
     args = ap.parse_args()
+    if args.write_sun_map:
+        write_hdr(args.write_sun_map, sun_map(sky=0.125))
+        return
     rng = np.random.default_rng(args.seed)
     ok = True
     for name, img, rotation in [
