@@ -18,9 +18,12 @@
 // half its own estimator). A direction that leaves the voxel grid unblocked within the ray
 // length brings the environment's radiance (environment_after_miss, as the GI rays):
 //   L_o = 1/K_d sum rho_d w_d L_env + 1/K_s sum w_s L_env,
-// w the lobe's f cos / pdf. Cosine (not luminance) sampling: the sky's sun is a directional
-// light with its own shadow map, so what the environment adds is smooth over the hemisphere
-// (docs/design/environment.md, "Who sees it").
+// w the lobe's f cos / pdf. With ENV_SAMPLING (`gi.env_sampling`, a map) K_e = max(K/2, 1) of
+// the directions are drawn from the map's luminance instead (environment_sampling.glsl) and
+// the rest split as above; each part of the BRDF is then an integral with two strategies,
+// combined by the balance heuristic in its multi-sample form (Veach 1997, §9.2.2): every
+// sample of either strategy weighs f L cos / (n_b p_b + K_e p_e), n_b p_b the part's own
+// BSDF samples' count times density (docs/design/environment.md).
 #include "frame.glsl"
 #include "gi_common.glsl"
 
@@ -34,6 +37,9 @@ layout(constant_id = 9) const bool ADVANCE = false;
 // Screen-space GI gathers the emission the camera sees (its lit colour includes it): the
 // emitter samples skip those points and bring the light of the others only.
 layout(constant_id = 10) const bool OFF_SCREEN_EMITTERS_ONLY = false;
+// Draw part of the environment's samples from the map's luminance (binding 16), combined by
+// MIS with the lobe samples; only with ENVIRONMENT_MAP.
+layout(constant_id = 11) const bool ENV_SAMPLING = false;
 
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(set = 0, binding = 0, std430) readonly buffer FrameBuf { GpuFrame frame; };
@@ -47,6 +53,8 @@ layout(set = 0, binding = 9) uniform sampler2D gb_specular;  // albedo when !HAS
 layout(set = 0, binding = 10) uniform sampler2D gb_albedo;
 layout(set = 0, binding = 15) uniform sampler2D environment_map;  // albedo unless a map
 #include "environment.glsl"
+#define ENV_CDF_BINDING 16
+#include "environment_sampling.glsl"
 
 // K, `shadow.direct_samples`, in the push constants' ray count.
 #define SAMPLES max(gi.rays, 1u)
@@ -164,23 +172,50 @@ void main() {
         if (lobe_count > 0u) sum += b / float(lobe_count);
     }
     if (ENVIRONMENT != ENVIRONMENT_NONE) {
-        // Phong and GGX pixels: at least one sample of each half.
-        uint lobe_count = m.kind != LOBE_LAMBERT ? max(SAMPLES / 2u, 1u) : 0u;
-        uint diffuse_count = max(SAMPLES - min(lobe_count, SAMPLES), 1u);
+        // The map's own samples (ENV_SAMPLING), then the lobe's: Phong and GGX pixels at least
+        // one sample of each half.
+        bool env_sampling = ENV_SAMPLING && ENVIRONMENT == ENVIRONMENT_MAP;
+        uint env_count = env_sampling ? max(SAMPLES / 2u, 1u) : 0u;
+        uint bsdf_count = max(SAMPLES - min(env_count, SAMPLES), 1u);
+        uint lobe_count = m.kind != LOBE_LAMBERT ? max(bsdf_count / 2u, 1u) : 0u;
+        uint diffuse_count = max(bsdf_count - min(lobe_count, bsdf_count), 1u);
+        float ne = float(env_count);
         vec3 diffuse = vec3(0.0);
         for (uint s = 0u; s < diffuse_count; ++s) {
             vec3 w;
             vec3 d = sample_lobe(m, n, wo, false, pixel_sample(uvec2(px), s, diffuse_count, 0x20000u), w);
-            if (dot(d, n) > 0.0) diffuse += w * environment_seen(o, n, d);
+            if (dot(d, n) <= 0.0) continue;
+            if (env_sampling) {
+                w *= env_balance(float(diffuse_count) * lobe_pdf(m, n, wo, d, false), ne * env_pdf(d));
+            }
+            diffuse += w * environment_seen(o, n, d);
         }
         sum += m.diffuse * diffuse / float(diffuse_count);
         vec3 lobe = vec3(0.0);
         for (uint s = 0u; s < lobe_count; ++s) {
             vec3 w;
             vec3 d = sample_lobe(m, n, wo, true, pixel_sample(uvec2(px), s, lobe_count, 0x30000u), w);
-            if (dot(d, n) > 0.0) lobe += w * environment_seen(o, n, d);
+            if (dot(d, n) <= 0.0) continue;
+            if (env_sampling) {
+                w *= env_balance(float(lobe_count) * lobe_pdf(m, n, wo, d, true), ne * env_pdf(d));
+            }
+            lobe += w * environment_seen(o, n, d);
         }
         if (lobe_count > 0u) sum += lobe / float(lobe_count);
+        // Each map sample: f_d L cos / (n_d p_d + K_e p_e) + f_s L cos / (n_s p_s + K_e p_e),
+        // already divided by its count through the balance heuristic's denominators.
+        for (uint s = 0u; s < env_count; ++s) {
+            float pe;
+            vec3 d = env_sample(pixel_sample(uvec2(px), s, env_count, 0x50000u), pe);
+            float ci = dot(d, n);
+            if (ci <= 0.0 || pe <= 0.0) continue;
+            vec3 f = lobe_part_brdf(m, n, d, wo, false) / (float(diffuse_count) * lobe_pdf(m, n, wo, d, false) + ne * pe);
+            if (lobe_count > 0u) {
+                f += lobe_part_brdf(m, n, d, wo, true) / (float(lobe_count) * lobe_pdf(m, n, wo, d, true) + ne * pe);
+            }
+            if (all(equal(f, vec3(0.0)))) continue;
+            sum += f * ci * environment_seen(o, n, d);
+        }
     }
     imageStore(radiance, px, vec4(lo.rgb + sum, lo.a));
 }

@@ -15,7 +15,12 @@
 // into a history image while camera and scene stay still. A path whose ray leaves the voxel
 // grid within its radius ends there with the environment's radiance (ENVIRONMENT,
 // environment.glsl; see escaped_radiance): a sky-lit point gets its sky light by cosine or
-// lobe sampling, no next event estimation toward the sky.
+// lobe sampling. With ENV_SAMPLING (`gi.env_sampling`, a map) every path vertex that samples
+// a further bounce also draws one direction from the map's luminance (environment_sampling.glsl)
+// and traces it like a BSDF ray; the two are combined by the balance heuristic, per lobe part
+// as the emitters' samples are: the map sample weighs f_part L cos / (p_part + p_e) for each
+// part the vertex samples (p_part including the lobe choice's probability), and a BSDF ray
+// that escapes weighs p_bsdf / (p_bsdf + p_e).
 //
 // With HAS_EMITTERS (emissive triangles and `gi.emitter_sampling`) every path vertex that
 // samples a further bounce also samples one emissive triangle by power (emitters.glsl): the
@@ -45,6 +50,8 @@ layout(constant_id = 8) const uint ENVIRONMENT = 0u;  // environment.glsl's kind
 // Off under temporal accumulation (gi_temporal.comp accumulates, with reprojection): the
 // output is this frame's estimate alone, and the seed is the frame's sample index.
 layout(constant_id = 9) const bool ACCUMULATE = true;
+// Next-event estimation toward the environment map (binding 16); only with ENVIRONMENT_MAP.
+layout(constant_id = 11) const bool ENV_SAMPLING = false;
 
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(set = 0, binding = 0, std430) readonly buffer FrameBuf { GpuFrame frame; };
@@ -62,6 +69,8 @@ layout(set = 0, binding = 12) uniform sampler3D emission_volume;  // albedo when
 layout(set = 0, binding = 13) uniform sampler3D material_volume;  // albedo when !HAS_MATERIAL_VOLUME
 layout(set = 0, binding = 15) uniform sampler2D environment_map;  // albedo unless a map
 #include "environment.glsl"
+#define ENV_CDF_BINDING 16
+#include "environment_sampling.glsl"
 
 uvec4 vx_column(uint level, int x, int y, uint layer) {
     return texelFetch(voxels, ivec3(x, y, int(layer)), int(level));
@@ -142,6 +151,20 @@ vec2 emitter_sample_u(uvec2 px, uint bounce, uint s, uint rays, uint path, uint 
     h = wang_hash(h ^ (path * 0x9e3779b9u));
     h = wang_hash(h + bounce * 0x85ebca6bu + 0x68e31da4u);
     uint h2 = wang_hash(h ^ 0x5bd1e995u);
+    return vec2(float(h >> 8u), float(h2 >> 8u)) * (1.0 / 16777216.0);
+}
+
+// The environment map's sample of path `path` at vertex `bounce`: emitter_sample_u's scheme
+// under other constants, so the two strategies' points are not correlated.
+vec2 env_sample_u(uvec2 px, uint bounce, uint s, uint rays, uint path, uint frame_index) {
+    if (bounce == 0u) {
+        vec2 u = vec2((float(s) + 0.5) / float(rays), radical_inverse(s));
+        return fract(u + pixel_rotation(px, frame_index + 0x20000u));
+    }
+    uint h = wang_hash(px.x * 1973u + px.y * 9277u);
+    h = wang_hash(h ^ (path * 0x9e3779b9u));
+    h = wang_hash(h + bounce * 0x85ebca6bu + 0x2545f491u);
+    uint h2 = wang_hash(h ^ 0x27d4eb2fu);
     return vec2(float(h >> 8u), float(h2 >> 8u)) * (1.0 / 16777216.0);
 }
 
@@ -251,11 +274,36 @@ void main() {
                 vec2 ul = emitter_sample_u(uvec2(px), b, j, count, frame_index * rays + s, frame_index);
                 l += throughput * emitter_sample_from(g, o, nn, from, m, parts, ps, ul);
             }
+            // The environment map's sample at this vertex: one direction by luminance, the
+            // parts of the lobe this vertex samples (as the emitter sample's `parts`), each
+            // weighted against its own BSDF density.
+            bool env_sampling = ENV_SAMPLING && ENVIRONMENT == ENVIRONMENT_MAP;
+            if (env_sampling) {
+                float pe;
+                vec2 ue = env_sample_u(uvec2(px), b, j, count, frame_index * rays + s, frame_index);
+                vec3 de = env_sample(ue, pe);
+                float ci = dot(de, nn);
+                if (ci > 0.0 && pe > 0.0) {
+                    float ps = b == 0u ? (lobe ? 1.0 : 0.0) : lobe_specular_probability(m);
+                    vec3 f = vec3(0.0);
+                    if (ps < 1.0) {
+                        f += lobe_part_brdf(m, nn, de, from, false) / ((1.0 - ps) * lobe_pdf(m, nn, from, de, false) + pe);
+                    }
+                    if (ps > 0.0) {
+                        f += lobe_part_brdf(m, nn, de, from, true) / (ps * lobe_pdf(m, nn, from, de, true) + pe);
+                    }
+                    if (any(greaterThan(f, vec3(0.0)))) {
+                        vec3 estart;
+                        VxHit eh = trace_from(o, nn, de, estart);
+                        if (!eh.hit) l += throughput * f * ci * escaped_radiance(o, estart, de, eh);
+                    }
+                }
+            }
             vec3 w;
             vec3 d = sample_lobe(m, nn, from, specular, u, w);
             if (dot(d, nn) <= 0.0) break;  // a lobe sample below the surface
-            // The BSDF ray's density, for the weight of an emitter it hits.
-            float pdf_bsdf = HAS_EMITTERS ? pick * lobe_pdf(m, nn, from, d, specular) : 0.0;
+            // The BSDF ray's density, for the weight of an emitter or the map it hits.
+            float pdf_bsdf = HAS_EMITTERS || env_sampling ? pick * lobe_pdf(m, nn, from, d, specular) : 0.0;
             // The diffuse color of the first bounce is applied after the paths.
             if (b > 0u && !specular) w *= m.diffuse;
             throughput *= w / pick;
@@ -267,7 +315,10 @@ void main() {
             vec3 start;
             VxHit h = trace_from(o, nn, d, start);
             if (!h.hit) {
-                if (ENVIRONMENT != ENVIRONMENT_NONE) l += throughput * escaped_radiance(o, start, d, h);
+                if (ENVIRONMENT != ENVIRONMENT_NONE) {
+                    float weight = env_sampling ? env_balance(pdf_bsdf, env_pdf(d)) : 1.0;
+                    l += throughput * (weight * escaped_radiance(o, start, d, h));
+                }
                 break;
             }
             ivec3 v = ivec3(h.voxel);

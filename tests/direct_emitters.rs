@@ -304,7 +304,9 @@ const BOUNDS_EMISSIVE: (f64, f64) = (0.03, 0.015);
 /// Mitsuba 3's direct light (assets/references/sky_courtyard_direct.exr, max_depth 2, 1024
 /// spp, 128²: the sky seen by the camera plus its light reflected once).
 ///
-/// Measured at K = 32: mean ratio 0.990, relMSE 0.0153; at K = 128 relMSE 0.0138. With
+/// Measured at K = 32: mean ratio 0.993, relMSE 0.0101 since the map has a sampler without
+/// anisotropy (docs/design/environment.md; before: mean ratio 0.990, relMSE 0.0153, and the
+/// fit below, made then); at K = 128 relMSE 0.0138. With
 /// relMSE(K) = b + n/K: n = 0.064 and b = 0.0133, so the noise at K = 32 is 0.002 and the rest
 /// is bias: the voxel visibility (the walls' and blocks' outlines rounded to the grid decide
 /// which directions near the horizon see the sky), the pixel centre against the box-filtered
@@ -353,7 +355,7 @@ const BOUNDS_SKY: (f64, f64) = (0.03, 0.025);
 
 /// Under TAA (its 16 frames, the accumulator of the direct image) the samples advance by the
 /// R2 sequence of the frame, so the frames average different samples: the sky-lit courtyard
-/// at K = 4 against the same Mitsuba reference as above. Measured relMSE 0.0107 (fixed
+/// at K = 4 against the same Mitsuba reference as above. Measured relMSE 0.0070 (0.0107 before the map's sampler lost its anisotropy; fixed
 /// samples, before: 0.0509; one frame at K = 4: 0.0578, the same before and after, since a
 /// frame that does not accumulate keeps its samples). The bias b of the K sweep above is
 /// 0.0133 at the pixel centre; TAA's sub-pixel jitter box-filters the pixel as the reference

@@ -33,6 +33,17 @@ vec2 environment_uv(vec3 d, float rotation) {
     return vec2(fract(u), v);
 }
 
+// The world direction of map coordinates uv under the same rotation: the inverse of
+// environment_uv (the CPU twin is `scene::environment::equirect_direction`).
+vec3 environment_direction(vec2 uv, float rotation) {
+    float phi = 2.0 * ENVIRONMENT_PI * uv.x;
+    float theta = ENVIRONMENT_PI * uv.y;
+    vec3 l = vec3(sin(theta) * sin(phi), cos(theta), -sin(theta) * cos(phi));
+    float s = sin(rotation);
+    float c = cos(rotation);
+    return vec3(c * l.x + s * l.z, l.y, -s * l.x + c * l.z);
+}
+
 // Radiance (W/(m^2 sr)) arriving along -d, i.e. seen by a ray travelling along unit d.
 vec3 environment_radiance(vec3 d) {
     if (ENVIRONMENT == ENVIRONMENT_NONE) return vec3(0.0);

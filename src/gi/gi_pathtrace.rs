@@ -8,7 +8,9 @@
 //! `GiSettings::emitter_sampling`, in scenes with emissive triangles, every path vertex also
 //! samples one of them by power (next-event estimation, [`super::emitters`]) and weighs it and
 //! the BSDF ray's emitter hit by multiple importance sampling (a third specialization
-//! constant and the emitter list's buffer at binding 14).
+//! constant and the emitter list's buffer at binding 14). With `GiSettings::env_sampling`, in
+//! scenes with an environment map, every path vertex also draws a direction from the map's
+//! luminance (its tables at binding 16), weighed against the BSDF ray by the balance heuristic.
 
 use super::emitters::EmitterBuffer;
 use super::gi_common::{add_ray_pass, GiShared, GpuGiPush};
@@ -39,12 +41,14 @@ impl GiPathtrace {
 
     /// `lobes`: later bounces read the material volume (the assembly creates it then).
     /// `emitter_sampling`: next-event estimation toward the emissive triangles, if any.
+    /// `env_sampling`: next-event estimation toward the environment map, if the scene has one.
     /// `temporal`: `gi_temporal` accumulates; the pass keeps no history of its own.
     pub fn new(
         ctx: &Context,
         target: &GiTarget<'_>,
         lobes: bool,
         emitter_sampling: bool,
+        env_sampling: bool,
         temporal: bool,
     ) -> Result<Self, VkError> {
         let (w, h) = target.size;
@@ -52,6 +56,7 @@ impl GiPathtrace {
             true => EmitterBuffer::new(ctx, target.scene, target.time_s)?,
             false => None,
         };
+        let environment = Environment::shader_kind(target.scene.environment.as_ref());
         let pipeline = ctx.compute_pipeline(
             "gi_pathtrace.comp",
             PushLayout::of::<GpuGiPush>(),
@@ -61,8 +66,9 @@ impl GiPathtrace {
                 HAS_EMISSION = target.scene.has_emission(),
                 HAS_MATERIAL_VOLUME = lobes && !target.scene.is_all_lambert(),
                 HAS_EMITTERS = emitters.is_some(),
-                ENVIRONMENT = Environment::shader_kind(target.scene.environment.as_ref()),
+                ENVIRONMENT = environment,
                 ACCUMULATE = !temporal,
+                ENV_SAMPLING = env_sampling && environment == 2,
             ],
         )?;
         let eyes = if temporal { 0 } else { target.eyes.max(1) };
@@ -123,6 +129,8 @@ impl GiMethodPasses for GiPathtrace {
         // stereo eyes); without emitter sampling the shader never reads its binding and the
         // ray-mask table fills it.
         let emitters = shared.world.buffer.unwrap_or(shared.lut);
+        // The map's tables, read only with `gi.env_sampling` in a scene with a map.
+        let environment_cdf = i.environment_cdf.unwrap_or(shared.lut);
         let push = shared.push;
         let frames = shared.frames.clone();
         let temporal_seed = shared.sample_index.is_some().then(|| shared.seed());
@@ -140,7 +148,7 @@ impl GiMethodPasses for GiPathtrace {
                 (13, material),
             ],
             (history, out_access),
-            &[(14, emitters)],
+            &[(14, emitters), (16, environment_cdf)],
             move || GpuGiPush {
                 seed: match &temporal_seed {
                     Some(seed) => seed(),

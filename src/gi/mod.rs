@@ -73,6 +73,8 @@ pub struct GiInputs {
     /// The environment map, in scenes lit by one (binding 15 of the ray passes), and the
     /// bilinear, repeating sampler it is read with.
     pub environment_map: Option<ImageHandle>,
+    /// The map's importance-sampling tables (binding 16 of the path tracer), with it.
+    pub environment_cdf: Option<BufferHandle>,
     pub environment_sampler: vk::Sampler,
     pub width: u32,
     pub height: u32,

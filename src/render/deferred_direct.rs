@@ -62,7 +62,7 @@ impl DeferredDirectPass {
             .bind_sampled(5, shadow_maps, s, c)
             .bind(6, radiance, Access::StorageWrite(c))
             .bind_sampled(7, emission, s, c)
-            .bind_sampled(8, environment, scene.texture_sampler, c)
+            .bind_sampled(8, environment, scene.environment_sampler, c)
             .record(move |ctx| {
                 ctx.bind(&pipe);
                 ctx.cmd.dispatch(w.div_ceil(8), h.div_ceil(8), 1);

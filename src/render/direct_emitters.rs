@@ -102,6 +102,7 @@ impl DirectEmittersPass {
                 OFF_SCREEN_EMITTERS_ONLY = light.emitters_off_screen_only,
                 ADVANCE = advance,
                 ENVIRONMENT = environment,
+                ENV_SAMPLING = gi.env_sampling && environment == 2,
             ],
         )?;
         let lut = ctx.upload_buffer(
@@ -150,6 +151,7 @@ impl DirectEmittersPass {
         let specular = gbuffer.specular.unwrap_or(gbuffer.albedo);
         let environment = scene.environment_map.unwrap_or(gbuffer.albedo);
         let emitters = world.emitters.unwrap_or(world.lut);
+        let environment_cdf = scene.environment_cdf.unwrap_or(world.lut);
         let push = self.push;
         let frames = self.frames.clone();
         g.add_pass("direct_emitters")
@@ -164,7 +166,8 @@ impl DirectEmittersPass {
             .bind_sampled(9, specular, s, c)
             .bind_sampled(10, gbuffer.albedo, s, c)
             .bind(14, emitters, Access::StorageRead(c))
-            .bind_sampled(15, environment, scene.texture_sampler, c)
+            .bind_sampled(15, environment, scene.environment_sampler, c)
+            .bind(16, environment_cdf, Access::StorageRead(c))
             .record(move |ctx| {
                 // The shader's R2 index: the base seed advanced by the frames written.
                 let advanced = frames.as_ref().map_or(0, |f| f.load(Ordering::SeqCst));

@@ -78,8 +78,18 @@ pub struct SceneGpu {
     /// placeholder (always last).
     textures: Vec<Image>,
     texture_sampler: crate::vk::Sampler,
+    /// Bilinear and repeating, without anisotropy: the environment map's sampler. Anisotropic
+    /// filtering takes its footprint from the derivatives of the lookup coordinate between
+    /// neighbouring invocations, which compute shaders do not define: the rays of neighbouring
+    /// pixels point anywhere, and on lavapipe their lookups came back blurred over many texels
+    /// (a 2 × 2-texel sun read at 19 to 94 where its bilinear value is 300 to 1000), so the map
+    /// a ray saw depended on its neighbours' rays.
+    environment_sampler: crate::vk::Sampler,
     /// The `[environment]` map (RGBA32F, linear radiance before its scale), if it is one.
     environment_map: Option<Image>,
+    /// The map's importance-sampling tables (`scene::environment::EnvironmentCdf`), read by
+    /// the passes that sample it (`gi.env_sampling`).
+    environment_cdf: Option<Buffer>,
     pub draws: Arc<RwLock<DrawLists>>,
     pub all_draws: Vec<Draw>,
     /// Draws of materials with d < 1 leave the G-buffer's list for `transparent`.
@@ -107,10 +117,14 @@ pub struct SceneInputs {
     pub materials_pbr: BufferHandle,
     /// The scene's textures, the placeholder last.
     pub textures: Vec<ImageHandle>,
-    /// Bilinear and repeating: the textures' and the environment map's sampler.
+    /// Bilinear, repeating and anisotropic: the textures' sampler.
     pub texture_sampler: vk::Sampler,
+    /// Bilinear and repeating, without anisotropy: the environment map's sampler.
+    pub environment_sampler: vk::Sampler,
     /// The environment map (`glsl/include/environment.glsl`), in scenes lit by one.
     pub environment_map: Option<ImageHandle>,
+    /// Its importance-sampling tables (`glsl/include/environment_sampling.glsl`).
+    pub environment_cdf: Option<BufferHandle>,
     pub draws: Arc<RwLock<DrawLists>>,
 }
 
@@ -195,6 +209,8 @@ impl SceneGpu {
         )?);
         let texture_sampler =
             ctx.create_sampler_with(vk::Filter::LINEAR, true, vk::SamplerAddressMode::REPEAT)?;
+        let environment_sampler =
+            ctx.create_sampler_with(vk::Filter::LINEAR, false, vk::SamplerAddressMode::REPEAT)?;
         let environment_map = match scene.environment.as_ref().and_then(|e| e.map()) {
             Some(m) => Some(ctx.upload_image(
                 &crate::vk::ImageDesc::new_2d(
@@ -207,6 +223,19 @@ impl SceneGpu {
             )?),
             _ => None,
         };
+        let environment_cdf = match scene
+            .environment
+            .as_ref()
+            .and_then(|e| e.map())
+            .and_then(crate::scene::environment::EnvironmentCdf::new)
+        {
+            Some(cdf) => Some(ctx.upload_buffer(
+                "environment cdf",
+                &cdf.to_gpu_bytes(),
+                vk::BufferUsageFlags::STORAGE_BUFFER,
+            )?),
+            None => None,
+        };
         Ok(Self {
             vertices: geometry.vertices,
             indices: geometry.indices,
@@ -217,7 +246,9 @@ impl SceneGpu {
             frame_right: None,
             textures,
             texture_sampler,
+            environment_sampler,
             environment_map,
+            environment_cdf,
             draws: Arc::new(RwLock::new(DrawLists::default())),
             all_draws: geometry.draws,
             split_transparent: false,
@@ -251,10 +282,15 @@ impl SceneGpu {
                 .map(|t| g.import_image(t, Access::Sampled(Shader::Fragment)))
                 .collect(),
             texture_sampler: self.texture_sampler.raw,
+            environment_sampler: self.environment_sampler.raw,
             environment_map: self
                 .environment_map
                 .as_ref()
                 .map(|m| g.import_image(m, Access::Sampled(Shader::Compute))),
+            environment_cdf: self
+                .environment_cdf
+                .as_ref()
+                .map(|b| g.import_buffer(b, Access::StorageRead(Shader::Compute))),
             draws: self.draws.clone(),
         }
     }

@@ -159,6 +159,108 @@ pub fn equirect_direction(u: f32, v: f32, rotation_rad: f32) -> Vec3 {
     )
 }
 
+/// The importance-sampling tables of an equirectangular map (`gi.env_sampling`), as
+/// `glsl/include/environment_sampling.glsl` reads them; `tools/envis_twin.py` is the numpy
+/// oracle this follows step by step.
+///
+/// Each texel's weight is its luminance smoothed by [1/8, 3/4, 1/8] in u (repeating) and in v
+/// (clamped), the integral of the bilinear lookup's hat over the texel in each axis, so every
+/// texel the lookup spreads a bright texel into has weight, times sin θ at the row's centre
+/// (a texel's solid angle is 2π² sin θ du dv). `values` holds the marginal CDF over rows
+/// (`height + 1` values, 0 first and 1 last), then each row's conditional CDF over its columns
+/// (`width + 1` values each; a black row's is uniform and never picked, its marginal interval
+/// being empty). A texel's probability is the product of its two intervals, exact in f32
+/// (the difference of two nearby floats is exact, Sterbenz's lemma), so the shader's density is
+/// the one its binary search samples.
+#[derive(Clone, Debug, PartialEq)]
+pub struct EnvironmentCdf {
+    pub width: u32,
+    pub height: u32,
+    pub values: Vec<f32>,
+}
+
+impl EnvironmentCdf {
+    /// The tables of `map`; `None` for a black map (nothing to sample).
+    pub fn new(map: &EnvironmentMap) -> Option<Self> {
+        let (w, h) = (map.width as usize, map.height as usize);
+        if w == 0 || h == 0 {
+            return None;
+        }
+        let lum: Vec<f64> = map
+            .texels
+            .chunks_exact(4)
+            .map(|t| 0.2126 * f64::from(t[0]) + 0.7152 * f64::from(t[1]) + 0.0722 * f64::from(t[2]))
+            .map(|y| y.max(0.0))
+            .collect();
+        let at = |x: usize, y: usize| lum[y * w + x];
+        let mut weights = vec![0.0f64; w * h];
+        for y in 0..h {
+            let (up, down) = (y.saturating_sub(1), (y + 1).min(h - 1));
+            let theta = std::f64::consts::PI * (y as f64 + 0.5) / h as f64;
+            for x in 0..w {
+                let (left, right) = ((x + w - 1) % w, (x + 1) % w);
+                let row = |r: usize| 0.75 * at(x, r) + 0.125 * (at(left, r) + at(right, r));
+                weights[y * w + x] = (0.75 * row(y) + 0.125 * (row(up) + row(down))) * theta.sin();
+            }
+        }
+        let rows: Vec<f64> = weights.chunks_exact(w).map(|r| r.iter().sum()).collect();
+        let total: f64 = rows.iter().sum();
+        if total <= 0.0 || !total.is_finite() {
+            return None;
+        }
+        let mut values = Vec::with_capacity(h + 1 + h * (w + 1));
+        values.extend(cumulative(&rows, total));
+        for (r, &sum) in weights.chunks_exact(w).zip(&rows) {
+            if sum > 0.0 {
+                values.extend(cumulative(r, sum));
+            } else {
+                values.extend((0..=w).map(|i| (i as f64 / w as f64) as f32));
+            }
+        }
+        Some(Self {
+            width: map.width,
+            height: map.height,
+            values,
+        })
+    }
+
+    /// The probability of picking texel (x, y): its marginal interval times its conditional's.
+    pub fn texel_probability(&self, x: u32, y: u32) -> f64 {
+        let (w, h) = (self.width as usize, self.height as usize);
+        let (x, y) = (x as usize, y as usize);
+        let m = &self.values[..=h];
+        let c = &self.values[h + 1 + y * (w + 1)..][..=w];
+        f64::from(m[y + 1] - m[y]) * f64::from(c[x + 1] - c[x])
+    }
+
+    /// The buffer the shaders read: a `uvec4` header (width, height, 0, 0), then `values`.
+    pub fn to_gpu_bytes(&self) -> Vec<u8> {
+        let mut bytes = Vec::with_capacity(16 + 4 * self.values.len());
+        for v in [self.width, self.height, 0, 0] {
+            bytes.extend_from_slice(&v.to_le_bytes());
+        }
+        for v in &self.values {
+            bytes.extend_from_slice(&v.to_le_bytes());
+        }
+        bytes
+    }
+}
+
+/// `weights`' running sums divided by `total`, with 0 before them and the last set to exactly 1.
+fn cumulative(weights: &[f64], total: f64) -> Vec<f32> {
+    let mut out = Vec::with_capacity(weights.len() + 1);
+    out.push(0.0);
+    let mut acc = 0.0;
+    for w in weights {
+        acc += w;
+        out.push((acc / total).min(1.0) as f32);
+    }
+    if let Some(last) = out.last_mut() {
+        *last = 1.0;
+    }
+    out
+}
+
 /// Why a map could not be read (the caller turns it into a [`super::SceneError`] naming the
 /// scene file and the key).
 #[derive(Debug)]
@@ -440,5 +542,77 @@ mod tests {
                 "{u} {v} {u2} {v2}"
             );
         }
+    }
+
+    fn map_of(w: u32, h: u32, texel: impl Fn(u32, u32) -> f32) -> EnvironmentMap {
+        let mut texels = Vec::new();
+        for y in 0..h {
+            for x in 0..w {
+                let v = texel(x, y);
+                texels.extend_from_slice(&[v, v, v, 1.0]);
+            }
+        }
+        EnvironmentMap {
+            path: PathBuf::from("test.exr"),
+            width: w,
+            height: h,
+            texels,
+            rotation_deg: 0.0,
+            scale: 1.0,
+        }
+    }
+
+    /// A constant map's texels are picked by their solid angle alone: sin θ of the row over
+    /// W Σ_rows sin θ (the smoothing keeps a constant constant).
+    #[test]
+    fn cdf_of_a_constant_map_follows_the_solid_angle() {
+        let (w, h) = (16, 8);
+        let Some(cdf) = EnvironmentCdf::new(&map_of(w, h, |_, _| 2.0)) else {
+            panic!("a constant map has tables");
+        };
+        assert_eq!(cdf.values.len(), (h + 1 + h * (w + 1)) as usize);
+        let sin = |y: u32| (std::f64::consts::PI * (f64::from(y) + 0.5) / f64::from(h)).sin();
+        let sum: f64 = (0..h).map(sin).sum();
+        for y in 0..h {
+            for x in 0..w {
+                let want = sin(y) / (f64::from(w) * sum);
+                let got = cdf.texel_probability(x, y);
+                assert!(
+                    (got - want).abs() < 1e-6 * want.max(1e-3),
+                    "{x} {y}: {got} {want}"
+                );
+            }
+        }
+    }
+
+    /// A 2 x 2-texel sun: the probabilities sum to 1, the sun's texels hold nearly all of it,
+    /// and every texel the bilinear lookup spreads the sun into (its 4 x 4 neighbourhood) can be
+    /// picked, while texels farther away cannot (their radiance is 0, so no bias).
+    #[test]
+    fn cdf_of_a_sun_covers_the_bilinear_footprint() {
+        let (w, h) = (32, 16);
+        let sun = |x: u32, y: u32| (10..12).contains(&x) && (5..7).contains(&y);
+        let Some(cdf) =
+            EnvironmentCdf::new(&map_of(w, h, |x, y| if sun(x, y) { 100.0 } else { 0.0 }))
+        else {
+            panic!("a sun map has tables");
+        };
+        let mut total = 0.0;
+        let mut in_sun = 0.0;
+        for y in 0..h {
+            for x in 0..w {
+                let p = cdf.texel_probability(x, y);
+                total += p;
+                if sun(x, y) {
+                    in_sun += p;
+                }
+                let near = (9..13).contains(&x) && (4..8).contains(&y);
+                assert_eq!(p > 0.0, near, "texel {x} {y}: {p}");
+            }
+        }
+        assert!((total - 1.0).abs() < 1e-6, "{total}");
+        // The smoothing keeps (3/4 + 1/8)^2 = 0.77 of each sun texel's weight on the sun.
+        assert!(in_sun > 0.7 && in_sun < 0.8, "{in_sun}");
+        assert!(EnvironmentCdf::new(&map_of(w, h, |_, _| 0.0)).is_none());
     }
 }

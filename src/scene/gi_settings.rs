@@ -69,6 +69,12 @@ pub struct GiSettings {
     /// importance sampling (`gi::emitters`). Scenes without emissive triangles are the same
     /// either way.
     pub emitter_sampling: bool,
+    /// Direct light of an environment map (`direct_emitters`) and the path tracer: draw
+    /// directions from the map's luminance too (`scene::environment::EnvironmentCdf`), combined
+    /// with the cosine and lobe samples by the balance heuristic; `false` samples the map by
+    /// the cosine and lobe samples alone. Scenes without a map (or with a constant) are the
+    /// same either way.
+    pub env_sampling: bool,
     /// The voxel volumes sample the MTL texture maps (`map_Kd` in the albedo volume, `map_Ke`
     /// in the emission volume, `map_Pr` / `map_Pm` in the material volume) per texel at the
     /// surface in each voxel (`voxel::maps`), and the VPL emitter rays take `map_Ke`'s texel at
@@ -324,6 +330,7 @@ impl Default for GiSettings {
             bounces: Bounces::Fixed(2),
             pathtrace_lobes: true,
             emitter_sampling: true,
+            env_sampling: false,
             voxel_map_texels: true,
             accumulate_frames: 1,
             temporal: false,
@@ -359,7 +366,7 @@ use range::*;
 
 /// Every `[gi]` key: the scene file's key, the path `--set`, the sweep's grid and the panel
 /// use, its range, its flag and its field.
-static GI_KEYS: [Key<GiSettings>; 39] = [
+static GI_KEYS: [Key<GiSettings>; 40] = [
     key!("gi.method", Kind::Choice(choices::<GiMethod>),
         "Indirect-light method (none: direct light only)",
         flag("gi", "METHOD"), choice GiMethod, method),
@@ -385,6 +392,15 @@ static GI_KEYS: [Key<GiSettings>; 39] = [
          estimation, MIS with the BSDF rays); off: emitters are found only by BSDF rays",
         toggle("emitter-sampling"),
         emitter_sampling
+    ),
+    key!(
+        "gi.env_sampling",
+        Kind::Bool,
+        "Environment map's direct light and path tracer: draw directions from the map's \
+         luminance too, combined with the cosine and lobe samples by MIS; off: the map is \
+         found only by cosine and lobe samples",
+        toggle("env-sampling"),
+        env_sampling
     ),
     key!(
         "gi.radius_m",

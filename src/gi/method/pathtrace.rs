@@ -78,6 +78,7 @@ pub(super) static SPEC: MethodSpec = MethodSpec {
             target,
             settings.pathtrace_lobes,
             settings.emitter_sampling,
+            settings.env_sampling,
             super::super::GiPasses::temporal_on(settings),
         )?))
     },
