@@ -222,14 +222,14 @@ fn viewer_scales_down_to_hold_a_frame_budget_and_refines_when_still() {
             "{gi}: {}",
             scales[1]
         );
-        // The area at a quarter, TAA-upsampled (`post.upscale`'s default); then presented as
-        // it is.
+        // The area at a quarter, upscaled (bilinear, `post.upscale`'s default); then
+        // presented as it is.
         let graphs: Vec<&str> = log
             .lines()
             .filter(|l| l.contains("frame graph: "))
             .collect();
         assert!(
-            graphs.iter().any(|l| l.contains(" TAA-upsampled from ")),
+            graphs.iter().any(|l| l.contains(" upscaled to ")),
             "{gi}: {graphs:?}"
         );
         let last = graphs.last().expect("a graph");
