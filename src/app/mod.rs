@@ -936,10 +936,8 @@ impl Viewer {
             settings.post = self.controls.post;
             settings.debug = debug_settings(&self.controls, settings.debug);
         }
-        // The scale's ray count (mono only), changed together with the scale's size: no
-        // renderer of its own.
-        // And TAA upsampling into the area while scaled (it is a post stage: a new renderer,
-        // made for the scale's new size anyway).
+        // The scale's ray count and TAA upsampling into the area (mono only): both change
+        // only together with the scale's size, whose new renderer carries them.
         (settings.gi, settings.post.upsample_to) = match self.display {
             Some(area) => (
                 self.dynres.gi(self.gi_base),
