@@ -160,7 +160,7 @@ fn check_reprojection(camera: impl Fn(Vec3) -> Mat4) {
         frames: 1,
         ..Default::default()
     };
-    let taa = TaaPass::new(&ctx, settings, (W, H), sampler.raw, false).expect("pass");
+    let taa = TaaPass::new(&ctx, settings, (W, H), (W, H), sampler.raw, false).expect("pass");
     let vp1 = camera(Vec3::new(0.0, 0.0, 6.0));
     let vp2 = camera(Vec3::new(0.35, 0.15, 5.8));
     let n = (W * H) as usize;
@@ -287,7 +287,7 @@ fn a_camera_step_of_one_texel_reprojects_the_history_exactly() {
         frames: 1,
         ..Default::default()
     };
-    let taa = TaaPass::new(&ctx, settings, (W, H), sampler.raw, false).expect("pass");
+    let taa = TaaPass::new(&ctx, settings, (W, H), (W, H), sampler.raw, false).expect("pass");
     let head_on = |x: f32| {
         let mut proj = Mat4::perspective_rh(50f32.to_radians(), W as f32 / H as f32, 0.1, 100.0);
         proj.y_axis.y = -proj.y_axis.y;

@@ -24,8 +24,15 @@
 //! - **Refine.** After `refine_frames` frames without camera motion the scene renders at the
 //!   full size (the image converges there); the first moving frame returns to the scale that
 //!   held the budget while moving, without measuring again.
+//! - **The GI follows the scale** (`post.dynamic_gi`, [`ScaleController::gi`]): below the
+//!   full size the voxel methods trace [`MOVING_GI_RAYS`] per pixel, and the scene's count
+//!   once refined. A ray count is baked into the renderer like the size, and it changes only
+//!   together with the scale, so it costs no renderer of its own. The viewer also turns
+//!   temporal accumulation on ([`viewer_gi`]), which makes one ray per pixel and frame
+//!   converge while the camera stands still.
 
-use crate::scene::DynamicResolution;
+use crate::gi::GiSettings;
+use crate::scene::{DynamicResolution, MOVING_GI_RAYS};
 
 /// Scales are whole eighths of the window's size per axis.
 pub const STEPS: u32 = 8;
@@ -97,6 +104,20 @@ impl ScaleController {
         } else {
             self.moving
         }
+    }
+
+    /// The GI settings the current scale renders with, from the panel's (`base`): see
+    /// [`gi_at_scale`].
+    pub fn gi(&self, base: GiSettings) -> GiSettings {
+        gi_at_scale(base, self.steps(), &self.settings)
+    }
+
+    /// The size TAA upsampling resolves the `internal` frame into (`post.upscale = "taa"`):
+    /// the scene's `area` while the frame is smaller, else `None` (full size: the frame is
+    /// the area's as `voxgi render` writes it; bilinear: the present pass blits).
+    pub fn upsample_to(&self, internal: (u32, u32), area: (u32, u32)) -> Option<(u32, u32)> {
+        let taa = self.settings.upscale == crate::scene::Upscale::Taa;
+        (taa && self.settings.on() && internal != area).then_some(area)
     }
 
     /// The internal size for a `size` area (each axis at least one pixel).
@@ -178,6 +199,33 @@ impl ScaleController {
     }
 }
 
+/// The GI settings a frame at `steps` eighths renders with: `base` (the scene's, or the
+/// panel's), with [`MOVING_GI_RAYS`] per pixel while the scale is below full and
+/// `post.dynamic_gi` is on, for the methods that trace rays per pixel (their spec sweeps
+/// `gi.rays`). At the full size, off, or for other methods: `base` itself, so a refined frame
+/// is the scene's.
+pub fn gi_at_scale(base: GiSettings, steps: u32, settings: &DynamicResolution) -> GiSettings {
+    let traces_rays = base.method.spec().sweep_keys.contains(&"gi.rays");
+    if !settings.dynamic_gi || steps >= STEPS || !traces_rays {
+        return base;
+    }
+    GiSettings {
+        rays: base.rays.min(MOVING_GI_RAYS),
+        ..base
+    }
+}
+
+/// The viewer's GI at start: the scene's and the flags' (`gi`), with temporal accumulation on
+/// when `post.dynamic_gi` is and neither the scene nor a flag set `gi.temporal` (`set`).
+/// Temporal accumulation is what lets one ray per pixel and frame ([`gi_at_scale`]) converge,
+/// and a still camera refine; methods without it ignore the switch.
+pub fn viewer_gi(gi: GiSettings, set: bool, settings: &DynamicResolution) -> GiSettings {
+    GiSettings {
+        temporal: gi.temporal || (settings.dynamic_gi && !set),
+        ..gi
+    }
+}
+
 /// `(w, h)` scaled by `steps` eighths, each axis rounded to the nearest pixel and at least 1.
 pub fn scaled_size((w, h): (u32, u32), steps: u32) -> (u32, u32) {
     let scale = |v: u32| {
@@ -195,6 +243,8 @@ mod tests {
             frame_budget_ms: budget_ms,
             min_scale: 0.125,
             refine_frames: 0,
+            dynamic_gi: true,
+            upscale: crate::scene::Upscale::Taa,
         }
     }
 
@@ -341,5 +391,107 @@ mod tests {
         assert_eq!(scaled_size((1280, 720), 3), (480, 270));
         assert_eq!(scaled_size((1, 3), 1), (1, 1));
         assert_eq!(scaled_size((333, 7), 5), (208, 4));
+    }
+
+    #[test]
+    fn the_gi_traces_one_ray_below_the_full_size_and_the_scenes_count_at_it() {
+        use crate::scene::GiMethod;
+        let pt = GiSettings {
+            method: GiMethod::Pathtrace,
+            rays: 4,
+            ..Default::default()
+        };
+        let on = settings(100.0);
+        for steps in 1..STEPS {
+            assert_eq!(gi_at_scale(pt, steps, &on).rays, 1, "{steps}/8");
+        }
+        assert_eq!(gi_at_scale(pt, STEPS, &on), pt);
+        // Only the ray count changes: a scale change and its ray count are one new renderer.
+        assert_eq!(gi_at_scale(pt, 1, &on), GiSettings { rays: 1, ..pt });
+        // Off: the scene's count at every scale.
+        let off = DynamicResolution {
+            dynamic_gi: false,
+            ..on
+        };
+        assert_eq!(gi_at_scale(pt, 1, &off), pt);
+        // Methods that trace no rays per pixel keep their settings.
+        for method in [GiMethod::None, GiMethod::Vpl] {
+            let g = GiSettings {
+                method,
+                rays: 4,
+                ..Default::default()
+            };
+            assert_eq!(gi_at_scale(g, 1, &on), g, "{method:?}");
+        }
+        // The hemisphere traces rays too.
+        let h = GiSettings {
+            method: GiMethod::Hemisphere,
+            rays: 16,
+            ..Default::default()
+        };
+        assert_eq!(gi_at_scale(h, 3, &on).rays, 1);
+        // The controller applies its own scale: at the floor while moving, full when refined.
+        let mut c = ScaleController::new(DynamicResolution {
+            refine_frames: 2,
+            ..on
+        });
+        assert_eq!(c.gi(pt).rays, 1);
+        c.observe(None, true);
+        assert_eq!(c.observe(None, true), Some(Change::Refine));
+        assert_eq!(c.gi(pt), pt);
+    }
+
+    #[test]
+    fn taa_upsampling_resolves_into_the_area_only_while_scaled() {
+        use crate::scene::Upscale;
+        let mut c = ScaleController::new(DynamicResolution {
+            refine_frames: 1,
+            ..settings(100.0)
+        });
+        let area = (969, 720);
+        let internal = c.internal_size(area);
+        assert_eq!(internal, (121, 90));
+        assert_eq!(c.upsample_to(internal, area), Some(area));
+        // Refined: the full-size frame, no upsampling (what `voxgi render` writes).
+        assert_eq!(c.observe(None, true), Some(Change::Refine));
+        assert_eq!(c.upsample_to(c.internal_size(area), area), None);
+        // Bilinear, or dynamic resolution off: never.
+        let mut b = ScaleController::new(DynamicResolution {
+            upscale: Upscale::Bilinear,
+            ..settings(100.0)
+        });
+        assert_eq!(b.upsample_to(b.internal_size(area), area), None);
+        b.set(settings(0.0));
+        assert_eq!(b.upsample_to(b.internal_size(area), area), None);
+    }
+
+    #[test]
+    fn the_viewer_turns_temporal_gi_on_unless_the_scene_or_a_flag_set_it() {
+        let on = settings(100.0);
+        let off = GiSettings {
+            temporal: false,
+            ..Default::default()
+        };
+        assert!(viewer_gi(off, false, &on).temporal);
+        // Set to off by the scene or a flag: stays off.
+        assert!(!viewer_gi(off, true, &on).temporal);
+        let set_on = GiSettings {
+            temporal: true,
+            ..off
+        };
+        assert!(viewer_gi(set_on, true, &on).temporal);
+        let no_dynamic_gi = DynamicResolution {
+            dynamic_gi: false,
+            ..on
+        };
+        assert!(!viewer_gi(off, false, &no_dynamic_gi).temporal);
+        // Nothing else changes.
+        assert_eq!(
+            viewer_gi(off, false, &on),
+            GiSettings {
+                temporal: true,
+                ..off
+            }
+        );
     }
 }

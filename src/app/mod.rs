@@ -24,6 +24,7 @@ mod pick;
 mod stereo;
 
 pub use camera::{FlyCamera, MoveKeys};
+pub use dynres::viewer_gi;
 pub use panel::{Controls, TimingStats};
 pub use stereo::StereoControls;
 
@@ -311,6 +312,9 @@ struct Viewer {
     /// Per frame slot, the scale (eighths) of the frame it recorded, for dynamic resolution's
     /// measurement of it; `None` for a renderer's first frame (one-time work) or in stereo.
     recorded_steps: [Option<u32>; MAX_FRAMES_IN_FLIGHT],
+    /// The panel's GI settings the renderer was last given (applied once no slider is
+    /// dragged); dynamic resolution renders them with the scale's ray count.
+    gi_base: GiSettings,
 }
 
 /// The view the editor's handles are drawn for.
@@ -406,6 +410,9 @@ fn describe_post(post: &crate::post::PostSettings, tone: &crate::post::ToneMap) 
     let mut parts = Vec::new();
     if let Some(t) = post.taa {
         parts.push(format!("taa α {}", t.history_weight));
+    }
+    if let Some((w, h)) = post.upsample_to {
+        parts.push(format!("TAA upsampling to {w}x{h}"));
     }
     if let Some(a) = post.auto_exposure {
         parts.push(format!("auto exposure key {}", a.key));
@@ -561,6 +568,7 @@ impl Viewer {
             last_camera: None,
             still: false,
             recorded_steps: [None; MAX_FRAMES_IN_FLIGHT],
+            gi_base: opts.settings.gi,
         }
     }
 
@@ -575,6 +583,10 @@ impl Viewer {
         if self.controls.stereo.mode.is_none() {
             let area = (settings.width, settings.height);
             (settings.width, settings.height) = self.dynres.internal_size(area);
+            settings.gi = self.dynres.gi(settings.gi);
+            settings.post.upsample_to = self
+                .dynres
+                .upsample_to((settings.width, settings.height), area);
             if self.dynres.steps() != dynres::STEPS {
                 self.log_scale(dynres::Change::Start, area);
             }
@@ -920,10 +932,20 @@ impl Viewer {
         settings.shadow = self.controls.shadow;
         // Each GI edit costs a new renderer: apply them once no slider is being dragged.
         if !self.egui_ctx.input(|i| i.pointer.any_down()) {
-            settings.gi = self.controls.gi;
+            self.gi_base = self.controls.gi;
             settings.post = self.controls.post;
             settings.debug = debug_settings(&self.controls, settings.debug);
         }
+        // The scale's ray count and TAA upsampling into the area (mono only): both change
+        // only together with the scale's size, whose new renderer carries them.
+        (settings.gi, settings.post.upsample_to) = match self.display {
+            Some(area) => (
+                self.dynres.gi(self.gi_base),
+                self.dynres
+                    .upsample_to((settings.width, settings.height), area),
+            ),
+            None => (self.gi_base, None),
+        };
         self.apply_projection(&settings);
         let stereo_changed = match (&self.stereo, self.controls.stereo.mode) {
             (Some(st), _) => st.outdated(&self.controls.stereo),
@@ -1178,6 +1200,7 @@ impl Viewer {
                 .as_ref()
                 .map_or((0, 0), |r| (r.settings.width, r.settings.height)),
             scale_steps: self.display.map_or(dynres::STEPS, |_| self.dynres.steps()),
+            gi: self.renderer.as_ref().map(|r| r.settings.gi),
         };
         let (controls, stats) = (&mut self.controls, &self.stats);
         let mut layout = panel::PanelLayout::default();
@@ -1438,7 +1461,8 @@ impl Viewer {
                 if let Some(p) = self.pick.as_ref() {
                     p.declare(&mut g, &scene_inputs);
                 }
-                (ldr, (renderer.settings.width, renderer.settings.height))
+                // TAA upsampling resolves into the scene's area: larger than the frame.
+                (ldr, renderer.output_size())
             }
         };
         // The scene's place in the window: right-aligned, left of it is the panel. (Only a
@@ -1503,13 +1527,16 @@ impl Viewer {
             "edit: scene viewport at [{}, 0] size [{dst_w}, {dst_h}] px",
             scene_rect.offset.x
         );
+        let frame = (renderer.settings.width, renderer.settings.height);
         log::info!(
             "frame graph: {}, presents {w}x{h}{}",
             stereo_mode.map_or_else(|| "mono".to_owned(), crate::post::StereoMode::name),
-            if (dst_w, dst_h) == (w, h) {
-                String::new()
-            } else {
+            if (dst_w, dst_h) != (w, h) {
                 format!(" upscaled to {dst_w}x{dst_h}")
+            } else if stereo_mode.is_none() && frame != (w, h) {
+                format!(" TAA-upsampled from {}x{}", frame.0, frame.1)
+            } else {
+                String::new()
             }
         );
         self.graph = Some(FrameGraph {

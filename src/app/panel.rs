@@ -149,6 +149,8 @@ pub struct PanelInfo<'a> {
     /// resolution; 8: full size).
     pub internal: (u32, u32),
     pub scale_steps: u32,
+    /// The GI settings the renderer runs (with dynamic resolution's ray count).
+    pub gi: Option<crate::gi::GiSettings>,
 }
 
 const SHADOW_RESOLUTIONS: [u32; 5] = [256, 512, 1024, 2048, 4096];
@@ -351,10 +353,11 @@ pub fn draw(
                         info.device, info.extent_px.0, info.extent_px.1, info.frame_ms
                     ));
                     ui.label(format!(
-                        "renders {}×{} (scale {})",
+                        "renders {}×{} (scale {}){}",
                         info.internal.0,
                         info.internal.1,
-                        scale_name(info.scale_steps)
+                        scale_name(info.scale_steps),
+                        info.gi.map_or_else(String::new, |gi| gi_rays_note(&gi))
                     ));
                     ui.label(
                 "WASD move · Q/E down/up · right mouse look · wheel speed · G next GI method · \
@@ -633,6 +636,22 @@ fn scale_name(steps: u32) -> String {
     }
 }
 
+/// The GI's rays per pixel and whether they accumulate, after the scale in the panel's
+/// header (dynamic resolution lowers the rays below the full size): ", 1 GI ray/px,
+/// accumulated". Empty for methods that trace no rays per pixel.
+fn gi_rays_note(gi: &crate::gi::GiSettings) -> String {
+    if !gi.method.spec().sweep_keys.contains(&"gi.rays") {
+        return String::new();
+    }
+    let plural = if gi.rays == 1 { "" } else { "s" };
+    let accumulated = if crate::gi::GiPasses::temporal_on(gi) {
+        ", accumulated"
+    } else {
+        ""
+    };
+    format!(", {} GI ray{plural}/px{accumulated}", gi.rays)
+}
+
 /// Dynamic resolution's settings, each the `[post]` key of its label.
 fn dynres_controls(ui: &mut egui::Ui, d: &mut crate::scene::DynamicResolution) {
     let mut t = PostTable {
@@ -663,6 +682,13 @@ fn dynres_controls(ui: &mut egui::Ui, d: &mut crate::scene::DynamicResolution) {
         false,
         "still frames to refine (0 never)",
     );
+    key_checkbox(
+        ui,
+        &mut t,
+        "post.dynamic_gi",
+        "1 GI ray per pixel while scaled",
+    );
+    key_choice(ui, &mut t, "post.upscale", "upscale");
     *d = t.dynres;
 }
 
@@ -825,6 +851,7 @@ mod table_tests {
             history: &history,
             internal: (size.x as u32, size.y as u32),
             scale_steps: 8,
+            gi: None,
         };
         let mut layout = PanelLayout::default();
         let mut texts = Vec::new();

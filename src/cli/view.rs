@@ -143,6 +143,12 @@ pub fn view(global: &Global, args: ViewArgs, out: &mut dyn Write) -> Result<(), 
     let voxel = super::args::VoxelArgs::default().layer(&args.gi.set)?;
     let mut scene = scene;
     scene.voxel = voxel.over(&scene.voxel);
+    // The viewer accumulates GI over frames unless the scene or a flag says otherwise
+    // (`post.dynamic_gi`; docs/design/dynamic-resolution.md).
+    let temporal_set = [&scene.gi, &args.gi.layer()?]
+        .iter()
+        .any(|l| l.get("gi.temporal").is_some());
+    settings.gi = crate::app::viewer_gi(settings.gi, temporal_set, &post.dynres);
     let name = super::sweep::scene_name(args.scene.as_deref().unwrap_or("cornell"));
     if let Some(budget) = args.budget_ms {
         let (row, _, layer) = crate::tune::tune_from_dir(&args.sweep, &name, budget)?;

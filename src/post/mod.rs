@@ -24,7 +24,10 @@ pub struct PostPasses {
     exposure: Option<ExposurePass>,
     bloom: Option<BloomPass>,
     fxaa: Option<FxaaPass>,
+    /// The size the stages after TAA run at: the frame's, or TAA upsampling's.
     size: (u32, u32),
+    /// TAA upsampling's size (`PostSettings::upsample_to`, when larger than the frame).
+    upsampled: Option<(u32, u32)>,
 }
 
 impl PostPasses {
@@ -52,9 +55,16 @@ impl PostPasses {
         moving: bool,
     ) -> Result<(), crate::vk::VkError> {
         let motion = settings.motion_vectors(moving);
-        self.taa = settings
-            .taa
-            .map(|t| TaaPass::new(ctx, t, size, sampler, motion))
+        // Upsampling is a TAA pass (with TAA's defaults where TAA is not on) whose output is
+        // larger than the frame; every stage after it runs at its size.
+        self.upsampled = settings.upsample_to.filter(|&out| out != size);
+        let out = self.upsampled.unwrap_or(size);
+        let taa = match self.upsampled {
+            Some(_) => Some(settings.taa.unwrap_or_default()),
+            None => settings.taa,
+        };
+        self.taa = taa
+            .map(|t| TaaPass::new(ctx, t, size, out, sampler, motion))
             .transpose()?;
         self.exposure = settings
             .auto_exposure
@@ -65,8 +75,13 @@ impl PostPasses {
             .map(|s| BloomPass::new(ctx, s, sampler))
             .transpose()?;
         self.fxaa = settings.fxaa.then(|| FxaaPass::new(ctx)).transpose()?;
-        self.size = size;
+        self.size = out;
         Ok(())
+    }
+
+    /// TAA upsampling's size, when the stages from TAA on run larger than the frame.
+    pub fn upsampled(&self) -> Option<(u32, u32)> {
+        self.upsampled
     }
 
     /// Starts a frame whose un-jittered view-projection is `view_proj`; returns the frame's

@@ -7,6 +7,17 @@
 //! clips it in YCoCg to the current 3×3 neighbourhood and blends it with the current frame.
 //! A copy (`taa_history`) keeps the result for the next frame. In scenes with moving objects
 //! the G-buffer's motion vectors replace the camera-only reprojection at surface pixels.
+//!
+//! **Upsampling** (the viewer's dynamic resolution, `post.upscale = "taa"`): the history and
+//! the resolved image have a larger size than the frame (`PostSettings::upsample_to`). Each
+//! output pixel reprojects the history at its own (un-jittered) centre and gathers the 3×3
+//! frame pixels around it, each weighted by the distance of its jittered sample position to
+//! the output pixel's centre (Karis 2014's Blackman-Harris fit exp(−2.29 d²), as in Unreal's
+//! TAAU and the FSR 2 reconstruction, which weighs samples by that distance). The history
+//! keeps the weighted mean of its samples and their total weight (in alpha, capped at
+//! 1 / the current frame's TAA weight, so a full history is TAA's exponential mean): a pixel
+//! that no sample of this frame lies near keeps its history, and a still camera fills every
+//! output pixel over the jitter cycle.
 
 use super::TaaSettings;
 use crate::graph::{Access, ImageHandle, RenderGraph, Shader};
@@ -74,13 +85,16 @@ struct TaaState {
     push: GpuTaaPush,
 }
 
-/// The TAA pipeline, its history (the frame's size, RGBA32F) and the per-frame state.
+/// The TAA pipeline, its history (the output's size, RGBA32F) and the per-frame state.
 pub struct TaaPass {
     pipeline: ComputePipeline,
     history: Image,
     sampler: vk::Sampler,
     settings: TaaSettings,
+    /// The frame's size: the jitter is a fraction of its pixels.
     size: (u32, u32),
+    /// The history's and the resolved image's size: `size`, or larger when upsampling.
+    out: (u32, u32),
     state: Arc<Mutex<TaaState>>,
 }
 
@@ -92,21 +106,24 @@ impl TaaPass {
     }
 
     /// `sampler`: nearest (the shader filters the history by hand). `motion`: the G-buffer
-    /// has motion vectors, [`TaaPass::declare`] gets them.
+    /// has motion vectors, [`TaaPass::declare`] gets them. `out`: the resolved size, `size`
+    /// or larger (upsampling).
     pub fn new(
         ctx: &Context,
         settings: TaaSettings,
         (w, h): (u32, u32),
+        out: (u32, u32),
         sampler: vk::Sampler,
         motion: bool,
     ) -> Result<Self, VkError> {
+        let upsample = out != (w, h);
         let pipeline = ctx.compute_pipeline(
             "taa.comp",
             PushLayout::of::<GpuTaaPush>(),
-            &crate::spec_constants![MOTION = motion],
+            &crate::spec_constants![MOTION = motion, UPSAMPLE = upsample],
         )?;
         let history = ctx.create_zeroed_image(
-            &Self::history_desc((w, h)),
+            &Self::history_desc(out),
             Access::Sampled(Shader::Compute).info().layout,
         )?;
         Ok(Self {
@@ -115,6 +132,7 @@ impl TaaPass {
             sampler,
             settings,
             size: (w, h),
+            out,
             state: Arc::new(Mutex::new(TaaState {
                 frames: 0,
                 prev_view_proj: Mat4::IDENTITY,
@@ -155,7 +173,7 @@ impl TaaPass {
         depth: ImageHandle,
         motion: Option<ImageHandle>,
     ) -> ImageHandle {
-        let (w, h) = self.size;
+        let (w, h) = self.out;
         let c = Shader::Compute;
         let history = g.import_image(&self.history, Access::Sampled(c));
         let resolved = g.create_image(ImageDesc::new_2d(

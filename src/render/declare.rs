@@ -175,9 +175,14 @@ impl Renderer {
             None => radiance,
         };
         let (radiance, exposure) = post.declare_hdr(g, radiance, gbuffer.depth, gbuffer.motion);
-        let ldr = self
-            .tonemap
-            .declare(g, radiance, exposure, s.tonemap, (w, h));
+        // TAA upsampling resolves into a larger image: tone mapping follows it.
+        let ldr = self.tonemap.declare(
+            g,
+            radiance,
+            exposure,
+            s.tonemap,
+            post.upsampled().unwrap_or((w, h)),
+        );
         let ldr = post.declare_ldr(g, ldr);
         FrameImages { radiance, ldr }
     }

@@ -242,6 +242,14 @@ impl Renderer {
             .collect()
     }
 
+    /// The size of the frame's tone-mapped image: the frame's, or TAA upsampling's
+    /// (`PostSettings::upsample_to`; the viewer's dynamic resolution) where larger.
+    pub fn output_size(&self) -> (u32, u32) {
+        self.post
+            .upsampled()
+            .unwrap_or((self.settings.width, self.settings.height))
+    }
+
     pub fn gi_accumulated_frames(&self) -> Option<u32> {
         self.gi.as_ref().map(|(gi, _)| gi.accumulated_frames())
     }

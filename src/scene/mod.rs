@@ -265,7 +265,7 @@ pub use object::{
 };
 pub use post_settings::{
     range as post_range, AutoExposure, DynamicResolution, PostSettings, PostTable, TaaSettings,
-    ToneMap, ToneOperator,
+    ToneMap, ToneOperator, Upscale, MOVING_GI_RAYS,
 };
 pub use pre_exposure::PreExposure;
 pub use query::NoSuchObject;

@@ -110,6 +110,11 @@ pub struct PostSettings {
     pub bloom: Option<f32>,
     /// FXAA after tone mapping (`--fxaa`).
     pub fxaa: bool,
+    /// TAA upsampling into this size, larger than the frame: the viewer's dynamic resolution
+    /// with `post.upscale = "taa"` (`post::taa`). The TAA pass resolves the jittered frame
+    /// into a history of this size, and the stages after it run at this size. `None`: TAA,
+    /// where on, at the frame's size. No scene key or flag sets it.
+    pub upsample_to: Option<(u32, u32)>,
 }
 
 impl PostSettings {
@@ -132,7 +137,37 @@ pub struct DynamicResolution {
     pub min_scale: f32,
     /// Still frames after which the viewer renders at the full size again; 0: never.
     pub refine_frames: u32,
+    /// The viewer's GI follows the scale (`app::dynres::ScaleController::gi`): temporal
+    /// accumulation on unless the scene or a flag sets `gi.temporal`, and
+    /// [`MOVING_GI_RAYS`] per pixel while the scale is below full.
+    pub dynamic_gi: bool,
+    /// How the internal frame reaches the window's size while scaled.
+    pub upscale: Upscale,
 }
+
+/// How the viewer upscales its internal frame to the window under dynamic resolution
+/// (`post.upscale`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum Upscale {
+    /// The tone-mapped frame, blitted with a bilinear filter. The default: on lavapipe TAA
+    /// upsampling into a 969×720 area costs 205 ms (the pass) and 58 ms (tone mapping at that
+    /// size) per frame, more than twice the 100 ms budget, against 13 ms for the blit.
+    #[default]
+    Bilinear,
+    /// TAA upsampling: each frame renders with a sub-pixel jitter and the TAA pass blends its
+    /// samples, by their distance to each window pixel's centre, into a history of the
+    /// window's size (Karis 2014; the FSR 2 reconstruction), so a still or slow camera
+    /// gains the detail of the full size over the frames. Its passes run at the window's
+    /// size: for a GPU that has the time.
+    Taa,
+}
+
+/// GI rays per pixel the viewer traces while its scale is below full (`post.dynamic_gi`):
+/// with temporal accumulation one ray per pixel and frame converges over the frames (the
+/// issue's "1–2 rays per pixel per frame"), and the path tracer's cost is linear in its rays,
+/// so this is the largest saving after the scale itself.
+pub const MOVING_GI_RAYS: u32 = 1;
 
 impl DynamicResolution {
     /// Whether the viewer scales at all.
@@ -153,6 +188,8 @@ impl Default for DynamicResolution {
             frame_budget_ms: 100.0,
             min_scale: 0.125,
             refine_frames: 30,
+            dynamic_gi: true,
+            upscale: Upscale::Bilinear,
         }
     }
 }
@@ -191,7 +228,7 @@ use range::*;
 
 /// Every `[post]` key: the scene file's key, the path `--set` and the panel use, its range,
 /// its flag and its field.
-static POST_KEYS: [Key<PostTable>; 14] = [
+static POST_KEYS: [Key<PostTable>; 16] = [
     key!("post.taa_history_weight", Kind::Number(TAA_HISTORY_WEIGHT),
         "TAA history weight α: each frame keeps α of the reprojected history",
         flag("taa-history-weight", "ALPHA"), stage taa history_weight),
@@ -290,6 +327,22 @@ static POST_KEYS: [Key<PostTable>; 14] = [
         None,
         dynres.refine_frames
     ),
+    key!(
+        "post.dynamic_gi",
+        Kind::Bool,
+        "The viewer's GI follows dynamic resolution: temporal accumulation on unless the scene \
+         or a flag sets gi.temporal, and 1 GI ray per pixel while the scale is below full (the \
+         scene's count when refined); false keeps the scene's GI settings. Headless renders \
+         are not affected",
+        None,
+        dynres.dynamic_gi
+    ),
+    key!("post.upscale", Kind::Choice(choices::<Upscale>),
+        "How the viewer upscales its reduced internal resolution to the window: bilinear (a \
+         filtered blit of each frame) or taa (jittered frames resolved into a history of the \
+         window's size, which regains detail while the camera is still or slow, at the cost \
+         of a TAA pass and tone mapping at the window's size)",
+        None, choice Upscale, dynres.upscale),
 ];
 
 impl Settings for PostTable {
