@@ -140,7 +140,10 @@ fn modern_hall_lit_by_its_emitters_through_gi() {
 
 #[test]
 fn sponza_lit_by_the_sun_with_every_method() {
-    let scene = load("sponza.toml");
+    let mut scene = load("sponza.toml");
+    // Loading, lighting and validation at the default grid (the scene's 512 columns cost
+    // several times the time; see the Modern Hall's test).
+    scene.voxel = Layer::default();
     assert_eq!(triangles(&scene), 66_445);
     // sponza.mtl gives 17 of its 19 materials a JPEG `map_Kd`.
     let textured = scene
