@@ -36,7 +36,7 @@ use crate::vk::{
     MemoryLocation, Swapchain, VkError, MAX_FRAMES_IN_FLIGHT,
 };
 use overlay::Overlay;
-use raw_window_handle::{HasRawDisplayHandle, HasRawWindowHandle};
+use raw_window_handle::{HasDisplayHandle, HasWindowHandle};
 use std::cell::Cell;
 use std::path::PathBuf;
 use std::rc::Rc;
@@ -183,7 +183,7 @@ pub fn run(scene: Scene, opts: &ViewerOptions) -> Result<ViewerReport, AppError>
     let ctx = Context::new(&ContextDesc {
         validation: opts.validation,
         device: opts.device.clone(),
-        instance_extensions: surface_extensions(event_loop.raw_display_handle())?,
+        instance_extensions: surface_extensions(display_handle(&event_loop)?)?,
         swapchain: true,
     })?;
     let mut viewer = Viewer::new(&ctx, &window, scene, opts)?;
@@ -202,6 +202,16 @@ pub fn run(scene: Scene, opts: &ViewerOptions) -> Result<ViewerReport, AppError>
         teardown: ctx.finish(),
         ..report
     })
+}
+
+/// The window system's display connection, for the surface.
+fn display_handle(
+    source: &impl HasDisplayHandle,
+) -> Result<raw_window_handle::RawDisplayHandle, AppError> {
+    Ok(source
+        .display_handle()
+        .map_err(|e| AppError::Window(e.to_string()))?
+        .as_raw())
 }
 
 /// The compiled frame for one swapchain size and set of graph-shaping settings.
@@ -441,8 +451,11 @@ impl Viewer {
         };
         let swapchain = Swapchain::new(
             ctx,
-            window.raw_display_handle(),
-            window.raw_window_handle(),
+            display_handle(window)?,
+            window
+                .window_handle()
+                .map_err(|e| AppError::Window(e.to_string()))?
+                .as_raw(),
             extent,
             MAX_FRAMES_IN_FLIGHT,
         )?;
