@@ -197,7 +197,7 @@ pub fn panel(ui: &mut egui::Ui, v: &EditView) -> PanelOut {
     }
     ui.horizontal(|ui| {
         let mut kind = ed.new_light_kind;
-        egui::ComboBox::from_id_source("new light kind")
+        egui::ComboBox::from_id_salt("new light kind")
             .width(90.0)
             .selected_text(LIGHT_KINDS.get(kind).copied().unwrap_or("point"))
             .show_ui(ui, |ui| {
@@ -236,7 +236,7 @@ fn vec3_row(
         for k in 0..3 {
             let mut d = egui::DragValue::new(&mut v[k]).speed(speed).max_decimals(4);
             if let Some(r) = &range {
-                d = d.clamp_range(r.clone());
+                d = d.range(r.clone());
             }
             let rect = ui.add(d).rect;
             if k == 0 {
@@ -259,7 +259,7 @@ fn direction_row(ui: &mut egui::Ui, label: &str, d: &mut Vec3) {
         ui.add(
             egui::DragValue::new(&mut el)
                 .speed(0.5)
-                .clamp_range(-90.0..=90.0)
+                .range(-90.0..=90.0)
                 .suffix("°"),
         );
         ui.label(format!("{label} azimuth, elevation"));
@@ -312,7 +312,7 @@ fn light_fields(ui: &mut egui::Ui, l: &mut Light, speed: f32) {
             ui.add(
                 egui::DragValue::new(radius_m)
                     .speed(speed * 0.1)
-                    .clamp_range(1e-5..=1e6)
+                    .range(1e-5..=1e6)
                     .prefix("radius m "),
             );
             vec3_row(ui, "radiance W/(m²·sr)", radiance_w_sr_m2, 0.1, nonneg);
@@ -334,7 +334,7 @@ fn light_fields(ui: &mut egui::Ui, l: &mut Light, speed: f32) {
                     ui.add(
                         egui::DragValue::new(v)
                             .speed(speed * 0.1)
-                            .clamp_range(1e-5..=1e6)
+                            .range(1e-5..=1e6)
                             .prefix(format!("{name} ")),
                     );
                 }

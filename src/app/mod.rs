@@ -37,16 +37,17 @@ use crate::vk::{
     MemoryLocation, Swapchain, VkError, MAX_FRAMES_IN_FLIGHT,
 };
 use overlay::Overlay;
-use raw_window_handle::{HasRawDisplayHandle, HasRawWindowHandle};
+use raw_window_handle::{HasDisplayHandle, HasWindowHandle};
 use std::cell::Cell;
 use std::path::PathBuf;
 use std::rc::Rc;
 use std::time::{Duration, Instant};
+use winit::application::ApplicationHandler;
 use winit::dpi::PhysicalSize;
-use winit::event::{ElementState, Event, KeyEvent, MouseButton, MouseScrollDelta, WindowEvent};
-use winit::event_loop::{EventLoop, EventLoopWindowTarget};
+use winit::event::{ElementState, KeyEvent, MouseButton, MouseScrollDelta, WindowEvent};
+use winit::event_loop::{ActiveEventLoop, EventLoop};
 use winit::keyboard::{KeyCode, PhysicalKey};
-use winit::window::{Window, WindowBuilder};
+use winit::window::{Window, WindowId};
 
 /// Seconds between the camera keyframes recorded in the viewer (printed on exit, saved as
 /// `[camera_path]`; edit `time_s` to retime the flight).
@@ -176,33 +177,116 @@ const MAX_PASSES: u32 = 128;
 /// Opens the window and runs until it is closed (or the scripted frames are done).
 pub fn run(scene: Scene, opts: &ViewerOptions) -> Result<ViewerReport, AppError> {
     let event_loop = EventLoop::new().map_err(|e| AppError::Window(e.to_string()))?;
-    let window = WindowBuilder::new()
-        .with_title("voxgi")
-        .with_inner_size(PhysicalSize::new(opts.width.max(1), opts.height.max(1)))
-        .build(&event_loop)
-        .map_err(|e| AppError::Window(e.to_string()))?;
-    let ctx = Context::new(&ContextDesc {
-        validation: opts.validation,
-        device: opts.device.clone(),
-        instance_extensions: surface_extensions(event_loop.raw_display_handle())?,
-        swapchain: true,
-    })?;
-    let mut viewer = Viewer::new(&ctx, &window, scene, opts)?;
-    let mut outcome: Result<(), AppError> = Ok(());
-    let loop_result = event_loop.run(|event, elwt| {
-        if let Err(e) = viewer.handle(&ctx, &window, event, elwt) {
-            outcome = Err(e);
-            elwt.exit();
-        }
-    });
+    let mut app = App {
+        opts,
+        scene: Some(scene),
+        open: None,
+        outcome: Ok(()),
+    };
+    let loop_result = event_loop.run_app(&mut app);
     // The viewer (its GPU objects, swapchain and surface) goes before the context and window.
-    let report = viewer.close(&ctx);
-    outcome?;
+    let closed = app.open.take().map(|o| {
+        let report = o.viewer.close(&o.ctx);
+        (report, o.ctx, o.window)
+    });
+    app.outcome?;
     loop_result.map_err(|e| AppError::Window(e.to_string()))?;
+    let Some((report, ctx, _window)) = closed else {
+        return Err(AppError::Window(
+            "the event loop ended before the window opened".into(),
+        ));
+    };
     Ok(ViewerReport {
         teardown: ctx.finish(),
         ..report
     })
+}
+
+/// The viewer with what it draws with; fields drop in order (viewer, context, window).
+struct Open {
+    viewer: Viewer,
+    ctx: Context,
+    window: Window,
+}
+
+/// winit's application: opens the window, context and viewer when the event loop starts
+/// (winit 0.30 creates windows from a running loop) and hands the viewer its events.
+struct App<'a> {
+    opts: &'a ViewerOptions,
+    /// The scene until the viewer takes it.
+    scene: Option<Scene>,
+    open: Option<Open>,
+    /// The first error, which ended the loop.
+    outcome: Result<(), AppError>,
+}
+
+impl App<'_> {
+    fn open(&mut self, event_loop: &ActiveEventLoop) -> Result<(), AppError> {
+        // A second `resumed` (platforms that suspend) finds the viewer open.
+        let Some(scene) = self.scene.take() else {
+            return Ok(());
+        };
+        let attributes = Window::default_attributes()
+            .with_title("voxgi")
+            .with_inner_size(PhysicalSize::new(
+                self.opts.width.max(1),
+                self.opts.height.max(1),
+            ));
+        let window = event_loop
+            .create_window(attributes)
+            .map_err(|e| AppError::Window(e.to_string()))?;
+        let ctx = Context::new(&ContextDesc {
+            validation: self.opts.validation,
+            device: self.opts.device.clone(),
+            instance_extensions: surface_extensions(display_handle(event_loop)?)?,
+            swapchain: true,
+        })?;
+        let viewer = Viewer::new(&ctx, &window, scene, self.opts)?;
+        self.open = Some(Open {
+            viewer,
+            ctx,
+            window,
+        });
+        Ok(())
+    }
+
+    fn fail(&mut self, event_loop: &ActiveEventLoop, e: AppError) {
+        self.outcome = Err(e);
+        event_loop.exit();
+    }
+}
+
+impl ApplicationHandler for App<'_> {
+    fn resumed(&mut self, event_loop: &ActiveEventLoop) {
+        if let Err(e) = self.open(event_loop) {
+            self.fail(event_loop, e);
+        }
+    }
+
+    fn window_event(&mut self, event_loop: &ActiveEventLoop, _: WindowId, event: WindowEvent) {
+        let Some(o) = self.open.as_mut() else {
+            return;
+        };
+        if let Err(e) = o.viewer.handle(&o.ctx, &o.window, event, event_loop) {
+            self.fail(event_loop, e);
+        }
+    }
+
+    fn about_to_wait(&mut self, _: &ActiveEventLoop) {
+        if let Some(o) = self.open.as_ref().filter(|o| !o.viewer.window_gone) {
+            o.window.request_redraw();
+        }
+    }
+}
+
+/// The window system's display connection, for the surface.
+fn display_handle(
+    source: &impl HasDisplayHandle,
+) -> Result<raw_window_handle::RawDisplayHandle, AppError> {
+    Ok(source
+        .display_handle()
+        .map_err(|e| AppError::Window(e.to_string()))?
+        .as_raw())
 }
 
 /// The compiled frame for one swapchain size and set of graph-shaping settings.
@@ -448,8 +532,11 @@ impl Viewer {
         };
         let swapchain = Swapchain::new(
             ctx,
-            window.raw_display_handle(),
-            window.raw_window_handle(),
+            display_handle(window)?,
+            window
+                .window_handle()
+                .map_err(|e| AppError::Window(e.to_string()))?
+                .as_raw(),
             extent,
             MAX_FRAMES_IN_FLIGHT,
         )?;
@@ -473,12 +560,14 @@ impl Viewer {
         swapchain: Swapchain,
     ) -> Self {
         let egui_ctx = egui::Context::default();
-        egui_ctx.set_visuals(egui::Visuals::dark());
+        // The dark theme whatever the system's (egui 0.29+ follows the system by default).
+        egui_ctx.set_theme(egui::Theme::Dark);
         let egui_state = egui_winit::State::new(
             egui_ctx.clone(),
             egui::ViewportId::ROOT,
             window,
             Some(window.scale_factor() as f32),
+            None,
             Some(8192),
         );
         let fly = FlyCamera::from_camera(&scene.camera, scene.aabb_at(0.0).extent().length());
@@ -611,22 +700,18 @@ impl Viewer {
         &mut self,
         ctx: &Context,
         window: &Window,
-        event: Event<()>,
-        elwt: &EventLoopWindowTarget<()>,
+        event: WindowEvent,
+        elwt: &ActiveEventLoop,
     ) -> Result<(), AppError> {
         match event {
-            Event::AboutToWait if !self.window_gone => window.request_redraw(),
-            Event::WindowEvent {
-                event: WindowEvent::Destroyed,
-                ..
-            } => {
+            WindowEvent::Destroyed => {
                 // Another client destroyed the window (a close asks first: CloseRequested).
                 log::warn!("the window was destroyed: exiting");
                 self.window_gone = true;
                 elwt.exit();
             }
-            Event::WindowEvent { .. } if self.window_gone => {}
-            Event::WindowEvent { event, .. } => {
+            _ if self.window_gone => {}
+            event => {
                 let consumed = self.egui_state.on_window_event(window, &event).consumed;
                 match event {
                     WindowEvent::CloseRequested => elwt.exit(),
@@ -690,7 +775,6 @@ impl Viewer {
                     _ => {}
                 }
             }
-            _ => {}
         }
         Ok(())
     }
@@ -698,7 +782,7 @@ impl Viewer {
     /// Movement keys follow the key's state; actions (screenshot, next GI method, exit) fire
     /// once per press, not again on the system's key repeat (a press held past the repeat
     /// delay, or delivered late on a busy machine, would otherwise step two GI methods).
-    fn key(&mut self, code: KeyCode, down: bool, repeat: bool, elwt: &EventLoopWindowTarget<()>) {
+    fn key(&mut self, code: KeyCode, down: bool, repeat: bool, elwt: &ActiveEventLoop) {
         let press = down && !repeat;
         // Ctrl+S saves the scene; S without Ctrl moves back.
         if code == KeyCode::KeyS && self.ctrl && press {

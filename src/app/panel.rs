@@ -297,10 +297,11 @@ fn timing_table(ui: &mut egui::Ui, medians: &[(String, f64)], right_x: f32) -> V
         let time_cell = egui::Rect::from_min_max(rect.max - egui::vec2(time_w, size.y), rect.max);
         let left = egui::Layout::left_to_right(egui::Align::Center);
         let right = egui::Layout::right_to_left(egui::Align::Center);
+        let cell = |rect, layout| egui::UiBuilder::new().max_rect(rect).layout(layout);
         let n = ui
-            .child_ui(name_cell, left)
-            .add(egui::Label::new(name).truncate(true));
-        let t = ui.child_ui(time_cell, right).label(time.monospace());
+            .new_child(cell(name_cell, left))
+            .add(egui::Label::new(name).truncate());
+        let t = ui.new_child(cell(time_cell, right)).label(time.monospace());
         (n.rect, t.rect)
     };
     row(
@@ -866,8 +867,11 @@ mod table_tests {
             if let (Some(p), 3) = (hover, frame) {
                 raw.events.push(egui::Event::PointerMoved(p));
                 if scroll_y != 0.0 {
-                    raw.events
-                        .push(egui::Event::Scroll(egui::vec2(0.0, scroll_y)));
+                    raw.events.push(egui::Event::MouseWheel {
+                        unit: egui::MouseWheelUnit::Point,
+                        delta: egui::vec2(0.0, scroll_y),
+                        modifiers: egui::Modifiers::NONE,
+                    });
                 }
             }
             let out = ctx.run(raw, |ctx| {
@@ -1085,7 +1089,7 @@ fn budget_controls(ui: &mut egui::Ui, c: &mut Controls) {
     ui.horizontal(|ui| {
         ui.add(
             egui::DragValue::new(&mut c.budget_ms)
-                .clamp_range(0.1..=1.0e6)
+                .range(0.1..=1.0e6)
                 .suffix(" ms"),
         );
         if ui.button("Best within budget").clicked() {

@@ -709,7 +709,7 @@ impl GraphExecutor {
         for b in barriers {
             match &slot.resources[b.resource.0 as usize] {
                 Some(GpuResource::Image(img)) => images.push(
-                    vk::ImageMemoryBarrier2::builder()
+                    vk::ImageMemoryBarrier2::default()
                         .src_stage_mask(b.src_stages)
                         .src_access_mask(b.src_access)
                         .dst_stage_mask(b.dst_stages)
@@ -725,11 +725,10 @@ impl GraphExecutor {
                             level_count: b.sub.mip_count,
                             base_array_layer: b.sub.base_layer,
                             layer_count: b.sub.layer_count,
-                        })
-                        .build(),
+                        }),
                 ),
                 Some(GpuResource::Buffer(buf)) => buffers.push(
-                    vk::BufferMemoryBarrier2::builder()
+                    vk::BufferMemoryBarrier2::default()
                         .src_stage_mask(b.src_stages)
                         .src_access_mask(b.src_access)
                         .dst_stage_mask(b.dst_stages)
@@ -738,8 +737,7 @@ impl GraphExecutor {
                         .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
                         .buffer(buf.raw)
                         .offset(0)
-                        .size(vk::WHOLE_SIZE)
-                        .build(),
+                        .size(vk::WHOLE_SIZE),
                 ),
                 None => {}
             }

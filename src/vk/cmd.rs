@@ -48,7 +48,7 @@ impl<'a> Cmd<'a> {
         if images.is_empty() && buffers.is_empty() {
             return;
         }
-        let dep = vk::DependencyInfo::builder()
+        let dep = vk::DependencyInfo::default()
             .image_memory_barriers(images)
             .buffer_memory_barriers(buffers);
         // SAFETY: Cmd invariant (recording); barrier handles are live resources of the graph.
@@ -62,7 +62,7 @@ impl<'a> Cmd<'a> {
         let Ok(cname) = CString::new(name) else {
             return;
         };
-        let label = vk::DebugUtilsLabelEXT::builder()
+        let label = vk::DebugUtilsLabelEXT::default()
             .label_name(&cname)
             .color(color);
         // SAFETY: Cmd invariant.
@@ -131,7 +131,7 @@ impl<'a> Cmd<'a> {
             offset: vk::Offset2D { x: 0, y: 0 },
             extent,
         };
-        let mut info = vk::RenderingInfo::builder()
+        let mut info = vk::RenderingInfo::default()
             .render_area(area)
             .layer_count(layers.max(1))
             .view_mask(view_mask)
@@ -149,7 +149,7 @@ impl<'a> Cmd<'a> {
             offset: vk::Offset2D { x: 0, y: 0 },
             extent,
         };
-        let info = vk::RenderingInfo::builder()
+        let info = vk::RenderingInfo::default()
             .render_area(area)
             .layer_count(layers.max(1));
         self.begin_rendering_info(&info, extent);
@@ -256,17 +256,17 @@ impl<'a> Cmd<'a> {
         let writes: Vec<vk::WriteDescriptorSet> = descriptors
             .iter()
             .map(|d| {
-                let w = vk::WriteDescriptorSet::builder()
+                let w = vk::WriteDescriptorSet::default()
                     .dst_binding(d.binding())
                     .descriptor_type(d.descriptor_type());
                 match d {
                     Descriptor::SampledImage { .. } | Descriptor::StorageImage { .. } => {
                         ii += 1;
-                        w.image_info(&image_infos[ii - 1]).build()
+                        w.image_info(&image_infos[ii - 1])
                     }
                     _ => {
                         bi += 1;
-                        w.buffer_info(&buffer_infos[bi - 1]).build()
+                        w.buffer_info(&buffer_infos[bi - 1])
                     }
                 }
             })
@@ -552,7 +552,10 @@ impl<'a> Cmd<'a> {
     }
 }
 
-fn attachment_info(a: &Attachment, layout: vk::ImageLayout) -> vk::RenderingAttachmentInfo {
+fn attachment_info(
+    a: &Attachment,
+    layout: vk::ImageLayout,
+) -> vk::RenderingAttachmentInfo<'static> {
     let (layout, store) = match a.read_only {
         true => (
             vk::ImageLayout::DEPTH_READ_ONLY_OPTIMAL,
@@ -560,7 +563,7 @@ fn attachment_info(a: &Attachment, layout: vk::ImageLayout) -> vk::RenderingAtta
         ),
         false => (layout, vk::AttachmentStoreOp::STORE),
     };
-    let mut info = vk::RenderingAttachmentInfo::builder()
+    let mut info = vk::RenderingAttachmentInfo::default()
         .image_view(a.view)
         .image_layout(layout)
         .store_op(store);
@@ -568,7 +571,7 @@ fn attachment_info(a: &Attachment, layout: vk::ImageLayout) -> vk::RenderingAtta
         Some(c) => info.load_op(vk::AttachmentLoadOp::CLEAR).clear_value(c),
         None => info.load_op(vk::AttachmentLoadOp::LOAD),
     };
-    info.build()
+    info
 }
 
 /// A copy between a tightly packed buffer (from `offset_bytes`) and mip `mip`, layers

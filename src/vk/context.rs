@@ -5,8 +5,8 @@
 
 use super::release::ReleaseQueue;
 use super::VkError;
-use ash::extensions::{ext, khr};
 use ash::vk;
+use ash::{ext, khr};
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
 use std::ffi::{c_void, CStr, CString};
 use std::sync::atomic::{AtomicU32, Ordering};
@@ -145,15 +145,18 @@ pub struct Context {
     pub queue: vk::Queue,
     pub queue_family: u32,
     pub info: DeviceInfo,
-    pub push_descriptor: khr::PushDescriptor,
-    /// Present when the loader offers `VK_EXT_debug_utils` (labels for RenderDoc, messenger).
-    pub debug_utils: Option<ext::DebugUtils>,
+    pub push_descriptor: khr::push_descriptor::Device,
+    /// Present when the loader offers `VK_EXT_debug_utils`: labels for RenderDoc and object
+    /// names (the device-level functions; ash 0.38 loads them apart from the instance's).
+    pub debug_utils: Option<ext::debug_utils::Device>,
     pub validation: Arc<ValidationLog>,
     /// Where dropped GPU objects wait until the GPU is done with them; also owns the
     /// allocator and the table of live allocations (see `release.rs`).
     pub(super) release: Arc<ReleaseQueue>,
     pub(super) upload_pool: Mutex<vk::CommandPool>,
     messenger: vk::DebugUtilsMessengerEXT,
+    /// The instance-level functions of `VK_EXT_debug_utils`: the messenger's.
+    debug_utils_instance: Option<ext::debug_utils::Instance>,
 }
 
 /// Device features voxgi needs, each with the reason shown to the user when it is missing.
@@ -197,21 +200,22 @@ struct InstanceLayers {
 /// Checks that what `desc` asks of the instance exists and lists it (the pointers are to
 /// `'static` names: the validation layer's, ash's extension names, and `desc`'s).
 fn instance_layers(entry: &ash::Entry, desc: &ContextDesc) -> Result<InstanceLayers, VkError> {
-    let available_ext: Vec<CString> = entry
-        .enumerate_instance_extension_properties(None)
-        .map_err(VkError::vk("enumerate instance extensions"))?
-        .iter()
-        // SAFETY: extension_name is a NUL-terminated array filled by the loader.
-        .map(|p| unsafe { CStr::from_ptr(p.extension_name.as_ptr()) }.to_owned())
-        .collect();
+    // SAFETY: the entry holds the loaded Vulkan library (ash 0.38 marks the call unsafe).
+    let available_ext: Vec<CString> =
+        unsafe { entry.enumerate_instance_extension_properties(None) }
+            .map_err(VkError::vk("enumerate instance extensions"))?
+            .iter()
+            // SAFETY: extension_name is a NUL-terminated array filled by the loader.
+            .map(|p| unsafe { CStr::from_ptr(p.extension_name.as_ptr()) }.to_owned())
+            .collect();
     let has_ext = |name: &CStr| available_ext.iter().any(|e| e.as_c_str() == name);
-    let debug_utils_available = has_ext(ext::DebugUtils::name());
+    let debug_utils_available = has_ext(ext::debug_utils::NAME);
 
     let mut layers: Vec<*const i8> = Vec::new();
     let validation_layer = c"VK_LAYER_KHRONOS_validation";
     if desc.validation {
-        let layer_present = entry
-            .enumerate_instance_layer_properties()
+        // SAFETY: the entry holds the loaded Vulkan library.
+        let layer_present = unsafe { entry.enumerate_instance_layer_properties() }
             .map_err(VkError::vk("enumerate instance layers"))?
             .iter()
             // SAFETY: layer_name is a NUL-terminated array filled by the loader.
@@ -229,7 +233,7 @@ fn instance_layers(entry: &ash::Entry, desc: &ContextDesc) -> Result<InstanceLay
 
     let mut extensions: Vec<*const i8> = Vec::new();
     if debug_utils_available {
-        extensions.push(ext::DebugUtils::name().as_ptr());
+        extensions.push(ext::debug_utils::NAME.as_ptr());
     }
     for e in &desc.instance_extensions {
         if !has_ext(e) {
@@ -256,11 +260,10 @@ fn create_device(
     desc: &ContextDesc,
 ) -> Result<ash::Device, vk::Result> {
     let priorities = [1.0f32];
-    let queue_info = [vk::DeviceQueueCreateInfo::builder()
+    let queue_info = [vk::DeviceQueueCreateInfo::default()
         .queue_family_index(queue_family)
-        .queue_priorities(&priorities)
-        .build()];
-    let features = vk::PhysicalDeviceFeatures::builder()
+        .queue_priorities(&priorities)];
+    let features = vk::PhysicalDeviceFeatures::default()
         .geometry_shader(true)
         .logic_op(true)
         .fragment_stores_and_atomics(true)
@@ -268,21 +271,20 @@ fn create_device(
         .independent_blend(true)
         // Out-of-range buffer reads return zero instead of faulting: the ray tests rely on
         // it only as a safety net, and the validation layers check every access anyway.
-        .robust_buffer_access(desc.validation)
-        .build();
+        .robust_buffer_access(desc.validation);
     // maintenance4 is mandatory in Vulkan 1.3; shaderc's SPIR-V 1.6 relies on it (LocalSizeId).
-    let mut features13 = vk::PhysicalDeviceVulkan13Features::builder()
+    let mut features13 = vk::PhysicalDeviceVulkan13Features::default()
         .dynamic_rendering(true)
         .synchronization2(true)
         .maintenance4(true);
-    let mut features12 = vk::PhysicalDeviceVulkan12Features::builder().host_query_reset(true);
+    let mut features12 = vk::PhysicalDeviceVulkan12Features::default().host_query_reset(true);
     // Optional: stereo renders both eyes' G-buffer in one pass with it.
-    let mut features11 = vk::PhysicalDeviceVulkan11Features::builder().multiview(info.multiview);
-    let mut device_ext: Vec<*const i8> = vec![khr::PushDescriptor::name().as_ptr()];
+    let mut features11 = vk::PhysicalDeviceVulkan11Features::default().multiview(info.multiview);
+    let mut device_ext: Vec<*const i8> = vec![khr::push_descriptor::NAME.as_ptr()];
     if desc.swapchain {
-        device_ext.push(khr::Swapchain::name().as_ptr());
+        device_ext.push(khr::swapchain::NAME.as_ptr());
     }
-    let device_info = vk::DeviceCreateInfo::builder()
+    let device_info = vk::DeviceCreateInfo::default()
         .queue_create_infos(&queue_info)
         .enabled_features(&features)
         .enabled_extension_names(&device_ext)
@@ -304,18 +306,18 @@ impl Context {
         } = instance_layers(&entry, desc)?;
 
         let app_name = c"voxgi";
-        let app_info = vk::ApplicationInfo::builder()
+        let app_info = vk::ApplicationInfo::default()
             .application_name(app_name)
             .application_version(vk::make_api_version(0, 0, 1, 0))
             .engine_name(app_name)
             .api_version(vk::API_VERSION_1_3);
         let enabled_validation_features =
             [vk::ValidationFeatureEnableEXT::SYNCHRONIZATION_VALIDATION];
-        let mut validation_features = vk::ValidationFeaturesEXT::builder()
+        let mut validation_features = vk::ValidationFeaturesEXT::default()
             .enabled_validation_features(&enabled_validation_features);
         let validation = Arc::new(ValidationLog::default());
         let mut instance_messenger_info = messenger_info(&validation);
-        let mut instance_info = vk::InstanceCreateInfo::builder()
+        let mut instance_info = vk::InstanceCreateInfo::default()
             .application_info(&app_info)
             .enabled_layer_names(&layers)
             .enabled_extension_names(&extensions);
@@ -333,7 +335,8 @@ impl Context {
         let instance = unsafe { entry.create_instance(&instance_info, None) }
             .map_err(VkError::vk("create the Vulkan instance"))?;
 
-        let debug_utils = debug_utils_available.then(|| ext::DebugUtils::new(&entry, &instance));
+        let debug_utils =
+            debug_utils_available.then(|| ext::debug_utils::Instance::new(&entry, &instance));
         let mut messenger = vk::DebugUtilsMessengerEXT::null();
         if let (true, Some(du)) = (desc.validation, debug_utils.as_ref()) {
             // SAFETY: the user data points into the Arc held by the Context (`validation`),
@@ -384,16 +387,15 @@ impl Context {
             instance: instance.clone(),
             device: device.clone(),
             physical_device,
-            debug_settings: gpu_allocator::AllocatorDebugSettings {
-                log_leaks_on_shutdown: true,
-                ..Default::default()
-            },
+            // Leaks are logged at shutdown (the default; `AllocatorDebugSettings` is
+            // non-exhaustive since gpu-allocator 0.26).
+            debug_settings: gpu_allocator::AllocatorDebugSettings::default(),
             buffer_device_address: false,
             allocation_sizes: Default::default(),
         })
         .map_err(|e| release_device(VkError::Allocation(e.to_string())))?;
 
-        let pool_info = vk::CommandPoolCreateInfo::builder()
+        let pool_info = vk::CommandPoolCreateInfo::default()
             .queue_family_index(queue_family)
             .flags(vk::CommandPoolCreateFlags::TRANSIENT);
         // SAFETY: device is valid; the pool is destroyed in Drop.
@@ -407,7 +409,10 @@ impl Context {
             }
         };
 
-        let push_descriptor = khr::PushDescriptor::new(&instance, &device);
+        let push_descriptor = khr::push_descriptor::Device::new(&instance, &device);
+        let debug_utils_device = debug_utils
+            .is_some()
+            .then(|| ext::debug_utils::Device::new(&instance, &device));
         let release = ReleaseQueue::new(device.clone(), allocator);
         Ok(Self {
             entry,
@@ -418,7 +423,8 @@ impl Context {
             queue_family,
             info,
             push_descriptor,
-            debug_utils,
+            debug_utils: debug_utils_device,
+            debug_utils_instance: debug_utils,
             validation,
             release,
             upload_pool: Mutex::new(upload_pool),
@@ -472,12 +478,11 @@ impl Context {
         let Ok(cname) = CString::new(name) else {
             return;
         };
-        let info = vk::DebugUtilsObjectNameInfoEXT::builder()
-            .object_type(T::TYPE)
-            .object_handle(object.as_raw())
+        let info = vk::DebugUtilsObjectNameInfoEXT::default()
+            .object_handle(object)
             .object_name(&cname);
         // SAFETY: object is a live handle of this device; naming failure is harmless.
-        let _ = unsafe { du.set_debug_utils_object_name(self.device.handle(), &info) };
+        let _ = unsafe { du.set_debug_utils_object_name(&info) };
     }
 
     /// Size of the device's largest device-local memory heap: an upper bound on any one
@@ -508,7 +513,7 @@ impl Drop for Context {
                 self.device.destroy_command_pool(*pool, None);
             }
             self.device.destroy_device(None);
-            if let Some(du) = &self.debug_utils {
+            if let Some(du) = &self.debug_utils_instance {
                 if self.messenger != vk::DebugUtilsMessengerEXT::null() {
                     du.destroy_debug_utils_messenger(self.messenger, None);
                 }
@@ -519,8 +524,8 @@ impl Drop for Context {
 }
 
 /// The messenger settings: warnings and errors of every type, recorded into `log`.
-fn messenger_info(log: &Arc<ValidationLog>) -> vk::DebugUtilsMessengerCreateInfoEXT {
-    vk::DebugUtilsMessengerCreateInfoEXT::builder()
+fn messenger_info(log: &Arc<ValidationLog>) -> vk::DebugUtilsMessengerCreateInfoEXT<'static> {
+    vk::DebugUtilsMessengerCreateInfoEXT::default()
         .message_severity(
             vk::DebugUtilsMessageSeverityFlagsEXT::WARNING
                 | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR,
@@ -532,7 +537,6 @@ fn messenger_info(log: &Arc<ValidationLog>) -> vk::DebugUtilsMessengerCreateInfo
         )
         .pfn_user_callback(Some(debug_callback))
         .user_data(Arc::as_ptr(log) as *mut c_void)
-        .build()
 }
 
 unsafe extern "system" fn debug_callback(
@@ -599,7 +603,7 @@ fn check_device(
     }
     let mut f13 = vk::PhysicalDeviceVulkan13Features::default();
     let mut f12 = vk::PhysicalDeviceVulkan12Features::default();
-    let mut f2 = vk::PhysicalDeviceFeatures2::builder()
+    let mut f2 = vk::PhysicalDeviceFeatures2::default()
         .push_next(&mut f13)
         .push_next(&mut f12);
     // SAFETY: as above; the chain points to live locals.
@@ -624,10 +628,10 @@ fn check_device(
             // SAFETY: extension_name is NUL-terminated.
             .any(|e| unsafe { CStr::from_ptr(e.extension_name.as_ptr()) } == n)
     };
-    if !has(khr::PushDescriptor::name()) {
+    if !has(khr::push_descriptor::NAME) {
         return Err("lacks the extension `VK_KHR_push_descriptor`".into());
     }
-    if swapchain && !has(khr::Swapchain::name()) {
+    if swapchain && !has(khr::swapchain::NAME) {
         return Err("lacks the extension `VK_KHR_swapchain`".into());
     }
     if props.limits.timestamp_compute_and_graphics != vk::TRUE {
@@ -695,7 +699,7 @@ fn pick_device(
     let mut maintenance3 = vk::PhysicalDeviceMaintenance3Properties::default();
     let mut maintenance4 = vk::PhysicalDeviceMaintenance4Properties::default();
     let mut driver = vk::PhysicalDeviceDriverProperties::default();
-    let mut props2 = vk::PhysicalDeviceProperties2::builder()
+    let mut props2 = vk::PhysicalDeviceProperties2::default()
         .push_next(&mut maintenance3)
         .push_next(&mut maintenance4)
         .push_next(&mut driver);
@@ -732,7 +736,7 @@ fn pick_device(
 /// passes without it).
 fn has_multiview(instance: &ash::Instance, pd: vk::PhysicalDevice) -> bool {
     let mut f11 = vk::PhysicalDeviceVulkan11Features::default();
-    let mut f2 = vk::PhysicalDeviceFeatures2::builder().push_next(&mut f11);
+    let mut f2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut f11);
     // SAFETY: pd is a physical device of this instance; the chain points to a live local.
     unsafe { instance.get_physical_device_features2(pd, &mut f2) };
     f11.multiview == vk::TRUE
@@ -752,8 +756,8 @@ fn largest_device_local_heap(memory: &vk::PhysicalDeviceMemoryProperties) -> u64
 pub fn describe_devices() -> Result<String, VkError> {
     // SAFETY: loads the system Vulkan loader; the Entry outlives the instance below.
     let entry = unsafe { ash::Entry::load() }.map_err(|e| VkError::NoLoader(e.to_string()))?;
-    let app_info = vk::ApplicationInfo::builder().api_version(vk::API_VERSION_1_3);
-    let info = vk::InstanceCreateInfo::builder().application_info(&app_info);
+    let app_info = vk::ApplicationInfo::default().api_version(vk::API_VERSION_1_3);
+    let info = vk::InstanceCreateInfo::default().application_info(&app_info);
     // SAFETY: info points to live locals.
     let instance = unsafe { entry.create_instance(&info, None) }
         .map_err(VkError::vk("create the Vulkan instance"))?;

@@ -111,14 +111,14 @@ impl FrameLoop {
         max_passes: u32,
         made: &mut Vec<Garbage>,
     ) -> Result<FrameSlot, VkError> {
-        let pool_info = vk::CommandPoolCreateInfo::builder()
+        let pool_info = vk::CommandPoolCreateInfo::default()
             .queue_family_index(ctx.queue_family)
             .flags(vk::CommandPoolCreateFlags::TRANSIENT);
         // SAFETY: valid device; the loop releases all objects below when it drops.
         let pool = unsafe { ctx.device.create_command_pool(&pool_info, None) }
             .map_err(VkError::vk("create a frame command pool"))?;
         made.push(Garbage::CommandPool(pool));
-        let alloc = vk::CommandBufferAllocateInfo::builder()
+        let alloc = vk::CommandBufferAllocateInfo::default()
             .command_pool(pool)
             .level(vk::CommandBufferLevel::PRIMARY)
             .command_buffer_count(1);
@@ -130,7 +130,7 @@ impl FrameLoop {
         let fence = unsafe { ctx.device.create_fence(&fence_info, None) }
             .map_err(VkError::vk("create a frame fence"))?;
         made.push(Garbage::Fence(fence));
-        let query_info = vk::QueryPoolCreateInfo::builder()
+        let query_info = vk::QueryPoolCreateInfo::default()
             .query_type(vk::QueryType::TIMESTAMP)
             .query_count(2 * max_passes.max(1));
         // SAFETY: valid device.
@@ -184,7 +184,7 @@ impl FrameLoop {
             ctx.device
                 .reset_command_pool(slot.pool, vk::CommandPoolResetFlags::empty())
                 .map_err(VkError::vk("reset a frame command pool"))?;
-            let begin = vk::CommandBufferBeginInfo::builder()
+            let begin = vk::CommandBufferBeginInfo::default()
                 .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
             ctx.device
                 .begin_command_buffer(slot.cmd, &begin)
@@ -209,29 +209,24 @@ impl FrameLoop {
         let waits: Vec<vk::SemaphoreSubmitInfo> = wait
             .iter()
             .map(|&(s, stage)| {
-                vk::SemaphoreSubmitInfo::builder()
+                vk::SemaphoreSubmitInfo::default()
                     .semaphore(s)
                     .stage_mask(stage)
-                    .build()
             })
             .collect();
         let signals: Vec<vk::SemaphoreSubmitInfo> = signal
             .iter()
             .map(|&s| {
-                vk::SemaphoreSubmitInfo::builder()
+                vk::SemaphoreSubmitInfo::default()
                     .semaphore(s)
                     .stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
-                    .build()
             })
             .collect();
-        let cmds = [vk::CommandBufferSubmitInfo::builder()
-            .command_buffer(slot.cmd)
-            .build()];
-        let submit = [vk::SubmitInfo2::builder()
+        let cmds = [vk::CommandBufferSubmitInfo::default().command_buffer(slot.cmd)];
+        let submit = [vk::SubmitInfo2::default()
             .wait_semaphore_infos(&waits)
             .command_buffer_infos(&cmds)
-            .signal_semaphore_infos(&signals)
-            .build()];
+            .signal_semaphore_infos(&signals)];
         // SAFETY: the command buffer is recording (begun in `begin`).
         unsafe { ctx.device.end_command_buffer(slot.cmd) }
             .map_err(VkError::vk("end a frame command buffer"))?;
@@ -288,13 +283,7 @@ fn read_timings(ctx: &Context, ts: &TimestampRecorder) -> Result<Vec<PassTiming>
     // the results are available without WAIT; data holds 2n u64 values.
     unsafe {
         ctx.device
-            .get_query_pool_results(
-                ts.pool,
-                0,
-                2 * n as u32,
-                &mut data,
-                vk::QueryResultFlags::TYPE_64,
-            )
+            .get_query_pool_results(ts.pool, 0, &mut data, vk::QueryResultFlags::TYPE_64)
             .map_err(VkError::vk("read timestamps"))?;
     }
     let bits = ctx.info.timestamp_valid_bits;

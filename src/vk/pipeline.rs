@@ -250,7 +250,7 @@ impl Context {
                 reason: e.to_string(),
             }
         })?;
-        let info = vk::ShaderModuleCreateInfo::builder().code(&words);
+        let info = vk::ShaderModuleCreateInfo::default().code(&words);
         // SAFETY: words is valid SPIR-V produced by shaderc at build time.
         let raw = unsafe { self.device.create_shader_module(&info, None) }
             .map_err(VkError::vk("create a shader module"))?;
@@ -284,15 +284,14 @@ impl Context {
             .bindings
             .values()
             .map(|r| {
-                vk::DescriptorSetLayoutBinding::builder()
+                vk::DescriptorSetLayoutBinding::default()
                     .binding(r.binding)
                     .descriptor_type(descriptor_type(r.kind))
                     .descriptor_count(r.count)
                     .stage_flags(vk::ShaderStageFlags::ALL)
-                    .build()
             })
             .collect();
-        let info = vk::DescriptorSetLayoutCreateInfo::builder()
+        let info = vk::DescriptorSetLayoutCreateInfo::default()
             .flags(vk::DescriptorSetLayoutCreateFlags::PUSH_DESCRIPTOR_KHR)
             .bindings(&b);
         // SAFETY: valid device and create info.
@@ -306,7 +305,7 @@ impl Context {
             size: push_constant_bytes,
         }];
         let set_layouts = [set_layout];
-        let mut layout_info = vk::PipelineLayoutCreateInfo::builder().set_layouts(&set_layouts);
+        let mut layout_info = vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts);
         if push_constant_bytes > 0 {
             layout_info = layout_info.push_constant_ranges(&ranges);
         }
@@ -335,18 +334,17 @@ impl Context {
         let mut owner = self.pipeline_with_layout(vk::PipelineBindPoint::COMPUTE, interface)?;
         let layout = owner.layout;
         let (entries, data) = spec_data(&spec);
-        let spec_info = vk::SpecializationInfo::builder()
+        let spec_info = vk::SpecializationInfo::default()
             .map_entries(&entries)
             .data(&data);
-        let stage = vk::PipelineShaderStageCreateInfo::builder()
+        let stage = vk::PipelineShaderStageCreateInfo::default()
             .stage(vk::ShaderStageFlags::COMPUTE)
             .module(module.raw)
             .name(c"main")
             .specialization_info(&spec_info);
-        let info = [vk::ComputePipelineCreateInfo::builder()
-            .stage(stage.build())
-            .layout(layout)
-            .build()];
+        let info = [vk::ComputePipelineCreateInfo::default()
+            .stage(stage)
+            .layout(layout)];
         // SAFETY: module and layout are live; info points to live locals.
         let result = unsafe {
             self.device
@@ -413,38 +411,37 @@ impl Context {
         let mut owner = self.pipeline_with_layout(vk::PipelineBindPoint::GRAPHICS, interface)?;
         let layout = owner.layout;
         let (entries, data) = spec_data(&spec);
-        let spec_info = vk::SpecializationInfo::builder()
+        let spec_info = vk::SpecializationInfo::default()
             .map_entries(&entries)
             .data(&data);
         let stages: Vec<vk::PipelineShaderStageCreateInfo> = modules
             .iter()
             .map(|(stage, m)| {
-                vk::PipelineShaderStageCreateInfo::builder()
+                vk::PipelineShaderStageCreateInfo::default()
                     .stage(*stage)
                     .module(m.raw)
                     .name(c"main")
                     .specialization_info(&spec_info)
-                    .build()
             })
             .collect();
         let (vertex_bindings, attributes) = vertex_descriptions(desc);
-        let vertex_input = vk::PipelineVertexInputStateCreateInfo::builder()
+        let vertex_input = vk::PipelineVertexInputStateCreateInfo::default()
             .vertex_binding_descriptions(&vertex_bindings)
             .vertex_attribute_descriptions(&attributes);
         let input_assembly =
-            vk::PipelineInputAssemblyStateCreateInfo::builder().topology(desc.topology);
-        let viewport = vk::PipelineViewportStateCreateInfo::builder()
+            vk::PipelineInputAssemblyStateCreateInfo::default().topology(desc.topology);
+        let viewport = vk::PipelineViewportStateCreateInfo::default()
             .viewport_count(1)
             .scissor_count(1);
-        let raster = vk::PipelineRasterizationStateCreateInfo::builder()
+        let raster = vk::PipelineRasterizationStateCreateInfo::default()
             .polygon_mode(vk::PolygonMode::FILL)
             .cull_mode(desc.cull_mode)
             .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
             .depth_bias_enable(desc.depth_bias)
             .line_width(1.0);
-        let multisample = vk::PipelineMultisampleStateCreateInfo::builder()
+        let multisample = vk::PipelineMultisampleStateCreateInfo::default()
             .rasterization_samples(vk::SampleCountFlags::TYPE_1);
-        let depth = vk::PipelineDepthStencilStateCreateInfo::builder()
+        let depth = vk::PipelineDepthStencilStateCreateInfo::default()
             .depth_test_enable(desc.depth_format.is_some() && desc.depth_test)
             .depth_write_enable(desc.depth_format.is_some() && desc.depth_write)
             .depth_compare_op(vk::CompareOp::LESS_OR_EQUAL);
@@ -454,7 +451,7 @@ impl Context {
             .map(|_| blend.attachment_state())
             .collect();
         let mut blend =
-            vk::PipelineColorBlendStateCreateInfo::builder().attachments(&blend_attachments);
+            vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend_attachments);
         if let Some(op) = desc.logic_op {
             blend = blend.logic_op_enable(true).logic_op(op);
         }
@@ -462,12 +459,12 @@ impl Context {
         if desc.depth_bias {
             dynamic_states.push(vk::DynamicState::DEPTH_BIAS);
         }
-        let dynamic = vk::PipelineDynamicStateCreateInfo::builder().dynamic_states(&dynamic_states);
-        let mut rendering = vk::PipelineRenderingCreateInfo::builder()
+        let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
+        let mut rendering = vk::PipelineRenderingCreateInfo::default()
             .color_attachment_formats(&desc.color_formats)
             .depth_attachment_format(desc.depth_format.unwrap_or(vk::Format::UNDEFINED))
             .view_mask(desc.view_mask);
-        let info = [vk::GraphicsPipelineCreateInfo::builder()
+        let info = [vk::GraphicsPipelineCreateInfo::default()
             .stages(&stages)
             .vertex_input_state(&vertex_input)
             .input_assembly_state(&input_assembly)
@@ -478,8 +475,7 @@ impl Context {
             .color_blend_state(&blend)
             .dynamic_state(&dynamic)
             .layout(layout)
-            .push_next(&mut rendering)
-            .build()];
+            .push_next(&mut rendering)];
         // SAFETY: modules and layout are live; info points to live locals.
         let result = unsafe {
             self.device
@@ -513,7 +509,7 @@ impl Context {
         } else {
             vk::SamplerMipmapMode::NEAREST
         };
-        let info = vk::SamplerCreateInfo::builder()
+        let info = vk::SamplerCreateInfo::default()
             .mag_filter(filter)
             .min_filter(filter)
             .mipmap_mode(mipmap_mode)
@@ -560,7 +556,7 @@ enum Blend {
 impl Blend {
     /// The blend state of each color attachment.
     fn attachment_state(self) -> vk::PipelineColorBlendAttachmentState {
-        let b = vk::PipelineColorBlendAttachmentState::builder()
+        let b = vk::PipelineColorBlendAttachmentState::default()
             .color_write_mask(vk::ColorComponentFlags::RGBA);
         match self {
             Blend::Premultiplied => b
@@ -570,8 +566,7 @@ impl Blend {
                 .color_blend_op(vk::BlendOp::ADD)
                 .src_alpha_blend_factor(vk::BlendFactor::ONE_MINUS_DST_ALPHA)
                 .dst_alpha_blend_factor(vk::BlendFactor::ONE)
-                .alpha_blend_op(vk::BlendOp::ADD)
-                .build(),
+                .alpha_blend_op(vk::BlendOp::ADD),
             Blend::Additive => b
                 .blend_enable(true)
                 .src_color_blend_factor(vk::BlendFactor::ONE)
@@ -579,9 +574,8 @@ impl Blend {
                 .color_blend_op(vk::BlendOp::ADD)
                 .src_alpha_blend_factor(vk::BlendFactor::ONE)
                 .dst_alpha_blend_factor(vk::BlendFactor::ONE)
-                .alpha_blend_op(vk::BlendOp::ADD)
-                .build(),
-            Blend::None => b.build(),
+                .alpha_blend_op(vk::BlendOp::ADD),
+            Blend::None => b,
         }
     }
 }

@@ -18,7 +18,7 @@
 //! context was destroyed touches nothing: it is logged and leaked, and [`Context::finish`]
 //! already reported its memory as never freed.
 
-use ash::extensions::khr;
+use ash::khr;
 use ash::vk;
 use ash::vk::Handle;
 use gpu_allocator::vulkan::{Allocation, Allocator};
@@ -46,8 +46,8 @@ pub(super) enum Garbage {
     Fence(vk::Fence),
     Semaphore(vk::Semaphore),
     CommandPool(vk::CommandPool),
-    Swapchain(khr::Swapchain, vk::SwapchainKHR),
-    Surface(khr::Surface, vk::SurfaceKHR),
+    Swapchain(khr::swapchain::Device, vk::SwapchainKHR),
+    Surface(khr::surface::Instance, vk::SurfaceKHR),
 }
 
 struct State {

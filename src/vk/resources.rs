@@ -115,8 +115,8 @@ impl ImageDesc {
             vk::ImageViewType::TYPE_2D
         }
     }
-    pub fn create_info(&self) -> vk::ImageCreateInfo {
-        vk::ImageCreateInfo::builder()
+    pub fn create_info(&self) -> vk::ImageCreateInfo<'static> {
+        vk::ImageCreateInfo::default()
             .image_type(self.image_type())
             .format(self.format)
             .extent(vk::Extent3D {
@@ -131,7 +131,6 @@ impl ImageDesc {
             .usage(self.usage)
             .sharing_mode(vk::SharingMode::EXCLUSIVE)
             .initial_layout(vk::ImageLayout::UNDEFINED)
-            .build()
     }
 }
 
@@ -214,7 +213,7 @@ impl Context {
                 desc.name
             )));
         }
-        let info = vk::BufferCreateInfo::builder()
+        let info = vk::BufferCreateInfo::default()
             .size(desc.size_bytes)
             .usage(desc.usage)
             .sharing_mode(vk::SharingMode::EXCLUSIVE);
@@ -314,7 +313,7 @@ impl Context {
     fn create_views(&self, image: &mut Image) -> Result<(), VkError> {
         let (raw, desc) = (image.raw, image.desc.clone());
         let make_view = |view_type, (base_mip, mips): (u32, u32), (base_layer, layers)| {
-            let info = vk::ImageViewCreateInfo::builder()
+            let info = vk::ImageViewCreateInfo::default()
                 .image(raw)
                 .view_type(view_type)
                 .format(desc.format)
@@ -448,7 +447,7 @@ impl Context {
             layer_count: image.desc.layers,
         };
         let barrier = |old, new, src_stage, src_access, dst_stage, dst_access| {
-            [vk::ImageMemoryBarrier2::builder()
+            [vk::ImageMemoryBarrier2::default()
                 .src_stage_mask(src_stage)
                 .src_access_mask(src_access)
                 .dst_stage_mask(dst_stage)
@@ -456,8 +455,7 @@ impl Context {
                 .old_layout(old)
                 .new_layout(new)
                 .image(image.raw)
-                .subresource_range(range)
-                .build()]
+                .subresource_range(range)]
         };
         let to_dst = barrier(
             vk::ImageLayout::UNDEFINED,
@@ -476,8 +474,8 @@ impl Context {
             vk::AccessFlags2::MEMORY_READ | vk::AccessFlags2::MEMORY_WRITE,
         );
         self.one_time_submit(|device, cmd| {
-            let dep = vk::DependencyInfo::builder().image_memory_barriers(&to_dst);
-            let dep_final = vk::DependencyInfo::builder().image_memory_barriers(&to_final);
+            let dep = vk::DependencyInfo::default().image_memory_barriers(&to_dst);
+            let dep_final = vk::DependencyInfo::default().image_memory_barriers(&to_final);
             // SAFETY: cmd is recording; the image is live and unused by any pending work
             // (it was just created); the range covers the whole image.
             unsafe {
@@ -510,7 +508,7 @@ impl Context {
             base_array_layer: 0,
             layer_count: desc.layers,
         };
-        let to_layout = [vk::ImageMemoryBarrier2::builder()
+        let to_layout = [vk::ImageMemoryBarrier2::default()
             .src_stage_mask(vk::PipelineStageFlags2::NONE)
             .src_access_mask(vk::AccessFlags2::NONE)
             .dst_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
@@ -520,10 +518,9 @@ impl Context {
             .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
             .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
             .image(image.raw)
-            .subresource_range(range)
-            .build()];
+            .subresource_range(range)];
         self.one_time_submit(|device, cmd| {
-            let dep = vk::DependencyInfo::builder().image_memory_barriers(&to_layout);
+            let dep = vk::DependencyInfo::default().image_memory_barriers(&to_layout);
             // SAFETY: cmd is recording; the image is live and unused by any pending work
             // (it was just created); the range covers the whole image.
             unsafe { device.cmd_pipeline_barrier2(cmd, &dep) };
@@ -593,7 +590,7 @@ impl Context {
             base_array_layer: 0,
             layer_count: desc.layers,
         };
-        let to_dst = [vk::ImageMemoryBarrier2::builder()
+        let to_dst = [vk::ImageMemoryBarrier2::default()
             .src_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
             .dst_stage_mask(vk::PipelineStageFlags2::COPY)
             .dst_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
@@ -602,9 +599,8 @@ impl Context {
             .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
             .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
             .image(image.raw)
-            .subresource_range(range)
-            .build()];
-        let to_final = [vk::ImageMemoryBarrier2::builder()
+            .subresource_range(range)];
+        let to_final = [vk::ImageMemoryBarrier2::default()
             .src_stage_mask(vk::PipelineStageFlags2::COPY)
             .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
             .dst_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
@@ -614,15 +610,14 @@ impl Context {
             .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
             .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
             .image(image.raw)
-            .subresource_range(range)
-            .build()];
+            .subresource_range(range)];
         let result = self.one_time_submit(|device, cmd| {
             // SAFETY: cmd is recording; image and staging are live; every region lies inside
             // the staging buffer and the image's mip levels.
             unsafe {
                 device.cmd_pipeline_barrier2(
                     cmd,
-                    &vk::DependencyInfo::builder().image_memory_barriers(&to_dst),
+                    &vk::DependencyInfo::default().image_memory_barriers(&to_dst),
                 );
                 device.cmd_copy_buffer_to_image(
                     cmd,
@@ -633,7 +628,7 @@ impl Context {
                 );
                 device.cmd_pipeline_barrier2(
                     cmd,
-                    &vk::DependencyInfo::builder().image_memory_barriers(&to_final),
+                    &vk::DependencyInfo::default().image_memory_barriers(&to_final),
                 );
             }
         });
@@ -652,26 +647,25 @@ impl Context {
             .upload_pool
             .lock()
             .map_err(|_| VkError::Invalid("upload pool lock poisoned".into()))?;
-        let info = vk::CommandBufferAllocateInfo::builder()
+        let info = vk::CommandBufferAllocateInfo::default()
             .command_pool(*pool)
             .level(vk::CommandBufferLevel::PRIMARY)
             .command_buffer_count(1);
         // SAFETY: pool is valid and externally synchronized by the mutex.
         let cmd = unsafe { self.device.allocate_command_buffers(&info) }
             .map_err(VkError::vk("allocate an upload command buffer"))?[0];
-        let begin = vk::CommandBufferBeginInfo::builder()
+        let begin = vk::CommandBufferBeginInfo::default()
             .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
         // SAFETY: cmd is a fresh primary command buffer.
         unsafe { self.device.begin_command_buffer(cmd, &begin) }
             .map_err(VkError::vk("begin an upload command buffer"))?;
         f(&self.device, cmd);
-        let barrier = [vk::MemoryBarrier2::builder()
+        let barrier = [vk::MemoryBarrier2::default()
             .src_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
             .src_access_mask(vk::AccessFlags2::MEMORY_WRITE)
             .dst_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
-            .dst_access_mask(vk::AccessFlags2::MEMORY_READ | vk::AccessFlags2::MEMORY_WRITE)
-            .build()];
-        let dep = vk::DependencyInfo::builder().memory_barriers(&barrier);
+            .dst_access_mask(vk::AccessFlags2::MEMORY_READ | vk::AccessFlags2::MEMORY_WRITE)];
+        let dep = vk::DependencyInfo::default().memory_barriers(&barrier);
         // SAFETY: cmd is recording.
         unsafe {
             self.device.cmd_pipeline_barrier2(cmd, &dep);
@@ -683,7 +677,7 @@ impl Context {
         let fence = unsafe { self.device.create_fence(&fence_info, None) }
             .map_err(VkError::vk("create a fence"))?;
         let cmds = [cmd];
-        let submit = [vk::SubmitInfo::builder().command_buffers(&cmds).build()];
+        let submit = [vk::SubmitInfo::default().command_buffers(&cmds)];
         let serial = self.release.next_submission();
         // SAFETY: queue access is serialized by holding the upload-pool lock; cmd is executable.
         let result = unsafe {
@@ -708,7 +702,7 @@ impl Context {
     /// Memory requirements of an image that is not created yet (Vulkan 1.3 core query).
     pub fn image_requirements(&self, desc: &ImageDesc) -> vk::MemoryRequirements {
         let info = desc.create_info();
-        let query = vk::DeviceImageMemoryRequirements::builder().create_info(&info);
+        let query = vk::DeviceImageMemoryRequirements::default().create_info(&info);
         let mut out = vk::MemoryRequirements2::default();
         // SAFETY: info is a valid create info; out is a plain output struct.
         unsafe {
@@ -724,11 +718,11 @@ impl Context {
         size_bytes: u64,
         usage: vk::BufferUsageFlags,
     ) -> vk::MemoryRequirements {
-        let info = vk::BufferCreateInfo::builder()
+        let info = vk::BufferCreateInfo::default()
             .size(size_bytes.max(1))
             .usage(usage)
             .sharing_mode(vk::SharingMode::EXCLUSIVE);
-        let query = vk::DeviceBufferMemoryRequirements::builder().create_info(&info);
+        let query = vk::DeviceBufferMemoryRequirements::default().create_info(&info);
         let mut out = vk::MemoryRequirements2::default();
         // SAFETY: info is a valid create info; out is a plain output struct.
         unsafe {
@@ -773,7 +767,7 @@ impl Context {
         name: &str,
     ) -> Result<Arena, VkError> {
         self.check_allocation_size(name, size_bytes)?;
-        let info = vk::MemoryAllocateInfo::builder()
+        let info = vk::MemoryAllocateInfo::default()
             .allocation_size(size_bytes.max(1))
             .memory_type_index(memory_type);
         // SAFETY: valid device; memory_type comes from device_local_type.
@@ -818,7 +812,7 @@ impl Context {
         memory: &Arena,
         offset: u64,
     ) -> Result<Buffer, VkError> {
-        let info = vk::BufferCreateInfo::builder()
+        let info = vk::BufferCreateInfo::default()
             .size(desc.size_bytes.max(1))
             .usage(desc.usage)
             .sharing_mode(vk::SharingMode::EXCLUSIVE);

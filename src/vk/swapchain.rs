@@ -6,7 +6,7 @@
 
 use super::release::{Garbage, ReleaseQueue};
 use super::{Context, Image, ImageDesc, VkError};
-use ash::extensions::khr;
+use ash::khr;
 use ash::vk;
 use raw_window_handle::{RawDisplayHandle, RawWindowHandle};
 use std::ffi::CStr;
@@ -37,8 +37,8 @@ pub enum Acquired {
 /// before the window (declare it before the window in the owning struct).
 pub struct Swapchain {
     release: Arc<ReleaseQueue>,
-    surface_loader: khr::Surface,
-    loader: khr::Swapchain,
+    surface_loader: khr::surface::Instance,
+    loader: khr::swapchain::Device,
     surface: vk::SurfaceKHR,
     raw: vk::SwapchainKHR,
     /// The swapchain images, viewed as `format`. The [`Image`]s own only their views.
@@ -66,7 +66,7 @@ impl Swapchain {
         extent: vk::Extent2D,
         slots: usize,
     ) -> Result<Self, VkError> {
-        let surface_loader = khr::Surface::new(&ctx.entry, &ctx.instance);
+        let surface_loader = khr::surface::Instance::new(&ctx.entry, &ctx.instance);
         // SAFETY: the handles come from a live window that outlives the swapchain (the caller
         // drops the swapchain before the window).
         let surface =
@@ -75,7 +75,7 @@ impl Swapchain {
         let mut s = Self {
             release: Arc::clone(&ctx.release),
             surface_loader,
-            loader: khr::Swapchain::new(&ctx.instance, &ctx.device),
+            loader: khr::swapchain::Device::new(&ctx.instance, &ctx.device),
             surface,
             raw: vk::SwapchainKHR::null(),
             images: Vec::new(),
@@ -194,7 +194,7 @@ impl Swapchain {
         if caps.max_image_count > 0 {
             count = count.min(caps.max_image_count);
         }
-        let info = vk::SwapchainCreateInfoKHR::builder()
+        let info = vk::SwapchainCreateInfoKHR::default()
             .surface(self.surface)
             .min_image_count(count)
             .image_format(self.format)
@@ -265,7 +265,7 @@ impl Swapchain {
         let waits = [self.render_semaphore(index)];
         let swapchains = [self.raw];
         let indices = [index];
-        let info = vk::PresentInfoKHR::builder()
+        let info = vk::PresentInfoKHR::default()
             .wait_semaphores(&waits)
             .swapchains(&swapchains)
             .image_indices(&indices);
