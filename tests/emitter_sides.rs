@@ -10,7 +10,7 @@
 
 mod common;
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use voxgi::eval::HdrImage;
 use voxgi::gi::{Bounces, GiMethod, GiSettings};
 use voxgi::render::{render_image, RenderSettings};
@@ -23,12 +23,6 @@ const L: f32 = 4.0;
 const RHO: f32 = 0.5;
 const SIDE_M: f32 = 1.0;
 const HEIGHT_M: f32 = 1.0;
-
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("voxgi-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    dir
-}
 
 /// A square emitter of side `SIDE_M` at y = `HEIGHT_M` over a Lambert floor (albedo `RHO`, 8 m
 /// square at y = 0), seen obliquely from (0, 2, −2) toward the floor under the square's centre.
@@ -150,7 +144,7 @@ fn floor_radiance(height_m: f32) -> f32 {
 /// mirrored object's corners reversed (`scene::corner_order`).
 #[test]
 fn an_emitter_lights_the_side_its_vertex_normals_point_to() {
-    let dir = temp_dir("emitter-sides");
+    let dir = common::temp_dir("emitter-sides");
     let delta = GiSettings::default().normal_offset_voxels
         * VoxelSettings::default()
             .grid_for(&scene(&dir, true, false), 0.0)

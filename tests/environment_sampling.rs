@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 use voxgi::gi::{Bounces, GiMethod, GiSettings};
 use voxgi::render::{render_image, RenderSettings};
 use voxgi::scene::environment::equirect_direction;
-use voxgi::scene::Scene;
+use voxgi::scene::{Scene, ShadowSettings};
 
 const ROOT: &str = env!("CARGO_MANIFEST_DIR");
 const SIZE: u32 = 64;
@@ -22,12 +22,6 @@ const MAP_W: u32 = 64;
 const MAP_H: u32 = 32;
 /// The sun: texels x 40-41, rows 9-10 (about 30° above the horizon), radiance 1000.
 const SUN: (u32, u32, f32) = (40, 9, 1000.0);
-
-fn temp_dir(tag: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("voxgi-envis-{tag}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("creates the temp dir");
-    dir
-}
 
 /// The sun map's texel (grey: the same in every channel).
 fn sun_texel(x: u32, y: u32) -> f32 {
@@ -115,10 +109,16 @@ fn irradiance(texel: impl Fn(u32, u32) -> f32) -> f64 {
     e
 }
 
+/// Renders with `gi`; under `--gi none` the direct light takes `gi.rays` samples per pixel
+/// (`shadow.direct_samples`, which `direct` below means by its count).
 fn render(ctx: &common::TestContext, scene: &Scene, gi: GiSettings) -> Vec<Vec3> {
     let settings = RenderSettings {
         width: SIZE,
         height: SIZE,
+        shadow: ShadowSettings {
+            direct_samples: gi.rays,
+            ..Default::default()
+        },
         gi,
         ..Default::default()
     };
@@ -149,7 +149,7 @@ fn direct(rays: u32, env_sampling: bool) -> GiSettings {
 /// are rotated sample sets, not independent draws, so the bound is loose on purpose.
 #[test]
 fn floor_under_a_sun_map_converges_to_the_closed_form() {
-    let dir = temp_dir("sun");
+    let dir = common::temp_dir("envis-sun");
     let scene = floor_scene(&write_map(&dir, "sun.exr", sun_texel));
     let expected = f64::from(ALBEDO) / std::f64::consts::PI * irradiance(sun_texel);
     let ctx = common::context();
@@ -180,7 +180,7 @@ fn floor_under_a_sun_map_converges_to_the_closed_form() {
 /// 0.35 / sqrt(8 · 4096) = 0.002; the bound 0.015 is seven of them.
 #[test]
 fn constant_map_gives_the_same_mean_with_and_without_importance_sampling() {
-    let dir = temp_dir("constant");
+    let dir = common::temp_dir("envis-constant");
     let scene = floor_scene(&write_map(&dir, "constant.exr", |_, _| 2.0));
     let ctx = common::context();
     let off = mean(&render(&ctx, &scene, direct(16, false)));

@@ -545,21 +545,7 @@ fn viewer_taa_upsampling_regains_detail_the_bilinear_blit_loses() {
     );
     let bilinear = image::imageops::resize(&small, w, h, image::imageops::FilterType::Triangle);
     // The viewer's built-in scene and camera, as `assert_matches_render` renders them.
-    let full_png = dir.join("render.png");
-    let out = voxgi(&[
-        "--validate",
-        "render",
-        "--gi",
-        "none",
-        "--width",
-        &w.to_string(),
-        "--height",
-        &h.to_string(),
-        "-o",
-        full_png.to_str().expect("utf-8 path"),
-    ]);
-    assert_success(&out, "voxgi --validate render");
-    let full = load(&full_png);
+    let full = render_like_viewer(w, h, dir);
     // relMSE of 8-bit values (Rousselle et al. 2011's ε = 0.01 on values in [0, 1]).
     let rel_mse = |a: &image::RgbaImage| {
         let sum: f64 = a
@@ -1181,21 +1167,7 @@ fn assert_not_blank(img: &image::RgbaImage) {
 /// With the camera untouched, the viewer shows exactly what `voxgi render` writes.
 fn assert_matches_render(img: &image::RgbaImage, dir: &Path) {
     let (w, h) = img.dimensions();
-    let reference = dir.join("render.png");
-    let out = voxgi(&[
-        "--validate",
-        "render",
-        "--gi",
-        "none",
-        "--width",
-        &w.to_string(),
-        "--height",
-        &h.to_string(),
-        "-o",
-        reference.to_str().expect("utf-8 path"),
-    ]);
-    assert_success(&out, "voxgi --validate render");
-    let reference = load(&reference);
+    let reference = render_like_viewer(w, h, dir);
     let max_diff = img
         .pixels()
         .zip(reference.pixels())
@@ -1206,6 +1178,26 @@ fn assert_matches_render(img: &image::RgbaImage, dir: &Path) {
         max_diff <= 1,
         "the viewer's frame differs from `voxgi render` by up to {max_diff}/255"
     );
+}
+
+/// `voxgi --validate render --gi none` of the viewer's built-in scene and camera at `w`×`h`,
+/// written into `dir` and read back.
+fn render_like_viewer(w: u32, h: u32, dir: &Path) -> image::RgbaImage {
+    let png = dir.join("render.png");
+    let out = voxgi(&[
+        "--validate",
+        "render",
+        "--gi",
+        "none",
+        "--width",
+        &w.to_string(),
+        "--height",
+        &h.to_string(),
+        "-o",
+        png.to_str().expect("utf-8 path"),
+    ]);
+    assert_success(&out, "voxgi --validate render");
+    load(&png)
 }
 
 /// Runs `xdotool ARGS` on the test's display; without xdotool the test fails with the hint.

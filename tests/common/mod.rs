@@ -68,6 +68,14 @@ fn ensure_runtime_dir() {
 }
 
 /// Runs the built `voxgi` binary with `args` and waits for it.
+/// A fresh folder `voxgi-NAME-PID` in the system's temp dir (emptied if it exists).
+pub fn temp_dir(name: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("voxgi-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("creates the temp dir");
+    dir
+}
+
 pub fn voxgi(args: &[&str]) -> std::process::Output {
     voxgi_with(args, |_| {})
 }
