@@ -545,7 +545,7 @@ fn viewer_taa_upsampling_regains_detail_the_bilinear_blit_loses() {
     );
     let bilinear = image::imageops::resize(&small, w, h, image::imageops::FilterType::Triangle);
     // The viewer's built-in scene and camera, as `assert_matches_render` renders them.
-    let full = render_like_viewer(w, h, dir);
+    let full = render_like_viewer(w, h, &dir);
     // relMSE of 8-bit values (Rousselle et al. 2011's ε = 0.01 on values in [0, 1]).
     let rel_mse = |a: &image::RgbaImage| {
         let sum: f64 = a
