@@ -233,7 +233,6 @@ void main() {
     // Phong and GGX pixels spend half their paths on the specular lobe (first bounce).
     uint lobe_rays = pixel.kind != LOBE_LAMBERT ? max(gi.rays, 1u) / 2u : 0u;
     float offset = gi.normal_offset_voxels * gi.voxel_diagonal_m;
-    mat4 voxel_to_world = inverse(gi.world_to_voxel);
     uint rays = max(gi.rays, 1u);
     uint bounce_param = gi.bounces;
     bool roulette = bounce_param == 0u;
@@ -323,7 +322,8 @@ void main() {
             }
             ivec3 v = ivec3(h.voxel);
             vec3 a = texelFetch(albedo_volume, v, 0).rgb;
-            vec3 hn = texelFetch(normal_volume, v, 0).xyz;
+            vec4 nd = texelFetch(normal_volume, v, 0);
+            vec3 hn = nd.xyz;
             hn = dot(hn, hn) > 0.25 ? normalize(hn) : -d;
             bool back = dot(hn, d) > 0.0;
             if (back) hn = -hn;  // the side the ray arrives at
@@ -337,14 +337,16 @@ void main() {
                 l += throughput * le;
             }
             m = hit_lobe(v, a);
-            l += throughput * direct_at(hp, hn, -d, m);
+            // The light at the surface inside the hit voxel, not at the ray's entry into it.
+            vec3 hs = voxel_surface_point(gi.world_to_voxel, v, nd, start, d, h.t);
+            l += throughput * direct_at(hs, hn, -d, m);
             // The next bounce starts a voxel diagonal (k1, at most the way it came) back along
             // the ray, not off the hit voxel along its normal: hp is where the ray entered the
             // hit voxel, and the voxel's normal may belong to a surface behind a wall thinner
             // than a voxel, through which the normal offset would push the origin. Every
             // point the ray passed through empty voxels is on its own side (`voxgi bench leak`).
             o = hp - d * min(offset, h.t);
-            g = (voxel_to_world * vec4(vec3(v) + 0.5, 1.0)).xyz;
+            g = hs;
             nn = hn;
             from = -d;
         }

@@ -1,7 +1,8 @@
 #version 450
 // Albedo and normal volumes, step 2 of 2 (see voxelize_attributes.comp): every voxel a
 // triangle touched takes the albedo and world-space face normal of its owner (the smallest
-// triangle index) and resets the owner for the next rewrite. Other voxels keep their values,
+// triangle index), and in the normal's w where the owner's plane cuts the voxel
+// (gi_common.glsl's voxel_surface_point reads it), and resets the owner for the next rewrite. Other voxels keep their values,
 // so the atlas voxelizer's volumes (voxelize_atlas_resolve) can share the images.
 // With HAS_MAPS (scenes with map_Kd, src/voxel/maps.rs) an owner whose material has an albedo
 // texture takes the texture's linear mean over its own part of the voxel
@@ -38,6 +39,24 @@ layout(push_constant) uniform Push {
 
 const uint NO_OWNER = 0xffffffffu;
 
+// World point -> continuous voxel coordinates (voxelize_core.glsl's to_voxel).
+vec3 to_voxel(vec3 p) {
+    vec3 d = p - pc.grid_min.xyz;
+    vec3 f = pc.dims.w == 0u ? d.yzx : (pc.dims.w == 1u ? d.zxy : d);
+    return f * pc.scale.xyz;
+}
+
+// The signed distance of the owner's plane from the centre of voxel v, in voxel units along
+// the plane's voxel-space normal, over sqrt(3)/2: the triangle touches the unit cube, so its
+// plane passes within half the cube's diagonal of the centre and the value lies in [-1, 1]
+// (an 8-bit snorm keeps it to 0.007 voxels).
+float voxel_plane_offset(Triangle t, ivec3 v) {
+    vec3 a = to_voxel(t.v[0].xyz);
+    vec3 nv = cross(to_voxel(t.v[1].xyz) - a, to_voxel(t.v[2].xyz) - a);
+    if (dot(nv, nv) <= 0.0) return 0.0;
+    return clamp(dot(normalize(nv), a - (vec3(v) + 0.5)) / 0.8660254, -1.0, 1.0);
+}
+
 void main() {
     ivec3 v = ivec3(gl_GlobalInvocationID);
     if (any(greaterThanEqual(v, imageSize(owner_volume)))) {
@@ -62,6 +81,6 @@ void main() {
         }
     }
     imageStore(albedo_volume, v, vec4(albedo, 1.0));
-    imageStore(normal_volume, v, vec4(n, 0.0));
+    imageStore(normal_volume, v, vec4(n, voxel_plane_offset(t, v)));
     imageStore(owner_volume, v, uvec4(NO_OWNER));
 }

@@ -27,6 +27,32 @@ layout(push_constant) uniform GiPush {
 } gi;
 #endif
 
+// Where a ray meets the surface inside the voxel v it entered at parameter t_in: the plane of
+// the voxel's owner triangle (voxelize_attributes_resolve.comp stores its world normal in
+// nd.xyz and its offset from the voxel centre in nd.w), clamped to the ray's stretch inside the
+// voxel. The entry point itself lies up to a voxel diagonal in front of the surface, where
+// shadow maps and light samples see a different light than the surface does. o and d are the
+// ray's origin and direction in world space and t its parameter there, w2v the grid's
+// world-to-voxel transform; voxels without a normal (none stored) keep the entry point.
+vec3 voxel_surface_point(mat4 w2v, ivec3 v, vec4 nd, vec3 o, vec3 d, float t_in) {
+    if (dot(nd.xyz, nd.xyz) <= 0.25) return o + d * t_in;
+    mat3 m = mat3(w2v);
+    vec3 ov = (w2v * vec4(o, 1.0)).xyz;
+    vec3 dv = m * d;
+    // The plane's voxel-space normal: normals transform by the inverse transpose.
+    vec3 nv = normalize(transpose(inverse(m)) * nd.xyz);
+    vec3 c = vec3(v) + 0.5;
+    // The ray's exit from the unit cube of v.
+    vec3 inv = 1.0 / dv;
+    vec3 t0 = (vec3(v) - ov) * inv;
+    vec3 t1 = (vec3(v) + 1.0 - ov) * inv;
+    vec3 tf = max(t0, t1);
+    float t_out = max(min(tf.x, min(tf.y, tf.z)), t_in);
+    float den = dot(nv, dv);
+    float t = abs(den) > 1e-6 ? (nd.w * 0.8660254 - dot(nv, ov - c)) / den : 0.5 * (t_in + t_out);
+    return o + d * clamp(t, t_in, t_out);
+}
+
 // Radical inverse in base 2 (Hammersley's second coordinate).
 float radical_inverse(uint i) {
     return float(bitfieldReverse(i)) * 2.3283064365386963e-10;

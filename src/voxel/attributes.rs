@@ -7,7 +7,9 @@
 //! exact conservative test (both shaders include `voxelize_core.glsl`); each voxel keeps the
 //! smallest index of the triangles touching it (atomic min on an owner volume). Pass
 //! `voxelize_attributes_resolve` then stores the owner's material albedo (RGBA8 UNORM) and
-//! world-space face normal (RGBA8 SNORM) and resets the owners. "Last writer wins" instead
+//! world-space face normal (RGBA8 SNORM), with the owner's plane offset from the voxel centre
+//! in the normal's w (the path tracer puts its bounce vertices on that plane:
+//! `voxel_surface_point` in `glsl/include/gi_common.glsl`), and resets the owners. "Last writer wins" instead
 //! made a voxel shared by two triangles (a cube standing on a floor) depend on the order the
 //! GPU ran them, so two renders of one scene differed. Both passes run in the first frame, and
 //! again in a frame whose moving objects moved.
