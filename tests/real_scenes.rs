@@ -1,7 +1,8 @@
 //! The third-party scenes (`assets/realscenes/`, scene files in `assets/scenes/`) load and
 //! render with every GI method at a tiny size, validation clean, and their images are lit
-//! where a working loader must light them. Measurements against the authors' references are
-//! in docs/measurements/real-scenes.md; these tests only guard the loading and the renders.
+//! where a working loader must light them; and the path tracer keeps the energy of Mitsuba 3
+//! rendering the same scenes (CornellBox-Original; Sponza under the sun, per bounce).
+//! Measurements against the authors' references are in docs/measurements/real-scenes.md.
 
 mod common;
 
@@ -216,4 +217,89 @@ fn cornell_original_path_tracer_keeps_the_references_energy() {
         (ratio - 1.0).abs() < 0.03,
         "the path tracer has {ratio:.4} of the reference's energy"
     );
+}
+
+/// Renders `sponza.toml` with the `voxgi` binary (the scene's own `[shadow]`, `[voxel]` and
+/// `[gi]` under `args`, validation on) at the references' 160x90 and returns the image.
+fn render_sponza(dir: &std::path::Path, name: &str, args: &[&str]) -> voxgi::eval::HdrImage {
+    let scene = format!("{}/assets/scenes/sponza.toml", env!("CARGO_MANIFEST_DIR"));
+    let exr = dir.join(format!("{name}.exr"));
+    let png = dir.join(format!("{name}.png"));
+    let exr_arg = exr.to_str().expect("utf-8 temp path");
+    let png_arg = png.to_str().expect("utf-8 temp path");
+    let mut all = vec![
+        "--validate",
+        "render",
+        &scene,
+        "--width",
+        "160",
+        "--height",
+        "90",
+    ];
+    all.extend_from_slice(args);
+    all.extend_from_slice(&["--exr", exr_arg, "-o", png_arg]);
+    let out = common::voxgi(&all);
+    assert!(
+        out.status.success(),
+        "voxgi {all:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    voxgi::eval::HdrImage::load_exr(&exr).expect("the render's EXR")
+}
+
+fn sum(img: &voxgi::eval::HdrImage) -> f64 {
+    img.data.iter().flatten().map(|&c| f64::from(c)).sum()
+}
+
+/// Sponza under the sun, per bounce, against Mitsuba 3 rendering voxgi's export of the same
+/// scene (the mapped render; `voxgi export-mitsuba assets/scenes/sponza.toml --width 160
+/// --height 90`, then `tools/reference` at max depth 2, 256 spp: assets/references/
+/// sponza_sun_d2.exr, the direct light; and at max depth 3, 512 spp: sponza_sun_d3.exr, the
+/// direct light and one bounce). The path tracer with `gi.bounces = 1`, 8 rays x 4 frames,
+/// less voxgi's direct light (`--gi none`) is its first bounce, compared with d3 - d2.
+///
+/// Measured: the direct light 1.008 of Mitsuba's, the first bounce 1.010 (1.004 at 16 rays
+/// x 8 frames, so about 0.6% of noise). The first bounce measured 1.050 when the bounce
+/// vertices took the sun's shadow maps at the ray's entry into the hit voxel (up to a voxel
+/// in front of the surface) instead of on the owner triangle's plane, and the direct light
+/// 1.025 with 1024-texel maps, whose PCF normal offset lights a band along every shadow edge
+/// (docs/measurements/real-scenes.md, "Energy against the mapped renders"). The bound is
+/// issue #33's 3% for the energy against the mapped render; the references' own noise is
+/// below 0.1% of their mean (tools/reference's relMSE estimates, 3e-4 and 1e-3 per pixel,
+/// over 14,400 pixels).
+#[test]
+fn sponza_sun_bounce_energy_matches_the_mapped_render() {
+    use voxgi::eval::HdrImage;
+    let refs = format!("{}/assets/references", env!("CARGO_MANIFEST_DIR"));
+    let d2 = HdrImage::load_exr(format!("{refs}/sponza_sun_d2.exr")).expect("d2 reference");
+    let d3 = HdrImage::load_exr(format!("{refs}/sponza_sun_d3.exr")).expect("d3 reference");
+    let dir = common::temp_dir("sponza-bounce");
+    let direct = render_sponza(&dir, "none", &["--gi", "none"]);
+    let one = render_sponza(
+        &dir,
+        "b1",
+        &[
+            "--gi",
+            "pathtrace",
+            "--gi-rays",
+            "8",
+            "--gi-frames",
+            "4",
+            "--set",
+            "gi.bounces=1",
+        ],
+    );
+    assert_eq!((direct.width, direct.height), (d2.width, d2.height));
+    let direct_ratio = sum(&direct) / sum(&d2);
+    let bounce_ratio = (sum(&one) - sum(&direct)) / (sum(&d3) - sum(&d2));
+    println!("sponza under the sun: direct {direct_ratio:.4}, first bounce {bounce_ratio:.4} of Mitsuba's");
+    assert!(
+        (direct_ratio - 1.0).abs() < 0.03,
+        "the direct light has {direct_ratio:.4} of the mapped render's"
+    );
+    assert!(
+        (bounce_ratio - 1.0).abs() < 0.03,
+        "the first bounce has {bounce_ratio:.4} of the mapped render's"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
 }

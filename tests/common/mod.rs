@@ -67,7 +67,6 @@ fn ensure_runtime_dir() {
     }
 }
 
-/// Runs the built `voxgi` binary with `args` and waits for it.
 /// A fresh folder `voxgi-NAME-PID` in the system's temp dir (emptied if it exists).
 pub fn temp_dir(name: &str) -> std::path::PathBuf {
     let dir = std::env::temp_dir().join(format!("voxgi-{name}-{}", std::process::id()));
@@ -76,6 +75,7 @@ pub fn temp_dir(name: &str) -> std::path::PathBuf {
     dir
 }
 
+/// Runs the built `voxgi` binary with `args` and waits for it.
 pub fn voxgi(args: &[&str]) -> std::process::Output {
     voxgi_with(args, |_| {})
 }
