@@ -42,8 +42,9 @@ vec3 voxel_surface_point(mat4 w2v, ivec3 v, vec4 nd, vec3 o, vec3 d, float t_in)
     // The plane's voxel-space normal: normals transform by the inverse transpose.
     vec3 nv = normalize(transpose(inverse(m)) * nd.xyz);
     vec3 c = vec3(v) + 0.5;
-    // The ray's exit from the unit cube of v.
-    vec3 inv = 1.0 / dv;
+    // The ray's exit from the unit cube of v (a zero direction component taken as 1e-12, so
+    // that no 0 * inf makes a NaN).
+    vec3 inv = 1.0 / mix(vec3(1e-12), dv, greaterThan(abs(dv), vec3(1e-12)));
     vec3 t0 = (vec3(v) - ov) * inv;
     vec3 t1 = (vec3(v) + 1.0 - ov) * inv;
     vec3 tf = max(t0, t1);
