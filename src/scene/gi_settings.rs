@@ -66,8 +66,9 @@ pub struct GiSettings {
     pub pathtrace_lobes: bool,
     /// Path tracer: next-event estimation toward the scene's emissive triangles at every path
     /// vertex, picked by power, combined with the BSDF-sampled rays' emitter hits by multiple
-    /// importance sampling (`gi::emitters`). Scenes without emissive triangles are the same
-    /// either way.
+    /// importance sampling (`gi::emitters`); the hemisphere method's radiance volume samples
+    /// them at every voxel too, for the light the voxel reflects. Scenes without emissive
+    /// triangles are the same either way.
     pub emitter_sampling: bool,
     /// Direct light of an environment map (`direct_emitters`) and the path tracer: draw a
     /// share α of the directions from the map's luminance (`scene::environment::EnvironmentCdf`,
@@ -389,7 +390,8 @@ static GI_KEYS: [Key<GiSettings>; 40] = [
         "gi.emitter_sampling",
         Kind::Bool,
         "Path tracer: sample emissive triangles by power at every path vertex (next-event \
-         estimation, MIS with the BSDF rays); off: emitters are found only by BSDF rays",
+         estimation, MIS with the BSDF rays); radiance volume: at every voxel, for the light \
+         its rays' hits reflect; off: emitters are found only by the rays",
         toggle("emitter-sampling"),
         emitter_sampling
     ),
