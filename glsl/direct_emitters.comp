@@ -18,8 +18,9 @@
 // half its own estimator). A direction that leaves the voxel grid unblocked within the ray
 // length brings the environment's radiance (environment_after_miss, as the GI rays):
 //   L_o = 1/K_d sum rho_d w_d L_env + 1/K_s sum w_s L_env,
-// w the lobe's f cos / pdf. With ENV_SAMPLING (`gi.env_sampling`, a map) K_e = max(K/2, 1) of
-// the directions are drawn from the map's luminance instead (environment_sampling.glsl) and
+// w the lobe's f cos / pdf. With ENV_SAMPLING (`gi.env_sampling`, a map) K_e = round(alpha K)
+// of the directions are drawn from the map's luminance instead (environment_sampling.glsl;
+// alpha per map from how concentrated its power is: 1/2 for a sun, 0 for a smooth sky) and
 // the rest split as above; each part of the BRDF is then an integral with two strategies,
 // combined by the balance heuristic in its multi-sample form (Veach 1997, §9.2.2): every
 // sample of either strategy weighs f L cos / (n_b p_b + K_e p_e), n_b p_b the part's own
@@ -175,7 +176,7 @@ void main() {
         // The map's own samples (ENV_SAMPLING), then the lobe's: Phong and GGX pixels at least
         // one sample of each half.
         bool env_sampling = ENV_SAMPLING && ENVIRONMENT == ENVIRONMENT_MAP;
-        uint env_count = env_sampling ? max(SAMPLES / 2u, 1u) : 0u;
+        uint env_count = env_sampling ? uint(env_map_share() * float(SAMPLES) + 0.5) : 0u;
         uint bsdf_count = max(SAMPLES - min(env_count, SAMPLES), 1u);
         uint lobe_count = m.kind != LOBE_LAMBERT ? max(bsdf_count / 2u, 1u) : 0u;
         uint diffuse_count = max(bsdf_count - min(lobe_count, bsdf_count), 1u);

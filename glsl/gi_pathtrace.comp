@@ -16,11 +16,16 @@
 // grid within its radius ends there with the environment's radiance (ENVIRONMENT,
 // environment.glsl; see escaped_radiance): a sky-lit point gets its sky light by cosine or
 // lobe sampling. With ENV_SAMPLING (`gi.env_sampling`, a map) every path vertex that samples
-// a further bounce also draws one direction from the map's luminance (environment_sampling.glsl)
-// and traces it like a BSDF ray; the two are combined by the balance heuristic, per lobe part
-// as the emitters' samples are: the map sample weighs f_part L cos / (p_part + p_e) for each
-// part the vertex samples (p_part including the lobe choice's probability), and a BSDF ray
-// that escapes weighs p_bsdf / (p_bsdf + p_e).
+// a further bounce also draws, with probability c = min(2 alpha, 1) (alpha the map's share,
+// environment_sampling.glsl's env_map_share: 1/2 for a sun, so c = 1; 0 for a smooth sky),
+// one direction from the map's luminance and traces it like a BSDF ray; the two are
+// combined by the balance heuristic with c the map's expected count, per lobe part as the
+// emitters' samples are: the map sample weighs f_part L cos / (p_part + c p_e) for each part
+// the vertex samples (p_part including the lobe choice's probability), and a BSDF ray that
+// escapes weighs p_bsdf / (p_bsdf + c p_e). The two weights' expectations sum to 1 wherever
+// either density is positive (c p_e / (p_part + c p_e) + p_part / (p_part + c p_e)), so the
+// estimate stays unbiased for any c; c = 1 is Veach's (1997, §9.2.2) balance heuristic with
+// one sample of each, and c spends the map's rays only where alpha says they pay.
 //
 // With HAS_EMITTERS (emissive triangles and `gi.emitter_sampling`) every path vertex that
 // samples a further bounce also samples one emissive triangle by power (emitters.glsl): the
@@ -277,19 +282,23 @@ void main() {
             // parts of the lobe this vertex samples (as the emitter sample's `parts`), each
             // weighted against its own BSDF density.
             bool env_sampling = ENV_SAMPLING && ENVIRONMENT == ENVIRONMENT_MAP;
-            if (env_sampling) {
+            // The map sample's expected count c; its first coordinate decides whether this
+            // vertex draws one (u.x < c) and, rescaled, places it.
+            float env_c = env_sampling ? min(2.0 * env_map_share(), 1.0) : 0.0;
+            vec2 ue = env_sampling ? env_sample_u(uvec2(px), b, j, count, frame_index * rays + s, frame_index) : vec2(1.0);
+            if (env_sampling && ue.x < env_c) {
                 float pe;
-                vec2 ue = env_sample_u(uvec2(px), b, j, count, frame_index * rays + s, frame_index);
+                ue.x = min(ue.x / env_c, 1.0);
                 vec3 de = env_sample(ue, pe);
                 float ci = dot(de, nn);
                 if (ci > 0.0 && pe > 0.0) {
                     float ps = b == 0u ? (lobe ? 1.0 : 0.0) : lobe_specular_probability(m);
                     vec3 f = vec3(0.0);
                     if (ps < 1.0) {
-                        f += lobe_part_brdf(m, nn, de, from, false) / ((1.0 - ps) * lobe_pdf(m, nn, from, de, false) + pe);
+                        f += lobe_part_brdf(m, nn, de, from, false) / ((1.0 - ps) * lobe_pdf(m, nn, from, de, false) + env_c * pe);
                     }
                     if (ps > 0.0) {
-                        f += lobe_part_brdf(m, nn, de, from, true) / (ps * lobe_pdf(m, nn, from, de, true) + pe);
+                        f += lobe_part_brdf(m, nn, de, from, true) / (ps * lobe_pdf(m, nn, from, de, true) + env_c * pe);
                     }
                     if (any(greaterThan(f, vec3(0.0)))) {
                         vec3 estart;
@@ -315,7 +324,7 @@ void main() {
             VxHit h = trace_from(o, nn, d, start);
             if (!h.hit) {
                 if (ENVIRONMENT != ENVIRONMENT_NONE) {
-                    float weight = env_sampling ? env_balance(pdf_bsdf, env_pdf(d)) : 1.0;
+                    float weight = env_sampling ? env_balance(pdf_bsdf, env_c * env_pdf(d)) : 1.0;
                     l += throughput * (weight * escaped_radiance(o, start, d, h));
                 }
                 break;

@@ -18,9 +18,17 @@
 #define ENVIRONMENT_SAMPLING_GLSL
 
 layout(set = 0, binding = ENV_CDF_BINDING, std430) readonly buffer EnvironmentCdf {
-    uvec4 env_cdf_size;  // width, height
+    uvec4 env_cdf_size;  // width, height, the bits of alpha (env_map_share), 0
     float env_cdf[];     // marginal (height + 1), then per row the conditional (width + 1)
 };
+
+// alpha in [0, 1/2]: the share of the environment's samples to draw from the map, the rest
+// from the BSDF: 1/2 where a majority of the map's power lies in 1% of the sphere (a sun), 0
+// otherwise (a smooth sky: the BSDF's samples alone, as without importance sampling);
+// EnvironmentCdf::map_share decides it once per map.
+float env_map_share() {
+    return uintBitsToFloat(env_cdf_size.z);
+}
 
 // The interval i in [0, n) with cdf[base + i] <= u < cdf[base + i + 1]: the last i whose start
 // is <= u, so empty intervals (a black texel or row) are never returned (cdf[base] = 0 and

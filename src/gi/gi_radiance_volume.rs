@@ -4,8 +4,12 @@
 //! maps, the second samples the hemisphere against it. With Phong or GGX materials the volume
 //! holds a glossy voxel's diffuse part and its lights' visibility, and the second pass adds
 //! its specular lobe toward each ray from the material volume and the lights
-//! (docs/design/materials.md).
+//! (docs/design/materials.md). With `GiSettings::emitter_sampling`, in scenes with emissive
+//! triangles, the volume pass also samples the emitter list (binding 14, next-event
+//! estimation as in the path tracer, [`super::emitters`]) for the light the emitters put on
+//! each voxel.
 
+use super::emitters::EmitterBuffer;
 use super::gi_common::{add_ray_pass, GiShared, GpuGiPush};
 use super::{GiInputs, GiMethodPasses, GiOutput, GiTarget, MethodWorld};
 use crate::graph::{Access, RenderGraph, Shader};
@@ -19,16 +23,28 @@ pub struct GiRadianceVolume {
     volume_pipeline: ComputePipeline,
     hemisphere_pipeline: ComputePipeline,
     image: Image,
+    /// The emissive triangles' table (`emitter_sampling` in a scene with emitters).
+    emitters: Option<EmitterBuffer>,
 }
 
 impl GiRadianceVolume {
-    pub fn new(ctx: &Context, target: &GiTarget<'_>) -> Result<Self, VkError> {
+    /// `emitter_sampling`: the volume pass samples the emissive triangles, if any.
+    pub fn new(
+        ctx: &Context,
+        target: &GiTarget<'_>,
+        emitter_sampling: bool,
+    ) -> Result<Self, VkError> {
+        let emitters = match emitter_sampling && target.scene.has_emission() {
+            true => EmitterBuffer::new(ctx, target.scene, target.time_s)?,
+            false => None,
+        };
         let volume_pipeline = ctx.compute_pipeline(
             "gi_radiance_volume.comp",
             PushLayout::of::<GpuGiPush>(),
             &crate::spec_constants![
                 HAS_EMISSION = target.scene.has_emission(),
                 HAS_LOBES = !target.scene.is_all_lambert(),
+                HAS_EMITTERS = emitters.is_some(),
             ],
         )?;
         let hemisphere_pipeline = ctx.compute_pipeline(
@@ -65,6 +81,7 @@ impl GiRadianceVolume {
             volume_pipeline,
             hemisphere_pipeline,
             image,
+            emitters,
         })
     }
 }
@@ -92,6 +109,9 @@ impl GiMethodPasses for GiRadianceVolume {
         // GGX materials its material binding; albedo fills them.
         let emission = v.emission.unwrap_or(albedo);
         let material = v.material.unwrap_or(albedo);
+        // The emitter list; without it the shader never reads its binding (nor the ray-mask
+        // table's), and the ray-mask table fills it.
+        let emitters = self.emitters.as_ref().map_or(shared.lut, |e| e.import(g));
         let pipe = *self.volume_pipeline;
         let push = shared.push;
         let dims = push.dims;
@@ -110,6 +130,8 @@ impl GiMethodPasses for GiRadianceVolume {
             .bind(5, volume, Access::StorageWrite(c))
             .bind_sampled(6, emission, sampler, c)
             .bind_sampled(7, material, sampler, c)
+            .bind(8, shared.lut, Access::StorageRead(c))
+            .bind(14, emitters, Access::StorageRead(c))
             .when(Some(shared.first_frame.clone()))
             .record(move |ctx| {
                 ctx.bind(&pipe);
@@ -167,5 +189,17 @@ impl GiMethodPasses for GiRadianceVolume {
             },
         );
         irradiance.into()
+    }
+
+    fn update_scene(&mut self, scene: &crate::scene::Scene, t_s: f32) {
+        if let Some(e) = &mut self.emitters {
+            e.update(scene, t_s);
+        }
+    }
+
+    fn write_slot(&mut self, slot: usize) {
+        if let Some(e) = &mut self.emitters {
+            e.write_slot(slot);
+        }
     }
 }

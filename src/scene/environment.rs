@@ -172,11 +172,81 @@ pub fn equirect_direction(u: f32, v: f32, rotation_rad: f32) -> Vec3 {
 /// being empty). A texel's probability is the product of its two intervals, exact in f32
 /// (the difference of two nearby floats is exact, Sterbenz's lemma), so the shader's density is
 /// the one its binary search samples.
+///
+/// `map_share` is α, the share of the environment's samples the renderers draw from these
+/// tables (the rest from the BSDF), chosen from how concentrated the map's power is: see
+/// [`map_share`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct EnvironmentCdf {
     pub width: u32,
     pub height: u32,
     pub values: Vec<f32>,
+    pub map_share: f32,
+}
+
+/// The solid angle, as a fraction of the sphere, whose power decides α ([`map_share`]).
+pub const MAP_SHARE_SOLID_ANGLE: f64 = 0.01;
+
+/// The share of the power in the brightest [`MAP_SHARE_SOLID_ANGLE`] from which a map is
+/// sampled: a majority.
+pub const MAP_SHARE_GATE: f64 = 0.5;
+
+/// The largest α: the BSDF keeps at least half of the samples, so a one-sample mixture's
+/// second moment is at most 1/(1 − α) = 2 times the BSDF's alone wherever the map's density
+/// misleads (cos θ and occlusion, which the map does not know).
+pub const MAP_SHARE_MAX: f64 = 0.5;
+
+/// α, the share of samples drawn from the map, from the texels' power (`weights`, luminance
+/// times sin θ, so a texel's solid angle is proportional to sin θ): s, the share of the power
+/// in the brightest fraction a = [`MAP_SHARE_SOLID_ANGLE`] of the sphere (texels ordered by
+/// luminance, the last one counted in part); α = [`MAP_SHARE_MAX`] where s reaches
+/// [`MAP_SHARE_GATE`], else 0.
+///
+/// Why: take a map of two levels, a part of solid angle a holding s of the power and the rest
+/// uniform, sampled by the mixture q = α p_map + (1 − α) p_bsdf where the map's samples land
+/// on the bright part and the BSDF's spread evenly (in its own measure), all independent. The
+/// estimator's relative second moment is s²/(a + α(1 − a)) + (1 − s)²/((1 − a)(1 − α)); its
+/// derivative in α vanishes at s(1 − a)(1 − α) = (1 − s)(a + α(1 − a)), i.e.
+/// α* = (s − a)/(1 − a) (Veach 1997, §9.2.2 for the mixture), which exceeds the cap as soon
+/// as s > 0.505: a sun holding most of the power. Below that the model flatters the map: the
+/// BSDF's samples are stratified, which removes most of the error of a smooth sky (a glow a
+/// stratum wide) but not of a source smaller than a stratum, and the map does not know which
+/// of its bright directions a surface's walls hide. Measured on the smooth skies
+/// (docs/measurements/environment.md: s = 0.075 and about 0.05, α* = 0.066 and 0.04), even
+/// one map sample in 16 made the direct light 7% and 16% worse, so those maps keep the BSDF's
+/// samples alone (α = 0, exactly the render without importance sampling).
+fn map_share(weights: &[f64], w: usize, h: usize) -> f64 {
+    let total: f64 = weights.iter().sum();
+    let sphere: f64 = (0..h)
+        .map(|y| w as f64 * (std::f64::consts::PI * (y as f64 + 0.5) / h as f64).sin())
+        .sum();
+    if total <= 0.0 || sphere <= 0.0 {
+        return 0.0;
+    }
+    // (luminance, power, solid angle as a fraction of the sphere) per texel, brightest first.
+    let mut texels: Vec<(f64, f64, f64)> = weights
+        .iter()
+        .enumerate()
+        .filter_map(|(i, &p)| {
+            let sin = (std::f64::consts::PI * ((i / w) as f64 + 0.5) / h as f64).sin();
+            (sin > 0.0).then(|| (p / sin, p / total, sin / sphere))
+        })
+        .collect();
+    texels.sort_by(|a, b| b.0.total_cmp(&a.0));
+    let (mut s, mut covered) = (0.0, 0.0);
+    for &(_, power, omega) in &texels {
+        let take = ((MAP_SHARE_SOLID_ANGLE - covered) / omega).min(1.0);
+        if take <= 0.0 {
+            break;
+        }
+        s += power * take;
+        covered += omega * take;
+    }
+    if s >= MAP_SHARE_GATE {
+        MAP_SHARE_MAX
+    } else {
+        0.0
+    }
 }
 
 impl EnvironmentCdf {
@@ -208,6 +278,7 @@ impl EnvironmentCdf {
         if total <= 0.0 || !total.is_finite() {
             return None;
         }
+        let map_share = map_share(&weights, w, h) as f32;
         let mut values = Vec::with_capacity(h + 1 + h * (w + 1));
         values.extend(cumulative(&rows, total));
         for (r, &sum) in weights.chunks_exact(w).zip(&rows) {
@@ -221,6 +292,7 @@ impl EnvironmentCdf {
             width: map.width,
             height: map.height,
             values,
+            map_share,
         })
     }
 
@@ -233,10 +305,11 @@ impl EnvironmentCdf {
         f64::from(m[y + 1] - m[y]) * f64::from(c[x + 1] - c[x])
     }
 
-    /// The buffer the shaders read: a `uvec4` header (width, height, 0, 0), then `values`.
+    /// The buffer the shaders read: a `uvec4` header (width, height, the bits of
+    /// `map_share`, 0), then `values`.
     pub fn to_gpu_bytes(&self) -> Vec<u8> {
         let mut bytes = Vec::with_capacity(16 + 4 * self.values.len());
-        for v in [self.width, self.height, 0, 0] {
+        for v in [self.width, self.height, self.map_share.to_bits(), 0] {
             bytes.extend_from_slice(&v.to_le_bytes());
         }
         for v in &self.values {
@@ -614,5 +687,37 @@ mod tests {
         // The smoothing keeps (3/4 + 1/8)^2 = 0.77 of each sun texel's weight on the sun.
         assert!(in_sun > 0.7 && in_sun < 0.8, "{in_sun}");
         assert!(EnvironmentCdf::new(&map_of(w, h, |_, _| 0.0)).is_none());
+    }
+
+    /// α against its closed form: a constant map holds exactly a of the power in any a of the
+    /// sphere, so α = 0. A map of two levels, L1 on 8 texels covering a fraction b < a of the
+    /// sphere and L0 elsewhere, holds s = (b L1 + (a − b) L0)/(b L1 + (1 − b) L0) in its
+    /// brightest a; L1 is chosen to put s 1% above and below the gate, which decides α.
+    #[test]
+    fn map_share_follows_the_power_in_the_brightest_solid_angle() {
+        let (w, h) = (64usize, 32usize);
+        let sin = |y: usize| (std::f64::consts::PI * (y as f64 + 0.5) / h as f64).sin();
+        let weights = |lum: &dyn Fn(usize, usize) -> f64| -> Vec<f64> {
+            (0..w * h).map(|i| lum(i % w, i / w) * sin(i / w)).collect()
+        };
+        let constant = map_share(&weights(&|_, _| 2.0), w, h);
+        assert_eq!(constant, 0.0);
+        // Texels 20-23 of rows 14 and 15 (next to the equator).
+        let spot = |x: usize, y: usize| (20..24).contains(&x) && (y == 14 || y == 15);
+        let sphere: f64 = (0..h).map(|y| w as f64 * sin(y)).sum();
+        let b = 4.0 * (sin(14) + sin(15)) / sphere;
+        let a = MAP_SHARE_SOLID_ANGLE;
+        assert!(b < a, "the spot is smaller than a: {b}");
+        let l0 = 1.0;
+        // s(L1) = (b L1 + (a − b) L0)/(b L1 + (1 − b) L0) = t solved for L1.
+        let l1_for = |t: f64| (t * (1.0 - b) * l0 - (a - b) * l0) / (b * (1.0 - t));
+        for (t, expected) in [
+            (1.01 * MAP_SHARE_GATE, MAP_SHARE_MAX),
+            (0.99 * MAP_SHARE_GATE, 0.0),
+        ] {
+            let l1 = l1_for(t);
+            let got = map_share(&weights(&|x, y| if spot(x, y) { l1 } else { l0 }), w, h);
+            assert_eq!(got, expected, "s = {t}, L1 = {l1}");
+        }
     }
 }

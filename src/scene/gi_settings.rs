@@ -66,14 +66,15 @@ pub struct GiSettings {
     pub pathtrace_lobes: bool,
     /// Path tracer: next-event estimation toward the scene's emissive triangles at every path
     /// vertex, picked by power, combined with the BSDF-sampled rays' emitter hits by multiple
-    /// importance sampling (`gi::emitters`). Scenes without emissive triangles are the same
-    /// either way.
+    /// importance sampling (`gi::emitters`); the hemisphere method's radiance volume samples
+    /// them at every voxel too, for the light the voxel reflects. Scenes without emissive
+    /// triangles are the same either way.
     pub emitter_sampling: bool,
-    /// Direct light of an environment map (`direct_emitters`) and the path tracer: draw
-    /// directions from the map's luminance too (`scene::environment::EnvironmentCdf`), combined
-    /// with the cosine and lobe samples by the balance heuristic; `false` samples the map by
-    /// the cosine and lobe samples alone. Scenes without a map (or with a constant) are the
-    /// same either way.
+    /// Direct light of an environment map (`direct_emitters`) and the path tracer: draw a
+    /// share α of the directions from the map's luminance (`scene::environment::EnvironmentCdf`,
+    /// α per map from how concentrated its power is, 0 to 1/2), combined with the cosine and
+    /// lobe samples by the balance heuristic; `false` samples the map by the cosine and lobe
+    /// samples alone. Scenes without a map (or with a constant) are the same either way.
     pub env_sampling: bool,
     /// The voxel volumes sample the MTL texture maps (`map_Kd` in the albedo volume, `map_Ke`
     /// in the emission volume, `map_Pr` / `map_Pm` in the material volume) per texel at the
@@ -330,7 +331,7 @@ impl Default for GiSettings {
             bounces: Bounces::Fixed(2),
             pathtrace_lobes: true,
             emitter_sampling: true,
-            env_sampling: false,
+            env_sampling: true,
             voxel_map_texels: true,
             accumulate_frames: 1,
             temporal: false,
@@ -389,16 +390,18 @@ static GI_KEYS: [Key<GiSettings>; 40] = [
         "gi.emitter_sampling",
         Kind::Bool,
         "Path tracer: sample emissive triangles by power at every path vertex (next-event \
-         estimation, MIS with the BSDF rays); off: emitters are found only by BSDF rays",
+         estimation, MIS with the BSDF rays); radiance volume: at every voxel, for the light \
+         its rays' hits reflect; off: emitters are found only by the rays",
         toggle("emitter-sampling"),
         emitter_sampling
     ),
     key!(
         "gi.env_sampling",
         Kind::Bool,
-        "Environment map's direct light and path tracer: draw directions from the map's \
-         luminance too, combined with the cosine and lobe samples by MIS; off: the map is \
-         found only by cosine and lobe samples",
+        "Environment map's direct light and path tracer: draw a share of the directions \
+         from the map's luminance (by how concentrated its power is: half for a sun, none \
+         for a sky as smooth as a constant), combined with the cosine and lobe samples by \
+         MIS; off: the map is found only by cosine and lobe samples",
         toggle("env-sampling"),
         env_sampling
     ),

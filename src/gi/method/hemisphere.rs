@@ -67,7 +67,11 @@ pub(super) fn build(
     target: &GiTarget<'_>,
 ) -> Result<Box<dyn GiMethodPasses>, VkError> {
     Ok(if settings.radiance_source == RadianceSource::Volume {
-        Box::new(GiRadianceVolume::new(ctx, target)?)
+        Box::new(GiRadianceVolume::new(
+            ctx,
+            target,
+            settings.emitter_sampling,
+        )?)
     } else {
         Box::new(GiHemisphere::new(
             ctx,
