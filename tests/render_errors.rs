@@ -282,4 +282,13 @@ fn resources_beyond_what_is_left_of_the_heap_are_refused() {
             if m.limit == MemoryLimit::Heap && m.need_bytes == 2048 && m.available_bytes == 1024),
         "{e}"
     );
+    // What is held already is named with what sizes it, since lowering the subject's own
+    // flag cannot free it.
+    let text = e.to_string();
+    assert!(
+        text.contains("held already")
+            && text.contains("--voxels")
+            && text.contains("--shadow-resolution"),
+        "{text}"
+    );
 }

@@ -71,6 +71,9 @@ pub struct MemoryError {
     pub limit: MemoryLimit,
     pub need_bytes: u64,
     pub available_bytes: u64,
+    /// What the device already held when this was sized (the voxel grid's volumes, shadow
+    /// and light maps, created before the frame's transients).
+    pub held_bytes: u64,
 }
 
 impl MemoryError {
@@ -86,11 +89,25 @@ impl MemoryError {
                  for buffers also maxBufferSize): lower {}",
                 self.subject, self.need_bytes, self.available_bytes, self.flags
             ),
-            MemoryLimit::Heap => format!(
-                "{} needs {need:.2} GiB ({} bytes) of device memory, more than is left of this \
-                 device's largest device-local heap ({have:.2} GiB, {} bytes): lower {}",
-                self.subject, self.need_bytes, self.available_bytes, self.flags
-            ),
+            MemoryLimit::Heap => {
+                let mut m = format!(
+                    "{} needs {need:.2} GiB ({} bytes) of device memory, more than is left of \
+                     this device's largest device-local heap ({have:.2} GiB, {} bytes): lower {}",
+                    self.subject, self.need_bytes, self.available_bytes, self.flags
+                );
+                // When what exists already holds most of the heap, lowering the subject's own
+                // flags may not be enough: say so, and what sizes the rest.
+                if self.held_bytes > self.need_bytes {
+                    m += &format!(
+                        "; {:.2} GiB of the heap is held already by what was made before it (the \
+                         voxel grid and its volumes, shadow and light maps): a smaller grid \
+                         (--voxels, --voxel-layers, the scene's `[voxel]` table) or smaller shadow \
+                         maps (--shadow-resolution) leave more",
+                        self.held_bytes as f64 / GIB
+                    );
+                }
+                m
+            }
         }
     }
 }
@@ -111,6 +128,7 @@ pub fn check_fits(
             limit,
             need_bytes,
             available_bytes,
+            held_bytes: already_bytes,
         })
     };
     let max_one = |n: &MemoryNeed| match n.is_buffer {
