@@ -86,11 +86,9 @@ void main() {
         imageStore(radiance_volume, v, vec4(0.0));
         return;
     }
-    // The light at the voxel's surface, not at its centre (which a conservative voxel has
-    // as often behind the surface, in the surface's own shadow).
-    vec4 nd = texelFetch(normal_volume, v, 0);
-    vec3 p = voxel_plane_point(gi.world_to_voxel, v, nd);
-    vec3 n = nd.xyz;
+    mat4 to_world = inverse(gi.world_to_voxel);
+    vec3 p = (to_world * vec4(vec3(v) + 0.5, 1.0)).xyz;
+    vec3 n = texelFetch(normal_volume, v, 0).xyz;
     n = dot(n, n) > 0.25 ? normalize(n) : vec3(0.0, 1.0, 0.0);
     vec3 a = texelFetch(albedo_volume, v, 0).rgb;
     bool ggx = false;

@@ -54,18 +54,6 @@ vec3 voxel_surface_point(mat4 w2v, ivec3 v, vec4 nd, vec3 o, vec3 d, float t_in)
     return o + d * clamp(t, t_in, t_out);
 }
 
-// The point of voxel v's surface nearest its centre: the centre moved onto the owner's plane
-// (voxel_surface_point's plane, along the plane's voxel-space normal), in world space; the
-// centre itself for voxels without a stored normal.
-vec3 voxel_plane_point(mat4 w2v, ivec3 v, vec4 nd) {
-    vec3 c = vec3(v) + 0.5;
-    if (dot(nd.xyz, nd.xyz) > 0.25) {
-        vec3 nv = normalize(transpose(inverse(mat3(w2v))) * nd.xyz);
-        c += nv * (nd.w * 0.8660254);
-    }
-    return (inverse(w2v) * vec4(c, 1.0)).xyz;
-}
-
 // Radical inverse in base 2 (Hammersley's second coordinate).
 float radical_inverse(uint i) {
     return float(bitfieldReverse(i)) * 2.3283064365386963e-10;
