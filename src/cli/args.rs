@@ -71,7 +71,19 @@ fn default_words<S: Settings>(k: &Key<S>) -> String {
         Value::Bool(false) => "off".to_owned(),
         v => k.kind.to_text(v),
     };
-    format!("the scene's `[{}] {}`, else {text}", S::TABLE, k.name())
+    let scene = format!("the scene's `[{}] {}`", S::TABLE, k.name());
+    // The built-in scene's GI lies under a scene that names no method (FrameArgs::settings).
+    match crate::scene::default_gi_layer().get(k.path) {
+        Some(d) if k.path == "gi.method" => format!(
+            "{scene}, else {} (the built-in scene's GI)",
+            k.kind.to_text(d)
+        ),
+        Some(d) => format!(
+            "{scene}, else {text}, or {} where no method is named",
+            k.kind.to_text(d)
+        ),
+        None => format!("{scene}, else {text}"),
+    }
 }
 
 /// The named flag of key `k`.
@@ -252,9 +264,17 @@ impl GiArgs {
         Ok(())
     }
 
-    /// The scene's `[gi]` values, overridden by the flags given.
+    /// The scene's `[gi]` values, overridden by the flags given. Where neither names a
+    /// method, the built-in default scene's GI (the path tracer) lies under both.
     pub fn settings(&self, scene: &Scene) -> Result<crate::gi::GiSettings, super::CliError> {
-        let s = resolve_gi(&scene.gi, &self.layer()?);
+        let cli = self.layer()?;
+        let names_method = |l: &Layer| l.iter().any(|(p, _)| p == "gi.method");
+        let s = if names_method(&scene.gi) || names_method(&cli) {
+            resolve_gi(&scene.gi, &cli)
+        } else {
+            let default = crate::scene::default_gi_layer();
+            crate::scene::schema::resolve(&[&default, &scene.gi, &cli])
+        };
         Ok(crate::gi::GiSettings {
             vpl: crate::gi::vpl::VplSettings {
                 show: self.vpl_show,
@@ -715,6 +735,41 @@ mod tests {
             (s.method, s.rays, s.bounces, s.accumulate_frames),
             (GiMethod::Hemisphere, 32, crate::gi::Bounces::Fixed(3), 8)
         );
+    }
+
+    /// A scene that names no GI method renders with the built-in scene's GI (the path
+    /// tracer, 4 rays × 2 frames, unbounded, filter 8) under its own `[gi]` keys and the
+    /// flags; a method named by the scene or a flag keeps the built-in defaults under it.
+    #[test]
+    fn a_scene_without_a_method_gets_the_default_scenes_gi() {
+        let mut scene =
+            crate::scene::builtin("cornell-point").expect("a built-in without a [gi] table");
+        assert!(scene.gi.get("gi.method").is_none());
+        let gi = |scene: &Scene, args: &[&str]| parse(args).gi.settings(scene).expect("settings");
+        let d = GiSettings::default();
+        let s = gi(&scene, &[]);
+        assert_eq!(
+            (
+                s.method,
+                s.rays,
+                s.accumulate_frames,
+                s.bounces,
+                s.filter_radius
+            ),
+            (GiMethod::Pathtrace, 4, 2, crate::gi::Bounces::Unbounded, 8)
+        );
+        // The flags and the scene's own keys still win over that layer.
+        let s = gi(&scene, &["--gi-rays", "16"]);
+        assert_eq!((s.method, s.rays), (GiMethod::Pathtrace, 16));
+        scene.gi.set("gi.bounces", Value::Count(2));
+        assert_eq!(gi(&scene, &[]).bounces, crate::gi::Bounces::Fixed(2));
+        // `--gi none` is direct light with the built-in defaults, not the layer's.
+        let s = gi(&scene, &["--gi", "none"]);
+        assert_eq!((s.method, s.rays), (GiMethod::None, d.rays));
+        // A scene that names a method keeps the defaults under its table.
+        scene.gi.set("gi.method", Value::Choice(1));
+        let s = gi(&scene, &[]);
+        assert_eq!((s.method, s.rays), (GiMethod::Hemisphere, d.rays));
     }
 
     /// Every flag of every table is a key's, with the key's range: each flag given a value

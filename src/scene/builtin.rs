@@ -31,6 +31,16 @@ bounces = \"unbounded\"
 filter_radius = 8
 ";
 
+/// The `[gi]` layer of the built-in default scene: the GI a scene that names no method renders
+/// with, under its own `[gi]` keys and the command line's (the command line applies it:
+/// `cli::args`), so that loading one's own scene into a GI renderer shows indirect light.
+pub fn default_gi_layer() -> super::schema::Layer {
+    static LAYER: std::sync::OnceLock<super::schema::Layer> = std::sync::OnceLock::new();
+    LAYER
+        .get_or_init(|| builtin(DEFAULT_SCENE).map(|s| s.gi).unwrap_or_default())
+        .clone()
+}
+
 /// The light of `cornell-point`: 1 W/sr at 0.25 m below the ceiling, E = 1 / 0.5² = 4 W/m² at
 /// the floor's center.
 const CORNELL_POINT_LIGHT_TOML: &str = "
