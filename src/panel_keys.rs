@@ -165,8 +165,8 @@ mod tests {
                     ..Default::default()
                 };
                 let before = gi;
-                let _ = ctx.run(egui::RawInput::default(), |ctx| {
-                    egui::CentralPanel::default().show(ctx, |ui| {
+                let _ = ctx.run_ui(egui::RawInput::default(), |root| {
+                    egui::CentralPanel::default().show(root, |ui| {
                         (method.spec().panel)(ui, &mut gi, Some(3));
                     });
                 });

@@ -1304,9 +1304,10 @@ impl Viewer {
             actions: Vec::new(),
             position_field: None,
         };
-        let out = egui_ctx.run(raw, |c| {
+        let out = egui_ctx.run_ui(raw, |root| {
             let mut edit_ui = |ui: &mut egui::Ui| edits = edit_ui::panel(ui, &edit_view);
-            layout = panel::draw(c, controls, stats, &info, &mut edit_ui);
+            layout = panel::draw(root, controls, stats, &info, &mut edit_ui);
+            let c = root.ctx();
             edit_ui::paint(
                 c,
                 edit_view.editor,
