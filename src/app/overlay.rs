@@ -127,19 +127,22 @@ impl Overlay {
         self.atlas.is_some()
     }
 
-    /// Applies egui's texture changes. Returns `true` when the atlas image was (re)created,
+    /// Applies egui's texture changes and empties `delta` (egui asserts that a dropped delta
+    /// is empty, an error here included). Returns `true` when the atlas image was (re)created,
     /// which needs a new graph. Waits for the device when the atlas changed (rare: the first
     /// frame and new glyphs), because frames in flight may still sample it.
     pub fn update_textures(
         &mut self,
         ctx: &Context,
-        delta: &egui::TexturesDelta,
+        delta: &mut egui::TexturesDelta,
     ) -> Result<bool, VkError> {
+        let set = std::mem::take(&mut delta.set);
+        delta.free.clear();
         let mut recreated = false;
         let mut changed = false;
         // egui lists a texture's changes in order: a whole image, then patches of it.
-        let atlas_deltas = delta.set.iter().filter_map(|(id, ds)| {
-            if *id == egui::TextureId::default() {
+        let atlas_deltas = set.into_iter().filter_map(|(id, ds)| {
+            if id == egui::TextureId::default() {
                 return Some(ds);
             }
             log::warn!("egui texture {id:?} ignored: the viewer draws the font atlas only");
