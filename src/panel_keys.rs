@@ -165,12 +165,11 @@ mod tests {
                     ..Default::default()
                 };
                 let before = gi;
-                let mut out = ctx.run_ui(egui::RawInput::default(), |root| {
-                    egui::CentralPanel::default().show(root, |ui| {
+                let _ = ctx.run(egui::RawInput::default(), |ctx| {
+                    egui::CentralPanel::default().show(ctx, |ui| {
                         (method.spec().panel)(ui, &mut gi, Some(3));
                     });
                 });
-                out.textures_delta.clear();
                 assert_eq!(
                     gi, before,
                     "{method:?}: drawing its panel changed a setting"

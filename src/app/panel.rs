@@ -275,7 +275,7 @@ fn timing_table(ui: &mut egui::Ui, medians: &[(String, f64)], right_x: f32) -> V
     let time_w = rows.iter().fold(0.0f32, |w, (_, t)| {
         let text = t.text().to_owned();
         w.max(
-            ui.fonts_mut(|f| f.layout_no_wrap(text, font.clone(), color))
+            ui.fonts(|f| f.layout_no_wrap(text, font.clone(), color))
                 .size()
                 .x,
         )
@@ -323,7 +323,7 @@ fn timing_table(ui: &mut egui::Ui, medians: &[(String, f64)], right_x: f32) -> V
 /// Draws the panel; returns where it and its GPU-time table landed. `edit_ui` draws the scene
 /// editor's section (`app::edit::panel`).
 pub fn draw(
-    root: &mut egui::Ui,
+    ctx: &egui::Context,
     c: &mut Controls,
     stats: &TimingStats,
     info: &PanelInfo,
@@ -333,19 +333,16 @@ pub fn draw(
     let mut graph = Default::default();
     let mut scroll = ScrollLayout::default();
     let mut spots = Vec::new();
-    let panel = egui::Panel::left("voxgi panel")
+    let panel = egui::SidePanel::left("voxgi panel")
         .resizable(false)
-        .default_size(240.0)
-        .show(root, |ui| {
+        .default_width(240.0)
+        .show(ctx, |ui| {
             // Taller than a short window: the contents scroll (wheel over the panel, or the
             // bar). The width stays the panel's, as without scrolling. No scrolling by
             // dragging the contents: a drag there is a slider's or a drag value's.
             let area = egui::ScrollArea::vertical()
                 .auto_shrink([false, true])
-                .scroll_source(egui::scroll_area::ScrollSource {
-                    drag: egui::scroll_area::DragScroll::Never,
-                    ..Default::default()
-                })
+                .drag_to_scroll(false)
                 .show(ui, |ui| {
                     // The panel's inner right edge as this frame lays it out (within the window): a
                     // control wider than that (a collapsing header's title, a slider) widens the
@@ -428,8 +425,7 @@ pub fn draw(
                     ui.separator();
                     scroll.screenshot_button = footer(ui, c, info.status);
                 });
-            // Where the contents are drawn (past an end while rubber-banding).
-            scroll.offset = area.state.unclamped_offset().y;
+            scroll.offset = area.state.offset.y;
             scroll.content_height = area.content_size.y;
             scroll.view = area.inner_rect;
         });
@@ -874,16 +870,13 @@ mod table_tests {
                     raw.events.push(egui::Event::MouseWheel {
                         unit: egui::MouseWheelUnit::Point,
                         delta: egui::vec2(0.0, scroll_y),
-                        phase: egui::TouchPhase::Move,
-                        source: egui::MouseWheelSource::Unknown,
                         modifiers: egui::Modifiers::NONE,
                     });
                 }
             }
-            let mut out = ctx.run_ui(raw, |ui| {
-                layout = draw(ui, &mut c, &stats, &info, &mut |_| {})
+            let out = ctx.run(raw, |ctx| {
+                layout = draw(ctx, &mut c, &stats, &info, &mut |_| {})
             });
-            out.textures_delta.clear();
             texts = out
                 .shapes
                 .iter()
@@ -1032,9 +1025,7 @@ mod table_tests {
     #[test]
     fn long_pass_names_are_elided_and_shown_in_full_on_hover() {
         let long = "voxelize_attributes_resolve";
-        // Tall enough for the whole table in view (its last rows end near 550 points), as
-        // shapes outside the view are culled.
-        let narrow = egui::vec2(200.0, 640.0);
+        let narrow = egui::vec2(200.0, 480.0);
         let (layout, texts) = draw_headless(narrow, None);
         let drawn =
             |texts: &[(String, bool)], elided| texts.iter().any(|(t, e)| t == long && *e == elided);
