@@ -818,7 +818,12 @@ mod tests {
         ) -> usize {
             let d = S::default();
             for k in S::keys() {
-                let v = (k.get)(&d);
+                // An unset default reads as words ("the scene's diagonal"): set the largest.
+                let v = match ((k.get)(&d), k.kind) {
+                    (Value::Unset, Kind::OptNumber(l, _)) => Value::Number(l.max),
+                    (Value::Unset, Kind::OptCount(l, _)) => Value::Count(l.max),
+                    (v, _) => v,
+                };
                 let set = format!("{}={}", k.path, k.kind.to_text(v));
                 let layer = table_layer(&parse(&["--set", &set])).expect(&set);
                 assert_eq!(layer.iter().collect::<Vec<_>>(), [(k.path, v)], "{set}");
