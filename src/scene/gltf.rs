@@ -314,7 +314,7 @@ impl Loader {
             let b = v.buffer();
             let len = self.buffers.get(b.index()).map_or(0, Vec::len);
             let end = v.offset().checked_add(v.length());
-            if end.map_or(true, |e| e > len) {
+            if end.is_none_or(|e| e > len) {
                 return Err(SceneError::GltfBuffer {
                     file: self.file.clone(),
                     buffer: b.index(),
@@ -383,7 +383,7 @@ impl Loader {
         let end = (count as u64 - 1)
             .checked_mul(stride as u64)
             .and_then(|x| x.checked_add((accessor.offset() + size) as u64));
-        if end.map_or(true, |e| e > view.length() as u64) {
+        if end.is_none_or(|e| e > view.length() as u64) {
             return Err(error(format!(
                 "{count} elements of {size} bytes (stride {stride}) from byte {} need {} \
                  bytes, but bufferView {} has {}",
