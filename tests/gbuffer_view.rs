@@ -87,7 +87,7 @@ fn cast(scene: &Scene, x: u32, y: u32) -> Option<Hit> {
                 if u < 0.0 || v < 0.0 || u + v > 1.0 || d <= 0.0 {
                     continue;
                 }
-                if best.as_ref().map_or(true, |h| d < h.distance_m) {
+                if best.as_ref().is_none_or(|h| d < h.distance_m) {
                     best = Some(Hit {
                         distance_m: d,
                         normal: e1.cross(e2).normalize(),

@@ -94,7 +94,7 @@ fn surface(cam: &Camera, px: [i32; 2]) -> Option<(Vec3, Vec3)> {
     let mut best: Option<(f32, Vec3, Vec3)> = None;
     let mut try_plane = |t: f32, n: Vec3, inside: &dyn Fn(Vec3) -> bool| {
         let p = near + d * t;
-        if t > 0.0 && t < 1.0 && inside(p) && best.map_or(true, |b| t < b.0) {
+        if t > 0.0 && t < 1.0 && inside(p) && best.is_none_or(|b| t < b.0) {
             best = Some((t, p, n));
         }
     };

@@ -383,7 +383,7 @@ fn back_wall_seen(cam: &voxgi::scene::Camera, px: [u32; 2]) -> Option<(bool, Vec
     let d = far - near;
     let mut best: Option<(f32, bool, Vec3)> = None;
     let mut consider = |t: f32, back: bool| {
-        if t > 0.0 && best.map_or(true, |b| t < b.0) {
+        if t > 0.0 && best.is_none_or(|b| t < b.0) {
             best = Some((t, back, near + d * t));
         }
     };

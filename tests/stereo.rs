@@ -404,9 +404,9 @@ fn spatial_source(mode: StereoMode, (w, h): (u32, u32), x: u32, y: u32) -> (bool
         StereoMode::SideBySideFull => (x < w, x % w, y),
         StereoMode::TopBottom if y < hl => (true, x, squeezed(y, hl, h)),
         StereoMode::TopBottom => (false, x, squeezed(y - hl, h - hl, h)),
-        StereoMode::RowInterleaved => (y % 2 == 0, x, y),
-        StereoMode::ColumnInterleaved => (x % 2 == 0, x, y),
-        StereoMode::Checkerboard => ((x + y) % 2 == 0, x, y),
+        StereoMode::RowInterleaved => (y.is_multiple_of(2), x, y),
+        StereoMode::ColumnInterleaved => (x.is_multiple_of(2), x, y),
+        StereoMode::Checkerboard => ((x + y).is_multiple_of(2), x, y),
         _ => unreachable!("{mode:?} is an anaglyph"),
     }
 }

@@ -4,6 +4,7 @@
 
 mod common;
 
+use glam::camera::rh::{proj::directx, view::look_at_mat4};
 use glam::{Mat4, Vec2, Vec3, Vec4};
 use voxgi::graph::{add_readback, readback_buffer, run_frames, Access, RenderGraph, Shader};
 use voxgi::post::{PostSettings, TaaPass, TaaSettings};
@@ -107,9 +108,9 @@ fn pixel_ndc(x: u32, y: u32) -> Vec2 {
 }
 
 fn camera(eye: Vec3) -> Mat4 {
-    let mut proj = Mat4::perspective_rh(50f32.to_radians(), W as f32 / H as f32, 0.1, 100.0);
+    let mut proj = directx::perspective(50f32.to_radians(), W as f32 / H as f32, 0.1, 100.0);
     proj.y_axis.y = -proj.y_axis.y;
-    proj * Mat4::look_at_rh(eye, Vec3::new(0.2, 0.1, 0.0), Vec3::Y)
+    proj * look_at_mat4(eye, Vec3::new(0.2, 0.1, 0.0), Vec3::Y)
 }
 
 /// The reprojection test, on the pass itself: frame 1 (no history) stores the painted
@@ -289,9 +290,9 @@ fn a_camera_step_of_one_texel_reprojects_the_history_exactly() {
     };
     let taa = TaaPass::new(&ctx, settings, (W, H), (W, H), sampler.raw, false).expect("pass");
     let head_on = |x: f32| {
-        let mut proj = Mat4::perspective_rh(50f32.to_radians(), W as f32 / H as f32, 0.1, 100.0);
+        let mut proj = directx::perspective(50f32.to_radians(), W as f32 / H as f32, 0.1, 100.0);
         proj.y_axis.y = -proj.y_axis.y;
-        proj * Mat4::look_at_rh(Vec3::new(x, 0.0, 6.0), Vec3::new(x, 0.0, 0.0), Vec3::Y)
+        proj * look_at_mat4(Vec3::new(x, 0.0, 6.0), Vec3::new(x, 0.0, 0.0), Vec3::Y)
     };
     let step = 6.0 * 2.0 * 25f32.to_radians().tan() / H as f32;
     let (vp1, vp2) = (head_on(0.0), head_on(step));

@@ -844,7 +844,7 @@ impl Viewer {
                 && self
                     .opts
                     .resize_to
-                    .map_or(true, |(w, h)| (extent.width, extent.height) == (w, h))
+                    .is_none_or(|(w, h)| (extent.width, extent.height) == (w, h))
         });
         let (prims, ppp) = self.run_ui(ctx, window, extent)?;
         if last_scripted {
@@ -1062,7 +1062,7 @@ impl Viewer {
             None => renderer.prepare(&self.scene)?,
         }
         let stereo_mode = self.stereo.as_ref().and(self.controls.stereo.mode);
-        if self.graph.as_ref().map_or(true, |g| {
+        if self.graph.as_ref().is_none_or(|g| {
             g.extent != extent
                 || needs_new_graph(&g.settings, &settings)
                 || g.stereo_mode != stereo_mode

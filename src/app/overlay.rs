@@ -152,7 +152,7 @@ impl Overlay {
                     if self
                         .atlas
                         .as_ref()
-                        .map_or(true, |a| (a.width, a.height) != (w, h))
+                        .is_none_or(|a| (a.width, a.height) != (w, h))
                     {
                         // The old atlas is released once the frames that sample it completed.
                         self.atlas = Some(create_atlas(ctx, w, h)?);

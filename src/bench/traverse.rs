@@ -153,7 +153,7 @@ pub fn gbuffer_points(scene: &Scene, size: u32) -> Vec<(Vec3, Vec3)> {
             let mut best: Option<(f32, usize)> = None;
             for (i, t) in tris.iter().enumerate() {
                 if let Some(dist) = intersect(o, d, t) {
-                    if best.map_or(true, |(b, _)| dist < b) {
+                    if best.is_none_or(|(b, _)| dist < b) {
                         best = Some((dist, i));
                     }
                 }

@@ -425,7 +425,7 @@ impl FrameArgs {
         // What needs voxels (a GI method, the emitters' or the environment's direct light, a
         // voxel debug view) voxelizes with the scene's `[voxel]` under the voxel flags and
         // `--set voxel.*`; `--voxels N` voxelizes even when nothing does (to measure the voxel
-        // passes). Every GI method, screen-space GI too, voxelizes as before.
+        // passes). Every GI method, screen-space GI too, voxelizes.
         let voxel = self.voxel.layer(&self.gi.set)?;
         let forced = self
             .voxel
@@ -862,6 +862,34 @@ mod tests {
         for path in ["gi.rays", "post.bloom", "shadow.resolution"] {
             assert!(e.to_string().contains(path), "{e}");
         }
+    }
+
+    /// `--set` reaches every key of the four tables, the keys without a flag too: each key's
+    /// default, written as a scene file writes it, reads back as that key's value.
+    #[test]
+    fn set_reaches_every_key_of_every_table() {
+        fn each<S: Settings>(
+            table_layer: fn(&FrameArgs) -> Result<Layer, crate::cli::CliError>,
+        ) -> usize {
+            let d = S::default();
+            for k in S::keys() {
+                // An unset default reads as words ("the scene's diagonal"): set the largest.
+                let v = match ((k.get)(&d), k.kind) {
+                    (Value::Unset, Kind::OptNumber(l, _)) => Value::Number(l.max),
+                    (Value::Unset, Kind::OptCount(l, _)) => Value::Count(l.max),
+                    (v, _) => v,
+                };
+                let set = format!("{}={}", k.path, k.kind.to_text(v));
+                let layer = table_layer(&parse(&["--set", &set])).expect(&set);
+                assert_eq!(layer.iter().collect::<Vec<_>>(), [(k.path, v)], "{set}");
+            }
+            S::keys().len()
+        }
+        let keys = each::<GiSettings>(|a| a.gi.layer())
+            + each::<PostTable>(|a| a.post.layer(&a.gi.set))
+            + each::<ShadowSettings>(|a| a.shadow.layer(&a.gi.set))
+            + each::<VoxelSettings>(|a| a.voxel.layer(&a.gi.set));
+        assert!(keys >= 60, "{keys} keys");
     }
 
     #[test]

@@ -221,10 +221,12 @@ fn fit_size(size: u32, width: u32, height: u32) -> Option<((u32, u32), u32, u32)
     if size == 0 || width == 0 || height == 0 {
         return None;
     }
-    if width % size == 0 {
+    if width.is_multiple_of(size) {
         let f = width / size;
-        (height % f == 0).then_some(((size, height / f), f, 1))
-    } else if size % width == 0 {
+        height
+            .is_multiple_of(f)
+            .then_some(((size, height / f), f, 1))
+    } else if size.is_multiple_of(width) {
         let k = size / width;
         Some(((size, height * k), 1, k))
     } else {

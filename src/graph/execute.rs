@@ -687,7 +687,7 @@ impl GraphExecutor {
             cmd.begin_label(&pass.name, label_color(p));
             let ts = timestamps.begin(cmd, &pass.name);
             self.emit(cmd, s, &self.compiled.pass_barriers[pos]);
-            let runs = pass.condition.as_ref().map_or(true, |c| c.is_open(slot));
+            let runs = pass.condition.as_ref().is_none_or(|c| c.is_open(slot));
             if let Some(f) = pass.record.as_ref().filter(|_| runs) {
                 f(&PassContext {
                     cmd,

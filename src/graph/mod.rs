@@ -279,7 +279,7 @@ impl SlotCondition {
     pub fn is_open(&self, slot: usize) -> bool {
         self.open
             .get(slot)
-            .map_or(true, |g| g.load(std::sync::atomic::Ordering::Acquire))
+            .is_none_or(|g| g.load(std::sync::atomic::Ordering::Acquire))
     }
 }
 

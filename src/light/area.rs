@@ -120,7 +120,7 @@ pub fn sample_lights(lights: &[Light], samples: Option<u32>) -> Vec<Light> {
 pub fn grid_for(s: u32, aspect: f32) -> (u32, u32) {
     let s = s.max(1);
     (1..=s)
-        .filter(|nx| s % nx == 0)
+        .filter(|nx| s.is_multiple_of(*nx))
         .map(|nx| (nx, s / nx))
         .min_by(|a, b| {
             let err = |(nx, ny): (u32, u32)| (aspect * ny as f32 / nx as f32).ln().abs();

@@ -19,8 +19,9 @@
 
 use super::shadow::{ShadowProjection, ShadowView};
 use crate::scene::ShadowSettings;
-use crate::scene::{Aabb, Camera, Light, Projection};
-use glam::{Mat4, Vec3};
+use crate::scene::{look_to, Aabb, Camera, Light, Projection};
+use glam::camera::rh::proj::directx;
+use glam::Vec3;
 
 /// Share of each cascade's depth range (from the previous split, or from 0 for the first) at
 /// its far end over which it fades into the next one. Mirrored by `CASCADE_BLEND` in
@@ -179,7 +180,7 @@ pub fn fitted_view(
 ) -> ShadowView {
     let res = settings.resolution.max(1) as f32;
     // The light's rotation about the world origin: a grid fixed in the world for snapping.
-    let view = Mat4::look_to_rh(Vec3::ZERO, direction, super::shadow::up_for(direction));
+    let view = look_to(Vec3::ZERO, direction, super::shadow::up_for(direction));
     let usable = (res - 2.0 * margin_texels(settings)).max(0.5 * res);
     let texel = (2.0 * radius / usable).max(f32::MIN_POSITIVE);
     let half = 0.5 * res * texel;
@@ -218,7 +219,7 @@ pub fn fitted_view(
     // The view looks down -z; a few texels of depth margin as the whole-scene map has.
     let z_margin = texel * margin_texels(settings) + 1e-6 * (hi - lo).abs().max(1.0);
     let (near, far) = (-hi - z_margin, -lo + z_margin);
-    let proj = super::shadow::flip_y(Mat4::orthographic_rh(
+    let proj = super::shadow::flip_y(directx::orthographic(
         cx - half,
         cx + half,
         cy - half,

@@ -8,8 +8,9 @@
 //! orthographic maps fitted to slices of the view frustum, after every light's own views.
 
 use crate::scene::aabb_visible;
-use crate::scene::{Aabb, Light, Scene};
+use crate::scene::{look_to, perspective, Aabb, Light, Scene};
 use crate::scene::{PointShadow, ShadowSettings};
+use glam::camera::rh::proj::directx;
 use glam::{Mat4, Vec3};
 
 /// The projection of a shadow view.
@@ -83,7 +84,7 @@ pub struct LightShadows {
 
 /// Perspective projection into Vulkan clip space (y down, depth 0..1), as the camera's.
 fn perspective_vk(fov_y: f32, near: f32, far: f32) -> Mat4 {
-    let mut p = Mat4::perspective_rh(fov_y, 1.0, near, far);
+    let mut p = perspective(fov_y, 1.0, near, far);
     p.y_axis.y = -p.y_axis.y;
     p
 }
@@ -247,7 +248,7 @@ fn spot_view(
     let (near, far) = depth_range(position, aabb);
     let half = (cutoff_deg.to_radians() * (1.0 + 2.0 * pcf_texels / res)).min(1.55);
     let proj = perspective_vk(2.0 * half, near, far);
-    let view = Mat4::look_to_rh(position, direction, up_for(direction));
+    let view = look_to(position, direction, up_for(direction));
     ShadowView {
         view_proj: proj * view,
         texel_footprint: 2.0 * half.tan() / res,
@@ -282,7 +283,7 @@ fn cube_views(
         Vec3::Z,
         Vec3::NEG_Z,
     ] {
-        let view = Mat4::look_to_rh(position, axis, up_for(axis));
+        let view = look_to(position, axis, up_for(axis));
         views.push(ShadowView {
             view_proj: proj * view,
             texel_footprint: 2.0 * half.tan() / res,
@@ -308,7 +309,7 @@ fn directional_view(
     let center = aabb.center();
     let radius = (aabb.extent().length() * 0.5).max(1e-6);
     let eye = center - direction * radius * 2.0;
-    let view = Mat4::look_to_rh(eye, direction, up_for(direction));
+    let view = look_to(eye, direction, up_for(direction));
     let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
     for i in 0..8 {
         let c = Vec3::new(
@@ -323,7 +324,7 @@ fn directional_view(
     let size = (hi.x - lo.x).max(hi.y - lo.y).max(1e-6);
     let margin = size * pcf_texels / res;
     let (near, far) = ((-hi.z - margin).max(0.0), -lo.z + margin);
-    let proj = Mat4::orthographic_rh(
+    let proj = directx::orthographic(
         lo.x - margin,
         lo.x - margin + size + 2.0 * margin,
         lo.y - margin,

@@ -246,8 +246,8 @@ mod tests {
     /// The jittered matrix moves every projected point by exactly the jitter and keeps depth.
     #[test]
     fn jitter_moves_projected_points_by_the_offset() {
-        let vp = Mat4::perspective_rh(1.0, 1.5, 0.1, 50.0)
-            * Mat4::look_at_rh(Vec3::new(1.0, 2.0, 5.0), Vec3::ZERO, Vec3::Y);
+        let vp = glam::camera::rh::proj::directx::perspective(1.0, 1.5, 0.1, 50.0)
+            * glam::camera::rh::view::look_at_mat4(Vec3::new(1.0, 2.0, 5.0), Vec3::ZERO, Vec3::Y);
         let j = Vec2::new(0.01, -0.02);
         for p in [Vec3::new(0.3, -0.2, 0.1), Vec3::new(-2.0, 1.0, -4.0)] {
             let a = vp.project_point3(p);

@@ -675,10 +675,7 @@ fn upload_geometry(ctx: &Context, scene: &Scene, t_s: f32) -> Result<Geometry, R
                 model,
                 prev_model: model,
                 aabb,
-                opaque: scene
-                    .materials
-                    .get(material)
-                    .map_or(true, |m| m.is_opaque()),
+                opaque: scene.materials.get(material).is_none_or(|m| m.is_opaque()),
             });
         }
     }

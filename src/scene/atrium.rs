@@ -638,7 +638,7 @@ pub fn build() -> AtriumModel {
         let z = -COURT_HALF_Z_M + (k as f32 + 0.5) * BAY_M;
         for s in [-1.0f32, 1.0] {
             let x = s * (COURT_HALF_X_M - ARCADE_DEPTH_M / 2.0 - 0.35);
-            let material = if (i + (s > 0.0) as usize) % 2 == 0 {
+            let material = if (i + (s > 0.0) as usize).is_multiple_of(2) {
                 AtriumMaterial::ClothRed
             } else {
                 AtriumMaterial::ClothBlue

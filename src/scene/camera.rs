@@ -1,7 +1,33 @@
 //! The scene camera: a pinhole with a vertical field of view, or an orthographic view of a
 //! given height.
 
+use glam::camera::rh::{proj::directx, view};
+use glam::Vec4;
 use glam::{Mat4, Vec3};
+
+/// World → view for an eye at `eye` looking along `dir` with the up hint `up` (right-handed:
+/// -Z forward, +X right, +Y up). `dir` need not be unit: it is normalized here, because glam's
+/// `look_to_mat4` takes it as unit and a scene's or a light's direction is unit only to rounding.
+pub fn look_to(eye: Vec3, dir: Vec3, up: Vec3) -> Mat4 {
+    view::look_to_mat4(eye, dir.normalize(), up)
+}
+
+/// Right-handed perspective projection (vertical field of view `fov_y_rad`, `aspect` = width /
+/// height), depth 0 at `near` and 1 at `far`, y up. The depth terms are far / (near − far) and
+/// that times near, as glam 0.25's `perspective_rh` had them: glam's `directx::perspective`
+/// rounds −far · 1/(far − near) instead, one ulp off in half the cases, and every depth and
+/// reprojection would move with it.
+pub fn perspective(fov_y_rad: f32, aspect: f32, near: f32, far: f32) -> Mat4 {
+    let (sin, cos) = (0.5 * fov_y_rad).sin_cos();
+    let h = cos / sin;
+    let r = far / (near - far);
+    Mat4::from_cols(
+        Vec4::new(h / aspect, 0.0, 0.0, 0.0),
+        Vec4::new(0.0, h, 0.0, 0.0),
+        Vec4::new(0.0, 0.0, r, -1.0),
+        Vec4::new(0.0, 0.0, r * near, 0.0),
+    )
+}
 
 /// How the camera projects: through a pinhole (`fov_y_deg`) or along parallel rays
 /// (`ortho_height_m`).
@@ -55,7 +81,7 @@ pub struct Camera {
 impl Camera {
     /// World → view (right-handed; the camera looks down -Z in view space, +X right, +Y up).
     pub fn view(&self) -> Mat4 {
-        Mat4::look_to_rh(self.position, self.forward, self.up)
+        look_to(self.position, self.forward, self.up)
     }
 
     /// View → Vulkan clip space: y points down in framebuffer space, depth 0 at `near` and 1 at
@@ -73,12 +99,12 @@ impl Camera {
                 0.5 * self.ortho_height_m * aspect,
                 0.5 * self.ortho_height_m,
             );
-            let mut p = Mat4::orthographic_rh(-hw, hw, -hh, hh, self.near, self.far);
+            let mut p = directx::orthographic(-hw, hw, -hh, hh, self.near, self.far);
             p.y_axis.y = -p.y_axis.y;
             return p;
         }
-        let mut p = Mat4::perspective_rh(self.fov_y_deg.to_radians(), aspect, self.near, self.far);
-        // glam's perspective_rh already maps depth to [0, 1]; Vulkan's y axis points down.
+        let mut p = perspective(self.fov_y_deg.to_radians(), aspect, self.near, self.far);
+        // `perspective` already maps depth to [0, 1]; Vulkan's y axis points down.
         p.y_axis.y = -p.y_axis.y;
         // Off-axis: x_ndc = P00 (x_v / d - shift) with d = -z_v, so clip x gains P00 shift z_v.
         p.z_axis.x += p.x_axis.x * self.shift_x_tan;

@@ -179,7 +179,7 @@ impl CameraPath {
         // The spline nearly vanished (keys pointing almost opposite ways): blend linearly.
         let (i, u) = self.segment(t_s);
         let (a, b) = (self.keys[i].forward, self.keys[i + 1].forward);
-        a.lerp(b, u).try_normalize().unwrap_or(a)
+        a.lerp_monotonic(b, u).try_normalize().unwrap_or(a)
     }
 
     /// The vertical field of view at `t_s`; keys without one take `default_deg`.

@@ -148,7 +148,7 @@ pub fn obj_smoothing_groups(text: &str) -> Option<Vec<u32>> {
             }
             Some("f") => {
                 let corners = words.count();
-                per_triangle.extend(std::iter::repeat(group).take(corners.saturating_sub(2)));
+                per_triangle.extend(std::iter::repeat_n(group, corners.saturating_sub(2)));
             }
             _ => {}
         }

@@ -33,8 +33,8 @@ mod tests {
 
     #[test]
     fn boxes_in_front_are_kept_behind_are_culled() {
-        let view = Mat4::look_to_rh(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y);
-        let proj = Mat4::perspective_rh(1.0, 1.0, 0.1, 100.0);
+        let view = glam::camera::rh::view::look_to_mat4(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y);
+        let proj = glam::camera::rh::proj::directx::perspective(1.0, 1.0, 0.1, 100.0);
         let vp = proj * view;
         let front = Aabb {
             min: Vec3::new(-1.0, -1.0, -11.0),

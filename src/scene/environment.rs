@@ -62,7 +62,7 @@ pub const ENVIRONMENT_KINDS: [&str; 3] = ["constant", "map", "sky"];
 impl Environment {
     /// The shaders' `ENVIRONMENT` specialization constant (`glsl/include/environment.glsl`):
     /// 0 none, 1 constant, 2 map (a sky is its baked map). Shaders compile the lookup in only
-    /// where it is not 0, so a scene without the table runs the same code as before it existed.
+    /// where it is not 0, so a scene without the table carries no environment code.
     pub fn shader_kind(environment: Option<&Environment>) -> u32 {
         match environment {
             None => 0,

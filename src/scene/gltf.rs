@@ -314,7 +314,7 @@ impl Loader {
             let b = v.buffer();
             let len = self.buffers.get(b.index()).map_or(0, Vec::len);
             let end = v.offset().checked_add(v.length());
-            if end.map_or(true, |e| e > len) {
+            if end.is_none_or(|e| e > len) {
                 return Err(SceneError::GltfBuffer {
                     file: self.file.clone(),
                     buffer: b.index(),
@@ -383,7 +383,7 @@ impl Loader {
         let end = (count as u64 - 1)
             .checked_mul(stride as u64)
             .and_then(|x| x.checked_add((accessor.offset() + size) as u64));
-        if end.map_or(true, |e| e > view.length() as u64) {
+        if end.is_none_or(|e| e > view.length() as u64) {
             return Err(error(format!(
                 "{count} elements of {size} bytes (stride {stride}) from byte {} need {} \
                  bytes, but bufferView {} has {}",
@@ -1010,7 +1010,7 @@ impl LocalPrimitive {
             .iter()
             .map(|&v| world.transform_point3(v))
             .collect();
-        let normal_matrix = Mat3::from_mat4(world).inverse().transpose();
+        let normal_matrix = inverse_transpose(Mat3::from_mat4(world));
         let uvs = self.uvs;
         let (positions, normals, uvs, indices) = match self.normals {
             Some(local) => {
@@ -1102,6 +1102,19 @@ fn triangles(mode: Mode, ix: &[u32]) -> Vec<u32> {
             .collect(),
         _ => ix[..ix.len() / 3 * 3].to_vec(),
     }
+}
+
+/// The normals' transform of a linear map `m`: its inverse transpose, the cofactors over the
+/// determinant z·(x×y). glam's `Mat3::inverse` takes the determinant as x·(y×z), which rounds
+/// differently; this order keeps glTF normals bit for bit what the renders were measured with.
+fn inverse_transpose(m: Mat3) -> Mat3 {
+    let (c0, c1, c2) = (
+        m.y_axis.cross(m.z_axis),
+        m.z_axis.cross(m.x_axis),
+        m.x_axis.cross(m.y_axis),
+    );
+    let inv_det = 1.0 / m.z_axis.dot(c2);
+    Mat3::from_cols(c0 * inv_det, c1 * inv_det, c2 * inv_det)
 }
 
 fn warn_tex_coord(file: &Path, material: &str, sets: [Option<u32>; 4]) {

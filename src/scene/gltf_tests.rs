@@ -37,7 +37,7 @@ impl Builder {
     }
 
     fn view(&mut self, bytes: &[u8]) -> usize {
-        while self.bin.len() % 4 != 0 {
+        while !self.bin.len().is_multiple_of(4) {
             self.bin.push(0);
         }
         let offset = self.bin.len();
@@ -122,11 +122,11 @@ impl Builder {
         let mut json = self.json.clone();
         json["buffers"] = json!([{ "byteLength": self.bin.len() }]);
         let mut j = serde_json::to_vec(&json).expect("json");
-        while j.len() % 4 != 0 {
+        while !j.len().is_multiple_of(4) {
             j.push(b' ');
         }
         let mut b = self.bin.clone();
-        while b.len() % 4 != 0 {
+        while !b.len().is_multiple_of(4) {
             b.push(0);
         }
         let mut out = Vec::new();

@@ -133,7 +133,7 @@ pub fn ggx_g1(alpha: f32, n_dot_v: f32) -> f32 {
 /// multiple-scattering compensation is applied, so rough surfaces lose some energy
 /// (single-scattering GGX).
 pub fn ggx_brdf(base: Vec3, ggx: Ggx, n: Vec3, wi: Vec3, wo: Vec3) -> Vec3 {
-    let f0 = Vec3::splat(DIELECTRIC_F0).lerp(base, ggx.metallic);
+    let f0 = Vec3::splat(DIELECTRIC_F0).lerp_monotonic(base, ggx.metallic);
     let diffuse = base * (1.0 - ggx.metallic);
     ggx_diffuse(diffuse, n, wi, wo) + ggx_specular(f0, ggx.roughness, n, wi, wo)
 }
@@ -511,7 +511,7 @@ mod tests {
                 N,
             );
             let alpha = r * r;
-            let f0 = Vec3::splat(DIELECTRIC_F0).lerp(base, m);
+            let f0 = Vec3::splat(DIELECTRIC_F0).lerp_monotonic(base, m);
             let pi = std::f32::consts::PI;
             let want = f0 / (4.0 * pi * alpha * alpha) + (1.0 - m) * base * 0.96 * 0.96 / pi;
             assert!(

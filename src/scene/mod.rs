@@ -242,7 +242,7 @@ use std::path::{Path, PathBuf};
 pub use builtin::{
     builtin, builtin_names, builtin_toml, default_gi_layer, load_scene_arg, DEFAULT_SCENE,
 };
-pub use camera::{Camera, Eye, Projection, StereoRig};
+pub use camera::{look_to, perspective, Camera, Eye, Projection, StereoRig};
 pub use camera_path::{CameraKey, CameraPath, CameraPathError};
 pub use cull::aabb_visible;
 pub use desc::gi_table_layer;

@@ -1,6 +1,6 @@
 //! Scene objects: a mesh instance with a transform, optionally animated.
 
-use glam::{Mat4, Quat, Vec3};
+use glam::{Mat4, Quat, Vec3, Vec4};
 
 use super::mesh::Aabb;
 
@@ -27,15 +27,28 @@ impl Transform {
         Mat4::from_scale_rotation_translation(self.scale, self.rotation, self.translate)
     }
 
-    /// Linear interpolation of translation and scale, spherical of rotation (glam's slerp
-    /// takes the shorter arc, so keyframes more than 180° apart need a key in between).
+    /// Linear interpolation of translation and scale, spherical of rotation (along the shorter
+    /// arc, so keyframes more than 180° apart need a key in between).
     pub fn interpolate(&self, other: &Transform, u: f32) -> Transform {
         Transform {
-            translate: self.translate.lerp(other.translate, u),
-            rotation: self.rotation.slerp(other.rotation, u).normalize(),
-            scale: self.scale.lerp(other.scale, u),
+            translate: self.translate.lerp_monotonic(other.translate, u),
+            rotation: slerp(self.rotation, other.rotation, u).normalize(),
+            scale: self.scale.lerp_monotonic(other.scale, u),
         }
     }
+}
+
+/// Spherical interpolation from `a` to `b` along the shorter arc. Keys closer than 3.6°
+/// (|a·b| > 0.9995) are interpolated linearly and normalized: glam 0.25's `slerp` threshold
+/// (glam 0.34's is 1 − ε), so that animations keep, bit for bit, the rotations their
+/// renders were measured with.
+fn slerp(a: Quat, b: Quat, u: f32) -> Quat {
+    let d = a.dot(b);
+    if d.abs() <= 0.9995 {
+        return a.slerp(b, u);
+    }
+    let b = if d < 0.0 { -b } else { b };
+    Quat::from_vec4(Vec4::from(a).lerp_monotonic(Vec4::from(b), u)).normalize()
 }
 
 /// Rotation from `rotate_deg = [x, y, z]`: about world X first, then Y, then Z

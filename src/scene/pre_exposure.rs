@@ -20,7 +20,7 @@ use super::{Environment, Light, Scene};
 /// The dimmest and the brightest source (max channel) for which `k` stays 0: half floats'
 /// normal range, less 2^2 of headroom at the top for the voxelizer's sums of a few fragments
 /// per voxel. Every scene in `assets/scenes` lies within (the brightest source is the
-/// 16,000 W/(m²·sr) sphere light of `sponza_authors`), and so renders bit for bit as before.
+/// 16,000 W/(m²·sr) sphere light of `sponza_authors`), so each stores its radiance unscaled.
 pub const NEUTRAL_BAND: (f32, f32) = (1.0 / 16384.0, 16384.0);
 
 /// The largest |k|: 2^±k must be a normal f32 (2^-126 to 2^127), with room for the values the
@@ -173,7 +173,7 @@ mod tests {
         }
     }
 
-    /// Inside the band nothing changes (every scene in assets/ renders bit for bit as before);
+    /// Inside the band nothing is scaled (every scene in assets/ stores its radiance as it is);
     /// outside it the brightest source is stored in [1, 2), in range with room for sums.
     #[test]
     fn k_is_zero_in_the_band_and_puts_the_brightest_in_one_to_two_outside() {

@@ -445,8 +445,12 @@ mod tests {
         // A camera looking at the grid's center: the center pixel's ray passes through the
         // grid center, and the light direction is a unit vector.
         let grid = VoxelGrid::from_box(Vec3::ZERO, Vec3::ONE, None, 64, 64, 1).expect("grid");
-        let view = Mat4::look_at_rh(Vec3::new(0.5, 0.5, 3.0), Vec3::splat(0.5), Vec3::Y);
-        let proj = Mat4::perspective_rh(1.0, 1.0, 0.1, 10.0);
+        let view = glam::camera::rh::view::look_at_mat4(
+            Vec3::new(0.5, 0.5, 3.0),
+            Vec3::splat(0.5),
+            Vec3::Y,
+        );
+        let proj = glam::camera::rh::proj::directx::perspective(1.0, 1.0, 0.1, 10.0);
         let push = GpuVoxelDebugPush::new(
             &grid,
             7,

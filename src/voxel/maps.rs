@@ -267,9 +267,11 @@ pub fn sample_map_cpu(t: &TextureData, uv: Vec2, lod_uv: f32) -> glam::Vec4 {
     let st = Vec2::new(uv.x * w as f32 - 0.5, (1.0 - uv.y) * h as f32 - 0.5);
     let (x0, y0) = (st.x.floor() as i64, st.y.floor() as i64);
     let f = st - st.floor();
-    let a = texel(x0, y0).lerp(texel(x0 + 1, y0), f.x);
-    let b = texel(x0, y0 + 1).lerp(texel(x0 + 1, y0 + 1), f.x);
-    a.lerp(b, f.y)
+    // a + (b - a) f: the form the voxel volumes were measured with (glam's `lerp` rounds
+    // a (1 - f) + b f differently).
+    let a = texel(x0, y0).lerp_monotonic(texel(x0 + 1, y0), f.x);
+    let b = texel(x0, y0 + 1).lerp_monotonic(texel(x0 + 1, y0 + 1), f.x);
+    a.lerp_monotonic(b, f.y)
 }
 
 #[cfg(test)]

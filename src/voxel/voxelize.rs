@@ -187,7 +187,7 @@ pub fn voxelize_mesh_covered(
     coverage: &[Coverage],
 ) -> Result<VoxelizeStats, VoxelError> {
     check_dims(grid, bits)?;
-    if indices.len() % 3 != 0 {
+    if !indices.len().is_multiple_of(3) {
         return Err(VoxelError::BadIndexCount { len: indices.len() });
     }
     for (t, tri) in indices.chunks_exact(3).enumerate() {
