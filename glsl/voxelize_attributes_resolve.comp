@@ -39,12 +39,7 @@ layout(push_constant) uniform Push {
 
 const uint NO_OWNER = 0xffffffffu;
 
-// World point -> continuous voxel coordinates (voxelize_core.glsl's to_voxel).
-vec3 to_voxel(vec3 p) {
-    vec3 d = p - pc.grid_min.xyz;
-    vec3 f = pc.dims.w == 0u ? d.yzx : (pc.dims.w == 1u ? d.zxy : d);
-    return f * pc.scale.xyz;
-}
+#include "voxel_space.glsl"
 
 // The signed distance of the owner's plane from the centre of voxel v, in voxel units along
 // the plane's voxel-space normal, over sqrt(3)/2: the triangle touches the unit cube, so its

@@ -34,13 +34,7 @@ bool is_degenerate(vec3 e0, vec3 e1, vec3 n) {
     return l <= bound;
 }
 
-// World point -> continuous voxel coordinates (VoxelGrid::world_to_voxel).
-vec3 to_voxel(vec3 p) {
-    precise vec3 d = p - pc.grid_min.xyz;
-    vec3 f = pc.dims.w == 0u ? d.yzx : (pc.dims.w == 1u ? d.zxy : d);
-    precise vec3 r = f * pc.scale.xyz;
-    return r;
-}
+#include "voxel_space.glsl"
 
 const vec3 HALF = vec3(0.5);
 
