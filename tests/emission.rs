@@ -245,6 +245,16 @@ fn a_metal_emitter_sends_its_emission_through_the_radiance_volume() {
     common::assert_no_validation_messages(&ctx);
 }
 
+/// The emissive Cornell box and its Mitsuba full-GI reference (256²).
+fn emissive_box_and_reference() -> (voxgi::scene::Scene, HdrImage) {
+    let scene = load_scene_arg(Some(&format!("{ROOT}/assets/scenes/cornell_emissive.toml")))
+        .expect("loads");
+    let reference =
+        HdrImage::load(Path::new(ROOT).join("assets/references/cornell_emissive_gi.exr"))
+            .expect("reference");
+    (scene, reference)
+}
+
 /// The emissive Cornell box has no lights: everything but the patch itself is indirect light
 /// from the patch, which the path tracer reads from the emission volume. Against the Mitsuba
 /// full-GI reference (assets/references/cornell_emissive_gi.exr), 256², 2 bounces, 16 rays, one
@@ -255,12 +265,8 @@ fn a_metal_emitter_sends_its_emission_through_the_radiance_volume() {
 /// the patch alone); the path tracer's second bounce must bring it below half of that.
 #[test]
 fn emissive_cornell_box_is_lit_by_the_path_tracer() {
-    let scene = load_scene_arg(Some(&format!("{ROOT}/assets/scenes/cornell_emissive.toml")))
-        .expect("loads");
+    let (scene, reference) = emissive_box_and_reference();
     let ctx = common::context();
-    let reference =
-        HdrImage::load(Path::new(ROOT).join("assets/references/cornell_emissive_gi.exr"))
-            .expect("reference");
     let mut rel_mse = Vec::new();
     for method in [GiMethod::None, GiMethod::Pathtrace] {
         let settings = RenderSettings {
@@ -299,12 +305,8 @@ fn emissive_cornell_box_is_lit_by_the_path_tracer() {
 /// emitters' light (or counted the patch's emission twice) would not reach.
 #[test]
 fn radiance_volume_brings_the_emitters_second_bounce() {
-    let scene = load_scene_arg(Some(&format!("{ROOT}/assets/scenes/cornell_emissive.toml")))
-        .expect("loads");
+    let (scene, reference) = emissive_box_and_reference();
     let ctx = common::context();
-    let reference =
-        HdrImage::load(Path::new(ROOT).join("assets/references/cornell_emissive_gi.exr"))
-            .expect("reference");
     let [with, without] = [true, false].map(|emitter_sampling| {
         let settings = RenderSettings {
             width: 256,
