@@ -25,6 +25,7 @@
 // the filter's), averaged over the centre's 3×3 pixels. Pixels with fewer than MIN_FRAMES
 // frames have no usable moments and are filtered by the geometric weights alone.
 #include "frame.glsl"
+#include "filter_lobes.glsl"
 
 layout(constant_id = 0) const bool GLOSSY = false;
 layout(constant_id = 1) const bool VARIANCE_GUIDED = false;
@@ -56,23 +57,6 @@ layout(push_constant) uniform Push {
 vec3 world_at(ivec2 px, vec2 size) {
     float depth = texelFetch(gb_depth, px, 0).r;
     return pixel_world_position(frame.inv_view_proj, frame.camera_position.xyz, px, vec2(size), depth);
-}
-
-// The lobe kind of the lobe target's texel: 0 Lambert, 1 Phong (rho_s > 0), 2 GGX.
-int lobe_kind(vec4 t) {
-    if (t.a > 1.5) return 2;
-    return any(greaterThan(t.rgb, vec3(0.0))) ? 1 : 0;
-}
-
-// The half-maximum angle of a lobe about its mirror direction (kind 1 or 2; w the normal
-// target's w: the Phong exponent or the GGX roughness).
-float lobe_half_angle(int kind, float w) {
-    float n = w;
-    if (kind == 2) {
-        float alpha = max(w * w, 1e-4);
-        n = 2.0 / (alpha * alpha) - 2.0;
-    }
-    return acos(exp2(-1.0 / max(n, 1e-3)));
 }
 
 void main() {

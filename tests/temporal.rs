@@ -7,7 +7,7 @@ mod common;
 
 use glam::Vec3;
 use voxgi::eval::{compare, HdrImage};
-use voxgi::gi::{GiMethod, GiSettings};
+use voxgi::gi::{GiFilterKind, GiMethod, GiSettings};
 use voxgi::render::{render_animation, render_image, render_sequence, RenderSettings};
 use voxgi::scene::{Light, Scene};
 
@@ -152,31 +152,45 @@ fn vpl_frames_continue_the_halton_sequence() {
     assert!(e16x4 <= e4 / 8.0, "16 × 4 VPLs {e16x4} against 4 {e4}");
 }
 
-/// As frames accumulate, the variance-guided filter steps back: after 48 frames the filtered
+/// As frames accumulate, the variance-guided filters step back: after 48 frames the filtered
 /// image is no further from the converged unfiltered one than the unfiltered 48 frames are
 /// (it keeps only the noise reduction), and much closer than a single filtered frame, whose
 /// error is the filter's blur plus noise (measured at 128², 64 frames: 0.0019 filtered,
-/// 0.0057 unfiltered, 0.0158 for one filtered frame).
+/// 0.0057 unfiltered, 0.0158 for one filtered frame). Both filters: the geometry-aware one
+/// (2 pass pairs of radius 4) and SVGF (5 à-trous iterations), whose luminance weights are
+/// guided by the variance of the accumulated mean.
 #[test]
-fn the_filter_steps_back_as_frames_accumulate() {
+fn the_filters_step_back_as_frames_accumulate() {
     let ctx = common::context();
     let scene = cornell();
     let h = GiMethod::Hemisphere;
     let converged = render(&ctx, &scene, &settings(h, 16, 64, true, false));
-    let filtered_one = render(&ctx, &scene, &settings(h, 2, 1, false, true));
-    let filtered_many = render(&ctx, &scene, &settings(h, 2, 48, true, true));
     let unfiltered_many = render(&ctx, &scene, &settings(h, 2, 48, true, false));
-    let (one, many, raw) = (
-        rel_mse(&converged, &filtered_one),
-        rel_mse(&converged, &filtered_many),
-        rel_mse(&converged, &unfiltered_many),
-    );
-    println!("relMSE: filtered 1 frame {one:.4}, 48 frames {many:.4}, unfiltered 48 {raw:.4}");
-    assert!(many <= raw, "filtered {many} against unfiltered {raw}");
-    assert!(
-        many <= one / 2.0,
-        "48 filtered frames {many} against one {one}"
-    );
+    let raw = rel_mse(&converged, &unfiltered_many);
+    for (kind, passes) in [(GiFilterKind::Geometric, 2), (GiFilterKind::Svgf, 5)] {
+        let with = |mut s: RenderSettings| {
+            s.gi.filter = kind;
+            s.gi.filter_passes = passes;
+            s
+        };
+        let filtered_one = render(&ctx, &scene, &with(settings(h, 2, 1, false, true)));
+        let filtered_many = render(&ctx, &scene, &with(settings(h, 2, 48, true, true)));
+        let (one, many) = (
+            rel_mse(&converged, &filtered_one),
+            rel_mse(&converged, &filtered_many),
+        );
+        println!(
+            "{kind:?} relMSE: filtered 1 frame {one:.4}, 48 frames {many:.4}, unfiltered 48 {raw:.4}"
+        );
+        assert!(
+            many <= raw,
+            "{kind:?}: filtered {many} against unfiltered {raw}"
+        );
+        assert!(
+            many <= one / 2.0,
+            "{kind:?}: 48 filtered frames {many} against one {one}"
+        );
+    }
 }
 
 /// A camera that moves keeps its history: after 16 still frames and 4 frames that move the

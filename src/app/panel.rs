@@ -1111,6 +1111,7 @@ fn gi_controls(ui: &mut egui::Ui, gi: &mut GiSettings, frames: Option<u32>) {
     if key_switch(ui, gi, "gi.radius_m", "limit ray length", limited) {
         key_slider(ui, gi, "gi.radius_m", (0.01, 100.0), true, "radius m");
     }
+    key_choice(ui, gi, "gi.filter", "filter");
     key_slider(
         ui,
         gi,

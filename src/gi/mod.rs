@@ -16,6 +16,7 @@ mod gi_filter;
 mod gi_hemisphere;
 mod gi_pathtrace;
 mod gi_radiance_volume;
+mod gi_svgf;
 mod gi_temporal;
 mod gi_vpl_emit;
 mod method;
@@ -26,8 +27,8 @@ pub mod ssgi_reflect;
 pub mod vpl;
 
 pub use crate::scene::{
-    Bounces, GiSettings, RadianceSource, SaoSettings, SsgiMips, SsgiResolution, SsgiSettings,
-    SsrRays,
+    Bounces, GiFilterKind, GiSettings, RadianceSource, SaoSettings, SsgiMips, SsgiResolution,
+    SsgiSettings, SsrRays,
 };
 pub use gi_common::GpuGiPush;
 pub use gi_temporal::TemporalView;
@@ -43,6 +44,7 @@ use crate::voxel::VoxelGrid;
 use gi_common::GiShared;
 use gi_composite::GiComposite;
 use gi_filter::GiFilter;
+use gi_svgf::GiSvgf;
 use std::sync::atomic::{AtomicU32, Ordering};
 use std::sync::Arc;
 
@@ -175,7 +177,7 @@ pub struct GiPasses {
     method: Box<dyn GiMethodPasses>,
     /// The albedo and normal volumes, for the methods that read them.
     attributes: Option<TriangleAttributeVolumes>,
-    filter: GiFilter,
+    filter: Filter,
     /// Temporal accumulation between the method and the filter (`gi.temporal`, for the
     /// methods whose spec has `temporal`).
     temporal: Option<gi_temporal::GiTemporal>,
@@ -238,8 +240,9 @@ impl GiPasses {
             settings,
             method,
             attributes,
-            filter: GiFilter::new(
+            filter: Filter::new(
                 ctx,
+                settings.filter,
                 target.has_phong || target.scene.has_ggx(),
                 Self::temporal_on(&settings),
             )?,
@@ -437,14 +440,24 @@ impl GiPasses {
         };
         let s = &self.settings;
         let tile = (s.method.spec().filter_tile)(s);
-        let filtered = self.filter.add_passes(
-            g,
-            inp,
-            self.sampler.raw,
-            (s.filter_radius, s.filter_passes, tile),
-            indirect,
-            moments,
-        );
+        let filtered = match &self.filter {
+            Filter::Geometric(f) => f.add_passes(
+                g,
+                inp,
+                self.sampler.raw,
+                (s.filter_radius, s.filter_passes, tile),
+                indirect,
+                moments,
+            ),
+            Filter::Svgf(f) => f.add_passes(
+                g,
+                inp,
+                self.sampler.raw,
+                (s.filter_radius > 0, s.filter_passes, tile),
+                indirect,
+                moments,
+            ),
+        };
         let ao = self
             .sao
             .as_ref()
@@ -456,6 +469,26 @@ impl GiPasses {
             overlay(g, total);
         }
         total
+    }
+}
+
+/// The spatial filter of the indirect light (`gi.filter`).
+enum Filter {
+    Geometric(GiFilter),
+    Svgf(GiSvgf),
+}
+
+impl Filter {
+    fn new(
+        ctx: &Context,
+        kind: GiFilterKind,
+        glossy: bool,
+        temporal: bool,
+    ) -> Result<Self, VkError> {
+        Ok(match kind {
+            GiFilterKind::Geometric => Self::Geometric(GiFilter::new(ctx, glossy, temporal)?),
+            GiFilterKind::Svgf => Self::Svgf(GiSvgf::new(ctx, glossy, temporal)?),
+        })
     }
 }
 

@@ -53,7 +53,10 @@ pub struct GiSettings {
     pub max_iterations: u32,
     /// Reflective light-map resolution per view (the thesis used 256²).
     pub light_map_resolution: u32,
-    /// Geometry-aware filter radius in pixels (0: off) and number of h+v passes.
+    /// Which spatial filter smooths the indirect light.
+    pub filter: GiFilterKind,
+    /// Filter radius in pixels (0: off) and number of passes: the geometry-aware filter's
+    /// h+v pass pairs, or SVGF's à-trous iterations (radius unused there, except 0: off).
     pub filter_radius: u32,
     pub filter_passes: u32,
     /// Seed of the per-pixel rotation (vary per frame to accumulate).
@@ -301,6 +304,19 @@ impl std::str::FromStr for Bounces {
     }
 }
 
+/// The spatial filter of the indirect light (`crate::gi`, before the composite).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+pub enum GiFilterKind {
+    /// The geometry-aware filter (Herzog et al. 2010, Thiedemann 2010 §8.6.1): a separable
+    /// joint bilateral blur by distance, normal and tangent plane.
+    #[default]
+    Geometric,
+    /// Spatiotemporal variance-guided filtering (Schied et al. 2017 §4.4): an à-trous wavelet
+    /// filter of 5×5 taps at spacing 2^i, its luminance weight guided by a variance
+    /// estimate that each iteration filters along.
+    Svgf,
+}
+
 /// Where hemisphere sampling reads the radiance leaving a hit surface (Thiedemann 2010 §6.3).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
 pub enum RadianceSource {
@@ -325,6 +341,7 @@ impl Default for GiSettings {
             start_level: 1,
             max_iterations: 1024,
             light_map_resolution: 256,
+            filter: GiFilterKind::Geometric,
             filter_radius: 4,
             filter_passes: 2,
             seed: 0,
@@ -367,7 +384,7 @@ use range::*;
 
 /// Every `[gi]` key: the scene file's key, the path `--set`, the sweep's grid and the panel
 /// use, its range, its flag and its field.
-static GI_KEYS: [Key<GiSettings>; 40] = [
+static GI_KEYS: [Key<GiSettings>; 41] = [
     key!("gi.method", Kind::Choice(choices::<GiMethod>),
         "Indirect-light method (none: direct light only)",
         flag("gi", "METHOD"), choice GiMethod, method),
@@ -426,17 +443,23 @@ static GI_KEYS: [Key<GiSettings>; 40] = [
         flag("gi-ray-offset", "K2"),
         ray_offset_voxels
     ),
+    key!("gi.filter", Kind::Choice(choices::<GiFilterKind>),
+        "The indirect light's spatial filter: the geometry-aware joint bilateral blur \
+         (Thiedemann 2010), or SVGF's variance-guided à-trous wavelet (Schied et al. 2017)",
+        flag("gi-filter", "FILTER"), choice GiFilterKind, filter),
     key!(
         "gi.filter_radius",
         Kind::Count(GI_FILTER_RADIUS),
-        "Geometry-aware filter radius in pixels, 0: off",
+        "Filter radius in pixels, 0: off (SVGF: only 0 counts; its footprint grows with its \
+         passes)",
         flag("gi-filter-radius", "R"),
         filter_radius
     ),
     key!(
         "gi.filter_passes",
         Kind::Count(GI_FILTER_PASSES),
-        "Geometry-aware filter passes, each horizontal + vertical",
+        "Filter passes: the geometry-aware filter's horizontal + vertical pairs, or SVGF's \
+         à-trous iterations (taps 2^i pixels apart; 5 reach 62 pixels)",
         flag("gi-filter-passes", "P"),
         filter_passes
     ),

@@ -250,8 +250,8 @@ pub use environment::{Environment, EnvironmentMap};
 pub use error::SceneError;
 pub use gi::resolve_gi;
 pub use gi_settings::{
-    range as gi_range, Bounces, GiMethod, GiSettings, RadianceSource, SaoSettings, SsgiMips,
-    SsgiResolution, SsgiSettings, SsrRays,
+    range as gi_range, Bounces, GiFilterKind, GiMethod, GiSettings, RadianceSource, SaoSettings,
+    SsgiMips, SsgiResolution, SsgiSettings, SsrRays,
 };
 pub use gltf::{is_gltf_path, LUMENS_PER_WATT, SUPPORTED_REQUIRED_EXTENSIONS};
 pub use light::{scaled, spot_falloff, Light};

@@ -39,6 +39,7 @@ pub(super) static SPEC: MethodSpec = MethodSpec {
         "gi.ray_offset_voxels",
         "gi.filter_radius",
         "gi.filter_passes",
+        "gi.filter",
         "gi.start_level",
         "gi.max_iterations",
         "gi.light_map_resolution",
@@ -48,12 +49,7 @@ pub(super) static SPEC: MethodSpec = MethodSpec {
     ],
     swept_by_default: true,
     plot_colour: "#1f77b4",
-    describe: |gi| {
-        format!(
-            "hemisphere, {} rays, filter {}×{}",
-            gi.rays, gi.filter_radius, gi.filter_passes
-        )
-    },
+    describe: |gi| format!("hemisphere, {} rays, {}", gi.rays, super::filter_label(gi)),
     panel: |ui, gi, _| {
         rays_slider(ui, gi);
         temporal_controls(ui, gi);

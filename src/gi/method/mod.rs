@@ -181,6 +181,18 @@ impl GiMethod {
     }
 }
 
+/// The spatial filter in a method's one-line description: "filter R×P" (the geometry-aware
+/// filter's radius and pass pairs) or "svgf ×P" (SVGF's iterations).
+fn filter_label(gi: &GiSettings) -> String {
+    match gi.filter {
+        crate::scene::GiFilterKind::Geometric => {
+            format!("filter {}×{}", gi.filter_radius, gi.filter_passes)
+        }
+        crate::scene::GiFilterKind::Svgf if gi.filter_radius == 0 => "filter 0".to_string(),
+        crate::scene::GiFilterKind::Svgf => format!("svgf ×{}", gi.filter_passes),
+    }
+}
+
 /// The panel's rays-per-pixel slider (`gi.rays`), for the methods that shoot rays per pixel.
 fn rays_slider(ui: &mut egui::Ui, gi: &mut GiSettings) {
     crate::panel_keys::key_slider(ui, gi, "gi.rays", (1.0, 256.0), true, "rays / pixel");

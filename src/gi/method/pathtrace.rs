@@ -37,6 +37,7 @@ pub(super) static SPEC: MethodSpec = MethodSpec {
         "gi.ray_offset_voxels",
         "gi.filter_radius",
         "gi.filter_passes",
+        "gi.filter",
         "gi.start_level",
         "gi.max_iterations",
         "gi.light_map_resolution",
@@ -49,8 +50,10 @@ pub(super) static SPEC: MethodSpec = MethodSpec {
     plot_colour: "#d62728",
     describe: |gi| {
         format!(
-            "pathtrace, {} rays, {} bounces, filter {}×{}",
-            gi.rays, gi.bounces, gi.filter_radius, gi.filter_passes
+            "pathtrace, {} rays, {} bounces, {}",
+            gi.rays,
+            gi.bounces,
+            super::filter_label(gi)
         )
     },
     panel: |ui, gi, frames| {

@@ -41,6 +41,7 @@ pub(super) static SPEC: MethodSpec = MethodSpec {
     sweep_keys: &[
         "gi.filter_radius",
         "gi.filter_passes",
+        "gi.filter",
         "gi.accumulate_frames",
         "gi.ssgi_resolution",
         "gi.ssgi_samples",
@@ -52,11 +53,10 @@ pub(super) static SPEC: MethodSpec = MethodSpec {
     plot_colour: "#9467bd",
     describe: |gi| {
         format!(
-            "ssgi, 1/{} resolution, {} samples, filter {}×{}",
+            "ssgi, 1/{} resolution, {} samples, {}",
             gi.ssgi.resolution.divisor(),
             gi.ssgi.samples,
-            gi.filter_radius,
-            gi.filter_passes
+            super::filter_label(gi)
         )
     },
     panel: |ui, gi, _| ssgi_controls(ui, gi),

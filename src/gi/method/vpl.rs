@@ -40,6 +40,7 @@ pub(super) static SPEC: MethodSpec = MethodSpec {
         "gi.ray_offset_voxels",
         "gi.filter_radius",
         "gi.filter_passes",
+        "gi.filter",
         "gi.start_level",
         "gi.max_iterations",
         "gi.light_map_resolution",
@@ -58,13 +59,12 @@ pub(super) static SPEC: MethodSpec = MethodSpec {
     plot_colour: "#2ca02c",
     describe: |gi| {
         format!(
-            "vpl, {} per set, {}×{} sets, {} bounces, filter {}×{}",
+            "vpl, {} per set, {}×{} sets, {} bounces, {}",
             gi.vpl.per_set,
             gi.vpl.pattern[0],
             gi.vpl.pattern[1],
             gi.vpl.bounces,
-            gi.filter_radius,
-            gi.filter_passes
+            super::filter_label(gi)
         )
     },
     panel: |ui, gi, _| {
