@@ -2,7 +2,7 @@
 //! declaration of their common bindings.
 
 use super::{GiInputs, GiSettings, GiTarget};
-use crate::graph::{Access, BufferHandle, ImageHandle, RenderGraph, Shader, SlotCondition};
+use crate::graph::{Access, BufferHandle, ImageHandle, RenderGraph, Shader};
 use crate::scene::Bounces;
 use crate::vk::{vk, PipelineHandle};
 use bytemuck::{Pod, Zeroable};
@@ -111,9 +111,6 @@ pub struct GiShared {
     /// Under temporal accumulation (`gi.temporal`): frames recorded so far, counting the one
     /// being recorded, by which the sample pattern advances ([`GiShared::seed`]).
     pub sample_index: Option<Arc<AtomicU32>>,
-    /// Open in the frame slots that record the first frame after a restart (camera, lights,
-    /// scene or settings changed): passes whose output lasts until then run only there.
-    pub first_frame: Arc<SlotCondition>,
     /// The albedo, normal and (scenes with emitters) emission volumes, already written this
     /// frame, for the methods that read them ([`super::GiPasses::needs_attribute_volumes`]).
     pub attributes: Option<crate::voxel::attributes::AttributeHandles>,

@@ -12,17 +12,21 @@
 use super::emitters::EmitterBuffer;
 use super::gi_common::{add_ray_pass, GiShared, GpuGiPush};
 use super::{GiInputs, GiMethodPasses, GiOutput, GiTarget, MethodWorld};
-use crate::graph::{Access, RenderGraph, Shader};
+use crate::graph::{Access, Cache, ImageHandle, RenderGraph, Shader};
 use crate::scene::Environment;
-use crate::vk::{vk, ComputePipeline, Context, Image, ImageDesc, PushLayout, VkError};
+use crate::vk::{vk, ComputePipeline, Context, ImageDesc, PushLayout, VkError};
+use std::sync::Arc;
 
-/// The direct-radiance volume (rgba32f, congruent with the bits) and its passes. f32 because
-/// f16 cannot hold radiance from lights of 1e-6 to 1e6 W/sr (tests/extremes.rs): 16 bytes per
-/// voxel, 33.5 MB at 128³.
+/// The direct-radiance volume's passes. The volume (rgba32f, congruent with the bits) is the
+/// graph's: a cached image kept while the lights and the objects stay (`shadow.cache`), else a
+/// transient computed every frame. f32 because f16 cannot hold radiance from lights of 1e-6 to
+/// 1e6 W/sr (tests/extremes.rs): 16 bytes per voxel, 33.5 MB at 128³.
 pub struct GiRadianceVolume {
     volume_pipeline: ComputePipeline,
     hemisphere_pipeline: ComputePipeline,
-    image: Image,
+    volume: ImageDesc,
+    /// The volume's validity with `shadow.cache` ([`GiMethodPasses::world_cache`]).
+    cache: Option<Arc<Cache>>,
     /// The emissive triangles' table (`emitter_sampling` in a scene with emitters).
     emitters: Option<EmitterBuffer>,
 }
@@ -59,34 +63,42 @@ impl GiRadianceVolume {
             ],
         )?;
         let ext = target.grid.extent_voxels();
-        let usage = vk::ImageUsageFlags::STORAGE
-            | vk::ImageUsageFlags::SAMPLED
-            | vk::ImageUsageFlags::TRANSFER_DST;
-        let image = ctx.create_image(
-            &ImageDesc::new_2d(
-                "direct radiance volume",
-                vk::Format::R32G32B32A32_SFLOAT,
-                ext.x,
-                ext.y,
-            )
-            .with_depth(ext.z)
-            .with_usage(usage),
-        )?;
-        ctx.clear_new_image(
-            &image,
-            vk::ClearColorValue { float32: [0.0; 4] },
-            Access::Sampled(Shader::Compute).info().layout,
-        )?;
+        let volume = ImageDesc::new_2d(
+            "direct radiance volume",
+            vk::Format::R32G32B32A32_SFLOAT,
+            ext.x,
+            ext.y,
+        )
+        .with_depth(ext.z);
         Ok(Self {
             volume_pipeline,
             hemisphere_pipeline,
-            image,
+            volume,
+            cache: target.cache.then(|| Cache::new("direct radiance volume")),
             emitters,
         })
     }
 }
 
+impl GiRadianceVolume {
+    /// The volume: a cached image of the graph's with the cache on, else a transient.
+    fn declare_volume(&self, g: &mut RenderGraph) -> ImageHandle {
+        match &self.cache {
+            Some(cache) => g.create_cached_image(
+                self.volume.clone(),
+                Access::Sampled(Shader::Compute),
+                std::slice::from_ref(cache),
+            ),
+            None => g.create_image(self.volume.clone()),
+        }
+    }
+}
+
 impl GiMethodPasses for GiRadianceVolume {
+    fn world_cache(&self) -> Option<&Arc<Cache>> {
+        self.cache.as_ref()
+    }
+
     /// The volume pass: view-independent, so a stereo frame's eyes share the volume.
     fn add_world_passes(
         &self,
@@ -95,7 +107,7 @@ impl GiMethodPasses for GiRadianceVolume {
         shared: &GiShared,
     ) -> MethodWorld {
         let c = Shader::Compute;
-        let volume = g.import_image(&self.image, Access::Sampled(c));
+        let volume = self.declare_volume(g);
         let world = MethodWorld {
             image: Some(volume),
             buffer: None,
@@ -116,10 +128,10 @@ impl GiMethodPasses for GiRadianceVolume {
         let push = shared.push;
         let dims = push.dims;
         let sampler = shared.sampler;
-        // The direct radiance changes only with the lights, the shadow maps and the scene, and
-        // each of those restarts accumulation (`GiPasses::reset`): the first frame after a
-        // restart computes the volume, later ones keep it (it cost 675 ms per frame at 128³ on
-        // lavapipe). The graph skips the pass in the other frames' slots.
+        // The direct radiance changes only with the lights, the shadow maps (which the lights
+        // and the objects decide) and the scene: with the cache on, the pass runs in the first
+        // frame and after such a change (`GiPasses::lights_changed`, `objects_moved`), not when
+        // only the camera moves. It cost 675 ms per frame at 128³ on lavapipe.
         g.add_pass("gi_radiance_volume")
             .pipeline(&pipe)
             .bind(0, i.frame, Access::StorageRead(c))
@@ -132,7 +144,7 @@ impl GiMethodPasses for GiRadianceVolume {
             .bind_sampled(7, material, sampler, c)
             .bind(8, shared.lut, Access::StorageRead(c))
             .bind(14, emitters, Access::StorageRead(c))
-            .when(Some(shared.first_frame.clone()))
+            .cached(self.cache.as_ref())
             .record(move |ctx| {
                 ctx.bind(&pipe);
                 ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
@@ -150,7 +162,7 @@ impl GiMethodPasses for GiRadianceVolume {
         // `add_world_passes` imported the volume (`GiPasses::add_eye_passes` runs it first).
         let volume = match shared.world.image {
             Some(volume) => volume,
-            None => g.import_image(&self.image, Access::Sampled(c)),
+            None => self.declare_volume(g),
         };
         let Some(v) = shared.attributes else {
             return volume.into();

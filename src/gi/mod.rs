@@ -35,7 +35,7 @@ pub use gi_temporal::TemporalView;
 pub use method::{EmitterReach, GiMethod, MethodSpec, Refusal};
 pub use sao::GpuSaoPush;
 
-use crate::graph::{Access, BufferHandle, ImageHandle, RenderGraph, Shader, SlotCondition};
+use crate::graph::{Access, BufferHandle, ImageHandle, RenderGraph, Shader};
 use crate::scene::Scene;
 use crate::vk::{vk, Buffer, Context, ImageDesc, VkError};
 use crate::voxel::attributes::{TriangleAttributeVolumes, ValueVolumes};
@@ -45,7 +45,7 @@ use gi_common::GiShared;
 use gi_composite::GiComposite;
 use gi_filter::GiFilter;
 use gi_svgf::GiSvgf;
-use std::sync::atomic::{AtomicU32, Ordering};
+use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
 use std::sync::Arc;
 
 /// The G-buffer and light inputs of the GI passes.
@@ -106,10 +106,21 @@ pub struct GiTarget<'a> {
     /// ([`crate::voxel::frame::VoxelFrame::enable_attribute_volumes`]); the triangle
     /// attribute pass covers only the others.
     pub atlas_attributes: bool,
+    /// `shadow.cache`: view-independent volumes (the direct-radiance volume) are kept while
+    /// the lights and the objects stay; off, they are computed every frame.
+    pub cache: bool,
 }
 
 /// One GI method's indirect-light passes: what a method module implements.
 trait GiMethodPasses {
+    /// The validity of the method's cached view-independent volumes (with `shadow.cache`):
+    /// [`GiPasses`] validates it before each frame with a key that every change of the lights
+    /// or the objects advances, and the method's passes that write them declare it
+    /// (`.cached`). `None`: the method keeps no such volume.
+    fn world_cache(&self) -> Option<&Arc<crate::graph::Cache>> {
+        None
+    }
+
     /// Declares the method's view-independent passes (the VPLs, the radiance volume), once
     /// per frame, before [`GiMethodPasses::add_passes`]: a one-frame stereo frame shares their
     /// results between the eyes ([`GiShared::world`]). Screen-space methods have none.
@@ -188,6 +199,9 @@ pub struct GiPasses {
     sao: Option<sao::Sao>,
     composite: GiComposite,
     accumulation: Accumulation,
+    /// Advanced by every change of the lights or the objects: the key of the method's cached
+    /// view-independent volumes ([`GiMethodPasses::world_cache`]).
+    world_generation: AtomicU64,
     lut: Buffer,
     sampler: crate::vk::Sampler,
     push: GpuGiPush,
@@ -271,6 +285,7 @@ impl GiPasses {
                 target.scene.has_ggx(),
             )?,
             accumulation: Accumulation::default(),
+            world_generation: AtomicU64::new(0),
             lut: ctx.upload_buffer(
                 "ray mask lut",
                 &RayMaskLut::new().to_gpu_bytes(),
@@ -313,15 +328,26 @@ impl GiPasses {
     /// the path tracer accumulates into it, and the passes that run once per restart run in
     /// it only if it is the first.
     pub fn advance(&self, slot: usize) {
-        self.accumulation.advance(slot);
+        self.accumulation.advance();
+        if let Some(c) = self.method.world_cache() {
+            c.validate(slot, self.world_generation.load(Ordering::SeqCst));
+        }
         self.sample_index.fetch_add(1, Ordering::SeqCst);
         if let Some(t) = &self.temporal {
             t.advance(slot);
         }
     }
 
+    /// The lights changed (moved, edited, switched; the environment, pre-exposure or shadow
+    /// parameters): the view-independent volumes are computed again and accumulation
+    /// restarts.
+    pub fn lights_changed(&self) {
+        self.world_generation.fetch_add(1, Ordering::SeqCst);
+        self.reset();
+    }
+
     /// Restarts accumulation (lights or scene changed; without temporal accumulation, the
-    /// camera too).
+    /// camera too). The view-independent volumes stay: they do not depend on the camera.
     pub fn reset(&self) {
         self.accumulation.reset();
         if let Some(t) = &self.temporal {
@@ -345,10 +371,17 @@ impl GiPasses {
     /// Objects moved since the last frame: under temporal accumulation the next frame keeps
     /// a short history instead of starting over.
     pub fn objects_moved(&self) {
+        self.world_generation.fetch_add(1, Ordering::SeqCst);
         match &self.temporal {
             Some(t) => t.objects_moved(),
             None => self.reset(),
         }
+    }
+
+    /// The validity of the method's cached view-independent volume (the direct-radiance
+    /// volume with `shadow.cache`), if it keeps one.
+    pub fn world_cache(&self) -> Option<&Arc<crate::graph::Cache>> {
+        self.method.world_cache()
     }
 
     /// Frames accumulated so far.
@@ -400,7 +433,6 @@ impl GiPasses {
             push: self.push,
             frames: self.accumulation.frames.clone(),
             sample_index: self.temporal.is_some().then(|| self.sample_index.clone()),
-            first_frame: self.accumulation.first_frame.clone(),
             attributes: None,
             eye,
             world: MethodWorld::default(),
@@ -492,63 +524,20 @@ impl Filter {
     }
 }
 
-/// Frames accumulated since the last restart, and the condition of the passes that run once
-/// per restart.
+/// Frames accumulated since the last restart.
 #[derive(Default)]
 struct Accumulation {
     /// Counting the frame being recorded.
     frames: Arc<AtomicU32>,
-    /// Open in the slots recording the first frame after a restart ([`GiShared::first_frame`]).
-    first_frame: Arc<SlotCondition>,
 }
 
 impl Accumulation {
-    fn advance(&self, slot: usize) {
-        let frames = self.frames.fetch_add(1, Ordering::SeqCst) + 1;
-        self.first_frame.set(slot, frames <= 1);
+    fn advance(&self) {
+        self.frames.fetch_add(1, Ordering::SeqCst);
     }
 
     /// The next frame recorded, in any slot, is a first frame.
     fn reset(&self) {
         self.frames.store(0, Ordering::SeqCst);
-        for slot in 0..crate::vk::MAX_FRAMES_IN_FLIGHT {
-            self.first_frame.set(slot, true);
-        }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// Two slots alternate: only the first frame after a start or a restart opens its slot,
-    /// whichever slot it is in; a restart between counting a frame and recording it opens
-    /// that frame's slot too (its volume must be recomputed).
-    #[test]
-    fn once_per_restart_passes_run_in_the_first_frame_only() {
-        let a = Accumulation::default();
-        let open = |slot| a.first_frame.is_open(slot);
-        a.advance(0);
-        assert!(open(0));
-        a.advance(1);
-        assert!(!open(1));
-        a.advance(0);
-        assert!(!open(0) && !open(1));
-        assert_eq!(a.frames.load(Ordering::SeqCst), 3);
-        a.reset();
-        assert!(
-            open(0) && open(1),
-            "the restart's frame runs wherever it is recorded"
-        );
-        a.advance(1);
-        assert!(open(1));
-        a.advance(0);
-        assert!(
-            !open(0) && open(1),
-            "slot 1 stays open until its next frame"
-        );
-        a.advance(1);
-        assert!(!open(1));
-        assert_eq!(a.frames.load(Ordering::SeqCst), 3);
     }
 }

@@ -157,6 +157,7 @@ impl Renderer {
                     motion: false,
                     temporal: false,
                     atlas_attributes: false,
+                    cache: settings.shadow.cache,
                 },
                 &settings.gi,
                 (settings.shadow.direct_samples, settings.post.taa.is_some()),
@@ -473,6 +474,7 @@ fn gi_passes(
             motion: motion_vectors(scene, settings),
             temporal: crate::gi::GiPasses::temporal_on(&settings.gi),
             atlas_attributes,
+            cache: settings.shadow.cache,
         },
     )?;
     let light_map = plan

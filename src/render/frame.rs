@@ -100,7 +100,10 @@ impl Renderer {
             gi.update_scene(scene, s.time_s);
             let changed =
                 right_changed || bytemuck::bytes_of(&f) != bytemuck::bytes_of(&self.frame_data);
-            if changed && (!gi.reprojects() || light_key(&f) != light_key(&self.frame_data)) {
+            let lights_changed = light_key(&f) != light_key(&self.frame_data);
+            if lights_changed {
+                gi.lights_changed();
+            } else if changed && !gi.reprojects() {
                 gi.reset();
             }
             let mut cameras = vec![temporal_view(&camera, aspect)];

@@ -229,15 +229,18 @@ impl Renderer {
 
     /// Frames the indirect light has accumulated since the last reset (`None`: GI off).
     /// The caches of the light-space passes, by name (`shadow map V` per layer, `light
-    /// maps`): how often each rendered and was reused (empty while `shadow.cache` is off).
+    /// maps`, `direct radiance volume`): how often each rendered and was reused (empty while
+    /// `shadow.cache` is off).
     pub fn cache_counts(&self) -> Vec<(String, (u64, u64))> {
         let layers = self.shadow_view_count + self.cascade_view_capacity;
         let light_map = self.gi.as_ref().and_then(|(_, lm)| lm.as_ref());
         let light_map = light_map.and_then(|lm| lm.cache());
+        let volume = self.gi.as_ref().and_then(|(gi, _)| gi.world_cache());
         self.shadow_depth
             .caches(layers)
             .iter()
             .chain(light_map)
+            .chain(volume)
             .map(|c| (c.name().to_owned(), c.counts()))
             .collect()
     }
