@@ -18,8 +18,11 @@
 //!   (`bench traverse` per scene, radius and test).
 //! - [`bench_ssgi`] (`voxgi bench ssgi`): the screen-space GI's scalability table (Oetke
 //!   2017 Fig. 4.8): mip filter × GI resolution × samples, per-stage GPU times and errors.
+//! - [`bench_dynamic`] (`voxgi bench dynamic`): animated objects voxelized again every frame
+//!   over a static scene voxelized once (Thiedemann 2010 §8.2, Figs. 41/42): 0, 3 and 9.
 //! - [`bench_scenes`], [`dense_scene`], [`tessellated_cube`]: the generated scenes they run on.
 
+mod dynamic;
 mod flicker;
 mod leak;
 pub mod plot;
@@ -34,6 +37,9 @@ pub mod temporal;
 mod traverse;
 mod voxelize;
 
+pub use dynamic::{
+    bench_dynamic, dynamic_scene, DynamicBenchDesc, DynamicBenchReport, DynamicBenchRow,
+};
 pub use flicker::{
     bench_flicker, change_and_flicker, default_methods, FlickerBenchDesc, FlickerReport, FlickerRow,
 };
@@ -100,7 +106,8 @@ pub enum BenchError {
     #[error(transparent)]
     Settings(#[from] crate::limits::LimitError),
     #[error(
-        "the scene has no point or spot light to move: the flicker benchmark moves the first          one along a circle; add one to the scene"
+        "the scene has no point or spot light to move: the flicker benchmark moves the first \
+         one along a circle; add one to the scene"
     )]
     NoMovableLight,
     #[error("no reference image {}: point --references at the folder that has it, render one with tools/reference (see assets/references/README.md) or choose a scene that has one", path.display())]

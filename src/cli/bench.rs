@@ -1,10 +1,10 @@
-//! `voxgi bench traverse|voxelize|voxelize-sweep|flicker|soak|leak|ssgi|ssgi-limits`: the benchmarks of [`crate::bench`].
+//! `voxgi bench traverse|voxelize|voxelize-sweep|dynamic|flicker|soak|leak|ssgi|ssgi-limits`: the benchmarks of [`crate::bench`].
 
 use super::{out, outln, with_context, CliError, Global};
 use crate::bench::{
-    bench_flicker, bench_leak, bench_soak, bench_traverse, bench_voxelize_atlas,
-    bench_voxelize_sweep, FlickerBenchDesc, LeakBenchDesc, SoakBenchDesc, TraverseBenchDesc,
-    VoxelizeBenchDesc, VoxelizeSweepDesc,
+    bench_dynamic, bench_flicker, bench_leak, bench_soak, bench_traverse, bench_voxelize_atlas,
+    bench_voxelize_sweep, DynamicBenchDesc, FlickerBenchDesc, LeakBenchDesc, SoakBenchDesc,
+    TraverseBenchDesc, VoxelizeBenchDesc, VoxelizeSweepDesc,
 };
 use crate::gi::GiMethod;
 use crate::scene::{load_scene_arg, DEFAULT_SCENE};
@@ -48,6 +48,25 @@ pub enum BenchCommand {
         /// Frames the reference path tracer accumulates per step.
         #[arg(long, default_value_t = 32, value_parser = clap::value_parser!(u32).range(1..=4096))]
         reference_frames: u32,
+        /// Print JSON instead of a table.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Animated objects voxelized again every frame over a static scene voxelized once
+    /// (Thiedemann 2010 §8.2, Figs. 41/42): Cornell walls with 16 static bunnies and N
+    /// flying ones; per voxelizer, the bits alone (hemisphere) and with the attribute volumes
+    /// (path tracer): GPU ms per frame of the bit passes, the attribute passes and the frame.
+    Dynamic {
+        /// Numbers of animated bunnies.
+        #[arg(long, value_delimiter = ',', default_values_t = [0, 3, 9],
+              value_parser = clap::value_parser!(u32).range(0..=256))]
+        animated: Vec<u32>,
+        /// Image width and height in pixels.
+        #[arg(long, default_value_t = 128, value_parser = clap::value_parser!(u32).range(8..=4096))]
+        size: u32,
+        /// Measured frames (the scene's time advances 50 ms per frame).
+        #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u32).range(1..=10000))]
+        frames: u32,
         /// Print JSON instead of a table.
         #[arg(long)]
         json: bool,
@@ -424,6 +443,21 @@ pub fn bench(global: &Global, command: &BenchCommand, out: &mut dyn Write) -> Re
             })
         }
         BenchCommand::Soak(args) => args.run(global, out),
+        BenchCommand::Dynamic {
+            animated,
+            size,
+            frames,
+            json,
+        } => with_context(global, |ctx| {
+            let desc = DynamicBenchDesc {
+                animated: animated.clone(),
+                size: *size,
+                frames: *frames as usize,
+                ..Default::default()
+            };
+            let report = bench_dynamic(ctx, &desc)?;
+            print(out, *json, &report, || report.table())
+        }),
         BenchCommand::Leak {
             methods,
             lights,
