@@ -142,6 +142,24 @@ impl Renderer {
             true => Some(gi_passes(ctx, scene, settings, &plan, &mut voxels)?),
             false => None,
         };
+        let oit = plan
+            .oit_on
+            .then(|| {
+                let materials = (
+                    plan.has_phong,
+                    scene.has_ggx(),
+                    scene.has_albedo_textures(),
+                    scene.has_alpha_maps(),
+                );
+                // The GI method's paths from the transparent fragments, if it gives them any.
+                let indirect = gi
+                    .as_ref()
+                    .and_then(|(gi, _)| gi.transparent_indirect())
+                    .map(|push| (push, scene.has_emission()));
+                let nodes = settings.oit_nodes_per_pixel;
+                oit::OitPasses::new(ctx, materials, nodes, sampler.raw, indirect)
+            })
+            .transpose()?;
         let direct_emitters = match (plan.direct_light, voxels.as_ref()) {
             (Some(light), Some(v)) => Some(direct_emitters::DirectEmittersPass::new(
                 ctx,
@@ -188,7 +206,7 @@ impl Renderer {
             voxel_debug,
             atlas_view,
             gbuffer_view,
-            oit: lit.oit,
+            oit,
             shadow_texels,
             auto_shadow: None,
             stereo: rig
@@ -286,7 +304,6 @@ struct LitPasses {
     shadow_depth: ShadowDepthPass,
     gbuffer: GbufferPass,
     deferred: DeferredDirectPass,
-    oit: Option<oit::OitPasses>,
     tonemap: TonemapPass,
     post: crate::post::PostPasses,
     /// The G-buffer writes motion vectors.
@@ -334,18 +351,6 @@ impl LitPasses {
             crate::scene::Environment::shader_kind(scene.environment.as_ref()),
             sampler,
         )?;
-        let oit = plan
-            .oit_on
-            .then(|| {
-                let materials = (
-                    features.phong,
-                    features.ggx,
-                    features.textures,
-                    features.alpha_maps,
-                );
-                oit::OitPasses::new(ctx, materials, settings.oit_nodes_per_pixel, sampler)
-            })
-            .transpose()?;
         let tonemap = TonemapPass::new(ctx, sampler)?;
         // A debug view replaces the lit image: no post passes, and no TAA jitter.
         let post = match settings.debug {
@@ -362,7 +367,6 @@ impl LitPasses {
             shadow_depth,
             gbuffer,
             deferred,
-            oit,
             tonemap,
             post,
             motion: features.motion,
