@@ -165,3 +165,15 @@ impl OitGatherPass {
         });
     }
 }
+
+#[cfg(test)]
+mod tests {
+    /// The indirect variant's parameter buffer holds what the ray passes get as push
+    /// constants: the shader's `GpuGiPush` has the Rust struct's names, offsets and sizes.
+    #[test]
+    fn gi_params_buffer_matches_the_ray_passes_push_constants() {
+        let files = ["oit_gather_indirect.frag"];
+        crate::vk::check_struct_against::<crate::gi::GpuGiPush>(&files, "GpuGiPush")
+            .unwrap_or_else(|e| panic!("{e}"));
+    }
+}
