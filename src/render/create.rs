@@ -113,7 +113,8 @@ impl Renderer {
 
     /// Creates the frame's resources and passes (see [`Renderer::new`]), in this order: the
     /// plan and its checks, the read-back buffers and the scene, the passes of the lit frame,
-    /// the debug views, the voxels, indirect light, and the voxel views.
+    /// the debug views, the voxels, indirect light, transparency (whose layers may trace the GI
+    /// method's rays), and the voxel views.
     fn create(
         ctx: &Context,
         scene: &Scene,
@@ -298,8 +299,8 @@ impl FramePlan {
     }
 }
 
-/// The passes of the lit frame: shadow maps, G-buffer, direct light, transparency, tone
-/// mapping and post-processing.
+/// The passes of the lit frame: shadow maps, G-buffer, direct light, tone mapping and
+/// post-processing.
 struct LitPasses {
     shadow_depth: ShadowDepthPass,
     gbuffer: GbufferPass,
