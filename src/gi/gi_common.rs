@@ -63,6 +63,26 @@ crate::push_constants!(GpuGiPush {
     ray_offset_max_voxels,
 });
 
+// Also a buffer's contents: `oit_gather_indirect.frag` reads the path tracer's parameters
+// from one (its push constants hold the draw).
+crate::gpu_struct!(GpuGiPush {
+    world_to_voxel,
+    dims,
+    max_level,
+    radius_m,
+    normal_offset_voxels,
+    hit_tolerance_voxels,
+    voxel_diagonal_m,
+    rays,
+    start_level,
+    max_iterations,
+    seed,
+    light_map_scale,
+    bounces,
+    ray_offset_voxels,
+    ray_offset_max_voxels,
+});
+
 impl GpuGiPush {
     /// The push constants of `settings` on `target`'s grid; the ray length defaults to the
     /// scene's diagonal (unbounded in practice).

@@ -161,6 +161,14 @@ pub struct GiWorld {
     method: MethodWorld,
 }
 
+impl GiWorld {
+    /// The ray-mask table and the attribute volumes (when the method reads them), for a pass
+    /// outside the method that traces its rays: `oit_gather` ([`GiPasses::transparent_indirect`]).
+    pub fn ray_inputs(&self) -> Option<(BufferHandle, crate::voxel::attributes::AttributeHandles)> {
+        self.attributes.map(|a| (self.lut, a))
+    }
+}
+
 /// What a GI method's passes produce.
 struct GiOutput {
     /// The unfiltered indirect light.
@@ -395,6 +403,14 @@ impl GiPasses {
     pub fn value_volumes(settings: &GiSettings, scene: &Scene) -> ValueVolumes {
         let lobes = (settings.method.spec().material_volume)(settings);
         ValueVolumes::new(scene, lobes, settings.voxel_map_texels)
+    }
+
+    /// The ray parameters (rays, bounces, offsets, the grid) transparent layers trace their
+    /// indirect light with, when the method gives them any ([`MethodSpec::transparent_indirect`])
+    /// and its attribute volumes exist.
+    pub fn transparent_indirect(&self) -> Option<GpuGiPush> {
+        (self.settings.method.spec().transparent_indirect && self.attributes.is_some())
+            .then_some(self.push)
     }
 
     /// Whether the chosen method reads the albedo and normal volumes (and with them, in

@@ -113,7 +113,8 @@ impl Renderer {
 
     /// Creates the frame's resources and passes (see [`Renderer::new`]), in this order: the
     /// plan and its checks, the read-back buffers and the scene, the passes of the lit frame,
-    /// the debug views, the voxels, indirect light, and the voxel views.
+    /// the debug views, the voxels, indirect light, transparency (whose layers may trace the GI
+    /// method's rays), and the voxel views.
     fn create(
         ctx: &Context,
         scene: &Scene,
@@ -142,6 +143,24 @@ impl Renderer {
             true => Some(gi_passes(ctx, scene, settings, &plan, &mut voxels)?),
             false => None,
         };
+        let oit = plan
+            .oit_on
+            .then(|| {
+                let materials = (
+                    plan.has_phong,
+                    scene.has_ggx(),
+                    scene.has_albedo_textures(),
+                    scene.has_alpha_maps(),
+                );
+                // The GI method's paths from the transparent fragments, if it gives them any.
+                let indirect = gi
+                    .as_ref()
+                    .and_then(|(gi, _)| gi.transparent_indirect())
+                    .map(|push| (push, scene.has_emission()));
+                let nodes = settings.oit_nodes_per_pixel;
+                oit::OitPasses::new(ctx, materials, nodes, sampler.raw, indirect)
+            })
+            .transpose()?;
         let direct_emitters = match (plan.direct_light, voxels.as_ref()) {
             (Some(light), Some(v)) => Some(direct_emitters::DirectEmittersPass::new(
                 ctx,
@@ -189,7 +208,7 @@ impl Renderer {
             voxel_debug,
             atlas_view,
             gbuffer_view,
-            oit: lit.oit,
+            oit,
             shadow_texels,
             auto_shadow: None,
             stereo: rig
@@ -281,13 +300,12 @@ impl FramePlan {
     }
 }
 
-/// The passes of the lit frame: shadow maps, G-buffer, direct light, transparency, tone
-/// mapping and post-processing.
+/// The passes of the lit frame: shadow maps, G-buffer, direct light, tone mapping and
+/// post-processing.
 struct LitPasses {
     shadow_depth: ShadowDepthPass,
     gbuffer: GbufferPass,
     deferred: DeferredDirectPass,
-    oit: Option<oit::OitPasses>,
     tonemap: TonemapPass,
     post: crate::post::PostPasses,
     /// The G-buffer writes motion vectors.
@@ -335,18 +353,6 @@ impl LitPasses {
             crate::scene::Environment::shader_kind(scene.environment.as_ref()),
             sampler,
         )?;
-        let oit = plan
-            .oit_on
-            .then(|| {
-                let materials = (
-                    features.phong,
-                    features.ggx,
-                    features.textures,
-                    features.alpha_maps,
-                );
-                oit::OitPasses::new(ctx, materials, settings.oit_nodes_per_pixel, sampler)
-            })
-            .transpose()?;
         let tonemap = TonemapPass::new(ctx, sampler)?;
         // A debug view replaces the lit image: no post passes, and no TAA jitter.
         let post = match settings.debug {
@@ -363,7 +369,6 @@ impl LitPasses {
             shadow_depth,
             gbuffer,
             deferred,
-            oit,
             tonemap,
             post,
             motion: features.motion,

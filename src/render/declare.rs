@@ -2,6 +2,7 @@
 //! light, transparency, post-processing and tone mapping, or a debug view instead.
 
 use super::*;
+use oit::OitVoxelInputs;
 
 /// What a frame's eyes share: declared by the first eye's passes, reused by the second.
 #[derive(Default)]
@@ -171,7 +172,19 @@ impl Renderer {
         };
         // Transparent layers over the lit opaque frame, before post-processing.
         let radiance = match &self.oit {
-            Some(oit) => oit.declare(g, scene, (gbuffer.depth, shadow_map), radiance, (w, h)),
+            Some(oit) => {
+                // The GI method's voxels, ray masks and attribute volumes, for the fragments'
+                // indirect light (declared above by the first eye).
+                let voxels = voxel_image.zip(shared.gi.and_then(|w| w.ray_inputs())).map(
+                    |(voxels, (lut, attributes))| OitVoxelInputs {
+                        voxels,
+                        lut,
+                        attributes,
+                    },
+                );
+                let world = (gbuffer.depth, shadow_map);
+                oit.declare(g, scene, world, radiance, (w, h), voxels)
+            }
             None => radiance,
         };
         let (radiance, exposure) = post.declare_hdr(g, radiance, gbuffer.depth, gbuffer.motion);

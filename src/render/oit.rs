@@ -6,11 +6,13 @@
 //! with such a material and `--transparency oit` have these passes or their memory.
 
 use super::oit_clear::OitClearPass;
-use super::oit_gather::{OitGatherPass, OitLists};
+use super::oit_gather::{OitGatherPass, OitIndirect, OitLists};
 use super::oit_resolve::{OitResolvePass, MAX_LAYERS};
 use super::scene_gpu::SceneInputs;
-use crate::graph::{Access, ImageHandle, RenderGraph};
+use crate::gi::GpuGiPush;
+use crate::graph::{Access, BufferHandle, ImageHandle, RenderGraph, Shader};
 use crate::vk::{vk, Buffer, Context, ImageDesc, VkError};
+use crate::voxel::attributes::AttributeHandles;
 
 /// Node-buffer capacity per pixel when no flag says otherwise: a pixel covered by one or two
 /// transparent layers, on average over the frame, fits several times over.
@@ -67,24 +69,47 @@ pub struct OitPasses {
     stats: Buffer,
     nodes_per_pixel: u32,
     shadow_sampler: vk::Sampler,
+    /// The GI method's ray parameters for the fragments' indirect light
+    /// ([`crate::gi::GiPasses::transparent_indirect`]), when it gives them any.
+    gi_params: Option<Buffer>,
+}
+
+/// What the fragments' voxel paths read, declared by the GI passes of the frame.
+#[derive(Clone, Copy, Debug)]
+pub struct OitVoxelInputs {
+    /// The voxel hierarchy.
+    pub voxels: ImageHandle,
+    /// The ray-mask table.
+    pub lut: BufferHandle,
+    pub attributes: AttributeHandles,
 }
 
 impl OitPasses {
     /// `materials`: (Phong, GGX, albedo textures, alpha maps) in the scene; `sampler`: the renderer's
-    /// nearest-neighbour sampler (shadow maps, radiance).
+    /// nearest-neighbour sampler (shadow maps, radiance); `indirect`: the GI method's ray
+    /// parameters and whether the scene has emitters, when the fragments get indirect light.
     pub fn new(
         ctx: &Context,
         materials: (bool, bool, bool, bool),
         nodes_per_pixel: u32,
         sampler: vk::Sampler,
+        indirect: Option<(GpuGiPush, bool)>,
     ) -> Result<Self, VkError> {
+        // Written once: the renderer is made anew when the GI settings change.
+        let gi_params = indirect
+            .map(|(push, _)| {
+                let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
+                ctx.upload_buffer("oit gi params", bytemuck::bytes_of(&push), usage)
+            })
+            .transpose()?;
         Ok(Self {
             clear: OitClearPass::new(ctx)?,
-            gather: OitGatherPass::new(ctx, materials)?,
+            gather: OitGatherPass::new(ctx, materials, indirect.map(|(_, emission)| emission))?,
             resolve: OitResolvePass::new(ctx, sampler)?,
             stats: crate::graph::readback_buffer(ctx, "oit stats", 16)?,
             nodes_per_pixel,
             shadow_sampler: sampler,
+            gi_params,
         })
     }
 
@@ -95,6 +120,8 @@ impl OitPasses {
     }
 
     /// Declares the four passes; returns `opaque` with the transparent layers blended over it.
+    /// `voxels`: what the GI passes declared for the fragments' indirect light (`None`: direct
+    /// light only).
     pub fn declare(
         &self,
         g: &mut RenderGraph,
@@ -102,6 +129,7 @@ impl OitPasses {
         (depth, shadow_maps): (ImageHandle, ImageHandle),
         opaque: ImageHandle,
         size: (u32, u32),
+        voxels: Option<OitVoxelInputs>,
     ) -> ImageHandle {
         let capacity = self.capacity(size);
         let lists = OitLists {
@@ -116,8 +144,23 @@ impl OitPasses {
         };
         self.clear
             .declare(g, lists.heads, lists.counters, capacity, size);
-        self.gather
-            .declare(g, scene, lists, depth, shadow_maps, self.shadow_sampler);
+        let indirect = match (&self.gi_params, voxels) {
+            (Some(params), Some(v)) => Some(OitIndirect {
+                params: g.import_buffer(params, Access::StorageRead(Shader::Fragment)),
+                voxels: v.voxels,
+                lut: v.lut,
+                attributes: v.attributes,
+            }),
+            _ => None,
+        };
+        self.gather.declare(
+            g,
+            scene,
+            lists,
+            (depth, shadow_maps),
+            self.shadow_sampler,
+            indirect,
+        );
         let out = self.resolve.declare(
             g,
             (lists.heads, lists.nodes, lists.counters),

@@ -28,6 +28,7 @@ pub(super) static SPEC: MethodSpec = MethodSpec {
     },
     // The direct-radiance volume's glossy voxels (their diffuse part and specular lobe).
     material_volume: |s| s.radiance_source == RadianceSource::Volume,
+    transparent_indirect: false,
     history: |_, _, _| Vec::new(),
     filter_tile: |_| [1, 1],
     multiview_blocker: None,

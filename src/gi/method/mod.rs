@@ -74,6 +74,11 @@ pub struct MethodSpec {
     /// The method's hits sample the Phong and GGX lobes, so the attribute volumes carry the
     /// material volume.
     pub material_volume: fn(&GiSettings) -> bool,
+    /// Transparent layers drawn as per-pixel lists (`--transparency oit`) get the method's
+    /// indirect light: `oit_gather` traces the voxel path tracer's paths from each fragment
+    /// (`glsl/include/oit_gather_body.glsl`), reading the attribute volumes. Otherwise they
+    /// get direct light only.
+    pub transparent_indirect: bool,
     /// The frame-sized history images the method keeps per eye, for the renderer's memory
     /// check: `(settings, size, glossy)` where `glossy` says the scene has Phong or GGX
     /// materials.

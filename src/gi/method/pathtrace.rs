@@ -22,6 +22,8 @@ pub(super) static SPEC: MethodSpec = MethodSpec {
     attribute_volumes: |_, _| true,
     // Later bounces sample the Phong and GGX lobes unless `--pathtrace-lobes false`.
     material_volume: |s| s.pathtrace_lobes,
+    // Its paths from each transparent fragment, with its rays and bounces.
+    transparent_indirect: true,
     // Per stereo eye: see `GiTarget::eyes` (the renderer repeats this list per eye).
     history: |s, size, _| match super::super::GiPasses::temporal_on(s) {
         true => vec![],

@@ -23,6 +23,8 @@ pub(super) static SPEC: MethodSpec = MethodSpec {
     brings_environment: false,
     attribute_volumes: |_, _| false,
     material_volume: |_| false,
+    // No voxels: transparent layers get direct light only.
+    transparent_indirect: false,
     history: |s, size, glossy| {
         if s.ssgi.ssr && glossy {
             vec![Ssgi::history_desc(size), Ssr::history_desc(size)]
