@@ -1304,9 +1304,10 @@ impl Viewer {
             actions: Vec::new(),
             position_field: None,
         };
-        let out = egui_ctx.run(raw, |c| {
+        let mut out = egui_ctx.run_ui(raw, |root| {
             let mut edit_ui = |ui: &mut egui::Ui| edits = edit_ui::panel(ui, &edit_view);
-            layout = panel::draw(c, controls, stats, &info, &mut edit_ui);
+            layout = panel::draw(root, controls, stats, &info, &mut edit_ui);
+            let c = root.ctx();
             edit_ui::paint(
                 c,
                 edit_view.editor,
@@ -1340,12 +1341,14 @@ impl Viewer {
         self.egui_state
             .handle_platform_output(window, out.platform_output);
         if let Some(overlay) = self.overlay.as_mut() {
-            if overlay.update_textures(ctx, &out.textures_delta)? {
+            if overlay.update_textures(ctx, &mut out.textures_delta)? {
                 // The atlas image changed: the graph imports the old one. (Dropped graphs are
                 // released once the frames in flight that use them completed.)
                 self.graph = None;
             }
         }
+        // Applied or not wanted (no overlay): egui asserts that a dropped delta is empty.
+        out.textures_delta.clear();
         let ppp = out.pixels_per_point;
         Ok((egui_ctx.tessellate(out.shapes, ppp), ppp))
     }
