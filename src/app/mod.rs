@@ -706,7 +706,10 @@ impl Viewer {
         match event {
             WindowEvent::Destroyed => {
                 // Another client destroyed the window (a close asks first: CloseRequested).
-                log::warn!("the window was destroyed: exiting");
+                // A frame may have found its surface lost first, and said so.
+                if !self.window_gone {
+                    log::warn!("the window was destroyed: exiting");
+                }
                 self.window_gone = true;
                 elwt.exit();
             }
@@ -1118,6 +1121,15 @@ impl Viewer {
                 frame_loop.submit(ctx, &[], &[])?;
                 self.swapchain_dirty = true;
                 return Ok(false);
+            }
+            Acquired::SurfaceLost => {
+                // The window was destroyed mid-frame; `Destroyed` has not arrived yet. Keep
+                // the frame loop in step (its teardown waits for the frames in flight) and
+                // exit as `Destroyed` does.
+                frame_loop.submit(ctx, &[], &[])?;
+                log::warn!("the window was destroyed: exiting");
+                self.window_gone = true;
+                return Ok(true);
             }
         };
         // A click waiting for the GPU is answered by this frame (recorded below).
