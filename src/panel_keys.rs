@@ -165,11 +165,12 @@ mod tests {
                     ..Default::default()
                 };
                 let before = gi;
-                let _ = ctx.run(egui::RawInput::default(), |ctx| {
-                    egui::CentralPanel::default().show(ctx, |ui| {
+                let mut out = ctx.run_ui(egui::RawInput::default(), |root| {
+                    egui::CentralPanel::default().show(root, |ui| {
                         (method.spec().panel)(ui, &mut gi, Some(3));
                     });
                 });
+                out.textures_delta.clear();
                 assert_eq!(
                     gi, before,
                     "{method:?}: drawing its panel changed a setting"

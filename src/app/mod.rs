@@ -706,7 +706,10 @@ impl Viewer {
         match event {
             WindowEvent::Destroyed => {
                 // Another client destroyed the window (a close asks first: CloseRequested).
-                log::warn!("the window was destroyed: exiting");
+                // A frame may have found its surface lost first, and said so.
+                if !self.window_gone {
+                    log::warn!("the window was destroyed: exiting");
+                }
                 self.window_gone = true;
                 elwt.exit();
             }
@@ -1119,6 +1122,15 @@ impl Viewer {
                 self.swapchain_dirty = true;
                 return Ok(false);
             }
+            Acquired::SurfaceLost => {
+                // The window was destroyed mid-frame; `Destroyed` has not arrived yet. Keep
+                // the frame loop in step (its teardown waits for the frames in flight) and
+                // exit as `Destroyed` does.
+                frame_loop.submit(ctx, &[], &[])?;
+                log::warn!("the window was destroyed: exiting");
+                self.window_gone = true;
+                return Ok(true);
+            }
         };
         // A click waiting for the GPU is answered by this frame (recorded below).
         let frame_size = (renderer.settings.width, renderer.settings.height);
@@ -1304,9 +1316,10 @@ impl Viewer {
             actions: Vec::new(),
             position_field: None,
         };
-        let out = egui_ctx.run(raw, |c| {
+        let mut out = egui_ctx.run_ui(raw, |root| {
             let mut edit_ui = |ui: &mut egui::Ui| edits = edit_ui::panel(ui, &edit_view);
-            layout = panel::draw(c, controls, stats, &info, &mut edit_ui);
+            layout = panel::draw(root, controls, stats, &info, &mut edit_ui);
+            let c = root.ctx();
             edit_ui::paint(
                 c,
                 edit_view.editor,
@@ -1340,12 +1353,14 @@ impl Viewer {
         self.egui_state
             .handle_platform_output(window, out.platform_output);
         if let Some(overlay) = self.overlay.as_mut() {
-            if overlay.update_textures(ctx, &out.textures_delta)? {
+            if overlay.update_textures(ctx, &mut out.textures_delta)? {
                 // The atlas image changed: the graph imports the old one. (Dropped graphs are
                 // released once the frames in flight that use them completed.)
                 self.graph = None;
             }
         }
+        // Applied or not wanted (no overlay): egui asserts that a dropped delta is empty.
+        out.textures_delta.clear();
         let ppp = out.pixels_per_point;
         Ok((egui_ctx.tessellate(out.shapes, ppp), ppp))
     }

@@ -127,26 +127,32 @@ impl Overlay {
         self.atlas.is_some()
     }
 
-    /// Applies egui's texture changes. Returns `true` when the atlas image was (re)created,
+    /// Applies egui's texture changes and empties `delta` (egui asserts that a dropped delta
+    /// is empty, an error here included). Returns `true` when the atlas image was (re)created,
     /// which needs a new graph. Waits for the device when the atlas changed (rare: the first
     /// frame and new glyphs), because frames in flight may still sample it.
     pub fn update_textures(
         &mut self,
         ctx: &Context,
-        delta: &egui::TexturesDelta,
+        delta: &mut egui::TexturesDelta,
     ) -> Result<bool, VkError> {
+        let set = std::mem::take(&mut delta.set);
+        delta.free.clear();
         let mut recreated = false;
         let mut changed = false;
-        for (id, d) in &delta.set {
-            if *id != egui::TextureId::default() {
-                log::warn!("egui texture {id:?} ignored: the viewer draws the font atlas only");
-                continue;
+        // egui lists a texture's changes in order: a whole image, then patches of it.
+        let atlas_deltas = set.into_iter().filter_map(|(id, ds)| {
+            if id == egui::TextureId::default() {
+                return Some(ds);
             }
+            log::warn!("egui texture {id:?} ignored: the viewer draws the font atlas only");
+            None
+        });
+        for d in atlas_deltas.flatten() {
             let (w, h) = (d.image.width(), d.image.height());
-            let pixels: Vec<[u8; 4]> = match &d.image {
-                egui::ImageData::Color(c) => c.pixels.iter().map(|p| p.to_array()).collect(),
-                egui::ImageData::Font(f) => f.srgba_pixels(None).map(|p| p.to_array()).collect(),
-            };
+            // egui hands every texture, the font atlas too, as premultiplied sRGBA.
+            let egui::ImageData::Color(c) = &d.image;
+            let pixels: Vec<[u8; 4]> = c.pixels.iter().map(|p| p.to_array()).collect();
             match d.pos {
                 None => {
                     if self

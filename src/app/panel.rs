@@ -275,7 +275,7 @@ fn timing_table(ui: &mut egui::Ui, medians: &[(String, f64)], right_x: f32) -> V
     let time_w = rows.iter().fold(0.0f32, |w, (_, t)| {
         let text = t.text().to_owned();
         w.max(
-            ui.fonts(|f| f.layout_no_wrap(text, font.clone(), color))
+            ui.fonts_mut(|f| f.layout_no_wrap(text, font.clone(), color))
                 .size()
                 .x,
         )
@@ -323,7 +323,7 @@ fn timing_table(ui: &mut egui::Ui, medians: &[(String, f64)], right_x: f32) -> V
 /// Draws the panel; returns where it and its GPU-time table landed. `edit_ui` draws the scene
 /// editor's section (`app::edit::panel`).
 pub fn draw(
-    ctx: &egui::Context,
+    root: &mut egui::Ui,
     c: &mut Controls,
     stats: &TimingStats,
     info: &PanelInfo,
@@ -333,16 +333,25 @@ pub fn draw(
     let mut graph = Default::default();
     let mut scroll = ScrollLayout::default();
     let mut spots = Vec::new();
-    let panel = egui::SidePanel::left("voxgi panel")
+    // Exactly 240 points: a panel grows to fit what does not wrap (egui 0.37 lays out a
+    // slider's label beside it, unwrapped: "cascade log/uniform λ" ends 310 points in), and a
+    // wider panel would take the scene's width. What does not fit is clipped at the edge. In
+    // a narrower window the panel takes the window's width: egui cuts an exact size to the
+    // window but lays the contents out at least that wide, past the window's edge.
+    let width = root.available_width().min(240.0);
+    let panel = egui::Panel::left("voxgi panel")
         .resizable(false)
-        .default_width(240.0)
-        .show(ctx, |ui| {
+        .exact_size(width)
+        .show(root, |ui| {
             // Taller than a short window: the contents scroll (wheel over the panel, or the
             // bar). The width stays the panel's, as without scrolling. No scrolling by
             // dragging the contents: a drag there is a slider's or a drag value's.
             let area = egui::ScrollArea::vertical()
                 .auto_shrink([false, true])
-                .drag_to_scroll(false)
+                .scroll_source(egui::scroll_area::ScrollSource {
+                    drag: egui::scroll_area::DragScroll::Never,
+                    ..Default::default()
+                })
                 .show(ui, |ui| {
                     // The panel's inner right edge as this frame lays it out (within the window): a
                     // control wider than that (a collapsing header's title, a slider) widens the
@@ -372,7 +381,7 @@ pub fn draw(
                             rows = timing_table(ui, &stats.medians(), right_x);
                         });
 
-                    egui::CollapsingHeader::new("GPU time per frame (stacked by pass)")
+                    egui::CollapsingHeader::new("GPU time per frame (stacked)")
                         .default_open(true)
                         .show(ui, |ui| {
                             let width = ui.available_width().min(right_x - ui.cursor().min.x);
@@ -398,7 +407,7 @@ pub fn draw(
 
                     egui::CollapsingHeader::new("Shadows")
                         .default_open(true)
-                        .show(ui, |ui| shadow_section(ui, &mut c.shadow));
+                        .show(ui, |ui| shadow_controls(ui, &mut c.shadow));
 
                     egui::CollapsingHeader::new("Dynamic resolution")
                         .default_open(false)
@@ -425,7 +434,8 @@ pub fn draw(
                     ui.separator();
                     scroll.screenshot_button = footer(ui, c, info.status);
                 });
-            scroll.offset = area.state.offset.y;
+            // Where the contents are drawn (past an end while rubber-banding).
+            scroll.offset = area.state.unclamped_offset().y;
             scroll.content_height = area.content_size.y;
             scroll.view = area.inner_rect;
         });
@@ -462,18 +472,6 @@ fn light_controls(ui: &mut egui::Ui, c: &mut Controls, light_names: &[String]) {
                 .text(format!("{name} ×")),
         );
     }
-}
-
-/// The shadow map's resolution and the shadow settings.
-fn shadow_section(ui: &mut egui::Ui, shadow: &mut ShadowSettings) {
-    egui::ComboBox::from_label("resolution")
-        .selected_text(format!("{}²", shadow.resolution))
-        .show_ui(ui, |ui| {
-            for r in SHADOW_RESOLUTIONS {
-                ui.selectable_value(&mut shadow.resolution, r, format!("{r}²"));
-            }
-        });
-    shadow_controls(ui, shadow);
 }
 
 /// The debug image shown instead of the frame, and for the atlas view its object.
@@ -870,13 +868,16 @@ mod table_tests {
                     raw.events.push(egui::Event::MouseWheel {
                         unit: egui::MouseWheelUnit::Point,
                         delta: egui::vec2(0.0, scroll_y),
+                        phase: egui::TouchPhase::Move,
+                        source: egui::MouseWheelSource::Unknown,
                         modifiers: egui::Modifiers::NONE,
                     });
                 }
             }
-            let out = ctx.run(raw, |ctx| {
-                layout = draw(ctx, &mut c, &stats, &info, &mut |_| {})
+            let mut out = ctx.run_ui(raw, |ui| {
+                layout = draw(ui, &mut c, &stats, &info, &mut |_| {})
             });
+            out.textures_delta.clear();
             texts = out
                 .shapes
                 .iter()
@@ -1022,10 +1023,41 @@ mod table_tests {
         assert!(faults.is_empty(), "{}", faults.join("\n"));
     }
 
+    /// egui paints its own warnings into the UI in debug builds (tests included), e.g.
+    /// "🔥 First use of widget ID …" / "Second use of …" where two widgets share an Id (two
+    /// combo boxes with one label); none may show in the panel. The window is tall enough
+    /// for every open section (shapes outside the view are culled).
+    #[test]
+    fn the_panel_shows_no_egui_warning() {
+        let (_, texts) = draw_headless(egui::vec2(640.0, 2400.0), None);
+        assert!(
+            texts.iter().any(|(t, _)| t == "voxgi"),
+            "the panel's heading is not among the texts: {texts:?}"
+        );
+        let warnings: Vec<&String> = texts
+            .iter()
+            .map(|(t, _)| t)
+            .filter(|t| t.contains('🔥') || t.contains(" use of ") && t.contains(" ID "))
+            .collect();
+        assert!(warnings.is_empty(), "egui warns in the panel: {warnings:?}");
+    }
+
+    /// The panel keeps its 240 points in any window wider than that, whatever its contents
+    /// (egui widens a panel to fit what does not wrap; the scene gets the rest).
+    #[test]
+    fn the_panel_is_240_points_wide() {
+        for w in [320.0, 640.0, 1280.0] {
+            let (layout, _) = draw_headless(egui::vec2(w, 480.0), None);
+            assert_eq!(layout.panel.width(), 240.0, "at a {w} point wide window");
+        }
+    }
+
     #[test]
     fn long_pass_names_are_elided_and_shown_in_full_on_hover() {
         let long = "voxelize_attributes_resolve";
-        let narrow = egui::vec2(200.0, 480.0);
+        // Tall enough for the whole table in view (its last rows end near 550 points), as
+        // shapes outside the view are culled.
+        let narrow = egui::vec2(200.0, 640.0);
         let (layout, texts) = draw_headless(narrow, None);
         let drawn =
             |texts: &[(String, bool)], elided| texts.iter().any(|(t, e)| t == long && *e == elided);

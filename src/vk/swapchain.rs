@@ -31,6 +31,9 @@ pub enum Acquired {
     Image { index: u32, ready: vk::Semaphore },
     /// The surface changed (resize); recreate and try the next frame.
     OutOfDate,
+    /// The surface is gone: another client destroyed its window, and the windowing system
+    /// says so before winit reports `Destroyed`. Nothing more can be drawn.
+    SurfaceLost,
 }
 
 /// Dropping it waits for the device and destroys the swapchain and then the surface: drop it
@@ -248,6 +251,7 @@ impl Swapchain {
             // A suboptimal image is still presentable: use it, recreate after presenting.
             Ok((index, _suboptimal)) => Ok(Acquired::Image { index, ready }),
             Err(vk::Result::ERROR_OUT_OF_DATE_KHR) => Ok(Acquired::OutOfDate),
+            Err(vk::Result::ERROR_SURFACE_LOST_KHR) => Ok(Acquired::SurfaceLost),
             Err(e) => Err(VkError::Call {
                 what: "acquire a swapchain image",
                 result: e,
