@@ -147,17 +147,13 @@ impl OitGatherPass {
         sampler: vk::Sampler,
         indirect: Option<OitIndirect>,
     ) {
-        let sampled = indirect.and_then(|i| {
+        // The indirect variant, its inputs and the images its hits read, when this pass made
+        // it and the frame has all of them.
+        let traced = indirect.and_then(|i| {
             let v = self.indirect.as_ref()?;
-            Some((
-                *v.pipeline,
-                i.params,
-                i.inputs.voxels,
-                i.inputs.lut,
-                Self::hit_inputs(v, &i.inputs)?,
-            ))
+            Some((*v.pipeline, i, Self::hit_inputs(v, &i.inputs)?))
         });
-        let pipe = sampled.as_ref().map_or(*self.pipeline, |s| s.0);
+        let pipe = traced.as_ref().map_or(*self.pipeline, |&(p, _, _)| p);
         let (vertices, indices) = (scene.vertices, scene.indices);
         let draws = scene.draws.clone();
         let textures = scene.textures.clone();
@@ -177,11 +173,11 @@ impl OitGatherPass {
             .read(vertices, Access::VertexBuffer)
             .read(indices, Access::IndexBuffer)
             .depth_read(depth);
-        if let Some((_, params, voxels, lut, hits)) = sampled {
+        if let Some((_, i, hits)) = traced {
             pass = pass
-                .bind(8, params, Access::StorageRead(f))
-                .bind_sampled(9, voxels, sampler, f)
-                .bind(10, lut, Access::StorageRead(f));
+                .bind(8, i.params, Access::StorageRead(f))
+                .bind_sampled(9, i.inputs.voxels, sampler, f)
+                .bind(10, i.inputs.lut, Access::StorageRead(f));
             for (binding, image) in (11..).zip(hits) {
                 pass = pass.bind_sampled(binding, image, sampler, f);
             }
