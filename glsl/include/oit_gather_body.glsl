@@ -8,8 +8,11 @@
 // reads how many were lost. oit_resolve.comp sorts and blends the lists.
 // Shaded from the constant material values and the albedo map (no bump or PBR maps).
 //
-// Body of oit_gather.frag (direct light and emission) and oit_gather_indirect.frag
-// (VOXEL_INDIRECT: plus the voxel path tracer's indirect light, see voxel_irradiance).
+// Body of oit_gather.frag (direct light and emission), oit_gather_indirect.frag
+// (VOXEL_INDIRECT: plus the voxel path tracer's indirect light, see voxel_irradiance) and
+// oit_gather_hemisphere*.frag (HEMISPHERE_INDIRECT: plus the hemisphere method's one bounce,
+// its hits read as gi_hemisphere_hit.glsl reads them: light maps, with EMISSION_FROM_VOLUME
+// the emission volume too, or with RADIANCE_FROM_VOLUME the direct-radiance volume).
 layout(early_fragment_tests) in;  // a fragment behind the opaque depth appends nothing
 
 layout(constant_id = 0) const bool HAS_PHONG = false;
@@ -47,10 +50,12 @@ layout(set = 0, binding = 6, std430) writeonly buffer Nodes { uvec4 nodes[]; };
 // x: nodes requested this frame (may exceed y), y: capacity; z, w: oit_resolve's counts.
 layout(set = 0, binding = 7, std430) coherent buffer Counters { uvec4 counters; };
 
-#ifdef VOXEL_INDIRECT
-// The hit voxel's emission is added where a path arrives on an emitter's front side.
-layout(constant_id = 4) const bool HAS_EMISSION = false;
-// The path tracer's parameters (src/gi/gi_common.rs's GpuGiPush, the ray passes' push
+#if defined(VOXEL_INDIRECT) || defined(HEMISPHERE_INDIRECT)
+#define LAYER_INDIRECT
+#endif
+
+#ifdef LAYER_INDIRECT
+// The GI method's ray parameters (src/gi/gi_common.rs's GpuGiPush, the ray passes' push
 // constants), in a buffer: this pass's push constants hold the draw's transform.
 #define GI_OWN_PUSH
 struct GpuGiPush {
@@ -73,9 +78,6 @@ struct GpuGiPush {
 layout(set = 0, binding = 8, std430) readonly buffer GiParams { GpuGiPush gi; };
 layout(set = 0, binding = 9) uniform usampler2DArray voxels;
 layout(set = 0, binding = 10, std430) readonly buffer RayMasks { uvec4 ray_masks[]; };
-layout(set = 0, binding = 11) uniform sampler3D albedo_volume;
-layout(set = 0, binding = 12) uniform sampler3D normal_volume;
-layout(set = 0, binding = 13) uniform sampler3D emission_volume;  // albedo when !HAS_EMISSION
 #include "gi_common.glsl"
 
 uvec4 vx_column(uint level, int x, int y, uint layer) {
@@ -89,6 +91,14 @@ bool vx_voxel(int x, int y, int k) {
 }
 #include "voxel_traverse.glsl"
 #include "material_lobe.glsl"
+#endif
+
+#ifdef VOXEL_INDIRECT
+// The hit voxel's emission is added where a path arrives on an emitter's front side.
+layout(constant_id = 4) const bool HAS_EMISSION = false;
+layout(set = 0, binding = 11) uniform sampler3D albedo_volume;
+layout(set = 0, binding = 12) uniform sampler3D normal_volume;
+layout(set = 0, binding = 13) uniform sampler3D emission_volume;  // albedo when !HAS_EMISSION
 #include "voxel_path.glsl"
 
 // Irradiance at the fragment p (normal n, the side the camera sees) by gi_pathtrace.comp's
@@ -144,6 +154,58 @@ vec3 voxel_irradiance(vec3 p, vec3 n, uvec2 px) {
 }
 #endif
 
+#ifdef HEMISPHERE_INDIRECT
+#ifdef RADIANCE_FROM_VOLUME
+// A glossy hit's specular lobe reads the material, base colour and emission volumes (the
+// albedo volume fills the material and emission bindings where the shader never reads them).
+layout(constant_id = 4) const bool HAS_EMISSION = false;
+layout(set = 0, binding = 11) uniform sampler3D radiance_volume;  // rgb radiance, a: lit side
+layout(set = 0, binding = 12) uniform sampler3D normal_volume;
+layout(set = 0, binding = 13) uniform sampler3D material_volume;
+layout(set = 0, binding = 14) uniform sampler3D albedo_volume;
+layout(set = 0, binding = 15) uniform sampler3D emission_volume;
+#else
+layout(set = 0, binding = 11) uniform sampler2DArray rlm_radiance;
+layout(set = 0, binding = 12) uniform sampler2DArray rlm_position;
+layout(set = 0, binding = 13) uniform sampler2DArray rlm_normal;
+#ifdef EMISSION_FROM_VOLUME
+layout(set = 0, binding = 14) uniform sampler3D emission_volume;
+layout(set = 0, binding = 15) uniform sampler3D normal_volume;
+#endif
+#endif
+#include "gi_hemisphere_hit.glsl"
+
+// Irradiance at the fragment p (normal n, the side the camera sees) by the hemisphere
+// method's rays, as gi_hemisphere_body.glsl casts a Lambert pixel's: `gi.rays`
+// cosine-distributed rays (Hammersley points, the per-pixel rotation of gi.seed), offset along
+// the normal and along the ray (Thiedemann 2010 §5.3.1), within gi.radius_m, the radiance at
+// each hit from hit_radiance. E = pi/N sum L. One bounce, as the method's; a ray that leaves
+// the grid brings nothing back (no environment). One frame's estimate with a fixed pattern,
+// as the path tracer's variant above: the layer has no history.
+vec3 voxel_irradiance(vec3 p, vec3 n, uvec2 px) {
+    vec3 origin = p + n * (gi.normal_offset_voxels * gi.voxel_diagonal_m);
+    vec3 ov = (gi.world_to_voxel * vec4(origin, 1.0)).xyz;
+    mat3 dir_to_voxel = mat3(gi.world_to_voxel);
+    uint rays = max(gi.rays, 1u);
+    vec2 rot = pixel_rotation(px, gi.seed);
+    vec3 sum = vec3(0.0);
+    for (uint i = 0u; i < rays; ++i) {
+        vec2 u = fract(vec2((float(i) + 0.5) / float(rays), radical_inverse(i)) + rot);
+        vec3 d = cosine_direction(n, u);
+        float cos_n = dot(d, n);
+        if (cos_n <= 0.0) continue;
+        float along = min(gi.ray_offset_voxels * gi.voxel_diagonal_m / max(cos_n, 1e-4),
+                          gi.ray_offset_max_voxels * gi.voxel_diagonal_m);
+        vec3 ray_o = ov + dir_to_voxel * (d * along);
+        float ray_t = max(gi.radius_m - along, 0.0);
+        VxHit h = voxel_first_hit(gi.dims, uint(gi.max_level), ray_o, dir_to_voxel * d, ray_t,
+                                  gi.start_level, gi.max_iterations);
+        if (h.hit) sum += hit_radiance(h, origin + d * (along + h.t), d);
+    }
+    return sum * (PI / float(rays));
+}
+#endif
+
 layout(push_constant) uniform Push {
     mat4 model;
     uint material;
@@ -179,7 +241,7 @@ void main() {
     }
     vec3 wo = toward_camera(frame.camera_position, frame.camera_forward, in_world);
     vec3 lo = direct_radiance(shadow_maps, in_world, n, wo, albedo, lobe, lobe_parameter);
-#ifdef VOXEL_INDIRECT
+#ifdef LAYER_INDIRECT
     // The diffuse part's indirect light, albedo/pi E, as gi_composite adds it to a Lambert
     // G-buffer pixel, on the side the camera sees (Mitsuba's mask around a diffuse BSDF
     // reflects from the side it is hit; what lies behind is the blend's).

@@ -32,7 +32,7 @@ pub use crate::scene::{
 };
 pub use gi_common::GpuGiPush;
 pub use gi_temporal::TemporalView;
-pub use method::{EmitterReach, GiMethod, MethodSpec, Refusal};
+pub use method::{EmitterReach, GiMethod, LayerIndirect, MethodSpec, Refusal};
 pub use sao::GpuSaoPush;
 
 use crate::graph::{Access, BufferHandle, ImageHandle, RenderGraph, Shader};
@@ -162,11 +162,26 @@ pub struct GiWorld {
 }
 
 impl GiWorld {
-    /// The ray-mask table and the attribute volumes (when the method reads them), for a pass
-    /// outside the method that traces its rays: `oit_gather` ([`GiPasses::transparent_indirect`]).
-    pub fn ray_inputs(&self) -> Option<(BufferHandle, crate::voxel::attributes::AttributeHandles)> {
-        self.attributes.map(|a| (self.lut, a))
+    /// What a pass outside the method that traces its rays reads: `oit_gather`
+    /// ([`GiPasses::transparent_indirect`]).
+    pub fn ray_inputs(&self) -> LayerRayInputs {
+        LayerRayInputs {
+            lut: self.lut,
+            attributes: self.attributes,
+            radiance_volume: self.method.image,
+        }
     }
+}
+
+/// The frame's resources the method's rays read at their hits, for `oit_gather`.
+#[derive(Clone, Copy, Debug)]
+pub struct LayerRayInputs {
+    /// The ray-mask table.
+    pub lut: BufferHandle,
+    /// The attribute volumes, when the method reads them.
+    pub attributes: Option<crate::voxel::attributes::AttributeHandles>,
+    /// The direct-radiance volume (`--gi-radiance volume`).
+    pub radiance_volume: Option<ImageHandle>,
 }
 
 /// What a GI method's passes produce.
@@ -406,11 +421,14 @@ impl GiPasses {
     }
 
     /// The ray parameters (rays, bounces, offsets, the grid) transparent layers trace their
-    /// indirect light with, when the method gives them any ([`MethodSpec::transparent_indirect`])
-    /// and its attribute volumes exist.
-    pub fn transparent_indirect(&self) -> Option<GpuGiPush> {
-        (self.settings.method.spec().transparent_indirect && self.attributes.is_some())
-            .then_some(self.push)
+    /// indirect light with, and which rays, when the method gives them any
+    /// ([`MethodSpec::transparent_indirect`]) and the attribute volumes those rays read exist
+    /// (the light maps' rays read them only in scenes with emitters, where the method makes
+    /// them).
+    pub fn transparent_indirect(&self, scene: &Scene) -> Option<(GpuGiPush, LayerIndirect)> {
+        let kind = (self.settings.method.spec().transparent_indirect)(&self.settings)?;
+        let reads_volumes = kind != LayerIndirect::LightMaps || scene.has_emission();
+        (!reads_volumes || self.attributes.is_some()).then_some((self.push, kind))
     }
 
     /// Whether the chosen method reads the albedo and normal volumes (and with them, in

@@ -155,8 +155,8 @@ impl Renderer {
                 // The GI method's paths from the transparent fragments, if it gives them any.
                 let indirect = gi
                     .as_ref()
-                    .and_then(|(gi, _)| gi.transparent_indirect())
-                    .map(|push| (push, scene.has_emission()));
+                    .and_then(|(gi, _)| gi.transparent_indirect(scene))
+                    .map(|(push, kind)| (push, kind, scene.has_emission()));
                 let nodes = settings.oit_nodes_per_pixel;
                 oit::OitPasses::new(ctx, materials, nodes, sampler.raw, indirect)
             })

@@ -173,15 +173,18 @@ impl Renderer {
         // Transparent layers over the lit opaque frame, before post-processing.
         let radiance = match &self.oit {
             Some(oit) => {
-                // The GI method's voxels, ray masks and attribute volumes, for the fragments'
-                // indirect light (declared above by the first eye).
-                let voxels = voxel_image.zip(shared.gi.and_then(|w| w.ray_inputs())).map(
-                    |(voxels, (lut, attributes))| OitVoxelInputs {
+                // The GI method's voxels, ray masks and what its rays read at hits, for the
+                // fragments' indirect light (declared above by the first eye).
+                let voxels = voxel_image.zip(shared.gi).map(|(voxels, world)| {
+                    let r = world.ray_inputs();
+                    OitVoxelInputs {
                         voxels,
-                        lut,
-                        attributes,
-                    },
-                );
+                        lut: r.lut,
+                        attributes: r.attributes,
+                        light_maps: shared.light_maps,
+                        radiance_volume: r.radiance_volume,
+                    }
+                });
                 let world = (gbuffer.depth, shadow_map);
                 oit.declare(g, scene, world, radiance, (w, h), voxels)
             }

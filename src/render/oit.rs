@@ -6,13 +6,13 @@
 //! with such a material and `--transparency oit` have these passes or their memory.
 
 use super::oit_clear::OitClearPass;
+pub use super::oit_gather::OitVoxelInputs;
 use super::oit_gather::{OitGatherPass, OitIndirect, OitLists};
 use super::oit_resolve::{OitResolvePass, MAX_LAYERS};
 use super::scene_gpu::SceneInputs;
-use crate::gi::GpuGiPush;
-use crate::graph::{Access, BufferHandle, ImageHandle, RenderGraph, Shader};
+use crate::gi::{GpuGiPush, LayerIndirect};
+use crate::graph::{Access, ImageHandle, RenderGraph, Shader};
 use crate::vk::{vk, Buffer, Context, ImageDesc, VkError};
-use crate::voxel::attributes::AttributeHandles;
 
 /// Node-buffer capacity per pixel when no flag says otherwise: a pixel covered by one or two
 /// transparent layers, on average over the frame, fits several times over.
@@ -74,37 +74,32 @@ pub struct OitPasses {
     gi_params: Option<Buffer>,
 }
 
-/// What the fragments' voxel paths read, declared by the GI passes of the frame.
-#[derive(Clone, Copy, Debug)]
-pub struct OitVoxelInputs {
-    /// The voxel hierarchy.
-    pub voxels: ImageHandle,
-    /// The ray-mask table.
-    pub lut: BufferHandle,
-    pub attributes: AttributeHandles,
-}
-
 impl OitPasses {
     /// `materials`: (Phong, GGX, albedo textures, alpha maps) in the scene; `sampler`: the renderer's
     /// nearest-neighbour sampler (shadow maps, radiance); `indirect`: the GI method's ray
-    /// parameters and whether the scene has emitters, when the fragments get indirect light.
+    /// parameters, its rays and whether the scene has emitters, when the fragments get
+    /// indirect light.
     pub fn new(
         ctx: &Context,
         materials: (bool, bool, bool, bool),
         nodes_per_pixel: u32,
         sampler: vk::Sampler,
-        indirect: Option<(GpuGiPush, bool)>,
+        indirect: Option<(GpuGiPush, LayerIndirect, bool)>,
     ) -> Result<Self, VkError> {
         // Written once: the renderer is made anew when the GI settings change.
         let gi_params = indirect
-            .map(|(push, _)| {
+            .map(|(push, _, _)| {
                 let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
                 ctx.upload_buffer("oit gi params", bytemuck::bytes_of(&push), usage)
             })
             .transpose()?;
         Ok(Self {
             clear: OitClearPass::new(ctx)?,
-            gather: OitGatherPass::new(ctx, materials, indirect.map(|(_, emission)| emission))?,
+            gather: OitGatherPass::new(
+                ctx,
+                materials,
+                indirect.map(|(_, k, emission)| (k, emission)),
+            )?,
             resolve: OitResolvePass::new(ctx, sampler)?,
             stats: crate::graph::readback_buffer(ctx, "oit stats", 16)?,
             nodes_per_pixel,
@@ -145,11 +140,9 @@ impl OitPasses {
         self.clear
             .declare(g, lists.heads, lists.counters, capacity, size);
         let indirect = match (&self.gi_params, voxels) {
-            (Some(params), Some(v)) => Some(OitIndirect {
+            (Some(params), Some(inputs)) => Some(OitIndirect {
                 params: g.import_buffer(params, Access::StorageRead(Shader::Fragment)),
-                voxels: v.voxels,
-                lut: v.lut,
-                attributes: v.attributes,
+                inputs,
             }),
             _ => None,
         };

@@ -1,12 +1,15 @@
 //! `oit_gather`: draws the surfaces with MTL d < 1 over the finished opaque depth (tested, not
 //! written), shades each fragment with the deferred pass's direct light and its emission, and
 //! appends it to its pixel's linked list (`glsl/gbuffer.vert`, `glsl/oit_gather.frag`). Under a
-//! GI method that gives transparent layers indirect light (the path tracer), the fragments
-//! also trace its voxel paths (`glsl/oit_gather_indirect.frag`).
+//! GI method that gives transparent layers indirect light, the fragments also trace its rays:
+//! the path tracer's voxel paths (`glsl/oit_gather_indirect.frag`) or the hemisphere method's
+//! one bounce (`glsl/oit_gather_hemisphere{,_emission,_volume}.frag`).
 
 use super::gbuffer::GpuGbufferPush;
+use super::light_map::LightMaps;
 use super::scene_gpu::{vertex_attributes, SceneInputs};
 use super::DEPTH;
+use crate::gi::LayerIndirect;
 use crate::graph::{Access, BufferHandle, ImageHandle, RenderGraph, Shader};
 use crate::vk::{vk, Context, GraphicsPipeline, GraphicsPipelineDesc, VkError};
 use crate::voxel::attributes::AttributeHandles;
@@ -19,44 +22,81 @@ pub struct OitLists {
     pub counters: BufferHandle,
 }
 
-/// What the fragments' voxel paths read: the GI method's ray parameters (a `GpuGiPush` in a
-/// buffer), the voxel hierarchy, the ray-mask table and the attribute volumes.
+/// What the fragments' rays read, declared by the GI passes of the frame: the voxel
+/// hierarchy, the ray-mask table, and what each kind of ray reads at its hits.
+#[derive(Clone, Copy, Debug)]
+pub struct OitVoxelInputs {
+    pub voxels: ImageHandle,
+    pub lut: BufferHandle,
+    /// The attribute volumes, when the method reads them.
+    pub attributes: Option<AttributeHandles>,
+    /// The reflective light maps, when the frame renders them.
+    pub light_maps: Option<LightMaps>,
+    /// The direct-radiance volume (`--gi-radiance volume`).
+    pub radiance_volume: Option<ImageHandle>,
+}
+
+/// The fragments' indirect-light inputs: the GI method's ray parameters (a `GpuGiPush` in a
+/// buffer) and what its rays read.
 #[derive(Clone, Copy, Debug)]
 pub struct OitIndirect {
     pub params: BufferHandle,
-    pub voxels: ImageHandle,
-    pub lut: BufferHandle,
-    pub attributes: AttributeHandles,
+    pub inputs: OitVoxelInputs,
+}
+
+/// The indirect-light variant of the pass: its pipeline, the rays it traces and whether the
+/// scene has emitters (which the variants read from the emission volume).
+struct IndirectVariant {
+    pipeline: GraphicsPipeline,
+    kind: LayerIndirect,
+    emission: bool,
 }
 
 pub struct OitGatherPass {
     pipeline: GraphicsPipeline,
-    /// The variant that adds the voxel paths' indirect light, made when the GI method gives
+    /// The variant that adds the GI method's indirect light, made when the method gives
     /// transparent layers any; a frame without its inputs draws with `pipeline`.
-    indirect: Option<GraphicsPipeline>,
+    indirect: Option<IndirectVariant>,
 }
 
 impl OitGatherPass {
     /// `phong`, `ggx`, `textures`, `alpha_maps`: what the scene's materials have (the shader
-    /// compiles in only those). `indirect`: make the indirect-light variant, with emission
-    /// reads when `Some(true)` (a scene with emitters).
+    /// compiles in only those). `indirect`: make the indirect-light variant tracing these rays,
+    /// with emission reads when the flag is true (a scene with emitters).
     pub fn new(
         ctx: &Context,
         materials: (bool, bool, bool, bool),
-        indirect: Option<bool>,
+        indirect: Option<(LayerIndirect, bool)>,
     ) -> Result<Self, VkError> {
         Ok(Self {
             pipeline: Self::pipeline(ctx, materials, None)?,
             indirect: indirect
-                .map(|emission| Self::pipeline(ctx, materials, Some(emission)))
+                .map(|(kind, emission)| {
+                    Ok::<_, VkError>(IndirectVariant {
+                        pipeline: Self::pipeline(ctx, materials, Some((kind, emission)))?,
+                        kind,
+                        emission,
+                    })
+                })
                 .transpose()?,
         })
+    }
+
+    /// The fragment shader of the plain pass or of an indirect variant.
+    fn fragment_shader(indirect: Option<(LayerIndirect, bool)>) -> &'static str {
+        match indirect {
+            None => "oit_gather.frag",
+            Some((LayerIndirect::Paths, _)) => "oit_gather_indirect.frag",
+            Some((LayerIndirect::LightMaps, false)) => "oit_gather_hemisphere.frag",
+            Some((LayerIndirect::LightMaps, true)) => "oit_gather_hemisphere_emission.frag",
+            Some((LayerIndirect::RadianceVolume, _)) => "oit_gather_hemisphere_volume.frag",
+        }
     }
 
     fn pipeline(
         ctx: &Context,
         (phong, ggx, textures, alpha_maps): (bool, bool, bool, bool),
-        indirect: Option<bool>,
+        indirect: Option<(LayerIndirect, bool)>,
     ) -> Result<GraphicsPipeline, VkError> {
         let mut spec = crate::spec_constants![
             HAS_PHONG = phong,
@@ -65,18 +105,19 @@ impl OitGatherPass {
             HAS_ALPHA_MAP = alpha_maps,
         ]
         .to_vec();
-        if let Some(emission) = indirect {
-            spec.extend(crate::spec_constants![HAS_EMISSION = emission]);
+        // The light maps' variants read emission by variant, not by a constant.
+        match indirect {
+            Some((LayerIndirect::Paths | LayerIndirect::RadianceVolume, emission)) => {
+                spec.extend(crate::spec_constants![HAS_EMISSION = emission]);
+            }
+            Some((LayerIndirect::LightMaps, _)) | None => {}
         }
         ctx.graphics_pipeline(&GraphicsPipelineDesc {
             // The G-buffer's vertex stage: the same positions, so the depth test against the
             // opaque depth compares equal transforms.
             vertex: "gbuffer.vert".into(),
             geometry: None,
-            fragment: match indirect {
-                Some(_) => "oit_gather_indirect.frag".into(),
-                None => "oit_gather.frag".into(),
-            },
+            fragment: Self::fragment_shader(indirect).into(),
             push: crate::vk::PushLayout::of::<GpuGbufferPush>(),
             vertex_stride: std::mem::size_of::<super::gpu::GpuVertex>() as u32,
             vertex_attributes: vertex_attributes(),
@@ -95,7 +136,8 @@ impl OitGatherPass {
 
     /// Declares the pass appending the transparent draws' fragments to `lists` (cleared by
     /// `oit_clear`), tested against the opaque `depth`; with `indirect`, the fragments add the
-    /// voxel paths' indirect light (when this pass made that variant).
+    /// GI method's indirect light (when this pass made that variant and the frame has what
+    /// its rays read).
     pub fn declare(
         &self,
         g: &mut RenderGraph,
@@ -105,10 +147,13 @@ impl OitGatherPass {
         sampler: vk::Sampler,
         indirect: Option<OitIndirect>,
     ) {
-        let (pipe, indirect) = match (&self.indirect, indirect) {
-            (Some(p), Some(i)) => (**p, Some(i)),
-            _ => (*self.pipeline, None),
-        };
+        // The indirect variant, its inputs and the images its hits read, when this pass made
+        // it and the frame has all of them.
+        let traced = indirect.and_then(|i| {
+            let v = self.indirect.as_ref()?;
+            Some((*v.pipeline, i, Self::hit_inputs(v, &i.inputs)?))
+        });
+        let pipe = traced.as_ref().map_or(*self.pipeline, |&(p, _, _)| p);
         let (vertices, indices) = (scene.vertices, scene.indices);
         let draws = scene.draws.clone();
         let textures = scene.textures.clone();
@@ -128,16 +173,14 @@ impl OitGatherPass {
             .read(vertices, Access::VertexBuffer)
             .read(indices, Access::IndexBuffer)
             .depth_read(depth);
-        if let Some(i) = indirect {
-            let v = i.attributes;
-            // Without emitters the shader never reads its emission binding; albedo fills it.
+        if let Some((_, i, hits)) = traced {
             pass = pass
                 .bind(8, i.params, Access::StorageRead(f))
-                .bind_sampled(9, i.voxels, sampler, f)
-                .bind(10, i.lut, Access::StorageRead(f))
-                .bind_sampled(11, v.albedo, sampler, f)
-                .bind_sampled(12, v.normal, sampler, f)
-                .bind_sampled(13, v.emission.unwrap_or(v.albedo), sampler, f);
+                .bind_sampled(9, i.inputs.voxels, sampler, f)
+                .bind(10, i.inputs.lut, Access::StorageRead(f));
+            for (binding, image) in (11..).zip(hits) {
+                pass = pass.bind_sampled(binding, image, sampler, f);
+            }
         }
         pass.record(move |ctx| {
             ctx.begin_rendering();
@@ -166,14 +209,56 @@ impl OitGatherPass {
     }
 }
 
+impl OitGatherPass {
+    /// The images variant `v` samples at its rays' hits, bound from 11 on, or `None` where
+    /// the frame lacks one (the pass then draws without indirect light).
+    fn hit_inputs(v: &IndirectVariant, i: &OitVoxelInputs) -> Option<Vec<ImageHandle>> {
+        Some(match v.kind {
+            LayerIndirect::Paths => {
+                let a = i.attributes?;
+                // Without emitters the shader never reads its emission binding; albedo fills it.
+                vec![a.albedo, a.normal, a.emission.unwrap_or(a.albedo)]
+            }
+            LayerIndirect::LightMaps => {
+                let m = i.light_maps?;
+                let mut images = vec![m.radiance, m.position, m.normal];
+                if v.emission {
+                    let a = i.attributes?;
+                    images.extend([a.emission.unwrap_or(a.albedo), a.normal]);
+                }
+                images
+            }
+            LayerIndirect::RadianceVolume => {
+                let a = i.attributes?;
+                // Without Phong or GGX materials the shader never reads the material volume,
+                // nor without emitters the emission volume; albedo fills them.
+                let (material, emission) = (a.material, a.emission);
+                vec![
+                    i.radiance_volume?,
+                    a.normal,
+                    material.unwrap_or(a.albedo),
+                    a.albedo,
+                    emission.unwrap_or(a.albedo),
+                ]
+            }
+        })
+    }
+}
+
 #[cfg(test)]
 mod tests {
-    /// The indirect variant's parameter buffer holds what the ray passes get as push
-    /// constants: the shader's `GpuGiPush` has the Rust struct's names, offsets and sizes.
+    /// The indirect variants' parameter buffer holds what the ray passes get as push
+    /// constants: each shader's `GpuGiPush` has the Rust struct's names, offsets and sizes.
     #[test]
     fn gi_params_buffer_matches_the_ray_passes_push_constants() {
-        let files = ["oit_gather_indirect.frag"];
-        crate::vk::check_struct_against::<crate::gi::GpuGiPush>(&files, "GpuGiPush")
-            .unwrap_or_else(|e| panic!("{e}"));
+        for file in [
+            "oit_gather_indirect.frag",
+            "oit_gather_hemisphere.frag",
+            "oit_gather_hemisphere_emission.frag",
+            "oit_gather_hemisphere_volume.frag",
+        ] {
+            crate::vk::check_struct_against::<crate::gi::GpuGiPush>(&[file], "GpuGiPush")
+                .unwrap_or_else(|e| panic!("{file}: {e}"));
+        }
     }
 }

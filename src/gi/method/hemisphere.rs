@@ -5,7 +5,7 @@
 use super::super::gi_hemisphere::GiHemisphere;
 use super::super::gi_radiance_volume::GiRadianceVolume;
 use super::super::{GiMethodPasses, GiSettings, GiTarget, RadianceSource};
-use super::{rays_slider, temporal_controls, EmitterReach, MethodSpec};
+use super::{rays_slider, temporal_controls, EmitterReach, LayerIndirect, MethodSpec};
 use crate::vk::{Context, VkError};
 
 pub(super) static SPEC: MethodSpec = MethodSpec {
@@ -28,7 +28,13 @@ pub(super) static SPEC: MethodSpec = MethodSpec {
     },
     // The direct-radiance volume's glossy voxels (their diffuse part and specular lobe).
     material_volume: |s| s.radiance_source == RadianceSource::Volume,
-    transparent_indirect: false,
+    // Layers trace the method's rays and read the hits as its pass does.
+    transparent_indirect: |s| {
+        Some(match s.radiance_source {
+            RadianceSource::Volume => LayerIndirect::RadianceVolume,
+            RadianceSource::Maps => LayerIndirect::LightMaps,
+        })
+    },
     history: |_, _, _| Vec::new(),
     filter_tile: |_| [1, 1],
     multiview_blocker: None,

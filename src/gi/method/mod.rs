@@ -41,6 +41,21 @@ impl GiMethod {
 pub(in crate::gi) type BuildPasses =
     fn(&Context, &GiSettings, &GiTarget<'_>) -> Result<Box<dyn GiMethodPasses>, VkError>;
 
+/// The rays a method traces from a transparent layer's fragments (`oit_gather`'s variants),
+/// each reading what the method's own pass reads at a hit.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LayerIndirect {
+    /// The path tracer's voxel paths (`oit_gather_indirect`): the attribute volumes.
+    Paths,
+    /// The hemisphere method's rays, hits from the reflective light maps
+    /// (`oit_gather_hemisphere`; with emitters `oit_gather_hemisphere_emission`, which also
+    /// reads the emission and normal volumes).
+    LightMaps,
+    /// The hemisphere method's rays, hits from the direct-radiance volume
+    /// (`oit_gather_hemisphere_volume`) and the attribute volumes.
+    RadianceVolume,
+}
+
 /// What the program asks about a GI method, answered in the method's file.
 pub struct MethodSpec {
     /// Its name in `--gi`, in a scene's `[gi] method`, in the panel and in the sweep's CSV.
@@ -74,11 +89,10 @@ pub struct MethodSpec {
     /// The method's hits sample the Phong and GGX lobes, so the attribute volumes carry the
     /// material volume.
     pub material_volume: fn(&GiSettings) -> bool,
-    /// Transparent layers drawn as per-pixel lists (`--transparency oit`) get the method's
-    /// indirect light: `oit_gather` traces the voxel path tracer's paths from each fragment
-    /// (`glsl/include/oit_gather_body.glsl`), reading the attribute volumes. Otherwise they
-    /// get direct light only.
-    pub transparent_indirect: bool,
+    /// How transparent layers drawn as per-pixel lists (`--transparency oit`) get the
+    /// method's indirect light: `oit_gather` traces the method's rays from each fragment
+    /// (`glsl/include/oit_gather_body.glsl`). `None`: they get direct light only.
+    pub transparent_indirect: fn(&GiSettings) -> Option<LayerIndirect>,
     /// The frame-sized history images the method keeps per eye, for the renderer's memory
     /// check: `(settings, size, glossy)` where `glossy` says the scene has Phong or GGX
     /// materials.

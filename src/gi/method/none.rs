@@ -15,7 +15,7 @@ pub(super) static SPEC: MethodSpec = MethodSpec {
     brings_environment: false,
     attribute_volumes: |_, _| false,
     material_volume: |_| false,
-    transparent_indirect: false,
+    transparent_indirect: |_| None,
     history: |_, _, _| Vec::new(),
     filter_tile: |_| [1, 1],
     multiview_blocker: None,

@@ -3,7 +3,7 @@
 //! `gi_pathtrace`.
 
 use super::super::gi_pathtrace::GiPathtrace;
-use super::{rays_slider, EmitterReach, MethodSpec};
+use super::{rays_slider, EmitterReach, LayerIndirect, MethodSpec};
 
 pub(super) static SPEC: MethodSpec = MethodSpec {
     name: "pathtrace",
@@ -23,7 +23,7 @@ pub(super) static SPEC: MethodSpec = MethodSpec {
     // Later bounces sample the Phong and GGX lobes unless `--pathtrace-lobes false`.
     material_volume: |s| s.pathtrace_lobes,
     // Its paths from each transparent fragment, with its rays and bounces.
-    transparent_indirect: true,
+    transparent_indirect: |_| Some(LayerIndirect::Paths),
     // Per stereo eye: see `GiTarget::eyes` (the renderer repeats this list per eye).
     history: |s, size, _| match super::super::GiPasses::temporal_on(s) {
         true => vec![],

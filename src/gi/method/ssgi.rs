@@ -24,7 +24,7 @@ pub(super) static SPEC: MethodSpec = MethodSpec {
     attribute_volumes: |_, _| false,
     material_volume: |_| false,
     // No voxels: transparent layers get direct light only.
-    transparent_indirect: false,
+    transparent_indirect: |_| None,
     history: |s, size, glossy| {
         if s.ssgi.ssr && glossy {
             vec![Ssgi::history_desc(size), Ssr::history_desc(size)]

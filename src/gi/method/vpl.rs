@@ -30,7 +30,7 @@ pub(super) static SPEC: MethodSpec = MethodSpec {
     },
     // Glossy hits of the bounces and the emitter rays.
     material_volume: |_| true,
-    transparent_indirect: false,
+    transparent_indirect: |_| None,
     history: |_, _, _| Vec::new(),
     // Each pixel of an N×M tile shades one VPL set (interleaved sampling, §7.2).
     filter_tile: |s| s.vpl.pattern,
