@@ -34,7 +34,7 @@ use crate::render::{FrameImages, RenderError, RenderSettings, Renderer};
 use crate::scene::{scaled, Camera, Light, Projection, Scene};
 use crate::vk::{
     surface_extensions, vk, Acquired, Buffer, BufferDesc, Context, ContextDesc, FrameLoop,
-    MemoryLocation, Swapchain, VkError, MAX_FRAMES_IN_FLIGHT,
+    MemoryLocation, Presented, Swapchain, VkError, MAX_FRAMES_IN_FLIGHT,
 };
 use overlay::Overlay;
 use raw_window_handle::{HasDisplayHandle, HasWindowHandle};
@@ -1167,8 +1167,14 @@ impl Viewer {
             &[(ready, vk::PipelineStageFlags2::ALL_COMMANDS)],
             &[swapchain.render_semaphore(index)],
         )?;
-        if swapchain.present(ctx, index)? {
-            self.swapchain_dirty = true;
+        match swapchain.present(ctx, index)? {
+            Presented::Done => {}
+            Presented::Recreate => self.swapchain_dirty = true,
+            // As at acquisition: the window was destroyed and `Destroyed` has not arrived.
+            Presented::SurfaceLost => {
+                log::warn!("the window was destroyed: exiting");
+                self.window_gone = true;
+            }
         }
         if let Some((p, gpu_ms, started)) = picked {
             if let Some((t, frame)) = started {

@@ -24,7 +24,7 @@ pub use pipeline::{
 pub use reflect::{BindingKind, GpuStruct, PushConstants, ShaderInterface, SpecEntry, SpecValue};
 pub use release::ReleaseQueue;
 pub use resources::{Arena, Buffer, BufferDesc, Image, ImageDesc, MemoryLocation};
-pub use swapchain::{surface_extensions, Acquired, Swapchain};
+pub use swapchain::{surface_extensions, Acquired, Presented, Swapchain};
 
 /// Errors of the Vulkan layer. Each message says what happened and what to do.
 #[derive(Debug, thiserror::Error)]

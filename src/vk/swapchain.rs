@@ -36,6 +36,17 @@ pub enum Acquired {
     SurfaceLost,
 }
 
+/// What [`Swapchain::present`] did.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Presented {
+    /// Presented; the swapchain still matches the surface.
+    Done,
+    /// Presented or not, the swapchain should be recreated (resized, suboptimal).
+    Recreate,
+    /// The surface is gone (as [`Acquired::SurfaceLost`], found at presentation).
+    SurfaceLost,
+}
+
 /// Dropping it waits for the device and destroys the swapchain and then the surface: drop it
 /// before the window (declare it before the window in the owning struct).
 pub struct Swapchain {
@@ -264,8 +275,8 @@ impl Swapchain {
         self.render_semaphores[index as usize]
     }
 
-    /// Presents image `index`. Returns `true` when the swapchain should be recreated.
-    pub fn present(&self, ctx: &Context, index: u32) -> Result<bool, VkError> {
+    /// Presents image `index`.
+    pub fn present(&self, ctx: &Context, index: u32) -> Result<Presented, VkError> {
         let waits = [self.render_semaphore(index)];
         let swapchains = [self.raw];
         let indices = [index];
@@ -276,8 +287,9 @@ impl Swapchain {
         // SAFETY: the image was acquired and the frame writing it was submitted signalling
         // `waits[0]`; the queue is used from this thread only.
         match unsafe { self.loader.queue_present(ctx.queue, &info) } {
-            Ok(suboptimal) => Ok(suboptimal),
-            Err(vk::Result::ERROR_OUT_OF_DATE_KHR) => Ok(true),
+            Ok(false) => Ok(Presented::Done),
+            Ok(true) | Err(vk::Result::ERROR_OUT_OF_DATE_KHR) => Ok(Presented::Recreate),
+            Err(vk::Result::ERROR_SURFACE_LOST_KHR) => Ok(Presented::SurfaceLost),
             Err(e) => Err(VkError::Call {
                 what: "present",
                 result: e,
