@@ -79,14 +79,7 @@ pub fn dynamic_scene(scenes_dir: &std::path::Path, animated: u32) -> Result<Scen
     // bunny.obj spans x [-4.96, 4.95], y [0, 9.65], z [-3.73, 3.81] (cornell_bunny.toml).
     let cell_m = 0.54 / STATIC_PER_SIDE as f32;
     let scale = 0.9 * 0.5 * cell_m / 6.26;
-    let mut toml = String::from(
-        "[camera]\nposition = [0.278, 0.273, -0.800]\ntarget = [0.278, 0.273, 0.0]\n\
-         fov_y_deg = 39.3\nnear = 0.01\nfar = 10.0\n\n\
-         [[lights]]\nkind = \"spot\"\nposition = [0.278, 0.540, 0.2796]\n\
-         direction = [0.0, -1.0, 0.0]\nintensity_w_sr = [1.0, 1.0, 1.0]\n\
-         cutoff_deg = 50.0\nbeam_deg = 40.0\n\n\
-         [[objects]]\nname = \"walls\"\nbuiltin = \"cornell_walls\"\n",
-    );
+    let mut toml = String::from(super::scenes::CORNELL_SPOT_TOML);
     for i in 0..STATIC_PER_SIDE * STATIC_PER_SIDE {
         let (a, b) = (i % STATIC_PER_SIDE, i / STATIC_PER_SIDE);
         toml += &format!(

@@ -19,6 +19,16 @@ pub fn bench_scenes() -> Result<Vec<(String, Scene)>, BenchError> {
     ])
 }
 
+/// The generated scenes' frame: the Cornell walls, the default camera and a spot light under
+/// the ceiling aimed down; objects are appended to it.
+pub const CORNELL_SPOT_TOML: &str =
+    "[camera]\nposition = [0.278, 0.273, -0.800]\ntarget = [0.278, 0.273, 0.0]\n\
+     fov_y_deg = 39.3\nnear = 0.01\nfar = 10.0\n\n\
+     [[lights]]\nkind = \"spot\"\nposition = [0.278, 0.540, 0.2796]\n\
+     direction = [0.0, -1.0, 0.0]\nintensity_w_sr = [1.0, 1.0, 1.0]\n\
+     cutoff_deg = 50.0\nbeam_deg = 40.0\n\n\
+     [[objects]]\nname = \"walls\"\nbuiltin = \"cornell_walls\"\n";
+
 /// Bunnies per axis of [`dense_scene`].
 pub const DENSE_BUNNIES_PER_AXIS: u32 = 4;
 
@@ -34,14 +44,7 @@ pub fn dense_scene(scenes_dir: &std::path::Path) -> Result<Scene, BenchError> {
     // within 6.26 of its vertical axis, so at any turn it stays inside its cell.
     let cell_m = 0.54 / n as f32;
     let scale = 0.95 * 0.5 * cell_m / 6.26;
-    let mut toml = String::from(
-        "[camera]\nposition = [0.278, 0.273, -0.800]\ntarget = [0.278, 0.273, 0.0]\n\
-         fov_y_deg = 39.3\nnear = 0.01\nfar = 10.0\n\n\
-         [[lights]]\nkind = \"spot\"\nposition = [0.278, 0.540, 0.2796]\n\
-         direction = [0.0, -1.0, 0.0]\nintensity_w_sr = [1.0, 1.0, 1.0]\n\
-         cutoff_deg = 50.0\nbeam_deg = 40.0\n\n\
-         [[objects]]\nname = \"walls\"\nbuiltin = \"cornell_walls\"\n",
-    );
+    let mut toml = String::from(CORNELL_SPOT_TOML);
     let mut k = 0;
     for j in 0..n {
         for i in 0..n {

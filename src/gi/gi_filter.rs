@@ -29,6 +29,10 @@ crate::push_constants!(GpuFilterPush {
     tile_px
 });
 
+/// A tap's tolerated distance from the centre's tangent plane, relative to the centre's
+/// distance from the camera (SVGF's surface weight uses the same).
+pub(super) const PLANE_TOLERANCE: f32 = 0.02;
+
 /// The filter's pipeline.
 pub struct GiFilter {
     pipeline: ComputePipeline,
@@ -88,7 +92,7 @@ impl GiFilter {
                 let fp = GpuFilterPush {
                     direction: dir,
                     radius: radius_px as i32,
-                    plane_tolerance: 0.02,
+                    plane_tolerance: PLANE_TOLERANCE,
                     tile_px: tile_px.max(1) as i32,
                 };
                 g.add_pass(&format!("gi_filter[{p}{axis}]"))

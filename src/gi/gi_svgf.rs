@@ -5,6 +5,7 @@
 //! spacing 1, 2, 4, …, which filter the variance along. The shaders' headers give the
 //! weights and how voxgi's differ from the paper's.
 
+use super::gi_filter::PLANE_TOLERANCE;
 use super::GiInputs;
 use crate::graph::{Access, ImageHandle, RenderGraph, Shader};
 use crate::vk::{vk, ComputePipeline, Context, ImageDesc, PushLayout, VkError};
@@ -39,10 +40,6 @@ crate::push_constants!(GpuAtrousPush {
     tile_px,
     last
 });
-
-/// The geometry-aware filter's tolerance of a tap's distance from the centre's tangent plane,
-/// relative to the centre's distance from the camera (`gi_filter.rs` uses the same).
-const PLANE_TOLERANCE: f32 = 0.02;
 
 /// SVGF's two pipelines.
 pub struct GiSvgf {
