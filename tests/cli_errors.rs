@@ -208,7 +208,7 @@ fn profile_flies_the_camera_path_or_says_the_scene_has_none() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success(), "{stderr}");
     assert!(
-        stderr.contains("cornell: `--camera-path` needs a `[camera_path]` table"),
+        stderr.contains("cornell: `voxgi profile --camera-path` needs a `[camera_path]` table"),
         "{stderr}"
     );
     // `--path-frames` means nothing without the path.

@@ -22,6 +22,7 @@
 //!   over a static scene voxelized once (Thiedemann 2010 §8.2, Figs. 41/42): 0, 3 and 9.
 //! - [`bench_scenes`], [`dense_scene`], [`tessellated_cube`]: the generated scenes they run on.
 
+pub mod camera_path;
 mod dynamic;
 mod flicker;
 mod leak;
@@ -120,11 +121,12 @@ pub enum BenchError {
         path: std::path::PathBuf,
     },
     #[error(
-        "ssgi-limits: no Mitsuba reference of {scene} at {}; add --make-references to render \
+        "{bench}: no Mitsuba reference of {scene} at {}; add --make-references to render \
          it with Mitsuba 3 (tools/reference installs it into .venv; seconds to minutes per image)",
         path.display()
     )]
     NoLimitReference {
+        bench: &'static str,
         scene: String,
         path: std::path::PathBuf,
     },

@@ -1,4 +1,4 @@
-//! `voxgi bench traverse|voxelize|voxelize-sweep|dynamic|flicker|soak|leak|ssgi|ssgi-limits`: the benchmarks of [`crate::bench`].
+//! `voxgi bench traverse|voxelize|voxelize-sweep|dynamic|flicker|camera-path|soak|leak|ssgi|ssgi-limits`: the benchmarks of [`crate::bench`].
 
 use super::{out, outln, with_context, CliError, Global};
 use crate::bench::{
@@ -52,6 +52,12 @@ pub enum BenchCommand {
         #[arg(long)]
         json: bool,
     },
+    /// Temporal accumulation along a camera path: the camera flies the scene's
+    /// `[camera_path]` while its animation plays, one frame per step; each method renders the
+    /// flight with and without temporal accumulation (same rays per frame), and a few frames
+    /// along it are scored against Mitsuba 3's images of those frames (relMSE, FLIP; made once
+    /// and cached), with the flicker there and the ghost and lag after a light switch.
+    CameraPath(CameraPathArgs),
     /// Animated objects voxelized again every frame over a static scene voxelized once
     /// (Thiedemann 2010 §8.2, Figs. 41/42): Cornell walls with 16 static bunnies and N
     /// flying ones; per voxelizer, the bits alone (hemisphere) and with the attribute volumes
@@ -442,6 +448,7 @@ pub fn bench(global: &Global, command: &BenchCommand, out: &mut dyn Write) -> Re
                 Ok(())
             })
         }
+        BenchCommand::CameraPath(args) => args.run(global, out),
         BenchCommand::Soak(args) => args.run(global, out),
         BenchCommand::Dynamic {
             animated,
@@ -566,8 +573,9 @@ struct References {
 /// `refs.make`, else an error naming `--make-references`.
 fn limit_reference(
     refs: &References,
+    bench: &'static str,
     name: &str,
-    scene: &crate::scene::Scene,
+    (scene, time_s): (&crate::scene::Scene, f32),
     size: u32,
     max_depth: u32,
 ) -> Result<crate::eval::HdrImage, CliError> {
@@ -588,12 +596,13 @@ fn limit_reference(
     if export.exists() {
         std::fs::remove_dir_all(&export).map_err(io(&export))?;
     }
-    crate::export::mitsuba::export_mitsuba(scene, 0.0, size, size, &export)?;
+    crate::export::mitsuba::export_mitsuba(scene, time_s, size, size, &export)?;
     let key = rc::export_key(&export, &settings, &tool).map_err(SweepError::from)?;
     let path = rc::cached_path(&refs.cache, name, &key);
     if !path.exists() {
         if !refs.make {
             return Err(crate::bench::BenchError::NoLimitReference {
+                bench,
                 scene: name.to_owned(),
                 path,
             }
@@ -624,8 +633,15 @@ fn ssgi_limits(
     for case in sl::limit_cases(size)? {
         for (k, (view, scene)) in case.views.iter().enumerate() {
             let name = format!("ssgi-limits-{}-{k}", case.case);
-            let gi = limit_reference(refs, &name, scene, size, 64)?;
-            let direct = limit_reference(refs, &format!("{name}-direct"), scene, size, 2)?;
+            let gi = limit_reference(refs, "ssgi-limits", &name, (scene, 0.0), size, 64)?;
+            let direct = limit_reference(
+                refs,
+                "ssgi-limits",
+                &format!("{name}-direct"),
+                (scene, 0.0),
+                size,
+                2,
+            )?;
             let mask = case.mask.as_deref();
             let reference = sl::indirect_mean(&gi, &direct, mask);
             let own_direct = sl::render(ctx, scene, size, sl::method_settings(GiMethod::None, 1))?;
@@ -650,4 +666,124 @@ fn ssgi_limits(
         reference_spp: refs.spp,
         rows,
     })
+}
+
+/// `voxgi bench camera-path`'s arguments.
+#[derive(clap::Args, Clone)]
+pub struct CameraPathArgs {
+    /// A scene file with a `[camera_path]` table. Default: assets/scenes/cornell_mover.toml.
+    scene: Option<String>,
+    /// Image width and height in pixels (references at the same size).
+    #[arg(long, default_value_t = 128, value_parser = clap::value_parser!(u32).range(8..=1024))]
+    size: u32,
+    /// Frames along the path.
+    #[arg(long, default_value_t = 48, value_parser = clap::value_parser!(u32).range(2..=4096))]
+    frames: u32,
+    /// Frames scored against Mitsuba, evenly spaced, the last included.
+    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=64))]
+    scored: u32,
+    /// Rays per pixel and frame.
+    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..=256))]
+    rays: u32,
+    /// Methods, each with and without temporal accumulation.
+    #[arg(long, value_delimiter = ',', default_values = ["hemisphere", "vpl", "pathtrace"],
+          value_parser = ["hemisphere", "vpl", "pathtrace"])]
+    methods: Vec<String>,
+    /// Frames each method's converged images (the noise and flicker measures) accumulate,
+    /// with the camera still.
+    #[arg(long, default_value_t = 32, value_parser = clap::value_parser!(u32).range(1..=4096))]
+    converged_frames: u32,
+    /// Rays per pixel and frame of those converged images.
+    #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..=256))]
+    converged_rays: u32,
+    /// Samples per pixel of the Mitsuba references.
+    #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..=65536))]
+    reference_spp: u32,
+    /// Render missing references with Mitsuba 3 (`tools/reference`; minutes each).
+    #[arg(long)]
+    make_references: bool,
+    /// The reference cache [default: ~/.cache/voxgi/references].
+    #[arg(long, value_name = "DIR")]
+    reference_cache: Option<std::path::PathBuf>,
+    /// The reference script.
+    #[arg(long, value_name = "PATH", default_value = "tools/reference")]
+    reference_tool: std::path::PathBuf,
+    /// Print JSON instead of the table.
+    #[arg(long)]
+    json: bool,
+}
+
+/// The camera-path benchmark's default scene: the Cornell walls with a moving cube, and a
+/// flight round it.
+const CAMERA_PATH_SCENE: &str = "assets/scenes/cornell_mover.toml";
+
+impl CameraPathArgs {
+    fn run(&self, global: &Global, out: &mut dyn Write) -> Result<(), CliError> {
+        use crate::bench::camera_path as cp;
+        let (name, scene) = match &self.scene {
+            Some(s) => (s.clone(), load_scene_arg(Some(s))?),
+            None => (CAMERA_PATH_SCENE.to_owned(), soak_default_scene()?),
+        };
+        let path = scene
+            .camera_path
+            .clone()
+            .ok_or_else(|| CliError::NoCameraPath {
+                command: "voxgi bench camera-path",
+                scene: name.clone(),
+            })?;
+        let refs = References {
+            spp: self.reference_spp,
+            make: self.make_references,
+            cache: self
+                .reference_cache
+                .clone()
+                .unwrap_or_else(crate::bench::reference_cache::default_cache_dir),
+            tool: self.reference_tool.clone(),
+        };
+        let desc = cp::CameraPathDesc {
+            size: self.size,
+            frames: self.frames,
+            scored: self.scored,
+            rays: self.rays,
+            converged_frames: self.converged_frames,
+            converged_rays: self.converged_rays,
+            methods: self
+                .methods
+                .iter()
+                .filter_map(|m| GiMethod::ALL.iter().copied().find(|g| g.name() == m))
+                .collect(),
+            ..Default::default()
+        };
+        // The references first: without Mitsuba nothing is rendered for nothing.
+        let times = cp::flight_times(&path, desc.frames);
+        let stem = std::path::Path::new(&name)
+            .file_stem()
+            .map_or_else(|| "scene".into(), |s| s.to_string_lossy().into_owned());
+        let mut references = Vec::new();
+        for k in cp::scored_frames(desc.frames, desc.scored) {
+            let at = cp::scene_at(&scene, &path, times[k]);
+            let key = format!("camera-path-{stem}-{}-{k}", desc.frames);
+            references.push(limit_reference(
+                &refs,
+                "camera-path",
+                &key,
+                (&at, times[k]),
+                desc.size,
+                64,
+            )?);
+        }
+        let reference_name = format!("Mitsuba 3, {} spp", refs.spp);
+        with_context(global, |ctx| {
+            let report = cp::bench_camera_path(
+                ctx,
+                &scene,
+                &name,
+                &path,
+                &desc,
+                &references,
+                &reference_name,
+            )?;
+            print(out, self.json, &report, || report.table())
+        })
+    }
 }

@@ -74,14 +74,18 @@ pub enum CliError {
          it is off: add --sao (or `sao = true` in the scene's [gi] table), or leave them out"
     )]
     SaoOff,
-    /// `profile --camera-path` on a scene without a `[camera_path]` table.
+    /// `profile --camera-path` or `bench camera-path` on a scene without a `[camera_path]`
+    /// table.
     #[error(
-        "{scene}: `--camera-path` needs a `[camera_path]` table in the scene file, and this \
+        "{scene}: `{command}` needs a `[camera_path]` table in the scene file, and this \
          scene has none; add one (keyframes with time_s, position and look_at or direction; \
-         see the format in `voxgi::scene` docs or assets/scenes/cornell_mover.toml) or drop \
-         the flag"
+         see the format in `voxgi::scene` docs or assets/scenes/cornell_mover.toml) or choose \
+         another scene"
     )]
-    NoCameraPath { scene: String },
+    NoCameraPath {
+        command: &'static str,
+        scene: String,
+    },
     /// `profile --stereo` with `--demo` or `--camera-path`.
     #[error(
         "`voxgi profile --stereo` profiles a scene's stereo frame from the scene's camera; it \

@@ -75,6 +75,7 @@ pub fn profile(global: &Global, args: &ProfileArgs, out: &mut dyn Write) -> Resu
         .unwrap_or_else(|| crate::scene::DEFAULT_SCENE.into());
     let path = match (&scene, args.camera_path) {
         (Some((s, _)), true) => Some(s.camera_path.clone().ok_or(CliError::NoCameraPath {
+            command: "voxgi profile --camera-path",
             scene: scene_name.clone(),
         })?),
         _ => None,

@@ -138,19 +138,49 @@ pub fn render_animation(
     settings: &super::RenderSettings,
     times_s: &[f32],
 ) -> Result<Vec<HdrImage>, RenderError> {
+    Ok(render_flight(ctx, scene, settings, times_s, None)?.images)
+}
+
+/// What [`render_flight`] saw: each frame's image and the GPU ms of its passes.
+pub struct Flight {
+    pub images: Vec<HdrImage>,
+    pub gpu_ms: Vec<f64>,
+}
+
+/// [`render_animation`] with the camera also flown along `path` at the same times, as a
+/// viewer's user flies it while the scene plays (for `voxgi bench camera-path`). Without a
+/// path it is [`render_animation`].
+pub fn render_flight(
+    ctx: &Context,
+    scene: &Scene,
+    settings: &super::RenderSettings,
+    times_s: &[f32],
+    path: Option<&CameraPath>,
+) -> Result<Flight, RenderError> {
     let mut settings = settings.clone();
     settings.time_s = times_s.first().copied().unwrap_or(settings.time_s);
-    let mut renderer = Renderer::new(ctx, scene, settings)?;
+    let mut flown = scene.clone();
+    let fly = |flown: &mut Scene, t_s: f32| {
+        if let Some(p) = path {
+            flown.camera = p.camera_at(&scene.camera, t_s);
+        }
+    };
+    fly(&mut flown, settings.time_s);
+    let mut renderer = Renderer::new(ctx, &flown, settings)?;
     let exec = GraphExecutor::new(ctx, renderer.graph(), MAX_FRAMES_IN_FLIGHT)?;
     let mut images = Vec::with_capacity(times_s.len());
+    let mut gpu_ms = Vec::with_capacity(times_s.len());
     for &t_s in times_s {
         renderer.settings.time_s = t_s;
-        renderer.prepare(scene)?;
+        fly(&mut flown, t_s);
+        renderer.prepare(&flown)?;
         // Each run waits for its frame, so the read-back holds it.
-        crate::graph::run_frames(ctx, &exec, 1, 0, |slot| renderer.write_frame(slot))?;
+        let timings =
+            crate::graph::run_frames(ctx, &exec, 1, 0, |slot| renderer.write_frame(slot))?;
+        gpu_ms.push(timings.iter().flatten().map(|t| t.gpu_ms).sum());
         images.push(renderer.hdr_image());
     }
-    Ok(images)
+    Ok(Flight { images, gpu_ms })
 }
 
 type FrameFacts = (Vec<PassTiming>, Vec<String>, (u64, u64));

@@ -741,6 +741,16 @@ mesh = "{mesh_path}"
 
 [gi]
 radius_m = 8.0
+
+# A walk for `voxgi profile --camera-path` and `voxgi bench camera-path`: into the courtyard,
+# turning to the lower gallery's lamp, then up to the upper gallery's spot, then to the far end.
+[camera_path]
+keyframes = [
+    {{ time_s = 0.0, position = [0.0, 1.7, -11.0], look_at = [0.0, 3.5, 4.0] }},
+    {{ time_s = 2.0, position = [-2.0, 1.7, -4.0], look_at = [-7.5, 2.5, 0.0] }},
+    {{ time_s = 4.0, position = [2.0, 1.7, 3.0], look_at = [7.5, 6.0, -4.0] }},
+    {{ time_s = 5.0, position = [0.0, 1.7, 8.0], look_at = [0.0, 4.0, 14.0] }},
+]
 "#
     )
 }
