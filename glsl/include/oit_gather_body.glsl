@@ -12,7 +12,8 @@
 // (VOXEL_INDIRECT: plus the voxel path tracer's indirect light, see voxel_irradiance) and
 // oit_gather_hemisphere*.frag (HEMISPHERE_INDIRECT: plus the hemisphere method's one bounce,
 // its hits read as gi_hemisphere_hit.glsl reads them: light maps, with EMISSION_FROM_VOLUME
-// the emission volume too, or with RADIANCE_FROM_VOLUME the direct-radiance volume).
+// the emission volume too, or with RADIANCE_FROM_VOLUME the direct-radiance volume) and
+// oit_gather_vpl.frag (VPL_INDIRECT: plus the frame's VPLs, gathered as gi_vpl_gather does).
 layout(early_fragment_tests) in;  // a fragment behind the opaque depth appends nothing
 
 layout(constant_id = 0) const bool HAS_PHONG = false;
@@ -50,14 +51,15 @@ layout(set = 0, binding = 6, std430) writeonly buffer Nodes { uvec4 nodes[]; };
 // x: nodes requested this frame (may exceed y), y: capacity; z, w: oit_resolve's counts.
 layout(set = 0, binding = 7, std430) coherent buffer Counters { uvec4 counters; };
 
-#if defined(VOXEL_INDIRECT) || defined(HEMISPHERE_INDIRECT)
+#if defined(VOXEL_INDIRECT) || defined(HEMISPHERE_INDIRECT) || defined(VPL_INDIRECT)
 #define LAYER_INDIRECT
 #endif
 
 #ifdef LAYER_INDIRECT
+#define GI_OWN_PUSH
+#ifndef VPL_INDIRECT
 // The GI method's ray parameters (src/gi/gi_common.rs's GpuGiPush, the ray passes' push
 // constants), in a buffer: this pass's push constants hold the draw's transform.
-#define GI_OWN_PUSH
 struct GpuGiPush {
     mat4 world_to_voxel;
     ivec3 dims;
@@ -76,6 +78,7 @@ struct GpuGiPush {
     float ray_offset_max_voxels;
 };
 layout(set = 0, binding = 8, std430) readonly buffer GiParams { GpuGiPush gi; };
+#endif
 layout(set = 0, binding = 9) uniform usampler2DArray voxels;
 layout(set = 0, binding = 10, std430) readonly buffer RayMasks { uvec4 ray_masks[]; };
 #include "gi_common.glsl"
@@ -151,6 +154,35 @@ vec3 voxel_irradiance(vec3 p, vec3 n, uvec2 px) {
         }
     }
     return sum * (PI / float(rays));
+}
+#endif
+
+#ifdef VPL_INDIRECT
+#include "vpl.glsl"
+#include "vpl_gather.glsl"
+// The VPL gather's parameters (src/gi/vpl.rs's GpuVplGatherPush, gi_vpl_gather's push
+// constants) in a buffer, and the frame's VPLs, written by gi_vpl_generate, gi_vpl_emit and
+// gi_vpl_bounce before the layers are drawn.
+layout(set = 0, binding = 8, std430) readonly buffer VplParams { GpuVplGatherPush vg; };
+layout(set = 0, binding = 11, std430) readonly buffer Vpls { GpuVpl vpls[]; };
+
+// Irradiance at the fragment p (normal n, the side the camera sees) from the frame's VPLs, each
+// by the opaque gather's term (vpl_arriving: E = I(w) cos theta_P / (d_min + d^2) with the
+// method's visibility test). The opaque pixels gather one of the N x M interleaved sets each
+// and the geometry-aware filter blends the sets across the pattern (Thiedemann 2010 §7.3.2);
+// a layer has no filter, so it gathers every set and takes their mean: each row is a complete
+// estimator of the indirect light, so the mean of the N M rows is the method's estimate with
+// all of its VPLs, at one visibility ray per VPL. The VPLs are the frame's own (the same
+// Halton points every frame without temporal accumulation), so a still view keeps its pattern.
+vec3 voxel_irradiance(vec3 p, vec3 n, uvec2 px) {
+    uint sets = max(vg.pattern.x, 1u) * max(vg.pattern.y, 1u);
+    uint count = sets * vg.pattern.z;
+    vec3 e = vec3(0.0);
+    for (uint i = 0u; i < count; ++i) {
+        vec3 dir, arriving;
+        if (vpl_arriving(vg, vpls[i], p, n, dir, arriving)) e += arriving;
+    }
+    return e / float(sets);
 }
 #endif
 

@@ -152,7 +152,7 @@ impl Renderer {
                     scene.has_albedo_textures(),
                     scene.has_alpha_maps(),
                 );
-                // The GI method's paths from the transparent fragments, if it gives them any.
+                // The GI method's rays from the transparent fragments, if it gives them any.
                 let indirect = gi
                     .as_ref()
                     .and_then(|(gi, _)| gi.transparent_indirect(scene))

@@ -10,7 +10,7 @@ pub use super::oit_gather::OitVoxelInputs;
 use super::oit_gather::{OitGatherPass, OitIndirect, OitLists};
 use super::oit_resolve::{OitResolvePass, MAX_LAYERS};
 use super::scene_gpu::SceneInputs;
-use crate::gi::{GpuGiPush, LayerIndirect};
+use crate::gi::{LayerIndirect, LayerParams};
 use crate::graph::{Access, ImageHandle, RenderGraph, Shader};
 use crate::vk::{vk, Buffer, Context, ImageDesc, VkError};
 
@@ -69,7 +69,7 @@ pub struct OitPasses {
     stats: Buffer,
     nodes_per_pixel: u32,
     shadow_sampler: vk::Sampler,
-    /// The GI method's ray parameters for the fragments' indirect light
+    /// The GI method's ray (or VPL gather) parameters for the fragments' indirect light
     /// ([`crate::gi::GiPasses::transparent_indirect`]), when it gives them any.
     gi_params: Option<Buffer>,
 }
@@ -84,13 +84,13 @@ impl OitPasses {
         materials: (bool, bool, bool, bool),
         nodes_per_pixel: u32,
         sampler: vk::Sampler,
-        indirect: Option<(GpuGiPush, LayerIndirect, bool)>,
+        indirect: Option<(LayerParams, LayerIndirect, bool)>,
     ) -> Result<Self, VkError> {
         // Written once: the renderer is made anew when the GI settings change.
         let gi_params = indirect
-            .map(|(push, _, _)| {
+            .map(|(params, _, _)| {
                 let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
-                ctx.upload_buffer("oit gi params", bytemuck::bytes_of(&push), usage)
+                ctx.upload_buffer("oit gi params", params.bytes(), usage)
             })
             .transpose()?;
         Ok(Self {

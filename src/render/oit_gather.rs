@@ -2,8 +2,9 @@
 //! written), shades each fragment with the deferred pass's direct light and its emission, and
 //! appends it to its pixel's linked list (`glsl/gbuffer.vert`, `glsl/oit_gather.frag`). Under a
 //! GI method that gives transparent layers indirect light, the fragments also trace its rays:
-//! the path tracer's voxel paths (`glsl/oit_gather_indirect.frag`) or the hemisphere method's
-//! one bounce (`glsl/oit_gather_hemisphere{,_emission,_volume}.frag`).
+//! the path tracer's voxel paths (`glsl/oit_gather_indirect.frag`), the hemisphere method's
+//! one bounce (`glsl/oit_gather_hemisphere{,_emission,_volume}.frag`) or the VPL method's
+//! gather over every interleaved set (`glsl/oit_gather_vpl.frag`).
 
 use super::gbuffer::GpuGbufferPush;
 use super::light_map::LightMaps;
@@ -34,10 +35,12 @@ pub struct OitVoxelInputs {
     pub light_maps: Option<LightMaps>,
     /// The direct-radiance volume (`--gi-radiance volume`).
     pub radiance_volume: Option<ImageHandle>,
+    /// The frame's VPLs (`--gi vpl`).
+    pub vpls: Option<BufferHandle>,
 }
 
-/// The fragments' indirect-light inputs: the GI method's ray parameters (a `GpuGiPush` in a
-/// buffer) and what its rays read.
+/// The fragments' indirect-light inputs: the GI method's ray parameters (a `GpuGiPush`, or
+/// the VPL gather's `GpuVplGatherPush`, in a buffer) and what its rays read.
 #[derive(Clone, Copy, Debug)]
 pub struct OitIndirect {
     pub params: BufferHandle,
@@ -90,6 +93,7 @@ impl OitGatherPass {
             Some((LayerIndirect::LightMaps, false)) => "oit_gather_hemisphere.frag",
             Some((LayerIndirect::LightMaps, true)) => "oit_gather_hemisphere_emission.frag",
             Some((LayerIndirect::RadianceVolume, _)) => "oit_gather_hemisphere_volume.frag",
+            Some((LayerIndirect::Vpls, _)) => "oit_gather_vpl.frag",
         }
     }
 
@@ -105,12 +109,13 @@ impl OitGatherPass {
             HAS_ALPHA_MAP = alpha_maps,
         ]
         .to_vec();
-        // The light maps' variants read emission by variant, not by a constant.
+        // The light maps' variants read emission by variant, not by a constant; the VPLs
+        // carry the emitters' light themselves (`gi_vpl_emit`).
         match indirect {
             Some((LayerIndirect::Paths | LayerIndirect::RadianceVolume, emission)) => {
                 spec.extend(crate::spec_constants![HAS_EMISSION = emission]);
             }
-            Some((LayerIndirect::LightMaps, _)) | None => {}
+            Some((LayerIndirect::LightMaps | LayerIndirect::Vpls, _)) | None => {}
         }
         ctx.graphics_pipeline(&GraphicsPipelineDesc {
             // The G-buffer's vertex stage: the same positions, so the depth test against the
@@ -178,8 +183,13 @@ impl OitGatherPass {
                 .bind(8, i.params, Access::StorageRead(f))
                 .bind_sampled(9, i.inputs.voxels, sampler, f)
                 .bind(10, i.inputs.lut, Access::StorageRead(f));
-            for (binding, image) in (11..).zip(hits) {
-                pass = pass.bind_sampled(binding, image, sampler, f);
+            match hits {
+                LayerHits::Images(images) => {
+                    for (binding, image) in (11..).zip(images) {
+                        pass = pass.bind_sampled(binding, image, sampler, f);
+                    }
+                }
+                LayerHits::Vpls(vpls) => pass = pass.bind(11, vpls, Access::StorageRead(f)),
             }
         }
         pass.record(move |ctx| {
@@ -209,11 +219,20 @@ impl OitGatherPass {
     }
 }
 
+/// What an indirect variant reads besides the voxels, bound from 11 on.
+enum LayerHits {
+    /// The images its rays sample at their hits.
+    Images(Vec<ImageHandle>),
+    /// The VPL buffer (binding 11).
+    Vpls(BufferHandle),
+}
+
 impl OitGatherPass {
-    /// The images variant `v` samples at its rays' hits, bound from 11 on, or `None` where
-    /// the frame lacks one (the pass then draws without indirect light).
-    fn hit_inputs(v: &IndirectVariant, i: &OitVoxelInputs) -> Option<Vec<ImageHandle>> {
-        Some(match v.kind {
+    /// What variant `v` reads at its rays' hits, or `None` where the frame lacks it (the pass
+    /// then draws without indirect light).
+    fn hit_inputs(v: &IndirectVariant, i: &OitVoxelInputs) -> Option<LayerHits> {
+        let images = match v.kind {
+            LayerIndirect::Vpls => return Some(LayerHits::Vpls(i.vpls?)),
             LayerIndirect::Paths => {
                 let a = i.attributes?;
                 // Without emitters the shader never reads its emission binding; albedo fills it.
@@ -241,7 +260,8 @@ impl OitGatherPass {
                     emission.unwrap_or(a.albedo),
                 ]
             }
-        })
+        };
+        Some(LayerHits::Images(images))
     }
 }
 
@@ -260,5 +280,11 @@ mod tests {
             crate::vk::check_struct_against::<crate::gi::GpuGiPush>(&[file], "GpuGiPush")
                 .unwrap_or_else(|e| panic!("{file}: {e}"));
         }
+        // The VPL variant's buffer holds the VPL gather's push constants.
+        crate::vk::check_struct_against::<crate::gi::vpl::GpuVplGatherPush>(
+            &["oit_gather_vpl.frag"],
+            "GpuVplGatherPush",
+        )
+        .unwrap_or_else(|e| panic!("oit_gather_vpl.frag: {e}"));
     }
 }
