@@ -105,7 +105,6 @@ void main() {
     // Self-intersection offset along the normal (Thiedemann 2010 §5.3.1).
     vec3 origin = p + n * (gi.normal_offset_voxels * gi.voxel_diagonal_m);
     vec3 ov = (gi.world_to_voxel * vec4(origin, 1.0)).xyz;
-    mat3 dir_to_voxel = mat3(gi.world_to_voxel);
     uint rays = max(gi.rays, 1u);
     // Phong and GGX pixels spend half their rays on the specular lobe, metals (a black
     // diffuse part) all of them.
@@ -128,17 +127,9 @@ void main() {
                      : (lobe ? phong_direction(mirror, ns.w, u) : cosine_direction(n, u));
         float cos_n = dot(d, n);
         if (cos_n <= 0.0) continue;  // a lobe sample below the surface contributes nothing
-        // Offset along the ray (Thiedemann 2010 §5.3.1): k2 * h / (d . n), clamped, so grazing
-        // rays leave the surface's own voxels too.
-        float along = min(gi.ray_offset_voxels * gi.voxel_diagonal_m / max(dot(d, n), 1e-4), gi.ray_offset_max_voxels * gi.voxel_diagonal_m);
-        vec3 o = origin + d * along;
-        vec3 ray_o = ov + dir_to_voxel * (d * along);
-        float ray_t = max(gi.radius_m - along, 0.0);
-        VxHit h = voxel_first_hit(gi.dims, uint(gi.max_level), ray_o, dir_to_voxel * d, ray_t, gi.start_level, gi.max_iterations);
+        // The hit's radiance, or the environment's past the grid (gi_hemisphere_hit.glsl).
         vec3 l;
-        if (h.hit) l = hit_radiance(h, o + d * h.t, d);
-        else if (ENVIRONMENT != ENVIRONMENT_NONE) l = environment_after_miss(gi.dims, ray_o, dir_to_voxel * d, ray_t, h.ran_out, d);
-        else continue;
+        if (!hemisphere_ray(origin, ov, d, cos_n, l)) continue;
         if (ggx) l *= w;
         else if (lobe) l *= cos_n;
         if (lobe) lobe_sum += l;

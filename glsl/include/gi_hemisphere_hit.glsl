@@ -6,8 +6,9 @@
 // and buffers the variant reads by these names (rlm_radiance, rlm_position, rlm_normal,
 // materials, pbr; emission_volume, normal_volume; radiance_volume, material_volume,
 // albedo_volume), the constants HAS_PHONG, HAS_GGX (and HAS_EMISSION with
-// RADIANCE_FROM_VOLUME), and includes voxel_traverse.glsl, shadow.glsl, brdf.glsl and
-// material_lobe.glsl first.
+// RADIANCE_FROM_VOLUME) and ENVIRONMENT, and includes voxel_traverse.glsl, shadow.glsl,
+// brdf.glsl, material_lobe.glsl and environment.glsl first. hemisphere_ray (at the end) traces
+// one of the method's rays and reads what it brings back.
 #ifndef GI_HEMISPHERE_HIT_GLSL
 #define GI_HEMISPHERE_HIT_GLSL
 #include "paraboloid.glsl"
@@ -159,4 +160,25 @@ vec3 hit_radiance(VxHit h, vec3 hit, vec3 dir) {
 #endif
 }
 #endif
+
+// What one of the method's rays brings back (Thiedemann 2010 §6.4.1): from `origin` (the
+// point moved off its surface along the normal, §5.3.1; `ov` the same point in voxel space)
+// along unit d, cos_n = d . n > 0, moved on along the ray by k2 h / cos_n, clamped (§5.3.1),
+// so grazing rays leave their surface's own voxels too. Its first hit within gi.radius_m
+// gives hit_radiance; a ray that leaves the voxel grid within that length the environment's
+// radiance (ENVIRONMENT, environment.glsl: the sky's light, with voxel visibility). False
+// where it brings nothing (a miss inside the grid, or no environment).
+bool hemisphere_ray(vec3 origin, vec3 ov, vec3 d, float cos_n, out vec3 l) {
+    mat3 dir_to_voxel = mat3(gi.world_to_voxel);
+    float along = min(gi.ray_offset_voxels * gi.voxel_diagonal_m / max(cos_n, 1e-4), gi.ray_offset_max_voxels * gi.voxel_diagonal_m);
+    vec3 o = origin + d * along;
+    vec3 ray_o = ov + dir_to_voxel * (d * along);
+    float ray_t = max(gi.radius_m - along, 0.0);
+    VxHit h = voxel_first_hit(gi.dims, uint(gi.max_level), ray_o, dir_to_voxel * d, ray_t, gi.start_level, gi.max_iterations);
+    l = vec3(0.0);
+    if (h.hit) l = hit_radiance(h, o + d * h.t, d);
+    else if (ENVIRONMENT != ENVIRONMENT_NONE) l = environment_after_miss(gi.dims, ray_o, dir_to_voxel * d, ray_t, h.ran_out, d);
+    else return false;
+    return true;
+}
 #endif

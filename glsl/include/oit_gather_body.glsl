@@ -96,6 +96,14 @@ bool vx_voxel(int x, int y, int k) {
 #include "material_lobe.glsl"
 #endif
 
+#if defined(VOXEL_INDIRECT) || defined(HEMISPHERE_INDIRECT)
+// The environment (environment.glsl's kinds): the layers' rays that leave the voxel grid read
+// it, as the opaque passes' rays do. The VPLs bring none (a VPL starts at a light).
+layout(constant_id = 8) const uint ENVIRONMENT = 0u;
+layout(set = 0, binding = 16) uniform sampler2D environment_map;  // a placeholder unless a map
+#include "environment.glsl"
+#endif
+
 #ifdef VOXEL_INDIRECT
 // The hit voxel's emission is added where a path arrives on an emitter's front side.
 layout(constant_id = 4) const bool HAS_EMISSION = false;
@@ -108,9 +116,11 @@ layout(set = 0, binding = 13) uniform sampler3D emission_volume;  // albedo when
 // paths: `gi.rays` cosine-distributed paths of `gi.bounces` bounces (0: Russian roulette
 // after ROULETTE_AFTER), the same bounce samples, offsets and next-event estimation from the
 // shadow maps at every hit, later bounces Lambert with the albedo volume's colour, an
-// emitter's front side adding its emission. E = pi/N sum L (cosine sampling). What the path
-// tracer does besides is left out: no emitter or environment-map sampling, and a path that
-// leaves the grid brings nothing back (no environment). One frame's estimate with a fixed
+// emitter's front side adding its emission, a path that leaves the grid the environment's
+// radiance. E = pi/N sum L (cosine sampling). What the path tracer does besides is left out:
+// no emitter or environment-map sampling (next-event estimation toward them), so an emitter's
+// or the map's light arrives only where a path meets it, unbiased but noisier. One frame's
+// estimate with a fixed
 // per-pixel pattern (gi.seed): the layer is shaded anew every frame and has no history to
 // accumulate into, so a still view keeps its noise rather than flickering.
 vec3 voxel_irradiance(vec3 p, vec3 n, uvec2 px) {
@@ -133,7 +143,12 @@ vec3 voxel_irradiance(vec3 p, vec3 n, uvec2 px) {
             }
             vec3 start;
             VxHit h = trace_from(o, nn, d, start);
-            if (!h.hit) break;
+            if (!h.hit) {
+                // A path that leaves the grid brings the environment's radiance, as the path
+                // tracer's BSDF rays do (weight 1: the layer draws no map samples to share it).
+                if (ENVIRONMENT != ENVIRONMENT_NONE) sum += throughput * escaped_radiance(o, start, d, h);
+                break;
+            }
             ivec3 v = ivec3(h.voxel);
             vec3 a = texelFetch(albedo_volume, v, 0).rgb;
             vec4 nd = texelFetch(normal_volume, v, 0);
@@ -211,13 +226,12 @@ layout(set = 0, binding = 15) uniform sampler3D normal_volume;
 // method's rays, as gi_hemisphere_body.glsl casts a Lambert pixel's: `gi.rays`
 // cosine-distributed rays (Hammersley points, the per-pixel rotation of gi.seed), offset along
 // the normal and along the ray (Thiedemann 2010 §5.3.1), within gi.radius_m, the radiance at
-// each hit from hit_radiance. E = pi/N sum L. One bounce, as the method's; a ray that leaves
-// the grid brings nothing back (no environment). One frame's estimate with a fixed pattern,
-// as the path tracer's variant above: the layer has no history.
+// each hit from hit_radiance and past the grid the environment's (hemisphere_ray, which the
+// method's pass calls too). E = pi/N sum L. One bounce, as the method's. One frame's estimate
+// with a fixed pattern, as the path tracer's variant above: the layer has no history.
 vec3 voxel_irradiance(vec3 p, vec3 n, uvec2 px) {
     vec3 origin = p + n * (gi.normal_offset_voxels * gi.voxel_diagonal_m);
     vec3 ov = (gi.world_to_voxel * vec4(origin, 1.0)).xyz;
-    mat3 dir_to_voxel = mat3(gi.world_to_voxel);
     uint rays = max(gi.rays, 1u);
     vec2 rot = pixel_rotation(px, gi.seed);
     vec3 sum = vec3(0.0);
@@ -226,13 +240,8 @@ vec3 voxel_irradiance(vec3 p, vec3 n, uvec2 px) {
         vec3 d = cosine_direction(n, u);
         float cos_n = dot(d, n);
         if (cos_n <= 0.0) continue;
-        float along = min(gi.ray_offset_voxels * gi.voxel_diagonal_m / max(cos_n, 1e-4),
-                          gi.ray_offset_max_voxels * gi.voxel_diagonal_m);
-        vec3 ray_o = ov + dir_to_voxel * (d * along);
-        float ray_t = max(gi.radius_m - along, 0.0);
-        VxHit h = voxel_first_hit(gi.dims, uint(gi.max_level), ray_o, dir_to_voxel * d, ray_t,
-                                  gi.start_level, gi.max_iterations);
-        if (h.hit) sum += hit_radiance(h, origin + d * (along + h.t), d);
+        vec3 l;
+        if (hemisphere_ray(origin, ov, d, cos_n, l)) sum += l;
     }
     return sum * (PI / float(rays));
 }

@@ -156,7 +156,16 @@ impl Renderer {
                 let indirect = gi
                     .as_ref()
                     .and_then(|(gi, _)| gi.transparent_indirect(scene))
-                    .map(|(push, kind)| (push, kind, scene.has_emission()));
+                    .map(|(params, kind)| {
+                        let variant = oit::LayerVariant {
+                            kind,
+                            emission: scene.has_emission(),
+                            environment: crate::scene::Environment::shader_kind(
+                                scene.environment.as_ref(),
+                            ),
+                        };
+                        (params, variant)
+                    });
                 let nodes = settings.oit_nodes_per_pixel;
                 oit::OitPasses::new(ctx, materials, nodes, sampler.raw, indirect)
             })

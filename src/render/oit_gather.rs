@@ -47,12 +47,22 @@ pub struct OitIndirect {
     pub inputs: OitVoxelInputs,
 }
 
-/// The indirect-light variant of the pass: its pipeline, the rays it traces and whether the
-/// scene has emitters (which the variants read from the emission volume).
+/// Which indirect-light variant the pass makes: the rays it traces and what of the scene they
+/// read.
+#[derive(Clone, Copy, Debug)]
+pub struct LayerVariant {
+    pub kind: LayerIndirect,
+    /// The scene has emitters, which the variants read from the emission volume.
+    pub emission: bool,
+    /// The scene's environment (`Environment::shader_kind`), which the path tracer's and the
+    /// hemisphere method's rays read where they leave the voxel grid.
+    pub environment: u32,
+}
+
+/// The indirect-light variant of the pass: its pipeline and what it was made for.
 struct IndirectVariant {
     pipeline: GraphicsPipeline,
-    kind: LayerIndirect,
-    emission: bool,
+    variant: LayerVariant,
 }
 
 pub struct OitGatherPass {
@@ -64,21 +74,19 @@ pub struct OitGatherPass {
 
 impl OitGatherPass {
     /// `phong`, `ggx`, `textures`, `alpha_maps`: what the scene's materials have (the shader
-    /// compiles in only those). `indirect`: make the indirect-light variant tracing these rays,
-    /// with emission reads when the flag is true (a scene with emitters).
+    /// compiles in only those). `indirect`: make this indirect-light variant.
     pub fn new(
         ctx: &Context,
         materials: (bool, bool, bool, bool),
-        indirect: Option<(LayerIndirect, bool)>,
+        indirect: Option<LayerVariant>,
     ) -> Result<Self, VkError> {
         Ok(Self {
             pipeline: Self::pipeline(ctx, materials, None)?,
             indirect: indirect
-                .map(|(kind, emission)| {
+                .map(|variant| {
                     Ok::<_, VkError>(IndirectVariant {
-                        pipeline: Self::pipeline(ctx, materials, Some((kind, emission)))?,
-                        kind,
-                        emission,
+                        pipeline: Self::pipeline(ctx, materials, Some(variant))?,
+                        variant,
                     })
                 })
                 .transpose()?,
@@ -86,8 +94,8 @@ impl OitGatherPass {
     }
 
     /// The fragment shader of the plain pass or of an indirect variant.
-    fn fragment_shader(indirect: Option<(LayerIndirect, bool)>) -> &'static str {
-        match indirect {
+    fn fragment_shader(indirect: Option<LayerVariant>) -> &'static str {
+        match indirect.map(|v| (v.kind, v.emission)) {
             None => "oit_gather.frag",
             Some((LayerIndirect::Paths, _)) => "oit_gather_indirect.frag",
             Some((LayerIndirect::LightMaps, false)) => "oit_gather_hemisphere.frag",
@@ -100,7 +108,7 @@ impl OitGatherPass {
     fn pipeline(
         ctx: &Context,
         (phong, ggx, textures, alpha_maps): (bool, bool, bool, bool),
-        indirect: Option<(LayerIndirect, bool)>,
+        indirect: Option<LayerVariant>,
     ) -> Result<GraphicsPipeline, VkError> {
         let mut spec = crate::spec_constants![
             HAS_PHONG = phong,
@@ -110,12 +118,14 @@ impl OitGatherPass {
         ]
         .to_vec();
         // The light maps' variants read emission by variant, not by a constant; the VPLs
-        // carry the emitters' light themselves (`gi_vpl_emit`).
-        match indirect {
-            Some((LayerIndirect::Paths | LayerIndirect::RadianceVolume, emission)) => {
-                spec.extend(crate::spec_constants![HAS_EMISSION = emission]);
+        // carry the emitters' light themselves (`gi_vpl_emit`) and bring no environment.
+        if let Some(v) = indirect {
+            if matches!(v.kind, LayerIndirect::Paths | LayerIndirect::RadianceVolume) {
+                spec.extend(crate::spec_constants![HAS_EMISSION = v.emission]);
             }
-            Some((LayerIndirect::LightMaps | LayerIndirect::Vpls, _)) | None => {}
+            if v.kind != LayerIndirect::Vpls {
+                spec.extend(crate::spec_constants![ENVIRONMENT = v.environment]);
+            }
         }
         ctx.graphics_pipeline(&GraphicsPipelineDesc {
             // The G-buffer's vertex stage: the same positions, so the depth test against the
@@ -188,6 +198,10 @@ impl OitGatherPass {
                     for (binding, image) in (11..).zip(images) {
                         pass = pass.bind_sampled(binding, image, sampler, f);
                     }
+                    // The environment map, where rays leaving the grid read one (the
+                    // placeholder texture fills the binding otherwise, never read).
+                    let map = scene.environment_map.unwrap_or(placeholder);
+                    pass = pass.bind_sampled(16, map, scene.environment_sampler, f);
                 }
                 LayerHits::Vpls(vpls) => pass = pass.bind(11, vpls, Access::StorageRead(f)),
             }
@@ -231,7 +245,7 @@ impl OitGatherPass {
     /// What variant `v` reads at its rays' hits, or `None` where the frame lacks it (the pass
     /// then draws without indirect light).
     fn hit_inputs(v: &IndirectVariant, i: &OitVoxelInputs) -> Option<LayerHits> {
-        let images = match v.kind {
+        let images = match v.variant.kind {
             LayerIndirect::Vpls => return Some(LayerHits::Vpls(i.vpls?)),
             LayerIndirect::Paths => {
                 let a = i.attributes?;
@@ -241,7 +255,7 @@ impl OitGatherPass {
             LayerIndirect::LightMaps => {
                 let m = i.light_maps?;
                 let mut images = vec![m.radiance, m.position, m.normal];
-                if v.emission {
+                if v.variant.emission {
                     let a = i.attributes?;
                     images.extend([a.emission.unwrap_or(a.albedo), a.normal]);
                 }
