@@ -11,7 +11,7 @@
 // Body of oit_gather.frag (direct light and emission), oit_gather_indirect.frag
 // (VOXEL_INDIRECT: plus the voxel path tracer's indirect light, see voxel_irradiance) and
 // oit_gather_hemisphere*.frag (HEMISPHERE_INDIRECT: plus the hemisphere method's one bounce,
-// its hits read as gi_hemisphere_hit.glsl reads them: light maps, with EMISSION_FROM_VOLUME
+// a glossy layer's lobe included, its rays cast and read by gi_hemisphere_hit.glsl: light maps, with EMISSION_FROM_VOLUME
 // the emission volume too, or with RADIANCE_FROM_VOLUME the direct-radiance volume) and
 // oit_gather_vpl.frag (VPL_INDIRECT: plus the frame's VPLs, gathered as gi_vpl_gather does).
 layout(early_fragment_tests) in;  // a fragment behind the opaque depth appends nothing
@@ -222,28 +222,30 @@ layout(set = 0, binding = 15) uniform sampler3D normal_volume;
 #endif
 #include "gi_hemisphere_hit.glsl"
 
-// Irradiance at the fragment p (normal n, the side the camera sees) by the hemisphere
-// method's rays, as gi_hemisphere_body.glsl casts a Lambert pixel's: `gi.rays`
-// cosine-distributed rays (Hammersley points, the per-pixel rotation of gi.seed), offset along
-// the normal and along the ray (Thiedemann 2010 §5.3.1), within gi.radius_m, the radiance at
-// each hit from hit_radiance and past the grid the environment's (hemisphere_ray, which the
-// method's pass calls too). E = pi/N sum L. One bounce, as the method's. One frame's estimate
-// with a fixed pattern, as the path tracer's variant above: the layer has no history.
-vec3 voxel_irradiance(vec3 p, vec3 n, uvec2 px) {
-    vec3 origin = p + n * (gi.normal_offset_voxels * gi.voxel_diagonal_m);
-    vec3 ov = (gi.world_to_voxel * vec4(origin, 1.0)).xyz;
-    uint rays = max(gi.rays, 1u);
-    vec2 rot = pixel_rotation(px, gi.seed);
-    vec3 sum = vec3(0.0);
-    for (uint i = 0u; i < rays; ++i) {
-        vec2 u = fract(vec2((float(i) + 0.5) / float(rays), radical_inverse(i)) + rot);
-        vec3 d = cosine_direction(n, u);
-        float cos_n = dot(d, n);
-        if (cos_n <= 0.0) continue;
-        vec3 l;
-        if (hemisphere_ray(origin, ov, d, cos_n, l)) sum += l;
+// Indirect radiance toward wo of the fragment p (normal n, the side the camera sees; diffuse
+// colour `albedo`, the lobe and its parameter as direct_radiance takes them) by the hemisphere
+// method's rays, cast and read by the very function gi_hemisphere_body.glsl calls
+// (hemisphere_gather: `gi.rays` rays on Hammersley points under the per-pixel rotation of
+// gi.seed, a Phong or GGX layer's half on its specular lobe, each ray's radiance from
+// hit_radiance at a hit and past the grid the environment's) and composed as a G-buffer pixel
+// of that material is: albedo/pi E for Lambert, hemisphere_glossy_radiance for Phong and GGX.
+// One bounce, as the method's. One frame's estimate with a fixed pattern, as the path tracer's
+// variant above: the layer has no history.
+vec3 hemisphere_layer_radiance(vec3 p, vec3 n, vec3 wo, uvec2 px, vec3 albedo, vec4 lobe,
+                               float lobe_parameter) {
+    bool ggx = HAS_GGX && lobe.w > 1.5;
+    vec3 specular = ggx ? vec3(0.0) : lobe.rgb;
+    bool phong = HAS_PHONG && !ggx && is_phong_pixel(specular);
+    Lobe receiver = Lobe(LOBE_GGX, albedo, lobe.rgb, lobe_parameter);
+    vec3 sum, lobe_sum;
+    uint diffuse_rays, lobe_rays;
+    hemisphere_gather(p, n, wo, pixel_rotation(px, gi.seed), phong, lobe_parameter, ggx,
+                      receiver, sum, lobe_sum, diffuse_rays, lobe_rays);
+    vec3 e = sum * (PI / float(max(diffuse_rays, 1u)));
+    if (ggx || phong) {
+        return hemisphere_glossy_radiance(ggx, albedo, specular, lobe_parameter, e, lobe_sum, lobe_rays);
     }
-    return sum * (PI / float(rays));
+    return albedo / PI * e;
 }
 #endif
 
@@ -282,7 +284,11 @@ void main() {
     }
     vec3 wo = toward_camera(frame.camera_position, frame.camera_forward, in_world);
     vec3 lo = direct_radiance(shadow_maps, in_world, n, wo, albedo, lobe, lobe_parameter);
-#ifdef LAYER_INDIRECT
+#ifdef HEMISPHERE_INDIRECT
+    // The hemisphere method's indirect radiance, a glossy layer's lobe included, as
+    // gi_composite adds it to a G-buffer pixel, on the side the camera sees.
+    lo += hemisphere_layer_radiance(in_world, n, wo, uvec2(gl_FragCoord.xy), albedo, lobe, lobe_parameter);
+#elif defined(LAYER_INDIRECT)
     // The diffuse part's indirect light, albedo/pi E, as gi_composite adds it to a Lambert
     // G-buffer pixel, on the side the camera sees (Mitsuba's mask around a diffuse BSDF
     // reflects from the side it is hit; what lies behind is the blend's).
