@@ -125,14 +125,6 @@ vec2 env_sample_u(uvec2 px, uint bounce, uint s, uint rays, uint path, uint fram
     return vec2(float(h >> 8u), float(h2 >> 8u)) * (1.0 / 16777216.0);
 }
 
-// The radiance a ray from o that trace_from started at `start` along d brings back when it hit
-// nothing (h): the environment's, if it left the grid within its length (environment.glsl).
-vec3 escaped_radiance(vec3 o, vec3 start, vec3 d, VxHit h) {
-    float t_max = max(gi.radius_m - distance(start, o), 0.0);
-    vec3 ov = (gi.world_to_voxel * vec4(start, 1.0)).xyz;
-    return environment_after_miss(gi.dims, ov, mat3(gi.world_to_voxel) * d, t_max, h.ran_out, d);
-}
-
 // The material at a voxel hit: the material volume's lobe, or Lambert with the albedo.
 Lobe hit_lobe(ivec3 v, vec3 albedo) {
     return HAS_MATERIAL_VOLUME ? voxel_lobe(albedo, texelFetch(material_volume, v, 0)) : lambert_lobe(albedo);

@@ -95,64 +95,24 @@ void main() {
     vec3 specular = HAS_PHONG ? gbuffer_phong_specular(gb_specular, px) : vec3(0.0);
     bool phong = HAS_PHONG && is_phong_pixel(specular);
     vec3 wo = toward_camera(frame.camera_position, frame.camera_forward, p);
-    vec3 mirror = reflect(-wo, n);
     // GGX receivers (HAS_GGX): F0 in the lobe target, the roughness in the normal's w, the
     // diffuse color (1 - m) b in the albedo (docs/ARCHITECTURE.md, "Materials").
     vec4 lobe_texel = HAS_GGX ? texelFetch(gb_specular, px, 0) : vec4(0.0);
     bool ggx = HAS_GGX && lobe_texel.a > 1.5;
     vec3 diffuse = ggx ? texelFetch(gb_albedo, px, 0).rgb : vec3(0.0);
     Lobe receiver = Lobe(LOBE_GGX, diffuse, lobe_texel.rgb, ns.w);
-    // Self-intersection offset along the normal (Thiedemann 2010 §5.3.1).
-    vec3 origin = p + n * (gi.normal_offset_voxels * gi.voxel_diagonal_m);
-    vec3 ov = (gi.world_to_voxel * vec4(origin, 1.0)).xyz;
-    mat3 dir_to_voxel = mat3(gi.world_to_voxel);
-    uint rays = max(gi.rays, 1u);
-    // Phong and GGX pixels spend half their rays on the specular lobe, metals (a black
-    // diffuse part) all of them.
-    uint lobe_rays = phong ? rays / 2u : 0u;
-    if (ggx) lobe_rays = lobe_specular_probability(receiver) == 1.0 ? rays : rays / 2u;
-    uint diffuse_rays = rays - lobe_rays;
     vec2 rot = ADVANCE ? fract(pixel_rotation(uvec2(px), 0u) + r2(gi.seed))
                        : pixel_rotation(uvec2(px), gi.seed);
-    vec3 sum = vec3(0.0);
-    vec3 lobe_sum = vec3(0.0);
-    for (uint i = 0u; i < rays; ++i) {
-        bool lobe = i >= diffuse_rays;
-        uint j = lobe ? i - diffuse_rays : i;
-        uint count = lobe ? lobe_rays : diffuse_rays;
-        vec2 u = fract(vec2((float(j) + 0.5) / float(count), radical_inverse(j)) + rot);
-        // GGX: visible-normal samples weighted F(wo.h) G1(wi), or cosine samples weighted
-        // (1 - F_d(n.wi)) (1 - F_d(n.wo)) (material_lobe.glsl's sample_lobe).
-        vec3 w = vec3(1.0);
-        vec3 d = ggx ? sample_lobe(receiver, n, wo, lobe, u, w)
-                     : (lobe ? phong_direction(mirror, ns.w, u) : cosine_direction(n, u));
-        float cos_n = dot(d, n);
-        if (cos_n <= 0.0) continue;  // a lobe sample below the surface contributes nothing
-        // Offset along the ray (Thiedemann 2010 §5.3.1): k2 * h / (d . n), clamped, so grazing
-        // rays leave the surface's own voxels too.
-        float along = min(gi.ray_offset_voxels * gi.voxel_diagonal_m / max(dot(d, n), 1e-4), gi.ray_offset_max_voxels * gi.voxel_diagonal_m);
-        vec3 o = origin + d * along;
-        vec3 ray_o = ov + dir_to_voxel * (d * along);
-        float ray_t = max(gi.radius_m - along, 0.0);
-        VxHit h = voxel_first_hit(gi.dims, uint(gi.max_level), ray_o, dir_to_voxel * d, ray_t, gi.start_level, gi.max_iterations);
-        vec3 l;
-        if (h.hit) l = hit_radiance(h, o + d * h.t, d);
-        else if (ENVIRONMENT != ENVIRONMENT_NONE) l = environment_after_miss(gi.dims, ray_o, dir_to_voxel * d, ray_t, h.ran_out, d);
-        else continue;
-        if (ggx) l *= w;
-        else if (lobe) l *= cos_n;
-        if (lobe) lobe_sum += l;
-        else sum += l;
-    }
+    // The rays (gi_hemisphere_hit.glsl, which transparent layers call too).
+    vec3 sum, lobe_sum;
+    uint diffuse_rays, lobe_rays;
+    hemisphere_gather(p, n, wo, rot, phong, ns.w, ggx, receiver, sum, lobe_sum, diffuse_rays, lobe_rays);
     vec3 e = sum * (PI / float(max(diffuse_rays, 1u)));
     if (ggx) {
-        // The indirect radiance (gi_composite's GGX_RADIANCE): (1 - m) b / pi E_weighted plus
-        // the lobe's mean of L F G1.
-        imageStore(irradiance, px, vec4(diffuse / PI * e + lobe_sum / float(max(lobe_rays, 1u)), 1.0));
+        imageStore(irradiance, px, vec4(hemisphere_glossy_radiance(true, diffuse, vec3(0.0), ns.w, e, lobe_sum, lobe_rays), 1.0));
     } else if (phong) {
         vec3 albedo = texelFetch(gb_albedo, px, 0).rgb;
-        vec3 s = specular * ((ns.w + 2.0) / (ns.w + 1.0)) * lobe_sum / float(max(lobe_rays, 1u));
-        imageStore(irradiance, px, vec4(albedo / PI * e + s, 1.0));
+        imageStore(irradiance, px, vec4(hemisphere_glossy_radiance(false, albedo, specular, ns.w, e, lobe_sum, lobe_rays), 1.0));
     } else {
         imageStore(irradiance, px, vec4(e, 1.0));
     }

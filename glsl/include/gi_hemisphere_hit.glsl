@@ -6,8 +6,9 @@
 // and buffers the variant reads by these names (rlm_radiance, rlm_position, rlm_normal,
 // materials, pbr; emission_volume, normal_volume; radiance_volume, material_volume,
 // albedo_volume), the constants HAS_PHONG, HAS_GGX (and HAS_EMISSION with
-// RADIANCE_FROM_VOLUME), and includes voxel_traverse.glsl, shadow.glsl, brdf.glsl and
-// material_lobe.glsl first.
+// RADIANCE_FROM_VOLUME) and ENVIRONMENT, and includes voxel_traverse.glsl, shadow.glsl,
+// brdf.glsl, material_lobe.glsl and environment.glsl first. hemisphere_ray (at the end) traces
+// one of the method's rays and reads what it brings back.
 #ifndef GI_HEMISPHERE_HIT_GLSL
 #define GI_HEMISPHERE_HIT_GLSL
 #include "paraboloid.glsl"
@@ -159,4 +160,75 @@ vec3 hit_radiance(VxHit h, vec3 hit, vec3 dir) {
 #endif
 }
 #endif
+
+// What one of the method's rays brings back (Thiedemann 2010 §6.4.1): from `origin` (the
+// point moved off its surface along the normal, §5.3.1; `ov` the same point in voxel space)
+// along unit d, cos_n = d . n > 0, moved on along the ray by k2 h / cos_n, clamped (§5.3.1),
+// so grazing rays leave their surface's own voxels too. Its first hit within gi.radius_m
+// gives hit_radiance; a ray that leaves the voxel grid within that length the environment's
+// radiance (ENVIRONMENT, environment.glsl: the sky's light, with voxel visibility). False
+// where it brings nothing (a miss inside the grid, or no environment).
+bool hemisphere_ray(vec3 origin, vec3 ov, vec3 d, float cos_n, out vec3 l) {
+    mat3 dir_to_voxel = mat3(gi.world_to_voxel);
+    float along = min(gi.ray_offset_voxels * gi.voxel_diagonal_m / max(cos_n, 1e-4), gi.ray_offset_max_voxels * gi.voxel_diagonal_m);
+    vec3 o = origin + d * along;
+    vec3 ray_o = ov + dir_to_voxel * (d * along);
+    float ray_t = max(gi.radius_m - along, 0.0);
+    VxHit h = voxel_first_hit(gi.dims, uint(gi.max_level), ray_o, dir_to_voxel * d, ray_t, gi.start_level, gi.max_iterations);
+    l = vec3(0.0);
+    if (h.hit) l = hit_radiance(h, o + d * h.t, d);
+    else if (ENVIRONMENT != ENVIRONMENT_NONE) l = environment_after_miss(gi.dims, ray_o, dir_to_voxel * d, ray_t, h.ran_out, d);
+    else return false;
+    return true;
+}
+
+// The method's rays from a surface point p (unit normal n, the side lit; wo toward the camera;
+// `rot` the pattern's Cranley-Patterson rotation) and what they bring back: `gi.rays` rays on
+// Hammersley points, a Lambert receiver's all cosine-distributed, a Phong or GGX receiver's
+// half on its specular lobe (a GGX metal, whose diffuse part is black, all of them; Thiedemann
+// 2010 §5.7 for Phong). GGX rays are material_lobe.glsl's sample_lobe (visible normals
+// weighted F(wo.h) G1(wi), or cosine samples weighted (1 - F_d(n.wi)) (1 - F_d(n.wo))), Phong
+// lobe rays phong_direction's around the mirror direction (weighted by cos). Returns the sums
+// of the diffuse rays' and the lobe rays' radiance and their counts: E = pi/N_d sum.
+void hemisphere_gather(vec3 p, vec3 n, vec3 wo, vec2 rot, bool phong, float shininess, bool ggx,
+                       Lobe receiver, out vec3 sum, out vec3 lobe_sum, out uint diffuse_rays,
+                       out uint lobe_rays) {
+    vec3 mirror = reflect(-wo, n);
+    // Self-intersection offset along the normal (Thiedemann 2010 §5.3.1).
+    vec3 origin = p + n * (gi.normal_offset_voxels * gi.voxel_diagonal_m);
+    vec3 ov = (gi.world_to_voxel * vec4(origin, 1.0)).xyz;
+    uint rays = max(gi.rays, 1u);
+    lobe_rays = phong ? rays / 2u : 0u;
+    if (ggx) lobe_rays = lobe_specular_probability(receiver) == 1.0 ? rays : rays / 2u;
+    diffuse_rays = rays - lobe_rays;
+    sum = vec3(0.0);
+    lobe_sum = vec3(0.0);
+    for (uint i = 0u; i < rays; ++i) {
+        bool lobe = i >= diffuse_rays;
+        uint j = lobe ? i - diffuse_rays : i;
+        uint count = lobe ? lobe_rays : diffuse_rays;
+        vec2 u = fract(vec2((float(j) + 0.5) / float(count), radical_inverse(j)) + rot);
+        vec3 w = vec3(1.0);
+        vec3 d = ggx ? sample_lobe(receiver, n, wo, lobe, u, w)
+                     : (lobe ? phong_direction(mirror, shininess, u) : cosine_direction(n, u));
+        float cos_n = dot(d, n);
+        if (cos_n <= 0.0) continue;  // a lobe sample below the surface contributes nothing
+        vec3 l;
+        if (!hemisphere_ray(origin, ov, d, cos_n, l)) continue;
+        if (ggx) l *= w;
+        else if (lobe) l *= cos_n;
+        if (lobe) lobe_sum += l;
+        else sum += l;
+    }
+}
+
+// A glossy receiver's indirect radiance from hemisphere_gather's sums and E: GGX (1 - m) b / pi
+// E (E with the diffuse weights) plus the lobe's mean of L F G1 (gi_composite's
+// GGX_RADIANCE); Phong rho_d / pi E plus rho_s (n + 2) / (n + 1) times the lobe's mean of L cos.
+vec3 hemisphere_glossy_radiance(bool ggx, vec3 diffuse, vec3 specular, float shininess, vec3 e,
+                                vec3 lobe_sum, uint lobe_rays) {
+    if (ggx) return diffuse / PI * e + lobe_sum / float(max(lobe_rays, 1u));
+    vec3 s = specular * ((shininess + 2.0) / (shininess + 1.0)) * lobe_sum / float(max(lobe_rays, 1u));
+    return diffuse / PI * e + s;
+}
 #endif

@@ -15,10 +15,11 @@
 // senders, Phong or GGX: I(w) = f(wi, w) Phi_in cos theta_VPL, vpl_intensity in vpl.glsl), and
 // gives a receiver point E = I(w) cos theta_P / (d_min + d^2) (§7.3), times
 // the visibility of the segment from the voxel ray test (offsets at both ends, §5.3.1), or 1
-// without visibility. d_min (the thesis's clamp) bounds the 1/d^2 singularity of every VPL,
-// glossy ones included: E <= I_max / d_min. A glossy VPL's intensity is bounded as well, by its
-// lobe's peak (GGX: D <= 1 / (pi alpha^2) with alpha >= 1e-4; Phong: (n + 2) / (2 pi)), but
-// not clamped further: a sharp lobe's VPL lights a small spot brightly, as the lobe does.
+// without visibility (vpl_arriving in vpl_gather.glsl, which transparent layers call too).
+// d_min (the thesis's clamp) bounds the 1/d^2 singularity of every VPL, glossy ones
+// included: E <= I_max / d_min. A glossy VPL's intensity is bounded as well, by its lobe's
+// peak (GGX: D <= 1 / (pi alpha^2) with alpha >= 1e-4; Phong: (n + 2) / (2 pi)), but not
+// clamped further: a sharp lobe's VPL lights a small spot brightly, as the lobe does.
 // Lambert pixels store E; Phong pixels their indirect radiance,
 // rho / pi E plus the Phong lobe rho_s (n+2)/(2 pi) cos^n(alpha) times I cos theta_P / (d_min + d^2);
 // GGX pixels their indirect radiance, the sum of f_r(wi, wo) I cos theta_P / (d_min + d^2) with
@@ -83,22 +84,7 @@ bool vx_voxel(int x, int y, int k) {
 }
 
 #include "voxel_traverse.glsl"
-
-// Whether the segment from receiver p (normal n) to the VPL at q (normal m) is free, both ends
-// moved off their surfaces along the normal by k1 and along the segment by
-// min(k2 h / cos, clamp) (thesis §5.3.1, as the hemisphere rays do at their origin).
-bool segment_visible(vec3 p, vec3 n, vec3 q, vec3 m, vec3 dir, float cos_p, float cos_v) {
-    float h = pc.voxel_diagonal_m;
-    float along_p = min(pc.offsets.y * h / max(cos_p, 1e-4), pc.offsets.z * h);
-    float along_v = min(pc.offsets.y * h / max(cos_v, 1e-4), pc.offsets.z * h);
-    vec3 a = p + n * (pc.offsets.x * h) + dir * along_p;
-    vec3 b = q + m * (pc.offsets.x * h) - dir * along_v;
-    // The offsets passed each other: the two points are closer than the voxels resolve.
-    if (dot(b - a, dir) <= 0.0) return true;
-    vec3 av = (pc.world_to_voxel * vec4(a, 1.0)).xyz;
-    vec3 bv = (pc.world_to_voxel * vec4(b, 1.0)).xyz;
-    return voxel_visible(pc.dims.xyz, uint(pc.dims.w), av, bv, pc.trace.x, pc.trace.y);
-}
+#include "vpl_gather.glsl"
 
 void main() {
     uvec2 pattern = max(pc.pattern.xy, uvec2(1u));
@@ -139,19 +125,13 @@ void main() {
     uint begin = 0u;
     uint end = row;
 #endif
+    GpuVplGatherPush g = GpuVplGatherPush(pc.world_to_voxel, pc.dims, pc.pattern, pc.trace,
+                                          pc.d_min_m2, pc.voxel_diagonal_m, pc.offsets, pc.splat_vpl);
     for (uint i = begin; i < end; ++i) {
-        GpuVpl vpl = vpls[first + i];
-        if (vpl.position.w == 0.0) continue;  // invalid: carries no flux
-        vec3 to_vpl = vpl.position.xyz - p;
-        float d2 = dot(to_vpl, to_vpl);
-        if (d2 <= 0.0) continue;
-        vec3 dir = to_vpl * inversesqrt(d2);
-        float cos_p = dot(n, dir);
-        float cos_v = -dot(vpl.normal.xyz, dir);
-        if (cos_p <= 0.0 || cos_v <= 0.0) continue;
-        if (pc.pattern.w != 0u && !segment_visible(p, n, vpl.position.xyz, vpl.normal.xyz, dir, cos_p, cos_v)) continue;
-        // I cos theta_P / (d_min + d^2) with I = I_max cos theta_VPL (plus a Phong sender's lobe).
-        vec3 arriving = vpl_intensity(vpl, -dir) * cos_p / (pc.d_min_m2 + d2);
+        // I cos theta_P / (d_min + d^2) with I = I_max cos theta_VPL (plus a glossy sender's
+        // lobe), where the VPL lights p (vpl_gather.glsl).
+        vec3 dir, arriving;
+        if (!vpl_arriving(g, vpls[first + i], p, n, dir, arriving)) continue;
         e += arriving;
         if (ggx) lobe += brdf_ggx(diffuse, lobe_texel.rgb, roughness, n, dir, to_eye) * arriving;
         else if (phong) lobe += brdf_phong(specular, shininess, n, dir, to_eye) * arriving;

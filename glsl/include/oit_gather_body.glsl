@@ -11,8 +11,9 @@
 // Body of oit_gather.frag (direct light and emission), oit_gather_indirect.frag
 // (VOXEL_INDIRECT: plus the voxel path tracer's indirect light, see voxel_irradiance) and
 // oit_gather_hemisphere*.frag (HEMISPHERE_INDIRECT: plus the hemisphere method's one bounce,
-// its hits read as gi_hemisphere_hit.glsl reads them: light maps, with EMISSION_FROM_VOLUME
-// the emission volume too, or with RADIANCE_FROM_VOLUME the direct-radiance volume).
+// a glossy layer's lobe included, its rays cast and read by gi_hemisphere_hit.glsl: light maps, with EMISSION_FROM_VOLUME
+// the emission volume too, or with RADIANCE_FROM_VOLUME the direct-radiance volume) and
+// oit_gather_vpl.frag (VPL_INDIRECT: plus the frame's VPLs, gathered as gi_vpl_gather does).
 layout(early_fragment_tests) in;  // a fragment behind the opaque depth appends nothing
 
 layout(constant_id = 0) const bool HAS_PHONG = false;
@@ -50,14 +51,15 @@ layout(set = 0, binding = 6, std430) writeonly buffer Nodes { uvec4 nodes[]; };
 // x: nodes requested this frame (may exceed y), y: capacity; z, w: oit_resolve's counts.
 layout(set = 0, binding = 7, std430) coherent buffer Counters { uvec4 counters; };
 
-#if defined(VOXEL_INDIRECT) || defined(HEMISPHERE_INDIRECT)
+#if defined(VOXEL_INDIRECT) || defined(HEMISPHERE_INDIRECT) || defined(VPL_INDIRECT)
 #define LAYER_INDIRECT
 #endif
 
 #ifdef LAYER_INDIRECT
+#define GI_OWN_PUSH
+#ifndef VPL_INDIRECT
 // The GI method's ray parameters (src/gi/gi_common.rs's GpuGiPush, the ray passes' push
 // constants), in a buffer: this pass's push constants hold the draw's transform.
-#define GI_OWN_PUSH
 struct GpuGiPush {
     mat4 world_to_voxel;
     ivec3 dims;
@@ -76,6 +78,7 @@ struct GpuGiPush {
     float ray_offset_max_voxels;
 };
 layout(set = 0, binding = 8, std430) readonly buffer GiParams { GpuGiPush gi; };
+#endif
 layout(set = 0, binding = 9) uniform usampler2DArray voxels;
 layout(set = 0, binding = 10, std430) readonly buffer RayMasks { uvec4 ray_masks[]; };
 #include "gi_common.glsl"
@@ -93,6 +96,14 @@ bool vx_voxel(int x, int y, int k) {
 #include "material_lobe.glsl"
 #endif
 
+#if defined(VOXEL_INDIRECT) || defined(HEMISPHERE_INDIRECT)
+// The environment (environment.glsl's kinds): the layers' rays that leave the voxel grid read
+// it, as the opaque passes' rays do. The VPLs bring none (a VPL starts at a light).
+layout(constant_id = 8) const uint ENVIRONMENT = 0u;
+layout(set = 0, binding = 16) uniform sampler2D environment_map;  // a placeholder unless a map
+#include "environment.glsl"
+#endif
+
 #ifdef VOXEL_INDIRECT
 // The hit voxel's emission is added where a path arrives on an emitter's front side.
 layout(constant_id = 4) const bool HAS_EMISSION = false;
@@ -105,9 +116,11 @@ layout(set = 0, binding = 13) uniform sampler3D emission_volume;  // albedo when
 // paths: `gi.rays` cosine-distributed paths of `gi.bounces` bounces (0: Russian roulette
 // after ROULETTE_AFTER), the same bounce samples, offsets and next-event estimation from the
 // shadow maps at every hit, later bounces Lambert with the albedo volume's colour, an
-// emitter's front side adding its emission. E = pi/N sum L (cosine sampling). What the path
-// tracer does besides is left out: no emitter or environment-map sampling, and a path that
-// leaves the grid brings nothing back (no environment). One frame's estimate with a fixed
+// emitter's front side adding its emission, a path that leaves the grid the environment's
+// radiance. E = pi/N sum L (cosine sampling). What the path tracer does besides is left out:
+// no emitter or environment-map sampling (next-event estimation toward them), so an emitter's
+// or the map's light arrives only where a path meets it, unbiased but noisier. One frame's
+// estimate with a fixed
 // per-pixel pattern (gi.seed): the layer is shaded anew every frame and has no history to
 // accumulate into, so a still view keeps its noise rather than flickering.
 vec3 voxel_irradiance(vec3 p, vec3 n, uvec2 px) {
@@ -130,7 +143,12 @@ vec3 voxel_irradiance(vec3 p, vec3 n, uvec2 px) {
             }
             vec3 start;
             VxHit h = trace_from(o, nn, d, start);
-            if (!h.hit) break;
+            if (!h.hit) {
+                // A path that leaves the grid brings the environment's radiance, as the path
+                // tracer's BSDF rays do (weight 1: the layer draws no map samples to share it).
+                if (ENVIRONMENT != ENVIRONMENT_NONE) sum += throughput * escaped_radiance(o, start, d, h);
+                break;
+            }
             ivec3 v = ivec3(h.voxel);
             vec3 a = texelFetch(albedo_volume, v, 0).rgb;
             vec4 nd = texelFetch(normal_volume, v, 0);
@@ -151,6 +169,35 @@ vec3 voxel_irradiance(vec3 p, vec3 n, uvec2 px) {
         }
     }
     return sum * (PI / float(rays));
+}
+#endif
+
+#ifdef VPL_INDIRECT
+#include "vpl.glsl"
+#include "vpl_gather.glsl"
+// The VPL gather's parameters (src/gi/vpl.rs's GpuVplGatherPush, gi_vpl_gather's push
+// constants) in a buffer, and the frame's VPLs, written by gi_vpl_generate, gi_vpl_emit and
+// gi_vpl_bounce before the layers are drawn.
+layout(set = 0, binding = 8, std430) readonly buffer VplParams { GpuVplGatherPush vg; };
+layout(set = 0, binding = 11, std430) readonly buffer Vpls { GpuVpl vpls[]; };
+
+// Irradiance at the fragment p (normal n, the side the camera sees) from the frame's VPLs, each
+// by the opaque gather's term (vpl_arriving: E = I(w) cos theta_P / (d_min + d^2) with the
+// method's visibility test). The opaque pixels gather one of the N x M interleaved sets each
+// and the geometry-aware filter blends the sets across the pattern (Thiedemann 2010 §7.3.2);
+// a layer has no filter, so it gathers every set and takes their mean: each row is a complete
+// estimator of the indirect light, so the mean of the N M rows is the method's estimate with
+// all of its VPLs, at one visibility ray per VPL. The VPLs are the frame's own (the same
+// Halton points every frame without temporal accumulation), so a still view keeps its pattern.
+vec3 voxel_irradiance(vec3 p, vec3 n, uvec2 px) {
+    uint sets = max(vg.pattern.x, 1u) * max(vg.pattern.y, 1u);
+    uint count = sets * vg.pattern.z;
+    vec3 e = vec3(0.0);
+    for (uint i = 0u; i < count; ++i) {
+        vec3 dir, arriving;
+        if (vpl_arriving(vg, vpls[i], p, n, dir, arriving)) e += arriving;
+    }
+    return e / float(sets);
 }
 #endif
 
@@ -175,34 +222,30 @@ layout(set = 0, binding = 15) uniform sampler3D normal_volume;
 #endif
 #include "gi_hemisphere_hit.glsl"
 
-// Irradiance at the fragment p (normal n, the side the camera sees) by the hemisphere
-// method's rays, as gi_hemisphere_body.glsl casts a Lambert pixel's: `gi.rays`
-// cosine-distributed rays (Hammersley points, the per-pixel rotation of gi.seed), offset along
-// the normal and along the ray (Thiedemann 2010 §5.3.1), within gi.radius_m, the radiance at
-// each hit from hit_radiance. E = pi/N sum L. One bounce, as the method's; a ray that leaves
-// the grid brings nothing back (no environment). One frame's estimate with a fixed pattern,
-// as the path tracer's variant above: the layer has no history.
-vec3 voxel_irradiance(vec3 p, vec3 n, uvec2 px) {
-    vec3 origin = p + n * (gi.normal_offset_voxels * gi.voxel_diagonal_m);
-    vec3 ov = (gi.world_to_voxel * vec4(origin, 1.0)).xyz;
-    mat3 dir_to_voxel = mat3(gi.world_to_voxel);
-    uint rays = max(gi.rays, 1u);
-    vec2 rot = pixel_rotation(px, gi.seed);
-    vec3 sum = vec3(0.0);
-    for (uint i = 0u; i < rays; ++i) {
-        vec2 u = fract(vec2((float(i) + 0.5) / float(rays), radical_inverse(i)) + rot);
-        vec3 d = cosine_direction(n, u);
-        float cos_n = dot(d, n);
-        if (cos_n <= 0.0) continue;
-        float along = min(gi.ray_offset_voxels * gi.voxel_diagonal_m / max(cos_n, 1e-4),
-                          gi.ray_offset_max_voxels * gi.voxel_diagonal_m);
-        vec3 ray_o = ov + dir_to_voxel * (d * along);
-        float ray_t = max(gi.radius_m - along, 0.0);
-        VxHit h = voxel_first_hit(gi.dims, uint(gi.max_level), ray_o, dir_to_voxel * d, ray_t,
-                                  gi.start_level, gi.max_iterations);
-        if (h.hit) sum += hit_radiance(h, origin + d * (along + h.t), d);
+// Indirect radiance toward wo of the fragment p (normal n, the side the camera sees; diffuse
+// colour `albedo`, the lobe and its parameter as direct_radiance takes them) by the hemisphere
+// method's rays, cast and read by the very function gi_hemisphere_body.glsl calls
+// (hemisphere_gather: `gi.rays` rays on Hammersley points under the per-pixel rotation of
+// gi.seed, a Phong or GGX layer's half on its specular lobe, each ray's radiance from
+// hit_radiance at a hit and past the grid the environment's) and composed as a G-buffer pixel
+// of that material is: albedo/pi E for Lambert, hemisphere_glossy_radiance for Phong and GGX.
+// One bounce, as the method's. One frame's estimate with a fixed pattern, as the path tracer's
+// variant above: the layer has no history.
+vec3 hemisphere_layer_radiance(vec3 p, vec3 n, vec3 wo, uvec2 px, vec3 albedo, vec4 lobe,
+                               float lobe_parameter) {
+    bool ggx = HAS_GGX && lobe.w > 1.5;
+    vec3 specular = ggx ? vec3(0.0) : lobe.rgb;
+    bool phong = HAS_PHONG && !ggx && is_phong_pixel(specular);
+    Lobe receiver = Lobe(LOBE_GGX, albedo, lobe.rgb, lobe_parameter);
+    vec3 sum, lobe_sum;
+    uint diffuse_rays, lobe_rays;
+    hemisphere_gather(p, n, wo, pixel_rotation(px, gi.seed), phong, lobe_parameter, ggx,
+                      receiver, sum, lobe_sum, diffuse_rays, lobe_rays);
+    vec3 e = sum * (PI / float(max(diffuse_rays, 1u)));
+    if (ggx || phong) {
+        return hemisphere_glossy_radiance(ggx, albedo, specular, lobe_parameter, e, lobe_sum, lobe_rays);
     }
-    return sum * (PI / float(rays));
+    return albedo / PI * e;
 }
 #endif
 
@@ -241,7 +284,11 @@ void main() {
     }
     vec3 wo = toward_camera(frame.camera_position, frame.camera_forward, in_world);
     vec3 lo = direct_radiance(shadow_maps, in_world, n, wo, albedo, lobe, lobe_parameter);
-#ifdef LAYER_INDIRECT
+#ifdef HEMISPHERE_INDIRECT
+    // The hemisphere method's indirect radiance, a glossy layer's lobe included, as
+    // gi_composite adds it to a G-buffer pixel, on the side the camera sees.
+    lo += hemisphere_layer_radiance(in_world, n, wo, uvec2(gl_FragCoord.xy), albedo, lobe, lobe_parameter);
+#elif defined(LAYER_INDIRECT)
     // The diffuse part's indirect light, albedo/pi E, as gi_composite adds it to a Lambert
     // G-buffer pixel, on the side the camera sees (Mitsuba's mask around a diffuse BSDF
     // reflects from the side it is hit; what lies behind is the blend's).

@@ -1,12 +1,12 @@
 // The voxel path tracer's building blocks (gi_pathtrace.comp; Thiedemann 2010 §6.4.2), shared
 // with oit_gather_indirect.frag, which traces the same paths from transparent fragments: direct
-// light at a path vertex from the shadow maps, the roulette numbers, the bounce samples and the
-// offset first-hit test.
+// light at a path vertex from the shadow maps, the roulette numbers, the bounce samples, the
+// offset first-hit test and the environment's radiance where a path leaves the grid.
 //
 // The including shader declares, before including this file: the frame buffer `frame`, the
 // GI parameters `gi` (gi_common.glsl's block or a buffer of the same members), the shadow maps
-// `shadow_maps`, and includes gi_common.glsl, voxel_traverse.glsl, shadow.glsl and
-// material_lobe.glsl.
+// `shadow_maps`, the constant ENVIRONMENT and the sampler `environment_map`, and includes
+// gi_common.glsl, voxel_traverse.glsl, shadow.glsl, material_lobe.glsl and environment.glsl.
 #ifndef VOXEL_PATH_GLSL
 #define VOXEL_PATH_GLSL
 // Outgoing radiance toward wo at p (normal n, material m) from every light, shadowed.
@@ -78,6 +78,14 @@ VxHit trace_from(vec3 o, vec3 n, vec3 d, out vec3 start) {
     vec3 ov = (gi.world_to_voxel * vec4(start, 1.0)).xyz;
     return voxel_first_hit(gi.dims, uint(gi.max_level), ov, mat3(gi.world_to_voxel) * d,
         max(gi.radius_m - along, 0.0), gi.start_level, gi.max_iterations);
+}
+
+// The radiance a ray from o that trace_from started at `start` along d brings back when it hit
+// nothing (h): the environment's, if it left the grid within its length (environment.glsl).
+vec3 escaped_radiance(vec3 o, vec3 start, vec3 d, VxHit h) {
+    float t_max = max(gi.radius_m - distance(start, o), 0.0);
+    vec3 ov = (gi.world_to_voxel * vec4(start, 1.0)).xyz;
+    return environment_after_miss(gi.dims, ov, mat3(gi.world_to_voxel) * d, t_max, h.ran_out, d);
 }
 
 #endif

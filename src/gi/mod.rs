@@ -141,6 +141,31 @@ trait GiMethodPasses {
     fn update_scene(&mut self, _scene: &crate::scene::Scene, _t_s: f32) {}
     /// Writes frame slot `slot`'s copy of such a table (after the slot's fence).
     fn write_slot(&mut self, _slot: usize) {}
+    /// The parameters of the rays transparent layers trace, when they are the method's own
+    /// rather than the ray passes' [`GpuGiPush`] (the VPL gather's).
+    fn layer_params(&self) -> Option<LayerParams> {
+        None
+    }
+}
+
+/// The parameters of transparent layers' indirect light, as `oit_gather`'s parameter buffer
+/// holds them ([`GiPasses::transparent_indirect`]).
+#[derive(Clone, Copy, Debug)]
+pub enum LayerParams {
+    /// The ray passes' push constants (the path tracer's and the hemisphere method's rays).
+    Rays(GpuGiPush),
+    /// The VPL gather's push constants.
+    Vpls(vpl::GpuVplGatherPush),
+}
+
+impl LayerParams {
+    /// The buffer's contents.
+    pub fn bytes(&self) -> &[u8] {
+        match self {
+            LayerParams::Rays(p) => bytemuck::bytes_of(p),
+            LayerParams::Vpls(p) => bytemuck::bytes_of(p),
+        }
+    }
 }
 
 /// What a method's view-independent passes produced in a frame.
@@ -169,6 +194,7 @@ impl GiWorld {
             lut: self.lut,
             attributes: self.attributes,
             radiance_volume: self.method.image,
+            vpls: self.method.buffer,
         }
     }
 }
@@ -182,6 +208,8 @@ pub struct LayerRayInputs {
     pub attributes: Option<crate::voxel::attributes::AttributeHandles>,
     /// The direct-radiance volume (`--gi-radiance volume`).
     pub radiance_volume: Option<ImageHandle>,
+    /// The frame's VPLs (`--gi vpl`).
+    pub vpls: Option<BufferHandle>,
 }
 
 /// What a GI method's passes produce.
@@ -420,15 +448,18 @@ impl GiPasses {
         ValueVolumes::new(scene, lobes, settings.voxel_map_texels)
     }
 
-    /// The ray parameters (rays, bounces, offsets, the grid) transparent layers trace their
-    /// indirect light with, and which rays, when the method gives them any
-    /// ([`MethodSpec::transparent_indirect`]) and the attribute volumes those rays read exist
-    /// (the light maps' rays read them only in scenes with emitters, where the method makes
-    /// them).
-    pub fn transparent_indirect(&self, scene: &Scene) -> Option<(GpuGiPush, LayerIndirect)> {
+    /// The ray parameters (rays, bounces, offsets, the grid; the VPL gather's for VPLs)
+    /// transparent layers trace their indirect light with, and which rays, when the method
+    /// gives them any ([`MethodSpec::transparent_indirect`]) and the attribute volumes those
+    /// rays read exist ([`LayerIndirect::reads_attribute_volumes`]).
+    pub fn transparent_indirect(&self, scene: &Scene) -> Option<(LayerParams, LayerIndirect)> {
         let kind = (self.settings.method.spec().transparent_indirect)(&self.settings)?;
-        let reads_volumes = kind != LayerIndirect::LightMaps || scene.has_emission();
-        (!reads_volumes || self.attributes.is_some()).then_some((self.push, kind))
+        let params = self
+            .method
+            .layer_params()
+            .unwrap_or(LayerParams::Rays(self.push));
+        (!kind.reads_attribute_volumes(scene) || self.attributes.is_some())
+            .then_some((params, kind))
     }
 
     /// Whether the chosen method reads the albedo and normal volumes (and with them, in

@@ -76,6 +76,19 @@ crate::push_constants!(GpuVplGatherPush {
     splat_vpl
 });
 
+// Also a buffer's contents: `oit_gather_vpl.frag` reads the gather's parameters from one (its
+// push constants hold the draw).
+crate::gpu_struct!(GpuVplGatherPush {
+    world_to_voxel,
+    dims,
+    pattern,
+    trace,
+    d_min_m2,
+    voxel_diagonal_m,
+    offsets,
+    splat_vpl
+});
+
 /// Push constants of `gi_vpl_points` (the debug view).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
@@ -493,6 +506,12 @@ impl GiMethodPasses for VplPasses {
         }
     }
 
+    /// Transparent layers gather every set with the opaque pixels' parameters
+    /// (`oit_gather_vpl.frag`).
+    fn layer_params(&self) -> Option<super::LayerParams> {
+        Some(super::LayerParams::Vpls(self.gather_push))
+    }
+
     fn add_world_passes(
         &self,
         g: &mut RenderGraph,
@@ -570,6 +589,7 @@ mod tests {
             "gi_vpl_gather.comp",
             "gi_vpl_splat.comp",
             "gi_vpl_points.comp",
+            "oit_gather_vpl.frag",
         ] {
             crate::vk::check_struct_against::<GpuVpl>(&[shader], "GpuVpl")
                 .unwrap_or_else(|e| panic!("{shader}: {e}"));

@@ -152,11 +152,20 @@ impl Renderer {
                     scene.has_albedo_textures(),
                     scene.has_alpha_maps(),
                 );
-                // The GI method's paths from the transparent fragments, if it gives them any.
+                // The GI method's rays from the transparent fragments, if it gives them any.
                 let indirect = gi
                     .as_ref()
                     .and_then(|(gi, _)| gi.transparent_indirect(scene))
-                    .map(|(push, kind)| (push, kind, scene.has_emission()));
+                    .map(|(params, kind)| {
+                        let variant = oit::LayerVariant {
+                            kind,
+                            emission: scene.has_emission(),
+                            environment: crate::scene::Environment::shader_kind(
+                                scene.environment.as_ref(),
+                            ),
+                        };
+                        (params, variant)
+                    });
                 let nodes = settings.oit_nodes_per_pixel;
                 oit::OitPasses::new(ctx, materials, nodes, sampler.raw, indirect)
             })

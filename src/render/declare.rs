@@ -183,6 +183,7 @@ impl Renderer {
                         attributes: r.attributes,
                         light_maps: shared.light_maps,
                         radiance_volume: r.radiance_volume,
+                        vpls: r.vpls,
                     }
                 });
                 let world = (gbuffer.depth, shadow_map);

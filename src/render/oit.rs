@@ -6,11 +6,11 @@
 //! with such a material and `--transparency oit` have these passes or their memory.
 
 use super::oit_clear::OitClearPass;
-pub use super::oit_gather::OitVoxelInputs;
+pub use super::oit_gather::{LayerVariant, OitVoxelInputs};
 use super::oit_gather::{OitGatherPass, OitIndirect, OitLists};
 use super::oit_resolve::{OitResolvePass, MAX_LAYERS};
 use super::scene_gpu::SceneInputs;
-use crate::gi::{GpuGiPush, LayerIndirect};
+use crate::gi::LayerParams;
 use crate::graph::{Access, ImageHandle, RenderGraph, Shader};
 use crate::vk::{vk, Buffer, Context, ImageDesc, VkError};
 
@@ -69,7 +69,7 @@ pub struct OitPasses {
     stats: Buffer,
     nodes_per_pixel: u32,
     shadow_sampler: vk::Sampler,
-    /// The GI method's ray parameters for the fragments' indirect light
+    /// The GI method's ray (or VPL gather) parameters for the fragments' indirect light
     /// ([`crate::gi::GiPasses::transparent_indirect`]), when it gives them any.
     gi_params: Option<Buffer>,
 }
@@ -77,29 +77,24 @@ pub struct OitPasses {
 impl OitPasses {
     /// `materials`: (Phong, GGX, albedo textures, alpha maps) in the scene; `sampler`: the renderer's
     /// nearest-neighbour sampler (shadow maps, radiance); `indirect`: the GI method's ray
-    /// parameters, its rays and whether the scene has emitters, when the fragments get
-    /// indirect light.
+    /// parameters and the variant tracing its rays, when the fragments get indirect light.
     pub fn new(
         ctx: &Context,
         materials: (bool, bool, bool, bool),
         nodes_per_pixel: u32,
         sampler: vk::Sampler,
-        indirect: Option<(GpuGiPush, LayerIndirect, bool)>,
+        indirect: Option<(LayerParams, LayerVariant)>,
     ) -> Result<Self, VkError> {
         // Written once: the renderer is made anew when the GI settings change.
         let gi_params = indirect
-            .map(|(push, _, _)| {
+            .map(|(params, _)| {
                 let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
-                ctx.upload_buffer("oit gi params", bytemuck::bytes_of(&push), usage)
+                ctx.upload_buffer("oit gi params", params.bytes(), usage)
             })
             .transpose()?;
         Ok(Self {
             clear: OitClearPass::new(ctx)?,
-            gather: OitGatherPass::new(
-                ctx,
-                materials,
-                indirect.map(|(_, k, emission)| (k, emission)),
-            )?,
+            gather: OitGatherPass::new(ctx, materials, indirect.map(|(_, variant)| variant))?,
             resolve: OitResolvePass::new(ctx, sampler)?,
             stats: crate::graph::readback_buffer(ctx, "oit stats", 16)?,
             nodes_per_pixel,

@@ -2,8 +2,9 @@
 //! written), shades each fragment with the deferred pass's direct light and its emission, and
 //! appends it to its pixel's linked list (`glsl/gbuffer.vert`, `glsl/oit_gather.frag`). Under a
 //! GI method that gives transparent layers indirect light, the fragments also trace its rays:
-//! the path tracer's voxel paths (`glsl/oit_gather_indirect.frag`) or the hemisphere method's
-//! one bounce (`glsl/oit_gather_hemisphere{,_emission,_volume}.frag`).
+//! the path tracer's voxel paths (`glsl/oit_gather_indirect.frag`), the hemisphere method's
+//! one bounce (`glsl/oit_gather_hemisphere{,_emission,_volume}.frag`) or the VPL method's
+//! gather over every interleaved set (`glsl/oit_gather_vpl.frag`).
 
 use super::gbuffer::GpuGbufferPush;
 use super::light_map::LightMaps;
@@ -34,22 +35,34 @@ pub struct OitVoxelInputs {
     pub light_maps: Option<LightMaps>,
     /// The direct-radiance volume (`--gi-radiance volume`).
     pub radiance_volume: Option<ImageHandle>,
+    /// The frame's VPLs (`--gi vpl`).
+    pub vpls: Option<BufferHandle>,
 }
 
-/// The fragments' indirect-light inputs: the GI method's ray parameters (a `GpuGiPush` in a
-/// buffer) and what its rays read.
+/// The fragments' indirect-light inputs: the GI method's ray parameters (a `GpuGiPush`, or
+/// the VPL gather's `GpuVplGatherPush`, in a buffer) and what its rays read.
 #[derive(Clone, Copy, Debug)]
 pub struct OitIndirect {
     pub params: BufferHandle,
     pub inputs: OitVoxelInputs,
 }
 
-/// The indirect-light variant of the pass: its pipeline, the rays it traces and whether the
-/// scene has emitters (which the variants read from the emission volume).
+/// Which indirect-light variant the pass makes: the rays it traces and what of the scene they
+/// read.
+#[derive(Clone, Copy, Debug)]
+pub struct LayerVariant {
+    pub kind: LayerIndirect,
+    /// The scene has emitters, which the variants read from the emission volume.
+    pub emission: bool,
+    /// The scene's environment (`Environment::shader_kind`), which the path tracer's and the
+    /// hemisphere method's rays read where they leave the voxel grid.
+    pub environment: u32,
+}
+
+/// The indirect-light variant of the pass: its pipeline and what it was made for.
 struct IndirectVariant {
     pipeline: GraphicsPipeline,
-    kind: LayerIndirect,
-    emission: bool,
+    variant: LayerVariant,
 }
 
 pub struct OitGatherPass {
@@ -61,21 +74,19 @@ pub struct OitGatherPass {
 
 impl OitGatherPass {
     /// `phong`, `ggx`, `textures`, `alpha_maps`: what the scene's materials have (the shader
-    /// compiles in only those). `indirect`: make the indirect-light variant tracing these rays,
-    /// with emission reads when the flag is true (a scene with emitters).
+    /// compiles in only those). `indirect`: make this indirect-light variant.
     pub fn new(
         ctx: &Context,
         materials: (bool, bool, bool, bool),
-        indirect: Option<(LayerIndirect, bool)>,
+        indirect: Option<LayerVariant>,
     ) -> Result<Self, VkError> {
         Ok(Self {
             pipeline: Self::pipeline(ctx, materials, None)?,
             indirect: indirect
-                .map(|(kind, emission)| {
+                .map(|variant| {
                     Ok::<_, VkError>(IndirectVariant {
-                        pipeline: Self::pipeline(ctx, materials, Some((kind, emission)))?,
-                        kind,
-                        emission,
+                        pipeline: Self::pipeline(ctx, materials, Some(variant))?,
+                        variant,
                     })
                 })
                 .transpose()?,
@@ -83,20 +94,21 @@ impl OitGatherPass {
     }
 
     /// The fragment shader of the plain pass or of an indirect variant.
-    fn fragment_shader(indirect: Option<(LayerIndirect, bool)>) -> &'static str {
-        match indirect {
+    fn fragment_shader(indirect: Option<LayerVariant>) -> &'static str {
+        match indirect.map(|v| (v.kind, v.emission)) {
             None => "oit_gather.frag",
             Some((LayerIndirect::Paths, _)) => "oit_gather_indirect.frag",
             Some((LayerIndirect::LightMaps, false)) => "oit_gather_hemisphere.frag",
             Some((LayerIndirect::LightMaps, true)) => "oit_gather_hemisphere_emission.frag",
             Some((LayerIndirect::RadianceVolume, _)) => "oit_gather_hemisphere_volume.frag",
+            Some((LayerIndirect::Vpls, _)) => "oit_gather_vpl.frag",
         }
     }
 
     fn pipeline(
         ctx: &Context,
         (phong, ggx, textures, alpha_maps): (bool, bool, bool, bool),
-        indirect: Option<(LayerIndirect, bool)>,
+        indirect: Option<LayerVariant>,
     ) -> Result<GraphicsPipeline, VkError> {
         let mut spec = crate::spec_constants![
             HAS_PHONG = phong,
@@ -105,12 +117,15 @@ impl OitGatherPass {
             HAS_ALPHA_MAP = alpha_maps,
         ]
         .to_vec();
-        // The light maps' variants read emission by variant, not by a constant.
-        match indirect {
-            Some((LayerIndirect::Paths | LayerIndirect::RadianceVolume, emission)) => {
-                spec.extend(crate::spec_constants![HAS_EMISSION = emission]);
+        // The light maps' variants read emission by variant, not by a constant; the VPLs
+        // carry the emitters' light themselves (`gi_vpl_emit`) and bring no environment.
+        if let Some(v) = indirect {
+            if matches!(v.kind, LayerIndirect::Paths | LayerIndirect::RadianceVolume) {
+                spec.extend(crate::spec_constants![HAS_EMISSION = v.emission]);
             }
-            Some((LayerIndirect::LightMaps, _)) | None => {}
+            if v.kind != LayerIndirect::Vpls {
+                spec.extend(crate::spec_constants![ENVIRONMENT = v.environment]);
+            }
         }
         ctx.graphics_pipeline(&GraphicsPipelineDesc {
             // The G-buffer's vertex stage: the same positions, so the depth test against the
@@ -178,8 +193,17 @@ impl OitGatherPass {
                 .bind(8, i.params, Access::StorageRead(f))
                 .bind_sampled(9, i.inputs.voxels, sampler, f)
                 .bind(10, i.inputs.lut, Access::StorageRead(f));
-            for (binding, image) in (11..).zip(hits) {
-                pass = pass.bind_sampled(binding, image, sampler, f);
+            match hits {
+                LayerHits::Images(images) => {
+                    for (binding, image) in (11..).zip(images) {
+                        pass = pass.bind_sampled(binding, image, sampler, f);
+                    }
+                    // The environment map, where rays leaving the grid read one (the
+                    // placeholder texture fills the binding otherwise, never read).
+                    let map = scene.environment_map.unwrap_or(placeholder);
+                    pass = pass.bind_sampled(16, map, scene.environment_sampler, f);
+                }
+                LayerHits::Vpls(vpls) => pass = pass.bind(11, vpls, Access::StorageRead(f)),
             }
         }
         pass.record(move |ctx| {
@@ -209,11 +233,20 @@ impl OitGatherPass {
     }
 }
 
+/// What an indirect variant reads besides the voxels, bound from 11 on.
+enum LayerHits {
+    /// The images its rays sample at their hits.
+    Images(Vec<ImageHandle>),
+    /// The VPL buffer (binding 11).
+    Vpls(BufferHandle),
+}
+
 impl OitGatherPass {
-    /// The images variant `v` samples at its rays' hits, bound from 11 on, or `None` where
-    /// the frame lacks one (the pass then draws without indirect light).
-    fn hit_inputs(v: &IndirectVariant, i: &OitVoxelInputs) -> Option<Vec<ImageHandle>> {
-        Some(match v.kind {
+    /// What variant `v` reads at its rays' hits, or `None` where the frame lacks it (the pass
+    /// then draws without indirect light).
+    fn hit_inputs(v: &IndirectVariant, i: &OitVoxelInputs) -> Option<LayerHits> {
+        let images = match v.variant.kind {
+            LayerIndirect::Vpls => return Some(LayerHits::Vpls(i.vpls?)),
             LayerIndirect::Paths => {
                 let a = i.attributes?;
                 // Without emitters the shader never reads its emission binding; albedo fills it.
@@ -222,7 +255,7 @@ impl OitGatherPass {
             LayerIndirect::LightMaps => {
                 let m = i.light_maps?;
                 let mut images = vec![m.radiance, m.position, m.normal];
-                if v.emission {
+                if v.variant.emission {
                     let a = i.attributes?;
                     images.extend([a.emission.unwrap_or(a.albedo), a.normal]);
                 }
@@ -241,7 +274,8 @@ impl OitGatherPass {
                     emission.unwrap_or(a.albedo),
                 ]
             }
-        })
+        };
+        Some(LayerHits::Images(images))
     }
 }
 
@@ -260,5 +294,11 @@ mod tests {
             crate::vk::check_struct_against::<crate::gi::GpuGiPush>(&[file], "GpuGiPush")
                 .unwrap_or_else(|e| panic!("{file}: {e}"));
         }
+        // The VPL variant's buffer holds the VPL gather's push constants.
+        crate::vk::check_struct_against::<crate::gi::vpl::GpuVplGatherPush>(
+            &["oit_gather_vpl.frag"],
+            "GpuVplGatherPush",
+        )
+        .unwrap_or_else(|e| panic!("oit_gather_vpl.frag: {e}"));
     }
 }

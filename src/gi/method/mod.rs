@@ -54,6 +54,23 @@ pub enum LayerIndirect {
     /// The hemisphere method's rays, hits from the direct-radiance volume
     /// (`oit_gather_hemisphere_volume`) and the attribute volumes.
     RadianceVolume,
+    /// The VPL method's gather over every interleaved set of the frame's VPLs
+    /// (`oit_gather_vpl`): the VPL buffer, with the gather's own parameters
+    /// ([`crate::gi::vpl::GpuVplGatherPush`]).
+    Vpls,
+}
+
+impl LayerIndirect {
+    /// Whether the layers' rays read the attribute volumes: the paths and the radiance
+    /// volume's hits always, the light maps' hits for the emitters' light in scenes with
+    /// emitters, the VPL gather never (the VPLs carry what their passes read).
+    pub fn reads_attribute_volumes(self, scene: &Scene) -> bool {
+        match self {
+            LayerIndirect::Paths | LayerIndirect::RadianceVolume => true,
+            LayerIndirect::LightMaps => scene.has_emission(),
+            LayerIndirect::Vpls => false,
+        }
+    }
 }
 
 /// What the program asks about a GI method, answered in the method's file.

@@ -4,7 +4,7 @@
 
 use super::super::vpl::VplPasses;
 use super::super::GiSettings;
-use super::{EmitterReach, MethodSpec};
+use super::{EmitterReach, LayerIndirect, MethodSpec};
 
 pub(super) static SPEC: MethodSpec = MethodSpec {
     name: "vpl",
@@ -30,7 +30,8 @@ pub(super) static SPEC: MethodSpec = MethodSpec {
     },
     // Glossy hits of the bounces and the emitter rays.
     material_volume: |_| true,
-    transparent_indirect: |_| None,
+    // Every interleaved set of the frame's VPLs (`oit_gather_vpl`).
+    transparent_indirect: |_| Some(LayerIndirect::Vpls),
     history: |_, _, _| Vec::new(),
     // Each pixel of an N×M tile shades one VPL set (interleaved sampling, §7.2).
     filter_tile: |s| s.vpl.pattern,
