@@ -2430,7 +2430,7 @@ fn open_from_panel(s: &mut EditSession, field: [f32; 2], text: &str) {
     xdotool(&["key", "Return"]);
 }
 
-/// Abuse (issue #32): scenes that fail to load, opened from the panel's "Scene" section while
+/// Abuse (issue #32): scenes that fail to load, opened from the panel's "Open scene" section while
 /// the built-in Cornell box is shown: a missing file, TOML that does not parse, a value out of
 /// range. Each is refused with the loader's message naming the file (and the line or field)
 /// in the log (and the panel), and the scene shown stays exactly as it was: F12 then equals

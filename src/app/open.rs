@@ -1,5 +1,5 @@
 //! Opening another scene while the viewer runs: a file dropped on the window
-//! (`WindowEvent::DroppedFile`) or the panel's "Scene" section (a path field and "Open").
+//! (`WindowEvent::DroppedFile`) or the panel's "Open scene" section (a path field and "Open").
 //!
 //! The scene is loaded by the command line's own code (`SceneOpener`, which `voxgi view`
 //! hands to [`super::run`]): the same loader, the same checks and this run's other flags, so
@@ -24,7 +24,7 @@ pub struct OpenError(pub String);
 /// model) with the viewer's options for it: what the command line would start with.
 pub type SceneOpener<'a> = dyn Fn(&str) -> Result<(Scene, ViewerOptions), OpenError> + 'a;
 
-/// The panel's "Scene" section.
+/// The panel's "Open scene" section.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct OpenControls {
     /// The scene shown (its file, or the built-in's name).
@@ -47,7 +47,7 @@ impl OpenControls {
     }
 }
 
-/// Draws the "Scene" section; adds where the path field and the button landed to `spots`
+/// Draws the "Open scene" section; adds where the path field and the button landed to `spots`
 /// ("open path", "open button").
 pub fn panel_section(ui: &mut egui::Ui, o: &mut OpenControls, spots: &mut Vec<super::panel::Spot>) {
     ui.label(format!("showing {}", o.shown));

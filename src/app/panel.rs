@@ -128,7 +128,7 @@ pub struct Controls {
     /// refuses a switch the frame cannot render and says why.
     pub projection: crate::scene::Projection,
     pub ortho_height_m: f32,
-    /// The "Scene" section: the scene shown and another to open (`app/open.rs`).
+    /// The "Open scene" section: the scene shown and another to open (`app/open.rs`).
     pub open: super::open::OpenControls,
 }
 
@@ -397,15 +397,15 @@ pub fn draw(
                         .default_open(true)
                         .show(ui, |ui| light_controls(ui, c, info.light_names));
 
-                    egui::CollapsingHeader::new("Scene")
+                    egui::CollapsingHeader::new("Edit scene")
+                        .default_open(true)
+                        .show(ui, |ui| edit_ui(ui));
+
+                    egui::CollapsingHeader::new("Open scene")
                         .default_open(true)
                         .show(ui, |ui| {
                             super::open::panel_section(ui, &mut c.open, &mut spots)
                         });
-
-                    egui::CollapsingHeader::new("Edit scene")
-                        .default_open(true)
-                        .show(ui, |ui| edit_ui(ui));
 
                     egui::CollapsingHeader::new("Post-processing")
                         .default_open(true)
