@@ -2152,8 +2152,8 @@ fn assert_taa_screenshot_is_the_render(dir: &Path, scene: &Path, shot: &Path, fr
 /// Abuse (issue #32): scenes that fail to load, given on the command line: a missing file,
 /// TOML that does not parse, a value out of range, a mesh that is not there. `voxgi view`
 /// refuses each before it opens a window, with a message naming the file (and the line or
-/// field), and never panics. (The viewer loads no scene while it runs: this is the one way a
-/// scene gets in.)
+/// field), and never panics. (Scenes opened while the viewer runs go through the same loader:
+/// `viewer_abuse_opens_scenes_that_fail_while_another_is_shown`.)
 #[test]
 fn viewer_abuse_refuses_scenes_that_fail_to_load_naming_the_file() {
     let dir = scratch_dir("abuse-load");
