@@ -308,8 +308,7 @@ fn a_resize_past_the_device_memory_is_refused_before_allocating() {
     // fails the heap sum with the transients (at least 36 B per pixel per frame in flight).
     let e = r
         .check_frame_size(&ctx, &scene, (16000, 16000), &[])
-        .err()
-        .expect("16000² refused");
+        .expect_err("16000² refused");
     assert!(
         matches!(&e, RenderError::OutOfDeviceMemory(m)
             if m.need_bytes > m.available_bytes && m.subject.contains("16000×16000")),
@@ -327,8 +326,7 @@ fn a_resize_past_the_device_memory_is_refused_before_allocating() {
     };
     let e = r
         .check_frame_size(&ctx, &scene, (64, 48), &[heap])
-        .err()
-        .expect("the extra need refused");
+        .expect_err("the extra need refused");
     assert!(
         matches!(&e, RenderError::OutOfDeviceMemory(m) if m.need_bytes > m.available_bytes),
         "{e}"
