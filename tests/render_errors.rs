@@ -292,3 +292,43 @@ fn resources_beyond_what_is_left_of_the_heap_are_refused() {
         "{text}"
     );
 }
+
+/// What the viewer asks before it resizes to a window (`Renderer::check_frame_size`): a size
+/// whose frame cannot fit is refused before anything of it exists, naming the allocation;
+/// the renderer is left as it was, and a size that fits passes, extra needs included.
+#[test]
+fn a_resize_past_the_device_memory_is_refused_before_allocating() {
+    use voxgi::render::memory::MemoryNeed;
+    let ctx = common::context();
+    let scene = load_scene_arg(None).expect("built-in scene");
+    let mut r = Renderer::new(&ctx, &scene, small()).expect("32² renders");
+    let held = ctx.allocated_bytes();
+    // 16000² RGBA32F read-back: 16000² × 16 B = 3.8 GiB in one buffer, past lavapipe's
+    // 2 GiB maxMemoryAllocationSize; any device that allocates that much at once still
+    // fails the heap sum with the transients (at least 36 B per pixel per frame in flight).
+    let e = r
+        .check_frame_size(&ctx, &scene, (16000, 16000), &[])
+        .expect_err("16000² refused");
+    assert!(
+        matches!(&e, RenderError::OutOfDeviceMemory(m)
+            if m.need_bytes > m.available_bytes && m.subject.contains("16000×16000")),
+        "{e}"
+    );
+    assert_eq!(ctx.allocated_bytes(), held, "the check allocated");
+    assert_eq!((r.settings.width, r.settings.height), (32, 32));
+    r.check_frame_size(&ctx, &scene, (64, 48), &[])
+        .expect("64×48 fits");
+    // What the caller adds counts: one more byte than the heap holds is refused.
+    let heap = MemoryNeed {
+        name: "probe".into(),
+        bytes: ctx.info.device_local_heap_bytes + 1,
+        is_buffer: false,
+    };
+    let e = r
+        .check_frame_size(&ctx, &scene, (64, 48), &[heap])
+        .expect_err("the extra need refused");
+    assert!(
+        matches!(&e, RenderError::OutOfDeviceMemory(m) if m.need_bytes > m.available_bytes),
+        "{e}"
+    );
+}

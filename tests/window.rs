@@ -254,8 +254,8 @@ fn viewer_scales_down_to_hold_a_frame_budget_and_refines_when_still() {
             );
         }
         if gi == "pathtrace" {
-            // One when the panel's width is first known (the scene's area narrows), one per
-            // change of scale: not one per frame.
+            // The first (made for the scene's area once the panel's width is known), one
+            // per change of scale: not one per frame.
             let renderers = log.lines().filter(|l| l.contains("new renderer ")).count();
             assert!((2..=4).contains(&renderers), "{gi}: {renderers}\n{log}");
         }
@@ -2152,8 +2152,8 @@ fn assert_taa_screenshot_is_the_render(dir: &Path, scene: &Path, shot: &Path, fr
 /// Abuse (issue #32): scenes that fail to load, given on the command line: a missing file,
 /// TOML that does not parse, a value out of range, a mesh that is not there. `voxgi view`
 /// refuses each before it opens a window, with a message naming the file (and the line or
-/// field), and never panics. (The viewer loads no scene while it runs: this is the one way a
-/// scene gets in.)
+/// field), and never panics. (Scenes opened while the viewer runs go through the same loader:
+/// `viewer_abuse_opens_scenes_that_fail_while_another_is_shown`.)
 #[test]
 fn viewer_abuse_refuses_scenes_that_fail_to_load_naming_the_file() {
     let dir = scratch_dir("abuse-load");
@@ -2358,7 +2358,7 @@ fn viewer_abuse_resizes_to_1x1_and_past_the_device_limit() {
 /// frame was presented (the second is then recording or on the GPU), the window manager's
 /// close (Alt+F4 in openbox: WM_DELETE_WINDOW, as the title bar's button sends) arrives. The
 /// viewer finishes the frames in flight and exits 0: no validation message, teardown
-/// included, no panic. Then the window destroyed outright by another client (xdotool's
+/// included, no panic; its log says it waited for at least one frame in flight. Then the window destroyed outright by another client (xdotool's
 /// `windowclose`: no request, the X window is simply gone mid-frame): the viewer says so and
 /// exits 0 as well, without asking the dead window anything.
 #[test]
@@ -2394,6 +2394,230 @@ fn viewer_abuse_closes_cleanly_mid_frame() {
         if destroy {
             assert!(log.contains("the window was destroyed: exiting"), "{log}");
         }
+        // The close found frames submitted whose completion the frame loop had not seen,
+        // and waited for them before releasing anything. (Whether they were still running:
+        // on lavapipe never, by then: Mesa's `wsi_common_queue_present` waits for the
+        // frame's fence on a software device before it presents, and a close arrives
+        // between frames, after their presentation. A GPU with an asynchronous present
+        // reports the running ones.)
+        let closing = log
+            .lines()
+            .find(|l| l.contains("closing: waiting for "))
+            .unwrap_or_else(|| panic!("the viewer did not log its close:\n{log}"));
+        let count = |after: &str| -> usize {
+            closing
+                .split_once(after)
+                .and_then(|(_, r)| r.split(' ').next())
+                .and_then(|n| n.parse().ok())
+                .unwrap_or_else(|| panic!("no count after `{after}` in `{closing}`"))
+        };
+        let (waited, running) = (count("waiting for "), count(" ("));
+        eprintln!("destroy {destroy}: {waited} frames in flight at close, {running} running");
+        assert!(waited >= 1, "destroy {destroy}: {closing}");
+        assert!(running <= waited, "destroy {destroy}: {closing}");
     }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Types `text` into the panel's path field and presses Enter: a click focuses the field,
+/// Ctrl+A selects what it held, the typing replaces it.
+fn open_from_panel(s: &mut EditSession, field: [f32; 2], text: &str) {
+    s.click(field);
+    s.frames(1);
+    xdotool(&["key", "ctrl+a"]);
+    xdotool(&["type", "--delay", "20", text]);
+    s.frames(1);
+    xdotool(&["key", "Return"]);
+}
+
+/// Abuse (issue #32): scenes that fail to load, opened from the panel's "Open scene" section while
+/// the built-in Cornell box is shown: a missing file, TOML that does not parse, a value out of
+/// range. Each is refused with the loader's message naming the file (and the line or field)
+/// in the log (and the panel), and the scene shown stays exactly as it was: F12 then equals
+/// `voxgi render`. Then a good scene (the box seen with a narrower lens) opens: its
+/// screenshot equals `voxgi render` of that file. Validation clean, teardown included.
+#[test]
+fn viewer_abuse_opens_scenes_that_fail_while_another_is_shown() {
+    require_display();
+    let _display = lock_display();
+    let dir = scratch_dir("abuse-open");
+    let cornell = include_str!("../assets/scenes/cornell.toml");
+    let write = |name: &str, text: &str| {
+        std::fs::write(dir.join(name), text).expect("write the scene");
+    };
+    write("broken.toml", "[camera\n");
+    write(
+        "wide.toml",
+        &cornell.replacen("fov_y_deg = ", "fov_y_deg = 400.0 # ", 1),
+    );
+    write(
+        "narrow.toml",
+        &cornell.replacen("fov_y_deg = ", "fov_y_deg = 30.0 # ", 1),
+    );
+    let shot = dir.join("shot.png");
+    let shot_arg = shot.to_str().expect("utf-8 path");
+    let (w, h) = (480.0, 480.0);
+    // Relative paths, as a person types them: the viewer runs in the scratch folder.
+    let mut s = EditSession::start_with(
+        &[
+            "--validate",
+            "view",
+            "--gi",
+            "none",
+            "--width",
+            "480",
+            "--height",
+            "480",
+            "--screenshot",
+            shot_arg,
+        ],
+        |cmd| {
+            cmd.current_dir(&dir);
+        },
+    );
+    let first = s.wait_for("panel: scrolled");
+    s.settled(first, "panel: scrolled", 3);
+    let field = scroll_panel_to(&mut s, "open path", h);
+    let cases = [
+        ("no-such-scene.toml", vec!["no-such-scene.toml"]),
+        ("broken.toml", vec!["broken.toml:1:"]),
+        ("wide.toml", vec!["wide.toml", "fov_y_deg"]),
+    ];
+    for (name, wanted) in cases {
+        open_from_panel(&mut s, field, name);
+        s.wait_for(&format!("{name} not opened: "));
+        // The rest of a message over several lines.
+        s.frames(1);
+        let said = s
+            .log
+            .rsplit_once(&format!("opening scene {name}"))
+            .map_or("", |(_, after)| after)
+            .to_owned();
+        for want in wanted {
+            assert!(
+                said.contains(want),
+                "the message does not name {want}:\n{said}"
+            );
+        }
+        s.key("F12");
+        s.wait_for(&format!("wrote {shot_arg}"));
+        let img = load(&shot);
+        assert_matches_render(&img, &dir);
+    }
+    open_from_panel(&mut s, field, "narrow.toml");
+    s.wait_for("opened narrow.toml");
+    s.frames(2);
+    s.key("F12");
+    s.wait_for(&format!("wrote {shot_arg}"));
+    let (log, stdout) = s.finish_with_stdout();
+    assert!(!log.contains("Validation"), "{log}");
+    let img = load(&shot);
+    let size = img.dimensions();
+    assert_eq!(size.1, h as u32);
+    let narrow = render_headless(&dir, &dir.join("narrow.toml"), &["--gi", "none"], size);
+    let diff = max_channel_diff(&img, &narrow);
+    assert!(
+        diff <= 1,
+        "the opened scene differs from `voxgi render narrow.toml` by up to {diff}/255"
+    );
+    // Against the scene shown before: something changed.
+    let before = render_like_viewer(size.0, size.1, &dir);
+    assert!(
+        max_channel_diff(&img, &before) > 8,
+        "the view did not change"
+    );
+    // The camera printed at exit is the opened scene's.
+    assert!(stdout.contains("camera at exit"), "{stdout}");
+    let _ = w;
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The viewer makes one renderer before its first frame, for the scene's area right of the
+/// panel: not one for the whole window and a second once the panel's width is known (with
+/// the path tracer, whose history has the frame's size, that was two renderers).
+#[test]
+fn viewer_makes_one_renderer_before_its_first_frame() {
+    require_display();
+    let _display = lock_display();
+    let out = voxgi_with(
+        &[
+            "--validate",
+            "view",
+            "--gi",
+            "pathtrace",
+            "--gi-rays",
+            "1",
+            "--width",
+            "320",
+            "--height",
+            "240",
+            "--frames",
+            "2",
+        ],
+        |cmd| {
+            cmd.env("RUST_LOG", "warn,voxgi::app=debug");
+        },
+    );
+    assert_success(&out, "voxgi --validate view --gi pathtrace");
+    let log = String::from_utf8_lossy(&out.stderr);
+    let before_first: Vec<&str> = log
+        .lines()
+        .take_while(|l| !l.contains("frame 1 presented"))
+        .filter(|l| l.contains("new renderer "))
+        .collect();
+    assert_eq!(before_first.len(), 1, "{log}");
+    // 320 px less the panel's 240: the scene's area, 80x240.
+    assert!(before_first[0].contains("new renderer 80x240"), "{log}");
+    let all = log.lines().filter(|l| l.contains("new renderer ")).count();
+    assert_eq!(all, 1, "{log}");
+}
+
+/// Abuse (issue #32): a window within the device's largest image (16000 < 16384 px on
+/// lavapipe) whose frame does not fit the device's memory: 16000×16000 is 1 GiB per
+/// swapchain image and 4 GiB for the renderer's RGBA32F read-back alone. The viewer counts
+/// what that size would allocate before making any of it, refuses it naming the size and
+/// the allocation (the message `voxgi render` gives for frames too big), draws nothing at
+/// it, and at 320×240 draws again exactly what `voxgi render` writes. Nothing of the big
+/// size is allocated, so the test is safe on a small machine.
+#[test]
+fn viewer_abuse_refuses_a_window_too_big_for_memory() {
+    require_display();
+    let _display = lock_display();
+    let dir = scratch_dir("abuse-memory");
+    let shot = dir.join("shot.png");
+    let shot_arg = shot.to_str().expect("utf-8 path");
+    let mut s = EditSession::start(&[
+        "--validate",
+        "view",
+        "--gi",
+        "none",
+        "--width",
+        "320",
+        "--height",
+        "240",
+        "--screenshot",
+        shot_arg,
+    ]);
+    s.frames(1);
+    xdotool(&["windowsize", &s.window, "16000", "16000"]);
+    let refused = s.wait_for("more than this device's memory holds");
+    assert!(
+        refused.contains("16000x16000 px")
+            && refused.contains("GiB")
+            && refused.contains('`')
+            && refused.contains("lower the window's size"),
+        "{refused}"
+    );
+    xdotool(&["windowsize", &s.window, "320", "240"]);
+    s.wait_for("the window is 320x240 px again: drawing");
+    s.wait_until("a frame at 320x240", |s, _| {
+        s.frame.is_some_and(|f| f.size == (320, 240))
+    });
+    s.key("F12");
+    s.wait_for(&format!("wrote {shot_arg}"));
+    let log = s.finish();
+    assert!(!log.contains("Validation"), "{log}");
+    let img = load(&shot);
+    assert_matches_render(&img, &dir);
     let _ = std::fs::remove_dir_all(&dir);
 }

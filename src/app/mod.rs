@@ -18,6 +18,7 @@ mod dynres;
 mod edit;
 mod edit_ui;
 mod frame_graph;
+mod open;
 mod overlay;
 mod panel;
 mod pick;
@@ -25,6 +26,7 @@ mod stereo;
 
 pub use camera::{FlyCamera, MoveKeys};
 pub use dynres::viewer_gi;
+pub use open::{OpenControls, OpenError, SceneOpener};
 pub use panel::{Controls, TimingStats};
 pub use stereo::StereoControls;
 
@@ -162,6 +164,9 @@ pub struct ViewerReport {
     pub camera_keys: Vec<Camera>,
     /// Scene files written by "Save scene" (Ctrl+S).
     pub saved: Vec<PathBuf>,
+    /// The floating origin of the scene shown at exit (`Scene::origin_m`): `camera` and
+    /// `camera_keys` are local to it.
+    pub origin_m: glam::DVec3,
 }
 
 /// Scripted runs give up after this long.
@@ -174,11 +179,17 @@ const MINIMIZED_POLL: Duration = Duration::from_millis(16);
 /// passes twice).
 const MAX_PASSES: u32 = 128;
 
-/// Opens the window and runs until it is closed (or the scripted frames are done).
-pub fn run(scene: Scene, opts: &ViewerOptions) -> Result<ViewerReport, AppError> {
+/// Opens the window and runs until it is closed (or the scripted frames are done). `opener`
+/// opens the scenes dropped on the window or named in the panel while it runs.
+pub fn run(
+    scene: Scene,
+    opts: &ViewerOptions,
+    opener: &SceneOpener,
+) -> Result<ViewerReport, AppError> {
     let event_loop = EventLoop::new().map_err(|e| AppError::Window(e.to_string()))?;
     let mut app = App {
         opts,
+        opener,
         scene: Some(scene),
         open: None,
         outcome: Ok(()),
@@ -213,6 +224,7 @@ struct Open {
 /// (winit 0.30 creates windows from a running loop) and hands the viewer its events.
 struct App<'a> {
     opts: &'a ViewerOptions,
+    opener: &'a SceneOpener<'a>,
     /// The scene until the viewer takes it.
     scene: Option<Scene>,
     open: Option<Open>,
@@ -267,7 +279,10 @@ impl ApplicationHandler for App<'_> {
         let Some(o) = self.open.as_mut() else {
             return;
         };
-        if let Err(e) = o.viewer.handle(&o.ctx, &o.window, event, event_loop) {
+        let r = o
+            .viewer
+            .handle(&o.ctx, &o.window, event, event_loop, self.opener);
+        if let Err(e) = r {
             self.fail(event_loop, e);
         }
     }
@@ -356,6 +371,9 @@ struct Viewer {
     /// The window was destroyed under the viewer (not closed): the viewer exits without
     /// touching it again.
     window_gone: bool,
+    /// The window's size whose frame did not fit the device's memory
+    /// ([`Self::check_window_memory`]): nothing is drawn until the size changes.
+    refused_px: Option<PhysicalSize<u32>>,
     /// Width of the side panel in pixels: the scene renders to the right of it.
     panel_px: u32,
     /// Where the panel's GPU-time table was drawn last frame (logged by scripted runs).
@@ -540,8 +558,15 @@ impl Viewer {
             extent,
             MAX_FRAMES_IN_FLIGHT,
         )?;
-        let mut viewer = Self::with_swapchain(window, scene, opts, swapchain);
-        viewer.controls.stereo.path = match opts.stereo_path {
+        let mut viewer = Self::with_swapchain(window, scene, opts, Some(swapchain));
+        viewer.resolve_stereo_path(ctx);
+        viewer.init_gpu(ctx)?;
+        Ok(viewer)
+    }
+
+    /// The stereo path of `--stereo-path`, else the device's default.
+    fn resolve_stereo_path(&mut self, ctx: &Context) {
+        self.controls.stereo.path = match self.opts.stereo_path {
             Some(path) => path,
             None => {
                 let (path, why) = crate::render::default_stereo_path(&ctx.info);
@@ -549,15 +574,14 @@ impl Viewer {
                 path
             }
         };
-        viewer.init_gpu(ctx)?;
-        Ok(viewer)
     }
 
+    /// The viewer of `scene` before any GPU object (but the swapchain, if given) is made.
     fn with_swapchain(
         window: &Window,
         scene: Scene,
         opts: &ViewerOptions,
-        swapchain: Swapchain,
+        swapchain: Option<Swapchain>,
     ) -> Self {
         let egui_ctx = egui::Context::default();
         // The dark theme whatever the system's (egui 0.29+ follows the system by default).
@@ -599,6 +623,11 @@ impl Viewer {
                 .unwrap_or_else(|| StereoControls::off(&scene, opts.settings.time_s)),
             projection: scene.camera.projection,
             ortho_height_m: scene.camera.ortho_height_m,
+            open: open::OpenControls::showing(match (&scene.source, &opts.builtin) {
+                (Some(file), _) => file.display().to_string(),
+                (None, Some(name)) => name.clone(),
+                (None, None) => opts.scene_name.clone(),
+            }),
         };
         Self {
             opts: opts.clone(),
@@ -613,7 +642,7 @@ impl Viewer {
             cursor: None,
             renderer: None,
             stereo: None,
-            swapchain: Some(swapchain),
+            swapchain,
             swapchain_dirty: false,
             overlay: None,
             frame_loop: None,
@@ -639,6 +668,7 @@ impl Viewer {
             window_px: window.inner_size(),
             oversized: false,
             window_gone: false,
+            refused_px: None,
             panel_px: 0,
             panel_layout: panel::PanelLayout::default(),
             editor,
@@ -661,35 +691,13 @@ impl Viewer {
         }
     }
 
+    /// The GPU objects that outlive scenes: the panel's, the pick pass and the frame loop.
+    /// The renderer is made before the first frame, once the panel's width is known
+    /// ([`Self::update_renderer`]).
     fn init_gpu(&mut self, ctx: &Context) -> Result<(), AppError> {
-        let (format, extent) = match &self.swapchain {
-            Some(s) => (s.format, s.extent),
-            None => return Ok(()),
+        let Some(format) = self.swapchain.as_ref().map(|s| s.format) else {
+            return Ok(());
         };
-        let mut settings = self.opts.settings.clone();
-        (settings.width, settings.height) =
-            stereo::eye_size(self.controls.stereo.mode, (extent.width, extent.height));
-        if self.controls.stereo.mode.is_none() {
-            let area = (settings.width, settings.height);
-            (settings.width, settings.height) = self.dynres.internal_size(area);
-            settings.gi = self.dynres.gi(settings.gi);
-            settings.post.upsample_to = self
-                .dynres
-                .upsample_to((settings.width, settings.height), area);
-            if self.dynres.steps() != dynres::STEPS {
-                self.log_scale(dynres::Change::Start, area);
-            }
-        }
-        log::info!("indirect light: {}", describe_gi(&settings.gi));
-        log::info!(
-            "post-processing: {}",
-            describe_post(&settings.post, &settings.tonemap)
-        );
-        let (renderer, stereo) = self.new_renderer(ctx, &settings)?;
-        self.renderer = Some(renderer);
-        self.renderer_frames = 0;
-        self.stereo = stereo;
-        self.scene_shape = Some(edit::SceneShape::of(&self.scene));
         self.overlay = Some(Overlay::new(ctx, format)?);
         self.pick = Some(pick::PickPass::new(ctx)?);
         self.frame_loop = Some(FrameLoop::new(ctx, MAX_FRAMES_IN_FLIGHT, MAX_PASSES)?);
@@ -702,6 +710,7 @@ impl Viewer {
         window: &Window,
         event: WindowEvent,
         elwt: &ActiveEventLoop,
+        opener: &SceneOpener,
     ) -> Result<(), AppError> {
         match event {
             WindowEvent::Destroyed => {
@@ -722,8 +731,14 @@ impl Viewer {
                         self.window_px = size;
                         self.swapchain_dirty = true;
                     }
+                    // Opened at the next redraw, as the panel's "Open" is.
+                    WindowEvent::DroppedFile(path) => {
+                        log::info!("dropped on the window: {}", path.display());
+                        self.controls.open.path = path.to_string_lossy().into_owned();
+                        self.controls.open.requested = true;
+                    }
                     WindowEvent::RedrawRequested => {
-                        let script_done = self.redraw(ctx, window)?;
+                        let script_done = self.redraw(ctx, window, opener)?;
                         if script_done {
                             elwt.exit();
                         }
@@ -835,11 +850,22 @@ impl Viewer {
     }
 
     /// Renders and presents one frame. Returns `true` when a scripted run is done.
-    fn redraw(&mut self, ctx: &Context, window: &Window) -> Result<bool, AppError> {
+    fn redraw(
+        &mut self,
+        ctx: &Context,
+        window: &Window,
+        opener: &SceneOpener,
+    ) -> Result<bool, AppError> {
         self.advance(window)?;
         let Some(extent) = self.presentable_extent(ctx, window)? else {
             return Ok(false);
         };
+        // A scene dropped on the window or asked for in the panel (last frame): this frame
+        // shows it, or the current scene and why it was not opened.
+        if std::mem::take(&mut self.controls.open.requested) {
+            let arg = self.controls.open.path.trim().to_owned();
+            self.open_scene(ctx, window, extent, opener, &arg)?;
+        }
         // The scripted run's last frame is the one it screenshots.
         let last_scripted = self.opts.frames.is_some_and(|n| {
             self.report.frames + 1 >= n
@@ -969,12 +995,43 @@ impl Viewer {
             );
             self.swapchain_dirty = true;
         }
-        let Some(swapchain) = self.swapchain.as_mut() else {
-            return Ok(None);
-        };
         let window_px = vk::Extent2D {
             width: size.width,
             height: size.height,
+        };
+        // Within the device's limits but too big for its memory: refused before the
+        // swapchain or anything else of that size is made, and checked once per size.
+        if self.refused_px == Some(size) {
+            std::thread::sleep(MINIMIZED_POLL);
+            return Ok(None);
+        }
+        let resizing = self
+            .swapchain
+            .as_ref()
+            .is_some_and(|s| s.extent != window_px);
+        if resizing || self.refused_px.is_some() {
+            if let Err(e) = self.check_window_memory(ctx, size) {
+                self.refused_px = Some(size);
+                self.status = format!(
+                    "the window is {}x{} px, more than this device's memory holds: {e}; \
+                     nothing is drawn until it is smaller",
+                    size.width, size.height
+                );
+                log::warn!("{}", self.status);
+                std::thread::sleep(MINIMIZED_POLL);
+                return Ok(None);
+            }
+            if self.refused_px.take().is_some() {
+                self.status.clear();
+                log::info!(
+                    "the window is {}x{} px again: drawing",
+                    size.width,
+                    size.height
+                );
+            }
+        }
+        let Some(swapchain) = self.swapchain.as_mut() else {
+            return Ok(None);
         };
         if self.swapchain_dirty || swapchain.extent != window_px {
             swapchain.recreate(ctx, window_px)?;
@@ -984,16 +1041,108 @@ impl Viewer {
         Ok((extent.width > 0 && extent.height > 0).then_some(extent))
     }
 
+    /// Refuses a window `size` whose frame cannot fit the device's memory, before anything
+    /// of that size is made: the swapchain's images, the screenshot buffer and the renderer's
+    /// frame at the size the scene would render (`Renderer::check_frame_size`, which names
+    /// the allocation). In stereo and under TAA upsampling the count is the mono frame's, an
+    /// estimate.
+    fn check_window_memory(
+        &mut self,
+        ctx: &Context,
+        size: PhysicalSize<u32>,
+    ) -> Result<(), RenderError> {
+        use crate::render::memory::MemoryNeed;
+        let Some(renderer) = self.renderer.as_mut() else {
+            return Ok(());
+        };
+        let panel_px = if size.width > self.panel_px + 64 {
+            self.panel_px
+        } else {
+            0
+        };
+        let area = (size.width - panel_px, size.height);
+        let frame = match self.controls.stereo.mode {
+            None => self.dynres.internal_size(area),
+            mode => stereo::eye_size(mode, area),
+        };
+        let images = self
+            .swapchain
+            .as_ref()
+            .map_or(0, |s| s.images.len())
+            .max(MAX_FRAMES_IN_FLIGHT + 1);
+        let px = |(w, h): (u32, u32)| u64::from(w) * u64::from(h);
+        let mut extra: Vec<MemoryNeed> = (0..images)
+            .map(|i| MemoryNeed {
+                name: format!("swapchain image {i}"),
+                bytes: px((size.width, size.height)) * 4,
+                is_buffer: false,
+            })
+            .collect();
+        extra.push(MemoryNeed {
+            name: "screenshot".into(),
+            bytes: px(frame) * 4,
+            is_buffer: true,
+        });
+        match renderer.check_frame_size(ctx, &self.scene, frame, &extra) {
+            // The advice is the window's, not the command line's size flags.
+            Err(RenderError::OutOfDeviceMemory(mut m)) => {
+                m.flags = "the window's size";
+                Err(RenderError::OutOfDeviceMemory(m))
+            }
+            // Only memory refuses a size here; anything else the frame at that size meets
+            // is met (and reported) where it is made.
+            Err(e) => {
+                log::debug!("the window's frame memory was not counted: {e}");
+                Ok(())
+            }
+            Ok(()) => Ok(()),
+        }
+    }
+
     /// Applies the panel to the scene and the renderer's settings: a new renderer or graph
     /// where a setting needs one, then the frame's constants. `false` when there is no
     /// renderer to draw with.
     fn apply_controls(&mut self, ctx: &Context, extent: vk::Extent2D) -> Result<bool, AppError> {
+        let Some(settings) = self.update_renderer(ctx, extent)? else {
+            return Ok(false);
+        };
+        let Some(renderer) = self.renderer.as_mut() else {
+            return Ok(false);
+        };
+        renderer.settings = settings.clone();
+        match &mut self.stereo {
+            Some(st) => st.prepare(renderer, &self.scene, &settings, &self.controls.stereo)?,
+            None => renderer.prepare(&self.scene)?,
+        }
+        let stereo_mode = self.stereo.as_ref().and(self.controls.stereo.mode);
+        if self.graph.as_ref().is_none_or(|g| {
+            g.extent != extent
+                || needs_new_graph(&g.settings, &settings)
+                || g.stereo_mode != stereo_mode
+                || g.display != self.display
+        }) {
+            self.rebuild(ctx)?;
+        }
+        Ok(true)
+    }
+
+    /// The frame's settings from the panel for a swapchain of `extent`, and the renderer for
+    /// them: a new one where a setting needs one, and the first one (made here, once the
+    /// panel's width is known, so that it has the scene's size from the start). `None` when
+    /// there is no renderer to draw with.
+    fn update_renderer(
+        &mut self,
+        ctx: &Context,
+        extent: vk::Extent2D,
+    ) -> Result<Option<RenderSettings>, AppError> {
         for (i, base) in self.base_lights.iter().enumerate() {
             let s = self.controls.light_scale.get(i).copied().unwrap_or(1.0);
             self.scene.lights[i] = scaled(base, s);
         }
-        let Some(current) = self.renderer.as_ref().map(|r| r.settings.clone()) else {
-            return Ok(false);
+        let first = self.renderer.is_none();
+        let current = match self.renderer.as_ref() {
+            Some(r) => r.settings.clone(),
+            None => self.opts.settings.clone(),
         };
         // The scene fills the window right of the panel (all of it when the window is narrow).
         let panel_px = if extent.width > self.panel_px + 64 {
@@ -1010,6 +1159,9 @@ impl Viewer {
         // (A stereo packing is not scaled.)
         if let Some(change) = self.dynres.set(self.controls.dynres) {
             self.log_scale(change, area);
+        }
+        if first && self.controls.stereo.mode.is_none() && self.dynres.steps() != dynres::STEPS {
+            self.log_scale(dynres::Change::Start, area);
         }
         self.display = self.controls.stereo.mode.is_none().then_some(area);
         if self.display.is_some() {
@@ -1039,7 +1191,15 @@ impl Viewer {
             (None, mode) => mode.is_some(),
         };
         let editing = self.editor.dragging() || self.egui_ctx.input(|i| i.pointer.any_down());
-        if needs_new_renderer(&current, &settings)
+        if first {
+            log::info!("indirect light: {}", describe_gi(&settings.gi));
+            log::info!(
+                "post-processing: {}",
+                describe_post(&settings.post, &settings.tonemap)
+            );
+        }
+        if first
+            || needs_new_renderer(&current, &settings)
             || stereo_changed
             || self.scene_needs_new_renderer(editing)
         {
@@ -1056,24 +1216,7 @@ impl Viewer {
                 self.light_change_done();
             }
         }
-        let Some(renderer) = self.renderer.as_mut() else {
-            return Ok(false);
-        };
-        renderer.settings = settings.clone();
-        match &mut self.stereo {
-            Some(st) => st.prepare(renderer, &self.scene, &settings, &self.controls.stereo)?,
-            None => renderer.prepare(&self.scene)?,
-        }
-        let stereo_mode = self.stereo.as_ref().and(self.controls.stereo.mode);
-        if self.graph.as_ref().is_none_or(|g| {
-            g.extent != extent
-                || needs_new_graph(&g.settings, &settings)
-                || g.stereo_mode != stereo_mode
-                || g.display != self.display
-        }) {
-            self.rebuild(ctx)?;
-        }
-        Ok(true)
+        Ok(self.renderer.is_some().then_some(settings))
     }
 
     /// Records the frame (with the panel's `ui` primitives and pixels per point), submits and
@@ -1716,9 +1859,20 @@ impl Viewer {
     /// swapchain and then the surface (the window outlives the viewer).
     fn close(mut self, ctx: &Context) -> ViewerReport {
         if let Some(fl) = self.frame_loop.as_mut() {
+            // What a close mid-frame waits for (the window tests check it was a frame still
+            // running, not one that had completed unseen).
+            match fl.in_flight(ctx) {
+                Ok(n) => log::info!(
+                    "closing: waiting for {} frames in flight ({} still running)",
+                    n.submitted,
+                    n.running
+                ),
+                Err(e) => log::warn!("closing: the frames in flight are unknown: {e}"),
+            }
             let _ = fl.finish(ctx);
         }
         self.report.camera = Some(self.fly.apply(&self.lens));
+        self.report.origin_m = self.scene.origin_m;
         std::mem::take(&mut self.report)
     }
 }
@@ -1758,6 +1912,7 @@ mod tests {
             stereo: StereoControls::off(&crate::scene::builtin("cornell").expect("cornell"), 0.0),
             projection: crate::scene::Projection::Perspective,
             ortho_height_m: 1.0,
+            open: Default::default(),
         };
         let d = debug_settings(&c, current.debug).expect("a debug view");
         assert_eq!((d.view, d.object, d.level), (DebugView::Atlas, 2, 3));

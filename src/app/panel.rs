@@ -128,6 +128,8 @@ pub struct Controls {
     /// refuses a switch the frame cannot render and says why.
     pub projection: crate::scene::Projection,
     pub ortho_height_m: f32,
+    /// The "Open scene" section: the scene shown and another to open (`app/open.rs`).
+    pub open: super::open::OpenControls,
 }
 
 /// Read-only facts the panel shows.
@@ -398,6 +400,12 @@ pub fn draw(
                     egui::CollapsingHeader::new("Edit scene")
                         .default_open(true)
                         .show(ui, |ui| edit_ui(ui));
+
+                    egui::CollapsingHeader::new("Open scene")
+                        .default_open(true)
+                        .show(ui, |ui| {
+                            super::open::panel_section(ui, &mut c.open, &mut spots)
+                        });
 
                     egui::CollapsingHeader::new("Post-processing")
                         .default_open(true)
@@ -836,6 +844,7 @@ mod table_tests {
             },
             projection: crate::scene::Projection::Perspective,
             ortho_height_m: 1.0,
+            open: super::super::open::OpenControls::showing("cornell".into()),
         };
         let lights = ["point 0".to_string()];
         let info = PanelInfo {

@@ -110,7 +110,74 @@ fn parse_size(s: &str) -> Result<(u32, u32), String> {
 /// Runs the viewer until its window closes (or a scripted run ends), then prints the camera
 /// as a pasteable `[camera]` table and the screenshots written.
 pub fn view(global: &Global, args: ViewArgs, out: &mut dyn Write) -> Result<(), CliError> {
-    let scene = args.camera.load_scene(args.scene.as_deref())?;
+    let (scene, opts) = open_scene(global, &args, args.scene.as_deref(), out)?;
+    // A scene opened while the viewer runs (dropped on the window, or the panel's "Open")
+    // goes through the same loader and checks, with this run's other flags.
+    let open = |arg: &str| -> Result<
+        (crate::scene::Scene, crate::app::ViewerOptions),
+        crate::app::OpenError,
+    > {
+        let mut said = Vec::new();
+        let opened = open_scene(global, &args, Some(arg), &mut said)
+            .map_err(|e| crate::app::OpenError(e.to_string()))?;
+        for line in String::from_utf8_lossy(&said).lines() {
+            log::info!("{line}");
+        }
+        Ok(opened)
+    };
+    let report = crate::app::run(scene, &opts, &open)?;
+    if let Some(camera) = &report.camera {
+        // Pasteable into a scene file, to start there next time (the scene shown at exit).
+        out!(
+            out,
+            "camera at exit:\n{}",
+            camera.toml_table(report.origin_m)
+        );
+    }
+    match crate::scene::CameraPath::through_cameras(&report.camera_keys, RECORDED_KEY_SPACING_S) {
+        // Pasteable into a scene file, for `voxgi profile --camera-path`.
+        Ok(path) => out!(
+            out,
+            "recorded camera path:\n{}",
+            path.toml_table(report.origin_m)
+        ),
+        Err(e) if !report.camera_keys.is_empty() => {
+            outln!(
+                out,
+                "recorded camera path not printed: `{}`: {}",
+                e.field,
+                e.problem
+            )
+        }
+        Err(_) => {}
+    }
+    for p in &report.screenshots {
+        outln!(out, "wrote {}", p.display());
+    }
+    for p in &report.saved {
+        outln!(out, "saved scene to {}", p.display());
+    }
+    if report.skipped_minimized > 0 {
+        outln!(
+            out,
+            "skipped {} frames while minimized",
+            report.skipped_minimized
+        );
+    }
+    super::check_teardown(&report.teardown)
+}
+
+/// The scene `scene_arg` (a built-in name, a TOML file, a glTF/OBJ model; `None`: the default)
+/// and the viewer's options for it under `args`' flags: what `voxgi view SCENE` starts with,
+/// and what the running viewer opens. Every check of the command line runs here, before any
+/// GPU work; what it prints (the budget's choice) goes to `out`.
+fn open_scene(
+    global: &Global,
+    args: &ViewArgs,
+    scene_arg: Option<&str>,
+    out: &mut dyn Write,
+) -> Result<(crate::scene::Scene, crate::app::ViewerOptions), CliError> {
+    let scene = args.camera.load_scene(scene_arg)?;
     // Checked when the viewer starts in the atlas view; the panel may switch to it
     // later, then showing this object if it exists, else the first.
     let object = match scene.find_object(&args.object) {
@@ -149,7 +216,7 @@ pub fn view(global: &Global, args: ViewArgs, out: &mut dyn Write) -> Result<(), 
         .iter()
         .any(|l| l.get("gi.temporal").is_some());
     settings.gi = crate::app::viewer_gi(settings.gi, temporal_set, &post.dynres);
-    let name = super::sweep::scene_name(args.scene.as_deref().unwrap_or("cornell"));
+    let name = super::sweep::scene_name(scene_arg.unwrap_or(crate::scene::DEFAULT_SCENE));
     if let Some(budget) = args.budget_ms {
         let (row, _, layer) = crate::tune::tune_from_dir(&args.sweep, &name, budget)?;
         settings.gi = crate::scene::schema::apply(settings.gi, &[&layer]);
@@ -183,57 +250,19 @@ pub fn view(global: &Global, args: ViewArgs, out: &mut dyn Write) -> Result<(), 
         resize_to: args.resize,
         minimize_at: args.minimize_at,
         restore_after: args.restore_after,
-        screenshot: args.screenshot,
-        sweep_dir: args.sweep,
+        screenshot: args.screenshot.clone(),
+        sweep_dir: args.sweep.clone(),
         scene_name: name,
         budget_ms: args.budget_ms.unwrap_or(100.0) as f32,
         dynres: post.dynres,
         stereo: Some(stereo),
         stereo_path: args.stereo.stereo_path,
-        save_to: args.save,
-        builtin: crate::scene::builtin_toml(
-            args.scene.as_deref().unwrap_or(crate::scene::DEFAULT_SCENE),
-        )
-        .is_some()
-        .then(|| {
-            args.scene
-                .clone()
-                .unwrap_or_else(|| crate::scene::DEFAULT_SCENE.into())
-        }),
+        save_to: args.save.clone(),
+        builtin: crate::scene::builtin_toml(scene_arg.unwrap_or(crate::scene::DEFAULT_SCENE))
+            .is_some()
+            .then(|| scene_arg.unwrap_or(crate::scene::DEFAULT_SCENE).to_owned()),
     };
-    let origin_m = scene.origin_m;
-    let report = crate::app::run(scene, &opts)?;
-    if let Some(camera) = &report.camera {
-        // Pasteable into a scene file, to start there next time.
-        out!(out, "camera at exit:\n{}", camera.toml_table(origin_m));
-    }
-    match crate::scene::CameraPath::through_cameras(&report.camera_keys, RECORDED_KEY_SPACING_S) {
-        // Pasteable into a scene file, for `voxgi profile --camera-path`.
-        Ok(path) => out!(out, "recorded camera path:\n{}", path.toml_table(origin_m)),
-        Err(e) if !report.camera_keys.is_empty() => {
-            outln!(
-                out,
-                "recorded camera path not printed: `{}`: {}",
-                e.field,
-                e.problem
-            )
-        }
-        Err(_) => {}
-    }
-    for p in &report.screenshots {
-        outln!(out, "wrote {}", p.display());
-    }
-    for p in &report.saved {
-        outln!(out, "saved scene to {}", p.display());
-    }
-    if report.skipped_minimized > 0 {
-        outln!(
-            out,
-            "skipped {} frames while minimized",
-            report.skipped_minimized
-        );
-    }
-    super::check_teardown(&report.teardown)
+    Ok((scene, opts))
 }
 
 #[cfg(test)]

@@ -79,6 +79,54 @@ impl Renderer {
     /// the graph's arenas, one set per frame in flight) cannot fit beside what is allocated
     /// now, before the executor allocates them.
     fn check_transient_memory(&self, ctx: &Context) -> Result<(), RenderError> {
+        memory::check_fits(
+            ctx,
+            &frame_subject(&self.settings),
+            FRAME_FLAGS,
+            &self.transient_needs(ctx)?,
+            ctx.allocated_bytes(),
+        )
+    }
+
+    /// Refuses a `size` for this renderer's frame that cannot fit the device, before
+    /// anything of that size is made (the viewer asks before it resizes to a window): the
+    /// frame-sized resources a renderer of that size holds, its graph's transient arenas
+    /// per frame in flight and `extra` (what the caller makes of that size, such as a
+    /// window's swapchain images), together beside everything allocated now. That counts
+    /// the present size's frame too, which a resize frees: near the limit it refuses a
+    /// size that would just fit.
+    pub fn check_frame_size(
+        &mut self,
+        ctx: &Context,
+        scene: &Scene,
+        (width, height): (u32, u32),
+        extra: &[memory::MemoryNeed],
+    ) -> Result<(), RenderError> {
+        let sized = RenderSettings {
+            width,
+            height,
+            ..self.settings.clone()
+        };
+        let current = std::mem::replace(&mut self.settings, sized.clone());
+        let transients = self.transient_needs(ctx);
+        self.settings = current;
+        let gi_on = sized.gi.method != crate::gi::GiMethod::None && sized.debug.is_none();
+        let eyes = if self.stereo.is_some() { 2 } else { 1 };
+        let mut needs = super::preflight::frame_memory_needs(ctx, scene, &sized, gi_on, eyes);
+        needs.extend(transients?);
+        needs.extend_from_slice(extra);
+        memory::check_fits(
+            ctx,
+            &frame_subject(&sized),
+            FRAME_FLAGS,
+            &needs,
+            ctx.allocated_bytes(),
+        )
+    }
+
+    /// The graph's transient arenas (one set per frame in flight) and cached images at the
+    /// renderer's settings.
+    fn transient_needs(&self, ctx: &Context) -> Result<Vec<memory::MemoryNeed>, RenderError> {
         let graph = self.graph();
         let arenas = crate::graph::transient_arenas(ctx, &graph)?;
         let slots = crate::vk::MAX_FRAMES_IN_FLIGHT;
@@ -102,13 +150,7 @@ impl Renderer {
             })
             .chain(cached)
             .collect();
-        memory::check_fits(
-            ctx,
-            &frame_subject(&self.settings),
-            FRAME_FLAGS,
-            &needs,
-            ctx.allocated_bytes(),
-        )
+        Ok(needs)
     }
 
     /// Creates the frame's resources and passes (see [`Renderer::new`]), in this order: the

@@ -105,6 +105,24 @@ pub(super) fn check_frame_memory(
     gi_on: bool,
     eyes: u32,
 ) -> Result<(), RenderError> {
+    memory::check_fits(
+        ctx,
+        &frame_subject(s),
+        FRAME_FLAGS,
+        &frame_memory_needs(ctx, scene, s, gi_on, eyes),
+        ctx.allocated_bytes(),
+    )
+}
+
+/// The persistent frame-sized resources of a frame (read-back buffers, the TAA, path tracer
+/// and SSGI histories), per eye.
+pub(super) fn frame_memory_needs(
+    ctx: &Context,
+    scene: &Scene,
+    s: &RenderSettings,
+    gi_on: bool,
+    eyes: u32,
+) -> Vec<memory::MemoryNeed> {
     let size = (s.width, s.height);
     let mut needs: Vec<_> = readback_descs(size)
         .iter()
@@ -118,13 +136,7 @@ pub(super) fn check_frame_memory(
         needs.extend(needs.clone());
     }
     needs.extend(images.iter().map(|d| memory::MemoryNeed::image(ctx, d)));
-    memory::check_fits(
-        ctx,
-        &frame_subject(s),
-        FRAME_FLAGS,
-        &needs,
-        ctx.allocated_bytes(),
-    )
+    needs
 }
 
 /// The persistent frame-sized images of one eye (TAA, path tracer and SSGI histories).

@@ -73,6 +73,15 @@ impl Drop for FrameLoop {
     }
 }
 
+/// Frames in flight at one moment ([`FrameLoop::in_flight`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct InFlight {
+    /// Submitted, completion not yet seen by the loop.
+    pub submitted: usize,
+    /// Of those, still running on the device.
+    pub running: usize,
+}
+
 /// GPU milliseconds of one pass in one frame.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PassTiming {
@@ -238,6 +247,21 @@ impl FrameLoop {
         self.current = (self.current + 1) % self.slots.len();
         self.frame_index += 1;
         Ok(())
+    }
+
+    /// The frames in flight: those submitted whose completion the loop has not seen yet (it
+    /// waits for a slot only when the slot comes round again), and of those the ones still
+    /// running now (fence not signalled).
+    pub fn in_flight(&self, ctx: &Context) -> Result<InFlight, VkError> {
+        let mut n = InFlight::default();
+        for slot in self.slots.iter().filter(|s| s.submitted.is_some()) {
+            n.submitted += 1;
+            // SAFETY: the fence belongs to this device and is not being destroyed.
+            let done = unsafe { ctx.device.get_fence_status(slot.fence) }
+                .map_err(VkError::vk("query a frame fence"))?;
+            n.running += usize::from(!done);
+        }
+        Ok(n)
     }
 
     /// Waits for every submitted frame and returns their timings, oldest first.

@@ -15,7 +15,9 @@ pub use cmd::{Attachment, Cmd};
 pub use context::{
     describe_devices, Context, ContextDesc, DeviceInfo, TeardownReport, ValidationLog,
 };
-pub use frame::{FrameLoop, FrameSlot, PassTiming, TimestampRecorder, MAX_FRAMES_IN_FLIGHT};
+pub use frame::{
+    FrameLoop, FrameSlot, InFlight, PassTiming, TimestampRecorder, MAX_FRAMES_IN_FLIGHT,
+};
 pub use pipeline::{
     check_push_against, check_spec_against, check_struct_against, descriptor_type, interface_of,
     Bindable, ComputePipeline, Descriptor, GraphicsPipeline, GraphicsPipelineDesc, Pipeline,
