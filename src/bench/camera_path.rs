@@ -22,7 +22,7 @@ use super::flicker::change_and_flicker;
 use super::temporal::{lag_after_switch_off, Lag};
 use super::BenchError;
 use crate::eval::{compare, HdrImage};
-use crate::gi::{GiMethod, GiSettings};
+use crate::gi::{GiFilterKind, GiMethod, GiSettings};
 use crate::render::{render_flight, render_image, RenderSettings};
 use crate::scene::{CameraPath, Scene};
 use crate::vk::Context;
@@ -41,6 +41,8 @@ pub struct CameraPathDesc {
     pub methods: Vec<GiMethod>,
     /// Rays per pixel and frame.
     pub rays: u32,
+    /// The spatial filter and its passes (`None`: the method's default).
+    pub filter: Option<(GiFilterKind, u32)>,
     /// Frames each method's converged images (of the noise and flicker measures) accumulate.
     pub converged_frames: u32,
     /// Rays per pixel and frame of those converged images.
@@ -57,6 +59,7 @@ impl Default for CameraPathDesc {
             scored: 4,
             methods: vec![GiMethod::Hemisphere, GiMethod::Vpl, GiMethod::Pathtrace],
             rays: 4,
+            filter: None,
             converged_frames: 32,
             converged_rays: 16,
             lag_max_frames: 32,
@@ -122,6 +125,8 @@ pub struct CameraPathReport {
     pub size: u32,
     pub frames: u32,
     pub rays: u32,
+    /// The spatial filter and its passes.
+    pub filter: String,
     /// The scored frames (0-based) and their times on the path.
     pub scored: Vec<(usize, f32)>,
     pub reference: String,
@@ -133,11 +138,12 @@ impl CameraPathReport {
     /// accumulation.
     pub fn table(&self) -> String {
         let mut s = format!(
-            "camera path of {}: {}² px, {} frames, {} rays per pixel and frame; scored frames {}; references: {}\n",
+            "camera path of {}: {}² px, {} frames, {} rays per pixel and frame, filter {}; scored frames {}; references: {}\n",
             self.scene,
             self.size,
             self.frames,
             self.rays,
+            self.filter,
             self.scored
                 .iter()
                 .map(|(k, t)| format!("{k} ({t:.2} s)"))
@@ -190,21 +196,28 @@ impl CameraPathReport {
 }
 
 /// The settings of `method` in the flight, with or without temporal accumulation: the
-/// method's defaults at `desc.rays`, one frame per step (a moving camera restarts the
-/// accumulation of a method without temporal history).
+/// method's defaults at `rays` (and `desc.filter`), one frame per step (a moving camera
+/// restarts the accumulation of a method without temporal history).
 fn method_settings(
     base: &RenderSettings,
+    desc: &CameraPathDesc,
     method: GiMethod,
     rays: u32,
     temporal: bool,
 ) -> RenderSettings {
+    let defaults = GiSettings::default();
+    let (filter, filter_passes) = desc
+        .filter
+        .unwrap_or((defaults.filter, defaults.filter_passes));
     RenderSettings {
         gi: GiSettings {
             method,
             rays,
             temporal,
             accumulate_frames: 1,
-            ..GiSettings::default()
+            filter,
+            filter_passes,
+            ..defaults
         },
         ..base.clone()
     }
@@ -240,7 +253,7 @@ pub fn bench_camera_path(
                 time_s: times[k],
                 gi: GiSettings {
                     accumulate_frames: desc.converged_frames.max(1),
-                    ..method_settings(&base, method, desc.converged_rays, true).gi
+                    ..method_settings(&base, desc, method, desc.converged_rays, true).gi
                 },
                 ..base.clone()
             };
@@ -251,7 +264,7 @@ pub fn bench_camera_path(
             own.push([converged(k - 1)?, converged(k)?]);
         }
         for temporal in [false, true] {
-            let settings = method_settings(&base, method, desc.rays, temporal);
+            let settings = method_settings(&base, desc, method, desc.rays, temporal);
             let flight = render_flight(ctx, scene, &settings, &times, Some(path))?;
             let mut rel_mse = Vec::with_capacity(scored.len());
             let mut noise = Vec::with_capacity(scored.len());
@@ -295,6 +308,10 @@ pub fn bench_camera_path(
         size: desc.size,
         frames: desc.frames,
         rays: desc.rays,
+        filter: {
+            let gi = method_settings(&base, desc, GiMethod::Hemisphere, desc.rays, false).gi;
+            format!("{:?} × {}", gi.filter, gi.filter_passes).to_lowercase()
+        },
         scored: scored.iter().map(|&k| (k, times[k])).collect(),
         reference: reference_name.to_owned(),
         rows,

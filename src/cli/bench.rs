@@ -689,6 +689,13 @@ pub struct CameraPathArgs {
     #[arg(long, value_delimiter = ',', default_values = ["hemisphere", "vpl", "pathtrace"],
           value_parser = ["hemisphere", "vpl", "pathtrace"])]
     methods: Vec<String>,
+    /// The spatial filter [default: the methods' own, geometric].
+    #[arg(long, value_enum)]
+    gi_filter: Option<crate::gi::GiFilterKind>,
+    /// The filter's passes (geometric: h+v pairs; svgf: à-trous iterations) [default: the
+    /// methods' own].
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=16), requires = "gi_filter")]
+    gi_filter_passes: Option<u32>,
     /// Frames each method's converged images (the noise and flicker measures) accumulate,
     /// with the camera still.
     #[arg(long, default_value_t = 32, value_parser = clap::value_parser!(u32).range(1..=4096))]
@@ -745,6 +752,10 @@ impl CameraPathArgs {
             frames: self.frames,
             scored: self.scored,
             rays: self.rays,
+            filter: self.gi_filter.map(|f| {
+                let passes = crate::gi::GiSettings::default().filter_passes;
+                (f, self.gi_filter_passes.unwrap_or(passes))
+            }),
             converged_frames: self.converged_frames,
             converged_rays: self.converged_rays,
             methods: self

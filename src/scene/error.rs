@@ -235,7 +235,10 @@ pub enum SceneError {
     /// A one-channel map (`map_Pr`, `map_Pm`) whose color channels differ: its first channel
     /// would be read silently, which for a packed texture is the wrong quantity.
     #[error(
-        "{}: {key} reads one value per texel from the first channel, but this map's red, green          and blue differ (texel ({x}, {y}) is {rgb:?}), as in a packed occlusion/roughness/         metalness texture; save the channel that holds the {key} values as a grey image          (referenced by {referenced_by})",
+        "{}: {key} reads one value per texel from the first channel, but this map's red, green \
+         and blue differ (texel ({x}, {y}) is {rgb:?}), as in a packed occlusion/roughness/\
+         metalness texture; save the channel that holds the {key} values as a grey image \
+         (referenced by {referenced_by})",
         file.display()
     )]
     TextureChannels {
@@ -438,5 +441,31 @@ impl SceneError {
             SceneError::GltfPrimitiveMode { .. } => "gltf-primitive-mode",
             SceneError::GltfImageMissing { .. } => "gltf-image-missing",
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A message is one sentence: the `\` continuations of its source lines drop their
+    /// indentation, so no run of spaces is left inside it.
+    #[test]
+    fn the_packed_map_message_reads_as_one_sentence() {
+        let e = SceneError::TextureChannels {
+            file: PathBuf::from("orm.png"),
+            key: "map_Pr".into(),
+            x: 3,
+            y: 4,
+            rgb: [10, 200, 30],
+            referenced_by: "material 'metal' in scene.mtl".into(),
+        };
+        let text = e.to_string();
+        assert!(
+            text.starts_with("orm.png: map_Pr reads one value"),
+            "{text}"
+        );
+        assert!(text.contains("roughness/metalness"), "{text}");
+        assert!(!text.contains("  "), "{text}");
     }
 }

@@ -145,14 +145,21 @@ pub fn unrepresentable_emission(scene: &Scene, p: PreExposure) -> Vec<String> {
             let bright = lit().any(|&c| c > range.1);
             (dim || bright).then(|| {
                 format!(
-                    "material '{}': its emission {:?} W/(m²·sr) is outside the {:e} to {:e}                      that half-float images hold at this scene's pre-exposure 2^{} (set by its                      brightest source, {:e}), so it renders {}; keep the scene's sources                      within about 2^29 of each other",
+                    "material '{}': its emission {:?} W/(m²·sr) is outside the {:e} to {:e} \
+                     that half-float images hold at this scene's pre-exposure 2^{} (set by its \
+                     brightest source, {:e}), so it renders {}; keep the scene's sources \
+                     within about 2^29 of each other",
                     m.name,
                     channels,
                     range.0,
                     range.1,
                     -p.k,
                     brightest_source(scene),
-                    if bright { "clipped" } else { "with less precision, or black" },
+                    if bright {
+                        "clipped"
+                    } else {
+                        "with less precision, or black"
+                    },
                 )
             })
         })
@@ -257,5 +264,7 @@ mod tests {
         assert_eq!(warnings.len(), 1, "{warnings:?}");
         assert!(warnings[0].contains("'night light'"), "{}", warnings[0]);
         assert!(warnings[0].contains("2^-19"), "{}", warnings[0]);
+        // One sentence: its source lines are joined without their indentation.
+        assert!(!warnings[0].contains("  "), "{}", warnings[0]);
     }
 }
