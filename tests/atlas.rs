@@ -949,7 +949,8 @@ fn pane_scene(opacity: f32) -> voxgi::scene::Scene {
 /// bits of the box with a pane of opacity α are the bits of the box without it, united with
 /// the opaque pane's atlas voxels that `Coverage::covers` keeps for the pane's object (the
 /// same points, so the same voxels; the rule is the CPU twin of the shaders' test). So a pane
-/// of opacity 0 sets nothing and one of opacity 1 everything it did before.
+/// of opacity 0 sets nothing and one of opacity 1 everything it did before; a moving pane
+/// (a dynamic instance) sets the voxels the static one sets.
 #[test]
 fn atlas_panes_keep_the_voxels_their_coverage_keeps() {
     use voxgi::voxel::coverage::Coverage;
@@ -982,6 +983,16 @@ fn atlas_panes_keep_the_voxels_their_coverage_keeps() {
         }
         println!("pane of opacity {opacity}: {kept} voxels kept");
         assert_eq!(differ, 0, "opacity {opacity}: {differ} voxels differ");
+        // A moving pane (a dynamic instance, its own coverage) takes the same decisions.
+        let mut moving = pane_scene(opacity);
+        for o in moving.objects.iter_mut().filter(|o| o.name == "pane") {
+            o.dynamic = true;
+        }
+        let (dynamic_bits, _) = atlas_bits(&ctx, &grid, &moving);
+        assert!(
+            dynamic_bits == bits,
+            "opacity {opacity}: the moving pane sets other voxels"
+        );
         if opacity == 0.0 {
             assert_eq!(kept, 0, "a pane of opacity 0 sets no voxel");
         } else {
