@@ -26,13 +26,16 @@ layout(set = 0, binding = 2, std430) readonly buffer Values { vec4 values[]; };
 #define VOXEL_MAPS_TEXELS_BINDING 3
 #define VOXEL_MAPS_TABLE_BINDING 4
 #include "voxel_maps.glsl"
+// A point its surface's coverage drops writes no attribute, as it sets no bit.
+#define ATLAS_COVERAGE_BINDING 5
+#include "voxel_coverage.glsl"
 
 layout(push_constant) uniform Push {
     mat4 model;      // model -> world
     vec4 grid_min;   // world corner of the grid box (xyz)
     vec4 scale;      // voxels per meter in the voxel-camera frame (u, v, w)
     uvec4 dims;      // res_x, res_y, D, depth axis (0 = X, 1 = Y, 2 = Z)
-    uvec4 extent;    // unused here (column-buffer size and point count of the compute twin)
+    uvec4 extent;    // w, 1: coverage bound (xyz: the compute twin's column-buffer size, count)
 } pc;
 
 layout(location = 0) flat out int v_layer;   // depth index k, -1 outside the grid
@@ -59,7 +62,8 @@ void main() {
     uvec4 pt = points[gl_VertexIndex];
     vec3 p = uintBitsToFloat(pt.xyz);
     uvec3 voxel;
-    bool inside = atlas_point_voxel(pc.model, p, pc.grid_min.xyz, pc.scale.xyz, pc.dims, voxel);
+    bool inside = atlas_point_voxel(pc.model, p, pc.grid_min.xyz, pc.scale.xyz, pc.dims, voxel)
+               && atlas_point_covers(voxel, pt.w, pc.extent.w);
     v_layer = inside ? int(voxel.z) : -1;
     // The column centre: a size-1 point there covers exactly pixel (voxel.x, voxel.y).
     vec2 ndc = (vec2(voxel.xy) + 0.5) / vec2(pc.dims.xy) * 2.0 - 1.0;

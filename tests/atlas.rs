@@ -773,7 +773,12 @@ fn atlas_volumes_follow_a_moving_object() {
 fn raster_atlas_bits_equal_compute_atlas_bits() {
     use voxgi::bench::{bench_voxelize_atlas, VoxelizeBenchDesc};
     let ctx = common::context();
-    for (path, layers) in [("cornell", 1), ("assets/scenes/cornell_bunny.toml", 2)] {
+    // The three panes of opacity 0.5: the raster twin drops the points the compute pass drops.
+    for (path, layers) in [
+        ("cornell", 1),
+        ("assets/scenes/cornell_bunny.toml", 2),
+        ("assets/scenes/transparency.toml", 1),
+    ] {
         let desc = VoxelizeBenchDesc {
             resolution: 128,
             layers,
@@ -923,4 +928,114 @@ fn atlas_volumes_follow_an_obj_sequence() {
     assert!(counts.windows(2).any(|w| w[0] != w[1]), "{counts:?}");
     assert_eq!(frame.atlases_packed(), 2);
     common::assert_no_validation_messages(&ctx);
+}
+
+/// `cornell_pane.toml` with the pane's opacity `opacity` (the pane is object "pane").
+fn pane_scene(opacity: f32) -> voxgi::scene::Scene {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes");
+    let text = std::fs::read_to_string(dir.join("cornell_pane.toml")).expect("scene file");
+    let line = "opacity = 0.5 }";
+    assert_eq!(
+        text.matches(line).count(),
+        1,
+        "cornell_pane.toml's pane material"
+    );
+    let toml = text.replace(line, &format!("opacity = {opacity:?} }}"));
+    voxgi::scene::Scene::from_toml_str(&toml, Path::new("<pane>"), &dir).expect("scene parses")
+}
+
+/// Opacity in the atlas voxelizer (docs/design/transparency.md): a pane's points set their
+/// voxels where the triangle voxelizer's stochastic coverage keeps them. Exactly: the atlas
+/// bits of the box with a pane of opacity α are the bits of the box without it, united with
+/// the opaque pane's atlas voxels that `Coverage::covers` keeps for the pane's object (the
+/// same points, so the same voxels; the rule is the CPU twin of the shaders' test). So a pane
+/// of opacity 0 sets nothing and one of opacity 1 everything it did before; a moving pane
+/// (a dynamic instance) sets the voxels the static one sets.
+#[test]
+fn atlas_panes_keep_the_voxels_their_coverage_keeps() {
+    use voxgi::voxel::coverage::Coverage;
+    let ctx = common::context();
+    let box_only = scene("assets/scenes/cornell_ceiling_spot.toml");
+    let aabb = box_only.aabb_at(0.0);
+    let desc = GridDesc {
+        layers: 1,
+        max_res_xy: 128,
+        ..Default::default()
+    };
+    let grid = VoxelGrid::around(aabb.min, aabb.max, &desc).expect("grid");
+    let (none, _) = atlas_bits(&ctx, &grid, &box_only);
+    let (opaque, _) = atlas_bits(&ctx, &grid, &pane_scene(1.0));
+    let mut pane_voxels = 0u64;
+    for opacity in [0.0f32, 0.5, 0.9] {
+        let (bits, _) = atlas_bits(&ctx, &grid, &pane_scene(opacity));
+        let rule = Coverage::new("pane", opacity);
+        let (mut differ, mut kept) = (0u64, 0u64);
+        for k in 0..grid.depth() {
+            for y in 0..grid.res_y() {
+                for x in 0..grid.res_x() {
+                    let pane = opaque.get(x, y, k)
+                        && !none.get(x, y, k)
+                        && rule.covers(glam::UVec3::new(x, y, k));
+                    kept += u64::from(pane);
+                    differ += u64::from(bits.get(x, y, k) != (none.get(x, y, k) || pane));
+                }
+            }
+        }
+        println!("pane of opacity {opacity}: {kept} voxels kept");
+        assert_eq!(differ, 0, "opacity {opacity}: {differ} voxels differ");
+        // A moving pane (a dynamic instance, its own coverage) takes the same decisions.
+        let mut moving = pane_scene(opacity);
+        for o in moving.objects.iter_mut().filter(|o| o.name == "pane") {
+            o.dynamic = true;
+        }
+        let (dynamic_bits, _) = atlas_bits(&ctx, &grid, &moving);
+        assert!(
+            dynamic_bits == bits,
+            "opacity {opacity}: the moving pane sets other voxels"
+        );
+        if opacity == 0.0 {
+            assert_eq!(kept, 0, "a pane of opacity 0 sets no voxel");
+        } else {
+            pane_voxels = pane_voxels.max(kept);
+        }
+    }
+    // The pane (0.5 m square, voxels of 0.5488 / 128 m): thousands of voxels, so the rule
+    // kept some of them in every decision above.
+    assert!(pane_voxels > 5_000, "{pane_voxels} pane voxels");
+    common::assert_no_validation_messages(&ctx);
+}
+
+/// The attribute volumes drop the points the bits drop: with the pane of opacity 0.5 the
+/// atlas voxelizer's albedo and normal volumes are congruent with its bits (a voxel has an
+/// attribute exactly where its bit is set), and the box without a pane and with a pane of
+/// opacity 0 set the same voxels.
+#[test]
+fn atlas_volumes_drop_the_points_the_coverage_drops() {
+    use voxgi::voxel::gpu::{VoxelSettings, Voxelizer};
+    use voxgi::voxel::gpu_atlas_volumes::AttributeVolumes;
+    use voxgi::voxel::VoxelFrame;
+    let ctx = common::context();
+    let settings = VoxelSettings {
+        voxelizer: Voxelizer::Atlas,
+        max_res_xy: 128,
+        ..Default::default()
+    };
+    let mut sets = Vec::new();
+    for (what, s) in [
+        ("no pane", scene("assets/scenes/cornell_ceiling_spot.toml")),
+        ("pane of opacity 0", pane_scene(0.0)),
+        ("pane of opacity 0.5", pane_scene(0.5)),
+    ] {
+        let mut frame = VoxelFrame::new(&ctx, &s, 0.0, &settings).expect("voxel frame");
+        assert!(frame
+            .enable_attribute_volumes(&ctx, &s, Default::default())
+            .expect("volumes"));
+        let volumes = AttributeVolumes::new(&ctx, &frame.voxels.grid).expect("volumes");
+        let (v, _) = run_volume_frame(&ctx, &frame, &volumes);
+        sets.push(assert_congruent(&v, &frame.voxels.grid, what));
+    }
+    common::assert_no_validation_messages(&ctx);
+    println!("voxels set: no pane, clear pane, half pane {sets:?}");
+    assert_eq!(sets[0], sets[1], "a pane of opacity 0 sets no voxel");
+    assert!(sets[2] > sets[0], "the pane of opacity 0.5 sets some");
 }

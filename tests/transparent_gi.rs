@@ -15,6 +15,7 @@ use voxgi::eval::HdrImage;
 use voxgi::gi::{Bounces, GiMethod, GiSettings, RadianceSource};
 use voxgi::render::{render_image, RenderSettings};
 use voxgi::scene::{Scene, Transparency};
+use voxgi::voxel::gpu::{VoxelSettings, Voxelizer};
 
 const ROOT: &str = env!("CARGO_MANIFEST_DIR");
 const SIZE: u32 = 128;
@@ -41,9 +42,15 @@ fn floor_mean(image: &HdrImage) -> f64 {
     sum / f64::from(n)
 }
 
-/// The path tracer with every bounce (Russian roulette), as Mitsuba's full-GI reference.
-fn render_floor(ctx: &voxgi::vk::Context, name: &str) -> f64 {
+/// The path tracer with every bounce (Russian roulette), as Mitsuba's full-GI reference,
+/// on the voxels of `voxelizer`.
+fn render_floor(ctx: &voxgi::vk::Context, name: &str, voxelizer: Voxelizer) -> f64 {
+    let scene = scene(name);
     let settings = RenderSettings {
+        voxels: Some(VoxelSettings {
+            voxelizer,
+            ..scene.voxel_settings()
+        }),
         width: SIZE,
         height: SIZE,
         gi: GiSettings {
@@ -55,7 +62,7 @@ fn render_floor(ctx: &voxgi::vk::Context, name: &str) -> f64 {
         },
         ..Default::default()
     };
-    let out = render_image(ctx, &scene(name), &settings).expect("renders");
+    let out = render_image(ctx, &scene, &settings).expect("renders");
     assert!(
         out.hdr
             .data
@@ -89,16 +96,32 @@ fn reference_floor(name: &str) -> f64 {
 /// docs/measurements/transparency.md). One test, so the box without the pane renders once.
 #[test]
 fn panes_of_opacity_0_and_half_pass_what_mitsubas_mask_passes() {
+    panes_pass_what_mitsubas_mask_passes(Voxelizer::Triangle);
+}
+
+/// The same with the atlas voxelizer (`--voxelizer atlas`), whose points take the triangle
+/// voxelizer's coverage decisions (tests/atlas.rs checks the bits voxel by voxel); before,
+/// it voxelized the panes opaque. Measured on lavapipe: clear pane ratio 1.0000 (the floor's
+/// light bit for bit that of the box without the pane), half pane 0.5795 against Mitsuba's
+/// 0.5909 (−1.9%; the triangle voxelizer's 0.5796). The bounds are the triangle voxelizer's:
+/// the atlas voxels are a subset of its conservative ones (recall 0.985, tests/atlas.rs), a
+/// difference on the box that the ratios divide out.
+#[test]
+fn atlas_panes_of_opacity_0_and_half_pass_what_mitsubas_mask_passes() {
+    panes_pass_what_mitsubas_mask_passes(Voxelizer::Atlas);
+}
+
+fn panes_pass_what_mitsubas_mask_passes(voxelizer: Voxelizer) {
     let ctx = common::context();
-    let without = render_floor(&ctx, "cornell_ceiling_spot.toml");
-    let clear = render_floor(&ctx, "cornell_pane_clear.toml");
-    let half = render_floor(&ctx, "cornell_pane.toml");
+    let without = render_floor(&ctx, "cornell_ceiling_spot.toml", voxelizer);
+    let clear = render_floor(&ctx, "cornell_pane_clear.toml", voxelizer);
+    let half = render_floor(&ctx, "cornell_pane.toml", voxelizer);
     common::assert_no_validation_messages(&ctx);
     let ref_without = reference_floor("cornell_ceiling_spot_gi.exr");
     let ref_half = reference_floor("cornell_pane_gi.exr");
     let (ratio, ref_ratio) = (half / without, ref_half / ref_without);
     println!(
-        "floor: voxgi no pane {without:.5}, clear pane {clear:.5} (ratio {:.4}), half pane \
+        "{voxelizer:?} voxelizer, floor: voxgi no pane {without:.5}, clear pane {clear:.5} (ratio {:.4}), half pane \
          {half:.5} (ratio {ratio:.4}); Mitsuba {ref_without:.5}, {ref_half:.5} (ratio \
          {ref_ratio:.4}); half pane / Mitsuba {:.4}",
         clear / without,

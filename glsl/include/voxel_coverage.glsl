@@ -28,4 +28,26 @@ bool coverage_covers(uvec3 v, float transparency, uint seed) {
     return float(h >> 8u) * (1.0 / 16777216.0) >= transparency;
 }
 
+// The atlas voxelizer's passes (voxelize_atlas.comp, voxelize_atlas_bits.vert,
+// voxelize_atlas_volumes.vert) define ATLAS_COVERAGE_BINDING: their points carry a triangle
+// index, not a triangle, so an instance whose object has a surface of opacity below 1 binds
+// its per-triangle coverage there (src/voxel/gpu_atlas.rs, AtlasCoverage: per triangle
+// vec2(1 - opacity, seed), the values the triangle voxelizer reads from v[0].w and v[1].w).
+// An opaque instance binds its point chunk instead and passes `has_coverage` = 0 (the push
+// constants' extent.w), so the buffer is never read and every point sets its voxel.
+#ifdef ATLAS_COVERAGE_BINDING
+layout(set = 0, binding = ATLAS_COVERAGE_BINDING, std430) readonly buffer AtlasCoverage {
+    vec2 atlas_coverage[];
+};
+
+// Whether the point of triangle `tri` in voxel v sets it: the triangle voxelizer's test.
+bool atlas_point_covers(uvec3 v, uint tri, uint has_coverage) {
+    if (has_coverage == 0u) {
+        return true;
+    }
+    vec2 c = atlas_coverage[tri];
+    return coverage_covers(v, c.x, uint(c.y));
+}
+#endif
+
 #endif

@@ -31,8 +31,19 @@
 //!
 //! Every sample lies on its triangle, so the atlas voxels are a subset of the conservative
 //! triangle voxelization ([`super::voxelize`]) up to f32 rounding at voxel boundaries.
+//!
+//! # Opacity
+//! A surface of opacity below 1 is held as the triangle voxelizer holds it, by stochastic
+//! coverage ([`super::coverage`]): a point sets its voxel where `coverage_covers` of
+//! `voxel_coverage.glsl` keeps it. A point carries only its triangle's index, and one object
+//! may have several materials, so an instance whose object has such a surface gets a
+//! per-triangle coverage buffer ([`AtlasCoverage`]) that all three passes placing points
+//! bind (`voxelize_atlas`, `voxelize_atlas_bits`, `voxelize_atlas_volumes`); the push
+//! constants' `extent.w` says whether it is bound. Opaque instances bind their point chunk in
+//! its place and take no decision, so opaque scenes voxelize bit for bit as before.
 
 use super::atlas::{AtlasCache, MeshAtlas};
+use super::coverage::{object_coverage, Coverage};
 use super::gpu::{image_extent, GpuVoxelError, SlotGate};
 use super::VoxelGrid;
 use crate::graph::{run_once, Access, BufferHandle, ImageHandle, Load, RenderGraph, Shader};
@@ -116,6 +127,47 @@ impl GpuAtlasVoxelizePush {
             dims: [ext.x, ext.y, ext.z, grid.axis().index() as u32],
             extent: [columns_px.0, columns_px.1, count, 0],
         }
+    }
+
+    /// This push with `extent.w` telling the shader whether the draw's coverage buffer is
+    /// bound (`atlas_point_covers` of `voxel_coverage.glsl`).
+    pub fn with_coverage(mut self, bound: bool) -> Self {
+        self.extent[3] = u32::from(bound);
+        self
+    }
+}
+
+/// Binding of the per-triangle coverage in `voxelize_atlas.comp` and
+/// `voxelize_atlas_bits.vert` (`ATLAS_COVERAGE_BINDING`).
+pub const COVERAGE_BINDING: u32 = 2;
+
+/// One object's per-triangle coverage (`vec2(1 − opacity, seed)` per triangle, indexed by
+/// the points' triangle index) for the atlas passes, uploaded only where some triangle has
+/// opacity below 1.
+pub struct AtlasCoverage {
+    pub buffer: Buffer,
+}
+
+impl AtlasCoverage {
+    /// The coverage of `object`'s triangles drawn from `mesh`; `None` when all are opaque
+    /// (no buffer, no decision).
+    pub fn new(
+        ctx: &Context,
+        scene: &Scene,
+        object: &crate::scene::Object,
+        mesh: usize,
+    ) -> Result<Option<Self>, VkError> {
+        let coverage = object_coverage(scene, object, mesh);
+        if coverage.iter().all(Coverage::is_opaque) {
+            return Ok(None);
+        }
+        let rows: Vec<[f32; 2]> = coverage.iter().map(Coverage::gpu_w).collect();
+        let buffer = ctx.upload_buffer(
+            &format!("atlas coverage ({})", object.name),
+            bytemuck::cast_slice(&rows),
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+        )?;
+        Ok(Some(Self { buffer }))
     }
 }
 
@@ -497,6 +549,8 @@ impl FrameAt {
 #[derive(Clone)]
 pub struct AtlasInstance<'a> {
     pub frames: Vec<&'a AtlasPoints>,
+    /// Per frame, the triangles' coverage where some has opacity below 1.
+    pub coverage: Vec<Option<&'a AtlasCoverage>>,
     pub frame: FrameAt,
     pub model: ModelAt,
 }
@@ -505,6 +559,8 @@ pub struct AtlasInstance<'a> {
 #[derive(Clone)]
 pub struct ImportedInstance {
     pub frames: Vec<Vec<(BufferHandle, u32)>>,
+    /// Per frame, the imported coverage buffer (none for an opaque object).
+    pub coverage: Vec<Option<BufferHandle>>,
     pub frame: FrameAt,
     pub model: ModelAt,
 }
@@ -514,6 +570,7 @@ impl<'a> AtlasInstance<'a> {
     pub fn rigid(points: &'a AtlasPoints, model: Mat4) -> Self {
         Self {
             frames: vec![points],
+            coverage: vec![None],
             frame: FrameAt::Fixed(0),
             model: ModelAt::Fixed(model),
         }
@@ -530,6 +587,11 @@ impl<'a> AtlasInstance<'a> {
                 .frames
                 .iter()
                 .map(|p| import_chunks(g, p, access))
+                .collect(),
+            coverage: self
+                .coverage
+                .iter()
+                .map(|c| c.map(|c| g.import_buffer(&c.buffer, access)))
                 .collect(),
             frame: self.frame.clone(),
             model: self.model.clone(),
@@ -551,15 +613,24 @@ pub fn import_chunks(
 }
 
 impl ImportedInstance {
-    /// The chunks `(points, count)` that slot `slot` splats (none: nothing), and its model.
-    pub fn at(&self, slot: usize) -> (&[(BufferHandle, u32)], Mat4) {
+    /// The chunks `(points, count)` that slot `slot` splats (none: nothing), its model and
+    /// its frame's coverage buffer (none for an opaque object).
+    pub fn at(&self, slot: usize) -> (&[(BufferHandle, u32)], Mat4, Option<BufferHandle>) {
         let f = self.frame.at(slot).min(self.frames.len().saturating_sub(1));
         let chunks = self.frames.get(f).map_or(&[][..], Vec::as_slice);
-        (chunks, self.model.at(slot))
+        let coverage = self.coverage.get(f).copied().flatten();
+        (chunks, self.model.at(slot), coverage)
     }
 
     pub fn handles(&self) -> impl Iterator<Item = BufferHandle> + '_ {
         self.frames.iter().flatten().map(|&(h, _)| h)
+    }
+
+    /// What the coverage binding may hold: the coverage buffers and, for opaque objects'
+    /// draws (which never read it), the point chunks.
+    pub fn coverage_handles(&self) -> impl Iterator<Item = BufferHandle> + '_ {
+        self.handles()
+            .chain(self.coverage.iter().flatten().copied())
     }
 }
 
@@ -582,20 +653,27 @@ pub fn add_voxelize_atlas_pass(
     let (pipe, grid) = (*pipes.voxelize, *grid);
     let (w, h) = image_extent(&grid);
     let chunks: Vec<BufferHandle> = sets.iter().flat_map(ImportedInstance::handles).collect();
+    let coverage: Vec<BufferHandle> = sets
+        .iter()
+        .flat_map(ImportedInstance::coverage_handles)
+        .collect();
     g.add_pass("voxelize_atlas")
         .pipeline(&pipe)
         .bind_one_of(0, chunks, read)
         .bind(1, columns, Access::StorageReadWrite(Shader::Compute))
+        .bind_one_of(COVERAGE_BINDING, coverage, read)
         .when(gate)
         .record(move |ctx| {
             for inst in &sets {
-                let (chunks, model) = inst.at(ctx.slot);
+                let (chunks, model, coverage) = inst.at(ctx.slot);
                 for &(buf, count) in chunks {
                     if count == 0 {
                         continue;
                     }
-                    let push = GpuAtlasVoxelizePush::new(&grid, model, (w, h), count);
-                    ctx.bind_with(&pipe, &[(0, buf)]);
+                    let push = GpuAtlasVoxelizePush::new(&grid, model, (w, h), count)
+                        .with_coverage(coverage.is_some());
+                    let cov = coverage.unwrap_or(buf);
+                    ctx.bind_with(&pipe, &[(0, buf), (COVERAGE_BINDING, cov)]);
                     ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
                     let x = count.min(MAX_POINTS_X);
                     ctx.cmd.dispatch(x.div_ceil(64), count.div_ceil(x), 1);
@@ -648,6 +726,8 @@ pub fn atlas_frames(scene: &Scene, object: &crate::scene::Object) -> Result<Vec<
 pub(super) struct DynamicInstance {
     /// Per sequence frame: `(mesh in the scene, its point list in AtlasScene::points)`.
     pub(super) frames: Vec<(usize, usize)>,
+    /// Per sequence frame, its triangles' coverage (none where all are opaque).
+    pub(super) coverage: Vec<Option<AtlasCoverage>>,
     pub(super) object: crate::scene::Object,
     pub(super) models: Arc<SlotMatrices>,
     pub(super) frame: Arc<SlotFrames>,
@@ -680,6 +760,8 @@ pub struct AtlasScene {
     pub(super) points: Vec<AtlasPoints>,
     /// `(points, model, index of the object in the scene)`.
     pub(super) static_instances: Vec<(usize, Mat4, usize)>,
+    /// Per static instance, its triangles' coverage (none where all are opaque).
+    static_coverage: Vec<Option<AtlasCoverage>>,
     pub(super) dynamic_instances: Vec<DynamicInstance>,
 }
 
@@ -712,6 +794,7 @@ impl AtlasScene {
             pipelines: AtlasPipelines::new(ctx)?,
             points: Vec::new(),
             static_instances: Vec::new(),
+            static_coverage: Vec::new(),
             dynamic_instances: Vec::new(),
         };
         // `(atlas, sequence frame, index into points)`: objects sharing a mesh (sequence)
@@ -759,9 +842,14 @@ impl AtlasScene {
                     };
                     lists.push((meshes[f], pi));
                 }
+                let mut coverage = Vec::with_capacity(lists.len());
+                for &(m, _) in &lists {
+                    coverage.push(AtlasCoverage::new(ctx, scene, o, m)?);
+                }
                 if o.dynamic || o.is_animated() {
                     let inst = DynamicInstance {
                         frames: lists,
+                        coverage,
                         object: o.clone(),
                         models: Arc::new(SlotMatrices::default()),
                         frame: Arc::new(SlotFrames::default()),
@@ -776,6 +864,8 @@ impl AtlasScene {
                 } else {
                     me.static_instances
                         .push((lists[0].1, o.transform_at(t_s), oi));
+                    me.static_coverage
+                        .push(coverage.into_iter().next().flatten());
                 }
             }
             Ok(())
@@ -861,19 +951,19 @@ impl AtlasScene {
     pub fn instances(&self, statics: bool, dynamics: bool) -> Vec<AtlasInstance<'_>> {
         let mut inst = Vec::new();
         if statics {
-            inst.extend(
-                self.static_instances
-                    .iter()
-                    .map(|&(p, m, _)| AtlasInstance {
-                        frames: vec![&self.points[p]],
-                        frame: FrameAt::Fixed(0),
-                        model: ModelAt::Fixed(m),
-                    }),
-            );
+            inst.extend(self.static_instances.iter().zip(&self.static_coverage).map(
+                |(&(p, m, _), c)| AtlasInstance {
+                    frames: vec![&self.points[p]],
+                    coverage: vec![c.as_ref()],
+                    frame: FrameAt::Fixed(0),
+                    model: ModelAt::Fixed(m),
+                },
+            ));
         }
         if dynamics {
             inst.extend(self.dynamic_instances.iter().map(|d| AtlasInstance {
                 frames: d.frames.iter().map(|&(_, p)| &self.points[p]).collect(),
+                coverage: d.coverage.iter().map(Option::as_ref).collect(),
                 frame: FrameAt::PerSlot(d.frame.clone()),
                 model: ModelAt::PerSlot(d.models.clone()),
             }));

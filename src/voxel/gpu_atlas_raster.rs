@@ -12,7 +12,7 @@
 //!   shader reads the single-bit LUT ([`super::ray_mask::ColumnLut1d::single_bit`]).
 
 use super::gpu::{image_extent, COLUMN_FORMAT};
-use super::gpu_atlas::{AtlasInstance, GpuAtlasVoxelizePush, ImportedInstance};
+use super::gpu_atlas::{AtlasInstance, GpuAtlasVoxelizePush, ImportedInstance, COVERAGE_BINDING};
 use super::ray_mask::ColumnLut1d;
 use super::VoxelGrid;
 use crate::graph::{Access, ImageHandle, Load, RenderGraph, Shader};
@@ -59,6 +59,10 @@ impl AtlasRasterBits {
         let sets: Vec<ImportedInstance> =
             instances.iter().filter_map(|i| i.import(g, read)).collect();
         let chunks: Vec<_> = sets.iter().flat_map(ImportedInstance::handles).collect();
+        let coverage: Vec<_> = sets
+            .iter()
+            .flat_map(ImportedInstance::coverage_handles)
+            .collect();
         let (pipe, grid) = (*self.pipe, *grid);
         let (w, h) = image_extent(&grid);
         // Cleared on load, so the logic op reads only what this pass wrote; the image is the
@@ -67,17 +71,20 @@ impl AtlasRasterBits {
             .pipeline(&pipe)
             .bind_one_of(0, chunks, read)
             .bind(1, lut, read)
+            .bind_one_of(COVERAGE_BINDING, coverage, read)
             .color(image, Load::Clear([0.0; 4]))
             .record(move |ctx| {
                 ctx.begin_rendering();
                 for inst in &sets {
-                    let (chunks, model) = inst.at(ctx.slot);
+                    let (chunks, model, coverage) = inst.at(ctx.slot);
                     for &(points, count) in chunks {
                         if count == 0 {
                             continue;
                         }
-                        let push = GpuAtlasVoxelizePush::new(&grid, model, (w, h), count);
-                        ctx.bind_with(&pipe, &[(0, points)]);
+                        let push = GpuAtlasVoxelizePush::new(&grid, model, (w, h), count)
+                            .with_coverage(coverage.is_some());
+                        let cov = coverage.unwrap_or(points);
+                        ctx.bind_with(&pipe, &[(0, points), (COVERAGE_BINDING, cov)]);
                         ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
                         ctx.cmd.draw(count, 1);
                     }

@@ -117,8 +117,18 @@ struct Sums {
     material: Option<ImageHandle>,
 }
 
-/// One sequence frame of a [`Splat`]: its point chunks `(points, count)`, triangles and values.
-type SplatFrame = (Vec<(BufferHandle, u32)>, BufferHandle, BufferHandle);
+/// One sequence frame of a [`Splat`]: its point chunks `(points, count)`, triangles, values
+/// and coverage (none for an opaque object).
+type SplatFrame = (
+    Vec<(BufferHandle, u32)>,
+    BufferHandle,
+    BufferHandle,
+    Option<BufferHandle>,
+);
+
+/// Binding of the per-triangle coverage in `voxelize_atlas_volumes.vert`
+/// (`ATLAS_COVERAGE_BINDING`).
+const COVERAGE_BINDING: u32 = 5;
 
 /// A draw of one instance: per sequence frame its point chunks `(points, count)`, its
 /// triangles and its values (the triangles without value volumes), and which frame and model
@@ -320,7 +330,9 @@ impl AtlasVolumes {
                     .map(|((f, p), t)| {
                         let t = g.import_buffer(t, read);
                         let v = values.get(f).map_or(t, |v| g.import_buffer(v, read));
-                        (import_chunks(g, p, read), t, v)
+                        let c = inst.coverage.get(f).copied().flatten();
+                        let c = c.map(|c| g.import_buffer(&c.buffer, read));
+                        (import_chunks(g, p, read), t, v, c)
                     })
                     .collect(),
                 frame: inst.frame,
@@ -464,11 +476,14 @@ fn add_splat_pass(
     let mut points = Vec::new();
     let mut tris = Vec::new();
     let mut values = Vec::new();
-    for (chunks, t, v) in splats.iter().flat_map(|s| &s.frames) {
+    // An opaque object's draws bind their points there (never read).
+    let mut coverage = Vec::new();
+    for (chunks, t, v, c) in splats.iter().flat_map(|s| &s.frames) {
         for &(p, _) in chunks {
             points.push(p);
             tris.push(*t);
             values.push(*v);
+            coverage.push(c.unwrap_or(p));
         }
     }
     let grid = *grid;
@@ -480,7 +495,8 @@ fn add_splat_pass(
         .pipeline(&pipe)
         .bind_one_of(0, points, read)
         .bind_one_of(1, tris.clone(), read)
-        .bind_one_of(2, values, read);
+        .bind_one_of(2, values, read)
+        .bind_one_of(COVERAGE_BINDING, coverage, read);
     // Without maps the shader never reads bindings 3 and 4: the triangles stand in.
     pass = match maps {
         Some((texels, table)) => pass.bind(3, texels, read).bind(4, table, read),
@@ -499,7 +515,9 @@ fn add_splat_pass(
         ctx.begin_rendering();
         for splat in &splats {
             let f = splat.frame.at(ctx.slot);
-            let Some((chunks, tris, values)) = splat.frames.get(f).or(splat.frames.first()) else {
+            let Some((chunks, tris, values, coverage)) =
+                splat.frames.get(f).or(splat.frames.first())
+            else {
                 continue;
             };
             let model = splat.model.at(ctx.slot);
@@ -509,15 +527,17 @@ fn add_splat_pass(
                 if count == 0 {
                     continue;
                 }
-                let push = GpuAtlasVoxelizePush::new(&grid, model, (0, 0), count);
+                let push = GpuAtlasVoxelizePush::new(&grid, model, (0, 0), count)
+                    .with_coverage(coverage.is_some());
                 let chosen = [
                     (0, points),
                     (1, *tris),
                     (2, *values),
+                    (COVERAGE_BINDING, coverage.unwrap_or(points)),
                     (3, *tris),
                     (4, *tris),
                 ];
-                let n = if with_maps { 3 } else { 5 };
+                let n = if with_maps { 4 } else { 6 };
                 ctx.bind_with(&pipe, &chosen[..n]);
                 ctx.cmd.push_constants(&pipe, bytemuck::bytes_of(&push));
                 ctx.cmd.draw(count, 1);
