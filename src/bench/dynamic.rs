@@ -10,7 +10,7 @@
 
 use super::BenchError;
 use crate::gi::{GiMethod, GiSettings};
-use crate::render::{RenderSettings, Renderer};
+use crate::render::RenderSettings;
 use crate::scene::{Scene, Voxelizer};
 use crate::stats::median;
 use crate::vk::{Context, PassTiming};
@@ -214,28 +214,15 @@ fn run_animated(
     settings: RenderSettings,
     desc: &DynamicBenchDesc,
 ) -> Result<Vec<Vec<PassTiming>>, BenchError> {
-    let mut renderer = Renderer::new(ctx, scene, settings)?;
-    let exec =
-        crate::graph::GraphExecutor::new(ctx, renderer.graph(), crate::vk::MAX_FRAMES_IN_FLIGHT)
-            .map_err(crate::render::RenderError::from)?;
-    let mut frame = 0usize;
-    let mut failed = None;
-    let frames =
-        crate::graph::run_frames(ctx, &exec, desc.warmup + desc.frames, desc.warmup, |slot| {
-            renderer.settings.time_s = frame as f32 * FRAME_S;
-            frame += 1;
-            match renderer.prepare(scene) {
-                Ok(()) => renderer.write_frame(slot),
-                Err(e) => {
-                    failed.get_or_insert(e);
-                }
-            }
-        })
-        .map_err(crate::render::RenderError::from)?;
-    if let Some(e) = failed {
-        return Err(e.into());
-    }
-    Ok(frames)
+    let run = crate::render::profile_steps(
+        ctx,
+        scene,
+        &settings,
+        desc.frames,
+        desc.warmup,
+        |frame, _, time_s| *time_s = frame as f32 * FRAME_S,
+    )?;
+    Ok(run.frames)
 }
 
 impl DynamicBenchReport {

@@ -38,8 +38,8 @@ pub use oit::{OitStats, DEFAULT_NODES_PER_PIXEL as OIT_DEFAULT_NODES_PER_PIXEL};
 pub use oit_resolve::MAX_LAYERS as OIT_MAX_LAYERS;
 pub use preflight::{check_lights, check_projection, check_setting_combination};
 pub use run::{
-    frames_to_image, profile_camera_path, profile_scene, render_animation, render_flight,
-    render_image, render_sequence, Flight, ProfileRun, RenderOutput, SequenceOutput,
+    frames_to_image, profile_camera_path, profile_scene, profile_steps, render_animation,
+    render_flight, render_image, render_sequence, Flight, ProfileRun, RenderOutput, SequenceOutput,
 };
 pub use scene_gpu::{Draw, DrawLists, SceneGpu, SceneInputs};
 pub use settings_check::{check_device_limits, check_render_settings};

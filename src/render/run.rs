@@ -246,19 +246,36 @@ pub fn profile_camera_path(
 ) -> Result<ProfileRun, RenderError> {
     let times_s = path.even_times_s(frames);
     let start_s = path.time_range_s().0;
-    let mut flown = scene.clone();
+    profile_steps(ctx, scene, settings, frames, warmup, |frame, shown, _| {
+        let t_s = frame
+            .checked_sub(warmup)
+            .and_then(|k| times_s.get(k).copied())
+            .unwrap_or(start_s);
+        shown.camera = path.camera_at(&scene.camera, t_s);
+    })
+}
+
+/// Like [`profile_scene`], with `step(k, scene, time_s)` setting what frame k (warm-up
+/// frames first, from 0) shows before it is prepared: the camera and lights of its copy of
+/// `scene`, and the animation time. Each frame goes through [`Renderer::prepare`], as the
+/// viewer's do (`profile --camera-path`, `bench dynamic`).
+pub fn profile_steps(
+    ctx: &Context,
+    scene: &Scene,
+    settings: &super::RenderSettings,
+    frames: usize,
+    warmup: usize,
+    mut step: impl FnMut(usize, &mut Scene, &mut f32),
+) -> Result<ProfileRun, RenderError> {
+    let mut shown = scene.clone();
     let mut renderer = Renderer::new(ctx, scene, settings.clone())?;
     let exec = GraphExecutor::new(ctx, renderer.graph(), MAX_FRAMES_IN_FLIGHT)?;
     let mut frame = 0usize;
     let mut failed = None;
     let measured = crate::graph::run_frames(ctx, &exec, warmup + frames, warmup, |slot| {
-        let t_s = frame
-            .checked_sub(warmup)
-            .and_then(|k| times_s.get(k).copied())
-            .unwrap_or(start_s);
+        step(frame, &mut shown, &mut renderer.settings.time_s);
         frame += 1;
-        flown.camera = path.camera_at(&scene.camera, t_s);
-        match renderer.prepare(&flown) {
+        match renderer.prepare(&shown) {
             Ok(()) => renderer.write_frame(slot),
             Err(e) => {
                 failed.get_or_insert(e);
