@@ -48,8 +48,13 @@ impl OpenControls {
 }
 
 /// Draws the "Open scene" section; adds where the path field and the button landed to `spots`
-/// ("open path", "open button").
-pub fn panel_section(ui: &mut egui::Ui, o: &mut OpenControls, spots: &mut Vec<super::panel::Spot>) {
+/// ("open path", "open button"; the panel's `Spot`s, written out so that this module does not
+/// import the panel that calls it).
+pub fn panel_section(
+    ui: &mut egui::Ui,
+    o: &mut OpenControls,
+    spots: &mut Vec<(String, egui::Rect)>,
+) {
     ui.label(format!("showing {}", o.shown));
     let field = ui.add(
         egui::TextEdit::singleline(&mut o.path)
