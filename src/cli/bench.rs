@@ -119,18 +119,8 @@ pub enum BenchCommand {
         /// Frames each method accumulates (ssgi: feedback bounces and history).
         #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..=4096))]
         frames: u32,
-        /// Samples per pixel of the Mitsuba references.
-        #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..=65536))]
-        reference_spp: u32,
-        /// Render missing references with Mitsuba 3 (`tools/reference`; minutes each).
-        #[arg(long)]
-        make_references: bool,
-        /// The reference cache [default: ~/.cache/voxgi/references].
-        #[arg(long, value_name = "DIR")]
-        reference_cache: Option<std::path::PathBuf>,
-        /// The reference script.
-        #[arg(long, value_name = "PATH", default_value = "tools/reference")]
-        reference_tool: std::path::PathBuf,
+        #[command(flatten)]
+        references: ReferenceArgs,
         /// Print JSON instead of the table.
         #[arg(long)]
         json: bool,
@@ -499,20 +489,10 @@ pub fn bench(global: &Global, command: &BenchCommand, out: &mut dyn Write) -> Re
         BenchCommand::SsgiLimits {
             size,
             frames,
-            reference_spp,
-            make_references,
-            reference_cache,
-            reference_tool,
+            references,
             json,
         } => with_context(global, |ctx| {
-            let refs = References {
-                spp: *reference_spp,
-                make: *make_references,
-                cache: reference_cache
-                    .clone()
-                    .unwrap_or_else(crate::bench::reference_cache::default_cache_dir),
-                tool: reference_tool.clone(),
-            };
+            let refs = references.references();
             let report = ssgi_limits(ctx, *size, *frames, &refs)?;
             print(out, *json, &report, || report.table())?;
             Ok(())
@@ -560,7 +540,39 @@ fn print(
     Ok(())
 }
 
-/// Where `voxgi bench ssgi-limits` finds or makes its Mitsuba references.
+/// The Mitsuba-reference flags of `bench ssgi-limits` and `bench camera-path`.
+#[derive(clap::Args, Clone)]
+pub struct ReferenceArgs {
+    /// Samples per pixel of the Mitsuba references.
+    #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..=65536))]
+    reference_spp: u32,
+    /// Render missing references with Mitsuba 3 (`tools/reference`; minutes each).
+    #[arg(long)]
+    make_references: bool,
+    /// The reference cache [default: ~/.cache/voxgi/references].
+    #[arg(long, value_name = "DIR")]
+    reference_cache: Option<std::path::PathBuf>,
+    /// The reference script.
+    #[arg(long, value_name = "PATH", default_value = "tools/reference")]
+    reference_tool: std::path::PathBuf,
+}
+
+impl ReferenceArgs {
+    fn references(&self) -> References {
+        References {
+            spp: self.reference_spp,
+            make: self.make_references,
+            cache: self
+                .reference_cache
+                .clone()
+                .unwrap_or_else(crate::bench::reference_cache::default_cache_dir),
+            tool: self.reference_tool.clone(),
+        }
+    }
+}
+
+/// Where `voxgi bench ssgi-limits` and `bench camera-path` find or make their Mitsuba
+/// references.
 struct References {
     spp: u32,
     make: bool,
@@ -703,18 +715,8 @@ pub struct CameraPathArgs {
     /// Rays per pixel and frame of those converged images.
     #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..=256))]
     converged_rays: u32,
-    /// Samples per pixel of the Mitsuba references.
-    #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..=65536))]
-    reference_spp: u32,
-    /// Render missing references with Mitsuba 3 (`tools/reference`; minutes each).
-    #[arg(long)]
-    make_references: bool,
-    /// The reference cache [default: ~/.cache/voxgi/references].
-    #[arg(long, value_name = "DIR")]
-    reference_cache: Option<std::path::PathBuf>,
-    /// The reference script.
-    #[arg(long, value_name = "PATH", default_value = "tools/reference")]
-    reference_tool: std::path::PathBuf,
+    #[command(flatten)]
+    references: ReferenceArgs,
     /// Print JSON instead of the table.
     #[arg(long)]
     json: bool,
@@ -738,15 +740,7 @@ impl CameraPathArgs {
                 command: "voxgi bench camera-path",
                 scene: name.clone(),
             })?;
-        let refs = References {
-            spp: self.reference_spp,
-            make: self.make_references,
-            cache: self
-                .reference_cache
-                .clone()
-                .unwrap_or_else(crate::bench::reference_cache::default_cache_dir),
-            tool: self.reference_tool.clone(),
-        };
+        let refs = self.references.references();
         let desc = cp::CameraPathDesc {
             size: self.size,
             frames: self.frames,
